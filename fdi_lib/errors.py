@@ -1,0 +1,68 @@
+"""Typed errors of :mod:`fdi_lib`.
+
+Every error subclasses a builtin (``ValueError`` or ``TypeError``) so that
+generic handlers keep working, and every message names the offending argument
+together with what was expected and what was received.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "FDIError",
+    "ShapeError",
+    "NonFiniteError",
+    "CovarianceError",
+    "ModelError",
+    "PersistentExcitationError",
+    "RankConditionError",
+    "UnknownReproductionError",
+    "EmptySetError",
+    "UnboundedSetError",
+]
+
+
+class FDIError(Exception):
+    """Base class of all errors raised by :mod:`fdi_lib`."""
+
+
+class ShapeError(FDIError, ValueError):
+    """An array has the wrong number of dimensions or the wrong shape."""
+
+
+class NonFiniteError(FDIError, ValueError):
+    """An array contains NaN or infinite values (the message gives the first index)."""
+
+
+class CovarianceError(FDIError, ValueError):
+    """A covariance matrix is not symmetric, not positive semi-definite, or not definite."""
+
+
+class ModelError(FDIError, ValueError):
+    """A model, profile or option is inconsistent (wrong keyword, bad horizon, ...)."""
+
+
+class PersistentExcitationError(FDIError, ValueError):
+    """The information matrix of a GLR or isolation test is singular.
+
+    Zhang & Basseville (2014), condition (22): the fault signature must be
+    persistently exciting over the samples used by the test.
+    """
+
+
+class RankConditionError(FDIError, ValueError):
+    """A rank assumption (e.g. full column rank of C_{k+1} E_k for the Kitanidis filter) fails."""
+
+
+class UnknownReproductionError(FDIError, KeyError):
+    """No reproduction is registered under the requested identifier."""
+
+    def __str__(self) -> str:  # KeyError quotes its message otherwise
+        return str(self.args[0]) if self.args else ""
+
+
+class EmptySetError(FDIError, ValueError):
+    """A polytope that must be non-empty (e.g. an SVO's initial set) is empty."""
+
+
+class UnboundedSetError(FDIError, ValueError):
+    """A polytope that must be bounded (e.g. an SVO's initial set) is unbounded."""

@@ -1,0 +1,155 @@
+"""Registry of paper reproductions: one function per figure or table.
+
+A reproduction is a function ``func(*, seed, trials, jobs) -> ReproductionResult``
+registered with :func:`register`. Its identifier (``zb2014-fig3``), the keys of
+its ``headline`` dictionary and their meaning (documented in the function's
+docstring) are a public contract used by the book, the tests and the CLI
+``python -m fdi_lib reproduce ID --json``: keep them stable.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+from fdi_lib.errors import ModelError, UnknownReproductionError
+
+__all__ = ["Reproduction", "ReproductionResult", "register", "get", "list_reproductions", "reproduce"]
+
+
+@dataclass(frozen=True)
+class ReproductionResult:
+    """What a reproduction returns.
+
+    Attributes
+    ----------
+    id : str
+        The reproduction identifier, e.g. ``"zb2014-fig3"``.
+    headline : dict
+        JSON-serialisable headline numbers (the ``--json`` output); keys documented
+        in the reproduction function's docstring.
+    paper : dict
+        The values the paper states for (some of) the same keys, for side-by-side display.
+    settings : dict
+        Everything needed to re-run: seed, number of trials, model settings.
+    data : dict
+        Arrays used to draw the figure (not part of the JSON contract).
+    """
+
+    id: str
+    headline: dict[str, Any]
+    paper: dict[str, Any] = field(default_factory=dict)
+    settings: dict[str, Any] = field(default_factory=dict)
+    data: dict[str, Any] = field(default_factory=dict, repr=False)
+
+    def to_json_dict(self) -> dict[str, Any]:
+        """The JSON object printed by the CLI: ``id``, ``headline``, ``paper``, ``settings``."""
+        return _jsonable({"id": self.id, "headline": self.headline, "paper": self.paper,
+                          "settings": self.settings})
+
+    def to_json(self, **kwargs: Any) -> str:
+        return json.dumps(self.to_json_dict(), **kwargs)
+
+
+@dataclass(frozen=True)
+class Reproduction:
+    """A registered reproduction (see :func:`register`)."""
+
+    id: str
+    paper: str
+    title: str
+    func: Callable[..., ReproductionResult]
+    plot: Callable[..., Any] | None
+    default_trials: int | None
+    default_seed: int
+
+    def __call__(self, *, seed: int | None = None, trials: int | None = None, jobs: int = 1,
+                 **kwargs: Any) -> ReproductionResult:
+        seed = self.default_seed if seed is None else seed
+        trials = self.default_trials if trials is None else trials
+        if trials is not None and (not isinstance(trials, (int, np.integer)) or trials < 1):
+            raise ModelError(f"trials: expected a positive integer, got {trials!r}")
+        if not isinstance(jobs, (int, np.integer)) or jobs == 0:
+            raise ModelError(f"jobs: expected a non-zero integer (-1 = all cores), got {jobs!r}")
+        result = self.func(seed=int(seed), trials=None if trials is None else int(trials),
+                           jobs=int(jobs), **kwargs)
+        if not isinstance(result, ReproductionResult) or result.id != self.id:
+            raise TypeError(f"reproduction {self.id!r} returned {type(result).__name__} "
+                            f"with id {getattr(result, 'id', None)!r}")
+        return result
+
+
+_REGISTRY: dict[str, Reproduction] = {}
+
+
+def register(id: str, *, paper: str, title: str, default_trials: int | None = None,
+             default_seed: int = 0, plot: Callable[..., Any] | None = None
+             ) -> Callable[[Callable[..., ReproductionResult]], Callable[..., ReproductionResult]]:
+    """Decorator registering a reproduction function under ``id``.
+
+    ``default_trials`` is the paper's own number of Monte Carlo trials (``None``
+    for deterministic or single-run figures); ``plot(result, fig=None)`` draws it.
+    """
+
+    def decorator(func: Callable[..., ReproductionResult]) -> Callable[..., ReproductionResult]:
+        if id in _REGISTRY:
+            raise ModelError(f"reproduction id {id!r} registered twice")
+        _REGISTRY[id] = Reproduction(id=id, paper=paper, title=title, func=func, plot=plot,
+                                     default_trials=default_trials, default_seed=default_seed)
+        return func
+
+    return decorator
+
+
+def _load_all() -> None:
+    """Import every module of :mod:`fdi_lib.reproduce` so that they register."""
+    import importlib
+    import pkgutil
+
+    import fdi_lib.reproduce as pkg
+
+    for info in pkgutil.iter_modules(pkg.__path__):
+        if info.name not in {"registry", "cli"}:
+            importlib.import_module(f"{pkg.__name__}.{info.name}")
+
+
+def list_reproductions() -> list[Reproduction]:
+    """All registered reproductions, sorted by identifier."""
+    _load_all()
+    return [_REGISTRY[k] for k in sorted(_REGISTRY)]
+
+
+def get(id: str) -> Reproduction:
+    """The reproduction registered under ``id`` (``UnknownReproductionError`` otherwise)."""
+    _load_all()
+    try:
+        return _REGISTRY[id]
+    except KeyError:
+        known = ", ".join(sorted(_REGISTRY)) or "none"
+        raise UnknownReproductionError(f"id: no reproduction {id!r}; known ids: {known}") from None
+
+
+def reproduce(id: str, *, seed: int | None = None, trials: int | None = None, jobs: int = 1,
+              **kwargs: Any) -> ReproductionResult:
+    """Run the reproduction ``id`` (same call as ``python -m fdi_lib reproduce ID``)."""
+    return get(id)(seed=seed, trials=trials, jobs=jobs, **kwargs)
+
+
+def _jsonable(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _jsonable(obj.tolist())
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, (np.floating, float)):
+        f = float(obj)
+        return f if np.isfinite(f) else None
+    return obj

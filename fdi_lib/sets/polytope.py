@@ -1,0 +1,395 @@
+"""Convex polytopes in H-representation, Set(M, m) = {x : M x <= m}.
+
+Rosa & Silvestre (2013), eq. (2). The hard, combinatorial parts are delegated to
+well-kept libraries rather than written here:
+
+* vertex enumeration (H -> V) and facet enumeration (V -> H), redundancy removal and
+  Fourier-Motzkin / block elimination: ``pycddlib`` (Fukuda's cddlib, double
+  description method), which handles degenerate and lower-dimensional inputs that
+  qhull rejects;
+* emptiness and support values on H-representations: linear programming with
+  :func:`scipy.optimize.linprog` (HiGHS);
+* area / volume: :class:`scipy.spatial.ConvexHull` (qhull) on the vertices.
+
+Every operation returns a new :class:`Polytope`; nothing is modified in place.
+
+Examples
+--------
+>>> import numpy as np
+>>> from fdi_lib.sets import Polytope
+>>> P = Polytope.box([-1, -1], [1, 1])
+>>> float(P.volume())
+4.0
+>>> Q = P.linear_map(np.array([[2.0, 0.0], [0.0, 1.0]]))
+>>> float(Q.volume())
+8.0
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+from typing import Any, Iterable, Sequence
+
+import numpy as np
+
+from fdi_lib.errors import EmptySetError, NonFiniteError, ShapeError, UnboundedSetError
+
+__all__ = ["Polytope", "convex_hull", "plot_polytope", "box_corners"]
+
+_TOL = 1e-9
+
+
+def _as_2d(name: str, a: Any, ncols: int | None = None) -> np.ndarray:
+    arr = np.asarray(a, dtype=float)
+    if arr.ndim != 2:
+        raise ShapeError(f"{name}: expected a 2-D array, got shape {arr.shape}")
+    if ncols is not None and arr.shape[1] != ncols:
+        raise ShapeError(f"{name}: expected {ncols} columns, got shape {arr.shape}")
+    _check_finite(name, arr)
+    return arr
+
+
+def _check_finite(name: str, arr: np.ndarray) -> None:
+    bad = np.argwhere(~np.isfinite(arr))
+    if bad.size:
+        raise NonFiniteError(f"{name}: non-finite value at index {tuple(int(i) for i in bad[0])}")
+
+
+def box_corners(generators: np.ndarray) -> np.ndarray:
+    """All points ``G s`` with ``s`` in {-1, 1}^g: the corners of the zonotope ``G [-1, 1]^g``.
+
+    Parameters
+    ----------
+    generators : ndarray, shape (n, g)
+
+    Returns
+    -------
+    ndarray, shape (2**g, n)
+    """
+    G = np.asarray(generators, dtype=float)
+    g = G.shape[1]
+    if g == 0:
+        return np.zeros((1, G.shape[0]))
+    signs = np.array(list(itertools.product((-1.0, 1.0), repeat=g)))
+    return signs @ G.T
+
+
+def _cdd_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """Vertices of Set(M, m) with cddlib (double description); raises if unbounded."""
+    import cdd
+
+    mat = cdd.matrix_from_array(np.column_stack([m, -M]), rep_type=cdd.RepType.INEQUALITY)
+    poly = cdd.polyhedron_from_matrix(mat)
+    gen = cdd.copy_generators(poly)
+    arr = np.array(gen.array, dtype=float).reshape(-1, M.shape[1] + 1)
+    if arr.shape[0] == 0:
+        return np.zeros((0, M.shape[1]))
+    if gen.lin_set or np.any(arr[:, 0] < 0.5):
+        raise UnboundedSetError(f"Set(M, m): the polytope is unbounded (cdd found {int(np.sum(arr[:, 0] < 0.5)) + len(gen.lin_set)} rays/lines)")
+    return arr[:, 1:]
+
+
+def _cdd_hull(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """H-representation (M, m) of conv(V) with cddlib; equalities become two inequalities."""
+    import cdd
+
+    mat = cdd.matrix_from_array(np.column_stack([np.ones(len(V)), V]), rep_type=cdd.RepType.GENERATOR)
+    poly = cdd.polyhedron_from_matrix(mat)
+    ineq = cdd.copy_inequalities(poly)
+    arr = np.array(ineq.array, dtype=float).reshape(-1, V.shape[1] + 1)
+    lin = sorted(ineq.lin_set)
+    if lin:
+        arr = np.vstack([arr, -arr[lin]])
+    # cdd row [b, a] means b + a x >= 0, i.e. (-a) x <= b
+    M, m = -arr[:, 1:], arr[:, 0]
+    keep = np.linalg.norm(M, axis=1) > 1e-12
+    return M[keep], m[keep]
+
+
+@dataclass(frozen=True, eq=False)
+class Polytope:
+    """The convex polytope Set(M, m) = {x in R^n : M x <= m} (Rosa & Silvestre 2013, eq. (2)).
+
+    Parameters
+    ----------
+    M : ndarray, shape (p, n)
+        Facet normals (rows). Rows need not be normalised nor irredundant.
+    m : ndarray, shape (p,)
+        Offsets.
+
+    Notes
+    -----
+    The object is immutable; vertices are computed lazily and cached.
+    """
+
+    M: np.ndarray
+    m: np.ndarray
+    _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        M = _as_2d("M", self.M)
+        m = np.asarray(self.m, dtype=float)
+        if m.ndim != 1 or m.shape[0] != M.shape[0]:
+            raise ShapeError(f"m: expected shape ({M.shape[0]},) to match M {M.shape}, got {m.shape}")
+        _check_finite("m", m)
+        if M.shape[1] < 1:
+            raise ShapeError(f"M: expected at least one column, got shape {M.shape}")
+        object.__setattr__(self, "M", M)
+        object.__setattr__(self, "m", m)
+
+    # ------------------------------------------------------------------ constructors
+    @classmethod
+    def box(cls, lower: Sequence[float], upper: Sequence[float]) -> "Polytope":
+        """The axis-aligned box {lower <= x <= upper}."""
+        lo = np.atleast_1d(np.asarray(lower, dtype=float))
+        hi = np.atleast_1d(np.asarray(upper, dtype=float))
+        if lo.shape != hi.shape or lo.ndim != 1:
+            raise ShapeError(f"lower, upper: expected equal 1-D shapes, got {lo.shape} and {hi.shape}")
+        n = lo.size
+        return cls(np.vstack([np.eye(n), -np.eye(n)]), np.concatenate([hi, -lo]))
+
+    @classmethod
+    def from_vertices(cls, points: Any) -> "Polytope":
+        """Convex hull of a point cloud, in H-representation (facet enumeration by cddlib).
+
+        Parameters
+        ----------
+        points : ndarray, shape (q, n), q >= 1
+        """
+        V = _as_2d("points", points)
+        if V.shape[0] == 0:
+            raise EmptySetError(f"points: expected at least one point, got shape {V.shape}")
+        M, m = _cdd_hull(V)
+        P = cls(M, m)
+        return P
+
+    # ------------------------------------------------------------------ basic queries
+    @property
+    def dim(self) -> int:
+        """Ambient dimension n."""
+        return int(self.M.shape[1])
+
+    @property
+    def n_facets(self) -> int:
+        """Number of inequalities p (after :meth:`remove_redundancy`: the facets)."""
+        return int(self.M.shape[0])
+
+    def vertices(self) -> np.ndarray:
+        """Vertices, shape (v, n); (0, n) if empty. Raises :class:`UnboundedSetError` if unbounded.
+
+        Vertex enumeration by cddlib (double description method).
+        """
+        if "V" not in self._cache:
+            self._cache["V"] = _cdd_vertices(self.M, self.m)
+        return self._cache["V"]
+
+    def is_empty(self, tol: float = _TOL) -> bool:
+        """Emptiness by linear programming (HiGHS): maximise the slack t with M x + t ||M_i|| <= m.
+
+        The set is declared empty when the optimal slack is below ``-tol`` (a point violating
+        no inequality by more than ``tol`` does not exist). Independent of vertex enumeration.
+        """
+        from scipy.optimize import linprog
+
+        if self.n_facets == 0:
+            return False
+        norms = np.linalg.norm(self.M, axis=1)
+        A = np.column_stack([self.M, norms])
+        c = np.zeros(self.dim + 1)
+        c[-1] = -1.0
+        bounds = [(None, None)] * self.dim + [(None, 1.0)]
+        res = linprog(c, A_ub=A, b_ub=self.m, bounds=bounds, method="highs")
+        if res.status == 2:
+            return True
+        if res.status != 0:  # pragma: no cover - HiGHS failures are unexpected
+            raise RuntimeError(f"linprog failed: {res.message}")
+        return bool(-res.fun < -tol)
+
+    def contains(self, x: Any, tol: float = 1e-9) -> bool:
+        """Whether ``x`` (shape (n,)) satisfies every inequality up to ``tol``."""
+        x = np.asarray(x, dtype=float)
+        if x.shape != (self.dim,):
+            raise ShapeError(f"x: expected shape ({self.dim},), got {x.shape}")
+        return bool(np.all(self.M @ x <= self.m + tol * (1.0 + np.abs(self.m))))
+
+    def support(self, directions: Any) -> np.ndarray:
+        """Support function h(c) = max_{x in P} c.x for each row c of ``directions`` (via vertices).
+
+        Returns ``-inf`` for every direction when the set is empty.
+        """
+        D = np.atleast_2d(np.asarray(directions, dtype=float))
+        if D.shape[1] != self.dim:
+            raise ShapeError(f"directions: expected {self.dim} columns, got shape {D.shape}")
+        V = self.vertices()
+        if V.shape[0] == 0:
+            return np.full(D.shape[0], -np.inf)
+        return (V @ D.T).max(axis=0)
+
+    def bounding_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """Smallest axis-aligned box (lower, upper), each shape (n,). Raises if empty."""
+        V = self._nonempty_vertices("bounding_box")
+        return V.min(axis=0), V.max(axis=0)
+
+    def volume(self) -> float:
+        """n-dimensional volume (area in 2-D, length in 1-D); 0 for empty or flat sets (qhull)."""
+        V = self.vertices()
+        if V.shape[0] <= self.dim:
+            return 0.0
+        if self.dim == 1:
+            return float(V.max() - V.min())
+        from scipy.spatial import ConvexHull, QhullError
+
+        try:
+            return float(ConvexHull(V).volume)
+        except QhullError:  # flat (lower-dimensional) set
+            return 0.0
+
+    def _nonempty_vertices(self, what: str) -> np.ndarray:
+        V = self.vertices()
+        if V.shape[0] == 0:
+            raise EmptySetError(f"{what}: the polytope is empty")
+        return V
+
+    # ------------------------------------------------------------------ operations
+    def remove_redundancy(self) -> "Polytope":
+        """Drop redundant inequalities (cddlib ``matrix_canonicalize``); empty sets are returned unchanged."""
+        import cdd
+
+        if self.is_empty():
+            return self
+        mat = cdd.matrix_from_array(np.column_stack([self.m, -self.M]), rep_type=cdd.RepType.INEQUALITY)
+        cdd.matrix_canonicalize(mat)
+        arr = np.array(mat.array, dtype=float).reshape(-1, self.dim + 1)
+        lin = sorted(mat.lin_set)
+        if lin:
+            arr = np.vstack([arr, -arr[lin]])
+        M, m = -arr[:, 1:], arr[:, 0]
+        keep = np.linalg.norm(M, axis=1) > 1e-12
+        return Polytope(M[keep], m[keep])
+
+    def intersect(self, other: "Polytope") -> "Polytope":
+        """Intersection: stack the inequalities."""
+        if other.dim != self.dim:
+            raise ShapeError(f"other: expected dimension {self.dim}, got {other.dim}")
+        return Polytope(np.vstack([self.M, other.M]), np.concatenate([self.m, other.m]))
+
+    def intersect_strip(self, C: Any, y: Any, bound: Any) -> "Polytope":
+        """Intersection with the measurement strip {x : |y - C x| <= bound} (componentwise).
+
+        Rosa & Silvestre (2013), eq. (3): the rows ``[C; -C] x <= [bound + y; bound - y]``.
+        """
+        C = _as_2d("C", C, self.dim)
+        y = np.atleast_1d(np.asarray(y, dtype=float))
+        b = np.broadcast_to(np.asarray(bound, dtype=float), y.shape)
+        if y.shape != (C.shape[0],):
+            raise ShapeError(f"y: expected shape ({C.shape[0]},), got {y.shape}")
+        _check_finite("y", y)
+        return Polytope(np.vstack([self.M, C, -C]), np.concatenate([self.m, b + y, b - y]))
+
+    def translate(self, b: Any) -> "Polytope":
+        """The set P + b."""
+        b = np.asarray(b, dtype=float)
+        if b.shape != (self.dim,):
+            raise ShapeError(f"b: expected shape ({self.dim},), got {b.shape}")
+        return Polytope(self.M, self.m + self.M @ b)
+
+    def linear_map(self, A: Any) -> "Polytope":
+        """Image {A x : x in P}.
+
+        Invertible square ``A``: exact in H-representation, Set(M A^{-1}, m). Otherwise
+        (singular or rectangular ``A``, shape (r, n)): map the vertices and take their hull.
+        """
+        A = _as_2d("A", A, self.dim)
+        if A.shape[0] == A.shape[1] and np.linalg.cond(A) < 1e10:
+            return Polytope(np.linalg.solve(A.T, self.M.T).T, self.m)
+        V = self._nonempty_vertices("linear_map")
+        return Polytope.from_vertices(V @ A.T)
+
+    def minkowski_box(self, L: Any, bound: Any = 1.0) -> "Polytope":
+        """Minkowski sum P + L [-bound, bound]^g (L shape (n, g)): sums of vertices and box corners, then hull."""
+        L = _as_2d("L", L)
+        if L.shape[0] != self.dim:
+            raise ShapeError(f"L: expected {self.dim} rows, got shape {L.shape}")
+        G = L * np.broadcast_to(np.asarray(bound, dtype=float), (L.shape[1],))
+        V = self._nonempty_vertices("minkowski_box")
+        pts = (V[:, None, :] + box_corners(G)[None, :, :]).reshape(-1, self.dim)
+        return Polytope.from_vertices(pts)
+
+    def project(self, dims: Sequence[int], method: str = "fourier-motzkin") -> "Polytope":
+        """Orthogonal projection onto the coordinates ``dims`` (eq. (3) -> R^n, Fig. 1).
+
+        Parameters
+        ----------
+        dims : sequence of int
+            Coordinates kept, in this order.
+        method : {"fourier-motzkin", "vertex"}
+            ``"fourier-motzkin"``: eliminate the other coordinates with cddlib's
+            block elimination (dual double description, a Fourier-Motzkin variant),
+            then remove redundancy. ``"vertex"``: project the vertices and take the hull.
+        """
+        dims = [int(d) for d in dims]
+        if not dims or min(dims) < 0 or max(dims) >= self.dim or len(set(dims)) != len(dims):
+            raise ShapeError(f"dims: expected distinct indices in [0, {self.dim}), got {dims}")
+        if method == "vertex":
+            V = self._nonempty_vertices("project")
+            return Polytope.from_vertices(V[:, dims])
+        if method != "fourier-motzkin":
+            raise ValueError(f"method: expected 'fourier-motzkin' or 'vertex', got {method!r}")
+        import cdd
+
+        elim = [d for d in range(self.dim) if d not in dims]
+        mat = cdd.matrix_from_array(np.column_stack([self.m, -self.M]), rep_type=cdd.RepType.INEQUALITY)
+        if elim:
+            mat = cdd.block_elimination(mat, {d + 1 for d in elim})
+        arr = np.array(mat.array, dtype=float).reshape(-1, self.dim + 1)
+        M, m = -arr[:, [d + 1 for d in dims]], arr[:, 0]
+        keep = np.linalg.norm(M, axis=1) > 1e-12
+        if np.any(m[~keep] < -1e-9):  # 0 <= m_i violated: the set was empty
+            return Polytope(np.vstack([np.eye(len(dims))[:1], -np.eye(len(dims))[:1]]), np.array([-1.0, -1.0]))
+        return Polytope(M[keep], m[keep]).remove_redundancy()
+
+    def outer_template(self, directions: Any) -> "Polytope":
+        """Outer approximation Set(D, h_P(D)) by a fixed set of directions (support via vertices).
+
+        Always contains P, with at most ``len(D)`` inequalities: the complexity reduction used by
+        the fast SVO update.
+        """
+        D = _as_2d("directions", directions, self.dim)
+        return Polytope(D, self.support(D))
+
+
+def convex_hull(polytopes: Iterable[Polytope]) -> Polytope:
+    """co{P_1, ..., P_r}: hull of the union of their vertices (eq. (4) of Rosa & Silvestre 2013).
+
+    Empty members are ignored; raises :class:`EmptySetError` if all are empty.
+    """
+    polys = list(polytopes)
+    if not polys:
+        raise EmptySetError("polytopes: expected at least one polytope, got none")
+    n = polys[0].dim
+    for i, P in enumerate(polys):
+        if P.dim != n:
+            raise ShapeError(f"polytopes[{i}]: expected dimension {n}, got {P.dim}")
+    V = [P.vertices() for P in polys]
+    V = [v for v in V if v.shape[0]]
+    if not V:
+        raise EmptySetError("polytopes: all members are empty")
+    return Polytope.from_vertices(np.vstack(V))
+
+
+def plot_polytope(P: Polytope, ax: Any, **kwargs: Any) -> Any:
+    """Draw a 2-D polytope as a filled polygon on ``ax``; returns ``ax``. Empty sets draw nothing."""
+    if P.dim != 2:
+        raise ShapeError(f"P: expected a 2-D polytope, got dimension {P.dim}")
+    V = P.vertices()
+    if V.shape[0] == 0:
+        return ax
+    c = V.mean(axis=0)
+    order = np.argsort(np.arctan2(V[:, 1] - c[1], V[:, 0] - c[0]))
+    V = V[order]
+    kwargs.setdefault("alpha", 0.35)
+    ax.fill(V[:, 0], V[:, 1], **kwargs)
+    edge = kwargs.get("color", kwargs.get("facecolor", "k"))
+    ax.plot(np.r_[V[:, 0], V[0, 0]], np.r_[V[:, 1], V[0, 1]], color=edge, lw=1.0)
+    return ax

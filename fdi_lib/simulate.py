@@ -1,0 +1,196 @@
+"""Simulation of the faulty LTV system, open or closed loop.
+
+Zhang & Basseville (2014), eqs. (3) and (5)::
+
+    X_{k+1} = F_k X_k + G_k U_k + W_k + Psi_k theta
+    Y_k     = H_k X_k + J_k U_k + V_k + Phi_k theta
+
+Noise is drawn first, as a :class:`Noise` record, so that exactly the same
+realisation can be replayed with another ``theta`` (e.g. ``theta = 0``): this
+is what makes Proposition 1 checkable to machine precision. Everything is
+vectorised over an optional leading axis of independent realisations.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+
+from fdi_lib.errors import ModelError, NonFiniteError, ShapeError
+from fdi_lib.models import FaultProfile, LTVModel
+
+__all__ = ["Noise", "Simulation", "draw_noise", "simulate", "pi_controller", "covariance_sqrt"]
+
+
+@dataclass(frozen=True)
+class Noise:
+    """One or several noise realisations.
+
+    Attributes
+    ----------
+    x0 : numpy.ndarray
+        Initial states ``X_0``, shape ``(*batch, n)``.
+    w : numpy.ndarray
+        State noise ``W_k``, shape ``(*batch, N, n)``.
+    v : numpy.ndarray
+        Output noise ``V_k``, shape ``(*batch, N, p)``.
+    """
+
+    x0: np.ndarray
+    w: np.ndarray
+    v: np.ndarray
+
+    @property
+    def batch_shape(self) -> tuple[int, ...]:
+        return self.x0.shape[:-1]
+
+
+@dataclass(frozen=True)
+class Simulation:
+    """A simulated record: states ``x`` ``(*batch, N+1, n)``, outputs ``y`` ``(*batch, N, p)``,
+    inputs ``u`` ``(*batch, N, l)`` and the ``noise`` that produced them."""
+
+    x: np.ndarray
+    y: np.ndarray
+    u: np.ndarray
+    noise: Noise
+
+
+def covariance_sqrt(cov: np.ndarray) -> np.ndarray:
+    """A square root ``S`` with ``S S^T = cov`` for symmetric PSD matrices (batched, via ``eigh``).
+
+    ``eigh`` rather than Cholesky so that singular PSD covariances (e.g. rank-one ``Q``) work.
+    """
+    eig, vec = np.linalg.eigh(cov)
+    return vec * np.sqrt(np.clip(eig, 0.0, None))[..., None, :]
+
+
+def draw_noise(model: LTVModel, rng: np.random.Generator, size: int | None = None) -> Noise:
+    """Draw ``X_0 ~ N(x0, P0)``, ``W_k ~ N(0, Q_k)``, ``V_k ~ N(0, R_k)``.
+
+    Parameters
+    ----------
+    model : LTVModel
+    rng : numpy.random.Generator
+        The only source of randomness (no global state).
+    size : int, optional
+        Number of independent realisations (leading batch axis); ``None`` for one.
+    """
+    if not isinstance(rng, np.random.Generator):
+        raise ModelError(f"rng: expected a numpy.random.Generator, got {type(rng).__name__}")
+    batch = () if size is None else (int(size),)
+    N, n, p = model.n_steps, model.n, model.p
+
+    def gaussian(cov: np.ndarray, dim: int) -> np.ndarray:
+        root = covariance_sqrt(cov[:1] if cov.strides[0] == 0 else cov)  # one root for constants
+        z = rng.standard_normal((*batch, N, dim))
+        return np.einsum("kij,...kj->...ki", np.broadcast_to(root, (N, dim, dim)), z)
+
+    x0 = model.x0 + rng.standard_normal((*batch, n)) @ covariance_sqrt(model.P0).T
+    return Noise(x0=x0, w=gaussian(model.Q, n), v=gaussian(model.R, p))
+
+
+def pi_controller(kp: float, ki: float, setpoint: float = 0.0) -> Callable[[int, np.ndarray], np.ndarray]:
+    """A discrete PI controller ``C(z) = kp + ki / (z - 1)`` acting on ``e_k = setpoint - y_k``.
+
+    Returns a fresh stateful callback ``u_k = controller(k, y_k)`` for :func:`simulate`
+    (single-output, single-input; works element-wise on a batch of realisations).
+    Zhang & Basseville (2014), Section 6.1: ``kp = 0.209``, ``ki = 0.0011``, setpoint 1.
+    """
+    state: dict[str, Any] = {"integral": None}
+
+    def controller(k: int, y_k: np.ndarray) -> np.ndarray:
+        e = setpoint - y_k[..., :1]
+        if state["integral"] is None:
+            state["integral"] = np.zeros_like(e)
+        u = kp * e + state["integral"]
+        state["integral"] = state["integral"] + ki * e
+        return u
+
+    return controller
+
+
+def simulate(model: LTVModel, *, rng: np.random.Generator | None = None, noise: Noise | None = None,
+             u: Any = None, controller: Callable[[int, np.ndarray], np.ndarray] | None = None,
+             fault: FaultProfile | None = None, theta: Any = None, size: int | None = None) -> Simulation:
+    """Simulate eq. (5) (eq. (3) when ``fault.Phi`` is zero).
+
+    Parameters
+    ----------
+    model : LTVModel
+    rng : numpy.random.Generator, optional
+        Draws the noise (exactly one of ``rng`` and ``noise``).
+    noise : Noise, optional
+        A noise record to replay (e.g. from a previous :class:`Simulation`).
+    u : array_like, optional
+        Open-loop input, shape ``(N, l)`` (or ``(N,)`` when ``l = 1``); default zeros.
+    controller : callable, optional
+        Closed loop: ``u_k = controller(k, y_k)`` with ``y_k`` of shape ``(*batch, p)``
+        (requires ``J_k = 0``, otherwise the loop is algebraic). Exclusive with ``u``.
+    fault : FaultProfile, optional
+        ``Psi_k`` and ``Phi_k``; with ``theta`` the fault vector, shape ``(m,)``.
+    size : int, optional
+        Number of realisations when drawing noise with ``rng``.
+
+    Returns
+    -------
+    Simulation
+    """
+    N, n, p, l = model.n_steps, model.n, model.p, model.l
+    if (rng is None) == (noise is None):
+        raise ModelError("simulate: give exactly one of rng (draw new noise) and noise (replay)")
+    if noise is None:
+        noise = draw_noise(model, rng, size)
+    elif size is not None:
+        raise ModelError("size: only with rng; a replayed noise record has its own batch shape")
+    batch = noise.batch_shape
+    if noise.w.shape != (*batch, N, n) or noise.v.shape != (*batch, N, p):
+        raise ShapeError(f"noise: expected w {(*batch, N, n)} and v {(*batch, N, p)}, "
+                         f"got {noise.w.shape} and {noise.v.shape}")
+    if u is not None and controller is not None:
+        raise ModelError("simulate: give u (open loop) or controller (closed loop), not both")
+    if controller is not None and np.any(model.J):
+        raise ModelError("controller: closed loop needs J_k = 0 (a non-zero J makes the loop algebraic)")
+    if u is None:
+        u_arr = np.zeros((N, l))
+    else:
+        u_arr = np.asarray(u, dtype=float)
+        if u_arr.ndim == 1 and l == 1:
+            u_arr = u_arr[:, None]
+        if u_arr.shape[-2:] != (N, l):
+            raise ShapeError(f"u: expected shape ({N}, {l}), got {np.shape(u)}")
+        if not np.all(np.isfinite(u_arr)):
+            idx = tuple(int(i) for i in np.argwhere(~np.isfinite(u_arr))[0])
+            raise NonFiniteError(f"u: expected finite values, got {u_arr[idx]!r} at index {idx}")
+    if fault is None:
+        if theta is not None:
+            raise ModelError("theta: given without a fault profile")
+        state_fault = np.zeros((N, n))
+        output_fault = np.zeros((N, p))
+    else:
+        th = np.asarray(theta, dtype=float)
+        if th.shape != (fault.m,):
+            raise ShapeError(f"theta: expected shape ({fault.m},), got {th.shape}")
+        if fault.Psi.shape[:2] != (N, n) or fault.Phi.shape[:2] != (N, p):
+            raise ShapeError(f"fault: expected Psi ({N}, {n}, m) and Phi ({N}, {p}, m), "
+                             f"got {fault.Psi.shape} and {fault.Phi.shape}")
+        state_fault = fault.Psi @ th
+        output_fault = fault.Phi @ th
+
+    x = np.empty((*batch, N + 1, n))
+    y = np.empty((*batch, N, p))
+    us = np.broadcast_to(u_arr, (*batch, N, l)).copy()
+    x[..., 0, :] = noise.x0
+    F, G, H, J = model.F, model.G, model.H, model.J
+    for k in range(N):
+        y_k = x[..., k, :] @ H[k].T + noise.v[..., k, :] + output_fault[k]
+        if controller is not None:
+            us[..., k, :] = np.broadcast_to(controller(k, y_k), (*batch, l))
+        else:
+            y_k = y_k + us[..., k, :] @ J[k].T
+        y[..., k, :] = y_k
+        x[..., k + 1, :] = x[..., k, :] @ F[k].T + us[..., k, :] @ G[k].T + noise.w[..., k, :] + state_fault[k]
+    return Simulation(x=x, y=y, u=us, noise=noise)
+

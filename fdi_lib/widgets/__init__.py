@@ -1,0 +1,50 @@
+"""Interactive explorations for the book (ipywidgets).
+
+Each chapter has a module here with a *tested, pure* callback
+``explore_*(..., fig=None) -> Figure`` that the notebook wires to sliders via
+:func:`interactive_figure`. The callback is what the book also calls once at
+the default values to show a static figure, so the HTML is never empty.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable
+
+__all__ = ["interactive_figure"]
+
+
+def interactive_figure(callback: Callable[..., Any], **sliders: Any):
+    """Wire ``callback(**values, fig=fig)`` to ipywidgets sliders (``continuous_update=False``).
+
+    Parameters
+    ----------
+    callback : callable
+        Pure function drawing into ``fig`` and returning it.
+    **sliders : ipywidgets.ValueWidget
+        One widget per keyword argument of ``callback``.
+
+    Returns
+    -------
+    ipywidgets.VBox
+        The sliders above an output area holding the figure.
+    """
+    import ipywidgets as widgets
+    import matplotlib.pyplot as plt
+
+    out = widgets.Output()
+    for w in sliders.values():
+        if hasattr(w, "continuous_update"):
+            w.continuous_update = False
+    state: dict[str, Any] = {"fig": None}
+
+    def redraw(_change: Any = None) -> None:
+        with out:
+            out.clear_output(wait=True)
+            state["fig"] = callback(**{k: w.value for k, w in sliders.items()}, fig=state["fig"])
+            plt.show(state["fig"])
+
+    for w in sliders.values():
+        w.observe(redraw, names="value")
+    redraw()
+    return widgets.VBox([widgets.HBox(list(sliders.values())[:3]),
+                         widgets.HBox(list(sliders.values())[3:]), out])
