@@ -1,0 +1,1 @@
+"""The papers' example systems, one module per example (plain data + functions)."""
