@@ -75,8 +75,83 @@ def box_corners(generators: np.ndarray) -> np.ndarray:
     return signs @ G.T
 
 
-def _cdd_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray:
-    """Vertices of Set(M, m) with cddlib (double description); raises if unbounded."""
+def _normalise(M: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit-norm rows, exact duplicates merged (keeping the tightest offset), zero rows checked."""
+    norms = np.linalg.norm(M, axis=1)
+    zero = norms < 1e-14
+    if np.any(m[zero] < 0):  # 0 <= m_i < 0: infeasible
+        return np.array([[1.0] + [0.0] * (M.shape[1] - 1)] * 2) * np.array([[1.0], [-1.0]]), np.array([-1.0, -1.0])
+    M, m, norms = M[~zero], m[~zero], norms[~zero]
+    M, m = M / norms[:, None], m / norms
+    key = np.round(M, 12)
+    order = np.lexsort(np.column_stack([m, key]).T[::-1])
+    key, M, m = key[order], M[order], m[order]
+    first = np.ones(len(m), dtype=bool)
+    first[1:] = np.any(key[1:] != key[:-1], axis=1)
+    return M[first], m[first]
+
+
+def _chebyshev(M: np.ndarray, m: np.ndarray, cap: float = 1e6) -> tuple[str, np.ndarray, float]:
+    """Chebyshev centre of Set(M, m) (unit rows) with cddlib's small dense simplex LP.
+
+    Returns (status, centre, radius); status is "optimal", "infeasible" or "unbounded".
+    cddlib's LP is used rather than HiGHS because it has microsecond overhead on these
+    tiny problems (HiGHS is the independent route used by :meth:`Polytope.is_empty`).
+    """
+    import cdd
+
+    n = M.shape[1]
+    # variables (x, r): maximise r s.t. m - M x - r >= 0, r <= cap
+    rows = np.column_stack([m, -M, -np.ones(len(m))])
+    rows = np.vstack([rows, np.r_[cap, np.zeros(n), -1.0], np.r_[0.0, np.zeros(n), 1.0]])
+    obj = np.r_[0.0, np.zeros(n), 1.0]
+    lp = cdd.linprog_from_array(np.vstack([rows, obj]), obj_type=cdd.LPObjType.MAX)
+    cdd.linprog_solve(lp)
+    if lp.status == cdd.LPStatusType.OPTIMAL:
+        sol = np.array(lp.primal_solution, dtype=float)
+        return "optimal", sol[:n], float(sol[n])
+    if lp.status in (cdd.LPStatusType.INCONSISTENT, cdd.LPStatusType.STRUC_INCONSISTENT):
+        return "infeasible", np.zeros(n), -np.inf
+    return "unbounded", np.zeros(n), np.inf
+
+
+def _qhull_vertices(M: np.ndarray, m: np.ndarray, centre: np.ndarray) -> np.ndarray:
+    """Vertices by qhull's halfspace intersection around an interior point."""
+    from scipy.spatial import HalfspaceIntersection
+
+    hs = HalfspaceIntersection(np.column_stack([M, -m]), centre)
+    V = hs.intersections
+    # merge vertices reported once per incident facet
+    key = np.round(V / (1e-9 * (1.0 + np.abs(V).max())), 0)
+    return V[np.unique(key, axis=0, return_index=True)[1]]
+
+
+def _enumerate_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """Vertices of Set(M, m), shape (v, n); (0, n) if empty; raises if unbounded.
+
+    Rows are normalised and de-duplicated; a Chebyshev centre is found by LP (cddlib). A
+    full-dimensional set goes to qhull's halfspace intersection, which is robust in floating
+    point; cddlib's double description in floating point can silently drop vertices when
+    nearly parallel inequalities are present. Flat sets (radius ~ 0), which qhull cannot
+    handle, go to cddlib.
+    """
+    M, m = _normalise(M, m)
+    n = M.shape[1]
+    status, centre, radius = _chebyshev(M, m)
+    if status == "infeasible" or radius < -1e-12:
+        return np.zeros((0, n))
+    if status == "unbounded" or radius >= 1e6 * (1 - 1e-12):
+        raise UnboundedSetError("Set(M, m): the polytope is unbounded (it contains arbitrarily large balls)")
+    if radius > 1e-9 * (1.0 + np.abs(m).max()):
+        try:
+            return _qhull_vertices(M, m, centre)
+        except Exception:  # pragma: no cover - qhull precision failure: fall back to cddlib
+            pass
+    return _cdd_dd_vertices(M, m)
+
+
+def _cdd_dd_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """Vertices with cddlib's double description method (handles flat sets); raises if unbounded."""
     import cdd
 
     mat = cdd.matrix_from_array(np.column_stack([m, -M]), rep_type=cdd.RepType.INEQUALITY)
@@ -86,12 +161,33 @@ def _cdd_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray:
     if arr.shape[0] == 0:
         return np.zeros((0, M.shape[1]))
     if gen.lin_set or np.any(arr[:, 0] < 0.5):
-        raise UnboundedSetError(f"Set(M, m): the polytope is unbounded (cdd found {int(np.sum(arr[:, 0] < 0.5)) + len(gen.lin_set)} rays/lines)")
+        raise UnboundedSetError("Set(M, m): the polytope is unbounded (cddlib found rays or lines)")
     return arr[:, 1:]
 
 
-def _cdd_hull(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """H-representation (M, m) of conv(V) with cddlib; equalities become two inequalities."""
+def _hull_hrep(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """H-representation (M, m) of conv(V).
+
+    Full-dimensional point sets go to qhull (:class:`scipy.spatial.ConvexHull`), which is
+    fast and numerically robust in floating point; flat (lower-dimensional) sets, which
+    qhull rejects, go to cddlib, whose equalities become pairs of inequalities.
+    """
+    from scipy.spatial import ConvexHull, QhullError
+
+    if V.shape[1] >= 2 and V.shape[0] > V.shape[1]:
+        try:
+            hull = ConvexHull(V)
+        except QhullError:
+            pass
+        else:
+            eq = hull.equations  # rows [a, b] with a x + b <= 0 (unit normals)
+            eq = eq[np.unique(np.round(eq, 12), axis=0, return_index=True)[1]]
+            return eq[:, :-1].copy(), -eq[:, -1]
+    return _cdd_hull_exact(V)
+
+
+def _cdd_hull_exact(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """H-representation of conv(V) with cddlib (double description); handles flat sets."""
     import cdd
 
     mat = cdd.matrix_from_array(np.column_stack([np.ones(len(V)), V]), rep_type=cdd.RepType.GENERATOR)
@@ -160,7 +256,7 @@ class Polytope:
         V = _as_2d("points", points)
         if V.shape[0] == 0:
             raise EmptySetError(f"points: expected at least one point, got shape {V.shape}")
-        M, m = _cdd_hull(V)
+        M, m = _hull_hrep(V)
         P = cls(M, m)
         return P
 
@@ -181,7 +277,7 @@ class Polytope:
         Vertex enumeration by cddlib (double description method).
         """
         if "V" not in self._cache:
-            self._cache["V"] = _cdd_vertices(self.M, self.m)
+            self._cache["V"] = _enumerate_vertices(self.M, self.m)
         return self._cache["V"]
 
     def is_empty(self, tol: float = _TOL) -> bool:
@@ -342,8 +438,9 @@ class Polytope:
         mat = cdd.matrix_from_array(np.column_stack([self.m, -self.M]), rep_type=cdd.RepType.INEQUALITY)
         if elim:
             mat = cdd.block_elimination(mat, {d + 1 for d in elim})
-        arr = np.array(mat.array, dtype=float).reshape(-1, self.dim + 1)
-        M, m = -arr[:, [d + 1 for d in dims]], arr[:, 0]
+        kept = sorted(dims)  # cdd drops the eliminated columns and keeps the others in order
+        arr = np.array(mat.array, dtype=float).reshape(-1, len(kept) + 1)
+        M, m = -arr[:, [kept.index(d) + 1 for d in dims]], arr[:, 0]
         keep = np.linalg.norm(M, axis=1) > 1e-12
         if np.any(m[~keep] < -1e-9):  # 0 <= m_i violated: the set was empty
             return Polytope(np.vstack([np.eye(len(dims))[:1], -np.eye(len(dims))[:1]]), np.array([-1.0, -1.0]))

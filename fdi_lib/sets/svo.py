@@ -1,0 +1,600 @@
+"""Set-valued observers (SVOs) for uncertain LPV systems, and FDI by model invalidation.
+
+Rosa & Silvestre (2013), §2-§4. The model (eq. (1)) is
+
+    x(k+1) = (A(k) + sum_i Delta_i(k) A_i(k)) x(k) + L(k) d(k) + (B(k) + sum_b Delta_b(k) B_b(k)) u(k)
+    y(k)   = (C(k) + sum_c Delta_c(k) C_c(k)) x(k) + n(k),
+
+with |Delta| <= 1, ||d(k)||_inf <= 1 and |n_i(k)| <= nbar_i. An SVO returns a convex
+polytope X̂(k) that contains every state compatible with the model and the data
+(Proposition 2); an empty X̂(k) proves that the data cannot come from the model, i.e. a
+fault (Proposition 3). No threshold is involved.
+
+Two update rules are offered (``method``):
+
+``"exact"``
+    The paper's construction: for every vertex v of the uncertainty cube (eq. (4)) the
+    set X̂_v(k+1) of states compatible with (3) is computed exactly (images of vertices,
+    Minkowski sum with the disturbance zonotope, facet and vertex enumeration by cddlib,
+    intersection with the measurement strip), and X̂(k+1) = co{X̂_v(k+1)}. Complexity
+    grows with time; used for the small 2-D figures.
+``"template"``
+    A fixed-complexity outer approximation of the same set: the support function of each
+    X̂_v in a fixed set of directions D (template) is computed in closed form from the
+    vertices of the previous sets, so X̂(k+1) = Set([D; C; -C], [max_v h_v; y + nbar; nbar - y])
+    always has |D| + 2 n_y inequalities. It contains the exact set, so Propositions 2 and 3
+    still hold; only conservatism is added. Used for the UAV (fast, bounded complexity).
+
+B uncertainty is folded into the disturbance as in the paper (L_d(k) = B_b(k) u(k)). C
+uncertainty is handled by the relaxation idea of eq. (11) applied directly to the output:
+the bilinear term Delta_c C_c x is replaced by an extra bounded noise whose bound is the
+largest |C_c x| over the predicted set (see :func:`SVOModel` and the book chapter, which
+explains why this differs from the augmented system (9)-(10)).
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+
+from fdi_lib.errors import EmptySetError, ModelError, NonFiniteError, ShapeError, UnboundedSetError
+from fdi_lib.sets.polytope import Polytope, _hull_hrep, _enumerate_vertices, box_corners
+
+__all__ = ["SVOModel", "SetValuedObserver", "SVORun", "run_svo", "FDIResult", "run_architecture_i",
+           "run_architecture_ii", "default_template"]
+
+
+def _arr(name: str, a: Any, ndim: int) -> np.ndarray:
+    x = np.asarray(a, dtype=float)
+    if x.ndim != ndim:
+        raise ShapeError(f"{name}: expected a {ndim}-D array, got shape {x.shape}")
+    bad = np.argwhere(~np.isfinite(x))
+    if bad.size:
+        raise NonFiniteError(f"{name}: non-finite value at index {tuple(int(i) for i in bad[0])}")
+    return x
+
+
+@dataclass(frozen=True, eq=False)
+class SVOModel:
+    """One step of the uncertain model (1) of Rosa & Silvestre (2013).
+
+    Parameters
+    ----------
+    A : ndarray, shape (n, n)
+        Known part A(k).
+    B : ndarray, shape (n, n_u), optional
+        Known input matrix (default: no input).
+    C : ndarray, shape (n_y, n)
+        Known output matrix.
+    L : ndarray, shape (n, n_d), optional
+        Disturbance directions; ||d(k)||_inf <= 1 (scale L to set the bounds).
+    noise : float or ndarray, shape (n_y,)
+        Sensor noise bounds nbar_i, |n_i(k)| <= nbar_i (a vector generalises the paper's scalar).
+    A_unc : ndarray, shape (n_A, n, n), optional
+        Directions A_i of the parametric uncertainty A_d = sum Delta_i A_i, |Delta_i| <= 1.
+    B_unc : ndarray, shape (n_B, n, n_u), optional
+        Directions B_b of the input uncertainty; handled as disturbance L = B_b u(k) (§2).
+    C_unc : ndarray, shape (n_C, n_y, n), optional
+        Directions C_c of the output uncertainty (eq. (8)).
+    """
+
+    A: Any
+    C: Any
+    B: Any = None
+    L: Any = None
+    noise: Any = 0.0
+    A_unc: Any = None
+    B_unc: Any = None
+    C_unc: Any = None
+    _vertex_A: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        A = _arr("A", self.A, 2)
+        n = A.shape[0]
+        if A.shape != (n, n):
+            raise ShapeError(f"A: expected a square matrix, got shape {A.shape}")
+        C = _arr("C", self.C, 2)
+        if C.shape[1] != n:
+            raise ShapeError(f"C: expected {n} columns (n = A.shape[0]), got shape {C.shape}")
+        ny = C.shape[0]
+        B = np.zeros((n, 0)) if self.B is None else _arr("B", self.B, 2)
+        if B.shape[0] != n:
+            raise ShapeError(f"B: expected {n} rows, got shape {B.shape}")
+        L = np.zeros((n, 0)) if self.L is None else _arr("L", self.L, 2)
+        if L.shape[0] != n:
+            raise ShapeError(f"L: expected {n} rows, got shape {L.shape}")
+        noise = np.broadcast_to(_arr("noise", np.atleast_1d(self.noise), 1), (ny,)).copy() \
+            if np.size(self.noise) in (1, ny) else None
+        if noise is None:
+            raise ShapeError(f"noise: expected a scalar or shape ({ny},), got shape {np.shape(self.noise)}")
+        if np.any(noise < 0):
+            raise ModelError(f"noise: expected non-negative bounds, got {noise}")
+        Au = np.zeros((0, n, n)) if self.A_unc is None else _arr("A_unc", self.A_unc, 3)
+        if Au.shape[1:] != (n, n):
+            raise ShapeError(f"A_unc: expected shape (n_A, {n}, {n}), got {Au.shape}")
+        Bu = np.zeros((0, n, B.shape[1])) if self.B_unc is None else _arr("B_unc", self.B_unc, 3)
+        if Bu.shape[1:] != B.shape:
+            raise ShapeError(f"B_unc: expected shape (n_B, {n}, {B.shape[1]}), got {Bu.shape}")
+        Cu = np.zeros((0, ny, n)) if self.C_unc is None else _arr("C_unc", self.C_unc, 3)
+        if Cu.shape[1:] != (ny, n):
+            raise ShapeError(f"C_unc: expected shape (n_C, {ny}, {n}), got {Cu.shape}")
+        for name, val in [("A", A), ("C", C), ("B", B), ("L", L), ("noise", noise), ("A_unc", Au),
+                          ("B_unc", Bu), ("C_unc", Cu)]:
+            object.__setattr__(self, name, val)
+        signs = np.array(list(itertools.product((-1.0, 1.0), repeat=Au.shape[0]))).reshape(-1, Au.shape[0])
+        object.__setattr__(self, "_vertex_A", A[None] + np.einsum("vi,ijk->vjk", signs, Au))
+
+    @property
+    def n(self) -> int:
+        return int(self.A.shape[0])
+
+    @property
+    def n_y(self) -> int:
+        return int(self.C.shape[0])
+
+    @property
+    def n_u(self) -> int:
+        return int(self.B.shape[1])
+
+    def vertex_matrices(self) -> np.ndarray:
+        """A(k) + sum_i v_i A_i(k) for every vertex v of the cube {|Delta| <= 1}, shape (2**n_A, n, n) (eq. (4))."""
+        return self._vertex_A
+
+    def generators(self, u: np.ndarray) -> np.ndarray:
+        """Columns G with L d + sum_b Delta_b B_b u = G s, ||s||_inf <= 1 (B uncertainty as disturbance, §2)."""
+        if self.B_unc.shape[0] == 0:
+            return self.L
+        return np.column_stack([self.L, np.einsum("bij,j->ib", self.B_unc, u)])
+
+
+def default_template(n: int, C: np.ndarray | None = None) -> np.ndarray:
+    """Template directions: +-e_i, plus +-normalised rows of C not parallel to those, shape (p, n)."""
+    rows = list(np.eye(n))
+    if C is not None:
+        for c in np.asarray(C, dtype=float):
+            c = c / np.linalg.norm(c)
+            if all(abs(abs(c @ r) - 1.0) > 1e-6 for r in rows):
+                rows.append(c)
+    D = np.array(rows)
+    return np.vstack([D, -D])
+
+
+@dataclass
+class _Entry:
+    X: Polytope
+    V: np.ndarray
+    model: SVOModel | None = None
+    u: np.ndarray | None = None
+
+
+class SetValuedObserver:
+    """Recursive SVO of Rosa & Silvestre (2013), §2, with horizon N (eq. (3)).
+
+    Parameters
+    ----------
+    X0 : Polytope
+        Prior set of x(0), Set(M_0, m_0); must be non-empty and bounded.
+    N : int
+        Horizon: X̂(k+1) uses X̂(k), ..., X̂(k-N+1) (Remark 1).
+    method : {"template", "exact"}
+        Update rule (see module docstring).
+    template : ndarray, shape (p, n), optional
+        Template directions of the ``"template"`` method (default :func:`default_template`).
+    margin : float
+        Relative outward inflation of the computed supports (round-off guard, keeps Prop. 2
+        valid under floating point).
+    strip_before_hull : bool
+        ``"exact"`` method only. False (default): X̂(k+1) = ∩_j co_v{Prop_j(v)} ∩ S, which always
+        contains the true state. True: the paper's literal construction co_v{Prop_0(v) ∩ S} (Fig. 2),
+        which is tighter but can exclude the true state when the uncertain parameter is strictly
+        inside the cube (a counter-example is in the tests and the book).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.sets import Polytope
+    >>> from fdi_lib.sets.svo import SVOModel, SetValuedObserver
+    >>> model = SVOModel(A=np.array([[0.9]]), C=np.array([[1.0]]), L=np.array([[0.1]]), noise=0.05)
+    >>> svo = SetValuedObserver(Polytope.box([-1], [1]), method="exact")
+    >>> X = svo.start(model, y0=np.array([0.2]))
+    >>> X = svo.update(model, u=np.zeros(0), y_next=np.array([0.15]))
+    >>> svo.empty
+    False
+    """
+
+    def __init__(self, X0: Polytope, *, N: int = 1, method: str = "template",
+                 template: np.ndarray | None = None, margin: float = 1e-9,
+                 strip_before_hull: bool = False) -> None:
+        if not isinstance(X0, Polytope):
+            raise TypeError(f"X0: expected a Polytope, got {type(X0).__name__}")
+        if not isinstance(N, (int, np.integer)) or N < 1:
+            raise ModelError(f"N: expected a positive integer horizon, got {N!r}")
+        if method not in ("template", "exact"):
+            raise ModelError(f"method: expected 'template' or 'exact', got {method!r}")
+        if X0.is_empty():
+            raise EmptySetError("X0: the initial set Set(M_0, m_0) is empty")
+        try:
+            V0 = X0.vertices()
+        except UnboundedSetError:
+            raise UnboundedSetError("X0: the initial set Set(M_0, m_0) is unbounded; "
+                                    "give finite bounds on every state") from None
+        self.N = int(N)
+        self.method = method
+        self.template = None if template is None else np.asarray(template, dtype=float)
+        if self.template is not None and (self.template.ndim != 2 or self.template.shape[1] != X0.dim):
+            raise ShapeError(f"template: expected shape (p, {X0.dim}), got {self.template.shape}")
+        self.margin = float(margin)
+        self.strip_before_hull = bool(strip_before_hull)
+        self.n = X0.dim
+        self._prior = _Entry(X0, V0)
+        self.history: list[_Entry] = []  # most recent first
+        self.empty = False
+
+    # -------------------------------------------------------------- public API
+    @property
+    def current(self) -> Polytope | None:
+        """The latest set X̂(k), or None once empty."""
+        return None if self.empty or not self.history else self.history[0].X
+
+    def start(self, model: SVOModel, y0: np.ndarray) -> Polytope | None:
+        """X̂(0) = X(0) ∩ {x : |y(0) - C x| <= nbar}."""
+        self._check_model(model)
+        X = self._strip(self._prior.X, model, y0, self._prior.V)
+        return self._push(X)
+
+    def start_from(self, other: "SetValuedObserver") -> None:
+        """Initialise with another observer's current history (Architecture II, §4.2)."""
+        if other.empty or not other.history:
+            raise EmptySetError("other: the observer to copy from has no non-empty set")
+        self.history = [_Entry(e.X, e.V, e.model, e.u) for e in other.history]
+        self.empty = False
+
+    def update(self, model: SVOModel, u: np.ndarray, y_next: np.ndarray) -> Polytope | None:
+        """X̂(k+1) from X̂(k..k-N+1), the model and input of step k, and y(k+1). None if empty."""
+        if self.empty:
+            return None
+        if not self.history:
+            raise ModelError("update: call start(model, y0) first")
+        self._check_model(model)
+        u = np.asarray(u, dtype=float).reshape(-1)
+        if u.shape != (model.n_u,):
+            raise ShapeError(f"u: expected shape ({model.n_u},), got {u.shape}")
+        y_next = np.asarray(y_next, dtype=float).reshape(-1)
+        if y_next.shape != (model.n_y,):
+            raise ShapeError(f"y_next: expected shape ({model.n_y},), got {y_next.shape}")
+        self.history[0].model = model
+        self.history[0].u = u
+        entries = self.history[: self.N]
+        if self.method == "template":
+            X = self._update_template(entries, model, y_next)
+        else:
+            X = self._update_exact(entries, model, y_next)
+        return self._push(X)
+
+    # -------------------------------------------------------------- internals
+    def _check_model(self, model: SVOModel) -> None:
+        if not isinstance(model, SVOModel):
+            raise TypeError(f"model: expected an SVOModel, got {type(model).__name__}")
+        if model.n != self.n:
+            raise ShapeError(f"model: expected state dimension {self.n} (from X0), got {model.n}")
+
+    def _push(self, X: Polytope | None) -> Polytope | None:
+        if X is None:
+            self.empty = True
+            return None
+        V = X.vertices()
+        if V.shape[0] == 0:
+            self.empty = True
+            return None
+        self.history.insert(0, _Entry(X, V))
+        del self.history[self.N + 1:]
+        return X
+
+    def _strip(self, X: Polytope, model: SVOModel, y: np.ndarray, V: np.ndarray) -> Polytope:
+        y = np.asarray(y, dtype=float).reshape(-1)
+        if y.shape != (model.n_y,):
+            raise ShapeError(f"y0: expected shape ({model.n_y},), got {y.shape}")
+        nb = model.noise + self._c_unc_bound(model, V)
+        return X.intersect_strip(model.C, y, nb)
+
+    @staticmethod
+    def _c_unc_bound(model: SVOModel, V: np.ndarray) -> np.ndarray:
+        """Relaxation (11) applied to the output: |Delta_c C_c x| <= max over the predicted set of |C_c x|."""
+        if model.C_unc.shape[0] == 0 or V.shape[0] == 0:
+            return np.zeros(model.n_y)
+        vals = np.abs(np.einsum("cyn,vn->cyv", model.C_unc, V)).max(axis=2)  # (n_C, n_y)
+        return vals.sum(axis=0)
+
+    def _propagations(self, entries: list[_Entry]) -> list[list[tuple[np.ndarray, np.ndarray, np.ndarray]]]:
+        """For each horizon j = 0..N'-1 and each Delta-vertex sequence of length j+1 (most recent step
+        first): (Phi, c, G) such that x(k+1) in Phi X(k-j) + c + G [-1, 1]^g (eqs. (3)-(4))."""
+        out = []
+        # sequences built recursively: prefix over steps k, k-1, ..., k-j
+        level = [(np.eye(self.n), np.zeros(self.n), np.zeros((self.n, 0)))]
+        for j, e in enumerate(entries):
+            model, u = e.model, e.u
+            G_step = model.generators(u)
+            Bu = model.B @ u
+            new = []
+            for Phi, c, G in level:
+                # Phi maps x(k-j+1) to x(k+1); add step k-j
+                for Av in model.vertex_matrices():
+                    new.append((Phi @ Av, c + Phi @ Bu, np.column_stack([G, Phi @ G_step])))
+            level = new
+            out.append(level)
+        return out
+
+    def _update_template(self, entries: list[_Entry], model_next: SVOModel, y: np.ndarray) -> Polytope | None:
+        D = self.template if self.template is not None else default_template(self.n, model_next.C)
+        Cu = model_next.C_unc.reshape(-1, self.n)
+        Dall = np.vstack([D, Cu, -Cu]) if Cu.size else D
+        h = np.full(Dall.shape[0], np.inf)
+        for j, level in enumerate(self._propagations(entries)):
+            V = entries[j].V
+            # support of co_v{Prop_j(v)} = max over the Delta-vertex sequences v (eq. (4))
+            hj = np.max([(V @ (Dall @ Phi).T).max(axis=0) + Dall @ c + np.abs(Dall @ G).sum(axis=1)
+                         for Phi, c, G in level], axis=0)
+            h = np.minimum(h, hj)  # intersection over the horizon: take the tightest bound
+        h = h + self.margin * (1.0 + np.abs(h))
+        p = D.shape[0]
+        nb = model_next.noise.copy()
+        if Cu.size:
+            q = Cu.shape[0]
+            rho = np.maximum(h[p:p + q], h[p + q:p + 2 * q])  # max |C_c x| over the prediction
+            nb = nb + rho.reshape(model_next.C_unc.shape[:2]).sum(axis=0)
+        nb = nb * (1.0 + self.margin) + self.margin
+        return Polytope(D, h[:p]).intersect_strip(model_next.C, y, nb)
+
+    def _update_exact(self, entries: list[_Entry], model_next: SVOModel, y: np.ndarray) -> Polytope | None:
+        props = self._propagations(entries)
+        H = []
+        imgs0 = None
+        per_vertex = []
+        for j, level in enumerate(props):
+            V = entries[j].V
+            pts_all = []
+            for Phi, c, G in level:
+                pts = ((V @ Phi.T + c)[:, None, :] + box_corners(G)[None, :, :]).reshape(-1, self.n)
+                pts_all.append(pts)
+            if j == 0:
+                imgs0 = pts_all
+            # co_v{Prop_j(v)}: hull of the union of the vertex images (qhull / cddlib)
+            M, m = _hull_hrep(np.vstack(pts_all))
+            H.append(np.column_stack([M, m + self.margin * (1.0 + np.abs(m))]))
+        nb = model_next.noise + self._c_unc_bound(model_next, np.vstack(imgs0))
+        nb = nb * (1.0 + self.margin) + self.margin
+        if self.strip_before_hull:
+            # the paper's literal reading: co_v{Prop_0(v) ∩ S}; can exclude the true state (see docs)
+            for pts in imgs0:
+                M, m = _hull_hrep(pts)
+                Xv = Polytope(M, m + self.margin * (1.0 + np.abs(m))).intersect_strip(model_next.C, y, nb)
+                Vv = _enumerate_vertices(Xv.M, Xv.m)
+                if Vv.shape[0]:
+                    per_vertex.append(Vv)
+            if not per_vertex:
+                return None
+            X = Polytope.from_vertices(np.vstack(per_vertex))
+            return X.intersect(Polytope(np.vstack([h[:, :-1] for h in H[1:]]) if len(H) > 1 else X.M[:0],
+                                        np.concatenate([h[:, -1] for h in H[1:]]) if len(H) > 1 else X.m[:0]))
+        Hs = np.vstack(H)
+        X = Polytope(Hs[:, :-1], Hs[:, -1]).intersect_strip(model_next.C, y, nb)
+        V = X.vertices()
+        # irredundant facets (the stacked H-representation grows with N otherwise)
+        return None if V.shape[0] == 0 else Polytope.from_vertices(V)
+
+
+ModelSpec = SVOModel | Sequence[SVOModel] | Callable[[int], SVOModel]
+
+
+def _model_at(models: ModelSpec, k: int) -> SVOModel:
+    if isinstance(models, SVOModel):
+        return models
+    if callable(models):
+        return models(k)
+    return models[k]
+
+
+@dataclass(frozen=True)
+class SVORun:
+    """Result of :func:`run_svo`.
+
+    Attributes
+    ----------
+    empty_at : int or None
+        First sample k with X̂(k) = ∅ (Proposition 3: a fault occurred at some k0 <= k); None if never.
+    lower, upper : ndarray, shape (T+1, n)
+        Bounding boxes of X̂(k) (NaN once empty).
+    n_facets, n_vertices : ndarray, shape (T+1,)
+        Complexity of X̂(k) (0 once empty).
+    step_time : ndarray, shape (T,)
+        Wall time of each update, in seconds (NaN after the set became empty).
+    sets : tuple of Polytope or None
+        The sets themselves when ``keep_sets=True``.
+    """
+
+    empty_at: int | None
+    lower: np.ndarray
+    upper: np.ndarray
+    n_facets: np.ndarray
+    n_vertices: np.ndarray
+    step_time: np.ndarray
+    sets: tuple | None = field(default=None, repr=False)
+
+
+def run_svo(models: ModelSpec, u: Any, y: Any, X0: Polytope, *, N: int = 1, method: str = "template",
+            template: np.ndarray | None = None, keep_sets: bool = False) -> SVORun:
+    """Run an SVO over a record: X̂(0), ..., X̂(T), stopping at the first empty set.
+
+    Parameters
+    ----------
+    models : SVOModel, sequence of SVOModel (length >= T+1) or callable k -> SVOModel
+        The (possibly time-varying) model; step k uses ``models(k)``, and y(k) uses its C.
+    u : ndarray, shape (T, n_u)
+        Inputs u(0), ..., u(T-1).
+    y : ndarray, shape (T+1, n_y)
+        Measurements y(0), ..., y(T).
+    X0 : Polytope
+        Prior set of x(0).
+    N, method, template
+        See :class:`SetValuedObserver`.
+    keep_sets : bool
+        Keep every X̂(k) in the result.
+
+    Returns
+    -------
+    SVORun
+    """
+    y = _arr("y", y, 2)
+    T = y.shape[0] - 1
+    u = _arr("u", np.asarray(u, dtype=float).reshape(T, -1) if np.size(u) == 0 else u, 2)
+    if u.shape[0] != T:
+        raise ShapeError(f"u: expected {T} rows (one less than y's {T + 1}), got shape {u.shape}")
+    svo = SetValuedObserver(X0, N=N, method=method, template=template)
+    n = X0.dim
+    lower = np.full((T + 1, n), np.nan)
+    upper = np.full((T + 1, n), np.nan)
+    nf = np.zeros(T + 1, dtype=int)
+    nv = np.zeros(T + 1, dtype=int)
+    st = np.full(T, np.nan)
+    sets = []
+    X = svo.start(_model_at(models, 0), y[0])
+    empty_at = None
+    for k in range(T + 1):
+        if k > 0:
+            t0 = time.perf_counter()
+            X = svo.update(_model_at(models, k - 1), u[k - 1], y[k])
+            st[k - 1] = time.perf_counter() - t0
+        if X is None:
+            empty_at = k
+            break
+        V = svo.history[0].V
+        lower[k], upper[k] = V.min(axis=0), V.max(axis=0)
+        nf[k], nv[k] = X.n_facets, V.shape[0]
+        if keep_sets:
+            sets.append(X)
+    return SVORun(empty_at, lower, upper, nf, nv, st, tuple(sets) if keep_sets else None)
+
+
+@dataclass(frozen=True)
+class FDIResult:
+    """Outcome of a bank of SVOs (Architectures I and II, §4, Fig. 6).
+
+    Attributes
+    ----------
+    architecture : str
+        ``"I"`` or ``"II"``.
+    detection_step : int or None
+        First sample at which the nominal SVO's set is empty (fault detected).
+    isolation_step : int or None
+        First sample at which exactly one fault SVO remains non-empty.
+    isolated : str or None
+        Name of that fault SVO.
+    empty_at : dict
+        First empty sample of every SVO (None if never).
+    """
+
+    architecture: str
+    detection_step: int | None
+    isolation_step: int | None
+    isolated: str | None
+    empty_at: dict
+
+
+def _bank(named_models: Mapping[str, ModelSpec], u, y, X0, N, method, template):
+    y = _arr("y", y, 2)
+    T = y.shape[0] - 1
+    u = _arr("u", u, 2)
+    if u.shape[0] != T:
+        raise ShapeError(f"u: expected {T} rows (one less than y's {T + 1}), got shape {u.shape}")
+    return y, u, T
+
+
+def run_architecture_i(nominal: ModelSpec, faults: Mapping[str, ModelSpec], u: Any, y: Any, X0: Polytope,
+                       *, N: int = 1, method: str = "template", template: np.ndarray | None = None,
+                       stop_when_isolated: bool = True) -> FDIResult:
+    """Architecture I (§4.1, Fig. 6(a)): a nominal SVO for detection, and one SVO per fault whose
+    model also contains the nominal plant; a fault is isolated when only one fault SVO is non-empty.
+
+    Parameters
+    ----------
+    nominal : model specification (see :func:`run_svo`)
+    faults : dict name -> model specification
+    u, y, X0, N, method, template : see :func:`run_svo`
+    stop_when_isolated : bool
+        Stop the record once the fault is isolated (saves time; ``empty_at`` of the survivor is then None).
+    """
+    y, u, T = _bank({"nominal": nominal, **faults}, u, y, X0, N, method, template)
+    specs = {"nominal": nominal, **faults}
+    svos = {k: SetValuedObserver(X0, N=N, method=method, template=template) for k in specs}
+    empty_at: dict[str, int | None] = {k: None for k in specs}
+    for name, svo in svos.items():
+        if svo.start(_model_at(specs[name], 0), y[0]) is None:
+            empty_at[name] = 0
+    det = iso = None
+    isolated = None
+    for k in range(T + 1):
+        if k > 0:
+            for name, svo in svos.items():
+                if empty_at[name] is None and svo.update(_model_at(specs[name], k - 1), u[k - 1], y[k]) is None:
+                    empty_at[name] = k
+        if det is None and empty_at["nominal"] is not None:
+            det = k
+        alive = [f for f in faults if empty_at[f] is None]
+        if det is not None and iso is None and len(alive) == 1:
+            iso, isolated = k, alive[0]
+            if stop_when_isolated:
+                break
+        if det is not None and not alive:
+            break
+    return FDIResult("I", det, iso, isolated, empty_at)
+
+
+def run_architecture_ii(nominal: ModelSpec, global_model: ModelSpec, faults: Mapping[str, ModelSpec], u: Any,
+                        y: Any, X0: Polytope, *, N: int = 1, method: str = "template",
+                        template: np.ndarray | None = None, stop_when_isolated: bool = True) -> FDIResult:
+    """Architecture II (§4.2, Fig. 6(b)): nominal SVO for detection, a Global SVO valid for the
+    healthy and every faulty plant, and fault SVOs started from the Global SVO's set at detection.
+
+    The fault models need not contain the nominal plant. Parameters as in :func:`run_architecture_i`.
+    """
+    y, u, T = _bank({"nominal": nominal, "global": global_model, **faults}, u, y, X0, N, method, template)
+    nom = SetValuedObserver(X0, N=N, method=method, template=template)
+    glob = SetValuedObserver(X0, N=N, method=method, template=template)
+    empty_at: dict[str, int | None] = {"nominal": None, "global": None, **{f: None for f in faults}}
+    if nom.start(_model_at(nominal, 0), y[0]) is None:
+        empty_at["nominal"] = 0
+    if glob.start(_model_at(global_model, 0), y[0]) is None:
+        empty_at["global"] = 0
+    fsvos: dict[str, SetValuedObserver] = {}
+    det = iso = None
+    isolated = None
+    for k in range(T + 1):
+        if k > 0:
+            if empty_at["nominal"] is None and nom.update(_model_at(nominal, k - 1), u[k - 1], y[k]) is None:
+                empty_at["nominal"] = k
+            if empty_at["global"] is None and glob.update(_model_at(global_model, k - 1), u[k - 1], y[k]) is None:
+                empty_at["global"] = k
+            for name, svo in fsvos.items():
+                if empty_at[name] is None and svo.update(_model_at(faults[name], k - 1), u[k - 1], y[k]) is None:
+                    empty_at[name] = k
+        if det is None and empty_at["nominal"] is not None:
+            det = k
+            if empty_at["global"] is not None:
+                break
+            for name in faults:
+                svo = SetValuedObserver(X0, N=N, method=method, template=template)
+                svo.start_from(glob)
+                fsvos[name] = svo
+        if det is not None:
+            alive = [f for f in faults if empty_at[f] is None]
+            if iso is None and len(alive) == 1:
+                iso, isolated = k, alive[0]
+                if stop_when_isolated:
+                    break
+            if not alive:
+                break
+    return FDIResult("II", det, iso, isolated, empty_at)
