@@ -1,0 +1,386 @@
+"""Kitanidis unbiased minimum-variance filter for LTV models with an unknown input.
+
+Model (Zhang 2021, eq. (1)/(23), in the book's notation ``A -> F``, ``B -> G``,
+``C -> H``, ``D -> J``, state fault profile ``Phi -> Psi``)::
+
+    X_{k+1} = F_k X_k + G_k U_k + E_k d_k + W_k (+ Psi_k theta)
+    Y_k     = H_k X_k + J_k U_k + V_k        (+ Phi_k theta)
+
+with ``d_k`` an arbitrary unknown input (no statistics, no model). The filter of
+Kitanidis (1987), as written in Zhang (2021), eq. (24), designed for ``theta = 0``::
+
+    P_k      = F_{k-1} P_{k-1|k-1} F_{k-1}^T + Q_{k-1}              (24a)  prior covariance
+    Sigma_k  = H_k P_k H_k^T + R_k                                   (24b)
+    Kc_k     = P_k H_k^T Sigma_k^{-1}                                (Kalman part)
+    Gamma_k  = (I - Kc_k H_k) E_{k-1}                                (24c)
+    Xi_k     = E_{k-1}^T H_k^T Sigma_k^{-1} H_k E_{k-1}              (24d)
+    K_k      = Kc_k + Gamma_k Xi_k^{-1} E_{k-1}^T H_k^T Sigma_k^{-1}  (24g)  Kitanidis gain "K-bar"
+    P_{k|k}  = P_k - Kc_k H_k P_k + Gamma_k Xi_k^{-1} Gamma_k^T       (24f)
+    Xhat_k   = Xpred_k + K_k eps_k,   eps_k = Y_k - J_k U_k - H_k Xpred_k,
+    Xpred_{k+1} = F_k Xhat_k + G_k U_k                               (24h)
+
+The gain satisfies the key identity (30), ``(I - K_k H_k) E_{k-1} = 0``, so the
+unknown input vanishes from the estimation error; it needs assumption (iv):
+``H_k E_{k-1}`` of full column rank (else :class:`~fdi_lib.errors.RankConditionError`).
+
+Time convention (the same as :mod:`fdi_lib.filters`): ``k = 0 .. N-1``; ``P_0 =
+model.P0`` is the covariance of ``X_0`` *before* ``Y_0``; since ``X_0`` carries no
+unknown input, the update at ``k = 0`` is the ordinary Kalman update (``K_0 =
+Kc_0``, i.e. ``E_{-1} = 0``). With no unknown input at all (``s = 0``) the filter
+*is* the Kalman filter of :func:`fdi_lib.filters.kalman_filter`.
+
+One-step-predictor form (Basseville & Zhang, eqs. (27)-(28), whose OCR is garbled)::
+
+    Xpred_{k+1} = F_k Xpred_k + G_k U_k + F_k L_k (Y_k - J_k U_k - H_k Xpred_k),   L_k = K_k
+    P_{k+1}     = F_k [(I - L_k H_k) P_k (I - L_k H_k)^T + L_k R_k L_k^T] F_k^T + Q_k
+
+which is the same recursion (``Xpred_{k+1} = F_k Xhat_k + G_k U_k``); the Joseph
+form there equals (24f) (a short algebra shown in the book chapter ``zhang2021``).
+Its "innovation" ``eps_k`` is returned as :attr:`KitanidisResult.innovations` with
+``gains.Sigma`` = ``H_k P_k H_k^T + R_k``; note that ``eps_k`` contains the term
+``H_k E_{k-1} d_{k-1}`` (the prediction cannot know ``d_{k-1}``), whereas the
+updated residual ``Y_k - J_k U_k - H_k Xhat_k`` (25) does not depend on ``d`` at all.
+
+The gains do not depend on the data: :func:`kitanidis_gains` computes them once
+and :func:`kitanidis_filter` runs the data recursion, vectorised over any leading
+axes of independent realisations.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import scipy.linalg
+
+from fdi_lib.errors import NonFiniteError, RankConditionError, ShapeError
+from fdi_lib.filters import as_outputs
+from fdi_lib.models import FaultProfile, LTVModel, as_sequence
+
+__all__ = [
+    "KitanidisGains",
+    "KitanidisResult",
+    "ResidualSignature",
+    "as_unknown_input_matrix",
+    "kitanidis_gains",
+    "kitanidis_filter",
+    "residual_signature",
+]
+
+#: Relative tolerance of the full-column-rank test of ``H_{k+1} E_k`` (assumption (iv)).
+RANK_RTOL = 1e-10
+
+
+def as_unknown_input_matrix(model: LTVModel, E: Any) -> np.ndarray:
+    """Validate ``E_k`` (constant ``(n, s)``, per step ``(N, n, s)`` or callable of ``k``).
+
+    Returns a read-only array of shape ``(N, n, s)``; ``E_k`` multiplies ``d_k`` in the
+    equation of ``X_{k+1}``.
+    """
+    first = np.asarray(E(0) if callable(E) else E, dtype=float)
+    if first.ndim == 1 and first.shape[0] == model.n:
+        first = first[:, None]
+        if not callable(E):
+            E = first
+    if first.ndim not in (2, 3) or first.shape[-2] != model.n:
+        raise ShapeError(f"E: expected shape ({model.n}, s) or ({model.n_steps}, {model.n}, s), "
+                         f"got {first.shape}")
+    s = first.shape[-1]
+    return as_sequence(E, n_steps=model.n_steps, shape=(model.n, s), name="E")
+
+
+@dataclass(frozen=True)
+class KitanidisGains:
+    """Data-independent quantities of the Kitanidis filter on ``k = 0 .. N-1``.
+
+    Attributes
+    ----------
+    K : numpy.ndarray
+        Kitanidis gains ``K-bar_k`` of eq. (24g), ``(N, n, p)``; ``Xhat_k = Xpred_k + K_k eps_k``.
+        Also the gain ``L_k`` of the one-step-predictor form (predictor gain ``F_k L_k``).
+    K_kalman : numpy.ndarray
+        Kalman part ``P_k H_k^T Sigma_k^{-1}``, ``(N, n, p)``.
+    P : numpy.ndarray
+        Prior covariances ``P-bar_{k|k-1}`` (24a), ``(N+1, n, n)`` (``P[0] = model.P0``).
+    P_filt : numpy.ndarray
+        Updated covariances ``P-bar_{k|k}`` (24f), ``(N, n, n)``.
+    Sigma : numpy.ndarray
+        ``H_k P_k H_k^T + R_k`` (24b), ``(N, p, p)``.
+    Sigma_chol : numpy.ndarray
+        Lower Cholesky factors of ``Sigma_k``.
+    Xi : numpy.ndarray
+        ``E_{k-1}^T H_k^T Sigma_k^{-1} H_k E_{k-1}`` (24d), ``(N, s, s)``; ``Xi[0] = 0`` (no unknown input
+        acts on ``X_0``).
+    residual_cov : numpy.ndarray
+        Covariance of the fault-free residual (25), ``H P_{k|k} H^T + R - H K R - R K^T H^T``, ``(N, p, p)``.
+    E : numpy.ndarray
+        The unknown-input matrices used, ``(N, n, s)``.
+    """
+
+    K: np.ndarray
+    K_kalman: np.ndarray
+    P: np.ndarray
+    P_filt: np.ndarray
+    Sigma: np.ndarray
+    Sigma_chol: np.ndarray
+    Xi: np.ndarray
+    residual_cov: np.ndarray
+    E: np.ndarray
+
+
+def kitanidis_gains(model: LTVModel, E: Any) -> KitanidisGains:
+    """Run the covariance recursion (24a)-(24g) of the Kitanidis filter.
+
+    Parameters
+    ----------
+    model : LTVModel
+        Fault-free model; ``P_0 = model.P0``.
+    E : array_like or callable
+        Unknown-input matrices ``E_k``, ``(n, s)`` constant, ``(N, n, s)`` per step or ``k -> (n, s)``.
+
+    Returns
+    -------
+    KitanidisGains
+
+    Raises
+    ------
+    RankConditionError
+        If some ``H_{k+1} E_k`` (``k = 0 .. N-2``) does not have full column rank ``s`` (assumption (iv)).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> m = ltv_model(F=0.5 * np.eye(2), H=np.eye(2), Q=np.eye(2), R=np.eye(2), n_steps=5)
+    >>> g = kitanidis_gains(m, E=[[1.0], [0.0]])
+    >>> E = np.array([[1.0], [0.0]])
+    >>> float(np.abs((np.eye(2) - g.K[3] @ m.H[3]) @ E).max()) < 1e-14   # identity (30)
+    True
+    """
+    Es = as_unknown_input_matrix(model, E)
+    N, n, p = model.n_steps, model.n, model.p
+    s = Es.shape[2]
+    K = np.empty((N, n, p))
+    Kc = np.empty((N, n, p))
+    P = np.empty((N + 1, n, n))
+    P_filt = np.empty((N, n, n))
+    Sigma = np.empty((N, p, p))
+    L = np.empty((N, p, p))
+    Xi = np.zeros((N, s, s))
+    Rcov = np.empty((N, p, p))
+    P[0] = model.P0
+    for k in range(N):
+        H, Pk, Rk = model.H[k], P[k], model.R[k]
+        S = H @ Pk @ H.T + Rk
+        S = 0.5 * (S + S.T)
+        c, low = scipy.linalg.cho_factor(S, lower=True)
+        Kk = scipy.linalg.cho_solve((c, low), H @ Pk).T  # P H^T S^{-1} by Cholesky solves
+        Pf = Pk - Kk @ H @ Pk
+        Kbar = Kk
+        if k > 0 and s > 0:
+            HE = H @ Es[k - 1]
+            sv = np.linalg.svd(HE, compute_uv=False)
+            if sv.size < s or sv[-1] <= RANK_RTOL * max(1.0, sv[0]):
+                smin = float(sv[-1]) if sv.size == s else 0.0
+                raise RankConditionError(
+                    f"E: assumption (iv) needs H_{{k+1}} E_k of full column rank {s}; at k = {k - 1}, "
+                    f"H_{k} E_{k - 1} has shape {HE.shape} and smallest singular value {smin:.3g}")
+            SinvHE = scipy.linalg.cho_solve((c, low), HE)  # Sigma^{-1} H E
+            Xk = HE.T @ SinvHE
+            Xk = 0.5 * (Xk + Xk.T)
+            Gam = Es[k - 1] - Kk @ HE  # (24c)
+            # Gamma Xi^{-1} via a symmetric solve; K-bar (24g), P-bar (24f)
+            GXi = scipy.linalg.solve(Xk, Gam.T, assume_a="pos").T
+            Kbar = Kk + GXi @ SinvHE.T
+            Pf = Pf + GXi @ Gam.T
+            Xi[k] = Xk
+        Pf = 0.5 * (Pf + Pf.T)
+        HK = H @ Kbar
+        Rc = H @ Pf @ H.T + Rk - HK @ Rk - Rk @ HK.T
+        Rcov[k] = 0.5 * (Rc + Rc.T)
+        K[k], Kc[k], P_filt[k], Sigma[k], L[k] = Kbar, Kk, Pf, S, np.tril(c)
+        Pn = model.F[k] @ Pf @ model.F[k].T + model.Q[k]
+        P[k + 1] = 0.5 * (Pn + Pn.T)
+    if not np.all(np.isfinite(P)):
+        k = int(np.argwhere(~np.isfinite(P))[0, 0])
+        raise NonFiniteError(f"model: the Kitanidis covariance recursion diverged (non-finite P at step {k})")
+    return KitanidisGains(K=K, K_kalman=Kc, P=P, P_filt=P_filt, Sigma=Sigma, Sigma_chol=L, Xi=Xi,
+                          residual_cov=Rcov, E=Es)
+
+
+@dataclass(frozen=True)
+class KitanidisResult:
+    """Output of :func:`kitanidis_filter` (leading batch axes as in the data).
+
+    Attributes
+    ----------
+    residuals : numpy.ndarray
+        ``Y_k - J_k U_k - H_k Xhat_k``, eq. (25), ``(*batch, N, p)``: independent of ``d``.
+    x_filt : numpy.ndarray
+        ``Xhat_k`` of (24h), ``(*batch, N, n)``.
+    x_pred : numpy.ndarray
+        ``Xpred_k = F_{k-1} Xhat_{k-1} + G_{k-1} U_{k-1}`` (``Xpred_0 = x0``), ``(*batch, N+1, n)``.
+    innovations : numpy.ndarray
+        ``eps_k = Y_k - J_k U_k - H_k Xpred_k`` (predictor form), ``(*batch, N, p)``.
+    gains : KitanidisGains
+    """
+
+    residuals: np.ndarray
+    x_filt: np.ndarray
+    x_pred: np.ndarray
+    innovations: np.ndarray
+    gains: KitanidisGains
+
+
+def _inputs(model: LTVModel, u: Any) -> np.ndarray:
+    N, l = model.n_steps, model.l
+    if u is None:
+        return np.zeros((N, l))
+    u_arr = np.asarray(u, dtype=float)
+    if u_arr.ndim == 1 and l == 1:
+        u_arr = u_arr[:, None]
+    if u_arr.ndim < 2 or u_arr.shape[-2:] != (N, l):
+        raise ShapeError(f"u: expected shape (..., {N}, {l}), got {np.shape(u)}")
+    if not np.all(np.isfinite(u_arr)):
+        idx = tuple(int(i) for i in np.argwhere(~np.isfinite(u_arr))[0])
+        raise NonFiniteError(f"u: expected finite values, got {u_arr[idx]!r} at index {idx}")
+    return u_arr
+
+
+def _check_gains(model: LTVModel, gains: Any, name: str = "gains") -> None:
+    if not hasattr(gains, "K") or np.shape(gains.K) != (model.n_steps, model.n, model.p):
+        raise ShapeError(f"{name}: expected gains with K of shape {(model.n_steps, model.n, model.p)} "
+                         f"for this model, got {np.shape(getattr(gains, 'K', None))}")
+
+
+def kitanidis_filter(model: LTVModel, y: Any, u: Any = None, E: Any = None, *,
+                     gains: KitanidisGains | None = None, x0: Any = None) -> KitanidisResult:
+    """Run the Kitanidis filter (24h) and return its residuals (25).
+
+    Parameters
+    ----------
+    model : LTVModel
+        Fault-free model (without the unknown input term).
+    y : array_like
+        Outputs ``(*batch, N, p)``.
+    u : array_like, optional
+        Known inputs ``(*batch, N, l)`` or ``(N, l)``; default zeros.
+    E : array_like or callable, optional
+        Unknown-input matrices (required unless ``gains`` is given).
+    gains : KitanidisGains, optional
+        Precomputed :func:`kitanidis_gains` (shared across realisations).
+    x0 : array_like, optional
+        ``Xpred_0``; default ``model.x0``.
+
+    Returns
+    -------
+    KitanidisResult
+    """
+    if gains is None:
+        if E is None:
+            raise ShapeError("E: expected the unknown-input matrices (or precomputed gains=), got None")
+        gains = kitanidis_gains(model, E)
+    else:
+        _check_gains(model, gains)
+    y_arr = as_outputs(model, y)
+    batch = y_arr.shape[:-2]
+    N, n = model.n_steps, model.n
+    u_arr = _inputs(model, u)
+    Gu = np.broadcast_to(np.einsum("kij,...kj->...ki", model.G, u_arr), (*batch, N, n))
+    ybar = y_arr - np.einsum("kij,...kj->...ki", model.J, u_arr)
+    xp = np.empty((*batch, N + 1, n))
+    xf = np.empty((*batch, N, n))
+    eps = np.empty(y_arr.shape)
+    xp[..., 0, :] = model.x0 if x0 is None else np.asarray(x0, dtype=float)
+    for k in range(N):
+        e = ybar[..., k, :] - xp[..., k, :] @ model.H[k].T
+        eps[..., k, :] = e
+        xf[..., k, :] = xp[..., k, :] + e @ gains.K[k].T
+        xp[..., k + 1, :] = xf[..., k, :] @ model.F[k].T + Gu[..., k, :]
+    res = ybar - np.einsum("kij,...kj->...ki", model.H, xf)
+    return KitanidisResult(residuals=res, x_filt=xf, x_pred=xp, innovations=eps, gains=gains)
+
+
+@dataclass(frozen=True)
+class ResidualSignature:
+    """Fault signature on an updated residual (Zhang 2021, Props 1 and 2).
+
+    Attributes
+    ----------
+    Upsilon : numpy.ndarray
+        ``Upsilon_k`` (7) with a Kalman gain, or ``Upsilon-tilde_k`` (27) with a Kitanidis gain,
+        ``(*batch, N, n, m)``.
+    on_residual : numpy.ndarray
+        ``H_k Upsilon_k + Phi_k``, ``(*batch, N, p, m)``: the regressor of ``theta`` in (6)/(26).
+    """
+
+    Upsilon: np.ndarray
+    on_residual: np.ndarray
+
+
+def residual_signature(model: LTVModel, gains: Any, fault: FaultProfile | None = None, *,
+                       Psi: Any = None, Phi: Any = None) -> ResidualSignature:
+    """Signature of ``theta`` on the updated residual, Zhang (2021) eqs. (7) and (27).
+
+    Generalised to an output profile ``Phi_k``::
+
+        Upsilon_0     = -K_0 Phi_0
+        Upsilon_{k+1} = (I - K_{k+1} H_{k+1}) (F_k Upsilon_k + Psi_k) - K_{k+1} Phi_{k+1}
+        residual_k    = (H_k Upsilon_k + Phi_k) theta + residual0_k
+
+    (for ``Phi = 0`` this is exactly (7b)/(27b) with ``Upsilon_0 = 0``).
+
+    Parameters
+    ----------
+    model : LTVModel
+    gains : KalmanGains or KitanidisGains
+        Any object with filter gains ``K`` of shape ``(N, n, p)`` such that
+        ``Xhat_{k|k} = Xpred_k + K_k eps_k``: :func:`fdi_lib.filters.kalman_gains` (Prop. 1)
+        or :func:`kitanidis_gains` (Prop. 2).
+    fault : FaultProfile, optional
+        ``Psi_k`` (``(N, n, m)``) and ``Phi_k`` (``(N, p, m)``), shared by all realisations.
+    Psi, Phi : array_like, optional
+        Instead of ``fault``: per-realisation profiles ``(*batch, N, n, m)`` / ``(*batch, N, p, m)``
+        (e.g. a random ``Psi_k`` drawn in each Monte Carlo trial).
+
+    Returns
+    -------
+    ResidualSignature
+    """
+    _check_gains(model, gains)
+    N, n, p = model.n_steps, model.n, model.p
+    if fault is not None:
+        if Psi is not None or Phi is not None:
+            raise ShapeError("fault: give either fault or Psi/Phi arrays, not both")
+        Psi_a, Phi_a = np.asarray(fault.Psi), np.asarray(fault.Phi)
+    else:
+        if Psi is None and Phi is None:
+            raise ShapeError("Psi, Phi: expected at least one fault profile, got None")
+        Psi_a = None if Psi is None else np.asarray(Psi, dtype=float)
+        Phi_a = None if Phi is None else np.asarray(Phi, dtype=float)
+        ref = Psi_a if Psi_a is not None else Phi_a
+        m = ref.shape[-1]
+        batch = ref.shape[:-3]
+        if Psi_a is None:
+            Psi_a = np.zeros((*batch, N, n, m))
+        if Phi_a is None:
+            Phi_a = np.zeros((*batch, N, p, m))
+    if Psi_a.ndim < 3 or Psi_a.shape[-3:-1] != (N, n):
+        raise ShapeError(f"Psi: expected shape (..., {N}, {n}, m), got {Psi_a.shape}")
+    if Phi_a.ndim < 3 or Phi_a.shape[-3:-1] != (N, p) or Phi_a.shape[-1] != Psi_a.shape[-1]:
+        raise ShapeError(f"Phi: expected shape (..., {N}, {p}, {Psi_a.shape[-1]}), got {Phi_a.shape}")
+    for arr, name in ((Psi_a, "Psi"), (Phi_a, "Phi")):
+        if not np.all(np.isfinite(arr)):
+            raise NonFiniteError(f"{name}: expected finite values")
+    batch = np.broadcast_shapes(Psi_a.shape[:-3], Phi_a.shape[:-3])
+    m = Psi_a.shape[-1]
+    K = gains.K
+    IKH = np.eye(n) - K @ model.H  # (N, n, n)
+    Ups = np.empty((*batch, N, n, m))
+    Ups[..., 0, :, :] = -K[0] @ Phi_a[..., 0, :, :]
+    for k in range(N - 1):
+        drive = model.F[k] @ Ups[..., k, :, :] + Psi_a[..., k, :, :]
+        Ups[..., k + 1, :, :] = IKH[k + 1] @ drive - K[k + 1] @ Phi_a[..., k + 1, :, :]
+    on_res = model.H @ Ups + Phi_a
+    return ResidualSignature(Upsilon=Ups, on_residual=on_res)
