@@ -151,7 +151,7 @@ def as_outputs(model: LTVModel, y: Any, name: str = "y") -> np.ndarray:
         raise ShapeError(f"{name}: expected shape (..., {model.n_steps}, {model.p}), got {np.shape(y)}")
     if not np.all(np.isfinite(arr)):
         idx = tuple(int(i) for i in np.argwhere(~np.isfinite(arr))[0])
-        raise NonFiniteError(f"{name}: expected finite values, got {arr[idx]!r} at index {idx}")
+        raise NonFiniteError(f"{name}: expected finite values, got {float(arr[idx])} at index {idx}")
     return arr
 
 

@@ -43,7 +43,7 @@ COV_RTOL = 1e-9
 def _check_finite(arr: np.ndarray, name: str) -> None:
     if not np.all(np.isfinite(arr)):
         idx = tuple(int(i) for i in np.argwhere(~np.isfinite(arr))[0])
-        raise NonFiniteError(f"{name}: expected finite values, got {arr[idx]!r} at index {idx}")
+        raise NonFiniteError(f"{name}: expected finite values, got {float(arr[idx])} at index {idx}")
 
 
 def as_sequence(value: MatrixLike, *, n_steps: int, shape: tuple[int, ...], name: str) -> np.ndarray:

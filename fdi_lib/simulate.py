@@ -163,7 +163,7 @@ def simulate(model: LTVModel, *, rng: np.random.Generator | None = None, noise: 
             raise ShapeError(f"u: expected shape ({N}, {l}), got {np.shape(u)}")
         if not np.all(np.isfinite(u_arr)):
             idx = tuple(int(i) for i in np.argwhere(~np.isfinite(u_arr))[0])
-            raise NonFiniteError(f"u: expected finite values, got {u_arr[idx]!r} at index {idx}")
+            raise NonFiniteError(f"u: expected finite values, got {float(u_arr[idx])} at index {idx}")
     if fault is None:
         if theta is not None:
             raise ModelError("theta: given without a fault profile")

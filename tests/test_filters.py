@@ -1,0 +1,83 @@
+import numpy as np
+import pytest
+import scipy.linalg
+from filterpy.kalman import KalmanFilter
+
+from fdi_lib.errors import NonFiniteError, ShapeError
+from fdi_lib.filters import kalman_filter, kalman_gains
+from fdi_lib.models import ltv_model
+from fdi_lib.simulate import simulate
+
+
+def test_against_filterpy_on_a_random_ltv_system(random_ltv):
+    """Innovations, gains and covariances equal filterpy's predict/update loop (independent code)."""
+    rng = np.random.default_rng(7)
+    m = random_ltv(rng, n=3, p=2, l=1, n_steps=40)
+    u = rng.standard_normal((40, 1))
+    sim = simulate(m, rng=rng, u=u)
+    res = kalman_filter(m, sim.y, u)
+    kf = KalmanFilter(dim_x=3, dim_z=2, dim_u=1)
+    kf.x = m.x0.copy()
+    kf.P = m.P0.copy()
+    for k in range(40):
+        kf.H, kf.R = m.H[k], m.R[k]
+        kf.update(sim.y[k] - m.J[k] @ u[k])
+        np.testing.assert_allclose(res.innovations[k], kf.y, rtol=1e-9, atol=1e-11)
+        np.testing.assert_allclose(res.gains.K[k], kf.K, rtol=1e-9, atol=1e-11)
+        np.testing.assert_allclose(res.gains.Sigma[k], kf.S, rtol=1e-9, atol=1e-11)
+        np.testing.assert_allclose(res.x_filt[k], kf.x, rtol=1e-9, atol=1e-11)
+        kf.F, kf.B, kf.Q = m.F[k], m.G[k], m.Q[k]
+        kf.predict(u=u[k])
+        np.testing.assert_allclose(res.x_pred[k + 1], kf.x, rtol=1e-9, atol=1e-11)
+        np.testing.assert_allclose(res.gains.P[k + 1], kf.P, rtol=1e-9, atol=1e-11)
+
+
+def test_steady_state_gain_solves_the_dare():
+    F = np.array([[0.5, 1.0], [0.0, 1.2]])
+    H = np.array([[1.0, 0.0]])
+    Q, R = 0.0025 * np.eye(2), np.array([[0.0025]])
+    g = kalman_gains(ltv_model(F=F, H=H, Q=Q, R=R, n_steps=300))
+    P = scipy.linalg.solve_discrete_are(F.T, H.T, Q, R)  # the predictor Riccati equation
+    np.testing.assert_allclose(g.P[-1], P, rtol=1e-10)
+    np.testing.assert_allclose(g.K[-1], P @ H.T @ np.linalg.inv(H @ P @ H.T + R), rtol=1e-10)
+    assert max(abs(np.linalg.eigvals(g.A[-1]))) < 1  # F(I - KH) is stable although F is not
+
+
+def test_steady_state_against_python_control():
+    control = pytest.importorskip("control")
+    F = np.array([[0.9, 0.2], [0.0, 1.1]])
+    H = np.array([[1.0, 1.0]])
+    Q, R = np.diag([0.1, 0.2]), np.array([[0.5]])
+    g = kalman_gains(ltv_model(F=F, H=H, Q=Q, R=R, n_steps=400))
+    L, P, _ = control.dlqe(F, np.eye(2), H, Q, R)  # predictor form: L = F P H^T (H P H^T + R)^{-1}
+    np.testing.assert_allclose(g.FK[-1], L, rtol=1e-8)
+    np.testing.assert_allclose(g.P[-1], P, rtol=1e-8)
+
+
+def test_innovations_are_white_with_covariance_sigma(random_ltv):
+    m = random_ltv(np.random.default_rng(3), n=2, p=1, n_steps=50)
+    sim = simulate(m, rng=np.random.default_rng(4), size=4000)
+    res = kalman_filter(m, sim.y, sim.u)
+    z = res.gains.whiten(res.innovations)[..., 0]  # (4000, 50), N(0, 1) iid in theory
+    assert abs(z.mean()) < 0.01
+    assert abs(z.var() - 1.0) < 0.02
+    lag1 = np.mean(z[:, 1:] * z[:, :-1])
+    assert abs(lag1) < 0.01
+
+
+def test_batch_equals_single(random_ltv):
+    m = random_ltv(np.random.default_rng(5), n=3, p=2, n_steps=20)
+    sim = simulate(m, rng=np.random.default_rng(6), size=3, u=np.ones((20, 1)))
+    batch = kalman_filter(m, sim.y, np.ones((20, 1)))
+    one = kalman_filter(m, sim.y[2], np.ones((20, 1)))
+    np.testing.assert_allclose(batch.innovations[2], one.innovations, rtol=0, atol=1e-13)
+
+
+def test_bad_outputs():
+    m = ltv_model(F=[[0.9]], H=[[1.0]], Q=1.0, R=1.0, n_steps=5)
+    with pytest.raises(ShapeError, match=r"y: expected shape \(\.\.\., 5, 1\), got \(4,\)"):
+        kalman_filter(m, np.zeros(4))
+    y = np.zeros(5)
+    y[3] = np.inf
+    with pytest.raises(NonFiniteError, match=r"y: expected finite values, got inf at index \(3, 0\)"):
+        kalman_filter(m, y)

@@ -1,0 +1,135 @@
+"""GLR tests of Zhang & Basseville (2014), Section 4, against independent computations."""
+
+import numpy as np
+import pytest
+import scipy.stats
+
+from conftest import make_random_ltv
+from fdi_lib.errors import ModelError, ShapeError
+from fdi_lib.filters import kalman_filter, kalman_gains
+from fdi_lib.glr import WindowedGLR, first_alarm, glr_known_profile, glr_window, quadratic_form
+from fdi_lib.models import fault_profile, impulse_family, step_family
+from fdi_lib.signatures import fault_signature
+from fdi_lib.simulate import simulate
+from fdi_lib.systems import zb2014_unstable as ex
+
+
+def test_known_profile_glr_equals_brute_force_least_squares():
+    rng = np.random.default_rng(0)
+    m = make_random_ltv(rng, n=3, p=2, n_steps=30)
+    prof = fault_profile(m, Psi=rng.standard_normal((30, 3, 2)))
+    sim = simulate(m, rng=rng, fault=prof, theta=[0.5, -1.0])
+    g = kalman_gains(m)
+    eps = kalman_filter(m, sim.y, sim.u, gains=g).innovations
+    S = fault_signature(m, g, prof).on_innovation
+    res = glr_known_profile(eps, g, S)
+    for k in (3, 10, 29):
+        # Stack the whitened regression explicitly and solve it with lstsq.
+        W = [np.linalg.cholesky(np.linalg.inv(g.Sigma[j])).T for j in range(k + 1)]
+        X = np.vstack([W[j] @ S[j] for j in range(k + 1)])
+        z = np.concatenate([W[j] @ eps[j] for j in range(k + 1)])
+        theta, *_ = np.linalg.lstsq(X, z, rcond=None)
+        lr = z @ z - np.sum((z - X @ theta) ** 2)  # 2 log LR = RSS(0) - RSS(theta_hat)
+        np.testing.assert_allclose(res.statistic[k], lr, rtol=1e-9)
+        np.testing.assert_allclose(res.theta_hat[k], theta, rtol=1e-8)
+
+
+def _naive_window(eps, model, gains, family, w, s):
+    """Per-onset triple loop straight from (31)-(36): for each k, each r, sum over j."""
+    N = model.n_steps
+    stat = np.full(N, np.nan)
+    onset = np.full(N, -1)
+    for k in range(N):
+        best = -np.inf
+        for r in range(max(0, k - w + 1), k - s + 1):
+            prof = family.profile(r)
+            S = fault_signature(model, gains, prof).on_innovation
+            C = sum(S[j].T @ np.linalg.solve(gains.Sigma[j], S[j]) for j in range(k + 1))
+            d = sum(S[j].T @ np.linalg.solve(gains.Sigma[j], eps[j]) for j in range(k + 1))
+            val = d @ np.linalg.pinv(C) @ d
+            if val > best:
+                best, onset[k] = val, r
+        if best > -np.inf:
+            stat[k] = best
+    return stat, onset
+
+
+@pytest.mark.parametrize("kind", ["step", "impulse"])
+def test_windowed_glr_equals_naive_triple_loop(kind):
+    rng = np.random.default_rng(1)
+    m = make_random_ltv(rng, n=2, p=1, n_steps=25)
+    g = kalman_gains(m)
+    if kind == "step":
+        fam = step_family(m, Psi=rng.standard_normal((25, 2, 2)), Phi=rng.standard_normal((25, 1, 2)))
+    else:
+        fam = impulse_family(m)
+    sim = simulate(m, rng=rng, fault=fam.profile(12), theta=[1.0, 2.0])
+    eps = kalman_filter(m, sim.y, sim.u, gains=g).innovations
+    fast = glr_window(eps, m, g, fam, window=8, min_samples=2)
+    stat, onset = _naive_window(eps, m, g, fam, 8, 2)
+    np.testing.assert_allclose(fast.statistic, stat, rtol=1e-9, equal_nan=True)
+    np.testing.assert_array_equal(fast.onset, onset)
+
+
+def test_online_updates_equal_batch_and_realisations_are_independent():
+    m = ex.unstable_model(120)
+    g = kalman_gains(m)
+    fam = impulse_family(m)
+    sim = simulate(m, rng=np.random.default_rng(2), controller=ex.controller(), size=3,
+                   fault=fam.profile(60), theta=[2.0, 0.0])
+    eps = kalman_filter(m, sim.y, sim.u, gains=g).innovations
+    batch = glr_window(eps, m, g, fam, window=30)
+    online = WindowedGLR(m, g, fam, window=30)
+    for k in range(120):
+        l_k, r_k, *_ = online.update(eps[1, k])
+        np.testing.assert_allclose(l_k, batch.statistic[1, k], rtol=1e-12, equal_nan=True)
+        assert r_k == batch.onset[1, k]
+    single = glr_window(eps[2], m, g, fam, window=30)
+    np.testing.assert_allclose(single.statistic, batch.statistic[2], rtol=1e-12, equal_nan=True)
+
+
+def test_known_profile_statistic_is_chi2_m_under_no_fault():
+    """Calibration: l_k ~ chi2(m) under H0 (4000 seeded runs, KS test at the last sample)."""
+    rng = np.random.default_rng(3)
+    m = make_random_ltv(rng, n=3, p=1, n_steps=40)
+    prof = fault_profile(m, Psi=rng.standard_normal((40, 3, 3)))  # m = 3 faults > p = 1 sensor
+    g = kalman_gains(m)
+    S = fault_signature(m, g, prof).on_innovation
+    sim = simulate(m, rng=np.random.default_rng(4), size=4000)
+    eps = kalman_filter(m, sim.y, sim.u, gains=g).innovations
+    stat = glr_known_profile(eps, g, S).statistic[:, -1]
+    assert scipy.stats.kstest(stat, scipy.stats.chi2(3).cdf).pvalue > 0.01
+    # ...and it is not chi2(2) or chi2(4): the test can fail.
+    assert scipy.stats.kstest(stat, scipy.stats.chi2(2).cdf).pvalue < 1e-6
+    assert scipy.stats.kstest(stat, scipy.stats.chi2(4).cdf).pvalue < 1e-6
+
+
+def test_pseudo_inverse_handles_a_singular_information():
+    C = np.array([[1.0, 1.0], [1.0, 1.0]])
+    d = np.array([2.0, 2.0])
+    stat, theta = quadratic_form(C, d)
+    np.testing.assert_allclose(stat, 4.0)  # d^T C^+ d with C^+ = C / 4
+    np.testing.assert_allclose(theta, [1.0, 1.0])
+
+
+def test_first_alarm():
+    stat = np.array([[np.nan, 1.0, 5.0, 2.0, 9.0], [0.0, 0.0, 0.0, 0.0, 0.0]])
+    np.testing.assert_array_equal(first_alarm(stat, 4.0), [2, -1])
+    np.testing.assert_array_equal(first_alarm(stat, 4.0, start=3), [4, -1])
+
+
+def test_bad_arguments():
+    m = ex.unstable_model(20)
+    g = kalman_gains(m)
+    fam = impulse_family(m)
+    with pytest.raises(ModelError, match=r"window: expected a positive integer, got 0"):
+        WindowedGLR(m, g, fam, window=0)
+    with pytest.raises(ModelError, match=r"min_samples: expected an integer in \[0, window=5\), got 5"):
+        WindowedGLR(m, g, fam, window=5, min_samples=5)
+    with pytest.raises(ShapeError, match=r"innovations: expected shape \(\.\.\., 20, 1\), got \(19, 1\)"):
+        glr_window(np.zeros((19, 1)), m, g, fam, window=5)
+    det = WindowedGLR(m, g, fam, window=5, batch_shape=(4,))
+    with pytest.raises(ShapeError, match=r"eps_k: expected shape \(4, 1\), got \(1,\)"):
+        det.update(np.zeros(1))
+    with pytest.raises(ShapeError, match=r"signature: expected shape \(20, 1, m\)"):
+        glr_known_profile(np.zeros((20, 1)), g, np.zeros((20, 2, 2)))
