@@ -38,19 +38,23 @@ __all__ = ["GLRResult", "glr_known_profile", "WindowGLRResult", "WindowedGLR", "
 RANK_RTOL = 1e-10
 
 
+def _pinv_factors(C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(V, inv)`` with ``C^+ = V diag(inv) V^T`` for symmetric PSD ``C`` ``(..., m, m)``."""
+    lam, V = np.linalg.eigh(C)
+    cutoff = RANK_RTOL * np.maximum(lam[..., -1:], np.finfo(float).tiny)
+    inv = np.where(lam > cutoff, 1.0 / np.where(lam > cutoff, lam, 1.0), 0.0)
+    return V, inv
+
+
 def quadratic_form(C: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(d^T C^+ d, C^+ d)`` for symmetric PSD ``C`` ``(..., m, m)`` and ``d`` ``(..., m)``.
 
     ``C`` may have fewer leading axes than ``d`` (it is shared across the extra
     leading axes of ``d``, e.g. Monte Carlo realisations).
     """
-    lam, V = np.linalg.eigh(C)
-    cutoff = RANK_RTOL * np.maximum(lam[..., -1:], np.finfo(float).tiny)
-    inv = np.where(lam > cutoff, 1.0 / np.where(lam > cutoff, lam, 1.0), 0.0)
-    q = np.einsum("...ji,...j->...i", V, d)          # V^T d
-    stat = np.einsum("...i,...i->...", q * inv, q)
-    theta = np.einsum("...ij,...j->...i", V, q * inv)
-    return stat, theta
+    V, inv = _pinv_factors(C)
+    q = np.sum(V * d[..., :, None], axis=-2)          # V^T d
+    return np.sum(q * q * inv, axis=-1), np.sum(V * (q * inv)[..., None, :], axis=-1)
 
 
 def _check_innovations(eps: np.ndarray, N: int, p: int) -> np.ndarray:
@@ -176,7 +180,10 @@ class WindowedGLR:
         # Stacks indexed by slot = r mod w, for the onsets r in {k-w+1, ..., k}.
         self._Gamma = np.zeros((w, n, m))
         self._C = np.zeros((w, m, m))
-        self._d = np.zeros((*self.batch_shape, w, m))
+        # Scores d_k(r) stored as (w, m, B), realisations last: every per-onset product below is
+        # then a BLAS matrix product with B columns, and reductions run over contiguous rows.
+        self._B = int(np.prod(self.batch_shape, dtype=int))
+        self._d = np.zeros((w, m, self._B))
         self._onset = np.full(w, -1)
         self._drive = family.Psi_tilde - gains.FK @ family.Phi_tilde   # Psi~_k - F_k K_k Phi~_k
         self.k = 0
@@ -205,16 +212,17 @@ class WindowedGLR:
         slot = k % w
         self._onset[slot] = k
         self._C[slot] = 0.0
-        self._d[..., slot, :] = 0.0
+        self._d[slot] = 0.0
         self._Gamma[slot] = self._drive[k - 1] if (fam.kind == "impulse" and k > 0) else 0.0
         # Signature on the innovation for every onset: H_k Gamma_k(r) + Phi~_k 1{k >= r}.
         sig = model.H[k] @ self._Gamma
         if fam.kind == "step":
             sig = sig + fam.Phi_tilde[k]
         sig_w = np.linalg.solve(g.Sigma_chol[k], sig)                 # Sigma^{-1/2} S, (w, p, m)
-        e_w = np.linalg.solve(g.Sigma_chol[k], eps_k[..., None])[..., 0]
-        self._C += np.einsum("rpi,rpj->rij", sig_w, sig_w)            # (32), recursively (27)
-        self._d += np.einsum("rpi,...p->...ri", sig_w, e_w)           # (33), recursively (28)
+        e_w = np.linalg.solve(g.Sigma_chol[k], eps_k.reshape(self._B, model.p).T)   # (p, B)
+        sig_wT = np.swapaxes(sig_w, -1, -2)                           # (w, m, p)
+        self._C += sig_wT @ sig_w                                     # (32), recursively (27)
+        self._d += sig_wT @ e_w                                       # (33), recursively (28)
         self.k = k + 1
         admissible = (self._onset >= 0) & (self._onset <= k - self.min_samples) & (self._onset > k - w)
         nan = np.full(self.batch_shape, np.nan)
@@ -223,13 +231,23 @@ class WindowedGLR:
             return (nan, np.full(self.batch_shape, -1), np.full((*self.batch_shape, m), np.nan),
                     np.full((*self.batch_shape, m, m), np.nan), np.full((*self.batch_shape, m), np.nan))
         slots = np.nonzero(admissible)[0]
-        stat, theta = quadratic_form(self._C[slots], self._d[..., slots, :])   # (35), (34)
-        best = np.argmax(stat, axis=-1)                                       # (36)
-        l_k = np.take_along_axis(stat, best[..., None], axis=-1)[..., 0]
-        th = np.take_along_axis(theta, best[..., None, None], axis=-2)[..., 0, :]
-        C_hat = self._C[slots][best]
-        d_hat = np.take_along_axis(self._d[..., slots, :], best[..., None, None], axis=-2)[..., 0, :]
-        return l_k, self._onset[slots][best], th, C_hat, d_hat
+        V, inv = _pinv_factors(self._C[slots])       # shared by all realisations
+        root = V * np.sqrt(inv)[:, None, :]          # C^+ = root root^T
+        d = self._d[slots]                           # (S, m, B)
+        q = np.swapaxes(root, -1, -2) @ d            # (S, m, B)
+        stat = np.sum(q * q, axis=1)                 # (35) for every admissible onset, (S, B)
+        best = np.argmax(stat, axis=0)               # (36), (B,)
+        cols = np.arange(self._B)
+        l_k = stat[best, cols]
+        th = (root[best] @ q[best, :, cols][..., None])[..., 0]             # (34): C^+ d
+        d_hat = d[best, :, cols]
+        shape = self.batch_shape
+        m = fam.m
+        l_k, th, d_hat = l_k.reshape(shape), th.reshape(*shape, m), d_hat.reshape(*shape, m)
+        best_onset = self._onset[slots][best].reshape(shape)
+        C_hat = self._C[slots][best].reshape(*shape, m, m)
+        return l_k, best_onset, th, C_hat, d_hat
+
 
 
 def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, family: FaultFamily,
