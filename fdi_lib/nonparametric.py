@@ -1,0 +1,521 @@
+"""Parametric and non-parametric additive faults (Basseville & Zhang).
+
+Model (2) of the paper, in the book's notation::
+
+    X_{k+1} = F_k X_k + G_k U_k + W_k + E_k f_k + Psi_k theta_k
+    Y_k     = H_k X_k + J_k U_k + V_k
+
+with ``f_k`` an arbitrary unknown signal (non-parametric fault) and ``theta_k`` a
+constant or slowly varying vector (parametric fault).
+
+Proposition 1 (eq. 25): for *any* predictor ``Xhat_{k+1} = F_k Xhat_k + G_k U_k +
+F_k K_k eps_k`` (3) designed for the fault-free model, the innovation splits exactly::
+
+    eps_k = eps0_k + H_k Gamma_k theta_k + H_k zeta_k + H_k delta_k
+    Gamma_{k+1} = A_k Gamma_k + Psi_k,            Gamma_0 = 0     (9)
+    zeta_{k+1}  = A_k zeta_k + E_k f_k,           zeta_0  = 0     (15)
+    delta_{k+1} = A_k delta_k - Gamma_{k+1} e_k,  delta_0 = 0     (23),  e_k = theta_{k+1} - theta_k
+
+with ``A_k = F_k (I - K_k H_k)``. :func:`innovation_split` computes every term
+(``Gamma_k`` through :func:`fdi_lib.signatures.fault_signature`, the same recursion).
+
+The Kitanidis filter (27)-(28) is the predictor (3) with the gain ``L_k`` of
+:func:`fdi_lib.kitanidis.kitanidis_gains` (one implementation for the whole book);
+:func:`kitanidis_predictor_gains` repackages it as :class:`~fdi_lib.filters.KalmanGains`
+so that :func:`fdi_lib.filters.kalman_filter` runs (27) and
+:func:`fdi_lib.signatures.fault_signature` gives ``Delta_k`` (30).
+
+Two corrections to the paper, derived and checked in the book chapter ``bz``:
+
+* With ``K_k = L_k``, (15) gives ``zeta_k = E_{k-1} f_{k-1}`` (because ``(I - L_k H_k) E_{k-1} = 0``),
+  so the Kitanidis *innovation* still contains ``H_k E_{k-1} f_{k-1}``: the paper's
+  ``H_k zeta_k = 0`` does not hold. The fault is rejected by any projection
+  ``T_k`` with ``T_k H_k E_{k-1} = 0`` (:func:`rejection_projection`).
+* The Kitanidis innovation is not white in general (Prop. 2 fails): its lag-one
+  covariance is ``-H_{k+1} F_k D_k Sigma_k`` with ``D_k = L_k - K^Kalman_k``
+  (:func:`kitanidis_lag_covariance`). The projected residual ``T_k eps_k`` *is* white
+  (``D_k Sigma_k T_k^T = 0``), with unit covariance by construction.
+
+Solution 1 (Section 3): windowed GLR + minmax on ``T_k eps_k`` (:func:`solution1`), plus an
+energy test on a parallel Kalman filter's innovation for the onset of ``f``.
+Solution 2 (Section 4): RLS tracking of ``theta_k`` in (47), see :mod:`fdi_lib.rls`
+and :func:`solution2`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+import scipy.linalg
+import scipy.stats
+
+from fdi_lib.errors import ModelError, ShapeError
+from fdi_lib.filters import KalmanGains, kalman_filter, kalman_gains
+from fdi_lib.glr import WindowGLRResult, first_alarm, glr_window
+from fdi_lib.isolation import minmax_isolation
+from fdi_lib.kitanidis import KitanidisGains, as_unknown_input_matrix, kitanidis_gains
+from fdi_lib.models import FaultFamily, LTVModel, fault_profile, ltv_model, step_family
+from fdi_lib.rls import RLSResult, rls_track
+from fdi_lib.signatures import fault_signature
+
+__all__ = [
+    "kitanidis_predictor_gains", "InnovationSplit", "innovation_split", "nonparametric_signature",
+    "drift_signature", "kitanidis_lag_covariance", "rejection_projection", "ReducedResidual",
+    "reduce_residual", "energy_statistic", "energy_threshold", "Solution1Result", "solution1",
+    "Solution2Result", "solution2", "first_alarm_after",
+]
+
+
+def kitanidis_predictor_gains(model: LTVModel, E: Any, kgains: KitanidisGains | None = None) -> KalmanGains:
+    """The Kitanidis filter in the one-step-predictor form (27)-(28), as :class:`KalmanGains`.
+
+    ``K = L_k`` (eq. 28, the Kitanidis gain of Zhang 2021 eq. 24g: no second Riccati
+    recursion, everything comes from :func:`fdi_lib.kitanidis.kitanidis_gains`),
+    ``P = P_k`` (the prior covariance), ``Sigma = H_k P_k H_k^T + R_k``,
+    ``A = F_k (I - L_k H_k)`` and ``FK = F_k L_k``. :func:`fdi_lib.filters.kalman_filter`
+    with these gains is recursion (27); its innovation is the paper's ``eps_k``.
+
+    Parameters
+    ----------
+    model : LTVModel
+        Fault-free model (1).
+    E : array_like or callable
+        ``E_k``, ``(n, q)`` or ``(N, n, q)``.
+    kgains : KitanidisGains, optional
+        Precomputed gains (then ``E`` is only checked for shape).
+
+    Returns
+    -------
+    KalmanGains
+    """
+    g = kitanidis_gains(model, E) if kgains is None else kgains
+    if g.K.shape != (model.n_steps, model.n, model.p):
+        raise ShapeError(f"kgains: expected K of shape {(model.n_steps, model.n, model.p)}, got {g.K.shape}")
+    IKH = np.eye(model.n) - g.K @ model.H
+    return KalmanGains(K=g.K, P=g.P, P_filt=g.P_filt, Sigma=g.Sigma, Sigma_chol=g.Sigma_chol,
+                       A=model.F @ IKH, FK=model.F @ g.K)
+
+
+def _check_gains(model: LTVModel, gains: KalmanGains) -> None:
+    if not isinstance(gains, KalmanGains) or gains.K.shape != (model.n_steps, model.n, model.p):
+        raise ShapeError(f"gains: expected KalmanGains with K of shape {(model.n_steps, model.n, model.p)}, "
+                         f"got {type(gains).__name__} with K {np.shape(getattr(gains, 'K', None))}")
+
+
+def _series(arr: Any, N: int, width: int, name: str) -> np.ndarray:
+    a = np.asarray(arr, dtype=float)
+    if a.ndim == 1 and width == 1:
+        a = a[:, None]
+    if a.ndim < 2 or a.shape[-2:] != (N, width):
+        raise ShapeError(f"{name}: expected shape (..., {N}, {width}), got {np.shape(arr)}")
+    return a
+
+
+def nonparametric_signature(model: LTVModel, gains: KalmanGains, E: Any, f: Any) -> np.ndarray:
+    """``zeta_k`` of eq. (15): ``zeta_{k+1} = F_k (I - K_k H_k) zeta_k + E_k f_k``, ``zeta_0 = 0``.
+
+    Parameters
+    ----------
+    model : LTVModel
+    gains : KalmanGains
+        Any predictor gains (Kalman, or Kitanidis via :func:`kitanidis_predictor_gains`).
+    E : array_like
+        ``(n, q)`` or ``(N, n, q)``.
+    f : array_like
+        Non-parametric fault ``f_k``, ``(*batch, N, q)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``zeta_k`` for ``k = 0 .. N``, shape ``(*batch, N+1, n)``. It depends on the unknown
+        ``f``: an FDI algorithm cannot compute it (only the book does, to check eq. 25).
+    """
+    _check_gains(model, gains)
+    Es = as_unknown_input_matrix(model, E)
+    fs = _series(f, model.n_steps, Es.shape[2], "f")
+    drive = np.einsum("kij,...kj->...ki", Es, fs)
+    z = np.zeros((*fs.shape[:-2], model.n_steps + 1, model.n))
+    for k in range(model.n_steps):
+        z[..., k + 1, :] = z[..., k, :] @ gains.A[k].T + drive[..., k, :]
+    return z
+
+
+def drift_signature(model: LTVModel, gains: KalmanGains, Gamma: np.ndarray, theta_path: Any) -> np.ndarray:
+    """``delta_k`` of eq. (23): ``delta_{k+1} = A_k delta_k - Gamma_{k+1} (theta_{k+1} - theta_k)``.
+
+    Parameters
+    ----------
+    Gamma : numpy.ndarray
+        ``Gamma_k`` of (9), ``(N+1, n, m)`` (:attr:`fdi_lib.signatures.Signature.Gamma`).
+    theta_path : array_like
+        ``theta_k``, ``(*batch, N, m)``; ``e_k = theta_{k+1} - theta_k`` for ``k = 0 .. N-2``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``delta_k`` for ``k = 0 .. N-1``, shape ``(*batch, N, n)``; bounded by a multiple of
+        ``max |e_k|`` (eq. 21).
+    """
+    _check_gains(model, gains)
+    N, n = model.n_steps, model.n
+    if np.shape(Gamma)[:2] != (N + 1, n):
+        raise ShapeError(f"Gamma: expected shape ({N + 1}, {n}, m), got {np.shape(Gamma)}")
+    th = _series(theta_path, N, Gamma.shape[2], "theta_path")
+    e = np.diff(th, axis=-2)
+    d = np.zeros((*th.shape[:-2], N, n))
+    for k in range(N - 1):
+        d[..., k + 1, :] = d[..., k, :] @ gains.A[k].T - e[..., k, :] @ Gamma[k + 1].T
+    return d
+
+
+@dataclass(frozen=True)
+class InnovationSplit:
+    """The four terms of eq. (25), each ``(*batch, N, p)``.
+
+    Attributes
+    ----------
+    parametric, nonparametric, drift : numpy.ndarray
+        ``H_k Gamma_k theta_k``, ``H_k zeta_k`` and ``H_k delta_k``.
+    residual : numpy.ndarray
+        ``eps_k - eps0_k - parametric - nonparametric - drift``: zero up to rounding (Prop. 1).
+    """
+
+    parametric: np.ndarray
+    nonparametric: np.ndarray
+    drift: np.ndarray
+    residual: np.ndarray
+
+
+def innovation_split(model: LTVModel, gains: KalmanGains, innovations: Any, innovations0: Any, *,
+                     Psi: Any, theta_path: Any, E: Any, f: Any) -> InnovationSplit:
+    """Check Proposition 1 (eq. 25) on a record: compute each term and what is left.
+
+    Parameters
+    ----------
+    innovations, innovations0 : array_like
+        ``eps_k`` of the predictor with ``gains`` on the faulty record and ``eps0_k`` on the
+        fault-free record with the same noise, ``(*batch, N, p)``.
+    Psi : array_like
+        ``Psi_k``, ``(n, m)`` or ``(N, n, m)``.
+    theta_path : array_like
+        ``theta_k``, ``(*batch, N, m)``.
+    E, f
+        As in :func:`nonparametric_signature`.
+    """
+    _check_gains(model, gains)
+    N, p = model.n_steps, model.p
+    eps = _series(innovations, N, p, "innovations")
+    eps0 = _series(innovations0, N, p, "innovations0")
+    sig = fault_signature(model, gains, fault_profile(model, Psi=Psi))       # Gamma_k of (9)
+    th = _series(theta_path, N, sig.Gamma.shape[2], "theta_path")
+    par = np.einsum("kpm,...km->...kp", sig.on_innovation, th)
+    zeta = nonparametric_signature(model, gains, E, f)[..., :N, :]
+    non = np.einsum("kpn,...kn->...kp", model.H, zeta)
+    dr = np.einsum("kpn,...kn->...kp", model.H, drift_signature(model, gains, sig.Gamma, th))
+    return InnovationSplit(parametric=par, nonparametric=non, drift=dr,
+                           residual=eps - eps0 - par - non - dr)
+
+
+def kitanidis_lag_covariance(model: LTVModel, kgains: KitanidisGains, lag: int = 1) -> np.ndarray:
+    """Theoretical ``Cov(eps_{k+lag}, eps_k)`` of the fault-free Kitanidis innovation.
+
+    ``E[eps_{k+j} eps_k^T] = -H_{k+j} A_{k+j-1} ... A_{k+1} F_k D_k Sigma_k`` for ``j >= 1``, with
+    ``A_i = F_i (I - L_i H_i)`` and ``D_k = L_k - K^Kalman_k`` (derived in the book). It is
+    zero for the Kalman filter (``D = 0``) but not for the Kitanidis filter: the paper's
+    Prop. 2 (whiteness) does not hold for the innovation (27).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N - lag, p, p)``, entry ``k`` is ``Cov(eps_{k+lag}, eps_k)``.
+    """
+    if not isinstance(lag, (int, np.integer)) or not 1 <= lag < model.n_steps:
+        raise ModelError(f"lag: expected an integer in [1, {model.n_steps - 1}], got {lag!r}")
+    g = kgains
+    D = g.K - g.K_kalman
+    A = model.F @ (np.eye(model.n) - g.K @ model.H)
+    N = model.n_steps
+    out = np.empty((N - lag, model.p, model.p))
+    for k in range(N - lag):
+        M = -model.F[k] @ D[k] @ g.Sigma[k]
+        for i in range(k + 1, k + lag):
+            M = A[i] @ M
+        out[k] = model.H[k + lag] @ M
+    return out
+
+
+def rejection_projection(model: LTVModel, kgains: KitanidisGains) -> np.ndarray:
+    """Projections ``T_k`` ``(N, p - q, p)`` with ``T_k H_k E_{k-1} = 0`` and ``T_k Sigma_k T_k^T = I``.
+
+    ``T_k eps_k`` of the Kitanidis innovation does not depend on ``f`` (``H_k zeta_k =
+    H_k E_{k-1} f_{k-1}`` is annihilated), is white with unit covariance under no
+    fault, and carries ``theta`` through ``T_k H_k Delta_k``. At ``k = 0`` (no unknown
+    input acts yet) ``E_0`` is used so that the dimension stays ``p - q``.
+
+    scipy's ``null_space`` (an SVD) gives the orthonormal complement of the whitened
+    ``Sigma_k^{-1/2} H_k E_{k-1}``.
+    """
+    N, p = model.n_steps, model.p
+    Es = kgains.E
+    q = Es.shape[2]
+    if q >= p:
+        raise ModelError(f"E: the rejection leaves p - q = {p - q} output directions; expected q < p = {p}")
+    T = np.empty((N, p - q, p))
+    for k in range(N):
+        Lc = kgains.Sigma_chol[k]
+        B = scipy.linalg.solve_triangular(Lc, model.H[k] @ Es[max(k - 1, 0)], lower=True)
+        Nk = scipy.linalg.null_space(B.T)                     # (p, p - q), orthonormal
+        T[k] = scipy.linalg.solve_triangular(Lc, Nk, lower=True, trans="T").T   # N^T L^{-1}
+    return T
+
+
+@dataclass(frozen=True)
+class ReducedResidual:
+    """The projected Kitanidis residual ``r_k = T_k eps_k`` and what the GLR needs.
+
+    Attributes
+    ----------
+    residuals : numpy.ndarray
+        ``(*batch, N, p - q)``; unit covariance, white, free of ``f``.
+    model : LTVModel
+        ``H_k -> T_k H_k``, ``R_k -> I``: the fault-free model as seen through ``T_k``.
+    gains : KalmanGains
+        ``A = F_k (I - L_k H_k)``, ``Sigma = I``; ``K = L_k T_k^T`` and ``FK = F_k L_k T_k^T`` are
+        only there to fill the container (the GLR on state faults uses ``A`` and ``Sigma``).
+    T : numpy.ndarray
+        ``(N, p - q, p)``.
+    """
+
+    residuals: np.ndarray
+    model: LTVModel
+    gains: KalmanGains
+    T: np.ndarray
+
+
+def reduce_residual(model: LTVModel, kgains: KitanidisGains, innovations: Any,
+                    T: np.ndarray | None = None) -> ReducedResidual:
+    """Project the Kitanidis innovation (27) with :func:`rejection_projection`."""
+    N, p = model.n_steps, model.p
+    eps = _series(innovations, N, p, "innovations")
+    T = rejection_projection(model, kgains) if T is None else np.asarray(T, dtype=float)
+    r = T.shape[1]
+    if T.shape != (N, r, p):
+        raise ShapeError(f"T: expected shape ({N}, r, {p}), got {T.shape}")
+    res = np.einsum("krp,...kp->...kr", T, eps)
+    red_model = ltv_model(F=model.F, G=model.G, H=T @ model.H, Q=model.Q, R=np.eye(r), n_steps=N,
+                          x0=model.x0, P0=model.P0)
+    eye = np.broadcast_to(np.eye(r), (N, r, r))
+    LT = kgains.K @ np.swapaxes(T, 1, 2)
+    red_gains = KalmanGains(K=LT, P=kgains.P, P_filt=kgains.P_filt, Sigma=np.array(eye),
+                            Sigma_chol=np.array(eye),
+                            A=model.F @ (np.eye(model.n) - kgains.K @ model.H), FK=model.F @ LT)
+    return ReducedResidual(residuals=res, model=red_model, gains=red_gains, T=T)
+
+
+def energy_statistic(residuals: Any, Sigma_chol: np.ndarray, window: int) -> np.ndarray:
+    """Moving-window energy ``sum_{j=k-w+1}^{k} ||Sigma_j^{-1/2} r_j||^2`` (``nan`` for ``k < w-1``).
+
+    Under "white Gaussian noise with covariance ``Sigma_k``" it is chi-square with
+    ``w p`` degrees of freedom (:func:`energy_threshold`): the simple test of Section 3.3
+    for an arbitrary signal ``f``.
+
+    Parameters
+    ----------
+    residuals : array_like
+        ``(*batch, N, p)``.
+    Sigma_chol : numpy.ndarray
+        ``(N, p, p)`` lower Cholesky factors.
+    window : int
+        ``w >= 1``.
+    """
+    L = np.asarray(Sigma_chol, dtype=float)
+    N, p = L.shape[:2]
+    r = _series(residuals, N, p, "residuals")
+    if not isinstance(window, (int, np.integer)) or not 1 <= window <= N:
+        raise ModelError(f"window: expected an integer in [1, {N}], got {window!r}")
+    z = np.linalg.solve(L, r[..., None])[..., 0]
+    c = np.cumsum(np.sum(z * z, axis=-1), axis=-1)
+    out = np.full(c.shape, np.nan)
+    out[..., window - 1] = c[..., window - 1]
+    out[..., window:] = c[..., window:] - c[..., :-window]
+    return out
+
+
+def energy_threshold(window: int, p: int, alpha: float) -> float:
+    """``chi2.ppf(1 - alpha, w p)``: per-sample false-alarm probability ``alpha`` of the energy test."""
+    if not 0.0 < alpha < 1.0:
+        raise ModelError(f"alpha: expected a probability in (0, 1), got {alpha!r}")
+    return float(scipy.stats.chi2.ppf(1.0 - alpha, window * p))
+
+
+def first_alarm_after(statistic: np.ndarray, threshold: float, start: int = 0) -> np.ndarray:
+    """:func:`fdi_lib.glr.first_alarm` (``-1`` if none); re-exported for the reproductions."""
+    return first_alarm(statistic, threshold, start)
+
+
+@dataclass(frozen=True)
+class Solution1Result:
+    """Solution 1 (Section 3) on a batch of records.
+
+    Attributes
+    ----------
+    reduced : ReducedResidual
+        Projected Kitanidis residual.
+    glr : WindowGLRResult
+        Windowed GLR for a jump of ``theta`` on ``reduced.residuals``.
+    glr_alarm : numpy.ndarray
+        First ``k`` with ``l_k > glr_threshold`` (``-1``: none), ``batch`` shape.
+    onset_hat : numpy.ndarray
+        ``r_hat`` at the GLR alarm (``-1``: none).
+    isolation : numpy.ndarray
+        ``(*batch, m)`` booleans: the minmax test declares ``theta^(i) != 0`` at the alarm
+        (``False`` where no alarm).
+    isolation_stat : numpy.ndarray
+        ``(*batch, m)`` minmax statistics (``nan`` where no alarm).
+    energy : numpy.ndarray
+        Energy statistic of the parallel Kalman filter's innovation, ``(*batch, N)``.
+    energy_alarm : numpy.ndarray
+        First energy alarm (``-1``: none).
+    nonparametric_alarm : numpy.ndarray
+        First energy alarm while the GLR is still quiet (``energy_alarm < glr_alarm`` or no GLR
+        alarm), else ``-1``: the decision "non-parametric fault" of Section 3.3.
+    glr_threshold, energy_threshold : float
+    """
+
+    reduced: ReducedResidual
+    glr: WindowGLRResult
+    glr_alarm: np.ndarray
+    onset_hat: np.ndarray
+    isolation: np.ndarray
+    isolation_stat: np.ndarray
+    energy: np.ndarray
+    energy_alarm: np.ndarray
+    nonparametric_alarm: np.ndarray
+    glr_threshold: float
+    energy_threshold: float
+
+
+def solution1(model: LTVModel, y: Any, u: Any = None, *, E: Any, Psi: Any, window: int,
+              glr_threshold: float, energy_window: int, energy_alpha: float,
+              isolation_alpha: float = 0.01, partitions: Sequence[Sequence[int]] | None = None,
+              kgains: KitanidisGains | None = None, kalman: KalmanGains | None = None,
+              T: np.ndarray | None = None) -> Solution1Result:
+    """Solution 1: reject ``E f``, test ``theta`` by GLR + minmax, detect ``f`` by energy.
+
+    Steps, all vectorised over the leading axes of ``y`` (Monte Carlo realisations):
+
+    1. Kitanidis filter (27) and projection ``r_k = T_k eps_k`` (free of ``f``, white).
+    2. Windowed GLR (Zhang & Basseville 2014, eqs. 35-37) for a jump ``Psi theta 1{k >= r}`` on ``r_k``;
+       alarm when ``l_k > glr_threshold``; minmax isolation (41) from ``C_k(r_hat), d_k(r_hat)``.
+    3. Parallel Kalman filter (46); windowed energy of its innovation (Section 3.3), an alarm
+       counts as "non-parametric" while the GLR is quiet.
+
+    Parameters
+    ----------
+    model : LTVModel
+        Fault-free model (1).
+    y, u : array_like
+        Outputs ``(*batch, N, p)`` and inputs ``(*batch, N, l)`` (closed loop: per realisation).
+    E, Psi : array_like
+        ``E_k`` ``(n, q)`` and ``Psi_k`` ``(n, m)`` (or per step).
+    window : int
+        GLR window ``w``.
+    glr_threshold : float
+        Threshold of ``l_k``.
+    energy_window : int
+        Window of the energy test.
+    energy_alpha : float
+        Per-sample false-alarm probability of the energy test (chi-square threshold).
+    isolation_alpha : float
+        Level of each minmax test.
+    partitions : sequence, optional
+        Minmax partitions; default one test per component of ``theta``.
+    kgains, kalman, T : optional
+        Precomputed Kitanidis gains, Kalman gains, projection (shared across chunks).
+    """
+    if kgains is None:
+        kgains = kitanidis_gains(model, E)
+    kpred = kitanidis_predictor_gains(model, E, kgains)
+    eps_kit = kalman_filter(model, y, u, gains=kpred).innovations          # (27)
+    red = reduce_residual(model, kgains, eps_kit, T)
+    fam: FaultFamily = step_family(red.model, Psi=Psi)
+    glr = glr_window(red.residuals, red.model, red.gains, fam, window)
+    alarm = first_alarm(glr.statistic, glr_threshold)
+    batch = alarm.shape
+    m = fam.m
+    parts = [[i] for i in range(m)] if partitions is None else partitions
+    iso = np.zeros((*batch, len(parts)), dtype=bool)
+    iso_stat = np.full((*batch, len(parts)), np.nan)
+    onset_hat = np.full(batch, -1)
+    hit = alarm >= 0
+    if np.any(hit):
+        idx = np.nonzero(hit)
+        ka = alarm[idx]
+        C = glr.C_hat[idx + (ka,)]
+        d = glr.d_hat[idx + (ka,)]
+        onset_hat[idx] = glr.onset[idx + (ka,)]
+        for j, dec in enumerate(minmax_isolation(C, d, parts, alpha=isolation_alpha)):
+            iso[idx + (j,)] = dec.faulty
+            iso_stat[idx + (j,)] = dec.statistic
+    kal = kalman_gains(model) if kalman is None else kalman
+    eps_kal = kalman_filter(model, y, u, gains=kal).innovations              # (46)
+    thr_e = energy_threshold(energy_window, model.p, energy_alpha)
+    en = energy_statistic(eps_kal, kal.Sigma_chol, energy_window)
+    e_alarm = first_alarm(en, thr_e)
+    nonpar = np.where((e_alarm >= 0) & ((alarm < 0) | (e_alarm < alarm)), e_alarm, -1)
+    return Solution1Result(reduced=red, glr=glr, glr_alarm=alarm, onset_hat=onset_hat, isolation=iso,
+                           isolation_stat=iso_stat, energy=en, energy_alarm=e_alarm,
+                           nonparametric_alarm=nonpar, glr_threshold=float(glr_threshold),
+                           energy_threshold=thr_e)
+
+
+@dataclass(frozen=True)
+class Solution2Result:
+    """Solution 2 (Section 4) on a batch of records.
+
+    Attributes
+    ----------
+    rls : RLSResult
+        Tracking of ``theta_k`` in (47).
+    regressor : numpy.ndarray
+        ``H_k Gamma_k`` ``(N, p, m)`` with the Kalman gain (Gamma of eq. 9, ``Psi_k`` from ``k = 0``).
+    energy : numpy.ndarray
+        Windowed energy of the tracking error ``E_k`` (whitened by ``Sigma_k``), ``(*batch, N)``.
+    energy_alarm : numpy.ndarray
+        First ``k >= start`` above the threshold (``-1``: none).
+    energy_threshold : float
+    """
+
+    rls: RLSResult
+    regressor: np.ndarray
+    energy: np.ndarray
+    energy_alarm: np.ndarray
+    energy_threshold: float
+
+
+def solution2(model: LTVModel, y: Any, u: Any = None, *, Psi: Any, lam: float, energy_window: int,
+              energy_alpha: float, start: int = 0, kalman: KalmanGains | None = None) -> Solution2Result:
+    """Solution 2: Kalman filter (46), RLS with forgetting factor on (47), energy of ``E_k``.
+
+    Parameters
+    ----------
+    Psi : array_like
+        ``Psi_k`` ``(n, m)`` or ``(N, n, m)``.
+    lam : float
+        Forgetting factor ``0 < lambda <= 1``.
+    energy_window, energy_alpha
+        As in :func:`solution1` (threshold ``chi2.ppf(1 - alpha, w p)``; the RLS error is smaller
+        than the innovation under no fault, so the level is conservative).
+    start : int
+        First sample at which an energy alarm may be raised (RLS warm-up).
+    """
+    kal = kalman_gains(model) if kalman is None else kalman
+    eps = kalman_filter(model, y, u, gains=kal).innovations
+    sig = fault_signature(model, kal, fault_profile(model, Psi=Psi))
+    res = rls_track(eps, sig.on_innovation, kal.Sigma, lam=lam)
+    thr = energy_threshold(energy_window, model.p, energy_alpha)
+    en = energy_statistic(res.errors, kal.Sigma_chol, energy_window)
+    return Solution2Result(rls=res, regressor=sig.on_innovation, energy=en,
+                           energy_alarm=first_alarm(en, thr, start), energy_threshold=thr)

@@ -1,0 +1,154 @@
+"""Recursive least squares with a forgetting factor, for tracking ``theta_k`` in eq. (47).
+
+Basseville & Zhang, Section 4 (after Ljung 1999): with the regression
+``eps_k = M_k theta_k + noise`` (``M_k = H_k Gamma_k``, noise covariance ``Sigma_k``)::
+
+    S_k       = lambda Sigma_k + M_k P_{k-1} M_k^T
+    L_k       = P_{k-1} M_k^T S_k^{-1}
+    theta_k^  = theta_{k-1}^ + L_k (eps_k - M_k theta_{k-1}^)
+    P_k       = lambda^{-1} (P_{k-1} - P_{k-1} M_k^T S_k^{-1} M_k P_{k-1})
+    E_k       = eps_k - M_k theta_k^                       (tracking error)
+
+with ``theta_0^ = 0``, ``P_0 = I``. This minimises
+``sum_j lambda^{k-j} ||eps_j - M_j theta||^2_{Sigma_j^{-1}} + lambda^k ||theta||^2_{P_0^{-1}}``.
+The gains ``L_k`` and ``P_k`` do not depend on the data (the regressor is known in
+advance), so they are computed once and shared by all realisations; only the
+``theta`` recursion runs per realisation, vectorised.
+
+No library is used: filterpy/padasip provide scalar-output RLS only, and the
+matrix-weighted, multi-output form above is five lines of numpy (Cholesky
+solves with scipy, no explicit inverse of ``S_k``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import scipy.linalg
+
+from fdi_lib.errors import ModelError, NonFiniteError, ShapeError
+
+__all__ = ["RLSGains", "rls_gains", "RLSResult", "rls_track"]
+
+
+@dataclass(frozen=True)
+class RLSGains:
+    """Data-independent part of the RLS: ``L`` ``(N, m, p)``, ``P`` ``(N+1, m, m)``, ``lam``."""
+
+    L: np.ndarray
+    P: np.ndarray
+    lam: float
+
+
+def rls_gains(regressor: Any, Sigma: Any, *, lam: float, P0: Any = None) -> RLSGains:
+    """Gain and covariance recursions of the RLS with forgetting factor.
+
+    Parameters
+    ----------
+    regressor : array_like
+        ``M_k``, shape ``(N, p, m)``.
+    Sigma : array_like
+        Noise covariances ``Sigma_k``, ``(N, p, p)``, symmetric positive definite.
+    lam : float
+        Forgetting factor, ``0 < lam <= 1`` (``1``: ordinary RLS, no forgetting).
+    P0 : array_like, optional
+        ``(m, m)``, default identity (the paper's choice).
+    """
+    M = np.asarray(regressor, dtype=float)
+    S_all = np.asarray(Sigma, dtype=float)
+    if M.ndim != 3:
+        raise ShapeError(f"regressor: expected shape (N, p, m), got {M.shape}")
+    N, p, m = M.shape
+    if S_all.shape != (N, p, p):
+        raise ShapeError(f"Sigma: expected shape ({N}, {p}, {p}), got {S_all.shape}")
+    if not (isinstance(lam, (int, float, np.floating)) and 0.0 < float(lam) <= 1.0):
+        raise ModelError(f"lam: expected a forgetting factor in (0, 1], got {lam!r}")
+    lam = float(lam)
+    P = np.empty((N + 1, m, m))
+    P[0] = np.eye(m) if P0 is None else np.asarray(P0, dtype=float)
+    if P[0].shape != (m, m):
+        raise ShapeError(f"P0: expected shape ({m}, {m}), got {np.shape(P0)}")
+    L = np.empty((N, m, p))
+    for k in range(N):
+        Pk, Mk = P[k], M[k]
+        S = lam * S_all[k] + Mk @ Pk @ Mk.T
+        c = scipy.linalg.cho_factor(0.5 * (S + S.T), lower=True)
+        Lk = scipy.linalg.cho_solve(c, Mk @ Pk).T          # P M^T S^{-1}
+        Pn = (Pk - Lk @ Mk @ Pk) / lam
+        L[k], P[k + 1] = Lk, 0.5 * (Pn + Pn.T)
+    if not np.all(np.isfinite(P)):
+        raise NonFiniteError("lam: the RLS covariance diverged (regressor not persistently exciting?)")
+    return RLSGains(L=L, P=P, lam=lam)
+
+
+@dataclass(frozen=True)
+class RLSResult:
+    """Output of :func:`rls_track`.
+
+    Attributes
+    ----------
+    theta_hat : numpy.ndarray
+        ``theta_k^``, ``(*batch, N, m)``.
+    errors : numpy.ndarray
+        Tracking errors ``E_k = eps_k - M_k theta_k^``, ``(*batch, N, p)``.
+    prior_errors : numpy.ndarray
+        ``eps_k - M_k theta_{k-1}^``, ``(*batch, N, p)``.
+    gains : RLSGains
+    """
+
+    theta_hat: np.ndarray
+    errors: np.ndarray
+    prior_errors: np.ndarray
+    gains: RLSGains
+
+
+def rls_track(innovations: Any, regressor: Any, Sigma: Any, *, lam: float, P0: Any = None,
+              theta0: Any = None, gains: RLSGains | None = None) -> RLSResult:
+    """Track ``theta_k`` in ``eps_k = M_k theta_k + noise`` (eq. 47) by RLS with forgetting.
+
+    Parameters
+    ----------
+    innovations : array_like
+        ``eps_k``, ``(*batch, N, p)``.
+    regressor, Sigma, lam, P0
+        As in :func:`rls_gains`.
+    theta0 : array_like, optional
+        ``theta_0^`` ``(m,)``, default zero.
+    gains : RLSGains, optional
+        Precomputed gains (shared across chunks).
+
+    Returns
+    -------
+    RLSResult
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> M = np.ones((200, 1, 1)); S = np.ones((200, 1, 1))
+    >>> r = rls_track(2.0 * np.ones((200, 1)), M, S, lam=0.95)
+    >>> round(float(r.theta_hat[-1, 0]), 6)
+    2.0
+    """
+    g = rls_gains(regressor, Sigma, lam=lam, P0=P0) if gains is None else gains
+    M = np.asarray(regressor, dtype=float)
+    N, p, m = M.shape
+    eps = np.asarray(innovations, dtype=float)
+    if eps.ndim < 2 or eps.shape[-2:] != (N, p):
+        raise ShapeError(f"innovations: expected shape (..., {N}, {p}), got {eps.shape}")
+    if not np.all(np.isfinite(eps)):
+        raise NonFiniteError("innovations: expected finite values")
+    batch = eps.shape[:-2]
+    th = np.zeros((*batch, m)) if theta0 is None else np.broadcast_to(np.asarray(theta0, float), (*batch, m))
+    if th.shape[-1] != m:
+        raise ShapeError(f"theta0: expected shape ({m},), got {np.shape(theta0)}")
+    theta = np.empty((*batch, N, m))
+    prior = np.empty(eps.shape)
+    for k in range(N):
+        e = eps[..., k, :] - th @ M[k].T
+        prior[..., k, :] = e
+        th = th + e @ g.L[k].T
+        theta[..., k, :] = th
+    errors = eps - np.einsum("kpm,...km->...kp", M, theta)
+    return RLSResult(theta_hat=theta, errors=errors, prior_errors=prior, gains=g)
