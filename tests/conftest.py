@@ -1,29 +1,14 @@
-"""Shared test helpers: random LTV systems (time-varying, possibly unstable)."""
+"""Shared test helpers."""
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
-from fdi_lib.models import LTVModel, ltv_model
+from fdi_lib.systems.random_ltv import random_ltv_model
 
-
-def make_random_ltv(rng: np.random.Generator, *, n: int = 3, p: int = 1, l: int = 1,
-                    n_steps: int = 60, unstable: bool = True) -> LTVModel:
-    """A random observable LTV model whose F_k has spectral radius > 1 when ``unstable``."""
-    base = rng.standard_normal((n, n))
-    base *= (1.15 if unstable else 0.8) / max(abs(np.linalg.eigvals(base)))
-    k = np.arange(n_steps)[:, None, None]
-    F = base + 0.05 * np.sin(0.3 * k) * rng.standard_normal((1, n, n))
-    G = rng.standard_normal((n, l)) + 0.1 * np.cos(0.2 * k) * rng.standard_normal((1, n, l))
-    H = rng.standard_normal((p, n)) + 0.1 * np.sin(0.1 * k) * rng.standard_normal((1, p, n))
-    A = rng.standard_normal((n, n))
-    Q = 0.05 * (A @ A.T) + 0.01 * np.eye(n)
-    B = rng.standard_normal((p, p))
-    R = 0.1 * (B @ B.T) + 0.05 * np.eye(p)
-    return ltv_model(F=F, G=G, H=H, Q=Q, R=R, n_steps=n_steps, P0=np.eye(n))
+make_random_ltv = random_ltv_model
 
 
 @pytest.fixture
 def random_ltv():
-    return make_random_ltv
+    return random_ltv_model
