@@ -6,7 +6,24 @@ Realisations are processed in chunks by a user function that is vectorised over
 the chunk (noise-independent quantities such as Kalman gains, signatures and
 information matrices are computed once and shared), and chunks are spread over
 CPU cores with joblib. Since a realisation's random numbers depend only on
-``(seed, i)``, results are bit-identical whatever ``jobs`` and ``chunk_size``.
+``(seed, i)``, results are bit-identical whatever ``jobs`` (the default chunk
+size does not depend on ``jobs``, so the chunks, and hence the floating-point
+operations, are the same for any number of workers).
+
+What is shared and what runs per realisation
+--------------------------------------------
+A chunk function computes once what does not depend on the noise (Kalman gains
+and ``Sigma_k``, the signatures ``Gamma_k(r)`` and informations ``C_k(r)`` of the
+windowed GLR, which :func:`fdi_lib.glr.glr_window` shares across a leading axis
+of realisations) and runs the noise-dependent parts (simulation, Kalman
+innovations, scores ``d_k(r)``, minmax statistics) vectorised over the chunk.
+Draws are the only per-realisation loop (:func:`draw_noise_batch`), because each
+realisation owns its random stream.
+
+Closed loops (a controller in :func:`fdi_lib.simulate.simulate`) make the input
+depend on the noise: the simulation and the Kalman filter are still vectorised
+over the chunk (the controller acts element-wise), and the detector only needs
+the innovations, so its shared quantities are unchanged; nothing runs per realisation.
 """
 
 from __future__ import annotations
@@ -20,7 +37,8 @@ from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.models import LTVModel
 from fdi_lib.simulate import Noise, draw_noise
 
-__all__ = ["trial_seeds", "trial_rngs", "run_monte_carlo", "draw_noise_batch", "binomial_ci"]
+__all__ = ["trial_seeds", "trial_rngs", "run_monte_carlo", "draw_noise_batch", "binomial_ci",
+           "default_chunk_size"]
 
 ChunkFn = Callable[[Sequence[np.random.SeedSequence]], dict[str, np.ndarray]]
 
@@ -42,6 +60,15 @@ def draw_noise_batch(model: LTVModel, seeds: Sequence[np.random.SeedSequence]) -
     draws = [draw_noise(model, rng) for rng in trial_rngs(seeds)]
     return Noise(x0=np.stack([d.x0 for d in draws]), w=np.stack([d.w for d in draws]),
                  v=np.stack([d.v for d in draws]))
+
+
+def default_chunk_size(n_trials: int) -> int:
+    """Default realisations per chunk: ``min(100, ceil(n_trials / 8))``, independent of the job count.
+
+    Eight chunks or more keep two to four workers busy; at most 100 realisations
+    per chunk keep the vectorised arrays (e.g. ``100 x w x m`` scores) in cache.
+    """
+    return max(1, min(100, -(-int(n_trials) // 8)))
 
 
 def _chunks(n: int, size: int) -> list[slice]:
@@ -66,8 +93,10 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
     jobs : int
         Parallel workers (joblib, processes); ``-1`` for all cores.
     chunk_size : int, optional
-        Realisations per call of ``chunk_fn``; default ``min(250, ceil(n_trials / (4 * cores)))``.
-        Does not change the results, only memory and speed.
+        Realisations per call of ``chunk_fn``; default :func:`default_chunk_size`, which
+        does not depend on ``jobs`` (same chunks, hence bit-identical results, for any
+        number of workers). Changes only memory and speed when ``chunk_fn`` is exactly
+        batch-invariant; give it explicitly to reproduce a run bit for bit.
     progress : bool
         Show a tqdm progress bar over chunks.
 
@@ -83,7 +112,7 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
 
     n_workers = joblib.cpu_count() if jobs < 0 else int(jobs)
     if chunk_size is None:
-        chunk_size = max(1, min(250, -(-n_trials // (4 * n_workers))))
+        chunk_size = default_chunk_size(n_trials)
     if not isinstance(chunk_size, (int, np.integer)) or chunk_size < 1:
         raise ModelError(f"chunk_size: expected a positive integer, got {chunk_size!r}")
     parts = _chunks(len(seeds), int(chunk_size))
@@ -129,3 +158,4 @@ def binomial_ci(successes: int, trials: int, level: float = 0.95) -> tuple[float
     ci = scipy.stats.binomtest(int(successes), int(trials)).proportion_ci(confidence_level=level,
                                                                         method="exact")
     return float(ci.low), float(ci.high)
+

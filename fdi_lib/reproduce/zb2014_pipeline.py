@@ -1,0 +1,542 @@
+"""Zhang & Basseville (2014), Section 6.2: leak detection on a gas pipeline (Table 1, Figs 5-9).
+
+All runs use the *surrogate* pipeline model of :mod:`fdi_lib.systems.gas_pipeline`
+(the identified model of Lopes dos Santos et al. 2011 is not public), the Kalman
+filter of the fault-free model, and the windowed GLR test (35)-(37) with
+``w = 160`` samples, threshold 50, disabled during the first 320 min.
+
+* ``zb2014-table1``: nominal and changed ``G0(1)``, ``Gp(1)``, ``Psi_k`` and ``theta``.
+* ``zb2014-fig5``, ``zb2014-fig6``: one run of fault 1 (``dG0(1) = -2e-5`` and ``-4e-5``).
+* ``zb2014-fig7``: 1000 runs per fault: detection delays and onset-estimation errors.
+* ``zb2014-fig8``: minmax isolation (41) after each alarm, threshold 6.6349.
+* ``zb2014-fig9``: output-end leak of -43980 at 700 min (``Phi_k = 1``, eq. (46)).
+
+Figs 7 and 8 come from one Monte Carlo experiment (:func:`pipeline_monte_carlo`),
+cached per ``(seed, trials)`` so that the book and the CLI run it once.
+"""
+
+from __future__ import annotations
+
+import functools
+import sys
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import scipy.stats
+
+from fdi_lib.errors import ModelError
+from fdi_lib.filters import KalmanGains, kalman_filter, kalman_gains
+from fdi_lib.glr import first_alarm, glr_window
+from fdi_lib.isolation import information, minmax_statistic
+from fdi_lib.models import FaultFamily, LTVModel
+from fdi_lib.montecarlo import binomial_ci, draw_noise_batch, run_monte_carlo
+from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, THRESHOLD_COLOR, figure
+from fdi_lib.reproduce.registry import ReproductionResult, register
+from fdi_lib.signatures import fault_signature
+from fdi_lib.simulate import simulate
+from fdi_lib.systems import gas_pipeline as gp
+
+__all__ = ["MINMAX_THRESHOLD", "PipelineSetup", "pipeline_setup", "SingleRun", "single_run",
+           "detection_chunk", "pipeline_monte_carlo", "fault_theta", "plot_single_run",
+           "plot_fig7", "plot_fig8"]
+
+PAPER = "Zhang & Basseville 2014"
+#: Threshold of each minmax test (Fig. 8): the 99 % quantile of chi-square with 1 degree of freedom.
+MINMAX_THRESHOLD = 6.6349
+#: Onset of the input-end faults and of the output leak (sample indices).
+FAULT_ONSET = gp.minutes_to_index(gp.FAULT_ONSET_MIN)
+LEAK_ONSET = gp.minutes_to_index(gp.LEAK_ONSET_MIN)
+#: First sample at which the GLR may alarm (disabled during the first 320 min).
+GLR_START = gp.minutes_to_index(gp.DISABLED_MIN)
+
+
+@dataclass(frozen=True)
+class PipelineSetup:
+    """Everything noise-independent, shared by all runs (computed once per process).
+
+    Attributes
+    ----------
+    model : LTVModel
+        Fault-free surrogate model.
+    u : numpy.ndarray
+        Input flow ``(N,)``.
+    gains : KalmanGains
+    input_family, leak_family : FaultFamily
+        Step families of the input-end faults (``m = 2``) and of the output leak (``m = 1``).
+    known_signature : numpy.ndarray
+        ``H_k Gamma_k(r) + Phi_k`` for the true onset ``r = 300``, ``(N, 1, 2)`` (known-onset minmax).
+    """
+
+    model: LTVModel
+    u: np.ndarray
+    gains: KalmanGains
+    input_family: FaultFamily
+    leak_family: FaultFamily
+    known_signature: np.ndarray
+
+
+@functools.lru_cache(maxsize=1)
+def pipeline_setup() -> PipelineSetup:
+    """The shared model, input, Kalman gains, fault families and true-onset signature."""
+    model = gp.pipeline_model()
+    gains = kalman_gains(model)
+    fam = gp.input_fault_family(model)
+    sig = fault_signature(model, gains, fam.profile(FAULT_ONSET)).on_innovation
+    return PipelineSetup(model=model, u=gp.pipeline_input(), gains=gains, input_family=fam,
+                         leak_family=gp.output_leak_family(model), known_signature=sig)
+
+
+def fault_theta(fault: int, delta: float | None = None) -> np.ndarray:
+    """``theta`` of Section 6.2: ``[dG0(1), 0]`` (fault 1) or ``[0, dGp(1)]`` (fault 2), Table 1 sizes by default."""
+    if fault not in (1, 2):
+        raise ModelError(f"fault: expected 1 or 2, got {fault!r}")
+    size = (gp.FAULT1_DELTA if fault == 1 else gp.FAULT2_DELTA) if delta is None else float(delta)
+    return np.array([size, 0.0]) if fault == 1 else np.array([0.0, size])
+
+
+# ----------------------------------------------------------------------------- single runs
+@dataclass(frozen=True)
+class SingleRun:
+    """One simulated record with its detector output (times in minutes).
+
+    Attributes
+    ----------
+    t_min : numpy.ndarray
+        ``k Ts``, ``(N,)``.
+    innovations : numpy.ndarray
+        ``eps_k``, ``(N,)``.
+    statistic : numpy.ndarray
+        ``l_k`` of eq. (35), ``(N,)`` (``nan`` while no onset is admissible).
+    onset : numpy.ndarray
+        ``r_hat_k`` (sample index), ``(N,)``.
+    alarm : int
+        First ``k >= 160`` with ``l_k > threshold`` (``-1`` if none).
+    true_onset : int
+        Sample index of the simulated jump.
+    threshold : float
+    """
+
+    t_min: np.ndarray
+    innovations: np.ndarray
+    statistic: np.ndarray
+    onset: np.ndarray
+    alarm: int
+    true_onset: int
+    threshold: float
+
+    @property
+    def alarm_time_min(self) -> float:
+        return float(gp.index_to_minutes(self.alarm))
+
+    @property
+    def onset_estimate_min(self) -> float:
+        return float(gp.index_to_minutes(self.onset[self.alarm])) if self.alarm >= 0 else float("nan")
+
+    @property
+    def detection_delay_min(self) -> float:
+        return self.alarm_time_min - self.true_onset * gp.TS_MIN
+
+
+def single_run(*, seed: int, kind: str = "input", fault: int = 1, delta: float | None = None,
+               threshold: float = gp.THRESHOLD, window: int = gp.WINDOW) -> SingleRun:
+    """Simulate one record and run the windowed GLR (Figs 5, 6 and 9).
+
+    Parameters
+    ----------
+    seed : int
+        Seed of the noise (``numpy.random.default_rng(seed)``).
+    kind : {"input", "output"}
+        Input-end fault (``Psi_k = [[U_k, p_k U_k], [0, 0]]``, onset 600 min) or output leak
+        (``Phi_k = 1``, onset 700 min, size ``delta``, default -43980).
+    fault : {1, 2}
+        Which input-end parameter changes (``kind == "input"``).
+    delta : float, optional
+        Fault size; default Table 1 (or the leak size).
+    threshold, window : float, int
+        GLR threshold and window ``w``.
+    """
+    st = pipeline_setup()
+    if kind == "input":
+        fam, onset, theta = st.input_family, FAULT_ONSET, fault_theta(fault, delta)
+    elif kind == "output":
+        fam, onset = st.leak_family, LEAK_ONSET
+        theta = np.array([gp.LEAK_SIZE if delta is None else float(delta)])
+    else:
+        raise ModelError(f"kind: expected 'input' or 'output', got {kind!r}")
+    sim = simulate(st.model, rng=np.random.default_rng(seed), u=st.u, fault=fam.profile(onset), theta=theta)
+    eps = kalman_filter(st.model, sim.y, st.u, gains=st.gains).innovations
+    res = glr_window(eps, st.model, st.gains, fam, window)
+    alarm = int(first_alarm(res.statistic, threshold, start=GLR_START))
+    return SingleRun(t_min=np.arange(st.model.n_steps) * gp.TS_MIN, innovations=eps[:, 0],
+                     statistic=res.statistic, onset=res.onset, alarm=alarm, true_onset=onset,
+                     threshold=float(threshold))
+
+
+def plot_single_run(result: ReproductionResult, fig: Any = None):
+    """Paper Figs 5, 6, 9: innovation (top) and GLR statistic ``l_k`` (bottom, log scale)."""
+    run: SingleRun = result.data["run"]
+    fig, axes = figure(2, 1, fig=fig, sharex=True, figsize=(7.0, 5.0))
+    ax0, ax1 = axes[:, 0]
+    ax0.plot(run.t_min, run.innovations, color=OURS_COLOR, lw=0.8)
+    ax0.axvline(run.true_onset * gp.TS_MIN, color="k", ls=":", lw=1, label="true onset")
+    ax0.set(ylabel=r"innovation $\varepsilon_k$", title=result.settings.get("title", ""))
+    ax0.legend(loc="lower left")
+    ax1.semilogy(run.t_min, np.where(run.statistic > 0, run.statistic, np.nan), color=OURS_COLOR,
+                 label=r"$l_k$ (35)")
+    ax1.axhline(run.threshold, color=THRESHOLD_COLOR, ls="--", label=f"threshold {run.threshold:g}")
+    ax1.axvspan(0, gp.DISABLED_MIN, color="0.9", label="GLR disabled")
+    ax1.axvline(run.true_onset * gp.TS_MIN, color="k", ls=":", lw=1)
+    if run.alarm >= 0:
+        ax1.axvline(run.alarm_time_min, color=PAPER_COLOR, lw=1, label=f"alarm {run.alarm_time_min:g} min")
+        ax1.axvline(run.onset_estimate_min, color="tab:green", lw=1,
+                    label=f"onset estimate {run.onset_estimate_min:g} min")
+    ax1.set(xlabel="time (min)", ylabel=r"$l_k$")
+    ax1.legend(loc="upper left", ncols=2)
+    return fig
+
+
+def _single_result(rid: str, run: SingleRun, paper: dict[str, Any], settings: dict[str, Any]
+                   ) -> ReproductionResult:
+    headline = {"alarm_time_min": run.alarm_time_min, "onset_estimate_min": run.onset_estimate_min,
+                "detection_delay_min": run.detection_delay_min}
+    return ReproductionResult(id=rid, headline=headline, paper=paper, settings=settings, data={"run": run})
+
+
+@register("zb2014-fig5", paper=PAPER, title="Gas pipeline, fault 1 (dG0(1) = -2e-5): innovation and GLR",
+          plot=plot_single_run)
+def fig5(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Paper Fig. 5: one run of fault 1 (``G0(1) - 2e-5`` at 600 min), threshold 50, ``w = 160``.
+
+    Headline keys
+    -------------
+    alarm_time_min : float
+        First time (min) after 320 min at which ``l_k > 50`` (paper: 786).
+    onset_estimate_min : float
+        ``r_hat Ts`` at the alarm, eq. (36) (paper: 618).
+    detection_delay_min : float
+        Alarm time minus 600 min (paper: 186). ``nan`` fields mean no alarm.
+    """
+    run = single_run(seed=seed, fault=1, delta=gp.FAULT1_DELTA)
+    return _single_result("zb2014-fig5", run,
+                          {"alarm_time_min": 786.0, "onset_estimate_min": 618.0, "detection_delay_min": 186.0},
+                          {"seed": seed, "theta": fault_theta(1).tolist(), "window": gp.WINDOW,
+                           "threshold": gp.THRESHOLD, "title": r"Fault 1, $\tilde G_0 = -2\times10^{-5}$"})
+
+
+@register("zb2014-fig6", paper=PAPER, title="Gas pipeline, fault 1 doubled (dG0(1) = -4e-5): innovation and GLR",
+          plot=plot_single_run)
+def fig6(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Paper Fig. 6: as Fig. 5 with the fault doubled (``-4e-5``), same noise (same seed).
+
+    Headline keys: as ``zb2014-fig5`` (paper: detection delay 88 min, so alarm at 688 min;
+    the paper gives no onset estimate for this run).
+    """
+    run = single_run(seed=seed, fault=1, delta=gp.FAULT1_DOUBLED_DELTA)
+    return _single_result("zb2014-fig6", run,
+                          {"alarm_time_min": 688.0, "onset_estimate_min": None, "detection_delay_min": 88.0},
+                          {"seed": seed, "theta": fault_theta(1, gp.FAULT1_DOUBLED_DELTA).tolist(),
+                           "window": gp.WINDOW, "threshold": gp.THRESHOLD,
+                           "title": r"Fault 1 doubled, $\tilde G_0 = -4\times10^{-5}$"})
+
+
+@register("zb2014-fig9", paper=PAPER, title="Gas pipeline, output-end leak of -43980 at 700 min",
+          plot=plot_single_run)
+def fig9(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Paper Fig. 9: bias of -43980 (10 % of the mean output flow) on the output from 700 min.
+
+    The GLR uses the step family ``Phi_k(r) = 1{k >= r}`` (``m = 1``) and the signature with
+    output faults, eq. (46).
+
+    Headline keys
+    -------------
+    alarm_time_min : float
+        First alarm (min) after 320 min (the paper shows it right after 700 min).
+    glr_level_over_threshold : float
+        Median of ``l_k / 50`` from the alarm to the end of the record (paper: "about 50").
+    glr_max_over_threshold : float
+        Maximum of ``l_k / 50`` (not in the paper).
+    innovation_drop : float
+        Innovation at the onset (first affected sample), in innovation standard deviations.
+    innovation_recovery : float
+        Mean innovation over the last 100 samples / leak size (0 = back to the pre-fault mean).
+    """
+    run = single_run(seed=seed, kind="output")
+    st = pipeline_setup()
+    sd = float(np.sqrt(st.gains.Sigma[LEAK_ONSET, 0, 0]))
+    after = run.statistic[run.alarm:] / gp.THRESHOLD if run.alarm >= 0 else np.array([np.nan])
+    headline = {"alarm_time_min": run.alarm_time_min,
+                "glr_level_over_threshold": float(np.median(after)),
+                "glr_max_over_threshold": float(np.max(after)),
+                "innovation_drop": float(run.innovations[LEAK_ONSET] / sd),
+                "innovation_recovery": float(np.mean(run.innovations[-100:]) / gp.LEAK_SIZE)}
+    return ReproductionResult(id="zb2014-fig9", headline=headline,
+                              paper={"alarm_time_min": None, "glr_level_over_threshold": 50.0},
+                              settings={"seed": seed, "leak": gp.LEAK_SIZE, "onset_min": gp.LEAK_ONSET_MIN,
+                                        "window": gp.WINDOW, "threshold": gp.THRESHOLD,
+                                        "title": "Output-end leak of -43980 at 700 min"},
+                              data={"run": run})
+
+
+# ----------------------------------------------------------------------------- Table 1
+@register("zb2014-table1", paper=PAPER, title="Gas pipeline: nominal and faulty G0(1), Gp(1) (Table 1)")
+def table1(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Paper Table 1: the simulated input-end faults; deterministic.
+
+    Headline keys
+    -------------
+    G0_1_nominal, G0_1_fault1 : float
+        ``G0(1)`` before and after fault 1.
+    Gp_1_nominal, Gp_1_fault2 : float
+        ``Gp(1)`` before and after fault 2.
+    theta_fault1, theta_fault2 : list of float
+        ``theta`` of each fault (``Psi_k = [[U_k, p_k U_k], [0, 0]]``).
+    leak_fraction_fault1, leak_fraction_fault2 : float
+        Steady outlet flow lost, as a fraction of the flow, in *our surrogate* (not in the paper).
+    """
+    rep = gp.design_report()
+    headline = {"G0_1_nominal": gp.G0_1, "G0_1_fault1": gp.G0_1 + gp.FAULT1_DELTA,
+                "Gp_1_nominal": gp.GP_1, "Gp_1_fault2": gp.GP_1 + gp.FAULT2_DELTA,
+                "theta_fault1": fault_theta(1).tolist(), "theta_fault2": fault_theta(2).tolist(),
+                "leak_fraction_fault1": rep["fault1_leak_fraction"],
+                "leak_fraction_fault2": rep["fault2_leak_fraction"]}
+    paper = {"G0_1_nominal": -7.8297e-4, "G0_1_fault1": -7.8297e-4 - 2e-5, "Gp_1_nominal": 3.8290e-5,
+             "Gp_1_fault2": 3.8290e-5 - 1e-5, "theta_fault1": [-2e-5, 0.0], "theta_fault2": [0.0, -1e-5]}
+    return ReproductionResult(id="zb2014-table1", headline=headline, paper=paper,
+                              settings={"psi": "[[U_k, p_k U_k], [0, 0]]", "onset_min": gp.FAULT_ONSET_MIN})
+
+
+# ----------------------------------------------------------------------------- Monte Carlo (Figs 7-8)
+def detection_chunk(seeds, *, fault: int) -> dict[str, np.ndarray]:
+    """Detection and isolation for a chunk of realisations of input-end fault ``fault`` (Table 1 size).
+
+    Vectorised over the chunk: noise (one stream per realisation), simulation, Kalman
+    innovations, windowed GLR (shared signatures and informations), first alarm,
+    onset estimate, and the two minmax statistics (41) from the estimated onset to the
+    alarm (``F = C_{k*}(r_hat)``, ``zeta = d_{k*}(r_hat)``). Also the minmax statistics
+    with the onset *known* (samples 300 .. 499), free of the detector's selection.
+
+    Returns
+    -------
+    dict
+        ``alarm``, ``onset_hat`` (sample indices, ``-1`` if none), ``l1``, ``l2`` (minmax
+        focusing on fault 1 / fault 2; ``nan`` without alarm), ``cos2`` (squared cosine
+        ``F12^2 / (F11 F22)`` between the two fault directions at the alarm) and
+        ``l1_known``, ``l2_known``.
+    """
+    st = pipeline_setup()
+    noise = draw_noise_batch(st.model, seeds)
+    sim = simulate(st.model, noise=noise, u=st.u, fault=st.input_family.profile(FAULT_ONSET),
+                   theta=fault_theta(fault))
+    eps = kalman_filter(st.model, sim.y, st.u, gains=st.gains).innovations
+    res = glr_window(eps, st.model, st.gains, st.input_family, gp.WINDOW)
+    alarm = first_alarm(res.statistic, gp.THRESHOLD, start=GLR_START)
+    B = alarm.shape[0]
+    k = np.where(alarm >= 0, alarm, 0)
+    rows = np.arange(B)
+    onset_hat = np.where(alarm >= 0, res.onset[rows, k], -1)
+    C, d = res.C_hat[rows, k], res.d_hat[rows, k]
+    ok = alarm >= 0
+    l1 = np.full(B, np.nan)
+    l2 = np.full(B, np.nan)
+    if ok.any():
+        l1[ok] = minmax_statistic(C[ok], d[ok], [0])
+        l2[ok] = minmax_statistic(C[ok], d[ok], [1])
+    F, zeta = information(eps, st.known_signature, st.gains, FAULT_ONSET, st.model.n_steps)
+    cos2 = np.full(B, np.nan)
+    cos2[ok] = C[ok, 0, 1] ** 2 / (C[ok, 0, 0] * C[ok, 1, 1])
+    return {"alarm": alarm, "onset_hat": onset_hat, "l1": l1, "l2": l2, "cos2": cos2,
+            "l1_known": minmax_statistic(F, zeta, [0]), "l2_known": minmax_statistic(F, zeta, [1])}
+
+
+def _fault_seed(seed: int, fault: int) -> int:
+    """Root seed of fault ``fault``: independent streams for the two faults."""
+    return int(np.random.SeedSequence([int(seed), int(fault)]).generate_state(1)[0])
+
+
+_MC_CACHE: dict[tuple[int, int], dict[int, dict[str, np.ndarray]]] = {}
+
+
+def pipeline_monte_carlo(*, seed: int, trials: int, jobs: int = 1, progress: bool | None = None,
+                         chunk_size: int | None = None) -> dict[int, dict[str, np.ndarray]]:
+    """The Monte Carlo experiment of Figs 7 and 8: ``trials`` runs of each input-end fault.
+
+    Parameters
+    ----------
+    seed : int
+        Root seed; fault ``f`` uses ``SeedSequence([seed, f])`` and realisation ``i`` its
+        ``i``-th spawned stream (:func:`fdi_lib.montecarlo.run_monte_carlo`).
+    trials : int
+        Runs per fault (paper: 1000).
+    jobs : int
+        Parallel workers; the results do not depend on it.
+    progress : bool, optional
+        Progress bar; default when standard error is a terminal (the CLI).
+    chunk_size : int, optional
+        Passed to :func:`~fdi_lib.montecarlo.run_monte_carlo`.
+
+    Returns
+    -------
+    dict
+        ``{1: arrays, 2: arrays}`` with the entries of :func:`detection_chunk`. Cached per
+        ``(seed, trials)`` when ``chunk_size`` is the default.
+    """
+    key = (int(seed), int(trials))
+    if chunk_size is None and key in _MC_CACHE:
+        return _MC_CACHE[key]
+    if progress is None:
+        progress = bool(getattr(sys.stderr, "isatty", lambda: False)())
+    out = {}
+    for fault in (1, 2):
+        out[fault] = run_monte_carlo(functools.partial(detection_chunk, fault=fault), trials,
+                                     seed=_fault_seed(seed, fault), jobs=jobs, chunk_size=chunk_size,
+                                     progress=progress, description=f"fault {fault}")
+    if chunk_size is None:
+        _MC_CACHE.clear()
+        _MC_CACHE[key] = out
+    return out
+
+
+def _quartiles(x: np.ndarray) -> dict[str, float | None]:
+    if x.size == 0:
+        return {"q1": None, "median": None, "q3": None}
+    q1, med, q3 = np.percentile(x, [25, 50, 75])
+    return {"q1": float(q1), "median": float(med), "q3": float(q3)}
+
+
+def _rate(k: int, n: int) -> dict[str, float | int | None]:
+    if n == 0:
+        return {"rate": None, "count": 0, "n": 0, "ci95": [None, None]}
+    lo, hi = binomial_ci(int(k), int(n))
+    return {"rate": k / n, "count": int(k), "n": int(n), "ci95": [lo, hi]}
+
+
+def plot_fig7(result: ReproductionResult, fig: Any = None):
+    """Paper Fig. 7: histograms of detection delays (top) and onset errors (bottom), fault 1 left, 2 right."""
+    fig, axes = figure(2, 2, fig=fig, figsize=(7.5, 5.0))
+    for j, fault in enumerate((1, 2)):
+        delay = result.data["delay_min"][fault]
+        err = result.data["onset_error_min"][fault]
+        axes[0, j].hist(delay, bins=40, color=OURS_COLOR)
+        axes[0, j].set(title=f"fault {fault}: detection delay", xlabel="min")
+        axes[1, j].hist(err, bins=40, color=OURS_COLOR)
+        axes[1, j].set(title=f"fault {fault}: onset estimation error", xlabel="min")
+    return fig
+
+
+@register("zb2014-fig7", paper=PAPER, title="Gas pipeline: histograms of detection delay and onset error",
+          default_trials=1000, plot=plot_fig7)
+def fig7(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Paper Fig. 7: ``trials`` runs per input-end fault (paper: 1000 each, 2000 in all).
+
+    Delays and onset errors are over runs whose first alarm is at or after the onset
+    (600 min); an alarm before it is a false alarm.
+
+    Headline keys
+    -------------
+    false_alarms : int
+        Runs (of both faults) whose first alarm precedes the fault (paper: 7 of 2000).
+    false_alarm_rate : dict
+        ``rate``, ``count``, ``n``, ``ci95`` (Clopper-Pearson) over both faults.
+    missed : dict
+        Per fault ("1", "2"): runs without any alarm.
+    delay_min : dict
+        Per fault: ``q1``, ``median``, ``q3`` of the detection delay (min).
+    onset_error_min : dict
+        Per fault: ``q1``, ``median``, ``q3`` of ``r_hat Ts - 600`` (min) at the alarm.
+    """
+    trials = 1000 if trials is None else trials
+    mc = pipeline_monte_carlo(seed=seed, trials=trials, jobs=jobs)
+    delays, errs, fa, missed = {}, {}, 0, {}
+    for fault, res in mc.items():
+        alarm, onset = res["alarm"], res["onset_hat"]
+        hit = alarm >= FAULT_ONSET
+        fa += int(np.sum((alarm >= 0) & (alarm < FAULT_ONSET)))
+        missed[str(fault)] = int(np.sum(alarm < 0))
+        delays[fault] = (alarm[hit] - FAULT_ONSET) * gp.TS_MIN
+        errs[fault] = (onset[hit] - FAULT_ONSET) * gp.TS_MIN
+    headline = {"false_alarms": fa, "false_alarm_rate": _rate(fa, 2 * trials), "missed": missed,
+                "delay_min": {str(f): _quartiles(v) for f, v in delays.items()},
+                "onset_error_min": {str(f): _quartiles(v) for f, v in errs.items()}}
+    paper = {"false_alarms": 7, "false_alarm_rate": {"rate": 7 / 2000, "count": 7, "n": 2000}}
+    return ReproductionResult(id="zb2014-fig7", headline=headline, paper=paper,
+                              settings={"seed": seed, "trials_per_fault": trials, "window": gp.WINDOW,
+                                        "threshold": gp.THRESHOLD, "start_min": gp.DISABLED_MIN},
+                              data={"delay_min": delays, "onset_error_min": errs})
+
+
+def plot_fig8(result: ReproductionResult, fig: Any = None):
+    """Paper Fig. 8: histograms of the two minmax statistics per fault, chi-square(1) and (2) densities."""
+    fig, axes = figure(2, 2, fig=fig, figsize=(7.5, 5.0))
+    x = np.linspace(0.05, 25, 300)
+    for j, fault in enumerate((1, 2)):
+        for i, test in enumerate((1, 2)):
+            ax = axes[i, j]
+            stat = result.data["minmax"][fault][test]
+            absent = test != fault
+            hi = 25 if absent else max(25, float(np.percentile(stat, 99)))
+            ax.hist(np.clip(stat, 0, hi), bins=50, range=(0, hi), density=True, color=OURS_COLOR, alpha=0.8)
+            if absent:
+                ax.plot(x, scipy.stats.chi2.pdf(x, 1), color=PAPER_COLOR, ls="--", label=r"$\chi^2(1)$")
+                ax.plot(x, scipy.stats.chi2.pdf(x, 2), color="k", ls=":", label=r"$\chi^2(2)$")
+                ax.set_ylim(0, 0.6)
+                ax.legend()
+            ax.axvline(MINMAX_THRESHOLD, color=THRESHOLD_COLOR, lw=1)
+            ax.set(title=f"fault {fault}, test on fault {test}", xlabel=r"$l_a$ (41)")
+    return fig
+
+
+@register("zb2014-fig8", paper=PAPER, title="Gas pipeline: minmax isolation after each alarm (threshold 6.6349)",
+          default_trials=1000, plot=plot_fig8)
+def fig8(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Paper Fig. 8: two parallel minmax tests (41) after each alarm, threshold 6.6349.
+
+    Same runs as ``zb2014-fig7``; rates over the runs with a detection at or after the onset.
+    Type I: the test on the *absent* fault rejects; type II: the test on the *present* fault
+    does not.
+
+    Headline keys
+    -------------
+    type1_rate, type2_rate : dict
+        Per fault ("1", "2"): ``rate``, ``count``, ``n``, ``ci95`` (paper: type I 1.7 % and
+        1.3 %, type II 0 % and 0 %).
+    type1_rate_known_onset : dict
+        Per fault: type I rate with the onset known (samples 300-499, no selection by the detector).
+    threshold_dof : int
+        Degrees of freedom whose 99 % chi-square quantile is 6.6349 (the caption's chi2(1); the
+        text says chi2(2)).
+    ks_pvalue_dof1, ks_pvalue_dof2 : dict
+        Per fault: Kolmogorov-Smirnov p-value of the absent-fault statistic (known onset)
+        against chi2(1) and chi2(2).
+    mean_absent_statistic : dict
+        Per fault: mean of the absent-fault statistic at the alarm (chi2(k) has mean k).
+    median_cos2 : dict
+        Per fault: median squared cosine ``F12^2 / (F11 F22)`` of the two fault directions over
+        the samples used at the alarm (1 = indistinguishable).
+    """
+    trials = 1000 if trials is None else trials
+    mc = pipeline_monte_carlo(seed=seed, trials=trials, jobs=jobs)
+    t1, t2, t1k, ks1, ks2, mean_abs, minmax, cos2 = {}, {}, {}, {}, {}, {}, {}, {}
+    for fault, res in mc.items():
+        hit = res["alarm"] >= FAULT_ONSET
+        present, absent = (res["l1"], res["l2"]) if fault == 1 else (res["l2"], res["l1"])
+        absent_known = res["l2_known"] if fault == 1 else res["l1_known"]
+        n = int(hit.sum())
+        t1[str(fault)] = _rate(int(np.sum(absent[hit] > MINMAX_THRESHOLD)), n)
+        t2[str(fault)] = _rate(int(np.sum(present[hit] <= MINMAX_THRESHOLD)), n)
+        t1k[str(fault)] = _rate(int(np.sum(absent_known > MINMAX_THRESHOLD)), absent_known.size)
+        ks1[str(fault)] = float(scipy.stats.kstest(absent_known, scipy.stats.chi2(1).cdf).pvalue)
+        ks2[str(fault)] = float(scipy.stats.kstest(absent_known, scipy.stats.chi2(2).cdf).pvalue)
+        mean_abs[str(fault)] = float(np.mean(absent[hit])) if n else None
+        minmax[fault] = {1: res["l1"][hit], 2: res["l2"][hit]}
+        cos2[str(fault)] = float(np.median(res["cos2"][hit])) if n else None
+    dof = int(np.argmin([abs(scipy.stats.chi2.ppf(0.99, k) - MINMAX_THRESHOLD) for k in (1, 2, 3)]) + 1)
+    headline = {"type1_rate": t1, "type2_rate": t2, "type1_rate_known_onset": t1k, "threshold_dof": dof,
+                "ks_pvalue_dof1": ks1, "ks_pvalue_dof2": ks2, "mean_absent_statistic": mean_abs,
+                "median_cos2": cos2}
+    paper = {"type1_rate": {"1": {"rate": 0.017}, "2": {"rate": 0.013}},
+             "type2_rate": {"1": {"rate": 0.0}, "2": {"rate": 0.0}}, "threshold_dof": "1 (caption) / 2 (text)"}
+    return ReproductionResult(id="zb2014-fig8", headline=headline, paper=paper,
+                              settings={"seed": seed, "trials_per_fault": trials,
+                                        "minmax_threshold": MINMAX_THRESHOLD},
+                              data={"minmax": minmax})
