@@ -446,19 +446,24 @@ def solution1(model: LTVModel, y: Any, u: Any = None, *, E: Any, Psi: Any, windo
     batch = alarm.shape
     m = fam.m
     parts = [[i] for i in range(m)] if partitions is None else partitions
-    iso = np.zeros((*batch, len(parts)), dtype=bool)
-    iso_stat = np.full((*batch, len(parts)), np.nan)
-    onset_hat = np.full(batch, -1)
-    hit = alarm >= 0
-    if np.any(hit):
-        idx = np.nonzero(hit)
-        ka = alarm[idx]
-        C = glr.C_hat[idx + (ka,)]
-        d = glr.d_hat[idx + (ka,)]
-        onset_hat[idx] = glr.onset[idx + (ka,)]
+    N = model.n_steps
+    a_flat = alarm.reshape(-1)
+    B = a_flat.size
+    iso = np.zeros((B, len(parts)), dtype=bool)
+    iso_stat = np.full((B, len(parts)), np.nan)
+    onset_hat = np.full(B, -1)
+    hit = np.nonzero(a_flat >= 0)[0]
+    if hit.size:
+        ka = a_flat[hit]
+        C = glr.C_hat.reshape(B, N, m, m)[hit, ka]
+        d = glr.d_hat.reshape(B, N, m)[hit, ka]
+        onset_hat[hit] = glr.onset.reshape(B, N)[hit, ka]
         for j, dec in enumerate(minmax_isolation(C, d, parts, alpha=isolation_alpha)):
-            iso[idx + (j,)] = dec.faulty
-            iso_stat[idx + (j,)] = dec.statistic
+            iso[hit, j] = dec.faulty
+            iso_stat[hit, j] = dec.statistic
+    iso = iso.reshape(*batch, len(parts))
+    iso_stat = iso_stat.reshape(*batch, len(parts))
+    onset_hat = onset_hat.reshape(batch)
     kal = kalman_gains(model) if kalman is None else kalman
     eps_kal = kalman_filter(model, y, u, gains=kal).innovations              # (46)
     thr_e = energy_threshold(energy_window, model.p, energy_alpha)

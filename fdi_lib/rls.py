@@ -10,7 +10,7 @@ Basseville & Zhang, Section 4 (after Ljung 1999): with the regression
     E_k       = eps_k - M_k theta_k^                       (tracking error)
 
 with ``theta_0^ = 0``, ``P_0 = I``. This minimises
-``sum_j lambda^{k-j} ||eps_j - M_j theta||^2_{Sigma_j^{-1}} + lambda^k ||theta||^2_{P_0^{-1}}``.
+``sum_{j<=k} lambda^{k-j} ||eps_j - M_j theta||^2_{Sigma_j^{-1}} + lambda^{k+1} ||theta||^2_{P_0^{-1}}``.
 The gains ``L_k`` and ``P_k`` do not depend on the data (the regressor is known in
 advance), so they are computed once and shared by all realisations; only the
 ``theta`` recursion runs per realisation, vectorised.

@@ -1,0 +1,60 @@
+"""Smoke and contract tests of the bz-* reproductions at reduced trial counts."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np
+import pytest
+
+from fdi_lib.reproduce.registry import get, reproduce
+
+
+@pytest.fixture(scope="module")
+def results():
+    return {rid: reproduce(rid, seed=1, trials=12) for rid in ("bz-whiteness", "bz-solution1", "bz-solution2")}
+
+
+def test_registered_with_documented_keys(results):
+    for rid, res in results.items():
+        rep = get(rid)
+        assert rep.default_trials == 300 and rep.plot is not None
+        doc = rep.func.__doc__
+        for key in res.headline:
+            if not key.endswith("_ci"):
+                assert key.split("_ci")[0] in doc or key in doc, (rid, key)
+        js = res.to_json_dict()
+        assert js["id"] == rid and js["settings"]["trials"] == 12
+        fig = rep.plot(res)
+        assert len(fig.axes) >= 2
+
+
+def test_whiteness_headline(results):
+    h = results["bz-whiteness"].headline
+    assert h["lag1_corr_theory"] < -0.05                       # the closed form is clearly non-zero
+    lo, hi = h["lag1_corr_empirical_ci"]
+    assert lo < h["lag1_corr_theory"] < hi
+    assert h["cov_rel_error_kitanidis"] < 0.1 and h["cov_rel_error_reduced"] < 0.1
+    for name in ("kalman", "kitanidis", "reduced_f"):
+        assert 0.0 <= h[f"lb_reject_rate_{name}"] <= 1.0
+
+
+def test_solution_headlines(results):
+    h1 = results["bz-solution1"].headline
+    assert h1["glr_detection_rate_theta"] > 0.8 and h1["glr_detection_rate_theta_with_f"] > 0.8
+    assert h1["glr_mean_delay_theta"] == h1["glr_mean_delay_theta_with_f"]   # f rejected exactly
+    assert h1["glr_alarm_rate_f_only"] == h1["glr_false_alarm_rate"]
+    assert h1["nonparametric_detection_rate_f"] > 0.8
+    h2 = results["bz-solution2"].headline
+    assert len(h2["tracking_rmse"]) == len(h2["lambdas"]) == 4
+    assert all(r > 0.8 for r in h2["detection_rate"])
+    assert all(0 < e < 0.05 for e in h2["tracking_rmse"])
+
+
+def test_same_results_for_any_job_count():
+    a = reproduce("bz-solution2", seed=3, trials=4, jobs=1)
+    b = reproduce("bz-solution2", seed=3, trials=4, jobs=2)
+    assert a.headline == b.headline
+    np.testing.assert_array_equal(a.data["mean_err_f"][0], b.data["mean_err_f"][0])

@@ -1,0 +1,40 @@
+"""Tests of the widget callback of the Basseville & Zhang chapter."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np
+import pytest
+
+from fdi_lib.errors import ModelError
+from fdi_lib.widgets.bz import bz_run, explore_bz
+
+
+def test_callback_draws_three_panels_and_reuses_figure():
+    fig = explore_bz()
+    assert len(fig.axes) == 3
+    theta_hat = np.asarray(fig.axes[0].lines[1].get_ydata())
+    assert theta_hat.size == 300
+    again = explore_bz(lam=0.9, delta=0.0, f_size=0.0, fig=fig)
+    assert again is fig and len(fig.axes) == 3
+
+
+def test_sliders_change_what_they_should():
+    base = bz_run(0.95, 3e-4, 0.2)
+    no_f = bz_run(0.95, 3e-4, 0.0)
+    # f does not move the Kitanidis GLR (rejected) but does raise the RLS error energy
+    assert np.allclose(base.sol1.glr.statistic, no_f.sol1.glr.statistic, equal_nan=True, atol=1e-9)
+    assert np.nanmax(base.sol2.energy[200:]) > np.nanmax(no_f.sol2.energy[200:])
+    # the forgetting factor changes the tracking only
+    other = bz_run(0.8, 3e-4, 0.2)
+    assert not np.allclose(other.sol2.rls.theta_hat, base.sol2.rls.theta_hat)
+
+
+def test_bad_values():
+    with pytest.raises(ModelError, match=r"lam: expected a forgetting factor in \(0, 1\], got 0"):
+        explore_bz(lam=0)
+    with pytest.raises(ModelError, match="delta, f_size: expected non-negative values"):
+        explore_bz(f_size=-1.0)
