@@ -1,0 +1,364 @@
+"""Zhang (2021), sparse fault diagnosis: Example 1 (Figs 2-5, Tables I-II).
+
+* ``zhang2021-fig2`` / ``zhang2021-fig3``: one trial of Example 1 (q = 5): number of non-zero
+  Lasso components against ``lambda`` with the flat range, then the Lasso "diamonds", the
+  least-squares circles and the true asterisks;
+* ``zhang2021-table1`` (+ Fig. 4): success rate against the number of faults q = 5 .. 25;
+* ``zhang2021-table2`` (+ Fig. 5): success rate and mean SNR of each output against the
+  output-noise factor r = 0.5, 10, 20, .., 200 (q = 5).
+
+Each trial: draw the support of ``theta``, ``Psi_k`` and ``d_k`` and the noise
+(:mod:`fdi_lib.systems.zhang2021_example1`), simulate, run the Kitanidis filter (gains shared
+by all trials), build the regression (36)-(38) from the signature (27), compute the exact
+Lasso path and apply the flat-range rule (both width readings, ``log`` being the headline
+one). Success = the selected support equals the true one (no miss, no false alarm).
+Columns of a table share the same trial seeds (common random numbers).
+"""
+
+from __future__ import annotations
+
+from functools import partial
+from typing import Any, Sequence
+
+import numpy as np
+
+from fdi_lib.kitanidis import kitanidis_filter, kitanidis_gains, residual_signature
+from fdi_lib.montecarlo import binomial_ci, run_monte_carlo, trial_rngs, trial_seeds
+from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
+from fdi_lib.reproduce.registry import ReproductionResult, register
+from fdi_lib.sparse import RegressionData, flat_range, lasso_path, least_squares_on_support, regression_data
+from fdi_lib.systems import zhang2021_example1 as ex
+
+__all__ = ["Q_VALUES", "R_VALUES", "PAPER_TABLE1", "PAPER_TABLE2", "example1_regression", "snr_db",
+           "example1_chunk", "example1_rates", "plot_fig2", "plot_fig3", "plot_table1", "plot_table2"]
+
+PAPER = "Zhang 2021"
+Q_VALUES = tuple(range(5, 26))
+R_VALUES = (0.5,) + tuple(range(10, 201, 10))
+PAPER_TABLE1 = dict(zip(Q_VALUES, (0.995, 0.980, 0.954, 0.900, 0.817, 0.750, 0.655, 0.555, 0.444, 0.377,
+                                   0.295, 0.251, 0.183, 0.146, 0.106, 0.090, 0.081, 0.040, 0.039, 0.027,
+                                   0.022)))
+PAPER_TABLE2 = {
+    "success_rate": dict(zip(R_VALUES, (0.994, 0.974, 0.957, 0.933, 0.917, 0.892, 0.881, 0.876, 0.824,
+                                        0.799, 0.786, 0.776, 0.742, 0.727, 0.747, 0.685, 0.684, 0.621,
+                                        0.597, 0.639, 0.575))),
+    "snr_db": dict(zip(R_VALUES, zip(
+        (34.06, 21.65, 18.64, 16.54, 15.37, 14.32, 13.60, 12.86, 12.42, 11.66, 11.63, 11.32, 11.15,
+         10.56, 10.11, 10.78, 9.808, 9.727, 9.403, 8.892, 8.784),
+        (32.63, 19.84, 17.05, 15.02, 13.69, 12.78, 11.81, 11.42, 10.95, 10.23, 9.91, 9.959, 9.320,
+         9.193, 8.988, 9.065, 8.206, 8.037, 7.965, 7.374, 7.489)))),
+}
+SCALES = ("log", "linear")
+
+
+def snr_db(y: np.ndarray, v: np.ndarray, *, start: int = 1) -> np.ndarray:
+    """Per-output SNR in dB, ``10 log10(sum_k (y_k - v_k)^2 / sum_k v_k^2)`` over ``k = start .. N-1``.
+
+    The signal is the output without its sensor noise (it contains the response to the
+    unknown input, to the state noise and to the fault); shape ``(*batch, p)``. The paper
+    only says an SNR is computed per sensor and averaged over trials; this is our reading.
+    """
+    sig = y[..., start:, :] - v[..., start:, :]
+    return 10.0 * np.log10((sig ** 2).sum(-2) / (v[..., start:, :] ** 2).sum(-2))
+
+
+def example1_regression(trials: ex.Example1Trial, *, r: float = 0.5) -> tuple[RegressionData, np.ndarray]:
+    """Simulate trials of Example 1 and build their regressions (36) with the Kitanidis filter.
+
+    Returns the :class:`~fdi_lib.sparse.RegressionData` (batched over trials) and the outputs ``y``.
+    """
+    model = ex.example1_model(r=r)
+    gains = kitanidis_gains(model, ex.E)  # shared by all trials
+    y = ex.simulate_trials(model, trials)
+    res = kitanidis_filter(model, y, gains=gains)
+    sig = residual_signature(model, gains, Psi=trials.Psi)  # Psi_k differs per trial
+    return regression_data(res.residuals, sig.on_residual, start=1), y
+
+
+def example1_chunk(seeds: Sequence[np.random.SeedSequence], *, q: int, r: float) -> dict[str, np.ndarray]:
+    """Monte Carlo chunk: success (both width readings), selected sizes and SNR for each trial."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1):  # small matrices: BLAS threads only add contention
+        return _example1_chunk(seeds, q=q, r=r)
+
+
+def _example1_chunk(seeds: Sequence[np.random.SeedSequence], *, q: int, r: float) -> dict[str, np.ndarray]:
+    model = ex.example1_model(r=r)
+    trials = ex.draw_trials(model, trial_rngs(seeds), q=q)
+    reg, y = example1_regression(trials, r=r)
+    out = {f"success_{s}": np.zeros(len(seeds), bool) for s in SCALES}
+    out.update({f"size_{s}": np.zeros(len(seeds), int) for s in SCALES})
+    for b in range(len(seeds)):
+        path = lasso_path(reg.X[b], reg.y[b], n_samples=reg.n_samples)
+        true = np.flatnonzero(trials.theta[b])
+        for s in SCALES:
+            fr = flat_range(path, scale=s)
+            out[f"size_{s}"][b] = fr.size
+            out[f"success_{s}"][b] = np.array_equal(fr.support, true)
+    out["snr_db"] = snr_db(y, trials.noise.v)
+    return out
+
+
+def example1_rates(*, q_values: Sequence[int], r_values: Sequence[float], trials: int, seed: int,
+                   jobs: int) -> dict[str, Any]:
+    """Success rates (and SNRs) over a grid of ``(q, r)`` columns, ``trials`` trials each.
+
+    Returns a dict of per-column arrays: ``success_log``, ``success_linear`` (counts),
+    ``ci_log`` (95 % Clopper-Pearson), ``snr_db`` (mean over trials, per output), ``size_log``
+    (histogram of selected sizes).
+    """
+    cols: dict[str, list[Any]] = {"success_log": [], "success_linear": [], "ci_log": [], "snr_db": [],
+                                  "mean_size_log": []}
+    for q, r in zip(q_values, r_values):
+        res = run_monte_carlo(partial(example1_chunk, q=int(q), r=float(r)), trials, seed=seed, jobs=jobs)
+        k_log = int(res["success_log"].sum())
+        cols["success_log"].append(k_log)
+        cols["success_linear"].append(int(res["success_linear"].sum()))
+        cols["ci_log"].append(binomial_ci(k_log, trials))
+        cols["snr_db"].append(res["snr_db"].mean(axis=0))
+        cols["mean_size_log"].append(float(res["size_log"].mean()))
+    return {k: np.asarray(v) for k, v in cols.items()}
+
+
+# --------------------------------------------------------------------------- Figures 2-3
+def _single_trial(seed: int, q: int = 5) -> dict[str, Any]:
+    model = ex.example1_model()
+    trials = ex.draw_trials(model, trial_rngs(trial_seeds(seed, 1)), q=q)
+    reg, _ = example1_regression(trials)
+    X, y = reg.X[0], reg.y[0]
+    path = lasso_path(X, y, n_samples=reg.n_samples)
+    flats = {s: flat_range(path, scale=s) for s in SCALES}
+    fr = flats["log"]
+    grid = np.geomspace(fr.low, fr.high, 10)[1:-1]  # lambdas strictly inside the flat range
+    return {"path": path, "flats": flats, "grid": grid,
+            "lasso": np.stack([path.coef(lam) for lam in grid]),
+            "theta_ls": least_squares_on_support(X, y, fr.support),
+            "theta": trials.theta[0], "true_support": np.flatnonzero(trials.theta[0])}
+
+
+def plot_fig2(result: ReproductionResult, fig: Any = None):
+    """Paper Fig. 2: number of non-zero Lasso components against ``lambda`` (exact path, log axis)."""
+    fig, ax = figure(fig=fig)
+    ax = ax[0, 0]
+    lam, sizes = result.data["lambdas"], result.data["sizes"]
+    floor = 1e-4 * lam[0]
+    edges = np.concatenate([np.clip(lam[::-1], floor, None), [3 * lam[0]]])
+    ax.stairs(np.concatenate([sizes[::-1], [0]]), edges, color=OURS_COLOR, baseline=None,
+              label="exact Lasso path (LARS breakpoints)")
+    ax.plot(result.data["grid"], np.full(result.data["grid"].size, result.headline["flat_size"]), "D",
+            color=PAPER_COLOR, label="flat range (log width)")
+    lo, hi = result.headline["flat_range_linear"]
+    ax.axvspan(lo, hi, color="0.8", alpha=0.5, label="flat range (linear width)")
+    ax.set(xscale="log", xlabel=r"$\lambda$ (normalisation of (39))", ylabel="non-zero components",
+           title="Example 1: support size along the Lasso path")
+    ax.set_xlim(floor, lam[0] * 3)
+    ax.legend(loc="upper right")
+    return fig
+
+
+@register("zhang2021-fig2", paper=PAPER, title="Example 1: support size of the Lasso estimate against lambda",
+          plot=plot_fig2)
+def fig2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Paper Fig. 2: one trial of Example 1 (q = 5), support size along the exact Lasso path.
+
+    Headline keys
+    -------------
+    flat_range : list of float
+        ``[low, high]`` of the widest constant-size range, log width (our default rule).
+    flat_size : int
+        Number of non-zero components in that range (paper: 5).
+    flat_range_linear : list of float
+        The same with linear width.
+    flat_size_linear : int
+    lambda_mid : float
+        Geometric middle of ``flat_range``: the ``lambda`` used.
+    n_breakpoints : int
+        Number of breakpoints of the exact path.
+    """
+    d = _single_trial(seed)
+    fl, fli = d["flats"]["log"], d["flats"]["linear"]
+    headline = {"flat_range": [fl.low, fl.high], "flat_size": fl.size,
+                "flat_range_linear": [fli.low, fli.high], "flat_size_linear": fli.size,
+                "lambda_mid": fl.middle, "n_breakpoints": int(d["path"].lambdas.size)}
+    return ReproductionResult(id="zhang2021-fig2", headline=headline, paper={"flat_size": 5},
+                              settings={"seed": seed, "q": 5, "r": 0.5, "N": ex.N_DATA, "m": ex.N_PARAMS,
+                                        "lambda_ratio": 1e-4},
+                              data={"lambdas": d["path"].lambdas, "sizes": d["path"].support_sizes(),
+                                    "grid": d["grid"]})
+
+
+def plot_fig3(result: ReproductionResult, fig: Any = None):
+    """Paper Fig. 3: Lasso diamonds (one colour per ``lambda`` in the flat range), LS circles, true asterisks."""
+    fig, ax = figure(fig=fig)
+    ax = ax[0, 0]
+    lasso, grid = result.data["lasso"], result.data["grid"]
+    idx = np.arange(1, lasso.shape[1] + 1)
+    colors = __import__("matplotlib").colormaps["viridis"](np.linspace(0, 1, grid.size))
+    for c, row in zip(colors, lasso):
+        nz = row != 0
+        ax.plot(idx[nz], row[nz], "D", color=c, ms=5, alpha=0.8)
+    ls = result.data["theta_ls"]
+    nz = ls != 0
+    ax.plot(idx[nz], ls[nz], "o", mfc="none", mec="k", ms=10, label="least squares on the support")
+    th = result.data["theta"]
+    ax.plot(idx[th != 0], th[th != 0], "*", color=PAPER_COLOR, ms=10, label="true non-zero components")
+    ax.plot([], [], "D", color=colors[0], label=r"Lasso, one colour per $\lambda$ in the flat range")
+    ax.set(xlabel=r"component of $\theta$", ylabel="value", title="Example 1: isolation and estimation")
+    ax.set_xlim(0, lasso.shape[1] + 1)
+    ax.legend(loc="lower right")
+    return fig
+
+
+@register("zhang2021-fig3", paper=PAPER, title="Example 1: Lasso diamonds, least-squares circles, true asterisks",
+          plot=plot_fig3)
+def fig3(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Paper Fig. 3: the same trial as ``zhang2021-fig2``.
+
+    Headline keys
+    -------------
+    flat_range : list of float
+        ``[low, high]`` of the flat range (log width).
+    support : list of int
+        Components selected at the middle of the flat range (0-based).
+    true_support : list of int
+        Components of ``theta`` set to 1 (0-based).
+    same_support_in_range : bool
+        Whether every ``lambda`` of the displayed grid inside the flat range gives that support.
+    theta_ls : list of float
+        Least-squares re-estimates of the selected components (true value 1).
+    lasso_mid : list of float
+        Lasso estimates of the selected components at the middle (shrunk towards 0).
+    """
+    d = _single_trial(seed)
+    fl = d["flats"]["log"]
+    same = all(np.array_equal(np.flatnonzero(row), fl.support) for row in d["lasso"])
+    mid = d["path"].coef(fl.middle)
+    headline = {"flat_range": [fl.low, fl.high], "support": fl.support.tolist(),
+                "true_support": d["true_support"].tolist(), "same_support_in_range": bool(same),
+                "theta_ls": d["theta_ls"][fl.support].tolist(), "lasso_mid": mid[fl.support].tolist()}
+    return ReproductionResult(id="zhang2021-fig3", headline=headline,
+                              paper={"same_support_in_range": True, "support_equals_true": True},
+                              settings={"seed": seed, "q": 5, "r": 0.5, "N": ex.N_DATA, "m": ex.N_PARAMS},
+                              data={"lasso": d["lasso"], "grid": d["grid"], "theta_ls": d["theta_ls"],
+                                    "theta": d["theta"]})
+
+
+# --------------------------------------------------------------------------- Tables I-II
+def _rate_table(values: Sequence[float], rates: dict[str, Any], paper: dict[Any, float], trials: int,
+                xlabel: str, fig: Any, title: str, log_x: bool = False):
+    fig, ax = figure(fig=fig)
+    ax = ax[0, 0]
+    x = np.asarray(values, dtype=float)
+    p = rates["success_log"] / trials
+    ci = rates["ci_log"]
+    ax.fill_between(x, ci[:, 0], ci[:, 1], color=OURS_COLOR, alpha=0.2, lw=0)
+    ax.plot(x, p, "o-", color=OURS_COLOR, ms=3, label=f"ours, log width ({trials} trials, 95 % CI)")
+    ax.plot(x, rates["success_linear"] / trials, "s--", color="0.4", ms=3, lw=0.8, label="ours, linear width")
+    ax.plot(x, [paper[v] for v in values], "x:", color=PAPER_COLOR, label="paper")
+    ax.set(xlabel=xlabel, ylabel="successful isolation rate", title=title, ylim=(-0.02, 1.02))
+    ax.legend(loc="upper right" if not log_x else "lower left")
+    return fig
+
+
+def plot_table1(result: ReproductionResult, fig: Any = None):
+    """Paper Fig. 4: success rate against the number of faults q."""
+    d = result.data
+    return _rate_table(Q_VALUES, d, PAPER_TABLE1, result.settings["trials"], "number of faults q", fig,
+                       "Example 1: isolation rate against q (r = 0.5)")
+
+
+def _rate_dict(keys: Sequence[Any], counts: np.ndarray, trials: int) -> dict[str, float]:
+    return {str(k): float(c) / trials for k, c in zip(keys, counts)}
+
+
+@register("zhang2021-table1", paper=PAPER, title="Example 1: success rate against the number of faults q",
+          default_trials=1000, plot=plot_table1)
+def table1(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Paper Table I / Fig. 4: isolation success rate for q = 5 .. 25 (r = 0.5, N = 100).
+
+    Headline keys
+    -------------
+    success_rate : dict
+        Per q (string key): fraction of trials whose selected support (log-width rule) equals
+        the true one.
+    success_rate_linear : dict
+        Same with the linear-width rule.
+    ci95 : dict
+        Per q, ``[low, high]`` Clopper-Pearson 95 % interval of ``success_rate``.
+    mean_size : dict
+        Per q, mean number of selected components (log rule).
+    """
+    n = 1000 if trials is None else trials
+    rates = example1_rates(q_values=Q_VALUES, r_values=[0.5] * len(Q_VALUES), trials=n, seed=seed, jobs=jobs)
+    headline = {"success_rate": _rate_dict(Q_VALUES, rates["success_log"], n),
+                "success_rate_linear": _rate_dict(Q_VALUES, rates["success_linear"], n),
+                "ci95": {str(q): list(c) for q, c in zip(Q_VALUES, rates["ci_log"])},
+                "mean_size": {str(q): float(s) for q, s in zip(Q_VALUES, rates["mean_size_log"])}}
+    return ReproductionResult(id="zhang2021-table1", headline=headline,
+                              paper={"success_rate": {str(q): v for q, v in PAPER_TABLE1.items()}},
+                              settings={"seed": seed, "trials": n, "r": 0.5, "N": ex.N_DATA, "m": ex.N_PARAMS,
+                                        "lambda_rule": "log width, window [1e-4, 1] lambda_max, size <= m/2"},
+                              data=rates)
+
+
+def plot_table2(result: ReproductionResult, fig: Any = None):
+    """Paper Fig. 5: success rate against the noise factor r, and the mean SNR of each output."""
+    d = result.data
+    trials = result.settings["trials"]
+    fig, axes = figure(1, 2, fig=fig, figsize=(8.5, 3.4))
+    _rate_table_axes(axes[0, 0], R_VALUES, d, PAPER_TABLE2["success_rate"], trials)
+    ax = axes[0, 1]
+    snr = d["snr_db"]
+    for i, mk in enumerate(("o", "s")):
+        ax.plot(R_VALUES, snr[:, i], mk + "-", ms=3, color=OURS_COLOR, alpha=1 - 0.4 * i,
+                label=f"ours, output {i + 1}")
+        ax.plot(R_VALUES, [PAPER_TABLE2["snr_db"][r][i] for r in R_VALUES], "x:", color=PAPER_COLOR,
+                alpha=1 - 0.4 * i, label=f"paper, output {i + 1}")
+    ax.set(xlabel="noise factor r", ylabel="mean SNR (dB)", title="SNR of the outputs")
+    ax.legend()
+    return fig
+
+
+def _rate_table_axes(ax: Any, values: Sequence[float], rates: dict[str, Any], paper: dict[Any, float],
+                     trials: int) -> None:
+    x = np.asarray(values, dtype=float)
+    ci = rates["ci_log"]
+    ax.fill_between(x, ci[:, 0], ci[:, 1], color=OURS_COLOR, alpha=0.2, lw=0)
+    ax.plot(x, rates["success_log"] / trials, "o-", color=OURS_COLOR, ms=3, label=f"ours, log ({trials} trials)")
+    ax.plot(x, rates["success_linear"] / trials, "s--", color="0.4", ms=3, lw=0.8, label="ours, linear")
+    ax.plot(x, [paper[v] for v in values], "x:", color=PAPER_COLOR, label="paper")
+    ax.set(xlabel="noise factor r", ylabel="successful isolation rate", ylim=(-0.02, 1.02),
+           title="Isolation rate (q = 5)")
+    ax.legend(loc="lower left")
+
+
+@register("zhang2021-table2", paper=PAPER, title="Example 1: success rate and SNR against the noise factor r",
+          default_trials=1000, plot=plot_table2)
+def table2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Paper Table II / Fig. 5: isolation rate and mean output SNR for R = r I_2 (q = 5, N = 100).
+
+    Headline keys
+    -------------
+    success_rate : dict
+        Per r (string key, e.g. ``"0.5"``, ``"10"``): success fraction, log-width rule.
+    success_rate_linear : dict
+        Same with the linear-width rule.
+    ci95 : dict
+        Per r, Clopper-Pearson 95 % interval of ``success_rate``.
+    snr_db : dict
+        Per r, ``[output 1, output 2]``: mean over trials of the SNR of :func:`snr_db`.
+    """
+    n = 1000 if trials is None else trials
+    rates = example1_rates(q_values=[5] * len(R_VALUES), r_values=R_VALUES, trials=n, seed=seed, jobs=jobs)
+    keys = [f"{r:g}" for r in R_VALUES]
+    headline = {"success_rate": _rate_dict(keys, rates["success_log"], n),
+                "success_rate_linear": _rate_dict(keys, rates["success_linear"], n),
+                "ci95": {k: list(c) for k, c in zip(keys, rates["ci_log"])},
+                "snr_db": {k: [float(s[0]), float(s[1])] for k, s in zip(keys, rates["snr_db"])}}
+    paper = {"success_rate": {f"{r:g}": v for r, v in PAPER_TABLE2["success_rate"].items()},
+             "snr_db": {f"{r:g}": list(v) for r, v in PAPER_TABLE2["snr_db"].items()}}
+    return ReproductionResult(id="zhang2021-table2", headline=headline, paper=paper,
+                              settings={"seed": seed, "trials": n, "q": 5, "N": ex.N_DATA, "m": ex.N_PARAMS,
+                                        "snr": "10 log10(sum (y - v)^2 / sum v^2), k = 1..N, mean over trials"},
+                              data=rates)

@@ -1,0 +1,130 @@
+"""Sparse regression (Zhang 2021, eqs. (36)-(39)): Lasso two ways, the flat-range rule, LS re-estimation."""
+
+import numpy as np
+import pytest
+
+from fdi_lib.errors import ModelError, NonFiniteError, ShapeError
+from fdi_lib.sparse import (LassoPath, diagnose, flat_range, lasso_cvxpy, lasso_path,
+                            least_squares_on_support, regression_data)
+
+
+def _problem(seed=0, rows=80, m=20, q=3, noise=0.3):
+    rng = np.random.default_rng(seed)
+    X = rng.standard_normal((rows, m))
+    theta = np.zeros(m)
+    theta[rng.choice(m, q, replace=False)] = rng.choice([-1.0, 1.0], q) * rng.uniform(1, 2, q)
+    return X, X @ theta + noise * rng.standard_normal(rows), theta
+
+
+@pytest.mark.parametrize("frac", [0.6, 0.2, 0.05, 0.01])
+def test_lars_path_and_cvxpy_agree(frac):
+    X, y, _ = _problem()
+    N = 40  # the paper's normalisation: N time samples of p = 2 outputs
+    path = lasso_path(X, y, n_samples=N)
+    lam = frac * path.lambdas[0]
+    a = path.coef(lam)
+    b = lasso_cvxpy(X, y, lam, n_samples=N)
+    np.testing.assert_allclose(a, b, atol=2e-4 * max(1.0, np.abs(a).max()))  # interior-point accuracy
+
+    def objective(t):
+        return np.sum((X @ t - y) ** 2) / (2 * N) + lam * np.abs(t).sum()
+
+    # the exact path is at least as good as the solver's optimum, and they agree to solver precision
+    assert objective(a) <= objective(b) + 1e-9
+    assert objective(b) - objective(a) < 1e-6 * objective(a)
+
+
+def test_path_satisfies_the_lasso_optimality_conditions():
+    """KKT of (39): X^T (y - X theta) / N = lam sign(theta) on the support, |.| <= lam elsewhere."""
+    X, y, _ = _problem(seed=1)
+    N = 40
+    path = lasso_path(X, y, n_samples=N)
+    assert np.abs(X.T @ y).max() / N == pytest.approx(path.lambdas[0], rel=1e-10)
+    for lam in np.geomspace(path.lambdas[0] * 0.99, path.lambdas[0] * 1e-3, 15):
+        th = path.coef(lam)
+        g = X.T @ (y - X @ th) / N
+        on = th != 0
+        np.testing.assert_allclose(g[on], lam * np.sign(th[on]), rtol=1e-7, atol=1e-9)
+        assert np.all(np.abs(g[~on]) <= lam * (1 + 1e-7))
+    assert np.all(path.coef(path.lambdas[0] * 1.01) == 0)
+
+
+def _hand_path(lambdas, sizes, m=10):
+    """A LassoPath whose interval (lambda_{i+1}, lambda_i) has the first sizes[i] components active."""
+    lambdas = np.asarray(lambdas, float)
+    K = lambdas.size - 1
+    coefs = np.zeros((m, K + 1))
+    for i, s in enumerate(sizes):  # make components active on interval i: non-zero at both ends' mean
+        coefs[:s, i + 1] = 1.0 + i
+    return LassoPath(lambdas=lambdas, coefs=coefs, n_samples=10)
+
+
+def test_flat_range_rule_on_hand_made_paths():
+    # sizes on (lam_{i+1}, lam_i): 1 on (6,10), 2 on (5,6), 3 on (0.5,5), 4 on (0.01,0.5), 5 on (0,0.01)
+    path = _hand_path([10, 6, 5, 0.5, 0.01, 0.0], [1, 2, 3, 4, 5])
+    np.testing.assert_array_equal(path.support_sizes(), [1, 2, 3, 4, 5])
+    lin = flat_range(path, scale="linear")
+    assert (lin.low, lin.high, lin.size) == (0.5, 5.0, 3) and lin.middle == pytest.approx(2.75)
+    assert lin.width == pytest.approx(4.5)
+    log = flat_range(path, scale="log")  # log widths: 0.51, 0.18, 2.30, 3.91 -> size 4
+    assert (log.low, log.high, log.size) == (0.01, 0.5, 4)
+    assert log.middle == pytest.approx(np.sqrt(0.005)) and log.width == pytest.approx(np.log(50))
+    np.testing.assert_array_equal(log.support, [0, 1, 2, 3])
+    # a narrower window (lambda >= 0.02 * 10 = 0.2) clips the size-4 range to (0.2, 0.5): size 3 wins
+    assert flat_range(path, scale="log", lambda_ratio=0.02).size == 3
+    # the sparsity cap removes sizes above 3
+    assert flat_range(path, scale="log", max_size=3).size == 3
+    assert flat_range(path, scale="log", max_size=1).size == 1
+
+
+def test_flat_range_merges_equal_sizes_and_excludes_empty_support():
+    path = _hand_path([10, 8, 4, 3, 1], [1, 1, 2, 3])
+    fr = flat_range(path, scale="linear")
+    assert (fr.low, fr.high, fr.size) == (4.0, 10.0, 1)
+    empty = LassoPath(lambdas=np.array([1.0, 0.0]), coefs=np.zeros((3, 2)), n_samples=5)
+    with pytest.raises(ModelError, match="no range of lambda"):
+        flat_range(empty)
+    with pytest.raises(ModelError, match="scale: expected 'log' or 'linear', got 'ln'"):
+        flat_range(path, scale="ln")
+    with pytest.raises(ModelError, match="lambda_ratio"):
+        flat_range(path, lambda_ratio=1.5)
+
+
+def test_diagnose_recovers_a_clean_sparse_vector_and_least_squares_is_unbiased():
+    X, y, theta = _problem(seed=3, rows=120, m=30, q=4, noise=0.05)
+    d = diagnose(X, y)
+    np.testing.assert_array_equal(d.support, np.flatnonzero(theta))
+    np.testing.assert_allclose(d.theta_ls, theta, atol=0.05)
+    # the Lasso estimate is shrunk towards zero, the LS re-estimate is not
+    assert np.all(np.abs(d.theta_lasso[d.support]) < np.abs(d.theta_ls[d.support]))
+    ref = np.zeros(30)
+    ref[d.support] = np.linalg.lstsq(X[:, d.support], y, rcond=None)[0]
+    np.testing.assert_allclose(least_squares_on_support(X, y, d.support), ref, rtol=1e-12)
+
+
+def test_regression_data_stacks_rows_in_time_order():
+    rng = np.random.default_rng(4)
+    r = rng.standard_normal((2, 5, 3))  # batch 2, N = 5, p = 3
+    S = rng.standard_normal((5, 3, 4))  # shared signature, m = 4
+    reg = regression_data(r, S, start=1)
+    assert reg.X.shape == (2, 12, 4) and reg.y.shape == (2, 12) and reg.n_samples == 4
+    np.testing.assert_array_equal(reg.y[1, 3:6], r[1, 2])
+    np.testing.assert_array_equal(reg.X[0, 3:6], S[2])
+    with pytest.raises(ShapeError, match="on_residual: expected shape"):
+        regression_data(r, S[:, :2])
+    with pytest.raises(ModelError, match=r"start: expected an integer in \[0, 4\]"):
+        regression_data(r, S, start=5)
+
+
+def test_bad_inputs():
+    X, y, _ = _problem()
+    with pytest.raises(ShapeError, match=r"y: expected shape \(80,\)"):
+        lasso_path(X, y[:-1])
+    bad = X.copy()
+    bad[3, 2] = np.nan
+    with pytest.raises(NonFiniteError, match="X: expected finite"):
+        lasso_path(bad, y)
+    with pytest.raises(ModelError, match="lam: expected a finite lambda > 0"):
+        lasso_cvxpy(X, y, -1.0)
+    with pytest.raises(ModelError, match="n_samples: expected a positive integer"):
+        lasso_path(X, y, n_samples=0)
