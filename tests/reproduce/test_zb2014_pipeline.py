@@ -1,0 +1,146 @@
+"""Reproductions of Zhang & Basseville (2014), Section 6.2 (gas pipeline): Table 1, Figs 5-9."""
+
+import json
+
+import numpy as np
+import pytest
+import scipy.stats
+
+from fdi_lib.filters import kalman_filter
+from fdi_lib.glr import WindowedGLR
+from fdi_lib.isolation import minmax_statistic
+from fdi_lib.montecarlo import binomial_ci, trial_seeds
+from fdi_lib.reproduce import reproduce
+from fdi_lib.reproduce import zb2014_pipeline as zp
+from fdi_lib.reproduce.cli import main
+from fdi_lib.simulate import draw_noise, simulate
+from fdi_lib.systems import gas_pipeline as gp
+
+
+def _loop_detector(seed_seq, fault):
+    """Per-realisation reference: own noise draw, online WindowedGLR sample by sample."""
+    st = zp.pipeline_setup()
+    noise = draw_noise(st.model, np.random.default_rng(seed_seq))
+    sim = simulate(st.model, noise=noise, u=st.u, fault=st.input_family.profile(zp.FAULT_ONSET),
+                   theta=zp.fault_theta(fault))
+    eps = kalman_filter(st.model, sim.y, st.u, gains=st.gains).innovations
+    det = WindowedGLR(st.model, st.gains, st.input_family, gp.WINDOW)
+    for k in range(st.model.n_steps):
+        l_k, r_k, _, C, d = det.update(eps[k])
+        if k >= zp.GLR_START and l_k > gp.THRESHOLD:
+            return k, int(r_k), float(minmax_statistic(C, d, [0])), float(minmax_statistic(C, d, [1]))
+    return -1, -1, np.nan, np.nan
+
+
+@pytest.mark.parametrize("fault", [1, 2])
+def test_batch_chunk_agrees_with_per_realisation_detector(fault):
+    seeds = trial_seeds(7, 4)
+    out = zp.detection_chunk(seeds, fault=fault)
+    for i, s in enumerate(seeds):
+        alarm, onset, l1, l2 = _loop_detector(s, fault)
+        assert out["alarm"][i] == alarm and out["onset_hat"][i] == onset
+        assert out["l1"][i] == pytest.approx(l1, rel=1e-7)
+        assert out["l2"][i] == pytest.approx(l2, rel=1e-7)
+
+
+def test_single_run_matches_chunk_path():
+    run = zp.single_run(seed=3, fault=1)
+    assert run.alarm >= zp.GLR_START
+    assert run.statistic[run.alarm] > gp.THRESHOLD
+    assert np.all(np.nan_to_num(run.statistic[zp.GLR_START:run.alarm], nan=0) <= gp.THRESHOLD)
+    assert run.detection_delay_min == run.alarm_time_min - 600.0
+
+
+def test_monte_carlo_identical_for_one_and_two_jobs():
+    zp._MC_CACHE.clear()
+    one = zp.pipeline_monte_carlo(seed=5, trials=12, jobs=1)
+    zp._MC_CACHE.clear()
+    two = zp.pipeline_monte_carlo(seed=5, trials=12, jobs=2)
+    zp._MC_CACHE.clear()
+    for fault in (1, 2):
+        for key in one[fault]:
+            np.testing.assert_array_equal(one[fault][key], two[fault][key])
+    # Different faults use independent noise streams (no shared false alarms).
+    assert not np.array_equal(one[1]["l1_known"], one[2]["l1_known"])
+
+
+def test_known_onset_minmax_type1_is_nominal():
+    """With the onset known (no selection), each minmax test on the absent fault is chi2(1)."""
+    st = zp.pipeline_setup()
+    from fdi_lib.isolation import information
+    n = 3000
+    rng = np.random.default_rng(2024)
+    for fault, absent in ((1, [1]), (2, [0])):
+        sim = simulate(st.model, rng=rng, u=st.u, fault=st.input_family.profile(zp.FAULT_ONSET),
+                       theta=zp.fault_theta(fault), size=n)
+        eps = kalman_filter(st.model, sim.y, st.u, gains=st.gains).innovations
+        F, zeta = information(eps, st.known_signature, st.gains, zp.FAULT_ONSET, st.model.n_steps)
+        stat = minmax_statistic(F, zeta, absent)
+        k = int(np.sum(stat > zp.MINMAX_THRESHOLD))
+        lo, hi = binomial_ci(k, n, level=0.99)
+        assert lo <= 0.01 <= hi, (fault, k)
+        assert scipy.stats.kstest(stat, scipy.stats.chi2(1).cdf).pvalue > 1e-3
+        assert scipy.stats.kstest(stat, scipy.stats.chi2(2).cdf).pvalue < 1e-6
+
+
+def test_threshold_is_chi2_one_dof():
+    assert scipy.stats.chi2.ppf(0.99, 1) == pytest.approx(zp.MINMAX_THRESHOLD, abs=5e-5)
+    assert abs(scipy.stats.chi2.ppf(0.99, 2) - zp.MINMAX_THRESHOLD) > 2
+
+
+def test_table1():
+    h = reproduce("zb2014-table1").headline
+    assert h["G0_1_fault1"] == pytest.approx(-8.0297e-4, rel=1e-12)
+    assert h["Gp_1_fault2"] == pytest.approx(2.8290e-5, rel=1e-12)
+    assert h["theta_fault1"] == [-2e-5, 0.0] and h["theta_fault2"] == [0.0, -1e-5]
+    assert 0 < h["leak_fraction_fault1"] < h["leak_fraction_fault2"]
+
+
+def test_fig5_fig6_single_runs():
+    r5, r6 = reproduce("zb2014-fig5"), reproduce("zb2014-fig6")
+    for r in (r5, r6):
+        assert set(r.headline) == {"alarm_time_min", "onset_estimate_min", "detection_delay_min"}
+        assert r.headline["alarm_time_min"] > 600.0
+    # Same noise, doubled fault: no later alarm.
+    assert r6.headline["detection_delay_min"] <= r5.headline["detection_delay_min"]
+    assert zp.plot_single_run(r5) is not None
+
+
+def test_fig9_output_leak():
+    r = reproduce("zb2014-fig9")
+    h = r.headline
+    assert 700.0 <= h["alarm_time_min"] <= 710.0
+    assert h["glr_level_over_threshold"] > 10
+    assert h["innovation_drop"] < -20                 # sudden drop ...
+    assert abs(h["innovation_recovery"]) < 0.2        # ... then back near the pre-fault level
+
+
+def test_fig7_fig8_smoke_and_json():
+    zp._MC_CACHE.clear()
+    r7 = reproduce("zb2014-fig7", trials=30)
+    r8 = reproduce("zb2014-fig8", trials=30)
+    assert set(r7.headline) >= {"false_alarms", "delay_min", "onset_error_min"}
+    for f in ("1", "2"):
+        assert r7.headline["delay_min"][f]["median"] > 0
+        assert r8.headline["type1_rate"][f]["n"] + r7.headline["missed"][f] <= 30
+        lo, hi = r8.headline["type2_rate"][f]["ci95"]
+        assert 0 <= lo <= r8.headline["type2_rate"][f]["rate"] <= hi <= 1
+    assert r8.headline["threshold_dof"] == 1
+    json.dumps(r7.to_json_dict())
+    json.dumps(r8.to_json_dict())
+    assert zp.plot_fig7(r7) is not None and zp.plot_fig8(r8) is not None
+    zp._MC_CACHE.clear()
+
+
+def test_cli_json(capsys):
+    assert main(["reproduce", "zb2014-table1", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["id"] == "zb2014-table1" and out["paper"]["G0_1_nominal"] == -7.8297e-4
+
+
+def test_bad_arguments():
+    from fdi_lib.errors import ModelError
+    with pytest.raises(ModelError, match="fault: expected 1 or 2"):
+        zp.fault_theta(3)
+    with pytest.raises(ModelError, match="kind: expected 'input' or 'output'"):
+        zp.single_run(seed=0, kind="middle")
