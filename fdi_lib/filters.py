@@ -86,8 +86,8 @@ def kalman_gains(model: LTVModel) -> KalmanGains:
     >>> from fdi_lib.models import ltv_model
     >>> m = ltv_model(F=[[0.9]], H=[[1.0]], Q=1.0, R=1.0, n_steps=200)
     >>> g = kalman_gains(m)
-    >>> round(float(g.P[-1, 0, 0]), 4)  # the DARE solution (1.81 + sqrt(1.81**2 + 4)) / 2
-    1.9758
+    >>> round(float(g.P[-1, 0, 0]), 4)  # DARE P^2 - 0.81 P - 1 = 0: P = (0.81 + sqrt(0.81**2 + 4)) / 2
+    1.4839
     """
     N, n, p = model.n_steps, model.n, model.p
     K = np.empty((N, n, p))
