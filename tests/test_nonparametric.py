@@ -215,3 +215,25 @@ def test_solution1_detects_isolates_theta_and_ignores_f(setting):
     # unbatched record works too
     one = solution1(model, s0.y[0], s0.u[0], **kw)
     assert one.glr_alarm.shape == () and one.isolation.shape == (2,)
+
+
+def test_solution2_rls_converges_to_constant_theta_on_the_example(setting):
+    """Section 4 with theta_k constant and no f: RLS on (47) converges; a fast f raises the energy."""
+    from fdi_lib.nonparametric import solution2
+
+    model, kal, _, _ = setting
+    rng = np.random.default_rng(21)
+    theta = np.array([0.06, -0.04])
+    th = np.broadcast_to(theta, (N, 2))
+    s0, s1 = _pair(model, rng, np.zeros((N, 1)), th, size=30)
+    res = solution2(model, s1.y, s1.u, Psi=ex.PSI, lam=0.99, energy_window=20, energy_alpha=1e-4,
+                    start=30, kalman=kal)
+    err = np.abs(res.rls.theta_hat[:, -1] - theta).mean(axis=0)
+    assert np.all(err < 0.015)
+    assert np.mean(res.energy_alarm >= 0) <= 0.1
+    f = ex.nonparametric_profile(N, size=0.3, onset=60)
+    prof = fault_profile(model, Psi=ex.state_disturbance(f, th))
+    s2 = simulate(model, noise=s0.noise, controller=ex.controller(), fault=prof, theta=[1.0])
+    res_f = solution2(model, s2.y, s2.u, Psi=ex.PSI, lam=0.99, energy_window=20, energy_alpha=1e-4,
+                      start=30, kalman=kal)
+    assert np.mean(res_f.energy_alarm >= 60) >= 0.9
