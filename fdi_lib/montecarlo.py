@@ -63,12 +63,13 @@ def draw_noise_batch(model: LTVModel, seeds: Sequence[np.random.SeedSequence]) -
 
 
 def default_chunk_size(n_trials: int) -> int:
-    """Default realisations per chunk: ``min(100, ceil(n_trials / 8))``, independent of the job count.
+    """Default realisations per chunk: ``min(250, ceil(n_trials / 4))``, independent of the job count.
 
-    Eight chunks or more keep two to four workers busy; at most 100 realisations
-    per chunk keep the vectorised arrays (e.g. ``100 x w x m`` scores) in cache.
+    Four chunks or more keep two workers busy; about 250 realisations per chunk
+    amortise the noise-independent work of a chunk (e.g. the windowed GLR's
+    ``Gamma_k(r)``, ``C_k(r)``) while keeping its arrays small (a few MiB).
     """
-    return max(1, min(100, -(-int(n_trials) // 8)))
+    return max(1, min(250, -(-int(n_trials) // 4)))
 
 
 def _chunks(n: int, size: int) -> list[slice]:

@@ -47,8 +47,8 @@ def test_results_do_not_depend_on_jobs_or_chunks(chunk_size):
 
 
 def test_default_chunk_size_is_job_independent():
-    assert default_chunk_size(1000) == 100
-    assert default_chunk_size(40) == 5
+    assert default_chunk_size(1000) == 250
+    assert default_chunk_size(40) == 10
     assert default_chunk_size(1) == 1
 
 
