@@ -89,6 +89,15 @@ def kitanidis_predictor_gains(model: LTVModel, E: Any, kgains: KitanidisGains | 
     Returns
     -------
     KalmanGains
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> m = ltv_model(F=0.5 * np.eye(2), H=np.eye(2), Q=np.eye(2), R=np.eye(2), n_steps=5)
+    >>> g = kitanidis_predictor_gains(m, E=[[1.0], [0.0]])
+    >>> float(np.abs(g.A[3] @ np.array([1.0, 0.0])).max()) < 1e-14   # F (I - L H) E = 0
+    True
     """
     g = kitanidis_gains(model, E) if kgains is None else kgains
     if g.K.shape != (model.n_steps, model.n, model.p):

@@ -142,20 +142,22 @@ def plot_whiteness(result: ReproductionResult, fig: Any = None):
 
 
 @register("bz-whiteness", paper=PAPER, title="Prop. 2: whiteness of the Kitanidis innovation (portmanteau tests)",
-          default_trials=300, plot=plot_whiteness)
+          default_trials=None, plot=plot_whiteness)
 def whiteness(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Prop. 2 put to the test: is the Kitanidis innovation white with covariance ``H P H^T + R``?
 
     ``trials`` fault-free closed-loop runs of ``WHITE["n_steps"]`` samples (the first
     ``WHITE["discard"]`` dropped), plus the same noise with a non-parametric fault from ``k = 0``
-    for the projected residual. The paper has no Monte Carlo count; 300 is our choice.
+    for the projected residual. The paper has no Monte Carlo count (``default_trials=None``);
+    ``trials=None`` runs 300, our choice.
 
     Headline keys
     -------------
     lb_reject_rate_kalman, lb_reject_rate_kitanidis, lb_reject_rate_reduced_f : float
         Fraction of (run, output component) whose Ljung-Box test at ``WHITE["lags"]`` lags rejects
         whiteness at 5 % (about 0.05 if white). ``reduced_f``: projected Kitanidis residual
-        ``T_k eps_k`` with the non-parametric fault active.
+        ``T_k eps_k`` with the non-parametric fault active. The intervals treat the ``trials * p``
+        series as independent (components of one run are only weakly correlated).
     lb_reject_rate_*_ci : list
         Clopper-Pearson 95 % intervals.
     ks_pvalue_kalman, ks_pvalue_kitanidis, ks_pvalue_reduced_f : float
@@ -281,14 +283,14 @@ def plot_solution1(result: ReproductionResult, fig: Any = None):
 
 
 @register("bz-solution1", paper=PAPER, title="Solution 1: GLR/minmax on the Kitanidis residual + energy test",
-          default_trials=300, plot=plot_solution1)
+          default_trials=None, plot=plot_solution1)
 def solution1_mc(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Solution 1 (Section 3) in Monte Carlo on the designed example, settings :data:`SOL1`.
 
     Five scenarios replay the same noise (paired comparison): ``none``; ``theta`` (jump
     ``theta = [0.05, 0]`` at k = 150); ``f`` (sinusoid of amplitude 0.2 from k = 100);
     ``both`` (``f`` from 100 and the jump at 150); ``theta2`` (jump ``[0, 0.05]`` at 150). The
-    paper gives no numbers; 300 trials is our choice.
+    paper gives no numbers (``default_trials=None``); ``trials=None`` runs 300, our choice.
 
     Headline keys (``*_ci``: 95 % Clopper-Pearson or t intervals)
     ------------------------------------------------------------
@@ -393,13 +395,14 @@ def plot_solution2(result: ReproductionResult, fig: Any = None):
 
 
 @register("bz-solution2", paper=PAPER, title="Solution 2: RLS tracking with forgetting factor + error energy",
-          default_trials=300, plot=plot_solution2)
+          default_trials=None, plot=plot_solution2)
 def solution2_mc(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Solution 2 (Section 4) in Monte Carlo on the designed example, settings :data:`SOL2`.
 
     ``theta_k`` drifts with ``||e_k||_inf = 3e-4`` from k = 50 (direction ``[1, -0.5]``); the
     non-parametric fault (sinusoid, amplitude 0.2) starts at k = 200 in the ``f`` scenario and is
     absent in the ``drift`` scenario (same noise). One RLS per forgetting factor ``lambda``.
+    No trial count in the paper (``default_trials=None``); ``trials=None`` runs 300.
 
     Headline keys (lists follow ``lambdas``)
     ----------------------------------------

@@ -20,7 +20,7 @@ def results():
 def test_registered_with_documented_keys(results):
     for rid, res in results.items():
         rep = get(rid)
-        assert rep.default_trials == 300 and rep.plot is not None
+        assert rep.default_trials is None and rep.plot is not None   # the paper has no Monte Carlo
         doc = rep.func.__doc__
         for key in res.headline:
             if not key.endswith("_ci"):
