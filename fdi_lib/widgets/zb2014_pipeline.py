@@ -1,0 +1,57 @@
+"""Widget callback of the gas pipeline chapter: leak size, fault, threshold, window, seed."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fdi_lib.errors import ModelError
+from fdi_lib.reproduce.registry import ReproductionResult
+from fdi_lib.reproduce.zb2014_pipeline import plot_single_run, single_run
+
+__all__ = ["explore_pipeline", "DEFAULTS"]
+
+#: Default slider values: Fig. 5 (fault 1, Table 1 size, threshold 50, w = 160).
+DEFAULTS = {"fault_size_e5": -2.0, "fault": 1, "threshold": 50.0, "window": 160, "seed": 0}
+
+
+def explore_pipeline(fault_size_e5: float = DEFAULTS["fault_size_e5"], fault: int = DEFAULTS["fault"],
+                     threshold: float = DEFAULTS["threshold"], window: int = DEFAULTS["window"],
+                     seed: int = DEFAULTS["seed"], fig: Any = None):
+    """Redraw one run of an input-end leak on the surrogate pipeline (as paper Figs 5-6).
+
+    Parameters
+    ----------
+    fault_size_e5 : float
+        Change of ``G0(1)`` (fault 1) or ``Gp(1)`` (fault 2), in units of ``1e-5``, in ``[-10, 0]``.
+    fault : {1, 2}
+        Which parameter changes at 600 min.
+    threshold : float
+        Alarm threshold on ``l_k`` (> 0).
+    window : int
+        GLR window ``w`` in ``[10, 250]`` samples.
+    seed : int
+        Noise seed.
+    fig : matplotlib.figure.Figure, optional
+        Figure to redraw into (the widget passes its own).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    if not -10.0 <= fault_size_e5 <= 0.0:
+        raise ModelError(f"fault_size_e5: expected a number in [-10, 0], got {fault_size_e5!r}")
+    if not 10 <= window <= 250:
+        raise ModelError(f"window: expected an integer in [10, 250], got {window!r}")
+    if not threshold > 0:
+        raise ModelError(f"threshold: expected a positive number, got {threshold!r}")
+    run = single_run(seed=int(seed), fault=int(fault), delta=float(fault_size_e5) * 1e-5,
+                     threshold=float(threshold), window=int(window))
+    if run.alarm < 0:
+        status = "no alarm"
+    elif run.alarm < run.true_onset:
+        status = f"false alarm at {run.alarm_time_min:g} min"
+    else:
+        status = f"delay {run.detection_delay_min:g} min"
+    title = f"fault {fault}, change {fault_size_e5:g}e-5, w = {window}: {status}"
+    result = ReproductionResult(id="explore", headline={}, settings={"title": title}, data={"run": run})
+    return plot_single_run(result, fig=fig)
