@@ -26,8 +26,8 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from fdi_lib.errors import NonFiniteError, ShapeError
-from fdi_lib.models import LTVModel
+from fdi_lib.errors import NonFiniteError
+from fdi_lib.models import LTVModel, as_record
 
 __all__ = ["KalmanGains", "KalmanResult", "kalman_gains", "kalman_filter", "as_outputs"]
 
@@ -143,16 +143,8 @@ class KalmanResult:
 
 
 def as_outputs(model: LTVModel, y: Any, name: str = "y") -> np.ndarray:
-    """Validate an output record ``(*batch, N, p)`` (``(N,)`` accepted when ``p = 1``)."""
-    arr = np.asarray(y, dtype=float)
-    if arr.ndim == 1 and model.p == 1:
-        arr = arr[:, None]
-    if arr.ndim < 2 or arr.shape[-2:] != (model.n_steps, model.p):
-        raise ShapeError(f"{name}: expected shape (..., {model.n_steps}, {model.p}), got {np.shape(y)}")
-    if not np.all(np.isfinite(arr)):
-        idx = tuple(int(i) for i in np.argwhere(~np.isfinite(arr))[0])
-        raise NonFiniteError(f"{name}: expected finite values, got {float(arr[idx])} at index {idx}")
-    return arr
+    """Validate an output record ``(*batch, N, p)`` against ``model`` (see :func:`~fdi_lib.models.as_record`)."""
+    return as_record(y, n_steps=model.n_steps, width=model.p, name=name)
 
 
 def kalman_filter(model: LTVModel, y: Any, u: Any = None, *, gains: KalmanGains | None = None,
@@ -176,17 +168,10 @@ def kalman_filter(model: LTVModel, y: Any, u: Any = None, *, gains: KalmanGains 
     -------
     KalmanResult
     """
-    y_arr = as_outputs(model, y)
-    batch = y_arr.shape[:-2]
     N, n, l = model.n_steps, model.n, model.l
-    if u is None:
-        u_arr = np.zeros((N, l))
-    else:
-        u_arr = np.asarray(u, dtype=float)
-        if u_arr.ndim == 1 and l == 1:
-            u_arr = u_arr[:, None]
-        if u_arr.ndim < 2 or u_arr.shape[-2:] != (N, l):
-            raise ShapeError(f"u: expected shape (..., {N}, {l}), got {np.shape(u)}")
+    y_arr = as_outputs(model, y)
+    u_arr = as_record(u, n_steps=N, width=l, name="u")
+    batch = y_arr.shape[:-2]
     g = kalman_gains(model) if gains is None else gains
     xh = np.empty((*batch, N + 1, n))
     xh[..., 0, :] = model.x0 if x0 is None else np.asarray(x0, dtype=float)

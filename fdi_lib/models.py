@@ -27,6 +27,7 @@ __all__ = [
     "ltv_model",
     "lpv_model",
     "as_sequence",
+    "as_record",
     "FaultProfile",
     "FaultFamily",
     "fault_profile",
@@ -92,6 +93,23 @@ def as_sequence(value: MatrixLike, *, n_steps: int, shape: tuple[int, ...], name
     arr = np.asarray(arr)
     if arr.flags.writeable and arr.base is None:
         arr.setflags(write=False)
+    return arr
+
+
+def as_record(value: Any, *, n_steps: int, width: int, name: str) -> np.ndarray:
+    """Validate a data record (inputs or outputs) of shape ``(*batch, n_steps, width)``.
+
+    ``None`` gives zeros ``(n_steps, width)``; a 1-D array of length ``n_steps`` is accepted
+    when ``width == 1``. Raises :class:`ShapeError` or :class:`NonFiniteError` (with the index).
+    """
+    if value is None:
+        return np.zeros((n_steps, width))
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim == 1 and width == 1:
+        arr = arr[:, None]
+    if arr.ndim < 2 or arr.shape[-2:] != (n_steps, width):
+        raise ShapeError(f"{name}: expected shape (..., {n_steps}, {width}), got {np.shape(value)}")
+    _check_finite(arr, name)
     return arr
 
 

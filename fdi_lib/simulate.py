@@ -18,8 +18,8 @@ from typing import Any, Callable
 
 import numpy as np
 
-from fdi_lib.errors import ModelError, NonFiniteError, ShapeError
-from fdi_lib.models import FaultProfile, LTVModel
+from fdi_lib.errors import ModelError, ShapeError
+from fdi_lib.models import FaultProfile, LTVModel, as_record
 
 __all__ = ["Noise", "Simulation", "draw_noise", "simulate", "pi_controller", "covariance_sqrt"]
 
@@ -153,17 +153,7 @@ def simulate(model: LTVModel, *, rng: np.random.Generator | None = None, noise: 
         raise ModelError("simulate: give u (open loop) or controller (closed loop), not both")
     if controller is not None and np.any(model.J):
         raise ModelError("controller: closed loop needs J_k = 0 (a non-zero J makes the loop algebraic)")
-    if u is None:
-        u_arr = np.zeros((N, l))
-    else:
-        u_arr = np.asarray(u, dtype=float)
-        if u_arr.ndim == 1 and l == 1:
-            u_arr = u_arr[:, None]
-        if u_arr.shape[-2:] != (N, l):
-            raise ShapeError(f"u: expected shape ({N}, {l}), got {np.shape(u)}")
-        if not np.all(np.isfinite(u_arr)):
-            idx = tuple(int(i) for i in np.argwhere(~np.isfinite(u_arr))[0])
-            raise NonFiniteError(f"u: expected finite values, got {float(u_arr[idx])} at index {idx}")
+    u_arr = as_record(u, n_steps=N, width=l, name="u")  # (N, l) or per realisation (*batch, N, l)
     if fault is None:
         if theta is not None:
             raise ModelError("theta: given without a fault profile")

@@ -66,7 +66,7 @@ def test_bad_arguments():
     m = ex.unstable_model(10)
     with pytest.raises(ModelError, match="exactly one of rng"):
         simulate(m)
-    with pytest.raises(ShapeError, match=r"u: expected shape \(10, 1\)"):
+    with pytest.raises(ShapeError, match=r"u: expected shape \(\.\.\., 10, 1\), got \(9, 1\)"):
         simulate(m, rng=np.random.default_rng(0), u=np.zeros((9, 1)))
     with pytest.raises(ModelError, match="not both"):
         simulate(m, rng=np.random.default_rng(0), u=np.zeros(10), controller=ex.controller())
