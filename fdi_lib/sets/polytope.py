@@ -109,10 +109,23 @@ def _chebyshev(M: np.ndarray, m: np.ndarray, cap: float = 1e6) -> tuple[str, np.
     cdd.linprog_solve(lp)
     if lp.status == cdd.LPStatusType.OPTIMAL:
         sol = np.array(lp.primal_solution, dtype=float)
-        return "optimal", sol[:n], float(sol[n])
-    if lp.status in (cdd.LPStatusType.INCONSISTENT, cdd.LPStatusType.STRUC_INCONSISTENT):
+        x, r = sol[:n], float(sol[n])
+        # accept cddlib's answer only if it verifies (its float simplex can fail silently)
+        if np.all(M @ x + r <= m + 1e-9 * (1.0 + np.abs(m))):
+            return "optimal", x, r
+    # any other outcome (claimed infeasible/unbounded, or an unverified optimum) is
+    # decided by HiGHS: an empty set means an alarm, so it must not rest on a fragile solver
+    from scipy.optimize import linprog
+
+    res = linprog(np.r_[np.zeros(n), -1.0], A_ub=np.column_stack([M, np.ones(len(m))]), b_ub=m,
+                  bounds=[(None, None)] * n + [(None, cap)], method="highs")
+    if res.status == 2:
         return "infeasible", np.zeros(n), -np.inf
-    return "unbounded", np.zeros(n), np.inf
+    if res.status == 3:
+        return "unbounded", np.zeros(n), np.inf
+    if res.status != 0:  # pragma: no cover
+        raise RuntimeError(f"Chebyshev centre LP failed: {res.message}")
+    return "optimal", res.x[:n], float(res.x[n])
 
 
 def _qhull_vertices(M: np.ndarray, m: np.ndarray, centre: np.ndarray) -> np.ndarray:
