@@ -1,0 +1,467 @@
+"""Reproductions of Rosa & Silvestre (2013): Figs 1-2, 8-12 and the timing of Remark 4.
+
+Figures 1-2 of the paper are illustrations without numbers; we build a small 2-D
+uncertain system (:func:`toy_model`) and report areas and counts. Figures 8-12 use the
+Eclipse UAV (:mod:`fdi_lib.systems.eclipse_uav`), whose nonlinear simulation model and
+bounds the paper does not give: see that module and the book chapter for our choices.
+"""
+
+from __future__ import annotations
+
+import time
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
+from fdi_lib.reproduce.registry import ReproductionResult, register
+from fdi_lib.sets.polytope import Polytope, convex_hull, plot_polytope
+from fdi_lib.sets.svo import SetValuedObserver, SVOModel, run_architecture_i, run_svo
+from fdi_lib.systems import eclipse_uav as uav
+
+__all__ = ["toy_model", "toy_prior", "simulate_toy", "fig1", "fig2", "fig8", "fig9", "fig10", "fig11",
+           "fig12", "timing", "uav_study", "UAV_X0", "plot_fig1", "plot_fig2", "plot_alpha",
+           "plot_fig11", "plot_fig12", "plot_timing"]
+
+PAPER = "Rosa & Silvestre 2013"
+
+# ----------------------------------------------------------------------------- 2-D example
+
+
+def toy_model(delta_bound: float = 0.4, noise: float = 0.5, dist: float = 0.02) -> SVOModel:
+    """A 2-D uncertain model of the form (1) used for Figs 1-2 and the widget.
+
+    x(k+1) = (A + Delta A_1) x(k) + L d(k) + B u(k),  y = [1 0] x + n, with
+    A = [[0.9, 0.3], [-0.1, 0.9]], A_1 = delta_bound * [[0, 0], [1, 0]] (an uncertain
+    coupling from x1 to x2), L = dist * I, B = [0, 1]^T, |n| <= noise, |Delta| <= 1.
+    """
+    A = np.array([[0.9, 0.3], [-0.1, 0.9]])
+    A1 = delta_bound * np.array([[0.0, 0.0], [1.0, 0.0]])
+    return SVOModel(A=A, C=np.array([[1.0, 0.0]]), B=np.array([[0.0], [1.0]]), L=dist * np.eye(2),
+                    noise=noise, A_unc=A1[None])
+
+
+def toy_prior() -> Polytope:
+    """X(0) = [-1, 1] x [-0.5, 0.5]."""
+    return Polytope.box([-1.0, -0.5], [1.0, 0.5])
+
+
+def simulate_toy(model: SVOModel, *, rng: np.random.Generator, steps: int = 30,
+                 x0: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Simulate the toy model with Delta, d, n uniform inside their bounds.
+
+    Returns x (steps+1, 2), u (steps, 1), y (steps+1, 1).
+    """
+    x = np.zeros((steps + 1, 2))
+    x[0] = np.array([0.4, -0.3]) if x0 is None else x0
+    u = np.sin(0.4 * np.arange(steps))[:, None] * 0.5
+    for k in range(steps):
+        delta = rng.uniform(-1, 1)
+        A = model.A + delta * model.A_unc[0]
+        x[k + 1] = A @ x[k] + model.L @ rng.uniform(-1, 1, 2) + model.B @ u[k]
+    y = x @ model.C.T + model.noise * rng.uniform(-1, 1, (steps + 1, 1))
+    return x, u, y
+
+
+def _fig2_sets(model: SVOModel, X: Polytope, u: np.ndarray, y: np.ndarray):
+    """Per-vertex sets X_{+1}, X_{-1} (with the strip, as drawn in the paper), their hull, and our set."""
+    from fdi_lib.sets.polytope import box_corners
+
+    per_vertex = []
+    imgs = []
+    G = model.generators(u)
+    for Av in model.vertex_matrices():
+        pts = ((X.vertices() @ Av.T + model.B @ u)[:, None, :] + box_corners(G)[None]).reshape(-1, 2)
+        P = Polytope.from_vertices(pts)
+        imgs.append(P)
+        per_vertex.append(P.intersect_strip(model.C, y, model.noise).remove_redundancy())
+    hull = convex_hull(per_vertex)
+    ours = convex_hull(imgs).intersect_strip(model.C, y, model.noise).remove_redundancy()
+    return per_vertex, hull, ours, imgs
+
+
+def plot_fig1(result: ReproductionResult, fig: Any = None):
+    """3-D lifted polytope (vertices and edges of its hull) and its shadow on the x1-x2 plane."""
+    from scipy.spatial import ConvexHull
+
+    import matplotlib.pyplot as plt
+
+    if fig is None:
+        fig = plt.figure(figsize=(7.0, 3.6), layout="constrained")
+    else:
+        fig.clear()
+    V = result.data["lifted_vertices"]
+    ax = fig.add_subplot(1, 2, 1, projection="3d")
+    hull = ConvexHull(V)
+    for s in hull.simplices:
+        tri = V[np.r_[s, s[0]]]
+        ax.plot(tri[:, 0], tri[:, 1], tri[:, 2], color=OURS_COLOR, lw=0.5)
+    P = result.data["projection"]
+    W = P.vertices()
+    c = W.mean(axis=0)
+    W = W[np.argsort(np.arctan2(W[:, 1] - c[1], W[:, 0] - c[0]))]
+    zmin = V[:, 2].min() - 0.3
+    ax.plot(np.r_[W[:, 0], W[0, 0]], np.r_[W[:, 1], W[0, 1]], zmin, color=PAPER_COLOR)
+    ax.set_xlabel("$x_1(k+1)$")
+    ax.set_ylabel("$x_2(k+1)$")
+    ax.set_zlabel("$d(k)$")
+    ax.set_title("Set(P, p) and its shadow")
+    ax2 = fig.add_subplot(1, 2, 2)
+    plot_polytope(P, ax2, color=PAPER_COLOR)
+    ax2.set_xlabel("$x_1(k+1)$")
+    ax2.set_ylabel("$x_2(k+1)$")
+    ax2.set_title("projection onto $\\mathbb{R}^n$")
+    return fig
+
+
+@register("rosa2013-fig1", paper=PAPER, title="Projection of Set(P, p) of eq. (3) onto the state (Fig. 1)",
+          plot=plot_fig1)
+def fig1(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Fig. 1: the lifted polytope of eq. (3) in (x(k+1), d(k)) and its projection onto x(k+1).
+
+    Toy model (:func:`toy_model`) with one scalar disturbance direction; x(k) is eliminated
+    exactly (A invertible), leaving a 3-D polytope in (x1, x2, d) that is projected onto
+    (x1, x2) by Fourier-Motzkin (cddlib block elimination) and, as a check, by vertices.
+
+    Headline keys
+    -------------
+    lifted_facets : int
+        Irredundant facets of the 3-D lifted polytope.
+    projected_facets : int
+        Facets of its projection (Fourier-Motzkin route, redundancy removed).
+    area_fourier_motzkin, area_vertex : float
+        Area of the projection by the two routes.
+    max_support_gap : float
+        Largest difference of their support functions over 64 directions (should be ~0).
+    """
+    model = toy_model()
+    X = toy_prior()
+    Lcol = np.array([[0.08], [0.05]])
+    Ainv = np.linalg.inv(model.A)
+    # variables z = (x+, d): x = A^{-1}(x+ - L d) must lie in X, |d| <= 1, strip on x+
+    M = np.vstack([np.hstack([X.M @ Ainv, -X.M @ Ainv @ Lcol]),
+                   np.array([[0, 0, 1.0], [0, 0, -1.0]])])
+    m = np.r_[X.m, 1.0, 1.0]
+    y = np.array([0.3])
+    lifted = Polytope(M, m).intersect_strip(np.array([[1.0, 0.0, 0.0]]), y, 0.4).remove_redundancy()
+    fm = lifted.project([0, 1], method="fourier-motzkin")
+    vx = lifted.project([0, 1], method="vertex")
+    ang = np.linspace(0, 2 * np.pi, 64, endpoint=False)
+    D = np.column_stack([np.cos(ang), np.sin(ang)])
+    gap = float(np.abs(fm.support(D) - vx.support(D)).max())
+    headline = {"lifted_facets": lifted.n_facets, "projected_facets": fm.n_facets,
+                "area_fourier_motzkin": fm.volume(), "area_vertex": vx.volume(), "max_support_gap": gap}
+    paper = {k: "illustration, no numbers" for k in headline}
+    return ReproductionResult("rosa2013-fig1", headline, paper, {"seed": seed, "y": 0.3, "noise": 0.4},
+                              {"lifted_vertices": lifted.vertices(), "projection": fm})
+
+
+def plot_fig2(result: ReproductionResult, fig: Any = None):
+    """The two per-vertex sets, their hull (paper Fig. 2) and our sound set."""
+    fig, axes = figure(1, 1, fig=fig, figsize=(7.0, 3.6))
+    ax = axes[0, 0]
+    d = result.data
+    plot_polytope(d["hull"], ax, color="0.6", alpha=0.25, label="hull (paper)")
+    plot_polytope(d["per_vertex"][1], ax, color=OURS_COLOR, label="$\\Delta=+1$")
+    plot_polytope(d["per_vertex"][0], ax, color=PAPER_COLOR, label="$\\Delta=-1$")
+    V = d["ours"].vertices()
+    c = V.mean(axis=0)
+    V = V[np.argsort(np.arctan2(V[:, 1] - c[1], V[:, 0] - c[0]))]
+    ax.plot(np.r_[V[:, 0], V[0, 0]], np.r_[V[:, 1], V[0, 1]], "k--", lw=1.0, label="ours (hull, then strip)")
+    ax.set_xlabel("$x_1(k+1)$")
+    ax.set_ylabel("$x_2(k+1)$")
+    ax.legend(loc="center left", bbox_to_anchor=(1.02, 0.5))
+    ax.set_title("paper Fig. 2: SVO hull, $n_A = 1$, $N = 1$")
+    return fig
+
+
+
+@register("rosa2013-fig2", paper=PAPER, title="SVO hulls: sets for Delta = +1 and -1 and their convex hull (Fig. 2)",
+          plot=plot_fig2)
+def fig2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Fig. 2: the sets for Delta = +1 and Delta = -1 (n_A = 1, N = 1) and their convex hull.
+
+    One SVO step of the toy model (:func:`toy_model`) from X(k) = [-1, 1] x [-0.5, 0.5] with
+    u(k) = 0 and y(k+1) = 0.2.
+
+    Headline keys
+    -------------
+    hull_area : float
+        Area of co{X_{+1}, X_{-1}} (the paper's construction: strip applied per vertex).
+    union_area : float
+        Area of X_{+1} union X_{-1} (inclusion-exclusion); the hull adds hull_area - union_area.
+    vertices : int
+        Number of vertices of the hull.
+    sound_hull_area : float
+        Area of our set co{Prop(+1), Prop(-1)} intersected with the strip afterwards, which always
+        contains the true state (it contains the paper's hull).
+    """
+    model = toy_model()
+    X = toy_prior()
+    u = np.array([0.0])
+    y = np.array([0.2])
+    per_vertex, hull, ours, imgs = _fig2_sets(model, X, u, y)
+    a_p, a_m = per_vertex[1].volume(), per_vertex[0].volume()
+    inter = per_vertex[0].intersect(per_vertex[1]).volume()
+    headline = {"hull_area": hull.volume(), "union_area": a_p + a_m - inter, "vertices": int(len(hull.vertices())),
+                "sound_hull_area": ours.volume()}
+    paper = {k: "illustration, no numbers" for k in headline}
+    return ReproductionResult("rosa2013-fig2", headline, paper,
+                              {"seed": seed, "u": 0.0, "y": 0.2, "delta_bound": 0.4, "noise": 0.5},
+                              {"per_vertex": per_vertex, "hull": hull, "ours": ours, "images": imgs})
+
+
+# ----------------------------------------------------------------------------- the UAV
+
+#: prior set of the UAV SVOs: |u|, |w| <= 2 m/s, |theta|, |q| <= 0.1 (rad, rad/s) about trim
+UAV_X0 = Polytope.box([-2.0, -2.0, -0.1, -0.1], [2.0, 2.0, 0.1, 0.1])
+DURATION = 6.0
+
+
+def _alpha_figure(scenario: str, rid: str, seed: int) -> ReproductionResult:
+    run = uav.simulate("alpha", scenario, rng=np.random.default_rng(seed), duration=3.0 if scenario != "soft" else 6.0)
+    res = run_svo(uav.svo_models(run, "nominal"), run.u, run.y, UAV_X0)
+    det = None if res.empty_at is None else (res.empty_at - run.onset_step + 1) * uav.TS * 1e3
+    amp = 3.0 if scenario == "step" else 5.0
+    ramp = {"step": 0.0, "hard": 1.0, "soft": 4.0}[scenario]
+    headline = {"fault_amplitude_deg": amp, "onset_s": uav.ONSET, "ramp_s": ramp,
+                "detection_time_ms": det}
+    paper = {"fault_amplitude_deg": amp, "onset_s": 0.5, "ramp_s": ramp,
+             "detection_time_ms": {"step": 10, "hard": "not stated", "soft": "< 500"}[scenario]}
+    alpha_true = np.rad2deg(uav.measure(run.x)[:, 1] + uav.ALPHA_TRIM)
+    return ReproductionResult(rid, headline, paper, {"seed": seed, "scenario": scenario},
+                              {"t": run.t, "alpha_meas_deg": np.rad2deg(run.y[:, 1] + uav.ALPHA_TRIM),
+                               "alpha_true_deg": alpha_true, "detect_t": None if det is None else uav.ONSET + det / 1e3 - uav.TS,
+                               "scenario": scenario})
+
+
+def plot_alpha(result: ReproductionResult, fig: Any = None):
+    """Measured and true angle of attack with the fault (paper Figs 8-10)."""
+    fig, axes = figure(1, 1, fig=fig)
+    ax = axes[0, 0]
+    d = result.data
+    ax.plot(d["t"], d["alpha_meas_deg"], color=OURS_COLOR, lw=0.8, label="measured $\\alpha$ (faulty sensor)")
+    ax.plot(d["t"], d["alpha_true_deg"], color="k", lw=0.8, label="true $\\alpha$")
+    ax.axvline(uav.ONSET, color="0.5", ls=":", label="fault onset")
+    if d["detect_t"] is not None:
+        ax.axvline(d["detect_t"], color=PAPER_COLOR, ls="--", label="detected (nominal SVO empty)")
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("angle of attack (deg)")
+    ax.set_title(f"alpha-sensor fault, {d['scenario']} scenario")
+    ax.legend(loc="best")
+    return fig
+
+
+@register("rosa2013-fig8", paper=PAPER, title="AOA measurement with a step sensor fault (Fig. 8)", plot=plot_alpha)
+def fig8(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Fig. 8: alpha measurement with a +3 deg step fault at t = 0.5 s (one seeded run).
+
+    Headline keys
+    -------------
+    fault_amplitude_deg, onset_s, ramp_s : float
+        The fault (paper §6.1).
+    detection_time_ms : float or None
+        (first empty sample of the nominal SVO - onset sample + 1) * Ts, in ms: 10 ms means the
+        first faulty sample already empties the set.
+    """
+    return _alpha_figure("step", "rosa2013-fig8", seed)
+
+
+@register("rosa2013-fig9", paper=PAPER, title="AOA measurement with a hard (1 s ramp) sensor fault (Fig. 9)",
+          plot=plot_alpha)
+def fig9(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Fig. 9: alpha measurement with a 5 deg fault ramped over 1 s from t = 0.5 s. Keys as :func:`fig8`."""
+    return _alpha_figure("hard", "rosa2013-fig9", seed)
+
+
+@register("rosa2013-fig10", paper=PAPER, title="AOA measurement with a soft (4 s ramp) sensor fault (Fig. 10)",
+          plot=plot_alpha)
+def fig10(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Fig. 10: alpha measurement with a 5 deg fault ramped over 4 s from t = 0.5 s. Keys as :func:`fig8`."""
+    return _alpha_figure("soft", "rosa2013-fig10", seed)
+
+
+def _one_uav_run(fault: str, scenario: str, seed: int, duration: float) -> dict:
+    run = uav.simulate(fault, scenario, rng=np.random.default_rng(seed), duration=duration)
+    res = run_architecture_i(uav.svo_models(run, "nominal"), {f: uav.svo_models(run, f) for f in uav.FAULTS},
+                             run.u, run.y, UAV_X0)
+    return {"fault": fault, "scenario": scenario, "onset": run.onset_step, "detection": res.detection_step,
+            "isolation": res.isolation_step, "isolated": res.isolated}
+
+
+@lru_cache(maxsize=8)
+def uav_study(seed: int, trials: int, jobs: int = 1, duration: float = DURATION) -> tuple:
+    """All runs of the Monte Carlo study of §6.4-6.5 (Architecture I, N = 1, template SVOs).
+
+    ``trials`` runs per fault and scenario, plus ``trials`` healthy runs per scenario for false
+    alarms; run i of every case uses seed ``seed + i`` (disturbance and noise streams), cached.
+    """
+    from joblib import Parallel, delayed
+
+    cases = [(f, s, seed + i) for f in ("none",) + uav.FAULTS for s in uav.SCENARIOS for i in range(trials)]
+    if jobs == 1:
+        out = [_one_uav_run(f, s, sd, duration) for f, s, sd in cases]
+    else:
+        out = Parallel(n_jobs=jobs)(delayed(_one_uav_run)(f, s, sd, duration) for f, s, sd in cases)
+    return tuple(out)
+
+
+def _summarise(runs: tuple, which: str) -> dict:
+    out: dict = {}
+    for f in uav.FAULTS:
+        out[f] = {}
+        for s in uav.SCENARIOS:
+            rs = [r for r in runs if r["fault"] == f and r["scenario"] == s]
+            vals = [(r[which] - r["onset"] + 1) * uav.TS * 1e3 for r in rs if r[which] is not None
+                    and (which == "detection" or r["isolated"] == f)]
+            out[f][s] = float(np.mean(vals)) if vals else None
+    return out
+
+
+def _counts(runs: tuple) -> dict:
+    det = {f: {s: sum(r["detection"] is not None for r in runs if r["fault"] == f and r["scenario"] == s)
+               for s in uav.SCENARIOS} for f in uav.FAULTS}
+    iso = {f: {s: sum(r["isolated"] == f for r in runs if r["fault"] == f and r["scenario"] == s)
+               for s in uav.SCENARIOS} for f in uav.FAULTS}
+    wrong = sum(r["isolated"] not in (None, r["fault"]) for r in runs if r["fault"] != "none")
+    return {"detected_runs": det, "correctly_isolated_runs": iso, "wrongly_isolated_runs": wrong}
+
+
+_PAPER_DET = {"alpha": {"step": 10, "hard": "not stated", "soft": "< 500"},
+              "elevator": {"step": 20, "hard": "not stated", "soft": "< 500"},
+              "dynamics": {"step": 20, "hard": "not stated", "soft": "< 500"}}
+_PAPER_ISO = {"alpha": {"step": 10, "hard": "not stated", "soft": "about 3500"},
+              "elevator": {"step": "not stated", "hard": "not stated", "soft": "not stated"},
+              "dynamics": {"step": "not stated", "hard": "not stated", "soft": "not stated"}}
+
+
+def _study_result(rid: str, seed: int, trials: int, jobs: int) -> ReproductionResult:
+    runs = uav_study(seed, trials, jobs)
+    fa = sum(r["detection"] is not None for r in runs if r["fault"] == "none")
+    headline = {"detection_time_ms": _summarise(runs, "detection"),
+                "isolation_time_ms": _summarise(runs, "isolation"),
+                "false_alarms": fa, "healthy_runs": sum(r["fault"] == "none" for r in runs), **_counts(runs)}
+    paper = {"detection_time_ms": _PAPER_DET, "isolation_time_ms": _PAPER_ISO, "false_alarms": 0,
+             "healthy_runs": "not stated", "detected_runs": "10 of 10 (all faults detected)",
+             "correctly_isolated_runs": "not stated", "wrongly_isolated_runs": "not stated"}
+    settings = {"seed": seed, "trials": trials, "duration_s": DURATION, "architecture": "I", "N": 1,
+                "method": "template", "noise_bound": uav.NOISE_BOUND, "dist_accel": uav.DIST_ACCEL}
+    return ReproductionResult(rid, headline, paper, settings, {"runs": runs})
+
+
+def _bar_plot(result: ReproductionResult, key: str, title: str, fig: Any = None):
+    fig, axes = figure(1, 1, fig=fig)
+    ax = axes[0, 0]
+    vals = result.headline[key]
+    width = 0.25
+    x = np.arange(len(uav.FAULTS))
+    for i, s in enumerate(uav.SCENARIOS):
+        h = [vals[f][s] if vals[f][s] is not None else 0.0 for f in uav.FAULTS]
+        bars = ax.bar(x + (i - 1) * width, h, width, label=s)
+        for b, f in zip(bars, uav.FAULTS):
+            if vals[f][s] is None:
+                ax.text(b.get_x() + b.get_width() / 2, 1.0, "n.d.", ha="center", va="bottom", fontsize=7,
+                        rotation=90)
+    ax.set_xticks(x, ["alpha sensor", "elevator", "M_u (dynamics)"])
+    ax.set_yscale("symlog", linthresh=10)
+    ax.set_ylabel("mean time (ms)")
+    ax.set_title(title)
+    ax.legend(title="scenario")
+    return fig
+
+
+def plot_fig11(result: ReproductionResult, fig: Any = None):
+    """Bar chart of mean detection times (n.d. = not detected), paper Fig. 11."""
+    return _bar_plot(result, "detection_time_ms", "paper Fig. 11: mean detection time", fig)
+
+
+def plot_fig12(result: ReproductionResult, fig: Any = None):
+    """Bar chart of mean isolation times (n.d. = not isolated), paper Fig. 12."""
+    return _bar_plot(result, "isolation_time_ms", "paper Fig. 12: mean isolation time", fig)
+
+
+
+
+@register("rosa2013-fig11", paper=PAPER, title="Mean fault detection times (Fig. 11)", default_trials=10,
+          plot=plot_fig11)
+def fig11(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Fig. 11: mean detection time per fault and scenario over ``trials`` runs (paper: 10).
+
+    Headline keys
+    -------------
+    detection_time_ms : dict fault -> scenario -> float or None
+        Mean over the runs in which the fault was detected of (detection sample - onset sample + 1)
+        * Ts, in ms; None if never detected within the 6 s record.
+    isolation_time_ms : dict fault -> scenario -> float or None
+        Same for correct isolations (only one fault SVO left, and it is the true one).
+    false_alarms : int
+        Healthy runs (3 scenarios x trials, no fault) in which the nominal SVO became empty.
+    healthy_runs : int
+    detected_runs, correctly_isolated_runs : dict fault -> scenario -> int
+    wrongly_isolated_runs : int
+        Runs that isolated a fault other than the true one.
+    """
+    return _study_result("rosa2013-fig11", seed, trials or 10, jobs)
+
+
+@register("rosa2013-fig12", paper=PAPER, title="Mean fault isolation times (Fig. 12)", default_trials=10,
+          plot=plot_fig12)
+def fig12(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Fig. 12: mean isolation time per fault and scenario (same runs and keys as :func:`fig11`)."""
+    return _study_result("rosa2013-fig12", seed, trials or 10, jobs)
+
+
+def step_times(N: int, seed: int, duration: float = 2.0) -> dict:
+    """Wall time per SVO update (nominal UAV SVO, template method) over one healthy run."""
+    run = uav.simulate("none", "step", rng=np.random.default_rng(seed), duration=duration)
+    models = uav.svo_models(run, "nominal")
+    mods = [models(k) for k in range(len(run.u))]  # model construction excluded from the timing
+    res = run_svo(mods, run.u, run.y, UAV_X0, N=N)
+    st = res.step_time[np.isfinite(res.step_time)] * 1e3
+    return {"median_ms": float(np.median(st)), "p90_ms": float(np.percentile(st, 90)),
+            "max_facets": int(res.n_facets.max()), "max_vertices": int(res.n_vertices.max()),
+            "empty_at": res.empty_at}
+
+
+def plot_timing(result: ReproductionResult, fig: Any = None):
+    """Median step time against N, with the paper's range and the 10 ms sampling period."""
+    fig, axes = figure(1, 1, fig=fig, figsize=(5.0, 3.2))
+    ax = axes[0, 0]
+    Ns = sorted(result.headline["step_ms"])
+    ax.plot(Ns, [result.headline["step_ms"][n] for n in Ns], "o-", color=OURS_COLOR, label="ours (median)")
+    ax.axhspan(5, 200, color=PAPER_COLOR, alpha=0.15, label="paper: 5-200 ms")
+    ax.axhline(10, color="k", ls=":", label="$T_s$ = 10 ms")
+    ax.set_yscale("log")
+    ax.set_xticks(Ns)
+    ax.set_xlabel("horizon N")
+    ax.set_ylabel("time per SVO step (ms)")
+    ax.legend()
+    return fig
+
+
+@register("rosa2013-timing", paper=PAPER, title="Wall time per SVO step against the horizon N (Remark 4)",
+          plot=plot_timing)
+def timing(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Remark 4: wall time of one SVO update of the UAV model (n = 4) for N = 1, 2, 3.
+
+    Headline keys
+    -------------
+    step_ms : dict N -> float
+        Median wall time per update (ms) over a 2 s healthy run, this machine, Python.
+    step_ms_p90 : dict N -> float
+        90th percentile.
+    max_facets, max_vertices : dict N -> int
+        Largest complexity of the sets (bounded by the template).
+
+    Timings depend on the machine and its load; they are not compared in tests.
+    """
+    out = {N: step_times(N, seed) for N in (1, 2, 3)}
+    headline = {"step_ms": {N: o["median_ms"] for N, o in out.items()},
+                "step_ms_p90": {N: o["p90_ms"] for N, o in out.items()},
+                "max_facets": {N: o["max_facets"] for N, o in out.items()},
+                "max_vertices": {N: o["max_vertices"] for N, o in out.items()}}
+    paper = {"step_ms": "5 to 200 ms per step depending on N (MATLAB, Xeon 2.6 GHz)",
+             "step_ms_p90": "not stated", "max_facets": "not stated", "max_vertices": "not stated"}
+    return ReproductionResult("rosa2013-timing", headline, paper, {"seed": seed, "duration_s": 2.0},
+                              {"out": out})
