@@ -193,7 +193,7 @@ class LassoPath:
         return self._active().sum(axis=0)
 
 
-def lasso_path(X: Any, y: Any, *, n_samples: int | None = None) -> LassoPath:
+def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: float = 0.0) -> LassoPath:
     """Exact Lasso path of (39) by LARS-Lasso (scikit-learn's ``lars_path``, ``method="lasso"``).
 
     scikit-learn does the hard part (the homotopy with its Cholesky up/down-dates and the
@@ -208,6 +208,9 @@ def lasso_path(X: Any, y: Any, *, n_samples: int | None = None) -> LassoPath:
         ``(rows,)``.
     n_samples : int, optional
         The ``N`` of the ``1/(2N)`` in (39); default ``rows`` (scikit-learn's convention).
+    lambda_min : float
+        Stop the path at this ``lambda`` (as a fraction of ``lambda_max``), e.g. the lower end of the
+        window explored by :func:`flat_range`; the path is exact down to it. Default 0: the full path.
 
     Returns
     -------
@@ -217,9 +220,13 @@ def lasso_path(X: Any, y: Any, *, n_samples: int | None = None) -> LassoPath:
 
     X, y = _check_xy(X, y)
     N = _norm(n_samples, X.shape[0])
+    if not 0.0 <= lambda_min < 1.0:
+        raise ModelError(f"lambda_min: expected a fraction of lambda_max in [0, 1), got {lambda_min!r}")
+    Xy = X.T @ y
+    alpha_min = lambda_min * float(np.abs(Xy).max()) / X.shape[0]
     # the Gram form is the same algorithm on X^T X and X^T y (m x m instead of rows x m)
-    alphas, _active, coefs = lars_path_gram(Xy=X.T @ y, Gram=X.T @ X, n_samples=X.shape[0],
-                                            method="lasso")
+    alphas, _active, coefs = lars_path_gram(Xy=Xy, Gram=X.T @ X, n_samples=X.shape[0],
+                                            method="lasso", alpha_min=alpha_min)
     # scikit-learn's alpha is for 1/(2 rows); (39) has 1/(2N): lambda = alpha * rows / N
     return LassoPath(lambdas=np.asarray(alphas) * X.shape[0] / N, coefs=np.asarray(coefs), n_samples=N)
 

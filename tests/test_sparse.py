@@ -128,3 +128,21 @@ def test_bad_inputs():
         lasso_cvxpy(X, y, -1.0)
     with pytest.raises(ModelError, match="n_samples: expected a positive integer"):
         lasso_path(X, y, n_samples=0)
+
+
+def test_truncated_path_gives_the_same_flat_range_as_the_full_path():
+    """Stopping LARS at the window's lower end (lambda_min) changes nothing inside the window."""
+    from fdi_lib.montecarlo import trial_rngs, trial_seeds
+    from fdi_lib.reproduce.zhang2021 import example1_regression
+    from fdi_lib.systems import zhang2021_example1 as ex
+
+    trials = ex.draw_trials(ex.example1_model(r=50.0), trial_rngs(trial_seeds(5, 12)), q=9)
+    reg, _ = example1_regression(trials, r=50.0)
+    for b in range(12):
+        full = lasso_path(reg.X[b], reg.y[b], n_samples=reg.n_samples)
+        cut = lasso_path(reg.X[b], reg.y[b], n_samples=reg.n_samples, lambda_min=1e-4)
+        assert cut.lambdas[-1] >= 1e-4 * full.lambdas[0] * (1 - 1e-9)
+        for scale in ("log", "linear"):
+            a, c = flat_range(full, scale=scale), flat_range(cut, scale=scale)
+            np.testing.assert_array_equal(a.support, c.support)
+            assert a.low == pytest.approx(c.low, rel=1e-9) and a.high == pytest.approx(c.high, rel=1e-9)

@@ -1,0 +1,77 @@
+"""Interactive exploration of Zhang (2021), Example 1: number of faults, noise and lambda.
+
+:func:`explore_sparse` is a pure callback: one seeded trial of Example 1 with ``q`` faults and
+output noise ``R = r I_2``; the Lasso estimate at ``lambda = lam_scale * lambda_rule`` (the
+middle of the flat range, log width) is drawn as diamonds, the least-squares re-estimate on
+its support as circles and the truth as asterisks, beside the support-size staircase.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from fdi_lib.errors import ModelError
+from fdi_lib.montecarlo import trial_rngs, trial_seeds
+from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
+from fdi_lib.reproduce.zhang2021 import example1_regression
+from fdi_lib.sparse import flat_range, lasso_path, least_squares_on_support
+from fdi_lib.systems import zhang2021_example1 as ex
+
+__all__ = ["explore_sparse"]
+
+
+def explore_sparse(q: int = 5, r: float = 0.5, lam_scale: float = 1.0, seed: int = 0, fig: Any = None):
+    """Draw one trial of Example 1 at ``lambda = lam_scale * lambda_rule``; returns the figure.
+
+    Parameters
+    ----------
+    q : int
+        Number of faults (non-zero components of ``theta``, 1 .. 25).
+    r : float
+        Output-noise factor (``R = r I_2``), > 0.
+    lam_scale : float
+        Multiplier of the flat-range ``lambda`` (1 = the paper's rule), > 0.
+    seed : int
+        Trial seed.
+    fig : matplotlib.figure.Figure, optional
+        Figure to redraw into.
+    """
+    if not isinstance(q, (int, np.integer)) or not 1 <= q <= 25:
+        raise ModelError(f"q: expected an integer in [1, 25], got {q!r}")
+    if not np.isfinite(lam_scale) or lam_scale <= 0:
+        raise ModelError(f"lam_scale: expected a positive number, got {lam_scale!r}")
+    model = ex.example1_model(r=r)
+    trials = ex.draw_trials(model, trial_rngs(trial_seeds(seed, 1)), q=int(q))
+    reg, _ = example1_regression(trials, r=r)
+    X, y = reg.X[0], reg.y[0]
+    path = lasso_path(X, y, n_samples=reg.n_samples)
+    fr = flat_range(path, scale="log")
+    lam = lam_scale * fr.middle
+    coef = path.coef(lam)
+    support = np.flatnonzero(coef)
+    ls = least_squares_on_support(X, y, support)
+    truth = np.flatnonzero(trials.theta[0])
+    ok = np.array_equal(support, truth)
+
+    fig, axes = figure(1, 2, fig=fig, figsize=(9.0, 3.4))
+    ax = axes[0, 0]
+    lam_b, sizes = path.lambdas, path.support_sizes()
+    floor = 1e-4 * lam_b[0]
+    edges = np.concatenate([np.clip(lam_b[::-1], floor, None), [3 * lam_b[0]]])
+    ax.stairs(np.concatenate([sizes[::-1], [0]]), edges, color=OURS_COLOR, baseline=None)
+    ax.axvspan(fr.low, fr.high, color=PAPER_COLOR, alpha=0.15, label="flat range")
+    ax.axvline(lam, color="k", ls="--", lw=1, label=rf"$\lambda$ = {lam:.3g}")
+    ax.set(xscale="log", xlabel=r"$\lambda$", ylabel="non-zero components", xlim=(floor, 3 * lam_b[0]),
+           title=f"support size (flat range: {fr.size})")
+    ax.legend(loc="upper right")
+    ax = axes[0, 1]
+    idx = np.arange(1, X.shape[1] + 1)
+    ax.plot(idx[support], coef[support], "D", color=OURS_COLOR, ms=5, label="Lasso")
+    ax.plot(idx[support], ls[support], "o", mfc="none", mec="k", ms=10, label="least squares")
+    ax.plot(idx[truth], np.ones(truth.size), "*", color=PAPER_COLOR, ms=10, label="true")
+    ax.set(xlabel=r"component of $\theta$", ylabel="value", xlim=(0, X.shape[1] + 1),
+           title=f"q = {q}, r = {r:g}: {'isolated' if ok else 'NOT isolated'}")
+    ax.legend(loc="lower right")
+    return fig

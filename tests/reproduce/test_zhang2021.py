@@ -1,0 +1,73 @@
+"""Reproductions of Zhang (2021): contract, smoke runs at reduced trials, statistical consistency."""
+
+import json
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np
+import pytest
+
+from fdi_lib.montecarlo import binomial_ci, run_monte_carlo
+from fdi_lib.reproduce.registry import get, reproduce
+from fdi_lib.reproduce.zhang2021 import example1_chunk, snr_db, snr_variants
+from functools import partial
+
+
+def test_fig2_fig3_single_trial_contract():
+    f2 = reproduce("zhang2021-fig2")
+    f3 = reproduce("zhang2021-fig3")
+    json.loads(f2.to_json())
+    assert set(f2.headline) >= {"flat_range", "flat_size", "flat_range_linear"}
+    assert set(f3.headline) >= {"flat_range", "support", "true_support"}
+    assert f2.headline["flat_range"] == f3.headline["flat_range"]
+    lo, hi = f3.headline["flat_range"]
+    assert 0 < lo < hi
+    assert len(f3.headline["true_support"]) == 5
+    # least squares on the right support is close to 1, the Lasso is shrunk
+    if f3.headline["support"] == f3.headline["true_support"]:
+        assert np.allclose(f3.headline["theta_ls"], 1.0, atol=0.1)
+        assert max(f3.headline["lasso_mid"]) < min(f3.headline["theta_ls"])
+    get("zhang2021-fig2").plot(f2)
+    get("zhang2021-fig3").plot(f3)
+
+
+def test_tables_smoke_at_reduced_trials():
+    t1 = reproduce("zhang2021-table1", trials=6, jobs=1)
+    assert set(t1.headline["success_rate"]) == {str(q) for q in range(5, 26)}
+    assert set(t1.paper["success_rate"]) == set(t1.headline["success_rate"])
+    t2 = reproduce("zhang2021-table2", trials=6, jobs=1)
+    assert set(t2.headline["snr_db"]) == set(t2.paper["snr_db"])
+    assert "0.5" in t2.headline["success_rate"] and "200" in t2.headline["success_rate"]
+    json.loads(t1.to_json())
+    json.loads(t2.to_json())
+    get("zhang2021-table1").plot(t1)
+    get("zhang2021-table2").plot(t2)
+
+
+def test_small_monte_carlo_is_consistent_and_job_independent():
+    """200 trials at q = 5: the rate is high and its 95 % interval contains the paper's 99.5 %;
+    results do not depend on the number of jobs."""
+    fn = partial(example1_chunk, q=5, r=0.5)
+    a = run_monte_carlo(fn, 200, seed=11, jobs=1, chunk_size=50)
+    b = run_monte_carlo(fn, 200, seed=11, jobs=2, chunk_size=70)
+    np.testing.assert_array_equal(a["success_log"], b["success_log"])
+    k = int(a["success_log"].sum())
+    lo, hi = binomial_ci(k, 200)
+    assert lo <= 0.995 <= hi or k == 200
+    assert k / 200 > 0.9
+
+
+def test_snr_definition():
+    rng = np.random.default_rng(0)
+    v = rng.standard_normal((2, 101, 2))
+    sig = 10.0 * np.sin(0.3 * np.arange(101))[None, :, None]
+    s = snr_db(sig + v, v)
+    for b in range(2):
+        for i in range(2):
+            yy, vv = sig[0, 1:, 0] + v[b, 1:, i], v[b, 1:, i]
+            expected = 10 * np.log10(np.mean((yy - yy.mean()) ** 2) / np.mean((vv - vv.mean()) ** 2))
+            assert s[b, i] == pytest.approx(expected, rel=1e-12)
+    variants = snr_variants(sig + v, v)
+    np.testing.assert_allclose(variants["var(Y) / var(V)"], s)
