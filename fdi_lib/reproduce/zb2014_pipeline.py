@@ -38,7 +38,7 @@ from fdi_lib.simulate import simulate
 from fdi_lib.systems import gas_pipeline as gp
 
 __all__ = ["MINMAX_THRESHOLD", "PipelineSetup", "pipeline_setup", "SingleRun", "single_run",
-           "detection_chunk", "pipeline_monte_carlo", "fault_theta", "plot_single_run",
+           "detection_chunk", "pipeline_monte_carlo", "known_onset_isolation_power", "fault_theta", "plot_single_run",
            "plot_fig7", "plot_fig8"]
 
 PAPER = "Zhang & Basseville 2014"
@@ -192,7 +192,7 @@ def plot_single_run(result: ReproductionResult, fig: Any = None):
         ax1.axvline(run.onset_estimate_min, color="tab:green", lw=1,
                     label=f"onset estimate {run.onset_estimate_min:g} min")
     ax1.set(xlabel="time (min)", ylabel=r"$l_k$")
-    ax1.legend(loc="upper left", ncols=2)
+    ax1.legend(loc="lower right", ncols=2)
     return fig
 
 
@@ -349,6 +349,47 @@ def detection_chunk(seeds, *, fault: int) -> dict[str, np.ndarray]:
             "l1_known": minmax_statistic(F, zeta, [0]), "l2_known": minmax_statistic(F, zeta, [1])}
 
 
+def known_onset_isolation_power(*, schedule: np.ndarray | None = None, start: int = FAULT_ONSET,
+                                stop: int = gp.N_STEPS, alpha_threshold: float = MINMAX_THRESHOLD
+                                ) -> dict[str, dict[str, float]]:
+    """Closed-form power of each minmax test with the onset known (no Monte Carlo).
+
+    With the onset and the samples ``start .. stop-1`` fixed, the minmax statistic (41) for
+    the present component ``a`` is non-central chi-square(1) with non-centrality
+    ``theta_a^2 F_a*``, ``F_a* = F_aa - F_ab^2 / F_bb`` (Basseville & Nikiforov 2002), so the
+    power is ``ncx2.sf(threshold, 1, theta_a^2 F_a*)`` (scipy).
+
+    Parameters
+    ----------
+    schedule : numpy.ndarray, optional
+        Pressure ``p_k`` ``(N,)``; default :func:`fdi_lib.systems.gas_pipeline.pipeline_schedule`.
+        The input flow is the surrogate's in all cases.
+    start, stop : int
+        Samples used (default: from the true onset to the end of the record).
+    alpha_threshold : float
+        Threshold of each test (default 6.6349).
+
+    Returns
+    -------
+    dict
+        Per fault ("1", "2"): ``cos2`` (``F12^2 / (F11 F22)``), ``noncentrality`` and ``power``.
+    """
+    u = gp.pipeline_input()
+    model = gp.pipeline_model(schedule=schedule, u=u)
+    gains = kalman_gains(model)
+    fam = gp.input_fault_family(model, schedule=schedule, u=u)
+    sig = fault_signature(model, gains, fam.profile(start)).on_innovation
+    F, _ = information(np.zeros((model.n_steps, model.p)), sig, gains, start, stop)
+    out = {}
+    for fault in (1, 2):
+        a, b = (0, 1) if fault == 1 else (1, 0)
+        f_star = F[a, a] - F[a, b] ** 2 / F[b, b]
+        lam = float(fault_theta(fault)[a] ** 2 * f_star)
+        out[str(fault)] = {"cos2": float(F[0, 1] ** 2 / (F[0, 0] * F[1, 1])), "noncentrality": lam,
+                           "power": float(scipy.stats.ncx2.sf(alpha_threshold, 1, lam))}
+    return out
+
+
 def _fault_seed(seed: int, fault: int) -> int:
     """Root seed of fault ``fault``: independent streams for the two faults."""
     return int(np.random.SeedSequence([int(seed), int(fault)]).generate_state(1)[0])
@@ -500,8 +541,11 @@ def fig8(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     type1_rate, type2_rate : dict
         Per fault ("1", "2"): ``rate``, ``count``, ``n``, ``ci95`` (paper: type I 1.7 % and
         1.3 %, type II 0 % and 0 %).
-    type1_rate_known_onset : dict
-        Per fault: type I rate with the onset known (samples 300-499, no selection by the detector).
+    type1_rate_known_onset, type2_rate_known_onset : dict
+        Per fault: type I and type II rates with the onset known (samples 300-499, no selection
+        by the detector).
+    type2_rate_known_onset_theory : dict
+        Per fault: ``1 - power`` of :func:`known_onset_isolation_power` (closed form).
     threshold_dof : int
         Degrees of freedom whose 99 % chi-square quantile is 6.6349 (the caption's chi2(1); the
         text says chi2(2)).
@@ -517,10 +561,15 @@ def fig8(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     trials = 1000 if trials is None else trials
     mc = pipeline_monte_carlo(seed=seed, trials=trials, jobs=jobs)
     t1, t2, t1k, ks1, ks2, mean_abs, minmax, cos2 = {}, {}, {}, {}, {}, {}, {}, {}
+    t2k, t2k_theory = {}, {}
+    power = known_onset_isolation_power()
     for fault, res in mc.items():
         hit = res["alarm"] >= FAULT_ONSET
         present, absent = (res["l1"], res["l2"]) if fault == 1 else (res["l2"], res["l1"])
         absent_known = res["l2_known"] if fault == 1 else res["l1_known"]
+        present_known = res["l1_known"] if fault == 1 else res["l2_known"]
+        t2k[str(fault)] = _rate(int(np.sum(present_known <= MINMAX_THRESHOLD)), present_known.size)
+        t2k_theory[str(fault)] = 1.0 - power[str(fault)]["power"]
         n = int(hit.sum())
         t1[str(fault)] = _rate(int(np.sum(absent[hit] > MINMAX_THRESHOLD)), n)
         t2[str(fault)] = _rate(int(np.sum(present[hit] <= MINMAX_THRESHOLD)), n)
@@ -531,7 +580,9 @@ def fig8(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
         minmax[fault] = {1: res["l1"][hit], 2: res["l2"][hit]}
         cos2[str(fault)] = float(np.median(res["cos2"][hit])) if n else None
     dof = int(np.argmin([abs(scipy.stats.chi2.ppf(0.99, k) - MINMAX_THRESHOLD) for k in (1, 2, 3)]) + 1)
-    headline = {"type1_rate": t1, "type2_rate": t2, "type1_rate_known_onset": t1k, "threshold_dof": dof,
+    headline = {"type1_rate": t1, "type2_rate": t2, "type1_rate_known_onset": t1k,
+                "type2_rate_known_onset": t2k, "type2_rate_known_onset_theory": t2k_theory,
+                "threshold_dof": dof,
                 "ks_pvalue_dof1": ks1, "ks_pvalue_dof2": ks2, "mean_absent_statistic": mean_abs,
                 "median_cos2": cos2}
     paper = {"type1_rate": {"1": {"rate": 0.017}, "2": {"rate": 0.013}},

@@ -166,15 +166,31 @@ def _hours(n_steps: int) -> np.ndarray:
     return START_HOUR + np.arange(n_steps) * TS_MIN / 60.0
 
 
-def pipeline_schedule(n_steps: int = N_STEPS) -> np.ndarray:
+def pipeline_schedule(n_steps: int = N_STEPS, *, fast_swing: float = 0.0,
+                      fast_period_min: float = 60.0) -> np.ndarray:
     """Pressure schedule ``p_k`` (MPa), shape ``(n_steps,)``.
 
     ``p_k = 5.5 + 0.6 cos(2 pi (h_k - 3) / 24)`` with ``h_k`` the hour of day
     (record from 06:00): highest at 03:00 when the line pack is refilled, lowest
     at 15:00 after the daytime draw-down.
+
+    Parameters
+    ----------
+    n_steps : int
+        Number of samples.
+    fast_swing : float
+        Amplitude (MPa) of an optional faster oscillation ``fast_swing sin(2 pi t / fast_period_min)``
+        (default 0: the surrogate's schedule). Used to study how the variation of ``p_k``
+        within an hour or two governs fault isolation.
+    fast_period_min : float
+        Its period in minutes (> 0).
     """
     _check_steps(n_steps)
-    return NOMINAL_PRESSURE + PRESSURE_SWING * np.cos(2 * np.pi * (_hours(n_steps) - 3.0) / 24.0)
+    if not fast_period_min > 0:
+        raise ModelError(f"fast_period_min: expected a positive number, got {fast_period_min!r}")
+    t_min = np.arange(n_steps) * TS_MIN
+    return (NOMINAL_PRESSURE + PRESSURE_SWING * np.cos(2 * np.pi * (_hours(n_steps) - 3.0) / 24.0)
+            + fast_swing * np.sin(2 * np.pi * t_min / fast_period_min))
 
 
 def pipeline_input(n_steps: int = N_STEPS) -> np.ndarray:

@@ -70,6 +70,7 @@ def test_known_onset_minmax_type1_is_nominal():
     from fdi_lib.isolation import information
     n = 3000
     rng = np.random.default_rng(2024)
+    power = zp.known_onset_isolation_power()
     for fault, absent in ((1, [1]), (2, [0])):
         sim = simulate(st.model, rng=rng, u=st.u, fault=st.input_family.profile(zp.FAULT_ONSET),
                        theta=zp.fault_theta(fault), size=n)
@@ -81,6 +82,11 @@ def test_known_onset_minmax_type1_is_nominal():
         assert lo <= 0.01 <= hi, (fault, k)
         assert scipy.stats.kstest(stat, scipy.stats.chi2(1).cdf).pvalue > 1e-3
         assert scipy.stats.kstest(stat, scipy.stats.chi2(2).cdf).pvalue < 1e-6
+        # Power of the test on the present component: simulated vs closed form (ncx2).
+        present = minmax_statistic(F, zeta, [fault - 1])
+        k = int(np.sum(present > zp.MINMAX_THRESHOLD))
+        lo, hi = binomial_ci(k, n, level=0.99)
+        assert lo <= power[str(fault)]["power"] <= hi, (fault, k, power)
 
 
 def test_threshold_is_chi2_one_dof():
@@ -144,3 +150,16 @@ def test_bad_arguments():
         zp.fault_theta(3)
     with pytest.raises(ModelError, match="kind: expected 'input' or 'output'"):
         zp.single_run(seed=0, kind="middle")
+
+
+def test_isolation_power_depends_on_relative_variation_of_p():
+    p = gp.pipeline_schedule()
+    ours = zp.known_onset_isolation_power()
+    scaled = zp.known_onset_isolation_power(schedule=2.0 * p)
+    centred = zp.known_onset_isolation_power(schedule=(p - p.mean()) / p.std())
+    assert scaled["1"]["cos2"] == pytest.approx(ours["1"]["cos2"], rel=1e-9)
+    assert centred["1"]["cos2"] < 0.9 < ours["1"]["cos2"]
+    assert centred["2"]["power"] > ours["2"]["power"]
+    from fdi_lib.errors import ModelError
+    with pytest.raises(ModelError, match="fast_period_min: expected a positive number"):
+        gp.pipeline_schedule(fast_period_min=0.0)
