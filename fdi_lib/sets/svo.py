@@ -125,7 +125,8 @@ class SVOModel:
         for name, val in [("A", A), ("C", C), ("B", B), ("L", L), ("noise", noise), ("A_unc", Au),
                           ("B_unc", Bu), ("C_unc", Cu)]:
             object.__setattr__(self, name, val)
-        signs = np.array(list(itertools.product((-1.0, 1.0), repeat=Au.shape[0]))).reshape(-1, Au.shape[0])
+        signs = np.array(list(itertools.product((-1.0, 1.0), repeat=Au.shape[0])), dtype=float).reshape(
+            2 ** Au.shape[0], Au.shape[0])
         object.__setattr__(self, "_vertex_A", A[None] + np.einsum("vi,ijk->vjk", signs, Au))
 
     @property

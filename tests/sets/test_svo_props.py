@@ -1,0 +1,132 @@
+"""Propositions 2-3 of Rosa & Silvestre (2013) as seeded property tests, plus the SVO's edge cases."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fdi_lib.errors import EmptySetError, ModelError, ShapeError, UnboundedSetError
+from fdi_lib.sets import Polytope
+from fdi_lib.sets.svo import (SetValuedObserver, SVOModel, run_architecture_i, run_architecture_ii,
+                              run_svo)
+
+
+def random_system(rng: np.random.Generator, c_unc: bool = False):
+    """A random stable 2-D system with one A uncertainty, one B uncertainty and (optionally) C uncertainty."""
+    A = rng.standard_normal((2, 2))
+    A *= rng.uniform(0.6, 0.95) / max(abs(np.linalg.eigvals(A)))
+    A1 = 0.1 * rng.standard_normal((2, 2))
+    B = rng.standard_normal((2, 1))
+    B1 = 0.1 * rng.standard_normal((1, 2, 1))
+    C = np.array([[1.0, rng.uniform(-0.5, 0.5)]])
+    C1 = 0.05 * rng.standard_normal((1, 1, 2)) if c_unc else None
+    L = np.diag(rng.uniform(0.01, 0.1, 2))
+    return SVOModel(A=A, B=B, C=C, L=L, noise=rng.uniform(0.05, 0.2), A_unc=A1[None], B_unc=B1, C_unc=C1)
+
+
+def simulate(model: SVOModel, rng: np.random.Generator, T: int, fault=None):
+    """Every uncertainty drawn uniformly inside its bound (Delta, d, n), optional additive sensor fault."""
+    x = np.zeros((T + 1, 2))
+    x[0] = rng.uniform(-0.5, 0.5, 2)
+    u = rng.uniform(-1, 1, (T, 1))
+    for k in range(T):
+        A = model.A + rng.uniform(-1, 1) * model.A_unc[0]
+        B = model.B + rng.uniform(-1, 1) * model.B_unc[0]
+        x[k + 1] = A @ x[k] + B @ u[k] + model.L @ rng.uniform(-1, 1, 2)
+    y = np.empty((T + 1, 1))
+    for k in range(T + 1):
+        C = model.C + (rng.uniform(-1, 1) * model.C_unc[0] if model.C_unc.shape[0] else 0)
+        y[k] = C @ x[k] + model.noise * rng.uniform(-1, 1)
+    if fault is not None:
+        y[fault[0]:] += fault[1]
+    return x, u, y
+
+
+X0 = Polytope.box([-1.0, -1.0], [1.0, 1.0])
+
+
+@pytest.mark.parametrize("method,N", [("template", 1), ("template", 2), ("exact", 1), ("exact", 2)])
+def test_prop2_containment_and_prop3_no_false_alarm(method, N):
+    """Prop. 2: x(k) in X̂(k) for all k; hence Prop. 3 never fires on healthy data."""
+    rng = np.random.default_rng(2013 + N + 7 * (method == "exact"))
+    runs = 12 if method == "exact" else 25
+    for _ in range(runs):
+        model = random_system(rng)
+        x, u, y = simulate(model, rng, T=25)
+        res = run_svo(model, u, y, X0, N=N, method=method, keep_sets=True)
+        assert res.empty_at is None
+        assert all(S.contains(x[k], 1e-7) for k, S in enumerate(res.sets))
+
+
+def test_output_uncertainty_relaxation_keeps_the_true_state():
+    rng = np.random.default_rng(8)
+    for _ in range(15):
+        model = random_system(rng, c_unc=True)
+        x, u, y = simulate(model, rng, T=25)
+        res = run_svo(model, u, y, X0, keep_sets=True)
+        assert res.empty_at is None
+        assert all(S.contains(x[k], 1e-7) for k, S in enumerate(res.sets))
+
+
+def test_fault_far_outside_bounds_detected_at_first_visible_sample():
+    rng = np.random.default_rng(5)
+    for _ in range(10):
+        model = random_system(rng)
+        k0 = 12
+        bias = 10.0 * (float(model.noise[0]) + 1.0)
+        x, u, y = simulate(model, rng, T=20, fault=(k0, bias))
+        assert run_svo(model, u, y, X0).empty_at == k0
+
+
+def test_paper_literal_hull_can_exclude_the_true_state():
+    """co_v{Prop(v) ∩ S} (strip before hull) misses x(k+1) = 1 when Delta = 0; ours keeps it."""
+    model = SVOModel(A=np.array([[1.0]]), A_unc=np.array([[[0.5]]]), C=np.array([[1.0]]), noise=0.1)
+    X = Polytope.box([0.99], [1.01])
+    y0, y1 = np.array([1.0]), np.array([1.0])   # true x(0) = 1, Delta = 0, x(1) = 1
+    literal = SetValuedObserver(X, method="exact", strip_before_hull=True)
+    literal.start(model, y0)
+    assert literal.update(model, np.zeros(0), y1) is None          # a false alarm
+    ours = SetValuedObserver(X, method="exact")
+    ours.start(model, y0)
+    assert ours.update(model, np.zeros(0), y1).contains(np.array([1.0]))
+
+
+def test_architectures_isolate_a_sensor_bias():
+    rng = np.random.default_rng(11)
+    model = random_system(rng)
+    bias = 3.0
+    x, u, y = simulate(model, rng, T=30, fault=(10, bias))
+    sensor = SVOModel(A=model.A, B=model.B, C=model.C, L=model.L, noise=model.noise + bias + 0.1,
+                      A_unc=model.A_unc, B_unc=model.B_unc)
+    big_dist = SVOModel(A=model.A, B=model.B, C=model.C, L=model.L * 1.5, noise=model.noise,
+                        A_unc=model.A_unc, B_unc=model.B_unc)
+    res = run_architecture_i(model, {"sensor": sensor, "process": big_dist}, u, y, X0)
+    assert res.detection_step == 10 and res.isolated == "sensor" and res.isolation_step == 10
+    res2 = run_architecture_ii(model, sensor, {"sensor": sensor, "process": big_dist}, u, y, X0)
+    assert res2.detection_step == 10 and res2.isolated == "sensor"
+
+
+def test_bad_inputs():
+    model = SVOModel(A=np.eye(2), C=np.array([[1.0, 0.0]]), noise=0.1)
+    with pytest.raises(EmptySetError, match="X0: the initial set"):
+        SetValuedObserver(Polytope(np.array([[1.0, 0.0], [-1.0, 0.0]]), np.array([-1.0, -1.0])))
+    with pytest.raises(UnboundedSetError, match="X0: the initial set .* unbounded"):
+        SetValuedObserver(Polytope(np.array([[1.0, 0.0], [0.0, 1.0]]), np.array([1.0, 1.0])))
+    with pytest.raises(ModelError, match="N: expected a positive integer"):
+        SetValuedObserver(X0, N=0)
+    with pytest.raises(ModelError, match="method: expected"):
+        SetValuedObserver(X0, method="fast")
+    with pytest.raises(ShapeError, match=r"C: expected 2 columns"):
+        SVOModel(A=np.eye(2), C=np.ones((1, 3)))
+    with pytest.raises(ShapeError, match=r"A_unc: expected shape \(n_A, 2, 2\)"):
+        SVOModel(A=np.eye(2), C=np.ones((1, 2)), A_unc=np.ones((1, 3, 3)))
+    with pytest.raises(ShapeError, match=r"noise: expected a scalar or shape \(1,\)"):
+        SVOModel(A=np.eye(2), C=np.ones((1, 2)), noise=[0.1, 0.2])
+    with pytest.raises(ShapeError, match=r"model: expected state dimension 2"):
+        SetValuedObserver(X0).start(SVOModel(A=np.eye(3), C=np.ones((1, 3))), np.zeros(1))
+    with pytest.raises(ShapeError, match=r"u: expected 3 rows"):
+        run_svo(model, np.zeros((2, 0)), np.zeros((4, 1)), X0)
+    svo = SetValuedObserver(X0)
+    svo.start(model, np.zeros(1))
+    with pytest.raises(ShapeError, match=r"y_next: expected shape \(1,\)"):
+        svo.update(model, np.zeros(0), np.zeros(2))
