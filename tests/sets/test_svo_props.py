@@ -125,7 +125,8 @@ def test_bad_inputs():
     with pytest.raises(ShapeError, match=r"model: expected state dimension 2"):
         SetValuedObserver(X0).start(SVOModel(A=np.eye(3), C=np.ones((1, 3))), np.zeros(1))
     with pytest.raises(ShapeError, match=r"u: expected 3 rows"):
-        run_svo(model, np.zeros((2, 0)), np.zeros((4, 1)), X0)
+        run_svo(SVOModel(A=np.eye(2), B=np.ones((2, 1)), C=np.array([[1.0, 0.0]])), np.zeros((2, 1)),
+                np.zeros((4, 1)), X0)
     svo = SetValuedObserver(X0)
     svo.start(model, np.zeros(1))
     with pytest.raises(ShapeError, match=r"y_next: expected shape \(1,\)"):
