@@ -452,15 +452,24 @@ def _rate(k: int, n: int) -> dict[str, float | int | None]:
     return {"rate": k / n, "count": int(k), "n": int(n), "ci95": [lo, hi]}
 
 
+def _grid_bins(x: np.ndarray, max_bins: int = 40) -> np.ndarray | int:
+    """Histogram edges on the sampling grid (multiples of ``Ts``), at most ``max_bins`` bins."""
+    if x.size == 0:
+        return 1
+    lo, hi = float(np.min(x)), float(np.max(x))
+    width = gp.TS_MIN * max(1, int(np.ceil((hi - lo + gp.TS_MIN) / (gp.TS_MIN * max_bins))))
+    return np.arange(lo - width / 2, hi + width, width)
+
+
 def plot_fig7(result: ReproductionResult, fig: Any = None):
     """Paper Fig. 7: histograms of detection delays (top) and onset errors (bottom), fault 1 left, 2 right."""
     fig, axes = figure(2, 2, fig=fig, figsize=(7.5, 5.0))
     for j, fault in enumerate((1, 2)):
         delay = result.data["delay_min"][fault]
         err = result.data["onset_error_min"][fault]
-        axes[0, j].hist(delay, bins=40, color=OURS_COLOR)
+        axes[0, j].hist(delay, bins=_grid_bins(delay), color=OURS_COLOR)
         axes[0, j].set(title=f"fault {fault}: detection delay", xlabel="min")
-        axes[1, j].hist(err, bins=40, color=OURS_COLOR)
+        axes[1, j].hist(err, bins=_grid_bins(err), color=OURS_COLOR)
         axes[1, j].set(title=f"fault {fault}: onset estimation error", xlabel="min")
     return fig
 
