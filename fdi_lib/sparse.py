@@ -222,13 +222,19 @@ def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: floa
     N = _norm(n_samples, X.shape[0])
     if not 0.0 <= lambda_min < 1.0:
         raise ModelError(f"lambda_min: expected a fraction of lambda_max in [0, 1), got {lambda_min!r}")
-    Xy = X.T @ y
+    # Exact rescaling X = sx X', y = sy y': theta = (sy / sx) theta', lambda = sx sy lambda'.
+    # It keeps LARS's absolute tolerances meaningful whatever the units (e.g. gas flows ~1e5).
+    sx = float(np.sqrt(np.mean(X ** 2))) or 1.0
+    sy = float(np.sqrt(np.mean(y ** 2))) or 1.0
+    Xs, ys = X / sx, y / sy
+    Xy = Xs.T @ ys
     alpha_min = lambda_min * float(np.abs(Xy).max()) / X.shape[0]
     # the Gram form is the same algorithm on X^T X and X^T y (m x m instead of rows x m)
-    alphas, _active, coefs = lars_path_gram(Xy=Xy, Gram=X.T @ X, n_samples=X.shape[0],
+    alphas, _active, coefs = lars_path_gram(Xy=Xy, Gram=Xs.T @ Xs, n_samples=X.shape[0],
                                             method="lasso", alpha_min=alpha_min)
     # scikit-learn's alpha is for 1/(2 rows); (39) has 1/(2N): lambda = alpha * rows / N
-    return LassoPath(lambdas=np.asarray(alphas) * X.shape[0] / N, coefs=np.asarray(coefs), n_samples=N)
+    return LassoPath(lambdas=np.asarray(alphas) * (X.shape[0] / N) * sx * sy,
+                     coefs=np.asarray(coefs) * (sy / sx), n_samples=N)
 
 
 def lasso_cvxpy(X: Any, y: Any, lam: float, *, n_samples: int | None = None) -> np.ndarray:

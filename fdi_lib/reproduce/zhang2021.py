@@ -30,7 +30,8 @@ from fdi_lib.sparse import RegressionData, flat_range, lasso_path, least_squares
 from fdi_lib.systems import zhang2021_example1 as ex
 
 __all__ = ["Q_VALUES", "R_VALUES", "PAPER_TABLE1", "PAPER_TABLE2", "example1_regression", "snr_db",
-           "snr_variants", "example1_chunk", "example1_rates", "plot_fig2", "plot_fig3", "plot_table1", "plot_table2"]
+           "snr_variants", "example1_chunk", "example1_rates", "example2_setup", "plot_fig2", "plot_fig3", "plot_table1",
+           "plot_table2", "plot_fig6", "plot_fig7"]
 
 PAPER = "Zhang 2021"
 Q_VALUES = tuple(range(5, 26))
@@ -151,6 +152,10 @@ def _single_trial(seed: int, q: int = 5) -> dict[str, Any]:
 
 def plot_fig2(result: ReproductionResult, fig: Any = None):
     """Paper Fig. 2: number of non-zero Lasso components against ``lambda`` (exact path, log axis)."""
+    return _plot_support(result, fig, "Example 1: support size along the Lasso path")
+
+
+def _plot_support(result: ReproductionResult, fig: Any, title: str):
     fig, ax = figure(fig=fig)
     ax = ax[0, 0]
     lam, sizes = result.data["lambdas"], result.data["sizes"]
@@ -163,7 +168,7 @@ def plot_fig2(result: ReproductionResult, fig: Any = None):
     lo, hi = result.headline["flat_range_linear"]
     ax.axvspan(lo, hi, color="0.8", alpha=0.5, label="flat range (linear width)")
     ax.set(xscale="log", xlabel=r"$\lambda$ (normalisation of (39))", ylabel="non-zero components",
-           title="Example 1: support size along the Lasso path")
+           title=title)
     ax.set_xlim(floor, lam[0] * 3)
     ax.legend(loc="upper right")
     return fig
@@ -202,6 +207,10 @@ def fig2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
 
 def plot_fig3(result: ReproductionResult, fig: Any = None):
     """Paper Fig. 3: Lasso diamonds (one colour per ``lambda`` in the flat range), LS circles, true asterisks."""
+    return _plot_diamonds(result, fig, "Example 1: isolation and estimation")
+
+
+def _plot_diamonds(result: ReproductionResult, fig: Any, title: str):
     fig, ax = figure(fig=fig)
     ax = ax[0, 0]
     lasso, grid = result.data["lasso"], result.data["grid"]
@@ -216,7 +225,7 @@ def plot_fig3(result: ReproductionResult, fig: Any = None):
     th = result.data["theta"]
     ax.plot(idx[th != 0], th[th != 0], "*", color=PAPER_COLOR, ms=10, label="true non-zero components")
     ax.plot([], [], "D", color=colors[0], label=r"Lasso, one colour per $\lambda$ in the flat range")
-    ax.set(xlabel=r"component of $\theta$", ylabel="value", title="Example 1: isolation and estimation")
+    ax.set(xlabel=r"component of $\theta$", ylabel="value", title=title)
     ax.set_xlim(0, lasso.shape[1] + 1)
     ax.legend(loc="lower right")
     return fig
@@ -374,3 +383,145 @@ def table2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
                               settings={"seed": seed, "trials": n, "q": 5, "N": ex.N_DATA, "m": ex.N_PARAMS,
                                         "snr": "10 log10(var_k y / var_k v), k = 1..N, mean over trials"},
                               data=rates)
+
+
+# --------------------------------------------------------------------------- Example 2 (Figs 6-7)
+#: Example 2 settings stated by the paper: state noise covariance, output noise variance, N, m, leaks.
+EX2_Q = np.array([[3.31, -2.18], [-2.18, 1.44]])
+EX2_R = np.array([[1.0e4]])
+EX2_N = 500
+EX2_M = 30
+EX2_LEAKS = (9, 14)  # 0-based: the paper's components 10 and 15
+EX2_LEAK_SIZE = 1.0e-4
+
+
+def example2_setup() -> tuple[Any, np.ndarray, np.ndarray]:
+    """Example 2 on the surrogate pipeline of :mod:`fdi_lib.systems.gas_pipeline`.
+
+    The surrogate's matrices, schedule and input (the originals are not public) with the noise
+    levels of Zhang (2021): ``Q = [[3.31, -2.18], [-2.18, 1.44]]``, ``R = 1e4``, ``N = 500``;
+    ``P0`` is the stationary Kalman covariance for these ``Q``, ``R`` (scipy's DARE). The leak
+    profile (48): ``Psi_k = -[[u_{k-1} .. u_{k-30}], [0 .. 0]]``, with ``u_j = u_0`` for ``j < 0``
+    (the surrogate starts in the steady state of ``u_0``).
+
+    Returns
+    -------
+    (model, u, Psi) : LTVModel, ``(N,)`` input, ``(N, 2, 30)`` profile.
+    """
+    import scipy.linalg
+
+    from fdi_lib.models import ltv_model
+    from fdi_lib.systems import gas_pipeline as gp
+
+    u = gp.pipeline_input(EX2_N)
+    base = gp.pipeline_model(EX2_N, u=u)
+    mats = gp.pipeline_matrices()
+    P0 = scipy.linalg.solve_discrete_are(mats.F0.T, mats.H0.T, EX2_Q, EX2_R)
+    model = ltv_model(F=base.F, G=base.G, H=base.H, J=base.J, Q=EX2_Q, R=EX2_R, n_steps=EX2_N,
+                      x0=base.x0, P0=0.5 * (P0 + P0.T))
+    upad = np.concatenate([np.full(EX2_M, u[0]), u])
+    Psi = np.zeros((EX2_N, 2, EX2_M))
+    for j in range(1, EX2_M + 1):
+        Psi[:, 0, j - 1] = -upad[EX2_M - j: EX2_M - j + EX2_N]
+    return model, u, Psi
+
+
+def _example2(seed: int) -> dict[str, Any]:
+    from fdi_lib.filters import kalman_filter, kalman_gains
+    from fdi_lib.models import fault_profile
+    from fdi_lib.simulate import simulate
+
+    model, u, Psi = example2_setup()
+    fault = fault_profile(model, Psi=Psi)
+    theta = np.zeros(EX2_M)
+    theta[list(EX2_LEAKS)] = EX2_LEAK_SIZE
+    rng = np.random.default_rng(trial_seeds(seed, 1)[0])
+    sim = simulate(model, rng=rng, u=u, fault=fault, theta=theta)
+    gains = kalman_gains(model)  # no unknown input: Proposition 1
+    res = kalman_filter(model, sim.y, u, gains=gains)
+    sig = residual_signature(model, gains, fault)
+    reg = regression_data(res.updated_residuals, sig.on_residual, start=1)
+    path = lasso_path(reg.X, reg.y, n_samples=reg.n_samples)
+    flats = {s: flat_range(path, scale=s) for s in SCALES}
+    fr = flats["log"]
+    grid = np.geomspace(fr.low, fr.high, 10)[1:-1]
+    corr = np.corrcoef(reg.X.T)
+    return {"path": path, "flats": flats, "grid": grid, "lasso": np.stack([path.coef(lam) for lam in grid]),
+            "theta_ls": least_squares_on_support(reg.X, reg.y, fr.support), "theta": theta,
+            "true_ls": least_squares_on_support(reg.X, reg.y, list(EX2_LEAKS)),
+            "corr_neighbours": float(np.abs(np.diag(corr, 1)).min()),
+            "corr_leaks": float(corr[EX2_LEAKS[0], EX2_LEAKS[1]])}
+
+
+def plot_fig6(result: ReproductionResult, fig: Any = None):
+    """Paper Fig. 6: support size along the Lasso path, Example 2 (surrogate pipeline)."""
+    return _plot_support(result, fig, "Example 2 (surrogate pipeline): support size")
+
+
+@register("zhang2021-fig6", paper=PAPER, title="Example 2 (surrogate pipeline): support size against lambda",
+          plot=plot_fig6)
+def fig6(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Paper Fig. 6: one record of Example 2 on the surrogate pipeline, exact Lasso path.
+
+    Headline keys
+    -------------
+    flat_range : list of float
+        ``[low, high]`` of the widest constant-size range (log width).
+    flat_size : int
+        Number of non-zero components there (paper: 2).
+    flat_range_linear : list of float
+    flat_size_linear : int
+    min_neighbour_correlation : float
+        Smallest ``|corr|`` between columns ``j`` and ``j + 1`` of ``X`` (delays one sample apart).
+    """
+    d = _example2(seed)
+    fl, fli = d["flats"]["log"], d["flats"]["linear"]
+    headline = {"flat_range": [fl.low, fl.high], "flat_size": fl.size,
+                "flat_range_linear": [fli.low, fli.high], "flat_size_linear": fli.size,
+                "min_neighbour_correlation": d["corr_neighbours"]}
+    return ReproductionResult(id="zhang2021-fig6", headline=headline, paper={"flat_size": 2},
+                              settings={"seed": seed, "N": EX2_N, "m": EX2_M, "Q": EX2_Q, "R": EX2_R,
+                                        "model": "surrogate pipeline (fdi_lib.systems.gas_pipeline)"},
+                              data={"lambdas": d["path"].lambdas, "sizes": d["path"].support_sizes(),
+                                    "grid": d["grid"]})
+
+
+def plot_fig7(result: ReproductionResult, fig: Any = None):
+    """Paper Fig. 7: Lasso diamonds, LS circles, true asterisks, Example 2 (values in 1e-4)."""
+    scaled = ReproductionResult(id=result.id, headline=result.headline, data={
+        "lasso": result.data["lasso"] / EX2_LEAK_SIZE, "grid": result.data["grid"],
+        "theta_ls": result.data["theta_ls"] / EX2_LEAK_SIZE, "theta": result.data["theta"] / EX2_LEAK_SIZE})
+    fig = _plot_diamonds(scaled, fig, "Example 2 (surrogate pipeline): isolation")
+    fig.axes[0].set_ylabel(r"value ($\times 10^{-4}$)")
+    return fig
+
+
+@register("zhang2021-fig7", paper=PAPER, title="Example 2 (surrogate pipeline): Lasso diamonds, LS circles, truth",
+          plot=plot_fig7)
+def fig7(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Paper Fig. 7: the same record as ``zhang2021-fig6``.
+
+    Headline keys
+    -------------
+    flat_range : list of float
+    support : list of int
+        Selected components (0-based; the paper's leaks 10 and 15 are 9 and 14).
+    true_support : list of int
+    theta_ls : list of float
+        Least-squares re-estimates of the selected components (true leaks 1e-4 each).
+    ls_on_true_support : list of float
+        Least squares on the *true* support, for comparison.
+    leak_column_correlation : float
+        Correlation between the columns of ``X`` of the two true leaks.
+    """
+    d = _example2(seed)
+    fl = d["flats"]["log"]
+    headline = {"flat_range": [fl.low, fl.high], "support": fl.support.tolist(),
+                "true_support": list(EX2_LEAKS), "theta_ls": d["theta_ls"][fl.support].tolist(),
+                "ls_on_true_support": d["true_ls"][list(EX2_LEAKS)].tolist(),
+                "leak_column_correlation": d["corr_leaks"]}
+    return ReproductionResult(id="zhang2021-fig7", headline=headline,
+                              paper={"support": list(EX2_LEAKS), "true_support": list(EX2_LEAKS)},
+                              settings={"seed": seed, "N": EX2_N, "m": EX2_M},
+                              data={"lasso": d["lasso"], "grid": d["grid"], "theta_ls": d["theta_ls"],
+                                    "theta": d["theta"]})

@@ -71,3 +71,25 @@ def test_snr_definition():
             assert s[b, i] == pytest.approx(expected, rel=1e-12)
     variants = snr_variants(sig + v, v)
     np.testing.assert_allclose(variants["var(Y) / var(V)"], s)
+
+
+def test_example2_surrogate_pipeline_contract_and_collinearity():
+    """Figs 6-7 on the surrogate pipeline: the leak profile (48), and the documented finding that
+    delayed-input columns are nearly collinear (the support found is a single merged component)."""
+    from fdi_lib.reproduce.zhang2021 import EX2_M, example2_setup
+
+    model, u, Psi = example2_setup()
+    assert Psi.shape == (500, 2, EX2_M) and np.all(Psi[:, 1] == 0)
+    np.testing.assert_array_equal(Psi[20, 0, 9], -u[10])  # column j (1-based 10) is -u_{k-10}
+    np.testing.assert_array_equal(Psi[3, 0, 9], -u[0])  # before the record: u_j = u_0
+    np.testing.assert_allclose(model.Q[0], [[3.31, -2.18], [-2.18, 1.44]])
+    f6 = reproduce("zhang2021-fig6")
+    f7 = reproduce("zhang2021-fig7")
+    json.loads(f6.to_json())
+    json.loads(f7.to_json())
+    assert f7.headline["true_support"] == [9, 14]
+    assert f6.headline["min_neighbour_correlation"] > 0.999
+    # whatever is selected, its least-squares values add up to the total leak 2e-4 (collinearity)
+    assert sum(f7.headline["theta_ls"]) == pytest.approx(2e-4, rel=0.05)
+    get("zhang2021-fig6").plot(f6)
+    get("zhang2021-fig7").plot(f7)
