@@ -227,7 +227,7 @@ def _plot_diamonds(result: ReproductionResult, fig: Any, title: str):
     ax.plot([], [], "D", color=colors[0], label=r"Lasso, one colour per $\lambda$ in the flat range")
     ax.set(xlabel=r"component of $\theta$", ylabel="value", title=title)
     ax.set_xlim(0, lasso.shape[1] + 1)
-    ax.legend(loc="lower right")
+    ax.legend(loc="best")
     return fig
 
 

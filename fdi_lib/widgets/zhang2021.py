@@ -73,5 +73,5 @@ def explore_sparse(q: int = 5, r: float = 0.5, lam_scale: float = 1.0, seed: int
     ax.plot(idx[truth], np.ones(truth.size), "*", color=PAPER_COLOR, ms=10, label="true")
     ax.set(xlabel=r"component of $\theta$", ylabel="value", xlim=(0, X.shape[1] + 1),
            title=f"q = {q}, r = {r:g}: {'isolated' if ok else 'NOT isolated'}")
-    ax.legend(loc="lower right")
+    ax.legend(loc="best")
     return fig
