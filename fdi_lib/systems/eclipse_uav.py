@@ -36,6 +36,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from fdi_lib.errors import ModelError
+from fdi_lib.sets.svo import single_threaded_blas
 
 __all__ = ["TABLE3", "V_TRIM", "ALPHA_TRIM", "TS", "MU_READING", "NOISE_BOUND", "DIST_ACCEL",
            "FAULTS", "SCENARIOS", "lpv_matrices", "zoh", "discretize", "measurement_matrix",
@@ -278,6 +279,7 @@ def excitation(t: np.ndarray) -> np.ndarray:
     return np.column_stack([eta, tau])
 
 
+@single_threaded_blas
 def simulate(fault: str = "none", scenario: str = "step", *, rng: np.random.Generator,
              duration: float = 6.0, substeps: int = 5) -> UAVRun:
     """Closed-loop simulation of the nonlinear stand-in plant with the LQG controller.
