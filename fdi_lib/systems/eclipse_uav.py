@@ -119,8 +119,11 @@ def _discretize_cached(V: float, mu_scale: float, elevator_eff: float, Ts: float
 
 def discretize(V: float, mu_scale: float = 1.0, elevator_eff: float = 1.0, Ts: float = TS
                ) -> tuple[np.ndarray, np.ndarray]:
-    """(A_d, B_d) of the LPV model at airspeed V, ZOH with period Ts (cached on a 1e-4 m/s grid
-    is *not* used: V is used exactly; the cache only helps repeated identical calls)."""
+    """(A_d, B_d) of the LPV model (15)-(16) at airspeed V (m/s), zero-order hold with period Ts (s).
+
+    Results are memoised (least-recently-used cache) because every SVO of a bank asks for the
+    same airspeeds at the same sample.
+    """
     return _discretize_cached(float(V), float(mu_scale), float(elevator_eff), float(Ts))
 
 
@@ -381,7 +384,7 @@ def svo_models(run: UAVRun, kind: str = "nominal"):
     eff_c, eff_r = (0.75, 0.25) if kind in ("elevator", "global") else (1.0, 0.0)
 
     def model(k: int) -> SVOModel:
-        Vh = round(V_TRIM + float(run.y[k, 0]), 4)
+        Vh = V_TRIM + float(run.y[k, 0])
         Ap, Bp = discretize(Vh + dV, mu_c, eff_c)
         Am, Bm = discretize(Vh - dV, mu_c, eff_c)
         A_unc = [(Ap - Am) / 2]
