@@ -375,12 +375,19 @@ def residual_signature(model: LTVModel, gains: Any, fault: FaultProfile | None =
             raise NonFiniteError(f"{name}: expected finite values")
     batch = np.broadcast_shapes(Psi_a.shape[:-3], Phi_a.shape[:-3])
     m = Psi_a.shape[-1]
+    Psi_a = np.broadcast_to(Psi_a, (*batch, N, n, m))
+    Phi_a = np.broadcast_to(Phi_a, (*batch, N, p, m))
+    nb = int(np.prod(batch, dtype=int))
+    # The recursion acts column by column: stack the columns of all realisations side by side,
+    # (N, rows, batch * m), so that each step is one plain matrix product (one BLAS call).
+    Psi_c = np.moveaxis(Psi_a.reshape(nb, N, n, m), 0, 2).reshape(N, n, nb * m)
+    Phi_c = np.moveaxis(Phi_a.reshape(nb, N, p, m), 0, 2).reshape(N, p, nb * m)
     K = gains.K
     IKH = np.eye(n) - K @ model.H  # (N, n, n)
-    Ups = np.empty((*batch, N, n, m))
-    Ups[..., 0, :, :] = -K[0] @ Phi_a[..., 0, :, :]
+    U = np.empty((N, n, nb * m))
+    U[0] = -K[0] @ Phi_c[0]
     for k in range(N - 1):
-        drive = model.F[k] @ Ups[..., k, :, :] + Psi_a[..., k, :, :]
-        Ups[..., k + 1, :, :] = IKH[k + 1] @ drive - K[k + 1] @ Phi_a[..., k + 1, :, :]
+        U[k + 1] = IKH[k + 1] @ (model.F[k] @ U[k] + Psi_c[k]) - K[k + 1] @ Phi_c[k + 1]
+    Ups = np.moveaxis(U.reshape(N, n, nb, m), 2, 0).reshape(*batch, N, n, m)
     on_res = model.H @ Ups + Phi_a
     return ResidualSignature(Upsilon=Ups, on_residual=on_res)

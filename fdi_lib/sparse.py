@@ -36,7 +36,7 @@ Like any exploration of ``lambda``, the rule needs a bounded window: we use
 breakpoint, above which ``theta_hat = 0``) and ``lambda_ratio = 1e-4``, the default window of
 Matlab's ``lasso`` for more rows than unknowns. Ranges are clipped to the window; only ranges
 with between 1 and ``max_size`` non-zero components (default ``m // 2``: the sparsity
-assumption) are candidates. Without these bounds the log reading would favour the last
+assumption) are candidates, and the window ends where the support first exceeds ``max_size``. Without these bounds the log reading would favour the last
 ranges near ``lambda = 0`` (nearly all components non-zero, i.e. no selection at all), whose
 log-width is unbounded.
 """
@@ -193,7 +193,8 @@ class LassoPath:
         return self._active().sum(axis=0)
 
 
-def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: float = 0.0) -> LassoPath:
+def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: float = 0.0,
+               max_size: int | None = None) -> LassoPath:
     """Exact Lasso path of (39) by LARS-Lasso (scikit-learn's ``lars_path``, ``method="lasso"``).
 
     scikit-learn does the hard part (the homotopy with its Cholesky up/down-dates and the
@@ -211,6 +212,9 @@ def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: floa
     lambda_min : float
         Stop the path at this ``lambda`` (as a fraction of ``lambda_max``), e.g. the lower end of the
         window explored by :func:`flat_range`; the path is exact down to it. Default 0: the full path.
+    max_size : int, optional
+        Also stop once the support has exceeded ``max_size`` components (the other end of the
+        window of :func:`flat_range`); the path is exact up to there. Default: no such stop.
 
     Returns
     -------
@@ -229,9 +233,19 @@ def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: floa
     Xs, ys = X / sx, y / sy
     Xy = Xs.T @ ys
     alpha_min = lambda_min * float(np.abs(Xy).max()) / X.shape[0]
-    # the Gram form is the same algorithm on X^T X and X^T y (m x m instead of rows x m)
-    alphas, _active, coefs = lars_path_gram(Xy=Xy, Gram=Xs.T @ Xs, n_samples=X.shape[0],
-                                            method="lasso", alpha_min=alpha_min)
+    Gram = Xs.T @ Xs
+    m = X.shape[1]
+    max_iter = 500 if max_size is None else int(max_size) + 2
+    while True:
+        # the Gram form is the same algorithm on X^T X and X^T y (m x m instead of rows x m)
+        alphas, _active, coefs = lars_path_gram(Xy=Xy, Gram=Gram, n_samples=X.shape[0], method="lasso",
+                                                alpha_min=alpha_min, max_iter=max_iter)
+        if max_size is None or alphas.size <= max_iter:  # finished (alpha_min, full support, ...)
+            break
+        trial = LassoPath(lambdas=np.asarray(alphas), coefs=np.asarray(coefs), n_samples=N)
+        if trial.support_sizes().max(initial=0) > max_size or max_iter >= 8 * m:
+            break
+        max_iter += 10  # drops happened: a few more breakpoints are needed
     # scikit-learn's alpha is for 1/(2 rows); (39) has 1/(2N): lambda = alpha * rows / N
     return LassoPath(lambdas=np.asarray(alphas) * (X.shape[0] / N) * sx * sy,
                      coefs=np.asarray(coefs) * (sy / sx), n_samples=N)
@@ -297,6 +311,10 @@ def _ranges(path: LassoPath, lambda_ratio: float, max_size: int | None) -> list[
     floor = lambda_ratio * float(a[0])
     top = path.coefs.shape[0] // 2 if max_size is None else max_size
     sizes = path.support_sizes()
+    over = np.flatnonzero(sizes > top)
+    if over.size:  # the window stops where the support first exceeds max_size
+        floor = max(floor, float(a[over[0]]))
+        sizes = sizes[: over[0]]
     out: list[tuple[float, float, int]] = []
     i = 0
     while i < sizes.size:
@@ -322,7 +340,8 @@ def flat_range(path: LassoPath, *, scale: Scale = "log", lambda_ratio: float = 1
     lambda_ratio : float
         Lower end of the explored window, as a fraction of ``lambda_max`` (in ``(0, 1)``).
     max_size : int, optional
-        Largest support size considered (the sparsity assumption); default ``m // 2``.
+        Largest support size considered (the sparsity assumption); default ``m // 2``. The window
+        also ends at the largest ``lambda`` where the support exceeds it.
 
     Returns
     -------

@@ -70,6 +70,9 @@ def test_flat_range_rule_on_hand_made_paths():
     assert (log.low, log.high, log.size) == (0.01, 0.5, 4)
     assert log.middle == pytest.approx(np.sqrt(0.005)) and log.width == pytest.approx(np.log(50))
     np.testing.assert_array_equal(log.support, [0, 1, 2, 3])
+    # the window ends where the support first exceeds max_size: with max_size = 2 only sizes 1, 2
+    path2 = _hand_path([10, 6, 5, 4.9, 0.01, 0.0], [1, 2, 3, 2, 2])
+    assert flat_range(path2, scale="log", max_size=2).size == 1
     # a narrower window (lambda >= 0.02 * 10 = 0.2) clips the size-4 range to (0.2, 0.5): size 3 wins
     assert flat_range(path, scale="log", lambda_ratio=0.02).size == 3
     # the sparsity cap removes sizes above 3
@@ -141,8 +144,12 @@ def test_truncated_path_gives_the_same_flat_range_as_the_full_path():
     for b in range(12):
         full = lasso_path(reg.X[b], reg.y[b], n_samples=reg.n_samples)
         cut = lasso_path(reg.X[b], reg.y[b], n_samples=reg.n_samples, lambda_min=1e-4)
+        short = lasso_path(reg.X[b], reg.y[b], n_samples=reg.n_samples, lambda_min=1e-4, max_size=25)
         assert cut.lambdas[-1] >= 1e-4 * full.lambdas[0] * (1 - 1e-9)
+        assert short.lambdas.size < full.lambdas.size and short.support_sizes().max() > 25
+        np.testing.assert_allclose(short.coefs, full.coefs[:, : short.lambdas.size], rtol=1e-9, atol=1e-12)
         for scale in ("log", "linear"):
-            a, c = flat_range(full, scale=scale), flat_range(cut, scale=scale)
-            np.testing.assert_array_equal(a.support, c.support)
-            assert a.low == pytest.approx(c.low, rel=1e-9) and a.high == pytest.approx(c.high, rel=1e-9)
+            a = flat_range(full, scale=scale)
+            for c in (flat_range(cut, scale=scale), flat_range(short, scale=scale)):
+                np.testing.assert_array_equal(a.support, c.support)
+                assert a.low == pytest.approx(c.low, rel=1e-9) and a.high == pytest.approx(c.high, rel=1e-9)

@@ -103,7 +103,8 @@ def _example1_chunk(seeds: Sequence[np.random.SeedSequence], *, q: int, r: float
     out = {f"success_{s}": np.zeros(len(seeds), bool) for s in SCALES}
     out.update({f"size_{s}": np.zeros(len(seeds), int) for s in SCALES})
     for b in range(len(seeds)):
-        path = lasso_path(reg.X[b], reg.y[b], n_samples=reg.n_samples, lambda_min=LAMBDA_RATIO)
+        path = lasso_path(reg.X[b], reg.y[b], n_samples=reg.n_samples, lambda_min=LAMBDA_RATIO,
+                          max_size=reg.X.shape[-1] // 2)
         true = np.flatnonzero(trials.theta[b])
         for s in SCALES:
             fr = flat_range(path, scale=s)
