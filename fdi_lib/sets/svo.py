@@ -45,7 +45,8 @@ from fdi_lib.errors import EmptySetError, ModelError, NonFiniteError, ShapeError
 from fdi_lib.sets.polytope import Polytope, _hull_hrep, _enumerate_vertices, box_corners
 
 __all__ = ["single_threaded_blas", "SVOModel", "SetValuedObserver", "SVORun", "run_svo", "FDIResult", "run_architecture_i",
-           "run_architecture_ii", "default_template"]
+           "run_architecture_ii", "default_template", "actuator_effectiveness_model", "sensor_bias_model",
+           "dynamics_entry_model"]
 
 
 def single_threaded_blas(func):
@@ -622,3 +623,60 @@ def run_architecture_ii(nominal: ModelSpec, global_model: ModelSpec, faults: Map
             if not alive:
                 break
     return FDIResult("II", det, iso, isolated, empty_at)
+
+
+# ----------------------------------------------------------------------------- fault models (Tables 1-2)
+
+
+def _replace(model: SVOModel, **changes: Any) -> SVOModel:
+    fields = {k: getattr(model, k) for k in ("A", "C", "B", "L", "noise", "A_unc", "B_unc", "C_unc")}
+    fields.update(changes)
+    return SVOModel(**fields)
+
+
+def actuator_effectiveness_model(model: SVOModel, input_index: int, lowest: float) -> SVOModel:
+    """Fault hypothesis "loss of effectiveness" of one actuator (Table 1): gain in [lowest, 1].
+
+    The column b of B becomes b (1 + lowest)/2 + Delta b (1 - lowest)/2, |Delta| <= 1, i.e. an
+    uncertain input matrix handled as a disturbance (§2). It contains the healthy plant
+    (gain 1), as Architecture I requires. ``lowest = 0`` is a floating actuator.
+    """
+    if not 0 <= input_index < model.n_u:
+        raise ModelError(f"input_index: expected 0 <= index < {model.n_u}, got {input_index}")
+    if not 0.0 <= lowest <= 1.0:
+        raise ModelError(f"lowest: expected a gain in [0, 1], got {lowest}")
+    B = model.B.copy()
+    extra = np.zeros((1,) + B.shape)
+    extra[0, :, input_index] = B[:, input_index] * (1.0 - lowest) / 2.0
+    B[:, input_index] *= (1.0 + lowest) / 2.0
+    return _replace(model, B=B, B_unc=np.concatenate([model.B_unc * 1.0, extra]))
+
+
+def sensor_bias_model(model: SVOModel, output_index: int, bound: float) -> SVOModel:
+    """Fault hypothesis "biased sensor" (Table 2): an additive fault |q| <= bound on one output,
+    folded into that sensor's noise bound (how SVO #2 of §6 is built). Contains the healthy plant."""
+    if not 0 <= output_index < model.n_y:
+        raise ModelError(f"output_index: expected 0 <= index < {model.n_y}, got {output_index}")
+    if not bound >= 0:
+        raise ModelError(f"bound: expected a non-negative bias bound, got {bound}")
+    noise = model.noise.copy()
+    noise[output_index] += bound
+    return _replace(model, noise=noise)
+
+
+def dynamics_entry_model(model: SVOModel, row: int, col: int, low: float, high: float) -> SVOModel:
+    """Fault hypothesis "system dynamics" (§4.3.1): entry A[row, col] anywhere in [low, high].
+
+    Adds the direction (high - low)/2 E_{row,col} to the parametric uncertainty and moves the
+    entry to the middle of the interval. Include the healthy value in [low, high] for Architecture I.
+    """
+    n = model.n
+    if not (0 <= row < n and 0 <= col < n):
+        raise ModelError(f"row, col: expected indices in [0, {n}), got ({row}, {col})")
+    if not low <= high:
+        raise ModelError(f"low, high: expected low <= high, got [{low}, {high}]")
+    A = model.A.copy()
+    A[row, col] = (low + high) / 2.0
+    E = np.zeros((1, n, n))
+    E[0, row, col] = (high - low) / 2.0
+    return _replace(model, A=A, A_unc=np.concatenate([model.A_unc, E]))

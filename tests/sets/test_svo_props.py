@@ -131,3 +131,35 @@ def test_bad_inputs():
     svo.start(model, np.zeros(1))
     with pytest.raises(ShapeError, match=r"y_next: expected shape \(1,\)"):
         svo.update(model, np.zeros(0), np.zeros(2))
+
+
+def test_fault_models_of_tables_1_2_contain_the_healthy_and_the_faulty_plant():
+    from fdi_lib.sets.svo import actuator_effectiveness_model, dynamics_entry_model, sensor_bias_model
+
+    rng = np.random.default_rng(21)
+    model = random_system(rng)
+    act = actuator_effectiveness_model(model, 0, lowest=0.5)
+    # gains 1 (healthy) and 0.5 (faulty) are the two vertices of the new uncertainty
+    cols = {round(float(s), 12) for s in (act.B[:, 0] + act.B_unc[-1][:, 0]) / model.B[:, 0]}
+    cols |= {round(float(s), 12) for s in (act.B[:, 0] - act.B_unc[-1][:, 0]) / model.B[:, 0]}
+    assert cols == {1.0, 0.5}
+    sen = sensor_bias_model(model, 0, bound=2.0)
+    assert sen.noise[0] == pytest.approx(model.noise[0] + 2.0)
+    lo, hi = sorted([model.A[1, 0], 1.3 * model.A[1, 0]])
+    dyn = dynamics_entry_model(model, 1, 0, lo, hi)
+    ends = sorted([dyn.A[1, 0] - dyn.A_unc[-1][1, 0], dyn.A[1, 0] + dyn.A_unc[-1][1, 0]])
+    np.testing.assert_allclose(ends, [lo, hi], rtol=1e-12)
+    assert dyn.vertex_matrices().shape == (4, 2, 2)
+    with pytest.raises(ModelError, match="lowest: expected a gain in"):
+        actuator_effectiveness_model(model, 0, lowest=1.5)
+    with pytest.raises(ModelError, match="output_index"):
+        sensor_bias_model(model, 3, bound=1.0)
+    # a 50 % actuator fault: the nominal SVO may fire, the fault-model SVO must not
+    x = np.zeros((31, 2)); u = rng.uniform(-1, 1, (30, 1))
+    for k in range(30):
+        gain = 1.0 if k < 10 else 0.5
+        x[k + 1] = ((model.A + rng.uniform(-1, 1) * model.A_unc[0]) @ x[k]
+                    + (model.B + rng.uniform(-1, 1) * model.B_unc[0]) @ (gain * u[k]) + model.L @ rng.uniform(-1, 1, 2))
+    y = x @ model.C.T + model.noise * rng.uniform(-1, 1, (31, 1))
+    res = run_svo(act, u, y, X0, keep_sets=True)
+    assert res.empty_at is None and all(S.contains(x[k], 1e-7) for k, S in enumerate(res.sets))
