@@ -8,7 +8,6 @@ bounds the paper does not give: see that module and the book chapter for our cho
 
 from __future__ import annotations
 
-import time
 from functools import lru_cache
 from typing import Any
 
