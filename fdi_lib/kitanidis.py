@@ -186,15 +186,19 @@ def kitanidis_gains(model: LTVModel, E: Any) -> KitanidisGains:
                 raise RankConditionError(
                     f"E: assumption (iv) needs H_{{k+1}} E_k of full column rank {s}; at k = {k - 1}, "
                     f"H_{k} E_{k - 1} has shape {HE.shape} and smallest singular value {smin:.3g}")
-            SinvHE = scipy.linalg.cho_solve((c, low), HE)  # Sigma^{-1} H E
-            Xk = HE.T @ SinvHE
-            Xk = 0.5 * (Xk + Xk.T)
+            # Square-root form: with Sigma = L L^T and L^{-1} H E = Qw Rw (thin QR), Xi = Rw^T Rw and
+            # Xi^{-1} E^T H^T Sigma^{-1} = Rw^{-1} Qw^T L^{-1}, a left inverse of H E accurate to
+            # cond(Rw) = sqrt(cond(Xi)) rather than cond(Xi): identity (30) then holds to that precision.
+            Lk = np.tril(c)
+            W = scipy.linalg.solve_triangular(Lk, HE, lower=True)
+            Qw, Rw = np.linalg.qr(W)
+            Linv = scipy.linalg.solve_triangular(Lk, np.eye(p), lower=True)
+            M = scipy.linalg.solve_triangular(Rw, Qw.T @ Linv)  # (s, p), M H E = I
             Gam = Es[k - 1] - Kk @ HE  # (24c)
-            # Gamma Xi^{-1} via a symmetric solve; K-bar (24g), P-bar (24f)
-            GXi = scipy.linalg.solve(Xk, Gam.T, assume_a="pos").T
-            Kbar = Kk + GXi @ SinvHE.T
-            Pf = Pf + GXi @ Gam.T
-            Xi[k] = Xk
+            Kbar = Kk + Gam @ M  # (24g)
+            GR = scipy.linalg.solve_triangular(Rw, Gam.T, trans="T").T  # Gamma Rw^{-1}
+            Pf = Pf + GR @ GR.T  # (24f): + Gamma Xi^{-1} Gamma^T
+            Xi[k] = W.T @ W  # (24d)
         Pf = 0.5 * (Pf + Pf.T)
         HK = H @ Kbar
         Rc = H @ Pf @ H.T + Rk - HK @ Rk - Rk @ HK.T

@@ -193,3 +193,31 @@ def test_bad_inputs_are_rejected(random_ltv):
         kitanidis_filter(m, np.zeros((19, 3)), E=E)
     with pytest.raises(ShapeError, match="Psi: expected shape"):
         residual_signature(m, kalman_gains(m), Psi=np.zeros((20, 3, 2)))
+
+
+from hypothesis import given, settings, strategies as st  # noqa: E402
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), n=st.integers(2, 6), extra_p=st.integers(0, 2), s=st.integers(1, 3))
+def test_identity_30_on_random_dimensions(seed, n, extra_p, s):
+    """(I - K_{k+1} H_{k+1}) E_k = 0 to machine precision whenever H_{k+1} E_k has full column rank."""
+    s = min(s, n)
+    p = min(n, s + extra_p)
+    rng = np.random.default_rng(seed)
+    N = 12
+    k = np.arange(N)[:, None, None]
+    F = rng.standard_normal((n, n)) / np.sqrt(n) + 0.1 * np.sin(k) * rng.standard_normal((1, n, n))
+    H = rng.standard_normal((p, n)) + 0.1 * np.cos(k) * rng.standard_normal((1, p, n))
+    A = rng.standard_normal((n, n))
+    B = rng.standard_normal((p, p))
+    m = ltv_model(F=F, H=H, Q=A @ A.T + 1e-3 * np.eye(n), R=B @ B.T + 0.1 * np.eye(p), n_steps=N)
+    E = rng.standard_normal((N, n, s))
+    g = kitanidis_gains(m, E)
+    for j in range(1, N):
+        resid = np.abs((np.eye(n) - g.K[j] @ m.H[j]) @ E[j - 1]).max()
+        # square-root implementation: error ~ eps * sqrt(cond Xi) * |Gamma| (random systems may have
+        # a diverging P when p = s, i.e. no output left to observe the state, hence ill-conditioning)
+        gam = np.abs(E[j - 1] - g.K_kalman[j] @ m.H[j] @ E[j - 1]).max()
+        scale = max(1.0, np.abs(E).max(), gam) * np.sqrt(np.linalg.cond(g.Xi[j]))
+        assert resid <= 1e-13 * scale, (j, resid, scale)
