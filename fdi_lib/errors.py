@@ -18,6 +18,7 @@ __all__ = [
     "UnknownReproductionError",
     "EmptySetError",
     "UnboundedSetError",
+    "NumericalError",
 ]
 
 
@@ -66,3 +67,7 @@ class EmptySetError(FDIError, ValueError):
 
 class UnboundedSetError(FDIError, ValueError):
     """A polytope that must be bounded (e.g. an SVO's initial set) is unbounded."""
+
+
+class NumericalError(FDIError, ArithmeticError):
+    """A floating-point geometric computation (e.g. vertex enumeration of a very thin polytope) failed."""

@@ -33,7 +33,7 @@ from typing import Any, Iterable, Sequence
 
 import numpy as np
 
-from fdi_lib.errors import EmptySetError, NonFiniteError, ShapeError, UnboundedSetError
+from fdi_lib.errors import EmptySetError, NonFiniteError, NumericalError, ShapeError, UnboundedSetError
 
 __all__ = ["Polytope", "convex_hull", "plot_polytope", "box_corners"]
 
@@ -160,7 +160,11 @@ def _enumerate_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray:
             return _qhull_vertices(M, m, centre)
         except Exception:  # pragma: no cover - qhull precision failure: fall back to cddlib
             pass
-    return _cdd_dd_vertices(M, m)
+    try:
+        return _cdd_dd_vertices(M, m)
+    except RuntimeError as exc:  # cddlib: "Numerical inconsistency is found"
+        raise NumericalError(f"Set(M, m): vertex enumeration failed in floating point for {len(m)} "
+                             f"inequalities in dimension {n} (Chebyshev radius {radius:.3g}): {exc}") from None
 
 
 def _cdd_dd_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray:
