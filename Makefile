@@ -5,6 +5,11 @@ PYTHON ?= $(shell command -v python3.11 2>/dev/null || command -v python3)
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
+# All matrices here are small: one BLAS thread per process avoids oversubscription (see
+# fdi_lib/threads.py); Monte Carlo parallelism is over processes.
+export OPENBLAS_NUM_THREADS := 1
+export OMP_NUM_THREADS := 1
+export MKL_NUM_THREADS := 1
 
 .PHONY: book test venv lock clean benchmarks
 

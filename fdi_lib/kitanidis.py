@@ -56,7 +56,7 @@ import scipy.linalg
 
 from fdi_lib.errors import NonFiniteError, RankConditionError, ShapeError
 from fdi_lib.filters import as_outputs
-from fdi_lib.models import FaultProfile, LTVModel, as_sequence
+from fdi_lib.models import FaultProfile, LTVModel, as_record, as_sequence
 
 __all__ = [
     "KitanidisGains",
@@ -237,21 +237,6 @@ class KitanidisResult:
     gains: KitanidisGains
 
 
-def _inputs(model: LTVModel, u: Any) -> np.ndarray:
-    N, l = model.n_steps, model.l
-    if u is None:
-        return np.zeros((N, l))
-    u_arr = np.asarray(u, dtype=float)
-    if u_arr.ndim == 1 and l == 1:
-        u_arr = u_arr[:, None]
-    if u_arr.ndim < 2 or u_arr.shape[-2:] != (N, l):
-        raise ShapeError(f"u: expected shape (..., {N}, {l}), got {np.shape(u)}")
-    if not np.all(np.isfinite(u_arr)):
-        idx = tuple(int(i) for i in np.argwhere(~np.isfinite(u_arr))[0])
-        raise NonFiniteError(f"u: expected finite values, got {u_arr[idx]!r} at index {idx}")
-    return u_arr
-
-
 def _check_gains(model: LTVModel, gains: Any, name: str = "gains") -> None:
     if not hasattr(gains, "K") or np.shape(gains.K) != (model.n_steps, model.n, model.p):
         raise ShapeError(f"{name}: expected gains with K of shape {(model.n_steps, model.n, model.p)} "
@@ -290,7 +275,7 @@ def kitanidis_filter(model: LTVModel, y: Any, u: Any = None, E: Any = None, *,
     y_arr = as_outputs(model, y)
     batch = y_arr.shape[:-2]
     N, n = model.n_steps, model.n
-    u_arr = _inputs(model, u)
+    u_arr = as_record(u, n_steps=model.n_steps, width=model.l, name="u")
     Gu = np.broadcast_to(np.einsum("kij,...kj->...ki", model.G, u_arr), (*batch, N, n))
     ybar = y_arr - np.einsum("kij,...kj->...ki", model.J, u_arr)
     xp = np.empty((*batch, N + 1, n))

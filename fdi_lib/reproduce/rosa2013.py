@@ -16,7 +16,8 @@ import numpy as np
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.sets.polytope import Polytope, convex_hull, plot_polytope
-from fdi_lib.sets.svo import SVOModel, run_architecture_i, run_svo, single_threaded_blas
+from fdi_lib.sets.svo import SVOModel, run_architecture_i, run_svo
+from fdi_lib.threads import single_threaded_blas
 from fdi_lib.systems import eclipse_uav as uav
 
 __all__ = ["toy_model", "toy_prior", "simulate_toy", "fig1", "fig2", "fig8", "fig9", "fig10", "fig11",

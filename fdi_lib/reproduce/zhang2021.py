@@ -28,6 +28,7 @@ from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.sparse import RegressionData, flat_range, lasso_path, least_squares_on_support, regression_data
 from fdi_lib.systems import zhang2021_example1 as ex
+from fdi_lib.threads import single_threaded_blas
 
 __all__ = ["Q_VALUES", "R_VALUES", "PAPER_TABLE1", "PAPER_TABLE2", "example1_regression", "snr_db",
            "snr_variants", "example1_chunk", "example1_rates", "example2_setup", "plot_fig2", "plot_fig3", "plot_table1",
@@ -88,15 +89,9 @@ def example1_regression(trials: ex.Example1Trial, *, r: float = 0.5) -> tuple[Re
     return regression_data(res.residuals, sig.on_residual, start=1), y
 
 
+@single_threaded_blas
 def example1_chunk(seeds: Sequence[np.random.SeedSequence], *, q: int, r: float) -> dict[str, np.ndarray]:
     """Monte Carlo chunk: success (both width readings), selected sizes and SNR for each trial."""
-    from threadpoolctl import threadpool_limits
-
-    with threadpool_limits(1):  # small matrices: BLAS threads only add contention
-        return _example1_chunk(seeds, q=q, r=r)
-
-
-def _example1_chunk(seeds: Sequence[np.random.SeedSequence], *, q: int, r: float) -> dict[str, np.ndarray]:
     model = ex.example1_model(r=r)
     trials = ex.draw_trials(model, trial_rngs(seeds), q=q)
     reg, y = example1_regression(trials, r=r)

@@ -43,30 +43,11 @@ import numpy as np
 
 from fdi_lib.errors import EmptySetError, ModelError, NonFiniteError, ShapeError, UnboundedSetError
 from fdi_lib.sets.polytope import Polytope, _hull_hrep, _enumerate_vertices, box_corners
+from fdi_lib.threads import single_threaded_blas
 
-__all__ = ["single_threaded_blas", "SVOModel", "SetValuedObserver", "SVORun", "run_svo", "FDIResult", "run_architecture_i",
+__all__ = ["SVOModel", "SetValuedObserver", "SVORun", "run_svo", "FDIResult", "run_architecture_i",
            "run_architecture_ii", "default_template", "actuator_effectiveness_model", "sensor_bias_model",
            "dynamics_entry_model"]
-
-
-def single_threaded_blas(func):
-    """Decorator: run ``func`` with BLAS limited to one thread (threadpoolctl, if installed).
-
-    The SVO works on 4x4 to 6x6 matrices; multi-threaded OpenBLAS on such sizes, on a busy
-    machine, was measured 500 times slower (10 ms instead of 20 us per matrix exponential).
-    """
-    import functools
-
-    @functools.wraps(func)
-    def wrapper(*args, **kwargs):
-        try:
-            from threadpoolctl import threadpool_limits
-        except ImportError:  # pragma: no cover - threadpoolctl comes with scikit-learn
-            return func(*args, **kwargs)
-        with threadpool_limits(limits=1, user_api="blas"):
-            return func(*args, **kwargs)
-
-    return wrapper
 
 
 def _arr(name: str, a: Any, ndim: int) -> np.ndarray:

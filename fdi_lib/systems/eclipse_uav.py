@@ -36,7 +36,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from fdi_lib.errors import ModelError
-from fdi_lib.sets.svo import single_threaded_blas
+from fdi_lib.threads import single_threaded_blas
 
 __all__ = ["TABLE3", "V_TRIM", "ALPHA_TRIM", "TS", "MU_READING", "NOISE_BOUND", "DIST_ACCEL",
            "FAULTS", "SCENARIOS", "lpv_matrices", "zoh", "discretize", "measurement_matrix",
