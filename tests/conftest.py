@@ -3,6 +3,11 @@
 from __future__ import annotations
 
 import pytest
+from hypothesis import settings
+
+# Property tests draw their examples deterministically: CI runs are reproducible.
+settings.register_profile("fdi", derandomize=True, deadline=None)
+settings.load_profile("fdi")
 
 from fdi_lib.systems.random_ltv import random_ltv_model
 
