@@ -20,7 +20,7 @@ from fdi_lib.sets.svo import SVOModel, run_architecture_i, run_svo
 from fdi_lib.threads import single_threaded_blas
 from fdi_lib.systems import eclipse_uav as uav
 
-__all__ = ["toy_model", "toy_prior", "simulate_toy", "fig1", "fig2", "fig8", "fig9", "fig10", "fig11",
+__all__ = ["toy_model", "toy_prior", "simulate_toy", "fig1", "fig2", "fig8", "fig9", "fig10", "fig11", "explanation_scale", "hidden_fault_study",
            "fig12", "timing", "uav_study", "UAV_X0", "plot_fig1", "plot_fig2", "plot_alpha",
            "plot_fig11", "plot_fig12", "plot_timing"]
 
@@ -466,3 +466,175 @@ def timing(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
              "step_ms_p90": "not stated", "max_facets": "not stated", "max_vertices": "not stated"}
     return ReproductionResult("rosa2013-timing", headline, paper, {"seed": seed, "duration_s": 2.0},
                               {"out": out})
+
+
+# ----------------------------------------------------------------------------- why the elevator and M_u faults stay hidden
+
+
+def explanation_scale(run: "uav.UAVRun", *, kind: str = "nominal", scale: str = "disturbance", start: int = 0,
+                      stop: int | None = None, dist_scale: float = 1.0) -> float:
+    """Smallest multiplier s of one bound for which the SVO model still explains the record (one LP).
+
+    The model is the one of :func:`fdi_lib.systems.eclipse_uav.svo_models` with every uncertain
+    parameter frozen at the centre of its interval (Delta = 0, no input uncertainty). The linear
+    program finds states x(start..stop), disturbances d and noises n with
+
+        x(k+1) = A(k) x(k) + B(k) u(k) + L(k) d(k),   y(k) = C x(k) + n(k),   x(0) in UAV_X0 (if start = 0),
+
+    and minimises s subject to |d_i(k)| <= s, |n_j(k)| <= nbar_j (``scale="disturbance"``) or
+    |d_i(k)| <= dist_scale, |n_j(k)| <= s nbar_j (``scale="noise"``).
+
+    How to read it: Delta = 0 is one admissible value, so when s <= 1 the data of the window are
+    reproduced by the healthy model within the bounds, and **no** SVO built on that model (exact
+    polytopes, any horizon N, any template) can become empty on that window. Conversely an SVO
+    whose disturbance bound is ``s_bound`` times the design one cannot detect anything on the
+    window unless ``s_bound`` < s.
+
+    Parameters
+    ----------
+    run : UAVRun
+        The record (its measured airspeed also schedules the model).
+    kind : str
+        SVO model, as in ``svo_models``.
+    scale : {"disturbance", "noise"}
+        Which bound is scaled.
+    start, stop : int
+        Window of samples [start, stop] (stop defaults to the last sample).
+    dist_scale : float
+        Disturbance multiplier kept fixed when ``scale="noise"``.
+
+    Returns
+    -------
+    float
+        The minimal s (``inf`` if no s works, which cannot happen for these models).
+    """
+    import scipy.sparse as sp
+    from scipy.optimize import linprog
+
+    from fdi_lib.errors import ModelError, NumericalError
+
+    if scale not in ("disturbance", "noise"):
+        raise ModelError(f"scale: expected 'disturbance' or 'noise', got {scale!r}")
+    K = len(run.y) - 1
+    stop = K if stop is None else int(stop)
+    if not (0 <= int(start) < stop <= K):
+        raise ModelError(f"start, stop: expected 0 <= start < stop <= {K}, got ({start}, {stop})")
+    start = int(start)
+    models = uav.svo_models(run, kind, dist_scale=1.0)
+    ms = [models(k) for k in range(start, stop + 1)]
+    T, n, nd = stop - start, 4, ms[0].L.shape[1]
+    nx, nv = (T + 1) * n, (T + 1) * n + T * nd + 1      # variables: x(start..stop), d(start..stop-1), s
+    si = nv - 1
+    eq_r, eq_c, eq_v, beq = [], [], [], np.zeros(T * n)
+    for j in range(T):
+        m = ms[j]
+        for a in range(n):
+            r = j * n + a
+            eq_r.append(r); eq_c.append((j + 1) * n + a); eq_v.append(1.0)
+            for b in range(n):
+                eq_r.append(r); eq_c.append(j * n + b); eq_v.append(-m.A[a, b])
+            for b in range(nd):
+                eq_r.append(r); eq_c.append(nx + j * nd + b); eq_v.append(-m.L[a, b])
+        beq[j * n:(j + 1) * n] = m.B @ run.u[start + j]
+    Aeq = sp.csr_matrix((eq_v, (eq_r, eq_c)), shape=(T * n, nv))
+    ub_r, ub_c, ub_v, bub = [], [], [], []
+    row = 0
+    for j in range(T * nd):                         # |d| <= s  or  |d| <= dist_scale
+        for sg in (1.0, -1.0):
+            ub_r.append(row); ub_c.append(nx + j); ub_v.append(sg)
+            if scale == "disturbance":
+                ub_r.append(row); ub_c.append(si); ub_v.append(-1.0); bub.append(0.0)
+            else:
+                bub.append(float(dist_scale))
+            row += 1
+    for j, m in enumerate(ms):                     # |y - C x| <= nbar  or  <= s nbar
+        y = run.y[start + j]
+        for o in range(m.n_y):
+            for sg in (1.0, -1.0):
+                for b in range(n):
+                    ub_r.append(row); ub_c.append(j * n + b); ub_v.append(sg * m.C[o, b])
+                if scale == "noise":
+                    ub_r.append(row); ub_c.append(si); ub_v.append(-m.noise[o]); bub.append(sg * y[o])
+                else:
+                    bub.append(sg * y[o] + m.noise[o])
+                row += 1
+    Aub = sp.csr_matrix((ub_v, (ub_r, ub_c)), shape=(row, nv))
+    bounds = [(None, None)] * (nv - 1) + [(0.0, None)]
+    if start == 0:
+        lo, hi = UAV_X0.bounding_box()
+        bounds[:n] = list(zip(lo, hi))
+    c = np.zeros(nv)
+    c[si] = 1.0
+    for method in ("highs-ds", "highs-ipm", "highs"):   # fall back when one HiGHS solver stalls numerically
+        res = linprog(c, A_ub=Aub, b_ub=np.array(bub), A_eq=Aeq, b_eq=beq, bounds=bounds, method=method)
+        if res.status in (0, 2):
+            break
+    if res.status == 2:
+        return float("inf")
+    if res.status != 0:
+        raise NumericalError(f"explanation_scale: the linear program failed ({res.message})")
+    return float(res.x[si])
+
+
+#: detection times (ms after onset) at which :func:`hidden_fault_study` evaluates the explanation scale
+HIDDEN_TIMES_MS = (20, 30, 50, 100, 500, 1000, 2500)
+#: disturbance multipliers of the template-SVO sensitivity study
+HIDDEN_SCALES = (1.0, 0.1, 0.01)
+
+
+@lru_cache(maxsize=4)
+def hidden_fault_study(seed: int, duration: float = 3.0) -> dict:
+    """Why the elevator and M_u step faults are not detected: effect sizes, LP bounds, sensitivity.
+
+    Healthy and faulty runs share ``seed``, hence the same disturbance and noise sequences.
+
+    Returns
+    -------
+    dict with keys
+        ``effect``: fault -> output -> max_k |y_faulty(k) - y_healthy(k)| divided by the SVO noise
+        bound of that output (sensor bound plus margin);
+        ``width``: fault -> state -> median width of the nominal template SVO's bounding box on the
+        faulty run, together with ``width_needed``: the w-offset (m/s) whose pitch-rate effect
+        (through M_w) equals the fault's largest one-step pitch-rate effect;
+        ``explanation``: run ("none", "elevator", "dynamics") -> detection time (ms, as in Fig. 11)
+        -> :func:`explanation_scale` of the disturbance on the window from 0 to the sample at
+        which that detection time would be reached (an SVO whose disturbance bound is s times ours
+        cannot have detected by then unless s is below this number);
+        ``first_sample_noise``: run -> smallest multiplier of the noise bounds that explains the
+        record up to the first sample on which an actuator fault is visible (20 ms after onset)
+        with no disturbance at all;
+        ``full_record_noise``: run -> the same over the whole record, disturbances at our bound;
+        ``template``: disturbance multiplier -> run -> detection time (ms) of the nominal template
+        SVO with that multiplier (None: never empty within ``duration``);
+        ``onset``: the onset sample.
+    """
+    runs = {f: uav.simulate(f, "step", rng=np.random.default_rng(seed), duration=duration)
+            for f in ("none", "elevator", "dynamics")}
+    onset = runs["elevator"].onset_step
+    nb = uav.NOISE_BOUND + uav.SVO_NOISE_MARGIN
+    outputs = ("airspeed", "alpha", "theta", "q")
+    effect = {f: dict(zip(outputs, (np.abs(runs[f].y - runs["none"].y).max(axis=0) / nb).tolist()))
+              for f in ("elevator", "dynamics")}
+    width, needed = {}, {}
+    A37, _ = uav.lpv_matrices(uav.V_TRIM)
+    for f in ("elevator", "dynamics"):
+        res = run_svo(uav.svo_models(runs[f], "nominal"), runs[f].u, runs[f].y, UAV_X0)
+        w = np.nanmedian(res.upper[onset:] - res.lower[onset:], axis=0)
+        width[f] = dict(zip(("u", "w", "theta", "q"), w.tolist()))
+        # one-step pitch-rate effect of the fault, from the true states and inputs, and the w offset doing the same
+        dq = np.abs(runs[f].x[onset + 1:, 3] - runs[f].x[onset:-1, 3]
+                    - (runs["none"].x[onset + 1:, 3] - runs["none"].x[onset:-1, 3])).max()
+        needed[f] = float(dq / (abs(A37[3, 1]) * uav.TS))
+    K = len(runs["none"].y) - 1
+    explanation = {f: {t: explanation_scale(r, stop=min(K, onset - 1 + t // 10)) for t in HIDDEN_TIMES_MS}
+                   for f, r in runs.items()}
+    template = {}
+    for s in HIDDEN_SCALES:
+        template[s] = {}
+        for f, r in runs.items():
+            e = run_svo(uav.svo_models(r, "nominal", dist_scale=s), r.u, r.y, UAV_X0).empty_at
+            template[s][f] = None if e is None else (e - onset + 1) * uav.TS * 1e3
+    first = {f: explanation_scale(r, scale="noise", dist_scale=0.0, stop=onset + 1) for f, r in runs.items()}
+    full = {f: explanation_scale(r, scale="noise") for f, r in runs.items()}
+    return {"effect": effect, "width": width, "width_needed": needed, "explanation": explanation,
+            "first_sample_noise": first, "full_record_noise": full, "template": template, "onset": onset}

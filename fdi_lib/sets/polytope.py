@@ -106,8 +106,12 @@ def _chebyshev(M: np.ndarray, m: np.ndarray, cap: float = 1e6) -> tuple[str, np.
     rows = np.vstack([rows, np.r_[cap, np.zeros(n), -1.0], np.r_[0.0, np.zeros(n), 1.0]])
     obj = np.r_[0.0, np.zeros(n), 1.0]
     lp = cdd.linprog_from_array(np.vstack([rows, obj]), obj_type=cdd.LPObjType.MAX)
-    cdd.linprog_solve(lp)
-    if lp.status == cdd.LPStatusType.OPTIMAL:
+    try:
+        cdd.linprog_solve(lp)
+        solved = lp.status == cdd.LPStatusType.OPTIMAL
+    except RuntimeError:  # cddlib's float simplex can abort ("LP cycling", "numerical inconsistency")
+        solved = False
+    if solved:
         sol = np.array(lp.primal_solution, dtype=float)
         x, r = sol[:n], float(sol[n])
         # accept cddlib's answer only if it verifies (its float simplex can fail silently)
@@ -208,7 +212,11 @@ def _cdd_hull_exact(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     import cdd
 
     mat = cdd.matrix_from_array(np.column_stack([np.ones(len(V)), V]), rep_type=cdd.RepType.GENERATOR)
-    poly = cdd.polyhedron_from_matrix(mat)
+    try:
+        poly = cdd.polyhedron_from_matrix(mat)
+    except RuntimeError as exc:  # cddlib: "Numerical inconsistency is found"
+        raise NumericalError(f"conv(V): facet enumeration failed in floating point for {len(V)} points in "
+                             f"dimension {V.shape[1]} (flat or nearly flat set): {exc}") from None
     ineq = cdd.copy_inequalities(poly)
     arr = np.array(ineq.array, dtype=float).reshape(-1, V.shape[1] + 1)
     lin = sorted(ineq.lin_set)

@@ -353,7 +353,7 @@ SVO_NOISE_MARGIN = np.array([0.05, np.deg2rad(0.06), 1e-5, 1e-5])  # linearisati
 SVO_DIST_MARGIN = np.array([2e-3, 1e-3, 2e-6, 2e-5])                # per-step: nonlinear terms, ZOH
 
 
-def svo_models(run: UAVRun, kind: str = "nominal"):
+def svo_models(run: UAVRun, kind: str = "nominal", *, dist_scale: float = 1.0, noise_scale: float = 1.0):
     """Per-step SVO models (callable k -> SVOModel) for the nominal plant or a fault hypothesis.
 
     Parameters
@@ -364,6 +364,13 @@ def svo_models(run: UAVRun, kind: str = "nominal"):
         SVO #1 (nominal), #2 (alpha-sensor noise bound enlarged by 5 deg), #3 (elevator
         effectiveness in [0.5, 1]: B + B_1 Delta, §2), #4 (M_u scale in [1, 1.3]: A + A_2 Delta),
         or the Global SVO of Architecture II (all three at once).
+    dist_scale : float
+        Multiplier of the whole per-step disturbance bound L (simulation bound plus margin);
+        1 is the design value. Used by the sensitivity study of the book (bound vs detection);
+        values below 1 assume less than the simulation injects, so false alarms become possible.
+    noise_scale : float
+        Multiplier of the sensor noise bounds (noise bound plus margin, before the alpha-fault
+        enlargement of SVO #2), likewise.
 
     Notes
     -----
@@ -374,11 +381,14 @@ def svo_models(run: UAVRun, kind: str = "nominal"):
 
     if kind not in ("nominal", "global") + FAULTS:
         raise ModelError(f"kind: expected 'nominal', 'global' or one of {FAULTS}, got {kind!r}")
+    for name, val in (("dist_scale", dist_scale), ("noise_scale", noise_scale)):
+        if not isinstance(val, (int, float, np.integer, np.floating)) or not np.isfinite(val) or val < 0:
+            raise ModelError(f"{name}: expected a finite non-negative number, got {val!r}")
     C = measurement_matrix()
-    noise = NOISE_BOUND + SVO_NOISE_MARGIN
+    noise = (NOISE_BOUND + SVO_NOISE_MARGIN) * float(noise_scale)
     if kind in ("alpha", "global"):
         noise = noise + np.r_[0.0, np.deg2rad(5.0) * 1.02, 0.0, 0.0]
-    L = np.diag(np.r_[DIST_ACCEL[:2] * TS, 0.5 * DIST_ACCEL[2] * TS**2, DIST_ACCEL[2] * TS] + SVO_DIST_MARGIN)
+    L = np.diag(np.r_[DIST_ACCEL[:2] * TS, 0.5 * DIST_ACCEL[2] * TS**2, DIST_ACCEL[2] * TS] + SVO_DIST_MARGIN) * float(dist_scale)
     dV = NOISE_BOUND[0] + SVO_V_MARGIN
     mu_c, mu_r = (1.15, 0.15) if kind in ("dynamics", "global") else (1.0, 0.0)
     eff_c, eff_r = (0.75, 0.25) if kind in ("elevator", "global") else (1.0, 0.0)

@@ -147,3 +147,32 @@ def test_bad_inputs_have_clear_messages():
         Polytope.box([0, 0], [1, 1]).project([0, 0])
     with pytest.raises(ShapeError, match=r"x: expected shape \(2,\)"):
         Polytope.box([0, 0], [1, 1]).contains(np.zeros(3))
+
+
+def test_chebyshev_falls_back_to_highs_when_cddlib_aborts(monkeypatch):
+    """cddlib's float simplex can raise ("LP cycling"); the centre must then come from HiGHS."""
+    import cdd
+
+    from fdi_lib.sets import polytope as poly
+
+    def boom(lp):
+        raise RuntimeError("*Error: Possibly an LP cycling occurs.")
+
+    monkeypatch.setattr(cdd, "linprog_solve", boom)
+    M = np.vstack([np.eye(2), -np.eye(2)])
+    status, centre, radius = poly._chebyshev(M, np.array([1.0, 2.0, 1.0, 0.0]))
+    assert status == "optimal" and radius == pytest.approx(1.0)
+    assert Polytope.box([-1, 0], [1, 2]).vertices().shape == (4, 2)
+
+
+def test_cdd_hull_failure_is_a_numerical_error(monkeypatch):
+    import cdd
+
+    from fdi_lib.errors import NumericalError
+
+    def boom(mat):
+        raise RuntimeError("*Error: Numerical inconsistency is found.")
+
+    monkeypatch.setattr(cdd, "polyhedron_from_matrix", boom)
+    with pytest.raises(NumericalError, match="facet enumeration failed"):
+        _cdd_hull_exact(np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]]))

@@ -69,3 +69,27 @@ def test_bad_inputs():
         uav.lpv_matrices(-1.0)
     with pytest.raises(ModelError, match="kind: expected"):
         uav.svo_models(uav.simulate(rng=np.random.default_rng(0), duration=0.05), "rudder")
+
+
+def test_elevator_and_mu_faults_reach_the_plant():
+    """Same seed: identical before the onset, then a pitch-rate difference of many noise bounds."""
+    h = uav.simulate("none", "step", rng=np.random.default_rng(5), duration=1.0)
+    for fault in ("elevator", "dynamics"):
+        f = uav.simulate(fault, "step", rng=np.random.default_rng(5), duration=1.0)
+        k = f.onset_step
+        np.testing.assert_array_equal(f.y[:k + 1], h.y[:k + 1])   # the fault acts from u(k) on
+        assert np.abs(f.y[k + 1:, 3] - h.y[k + 1:, 3]).max() > 5 * uav.NOISE_BOUND[3]
+        assert np.all(np.abs(f.y[k + 1:, 3] - h.y[k + 1:, 3]) > 0)
+
+
+def test_svo_model_scales():
+    run = uav.simulate(rng=np.random.default_rng(0), duration=0.05)
+    m1, m2 = uav.svo_models(run)(0), uav.svo_models(run, dist_scale=0.25, noise_scale=0.5)(0)
+    np.testing.assert_allclose(m2.L, 0.25 * m1.L)
+    np.testing.assert_allclose(m2.noise, 0.5 * m1.noise)
+    np.testing.assert_allclose(m2.A, m1.A)
+    for bad in (-1.0, np.nan, "1"):
+        with pytest.raises(ModelError, match="dist_scale: expected a finite non-negative number"):
+            uav.svo_models(run, dist_scale=bad)
+    with pytest.raises(ModelError, match="noise_scale"):
+        uav.svo_models(run, noise_scale=np.inf)
