@@ -30,6 +30,7 @@ def interactive_figure(callback: Callable[..., Any], **sliders: Any):
     """
     import ipywidgets as widgets
     import matplotlib.pyplot as plt
+    from IPython.display import display
 
     out = widgets.Output()
     for w in sliders.values():
@@ -41,7 +42,10 @@ def interactive_figure(callback: Callable[..., Any], **sliders: Any):
         with out:
             out.clear_output(wait=True)
             state["fig"] = callback(**{k: w.value for k, w in sliders.items()}, fig=state["fig"])
-            plt.show(state["fig"])
+            display(state["fig"])
+            # Shown in the output area only: keep pyplot from showing it again at the end of the
+            # cell. A closed figure can still be cleared and redrawn by the next callback.
+            plt.close(state["fig"])
 
     for w in sliders.values():
         w.observe(redraw, names="value")

@@ -40,3 +40,18 @@ def test_detection_over_seeds_is_robust():
         run = unstable_run(theta=(4.0, 0.0), seed=seed)
         k = int(np.nanargmax(run.glr.statistic))
         assert abs(run.glr.onset[k] - 201) <= 2
+
+
+def test_plot_functions_draw_the_figures():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from fdi_lib.reproduce import get
+
+    for rid, n_axes in [("zb2014-fig1", 1), ("zb2014-fig2", 1), ("zb2014-fig3", 2), ("zb2014-fig4", 2)]:
+        rep = get(rid)
+        fig = rep.plot(rep())
+        assert len(fig.axes) == n_axes
+        assert all(ax.lines for ax in fig.axes), f"{rid}: an empty panel"
+    fig1 = get("zb2014-fig1").plot(get("zb2014-fig1")())
+    assert len(fig1.axes[0].lines) == len(ONSETS) + 1  # one curve per onset + the paper's bound
