@@ -113,6 +113,8 @@ def glr_null_calibration(model: LTVModel, fault: FaultProfile, *, n_runs: int, s
         Root seed (per-run streams, identical for any ``jobs``).
     alpha : float
         Nominal level of the reported rejection rate.
+    jobs : int
+        Parallel workers of :func:`fdi_lib.montecarlo.run_monte_carlo` (same results for any value).
     u : array_like, optional
         Known input ``(N, l)``; default zeros.
     """
@@ -131,6 +133,8 @@ def minmax_null_calibration(model: LTVModel, fault: FaultProfile, a: Sequence[in
 
     Parameters
     ----------
+    model, fault, n_runs, seed, alpha, jobs, u
+        As in :func:`glr_null_calibration` (the data are simulated with ``theta``).
     a : sequence of int
         Indices of ``theta_a``; ``theta[a]`` must be zero.
     theta : sequence of float

@@ -100,6 +100,8 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
         batch-invariant; give it explicitly to reproduce a run bit for bit.
     progress : bool
         Show a tqdm progress bar over chunks.
+    description : str
+        Label of the progress bar.
 
     Returns
     -------

@@ -156,6 +156,10 @@ def drift_signature(model: LTVModel, gains: KalmanGains, Gamma: np.ndarray, thet
 
     Parameters
     ----------
+    model : LTVModel
+        Fault-free model.
+    gains : KalmanGains
+        Gains of the predictor (Kalman, or Kitanidis via :func:`kitanidis_predictor_gains`).
     Gamma : numpy.ndarray
         ``Gamma_k`` of (9), ``(N+1, n, m)`` (:attr:`fdi_lib.signatures.Signature.Gamma`).
     theta_path : array_like
@@ -203,6 +207,8 @@ def innovation_split(model: LTVModel, gains: KalmanGains, innovations: Any, inno
 
     Parameters
     ----------
+    model, gains
+        As in :func:`drift_signature`.
     innovations, innovations0 : array_like
         ``eps_k`` of the predictor with ``gains`` on the faulty record and ``eps0_k`` on the
         fault-free record with the same noise, ``(*batch, N, p)``.
@@ -515,6 +521,10 @@ def solution2(model: LTVModel, y: Any, u: Any = None, *, Psi: Any, lam: float, e
 
     Parameters
     ----------
+    model : LTVModel
+        Fault-free model; the standard Kalman filter is designed for it.
+    y, u : array_like
+        Outputs ``(*batch, N, p)`` and inputs ``(N, l)`` (default zeros).
     Psi : array_like
         ``Psi_k`` ``(n, m)`` or ``(N, n, m)``.
     lam : float
@@ -524,6 +534,8 @@ def solution2(model: LTVModel, y: Any, u: Any = None, *, Psi: Any, lam: float, e
         than the innovation under no fault, so the level is conservative).
     start : int
         First sample at which an energy alarm may be raised (RLS warm-up).
+    kalman : KalmanGains, optional
+        Precomputed :func:`fdi_lib.filters.kalman_gains` of ``model`` (shared across calls).
     """
     kal = kalman_gains(model) if kalman is None else kalman
     eps = kalman_filter(model, y, u, gains=kal).innovations

@@ -130,7 +130,9 @@ def simulate(model: LTVModel, *, rng: np.random.Generator | None = None, noise: 
         Closed loop: ``u_k = controller(k, y_k)`` with ``y_k`` of shape ``(*batch, p)``
         (requires ``J_k = 0``, otherwise the loop is algebraic). Exclusive with ``u``.
     fault : FaultProfile, optional
-        ``Psi_k`` and ``Phi_k``; with ``theta`` the fault vector, shape ``(m,)``.
+        ``Psi_k`` and ``Phi_k``.
+    theta : array_like, optional
+        The fault vector, shape ``(m,)``; required with ``fault``.
     size : int, optional
         Number of realisations when drawing noise with ``rng``.
 

@@ -17,3 +17,12 @@ make_random_ltv = random_ltv_model
 @pytest.fixture
 def random_ltv():
     return random_ltv_model
+
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    """Close the figures a test opened (pyplot keeps them alive otherwise)."""
+    yield
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
