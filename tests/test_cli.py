@@ -48,3 +48,8 @@ def test_unknown_id_and_bad_arguments(capsys):
 def test_describe_prints_the_docstring(capsys):
     assert main(["reproduce", "zb2014-fig1", "--describe"]) == 0
     assert "gamma_norm_max" in capsys.readouterr().out
+
+
+def test_unknown_keyword_is_rejected_by_name():
+    with pytest.raises(TypeError, match="unexpected keyword argument 'sed'"):
+        reproduce("zb2014-fig1", sed=3)
