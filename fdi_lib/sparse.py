@@ -39,6 +39,12 @@ with between 1 and ``max_size`` non-zero components (default ``m // 2``: the spa
 assumption) are candidates, and the window ends where the support first exceeds ``max_size``. Without these bounds the log reading would favour the last
 ranges near ``lambda = 0`` (nearly all components non-zero, i.e. no selection at all), whose
 log-width is unbounded.
+
+:func:`grid_flat_range` is the same rule read on a finite geometric grid of ``lambda`` values
+(what "numerically exploring different values of lambda" gives, Zhang 2021, Sec. IV after (39)):
+the support at each grid point is read off the exact path, the widest *run* of grid points with
+constant support size wins. It tends to :func:`flat_range` (``scale="log"``) as the grid gets finer,
+and misses ranges shorter than the grid step.
 """
 
 from __future__ import annotations
@@ -58,6 +64,8 @@ __all__ = [
     "lasso_cvxpy",
     "FlatRange",
     "flat_range",
+    "GridFlatRange",
+    "grid_flat_range",
     "Diagnosis",
     "diagnose",
     "least_squares_on_support",
@@ -368,6 +376,111 @@ def flat_range(path: LassoPath, *, scale: Scale = "log", lambda_ratio: float = 1
     tol = 1e-12 * max(1.0, float(np.abs(path.coefs).max(initial=0.0)))
     return FlatRange(low=lo, high=h, middle=mid, size=size, support=np.flatnonzero(np.abs(c) > tol),
                      width=float(widths[best]), scale=scale)
+
+
+@dataclass(frozen=True)
+class GridFlatRange:
+    """The widest run of grid points with a constant number of non-zero components.
+
+    Attributes
+    ----------
+    grid : numpy.ndarray
+        The ``lambda`` grid, decreasing, shape ``(n_grid,)``.
+    sizes : numpy.ndarray
+        Support size at each grid point, shape ``(n_grid,)``; ``-1`` below the window (where the
+        support has exceeded ``max_size``, or the path was stopped).
+    start, stop : int
+        The run is ``grid[start:stop]`` (``stop - start`` points, the width).
+    middle : float
+        ``grid[(start + stop - 1) // 2]``: the middle grid point of the run (for an even number
+        of points, the larger ``lambda`` of the two middle ones).
+    size : int
+        Number of non-zero components on the run.
+    support : numpy.ndarray
+        Indices of the non-zero components at ``middle`` (the support of the path interval that
+        holds it).
+    """
+
+    grid: np.ndarray
+    sizes: np.ndarray
+    start: int
+    stop: int
+    middle: float
+    size: int
+    support: np.ndarray
+
+
+def grid_flat_range(path: LassoPath, n_grid: int, *, lambda_ratio: float = 1e-4,
+                    max_size: int | None = None) -> GridFlatRange:
+    """The flat-range rule of Zhang (2021, Sec. IV, after (39)) on a finite ``lambda`` grid.
+
+    The grid is ``n_grid`` geometrically spaced values from ``lambda_max = path.lambdas[0]`` down to
+    ``lambda_ratio * lambda_max`` (both included; Matlab's ``lasso`` builds its default grid this
+    way). The Lasso path of (39) is piecewise linear in ``lambda`` with a constant support between
+    consecutive breakpoints, so the support size at each grid point is read off the exact path (no
+    solver). Grid points with support size 0 or above ``max_size`` are not candidates, and the
+    window ends at the first grid point where the support exceeds ``max_size`` (as in
+    :func:`flat_range`). The widest run of consecutive candidate points with the same size wins
+    (ties: the run at the larger ``lambda``); its middle point is the ``lambda`` used. Since the
+    grid is geometric, a run's length measures log width: as ``n_grid`` grows the rule tends to
+    :func:`flat_range` with ``scale="log"``; a range shorter than the grid step
+    ``log(1 / lambda_ratio) / (n_grid - 1)`` may hold no grid point at all.
+
+    Parameters
+    ----------
+    path : LassoPath
+        Exact path, e.g. from :func:`lasso_path`; it must reach ``lambda_ratio * lambda_max`` or a
+        support larger than ``max_size``.
+    n_grid : int
+        Number of grid points, at least 3.
+    lambda_ratio : float
+        Lower end of the grid as a fraction of ``lambda_max``, in ``(0, 1)``.
+    max_size : int, optional
+        Largest support size considered; default ``m // 2``.
+
+    Returns
+    -------
+    GridFlatRange
+    """
+    if isinstance(n_grid, bool) or not isinstance(n_grid, (int, np.integer)) or n_grid < 3:
+        raise ModelError(f"n_grid: expected an integer >= 3, got {n_grid!r}")
+    if not 0 < lambda_ratio < 1:
+        raise ModelError(f"lambda_ratio: expected a number in (0, 1), got {lambda_ratio!r}")
+    if max_size is not None and (isinstance(max_size, bool) or not isinstance(max_size, (int, np.integer))
+                                 or max_size < 1):
+        raise ModelError(f"max_size: expected a positive integer, got {max_size!r}")
+    a = path.lambdas
+    if a.size < 2 or not a[0] > 0:
+        raise ModelError("path: expected at least two breakpoints and lambda_max > 0")
+    top = path.coefs.shape[0] // 2 if max_size is None else int(max_size)
+    grid = np.geomspace(float(a[0]), lambda_ratio * float(a[0]), int(n_grid))
+    grid[0] = a[0]
+    act = path._active()  # (m, K): support on each interval (a[i+1], a[i])
+    isz = act.sum(axis=0)
+    # interval i is (a[i+1], a[i]); lambda >= a[0] has the empty support
+    idx = np.searchsorted(-a, -grid, side="right") - 1
+    sizes = np.where(grid >= a[0], 0, isz[np.clip(idx, 0, isz.size - 1)])  # theta_hat(lambda_max) = 0
+    over = np.flatnonzero(isz > top)
+    if over.size:  # the window ends where the support first exceeds max_size
+        end = float(a[over[0]])
+    elif a[-1] <= grid[-1] * (1 + 1e-9):  # the path covers the grid (up to rounding of its lower end)
+        end = float(grid[-1])
+    else:
+        raise ModelError(f"path: stops at lambda = {a[-1]:g} > lambda_ratio * lambda_max = {grid[-1]:g} "
+                         "with no support above max_size; compute it further (lasso_path lambda_min)")
+    sizes = np.where(grid >= end, sizes, -1)
+    starts = np.concatenate([[0], np.flatnonzero(np.diff(sizes)) + 1])  # runs of equal size
+    stops = np.append(starts[1:], grid.size)
+    lengths = np.where((sizes[starts] >= 1) & (sizes[starts] <= top), stops - starts, 0)
+    best = int(np.argmax(lengths))  # the first (largest lambda) on ties
+    if lengths[best] == 0:
+        raise ModelError(f"path: no grid point of the {n_grid}-point grid has between 1 and max_size "
+                         "non-zero components")
+    start, stop = int(starts[best]), int(stops[best])
+    k = (start + stop - 1) // 2
+    support = np.flatnonzero(act[:, min(max(int(idx[k]), 0), isz.size - 1)])  # support of the interval of grid[k]
+    return GridFlatRange(grid=grid, sizes=sizes, start=start, stop=stop, middle=float(grid[k]),
+                         size=int(sizes[start]), support=support)
 
 
 def least_squares_on_support(X: Any, y: Any, support: Any) -> np.ndarray:

@@ -153,3 +153,82 @@ def test_truncated_path_gives_the_same_flat_range_as_the_full_path():
             for c in (flat_range(cut, scale=scale), flat_range(short, scale=scale)):
                 np.testing.assert_array_equal(a.support, c.support)
                 assert a.low == pytest.approx(c.low, rel=1e-9) and a.high == pytest.approx(c.high, rel=1e-9)
+
+
+def _exact_path(lambdas, first_ranges):
+    """Hand-made path on breakpoints ``lambdas`` (ending at 0): sizes [a, 3, 2, 4] on its 4 intervals.
+
+    Components 0 and 2 (and 1 when ``first_ranges == 2``) are active where stated; interval 1 is
+    where component 2 alone enters and leaves (values cancel at the midpoints of its neighbours).
+    """
+    coefs = np.zeros((6, 5))
+    coefs[0] = [0, 1, 1, 1, 1]  # active on every interval
+    coefs[1] = [0, 1, 1, 1, 1] if first_ranges == 2 else [0, 0, 1, 1, 1]
+    coefs[2] = [0, 0, 1, -1, 1]  # active on interval 1 only
+    coefs[3] = coefs[4] = [0, 0, 0, 0, 1]  # enter on interval 3
+    return LassoPath(lambdas=np.asarray(lambdas, dtype=float), coefs=coefs, n_samples=10)
+
+
+def test_grid_flat_range_on_a_hand_made_path_misses_a_short_range():
+    """Sizes 1 on (0.9, 10), 3 on (0.8, 0.9) (short), 2 on (2e-3, 0.8), 4 below; max_size 3."""
+    from fdi_lib.sparse import grid_flat_range
+
+    path = _exact_path([10, 0.9, 0.8, 2e-3, 0.0], first_ranges=1)
+    np.testing.assert_array_equal(path.support_sizes(), [1, 3, 2, 4])
+    exact = flat_range(path, scale="log", max_size=3)
+    assert (exact.low, exact.high, exact.size) == (2e-3, 0.8, 2)
+    # 9 points, one per half decade from 10 to 1e-3: the size-3 range (0.8, 0.9) holds no point
+    g = grid_flat_range(path, 9, lambda_ratio=1e-4, max_size=3)
+    np.testing.assert_allclose(g.grid, np.geomspace(10, 1e-3, 9))
+    np.testing.assert_array_equal(g.sizes, [0, 1, 1, 2, 2, 2, 2, 2, -1])  # 1e-3 is past the window end
+    assert (g.start, g.stop, g.size) == (3, 8, 2) and g.middle == pytest.approx(g.grid[5])
+    np.testing.assert_array_equal(g.support, [0, 1])
+    # a finer grid (one point per 0.01 decade) sees the short range
+    fine = grid_flat_range(path, 401, lambda_ratio=1e-4, max_size=3)
+    assert 3 in fine.sizes and fine.size == 2
+    # when the short range separates two ranges of the same size, the coarse grid merges them
+    merged = _exact_path([10, 0.9, 0.8, 2e-3, 0.0], first_ranges=2)
+    np.testing.assert_array_equal(merged.support_sizes(), [2, 3, 2, 4])
+    assert flat_range(merged, scale="log", max_size=3).high == pytest.approx(0.8)
+    gm = grid_flat_range(merged, 9, lambda_ratio=1e-4, max_size=3)
+    assert (gm.start, gm.stop, gm.size) == (1, 8, 2) and gm.middle == pytest.approx(gm.grid[4])
+
+
+def test_grid_flat_range_converges_to_the_exact_rule():
+    from fdi_lib.sparse import grid_flat_range
+
+    for seed in range(6):
+        X, y, _ = _problem(seed=seed, rows=60, m=30, q=5, noise=0.5)
+        path = lasso_path(X, y, lambda_min=1e-4, max_size=15)
+        exact = flat_range(path, scale="log")
+        prev = np.inf
+        for n in (2001, 20001):
+            g = grid_flat_range(path, n)
+            np.testing.assert_array_equal(g.support, exact.support)
+            assert g.size == exact.size
+            # the run's ends are within one grid step of the range's ends, its middle near sqrt(lo hi)
+            step = np.log(1e4) / (n - 1)
+            assert abs(np.log(g.grid[g.start] / exact.high)) <= step * (1 + 1e-9)
+            assert abs(np.log(g.grid[g.stop - 1] / exact.low)) <= step * (1 + 1e-9)
+            err = abs(np.log(g.middle / exact.middle))
+            assert err <= step * (1 + 1e-9) and err <= prev
+            prev = err
+
+
+def test_grid_flat_range_bad_inputs():
+    from fdi_lib.sparse import grid_flat_range
+
+    path = _hand_path([10, 1.0, 0.9, 1e-3, 0.0], [1, 3, 2, 4])
+    for bad in (2, 0, 10.0, True, "50"):
+        with pytest.raises(ModelError, match="n_grid: expected an integer >= 3"):
+            grid_flat_range(path, bad)
+    with pytest.raises(ModelError, match=r"lambda_ratio: expected a number in \(0, 1\)"):
+        grid_flat_range(path, 50, lambda_ratio=0.0)
+    with pytest.raises(ModelError, match="max_size: expected a positive integer"):
+        grid_flat_range(path, 50, max_size=0)
+    short = LassoPath(lambdas=np.array([10.0, 1.0]), coefs=np.array([[0.0, 1.0], [0.0, 0.0]]), n_samples=5)
+    with pytest.raises(ModelError, match="path: stops at lambda = 1 > lambda_ratio"):
+        grid_flat_range(short, 50)
+    empty = LassoPath(lambdas=np.array([1.0, 0.0]), coefs=np.zeros((3, 2)), n_samples=5)
+    with pytest.raises(ModelError, match="no grid point"):
+        grid_flat_range(empty, 50)

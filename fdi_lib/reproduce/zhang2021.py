@@ -26,7 +26,8 @@ from fdi_lib.kitanidis import kitanidis_filter, kitanidis_gains, residual_signat
 from fdi_lib.montecarlo import binomial_ci, run_monte_carlo, trial_rngs, trial_seeds
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.reproduce.registry import ReproductionResult, register
-from fdi_lib.sparse import RegressionData, flat_range, lasso_path, least_squares_on_support, regression_data
+from fdi_lib.sparse import (RegressionData, flat_range, grid_flat_range, lasso_path, least_squares_on_support,
+                            regression_data)
 from fdi_lib.systems import zhang2021_example1 as ex
 from fdi_lib.threads import single_threaded_blas
 
@@ -53,6 +54,9 @@ PAPER_TABLE2 = {
 SCALES = ("log", "linear")
 #: Lower end of the explored lambda window (fraction of lambda_max), see :func:`fdi_lib.sparse.flat_range`.
 LAMBDA_RATIO = 1e-4
+#: Sizes of the geometric lambda grids of the grid reading of the rule (:func:`fdi_lib.sparse.grid_flat_range`),
+#: on the same window; chosen before any run (a coarse and a fine grid), not tuned.
+GRID_SIZES = (50, 200)
 
 
 def snr_db(y: np.ndarray, v: np.ndarray, *, start: int = 1) -> np.ndarray:
@@ -91,12 +95,19 @@ def example1_regression(trials: ex.Example1Trial, *, r: float = 0.5) -> tuple[Re
 
 @single_threaded_blas
 def example1_chunk(seeds: Sequence[np.random.SeedSequence], *, q: int, r: float) -> dict[str, np.ndarray]:
-    """Monte Carlo chunk: success (both width readings), selected sizes and SNR for each trial."""
+    """Monte Carlo chunk: success (both width readings, and the grid rule), selected sizes and SNR.
+
+    Returns per-trial arrays: ``success_log``, ``success_linear`` (exact path, log / linear width),
+    ``size_log``, ``size_linear`` (selected support size), ``success_grid50``, ``success_grid200``
+    (the rule on a geometric grid of 50 / 200 ``lambda`` values over the same window, read off the
+    same exact path, :func:`fdi_lib.sparse.grid_flat_range`) and ``snr_db`` (``(trials, p)``).
+    """
     model = ex.example1_model(r=r)
     trials = ex.draw_trials(model, trial_rngs(seeds), q=q)
     reg, y = example1_regression(trials, r=r)
     out = {f"success_{s}": np.zeros(len(seeds), bool) for s in SCALES}
     out.update({f"size_{s}": np.zeros(len(seeds), int) for s in SCALES})
+    out.update({f"success_grid{n}": np.zeros(len(seeds), bool) for n in GRID_SIZES})
     for b in range(len(seeds)):
         path = lasso_path(reg.X[b], reg.y[b], n_samples=reg.n_samples, lambda_min=LAMBDA_RATIO,
                           max_size=reg.X.shape[-1] // 2)
@@ -105,6 +116,9 @@ def example1_chunk(seeds: Sequence[np.random.SeedSequence], *, q: int, r: float)
             fr = flat_range(path, scale=s)
             out[f"size_{s}"][b] = fr.size
             out[f"success_{s}"][b] = np.array_equal(fr.support, true)
+        for n in GRID_SIZES:
+            g = grid_flat_range(path, n, lambda_ratio=LAMBDA_RATIO)
+            out[f"success_grid{n}"][b] = np.array_equal(g.support, true)
     out["snr_db"] = snr_db(y, trials.noise.v)
     return out
 
@@ -113,12 +127,13 @@ def example1_rates(*, q_values: Sequence[int], r_values: Sequence[float], trials
                    jobs: int) -> dict[str, Any]:
     """Success rates (and SNRs) over a grid of ``(q, r)`` columns, ``trials`` trials each.
 
-    Returns a dict of per-column arrays: ``success_log``, ``success_linear`` (counts),
-    ``ci_log`` (95 % Clopper-Pearson), ``snr_db`` (mean over trials, per output), ``size_log``
-    (histogram of selected sizes).
+    Returns a dict of per-column arrays: ``success_log``, ``success_linear``, ``success_grid50``,
+    ``success_grid200`` (counts), ``ci_log`` (95 % Clopper-Pearson), ``snr_db`` (mean over trials,
+    per output), ``mean_size_log`` (mean selected size).
     """
     cols: dict[str, list[Any]] = {"success_log": [], "success_linear": [], "ci_log": [], "snr_db": [],
                                   "mean_size_log": []}
+    cols.update({f"success_grid{n}": [] for n in GRID_SIZES})
     for q, r in zip(q_values, r_values):
         res = run_monte_carlo(partial(example1_chunk, q=int(q), r=float(r)), trials, seed=seed, jobs=jobs)
         k_log = int(res["success_log"].sum())
@@ -127,6 +142,8 @@ def example1_rates(*, q_values: Sequence[int], r_values: Sequence[float], trials
         cols["ci_log"].append(binomial_ci(k_log, trials))
         cols["snr_db"].append(res["snr_db"].mean(axis=0))
         cols["mean_size_log"].append(float(res["size_log"].mean()))
+        for n in GRID_SIZES:
+            cols[f"success_grid{n}"].append(int(res[f"success_grid{n}"].sum()))
     return {k: np.asarray(v) for k, v in cols.items()}
 
 
@@ -305,6 +322,9 @@ def table1(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
         Per q, ``[low, high]`` Clopper-Pearson 95 % interval of ``success_rate``.
     mean_size : dict
         Per q, mean number of selected components (log rule).
+    success_rate_grid50, success_rate_grid200 : dict
+        Per q, success fraction of the rule read on a geometric grid of 50 / 200 ``lambda`` values
+        over the same window (:func:`fdi_lib.sparse.grid_flat_range`), on the same trials.
     """
     n = 1000 if trials is None else trials
     rates = example1_rates(q_values=Q_VALUES, r_values=[0.5] * len(Q_VALUES), trials=n, seed=seed, jobs=jobs)
@@ -312,10 +332,13 @@ def table1(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
                 "success_rate_linear": _rate_dict(Q_VALUES, rates["success_linear"], n),
                 "ci95": {str(q): list(c) for q, c in zip(Q_VALUES, rates["ci_log"])},
                 "mean_size": {str(q): float(s) for q, s in zip(Q_VALUES, rates["mean_size_log"])}}
+    headline.update({f"success_rate_grid{g}": _rate_dict(Q_VALUES, rates[f"success_grid{g}"], n)
+                     for g in GRID_SIZES})
     return ReproductionResult(id="zhang2021-table1", headline=headline,
                               paper={"success_rate": {str(q): v for q, v in PAPER_TABLE1.items()}},
                               settings={"seed": seed, "trials": n, "r": 0.5, "N": ex.N_DATA, "m": ex.N_PARAMS,
-                                        "lambda_rule": "log width, window [1e-4, 1] lambda_max, size <= m/2"},
+                                        "lambda_rule": "log width, window [1e-4, 1] lambda_max, size <= m/2",
+                                        "grid_sizes": list(GRID_SIZES)},
                               data=rates)
 
 
@@ -365,6 +388,9 @@ def table2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
         Per r, Clopper-Pearson 95 % interval of ``success_rate``.
     snr_db : dict
         Per r, ``[output 1, output 2]``: mean over trials of the SNR of :func:`snr_db`.
+    success_rate_grid50, success_rate_grid200 : dict
+        Per r, success fraction of the rule on a geometric grid of 50 / 200 ``lambda`` values
+        (:func:`fdi_lib.sparse.grid_flat_range`), on the same trials.
     """
     n = 1000 if trials is None else trials
     rates = example1_rates(q_values=[5] * len(R_VALUES), r_values=R_VALUES, trials=n, seed=seed, jobs=jobs)
@@ -373,11 +399,13 @@ def table2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
                 "success_rate_linear": _rate_dict(keys, rates["success_linear"], n),
                 "ci95": {k: list(c) for k, c in zip(keys, rates["ci_log"])},
                 "snr_db": {k: [float(s[0]), float(s[1])] for k, s in zip(keys, rates["snr_db"])}}
+    headline.update({f"success_rate_grid{g}": _rate_dict(keys, rates[f"success_grid{g}"], n) for g in GRID_SIZES})
     paper = {"success_rate": {f"{r:g}": v for r, v in PAPER_TABLE2["success_rate"].items()},
              "snr_db": {f"{r:g}": list(v) for r, v in PAPER_TABLE2["snr_db"].items()}}
     return ReproductionResult(id="zhang2021-table2", headline=headline, paper=paper,
                               settings={"seed": seed, "trials": n, "q": 5, "N": ex.N_DATA, "m": ex.N_PARAMS,
-                                        "snr": "10 log10(var_k y / var_k v), k = 1..N, mean over trials"},
+                                        "snr": "10 log10(var_k y / var_k v), k = 1..N, mean over trials",
+                                        "grid_sizes": list(GRID_SIZES)},
                               data=rates)
 
 

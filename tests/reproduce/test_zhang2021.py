@@ -40,6 +40,9 @@ def test_tables_smoke_at_reduced_trials():
     t2 = reproduce("zhang2021-table2", trials=6, jobs=1)
     assert set(t2.headline["snr_db"]) == set(t2.paper["snr_db"])
     assert "0.5" in t2.headline["success_rate"] and "200" in t2.headline["success_rate"]
+    for g in (50, 200):  # the grid reading of the rule: added keys, same columns
+        assert set(t1.headline[f"success_rate_grid{g}"]) == set(t1.headline["success_rate"])
+        assert set(t2.headline[f"success_rate_grid{g}"]) == set(t2.headline["success_rate"])
     json.loads(t1.to_json())
     json.loads(t2.to_json())
     get("zhang2021-table1").plot(t1)
@@ -57,6 +60,11 @@ def test_small_monte_carlo_is_consistent_and_job_independent():
     lo, hi = binomial_ci(k, 200)
     assert lo <= 0.995 <= hi or k == 200
     assert k / 200 > 0.9
+    # the grid readings of the rule (50 and 200 lambdas) are recorded on the same trials
+    for g in (50, 200):
+        np.testing.assert_array_equal(a[f"success_grid{g}"], b[f"success_grid{g}"])
+        assert a[f"success_grid{g}"].shape == a["success_log"].shape
+        assert np.mean(a[f"success_grid{g}"] == a["success_log"]) > 0.95
 
 
 def test_snr_definition():
