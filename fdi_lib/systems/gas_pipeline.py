@@ -88,7 +88,7 @@ __all__ = [
     "LEAK_ONSET_MIN", "LEAK_SIZE", "WINDOW", "THRESHOLD", "DISABLED_MIN",
     "projected_q", "pipeline_schedule", "pipeline_input", "PipelineMatrices", "pipeline_matrices",
     "pipeline_model", "input_fault_psi", "input_fault_family", "output_leak_family",
-    "minutes_to_index", "index_to_minutes", "design_report",
+    "minutes_to_index", "index_to_minutes", "design_report", "noise_free_output",
 ]
 
 #: Sampling period (min).
@@ -206,11 +206,24 @@ def pipeline_input(n_steps: int = N_STEPS) -> np.ndarray:
     h = _hours(n_steps)
     shape = (1.0 + FLOW_SWING * np.cos(2 * np.pi * (h - 9.0) / 24.0)
              + FLOW_SWING_2 * np.cos(4 * np.pi * (h - 7.0) / 24.0))
-    return MEAN_FLOW * shape / _noise_free_output(shape, pipeline_schedule(n_steps)).mean()
+    return MEAN_FLOW * shape / noise_free_output(shape, pipeline_schedule(n_steps)).mean()
 
 
-def _noise_free_output(u: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """Output of the fault-free surrogate without noise, from the steady state of ``u[0]``."""
+def noise_free_output(u: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Outlet flow of the fault-free surrogate without noise, started at the steady state of ``u[0]``.
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        Inlet flow ``U_k``, shape ``(N,)``.
+    p : numpy.ndarray
+        Pressure schedule ``p_k``, shape ``(N,)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``Y_k`` without noise, shape ``(N,)`` (used to scale the input to the stated mean flow).
+    """
     mats = pipeline_matrices()
     x = np.linalg.solve(np.eye(2) - mats.F0, (mats.G0[:, 0] + mats.Gp[:, 0] * p[0]) * u[0])
     y = np.empty(u.shape)

@@ -123,3 +123,18 @@ def test_bad_inputs():
     with pytest.raises(ModelError, match="minutes: expected a multiple"):
         gp.minutes_to_index(601.0)
     assert gp.minutes_to_index(600.0) == 300
+
+
+def test_noise_free_output_equals_a_noiseless_simulation():
+    import numpy as np
+
+    from fdi_lib import systems
+    from fdi_lib.simulate import Noise, simulate
+
+    gp = systems.gas_pipeline
+    model, u, p = gp.pipeline_model(), gp.pipeline_input(), gp.pipeline_schedule()
+    mats = gp.pipeline_matrices()
+    x0 = np.linalg.solve(np.eye(2) - mats.F0, (mats.G0[:, 0] + mats.Gp[:, 0] * p[0]) * u[0])
+    zero = Noise(x0=x0, w=np.zeros((model.n_steps, 2)), v=np.zeros((model.n_steps, 1)))
+    sim = simulate(model, noise=zero, u=u)
+    np.testing.assert_allclose(gp.noise_free_output(u, p), sim.y[:, 0], rtol=1e-12)
