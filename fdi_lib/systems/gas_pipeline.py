@@ -81,6 +81,7 @@ import scipy.linalg
 
 from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.models import FaultFamily, LTVModel, lpv_model, step_family
+from fdi_lib.simulate import Noise, simulate
 
 __all__ = [
     "TS_MIN", "RECORD_MIN", "N_STEPS", "G0_1", "GP_1", "Q_PRINTED", "R", "MEAN_FLOW",
@@ -224,13 +225,10 @@ def noise_free_output(u: np.ndarray, p: np.ndarray) -> np.ndarray:
     numpy.ndarray
         ``Y_k`` without noise, shape ``(N,)`` (used to scale the input to the stated mean flow).
     """
-    mats = pipeline_matrices()
-    x = np.linalg.solve(np.eye(2) - mats.F0, (mats.G0[:, 0] + mats.Gp[:, 0] * p[0]) * u[0])
-    y = np.empty(u.shape)
-    for k in range(u.shape[0]):
-        y[k] = mats.H0[0] @ x + (mats.J0[0, 0] + mats.Jp[0, 0] * p[k]) * u[k]
-        x = mats.F0 @ x + (mats.G0[:, 0] + mats.Gp[:, 0] * p[k]) * u[k]
-    return y
+    u = np.asarray(u, dtype=float)
+    model = pipeline_model(u.shape[0], schedule=p, u=u)  # x0 is the steady state of U_0, p_0
+    zero = Noise(x0=model.x0, w=np.zeros((model.n_steps, model.n)), v=np.zeros((model.n_steps, model.p)))
+    return simulate(model, noise=zero, u=u).y[:, 0]
 
 
 def _check_steps(n_steps: int) -> None:
