@@ -525,40 +525,30 @@ def explanation_scale(run: "uav.UAVRun", *, kind: str = "nominal", scale: str = 
     T, n, nd = stop - start, 4, ms[0].L.shape[1]
     nx, nv = (T + 1) * n, (T + 1) * n + T * nd + 1      # variables: x(start..stop), d(start..stop-1), s
     si = nv - 1
-    eq_r, eq_c, eq_v, beq = [], [], [], np.zeros(T * n)
-    for j in range(T):
-        m = ms[j]
-        for a in range(n):
-            r = j * n + a
-            eq_r.append(r); eq_c.append((j + 1) * n + a); eq_v.append(1.0)
-            for b in range(n):
-                eq_r.append(r); eq_c.append(j * n + b); eq_v.append(-m.A[a, b])
-            for b in range(nd):
-                eq_r.append(r); eq_c.append(nx + j * nd + b); eq_v.append(-m.L[a, b])
-        beq[j * n:(j + 1) * n] = m.B @ run.u[start + j]
-    Aeq = sp.csr_matrix((eq_v, (eq_r, eq_c)), shape=(T * n, nv))
-    ub_r, ub_c, ub_v, bub = [], [], [], []
-    row = 0
-    for j in range(T * nd):                         # |d| <= s  or  |d| <= dist_scale
-        for sg in (1.0, -1.0):
-            ub_r.append(row); ub_c.append(nx + j); ub_v.append(sg)
-            if scale == "disturbance":
-                ub_r.append(row); ub_c.append(si); ub_v.append(-1.0); bub.append(0.0)
-            else:
-                bub.append(float(dist_scale))
-            row += 1
-    for j, m in enumerate(ms):                     # |y - C x| <= nbar  or  <= s nbar
-        y = run.y[start + j]
-        for o in range(m.n_y):
-            for sg in (1.0, -1.0):
-                for b in range(n):
-                    ub_r.append(row); ub_c.append(j * n + b); ub_v.append(sg * m.C[o, b])
-                if scale == "noise":
-                    ub_r.append(row); ub_c.append(si); ub_v.append(-m.noise[o]); bub.append(sg * y[o])
-                else:
-                    bub.append(sg * y[o] + m.noise[o])
-                row += 1
-    Aub = sp.csr_matrix((ub_v, (ub_r, ub_c)), shape=(row, nv))
+    # Dynamics x(j+1) - A(j) x(j) - L(j) d(j) = B(j) u(j), as sparse blocks over the window.
+    shift = sp.hstack([sp.csr_matrix((T * n, n)), sp.identity(T * n)])            # picks x(j+1)
+    dyn = sp.hstack([sp.block_diag([m.A for m in ms[:T]]), sp.csr_matrix((T * n, n))])  # A(j) x(j)
+    Aeq = sp.hstack([shift - dyn, -sp.block_diag([m.L for m in ms[:T]]), sp.csr_matrix((T * n, 1))])
+    beq = np.concatenate([m.B @ run.u[start + j] for j, m in enumerate(ms[:T])])
+    # Disturbances: +-d <= s (scaled) or +-d <= dist_scale.
+    pm = np.array([[1.0], [-1.0]])
+    d_rows = sp.hstack([sp.csr_matrix((2 * T * nd, nx)), sp.kron(sp.identity(T * nd), pm),
+                        sp.csr_matrix((2 * T * nd, 1))])
+    # Measurements: +-(C x - y) <= nbar (or s nbar when the noise bound is scaled).
+    C = sp.block_diag([sp.kron(pm, m.C) for m in ms])                              # rows (+C; -C) per sample
+    y_pm = np.concatenate([np.concatenate([run.y[start + j], -run.y[start + j]]) for j in range(T + 1)])
+    nbar = np.concatenate([np.concatenate([m.noise, m.noise]) for m in ms])
+    y_rows = sp.hstack([C, sp.csr_matrix((C.shape[0], T * nd + 1))])
+    if scale == "disturbance":
+        d_rows = d_rows - sp.csr_matrix((np.ones(2 * T * nd), (np.arange(2 * T * nd), np.full(2 * T * nd, si))),
+                                        shape=d_rows.shape)
+        d_bound, y_bound = np.zeros(2 * T * nd), y_pm + nbar
+    else:
+        y_rows = y_rows - sp.csr_matrix((nbar, (np.arange(nbar.size), np.full(nbar.size, si))),
+                                        shape=y_rows.shape)
+        d_bound, y_bound = np.full(2 * T * nd, float(dist_scale)), y_pm
+    Aub = sp.vstack([d_rows, y_rows]).tocsr()
+    bub = np.concatenate([d_bound, y_bound])
     bounds = [(None, None)] * (nv - 1) + [(0.0, None)]
     if start == 0:
         lo, hi = UAV_X0.bounding_box()
@@ -566,7 +556,7 @@ def explanation_scale(run: "uav.UAVRun", *, kind: str = "nominal", scale: str = 
     c = np.zeros(nv)
     c[si] = 1.0
     for method in ("highs-ds", "highs-ipm", "highs"):   # fall back when one HiGHS solver stalls numerically
-        res = linprog(c, A_ub=Aub, b_ub=np.array(bub), A_eq=Aeq, b_eq=beq, bounds=bounds, method=method)
+        res = linprog(c, A_ub=Aub, b_ub=bub, A_eq=Aeq, b_eq=beq, bounds=bounds, method=method)
         if res.status in (0, 2):
             break
     if res.status == 2:
