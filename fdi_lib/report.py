@@ -1,0 +1,275 @@
+"""Numbers and tables for readers: one place for every format the book prints.
+
+The chapters never format numbers themselves: they call these functions, so that a rate, a
+count or a time looks the same on every page, and the formats are tested once
+(``tests/test_report.py``). Each ``fmt_*`` function returns a string; :func:`table` returns a
+:class:`Table`, which Jupyter (and the built book) displays as an HTML table with human row
+labels, a units column if given, and notes under it.
+
+Conventions
+-----------
+- counts are integers (``fmt_count``);
+- rates are percentages with their 95 % interval when one is known (``fmt_rate``);
+- times are in ms below one second, in s above (``fmt_time``);
+- other numbers get 3 significant digits, a plain decimal form between 1e-3 and 1e5 and a
+  ``×10^n`` form outside it; numbers below ``tiny`` in magnitude print as ``< tiny``
+  (``fmt_number``);
+- a missing value is written ``n/a`` and a note under the table says why (:data:`NA`).
+
+Examples
+--------
+>>> fmt_rate(0.017, (0.0098, 0.027))
+'1.7 % [0.98, 2.7]'
+>>> fmt_time(0.00122)
+'1.22 ms'
+>>> fmt_number(5.351584e-235)
+'< 10⁻¹⁵'
+>>> fmt_count(7.0)
+'7'
+"""
+
+from __future__ import annotations
+
+import html
+import math
+import numbers
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Sequence
+
+from .errors import ModelError
+
+__all__ = ["NA", "fmt_count", "fmt_rate", "fmt_time", "fmt_number", "fmt_value", "Table", "table"]
+
+#: What a table cell shows when a value does not exist; the table's notes say why.
+NA = "n/a"
+
+_SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def _finite_number(x: Any, name: str) -> float:
+    if isinstance(x, bool) or not isinstance(x, numbers.Real):
+        raise ModelError(f"{name} must be a real number, got {type(x).__name__} {x!r}")
+    x = float(x)
+    if not math.isfinite(x):
+        raise ModelError(f"{name} must be finite, got {x!r}")
+    return x
+
+
+def _sig(x: float, digits: int) -> str:
+    """``x`` with ``digits`` significant digits in plain decimal form, trailing zeros dropped."""
+    if x == 0:
+        return "0"
+    decimals = max(digits - 1 - math.floor(math.log10(abs(x))), 0)
+    s = f"{x:.{decimals}f}"
+    return s.rstrip("0").rstrip(".") if "." in s else s
+
+
+def fmt_count(n: Any) -> str:
+    """An integer count, with thin-space thousands separators (``12 345``).
+
+    Parameters
+    ----------
+    n : int or float
+        A count; a float must be integral (``7.0`` prints as ``7``).
+    """
+    x = _finite_number(n, "n")
+    if x != round(x):
+        raise ModelError(f"n must be an integral count, got {n!r}")
+    return f"{int(round(x)):,}".replace(",", "\u202f")
+
+
+def fmt_number(x: Any, digits: int = 3, tiny: float = 1e-15) -> str:
+    """A real number with ``digits`` significant digits, for a reader.
+
+    Parameters
+    ----------
+    x : float
+        The number (NaN and infinities are rejected: a missing value is :data:`NA`).
+    digits : int
+        Significant digits.
+    tiny : float
+        Magnitudes below this print as ``< tiny`` (underflow, not information).
+    """
+    x = _finite_number(x, "x")
+    if x == 0:
+        return "0"
+    if abs(x) < tiny:
+        return "< " + fmt_number(tiny, 1, tiny=0.0)
+    if 1e-3 <= abs(x) < 1e5:
+        return _sig(x, digits)
+    exponent = math.floor(math.log10(abs(x)))
+    mantissa = x / 10**exponent
+    if round(mantissa, digits - 1) in (10.0, -10.0):
+        mantissa, exponent = mantissa / 10, exponent + 1
+    m = _sig(mantissa, digits)
+    power = "10" + str(exponent).translate(_SUPERSCRIPT)
+    if m in ("1", "-1"):
+        return m[:-1] + power
+    return f"{m}×{power}"
+
+
+def fmt_rate(rate: Any, ci: Sequence[float] | None = None, digits: int = 2) -> str:
+    """A rate (a fraction in [0, 1]) as a percentage, with its interval if given.
+
+    Parameters
+    ----------
+    rate : float or None
+        The fraction; ``None`` gives :data:`NA`.
+    ci : (float, float), optional
+        Its interval (fractions), printed in percent in brackets.
+    digits : int
+        Significant digits of each percentage (0 and 100 print exactly).
+    """
+    if rate is None:
+        return NA
+    r = _finite_number(rate, "rate")
+    if not 0.0 <= r <= 1.0:
+        raise ModelError(f"rate must be a fraction in [0, 1], got {rate!r}")
+    out = f"{_pct(r, digits)} %"
+    if ci is not None:
+        if len(ci) != 2:
+            raise ModelError(f"ci must be a pair (low, high), got {ci!r}")
+        lo, hi = (_finite_number(c, "ci") for c in ci)
+        if not 0.0 <= lo <= hi <= 1.0:
+            raise ModelError(f"ci must satisfy 0 <= low <= high <= 1, got {ci!r}")
+        out += f" [{_pct(lo, digits)}, {_pct(hi, digits)}]"
+    return out
+
+
+def _pct(r: float, digits: int) -> str:
+    p = 100.0 * r
+    if p in (0.0, 100.0):
+        return f"{p:.0f}"
+    return _sig(p, digits)
+
+
+def fmt_time(seconds: Any, digits: int = 3) -> str:
+    """A duration: µs, ms below one second, s up to two minutes, then min.
+
+    Parameters
+    ----------
+    seconds : float
+        Non-negative duration in seconds.
+    digits : int
+        Significant digits.
+    """
+    s = _finite_number(seconds, "seconds")
+    if s < 0:
+        raise ModelError(f"seconds must be non-negative, got {seconds!r}")
+    if s == 0:
+        return "0 s"
+    if s < 1e-3:
+        return f"{_sig(s * 1e6, digits)} µs"
+    if s < 1.0:
+        return f"{_sig(s * 1e3, digits)} ms"
+    if s < 120.0:
+        return f"{_sig(s, digits)} s"
+    return f"{_sig(s / 60.0, digits)} min"
+
+
+def fmt_value(v: Any, digits: int = 3) -> str:
+    """Any cell value: ``None`` → :data:`NA`, bool → yes/no, int → count, float → number,
+    sequence → comma-separated values in brackets, string unchanged."""
+    if v is None:
+        return NA
+    if isinstance(v, str):
+        return v
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, numbers.Integral):
+        return fmt_count(v)
+    if isinstance(v, numbers.Real):
+        if math.isnan(float(v)):
+            raise ModelError("a table cell is NaN: pass None (shown as n/a) and explain it in a note")
+        return fmt_number(v, digits)
+    if isinstance(v, (list, tuple)) or hasattr(v, "tolist"):
+        seq = v.tolist() if hasattr(v, "tolist") else v
+        if not isinstance(seq, list):
+            return fmt_value(seq, digits)
+        return "[" + ", ".join(fmt_value(x, digits) for x in seq) + "]"
+    raise ModelError(f"cannot format a table cell of type {type(v).__name__}")
+
+
+@dataclass(frozen=True)
+class Table:
+    """A small table for readers: row labels, column headers, formatted cells and notes.
+
+    Displayed as HTML in Jupyter and in the built book (``_repr_html_``); ``str()`` gives a
+    plain-text version; :meth:`to_frame` a pandas DataFrame of the formatted cells.
+    """
+
+    columns: tuple[str, ...]
+    rows: tuple[tuple[str, tuple[str, ...]], ...]
+    notes: tuple[str, ...] = field(default=())
+    index_header: str = ""
+
+    def _repr_html_(self) -> str:
+        esc = html.escape
+        head = "".join(f"<th>{esc(c)}</th>" for c in (self.index_header, *self.columns))
+        body = "".join(
+            "<tr><th>" + esc(label) + "</th>" + "".join(f"<td>{esc(c)}</td>" for c in cells) + "</tr>"
+            for label, cells in self.rows
+        )
+        notes = "".join(f"<li>{esc(n)}</li>" for n in self.notes)
+        foot = f'<ul class="fdi-table-notes">{notes}</ul>' if notes else ""
+        return (f'<div class="fdi-table-wrap"><table class="fdi-table"><thead><tr>{head}</tr></thead>'
+                f"<tbody>{body}</tbody></table>{foot}</div>")
+
+    def __str__(self) -> str:
+        widths = [max(len(self.index_header), *(len(r[0]) for r in self.rows))] + [
+            max(len(c), *(len(r[1][j]) for r in self.rows)) for j, c in enumerate(self.columns)
+        ]
+        line = lambda cells: "  ".join(c.ljust(w) for c, w in zip(cells, widths)).rstrip()  # noqa: E731
+        out = [line((self.index_header, *self.columns))]
+        out += [line((label, *cells)) for label, cells in self.rows]
+        out += [f"note: {n}" for n in self.notes]
+        return "\n".join(out)
+
+    def to_frame(self):
+        """The formatted cells as a :class:`pandas.DataFrame` (strings), indexed by row label."""
+        import pandas as pd
+
+        return pd.DataFrame([list(c) for _, c in self.rows], index=[r for r, _ in self.rows],
+                            columns=list(self.columns))
+
+
+def table(rows: Mapping[str, Sequence[Any]], columns: Sequence[str], *, notes: Sequence[str] = (),
+          index_header: str = "", digits: int = 3) -> Table:
+    """Build a :class:`Table` from human row labels to cell values.
+
+    Parameters
+    ----------
+    rows : mapping of str to sequence
+        Row label (a human label with its unit, e.g. ``"detection delay (min)"``) to the row's
+        cells, one per column. Strings are kept (use the ``fmt_*`` functions for rates and
+        times); other values go through :func:`fmt_value`.
+    columns : sequence of str
+        Column headers (e.g. ``["ours", "paper"]``).
+    notes : sequence of str
+        Notes printed under the table (say there why a cell is ``n/a``).
+    index_header : str
+        Header of the label column.
+    digits : int
+        Significant digits for plain numbers.
+
+    Examples
+    --------
+    >>> t = table({"false alarms (of 2000 runs)": [0, 7]}, ["ours", "paper"])
+    >>> print(t)
+                                 ours  paper
+    false alarms (of 2000 runs)  0     7
+    """
+    columns = tuple(str(c) for c in columns)
+    if not columns:
+        raise ModelError("columns must name at least one column, got none")
+    out = []
+    for label, cells in rows.items():
+        if not isinstance(label, str) or not label:
+            raise ModelError(f"row labels must be non-empty strings, got {label!r}")
+        cells = list(cells)
+        if len(cells) != len(columns):
+            raise ModelError(f"row {label!r} has {len(cells)} cells, expected {len(columns)} (columns {columns})")
+        out.append((label, tuple(fmt_value(c, digits) for c in cells)))
+    if any(NA in cells for _, cells in out) and not notes:
+        raise ModelError("a cell is n/a: add a note saying why")
+    return Table(columns=columns, rows=tuple(out), notes=tuple(notes), index_header=index_header)

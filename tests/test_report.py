@@ -1,0 +1,82 @@
+"""Formats of fdi_lib.report: each case is the string a reader must see."""
+
+import numpy as np
+import pytest
+
+from fdi_lib.errors import ModelError
+from fdi_lib.report import NA, fmt_count, fmt_number, fmt_rate, fmt_time, fmt_value, table
+
+
+@pytest.mark.parametrize("x, expected", [
+    (7.0, "7"), (0, "0"), (12345, "12\u202f345"), (np.int64(2000), "2\u202f000"),
+])
+def test_fmt_count(x, expected):
+    assert fmt_count(x) == expected
+
+
+@pytest.mark.parametrize("bad", [7.5, float("nan"), "7", True])
+def test_fmt_count_rejects(bad):
+    with pytest.raises(ModelError, match="n must be"):
+        fmt_count(bad)
+
+
+@pytest.mark.parametrize("x, expected", [
+    (5.351584e-235, "< 10⁻¹⁵"), (0.0, "0"), (1.2808, "1.28"), (-0.333333, "-0.333"),
+    (43980.0, "43980"), (1.5e7, "1.5×10⁷"), (2.5e-5, "2.5×10⁻⁵"), (-4e-5, "-4×10⁻⁵"),
+    (9.9999e5, "10⁶"), (1e-3, "0.001"), (100.0, "100"),
+])
+def test_fmt_number(x, expected):
+    assert fmt_number(x) == expected
+
+
+@pytest.mark.parametrize("rate, ci, expected", [
+    (0.017, None, "1.7 %"), (0.0, None, "0 %"), (1.0, None, "100 %"),
+    (0.017, (0.0098, 0.027), "1.7 % [0.98, 2.7]"), (0.901, (0.88, 0.92), "90 % [88, 92]"),
+    (None, None, NA),
+])
+def test_fmt_rate(rate, ci, expected):
+    assert fmt_rate(rate, ci) == expected
+
+
+@pytest.mark.parametrize("rate, ci, match", [
+    (1.5, None, "fraction in"), (0.5, (0.6, 0.4), "low <= high"), (0.5, (0.1,), "pair"),
+    (float("nan"), None, "finite"),
+])
+def test_fmt_rate_rejects(rate, ci, match):
+    with pytest.raises(ModelError, match=match):
+        fmt_rate(rate, ci)
+
+
+@pytest.mark.parametrize("s, expected", [
+    (0.00122, "1.22 ms"), (2.5e-5, "25 µs"), (89.4, "89.4 s"), (211.0, "3.52 min"), (0, "0 s"),
+])
+def test_fmt_time(s, expected):
+    assert fmt_time(s) == expected
+
+
+def test_fmt_value_dispatch():
+    assert fmt_value(None) == NA
+    assert fmt_value(True) == "yes"
+    assert fmt_value([1, 2.5]) == "[1, 2.5]"
+    assert fmt_value(np.array([600, 786])) == "[600, 786]"
+    with pytest.raises(ModelError, match="NaN"):
+        fmt_value(float("nan"))
+
+
+def test_table_html_and_text():
+    t = table({"false alarms (of 2000 runs)": [0, 7], "type I error": [fmt_rate(0.01), None]},
+              ["ours", "paper"], notes=["the paper gives no type I error for this case"])
+    html = t._repr_html_()
+    assert html.count("<tr>") == 3 and "fdi-table" in html and "n/a" in html
+    assert "the paper gives no type I error" in html
+    assert t.to_frame().loc["type I error", "paper"] == NA
+    assert str(t).splitlines()[1].split() == ["false", "alarms", "(of", "2000", "runs)", "0", "7"]
+
+
+def test_table_rejects():
+    with pytest.raises(ModelError, match="expected 2"):
+        table({"a": [1]}, ["ours", "paper"])
+    with pytest.raises(ModelError, match="add a note"):
+        table({"a": [1, None]}, ["ours", "paper"])
+    with pytest.raises(ModelError, match="row labels"):
+        table({"": [1]}, ["ours"])
