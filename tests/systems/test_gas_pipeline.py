@@ -24,6 +24,7 @@ def test_stated_values_are_kept(model):
     np.testing.assert_allclose(model.G[:, 0, 0], -7.8297e-4 + 3.8290e-5 * p, rtol=0, atol=1e-18)
     assert model.R[0, 0, 0] == 3.0273e5
     assert model.n_steps == 500 and gp.N_STEPS * gp.TS_MIN == gp.RECORD_MIN == 1000.0
+    np.testing.assert_allclose(model.G[:, 0, 0], gp.G0_1 + gp.GP_1 * p, rtol=0, atol=1e-18)
     # Q: the printed matrix up to its rounding (entries given to 4 decimals).
     np.testing.assert_allclose(model.Q[0], gp.Q_PRINTED, rtol=0, atol=1e-4)
     assert gp.LEAK_SIZE == -0.1 * gp.MEAN_FLOW
@@ -49,7 +50,7 @@ def test_printed_q_is_indefinite_and_rejected_projection_is_nearest_psd():
 
 
 def test_stable_and_observable(model):
-    assert np.max(np.abs(np.linalg.eigvals(model.F))) < 1.0
+    assert np.max(np.abs(np.linalg.eigvals(model.F)), axis=-1).max() < 1.0
     O = np.vstack([model.H[0], model.H[0] @ model.F[0]])
     assert np.linalg.matrix_rank(O) == 2
     # Controllable from the (rank-one) noise direction, as the Kalman theory assumes.
@@ -58,21 +59,77 @@ def test_stable_and_observable(model):
     assert np.linalg.matrix_rank(C, tol=1e-8 * np.linalg.norm(C)) == 2
 
 
-def test_mass_balance_and_leak_direction():
+def test_physical_section_from_first_principles():
+    """Independent check: the continuous lumped section, discretised by Euler sub-steps."""
+    sec = gp.physical_section()
+    L = sec.length_km * 1e3
+    c2 = gp.SOUND_SPEED ** 2
+    # Resistance from the linearised square law and the stated mean flow.
+    q_kg = gp.MEAN_FLOW * gp.NORMAL_DENSITY / 3600
+    res = sec.friction_factor * L * c2 * q_kg / (gp.DIAMETER * sec.area ** 2 * gp.MEAN_PRESSURE_BAR * 1e5)
+    assert sec.resistance == pytest.approx(res, rel=1e-12)
+    # Colebrook-White holds at the returned friction factor.
+    lam = sec.friction_factor
+    rhs = -2 * np.log10(gp.ROUGHNESS / gp.DIAMETER / 3.7 + 2.51 / (sec.reynolds * np.sqrt(lam)))
+    assert 1 / np.sqrt(lam) == pytest.approx(rhs, rel=1e-10)
+    # One sample of the physical model (q in kg/s, dp in Pa) by 20000 explicit Euler steps.
+    I, C = L / sec.area, sec.area * L / c2
+    z, dt, n = np.zeros(2), 120.0 / 20000, 20000
+    for _ in range(n):  # unit input flow step U = 1 kg/s from rest
+        z = z + dt * np.array([(z[1] - res * z[0]) / I, (1.0 - z[0]) / C])
+    # g1: fraction of the input reaching the flow in one sample; X1 = s1 q.
+    assert sec.g1 == pytest.approx(z[0], rel=2e-3)
+    assert sec.G0[0, 0] == gp.G0_1 and sec.s1 * sec.g1 == pytest.approx(gp.G0_1, rel=1e-12)
+    # States keep the paper's meaning: X1 proportional to the flow, X2 to the pressure drop.
+    assert sec.G0[1, 0] / sec.s2 > 0          # an inflow raises the pressure drop
+    assert sec.tau_fast_s < 60 < 60 * sec.tau_slow_min
+
+
+def test_mass_balance_and_scheduling():
     rep = gp.design_report()
+    # Exact discretisation: unit steady gain from inlet to outlet flow at p = 0 (mass balance)...
+    mats = gp.pipeline_matrices()
+    dc0 = (mats.H0 @ np.linalg.solve(np.eye(2) - mats.F0, mats.G0))[0, 0]
+    assert dc0 == pytest.approx(1.0, abs=1e-12)
+    # ... and within the first-order (affine in p_k) approximation over the schedule.
+    assert abs(rep["dc_gain_min"] - 1) < 0.02 and abs(rep["dc_gain_max"] - 1) < 0.02
+    # Gp(1) / G0(1) is the physical sensitivity of g1 to p_k (finite difference on the section).
+    sec = gp.physical_section()
+    beta = sec.bar_per_unit
+    Fu, Gu = gp._section_zoh(sec.length_km * 1e3, gp.MEAN_PRESSURE_BAR - 0.01 * beta, sec.friction_factor)
+    Fd, Gd = gp._section_zoh(sec.length_km * 1e3, gp.MEAN_PRESSURE_BAR + 0.01 * beta, sec.friction_factor)
+    assert (Gu[0, 0] - Gd[0, 0]) / 0.02 / sec.g1 == pytest.approx(gp.GP_1 / gp.G0_1, rel=1e-6)
+    # The schedule is a deviation signal: zero mean over a full day.
+    p_day = gp.pipeline_schedule(720)
+    assert abs(p_day.mean()) < 1e-12 * np.abs(p_day).max()
+
+
+def test_designed_variant_is_the_first_surrogate():
+    rep = gp.design_report(variant="designed")
     assert rep["dc_gain_min"] == pytest.approx(1.0, abs=1e-12)
     assert rep["dc_gain_max"] == pytest.approx(1.0, abs=1e-12)
-    assert rep["leak_gain"] > 0                       # depressing G(1) loses gas
-    assert 0 < rep["fault1_leak_fraction"] < rep["fault2_leak_fraction"] < 0.2
-    assert abs(rep["fault1_innovation_shift_sd"]) < 2.0     # "hardly visible"
+    assert rep["leak_gain"] > 0
+    assert abs(rep["fault1_innovation_shift_sd"]) < 2.0
     assert rep["output_std_from_W"] == pytest.approx(rep["sqrt_R"], rel=1e-9)
+    p = gp.pipeline_schedule(variant="designed")
+    assert 4.8 < p.min() and p.max() < 6.2
+    with pytest.raises(ModelError, match="variant: expected one of"):
+        gp.pipeline_model(variant="other")
+
+
+def test_calibration_reproduces_the_recorded_fit():
+    fit = gp.calibrate()
+    for key, value in gp.CALIBRATION["fitted"].items():
+        assert fit[key] == pytest.approx(value, rel=1e-7), key
+    tg = gp.calibration_targets(fit["section_length_km"], fit["state2_scale"], fit["pressure_swing_bar"])
+    for key, spec in gp.CALIBRATION["targets"].items():
+        assert tg[key] == pytest.approx(spec["value"], rel=1e-6), key
 
 
 def test_input_and_schedule_patterns():
     u, p = gp.pipeline_input(), gp.pipeline_schedule()
     assert u.shape == p.shape == (500,)
     assert np.all(u > 0) and 0.75 < u.min() / u.max() < 0.95
-    assert 4.8 < p.min() and p.max() < 6.2
     # Noise-free output mean is the paper's 439800 (independent loop with the LTV arrays).
     m = gp.pipeline_model()
     x = m.x0.copy()
@@ -85,7 +142,11 @@ def test_input_and_schedule_patterns():
 
 def test_stationary_kalman_and_simulation(model):
     g = kalman_gains(model)
-    np.testing.assert_allclose(g.P[-1], g.P[0], rtol=1e-8)
+    # F_k varies with p_k (Fp != 0): P_k stays within 0.1 % of the stationary P0 of F0.
+    np.testing.assert_allclose(g.P[-1], g.P[0], rtol=1e-3)
+    designed = gp.pipeline_model(variant="designed")
+    gd = kalman_gains(designed)   # constant F: exactly stationary
+    np.testing.assert_allclose(gd.P[-1], gd.P[0], rtol=1e-8)
     sim = simulate(model, rng=np.random.default_rng(3), u=gp.pipeline_input(), size=20)
     rel = np.abs(sim.y.mean(axis=(0, 1))[0] / gp.MEAN_FLOW - 1)
     assert rel < 0.01
@@ -133,10 +194,10 @@ def test_noise_free_output_equals_a_direct_recursion():
     gp = systems.gas_pipeline
     u, p = gp.pipeline_input(), gp.pipeline_schedule()
     mats = gp.pipeline_matrices()
-    x = np.linalg.solve(np.eye(2) - mats.F0, (mats.G0[:, 0] + mats.Gp[:, 0] * p[0]) * u[0])
+    x = np.linalg.solve(np.eye(2) - mats.F0 - mats.Fp * p[0], (mats.G0[:, 0] + mats.Gp[:, 0] * p[0]) * u[0])
     expected = np.empty(u.shape)
     for k in range(u.shape[0]):  # eq. (53) without noise, written out
         expected[k] = mats.H0[0] @ x + (mats.J0[0, 0] + mats.Jp[0, 0] * p[k]) * u[k]
-        x = mats.F0 @ x + (mats.G0[:, 0] + mats.Gp[:, 0] * p[k]) * u[k]
+        x = (mats.F0 + mats.Fp * p[k]) @ x + (mats.G0[:, 0] + mats.Gp[:, 0] * p[k]) * u[k]
     np.testing.assert_allclose(gp.noise_free_output(u, p), expected, rtol=1e-12)
     assert abs(gp.noise_free_output(u, p).mean() - gp.MEAN_FLOW) < 1e-6 * gp.MEAN_FLOW
