@@ -39,6 +39,7 @@ from fdi_lib.systems import gas_pipeline as gp
 
 __all__ = ["MINMAX_THRESHOLD", "PipelineSetup", "pipeline_setup", "SingleRun", "single_run",
            "detection_chunk", "pipeline_monte_carlo", "known_onset_isolation_power", "fault_theta", "plot_single_run",
+           "SCHEDULES", "DEFAULT_SCHEDULE", "fault_schedule", "surrogate_sensitivity",
            "plot_fig7", "plot_fig8"]
 
 PAPER = "Zhang & Basseville 2014"
@@ -76,14 +77,56 @@ class PipelineSetup:
     known_signature: np.ndarray
 
 
-@functools.lru_cache(maxsize=1)
-def pipeline_setup() -> PipelineSetup:
-    """The shared model, input, Kalman gains, fault families and true-onset signature."""
-    model = gp.pipeline_model()
+#: Schedules of the fault-2 column ``p_k U_k``: the variant's own, or its origin moved.
+SCHEDULES = ("centred", "absolute")
+#: The schedule each surrogate uses by default.
+DEFAULT_SCHEDULE = {"physical": "centred", "designed": "absolute"}
+
+
+def fault_schedule(variant: str = "physical", schedule: str | None = None) -> np.ndarray:
+    """``p_k`` in the fault profile ``Psi_k = [[U_k, p_k U_k], [0, 0]]`` for a surrogate and a schedule origin.
+
+    ``physical``: centred is the deviation ``p_k`` of the model; absolute moves its origin
+    to zero absolute mean pressure, ``p_k - 60 bar / beta``. ``designed``: absolute is the
+    model's pressure in MPa; centred is ``p_k - 5.5``. The nominal model is the same in
+    both cases: only what fault 2 means changes (a question the papers leave open).
+
+    Parameters
+    ----------
+    variant : {"physical", "designed"}
+        Surrogate (:data:`fdi_lib.systems.gas_pipeline.VARIANTS`).
+    schedule : {"centred", "absolute"}, optional
+        Default: the variant's own (:data:`DEFAULT_SCHEDULE`).
+    """
+    gp._check_variant(variant)
+    schedule = DEFAULT_SCHEDULE[variant] if schedule is None else schedule
+    if schedule not in SCHEDULES:
+        raise ModelError(f"schedule: expected one of {SCHEDULES}, got {schedule!r}")
+    p = gp.pipeline_schedule(variant=variant)
+    if schedule == DEFAULT_SCHEDULE[variant]:
+        return p
+    if variant == "physical":
+        return p - gp.MEAN_PRESSURE_BAR / gp.physical_section().bar_per_unit
+    return p - gp.NOMINAL_PRESSURE
+
+
+@functools.lru_cache(maxsize=4)
+def pipeline_setup(variant: str = "physical", schedule: str | None = None) -> PipelineSetup:
+    """The shared model, input, Kalman gains, fault families and true-onset signature.
+
+    Parameters
+    ----------
+    variant : {"physical", "designed"}
+        Surrogate.
+    schedule : {"centred", "absolute"}, optional
+        Origin of ``p_k`` in the fault-2 column (:func:`fault_schedule`).
+    """
+    model = gp.pipeline_model(variant=variant)
+    u = gp.pipeline_input(variant=variant)
     gains = kalman_gains(model)
-    fam = gp.input_fault_family(model)
+    fam = gp.input_fault_family(model, schedule=fault_schedule(variant, schedule), u=u)
     sig = fault_signature(model, gains, fam.profile(FAULT_ONSET)).on_innovation
-    return PipelineSetup(model=model, u=gp.pipeline_input(), gains=gains, input_family=fam,
+    return PipelineSetup(model=model, u=u, gains=gains, input_family=fam,
                          leak_family=gp.output_leak_family(model), known_signature=sig)
 
 
@@ -139,7 +182,8 @@ class SingleRun:
 
 
 def single_run(*, seed: int, kind: str = "input", fault: int = 1, delta: float | None = None,
-               threshold: float = gp.THRESHOLD, window: int = gp.WINDOW) -> SingleRun:
+               threshold: float = gp.THRESHOLD, window: int = gp.WINDOW, variant: str = "physical"
+               ) -> SingleRun:
     """Simulate one record and run the windowed GLR (Figs 5, 6 and 9).
 
     Parameters
@@ -155,8 +199,10 @@ def single_run(*, seed: int, kind: str = "input", fault: int = 1, delta: float |
         Fault size; default Table 1 (or the leak size).
     threshold, window : float, int
         GLR threshold and window ``w``.
+    variant : {"physical", "designed"}
+        Surrogate (its own schedule).
     """
-    st = pipeline_setup()
+    st = pipeline_setup(variant)
     if kind == "input":
         fam, onset, theta = st.input_family, FAULT_ONSET, fault_theta(fault, delta)
     elif kind == "output":
@@ -196,6 +242,9 @@ def plot_single_run(result: ReproductionResult, fig: Any = None):
     return fig
 
 
+_SINGLE_KEYS = ("alarm_time_min", "onset_estimate_min", "detection_delay_min")
+
+
 def _single_result(rid: str, run: SingleRun, paper: dict[str, Any], settings: dict[str, Any]
                    ) -> ReproductionResult:
     headline = {"alarm_time_min": run.alarm_time_min, "onset_estimate_min": run.onset_estimate_min,
@@ -219,7 +268,8 @@ def fig5(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """
     run = single_run(seed=seed, fault=1, delta=gp.FAULT1_DELTA)
     return _single_result("zb2014-fig5", run,
-                          {"alarm_time_min": 786.0, "onset_estimate_min": 618.0, "detection_delay_min": 186.0},
+                          {"alarm_time_min": 786.0, "onset_estimate_min": 618.0, "detection_delay_min": 186.0,
+                           "calibrated_to": [], "predictions": list(_SINGLE_KEYS)},
                           {"seed": seed, "theta": fault_theta(1).tolist(), "window": gp.WINDOW,
                            "threshold": gp.THRESHOLD, "title": r"Fault 1, $\tilde G_0 = -2\times10^{-5}$"})
 
@@ -234,7 +284,8 @@ def fig6(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """
     run = single_run(seed=seed, fault=1, delta=gp.FAULT1_DOUBLED_DELTA)
     return _single_result("zb2014-fig6", run,
-                          {"alarm_time_min": 688.0, "onset_estimate_min": None, "detection_delay_min": 88.0},
+                          {"alarm_time_min": 688.0, "onset_estimate_min": None, "detection_delay_min": 88.0,
+                           "calibrated_to": [], "predictions": list(_SINGLE_KEYS)},
                           {"seed": seed, "theta": fault_theta(1, gp.FAULT1_DOUBLED_DELTA).tolist(),
                            "window": gp.WINDOW, "threshold": gp.THRESHOLD,
                            "title": r"Fault 1 doubled, $\tilde G_0 = -4\times10^{-5}$"})
@@ -271,7 +322,10 @@ def fig9(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
                 "innovation_drop": float(run.innovations[LEAK_ONSET] / sd),
                 "innovation_recovery": float(np.mean(run.innovations[-100:]) / gp.LEAK_SIZE)}
     return ReproductionResult(id="zb2014-fig9", headline=headline,
-                              paper={"alarm_time_min": None, "glr_level_over_threshold": 50.0},
+                              paper={"alarm_time_min": None, "glr_level_over_threshold": 50.0,
+                                     "calibrated_to": ["glr_level_over_threshold"],
+                                     "predictions": ["alarm_time_min", "innovation_drop",
+                                                     "innovation_recovery"]},
                               settings={"seed": seed, "leak": gp.LEAK_SIZE, "onset_min": gp.LEAK_ONSET_MIN,
                                         "window": gp.WINDOW, "threshold": gp.THRESHOLD,
                                         "title": "Output-end leak of -43980 at 700 min"},
@@ -301,13 +355,15 @@ def table1(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
                 "leak_fraction_fault1": rep["fault1_leak_fraction"],
                 "leak_fraction_fault2": rep["fault2_leak_fraction"]}
     paper = {"G0_1_nominal": -7.8297e-4, "G0_1_fault1": -7.8297e-4 - 2e-5, "Gp_1_nominal": 3.8290e-5,
-             "Gp_1_fault2": 3.8290e-5 - 1e-5, "theta_fault1": [-2e-5, 0.0], "theta_fault2": [0.0, -1e-5]}
+             "Gp_1_fault2": 3.8290e-5 - 1e-5, "theta_fault1": [-2e-5, 0.0], "theta_fault2": [0.0, -1e-5],
+             "calibrated_to": [], "predictions": []}
     return ReproductionResult(id="zb2014-table1", headline=headline, paper=paper,
                               settings={"psi": "[[U_k, p_k U_k], [0, 0]]", "onset_min": gp.FAULT_ONSET_MIN})
 
 
 # ----------------------------------------------------------------------------- Monte Carlo (Figs 7-8)
-def detection_chunk(seeds, *, fault: int) -> dict[str, np.ndarray]:
+def detection_chunk(seeds, *, fault: int, variant: str = "physical", schedule: str | None = None
+                    ) -> dict[str, np.ndarray]:
     """Detection and isolation for a chunk of realisations of input-end fault ``fault`` (Table 1 size).
 
     Vectorised over the chunk: noise (one stream per realisation), simulation, Kalman
@@ -315,6 +371,7 @@ def detection_chunk(seeds, *, fault: int) -> dict[str, np.ndarray]:
     onset estimate, and the two minmax statistics (41) from the estimated onset to the
     alarm (``F = C_{k*}(r_hat)``, ``zeta = d_{k*}(r_hat)``). Also the minmax statistics
     with the onset *known* (samples 300 .. 499), free of the detector's selection.
+    ``variant`` and ``schedule`` select the surrogate (:func:`pipeline_setup`).
 
     Returns
     -------
@@ -322,9 +379,9 @@ def detection_chunk(seeds, *, fault: int) -> dict[str, np.ndarray]:
         ``alarm``, ``onset_hat`` (sample indices, ``-1`` if none), ``l1``, ``l2`` (minmax
         focusing on fault 1 / fault 2; ``nan`` without alarm), ``cos2`` (squared cosine
         ``F12^2 / (F11 F22)`` between the two fault directions at the alarm) and
-        ``l1_known``, ``l2_known``.
+        ``l1_known``, ``l2_known``, ``max_prefault`` (largest ``l_k`` from 320 min to the onset).
     """
-    st = pipeline_setup()
+    st = pipeline_setup(variant, schedule)
     noise = draw_noise_batch(st.model, seeds)
     sim = simulate(st.model, noise=noise, u=st.u, fault=st.input_family.profile(FAULT_ONSET),
                    theta=fault_theta(fault))
@@ -345,13 +402,14 @@ def detection_chunk(seeds, *, fault: int) -> dict[str, np.ndarray]:
     F, zeta = information(eps, st.known_signature, st.gains, FAULT_ONSET, st.model.n_steps)
     cos2 = np.full(B, np.nan)
     cos2[ok] = C[ok, 0, 1] ** 2 / (C[ok, 0, 0] * C[ok, 1, 1])
-    return {"alarm": alarm, "onset_hat": onset_hat, "l1": l1, "l2": l2, "cos2": cos2,
+    pre = np.nan_to_num(res.statistic[:, GLR_START:FAULT_ONSET], nan=0.0).max(axis=1)
+    return {"alarm": alarm, "onset_hat": onset_hat, "l1": l1, "l2": l2, "cos2": cos2, "max_prefault": pre,
             "l1_known": minmax_statistic(F, zeta, [0]), "l2_known": minmax_statistic(F, zeta, [1])}
 
 
 def known_onset_isolation_power(*, schedule: np.ndarray | None = None, start: int = FAULT_ONSET,
-                                stop: int = gp.N_STEPS, alpha_threshold: float = MINMAX_THRESHOLD
-                                ) -> dict[str, dict[str, float]]:
+                                stop: int = gp.N_STEPS, alpha_threshold: float = MINMAX_THRESHOLD,
+                                variant: str = "physical") -> dict[str, dict[str, float]]:
     """Closed-form power of each minmax test with the onset known (no Monte Carlo).
 
     With the onset and the samples ``start .. stop-1`` fixed, the minmax statistic (41) for
@@ -368,16 +426,18 @@ def known_onset_isolation_power(*, schedule: np.ndarray | None = None, start: in
         Samples used (default: from the true onset to the end of the record).
     alpha_threshold : float
         Threshold of each test (default 6.6349).
+    variant : {"physical", "designed"}
+        Surrogate.
 
     Returns
     -------
     dict
         Per fault ("1", "2"): ``cos2`` (``F12^2 / (F11 F22)``), ``noncentrality`` and ``power``.
     """
-    u = gp.pipeline_input()
-    model = gp.pipeline_model(schedule=schedule, u=u)
+    u = gp.pipeline_input(variant=variant)
+    model = gp.pipeline_model(variant=variant, schedule=schedule, u=u)
     gains = kalman_gains(model)
-    fam = gp.input_fault_family(model, schedule=schedule, u=u)
+    fam = gp.input_fault_family(model, schedule=schedule, u=u, variant=variant)
     sig = fault_signature(model, gains, fam.profile(start)).on_innovation
     F, _ = information(np.zeros((model.n_steps, model.p)), sig, gains, start, stop)
     out = {}
@@ -395,11 +455,12 @@ def _fault_seed(seed: int, fault: int) -> int:
     return int(np.random.SeedSequence([int(seed), int(fault)]).generate_state(1)[0])
 
 
-_MC_CACHE: dict[tuple[int, int], dict[int, dict[str, np.ndarray]]] = {}
+_MC_CACHE: dict[tuple, dict[int, dict[str, np.ndarray]]] = {}
 
 
 def pipeline_monte_carlo(*, seed: int, trials: int, jobs: int = 1, progress: bool | None = None,
-                         chunk_size: int | None = None) -> dict[int, dict[str, np.ndarray]]:
+                         chunk_size: int | None = None, variant: str = "physical",
+                         schedule: str | None = None) -> dict[int, dict[str, np.ndarray]]:
     """The Monte Carlo experiment of Figs 7 and 8: ``trials`` runs of each input-end fault.
 
     Parameters
@@ -415,25 +476,27 @@ def pipeline_monte_carlo(*, seed: int, trials: int, jobs: int = 1, progress: boo
         Progress bar; default when standard error is a terminal (the CLI).
     chunk_size : int, optional
         Passed to :func:`~fdi_lib.montecarlo.run_monte_carlo`.
+    variant, schedule : str
+        Surrogate and schedule origin (:func:`pipeline_setup`).
 
     Returns
     -------
     dict
         ``{1: arrays, 2: arrays}`` with the entries of :func:`detection_chunk`. Cached per
-        ``(seed, trials)`` when ``chunk_size`` is the default.
+        ``(seed, trials, variant, schedule)`` when ``chunk_size`` is the default.
     """
-    key = (int(seed), int(trials))
+    key = (int(seed), int(trials), variant, schedule)
     if chunk_size is None and key in _MC_CACHE:
         return _MC_CACHE[key]
     if progress is None:
         progress = bool(getattr(sys.stderr, "isatty", lambda: False)())
     out = {}
     for fault in (1, 2):
-        out[fault] = run_monte_carlo(functools.partial(detection_chunk, fault=fault), trials,
+        chunk = functools.partial(detection_chunk, fault=fault, variant=variant, schedule=schedule)
+        out[fault] = run_monte_carlo(chunk, trials,
                                      seed=_fault_seed(seed, fault), jobs=jobs, chunk_size=chunk_size,
                                      progress=progress, description=f"fault {fault}")
     if chunk_size is None:
-        _MC_CACHE.clear()
         _MC_CACHE[key] = out
     return out
 
@@ -494,21 +557,43 @@ def fig7(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
         Per fault: ``q1``, ``median``, ``q3`` of the detection delay (min).
     onset_error_min : dict
         Per fault: ``q1``, ``median``, ``q3`` of ``r_hat Ts - 600`` (min) at the alarm.
+    hits : dict
+        Per fault: runs whose first alarm is at or after the onset (``false alarms + hits +
+        missed = trials`` per fault).
+    false_alarms_per_fault : dict
+        Per fault: runs whose first alarm precedes the onset.
+    max_prefault_statistic : float
+        Largest ``l_k`` before the onset (from 320 min) over all runs.
+    union_bound_false_alarm : float
+        Union bound on the per-run false-alarm probability: (number of tested samples before
+        the onset) x (window) x ``P(chi2(2) > 50)``, the GLR being a maximum of chi2(2) variables.
+
+    The ``paper`` dict marks ``missed`` (fault 2) as the calibration target of the physical
+    surrogate (:data:`fdi_lib.systems.gas_pipeline.CALIBRATION`); the other keys are predictions.
     """
     trials = 1000 if trials is None else trials
     mc = pipeline_monte_carlo(seed=seed, trials=trials, jobs=jobs)
-    delays, errs, fa, missed = {}, {}, 0, {}
+    delays, errs, fa, missed, hits, fa_f = {}, {}, 0, {}, {}, {}
     for fault, res in mc.items():
         alarm, onset = res["alarm"], res["onset_hat"]
         hit = alarm >= FAULT_ONSET
-        fa += int(np.sum((alarm >= 0) & (alarm < FAULT_ONSET)))
+        fa_f[str(fault)] = int(np.sum((alarm >= 0) & (alarm < FAULT_ONSET)))
+        fa += fa_f[str(fault)]
+        hits[str(fault)] = int(hit.sum())
         missed[str(fault)] = int(np.sum(alarm < 0))
         delays[fault] = (alarm[hit] - FAULT_ONSET) * gp.TS_MIN
         errs[fault] = (onset[hit] - FAULT_ONSET) * gp.TS_MIN
+    n_tested = FAULT_ONSET - GLR_START
     headline = {"false_alarms": fa, "false_alarm_rate": _rate(fa, 2 * trials), "missed": missed,
                 "delay_min": {str(f): _quartiles(v) for f, v in delays.items()},
-                "onset_error_min": {str(f): _quartiles(v) for f, v in errs.items()}}
-    paper = {"false_alarms": 7, "false_alarm_rate": {"rate": 7 / 2000, "count": 7, "n": 2000}}
+                "onset_error_min": {str(f): _quartiles(v) for f, v in errs.items()},
+                "hits": hits, "false_alarms_per_fault": fa_f,
+                "max_prefault_statistic": float(max(np.nanmax(r["max_prefault"]) for r in mc.values())),
+                "union_bound_false_alarm": float(n_tested * gp.WINDOW * scipy.stats.chi2.sf(gp.THRESHOLD, 2))}
+    paper = {"false_alarms": 7, "false_alarm_rate": {"rate": 7 / 2000, "count": 7, "n": 2000},
+             "missed": {"2": 0}, "calibrated_to": ["missed"],
+             "predictions": ["false_alarms", "false_alarm_rate", "delay_min", "onset_error_min",
+                             "max_prefault_statistic"]}
     return ReproductionResult(id="zb2014-fig7", headline=headline, paper=paper,
                               settings={"seed": seed, "trials_per_fault": trials, "window": gp.WINDOW,
                                         "threshold": gp.THRESHOLD, "start_min": gp.DISABLED_MIN},
@@ -566,11 +651,17 @@ def fig8(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     median_cos2 : dict
         Per fault: median squared cosine ``F12^2 / (F11 F22)`` of the two fault directions over
         the samples used at the alarm (1 = indistinguishable).
+    type1_rate_onset_error_le10, type2_rate_onset_error_le10 : dict
+        Per fault: the rates over detected runs whose onset estimate is within 10 min of 600.
+    type1_rate_onset_error_gt40, type2_rate_onset_error_gt40 : dict
+        The same over detected runs whose onset estimate is more than 40 min off.
+
+    All rates are predictions (``paper["predictions"]``); nothing here was calibrated.
     """
     trials = 1000 if trials is None else trials
     mc = pipeline_monte_carlo(seed=seed, trials=trials, jobs=jobs)
     t1, t2, t1k, ks1, ks2, mean_abs, minmax, cos2 = {}, {}, {}, {}, {}, {}, {}, {}
-    t2k, t2k_theory = {}, {}
+    t2k, t2k_theory, t1_le, t2_le, t1_gt, t2_gt = {}, {}, {}, {}, {}, {}
     power = known_onset_isolation_power()
     for fault, res in mc.items():
         hit = res["alarm"] >= FAULT_ONSET
@@ -581,6 +672,10 @@ def fig8(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
         t2k_theory[str(fault)] = 1.0 - power[str(fault)]["power"]
         n = int(hit.sum())
         t1[str(fault)] = _rate(int(np.sum(absent[hit] > MINMAX_THRESHOLD)), n)
+        err = np.abs(res["onset_hat"] - FAULT_ONSET) * gp.TS_MIN
+        for sel, d1, d2 in ((hit & (err <= 10), t1_le, t2_le), (hit & (err > 40), t1_gt, t2_gt)):
+            d1[str(fault)] = _rate(int(np.sum(absent[sel] > MINMAX_THRESHOLD)), int(sel.sum()))
+            d2[str(fault)] = _rate(int(np.sum(present[sel] <= MINMAX_THRESHOLD)), int(sel.sum()))
         t2[str(fault)] = _rate(int(np.sum(present[hit] <= MINMAX_THRESHOLD)), n)
         t1k[str(fault)] = _rate(int(np.sum(absent_known > MINMAX_THRESHOLD)), absent_known.size)
         ks1[str(fault)] = float(scipy.stats.kstest(absent_known, scipy.stats.chi2(1).cdf).pvalue)
@@ -593,10 +688,60 @@ def fig8(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
                 "type2_rate_known_onset": t2k, "type2_rate_known_onset_theory": t2k_theory,
                 "threshold_dof": dof,
                 "ks_pvalue_dof1": ks1, "ks_pvalue_dof2": ks2, "mean_absent_statistic": mean_abs,
-                "median_cos2": cos2}
+                "median_cos2": cos2,
+                "type1_rate_onset_error_le10": t1_le, "type2_rate_onset_error_le10": t2_le,
+                "type1_rate_onset_error_gt40": t1_gt, "type2_rate_onset_error_gt40": t2_gt}
     paper = {"type1_rate": {"1": {"rate": 0.017}, "2": {"rate": 0.013}},
-             "type2_rate": {"1": {"rate": 0.0}, "2": {"rate": 0.0}}, "threshold_dof": "1 (caption) / 2 (text)"}
+             "type2_rate": {"1": {"rate": 0.0}, "2": {"rate": 0.0}}, "threshold_dof": "1 (caption) / 2 (text)",
+             "calibrated_to": [], "predictions": ["type1_rate", "type2_rate"]}
     return ReproductionResult(id="zb2014-fig8", headline=headline, paper=paper,
                               settings={"seed": seed, "trials_per_fault": trials,
                                         "minmax_threshold": MINMAX_THRESHOLD},
                               data={"minmax": minmax})
+
+
+# ----------------------------------------------------------------------------- sensitivity
+def surrogate_sensitivity(*, seed: int, trials: int, jobs: int = 1) -> list[dict[str, Any]]:
+    """Figs 7-8 summaries for both surrogates and both schedule origins (modest trial counts).
+
+    Parameters
+    ----------
+    seed : int
+        Root seed (the same for every combination: common random numbers per surrogate).
+    trials : int
+        Runs per fault and combination.
+    jobs : int
+        Parallel workers (results do not depend on it).
+
+    Returns
+    -------
+    list of dict
+        One per ``(variant, schedule)``: ``variant``, ``schedule``, ``trials``, ``missed``
+        (per fault, a rate dict with its 95 % interval), ``false_alarm_rate``, ``median_delay_min``
+        (per fault), ``type1_rate``, ``type2_rate`` (per fault, at the alarm) and
+        ``type2_rate_known_onset`` (per fault).
+    """
+    rows = []
+    for variant in gp.VARIANTS:
+        for schedule in SCHEDULES:
+            mc = pipeline_monte_carlo(seed=seed, trials=trials, jobs=jobs, progress=False,
+                                      variant=variant, schedule=schedule)
+            row: dict[str, Any] = {"variant": variant, "schedule": schedule, "trials": trials,
+                                   "missed": {}, "median_delay_min": {}, "type1_rate": {},
+                                   "type2_rate": {}, "type2_rate_known_onset": {}}
+            fa = 0
+            for fault, res in mc.items():
+                f = str(fault)
+                hit = res["alarm"] >= FAULT_ONSET
+                fa += int(np.sum((res["alarm"] >= 0) & (res["alarm"] < FAULT_ONSET)))
+                present, absent = (res["l1"], res["l2"]) if fault == 1 else (res["l2"], res["l1"])
+                present_known = res["l1_known"] if fault == 1 else res["l2_known"]
+                row["missed"][f] = _rate(int(np.sum(res["alarm"] < 0)), trials)
+                delays = (res["alarm"][hit] - FAULT_ONSET) * gp.TS_MIN
+                row["median_delay_min"][f] = float(np.median(delays)) if delays.size else None
+                row["type1_rate"][f] = _rate(int(np.sum(absent[hit] > MINMAX_THRESHOLD)), int(hit.sum()))
+                row["type2_rate"][f] = _rate(int(np.sum(present[hit] <= MINMAX_THRESHOLD)), int(hit.sum()))
+                row["type2_rate_known_onset"][f] = _rate(int(np.sum(present_known <= MINMAX_THRESHOLD)), trials)
+            row["false_alarm_rate"] = _rate(fa, 2 * trials)
+            rows.append(row)
+    return rows
