@@ -29,7 +29,7 @@ from fdi_lib.errors import ModelError
 from fdi_lib.filters import KalmanGains, kalman_filter, kalman_gains
 from fdi_lib.glr import first_alarm, glr_window
 from fdi_lib.isolation import information, minmax_statistic
-from fdi_lib.models import FaultFamily, LTVModel
+from fdi_lib.models import FaultFamily, LTVModel, step_family
 from fdi_lib.montecarlo import binomial_ci, draw_noise_batch, run_monte_carlo
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, THRESHOLD_COLOR, figure
 from fdi_lib.reproduce.registry import ReproductionResult, register
@@ -219,6 +219,52 @@ def single_run(*, seed: int, kind: str = "input", fault: int = 1, delta: float |
                      threshold=float(threshold))
 
 
+def onset_profile(run: SingleRun, *, fault: int = 1, columns: str = "both",
+                  variant: str = "physical") -> dict[str, np.ndarray]:
+    """GLR statistic and ``theta_hat`` of every candidate onset at the alarm of an input-fault run.
+
+    Recomputed independently of the detector: for each onset ``r`` of the window at the
+    alarm ``k*``, the signature of the step ``Psi_k 1{k >= r}`` (:func:`fault_signature`)
+    and ``C, d`` over ``r .. k*`` (:func:`fdi_lib.isolation.information`), then
+    ``l(r) = d^T C^+ d`` and ``theta_hat(r) = C^+ d``.
+
+    Parameters
+    ----------
+    run : SingleRun
+        A run with an alarm (:func:`single_run`, ``kind="input"``).
+    fault : {1, 2}
+        Unused by the computation; kept in the result for the record.
+    columns : {"both", "U"}
+        Both columns of ``Psi_k`` (the paper's test) or the ``U_k`` column alone (``m = 1``).
+    variant : {"physical", "designed"}
+        Surrogate of the run.
+
+    Returns
+    -------
+    dict
+        ``onsets`` (sample indices), ``statistic``, ``theta_hat`` ``(n_onsets, m)``, ``fault``.
+    """
+    if run.alarm < 0:
+        raise ModelError("run: expected a run with an alarm, got one without")
+    if columns not in ("both", "U"):
+        raise ModelError(f"columns: expected 'both' or 'U', got {columns!r}")
+    st = pipeline_setup(variant)
+    fam = st.input_family
+    if columns == "U":
+        fam = step_family(st.model, Psi=fam.Psi_tilde[:, :, :1])
+    k = run.alarm
+    onsets = np.arange(max(0, k - gp.WINDOW + 1), k)
+    eps = run.innovations[:, None]
+    stat, theta = [], []
+    for r in onsets:
+        sig = fault_signature(st.model, st.gains, fam.profile(int(r))).on_innovation
+        C, d = information(eps, sig, st.gains, int(r), k + 1)
+        th = np.linalg.pinv(C) @ d
+        stat.append(float(d @ th))
+        theta.append(th)
+    return {"onsets": onsets, "statistic": np.array(stat), "theta_hat": np.array(theta), "fault": fault}
+
+
 def plot_single_run(result: ReproductionResult, fig: Any = None):
     """Paper Figs 5, 6, 9: innovation (top) and GLR statistic ``l_k`` (bottom, log scale)."""
     run: SingleRun = result.data["run"]
@@ -265,13 +311,32 @@ def fig5(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
         ``r_hat Ts`` at the alarm, eq. (36) (paper: 618).
     detection_delay_min : float
         Alarm time minus 600 min (paper: 186). ``nan`` fields mean no alarm.
+    onsets_within_2_of_max : int
+        Candidate onsets at the alarm whose ``l(r)`` is within 2 of the maximum (how flat the
+        GLR is across onsets; :func:`onset_profile`).
+    theta_hat_at_alarm : list of float
+        ``theta_hat`` at the estimated onset (true ``[-2e-5, 0]``).
+    theta_hat_ratio : float
+        Its first component over the true one.
+    onset_estimate_u_only_min : float
+        The onset estimate (min) of the same noise with the ``U_k`` column alone (``m = 1``).
     """
     run = single_run(seed=seed, fault=1, delta=gp.FAULT1_DELTA)
-    return _single_result("zb2014-fig5", run,
+    res = _single_result("zb2014-fig5", run,
                           {"alarm_time_min": 786.0, "onset_estimate_min": 618.0, "detection_delay_min": 186.0,
                            "calibrated_to": [], "predictions": list(_SINGLE_KEYS)},
                           {"seed": seed, "theta": fault_theta(1).tolist(), "window": gp.WINDOW,
                            "threshold": gp.THRESHOLD, "title": r"Fault 1, $\tilde G_0 = -2\times10^{-5}$"})
+    if run.alarm >= 0:
+        both, alone = onset_profile(run), onset_profile(run, columns="U")
+        best = int(np.argmax(both["statistic"]))
+        res.headline.update({
+            "onsets_within_2_of_max": int(np.sum(both["statistic"] >= both["statistic"].max() - 2.0)),
+            "theta_hat_at_alarm": both["theta_hat"][best].tolist(),
+            "theta_hat_ratio": float(both["theta_hat"][best][0] / gp.FAULT1_DELTA),
+            "onset_estimate_u_only_min": float(alone["onsets"][np.argmax(alone["statistic"])] * gp.TS_MIN)})
+        res.data.update({"profile": both, "profile_u_only": alone})
+    return res
 
 
 @register("zb2014-fig6", paper=PAPER, title="Gas pipeline, fault 1 doubled (dG0(1) = -4e-5): innovation and GLR",
@@ -311,6 +376,11 @@ def fig9(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
         Innovation at the onset (first affected sample), in innovation standard deviations.
     innovation_recovery : float
         Mean innovation over the last 100 samples / leak size (0 = back to the pre-fault mean).
+    innovation_sd : float
+        Innovation standard deviation ``sqrt(Sigma_k)`` at the onset.
+    leak_over_sd_squared_over_threshold : float
+        ``(leak / innovation_sd)^2 / 50``: the level the GLR reaches on average from one sample
+        (``l_k >= (leak / sigma)^2``).
     """
     run = single_run(seed=seed, kind="output")
     st = pipeline_setup()
@@ -320,7 +390,9 @@ def fig9(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
                 "glr_level_over_threshold": float(np.median(after)),
                 "glr_max_over_threshold": float(np.max(after)),
                 "innovation_drop": float(run.innovations[LEAK_ONSET] / sd),
-                "innovation_recovery": float(np.mean(run.innovations[-100:]) / gp.LEAK_SIZE)}
+                "innovation_recovery": float(np.mean(run.innovations[-100:]) / gp.LEAK_SIZE),
+                "innovation_sd": sd, "leak_over_sd_squared_over_threshold": float((gp.LEAK_SIZE / sd) ** 2
+                                                                                  / gp.THRESHOLD)}
     return ReproductionResult(id="zb2014-fig9", headline=headline,
                               paper={"alarm_time_min": None, "glr_level_over_threshold": 50.0,
                                      "calibrated_to": ["glr_level_over_threshold"],

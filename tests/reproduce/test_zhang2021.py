@@ -97,6 +97,10 @@ def test_example2_surrogate_pipeline_contract_and_collinearity():
     json.loads(f7.to_json())
     assert f7.headline["true_support"] == [9, 14]
     assert f6.headline["min_neighbour_correlation"] > 0.999
+    # On the physical surrogate the signature filter is short: the correlation comes from the
+    # smooth input, not from a long filter.
+    assert f6.headline["signature_taps_90"] <= 5
+    assert f6.paper["calibrated_to"] == [] and f7.paper["calibrated_to"] == []
     # whatever is selected, its least-squares values add up to the total leak 2e-4 (collinearity)
     assert sum(f7.headline["theta_ls"]) == pytest.approx(2e-4, rel=0.05)
     get("zhang2021-fig6").plot(f6)
