@@ -32,6 +32,7 @@ from fdi_lib.isolation import information, minmax_statistic
 from fdi_lib.models import FaultFamily, LTVModel, step_family
 from fdi_lib.montecarlo import binomial_ci, draw_noise_batch, run_monte_carlo
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, THRESHOLD_COLOR, figure
+from fdi_lib.report import fmt_rate
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.signatures import fault_signature
 from fdi_lib.simulate import simulate
@@ -39,7 +40,8 @@ from fdi_lib.systems import gas_pipeline as gp
 
 __all__ = ["MINMAX_THRESHOLD", "PipelineSetup", "pipeline_setup", "SingleRun", "single_run",
            "detection_chunk", "pipeline_monte_carlo", "known_onset_isolation_power", "fault_theta", "plot_single_run",
-           "SCHEDULES", "DEFAULT_SCHEDULE", "fault_schedule", "surrogate_sensitivity",
+           "SCHEDULES", "DEFAULT_SCHEDULE", "fault_schedule", "surrogate_sensitivity", "onset_profile",
+           "plot_signals", "plot_onset_profile", "format_rate",
            "plot_fig7", "plot_fig8"]
 
 PAPER = "Zhang & Basseville 2014"
@@ -272,7 +274,7 @@ def plot_single_run(result: ReproductionResult, fig: Any = None):
     ax0, ax1 = axes[:, 0]
     ax0.plot(run.t_min, run.innovations, color=OURS_COLOR, lw=0.8)
     ax0.axvline(run.true_onset * gp.TS_MIN, color="k", ls=":", lw=1, label="true onset")
-    ax0.set(ylabel=r"innovation $\varepsilon_k$", title=result.settings.get("title", ""))
+    ax0.set(ylabel=r"$\varepsilon_k$ (Nm$^3$/h)", title=result.settings.get("title", ""))
     ax0.legend(loc="lower left")
     ax1.semilogy(run.t_min, np.where(run.statistic > 0, run.statistic, np.nan), color=OURS_COLOR,
                  label=r"$l_k$ (35)")
@@ -283,12 +285,42 @@ def plot_single_run(result: ReproductionResult, fig: Any = None):
         ax1.axvline(run.alarm_time_min, color=PAPER_COLOR, lw=1, label=f"alarm {run.alarm_time_min:g} min")
         ax1.axvline(run.onset_estimate_min, color="tab:green", lw=1,
                     label=f"onset estimate {run.onset_estimate_min:g} min")
-    ax1.set(xlabel="time (min)", ylabel=r"$l_k$")
+    ax1.set(xlabel=r"$t = k T_s$ (min)", ylabel=r"$l_k$")
     ax1.legend(loc="lower right", ncols=2)
     return fig
 
 
 _SINGLE_KEYS = ("alarm_time_min", "onset_estimate_min", "detection_delay_min")
+
+
+def plot_signals(variant: str = "physical", fig: Any = None):
+    """Inlet flow ``U_k``, noise-free outlet flow and schedule ``p_k`` of a surrogate (not in the paper)."""
+    u, p = gp.pipeline_input(variant=variant), gp.pipeline_schedule(variant=variant)
+    t = np.arange(gp.N_STEPS) * gp.TS_MIN
+    fig, axes = figure(1, 2, fig=fig, figsize=(7.5, 3.0))
+    axes[0, 0].plot(t, u / 1e3, color=OURS_COLOR, label=r"$U_k$")
+    axes[0, 0].plot(t, gp.noise_free_output(u, p, variant=variant) / 1e3, color=PAPER_COLOR, ls="--",
+                    label=r"$Y_k$ without noise")
+    axes[0, 0].set(xlabel=r"$t$ (min from 06:00)", ylabel=r"flow ($10^3$ Nm$^3$/h)")
+    axes[0, 0].legend()
+    axes[0, 1].plot(t, p, color="tab:green")
+    axes[0, 1].set(xlabel=r"$t$ (min from 06:00)", ylabel=r"$p_k$")
+    return fig
+
+
+def plot_onset_profile(result: ReproductionResult, fig: Any = None):
+    """GLR statistic of every candidate onset at the alarm of Fig 5 (not in the paper)."""
+    both, alone = result.data["profile"], result.data["profile_u_only"]
+    fig, ax = figure(fig=fig, figsize=(7.0, 3.5))
+    ax = ax[0, 0]
+    ax.plot(both["onsets"] * gp.TS_MIN, both["statistic"], color=OURS_COLOR,
+            label=r"both columns of $\Psi_k$ ($m = 2$)")
+    ax.plot(alone["onsets"] * gp.TS_MIN, alone["statistic"], color=PAPER_COLOR, ls="--",
+            label=r"$U_k$ column alone ($m = 1$)")
+    ax.axvline(gp.FAULT_ONSET_MIN, color="k", ls=":", lw=1, label="true onset")
+    ax.set(xlabel=r"candidate onset $r T_s$ (min)", ylabel=r"$l_{k^*}(r)$")
+    ax.legend()
+    return fig
 
 
 def _single_result(rid: str, run: SingleRun, paper: dict[str, Any], settings: dict[str, Any]
@@ -603,9 +635,9 @@ def plot_fig7(result: ReproductionResult, fig: Any = None):
         delay = result.data["delay_min"][fault]
         err = result.data["onset_error_min"][fault]
         axes[0, j].hist(delay, bins=_grid_bins(delay), color=OURS_COLOR)
-        axes[0, j].set(title=f"fault {fault}: detection delay", xlabel="min")
+        axes[0, j].set(title=f"fault {fault}: detection delay", xlabel=r"$k^* T_s - 600$ (min)")
         axes[1, j].hist(err, bins=_grid_bins(err), color=OURS_COLOR)
-        axes[1, j].set(title=f"fault {fault}: onset estimation error", xlabel="min")
+        axes[1, j].set(title=f"fault {fault}: onset estimation error", xlabel=r"$\hat r T_s - 600$ (min)")
     return fig
 
 
@@ -689,7 +721,7 @@ def plot_fig8(result: ReproductionResult, fig: Any = None):
                 ax.set_ylim(0, 0.6)
                 ax.legend()
             ax.axvline(MINMAX_THRESHOLD, color=THRESHOLD_COLOR, lw=1)
-            ax.set(title=f"fault {fault}, test on fault {test}", xlabel=r"$l_a$ (41)")
+            ax.set(title=f"fault {fault}, test on fault {test}", xlabel=rf"$l_{{{test}}}$ (41)")
     return fig
 
 
@@ -817,3 +849,21 @@ def surrogate_sensitivity(*, seed: int, trials: int, jobs: int = 1) -> list[dict
             row["false_alarm_rate"] = _rate(fa, 2 * trials)
             rows.append(row)
     return rows
+
+
+def format_rate(rate: dict[str, Any]) -> str:
+    """A rate dict of these reproductions (``rate``, ``ci95``) as :func:`fdi_lib.report.fmt_rate` text.
+
+    Parameters
+    ----------
+    rate : dict
+        ``{"rate": float or None, "ci95": [low, high], ...}`` (as returned in the headlines).
+
+    Returns
+    -------
+    str
+        e.g. ``"5.8 % [4.4, 7.4]"``; ``"n/a"`` when no run qualified.
+    """
+    ci = rate.get("ci95")
+    ok = rate.get("rate") is not None and ci is not None and None not in ci
+    return fmt_rate(rate.get("rate"), ci if ok else None)
