@@ -200,3 +200,16 @@ def test_isolation_power_depends_on_relative_variation_of_p():
     from fdi_lib.errors import ModelError
     with pytest.raises(ModelError, match="fast_period_min: expected a positive number"):
         gp.pipeline_schedule(fast_period_min=0.0)
+
+
+def test_format_rate_and_reader_plots():
+    assert zp.format_rate({"rate": 0.017, "ci95": [0.0098, 0.027]}) == "1.7 % [0.98, 2.7]"
+    assert zp.format_rate({"rate": None, "count": 0, "n": 0, "ci95": [None, None]}) == "n/a"
+    fig = zp.plot_signals()
+    assert fig.axes[1].get_ylabel() == r"$p_k$"
+    r5 = reproduce("zb2014-fig5")
+    fig = zp.plot_onset_profile(r5)
+    assert fig.axes[0].get_ylabel() == r"$l_{k^*}(r)$"
+    assert len(fig.axes[0].lines) == 3
+    import matplotlib.pyplot as plt
+    plt.close("all")
