@@ -190,6 +190,12 @@ class SetValuedObserver:
     margin : float
         Relative outward inflation of the computed supports (round-off guard, keeps Prop. 2
         valid under floating point).
+    scale : ndarray, shape (n,), optional
+        Positive state scaling s: the observer works internally in z = x / s (every matrix
+        transformed, sets mapped back on output). Sets in which some coordinates are known 10^3
+        times better than others (the UAV: pitch to 1e-4 rad, speeds to 0.1 m/s) are nearly flat
+        for a floating-point hull; scaling each coordinate by its typical width makes them round.
+        The sets are the same up to rounding; default: no scaling.
     strip_before_hull : bool
         ``"exact"`` method only. False (default): X̂(k+1) = ∩_j co_v{Prop_j(v)} ∩ S, which always
         contains the true state. True: the paper's literal construction co_v{Prop_0(v) ∩ S} (Fig. 2),
@@ -211,7 +217,7 @@ class SetValuedObserver:
 
     def __init__(self, X0: Polytope, *, N: int = 1, method: str = "template",
                  template: np.ndarray | None = None, margin: float = 1e-9,
-                 strip_before_hull: bool = False) -> None:
+                 strip_before_hull: bool = False, scale: Any = None) -> None:
         if not isinstance(X0, Polytope):
             raise TypeError(f"X0: expected a Polytope, got {type(X0).__name__}")
         if not isinstance(N, (int, np.integer)) or N < 1:
@@ -230,6 +236,16 @@ class SetValuedObserver:
         self.template = None if template is None else np.asarray(template, dtype=float)
         if self.template is not None and (self.template.ndim != 2 or self.template.shape[1] != X0.dim):
             raise ShapeError(f"template: expected shape (p, {X0.dim}), got {self.template.shape}")
+        if scale is None:
+            self._s = None
+        else:
+            sc = _arr("scale", np.atleast_1d(scale), 1)
+            if sc.shape != (X0.dim,) or np.any(sc <= 0):
+                raise ModelError(f"scale: expected {X0.dim} positive numbers, got {sc}")
+            self._s = sc
+            X0, V0 = Polytope(X0.M * sc[None, :], X0.m), V0 / sc[None, :]
+            if self.template is not None:   # D x = (D S) z
+                self.template = self.template * sc[None, :]
         self.margin = float(margin)
         self.strip_before_hull = bool(strip_before_hull)
         self.n = X0.dim
@@ -240,19 +256,32 @@ class SetValuedObserver:
     # -------------------------------------------------------------- public API
     @property
     def current(self) -> Polytope | None:
-        """The latest set X̂(k), or None once empty."""
-        return None if self.empty or not self.history else self.history[0].X
+        """The latest set X̂(k) (state coordinates x), or None once empty."""
+        if self.empty or not self.history:
+            return None
+        X = self.history[0].X
+        return X if self._s is None else Polytope(X.M / self._s[None, :], X.m)
+
+    @property
+    def current_vertices(self) -> np.ndarray | None:
+        """Vertices of :attr:`current`, shape (v, n), or None once empty."""
+        if self.empty or not self.history:
+            return None
+        V = self.history[0].V
+        return V if self._s is None else V * self._s[None, :]
 
     def start(self, model: SVOModel, y0: np.ndarray) -> Polytope | None:
         """X̂(0) = X(0) ∩ {x : |y(0) - C x| <= nbar}."""
-        self._check_model(model)
+        model = self._check_model(model)
         X = self._strip(self._prior.X, model, y0, self._prior.V)
-        return self._push(X)
+        return self._wrap(self._push(X))
 
     def start_from(self, other: "SetValuedObserver") -> None:
         """Initialise with another observer's current history (Architecture II, §4.2)."""
         if other.empty or not other.history:
             raise EmptySetError("other: the observer to copy from has no non-empty set")
+        if (self._s is None) != (other._s is None) or (self._s is not None and np.any(self._s != other._s)):
+            raise ModelError("other: expected an observer with the same state scaling")
         self.history = [_Entry(e.X, e.V, e.model, e.u) for e in other.history]
         self.empty = False
 
@@ -262,7 +291,7 @@ class SetValuedObserver:
             return None
         if not self.history:
             raise ModelError("update: call start(model, y0) first")
-        self._check_model(model)
+        model = self._check_model(model)
         u = np.asarray(u, dtype=float).reshape(-1)
         if u.shape != (model.n_u,):
             raise ShapeError(f"u: expected shape ({model.n_u},), got {u.shape}")
@@ -276,14 +305,25 @@ class SetValuedObserver:
             X = self._update_template(entries, model, y_next)
         else:
             X = self._update_exact(entries, model, y_next)
-        return self._push(X)
+        return self._wrap(self._push(X))
 
     # -------------------------------------------------------------- internals
-    def _check_model(self, model: SVOModel) -> None:
+    def _wrap(self, X: Polytope | None) -> Polytope | None:
+        return None if X is None else self.current
+
+    def _check_model(self, model: SVOModel) -> SVOModel:
+        """Validate ``model`` and express it in the internal coordinates z = x / s."""
         if not isinstance(model, SVOModel):
             raise TypeError(f"model: expected an SVOModel, got {type(model).__name__}")
         if model.n != self.n:
             raise ShapeError(f"model: expected state dimension {self.n} (from X0), got {model.n}")
+        s = self._s
+        if s is None:
+            return model
+        T = s[None, :] / s[:, None]   # S^-1 A S
+        return SVOModel(A=model.A * T, C=model.C * s[None, :], B=model.B / s[:, None], L=model.L / s[:, None],
+                        noise=model.noise, A_unc=model.A_unc * T[None], B_unc=model.B_unc / s[None, :, None],
+                        C_unc=model.C_unc * s[None, None, :])
 
     def _push(self, X: Polytope | None) -> Polytope | None:
         if X is None:
@@ -385,9 +425,8 @@ class SetValuedObserver:
                                         np.concatenate([h[:, -1] for h in H[1:]]) if len(H) > 1 else X.m[:0]))
         Hs = np.vstack(H)
         X = Polytope(Hs[:, :-1], Hs[:, -1]).intersect_strip(model_next.C, y, nb)
-        V = X.vertices()
-        # irredundant facets (the stacked H-representation grows with N otherwise)
-        return None if V.shape[0] == 0 else Polytope.from_vertices(V)
+        # only the vertices feed the next step: no second hull for an irredundant H-representation
+        return None if X.vertices().shape[0] == 0 else X
 
 
 ModelSpec = SVOModel | Sequence[SVOModel] | Callable[[int], SVOModel]
@@ -430,7 +469,7 @@ class SVORun:
 
 @single_threaded_blas
 def run_svo(models: ModelSpec, u: Any, y: Any, X0: Polytope, *, N: int = 1, method: str = "template",
-            template: np.ndarray | None = None, keep_sets: bool = False) -> SVORun:
+            template: np.ndarray | None = None, keep_sets: bool = False, scale: Any = None) -> SVORun:
     """Run an SVO over a record: X̂(0), ..., X̂(T), stopping at the first empty set.
 
     Parameters
@@ -443,7 +482,7 @@ def run_svo(models: ModelSpec, u: Any, y: Any, X0: Polytope, *, N: int = 1, meth
         Measurements y(0), ..., y(T).
     X0 : Polytope
         Prior set of x(0).
-    N, method, template
+    N, method, template, scale
         See :class:`SetValuedObserver`.
     keep_sets : bool
         Keep every X̂(k) in the result.
@@ -457,7 +496,7 @@ def run_svo(models: ModelSpec, u: Any, y: Any, X0: Polytope, *, N: int = 1, meth
     u = _arr("u", np.asarray(u, dtype=float).reshape(T, -1) if np.size(u) == 0 else u, 2)
     if u.shape[0] != T:
         raise ShapeError(f"u: expected {T} rows (one less than y's {T + 1}), got shape {u.shape}")
-    svo = SetValuedObserver(X0, N=N, method=method, template=template)
+    svo = SetValuedObserver(X0, N=N, method=method, template=template, scale=scale)
     n = X0.dim
     lower = np.full((T + 1, n), np.nan)
     upper = np.full((T + 1, n), np.nan)
@@ -475,7 +514,7 @@ def run_svo(models: ModelSpec, u: Any, y: Any, X0: Polytope, *, N: int = 1, meth
         if X is None:
             empty_at = k
             break
-        V = svo.history[0].V
+        V = svo.current_vertices
         lower[k], upper[k] = V.min(axis=0), V.max(axis=0)
         nf[k], nv[k] = X.n_facets, V.shape[0]
         if keep_sets:
@@ -520,7 +559,7 @@ def _bank(named_models: Mapping[str, ModelSpec], u, y, X0, N, method, template):
 @single_threaded_blas
 def run_architecture_i(nominal: ModelSpec, faults: Mapping[str, ModelSpec], u: Any, y: Any, X0: Polytope,
                        *, N: int = 1, method: str = "template", template: np.ndarray | None = None,
-                       stop_when_isolated: bool = True) -> FDIResult:
+                       stop_when_isolated: bool = True, scale: Any = None) -> FDIResult:
     """Architecture I (§4.1, Fig. 6(a)): a nominal SVO for detection, and one SVO per fault whose
     model also contains the nominal plant; a fault is isolated when only one fault SVO is non-empty.
 
@@ -528,13 +567,13 @@ def run_architecture_i(nominal: ModelSpec, faults: Mapping[str, ModelSpec], u: A
     ----------
     nominal : model specification (see :func:`run_svo`)
     faults : dict name -> model specification
-    u, y, X0, N, method, template : see :func:`run_svo`
+    u, y, X0, N, method, template, scale : see :func:`run_svo`
     stop_when_isolated : bool
         Stop the record once the fault is isolated (saves time; ``empty_at`` of the survivor is then None).
     """
     y, u, T = _bank({"nominal": nominal, **faults}, u, y, X0, N, method, template)
     specs = {"nominal": nominal, **faults}
-    svos = {k: SetValuedObserver(X0, N=N, method=method, template=template) for k in specs}
+    svos = {k: SetValuedObserver(X0, N=N, method=method, template=template, scale=scale) for k in specs}
     empty_at: dict[str, int | None] = {k: None for k in specs}
     for name, svo in svos.items():
         if svo.start(_model_at(specs[name], 0), y[0]) is None:
@@ -561,15 +600,16 @@ def run_architecture_i(nominal: ModelSpec, faults: Mapping[str, ModelSpec], u: A
 @single_threaded_blas
 def run_architecture_ii(nominal: ModelSpec, global_model: ModelSpec, faults: Mapping[str, ModelSpec], u: Any,
                         y: Any, X0: Polytope, *, N: int = 1, method: str = "template",
-                        template: np.ndarray | None = None, stop_when_isolated: bool = True) -> FDIResult:
+                        template: np.ndarray | None = None, stop_when_isolated: bool = True,
+                        scale: Any = None) -> FDIResult:
     """Architecture II (§4.2, Fig. 6(b)): nominal SVO for detection, a Global SVO valid for the
     healthy and every faulty plant, and fault SVOs started from the Global SVO's set at detection.
 
     The fault models need not contain the nominal plant. Parameters as in :func:`run_architecture_i`.
     """
     y, u, T = _bank({"nominal": nominal, "global": global_model, **faults}, u, y, X0, N, method, template)
-    nom = SetValuedObserver(X0, N=N, method=method, template=template)
-    glob = SetValuedObserver(X0, N=N, method=method, template=template)
+    nom = SetValuedObserver(X0, N=N, method=method, template=template, scale=scale)
+    glob = SetValuedObserver(X0, N=N, method=method, template=template, scale=scale)
     empty_at: dict[str, int | None] = {"nominal": None, "global": None, **{f: None for f in faults}}
     if nom.start(_model_at(nominal, 0), y[0]) is None:
         empty_at["nominal"] = 0
@@ -592,7 +632,7 @@ def run_architecture_ii(nominal: ModelSpec, global_model: ModelSpec, faults: Map
             if empty_at["global"] is not None:
                 break
             for name in faults:
-                svo = SetValuedObserver(X0, N=N, method=method, template=template)
+                svo = SetValuedObserver(X0, N=N, method=method, template=template, scale=scale)
                 svo.start_from(glob)
                 fsvos[name] = svo
         if det is not None:

@@ -54,7 +54,7 @@ __all__ = ["TABLE3", "V_TRIM", "ALPHA_TRIM", "TS", "MU_READING", "NOISE_BOUND", 
            "ETA_UNITS", "ETA_UNIT", "FAULT_MODES", "ETA_TRIM", "RHO", "pitch_authority",
            "FAULTS", "SCENARIOS", "lpv_matrices", "zoh", "discretize", "measurement_matrix",
            "trim_state", "measure", "plant_derivative", "LQG", "design_lqg", "fault_profile",
-           "UAVRun", "simulate", "svo_models"]
+           "UAVRun", "simulate", "svo_models", "svo_scale", "discretize_many", "excitation"]
 
 #: Table 3 of the paper (SI units). Only documentary: the LPV model (16) already folds them in.
 TABLE3 = {"S": 2.365, "c": 1.34, "aspect_ratio": 2.047, "m": 39.7, "x_cg": 1.217, "I_y": 10.43}
@@ -462,6 +462,15 @@ def simulate(fault: str = "none", scenario: str = "step", *, rng: np.random.Gene
 SVO_V_MARGIN = 0.05                       # airspeed scheduling margin (m/s)
 SVO_NOISE_MARGIN = np.array([0.05, np.deg2rad(0.06), 1e-5, 1e-5])  # linearisation of the sensors
 SVO_DIST_MARGIN = np.array([2e-3, 1e-3, 2e-6, 2e-5])                # per-step: nonlinear terms, ZOH
+
+
+def svo_scale() -> np.ndarray:
+    """State scaling for the SVOs (argument ``scale`` of :func:`fdi_lib.sets.svo.run_svo`).
+
+    Half-widths of the box that the measurement strip alone allows, |C^-1| (nbar + margin): about
+    0.16, 0.16 m/s on u, w and 3.6e-4 rad, rad/s on theta, q. In these units the SVO sets are round.
+    """
+    return np.abs(np.linalg.inv(measurement_matrix())) @ (NOISE_BOUND + SVO_NOISE_MARGIN)
 
 
 def svo_models(run: UAVRun, kind: str = "nominal", *, dist_scale: float = 1.0, noise_scale: float = 1.0):
