@@ -21,7 +21,9 @@ from fdi_lib.threads import single_threaded_blas
 from fdi_lib.systems import eclipse_uav as uav
 
 __all__ = ["toy_model", "toy_prior", "simulate_toy", "fig1", "fig2", "fig8", "fig9", "fig10", "fig11", "fig11_rad", "fig12_rad",
-           "fault_mode_study", "explanation_scale", "hidden_fault_study",
+           "fault_mode_study", "explanation_scale", "hidden_fault_study", "isolation_lags",
+           "containment_check", "exact_vs_template", "horizon_comparison", "random_system",
+           "healthy_record",
            "fig12", "timing", "uav_study", "UAV_X0", "plot_fig1", "plot_fig2", "plot_alpha",
            "plot_fig11", "plot_fig12", "plot_timing"]
 
@@ -286,12 +288,14 @@ def fig10(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
 def _one_uav_run(fault: str, scenario: str, seed: "int | np.random.SeedSequence", duration: float,
                  eta_unit: str = uav.ETA_UNIT, fault_mode: str = "deviation", method: str = "template",
                  N: int = 1) -> dict:
-    """One closed-loop run and its Architecture I bank (healthy runs: the nominal SVO only)."""
+    """One closed-loop run and its Architecture I bank (the fault SVOs only if the nominal one empties)."""
     run = uav.simulate(fault, scenario, rng=np.random.default_rng(seed), duration=duration,
                        eta_unit=eta_unit, fault_mode=fault_mode)
     nominal = uav.svo_models(run, "nominal")
-    if fault == "none":   # a false alarm is an empty nominal set; the fault SVOs play no part
-        e = run_svo(nominal, run.u, run.y, UAV_X0, N=N, method=method).empty_at
+    # Isolation is declared only after detection, and the nominal SVO does not depend on the
+    # others: when it never empties (healthy runs, hidden faults) the fault SVOs play no part.
+    e = run_svo(nominal, run.u, run.y, UAV_X0, N=N, method=method).empty_at
+    if e is None or fault == "none":
         return {"fault": fault, "scenario": scenario, "onset": run.onset_step, "detection": e,
                 "isolation": None, "isolated": None, "empty_at": {"nominal": e}}
     res = run_architecture_i(nominal, {f: uav.svo_models(run, f) for f in uav.FAULTS},
@@ -690,3 +694,113 @@ def hidden_fault_study(seed: int, duration: float = 3.0, eta_unit: str = uav.ETA
     full = {f: explanation_scale(r, scale="noise") for f, r in runs.items()}
     return {"effect": effect, "width": width, "width_needed": needed, "explanation": explanation,
             "first_sample_noise": first, "full_record_noise": full, "template": template, "onset": onset}
+
+
+# ----------------------------------------------------------------------------- diagnostics of issue 14
+
+
+def isolation_lags(runs: tuple, fault: str = "alpha", scenario: str = "soft") -> dict:
+    """Samples between the nominal SVO's emptiness and each fault SVO's, over the runs of one case.
+
+    Returns SVO name -> list of lags in ms (None when that SVO never emptied: the survivor).
+    Isolation in Architecture I waits for the last wrong hypothesis, so the largest lag of the
+    other SVOs is the isolation delay after detection.
+    """
+    out: dict = {f: [] for f in uav.FAULTS}
+    for r in runs:
+        if r["fault"] != fault or r["scenario"] != scenario or r["detection"] is None:
+            continue
+        for f in uav.FAULTS:
+            e = r["empty_at"].get(f)
+            out[f].append(None if e is None else (e - r["detection"]) * uav.TS * 1e3)
+    return out
+
+
+@single_threaded_blas
+def containment_check(eta_unit: str, seed: int, amplitude: float = 3.6, duration: float = 3.0) -> dict:
+    """Nominal template SVO on a healthy run with +-``amplitude`` m/s airspeed commands.
+
+    Returns {"samples": checked samples, "outside": samples whose true state is outside the set,
+    "empty_at": first empty sample or None, "airspeed_swing": peak-to-peak measured airspeed (m/s)}.
+    """
+    run = uav.simulate("none", "step", rng=np.random.default_rng(seed), duration=duration,
+                       eta_unit=eta_unit, amplitude=amplitude)
+    res = run_svo(uav.svo_models(run, "nominal"), run.u, run.y, UAV_X0, keep_sets=True)
+    outside = sum(not S.contains(run.x[k], 1e-7) for k, S in enumerate(res.sets))
+    return {"samples": len(res.sets), "outside": int(outside), "empty_at": res.empty_at,
+            "airspeed_swing": float(np.ptp(run.y[:, 0]))}
+
+
+@single_threaded_blas
+def exact_vs_template(seed: int, steps: int = 2, N: int = 1) -> dict:
+    """The paper's exact update (vertex images and hulls, eq. (3)-(4)) against the template one.
+
+    Nominal UAV SVO on a healthy run, ``steps`` updates, state scaling :func:`uav.svo_scale`.
+    Returns, per method, per-update lists: ``vertices``, ``facets`` (inequalities kept),
+    ``ms`` (wall time of the update including the model's construction) and ``widths`` (bounding
+    box widths, shape (steps + 1, 4)).
+    """
+    import time
+
+    run = uav.simulate("none", "step", rng=np.random.default_rng(seed), duration=steps * uav.TS)
+    out = {}
+    for method in ("exact", "template"):
+        t0 = time.perf_counter()
+        models = uav.svo_models(run, "nominal")
+        build = (time.perf_counter() - t0) / steps
+        res = run_svo(models, run.u, run.y, UAV_X0, N=N, method=method, scale=uav.svo_scale())
+        out[method] = {"vertices": res.n_vertices.tolist(), "facets": res.n_facets.tolist(),
+                       "ms": ((res.step_time + build) * 1e3).tolist(), "widths": res.upper - res.lower}
+    return out
+
+
+def horizon_comparison(seed: int, runs: int = 20, steps: int = 12, horizons: tuple = (2, 3)) -> dict:
+    """Separate projection of the horizon rows against the joint form of eq. (3) (template rule).
+
+    Random stable 2-D systems with one A and one B uncertainty (:func:`random_system`), healthy
+    records of ``steps`` samples, 16 template directions, N in ``horizons``. Returns N -> {"cases": runs, "tighter":
+    runs in which the joint set is smaller in some direction by more than 1e-9, "max_gap": largest
+    support difference, "outside": samples with the true state outside the joint set, "alarms":
+    runs in which the joint set became empty}.
+    """
+    from fdi_lib.sets import Polytope
+
+    rng = np.random.default_rng(seed)
+    X0 = Polytope.box([-1, -1], [1, 1])
+    D = np.array([[np.cos(a), np.sin(a)] for a in np.linspace(0, 2 * np.pi, 16, endpoint=False)])
+    T = np.vstack([np.eye(2), -np.eye(2), D])
+    out = {N: {"cases": runs, "tighter": 0, "max_gap": 0.0, "outside": 0, "alarms": 0} for N in horizons}
+    for _ in range(runs):
+        m = random_system(rng)
+        x, u, y = healthy_record(m, rng, steps)
+        for N in horizons:
+            a = run_svo(m, u, y, X0, N=N, template=T, keep_sets=True)
+            b = run_svo(m, u, y, X0, N=N, template=T, keep_sets=True, joint=True)
+            o = out[N]
+            o["alarms"] += b.empty_at is not None
+            o["outside"] += sum(not S.contains(x[k], 1e-7) for k, S in enumerate(b.sets))
+            gap = max(float((Sa.support(D) - Sb.support(D)).max()) for Sa, Sb in zip(a.sets, b.sets))
+            o["tighter"] += gap > 1e-9
+            o["max_gap"] = max(o["max_gap"], gap)
+    return out
+
+
+def random_system(rng: np.random.Generator) -> SVOModel:
+    """A random stable 2-D system with one uncertain direction in A and one in B (Props 2-3 checks)."""
+    A = rng.standard_normal((2, 2))
+    A *= rng.uniform(0.6, 0.95) / max(abs(np.linalg.eigvals(A)))
+    return SVOModel(A=A, B=rng.standard_normal((2, 1)), C=np.array([[1.0, rng.uniform(-0.5, 0.5)]]),
+                    L=np.diag(rng.uniform(0.01, 0.1, 2)), noise=rng.uniform(0.05, 0.2),
+                    A_unc=0.1 * rng.standard_normal((1, 2, 2)), B_unc=0.1 * rng.standard_normal((1, 2, 1)))
+
+
+def healthy_record(model: SVOModel, rng: np.random.Generator, T: int = 25):
+    """Simulate ``model`` with every uncertainty uniform in its bound: x (T+1, 2), u (T, 1), y (T+1, 1)."""
+    x = np.zeros((T + 1, 2))
+    x[0] = rng.uniform(-0.5, 0.5, 2)
+    u = rng.uniform(-1, 1, (T, 1))
+    for k in range(T):
+        x[k + 1] = ((model.A + rng.uniform(-1, 1) * model.A_unc[0]) @ x[k]
+                    + (model.B + rng.uniform(-1, 1) * model.B_unc[0]) @ u[k] + model.L @ rng.uniform(-1, 1, 2))
+    y = x @ model.C.T + model.noise * rng.uniform(-1, 1, (T + 1, 1))
+    return x, u, y

@@ -41,7 +41,8 @@ from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
-from fdi_lib.errors import EmptySetError, ModelError, NonFiniteError, ShapeError, UnboundedSetError
+from fdi_lib.errors import (EmptySetError, ModelError, NonFiniteError, NumericalError, ShapeError,
+                            UnboundedSetError)
 from fdi_lib.sets.polytope import Polytope, _hull_hrep, _enumerate_vertices, box_corners
 from fdi_lib.threads import single_threaded_blas
 
@@ -196,6 +197,12 @@ class SetValuedObserver:
         times better than others (the UAV: pitch to 1e-4 rad, speeds to 0.1 m/s) are nearly flat
         for a floating-point hull; scaling each coordinate by its typical width makes them round.
         The sets are the same up to rounding; default: no scaling.
+    joint : bool
+        ``"template"`` method with N > 1 only. False (default, fast): each row j of eq. (3) is
+        projected on its own and the results are intersected, so the disturbances d(k), d(k-1), ...
+        may take different values in different rows. True: the rows are stacked with shared
+        disturbances as in eq. (3) and the support of the joint set is found by one linear program
+        per direction and Delta-vertex sequence (HiGHS); tighter, and much slower.
     strip_before_hull : bool
         ``"exact"`` method only. False (default): X̂(k+1) = ∩_j co_v{Prop_j(v)} ∩ S, which always
         contains the true state. True: the paper's literal construction co_v{Prop_0(v) ∩ S} (Fig. 2),
@@ -217,7 +224,7 @@ class SetValuedObserver:
 
     def __init__(self, X0: Polytope, *, N: int = 1, method: str = "template",
                  template: np.ndarray | None = None, margin: float = 1e-9,
-                 strip_before_hull: bool = False, scale: Any = None) -> None:
+                 strip_before_hull: bool = False, scale: Any = None, joint: bool = False) -> None:
         if not isinstance(X0, Polytope):
             raise TypeError(f"X0: expected a Polytope, got {type(X0).__name__}")
         if not isinstance(N, (int, np.integer)) or N < 1:
@@ -248,6 +255,7 @@ class SetValuedObserver:
                 self.template = self.template * sc[None, :]
         self.margin = float(margin)
         self.strip_before_hull = bool(strip_before_hull)
+        self.joint = bool(joint)
         self.n = X0.dim
         self._prior = _Entry(X0, V0)
         self.history: list[_Entry] = []  # most recent first
@@ -371,17 +379,71 @@ class SetValuedObserver:
             out.append(level)
         return out
 
+    def _joint_support(self, entries: list[_Entry], props: list, Dall: np.ndarray) -> np.ndarray:
+        """Support of co_v{joint set of eq. (3)} in the directions Dall (one LP per direction and v).
+
+        For a full Delta-vertex sequence v, the rows j = 0..N'-1 share x(k+1) and the disturbance
+        coefficients: row j uses the first g_j columns of v's generator matrix (its own prefix).
+        Variables (x(k+1), x(k), ..., x(k-N'+1), s); x(k-j) in X̂(k-j), |s| <= 1.
+        """
+        from scipy.optimize import linprog
+
+        n, Np = self.n, len(props)
+        full = props[-1]
+        g_full = full[0][2].shape[1]
+        widths = [lvl[0][2].shape[1] for lvl in props]
+        nv = n * (Np + 1) + g_full
+        A_ub = [np.zeros((0, nv))]
+        b_ub = [np.zeros(0)]
+        for j, e in enumerate(entries[:Np]):
+            blk = np.zeros((e.X.n_facets, nv))
+            blk[:, n * (j + 1):n * (j + 2)] = e.X.M
+            A_ub.append(blk)
+            b_ub.append(e.X.m)
+        A_ub, b_ub = np.vstack(A_ub), np.concatenate(b_ub)
+        bounds = [(None, None)] * (n * (Np + 1)) + [(-1.0, 1.0)] * g_full
+        h = np.full(Dall.shape[0], -np.inf)
+        reps = [len(props[j]) for j in range(Np)]
+        for iv, (_, _, G) in enumerate(full):
+            A_eq, b_eq = [], []
+            for j in range(Np):
+                # the prefix of v of length j+1 is entry iv // (reps[-1] // reps[j]) of level j
+                Phi_j, c_j, G_j = props[j][iv // (reps[-1] // reps[j])]
+                row = np.zeros((n, nv))
+                row[:, :n] = np.eye(n)
+                row[:, n * (j + 1):n * (j + 2)] = -Phi_j
+                row[:, n * (Np + 1):n * (Np + 1) + widths[j]] = -G[:, :widths[j]]
+                A_eq.append(row)
+                b_eq.append(c_j)
+            A_eq, b_eq = np.vstack(A_eq), np.concatenate(b_eq)
+            for i, d in enumerate(Dall):
+                c = np.zeros(nv)
+                c[:n] = -d
+                res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b_eq, bounds=bounds, method="highs")
+                if res.status == 2:
+                    continue   # this vertex sequence explains nothing: no contribution to the hull
+                if res.status != 0:
+                    raise NumericalError(f"joint horizon: the support LP failed ({res.message})")
+                h[i] = max(h[i], -res.fun)
+        return h
+
     def _update_template(self, entries: list[_Entry], model_next: SVOModel, y: np.ndarray) -> Polytope | None:
         D = self.template if self.template is not None else default_template(self.n, model_next.C)
         Cu = model_next.C_unc.reshape(-1, self.n)
         Dall = np.vstack([D, Cu, -Cu]) if Cu.size else D
-        h = np.full(Dall.shape[0], np.inf)
-        for j, level in enumerate(self._propagations(entries)):
-            V = entries[j].V
-            # support of co_v{Prop_j(v)} = max over the Delta-vertex sequences v (eq. (4))
-            hj = np.max([(V @ (Dall @ Phi).T).max(axis=0) + Dall @ c + np.abs(Dall @ G).sum(axis=1)
-                         for Phi, c, G in level], axis=0)
-            h = np.minimum(h, hj)  # intersection over the horizon: take the tightest bound
+        props = self._propagations(entries)
+        if self.joint and len(props) > 1:
+            h = self._joint_support(entries, props, Dall)
+            if np.all(np.isinf(h)):
+                return None
+        else:
+            h = np.full(Dall.shape[0], np.inf)
+            for j, level in enumerate(props):
+                V = entries[j].V
+                # support of co_v{Prop_j(v)} = max over the Delta-vertex sequences v (eq. (4))
+                hj = np.max([(V @ (Dall @ Phi).T).max(axis=0) + Dall @ c + np.abs(Dall @ G).sum(axis=1)
+                             for Phi, c, G in level], axis=0)
+                h = np.minimum(h, hj)  # intersection over the horizon: take the tightest bound
         h = h + self.margin * (1.0 + np.abs(h))
         p = D.shape[0]
         nb = model_next.noise.copy()
@@ -469,7 +531,8 @@ class SVORun:
 
 @single_threaded_blas
 def run_svo(models: ModelSpec, u: Any, y: Any, X0: Polytope, *, N: int = 1, method: str = "template",
-            template: np.ndarray | None = None, keep_sets: bool = False, scale: Any = None) -> SVORun:
+            template: np.ndarray | None = None, keep_sets: bool = False, scale: Any = None,
+            joint: bool = False) -> SVORun:
     """Run an SVO over a record: X̂(0), ..., X̂(T), stopping at the first empty set.
 
     Parameters
@@ -482,7 +545,7 @@ def run_svo(models: ModelSpec, u: Any, y: Any, X0: Polytope, *, N: int = 1, meth
         Measurements y(0), ..., y(T).
     X0 : Polytope
         Prior set of x(0).
-    N, method, template, scale
+    N, method, template, scale, joint
         See :class:`SetValuedObserver`.
     keep_sets : bool
         Keep every X̂(k) in the result.
@@ -496,7 +559,7 @@ def run_svo(models: ModelSpec, u: Any, y: Any, X0: Polytope, *, N: int = 1, meth
     u = _arr("u", np.asarray(u, dtype=float).reshape(T, -1) if np.size(u) == 0 else u, 2)
     if u.shape[0] != T:
         raise ShapeError(f"u: expected {T} rows (one less than y's {T + 1}), got shape {u.shape}")
-    svo = SetValuedObserver(X0, N=N, method=method, template=template, scale=scale)
+    svo = SetValuedObserver(X0, N=N, method=method, template=template, scale=scale, joint=joint)
     n = X0.dim
     lower = np.full((T + 1, n), np.nan)
     upper = np.full((T + 1, n), np.nan)
