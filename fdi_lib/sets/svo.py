@@ -17,13 +17,17 @@ Two update rules are offered (``method``):
     set X̂_v(k+1) of states compatible with (3) is computed exactly (images of vertices,
     Minkowski sum with the disturbance zonotope, facet and vertex enumeration by cddlib,
     intersection with the measurement strip), and X̂(k+1) = co{X̂_v(k+1)}. Complexity
-    grows with time; used for the small 2-D figures.
+    grows with time: on the 4-state UAV model (run with ``scale``) the sets reach hundreds of
+    vertices after two steps; used for the 2-D figures and the comparisons of the book.
 ``"template"``
     A fixed-complexity outer approximation of the same set: the support function of each
     X̂_v in a fixed set of directions D (template) is computed in closed form from the
     vertices of the previous sets, so X̂(k+1) = Set([D; C; -C], [max_v h_v; y + nbar; nbar - y])
     always has |D| + 2 n_y inequalities. It contains the exact set, so Propositions 2 and 3
     still hold; only conservatism is added. Used for the UAV (fast, bounded complexity).
+    With N > 1 each row of the horizon is projected on its own and the results intersected
+    (disturbances not shared between rows); ``joint=True`` solves the stacked form of eq. (3)
+    with shared disturbances by linear programming (tighter, slower).
 
 B uncertainty is folded into the disturbance as in the paper (L_d(k) = B_b(k) u(k)). C
 uncertainty is handled by the relaxation idea of eq. (11) applied directly to the output:
@@ -202,7 +206,10 @@ class SetValuedObserver:
         projected on its own and the results are intersected, so the disturbances d(k), d(k-1), ...
         may take different values in different rows. True: the rows are stacked with shared
         disturbances as in eq. (3) and the support of the joint set is found by one linear program
-        per direction and Delta-vertex sequence (HiGHS); tighter, and much slower.
+        per direction and Delta-vertex sequence (HiGHS); tighter, and much slower. Sound (contains
+        every compatible state) when A is known (no ``A_unc``); with an uncertain A the hull over
+        vertex sequences can miss the true state, as the paper's strip-before-hull order can
+        (:func:`fdi_lib.reproduce.rosa2013.horizon_comparison` measures it).
     strip_before_hull : bool
         ``"exact"`` method only. False (default): X̂(k+1) = ∩_j co_v{Prop_j(v)} ∩ S, which always
         contains the true state. True: the paper's literal construction co_v{Prop_0(v) ∩ S} (Fig. 2),

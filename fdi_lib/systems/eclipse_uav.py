@@ -41,6 +41,7 @@ the book chapter as well):
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -200,6 +201,10 @@ def _polynomial(mu_scale: float, elevator_eff: float, eta_unit: str) -> tuple[np
     return P0, P1, P2
 
 
+#: trim (u*, w*) of :func:`trim_state`, as plain floats for the inner loop of the simulation
+_TRIM_UW = (V_TRIM * math.cos(ALPHA_TRIM), V_TRIM * math.sin(ALPHA_TRIM))
+
+
 def measurement_matrix(V: float = V_TRIM, alpha: float = ALPHA_TRIM) -> np.ndarray:
     """Linearised C of the sensors (airspeed, alpha, theta, q) about the trim point, shape (4, 4)."""
     ca, sa = np.cos(alpha), np.sin(alpha)
@@ -248,19 +253,32 @@ def plant_derivative(x: np.ndarray, delta: np.ndarray, dist: np.ndarray, mu_scal
     fault_mode : {"deviation", "total"}
         Where the faults act (:data:`FAULT_MODES`).
     """
-    xs = trim_state()
-    V = float(np.hypot(xs[0] + x[0], xs[1] + x[1]))
-    P0, P1, P2 = _polynomial(float(mu_scale), float(elevator_eff), eta_unit)
-    AB = P0 + V * P1 + V * V * P2
-    dx = AB[:, :4] @ x + AB[:, 4:] @ delta
-    dx[0] += -x[3] * x[1] + AB[0, 2] * (np.sin(x[2]) - x[2])
-    dx[[0, 1, 3]] += DIST_ACCEL * dist
-    if fault_mode == "total" and (elevator_eff != 1.0 or mu_scale != 1.0):
+    return _rhs(float(mu_scale), float(elevator_eff), eta_unit, fault_mode)(x, delta, dist)
+
+
+def _rhs(mu_scale: float, elevator_eff: float, eta_unit: str, fault_mode: str):
+    """The right-hand side of :func:`plant_derivative` for fixed fault parameters (x, delta, dist) -> dx."""
+    u_star, w_star = _TRIM_UW
+    P0, P1, P2 = _polynomial(mu_scale, elevator_eff, eta_unit)
+    total = fault_mode == "total" and (elevator_eff != 1.0 or mu_scale != 1.0)
+    if total:
         H0, H1, H2 = _polynomial(1.0, 1.0, eta_unit)
-        healthy = H0 + V * H1 + V * V * H2
-        dx += (elevator_eff - 1.0) * healthy[:, 4] * ETA_TRIM
-        dx[3] += (mu_scale - 1.0) * healthy[3, 0] * xs[0]
-    return dx
+    acc = np.zeros(4)
+
+    def f(x: np.ndarray, delta: np.ndarray, dist: np.ndarray) -> np.ndarray:
+        V = math.hypot(u_star + x[0], w_star + x[1])
+        AB = P0 + V * (P1 + V * P2)
+        dx = AB[:, :4] @ x + AB[:, 4:] @ delta
+        acc[0], acc[1], acc[3] = DIST_ACCEL[0] * dist[0], DIST_ACCEL[1] * dist[1], DIST_ACCEL[2] * dist[2]
+        dx += acc
+        dx[0] += -x[3] * x[1] + AB[0, 2] * (math.sin(x[2]) - x[2])
+        if total:
+            healthy = H0 + V * (H1 + V * H2)
+            dx += (elevator_eff - 1.0) * healthy[:, 4] * ETA_TRIM
+            dx[3] += (mu_scale - 1.0) * healthy[3, 0] * u_star
+        return dx
+
+    return f
 
 
 @dataclass(frozen=True)
@@ -445,11 +463,13 @@ def simulate(fault: str = "none", scenario: str = "step", *, rng: np.random.Gene
         mu = 1.0 + size * p[k] if fault == "dynamics" else 1.0
         eff = 1.0 - size * p[k] if fault == "elevator" else 1.0
         xi = x[k].copy()
+        f = _rhs(float(mu), float(eff), eta_unit, fault_mode)
+        dk = dist[k]
         for _ in range(substeps):  # RK4 with zero-order-hold input and disturbance
-            k1 = plant_derivative(xi, uk, dist[k], mu, eff, eta_unit, fault_mode)
-            k2 = plant_derivative(xi + h / 2 * k1, uk, dist[k], mu, eff, eta_unit, fault_mode)
-            k3 = plant_derivative(xi + h / 2 * k2, uk, dist[k], mu, eff, eta_unit, fault_mode)
-            k4 = plant_derivative(xi + h * k3, uk, dist[k], mu, eff, eta_unit, fault_mode)
+            k1 = f(xi, uk, dk)
+            k2 = f(xi + h / 2 * k1, uk, dk)
+            k3 = f(xi + h / 2 * k2, uk, dk)
+            k4 = f(xi + h * k3, uk, dk)
             xi = xi + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         x[k + 1] = xi
         if not np.all(np.isfinite(xi)) or np.abs(xi).max() > 1e3:
