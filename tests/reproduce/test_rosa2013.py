@@ -109,3 +109,33 @@ def test_hidden_fault_study_effect_sizes():
     q = np.abs(f.y[:, 3] - h.y[:, 3]).max() / (uav.NOISE_BOUND[3] + uav.SVO_NOISE_MARGIN[3])
     assert out["effect"]["dynamics"]["q"] == pytest.approx(q, rel=1e-12)
     assert out["template"][1.0]["none"] is None                            # no false alarm at the design bounds
+
+
+def test_isolation_lags_on_synthetic_runs():
+    runs = ({"fault": "alpha", "scenario": "soft", "detection": 80, "onset": 51,
+             "empty_at": {"nominal": 80, "alpha": None, "elevator": 85, "dynamics": 80}},
+            {"fault": "alpha", "scenario": "soft", "detection": None, "onset": 51,
+             "empty_at": {"nominal": None}},
+            {"fault": "elevator", "scenario": "soft", "detection": 90, "onset": 51,
+             "empty_at": {"nominal": 90, "alpha": 91, "elevator": None, "dynamics": 99}})
+    lags = R.isolation_lags(runs)
+    assert lags == {"alpha": [None], "elevator": [pytest.approx(50.0)], "dynamics": [pytest.approx(0.0)]}
+
+
+def test_total_speed_mu_fault_is_seen_at_once_and_the_deviation_one_is_not():
+    """0.3 M_u u* Ts on the pitch rate is about 74 noise bounds: the nominal set must empty at the
+    first sample after the onset (20 ms); on the speed deviation the same fault stays hidden."""
+    out = R.fault_mode_study(2013, 1, duration=0.8)["dynamics"]
+    assert out["total"]["detected"] == 1 and out["total"]["detection_ms"] == pytest.approx(20.0)
+    assert out["deviation"]["detected"] == 0
+
+
+def test_uav_study_streams_are_independent_across_seeds():
+    """Seeds 0 and 1 share no realisation (spawned streams, not seed + i)."""
+    a = np.random.SeedSequence(0).spawn(3)
+    b = np.random.SeedSequence(1).spawn(3)
+    draws_a = {float(np.random.default_rng(s).uniform()) for s in a}
+    draws_b = {float(np.random.default_rng(s).uniform()) for s in b}
+    assert not draws_a & draws_b
+    run = R._one_uav_run("none", "step", a[1], 0.3)
+    assert run["detection"] is None and run["empty_at"] == {"nominal": None}
