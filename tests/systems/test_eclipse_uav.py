@@ -149,3 +149,10 @@ def test_svo_model_scales():
             uav.svo_models(run, dist_scale=bad)
     with pytest.raises(ModelError, match="noise_scale"):
         uav.svo_models(run, noise_scale=np.inf)
+
+
+def test_integration_step_is_fine_enough():
+    """The default RK4 step (2 per sample) against 10 per sample: outputs within 1e-5 noise bounds."""
+    a = uav.simulate("elevator", "hard", rng=np.random.default_rng(1), duration=2.0)
+    b = uav.simulate("elevator", "hard", rng=np.random.default_rng(1), duration=2.0, substeps=10)
+    assert np.all(np.abs(a.y - b.y).max(axis=0) < 1e-5 * uav.NOISE_BOUND)
