@@ -38,6 +38,7 @@ explains why this differs from the augmented system (9)-(10)).
 
 from __future__ import annotations
 
+import functools
 import itertools
 import time
 from dataclasses import dataclass, field
@@ -59,10 +60,18 @@ def _arr(name: str, a: Any, ndim: int) -> np.ndarray:
     x = np.asarray(a, dtype=float)
     if x.ndim != ndim:
         raise ShapeError(f"{name}: expected a {ndim}-D array, got shape {x.shape}")
-    bad = np.argwhere(~np.isfinite(x))
-    if bad.size:
+    if not np.isfinite(x).all():
+        bad = np.argwhere(~np.isfinite(x))
         raise NonFiniteError(f"{name}: non-finite value at index {tuple(int(i) for i in bad[0])}")
     return x
+
+
+@functools.lru_cache(maxsize=16)
+def _cube_vertices(n_A: int) -> np.ndarray:
+    """The 2**n_A vertices of the cube {|Delta| <= 1} (eq. (4)), shape (2**n_A, n_A)."""
+    v = np.array(list(itertools.product((-1.0, 1.0), repeat=n_A)), dtype=float).reshape(2 ** n_A, n_A)
+    v.flags.writeable = False
+    return v
 
 
 @dataclass(frozen=True, eq=False)
@@ -132,8 +141,7 @@ class SVOModel:
         for name, val in [("A", A), ("C", C), ("B", B), ("L", L), ("noise", noise), ("A_unc", Au),
                           ("B_unc", Bu), ("C_unc", Cu)]:
             object.__setattr__(self, name, val)
-        signs = np.array(list(itertools.product((-1.0, 1.0), repeat=Au.shape[0])), dtype=float).reshape(
-            2 ** Au.shape[0], Au.shape[0])
+        signs = _cube_vertices(Au.shape[0])
         object.__setattr__(self, "_vertex_A", A[None] + np.einsum("vi,ijk->vjk", signs, Au))
 
     @property
