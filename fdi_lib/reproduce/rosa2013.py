@@ -477,8 +477,8 @@ def fault_mode_study(seed: int, trials: int, eta_unit: str = uav.ETA_UNIT, durat
 
 
 @single_threaded_blas
-def step_times(N: int, seed: int, duration: float = 2.0, method: str = "template") -> dict:
-    """Wall time per SVO update (nominal UAV SVO) over one healthy run, model construction included.
+def step_times(N: int, seed: int, duration: float = 2.0) -> dict:
+    """Wall time per template SVO update (nominal UAV SVO) over one healthy run, model construction included.
 
     The per-step models are built in one batch (:func:`uav.svo_models`); each step is charged
     its share of that batch plus the construction of its ``SVOModel`` and the update itself.
@@ -489,8 +489,7 @@ def step_times(N: int, seed: int, duration: float = 2.0, method: str = "template
     t0 = time.perf_counter()
     models = uav.svo_models(run, "nominal")
     build = (time.perf_counter() - t0) / len(run.u)
-    scale = uav.svo_scale() if method == "exact" else None
-    res = run_svo(models, run.u, run.y, UAV_X0, N=N, method=method, scale=scale)
+    res = run_svo(models, run.u, run.y, UAV_X0, N=N)
     st = (res.step_time[np.isfinite(res.step_time)] + build) * 1e3
     return {"median_ms": float(np.median(st)), "p90_ms": float(np.percentile(st, 90)),
             "max_facets": int(res.n_facets.max()), "max_vertices": int(res.n_vertices.max()),
