@@ -249,9 +249,9 @@ def plot_alpha(result: ReproductionResult, fig: Any = None):
     ax.axvline(uav.ONSET, color="0.5", ls=":", label="fault onset")
     if d["detect_t"] is not None:
         ax.axvline(d["detect_t"], color=PAPER_COLOR, ls="--", label="detected (nominal SVO empty)")
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("angle of attack (deg)")
-    ax.set_title(f"alpha-sensor fault, {d['scenario']} scenario")
+    ax.set_xlabel(r"$t$ (s)")
+    ax.set_ylabel(r"$\alpha$ (°)")
+    ax.set_title(rf"$\alpha$-sensor fault, {d['scenario']} scenario")
     ax.legend(loc="best")
     return fig
 
@@ -388,9 +388,9 @@ def _bar_plot(result: ReproductionResult, key: str, title: str, fig: Any = None)
             if vals[f][s] is None:
                 ax.text(b.get_x() + b.get_width() / 2, 1.0, "n.d.", ha="center", va="bottom", fontsize=7,
                         rotation=90)
-    ax.set_xticks(x, ["alpha sensor", "elevator", "M_u (dynamics)"])
+    ax.set_xticks(x, [r"$\alpha$ sensor", r"elevator $\eta$", r"$M_u$ (dynamics)"])
     ax.set_yscale("symlog", linthresh=10)
-    ax.set_ylabel("mean time (ms)")
+    ax.set_ylabel(r"mean time $\bar t$ (ms)")
     ax.set_title(title)
     ax.legend(title="scenario")
     return fig
@@ -506,8 +506,8 @@ def plot_timing(result: ReproductionResult, fig: Any = None):
     ax.axhline(10, color="k", ls=":", label="$T_s$ = 10 ms")
     ax.set_yscale("log")
     ax.set_xticks(Ns)
-    ax.set_xlabel("horizon N")
-    ax.set_ylabel("time per SVO step (ms)")
+    ax.set_xlabel(r"horizon $N$")
+    ax.set_ylabel(r"time per SVO step $t_{\rm step}$ (ms)")
     ax.legend()
     return fig
 
