@@ -132,12 +132,41 @@ def _chebyshev(M: np.ndarray, m: np.ndarray, cap: float = 1e6) -> tuple[str, np.
     return "optimal", res.x[:n], float(res.x[n])
 
 
-def _qhull_vertices(M: np.ndarray, m: np.ndarray, centre: np.ndarray) -> np.ndarray:
-    """Vertices by qhull's halfspace intersection around an interior point."""
-    from scipy.spatial import HalfspaceIntersection
+def _all_inside(V: np.ndarray, M: np.ndarray, m: np.ndarray, tol: float) -> bool:
+    """Whether every row of V satisfies M v <= m + tol (in blocks: V and M can both be large)."""
+    step = max(1, 2_000_000 // max(1, M.shape[0]))
+    return all(np.all(V[i:i + step] @ M.T <= m + tol) for i in range(0, V.shape[0], step))
 
-    hs = HalfspaceIntersection(np.column_stack([M, -m]), centre)
-    V = hs.intersections
+
+#: qhull options tried in turn: default, then allowing wide merges ("Q12", the remedy qhull itself
+#: proposes for a "dupridge" topology error between nearly coincident vertices), then also merging
+#: pinched vertices ("Q14"). Each result is verified against the inequalities.
+_QHULL_RETRIES = (None, "Q12", "Q12 Q14")
+
+
+def _qhull_vertices(M: np.ndarray, m: np.ndarray, centre: np.ndarray) -> np.ndarray:
+    """Vertices by qhull's halfspace intersection around an interior point.
+
+    Many nearly parallel inequalities (the hull of thousands of vertex images) make qhull's
+    default merging fail with a topology error; the options of :data:`_QHULL_RETRIES` are then
+    tried in turn, and a result is accepted only if every vertex satisfies every inequality to
+    1e-9 (relative). Raises the last qhull error if none works.
+    """
+    from scipy.spatial import HalfspaceIntersection, QhullError
+
+    err: Exception | None = None
+    for opts in _QHULL_RETRIES:
+        try:
+            hs = HalfspaceIntersection(np.column_stack([M, -m]), centre, qhull_options=opts)
+        except QhullError as exc:
+            err = exc
+            continue
+        V = hs.intersections
+        if _all_inside(V, M, m, 1e-9 * (1.0 + np.abs(m))):
+            break
+        err = NumericalError(f"qhull ({opts}): vertices violate the inequalities")
+    else:
+        raise err  # type: ignore[misc]
     # merge vertices reported once per incident facet
     key = np.round(V / (1e-9 * (1.0 + np.abs(V).max())), 0)
     return V[np.unique(key, axis=0, return_index=True)[1]]
@@ -189,22 +218,30 @@ def _cdd_dd_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray:
 def _hull_hrep(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """H-representation (M, m) of conv(V).
 
-    Full-dimensional point sets go to qhull (:class:`scipy.spatial.ConvexHull`), which is
-    fast and numerically robust in floating point; flat (lower-dimensional) sets, which
-    qhull rejects, go to cddlib, whose equalities become pairs of inequalities.
+    Full-dimensional point sets go to qhull (:class:`scipy.spatial.ConvexHull`), retried with the
+    options of :data:`_QHULL_RETRIES` on a topology error; flat (lower-dimensional) sets, which
+    qhull rejects, go to cddlib, whose equalities become pairs of inequalities. Every result is
+    verified (all points inside, to 1e-9 relative); a failed verification raises
+    :class:`NumericalError` rather than returning a wrong set.
     """
     from scipy.spatial import ConvexHull, QhullError
 
+    scale = 1.0 + np.abs(V).max()
     if V.shape[1] >= 2 and V.shape[0] > V.shape[1]:
-        try:
-            hull = ConvexHull(V)
-        except QhullError:
-            pass
-        else:
+        for opts in _QHULL_RETRIES:
+            try:
+                hull = ConvexHull(V, qhull_options=opts)
+            except QhullError:
+                continue
             eq = hull.equations  # rows [a, b] with a x + b <= 0 (unit normals)
             eq = eq[np.unique(np.round(eq, 12), axis=0, return_index=True)[1]]
-            return eq[:, :-1].copy(), -eq[:, -1]
-    return _cdd_hull_exact(V)
+            M, m = eq[:, :-1].copy(), -eq[:, -1]
+            if _all_inside(V, M, m, 1e-9 * scale):
+                return M, m
+    M, m = _cdd_hull_exact(V)
+    if not _all_inside(V, M, m, 1e-9 * scale):
+        raise NumericalError(f"conv(V): the facets found in floating point exclude some of the {len(V)} points")
+    return M, m
 
 
 def _cdd_hull_exact(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

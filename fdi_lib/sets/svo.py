@@ -17,13 +17,17 @@ Two update rules are offered (``method``):
     set X̂_v(k+1) of states compatible with (3) is computed exactly (images of vertices,
     Minkowski sum with the disturbance zonotope, facet and vertex enumeration by cddlib,
     intersection with the measurement strip), and X̂(k+1) = co{X̂_v(k+1)}. Complexity
-    grows with time; used for the small 2-D figures.
+    grows with time: on the 4-state UAV model (run with ``scale``) the sets reach hundreds of
+    vertices after two steps; used for the 2-D figures and the comparisons of the book.
 ``"template"``
     A fixed-complexity outer approximation of the same set: the support function of each
     X̂_v in a fixed set of directions D (template) is computed in closed form from the
     vertices of the previous sets, so X̂(k+1) = Set([D; C; -C], [max_v h_v; y + nbar; nbar - y])
     always has |D| + 2 n_y inequalities. It contains the exact set, so Propositions 2 and 3
     still hold; only conservatism is added. Used for the UAV (fast, bounded complexity).
+    With N > 1 each row of the horizon is projected on its own and the results intersected
+    (disturbances not shared between rows); ``joint=True`` solves the stacked form of eq. (3)
+    with shared disturbances by linear programming (tighter, slower).
 
 B uncertainty is folded into the disturbance as in the paper (L_d(k) = B_b(k) u(k)). C
 uncertainty is handled by the relaxation idea of eq. (11) applied directly to the output:
@@ -34,6 +38,7 @@ explains why this differs from the augmented system (9)-(10)).
 
 from __future__ import annotations
 
+import functools
 import itertools
 import time
 from dataclasses import dataclass, field
@@ -41,7 +46,8 @@ from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
-from fdi_lib.errors import EmptySetError, ModelError, NonFiniteError, ShapeError, UnboundedSetError
+from fdi_lib.errors import (EmptySetError, ModelError, NonFiniteError, NumericalError, ShapeError,
+                            UnboundedSetError)
 from fdi_lib.sets.polytope import Polytope, _hull_hrep, _enumerate_vertices, box_corners
 from fdi_lib.threads import single_threaded_blas
 
@@ -54,10 +60,18 @@ def _arr(name: str, a: Any, ndim: int) -> np.ndarray:
     x = np.asarray(a, dtype=float)
     if x.ndim != ndim:
         raise ShapeError(f"{name}: expected a {ndim}-D array, got shape {x.shape}")
-    bad = np.argwhere(~np.isfinite(x))
-    if bad.size:
+    if not np.isfinite(x).all():
+        bad = np.argwhere(~np.isfinite(x))
         raise NonFiniteError(f"{name}: non-finite value at index {tuple(int(i) for i in bad[0])}")
     return x
+
+
+@functools.lru_cache(maxsize=16)
+def _cube_vertices(n_A: int) -> np.ndarray:
+    """The 2**n_A vertices of the cube {|Delta| <= 1} (eq. (4)), shape (2**n_A, n_A)."""
+    v = np.array(list(itertools.product((-1.0, 1.0), repeat=n_A)), dtype=float).reshape(2 ** n_A, n_A)
+    v.flags.writeable = False
+    return v
 
 
 @dataclass(frozen=True, eq=False)
@@ -127,8 +141,7 @@ class SVOModel:
         for name, val in [("A", A), ("C", C), ("B", B), ("L", L), ("noise", noise), ("A_unc", Au),
                           ("B_unc", Bu), ("C_unc", Cu)]:
             object.__setattr__(self, name, val)
-        signs = np.array(list(itertools.product((-1.0, 1.0), repeat=Au.shape[0])), dtype=float).reshape(
-            2 ** Au.shape[0], Au.shape[0])
+        signs = _cube_vertices(Au.shape[0])
         object.__setattr__(self, "_vertex_A", A[None] + np.einsum("vi,ijk->vjk", signs, Au))
 
     @property
@@ -190,6 +203,21 @@ class SetValuedObserver:
     margin : float
         Relative outward inflation of the computed supports (round-off guard, keeps Prop. 2
         valid under floating point).
+    scale : ndarray, shape (n,), optional
+        Positive state scaling s: the observer works internally in z = x / s (every matrix
+        transformed, sets mapped back on output). Sets in which some coordinates are known 10^3
+        times better than others (the UAV: pitch to 1e-4 rad, speeds to 0.1 m/s) are nearly flat
+        for a floating-point hull; scaling each coordinate by its typical width makes them round.
+        The sets are the same up to rounding; default: no scaling.
+    joint : bool
+        ``"template"`` method with N > 1 only. False (default, fast): each row j of eq. (3) is
+        projected on its own and the results are intersected, so the disturbances d(k), d(k-1), ...
+        may take different values in different rows. True: the rows are stacked with shared
+        disturbances as in eq. (3) and the support of the joint set is found by one linear program
+        per direction and Delta-vertex sequence (HiGHS); tighter, and much slower. Sound (contains
+        every compatible state) when A is known (no ``A_unc``); with an uncertain A the hull over
+        vertex sequences can miss the true state, as the paper's strip-before-hull order can
+        (:func:`fdi_lib.reproduce.rosa2013.horizon_comparison` measures it).
     strip_before_hull : bool
         ``"exact"`` method only. False (default): X̂(k+1) = ∩_j co_v{Prop_j(v)} ∩ S, which always
         contains the true state. True: the paper's literal construction co_v{Prop_0(v) ∩ S} (Fig. 2),
@@ -211,7 +239,7 @@ class SetValuedObserver:
 
     def __init__(self, X0: Polytope, *, N: int = 1, method: str = "template",
                  template: np.ndarray | None = None, margin: float = 1e-9,
-                 strip_before_hull: bool = False) -> None:
+                 strip_before_hull: bool = False, scale: Any = None, joint: bool = False) -> None:
         if not isinstance(X0, Polytope):
             raise TypeError(f"X0: expected a Polytope, got {type(X0).__name__}")
         if not isinstance(N, (int, np.integer)) or N < 1:
@@ -230,8 +258,19 @@ class SetValuedObserver:
         self.template = None if template is None else np.asarray(template, dtype=float)
         if self.template is not None and (self.template.ndim != 2 or self.template.shape[1] != X0.dim):
             raise ShapeError(f"template: expected shape (p, {X0.dim}), got {self.template.shape}")
+        if scale is None:
+            self._s = None
+        else:
+            sc = _arr("scale", np.atleast_1d(scale), 1)
+            if sc.shape != (X0.dim,) or np.any(sc <= 0):
+                raise ModelError(f"scale: expected {X0.dim} positive numbers, got {sc}")
+            self._s = sc
+            X0, V0 = Polytope(X0.M * sc[None, :], X0.m), V0 / sc[None, :]
+            if self.template is not None:   # D x = (D S) z
+                self.template = self.template * sc[None, :]
         self.margin = float(margin)
         self.strip_before_hull = bool(strip_before_hull)
+        self.joint = bool(joint)
         self.n = X0.dim
         self._prior = _Entry(X0, V0)
         self.history: list[_Entry] = []  # most recent first
@@ -240,19 +279,32 @@ class SetValuedObserver:
     # -------------------------------------------------------------- public API
     @property
     def current(self) -> Polytope | None:
-        """The latest set X̂(k), or None once empty."""
-        return None if self.empty or not self.history else self.history[0].X
+        """The latest set X̂(k) (state coordinates x), or None once empty."""
+        if self.empty or not self.history:
+            return None
+        X = self.history[0].X
+        return X if self._s is None else Polytope(X.M / self._s[None, :], X.m)
+
+    @property
+    def current_vertices(self) -> np.ndarray | None:
+        """Vertices of :attr:`current`, shape (v, n), or None once empty."""
+        if self.empty or not self.history:
+            return None
+        V = self.history[0].V
+        return V if self._s is None else V * self._s[None, :]
 
     def start(self, model: SVOModel, y0: np.ndarray) -> Polytope | None:
         """X̂(0) = X(0) ∩ {x : |y(0) - C x| <= nbar}."""
-        self._check_model(model)
+        model = self._check_model(model)
         X = self._strip(self._prior.X, model, y0, self._prior.V)
-        return self._push(X)
+        return self._wrap(self._push(X))
 
     def start_from(self, other: "SetValuedObserver") -> None:
         """Initialise with another observer's current history (Architecture II, §4.2)."""
         if other.empty or not other.history:
             raise EmptySetError("other: the observer to copy from has no non-empty set")
+        if (self._s is None) != (other._s is None) or (self._s is not None and np.any(self._s != other._s)):
+            raise ModelError("other: expected an observer with the same state scaling")
         self.history = [_Entry(e.X, e.V, e.model, e.u) for e in other.history]
         self.empty = False
 
@@ -262,7 +314,7 @@ class SetValuedObserver:
             return None
         if not self.history:
             raise ModelError("update: call start(model, y0) first")
-        self._check_model(model)
+        model = self._check_model(model)
         u = np.asarray(u, dtype=float).reshape(-1)
         if u.shape != (model.n_u,):
             raise ShapeError(f"u: expected shape ({model.n_u},), got {u.shape}")
@@ -276,14 +328,25 @@ class SetValuedObserver:
             X = self._update_template(entries, model, y_next)
         else:
             X = self._update_exact(entries, model, y_next)
-        return self._push(X)
+        return self._wrap(self._push(X))
 
     # -------------------------------------------------------------- internals
-    def _check_model(self, model: SVOModel) -> None:
+    def _wrap(self, X: Polytope | None) -> Polytope | None:
+        return None if X is None else self.current
+
+    def _check_model(self, model: SVOModel) -> SVOModel:
+        """Validate ``model`` and express it in the internal coordinates z = x / s."""
         if not isinstance(model, SVOModel):
             raise TypeError(f"model: expected an SVOModel, got {type(model).__name__}")
         if model.n != self.n:
             raise ShapeError(f"model: expected state dimension {self.n} (from X0), got {model.n}")
+        s = self._s
+        if s is None:
+            return model
+        T = s[None, :] / s[:, None]   # S^-1 A S
+        return SVOModel(A=model.A * T, C=model.C * s[None, :], B=model.B / s[:, None], L=model.L / s[:, None],
+                        noise=model.noise, A_unc=model.A_unc * T[None], B_unc=model.B_unc / s[None, :, None],
+                        C_unc=model.C_unc * s[None, None, :])
 
     def _push(self, X: Polytope | None) -> Polytope | None:
         if X is None:
@@ -331,17 +394,71 @@ class SetValuedObserver:
             out.append(level)
         return out
 
+    def _joint_support(self, entries: list[_Entry], props: list, Dall: np.ndarray) -> np.ndarray:
+        """Support of co_v{joint set of eq. (3)} in the directions Dall (one LP per direction and v).
+
+        For a full Delta-vertex sequence v, the rows j = 0..N'-1 share x(k+1) and the disturbance
+        coefficients: row j uses the first g_j columns of v's generator matrix (its own prefix).
+        Variables (x(k+1), x(k), ..., x(k-N'+1), s); x(k-j) in X̂(k-j), |s| <= 1.
+        """
+        from scipy.optimize import linprog
+
+        n, Np = self.n, len(props)
+        full = props[-1]
+        g_full = full[0][2].shape[1]
+        widths = [lvl[0][2].shape[1] for lvl in props]
+        nv = n * (Np + 1) + g_full
+        A_ub = [np.zeros((0, nv))]
+        b_ub = [np.zeros(0)]
+        for j, e in enumerate(entries[:Np]):
+            blk = np.zeros((e.X.n_facets, nv))
+            blk[:, n * (j + 1):n * (j + 2)] = e.X.M
+            A_ub.append(blk)
+            b_ub.append(e.X.m)
+        A_ub, b_ub = np.vstack(A_ub), np.concatenate(b_ub)
+        bounds = [(None, None)] * (n * (Np + 1)) + [(-1.0, 1.0)] * g_full
+        h = np.full(Dall.shape[0], -np.inf)
+        reps = [len(props[j]) for j in range(Np)]
+        for iv, (_, _, G) in enumerate(full):
+            A_eq, b_eq = [], []
+            for j in range(Np):
+                # the prefix of v of length j+1 is entry iv // (reps[-1] // reps[j]) of level j
+                Phi_j, c_j, G_j = props[j][iv // (reps[-1] // reps[j])]
+                row = np.zeros((n, nv))
+                row[:, :n] = np.eye(n)
+                row[:, n * (j + 1):n * (j + 2)] = -Phi_j
+                row[:, n * (Np + 1):n * (Np + 1) + widths[j]] = -G[:, :widths[j]]
+                A_eq.append(row)
+                b_eq.append(c_j)
+            A_eq, b_eq = np.vstack(A_eq), np.concatenate(b_eq)
+            for i, d in enumerate(Dall):
+                c = np.zeros(nv)
+                c[:n] = -d
+                res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b_eq, bounds=bounds, method="highs")
+                if res.status == 2:
+                    continue   # this vertex sequence explains nothing: no contribution to the hull
+                if res.status != 0:
+                    raise NumericalError(f"joint horizon: the support LP failed ({res.message})")
+                h[i] = max(h[i], -res.fun)
+        return h
+
     def _update_template(self, entries: list[_Entry], model_next: SVOModel, y: np.ndarray) -> Polytope | None:
         D = self.template if self.template is not None else default_template(self.n, model_next.C)
         Cu = model_next.C_unc.reshape(-1, self.n)
         Dall = np.vstack([D, Cu, -Cu]) if Cu.size else D
-        h = np.full(Dall.shape[0], np.inf)
-        for j, level in enumerate(self._propagations(entries)):
-            V = entries[j].V
-            # support of co_v{Prop_j(v)} = max over the Delta-vertex sequences v (eq. (4))
-            hj = np.max([(V @ (Dall @ Phi).T).max(axis=0) + Dall @ c + np.abs(Dall @ G).sum(axis=1)
-                         for Phi, c, G in level], axis=0)
-            h = np.minimum(h, hj)  # intersection over the horizon: take the tightest bound
+        props = self._propagations(entries)
+        if self.joint and len(props) > 1:
+            h = self._joint_support(entries, props, Dall)
+            if np.all(np.isinf(h)):
+                return None
+        else:
+            h = np.full(Dall.shape[0], np.inf)
+            for j, level in enumerate(props):
+                V = entries[j].V
+                # support of co_v{Prop_j(v)} = max over the Delta-vertex sequences v (eq. (4))
+                hj = np.max([(V @ (Dall @ Phi).T).max(axis=0) + Dall @ c + np.abs(Dall @ G).sum(axis=1)
+                             for Phi, c, G in level], axis=0)
+                h = np.minimum(h, hj)  # intersection over the horizon: take the tightest bound
         h = h + self.margin * (1.0 + np.abs(h))
         p = D.shape[0]
         nb = model_next.noise.copy()
@@ -385,9 +502,8 @@ class SetValuedObserver:
                                         np.concatenate([h[:, -1] for h in H[1:]]) if len(H) > 1 else X.m[:0]))
         Hs = np.vstack(H)
         X = Polytope(Hs[:, :-1], Hs[:, -1]).intersect_strip(model_next.C, y, nb)
-        V = X.vertices()
-        # irredundant facets (the stacked H-representation grows with N otherwise)
-        return None if V.shape[0] == 0 else Polytope.from_vertices(V)
+        # only the vertices feed the next step: no second hull for an irredundant H-representation
+        return None if X.vertices().shape[0] == 0 else X
 
 
 ModelSpec = SVOModel | Sequence[SVOModel] | Callable[[int], SVOModel]
@@ -430,7 +546,8 @@ class SVORun:
 
 @single_threaded_blas
 def run_svo(models: ModelSpec, u: Any, y: Any, X0: Polytope, *, N: int = 1, method: str = "template",
-            template: np.ndarray | None = None, keep_sets: bool = False) -> SVORun:
+            template: np.ndarray | None = None, keep_sets: bool = False, scale: Any = None,
+            joint: bool = False) -> SVORun:
     """Run an SVO over a record: X̂(0), ..., X̂(T), stopping at the first empty set.
 
     Parameters
@@ -443,7 +560,7 @@ def run_svo(models: ModelSpec, u: Any, y: Any, X0: Polytope, *, N: int = 1, meth
         Measurements y(0), ..., y(T).
     X0 : Polytope
         Prior set of x(0).
-    N, method, template
+    N, method, template, scale, joint
         See :class:`SetValuedObserver`.
     keep_sets : bool
         Keep every X̂(k) in the result.
@@ -457,7 +574,7 @@ def run_svo(models: ModelSpec, u: Any, y: Any, X0: Polytope, *, N: int = 1, meth
     u = _arr("u", np.asarray(u, dtype=float).reshape(T, -1) if np.size(u) == 0 else u, 2)
     if u.shape[0] != T:
         raise ShapeError(f"u: expected {T} rows (one less than y's {T + 1}), got shape {u.shape}")
-    svo = SetValuedObserver(X0, N=N, method=method, template=template)
+    svo = SetValuedObserver(X0, N=N, method=method, template=template, scale=scale, joint=joint)
     n = X0.dim
     lower = np.full((T + 1, n), np.nan)
     upper = np.full((T + 1, n), np.nan)
@@ -475,7 +592,7 @@ def run_svo(models: ModelSpec, u: Any, y: Any, X0: Polytope, *, N: int = 1, meth
         if X is None:
             empty_at = k
             break
-        V = svo.history[0].V
+        V = svo.current_vertices
         lower[k], upper[k] = V.min(axis=0), V.max(axis=0)
         nf[k], nv[k] = X.n_facets, V.shape[0]
         if keep_sets:
@@ -520,7 +637,7 @@ def _bank(named_models: Mapping[str, ModelSpec], u, y, X0, N, method, template):
 @single_threaded_blas
 def run_architecture_i(nominal: ModelSpec, faults: Mapping[str, ModelSpec], u: Any, y: Any, X0: Polytope,
                        *, N: int = 1, method: str = "template", template: np.ndarray | None = None,
-                       stop_when_isolated: bool = True) -> FDIResult:
+                       stop_when_isolated: bool = True, scale: Any = None) -> FDIResult:
     """Architecture I (§4.1, Fig. 6(a)): a nominal SVO for detection, and one SVO per fault whose
     model also contains the nominal plant; a fault is isolated when only one fault SVO is non-empty.
 
@@ -528,13 +645,13 @@ def run_architecture_i(nominal: ModelSpec, faults: Mapping[str, ModelSpec], u: A
     ----------
     nominal : model specification (see :func:`run_svo`)
     faults : dict name -> model specification
-    u, y, X0, N, method, template : see :func:`run_svo`
+    u, y, X0, N, method, template, scale : see :func:`run_svo`
     stop_when_isolated : bool
         Stop the record once the fault is isolated (saves time; ``empty_at`` of the survivor is then None).
     """
     y, u, T = _bank({"nominal": nominal, **faults}, u, y, X0, N, method, template)
     specs = {"nominal": nominal, **faults}
-    svos = {k: SetValuedObserver(X0, N=N, method=method, template=template) for k in specs}
+    svos = {k: SetValuedObserver(X0, N=N, method=method, template=template, scale=scale) for k in specs}
     empty_at: dict[str, int | None] = {k: None for k in specs}
     for name, svo in svos.items():
         if svo.start(_model_at(specs[name], 0), y[0]) is None:
@@ -561,15 +678,16 @@ def run_architecture_i(nominal: ModelSpec, faults: Mapping[str, ModelSpec], u: A
 @single_threaded_blas
 def run_architecture_ii(nominal: ModelSpec, global_model: ModelSpec, faults: Mapping[str, ModelSpec], u: Any,
                         y: Any, X0: Polytope, *, N: int = 1, method: str = "template",
-                        template: np.ndarray | None = None, stop_when_isolated: bool = True) -> FDIResult:
+                        template: np.ndarray | None = None, stop_when_isolated: bool = True,
+                        scale: Any = None) -> FDIResult:
     """Architecture II (§4.2, Fig. 6(b)): nominal SVO for detection, a Global SVO valid for the
     healthy and every faulty plant, and fault SVOs started from the Global SVO's set at detection.
 
     The fault models need not contain the nominal plant. Parameters as in :func:`run_architecture_i`.
     """
     y, u, T = _bank({"nominal": nominal, "global": global_model, **faults}, u, y, X0, N, method, template)
-    nom = SetValuedObserver(X0, N=N, method=method, template=template)
-    glob = SetValuedObserver(X0, N=N, method=method, template=template)
+    nom = SetValuedObserver(X0, N=N, method=method, template=template, scale=scale)
+    glob = SetValuedObserver(X0, N=N, method=method, template=template, scale=scale)
     empty_at: dict[str, int | None] = {"nominal": None, "global": None, **{f: None for f in faults}}
     if nom.start(_model_at(nominal, 0), y[0]) is None:
         empty_at["nominal"] = 0
@@ -592,7 +710,7 @@ def run_architecture_ii(nominal: ModelSpec, global_model: ModelSpec, faults: Map
             if empty_at["global"] is not None:
                 break
             for name in faults:
-                svo = SetValuedObserver(X0, N=N, method=method, template=template)
+                svo = SetValuedObserver(X0, N=N, method=method, template=template, scale=scale)
                 svo.start_from(glob)
                 fsvos[name] = svo
         if det is not None:

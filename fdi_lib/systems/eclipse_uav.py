@@ -7,9 +7,21 @@ the book chapter as well):
 * **M_u reading.** The OCR prints ``M_u = 0.2.6146 V^2 - 0.003426 V - 0.1425``. We read the
   quadratic coefficient as ``2.6146e-5`` (the "x 10^-5" lost, as it is printed for Z_u);
   see :data:`MU_READING`.
+* **Elevator unit.** The paper does not say in which unit eta enters (16). Read per radian,
+  Table 3's M_eta = 0.287 1/s^2 at 37 m/s is 0.7 % of |M_alpha| = |M_w| V: an elevator with
+  almost no pitch authority. Read per degree (X_eta, Z_eta, M_eta per degree of deflection),
+  M_eta / M_alpha = -0.43, the usual order for a conventional aircraft. The default
+  :data:`ETA_UNIT` is "deg"; the input eta of every function is in radians either way
+  (:func:`pitch_authority` computes the ratios).
 * **Coordinates.** Deviations from the trim point x* = (V cos a, V sin a, a, 0) with
   V = 37 m/s and a = 0.01 rad (level flight, theta* = alpha*); inputs are deviations of the
   elevator eta (rad) and of the thrust variable tau from their (unstated) trim values.
+* **Where the faults act** (:data:`FAULT_MODES`). "deviation" (default): the elevator loss
+  scales the deviation eta, and the M_u change multiplies the speed deviation u, as the LPV
+  model (16) written in deviations suggests. "total": the loss scales the total deflection
+  eta* + eta (eta* = :data:`ETA_TRIM`, an assumption: the paper gives no trim deflection) and the
+  M_u change multiplies the total axial speed u* + u, which adds the moment 0.3 M_u u* at the
+  onset.
 * **Nonlinear stand-in plant** (:func:`plant_derivative`): the LPV model (15) with the
   airspeed evaluated on the *true* state, V_AS(x) = sqrt(u^2 + w^2) of (14), plus the two
   terms of (14) that a linearisation drops: the Coriolis product -q w in the axial equation
@@ -29,6 +41,7 @@ the book chapter as well):
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -39,9 +52,10 @@ from fdi_lib.errors import ModelError
 from fdi_lib.threads import single_threaded_blas
 
 __all__ = ["TABLE3", "V_TRIM", "ALPHA_TRIM", "TS", "MU_READING", "NOISE_BOUND", "DIST_ACCEL",
+           "ETA_UNITS", "ETA_UNIT", "FAULT_MODES", "ETA_TRIM", "RHO", "pitch_authority",
            "FAULTS", "SCENARIOS", "lpv_matrices", "zoh", "discretize", "measurement_matrix",
            "trim_state", "measure", "plant_derivative", "LQG", "design_lqg", "fault_profile",
-           "UAVRun", "simulate", "svo_models"]
+           "UAVRun", "simulate", "svo_models", "svo_scale", "discretize_many", "excitation"]
 
 #: Table 3 of the paper (SI units). Only documentary: the LPV model (16) already folds them in.
 TABLE3 = {"S": 2.365, "c": 1.34, "aspect_ratio": 2.047, "m": 39.7, "x_cg": 1.217, "I_y": 10.43}
@@ -56,6 +70,18 @@ DIST_ACCEL = np.array([0.2, 0.2, 0.002])
 FAULTS = ("alpha", "elevator", "dynamics")   #: FDI #1, #2, #3 of §6
 SCENARIOS = ("step", "hard", "soft")          #: §6.1, §6.2, §6.3
 ONSET = 0.5                                    #: fault onset time (s)
+ETA_UNITS = ("deg", "rad")   #: readings of the elevator coefficients of (16): per degree or per radian
+ETA_UNIT = "deg"             #: default reading (see the module docstring and :func:`pitch_authority`)
+FAULT_MODES = ("deviation", "total")  #: where the elevator and M_u faults act (module docstring)
+ETA_TRIM = np.deg2rad(-2.0)  #: assumed trim elevator deflection (rad) of the "total" fault mode
+RHO = 1.225                  #: air density (kg/m^3, sea level) for the coefficient form of M_eta, M_w
+
+
+def _check_eta_unit(eta_unit: str) -> float:
+    """Factor turning the printed elevator coefficients into per-radian ones."""
+    if eta_unit not in ETA_UNITS:
+        raise ModelError(f"eta_unit: expected one of {ETA_UNITS}, got {eta_unit!r}")
+    return float(np.rad2deg(1.0)) if eta_unit == "deg" else 1.0
 
 
 def _coefficients(V: float, mu_scale: float = 1.0) -> dict[str, float]:
@@ -72,7 +98,8 @@ def _coefficients(V: float, mu_scale: float = 1.0) -> dict[str, float]:
     }
 
 
-def lpv_matrices(V: float, mu_scale: float = 1.0, elevator_eff: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+def lpv_matrices(V: float, mu_scale: float = 1.0, elevator_eff: float = 1.0, eta_unit: str = ETA_UNIT
+                 ) -> tuple[np.ndarray, np.ndarray]:
     """Continuous-time A(V_AS), B(V_AS) of eqs. (15)-(16), state (u, w, theta, q), input (eta, tau).
 
     Parameters
@@ -83,6 +110,8 @@ def lpv_matrices(V: float, mu_scale: float = 1.0, elevator_eff: float = 1.0) -> 
         Multiplier of M_u (dynamics fault: 1.3 = +30 %).
     elevator_eff : float
         Elevator effectiveness (actuator fault: 0.5 = 50 %).
+    eta_unit : {"deg", "rad"}
+        Unit of the printed elevator coefficients X_eta, Z_eta, M_eta; the input eta is in rad.
 
     Returns
     -------
@@ -91,16 +120,35 @@ def lpv_matrices(V: float, mu_scale: float = 1.0, elevator_eff: float = 1.0) -> 
     """
     if not np.isfinite(V) or V <= 0:
         raise ModelError(f"V: expected a positive finite airspeed, got {V!r}")
+    g = _check_eta_unit(eta_unit) * elevator_eff
     c = _coefficients(float(V), mu_scale)
     A = np.array([[c["Xu"], c["Xw"], c["Xth"], c["Xq"]],
                   [c["Zu"], c["Zw"], c["Zth"], c["Zq"]],
                   [0.0, 0.0, 0.0, 1.0],
                   [c["Mu"], c["Mw"], c["Mth"], c["Mq"]]])
-    B = np.array([[c["Xeta"] * elevator_eff, c["Xtau"]],
-                  [c["Zeta"] * elevator_eff, 0.0],
+    B = np.array([[c["Xeta"] * g, c["Xtau"]],
+                  [c["Zeta"] * g, 0.0],
                   [0.0, 0.0],
-                  [c["Meta"] * elevator_eff, c["Mtau"]]])
+                  [c["Meta"] * g, c["Mtau"]]])
     return A, B
+
+
+def pitch_authority(eta_unit: str = ETA_UNIT, V: float = V_TRIM, rho: float = RHO) -> dict[str, float]:
+    """Pitch-moment coefficients of the elevator and of the angle of attack at airspeed V.
+
+    M_alpha = M_w V (a change of alpha is a change of w = V alpha); the coefficient form divides a
+    moment derivative by qbar S c / I_y (Table 3, qbar = rho V^2 / 2), the ratio does not need it.
+
+    Returns
+    -------
+    dict with keys ``M_eta`` (1/s^2 per rad), ``M_alpha`` (1/s^2 per rad), ``Cm_eta``, ``Cm_alpha``
+    (per rad) and ``ratio`` (Cm_eta / |Cm_alpha|).
+    """
+    A, B = lpv_matrices(V, eta_unit=eta_unit)
+    M_eta, M_alpha = float(B[3, 0]), float(A[3, 1] * V)
+    k = 0.5 * rho * V**2 * TABLE3["S"] * TABLE3["c"] / TABLE3["I_y"]
+    return {"M_eta": M_eta, "M_alpha": M_alpha, "Cm_eta": M_eta / k, "Cm_alpha": M_alpha / k,
+            "ratio": abs(M_eta / M_alpha)}
 
 
 def zoh(A: np.ndarray, B: np.ndarray, Ts: float = TS) -> tuple[np.ndarray, np.ndarray]:
@@ -113,18 +161,48 @@ def zoh(A: np.ndarray, B: np.ndarray, Ts: float = TS) -> tuple[np.ndarray, np.nd
 
 
 @lru_cache(maxsize=4096)
-def _discretize_cached(V: float, mu_scale: float, elevator_eff: float, Ts: float):
-    return zoh(*lpv_matrices(V, mu_scale, elevator_eff), Ts)
+def _discretize_cached(V: float, mu_scale: float, elevator_eff: float, Ts: float, eta_unit: str):
+    return zoh(*lpv_matrices(V, mu_scale, elevator_eff, eta_unit), Ts)
 
 
-def discretize(V: float, mu_scale: float = 1.0, elevator_eff: float = 1.0, Ts: float = TS
-               ) -> tuple[np.ndarray, np.ndarray]:
+def discretize(V: float, mu_scale: float = 1.0, elevator_eff: float = 1.0, Ts: float = TS,
+               eta_unit: str = ETA_UNIT) -> tuple[np.ndarray, np.ndarray]:
     """(A_d, B_d) of the LPV model (15)-(16) at airspeed V (m/s), zero-order hold with period Ts (s).
 
     Results are memoised (least-recently-used cache) because every SVO of a bank asks for the
     same airspeeds at the same sample.
     """
-    return _discretize_cached(float(V), float(mu_scale), float(elevator_eff), float(Ts))
+    return _discretize_cached(float(V), float(mu_scale), float(elevator_eff), float(Ts), eta_unit)
+
+
+def discretize_many(V: np.ndarray, mu_scale: float = 1.0, elevator_eff: float = 1.0, Ts: float = TS,
+                    eta_unit: str = ETA_UNIT) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`discretize` for an array of airspeeds at once (one batched matrix exponential).
+
+    Returns A_d of shape (len(V), 4, 4) and B_d of shape (len(V), 4, 2).
+    """
+    V = np.asarray(V, dtype=float).reshape(-1)
+    if not np.all(np.isfinite(V)) or np.any(V <= 0):
+        raise ModelError(f"V: expected positive finite airspeeds, got min {V.min()!r}")
+    P = _polynomial(float(mu_scale), float(elevator_eff), eta_unit)
+    E = np.zeros((V.size, 6, 6))
+    E[:, :4, :] = (P[0][None] + V[:, None, None] * P[1][None] + V[:, None, None] ** 2 * P[2][None])
+    F = expm(E * Ts)
+    return F[:, :4, :4], F[:, :4, 4:]
+
+
+@lru_cache(maxsize=64)
+def _polynomial(mu_scale: float, elevator_eff: float, eta_unit: str) -> tuple[np.ndarray, ...]:
+    """[A B](V) = P0 + V P1 + V^2 P2 (every entry of (16) is a polynomial of degree <= 2 in V)."""
+    f = [np.hstack(lpv_matrices(v, mu_scale, elevator_eff, eta_unit)) for v in (1.0, 2.0, 3.0)]
+    P2 = (f[2] - 2 * f[1] + f[0]) / 2
+    P1 = f[1] - f[0] - 3 * P2
+    P0 = f[0] - P1 - P2
+    return P0, P1, P2
+
+
+#: trim (u*, w*) of :func:`trim_state`, as plain floats for the inner loop of the simulation
+_TRIM_UW = (V_TRIM * math.cos(ALPHA_TRIM), V_TRIM * math.sin(ALPHA_TRIM))
 
 
 def measurement_matrix(V: float = V_TRIM, alpha: float = ALPHA_TRIM) -> np.ndarray:
@@ -150,11 +228,15 @@ def measure(x: np.ndarray) -> np.ndarray:
 
 
 def plant_derivative(x: np.ndarray, delta: np.ndarray, dist: np.ndarray, mu_scale: float = 1.0,
-                     elevator_eff: float = 1.0) -> np.ndarray:
+                     elevator_eff: float = 1.0, eta_unit: str = ETA_UNIT, fault_mode: str = "deviation"
+                     ) -> np.ndarray:
     """Right-hand side of the nonlinear stand-in plant (deviations from trim).
 
     dx/dt = A(V_AS(x)) x + B(V_AS(x)) delta + [-q w + X_theta (sin theta - theta), 0, 0, 0]
-            + [a_u, a_w, 0, a_q] * dist,    V_AS(x) = |(u*, w*) + (u, w)|   (eqs. (14)-(16)).
+            + [a_u, a_w, 0, a_q] * dist,    V_AS(x) = |(u*, w*) + (u, w)|   (eqs. (14)-(16)),
+
+    plus, when ``fault_mode="total"``, the faults' action on the trim values:
+    (elevator_eff - 1) b_eta eta* and (mu_scale - 1) M_u u* e_q.
 
     Parameters
     ----------
@@ -164,14 +246,39 @@ def plant_derivative(x: np.ndarray, delta: np.ndarray, dist: np.ndarray, mu_scal
         (eta, tau) deviations.
     dist : ndarray, shape (3,)
         Normalised disturbances in [-1, 1] on (u, w, q).
+    mu_scale, elevator_eff : float
+        Fault parameters (as in :func:`lpv_matrices`).
+    eta_unit : {"deg", "rad"}
+        Reading of the elevator coefficients.
+    fault_mode : {"deviation", "total"}
+        Where the faults act (:data:`FAULT_MODES`).
     """
-    xs = trim_state()
-    V = float(np.hypot(xs[0] + x[0], xs[1] + x[1]))
-    A, B = lpv_matrices(V, mu_scale, elevator_eff)
-    dx = A @ x + B @ delta
-    dx[0] += -x[3] * x[1] + A[0, 2] * (np.sin(x[2]) - x[2])
-    dx[[0, 1, 3]] += DIST_ACCEL * dist
-    return dx
+    return _rhs(float(mu_scale), float(elevator_eff), eta_unit, fault_mode)(x, delta, dist)
+
+
+def _rhs(mu_scale: float, elevator_eff: float, eta_unit: str, fault_mode: str):
+    """The right-hand side of :func:`plant_derivative` for fixed fault parameters (x, delta, dist) -> dx."""
+    u_star, w_star = _TRIM_UW
+    P0, P1, P2 = _polynomial(mu_scale, elevator_eff, eta_unit)
+    total = fault_mode == "total" and (elevator_eff != 1.0 or mu_scale != 1.0)
+    if total:
+        H0, H1, H2 = _polynomial(1.0, 1.0, eta_unit)
+    acc = np.zeros(4)
+
+    def f(x: np.ndarray, delta: np.ndarray, dist: np.ndarray) -> np.ndarray:
+        V = math.hypot(u_star + x[0], w_star + x[1])
+        AB = P0 + V * (P1 + V * P2)
+        dx = AB[:, :4] @ x + AB[:, 4:] @ delta
+        acc[0], acc[1], acc[3] = DIST_ACCEL[0] * dist[0], DIST_ACCEL[1] * dist[1], DIST_ACCEL[2] * dist[2]
+        dx += acc
+        dx[0] += -x[3] * x[1] + AB[0, 2] * (math.sin(x[2]) - x[2])
+        if total:
+            healthy = H0 + V * (H1 + V * H2)
+            dx += (elevator_eff - 1.0) * healthy[:, 4] * ETA_TRIM
+            dx[3] += (mu_scale - 1.0) * healthy[3, 0] * u_star
+        return dx
+
+    return f
 
 
 @dataclass(frozen=True)
@@ -195,16 +302,17 @@ class LQG:
     C: np.ndarray
 
 
-@lru_cache(maxsize=1)
-def design_lqg() -> LQG:
+@lru_cache(maxsize=2)
+def design_lqg(eta_unit: str = ETA_UNIT) -> LQG:
     """LQR + Kalman estimator for the trim model (python-control ``c2d``, ``dlqr``, ``dlqe``).
 
-    Bryson weights: states (1 m/s, 1 m/s, 2 deg, 5 deg/s), inputs (5 deg, 0.05); estimator with
+    ``eta_unit`` selects the reading of the elevator coefficients (the controller is designed on
+    the same model as the plant). Bryson weights: states (1 m/s, 1 m/s, 2 deg, 5 deg/s), inputs (5 deg, 0.05); estimator with
     process noise DIST_ACCEL * Ts and measurement noise NOISE_BOUND (as standard deviations).
     """
     import control
 
-    A, B = lpv_matrices(V_TRIM)
+    A, B = lpv_matrices(V_TRIM, eta_unit=eta_unit)
     C = measurement_matrix()
     sysd = control.c2d(control.ss(A, B, C, np.zeros((4, 2))), TS, method="zoh")
     Ad, Bd = np.asarray(sysd.A), np.asarray(sysd.B)
@@ -254,6 +362,10 @@ class UAVRun:
     fault, scenario : str
     onset_step : int
         First sample at which the fault is active (t >= 0.5 s).
+    eta_unit : str
+        Reading of the elevator coefficients used by the plant (the SVO models follow it).
+    fault_mode : str
+        Where the fault acted (:data:`FAULT_MODES`).
     """
 
     t: np.ndarray
@@ -263,6 +375,8 @@ class UAVRun:
     fault: str
     scenario: str
     onset_step: int
+    eta_unit: str = ETA_UNIT
+    fault_mode: str = "deviation"
 
 
 def _bounded_lowpass(rng: np.random.Generator, K: int, dim: int, a: float) -> np.ndarray:
@@ -284,7 +398,8 @@ def excitation(t: np.ndarray) -> np.ndarray:
 
 @single_threaded_blas
 def simulate(fault: str = "none", scenario: str = "step", *, rng: np.random.Generator,
-             duration: float = 6.0, substeps: int = 5) -> UAVRun:
+             duration: float = 6.0, substeps: int = 2, eta_unit: str = ETA_UNIT,
+             fault_mode: str = "deviation", amplitude: float = 0.0) -> UAVRun:
     """Closed-loop simulation of the nonlinear stand-in plant with the LQG controller.
 
     Parameters
@@ -298,7 +413,16 @@ def simulate(fault: str = "none", scenario: str = "step", *, rng: np.random.Gene
     duration : float
         Simulated time (s).
     substeps : int
-        RK4 sub-steps per sampling period.
+        RK4 sub-steps per sampling period (2: 5 ms steps; the outputs then differ from those of a
+        much finer integration by about 1e-6 noise bounds, checked in the tests).
+    eta_unit : {"deg", "rad"}
+        Reading of the elevator coefficients (:data:`ETA_UNIT`).
+    fault_mode : {"deviation", "total"}
+        Where the elevator and M_u faults act (:data:`FAULT_MODES`).
+    amplitude : float
+        Extra airspeed command (m/s): a 0.25 Hz square wave of this amplitude is added to the
+        LQG's state reference of u (0: the manoeuvre of the study). Used to test containment under
+        a larger manoeuvre.
 
     Returns
     -------
@@ -307,11 +431,16 @@ def simulate(fault: str = "none", scenario: str = "step", *, rng: np.random.Gene
     if fault not in ("none",) + FAULTS:
         raise ModelError(f"fault: expected 'none' or one of {FAULTS}, got {fault!r}")
     fault_profile(np.zeros(1), scenario)
+    _check_eta_unit(eta_unit)
+    if fault_mode not in FAULT_MODES:
+        raise ModelError(f"fault_mode: expected one of {FAULT_MODES}, got {fault_mode!r}")
+    if not np.isfinite(amplitude) or amplitude < 0:
+        raise ModelError(f"amplitude: expected a finite non-negative airspeed (m/s), got {amplitude!r}")
     if not isinstance(rng, np.random.Generator):
         raise TypeError(f"rng: expected numpy.random.Generator, got {type(rng).__name__}")
     K = int(round(duration / TS))
     t = np.arange(K + 1) * TS
-    lqg = design_lqg()
+    lqg = design_lqg(eta_unit)
     dist = _bounded_lowpass(rng, K, 3, 0.9)
     noise = _bounded_lowpass(rng, K + 1, 4, 0.5) * NOISE_BOUND
     p = fault_profile(t, scenario) * (fault != "none")
@@ -328,23 +457,26 @@ def simulate(fault: str = "none", scenario: str = "step", *, rng: np.random.Gene
             y[k, 1] += size * p[k]
         if k == K:
             break
-        uk = -lqg.K @ xhat + exc[k]
+        ref = np.r_[amplitude * np.sign(np.sin(2 * np.pi * 0.25 * t[k])), 0.0, 0.0, 0.0]
+        uk = -lqg.K @ (xhat - ref) + exc[k]
         u[k] = uk
         xhat = lqg.A @ xhat + lqg.B @ uk + lqg.L @ (y[k] - lqg.C @ xhat)
         mu = 1.0 + size * p[k] if fault == "dynamics" else 1.0
         eff = 1.0 - size * p[k] if fault == "elevator" else 1.0
         xi = x[k].copy()
+        f = _rhs(float(mu), float(eff), eta_unit, fault_mode)
+        dk = dist[k]
         for _ in range(substeps):  # RK4 with zero-order-hold input and disturbance
-            k1 = plant_derivative(xi, uk, dist[k], mu, eff)
-            k2 = plant_derivative(xi + h / 2 * k1, uk, dist[k], mu, eff)
-            k3 = plant_derivative(xi + h / 2 * k2, uk, dist[k], mu, eff)
-            k4 = plant_derivative(xi + h * k3, uk, dist[k], mu, eff)
+            k1 = f(xi, uk, dk)
+            k2 = f(xi + h / 2 * k1, uk, dk)
+            k3 = f(xi + h / 2 * k2, uk, dk)
+            k4 = f(xi + h * k3, uk, dk)
             xi = xi + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         x[k + 1] = xi
         if not np.all(np.isfinite(xi)) or np.abs(xi).max() > 1e3:
             raise ModelError(f"simulate: the closed loop diverged at t = {t[k + 1]:.2f} s")
     onset = int(np.argmax(p > 0)) if p.any() else K + 1
-    return UAVRun(t, x, y, u, fault, scenario, onset)
+    return UAVRun(t, x, y, u, fault, scenario, onset, eta_unit, fault_mode)
 
 
 #: margins of the SVO models over the simulation bounds (all documented in the book)
@@ -353,13 +485,23 @@ SVO_NOISE_MARGIN = np.array([0.05, np.deg2rad(0.06), 1e-5, 1e-5])  # linearisati
 SVO_DIST_MARGIN = np.array([2e-3, 1e-3, 2e-6, 2e-5])                # per-step: nonlinear terms, ZOH
 
 
+def svo_scale() -> np.ndarray:
+    """State scaling for the SVOs (argument ``scale`` of :func:`fdi_lib.sets.svo.run_svo`).
+
+    Half-widths of the box that the measurement strip alone allows, |C^-1| (nbar + margin): about
+    0.16, 0.16 m/s on u, w and 3.6e-4 rad, rad/s on theta, q. In these units the SVO sets are round.
+    """
+    return np.abs(np.linalg.inv(measurement_matrix())) @ (NOISE_BOUND + SVO_NOISE_MARGIN)
+
+
 def svo_models(run: UAVRun, kind: str = "nominal", *, dist_scale: float = 1.0, noise_scale: float = 1.0):
     """Per-step SVO models (callable k -> SVOModel) for the nominal plant or a fault hypothesis.
 
     Parameters
     ----------
     run : UAVRun
-        Supplies the measured airspeed used for scheduling (V_hat = V_TRIM + y[k, 0]).
+        Supplies the measured airspeed used for scheduling (V_hat = V_TRIM + y[k, 0]) and the
+        reading of the elevator coefficients (``run.eta_unit``).
     kind : {"nominal", "alpha", "elevator", "dynamics", "global"}
         SVO #1 (nominal), #2 (alpha-sensor noise bound enlarged by 5 deg), #3 (elevator
         effectiveness in [0.5, 1]: B + B_1 Delta, §2), #4 (M_u scale in [1, 1.3]: A + A_2 Delta),
@@ -393,21 +535,23 @@ def svo_models(run: UAVRun, kind: str = "nominal", *, dist_scale: float = 1.0, n
     mu_c, mu_r = (1.15, 0.15) if kind in ("dynamics", "global") else (1.0, 0.0)
     eff_c, eff_r = (0.75, 0.25) if kind in ("elevator", "global") else (1.0, 0.0)
 
+    Vh = V_TRIM + run.y[:, 0]
+    Ap, Bp = discretize_many(Vh + dV, mu_c, eff_c, eta_unit=run.eta_unit)
+    Am, Bm = discretize_many(Vh - dV, mu_c, eff_c, eta_unit=run.eta_unit)
+    A_unc = [(Ap - Am) / 2]
+    B_unc = [(Bp - Bm) / 2]
+    if mu_r:
+        Ahi, _ = discretize_many(Vh, mu_c + mu_r, eff_c, eta_unit=run.eta_unit)
+        Alo, _ = discretize_many(Vh, mu_c - mu_r, eff_c, eta_unit=run.eta_unit)
+        A_unc.append((Ahi - Alo) / 2)
+    if eff_r:
+        _, Bhi = discretize_many(Vh, mu_c, eff_c + eff_r, eta_unit=run.eta_unit)
+        _, Blo = discretize_many(Vh, mu_c, eff_c - eff_r, eta_unit=run.eta_unit)
+        B_unc.append((Bhi - Blo) / 2)
+    A_c, B_c = (Ap + Am) / 2, (Bp + Bm) / 2
+    A_unc, B_unc = np.stack(A_unc, axis=1), np.stack(B_unc, axis=1)
+
     def model(k: int) -> SVOModel:
-        Vh = V_TRIM + float(run.y[k, 0])
-        Ap, Bp = discretize(Vh + dV, mu_c, eff_c)
-        Am, Bm = discretize(Vh - dV, mu_c, eff_c)
-        A_unc = [(Ap - Am) / 2]
-        B_unc = [(Bp - Bm) / 2]
-        if mu_r:
-            Ahi, _ = discretize(Vh, mu_c + mu_r, eff_c)
-            Alo, _ = discretize(Vh, mu_c - mu_r, eff_c)
-            A_unc.append((Ahi - Alo) / 2)
-        if eff_r:
-            _, Bhi = discretize(Vh, mu_c, eff_c + eff_r)
-            _, Blo = discretize(Vh, mu_c, eff_c - eff_r)
-            B_unc.append((Bhi - Blo) / 2)
-        return SVOModel(A=(Ap + Am) / 2, B=(Bp + Bm) / 2, C=C, L=L, noise=noise,
-                        A_unc=np.array(A_unc), B_unc=np.array(B_unc))
+        return SVOModel(A=A_c[k], B=B_c[k], C=C, L=L, noise=noise, A_unc=A_unc[k], B_unc=B_unc[k])
 
     return model

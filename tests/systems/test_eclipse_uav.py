@@ -11,14 +11,59 @@ from fdi_lib.systems import eclipse_uav as uav
 from fdi_lib.reproduce.rosa2013 import UAV_X0
 
 
-def test_mu_reading_and_matrices_at_trim():
-    A, B = uav.lpv_matrices(37.0)
-    assert A[3, 0] == pytest.approx(2.6146e-5 * 37**2 - 0.003426 * 37 - 0.1425, rel=1e-12)
-    assert A[1, 3] == pytest.approx(1.012 * 37 - 0.77)
+def test_matrices_at_trim_against_hand_values():
+    """Entries of (16) at 37 m/s, evaluated by hand (not with the module's formulas)."""
+    A, B = uav.lpv_matrices(37.0, eta_unit="rad")
+    assert A[3, 0] == pytest.approx(-0.2334681, abs=1e-6)   # M_u: 0.0357939 - 0.126762 - 0.1425
+    assert A[3, 1] == pytest.approx(-1.041155, abs=1e-6)    # M_w
+    assert A[1, 3] == pytest.approx(36.674, abs=1e-9)       # Z_q
+    assert B[3, 0] == pytest.approx(0.287005, abs=1e-6)     # M_eta: 0.28749 - 0.00555 + 0.005065
     assert B[0, 1] == 24.76 and B[3, 1] == -0.294
-    A2, B2 = uav.lpv_matrices(37.0, mu_scale=1.3, elevator_eff=0.5)
-    assert A2[3, 0] == pytest.approx(1.3 * A[3, 0])
-    np.testing.assert_allclose(B2[:, 0], 0.5 * B[:, 0])
+    Ad, Bd = uav.lpv_matrices(37.0, eta_unit="deg")
+    np.testing.assert_array_equal(Ad, A)
+    np.testing.assert_allclose(Bd[:, 0], B[:, 0] * 180 / np.pi, rtol=1e-14)
+    np.testing.assert_array_equal(Bd[:, 1], B[:, 1])
+    A2, B2 = uav.lpv_matrices(37.0, mu_scale=1.3, elevator_eff=0.5, eta_unit="rad")
+    assert A2[3, 0] == pytest.approx(1.3 * -0.2334681, abs=1e-6)
+    assert B2[3, 0] == pytest.approx(0.5 * 0.287005, abs=1e-6)
+
+
+def test_pitch_authority_of_both_readings():
+    """C_m_eta / |C_m_alpha| = M_eta / |M_w V|: 0.287005 / 38.5227 per rad, 57.2958 times that per deg."""
+    rad, deg = uav.pitch_authority("rad"), uav.pitch_authority("deg")
+    assert rad["ratio"] == pytest.approx(0.287005 / 38.522735, rel=1e-5)
+    assert deg["ratio"] == pytest.approx(0.287005 * 57.29578 / 38.522735, rel=1e-5)
+    qbar_sc_over_iy = 0.5 * 1.225 * 37.0**2 * 2.365 * 1.34 / 10.43
+    assert deg["Cm_eta"] == pytest.approx(16.44418 / qbar_sc_over_iy, rel=1e-5)
+    assert rad["Cm_alpha"] == pytest.approx(-38.522735 / qbar_sc_over_iy, rel=1e-6)
+
+
+def test_fast_paths_match_direct_formulas():
+    """Batched discretisation and the polynomial plant derivative against the direct routes."""
+    import control
+
+    V = np.array([25.0, 37.0, 48.5])
+    for unit in uav.ETA_UNITS:
+        Ad, Bd = uav.discretize_many(V, 1.15, 0.75, eta_unit=unit)
+        for i, v in enumerate(V):
+            A, B = uav.lpv_matrices(v, 1.15, 0.75, eta_unit=unit)
+            sysd = control.c2d(control.ss(A, B, np.eye(4), np.zeros((4, 2))), uav.TS, method="zoh")
+            np.testing.assert_allclose(Ad[i], sysd.A, atol=1e-12)
+            np.testing.assert_allclose(Bd[i], sysd.B, atol=1e-12)
+    rng = np.random.default_rng(0)
+    x, d, e = rng.normal(0, 0.3, 4), rng.normal(0, 0.05, 2), rng.uniform(-1, 1, 3)
+    xs = uav.trim_state()
+    Vx = np.hypot(xs[0] + x[0], xs[1] + x[1])
+    A, B = uav.lpv_matrices(Vx, 1.3, 0.5)
+    expected = A @ x + B @ d + np.r_[-x[3] * x[1] + A[0, 2] * (np.sin(x[2]) - x[2]), 0, 0, 0]
+    expected[[0, 1, 3]] += uav.DIST_ACCEL * e
+    np.testing.assert_allclose(uav.plant_derivative(x, d, e, 1.3, 0.5), expected, rtol=1e-12, atol=1e-14)
+    # "total" mode: the loss also removes half of the trim deflection's effect, the M_u change acts on u*
+    A1, B1 = uav.lpv_matrices(Vx)
+    total = expected - 0.5 * B1[:, 0] * uav.ETA_TRIM
+    total[3] += 0.3 * A1[3, 0] * xs[0]
+    np.testing.assert_allclose(uav.plant_derivative(x, d, e, 1.3, 0.5, fault_mode="total"), total,
+                               rtol=1e-12, atol=1e-14)
 
 
 def test_zoh_matches_python_control():
@@ -38,9 +83,11 @@ def test_lqg_closed_loop_is_stable():
     assert max(abs(np.linalg.eigvals(lqg.A))) > 1.0     # the open loop of (16) is unstable
 
 
-def test_healthy_run_respects_bounds_and_nominal_svo_stays_nonempty():
-    run = uav.simulate("none", "step", rng=np.random.default_rng(3), duration=1.5)
-    assert np.abs(run.x).max() < 2.0
+@pytest.mark.parametrize("seed", [3, 11])
+def test_containment_under_a_larger_manoeuvre(seed):
+    """+-3.6 m/s airspeed commands (3 s): the true state stays in every nominal SVO set (eta per degree)."""
+    run = uav.simulate("none", "step", rng=np.random.default_rng(seed), duration=3.0, amplitude=3.6)
+    assert np.ptp(run.y[:, 0]) > 5.0     # the manoeuvre is large: > 5 m/s of airspeed swing
     res = run_svo(uav.svo_models(run, "nominal"), run.u, run.y, UAV_X0, keep_sets=True)
     assert res.empty_at is None
     assert all(S.contains(run.x[k], 1e-7) for k, S in enumerate(res.sets))
@@ -67,19 +114,28 @@ def test_bad_inputs():
         uav.simulate("alpha", rng=0)
     with pytest.raises(ModelError, match="V: expected a positive finite airspeed"):
         uav.lpv_matrices(-1.0)
+    with pytest.raises(ModelError, match="eta_unit: expected one of"):
+        uav.lpv_matrices(37.0, eta_unit="grad")
+    with pytest.raises(ModelError, match="fault_mode: expected one of"):
+        uav.simulate("elevator", rng=np.random.default_rng(0), fault_mode="trim")
     with pytest.raises(ModelError, match="kind: expected"):
         uav.svo_models(uav.simulate(rng=np.random.default_rng(0), duration=0.05), "rudder")
 
 
 def test_elevator_and_mu_faults_reach_the_plant():
-    """Same seed: identical before the onset, then a pitch-rate difference of many noise bounds."""
+    """Same seed: identical before the onset, then a pitch-rate difference (in noise bounds)."""
     h = uav.simulate("none", "step", rng=np.random.default_rng(5), duration=1.0)
-    for fault in ("elevator", "dynamics"):
-        f = uav.simulate(fault, "step", rng=np.random.default_rng(5), duration=1.0)
+    for fault, mode, least in (("elevator", "deviation", 5), ("dynamics", "deviation", 1),
+                               ("dynamics", "total", 50)):
+        f = uav.simulate(fault, "step", rng=np.random.default_rng(5), duration=1.0, fault_mode=mode)
         k = f.onset_step
         np.testing.assert_array_equal(f.y[:k + 1], h.y[:k + 1])   # the fault acts from u(k) on
-        assert np.abs(f.y[k + 1:, 3] - h.y[k + 1:, 3]).max() > 5 * uav.NOISE_BOUND[3]
+        assert np.abs(f.y[k + 1:, 3] - h.y[k + 1:, 3]).max() > least * uav.NOISE_BOUND[3]
         assert np.all(np.abs(f.y[k + 1:, 3] - h.y[k + 1:, 3]) > 0)
+    # total speed: one sample after the onset, 0.3 M_u u* Ts of pitch rate (the LQG has not reacted yet)
+    f = uav.simulate("dynamics", "step", rng=np.random.default_rng(5), duration=0.6, fault_mode="total")
+    k = f.onset_step
+    assert f.y[k + 1, 3] - h.y[k + 1, 3] == pytest.approx(0.3 * -0.2334681 * 36.998 * uav.TS, rel=0.05)
 
 
 def test_svo_model_scales():
@@ -93,3 +149,10 @@ def test_svo_model_scales():
             uav.svo_models(run, dist_scale=bad)
     with pytest.raises(ModelError, match="noise_scale"):
         uav.svo_models(run, noise_scale=np.inf)
+
+
+def test_integration_step_is_fine_enough():
+    """The default RK4 step (2 per sample) against 10 per sample: outputs within 1e-5 noise bounds."""
+    a = uav.simulate("elevator", "hard", rng=np.random.default_rng(1), duration=2.0)
+    b = uav.simulate("elevator", "hard", rng=np.random.default_rng(1), duration=2.0, substeps=10)
+    assert np.all(np.abs(a.y - b.y).max(axis=0) < 1e-5 * uav.NOISE_BOUND)
