@@ -50,6 +50,7 @@ and misses ranges shorter than the grid step.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -188,10 +189,18 @@ class LassoPath:
         t = (a[i] - lam) / (a[i] - a[i + 1])
         return (1 - t) * self.coefs[:, i] + t * self.coefs[:, i + 1]
 
-    def _active(self) -> np.ndarray:
+    @functools.cached_property
+    def _tol(self) -> float:
+        """Magnitude below which a coefficient counts as zero (relative to the largest)."""
+        return 1e-12 * max(1.0, float(np.abs(self.coefs).max(initial=0.0)))
+
+    @functools.cached_property
+    def _support_matrix(self) -> np.ndarray:
         mid = 0.5 * (self.coefs[:, :-1] + self.coefs[:, 1:])
-        tol = 1e-12 * max(1.0, float(np.abs(self.coefs).max(initial=0.0)))
-        return np.abs(mid) > tol  # (m, K)
+        return np.abs(mid) > self._tol  # (m, K), computed once per path
+
+    def _active(self) -> np.ndarray:
+        return self._support_matrix
 
     def interval_supports(self) -> list[np.ndarray]:
         """Support (indices of non-zero components) on each open interval ``(lambda_{i+1}, lambda_i)``."""
@@ -498,8 +507,7 @@ def flat_range(path: LassoPath, *, scale: Scale = "log", lambda_ratio: float = 1
     lo, h, size = cands[best]
     mid = float(np.sqrt(lo * h)) if scale == "log" else 0.5 * (lo + h)
     c = path.coef(mid)
-    tol = 1e-12 * max(1.0, float(np.abs(path.coefs).max(initial=0.0)))
-    return FlatRange(low=lo, high=h, middle=mid, size=size, support=np.flatnonzero(np.abs(c) > tol),
+    return FlatRange(low=lo, high=h, middle=mid, size=size, support=np.flatnonzero(np.abs(c) > path._tol),
                      width=float(widths[best]), scale=scale)
 
 
