@@ -314,7 +314,8 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
     (rank-one up/down-date when a component joins or drops); the next event is the first join
     (an inactive correlation reaching ``c``), drop (an active coefficient reaching 0, the Lasso
     modification; the dropped component cannot rejoin at once with its old sign), or the end of
-    the window. The tests check it against scikit-learn's ``lars_path`` to 1e-9.
+    the window. Problems that have finished are dropped from the working arrays whenever they
+    are half of them. The tests check it against scikit-learn's ``lars_path`` to 1e-9.
 
     Returns the correlation levels ``(B, S)`` and coefficients ``(B, S, m)`` at the
     breakpoints, and the number ``(B,)`` of breakpoints of each problem (the tails are padding).
@@ -328,14 +329,24 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
     inv = np.zeros((B, m, m))  # inverse of Gram_AA, zero outside A x A
     j = np.abs(cov).argmax(axis=1)
     c = np.abs(cov[rows, j])
-    levels, coefs = [c.copy()], [beta.copy()]
+    cap = 2 * m + 4  # breakpoints stored per problem (grown if needed)
+    levels, coefs = np.zeros((B, cap)), np.zeros((B, cap, m))
+    levels[:, 0] = c
     n_points = np.ones(B, int)
+    ids = np.arange(B)  # problems still followed (the arrays below are compacted to them)
     running = c > c_min
     joining = running.copy()  # problems whose event is the join of component j
     dropping = np.zeros(B, bool)  # ... the drop of component j
     barred = np.full(B, -1)  # a component that just dropped cannot rejoin with its old sign at once
     barred_sign = np.zeros(B)
     while running.any():
+        if running.sum() <= rows.size // 2 and rows.size >= 16:  # drop finished problems
+            keep = running
+            Gram, c_min, beta, cov, sign, active, inv, c, j = (
+                x[keep] for x in (Gram, c_min, beta, cov, sign, active, inv, c, j))
+            joining, dropping, barred, barred_sign, running, ids = (
+                x[keep] for x in (joining, dropping, barred, barred_sign, running, ids))
+            rows = np.arange(ids.size)
         # rank-one change of inv: + w w^T / schur (j joins), - col col^T / col_j (j drops)
         g = Gram[rows, :, j]
         u = np.einsum("bij,bj->bi", inv, g)
@@ -382,15 +393,20 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
         beta[rows[dropping], j[dropping]] = 0.0
         barred = np.where(dropping, j, -1)
         barred_sign = sign[rows, j]
-        levels.append(c.copy())
-        coefs.append(beta.copy())
-        n_points += running
+        at = ids[running]
+        if n_points[at].max() >= cap:
+            levels = np.concatenate([levels, np.zeros_like(levels)], axis=1)
+            coefs = np.concatenate([coefs, np.zeros_like(coefs)], axis=1)
+            cap *= 2
+        levels[at, n_points[at]] = c[running]
+        coefs[at, n_points[at]] = beta[running]
+        n_points[at] += 1
         if max_size is not None:  # the interval just followed had more than max_size components
             running &= active.sum(axis=1) <= max_size
         running &= ~ended
         joining &= running
         dropping &= running
-    return np.stack(levels, axis=1), np.stack(coefs, axis=1), n_points
+    return levels, coefs, n_points
 
 
 def lasso_cvxpy(X: Any, y: Any, lam: float, *, n_samples: int | None = None) -> np.ndarray:
