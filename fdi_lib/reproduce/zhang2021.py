@@ -17,7 +17,7 @@ Columns of a table share the same trial seeds (common random numbers).
 
 from __future__ import annotations
 
-from functools import partial
+from functools import lru_cache, partial
 from typing import Any, Sequence
 
 import numpy as np
@@ -80,13 +80,20 @@ def snr_variants(y: np.ndarray, v: np.ndarray, *, start: int = 1) -> dict[str, n
             "sum Y^2 / sum V^2": 10 * np.log10((yy ** 2).sum(-2) / (vv ** 2).sum(-2))}
 
 
+@lru_cache(maxsize=64)
+def _example1_setup(r: float) -> tuple[Any, Any]:
+    """Model and Kitanidis gains of Example 1 for noise factor ``r`` (noise-independent: computed
+    once per process and ``r``, shared by all the chunks of a column)."""
+    model = ex.example1_model(r=r)
+    return model, kitanidis_gains(model, ex.E)
+
+
 def example1_regression(trials: ex.Example1Trial, *, r: float = 0.5) -> tuple[RegressionData, np.ndarray]:
     """Simulate trials of Example 1 and build their regressions (36) with the Kitanidis filter.
 
     Returns the :class:`~fdi_lib.sparse.RegressionData` (batched over trials) and the outputs ``y``.
     """
-    model = ex.example1_model(r=r)
-    gains = kitanidis_gains(model, ex.E)  # shared by all trials
+    model, gains = _example1_setup(float(r))  # gains shared by all trials
     y = ex.simulate_trials(model, trials)
     res = kitanidis_filter(model, y, gains=gains)
     sig = residual_signature(model, gains, Psi=trials.Psi)  # Psi_k differs per trial
@@ -102,7 +109,7 @@ def example1_chunk(seeds: Sequence[np.random.SeedSequence], *, q: int, r: float)
     (the rule on a geometric grid of 50 / 200 ``lambda`` values over the same window, read off the
     same exact path, :func:`fdi_lib.sparse.grid_flat_range`) and ``snr_db`` (``(trials, p)``).
     """
-    model = ex.example1_model(r=r)
+    model, _ = _example1_setup(float(r))
     trials = ex.draw_trials(model, trial_rngs(seeds), q=q)
     reg, y = example1_regression(trials, r=r)
     out = {f"success_{s}": np.zeros(len(seeds), bool) for s in SCALES}
