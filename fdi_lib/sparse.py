@@ -287,13 +287,13 @@ def lasso_paths(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: flo
         raise ModelError(f"max_size: expected a positive integer, got {max_size!r}")
     # Exact rescaling X = sx X', y = sy y' per problem: theta = (sy / sx) theta', lambda = sx sy lambda'
     # (keeps the homotopy's tolerances meaningful whatever the units, e.g. gas flows ~1e5).
-    sx = np.sqrt(np.mean(X ** 2, axis=(1, 2)))
-    sy = np.sqrt(np.mean(y ** 2, axis=1))
+    Gram = np.matmul(X.transpose(0, 2, 1), X)
+    sx = np.sqrt(np.einsum("bii->b", Gram) / (rows * X.shape[2]))  # sqrt(mean(X^2))
+    sy = np.sqrt(np.einsum("br,br->b", y, y) / rows)
     sx[sx == 0] = 1.0
     sy[sy == 0] = 1.0
-    Xs = X / sx[:, None, None]
-    Xy = np.einsum("bri,br->bi", Xs, y / sy[:, None])
-    Gram = np.matmul(Xs.transpose(0, 2, 1), Xs)
+    Gram /= (sx * sx)[:, None, None]
+    Xy = np.einsum("bri,br->bi", X, y) / (sx * sy)[:, None]
     levels, coefs, n_points = _homotopy(Gram, Xy, lambda_min * np.abs(Xy).max(axis=1), max_size)
     # the correlation level c is rows * alpha (scikit-learn's 1/(2 rows)); (39) has 1/(2N): lambda = c / N
     lam = levels * (sx * sy / N)[:, None]
@@ -602,7 +602,7 @@ def grid_flat_range(path: LassoPath, n_grid: int, *, lambda_ratio: float = 1e-4,
     if a.size < 2 or not a[0] > 0:
         raise ModelError("path: expected at least two breakpoints and lambda_max > 0")
     top = path.coefs.shape[0] // 2 if max_size is None else int(max_size)
-    grid = np.geomspace(float(a[0]), lambda_ratio * float(a[0]), int(n_grid))
+    grid = float(a[0]) * _unit_grid(int(n_grid), float(lambda_ratio))  # geometric, from lambda_max
     grid[0] = a[0]
     act = path._active()  # (m, K): support on each interval (a[i+1], a[i])
     isz = act.sum(axis=0)
@@ -630,6 +630,14 @@ def grid_flat_range(path: LassoPath, n_grid: int, *, lambda_ratio: float = 1e-4,
     support = np.flatnonzero(act[:, min(max(int(idx[k]), 0), isz.size - 1)])  # support of the interval of grid[k]
     return GridFlatRange(grid=grid, sizes=sizes, start=start, stop=stop, middle=float(grid[k]),
                          size=int(sizes[start]), support=support)
+
+
+@functools.lru_cache(maxsize=16)
+def _unit_grid(n_grid: int, lambda_ratio: float) -> np.ndarray:
+    """``n_grid`` geometrically spaced values from 1 down to ``lambda_ratio`` (cached, read-only)."""
+    grid = np.geomspace(1.0, lambda_ratio, n_grid)
+    grid.flags.writeable = False
+    return grid
 
 
 def least_squares_on_support(X: Any, y: Any, support: Any) -> np.ndarray:
