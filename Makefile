@@ -36,7 +36,7 @@ LIB_HASH = $(shell find fdi_lib -name '*.py' | LC_ALL=C sort | xargs cat | sha1s
 FAST_CACHE = $(CURDIR)/_build/.jupyter_cache-$(LIB_HASH)
 book-fast: $(STAMP)
 	mkdir -p _build
-	find _build -maxdepth 1 -name '.jupyter_cache-*' ! -path '$(FAST_CACHE)' -exec rm -rf {} +
+	find _build -maxdepth 1 -name '.jupyter_cache-*' ! -name '.jupyter_cache-$(LIB_HASH)' -exec rm -rf {} +  # stale caches
 	sed -e 's|^\(  execute_notebooks:\) force.*|\1 cache|' -e 's|^\(  timeout:.*\)|\1\n  cache: $(FAST_CACHE)|' \
 	    _config.yml > _build/_config_fast.yml
 	grep -q 'execute_notebooks: cache' _build/_config_fast.yml
