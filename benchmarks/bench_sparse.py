@@ -7,7 +7,9 @@ Timed in this run:
   trials (:func:`fdi_lib.sparse.lasso_paths`) against scikit-learn's ``lars_path`` called per
   trial (the route before issue 16), same window (down to 1e-4 lambda_max), CPU time per trial;
 * the whole chunk (draws, shared Kitanidis gains, filter, signatures, paths, the flat-range
-  rules) per trial, one process;
+  rules) per trial, one process, in CPU time: 42,000 times it over two cores is what the two
+  tables take on two idle cores (the wall-time figure below also counts the other sessions of a
+  shared machine);
 * columns of 1000 trials with ``--jobs`` workers (and one job), for a few columns of each table;
   the two tables are estimated as 21 x the mean column time of each (all columns have the same
   work, up to the path lengths);
@@ -75,9 +77,13 @@ def main() -> None:
     per_trial = (time.process_time() - t) / 250
     print(f"  whole chunk: {1e3 * per_trial:.2f} ms per trial (CPU, one process): "
           f"{42_000 * per_trial:.0f} s of CPU for the two tables")
+    record("Zhang 2021 Tables I and II from CPU time: 42,000 trials x CPU per trial / 2 cores",
+           42_000 * per_trial / 2, "s", 20.0,
+           note="what two idle cores would take, workers' start-up excluded")
 
     cols = {"Table I": [(5, 0.5), (15, 0.5), (25, 0.5)], "Table II": [(5, 10.0), (5, 200.0)]}
-    run_monte_carlo(partial(example1_chunk, q=5, r=0.5), 8, seed=0, jobs=args.jobs, chunk_size=2)  # start workers
+    # start the workers
+    run_monte_carlo(partial(example1_chunk, q=5, r=0.5), 8, seed=0, jobs=args.jobs, chunk_size=2)
     est = 0.0
     for name, qr in cols.items():
         times = []
