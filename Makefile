@@ -11,7 +11,7 @@ export OPENBLAS_NUM_THREADS := 1
 export OMP_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 
-.PHONY: book test venv lock clean benchmarks
+.PHONY: book book-fast test venv lock clean benchmarks
 
 venv: $(STAMP)
 
@@ -29,12 +29,29 @@ book: $(STAMP)
 	set -o pipefail; $(BIN)/jupyter-book build . --warningiserror --nitpick --keep-going --builder html 2>&1 | tee _build.log
 	@echo "Book built: $(abspath _build/html/index.html)"
 
+## Authoring mode: re-execute only the chapters whose text changed since the last book-fast
+## (jupyter-cache), with a cache keyed by the library's source (a change in fdi_lib re-executes
+## everything). `make book` and CI still force every chapter.
+LIB_HASH = $(shell find fdi_lib -name '*.py' | LC_ALL=C sort | xargs cat | sha1sum | cut -c1-12)
+FAST_CACHE = $(CURDIR)/_build/.jupyter_cache-$(LIB_HASH)
+book-fast: $(STAMP)
+	mkdir -p _build
+	find _build -maxdepth 1 -name '.jupyter_cache-*' ! -name '.jupyter_cache-$(LIB_HASH)' -exec rm -rf {} +  # stale caches
+	sed -e 's|^\(  execute_notebooks:\) force.*|\1 cache|' -e 's|^\(  timeout:.*\)|\1\n  cache: $(FAST_CACHE)|' \
+	    _config.yml > _build/_config_fast.yml
+	grep -q 'execute_notebooks: cache' _build/_config_fast.yml
+	set -o pipefail; $(BIN)/jupyter-book build . --config _build/_config_fast.yml --builder html --keep-going 2>&1 | tee _build/book-fast.log
+	@echo "Book built (cached execution): $(abspath _build/html/index.html)"
+
 ## Run the whole test suite.
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
 
+## Performance targets (issue 16): each prints its figure, target and ratio; the figures are also
+## collected in _build/benchmarks.json, which the book's status page shows when present.
 benchmarks: $(STAMP)
-	for f in benchmarks/bench_*.py; do echo "== $$f"; $(BIN)/python $$f || exit 1; done
+	mkdir -p _build; rm -f _build/benchmarks.json
+	for f in benchmarks/bench_*.py; do echo "== $$f"; FDI_BENCH_JSON=$(CURDIR)/_build/benchmarks.json $(BIN)/python $$f || exit 1; done
 
 ## Re-pin requirements.lock from the current environment (maintainers only).
 lock:

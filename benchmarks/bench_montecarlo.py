@@ -1,10 +1,13 @@
 """Benchmark: Figs 7 and 8 of Zhang & Basseville 2014 (gas pipeline) at the paper's full trial count.
 
-Target (issue 3): Figs 7 and 8 together, 2 x 1000 runs, N = 500, w = 160, in at most 20 s wall
-on this 2-core machine. Timed in this run:
+Targets: Figs 7 and 8 together, 2 x 1000 runs, N = 500, w = 160, in at most 20 s wall on this
+2-core machine (issue 3); two jobs faster than one (issue 16). Timed in this run:
 
-* the vectorised Monte Carlo engine (worker start-up included: a fresh pool per run) (``reproduce("zb2014-fig7")`` then ``"zb2014-fig8"``, which
-  reuses the same runs), with 2 jobs and with 1 job (cache cleared before each);
+* the vectorised Monte Carlo engine (``reproduce("zb2014-fig7")`` then ``"zb2014-fig8"``, which
+  reuses the same runs), with 2 jobs (first with the worker start-up, then warm) and with 1 job
+  (cache cleared before each). Wall times: on a machine shared with other busy sessions (Linux
+  gives each session a fair share of the cores), a second process cannot add CPU, so compare
+  with the load average printed;
 * the baseline: a per-realisation loop of the foundation's single-run detector (draw the
   noise, simulate, Kalman filter, :func:`fdi_lib.glr.glr_window` on one record, first alarm,
   two minmax tests), timed on a few realisations and scaled to 2000;
@@ -23,6 +26,7 @@ import time
 import tracemalloc
 
 import numpy as np
+from _record import record
 
 from fdi_lib.filters import kalman_filter
 from fdi_lib.glr import first_alarm, glr_window
@@ -77,20 +81,26 @@ def main() -> None:
     parser.add_argument("--baseline-runs", type=int, default=6)
     args = parser.parse_args()
     zp.pipeline_setup()  # shared setup (model, gains), paid once by both paths
-    t2 = figs_7_8(jobs=2)
+    t2_cold = figs_7_8(jobs=2)
     t1 = figs_7_8(jobs=1)
+    t2 = figs_7_8(jobs=2)
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     per = baseline_per_realisation(args.baseline_runs)
     base = per * 2 * TRIALS
     print(f"Figs 7+8, 2 x {TRIALS} runs, N = {gp.N_STEPS}, w = {gp.WINDOW}; "
           f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} (others share the machine)")
-    print(f"  engine, 2 jobs          : {t2:7.2f} s   (target <= 20 s: {'met' if t2 <= 20 else 'NOT met'})")
+    print(f"  engine, 2 jobs, cold    : {t2_cold:7.2f} s   (worker start-up included)")
+    print(f"  engine, 2 jobs, warm    : {t2:7.2f} s")
     print(f"  engine, 1 job           : {t1:7.2f} s")
     print(f"  per-realisation loop    : {per * 1e3:7.1f} ms/run x {2 * TRIALS} = {base:7.1f} s "
           f"(timed on {args.baseline_runs} runs)")
     print(f"  speed-up vs loop        : {base / t2:7.1f}x (2 jobs), {base / t1:7.1f}x (1 job)")
     print(f"  peak memory, one chunk  : {chunk_peak_mib():7.1f} MiB (tracemalloc, 250 realisations)")
     print(f"  max RSS of this process : {rss:7.1f} MiB")
+    record(f"Figs 7+8 of Zhang & Basseville 2014, 2 x {TRIALS} runs, 2 jobs (start-up included)", t2_cold,
+           "s", 20.0, baseline="per-realisation loop, scaled", speedup=base / t2_cold)
+    record("Figs 7+8, one job / two jobs (warm workers)", t1 / t2, "x", 1.0, higher_is_better=True,
+           note=f"1 job {t1:.2f} s, 2 jobs {t2:.2f} s wall, load average {os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":

@@ -8,14 +8,16 @@ Zhang & Basseville (2014), Section 4:
   ``l_k = max_{k-w+1 <= r <= k-s} d_k(r)^T C_k(r)^{-1} d_k(r)``, ``r_hat_k = argmax``.
 
 The windowed test keeps, for every candidate onset of the window, the signature
-``Gamma_k(r)`` and the sums ``C_k(r)``, ``d_k(r)`` as stacked arrays updated with
-one vectorised step per sample (no loop over ``r``), either online
-(:class:`WindowedGLR`, sample by sample) or over a record (:func:`glr_window`).
-Everything noise-independent (``Gamma_k(r)``, ``C_k(r)`` and its spectral
-factorisation) is computed once per sample and shared by all realisations of a
-batch of innovations ``(*batch, N, p)``.
+``Gamma_k(r)`` and the sums ``C_k(r)``, ``d_k(r)`` as stacked arrays (no loop over ``r``),
+either online (:class:`WindowedGLR`, sample by sample) or over a record (:func:`glr_window`).
+Everything noise-independent (``Gamma_k(r)``, ``C_k(r)`` and the factors of its
+pseudo-inverse) is computed once, for all samples at once, when the detector is built, and
+shared by all realisations of a batch of innovations ``(*batch, N, p)``; a record of few
+realisations is then evaluated by blocks of samples.
 
-Quadratic forms use the Moore-Penrose pseudo-inverse of ``C`` (via ``eigh``):
+Quadratic forms use the Moore-Penrose pseudo-inverse of ``C`` (via its eigen-decomposition:
+one Jacobi rotation per 2 x 2 matrix, applied to all matrices at once, LAPACK's ``eigh`` beyond
+4 x 4):
 ``d^T C^+ d`` is the exact GLR statistic even when ``C`` is singular
 (non-identifiable directions of ``theta`` carry no likelihood), and equals
 ``d^T C^{-1} d`` when persistent excitation (22) holds.
@@ -40,10 +42,63 @@ RANK_RTOL = 1e-10
 
 def _pinv_factors(C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(V, inv)`` with ``C^+ = V diag(inv) V^T`` for symmetric PSD ``C`` ``(..., m, m)``."""
-    lam, V = np.linalg.eigh(C)
-    cutoff = RANK_RTOL * np.maximum(lam[..., -1:], np.finfo(float).tiny)
+    lam, V = _small_eigh(C) if C.shape[-1] <= _JACOBI_MAX_M else np.linalg.eigh(C)
+    cutoff = RANK_RTOL * np.maximum(lam.max(axis=-1, keepdims=True), np.finfo(float).tiny)
     inv = np.where(lam > cutoff, 1.0 / np.where(lam > cutoff, lam, 1.0), 0.0)
     return V, inv
+
+
+#: Largest size decomposed by :func:`_small_eigh` (cyclic Jacobi); larger ones go to LAPACK.
+_JACOBI_MAX_M = 4
+
+
+def _small_eigh(C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eigen-decomposition ``C = V diag(lam) V^T`` of a stack of small symmetric matrices.
+
+    Cyclic Jacobi rotations, each applied to the whole stack at once (a few array operations
+    instead of one LAPACK call per matrix, which dominates for thousands of 2 x 2 matrices).
+    For ``m = 2`` one rotation is exact; larger ``m`` sweep until the off-diagonal part is
+    below rounding (quadratic convergence: a handful of sweeps). Eigenvalues are not sorted.
+    """
+    m = C.shape[-1]
+    if m == 2:  # one rotation, on contiguous component arrays
+        a, b, c = C[..., 0, 0], C[..., 0, 1], C[..., 1, 1]
+        nz = b != 0
+        with np.errstate(over="ignore"):  # b ~ 0: theta = inf, t = 0
+            theta = (c - a) / (2.0 * np.where(nz, b, 1.0))
+            t = np.where(nz, np.sign(theta) / (np.abs(theta) + np.hypot(theta, 1.0)), 0.0)
+        t = np.where(nz & (theta == 0), 1.0, t)
+        cs = 1.0 / np.sqrt(t * t + 1.0)
+        sn = t * cs
+        V = np.stack([np.stack([cs, sn], axis=-1), np.stack([-sn, cs], axis=-1)], axis=-2)
+        return np.stack([a - t * b, c + t * b], axis=-1), V
+    A = np.array(C, dtype=float)
+    V = np.broadcast_to(np.eye(m), A.shape).copy()
+    scale = np.sqrt(np.sum(A * A, axis=(-2, -1)))
+    for _ in range(1 if m == 2 else 12):
+        for p in range(m - 1):
+            for q in range(p + 1, m):
+                apq = A[..., p, q]
+                nz = apq != 0
+                with np.errstate(over="ignore"):  # apq ~ 0: theta = inf, t = 0
+                    theta = (A[..., q, q] - A[..., p, p]) / (2.0 * np.where(nz, apq, 1.0))
+                    t = np.where(nz, np.sign(theta) / (np.abs(theta) + np.hypot(theta, 1.0)), 0.0)
+                t = np.where(nz & (theta == 0), 1.0, t)
+                c = 1.0 / np.sqrt(t * t + 1.0)
+                s = (t * c)[..., None]
+                c = c[..., None]
+                for M in (A, V):  # columns p, q of A J and of V J
+                    mp, mq = M[..., :, p].copy(), M[..., :, q].copy()
+                    M[..., :, p] = c * mp - s * mq
+                    M[..., :, q] = s * mp + c * mq
+                mp, mq = A[..., p, :].copy(), A[..., q, :].copy()  # rows p, q of J^T (A J)
+                A[..., p, :] = c * mp - s * mq
+                A[..., q, :] = s * mp + c * mq
+                A[..., p, q] = A[..., q, p] = 0.0
+        off = np.sum(A * A, axis=(-2, -1)) - np.sum(np.diagonal(A, axis1=-2, axis2=-1) ** 2, axis=-1)
+        if m == 2 or np.all(off <= (1e-32 * scale * scale)):
+            break
+    return np.diagonal(A, axis1=-2, axis2=-1).copy(), V
 
 
 def quadratic_form(C: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -157,7 +212,8 @@ class WindowedGLR:
     Notes
     -----
     Time indices are ``k = 0 .. N-1``. Cost per sample: ``O(w (n^2 m + p m^2))`` for
-    the shared quantities plus ``O(batch w p m)`` for the scores.
+    the shared quantities (all computed at construction, kept in ``O(N w m (m + p))``
+    memory) plus ``O(batch w p m)`` for the scores.
     """
 
     def __init__(self, model: LTVModel, gains: KalmanGains, family: FaultFamily, window: int,
@@ -176,17 +232,59 @@ class WindowedGLR:
         self.model, self.gains, self.family = model, gains, family
         self.window, self.min_samples = int(window), int(s)
         self.batch_shape = tuple(batch_shape)
-        w = self.window
-        # Stacks indexed by slot = r mod w, for the onsets r in {k-w+1, ..., k}.
-        self._Gamma = np.zeros((w, n, m))
-        self._C = np.zeros((w, m, m))
-        # Scores d_k(r) stored as (w, m, B), realisations last: every per-onset product below is
-        # then a BLAS matrix product with B columns, and reductions run over contiguous rows.
         self._B = int(np.prod(self.batch_shape, dtype=int))
-        self._d = np.zeros((w, m, self._B))
-        self._onset = np.full(w, -1)
-        self._drive = family.Psi_tilde - gains.FK @ family.Phi_tilde   # Psi~_k - F_k K_k Phi~_k
+        self._shared()
+        # Scores d_k(r) stored as (w, m, B), slot = r mod w, realisations last: every per-onset
+        # product below is then a BLAS matrix product with B columns.
+        self._d = np.zeros((self.window, m, self._B))
         self.k = 0
+
+    def _shared(self) -> None:
+        """Everything noise-independent, for all ``k`` at once (stacks indexed by slot ``r mod w``).
+
+        ``Gamma_k(r)`` by the recursion (31) (one vectorised step per sample over the window's
+        onsets), then in single array operations over all ``(k, r)``: the whitened signatures
+        ``Sigma_k^{-1/2} (H_k Gamma_k(r) + Phi~_k)``, the informations ``C_k(r)`` (sums (32),
+        recursively (27)), and the factors of their pseudo-inverses ``C^+ = R R^T``.
+        """
+        model, g, fam, w = self.model, self.gains, self.family, self.window
+        N, n, m = model.n_steps, model.n, fam.m
+        drive = fam.Psi_tilde - g.FK @ fam.Phi_tilde   # Psi~_k - F_k K_k Phi~_k
+        k_all = np.arange(N)
+        # onset held by slot j at time k: the r = j mod w in (k - w, k] (-1 before the record)
+        onset = k_all[:, None] - (k_all[:, None] - np.arange(w)[None, :]) % w      # (N, w)
+        onset[onset < 0] = -1
+        # Gamma_k(r) as (n, w m): slots side by side, so that (31) is one matrix product per sample
+        Gamma = np.zeros((N, n, w, m))
+        G = np.zeros((n, w, m))
+        drive_c = np.ascontiguousarray(np.swapaxes(drive, 0, 1))  # (n, N, m)
+        for k in range(N):
+            if k > 0:  # Gamma_k(r) = A_{k-1} Gamma_{k-1}(r) + drive_{k-1}(r), eq. (31)
+                G = (g.A[k - 1] @ G.reshape(n, w * m)).reshape(n, w, m)
+                if fam.kind == "step":
+                    G += (onset[k - 1] >= 0)[None, :, None] * drive_c[:, k - 1, None, :]
+                # impulse: Psi_{k-1}(r) != 0 only for r = k
+            G[:, k % w] = drive_c[:, k - 1] if (fam.kind == "impulse" and k > 0) else 0.0   # r = k enters
+            Gamma[k] = G
+        sig = (model.H @ Gamma.reshape(N, n, w * m)).reshape(N, -1, w, m)      # (N, p, w, m)
+        if fam.kind == "step":
+            sig = sig + (onset >= 0)[:, None, :, None] * fam.Phi_tilde[:, :, None, :]
+        self._Linv = np.linalg.inv(g.Sigma_chol)                         # Sigma_k^{-1/2}, (N, p, p)
+        sig_w = (self._Linv @ sig.reshape(N, -1, w * m)).reshape(sig.shape)
+        self._sig_wT = np.ascontiguousarray(np.transpose(sig_w, (0, 2, 3, 1)))  # (N, w, m, p)
+        inc = np.einsum("kpwi,kpwj->kwij", sig_w, sig_w)                 # (N, w, m, m)
+        C = np.empty_like(inc)
+        acc = np.zeros((w, m, m))
+        for k in range(N):
+            acc[k % w] = 0.0
+            acc += inc[k]
+            C[k] = acc
+        self._Cs = C
+        self._onsets = onset
+        self._allowed = (onset >= 0) & (onset <= k_all[:, None] - self.min_samples)   # (N, w)
+        self._admissible = [np.nonzero(a)[0] for a in self._allowed]
+        V, inv = _pinv_factors(C)
+        self._root = V * np.sqrt(inv)[..., None, :]                      # C^+ = root root^T
 
     def update(self, eps_k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Process innovation ``eps_k`` ``(*batch, p)``.
@@ -194,60 +292,85 @@ class WindowedGLR:
         Returns ``(l_k, r_hat_k, theta_hat_k, C_k(r_hat), d_k(r_hat))`` (``nan``/``-1`` when
         no onset is admissible yet).
         """
-        model, g, fam, k, w = self.model, self.gains, self.family, self.k, self.window
+        model, k, w, m = self.model, self.k, self.window, self.family.m
         if k >= model.n_steps:
             raise ModelError(f"update: the model horizon N={model.n_steps} is exhausted")
         eps_k = np.asarray(eps_k, dtype=float)
         if eps_k.shape != (*self.batch_shape, model.p):
             raise ShapeError(f"eps_k: expected shape {(*self.batch_shape, model.p)}, got {eps_k.shape}")
-        if k > 0:
-            # Gamma_k(r) = A_{k-1} Gamma_{k-1}(r) + drive_{k-1}(r), for all onsets at once (eq. (31)).
-            r = self._onset
-            if fam.kind == "step":
-                active = (r >= 0) & (k - 1 >= r)
-            else:  # impulse: Psi_{k-1}(r) != 0 only for r = k
-                active = np.zeros(w, dtype=bool)
-            self._Gamma = g.A[k - 1] @ self._Gamma + active[:, None, None] * self._drive[k - 1]
-        # New onset r = k enters the window (replacing r = k - w).
-        slot = k % w
-        self._onset[slot] = k
-        self._C[slot] = 0.0
-        self._d[slot] = 0.0
-        self._Gamma[slot] = self._drive[k - 1] if (fam.kind == "impulse" and k > 0) else 0.0
-        # Signature on the innovation for every onset: H_k Gamma_k(r) + Phi~_k 1{k >= r}.
-        sig = model.H[k] @ self._Gamma
-        if fam.kind == "step":
-            sig = sig + fam.Phi_tilde[k]
-        sig_w = np.linalg.solve(g.Sigma_chol[k], sig)                 # Sigma^{-1/2} S, (w, p, m)
-        e_w = np.linalg.solve(g.Sigma_chol[k], eps_k.reshape(self._B, model.p).T)   # (p, B)
-        sig_wT = np.swapaxes(sig_w, -1, -2)                           # (w, m, p)
-        self._C += sig_wT @ sig_w                                     # (32), recursively (27)
-        self._d += sig_wT @ e_w                                       # (33), recursively (28)
+        # New onset r = k enters the window (replacing r = k - w); scores (33), recursively (28).
+        self._d[k % w] = 0.0
+        e_w = self._Linv[k] @ eps_k.reshape(self._B, model.p).T         # (p, B)
+        self._d += self._sig_wT[k] @ e_w
         self.k = k + 1
-        admissible = (self._onset >= 0) & (self._onset <= k - self.min_samples) & (self._onset > k - w)
-        nan = np.full(self.batch_shape, np.nan)
-        if not admissible.any():
-            m = fam.m
-            return (nan, np.full(self.batch_shape, -1), np.full((*self.batch_shape, m), np.nan),
-                    np.full((*self.batch_shape, m, m), np.nan), np.full((*self.batch_shape, m), np.nan))
-        slots = np.nonzero(admissible)[0]
-        V, inv = _pinv_factors(self._C[slots])       # shared by all realisations
-        root = V * np.sqrt(inv)[:, None, :]          # C^+ = root root^T
+        shape = self.batch_shape
+        slots = self._admissible[k]
+        if not slots.size:
+            return (np.full(shape, np.nan), np.full(shape, -1), np.full((*shape, m), np.nan),
+                    np.full((*shape, m, m), np.nan), np.full((*shape, m), np.nan))
+        root = self._root[k, slots]                  # shared by all realisations
         d = self._d[slots]                           # (S, m, B)
         q = np.swapaxes(root, -1, -2) @ d            # (S, m, B)
-        stat = np.sum(q * q, axis=1)                 # (35) for every admissible onset, (S, B)
+        stat = np.einsum("smb,smb->sb", q, q)        # (35) for every admissible onset, (S, B)
         best = np.argmax(stat, axis=0)               # (36), (B,)
         cols = np.arange(self._B)
         l_k = stat[best, cols]
         th = (root[best] @ q[best, :, cols][..., None])[..., 0]             # (34): C^+ d
         d_hat = d[best, :, cols]
-        shape = self.batch_shape
-        m = fam.m
         l_k, th, d_hat = l_k.reshape(shape), th.reshape(*shape, m), d_hat.reshape(*shape, m)
-        best_onset = self._onset[slots][best].reshape(shape)
-        C_hat = self._C[slots][best].reshape(*shape, m, m)
+        best_onset = self._onsets[k, slots][best].reshape(shape)
+        C_hat = self._Cs[k, slots][best].reshape(*shape, m, m)
         return l_k, best_onset, th, C_hat, d_hat
 
+
+    def _record(self, eps: np.ndarray) -> WindowGLRResult:
+        """:func:`glr_window`: all the samples of a fresh detector, statistics evaluated by blocks.
+
+        The scores ``d_k(r)`` are accumulated sample by sample as in :meth:`update` (same sums
+        in the same order) and kept for a block of samples; the quadratic forms (35), the
+        maximisation (36) and the estimates (34) then run on the whole block at once.
+        """
+        model, w, m, B = self.model, self.window, self.family.m, self._B
+        N, p = model.n_steps, model.p
+        if self.k != 0:
+            raise ModelError("_record: expected a fresh detector")
+        e_w = self._Linv @ np.moveaxis(eps.reshape(B, N, p), 0, 2)        # (N, p, B)
+        stat = np.full((N, B), np.nan)
+        onset = np.full((N, B), -1)
+        theta = np.full((N, B, m), np.nan)
+        C_hat = np.full((N, B, m, m), np.nan)
+        d_hat = np.full((N, B, m), np.nan)
+        block = max(1, min(N, 2_000_000 // (w * m * B)))
+        for k0 in range(0, N, block):
+            ks = np.arange(k0, min(N, k0 + block))
+            D = np.empty((ks.size, w, m, B))
+            for i, k in enumerate(ks):
+                self._d[k % w] = 0.0
+                self._d += self._sig_wT[k] @ e_w[k]
+                D[i] = self._d
+            root = self._root[ks]                                        # (K, w, m, m)
+            q = np.swapaxes(root, -1, -2) @ D                            # (K, w, m, B)
+            st = np.einsum("kwmb,kwmb->kwb", q, q)                       # (35)
+            st = np.where(self._allowed[ks][:, :, None], st, -np.inf)
+            best = np.argmax(st, axis=1)                                 # (36), (K, B)
+            ok = self._allowed[ks].any(axis=1)                           # some onset admissible
+            kk = np.arange(ks.size)[:, None]
+            stat[ks[ok]] = np.take_along_axis(st, best[:, None, :], axis=1)[:, 0][ok]
+            onset[ks[ok]] = self._onsets[ks[:, None], best][ok]
+            at = best[:, None, None, :]
+            qb = np.take_along_axis(q, at, axis=1)[:, 0]                 # (K, m, B)
+            th = np.einsum("kbij,kjb->kbi", root[kk, best], qb)          # (34): C^+ d
+            theta[ks[ok]] = th[ok]
+            C_hat[ks[ok]] = self._Cs[ks[:, None], best][ok]
+            d_hat[ks[ok]] = np.swapaxes(np.take_along_axis(D, at, axis=1)[:, 0], 1, 2)[ok]
+        self.k = N
+        shape = self.batch_shape
+        return WindowGLRResult(statistic=np.moveaxis(stat, 0, -1).reshape(*shape, N),
+                               onset=np.moveaxis(onset, 0, -1).reshape(*shape, N),
+                               theta_hat=np.moveaxis(theta, 0, 1).reshape(*shape, N, m),
+                               C_hat=np.moveaxis(C_hat, 0, 1).reshape(*shape, N, m, m),
+                               d_hat=np.moveaxis(d_hat, 0, 1).reshape(*shape, N, m),
+                               window=w, min_samples=self.min_samples)
 
 
 def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, family: FaultFamily,
@@ -269,6 +392,9 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
     eps = _check_innovations(innovations, model.n_steps, model.p)
     batch = eps.shape[:-2]
     det = WindowedGLR(model, gains, family, window, min_samples, batch_shape=batch)
+    if det._B <= _RECORD_MAX_BATCH:
+        return det._record(eps)
+    # many realisations: one update per sample already works on wide arrays
     N, m = model.n_steps, family.m
     stat = np.empty((*batch, N))
     onset = np.empty((*batch, N), dtype=int)
@@ -280,6 +406,11 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
          d_hat[..., k, :]) = det.update(eps[..., k, :])
     return WindowGLRResult(statistic=stat, onset=onset, theta_hat=theta, C_hat=C_hat, d_hat=d_hat,
                            window=det.window, min_samples=det.min_samples)
+
+
+#: Up to this many realisations, :func:`glr_window` evaluates the statistics by blocks of
+#: samples (:meth:`WindowedGLR._record`: few, wide array operations); beyond, sample by sample.
+_RECORD_MAX_BATCH = 4
 
 
 def first_alarm(statistic: np.ndarray, threshold: float, start: int = 0) -> np.ndarray:

@@ -369,14 +369,22 @@ def residual_signature(model: LTVModel, gains: Any, fault: FaultProfile | None =
     nb = int(np.prod(batch, dtype=int))
     # The recursion acts column by column: stack the columns of all realisations side by side,
     # (N, rows, batch * m), so that each step is one plain matrix product (one BLAS call).
+    # An all-zero Phi (the usual state-fault case) is skipped rather than multiplied.
+    has_phi = bool(np.any(Phi_a))
     Psi_c = np.moveaxis(Psi_a.reshape(nb, N, n, m), 0, 2).reshape(N, n, nb * m)
-    Phi_c = np.moveaxis(Phi_a.reshape(nb, N, p, m), 0, 2).reshape(N, p, nb * m)
+    Phi_c = np.moveaxis(Phi_a.reshape(nb, N, p, m), 0, 2).reshape(N, p, nb * m) if has_phi else None
     K = gains.K
     IKH = np.eye(n) - K @ model.H  # (N, n, n)
     U = np.empty((N, n, nb * m))
-    U[0] = -K[0] @ Phi_c[0]
+    U[0] = -K[0] @ Phi_c[0] if has_phi else 0.0
     for k in range(N - 1):
-        U[k + 1] = IKH[k + 1] @ (model.F[k] @ U[k] + Psi_c[k]) - K[k + 1] @ Phi_c[k + 1]
+        U[k + 1] = IKH[k + 1] @ (model.F[k] @ U[k] + Psi_c[k])
+        if has_phi:
+            U[k + 1] -= K[k + 1] @ Phi_c[k + 1]
+    # back to (*batch, N, rows, m) as views of the stacked arrays (no copy)
     Ups = np.moveaxis(U.reshape(N, n, nb, m), 2, 0).reshape(*batch, N, n, m)
-    on_res = model.H @ Ups + Phi_a
+    HU = (model.H @ U).reshape(N, p, nb, m)  # H_k Upsilon_k, one product per sample
+    on_res = np.moveaxis(HU, 2, 0).reshape(*batch, N, p, m)
+    if has_phi:
+        on_res = on_res + Phi_a
     return ResidualSignature(Upsilon=Ups, on_residual=on_res)

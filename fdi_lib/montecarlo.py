@@ -5,7 +5,9 @@ Every realisation ``i`` gets its own random stream, spawned from one seed with
 Realisations are processed in chunks by a user function that is vectorised over
 the chunk (noise-independent quantities such as Kalman gains, signatures and
 information matrices are computed once and shared), and chunks are spread over
-CPU cores with joblib. Since a realisation's random numbers depend only on
+CPU cores: the calling process computes chunks itself, ``jobs - 1`` worker processes (a
+reusable loky pool, joblib's) take the others, each chunk with a single-threaded BLAS.
+Since a realisation's random numbers depend only on
 ``(seed, i)``, results are bit-identical whatever ``jobs`` (the default chunk
 size does not depend on ``jobs``, so the chunks, and hence the floating-point
 operations, are the same for any number of workers).
@@ -125,20 +127,8 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
         bar: Any = tqdm(total=len(parts), desc=description, unit="chunk")
     else:
         bar = None
-    if n_workers == 1:
-        results = []
-        for sl in parts:
-            results.append(chunk_fn(seeds[sl]))
-            if bar is not None:
-                bar.update()
-    else:
-        gen = joblib.Parallel(n_jobs=n_workers, return_as="generator")(
-            joblib.delayed(chunk_fn)(seeds[sl]) for sl in parts)
-        results = []
-        for res in gen:
-            results.append(res)
-            if bar is not None:
-                bar.update()
+    results = _run_chunks(chunk_fn, [seeds[sl] for sl in parts], n_workers,
+                          None if bar is None else bar.update)
     if bar is not None:
         bar.close()
     keys = results[0].keys()
@@ -152,6 +142,98 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
         out[key] = np.concatenate(arrays, axis=0)
     return out
 
+
+def _call(chunk_fn: ChunkFn, seeds: Sequence[np.random.SeedSequence]) -> dict[str, np.ndarray]:
+    """One chunk, with the BLAS on one thread (the same floating-point operations in every process)."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        return chunk_fn(seeds)
+
+
+def _run_chunks(chunk_fn: ChunkFn, chunks: list[Sequence[np.random.SeedSequence]], n_workers: int,
+                done: Callable[[], Any] | None) -> list[dict[str, np.ndarray]]:
+    """Results of ``chunk_fn`` on every chunk, in order, on this process and ``n_workers - 1`` others.
+
+    The calling process computes chunks too: it is warm (modules imported, per-process caches of
+    a chunk function's set-up filled), while a worker process pays its start-up (about a second
+    of imports) and its caches once. Chunks are handed out one at a time: this process takes them
+    from the front, each worker (driven by a thread of this process) the next one from the back as
+    soon as it is free. When no new chunk is left and no worker has delivered yet (still
+    starting), this process recomputes a pending chunk rather than wait for it (the result is the
+    same): more jobs are never much slower than one. Workers are a reusable loky pool, kept
+    between calls: the start-up is paid once per session.
+    """
+    if n_workers == 1 or len(chunks) == 1:
+        out = []
+        for c in chunks:
+            out.append(_call(chunk_fn, c))
+            if done is not None:
+                done()
+        return out
+    import threading
+    import warnings
+
+    from joblib.externals.loky import get_reusable_executor
+
+    with warnings.catch_warnings():  # a new size waits for chunks left running by a takeover
+        warnings.filterwarnings("ignore", "Trying to resize an executor", UserWarning)
+        executor = get_reusable_executor(max_workers=n_workers - 1, timeout=600)
+    lock = threading.Lock()
+    delivered = threading.Event()  # a worker has delivered a chunk (set) or failed
+    todo = list(range(len(chunks)))
+    pending: set[int] = set()
+    results: dict[int, dict[str, np.ndarray]] = {}
+    errors: list[BaseException] = []
+
+    def store(i: int, res: dict[str, np.ndarray]) -> None:
+        with lock:
+            pending.discard(i)
+            if i not in results:
+                results[i] = res
+                if done is not None:
+                    done()
+
+    def drive_worker() -> None:
+        while True:
+            with lock:
+                if not todo or errors:
+                    return
+                i = todo.pop()
+                pending.add(i)
+            try:
+                res = executor.submit(_call, chunk_fn, chunks[i]).result()
+            except BaseException as exc:  # re-raised by the calling thread
+                with lock:
+                    errors.append(exc)
+                delivered.set()
+                return
+            store(i, res)
+            delivered.set()
+
+    threads = [threading.Thread(target=drive_worker, daemon=True) for _ in range(n_workers - 1)]
+    for t in threads:
+        t.start()
+    while True:
+        with lock:
+            if errors:
+                raise errors[0]
+            if todo:
+                i: int | None = todo.pop(0)
+            elif pending and not delivered.is_set():
+                i = max(pending)  # workers still starting: take over the chunk given out last
+            else:
+                i = None
+        if i is None:
+            break
+        if i not in results:
+            store(i, _call(chunk_fn, chunks[i]))
+    for t in threads:  # wait for the chunks still running in workers (not for taken-over ones)
+        while t.is_alive() and len(results) < len(chunks) and not errors:
+            t.join(0.01)
+    if len(results) < len(chunks):
+        raise errors[0]
+    return [results[i] for i in range(len(chunks))]
 
 def binomial_ci(successes: int, trials: int, level: float = 0.95) -> tuple[float, float]:
     """Exact (Clopper-Pearson) confidence interval of a binomial proportion (scipy's ``binomtest``)."""

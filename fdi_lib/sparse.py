@@ -18,7 +18,8 @@ Two solvers, which must agree:
 * :func:`lasso_cvxpy` - the convex programme written as is in cvxpy (readable, for teaching,
   one ``lambda`` at a time);
 * :func:`lasso_path` - the exact, piecewise-linear Lasso path by the LARS-Lasso homotopy of
-  Efron et al. (2004), computed by scikit-learn's ``lars_path(method="lasso")``: every
+  Efron et al. (2004), the algorithm of scikit-learn's ``lars_path(method="lasso")``, here in
+  Gram form and batched over problems (:func:`lasso_paths`, for Monte Carlo chunks): every
   breakpoint (every change of support) comes out, with no ``lambda`` grid.
 
 The paper's rule for ``lambda`` (:func:`flat_range`): take the widest range of ``lambda``
@@ -49,6 +50,7 @@ and misses ranges shorter than the grid step.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -61,6 +63,7 @@ __all__ = [
     "regression_data",
     "LassoPath",
     "lasso_path",
+    "lasso_paths",
     "lasso_cvxpy",
     "FlatRange",
     "flat_range",
@@ -186,10 +189,18 @@ class LassoPath:
         t = (a[i] - lam) / (a[i] - a[i + 1])
         return (1 - t) * self.coefs[:, i] + t * self.coefs[:, i + 1]
 
-    def _active(self) -> np.ndarray:
+    @functools.cached_property
+    def _tol(self) -> float:
+        """Magnitude below which a coefficient counts as zero (relative to the largest)."""
+        return 1e-12 * max(1.0, float(np.abs(self.coefs).max(initial=0.0)))
+
+    @functools.cached_property
+    def _support_matrix(self) -> np.ndarray:
         mid = 0.5 * (self.coefs[:, :-1] + self.coefs[:, 1:])
-        tol = 1e-12 * max(1.0, float(np.abs(self.coefs).max(initial=0.0)))
-        return np.abs(mid) > tol  # (m, K)
+        return np.abs(mid) > self._tol  # (m, K), computed once per path
+
+    def _active(self) -> np.ndarray:
+        return self._support_matrix
 
     def interval_supports(self) -> list[np.ndarray]:
         """Support (indices of non-zero components) on each open interval ``(lambda_{i+1}, lambda_i)``."""
@@ -203,11 +214,14 @@ class LassoPath:
 
 def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: float = 0.0,
                max_size: int | None = None) -> LassoPath:
-    """Exact Lasso path of (39) by LARS-Lasso (scikit-learn's ``lars_path``, ``method="lasso"``).
+    """Exact Lasso path of (39) by the LARS-Lasso homotopy (Efron et al. 2004).
 
-    scikit-learn does the hard part (the homotopy with its Cholesky up/down-dates and the
-    drop rule that turns LARS into the Lasso, Efron et al. 2004): it is well tested and exact
-    at every breakpoint, which a hand-written ``lambda`` grid would not be.
+    The homotopy follows ``theta_hat(lambda)`` from ``lambda_max`` down, from one breakpoint (a
+    change of support) to the next, with the drop rule that turns LARS into the Lasso: it is
+    exact at every breakpoint, which a hand-written ``lambda`` grid would not be. It is the
+    algorithm of scikit-learn's ``lars_path(method="lasso")`` (the tests check that both give
+    the same breakpoints), written here batched over problems (:func:`lasso_paths`) so that a
+    Monte Carlo chunk follows all its paths at once.
 
     Parameters
     ----------
@@ -221,42 +235,178 @@ def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: floa
         Stop the path at this ``lambda`` (as a fraction of ``lambda_max``), e.g. the lower end of the
         window explored by :func:`flat_range`; the path is exact down to it. Default 0: the full path.
     max_size : int, optional
-        Also stop once the support has exceeded ``max_size`` components (the other end of the
-        window of :func:`flat_range`); the path is exact up to there. Default: no such stop.
+        Also stop at the end of the first interval where the support has more than ``max_size``
+        components (the other end of the window of :func:`flat_range`); the path is exact up to
+        there. Default: no such stop.
 
     Returns
     -------
     LassoPath
     """
-    from sklearn.linear_model import lars_path_gram
-
     X, y = _check_xy(X, y)
-    N = _norm(n_samples, X.shape[0])
+    return lasso_paths(X[None], y[None], n_samples=n_samples, lambda_min=lambda_min, max_size=max_size)[0]
+
+
+def lasso_paths(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: float = 0.0,
+                max_size: int | None = None) -> list[LassoPath]:
+    """Exact Lasso paths of a batch of problems, as :func:`lasso_path` for each.
+
+    Parameters
+    ----------
+    X : array_like
+        ``(B, rows, m)``, e.g. :attr:`RegressionData.X` of a batch of trials.
+    y : array_like
+        ``(B, rows)``.
+    n_samples : int, optional
+        The ``N`` of (39); default ``rows``.
+    lambda_min : float
+        Lower end of the path as a fraction of each problem's ``lambda_max`` (see :func:`lasso_path`).
+    max_size : int, optional
+        Stop each path at the end of its first interval with more than ``max_size`` components.
+
+    Returns
+    -------
+    list of LassoPath
+        One per problem, each identical to :func:`lasso_path` of that problem alone.
+    """
+    X = np.asarray(X, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if X.ndim != 3:
+        raise ShapeError(f"X: expected shape (B, rows, m), got {X.shape}")
+    if y.shape != X.shape[:2]:
+        raise ShapeError(f"y: expected shape {X.shape[:2]}, got {y.shape}")
+    for arr, name in ((X, "X"), (y, "y")):
+        if not np.all(np.isfinite(arr)):
+            raise NonFiniteError(f"{name}: expected finite values")
+    rows = X.shape[1]
+    N = _norm(n_samples, rows)
     if not 0.0 <= lambda_min < 1.0:
         raise ModelError(f"lambda_min: expected a fraction of lambda_max in [0, 1), got {lambda_min!r}")
-    # Exact rescaling X = sx X', y = sy y': theta = (sy / sx) theta', lambda = sx sy lambda'.
-    # It keeps LARS's absolute tolerances meaningful whatever the units (e.g. gas flows ~1e5).
-    sx = float(np.sqrt(np.mean(X ** 2))) or 1.0
-    sy = float(np.sqrt(np.mean(y ** 2))) or 1.0
-    Xs, ys = X / sx, y / sy
-    Xy = Xs.T @ ys
-    alpha_min = lambda_min * float(np.abs(Xy).max()) / X.shape[0]
-    Gram = Xs.T @ Xs
-    m = X.shape[1]
-    max_iter = 500 if max_size is None else int(max_size) + 2
-    while True:
-        # the Gram form is the same algorithm on X^T X and X^T y (m x m instead of rows x m)
-        alphas, _active, coefs = lars_path_gram(Xy=Xy, Gram=Gram, n_samples=X.shape[0], method="lasso",
-                                                alpha_min=alpha_min, max_iter=max_iter)
-        if max_size is None or alphas.size <= max_iter:  # finished (alpha_min, full support, ...)
-            break
-        trial = LassoPath(lambdas=np.asarray(alphas), coefs=np.asarray(coefs), n_samples=N)
-        if trial.support_sizes().max(initial=0) > max_size or max_iter >= 8 * m:
-            break
-        max_iter += 10  # drops happened: a few more breakpoints are needed
-    # scikit-learn's alpha is for 1/(2 rows); (39) has 1/(2N): lambda = alpha * rows / N
-    return LassoPath(lambdas=np.asarray(alphas) * (X.shape[0] / N) * sx * sy,
-                     coefs=np.asarray(coefs) * (sy / sx), n_samples=N)
+    if max_size is not None and (isinstance(max_size, bool) or not isinstance(max_size, (int, np.integer))
+                                 or max_size < 1):
+        raise ModelError(f"max_size: expected a positive integer, got {max_size!r}")
+    # Exact rescaling X = sx X', y = sy y' per problem: theta = (sy / sx) theta', lambda = sx sy lambda'
+    # (keeps the homotopy's tolerances meaningful whatever the units, e.g. gas flows ~1e5).
+    Gram = np.matmul(X.transpose(0, 2, 1), X)
+    sx = np.sqrt(np.einsum("bii->b", Gram) / (rows * X.shape[2]))  # sqrt(mean(X^2))
+    sy = np.sqrt(np.einsum("br,br->b", y, y) / rows)
+    sx[sx == 0] = 1.0
+    sy[sy == 0] = 1.0
+    Gram /= (sx * sx)[:, None, None]
+    Xy = np.einsum("bri,br->bi", X, y) / (sx * sy)[:, None]
+    levels, coefs, n_points = _homotopy(Gram, Xy, lambda_min * np.abs(Xy).max(axis=1), max_size)
+    # the correlation level c is rows * alpha (scikit-learn's 1/(2 rows)); (39) has 1/(2N): lambda = c / N
+    lam = levels * (sx * sy / N)[:, None]
+    th = coefs * (sy / sx)[:, None, None]
+    return [LassoPath(lambdas=lam[b, :k].copy(), coefs=th[b, :k].T.copy(), n_samples=N)
+            for b, k in enumerate(n_points)]
+
+
+def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
+              max_size: int | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """LARS-Lasso homotopy of Efron et al. (2004) in Gram form, batched over a leading axis.
+
+    ``Gram`` ``(B, m, m)``, ``Xy`` ``(B, m)``; the path is followed in the correlation level
+    ``c = max_j |Xy_j - (Gram beta)_j|`` (``c = rows * alpha``) from its maximum down to ``c_min``
+    ``(B,)``, or until an interval with more than ``max_size`` active components is complete.
+    Each step moves every unfinished problem to its next breakpoint at once: the direction on
+    the active set solves ``Gram_AA d = sign_A``, kept through the inverse of ``Gram_AA``
+    (rank-one up/down-date when a component joins or drops); the next event is the first join
+    (an inactive correlation reaching ``c``), drop (an active coefficient reaching 0, the Lasso
+    modification; the dropped component cannot rejoin at once with its old sign), or the end of
+    the window. Problems that have finished are dropped from the working arrays whenever they
+    are half of them. The tests check it against scikit-learn's ``lars_path`` to 1e-9.
+
+    Returns the correlation levels ``(B, S)`` and coefficients ``(B, S, m)`` at the
+    breakpoints, and the number ``(B,)`` of breakpoints of each problem (the tails are padding).
+    """
+    B, m = Xy.shape
+    rows = np.arange(B)
+    beta = np.zeros((B, m))
+    cov = Xy.copy()
+    sign = np.zeros((B, m))
+    active = np.zeros((B, m), bool)
+    inv = np.zeros((B, m, m))  # inverse of Gram_AA, zero outside A x A
+    j = np.abs(cov).argmax(axis=1)
+    c = np.abs(cov[rows, j])
+    cap = 2 * m + 4  # breakpoints stored per problem (grown if needed)
+    levels, coefs = np.zeros((B, cap)), np.zeros((B, cap, m))
+    levels[:, 0] = c
+    n_points = np.ones(B, int)
+    ids = np.arange(B)  # problems still followed (the arrays below are compacted to them)
+    running = c > c_min
+    joining = running.copy()  # problems whose event is the join of component j
+    dropping = np.zeros(B, bool)  # ... the drop of component j
+    barred = np.full(B, -1)  # a component that just dropped cannot rejoin with its old sign at once
+    barred_sign = np.zeros(B)
+    while running.any():
+        if running.sum() <= rows.size // 2 and rows.size >= 16:  # drop finished problems
+            keep = running
+            Gram, c_min, beta, cov, sign, active, inv, c, j = (
+                x[keep] for x in (Gram, c_min, beta, cov, sign, active, inv, c, j))
+            joining, dropping, barred, barred_sign, running, ids = (
+                x[keep] for x in (joining, dropping, barred, barred_sign, running, ids))
+            rows = np.arange(ids.size)
+        # rank-one change of inv: + w w^T / schur (j joins), - col col^T / col_j (j drops)
+        g = Gram[rows, :, j]
+        u = np.einsum("bij,bj->bi", inv, g)
+        u[rows, j] = -1.0  # u = w: then G_jj - g_A^T inv g_A = -g^T w
+        schur = -np.einsum("bi,bi->b", g, u)
+        col = inv[rows, :, j]
+        z = np.where(joining[:, None], u, col)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            f = np.where(joining, 1.0 / schur, np.where(dropping, -1.0 / col[rows, j], 0.0))
+        inv += (z * f[:, None])[:, :, None] * z[:, None, :]
+        if dropping.any():
+            b = rows[dropping]
+            inv[b, j[b], :] = 0.0
+            inv[b, :, j[b]] = 0.0
+        active[rows, j] |= joining
+        active[rows, j] &= ~dropping
+        sign[rows, j] = np.where(joining, np.sign(cov[rows, j]), np.where(dropping, 0.0, sign[rows, j]))
+        d = np.einsum("bij,bj->bi", inv, sign)
+        a = np.einsum("bij,bj->bi", Gram, d)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            up = (c[:, None] - cov) / (1.0 - a)
+            down = (c[:, None] + cov) / (1.0 + a)
+            zero = -beta / d
+        join = np.where(up > 0, up, np.inf)
+        join = np.minimum(join, np.where(down > 0, down, np.inf))
+        join[active] = np.inf
+        hit = barred >= 0
+        b = rows[hit]
+        join[b, barred[b]] = np.where(barred_sign[b] > 0, down[b, barred[b]], up[b, barred[b]])
+        join[b, barred[b]] = np.where(join[b, barred[b]] > 0, join[b, barred[b]], np.inf)
+        zero = np.where(active & (zero > 0), zero, np.inf)
+        j_join, j_drop = join.argmin(axis=1), zero.argmin(axis=1)
+        g_join, g_drop = join[rows, j_join], zero[rows, j_drop]
+        g_end = c - c_min
+        gamma = np.where(running, np.minimum(np.minimum(g_join, g_drop), g_end), 0.0)
+        beta += gamma[:, None] * d
+        cov -= gamma[:, None] * a
+        c = c - gamma
+        ended = running & (g_end <= np.minimum(g_join, g_drop))
+        c[ended] = c_min[ended]
+        dropping = running & ~ended & (g_drop < g_join)
+        joining = running & ~ended & ~dropping
+        j = np.where(dropping, j_drop, j_join)
+        beta[rows[dropping], j[dropping]] = 0.0
+        barred = np.where(dropping, j, -1)
+        barred_sign = sign[rows, j]
+        at = ids[running]
+        if n_points[at].max() >= cap:
+            levels = np.concatenate([levels, np.zeros_like(levels)], axis=1)
+            coefs = np.concatenate([coefs, np.zeros_like(coefs)], axis=1)
+            cap *= 2
+        levels[at, n_points[at]] = c[running]
+        coefs[at, n_points[at]] = beta[running]
+        n_points[at] += 1
+        if max_size is not None:  # the interval just followed had more than max_size components
+            running &= active.sum(axis=1) <= max_size
+        running &= ~ended
+        joining &= running
+        dropping &= running
+    return levels, coefs, n_points
 
 
 def lasso_cvxpy(X: Any, y: Any, lam: float, *, n_samples: int | None = None) -> np.ndarray:
@@ -373,8 +523,7 @@ def flat_range(path: LassoPath, *, scale: Scale = "log", lambda_ratio: float = 1
     lo, h, size = cands[best]
     mid = float(np.sqrt(lo * h)) if scale == "log" else 0.5 * (lo + h)
     c = path.coef(mid)
-    tol = 1e-12 * max(1.0, float(np.abs(path.coefs).max(initial=0.0)))
-    return FlatRange(low=lo, high=h, middle=mid, size=size, support=np.flatnonzero(np.abs(c) > tol),
+    return FlatRange(low=lo, high=h, middle=mid, size=size, support=np.flatnonzero(np.abs(c) > path._tol),
                      width=float(widths[best]), scale=scale)
 
 
@@ -453,7 +602,7 @@ def grid_flat_range(path: LassoPath, n_grid: int, *, lambda_ratio: float = 1e-4,
     if a.size < 2 or not a[0] > 0:
         raise ModelError("path: expected at least two breakpoints and lambda_max > 0")
     top = path.coefs.shape[0] // 2 if max_size is None else int(max_size)
-    grid = np.geomspace(float(a[0]), lambda_ratio * float(a[0]), int(n_grid))
+    grid = float(a[0]) * _unit_grid(int(n_grid), float(lambda_ratio))  # geometric, from lambda_max
     grid[0] = a[0]
     act = path._active()  # (m, K): support on each interval (a[i+1], a[i])
     isz = act.sum(axis=0)
@@ -481,6 +630,14 @@ def grid_flat_range(path: LassoPath, n_grid: int, *, lambda_ratio: float = 1e-4,
     support = np.flatnonzero(act[:, min(max(int(idx[k]), 0), isz.size - 1)])  # support of the interval of grid[k]
     return GridFlatRange(grid=grid, sizes=sizes, start=start, stop=stop, middle=float(grid[k]),
                          size=int(sizes[start]), support=support)
+
+
+@functools.lru_cache(maxsize=16)
+def _unit_grid(n_grid: int, lambda_ratio: float) -> np.ndarray:
+    """``n_grid`` geometrically spaced values from 1 down to ``lambda_ratio`` (cached, read-only)."""
+    grid = np.geomspace(1.0, lambda_ratio, n_grid)
+    grid.flags.writeable = False
+    return grid
 
 
 def least_squares_on_support(X: Any, y: Any, support: Any) -> np.ndarray:

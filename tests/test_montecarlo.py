@@ -19,6 +19,17 @@ def _gaussian_chunk(seeds, *, dim):
     return {"x": x, "norm": np.sqrt(np.sum(x**2, axis=1))}
 
 
+def _slow_worker_chunk(seeds, *, parent):
+    """A chunk whose result carries where it ran; workers (not the calling process) are slow."""
+    import os
+    import time
+
+    if os.getpid() != parent:
+        time.sleep(0.3)
+    return {"x": np.array([np.random.default_rng(s).standard_normal() for s in seeds]),
+            "here": np.full(len(seeds), os.getpid() == parent)}
+
+
 def _bad_chunk(seeds):
     return {"x": np.zeros(len(seeds) + 1)}
 
@@ -41,6 +52,9 @@ def test_results_do_not_depend_on_jobs_or_chunks(chunk_size):
     for key in ref:
         np.testing.assert_array_equal(one[key], ref[key])
         np.testing.assert_array_equal(two[key], ref[key])
+    three = run_monte_carlo(fn, 23, seed=11, jobs=3, chunk_size=chunk_size)
+    for key in ref:
+        np.testing.assert_array_equal(three[key], ref[key])
     # A realisation's draws depend only on (seed, i): the first 10 of 23 are those of 10.
     short = run_monte_carlo(fn, 10, seed=11)
     np.testing.assert_array_equal(short["x"], ref["x"][:10])
@@ -88,3 +102,16 @@ def test_binomial_ci_coverage():
     ks = rng.binomial(200, 0.01, size=400)
     cover = np.mean([binomial_ci(int(k), 200)[0] <= 0.01 <= binomial_ci(int(k), 200)[1] for k in ks])
     assert cover >= 0.93
+
+
+def test_calling_process_shares_the_work_and_results_keep_their_order():
+    """Chunks run in the calling process and in workers, every result lands at its place."""
+    import os
+
+    fn = functools.partial(_slow_worker_chunk, parent=os.getpid())
+    ref = run_monte_carlo(fn, 40, seed=3, jobs=1, chunk_size=4)
+    assert ref["here"].all()
+    for _ in range(2):  # cold workers (start-up), then warm ones
+        two = run_monte_carlo(fn, 40, seed=3, jobs=2, chunk_size=4)
+        np.testing.assert_array_equal(two["x"], ref["x"])
+        assert two["here"][:4].all()  # the calling process takes the first chunk itself

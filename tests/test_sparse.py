@@ -232,3 +232,55 @@ def test_grid_flat_range_bad_inputs():
     empty = LassoPath(lambdas=np.array([1.0, 0.0]), coefs=np.zeros((3, 2)), n_samples=5)
     with pytest.raises(ModelError, match="no grid point"):
         grid_flat_range(empty, 50)
+
+
+def _sklearn_path(X, y, N, lambda_min=0.0):
+    """scikit-learn's LARS-Lasso (``lars_path``) on the same problem, in the normalisation of (39)."""
+    from sklearn.linear_model import lars_path
+
+    alpha_min = lambda_min * np.abs(X.T @ y).max() / X.shape[0]
+    alphas, _, coefs = lars_path(X, y, method="lasso", alpha_min=alpha_min, max_iter=1000)
+    return alphas * X.shape[0] / N, coefs
+
+
+@pytest.mark.parametrize("seed, q, noise", [(0, 3, 0.3), (1, 8, 1.0), (2, 15, 3.0), (3, 20, 0.1)])
+def test_homotopy_matches_scikit_learn_lars_path(seed, q, noise):
+    """Our batched homotopy and scikit-learn's lars_path give the same breakpoints and coefficients,
+    including paths with drops (components leaving the support), full and truncated."""
+    from fdi_lib.sparse import lasso_paths
+
+    problems = [_problem(seed=10 * seed + i, rows=60, m=30, q=q, noise=noise) for i in range(6)]
+    X = np.stack([p[0] for p in problems])
+    y = np.stack([p[1] for p in problems])
+    drops = 0
+    for lambda_min in (0.0, 1e-3):
+        paths = lasso_paths(X, y, n_samples=20, lambda_min=lambda_min)
+        for b, path in enumerate(paths):
+            lam, coefs = _sklearn_path(X[b], y[b], 20, lambda_min)
+            assert path.lambdas.shape == lam.shape
+            np.testing.assert_allclose(path.lambdas, lam, rtol=1e-9, atol=1e-12 * lam[0])
+            np.testing.assert_allclose(path.coefs, coefs, rtol=1e-8, atol=1e-10 * np.abs(coefs).max())
+            single = lasso_path(X[b], y[b], n_samples=20, lambda_min=lambda_min)  # batch of one
+            np.testing.assert_allclose(single.lambdas, path.lambdas, rtol=1e-12)
+            drops += int(np.sum(np.diff(path.support_sizes()) < 0))
+    if q >= 15:
+        assert drops > 0  # the Lasso drop rule was exercised
+
+
+def test_batched_paths_match_scikit_learn_on_example1_and_stop_at_max_size():
+    from fdi_lib.montecarlo import trial_rngs, trial_seeds
+    from fdi_lib.reproduce.zhang2021 import example1_regression
+    from fdi_lib.sparse import lasso_paths
+    from fdi_lib.systems import zhang2021_example1 as ex
+
+    trials = ex.draw_trials(ex.example1_model(), trial_rngs(trial_seeds(3, 16)), q=20)
+    reg, _ = example1_regression(trials)
+    paths = lasso_paths(reg.X, reg.y, n_samples=reg.n_samples, lambda_min=1e-4, max_size=25)
+    for b, path in enumerate(paths):
+        lam, coefs = _sklearn_path(reg.X[b], reg.y[b], reg.n_samples, 1e-4)
+        k = path.lambdas.size
+        np.testing.assert_allclose(path.lambdas, lam[:k], rtol=1e-9)
+        np.testing.assert_allclose(path.coefs, coefs[:, :k], rtol=1e-8, atol=1e-10 * np.abs(coefs).max())
+        sizes = path.support_sizes()
+        # stopped at the end of the first interval with more than 25 components (or at the window's end)
+        assert (sizes[-1] > 25 and sizes[:-1].max() <= 25) or path.lambdas[-1] == pytest.approx(lam[-1])

@@ -17,7 +17,7 @@ Columns of a table share the same trial seeds (common random numbers).
 
 from __future__ import annotations
 
-from functools import partial
+from functools import lru_cache, partial
 from typing import Any, Sequence
 
 import numpy as np
@@ -26,8 +26,8 @@ from fdi_lib.kitanidis import kitanidis_filter, kitanidis_gains, residual_signat
 from fdi_lib.montecarlo import binomial_ci, run_monte_carlo, trial_rngs, trial_seeds
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.reproduce.registry import ReproductionResult, register
-from fdi_lib.sparse import (RegressionData, flat_range, grid_flat_range, lasso_path, least_squares_on_support,
-                            regression_data)
+from fdi_lib.sparse import (RegressionData, flat_range, grid_flat_range, lasso_path, lasso_paths,
+                            least_squares_on_support, regression_data)
 from fdi_lib.systems import zhang2021_example1 as ex
 from fdi_lib.threads import single_threaded_blas
 
@@ -80,13 +80,20 @@ def snr_variants(y: np.ndarray, v: np.ndarray, *, start: int = 1) -> dict[str, n
             "sum Y^2 / sum V^2": 10 * np.log10((yy ** 2).sum(-2) / (vv ** 2).sum(-2))}
 
 
+@lru_cache(maxsize=64)
+def _example1_setup(r: float) -> tuple[Any, Any]:
+    """Model and Kitanidis gains of Example 1 for noise factor ``r`` (noise-independent: computed
+    once per process and ``r``, shared by all the chunks of a column)."""
+    model = ex.example1_model(r=r)
+    return model, kitanidis_gains(model, ex.E)
+
+
 def example1_regression(trials: ex.Example1Trial, *, r: float = 0.5) -> tuple[RegressionData, np.ndarray]:
     """Simulate trials of Example 1 and build their regressions (36) with the Kitanidis filter.
 
     Returns the :class:`~fdi_lib.sparse.RegressionData` (batched over trials) and the outputs ``y``.
     """
-    model = ex.example1_model(r=r)
-    gains = kitanidis_gains(model, ex.E)  # shared by all trials
+    model, gains = _example1_setup(float(r))  # gains shared by all trials
     y = ex.simulate_trials(model, trials)
     res = kitanidis_filter(model, y, gains=gains)
     sig = residual_signature(model, gains, Psi=trials.Psi)  # Psi_k differs per trial
@@ -102,15 +109,15 @@ def example1_chunk(seeds: Sequence[np.random.SeedSequence], *, q: int, r: float)
     (the rule on a geometric grid of 50 / 200 ``lambda`` values over the same window, read off the
     same exact path, :func:`fdi_lib.sparse.grid_flat_range`) and ``snr_db`` (``(trials, p)``).
     """
-    model = ex.example1_model(r=r)
+    model, _ = _example1_setup(float(r))
     trials = ex.draw_trials(model, trial_rngs(seeds), q=q)
     reg, y = example1_regression(trials, r=r)
     out = {f"success_{s}": np.zeros(len(seeds), bool) for s in SCALES}
     out.update({f"size_{s}": np.zeros(len(seeds), int) for s in SCALES})
     out.update({f"success_grid{n}": np.zeros(len(seeds), bool) for n in GRID_SIZES})
-    for b in range(len(seeds)):
-        path = lasso_path(reg.X[b], reg.y[b], n_samples=reg.n_samples, lambda_min=LAMBDA_RATIO,
-                          max_size=reg.X.shape[-1] // 2)
+    paths = lasso_paths(reg.X, reg.y, n_samples=reg.n_samples, lambda_min=LAMBDA_RATIO,
+                        max_size=reg.X.shape[-1] // 2)  # all the chunk's paths at once
+    for b, path in enumerate(paths):
         true = np.flatnonzero(trials.theta[b])
         for s in SCALES:
             fr = flat_range(path, scale=s)
