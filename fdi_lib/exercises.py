@@ -36,7 +36,8 @@ from fdi_lib.errors import FDIError, ModelError
 
 __all__ = ["Exercise", "Mistake", "CheckResult", "ExerciseData", "EXERCISES", "CHAPTERS",
            "DIFFICULTIES", "UnknownExerciseError", "AnswerError", "get_exercise", "exercises",
-           "exercise_data", "check", "exercise_table", "strip_solutions"]
+           "exercise_data", "check", "exercise_table", "strip_solutions", "ChapterExercise",
+           "parse_chapter", "exercises_section", "code_cells"]
 
 #: Difficulty labels, in increasing order.
 DIFFICULTIES = ("warm-up", "core", "challenge")
@@ -142,7 +143,9 @@ class ExerciseData(dict):
     def __repr__(self) -> str:
         lines = []
         for key, val in self.items():
-            if isinstance(val, np.ndarray):
+            if hasattr(val, "n_steps"):  # a model: its dimensions, not its matrices
+                text = f"{type(val).__name__}(n={val.n}, p={val.p}, N={val.n_steps})"
+            elif isinstance(val, np.ndarray):
                 text = np.array2string(val, precision=6, suppress_small=False, separator=", ")
                 text = text.replace("\n", "\n" + " " * (len(key) + 3))
             else:
@@ -484,11 +487,10 @@ def _sparse4_path(d: dict):
     return lasso_path(r["X"], r["y"], n_samples=r["n_samples"])
 
 
-def _sparse4_answer(d: dict, scale: str) -> float:
+def _sparse4_answer(d: dict) -> float:
     from fdi_lib.sparse import flat_range
 
-    return flat_range(_sparse4_path(d), scale=scale, lambda_ratio=d["lambda_ratio"],
-                      max_size=d["max_size"]).middle
+    return flat_range(_sparse4_path(d), lambda_ratio=d["lambda_ratio"], max_size=d["max_size"]).middle
 
 
 def _sparse4_arithmetic(d: dict) -> float:
@@ -695,7 +697,7 @@ _LIST = [
         answer="array of shape (2, 2): Gamma_3", rtol=1e-9, data=_sig2_data, reference=_sig2_ref,
         mistakes=(Mistake(_sig2_open_loop, "This is the recursion with F_k in place of F_k (I - K_k H_k): "
                                            "the signature filter runs on the closed-loop predictor."),)),
-    _ex("sig-3", _SIG, "A sensor bias (Proposition 2)", "core", 15,
+    _ex("sig-3", _SIG, "A sensor bias", "core", 15,
         answer="array of shape (5,): H_k Gamma_k + Phi_k for k = 0..4", rtol=1e-9, data=_sig3_data,
         reference=_sig3_ref,
         mistakes=(Mistake(_sig3_no_fk, "This ignores the term -F_k K_k Phi_k of Proposition 2: the filter "
@@ -795,13 +797,10 @@ _LIST = [
                           "time samples N."),)),
     _ex("sparse-4", _SPARSE, "The flat-range rule on a given path", "core", 20,
         answer="a number: the lambda chosen by the rule (log width)", rtol=1e-8, data=_sparse4_data,
-        reference=lambda d: _sparse4_answer(d, "log"),
+        reference=_sparse4_answer,
         mistakes=(Mistake(_sparse4_arithmetic, "This is an arithmetic middle (the linear reading): the "
                                                "book's rule measures width by log(high / low) and takes "
-                                               "the geometric mean sqrt(low high) of the widest range."),
-                  Mistake(lambda d: _sparse4_answer(d, "linear"), "This is the linear-width reading: the "
-                                                                 "book's rule measures width by "
-                                                                 "log(high / low)."))),
+                                               "the geometric mean sqrt(low high) of the widest range."),)),
     _ex("sparse-5", _SPARSE, "Undo the shrinkage", "core", 15,
         answer="array of shape (8,): least squares on the selected support, zeros elsewhere", rtol=1e-8,
         data=_sparse_regression, reference=_sparse5_ref,
@@ -903,7 +902,8 @@ def exercise_data(exercise_id: str) -> ExerciseData:
     Returns an empty :class:`ExerciseData` for an exercise that brings no data of its own.
     """
     ex = get_exercise(exercise_id)
-    return ExerciseData(ex.data() if ex.data is not None else {})
+    raw = ex.data() if ex.data is not None else {}
+    return ExerciseData({k: np.array(v) if isinstance(v, np.ndarray) else v for k, v in raw.items()})
 
 
 @functools.lru_cache(maxsize=None)
@@ -1090,3 +1090,73 @@ def strip_solutions(text: str) -> str:
         out.append(lines[i])
         i += 1
     return "".join(out)
+
+
+# ----------------------------------------------------------------------------- reading chapters
+@dataclass(frozen=True)
+class ChapterExercise:
+    """One exercise as written in a chapter (gated syntax).
+
+    Attributes
+    ----------
+    id : str
+        The identifier (the label is ``"ex-" + id``).
+    difficulty : str
+        The difficulty in the title, lower case (``"Warm-up: Title"`` gives ``"warm-up"``).
+    title : str
+    exercise : str
+        The MyST text between ``exercise-start`` and ``exercise-end`` (statement, starter cells).
+    solution : str
+        The text between ``solution-start`` and ``solution-end`` (``""`` if there is none).
+    solution_options : str
+        The option lines of ``solution-start`` (e.g. ``":class: dropdown"``).
+    """
+
+    id: str
+    difficulty: str
+    title: str
+    exercise: str
+    solution: str
+    solution_options: str
+
+
+_EXERCISE_RE = re.compile(r"^```\{exercise-start\} (?P<diff>[^:\n]+): (?P<title>[^\n]*)\n"
+                          r":label: ex-(?P<id>[a-z0-9-]+)\n```\n(?P<body>.*?)^```\{exercise-end\}\n```$",
+                          re.S | re.M)
+_SOLUTION_RE = re.compile(r"^```\{solution-start\} ex-(?P<id>[a-z0-9-]+)\n(?P<opts>(?::[^\n]*\n)*)```\n"
+                          r"(?P<body>.*?)^```\{solution-end\}\n```$", re.S | re.M)
+_CELL_RE = re.compile(r"^```\{code-cell\} ipython3\n(?P<body>.*?)^```$", re.S | re.M)
+
+
+def parse_chapter(text: str) -> list[ChapterExercise]:
+    """The exercises of a chapter in the gated syntax, in order, each with its solution."""
+    solutions = {m["id"]: m for m in _SOLUTION_RE.finditer(text)}
+    out = []
+    for m in _EXERCISE_RE.finditer(text):
+        sol = solutions.get(m["id"])
+        out.append(ChapterExercise(id=m["id"], difficulty=m["diff"].strip().lower(), title=m["title"].strip(),
+                                   exercise=m["body"], solution=sol["body"] if sol else "",
+                                   solution_options=sol["opts"] if sol else ""))
+    return out
+
+
+def exercises_section(text: str) -> str:
+    """The ``## Exercises`` section of a chapter (up to the next ``## `` heading); ``""`` if none."""
+    m = re.search(r"^## Exercises\n", text, re.M)
+    if m is None:
+        return ""
+    end = re.search(r"^## ", text[m.end():], re.M)
+    return text[m.start(): m.end() + end.start()] if end else text[m.start():]
+
+
+def code_cells(text: str) -> list[str]:
+    """The sources of the ``{code-cell}`` blocks of a MyST text, without their metadata header."""
+    cells = []
+    for m in _CELL_RE.finditer(text):
+        body = m["body"]
+        if body.startswith("---\n"):
+            body = body[body.index("\n---\n", 3) + 5:]
+        elif body.startswith(":"):
+            body = "".join(line for line in body.splitlines(keepends=True) if not line.startswith(":"))
+        cells.append(body)
+    return cells
