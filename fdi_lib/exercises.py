@@ -36,8 +36,9 @@ from fdi_lib.errors import FDIError, ModelError
 
 __all__ = ["Exercise", "Mistake", "CheckResult", "ExerciseData", "EXERCISES", "CHAPTERS",
            "DIFFICULTIES", "UnknownExerciseError", "AnswerError", "get_exercise", "exercises",
-           "exercise_data", "check", "exercise_table", "strip_solutions", "ChapterExercise",
-           "parse_chapter", "exercises_section", "code_cells"]
+           "exercise_data", "check", "exercise_table", "counts_table", "COURSE_PLAN", "plan_table",
+           "strip_solutions", "ChapterExercise",
+           "parse_chapter", "exercises_section", "code_cells", "words", "solution_fingerprints"]
 
 #: Difficulty labels, in increasing order.
 DIFFICULTIES = ("warm-up", "core", "challenge")
@@ -1051,6 +1052,55 @@ def exercise_table():
     return table(rows, ["chapter", "title", "difficulty", "time", "checkable"], index_header="exercise")
 
 
+def counts_table():
+    """Number of exercises per chapter and difficulty, checkable ones and total time (a report table)."""
+    from fdi_lib.report import table
+
+    rows = {}
+    for chapter, title in CHAPTERS.items():
+        exs = exercises(chapter)
+        rows[title] = ([sum(e.difficulty == d for e in exs) for d in DIFFICULTIES]
+                       + [sum(e.checkable for e in exs), len(exs), f"{sum(e.minutes for e in exs)} min"])
+    every = list(EXERCISES.values())
+    rows["all chapters"] = ([sum(e.difficulty == d for e in every) for d in DIFFICULTIES]
+                            + [sum(e.checkable for e in every), len(every),
+                               f"{sum(e.minutes for e in every)} min"])
+    return table(rows, [*DIFFICULTIES, "checkable", "total", "time"], index_header="chapter")
+
+
+#: A suggested course of eight weeks: (topic, chapters read, exercises set), each exercise once.
+COURSE_PLAN: tuple[tuple[str, tuple[str, ...], tuple[str, ...]], ...] = (
+    ("Kalman innovation and fault signatures", ("zb2014/signature",), ("sig-1", "sig-2", "sig-3")),
+    ("Boundedness and identifiability", ("zb2014/signature",), ("sig-4", "sig-5", "sig-6")),
+    ("GLR test with a known profile", ("zb2014/glr",), ("glr-1", "glr-2", "glr-3")),
+    ("Unknown onset and minmax isolation", ("zb2014/glr",), ("glr-5", "glr-4", "glr-6")),
+    ("Case study: leaks on a gas pipeline", ("zb2014/pipeline",),
+     ("pipe-1", "pipe-2", "pipe-3", "pipe-4", "pipe-5", "pipe-6")),
+    ("Sparse isolation with the Lasso", ("zhang2021/sparse",),
+     ("sparse-1", "sparse-2", "sparse-3", "sparse-4", "sparse-5", "sparse-6")),
+    ("Unknown inputs: parametric and non-parametric faults", ("bz/parametric-nonparametric",),
+     ("bz-1", "bz-5", "bz-2", "bz-3", "bz-4", "bz-6")),
+    ("Set membership: set-valued observers", ("rosa2013/svo",),
+     ("svo-1", "svo-2", "svo-5", "svo-3", "svo-4", "svo-6")),
+)
+
+
+def plan_table():
+    """:data:`COURSE_PLAN` as a report table, with the estimated time of each week's exercises."""
+    from fdi_lib.report import table
+
+    rows = {}
+    for week, (topic, chapters, ids) in enumerate(COURSE_PLAN, start=1):
+        exs = [get_exercise(i) for i in ids]
+        core = sum(e.minutes for e in exs if e.difficulty != "challenge")
+        extra = sum(e.minutes for e in exs if e.difficulty == "challenge")
+        rows[f"week {week}"] = [topic, "; ".join(CHAPTERS[c] for c in chapters),
+                                ", ".join(f"{e.id} ({e.minutes} min)" for e in exs),
+                                f"{core} min", f"{extra} min"]
+    return table(rows, ["topic", "chapter", "exercises (estimated time)", "warm-up and core",
+                        "challenge"], index_header="week")
+
+
 _FENCE = re.compile(r"^(?P<fence>`{3,}|:{3,})\{(?P<name>[a-z-]+)\}")
 
 
@@ -1160,3 +1210,33 @@ def code_cells(text: str) -> list[str]:
             body = "".join(line for line in body.splitlines(keepends=True) if not line.startswith(":"))
         cells.append(body)
     return cells
+
+
+# ----------------------------------------------------------------------------- student edition checks
+_MATH = re.compile(r"\$\$.*?\$\$|\$[^$\n]*\$|\\\(.*?\\\)|\\\[.*?\\\]", re.S)
+
+
+def words(text: str) -> list[str]:
+    """The words of a MyST source, a notebook or an HTML page's text, comparable across the three.
+
+    Maths is dropped (``$...$`` in sources, ``\\(...\\)`` in HTML), then the alphabetic words are
+    kept, lower case; code keeps its identifiers, so a code line reads the same in all three.
+    """
+    return re.findall(r"[a-z]+", _MATH.sub(" ", text).lower())
+
+
+def _shingles(ws: list[str], n: int) -> set[tuple[str, ...]]:
+    return {tuple(ws[i:i + n]) for i in range(len(ws) - n + 1)}
+
+
+def solution_fingerprints(full_text: str, student_text: str, n: int = 8) -> set[tuple[str, ...]]:
+    """Runs of ``n`` words that occur in the solutions of ``full_text`` and nowhere in ``student_text``.
+
+    ``student_text`` is the same chapter after :func:`strip_solutions`. A student page or notebook
+    that contains one of these runs shows solution text.
+    """
+    keep = _shingles(words(student_text), n)
+    out: set[tuple[str, ...]] = set()
+    for ex in parse_chapter(full_text):
+        out |= _shingles(words(ex.solution), n) - keep
+    return out

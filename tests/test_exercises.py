@@ -305,3 +305,53 @@ def test_strip_solutions_small_cases():
     assert strip_solutions(text) == "a\n\nb\nc\n"
     with pytest.raises(ModelError, match="has no solution-end"):
         strip_solutions("```{solution-start} ex-x\n```\nsecret\n")
+
+
+def test_course_plan_sets_every_exercise_once():
+    planned = [i for _, _, ids in E.COURSE_PLAN for i in ids]
+    assert sorted(planned) == sorted(EXERCISES)
+    for _, chapters, ids in E.COURSE_PLAN:
+        assert all(EXERCISES[i].chapter in chapters for i in ids)
+    assert 6 <= len(E.COURSE_PLAN) <= 10
+    assert len(E.plan_table().rows) == len(E.COURSE_PLAN)
+    counts = E.counts_table()
+    assert counts.rows[-1][1][:3] == tuple(str(sum(e.difficulty == d for e in EXERCISES.values()))
+                                           for d in E.DIFFICULTIES)
+
+
+def _student_tool():
+    import importlib.util
+
+    path = Path(__file__).resolve().parents[1] / "tools" / "student_edition.py"
+    spec = importlib.util.spec_from_file_location("student_edition", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_words_read_sources_notebooks_and_html_alike():
+    assert E.words("Then $H_k\\Gamma_k$ is `fault_signature(m)`") == ["then", "is", "fault", "signature", "m"]
+    assert E.words("Then \\(H_k\\Gamma_k\\) is fault_signature ( m )") == ["then", "is", "fault", "signature", "m"]
+
+
+def test_student_verification_finds_solution_text(tmp_path):
+    """The verifier of `make student` on a fake student edition: clean, then with a leaked solution."""
+    tool = _student_tool()
+    src = tmp_path / "src" / "book"
+    for path in tool.chapters(BOOK):
+        target = src / path.relative_to(BOOK)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_text(strip_solutions(path.read_text()))
+    tool.write_notebooks(tmp_path / "src", tmp_path)
+    html = tmp_path / "html"
+    html.mkdir()
+    glr = chapter_text("zb2014/glr")
+    page = f"<html><body><div class='exercise'>{strip_solutions(glr)}</div></body></html>"
+    (html / "glr.html").write_text(page)
+    assert tool.verify(tmp_path) == []
+    solution = parse_chapter(glr)[2].solution
+    (html / "glr.html").write_text(page.replace("</body>", f"<p>{solution}</p></body>"))
+    (problem,) = tool.verify(tmp_path)
+    assert "glr.html" in problem and "runs of solution text" in problem
+    (html / "glr.html").write_text(page.replace("</body>", "<div class='solution'>x</div></body>"))
+    assert any("solution directive" in p for p in tool.verify(tmp_path))
