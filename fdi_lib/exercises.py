@@ -1145,14 +1145,16 @@ def strip_solutions(text: str) -> str:
 # ----------------------------------------------------------------------------- reading chapters
 @dataclass(frozen=True)
 class ChapterExercise:
-    """One exercise as written in a chapter (gated syntax).
+    """One exercise as written in a chapter (gated syntax, title ``"<id> · <difficulty> · <title>"``,
+    label ``"ex-<id>"``, unnumbered: the identifier is the exercise's name everywhere).
 
     Attributes
     ----------
     id : str
-        The identifier (the label is ``"ex-" + id``).
+        The identifier of the label (``"ex-" + id``); :func:`parse_chapter` checks that the title
+        starts with the same.
     difficulty : str
-        The difficulty in the title, lower case (``"Warm-up: Title"`` gives ``"warm-up"``).
+        The difficulty in the title.
     title : str
     exercise : str
         The MyST text between ``exercise-start`` and ``exercise-end`` (statement, starter cells).
@@ -1170,9 +1172,9 @@ class ChapterExercise:
     solution_options: str
 
 
-_EXERCISE_RE = re.compile(r"^```\{exercise-start\} (?P<diff>[^:\n]+): (?P<title>[^\n]*)\n"
-                          r":label: ex-(?P<id>[a-z0-9-]+)\n```\n(?P<body>.*?)^```\{exercise-end\}\n```$",
-                          re.S | re.M)
+_EXERCISE_RE = re.compile(r"^```\{exercise-start\} (?P<tid>[a-z0-9-]+) · (?P<diff>[a-z-]+) · (?P<title>[^\n]*)\n"
+                          r":label: ex-(?P<id>[a-z0-9-]+)\n(?P<opts>(?::[^\n]*\n)*)```\n"
+                          r"(?P<body>.*?)^```\{exercise-end\}\n```$", re.S | re.M)
 _SOLUTION_RE = re.compile(r"^```\{solution-start\} ex-(?P<id>[a-z0-9-]+)\n(?P<opts>(?::[^\n]*\n)*)```\n"
                           r"(?P<body>.*?)^```\{solution-end\}\n```$", re.S | re.M)
 _CELL_RE = re.compile(r"^```\{code-cell\} ipython3\n(?P<body>.*?)^```$", re.S | re.M)
@@ -1183,8 +1185,10 @@ def parse_chapter(text: str) -> list[ChapterExercise]:
     solutions = {m["id"]: m for m in _SOLUTION_RE.finditer(text)}
     out = []
     for m in _EXERCISE_RE.finditer(text):
+        if m["tid"] != m["id"]:
+            raise ModelError(f"text: exercise titled {m['tid']!r} has the label 'ex-{m['id']}'")
         sol = solutions.get(m["id"])
-        out.append(ChapterExercise(id=m["id"], difficulty=m["diff"].strip().lower(), title=m["title"].strip(),
+        out.append(ChapterExercise(id=m["id"], difficulty=m["diff"], title=m["title"].strip(),
                                    exercise=m["body"], solution=sol["body"] if sol else "",
                                    solution_options=sol["opts"] if sol else ""))
     return out

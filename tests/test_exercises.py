@@ -355,3 +355,9 @@ def test_student_verification_finds_solution_text(tmp_path):
     assert "glr.html" in problem and "runs of solution text" in problem
     (html / "glr.html").write_text(page.replace("</body>", "<div class='solution'>x</div></body>"))
     assert any("solution directive" in p for p in tool.verify(tmp_path))
+
+
+def test_parse_chapter_rejects_a_title_that_names_another_exercise():
+    text = "```{exercise-start} glr-1 · core · T\n:label: ex-glr-2\n:nonumber:\n```\nx\n```{exercise-end}\n```\n"
+    with pytest.raises(ModelError, match="titled 'glr-1' has the label 'ex-glr-2'"):
+        parse_chapter(text)
