@@ -361,3 +361,10 @@ def test_parse_chapter_rejects_a_title_that_names_another_exercise():
     text = "```{exercise-start} glr-1 · core · T\n:label: ex-glr-2\n:nonumber:\n```\nx\n```{exercise-end}\n```\n"
     with pytest.raises(ModelError, match="titled 'glr-1' has the label 'ex-glr-2'"):
         parse_chapter(text)
+
+
+def test_docstring_examples():
+    import doctest
+
+    result = doctest.testmod(E, optionflags=doctest.ELLIPSIS)
+    assert result.attempted >= 5 and result.failed == 0
