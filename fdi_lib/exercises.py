@@ -961,7 +961,7 @@ def _scalar_diagnosis(a: float, ref: float, ex: Exercise) -> str:
         return f"it is too {word} by about a factor 10^{abs(round(decades))}"
     if abs(ratio - 1) <= 0.1:
         return f"it is close (within 10 %) but outside the tolerance ({ex.tolerance})"
-    return f"it is too {'large' if ratio > 1 else 'small'} (same sign and order of magnitude)"
+    return f"it is too {'large' if ratio > 1 else 'small'}, with the right sign and order of magnitude"
 
 
 def _index_text(idx: tuple[int, ...]) -> str:
