@@ -11,7 +11,7 @@ export OPENBLAS_NUM_THREADS := 1
 export OMP_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 
-.PHONY: book book-fast test venv lock clean benchmarks
+.PHONY: book book-fast test venv lock clean benchmarks student
 
 venv: $(STAMP)
 
@@ -42,6 +42,14 @@ book-fast: $(STAMP)
 	grep -q 'execute_notebooks: cache' _build/_config_fast.yml
 	set -o pipefail; $(BIN)/jupyter-book build . --config _build/_config_fast.yml --builder html --keep-going 2>&1 | tee _build/book-fast.log
 	@echo "Book built (cached execution): $(abspath _build/html/index.html)"
+
+## Student edition: the same book without the exercise solutions (_build/student/html) and one
+## notebook per chapter with the starter cells (_build/student/notebooks); fails if either still
+## contains solution text (tools/student_edition.py verify).
+student: $(STAMP)
+	mkdir -p _build/student
+	set -o pipefail; $(BIN)/python tools/student_edition.py build --warningiserror --nitpick --keep-going 2>&1 | tee _build/student/build.log
+	@echo "Student book built: $(abspath _build/student/html/index.html)"
 
 ## Run the whole test suite.
 test: $(STAMP)

@@ -1,0 +1,370 @@
+"""The exercises: registry, checker, chapters, and the student edition's solution filter."""
+
+from __future__ import annotations
+
+import ast
+import contextlib
+import io
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.stats
+
+from fdi_lib import exercises as E
+from fdi_lib.errors import ModelError
+from fdi_lib.exercises import (EXERCISES, AnswerError, UnknownExerciseError, check, code_cells,
+                               exercise_data, exercises_section, parse_chapter, strip_solutions)
+
+BOOK = Path(__file__).resolve().parents[1] / "book"
+CHECKABLE = [e.id for e in EXERCISES.values() if e.checkable]
+
+
+def chapter_text(chapter: str) -> str:
+    return (BOOK / f"{chapter}.md").read_text()
+
+
+def reference(exercise_id: str) -> np.ndarray:
+    return np.array(E._expected(exercise_id))
+
+
+# ----------------------------------------------------------------------------- the registry
+def test_registry_is_consistent():
+    assert list(EXERCISES) == [e.id for e in E.exercises()]
+    for e in EXERCISES.values():
+        assert e.chapter in E.CHAPTERS
+        assert e.difficulty in E.DIFFICULTIES
+        assert e.id.startswith(("sig-", "glr-", "pipe-", "sparse-", "bz-", "svo-"))
+        assert 1 <= e.minutes <= 60
+        assert e.checkable == (e.answer is not None)
+        if not e.checkable:
+            assert e.data is None and not e.mistakes
+
+
+@pytest.mark.parametrize("chapter", list(E.CHAPTERS))
+def test_each_chapter_has_graded_exercises(chapter):
+    exs = E.exercises(chapter)
+    assert 5 <= len(exs) <= 8
+    assert sum(e.checkable for e in exs) >= 3
+    assert {e.difficulty for e in exs} == set(E.DIFFICULTIES)
+
+
+@pytest.mark.parametrize("exercise_id", CHECKABLE)
+def test_data_is_seeded(exercise_id):
+    a, b = exercise_data(exercise_id), exercise_data(exercise_id)
+    assert a.keys() == b.keys()
+    for key in a:
+        if isinstance(a[key], np.ndarray):
+            np.testing.assert_array_equal(a[key], b[key])
+            assert a[key] is not b[key]          # a fresh copy: students may modify it
+    assert repr(a)                               # printable
+
+
+# ----------------------------------------------------------------------------- independent references
+# Each reference of the registry is recomputed here another way (closed forms, explicit loops).
+def _kalman_by_hand(d):
+    x, P, out = d["x0"], d["P0"], []
+    for y in d["y"]:
+        S = d["H"] @ P @ d["H"].T + d["R"]
+        K = P @ d["H"].T / S[0, 0]
+        e = y - (d["H"] @ x)[0]
+        out.append(e)
+        x = d["F"] @ (x + K[:, 0] * e)
+        P = d["F"] @ (P - K @ d["H"] @ P) @ d["F"].T + d["Q"]
+    return out
+
+
+INDEPENDENT = {
+    "sig-1": _kalman_by_hand,
+    "sig-5": lambda d: np.log10(1.2),
+    "glr-1": lambda d: -2 * np.log(d["alpha"]),                       # chi2(2) is exponential, mean 2
+    "glr-2": lambda d: [16 / 7, 5 / 7, -6 / 7],                       # C^-1 = [[2, -1], [-1, 4]] / 7
+    "glr-5": lambda d: d["w"] - d["s"],
+    "pipe-1": lambda d: scipy.stats.norm.ppf(1 - d["alpha"] / 2) ** 2,
+    "pipe-5": lambda d: [scipy.stats.beta.ppf(0.025, 7, 1994), scipy.stats.beta.ppf(0.975, 8, 1993)],
+    "sparse-1": lambda d: 1 + 50 + 1225 + 19600 + 230300 + 2118760,
+    "sparse-3": lambda d: np.abs(d["X"].T @ d["y"]).max() / d["n_samples"],
+    "bz-5": lambda d: scipy.stats.chi2.isf(d["alpha"], d["window"] * d["p_reduced"]),
+    "svo-2": lambda d: [1.2, 1.4],
+    "svo-3": lambda d: 6.0 - 5.0,                                     # hull 6, union 4 + 4 - 3
+    "svo-4": lambda d: 0.9 * 0.2 + 0.05 + 0.1,
+    "svo-5": lambda d: 2 ** (d["N"] * d["n_A"]),
+}
+
+
+@pytest.mark.parametrize("exercise_id", sorted(INDEPENDENT))
+def test_reference_matches_an_independent_computation(exercise_id):
+    answer = INDEPENDENT[exercise_id](exercise_data(exercise_id))
+    result = check(exercise_id, answer)
+    assert result, result.message
+
+
+# ----------------------------------------------------------------------------- the checker
+@pytest.mark.parametrize("exercise_id", CHECKABLE)
+def test_reference_passes_and_no_answer_is_reported(exercise_id):
+    assert check(exercise_id, reference(exercise_id))
+    assert check(exercise_id, reference(exercise_id).tolist())
+    none = check(exercise_id, None)
+    assert not none and "no answer yet" in none.message and "answer = None" in none.message
+
+
+@pytest.mark.parametrize("exercise_id", CHECKABLE)
+def test_every_registered_mistake_fails_with_its_hint(exercise_id):
+    ex = EXERCISES[exercise_id]
+    for mistake in ex.mistakes:
+        wrong = mistake.answer(exercise_data(exercise_id))
+        result = check(exercise_id, wrong)
+        assert not result
+        assert mistake.hint in result.message
+
+
+def _numbers(message: str) -> list[float]:
+    return [float(x) for x in re.findall(r"-?\d+\.\d+(?:e-?\d+)?|-?\d+e-?\d+", message)]
+
+
+@pytest.mark.parametrize("exercise_id", CHECKABLE)
+def test_messages_never_reveal_the_answer(exercise_id):
+    ref = reference(exercise_id)
+    wrongs = [1.5 * ref + 1.0, -ref - 1.0, 100 * ref + 3.0, np.zeros(ref.shape) + 0.123]
+    wrongs += [np.array(m.answer(exercise_data(exercise_id)), dtype=float) for m in EXERCISES[exercise_id].mistakes]
+    secret = [v for v in np.ravel(ref) if v != round(v)]            # small integers are also indices
+    for wrong in wrongs:
+        message = check(exercise_id, wrong).message
+        for number in _numbers(message):
+            assert not any(np.isclose(number, v, rtol=1e-3, atol=0) for v in secret), (message, ref)
+
+
+# The typical wrong answers of the issue: missing transpose, wrong degrees of freedom, off-by-one
+# window, wrong sign, and what the generic diagnosis says.
+def _off_entry(exercise_id, idx, factor):
+    a = reference(exercise_id).copy()
+    a[idx] *= factor
+    return a
+
+
+TYPICAL = [
+    ("sig-2", lambda: reference("sig-2").T, "transpose"),
+    ("bz-4", lambda: reference("bz-4").T, "transpose"),
+    ("sig-2", lambda: reference("sig-2")[:1], "got shape (1, 2)"),
+    ("sig-1", lambda: reference("sig-1").reshape(2, 1), "reshape to (2,)"),
+    ("glr-1", lambda: scipy.stats.chi2.ppf(0.99, 1), "degrees of freedom"),
+    ("glr-3", lambda: E._glr3_answer(exercise_data("glr-3"), 1), "1 degree of freedom"),
+    ("pipe-1", lambda: scipy.stats.chi2.ppf(0.99, 2), "dim theta_a = 1"),
+    ("bz-5", lambda: scipy.stats.chi2.ppf(1 - 1e-4, 20), "Degrees of freedom"),
+    ("glr-5", lambda: 99, "Off by one"),
+    ("glr-5", lambda: 97, "Off by one"),
+    ("pipe-3", lambda: E._pipe3_answer(exercise_data("pipe-3"), 1), "Off by one"),
+    ("bz-4", lambda: -reference("bz-4"), "wrong sign"),
+    ("svo-2", lambda: -reference("svo-2"), "wrong sign"),
+    ("glr-4", lambda: -reference("glr-4"), "wrong sign"),
+    ("glr-1", lambda: 100 * reference("glr-1"), "factor 10^2"),
+    ("sparse-3", lambda: 1e-3 * reference("sparse-3"), "too small by about a factor 10^3"),
+    ("glr-1", lambda: 1.05 * reference("glr-1"), "close (within 10 %)"),
+    ("sig-2", lambda: _off_entry("sig-2", (1, 0), 1.5), "Entry [1, 0] is off"),
+    ("svo-1", lambda: _off_entry("svo-1", 2, -1.0), "Entry [2] is off (it has the wrong sign); the rest"),
+    ("sig-3", lambda: reference("sig-3") + 1.0, "5 of 5 entries are off"),
+    ("sparse-5", lambda: E._sparse5_lasso(exercise_data("sparse-5")), "shrunk towards zero"),
+    ("sparse-1", lambda: 2118760, "exactly q_max"),
+    ("svo-1", lambda: E._svo1_answer(exercise_data("svo-1"), strip=False), "intersect with the strip"),
+]
+
+
+@pytest.mark.parametrize("exercise_id, wrong, expected", TYPICAL)
+def test_typical_wrong_answers_get_the_right_message(exercise_id, wrong, expected):
+    result = check(exercise_id, wrong())
+    assert not result
+    assert result.message.startswith(f"{exercise_id}: not yet.")
+    assert expected in result.message
+
+
+def test_unknown_exercise_is_a_typed_error_with_suggestions():
+    with pytest.raises(UnknownExerciseError, match=r"no exercise 'glr-33'; did you mean 'glr-3'"):
+        check("glr-33", 1.0)
+    with pytest.raises(KeyError):                 # still a KeyError for generic handlers
+        E.get_exercise("nope")
+    with pytest.raises(UnknownExerciseError, match="expected a string"):
+        check(3, 1.0)
+
+
+@pytest.mark.parametrize("bad, match", [("9.2", "got str"), ({"a": 1}, "got dict"),
+                                        ([1.0, np.nan], r"got nan at index \[1\]"),
+                                        (np.inf, "got inf"), (1 + 2j, "complex"),
+                                        ([[1.0], [1.0, 2.0]], "numpy cannot read")])
+def test_unusable_answers_are_typed_errors(bad, match):
+    with pytest.raises(AnswerError, match=match):
+        check("glr-3", bad)
+
+
+def test_explanations_are_not_checkable():
+    with pytest.raises(ModelError, match="no checkable answer"):
+        check("glr-6", 1.0)
+    assert exercise_data("glr-6") == {}
+
+
+def test_check_result_behaves_like_a_bool_and_prints_its_message():
+    ok = check("glr-5", 98)
+    assert ok and repr(ok) == str(ok) == ok.message == "glr-5: correct (tolerance: exact (integers))."
+
+
+def test_exercise_table_lists_every_exercise():
+    t = E.exercise_table()
+    assert [label for label, _ in t.rows] == list(EXERCISES)
+    html = t._repr_html_()
+    assert all(f"<th>{i}</th>" in html for i in EXERCISES)
+    assert "n/a" not in html
+
+
+# ----------------------------------------------------------------------------- the chapters
+def _all_chapter_exercises():
+    found = {}
+    for path in sorted(BOOK.rglob("*.md")):
+        for ex in parse_chapter(path.read_text()):
+            found.setdefault(ex.id, []).append((path.relative_to(BOOK).with_suffix("").as_posix(), ex))
+    return found
+
+
+def test_every_exercise_appears_in_exactly_one_chapter_with_its_label():
+    found = _all_chapter_exercises()
+    assert sorted(found) == sorted(EXERCISES)
+    for exercise_id, places in found.items():
+        assert len(places) == 1, (exercise_id, [p for p, _ in places])
+        chapter, ex = places[0]
+        reg = EXERCISES[exercise_id]
+        assert chapter == reg.chapter
+        assert ex.difficulty == reg.difficulty and ex.title == reg.title
+        first = ex.exercise.strip().splitlines()[0]
+        assert first.startswith(f"*About {reg.minutes} min; ")
+        assert ("; checkable.*" in first) == reg.checkable
+        assert ex.solution, f"{exercise_id}: no solution"
+        assert ex.solution_options.strip() == ":class: dropdown"
+
+
+@pytest.mark.parametrize("exercise_id", list(EXERCISES))
+def test_starter_and_solution_cells(exercise_id):
+    (chapter, ex), = _all_chapter_exercises()[exercise_id]
+    starter, solution = code_cells(ex.exercise), code_cells(ex.solution)
+    assert len(starter) == 1 and solution
+    for cell in starter + solution:
+        ast.parse(cell)
+        assert max(len(line) for line in cell.splitlines()) <= 79
+    if EXERCISES[exercise_id].checkable:
+        assert "answer = None" in starter[0]
+        assert starter[0].rstrip().splitlines()[-1] == f'check("{exercise_id}", answer)'
+        assert solution[-1].rstrip().splitlines()[-1] == f'check("{exercise_id}", answer)'
+    else:
+        assert "check(" not in starter[0] + "".join(solution)
+
+
+def _run(cell: str, ns: dict):
+    """Execute a cell like Jupyter: the value of a final expression is returned."""
+    tree = ast.parse(cell)
+    last = tree.body.pop() if tree.body and isinstance(tree.body[-1], ast.Expr) else None
+    with contextlib.redirect_stdout(io.StringIO()):
+        exec(compile(tree, "<cell>", "exec"), ns)
+        return eval(compile(ast.Expression(last.value), "<cell>", "eval"), ns) if last else None
+
+
+@pytest.mark.parametrize("chapter", list(E.CHAPTERS))
+def test_chapter_solutions_run_and_pass_their_checks(chapter):
+    """The Exercises section alone, as the build runs it: starters report no answer, solutions pass."""
+    section = exercises_section(chapter_text(chapter))
+    blocks = parse_chapter(section)
+    ns: dict = {}
+    for cell in code_cells(section[: section.index("```{exercise-start}")]):
+        _run(cell, ns)
+    for ex in blocks:
+        (starter,) = code_cells(ex.exercise)
+        out = _run(starter, ns)
+        if EXERCISES[ex.id].checkable:
+            assert not out and "no answer yet" in out.message
+        for cell in code_cells(ex.solution):
+            out = _run(cell, ns)
+        if EXERCISES[ex.id].checkable:
+            assert out, out.message
+
+
+# ----------------------------------------------------------------------------- student edition
+@pytest.mark.parametrize("chapter", list(E.CHAPTERS))
+def test_strip_solutions_keeps_everything_else(chapter):
+    text = chapter_text(chapter)
+    stripped = strip_solutions(text)
+    assert "solution-start" not in stripped and "solution-end" not in stripped
+    assert [e.id for e in parse_chapter(stripped)] == [e.id for e in parse_chapter(text)]
+    assert [e.exercise for e in parse_chapter(stripped)] == [e.exercise for e in parse_chapter(text)]
+    assert all(not e.solution for e in parse_chapter(stripped))
+    # what remains is the original with the solution blocks cut out (an independent regex cut)
+    expected = E._SOLUTION_RE.sub("", text)
+    squeeze = lambda s: re.sub(r"\n{3,}", "\n\n", s)  # noqa: E731
+    assert squeeze(stripped) == squeeze(expected)
+
+
+def test_strip_solutions_small_cases():
+    text = ("a\n\n```{solution-start} ex-x\n:class: dropdown\n```\n\nsecret\n\n```{code-cell} ipython3\n"
+            "secret_code()\n```\n\n```{solution-end}\n```\n\nb\n:::{solution} ex-y\nold secret\n:::\nc\n")
+    assert strip_solutions(text) == "a\n\nb\nc\n"
+    with pytest.raises(ModelError, match="has no solution-end"):
+        strip_solutions("```{solution-start} ex-x\n```\nsecret\n")
+
+
+def test_course_plan_sets_every_exercise_once():
+    planned = [i for _, _, ids in E.COURSE_PLAN for i in ids]
+    assert sorted(planned) == sorted(EXERCISES)
+    for _, chapters, ids in E.COURSE_PLAN:
+        assert all(EXERCISES[i].chapter in chapters for i in ids)
+    assert 6 <= len(E.COURSE_PLAN) <= 10
+    assert len(E.plan_table().rows) == len(E.COURSE_PLAN)
+    counts = E.counts_table()
+    assert counts.rows[-1][1][:3] == tuple(str(sum(e.difficulty == d for e in EXERCISES.values()))
+                                           for d in E.DIFFICULTIES)
+
+
+def _student_tool():
+    import importlib.util
+
+    path = Path(__file__).resolve().parents[1] / "tools" / "student_edition.py"
+    spec = importlib.util.spec_from_file_location("student_edition", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_words_read_sources_notebooks_and_html_alike():
+    assert E.words("Then $H_k\\Gamma_k$ is `fault_signature(m)`") == ["then", "is", "fault", "signature", "m"]
+    assert E.words("Then \\(H_k\\Gamma_k\\) is fault_signature ( m )") == ["then", "is", "fault", "signature", "m"]
+
+
+def test_student_verification_finds_solution_text(tmp_path):
+    """The verifier of `make student` on a fake student edition: clean, then with a leaked solution."""
+    tool = _student_tool()
+    src = tmp_path / "src" / "book"
+    for path in tool.chapters(BOOK):
+        target = src / path.relative_to(BOOK)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_text(strip_solutions(path.read_text()))
+    tool.write_notebooks(tmp_path / "src", tmp_path)
+    html = tmp_path / "html"
+    html.mkdir()
+    glr = chapter_text("zb2014/glr")
+    page = f"<html><body><div class='exercise'>{strip_solutions(glr)}</div></body></html>"
+    (html / "glr.html").write_text(page)
+    assert tool.verify(tmp_path) == []
+    solution = parse_chapter(glr)[2].solution
+    (html / "glr.html").write_text(page.replace("</body>", f"<p>{solution}</p></body>"))
+    (problem,) = tool.verify(tmp_path)
+    assert "glr.html" in problem and "runs of solution text" in problem
+    (html / "glr.html").write_text(page.replace("</body>", "<div class='solution'>x</div></body>"))
+    assert any("solution directive" in p for p in tool.verify(tmp_path))
+
+
+def test_parse_chapter_rejects_a_title_that_names_another_exercise():
+    text = "```{exercise-start} glr-1 · core · T\n:label: ex-glr-2\n:nonumber:\n```\nx\n```{exercise-end}\n```\n"
+    with pytest.raises(ModelError, match="titled 'glr-1' has the label 'ex-glr-2'"):
+        parse_chapter(text)
+
+
+def test_docstring_examples():
+    import doctest
+
+    result = doctest.testmod(E, optionflags=doctest.ELLIPSIS)
+    assert result.attempted >= 5 and result.failed == 0
