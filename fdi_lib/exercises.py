@@ -365,14 +365,14 @@ def _pipe1_data() -> dict:
 def _pipe2_data() -> dict:
     from fdi_lib.systems import gas_pipeline as gp
 
-    mats = gp.pipeline_matrices()
+    mats = gp.pipeline_matrices("designed")
     return {"F": mats.F0.copy(), "H": mats.H0.copy(), "G0": mats.G0.copy(), "Gp": mats.Gp.copy()}
 
 
 def _pipe2_ref(d: dict) -> np.ndarray:
     from fdi_lib.systems import gas_pipeline as gp
 
-    mats = gp.pipeline_matrices()
+    mats = gp.pipeline_matrices("designed")
     return np.array([mats.J0[0, 0], mats.Jp[0, 0]])
 
 
