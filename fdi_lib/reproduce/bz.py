@@ -27,7 +27,7 @@ import scipy.stats
 
 from fdi_lib.filters import KalmanGains, kalman_filter, kalman_gains
 from fdi_lib.glr import first_alarm, glr_window
-from fdi_lib.kitanidis import KitanidisGains, kitanidis_gains
+from fdi_lib.kitanidis import KitanidisGains, kitanidis_filter, kitanidis_gains
 from fdi_lib.models import LTVModel, fault_profile, step_family
 from fdi_lib.montecarlo import binomial_ci, draw_noise_batch, run_monte_carlo
 from fdi_lib.nonparametric import (kitanidis_lag_covariance, kitanidis_predictor_gains,
@@ -37,7 +37,7 @@ from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.simulate import Noise, simulate
 from fdi_lib.systems import bz_example as ex
 
-__all__ = ["SOL1", "SOL2", "WHITE", "setup", "plot_whiteness", "plot_solution1", "plot_solution2",
+__all__ = ["SOL1", "SOL2", "WHITE", "setup", "updated_residual_projection", "projected_lag_covariance", "plot_whiteness", "plot_solution1", "plot_solution2",
            "ljung_box_pvalues"]
 
 PAPER = "Basseville & Zhang (parametric and non-parametric faults)"
@@ -114,9 +114,34 @@ def _whiteness_chunk(seeds: Sequence[np.random.SeedSequence], n_steps: int) -> d
     eps_kit = kalman_filter(model, s0.y, s0.u, gains=kpred).innovations
     eps_kit_f = kalman_filter(model, s1.y, s1.u, gains=kpred).innovations
     red_f = np.einsum("krp,...kp->...kr", T, eps_kit_f)
+    upd_0 = kitanidis_filter(model, s0.y, s0.u, gains=kg).residuals   # Zhang 2021's residual (25)
+    upd_f = kitanidis_filter(model, s1.y, s1.u, gains=kg).residuals
     d = WHITE["discard"]
     return {"kalman": eps_kal[:, d:], "kitanidis": eps_kit[:, d:], "kitanidis_f": eps_kit_f[:, d:],
-            "reduced_f": red_f[:, d:]}
+            "reduced_f": red_f[:, d:], "updated_f": upd_f[:, d:],
+            "updated_change": np.abs(upd_f - upd_0).max(axis=(1, 2))}
+
+
+def updated_residual_projection(model: LTVModel, kg: KitanidisGains) -> np.ndarray:
+    """``T_k = I - H_k L_k`` ``(N, p, p)``: the updated residual (25) of Zhang (2021) is ``T_k eps_k``.
+
+    ``T_k H_k E_{k-1} = H_k E_{k-1} - H_k (L_k H_k E_{k-1}) = 0`` by identity (30), so it rejects
+    ``f`` like :func:`fdi_lib.nonparametric.rejection_projection`, but keeps ``p`` rows: its
+    covariance ``T_k Sigma_k T_k^T`` has rank ``p - q`` (singular).
+    """
+    return np.eye(model.p) - model.H @ kg.K
+
+
+def projected_lag_covariance(model: LTVModel, kg: KitanidisGains, T: np.ndarray,
+                             lag: int = 1) -> np.ndarray:
+    """Closed-form ``Cov(T_{k+lag} eps_{k+lag}, T_k eps_k)`` of the fault-free Kitanidis innovation.
+
+    ``T_{k+lag} C_k T_k^T`` with ``C_k`` from :func:`fdi_lib.nonparametric.kitanidis_lag_covariance`
+    (``-H F D Sigma`` at lag one); zero whenever ``T_k H_k E_{k-1} = 0``, since
+    ``D_k Sigma_k = Gamma_k Xi_k^{-1} E_{k-1}^T H_k^T``. Shape ``(N - lag, r, r)``.
+    """
+    C = kitanidis_lag_covariance(model, kg, lag)
+    return T[lag:] @ C @ np.swapaxes(T[:-lag], 1, 2)
 
 
 def plot_whiteness(result: ReproductionResult, fig: Any = None):
@@ -173,6 +198,17 @@ def whiteness(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult
         which holds.
     cov_rel_error_reduced : float
         Same for ``T_k eps_k`` (unit covariance by construction), with the non-parametric fault active.
+    updated_f_change : float
+        Largest change of Zhang (2021)'s updated residual ``(I - H_k L_k) eps_k`` when the
+        non-parametric fault is switched on (rounding error: it does not depend on ``f``).
+    lag1_cov_updated_theory_max : float
+        Largest entry of its closed-form lag-one covariance (:func:`projected_lag_covariance`),
+        relative to ``max |Sigma_k|``: zero up to rounding (white).
+    updated_cov_rank : int
+        Numerical rank of its Monte Carlo covariance (pooled, ``f`` active): ``p - q`` (singular).
+    lag1_corr_updated_max, lag1_corr_updated_halfwidth : float
+        Largest ``|lag-one correlation|`` between its components (Monte Carlo, ``f`` active, pooled;
+        the components with zero variance left out) and the largest 95 % half-width.
     """
     n = WHITE["n_steps"]
     trials = 300 if trials is None else trials
@@ -207,6 +243,22 @@ def whiteness(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult
     cov_r = np.einsum("rki,rkj->ij", zr, zr) / (zr.shape[0] * zr.shape[1])
     eye = np.eye(cov_r.shape[0])
     headline["cov_rel_error_reduced"] = float(np.linalg.norm(cov_r - eye) / np.linalg.norm(eye))
+    # Zhang 2021's updated residual T_k eps_k, T_k = I - H_k L_k: free of f, white, singular covariance.
+    Tu = updated_residual_projection(model, kg)
+    headline["updated_f_change"] = float(out["updated_change"].max())
+    lagu = projected_lag_covariance(model, kg, Tu, 1)[d:]
+    headline["lag1_cov_updated_theory_max"] = float(np.abs(lagu).max() / np.abs(kg.Sigma).max())
+    ru = out["updated_f"]
+    cu = np.einsum("rki,rkj->ij", ru, ru) / (ru.shape[0] * ru.shape[1])
+    eig = np.linalg.eigvalsh(cu)
+    headline["updated_cov_rank"] = int(np.sum(eig > 1e-9 * eig[-1]))
+    sd = np.sqrt(np.diag(cu))
+    prod_u = np.einsum("rki,rkj->rij", ru[:, 1:], ru[:, :-1]) / (ru.shape[1] - 1) / np.outer(sd, sd)
+    keep = np.outer(sd > 1e-9 * sd.max(), sd > 1e-9 * sd.max())
+    m_u = prod_u.mean(axis=0)
+    half_u = 1.96 * prod_u.std(axis=0, ddof=1) / np.sqrt(prod_u.shape[0])
+    headline["lag1_corr_updated_max"] = float(np.abs(m_u[keep]).max())
+    headline["lag1_corr_updated_halfwidth"] = float(half_u[keep].max())
     paper = {"lb_reject_rate_kitanidis": "white (Prop. 2): about 0.05",
              "lag1_corr_empirical": "0 (Prop. 2)",
              "cov_rel_error_kitanidis": "Sigma_k = H P_k H^T + R_k (eq. 45)"}

@@ -61,3 +61,25 @@ def test_same_results_for_any_job_count():
     b = reproduce("bz-solution2", seed=3, trials=4, jobs=2)
     assert a.headline == b.headline
     np.testing.assert_array_equal(a.data["mean_err_f"][0], b.data["mean_err_f"][0])
+
+
+def test_updated_residual_is_free_of_f_white_and_singular(results):
+    """Zhang 2021's updated residual (I - H L) eps: T H E = 0, closed-form lag covariance zero
+    (while the innovation's is not), covariance of rank p - q; Monte Carlo agrees."""
+    from fdi_lib.nonparametric import kitanidis_lag_covariance
+    from fdi_lib.reproduce.bz import projected_lag_covariance, setup, updated_residual_projection
+    from fdi_lib.systems import bz_example as ex
+
+    model, _, kg, _, _ = setup(200)
+    T = updated_residual_projection(model, kg)
+    assert np.abs(T[1:] @ model.H[1:] @ ex.E).max() < 1e-10
+    assert np.abs(projected_lag_covariance(model, kg, T, 1)).max() < 1e-12 * np.abs(kg.Sigma).max()
+    assert np.abs(projected_lag_covariance(model, kg, T, 3)).max() < 1e-12 * np.abs(kg.Sigma).max()
+    assert np.abs(kitanidis_lag_covariance(model, kg, 1)).max() > 0.05 * np.abs(kg.Sigma).max()
+    S = T @ kg.Sigma @ np.swapaxes(T, 1, 2)
+    assert all(np.linalg.matrix_rank(S[k], tol=1e-10) == model.p - ex.E.shape[1] for k in (5, 100))
+    h = results["bz-whiteness"].headline
+    assert h["updated_f_change"] < 1e-10
+    assert h["updated_cov_rank"] == model.p - ex.E.shape[1]
+    assert h["lag1_corr_updated_max"] < 2 * h["lag1_corr_updated_halfwidth"]
+    assert abs(h["lag1_corr_theory"]) > 5 * h["lag1_cov_updated_theory_max"] + 0.05
