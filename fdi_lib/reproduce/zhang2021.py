@@ -37,10 +37,11 @@ from fdi_lib.sparse import (RegressionData, flat_range, grid_flat_range, lasso_p
 from fdi_lib.systems import zhang2021_example1 as ex
 from fdi_lib.threads import single_threaded_blas
 
-__all__ = ["Q_VALUES", "R_VALUES", "PAPER_TABLE1", "PAPER_TABLE2", "example1_regression", "snr_db",
+__all__ = ["outputs_with_unknown_input", "Q_VALUES", "R_VALUES", "PAPER_TABLE1", "PAPER_TABLE2", "example1_regression", "snr_db",
            "snr_variants", "snr_comparison", "closest_snr_reading", "example1_chunk",
            "lambda_rule_chunk", "initial_state_chunk", "initial_state_models", "unknown_input_effect",
-           "lambda_rule_table", "initial_state_table", "paper_between_readings", "example1_rates", "example2_setup", "plot_fig2", "plot_fig3", "plot_table1",
+           "lambda_rule_table", "initial_state_table", "paper_between_readings", "rate_table",
+           "snr_table", "grid_rule_difference", "paper_outside_ci", "example1_rates", "example2_setup", "plot_fig2", "plot_fig3", "plot_table1",
            "plot_table2", "plot_fig6", "plot_fig7"]
 
 PAPER = "Zhang 2021"
@@ -87,6 +88,26 @@ def snr_variants(y: np.ndarray, v: np.ndarray, *, start: int = 1) -> dict[str, n
             "var(Y - V) / var(V)": 10 * np.log10(s.var(-2) / vv.var(-2)),
             "sum (Y - V)^2 / sum V^2": 10 * np.log10((s ** 2).sum(-2) / (vv ** 2).sum(-2)),
             "sum Y^2 / sum V^2": 10 * np.log10((yy ** 2).sum(-2) / (vv ** 2).sum(-2))}
+
+
+def outputs_with_unknown_input(model: Any, E: np.ndarray, Psi: np.ndarray, Phi: np.ndarray, *,
+                               noise: Any, u: np.ndarray, d: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Outputs of ``X+ = F X + G U + E_k d_k + W + Psi_k theta``, ``Y = H X + V + Phi_k theta``.
+
+    The unknown input and the state fault enter :func:`fdi_lib.simulate.simulate` as extra
+    inputs ``[d_k, Psi_k theta]`` with input matrix ``[G_k, E_k, I]`` (the filters never see
+    them). ``E``: ``(N, n, s)``; ``Psi``: ``(N, n, m)``; ``Phi``: ``(N, p, m)``; ``u``: ``(N, 1)``;
+    ``d``: ``(N, s)``; returns ``(N, p)``.
+    """
+    from fdi_lib.models import ltv_model
+    from fdi_lib.simulate import simulate
+
+    N, n = model.n_steps, model.n
+    G_aug = np.concatenate([model.G, np.broadcast_to(E, (N, *np.shape(E)[-2:])),
+                            np.broadcast_to(np.eye(n), (N, n, n))], axis=2)
+    sim_model = ltv_model(F=model.F, G=G_aug, H=model.H, Q=model.Q, R=model.R, n_steps=N)
+    sim = simulate(sim_model, noise=noise, u=np.concatenate([u, d, Psi @ theta], axis=1))
+    return sim.y + Phi @ theta
 
 
 def snr_comparison(r_values: Sequence[float] = (0.5, 100.0, 200.0), *, trials: int = 200,
@@ -208,12 +229,12 @@ def _plot_support(result: ReproductionResult, fig: Any, title: str):
     floor = 1e-4 * lam[0]
     edges = np.concatenate([np.clip(lam[::-1], floor, None), [3 * lam[0]]])
     ax.stairs(np.concatenate([sizes[::-1], [0]]), edges, color=OURS_COLOR, baseline=None,
-              label="exact Lasso path (LARS breakpoints)")
+              label=r"exact Lasso path: $\#\{j: \hat\theta_j(\lambda) \neq 0\}$")
     ax.plot(result.data["grid"], np.full(result.data["grid"].size, result.headline["flat_size"]), "D",
-            color=PAPER_COLOR, label="flat range (log width)")
+            color=PAPER_COLOR, label=r"$\lambda$ in the flat range (log width)")
     lo, hi = result.headline["flat_range_linear"]
     ax.axvspan(lo, hi, color="0.8", alpha=0.5, label="flat range (linear width)")
-    ax.set(xscale="log", xlabel=r"$\lambda$ (normalisation of (39))", ylabel="non-zero components",
+    ax.set(xscale="log", xlabel=r"$\lambda$ (normalisation of (39))", ylabel=r"non-zero components of $\hat\theta$",
            title=title)
     ax.set_xlim(floor, lam[0] * 3)
     ax.legend(loc="upper right")
@@ -267,11 +288,11 @@ def _plot_diamonds(result: ReproductionResult, fig: Any, title: str):
         ax.plot(idx[nz], row[nz], "D", color=c, ms=5, alpha=0.8)
     ls = result.data["theta_ls"]
     nz = ls != 0
-    ax.plot(idx[nz], ls[nz], "o", mfc="none", mec="k", ms=10, label="least squares on the support")
+    ax.plot(idx[nz], ls[nz], "o", mfc="none", mec="k", ms=10, label=r"least squares $\hat\theta^{\rm LS}_j$")
     th = result.data["theta"]
-    ax.plot(idx[th != 0], th[th != 0], "*", color=PAPER_COLOR, ms=10, label="true non-zero components")
-    ax.plot([], [], "D", color=colors[0], label=r"Lasso, one colour per $\lambda$ in the flat range")
-    ax.set(xlabel=r"component of $\theta$", ylabel="value", title=title)
+    ax.plot(idx[th != 0], th[th != 0], "*", color=PAPER_COLOR, ms=10, label=r"true $\theta_j \neq 0$")
+    ax.plot([], [], "D", color=colors[0], label=r"Lasso $\hat\theta_j(\lambda)$, one colour per $\lambda$")
+    ax.set(xlabel=r"component $j$ of $\theta$", ylabel=r"$\hat\theta_j$, $\theta_j$", title=title)
     ax.set_xlim(0, lasso.shape[1] + 1)
     ax.legend(loc="best")
     return fig
@@ -323,7 +344,7 @@ def _rate_table(values: Sequence[float], rates: dict[str, Any], paper: dict[Any,
     ax.plot(x, p, "o-", color=OURS_COLOR, ms=3, label=f"ours, log width ({trials} trials, 95 % CI)")
     ax.plot(x, rates["success_linear"] / trials, "s--", color="0.4", ms=3, lw=0.8, label="ours, linear width")
     ax.plot(x, [paper[v] for v in values], "x:", color=PAPER_COLOR, label="paper")
-    ax.set(xlabel=xlabel, ylabel="successful isolation rate", title=title, ylim=(-0.02, 1.02))
+    ax.set(xlabel=xlabel, ylabel=r"success rate $\hat p$", title=title, ylim=(-0.02, 1.02))
     ax.legend(loc="upper right" if not log_x else "lower left")
     return fig
 
@@ -331,8 +352,8 @@ def _rate_table(values: Sequence[float], rates: dict[str, Any], paper: dict[Any,
 def plot_table1(result: ReproductionResult, fig: Any = None):
     """Paper Fig. 4: success rate against the number of faults q."""
     d = result.data
-    return _rate_table(Q_VALUES, d, PAPER_TABLE1, result.settings["trials"], "number of faults q", fig,
-                       "Example 1: isolation rate against q (r = 0.5)")
+    return _rate_table(Q_VALUES, d, PAPER_TABLE1, result.settings["trials"], r"number of faults $q$", fig,
+                       r"Example 1: isolation rate against $q$ ($r = 0.5$)")
 
 
 def _rate_dict(keys: Sequence[Any], counts: np.ndarray, trials: int) -> dict[str, float]:
@@ -385,10 +406,10 @@ def plot_table2(result: ReproductionResult, fig: Any = None):
     snr = d["snr_db"]
     for i, mk in enumerate(("o", "s")):
         ax.plot(R_VALUES, snr[:, i], mk + "-", ms=3, color=OURS_COLOR, alpha=1 - 0.4 * i,
-                label=f"ours, output {i + 1}")
+                label=f"ours, $Y^{{({i + 1})}}$")
         ax.plot(R_VALUES, [PAPER_TABLE2["snr_db"][r][i] for r in R_VALUES], "x:", color=PAPER_COLOR,
-                alpha=1 - 0.4 * i, label=f"paper, output {i + 1}")
-    ax.set(xlabel="noise factor r", ylabel="mean SNR (dB)", title="SNR of the outputs")
+                alpha=1 - 0.4 * i, label=f"paper, $Y^{{({i + 1})}}$")
+    ax.set(xlabel=r"noise factor $r$ ($R = r I_2$)", ylabel=r"mean SNR of $Y^{(i)}$ (dB)", title="SNR of the outputs")
     ax.legend()
     return fig
 
@@ -401,8 +422,8 @@ def _rate_table_axes(ax: Any, values: Sequence[float], rates: dict[str, Any], pa
     ax.plot(x, rates["success_log"] / trials, "o-", color=OURS_COLOR, ms=3, label=f"ours, log ({trials} trials)")
     ax.plot(x, rates["success_linear"] / trials, "s--", color="0.4", ms=3, lw=0.8, label="ours, linear")
     ax.plot(x, [paper[v] for v in values], "x:", color=PAPER_COLOR, label="paper")
-    ax.set(xlabel="noise factor r", ylabel="successful isolation rate", ylim=(-0.02, 1.02),
-           title="Isolation rate (q = 5)")
+    ax.set(xlabel=r"noise factor $r$ ($R = r I_2$)", ylabel=r"success rate $\hat p$", ylim=(-0.02, 1.02),
+           title=r"Isolation rate ($q = 5$)")
     ax.legend(loc="lower left")
 
 
@@ -653,7 +674,7 @@ def lambda_rule_table(result: ReproductionResult):
     heads = [f"q = {c[1:]}" if c[0] == "q" else f"r = {c[1:]} (q = 5)" for c in cols]
     rows = {RULE_LABELS[k]: [fmt_rate(h["success_rate"][k][c], h["ci95"][k][c]) for c in cols]
             for k in RULE_READINGS + ("oracle",)}
-    rows["paper (Tables I-II)"] = [fmt_rate(result.paper["success_rate"][c]) for c in cols]
+    rows["paper (Tables I-II)"] = [fmt_rate(result.paper["success_rate"][c], digits=3) for c in cols]
     return table(rows, heads, index_header="success rate (%)",
                  notes=[f"{n} trials per column, the first {n} trials of the paper tables' "
                         "columns; 95 % Clopper-Pearson intervals in brackets.",
@@ -671,7 +692,7 @@ def initial_state_table(result: ReproductionResult):
     for i, label in INIT_LABELS.items():
         rows[label] = [fmt_rate(h["init_success_rate"][i], h["init_ci95"][f"log_{i}"]),
                        fmt_rate(h["init_oracle_rate"][i], h["init_ci95"][f"oracle_{i}"])]
-    rows["paper (Table I)"] = [fmt_rate(PAPER_TABLE1[15]), "not given"]
+    rows["paper (Table I)"] = [fmt_rate(PAPER_TABLE1[15], digits=3), "not given"]
     return table(rows, ["log rule", "oracle"], index_header="q = 15, r = 0.5",
                  notes=[f"{n} trials, the same draws in every row except X₀; "
                         "95 % Clopper-Pearson intervals in brackets."])
@@ -825,3 +846,57 @@ def fig7(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
                               settings={"seed": seed, "N": EX2_N, "m": EX2_M},
                               data={"lasso": d["lasso"], "grid": d["grid"], "theta_ls": d["theta_ls"],
                                     "theta": d["theta"]})
+
+
+# --------------------------------------------------------------------------- tables for readers (Example 1)
+def rate_table(result: ReproductionResult):
+    """Table I or II for readers: the paper's rate, ours (log rule, 95 % interval), the linear rule.
+
+    For ``zhang2021-table2`` the mean SNR of each output (ours / paper, dB) is added.
+    """
+    from fdi_lib.report import fmt_number, fmt_rate, table
+
+    h, pap = result.headline, result.paper["success_rate"]
+    is_t2 = "snr_db" in h
+    cols = ["paper", "ours, log width", "ours, linear width", "paper in our interval"]
+    if is_t2:
+        cols += ["SNR output 1 (dB), ours / paper", "SNR output 2 (dB), ours / paper"]
+    rows = {}
+    for k in pap:
+        cells = [fmt_rate(pap[k], digits=3), fmt_rate(h["success_rate"][k], h["ci95"][k], digits=3),
+                 fmt_rate(h["success_rate_linear"][k], digits=3), bool(h["ci95"][k][0] <= pap[k] <= h["ci95"][k][1])]
+        if is_t2:
+            cells += [f"{fmt_number(h['snr_db'][k][i], 4)} / {fmt_number(result.paper['snr_db'][k][i], 4)}"
+                      for i in range(2)]
+        rows[f"r = {k}" if is_t2 else f"q = {k}"] = cells
+    n = result.settings["trials"]
+    return table(rows, cols, index_header="",
+                 notes=[f"{n} trials per column, the same seeds in every column; 95 % Clopper-Pearson "
+                        "interval of the log-width rate in brackets."])
+
+
+def snr_table(readings: dict[str, np.ndarray], r_values: Sequence[float] = (0.5, 100.0, 200.0)):
+    """Mean SNR (dB, output 1 / output 2) of each reading of :func:`snr_variants` beside Table II's."""
+    from fdi_lib.report import fmt_number, table
+
+    def cell(v: Sequence[float]) -> str:
+        return " / ".join(fmt_number(float(x), 4) for x in v)
+
+    rows = {f"10 log₁₀ {k}": [cell(v[i]) for i in range(len(r_values))] for k, v in readings.items()}
+    rows["paper (Table II)"] = [cell(PAPER_TABLE2["snr_db"][float(r) if r != int(r) else int(r)])
+                                for r in r_values]
+    return table(rows, [f"r = {r:g}" for r in r_values], index_header="SNR reading (dB)")
+
+
+def grid_rule_difference(result: ReproductionResult) -> float:
+    """Largest ``|grid rate - exact log rate|`` over the columns and the grids of :data:`GRID_SIZES`."""
+    h = result.headline
+    return float(max(abs(h[f"success_rate_grid{g}"][k] - h["success_rate"][k])
+                     for g in GRID_SIZES for k in h["success_rate"]))
+
+
+def paper_outside_ci(result: ReproductionResult) -> tuple[int, int]:
+    """``(outside, below)``: paper rates outside our 95 % intervals (log rule), and how many below them."""
+    h, pap = result.headline, result.paper["success_rate"]
+    cis = h["ci95"]
+    return (sum(not cis[k][0] <= pap[k] <= cis[k][1] for k in pap), sum(pap[k] < cis[k][0] for k in pap))

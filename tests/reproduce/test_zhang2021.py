@@ -186,3 +186,41 @@ def test_lambda_rule_reproduction_contract():
 
     assert "oracle: true support on the path" in str(lambda_rule_table(r))
     assert "not given" in str(initial_state_table(r))
+
+
+def test_reader_tables_and_counts():
+    from fdi_lib.reproduce.registry import ReproductionResult
+    from fdi_lib.reproduce.zhang2021 import (grid_rule_difference, paper_outside_ci, rate_table,
+                                             snr_table)
+
+    h = {"success_rate": {"5": 0.99, "15": 0.46}, "success_rate_linear": {"5": 0.98, "15": 0.41},
+         "ci95": {"5": [0.98, 0.995], "15": [0.43, 0.49]},
+         "success_rate_grid50": {"5": 0.99, "15": 0.47}, "success_rate_grid200": {"5": 0.97, "15": 0.46}}
+    res = ReproductionResult(id="x", headline=h, paper={"success_rate": {"5": 0.995, "15": 0.295}},
+                             settings={"trials": 1000})
+    assert paper_outside_ci(res) == (1, 1)
+    assert grid_rule_difference(res) == pytest.approx(0.02)
+    text = str(rate_table(res))
+    assert "q = 15" in text and "46 % [43, 49]" in text and "29.5 %" in text
+    t = str(snr_table({"var(Y) / var(V)": np.array([[34.5, 32.8]])}, (0.5,)))
+    assert "34.5 / 32.8" in t and "34.06 / 32.63" in t
+
+
+def test_outputs_with_unknown_input_matches_a_direct_loop():
+    from fdi_lib.models import ltv_model
+    from fdi_lib.reproduce.zhang2021 import outputs_with_unknown_input
+    from fdi_lib.simulate import draw_noise
+
+    rng = np.random.default_rng(3)
+    N, n, p, s, m = 8, 3, 2, 1, 4
+    model = ltv_model(F=0.5 * np.eye(n), G=rng.standard_normal((n, 1)), H=rng.standard_normal((p, n)),
+                      Q=np.eye(n), R=np.eye(p), n_steps=N)
+    E, Psi, Phi = rng.standard_normal((N, n, s)), rng.standard_normal((N, n, m)), rng.standard_normal((N, p, m))
+    u, d, theta = rng.standard_normal((N, 1)), rng.standard_normal((N, s)), rng.standard_normal(m)
+    noise = draw_noise(model, rng)
+    y = outputs_with_unknown_input(model, E, Psi, Phi, noise=noise, u=u, d=d, theta=theta)
+    x = noise.x0.copy()
+    for k in range(N):
+        expected = model.H[k] @ x + noise.v[k] + Phi[k] @ theta
+        np.testing.assert_allclose(y[k], expected, rtol=1e-12, atol=1e-12)
+        x = model.F[k] @ x + model.G[k] @ u[k] + E[k] @ d[k] + noise.w[k] + Psi[k] @ theta
