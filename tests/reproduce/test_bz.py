@@ -83,3 +83,17 @@ def test_updated_residual_is_free_of_f_white_and_singular(results):
     assert h["updated_cov_rank"] == model.p - ex.E.shape[1]
     assert h["lag1_corr_updated_max"] < 2 * h["lag1_corr_updated_halfwidth"]
     assert abs(h["lag1_corr_theory"]) > 5 * h["lag1_cov_updated_theory_max"] + 0.05
+
+
+def test_reader_tables(results):
+    from fdi_lib.reproduce.bz import LABELS, headline_table, solution2_table
+
+    r1 = results["bz-solution1"]
+    keys = [k for k in LABELS if k in r1.headline]
+    t = headline_table(r1, keys)
+    assert [label for label, _ in t.rows] == [LABELS[k] for k in keys]
+    text = str(t)
+    assert "_" not in text.split("note:")[0]  # no raw keys
+    assert "%" in dict(t.rows)[LABELS["glr_false_alarm_rate"]][0]
+    t2 = solution2_table(results["bz-solution2"])
+    assert t2.columns == ("λ = 0.9", "λ = 0.95", "λ = 0.98", "λ = 0.995")
