@@ -259,9 +259,9 @@ def whiteness(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult
     half_u = 1.96 * prod_u.std(axis=0, ddof=1) / np.sqrt(prod_u.shape[0])
     headline["lag1_corr_updated_max"] = float(np.abs(m_u[keep]).max())
     headline["lag1_corr_updated_halfwidth"] = float(half_u[keep].max())
-    paper = {"lb_reject_rate_kitanidis": "white (Prop. 2): about 0.05",
+    paper = {"lb_reject_rate_kitanidis": "white (Prop. 2): about 5 %",
              "lag1_corr_empirical": "0 (Prop. 2)",
-             "cov_rel_error_kitanidis": "Sigma_k = H P_k H^T + R_k (eq. 45)"}
+             "cov_rel_error_kitanidis": "Σₖ = HₖPₖHₖᵀ + Rₖ (eq. 45)"}
     return ReproductionResult(
         id="bz-whiteness", headline=headline, paper=paper,
         settings={**WHITE, "seed": seed, "trials": trials},
