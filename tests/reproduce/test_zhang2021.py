@@ -181,7 +181,7 @@ def test_lambda_rule_reproduction_contract():
     h = r.headline
     assert set(h["success_rate"]) == {"log", "linear", "grid20", "grid100", "standardised", "oracle"}
     assert set(h["success_rate"]["oracle"]) == set(r.paper["success_rate"]) == {"q9", "q15", "q25", "r100", "r200"}
-    assert set(h["init_success_rate"]) == {"paper", "known", "spread"}
+    assert set(h["init_success_rate"]) == {"paper", "spread"}
     from fdi_lib.reproduce.zhang2021 import initial_state_table, lambda_rule_table
 
     assert "oracle: true support on the path" in str(lambda_rule_table(r))
