@@ -37,8 +37,9 @@ from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.simulate import Noise, simulate
 from fdi_lib.systems import bz_example as ex
 
-__all__ = ["SOL1", "SOL2", "WHITE", "LABELS", "headline_table", "solution2_table", "setup", "updated_residual_projection", "projected_lag_covariance", "plot_whiteness", "plot_solution1", "plot_solution2",
-           "ljung_box_pvalues"]
+__all__ = ["SOL1", "SOL2", "WHITE", "LABELS", "headline_table", "solution2_table", "setup",
+           "updated_residual_projection", "projected_lag_covariance", "plot_whiteness", "plot_solution1",
+           "plot_solution2", "ljung_box_pvalues"]
 
 PAPER = "Basseville & Zhang (parametric and non-parametric faults)"
 
@@ -149,7 +150,8 @@ def plot_whiteness(result: ReproductionResult, fig: Any = None):
     fig, axes = figure(1, 2, fig=fig, figsize=(8.0, 3.4))
     ax = axes[0, 0]
     bins = np.linspace(0, 1, 21)
-    for name, label in (("kalman", r"Kalman innovation $\varepsilon_k$"), ("kitanidis", r"Kitanidis innovation $\varepsilon_k$ (27)"),
+    for name, label in (("kalman", r"Kalman innovation $\varepsilon_k$"),
+                        ("kitanidis", r"Kitanidis innovation $\varepsilon_k$ (27)"),
                         ("reduced_f", r"projected $T_k\varepsilon_k$, $f\neq 0$")):
         ax.hist(result.data["pvalues"][name].ravel(), bins=bins, histtype="step", density=True, label=label)
     ax.axhline(1.0, color="k", lw=0.8, ls=":")
