@@ -37,7 +37,8 @@ from fdi_lib.sparse import (RegressionData, flat_range, grid_flat_range, lasso_p
 from fdi_lib.systems import zhang2021_example1 as ex
 from fdi_lib.threads import single_threaded_blas
 
-__all__ = ["outputs_with_unknown_input", "Q_VALUES", "R_VALUES", "PAPER_TABLE1", "PAPER_TABLE2",
+__all__ = ["VARIANT_Q", "VARIANT_R", "VARIANT_GRIDS", "RULE_READINGS", "INIT_VARIANTS",
+           "outputs_with_unknown_input", "Q_VALUES", "R_VALUES", "PAPER_TABLE1", "PAPER_TABLE2",
            "example1_regression", "snr_db", "snr_variants", "snr_comparison", "closest_snr_reading",
            "example1_chunk", "lambda_rule_chunk", "initial_state_chunk", "initial_state_models",
            "unknown_input_effect", "lambda_rule_table", "initial_state_table", "paper_between_readings",
