@@ -27,7 +27,7 @@ import scipy.stats
 
 from fdi_lib.filters import KalmanGains, kalman_filter, kalman_gains
 from fdi_lib.glr import first_alarm, glr_window
-from fdi_lib.kitanidis import KitanidisGains, kitanidis_gains
+from fdi_lib.kitanidis import KitanidisGains, kitanidis_filter, kitanidis_gains
 from fdi_lib.models import LTVModel, fault_profile, step_family
 from fdi_lib.montecarlo import binomial_ci, draw_noise_batch, run_monte_carlo
 from fdi_lib.nonparametric import (kitanidis_lag_covariance, kitanidis_predictor_gains,
@@ -37,8 +37,9 @@ from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.simulate import Noise, simulate
 from fdi_lib.systems import bz_example as ex
 
-__all__ = ["SOL1", "SOL2", "WHITE", "setup", "plot_whiteness", "plot_solution1", "plot_solution2",
-           "ljung_box_pvalues"]
+__all__ = ["SOL1", "SOL2", "WHITE", "LABELS", "headline_table", "solution2_table", "setup",
+           "updated_residual_projection", "projected_lag_covariance", "plot_whiteness", "plot_solution1",
+           "plot_solution2", "ljung_box_pvalues"]
 
 PAPER = "Basseville & Zhang (parametric and non-parametric faults)"
 
@@ -114,9 +115,34 @@ def _whiteness_chunk(seeds: Sequence[np.random.SeedSequence], n_steps: int) -> d
     eps_kit = kalman_filter(model, s0.y, s0.u, gains=kpred).innovations
     eps_kit_f = kalman_filter(model, s1.y, s1.u, gains=kpred).innovations
     red_f = np.einsum("krp,...kp->...kr", T, eps_kit_f)
+    upd_0 = kitanidis_filter(model, s0.y, s0.u, gains=kg).residuals   # Zhang 2021's residual (25)
+    upd_f = kitanidis_filter(model, s1.y, s1.u, gains=kg).residuals
     d = WHITE["discard"]
     return {"kalman": eps_kal[:, d:], "kitanidis": eps_kit[:, d:], "kitanidis_f": eps_kit_f[:, d:],
-            "reduced_f": red_f[:, d:]}
+            "reduced_f": red_f[:, d:], "updated_f": upd_f[:, d:],
+            "updated_change": np.abs(upd_f - upd_0).max(axis=(1, 2))}
+
+
+def updated_residual_projection(model: LTVModel, kg: KitanidisGains) -> np.ndarray:
+    """``T_k = I - H_k L_k`` ``(N, p, p)``: the updated residual (25) of Zhang (2021) is ``T_k eps_k``.
+
+    ``T_k H_k E_{k-1} = H_k E_{k-1} - H_k (L_k H_k E_{k-1}) = 0`` by identity (30), so it rejects
+    ``f`` like :func:`fdi_lib.nonparametric.rejection_projection`, but keeps ``p`` rows: its
+    covariance ``T_k Sigma_k T_k^T`` has rank ``p - q`` (singular).
+    """
+    return np.eye(model.p) - model.H @ kg.K
+
+
+def projected_lag_covariance(model: LTVModel, kg: KitanidisGains, T: np.ndarray,
+                             lag: int = 1) -> np.ndarray:
+    """Closed-form ``Cov(T_{k+lag} eps_{k+lag}, T_k eps_k)`` of the fault-free Kitanidis innovation.
+
+    ``T_{k+lag} C_k T_k^T`` with ``C_k`` from :func:`fdi_lib.nonparametric.kitanidis_lag_covariance`
+    (``-H F D Sigma`` at lag one); zero whenever ``T_k H_k E_{k-1} = 0``, since
+    ``D_k Sigma_k = Gamma_k Xi_k^{-1} E_{k-1}^T H_k^T``. Shape ``(N - lag, r, r)``.
+    """
+    C = kitanidis_lag_covariance(model, kg, lag)
+    return T[lag:] @ C @ np.swapaxes(T[:-lag], 1, 2)
 
 
 def plot_whiteness(result: ReproductionResult, fig: Any = None):
@@ -124,18 +150,19 @@ def plot_whiteness(result: ReproductionResult, fig: Any = None):
     fig, axes = figure(1, 2, fig=fig, figsize=(8.0, 3.4))
     ax = axes[0, 0]
     bins = np.linspace(0, 1, 21)
-    for name, label in (("kalman", "Kalman innovation"), ("kitanidis", "Kitanidis innovation (27)"),
+    for name, label in (("kalman", r"Kalman innovation $\varepsilon_k$"),
+                        ("kitanidis", r"Kitanidis innovation $\varepsilon_k$ (27)"),
                         ("reduced_f", r"projected $T_k\varepsilon_k$, $f\neq 0$")):
         ax.hist(result.data["pvalues"][name].ravel(), bins=bins, histtype="step", density=True, label=label)
     ax.axhline(1.0, color="k", lw=0.8, ls=":")
-    ax.set(xlabel="Ljung-Box p-value", ylabel="density", title="Portmanteau p-values")
+    ax.set(xlabel=r"Ljung-Box $p$-value", ylabel="density", title=r"Portmanteau $p$-values")
     ax.legend(loc="upper right")
     ax = axes[0, 1]
     k = result.data["lag_k"]
     ax.plot(k, result.data["lag1_theory"], color=OURS_COLOR, label="closed form")
     ax.plot(k, result.data["lag1_empirical"], ".", ms=2, color="0.4", label="Monte Carlo")
     ax.axhline(0.0, color=THRESHOLD_COLOR, lw=0.8, ls="--", label="paper (Prop. 2): 0")
-    ax.set(xlabel="k", ylabel=r"corr$(\varepsilon^{(1)}_{k+1},\varepsilon^{(1)}_k)$",
+    ax.set(xlabel=r"$k$", ylabel=r"corr$(\varepsilon^{(1)}_{k+1},\varepsilon^{(1)}_k)$",
            title="Kitanidis innovation, lag one")
     ax.legend(loc="lower right")
     return fig
@@ -173,6 +200,17 @@ def whiteness(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult
         which holds.
     cov_rel_error_reduced : float
         Same for ``T_k eps_k`` (unit covariance by construction), with the non-parametric fault active.
+    updated_f_change : float
+        Largest change of Zhang (2021)'s updated residual ``(I - H_k L_k) eps_k`` when the
+        non-parametric fault is switched on (rounding error: it does not depend on ``f``).
+    lag1_cov_updated_theory_max : float
+        Largest entry of its closed-form lag-one covariance (:func:`projected_lag_covariance`),
+        relative to ``max |Sigma_k|``: zero up to rounding (white).
+    updated_cov_rank : int
+        Numerical rank of its Monte Carlo covariance (pooled, ``f`` active): ``p - q`` (singular).
+    lag1_corr_updated_max, lag1_corr_updated_halfwidth : float
+        Largest ``|lag-one correlation|`` between its components (Monte Carlo, ``f`` active, pooled;
+        the components with zero variance left out) and the largest 95 % half-width.
     """
     n = WHITE["n_steps"]
     trials = 300 if trials is None else trials
@@ -207,9 +245,25 @@ def whiteness(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult
     cov_r = np.einsum("rki,rkj->ij", zr, zr) / (zr.shape[0] * zr.shape[1])
     eye = np.eye(cov_r.shape[0])
     headline["cov_rel_error_reduced"] = float(np.linalg.norm(cov_r - eye) / np.linalg.norm(eye))
-    paper = {"lb_reject_rate_kitanidis": "white (Prop. 2): about 0.05",
+    # Zhang 2021's updated residual T_k eps_k, T_k = I - H_k L_k: free of f, white, singular covariance.
+    Tu = updated_residual_projection(model, kg)
+    headline["updated_f_change"] = float(out["updated_change"].max())
+    lagu = projected_lag_covariance(model, kg, Tu, 1)[d:]
+    headline["lag1_cov_updated_theory_max"] = float(np.abs(lagu).max() / np.abs(kg.Sigma).max())
+    ru = out["updated_f"]
+    cu = np.einsum("rki,rkj->ij", ru, ru) / (ru.shape[0] * ru.shape[1])
+    eig = np.linalg.eigvalsh(cu)
+    headline["updated_cov_rank"] = int(np.sum(eig > 1e-9 * eig[-1]))
+    sd = np.sqrt(np.diag(cu))
+    prod_u = np.einsum("rki,rkj->rij", ru[:, 1:], ru[:, :-1]) / (ru.shape[1] - 1) / np.outer(sd, sd)
+    keep = np.outer(sd > 1e-9 * sd.max(), sd > 1e-9 * sd.max())
+    m_u = prod_u.mean(axis=0)
+    half_u = 1.96 * prod_u.std(axis=0, ddof=1) / np.sqrt(prod_u.shape[0])
+    headline["lag1_corr_updated_max"] = float(np.abs(m_u[keep]).max())
+    headline["lag1_corr_updated_halfwidth"] = float(half_u[keep].max())
+    paper = {"lb_reject_rate_kitanidis": "white (Prop. 2): about 5 %",
              "lag1_corr_empirical": "0 (Prop. 2)",
-             "cov_rel_error_kitanidis": "Sigma_k = H P_k H^T + R_k (eq. 45)"}
+             "cov_rel_error_kitanidis": "Σₖ = HₖPₖHₖᵀ + Rₖ (eq. 45)"}
     return ReproductionResult(
         id="bz-whiteness", headline=headline, paper=paper,
         settings={**WHITE, "seed": seed, "trials": trials},
@@ -269,7 +323,7 @@ def plot_solution1(result: ReproductionResult, fig: Any = None):
             label=r"$f$ only, GLR on Kalman")
     ax.axvline(s["theta_onset"], color=THRESHOLD_COLOR, lw=0.8, ls=":")
     ax.axvline(s["f_onset"], color="0.5", lw=0.8, ls=":")
-    ax.set(xlabel="alarm time k", ylabel="runs", title="GLR alarms (projected Kitanidis residual)")
+    ax.set(xlabel=r"alarm time $k$", ylabel="number of runs", title=r"GLR alarms on $T_k\varepsilon_k$")
     ax.legend(loc="upper left")
     ax = axes[0, 1]
     for key, label in (("f_nonpar_alarm", r"$f$ only"), ("both_nonpar_alarm", r"$\theta$ + $f$"),
@@ -277,7 +331,7 @@ def plot_solution1(result: ReproductionResult, fig: Any = None):
         a = d[key]
         ax.hist(a[a >= 0], bins=bins, histtype="step", label=label)
     ax.axvline(s["f_onset"], color="0.5", lw=0.8, ls=":")
-    ax.set(xlabel="alarm time k", ylabel="runs", title="Energy alarms (parallel Kalman filter)")
+    ax.set(xlabel=r"alarm time $k$", ylabel="number of runs", title="Energy alarms (parallel Kalman filter)")
     ax.legend(loc="upper left")
     return fig
 
@@ -388,7 +442,7 @@ def plot_solution2(result: ReproductionResult, fig: Any = None):
             ax.plot(result.data[f"mean_err_{tag}"][i], label=rf"$\lambda$ = {lam}")
         if tag != "drift":
             ax.axvline(s["f_onset"], color=THRESHOLD_COLOR, lw=0.8, ls=":")
-        ax.set(xlabel="k", ylim=(0, None), title=titles[tag])
+        ax.set(xlabel=r"$k$", ylim=(0, None), title=titles[tag])
     axes[0, 0].set_ylabel(r"mean $\|\hat\theta_k-\theta_k\|$")
     axes[0, 0].legend(loc="upper right")
     return fig
@@ -459,3 +513,87 @@ def solution2_mc(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
              "detection_rate": "tracking error energy detects f (no number)"}
     return ReproductionResult(id="bz-solution2", headline=h, paper=paper,
                               settings={**s, "seed": seed, "trials": trials}, data=data)
+
+
+# ----------------------------------------------------------------------------- tables for readers
+#: Human labels (with units) of the headline keys the book shows.
+LABELS: dict[str, str] = {
+    "lb_reject_rate_kalman": "Ljung-Box rejections at 5 %, Kalman innovation",
+    "lb_reject_rate_kitanidis": "Ljung-Box rejections at 5 %, Kitanidis innovation",
+    "lb_reject_rate_reduced_f": "Ljung-Box rejections at 5 %, projected residual, f active",
+    "ks_pvalue_kalman": "KS p-value of the Ljung-Box p-values, Kalman",
+    "ks_pvalue_kitanidis": "KS p-value of the Ljung-Box p-values, Kitanidis",
+    "ks_pvalue_reduced_f": "KS p-value of the Ljung-Box p-values, projected",
+    "lag1_corr_theory": "lag-one correlation of ε⁽¹⁾, closed form",
+    "lag1_corr_empirical": "lag-one correlation of ε⁽¹⁾, Monte Carlo",
+    "cov_rel_error_kitanidis": "relative error of Σₖ = HPHᵀ + R (Kitanidis)",
+    "cov_rel_error_reduced": "relative error of the unit covariance (projected)",
+    "glr_false_alarm_rate": "GLR false alarms (no fault)",
+    "glr_alarm_rate_f_only": "GLR alarms with f only (projected residual)",
+    "kalman_glr_alarm_rate_f_only": "GLR alarms with f only (Kalman innovation)",
+    "glr_detection_rate_theta": "GLR detection of the θ jump",
+    "glr_detection_rate_theta_with_f": "GLR detection of the θ jump, f active",
+    "glr_mean_delay_theta": "GLR mean delay, θ jump (samples)",
+    "glr_mean_delay_theta_with_f": "GLR mean delay, θ jump, f active (samples)",
+    "isolation_correct_rate_theta": "correct isolation, θ = (0.05, 0)",
+    "isolation_correct_rate_theta_with_f": "correct isolation, θ = (0.05, 0), f active",
+    "isolation_correct_rate_theta2": "correct isolation, θ = (0, 0.05)",
+    "energy_false_alarm_rate": "energy-test false alarms (no fault)",
+    "nonparametric_detection_rate_f": "f declared non-parametric (f only)",
+    "nonparametric_mean_delay_f": "mean delay of that decision (samples)",
+    "nonparametric_detection_rate_both": "f declared non-parametric (θ and f)",
+    "misattribution_rate_theta": "θ jump first declared non-parametric",
+}
+_NA_NOTE = "n/a: no run raised the alarm, so there is no delay to average."
+
+
+def _cell(key: str, value: Any, ci: Any) -> str:
+    from fdi_lib.report import NA, fmt_number, fmt_rate
+
+    if value is None:
+        return NA
+    if "rate" in key:
+        return fmt_rate(value, ci)
+    if ci is not None and ci[0] is not None:
+        return f"{fmt_number(value)} [{fmt_number(ci[0])}, {fmt_number(ci[1])}]"
+    return fmt_number(value)
+
+
+def headline_table(result: ReproductionResult, keys: Sequence[str]):
+    """Our values (95 % intervals where known) beside the paper's claim, for the keys of :data:`LABELS`."""
+    from fdi_lib.report import NA, table
+
+    h = result.headline
+    rows = {LABELS[k]: [_cell(k, h[k], h.get(k + "_ci")), str(result.paper.get(k, "not given"))]
+            for k in keys}
+    notes = ["Rates in % with their 95 % Clopper-Pearson interval; delays with a 95 % t interval; "
+             f"{result.settings['trials']} runs."]
+    if any(NA in cells for cells in rows.values()):
+        notes.append(_NA_NOTE)
+    return table(rows, ["ours", "paper"], notes=notes)
+
+
+def solution2_table(result: ReproductionResult):
+    """Tracking errors, detection rates and delays of ``bz-solution2``, one column per forgetting factor."""
+    from fdi_lib.report import NA, fmt_number, fmt_rate, table
+
+    h = result.headline
+
+    def num(xs: Sequence[Any]) -> list[str]:
+        return [NA if x is None else fmt_number(x) for x in xs]
+
+    rows = {
+        "tracking RMSE, k = 100 to 199": num(h["tracking_rmse"]),
+        "RMSE after the onset of f (fast f)": num(h["tracking_rmse_after_f"]),
+        "RMSE on the same range, no f": num(h["tracking_rmse_after_f_no_f"]),
+        "RMSE after the onset of f (slow f)": num(h["tracking_rmse_after_f_slow"]),
+        "detection of f (fast f)": [fmt_rate(r, c) for r, c in zip(h["detection_rate"], h["detection_rate_ci"])],
+        "mean delay, fast f (samples)": num(h["mean_delay"]),
+        "detection of f (slow f)": [fmt_rate(r) for r in h["detection_rate_slow"]],
+        "mean delay, slow f (samples)": num(h["mean_delay_slow"]),
+        "false alarms (no f)": [fmt_rate(r, c) for r, c in zip(h["false_alarm_rate"], h["false_alarm_rate_ci"])],
+    }
+    notes = [f"{result.settings['trials']} runs; rates in % (95 % Clopper-Pearson interval)."]
+    if any(NA in cells for cells in rows.values()):
+        notes.append(_NA_NOTE)
+    return table(rows, [f"λ = {lam:g}" for lam in h["lambdas"]], notes=notes)

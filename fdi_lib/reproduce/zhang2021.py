@@ -5,7 +5,12 @@
   least-squares circles and the true asterisks;
 * ``zhang2021-table1`` (+ Fig. 4): success rate against the number of faults q = 5 .. 25;
 * ``zhang2021-table2`` (+ Fig. 5): success rate and mean SNR of each output against the
-  output-noise factor r = 0.5, 10, 20, .., 200 (q = 5).
+  output-noise factor r = 0.5, 10, 20, .., 200 (q = 5);
+* ``zhang2021-lambda-rule``: readings of the rule for ``lambda`` (exact log / linear width,
+  geometric grids, standardised X), the oracle (true support anywhere on the Lasso path) and
+  the initial state, on the first trials of the tables' columns. The rule is defined in words in
+  the paper and exactly in the author's Matlab files (MathWorks File Exchange 89847), which we
+  do not have.
 
 Each trial: draw the support of ``theta``, ``Psi_k`` and ``d_k`` and the noise
 (:mod:`fdi_lib.systems.zhang2021_example1`), simulate, run the Kitanidis filter (gains shared
@@ -23,6 +28,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from fdi_lib.kitanidis import kitanidis_filter, kitanidis_gains, residual_signature
+from fdi_lib.errors import ModelError
 from fdi_lib.montecarlo import binomial_ci, run_monte_carlo, trial_rngs, trial_seeds
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.reproduce.registry import ReproductionResult, register
@@ -31,9 +37,13 @@ from fdi_lib.sparse import (RegressionData, flat_range, grid_flat_range, lasso_p
 from fdi_lib.systems import zhang2021_example1 as ex
 from fdi_lib.threads import single_threaded_blas
 
-__all__ = ["Q_VALUES", "R_VALUES", "PAPER_TABLE1", "PAPER_TABLE2", "example1_regression", "snr_db",
-           "snr_variants", "example1_chunk", "example1_rates", "example2_setup", "plot_fig2", "plot_fig3", "plot_table1",
-           "plot_table2", "plot_fig6", "plot_fig7"]
+__all__ = ["VARIANT_Q", "VARIANT_R", "VARIANT_GRIDS", "RULE_READINGS", "INIT_VARIANTS",
+           "outputs_with_unknown_input", "Q_VALUES", "R_VALUES", "PAPER_TABLE1", "PAPER_TABLE2",
+           "example1_regression", "snr_db", "snr_variants", "snr_comparison", "closest_snr_reading",
+           "example1_chunk", "lambda_rule_chunk", "initial_state_chunk", "initial_state_models",
+           "unknown_input_effect", "lambda_rule_table", "initial_state_table", "paper_between_readings",
+           "rate_table", "snr_table", "grid_rule_difference", "paper_outside_ci", "example1_rates",
+           "example2_setup", "plot_fig2", "plot_fig3", "plot_table1", "plot_table2", "plot_fig6", "plot_fig7"]
 
 PAPER = "Zhang 2021"
 Q_VALUES = tuple(range(5, 26))
@@ -64,8 +74,9 @@ def snr_db(y: np.ndarray, v: np.ndarray, *, start: int = 1) -> np.ndarray:
 
     Sample variances over time of the measured output and of its sensor noise, shape
     ``(*batch, p)``. The paper only says an SNR is computed per sensor and averaged over
-    trials; among the simple readings (with or without the mean, with or without the noise
-    in the signal), this one is closest to its Table II (the book chapter shows the comparison).
+    trials; of the simple readings of :func:`snr_variants`, the two variance ratios are within a
+    few tenths of a dB of its Table II, this one or ``var(Y - V) / var(V)`` being the closer
+    depending on the noise level (:func:`closest_snr_reading`; the book chapter shows it).
     """
     return 10.0 * np.log10(y[..., start:, :].var(axis=-2) / v[..., start:, :].var(axis=-2))
 
@@ -86,6 +97,50 @@ def _example1_setup(r: float) -> tuple[Any, Any]:
     once per process and ``r``, shared by all the chunks of a column)."""
     model = ex.example1_model(r=r)
     return model, kitanidis_gains(model, ex.E)
+
+
+def outputs_with_unknown_input(model: Any, E: np.ndarray, Psi: np.ndarray, Phi: np.ndarray, *,
+                               noise: Any, u: np.ndarray, d: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Outputs of ``X+ = F X + G U + E_k d_k + W + Psi_k theta``, ``Y = H X + V + Phi_k theta``.
+
+    The unknown input and the state fault enter :func:`fdi_lib.simulate.simulate` as extra
+    inputs ``[d_k, Psi_k theta]`` with input matrix ``[G_k, E_k, I]`` (the filters never see
+    them). ``E``: ``(N, n, s)``; ``Psi``: ``(N, n, m)``; ``Phi``: ``(N, p, m)``; ``u``: ``(N, 1)``;
+    ``d``: ``(N, s)``; returns ``(N, p)``.
+    """
+    from fdi_lib.models import ltv_model
+    from fdi_lib.simulate import simulate
+
+    N, n = model.n_steps, model.n
+    G_aug = np.concatenate([model.G, np.broadcast_to(E, (N, *np.shape(E)[-2:])),
+                            np.broadcast_to(np.eye(n), (N, n, n))], axis=2)
+    sim_model = ltv_model(F=model.F, G=G_aug, H=model.H, Q=model.Q, R=model.R, n_steps=N)
+    sim = simulate(sim_model, noise=noise, u=np.concatenate([u, d, Psi @ theta], axis=1))
+    return sim.y + Phi @ theta
+
+
+def snr_comparison(r_values: Sequence[float] = (0.5, 100.0, 200.0), *, trials: int = 200,
+                   seed: int = 1) -> dict[str, np.ndarray]:
+    """Mean SNR of each reading of :func:`snr_variants`, ``{reading: (len(r_values), p)}`` in dB.
+
+    ``trials`` simulated trials of Example 1 (q = 5) per noise factor, the same seeds for all.
+    """
+    out: dict[str, list[np.ndarray]] = {}
+    for r in r_values:
+        model = ex.example1_model(r=float(r))
+        tr = ex.draw_trials(model, trial_rngs(trial_seeds(seed, trials)), q=5)
+        for name, val in snr_variants(ex.simulate_trials(model, tr), tr.noise.v).items():
+            out.setdefault(name, []).append(val.mean(axis=0))
+    return {k: np.asarray(v) for k, v in out.items()}
+
+
+def closest_snr_reading(readings: dict[str, np.ndarray],
+                        r_values: Sequence[float] = (0.5, 100.0, 200.0)) -> list[str]:
+    """Per noise factor, the reading whose mean SNR is closest to Table II's (mean |dB gap| over outputs)."""
+    paper = np.array([PAPER_TABLE2["snr_db"][float(r) if r != int(r) else int(r)] for r in r_values])
+    names = list(readings)
+    gaps = np.array([np.abs(readings[k] - paper).mean(axis=1) for k in names])  # (readings, r)
+    return [names[i] for i in gaps.argmin(axis=0)]
 
 
 def example1_regression(trials: ex.Example1Trial, *, r: float = 0.5) -> tuple[RegressionData, np.ndarray]:
@@ -182,12 +237,12 @@ def _plot_support(result: ReproductionResult, fig: Any, title: str):
     floor = 1e-4 * lam[0]
     edges = np.concatenate([np.clip(lam[::-1], floor, None), [3 * lam[0]]])
     ax.stairs(np.concatenate([sizes[::-1], [0]]), edges, color=OURS_COLOR, baseline=None,
-              label="exact Lasso path (LARS breakpoints)")
+              label=r"exact Lasso path: $\#\{j: \hat\theta_j(\lambda) \neq 0\}$")
     ax.plot(result.data["grid"], np.full(result.data["grid"].size, result.headline["flat_size"]), "D",
-            color=PAPER_COLOR, label="flat range (log width)")
+            color=PAPER_COLOR, label=r"$\lambda$ in the flat range (log width)")
     lo, hi = result.headline["flat_range_linear"]
     ax.axvspan(lo, hi, color="0.8", alpha=0.5, label="flat range (linear width)")
-    ax.set(xscale="log", xlabel=r"$\lambda$ (normalisation of (39))", ylabel="non-zero components",
+    ax.set(xscale="log", xlabel=r"$\lambda$ (normalisation of (39))", ylabel=r"non-zero components of $\hat\theta$",
            title=title)
     ax.set_xlim(floor, lam[0] * 3)
     ax.legend(loc="upper right")
@@ -241,11 +296,11 @@ def _plot_diamonds(result: ReproductionResult, fig: Any, title: str):
         ax.plot(idx[nz], row[nz], "D", color=c, ms=5, alpha=0.8)
     ls = result.data["theta_ls"]
     nz = ls != 0
-    ax.plot(idx[nz], ls[nz], "o", mfc="none", mec="k", ms=10, label="least squares on the support")
+    ax.plot(idx[nz], ls[nz], "o", mfc="none", mec="k", ms=10, label=r"least squares $\hat\theta^{\rm LS}_j$")
     th = result.data["theta"]
-    ax.plot(idx[th != 0], th[th != 0], "*", color=PAPER_COLOR, ms=10, label="true non-zero components")
-    ax.plot([], [], "D", color=colors[0], label=r"Lasso, one colour per $\lambda$ in the flat range")
-    ax.set(xlabel=r"component of $\theta$", ylabel="value", title=title)
+    ax.plot(idx[th != 0], th[th != 0], "*", color=PAPER_COLOR, ms=10, label=r"true $\theta_j \neq 0$")
+    ax.plot([], [], "D", color=colors[0], label=r"Lasso $\hat\theta_j(\lambda)$, one colour per $\lambda$")
+    ax.set(xlabel=r"component $j$ of $\theta$", ylabel=r"$\hat\theta_j$, $\theta_j$", title=title)
     ax.set_xlim(0, lasso.shape[1] + 1)
     ax.legend(loc="best")
     return fig
@@ -297,7 +352,7 @@ def _rate_table(values: Sequence[float], rates: dict[str, Any], paper: dict[Any,
     ax.plot(x, p, "o-", color=OURS_COLOR, ms=3, label=f"ours, log width ({trials} trials, 95 % CI)")
     ax.plot(x, rates["success_linear"] / trials, "s--", color="0.4", ms=3, lw=0.8, label="ours, linear width")
     ax.plot(x, [paper[v] for v in values], "x:", color=PAPER_COLOR, label="paper")
-    ax.set(xlabel=xlabel, ylabel="successful isolation rate", title=title, ylim=(-0.02, 1.02))
+    ax.set(xlabel=xlabel, ylabel=r"success rate $\hat p$", title=title, ylim=(-0.02, 1.02))
     ax.legend(loc="upper right" if not log_x else "lower left")
     return fig
 
@@ -305,8 +360,8 @@ def _rate_table(values: Sequence[float], rates: dict[str, Any], paper: dict[Any,
 def plot_table1(result: ReproductionResult, fig: Any = None):
     """Paper Fig. 4: success rate against the number of faults q."""
     d = result.data
-    return _rate_table(Q_VALUES, d, PAPER_TABLE1, result.settings["trials"], "number of faults q", fig,
-                       "Example 1: isolation rate against q (r = 0.5)")
+    return _rate_table(Q_VALUES, d, PAPER_TABLE1, result.settings["trials"], r"number of faults $q$", fig,
+                       r"Example 1: isolation rate against $q$ ($r = 0.5$)")
 
 
 def _rate_dict(keys: Sequence[Any], counts: np.ndarray, trials: int) -> dict[str, float]:
@@ -359,10 +414,10 @@ def plot_table2(result: ReproductionResult, fig: Any = None):
     snr = d["snr_db"]
     for i, mk in enumerate(("o", "s")):
         ax.plot(R_VALUES, snr[:, i], mk + "-", ms=3, color=OURS_COLOR, alpha=1 - 0.4 * i,
-                label=f"ours, output {i + 1}")
+                label=f"ours, $Y^{{({i + 1})}}$")
         ax.plot(R_VALUES, [PAPER_TABLE2["snr_db"][r][i] for r in R_VALUES], "x:", color=PAPER_COLOR,
-                alpha=1 - 0.4 * i, label=f"paper, output {i + 1}")
-    ax.set(xlabel="noise factor r", ylabel="mean SNR (dB)", title="SNR of the outputs")
+                alpha=1 - 0.4 * i, label=f"paper, $Y^{{({i + 1})}}$")
+    ax.set(xlabel=r"noise factor $r$ ($R = r I_2$)", ylabel=r"mean SNR of $Y^{(i)}$ (dB)", title="SNR of the outputs")
     ax.legend()
     return fig
 
@@ -375,8 +430,8 @@ def _rate_table_axes(ax: Any, values: Sequence[float], rates: dict[str, Any], pa
     ax.plot(x, rates["success_log"] / trials, "o-", color=OURS_COLOR, ms=3, label=f"ours, log ({trials} trials)")
     ax.plot(x, rates["success_linear"] / trials, "s--", color="0.4", ms=3, lw=0.8, label="ours, linear")
     ax.plot(x, [paper[v] for v in values], "x:", color=PAPER_COLOR, label="paper")
-    ax.set(xlabel="noise factor r", ylabel="successful isolation rate", ylim=(-0.02, 1.02),
-           title="Isolation rate (q = 5)")
+    ax.set(xlabel=r"noise factor $r$ ($R = r I_2$)", ylabel=r"success rate $\hat p$", ylim=(-0.02, 1.02),
+           title=r"Isolation rate ($q = 5$)")
     ax.legend(loc="lower left")
 
 
@@ -414,6 +469,248 @@ def table2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
                                         "snr": "10 log10(var_k y / var_k v), k = 1..N, mean over trials",
                                         "grid_sizes": list(GRID_SIZES)},
                               data=rates)
+
+
+# --------------------------------------------------------------------------- the lambda rule: variants
+#: Columns of the variants table: q for Table I (r = 0.5), r for Table II (q = 5); chosen
+#: where the paper's rates and ours part (q >= 9) or the noise is high, not tuned.
+VARIANT_Q = (9, 15, 25)
+VARIANT_R = (100.0, 200.0)
+#: Geometric grids of the variants table (a coarse and a fine one), on the window of the rule.
+VARIANT_GRIDS = (20, 100)
+#: Readings of the rule in the variants table, in display order (keys of :func:`lambda_rule_chunk`).
+RULE_READINGS = ("log", "linear", "grid20", "grid100", "standardised")
+#: Filter initialisations / initial states compared at q = 15 (:func:`initial_state_chunk`):
+#: ``paper``: ``X_0 ~ N(0, I)``, the filter starts from ``xhat_{0|0} = 0``, ``P_{0|0} = I`` and
+#: does not use ``Y_0`` (the paper's Sec. III-A initialisation); ``spread``: ``X_0 ~ N(0, 100 I)``
+#: and ``P_{0|0} = 100 I`` (a large initial state, known to the filter).
+INIT_VARIANTS = {"paper": 1.0, "spread": 10.0}
+#: ``R_0`` of the filter model that ignores ``Y_0``: the update at k = 0 changes the estimate
+#: and the covariance by a relative 1e-12 at most.
+_R0_IGNORE = 1e12
+
+
+def _oracle(path: Any, true: np.ndarray) -> bool:
+    """Whether the true support is the support of some interval of the (full) Lasso path."""
+    return any(np.array_equal(s, true) for s in path.interval_supports())
+
+
+@single_threaded_blas
+def lambda_rule_chunk(seeds: Sequence[np.random.SeedSequence], *, q: int,
+                      r: float) -> dict[str, np.ndarray]:
+    """Monte Carlo chunk of the variants table: readings of the rule and the oracle.
+
+    On the same trials as :func:`example1_chunk` (same draws for the same seeds), the full
+    exact Lasso path (down to ``lambda = 0``) gives: ``log``, ``linear`` (:func:`flat_range`),
+    ``grid20``, ``grid100`` (:func:`grid_flat_range` on geometric grids of 20 / 100 points over
+    the window ``[1e-4, 1] lambda_max``), and ``oracle``: the true support is the support of
+    some interval of the path (then some ``lambda`` finds it; otherwise no ``lambda`` does, so
+    no rule for ``lambda`` can succeed). ``standardised``: the log rule on the path of the
+    regression with the columns of ``X`` scaled to unit root mean square (as Matlab's
+    ``lasso`` does by default; scaling a column does not change which components are non-zero,
+    only the path). Each entry: per-trial booleans (success = selected support equals the true one).
+    """
+    model = ex.example1_model(r=r)
+    trials = ex.draw_trials(model, trial_rngs(seeds), q=q)
+    reg, _ = example1_regression(trials, r=r)
+    keys = RULE_READINGS + ("oracle",)
+    out = {k: np.zeros(len(seeds), bool) for k in keys}
+    for b in range(len(seeds)):
+        X, y = reg.X[b], reg.y[b]
+        true = np.flatnonzero(trials.theta[b])
+        path = lasso_path(X, y, n_samples=reg.n_samples)
+        for s in SCALES:
+            out[s][b] = np.array_equal(flat_range(path, scale=s, lambda_ratio=LAMBDA_RATIO).support, true)
+        for n in VARIANT_GRIDS:
+            g = grid_flat_range(path, n, lambda_ratio=LAMBDA_RATIO)
+            out[f"grid{n}"][b] = np.array_equal(g.support, true)
+        out["oracle"][b] = _oracle(path, true)
+        scale = np.sqrt(np.mean(X ** 2, axis=0))
+        path_s = lasso_path(X / scale, y, n_samples=reg.n_samples, lambda_min=LAMBDA_RATIO,
+                            max_size=X.shape[1] // 2)
+        sup = flat_range(path_s, lambda_ratio=LAMBDA_RATIO).support
+        out["standardised"][b] = np.array_equal(sup, true)
+    return out
+
+
+def initial_state_models(r: float, init: str) -> tuple[Any, Any]:
+    """``(simulation model, filter model)`` of Example 1 for an initialisation of :data:`INIT_VARIANTS`.
+
+    The filter model has ``P0 = P_{0|0}`` (``s^2 I``, ``s`` the value in :data:`INIT_VARIANTS`)
+    and ``R_0 = 1e12 I``, so that its update at ``k = 0`` leaves ``xhat_{0|0} = 0`` and
+    ``P_{0|0}`` unchanged to a relative 1e-12: the filter starts as the paper's Kalman and
+    Kitanidis filters do and uses the data from ``k = 1``.
+    """
+    if init not in INIT_VARIANTS:
+        raise ModelError(f"init: expected one of {sorted(INIT_VARIANTS)}, got {init!r}")
+    from fdi_lib.models import ltv_model
+
+    base = ex.example1_model(r=r)
+    s2 = INIT_VARIANTS[init] ** 2
+    R = np.repeat(base.R[:1], base.n_steps, axis=0)
+    R[0] = _R0_IGNORE * np.eye(base.p)
+    filt = ltv_model(F=base.F, H=base.H, Q=base.Q, R=R, n_steps=base.n_steps,
+                     x0=np.zeros(base.n), P0=s2 * np.eye(base.n))
+    return base, filt
+
+
+@single_threaded_blas
+def initial_state_chunk(seeds: Sequence[np.random.SeedSequence], *, q: int,
+                        r: float) -> dict[str, np.ndarray]:
+    """Monte Carlo chunk: the log rule and the oracle under each initialisation of :data:`INIT_VARIANTS`.
+
+    The trials are those of :func:`example1_chunk` (same seeds, same draws) except the initial
+    state, ``X_0`` scaled by the value in :data:`INIT_VARIANTS`. Returns per-trial booleans
+    ``log_<init>`` and ``oracle_<init>``.
+    """
+    import dataclasses
+
+    base = ex.example1_model(r=r)
+    trials0 = ex.draw_trials(base, trial_rngs(seeds), q=q)
+    out: dict[str, np.ndarray] = {}
+    for init, s in INIT_VARIANTS.items():
+        sim_model, filt = initial_state_models(r, init)
+        noise = dataclasses.replace(trials0.noise, x0=s * trials0.noise.x0)
+        trials = dataclasses.replace(trials0, noise=noise)
+        y = ex.simulate_trials(sim_model, trials)
+        gains = kitanidis_gains(filt, ex.E)
+        res = kitanidis_filter(filt, y, gains=gains)
+        sig = residual_signature(filt, gains, Psi=trials.Psi)
+        reg = regression_data(res.residuals, sig.on_residual, start=1)
+        ok, orc = np.zeros(len(seeds), bool), np.zeros(len(seeds), bool)
+        for b in range(len(seeds)):
+            true = np.flatnonzero(trials.theta[b])
+            path = lasso_path(reg.X[b], reg.y[b], n_samples=reg.n_samples)
+            ok[b] = np.array_equal(flat_range(path, lambda_ratio=LAMBDA_RATIO).support, true)
+            orc[b] = _oracle(path, true)
+        out[f"log_{init}"], out[f"oracle_{init}"] = ok, orc
+    return out
+
+
+def unknown_input_effect(*, q: int = 15, r: float = 0.5, trials: int = 20, seed: int = 0) -> float:
+    """Largest change of the regression ``(X, y)`` when ``d_k`` is set to 0, relative to ``max |y|``.
+
+    Proposition 2: the Kitanidis residual does not depend on ``d`` at all, so this is rounding
+    error, and the way ``d_k`` is drawn cannot change any rate.
+    """
+    import dataclasses
+
+    model = ex.example1_model(r=r)
+    tr = ex.draw_trials(model, trial_rngs(trial_seeds(seed, trials)), q=q)
+    reg, _ = example1_regression(tr, r=r)
+    reg0, _ = example1_regression(dataclasses.replace(tr, d=np.zeros_like(tr.d)), r=r)
+    return float(max(np.abs(reg.y - reg0.y).max(), np.abs(reg.X - reg0.X).max()) / np.abs(reg.y).max())
+
+
+def _variant_columns() -> list[tuple[str, int, float]]:
+    return ([(f"q{q}", q, 0.5) for q in VARIANT_Q]
+            + [(f"r{r:g}", 5, r) for r in VARIANT_R])
+
+
+@register("zhang2021-lambda-rule", paper=PAPER,
+          title="Example 1: readings of the lambda rule, the oracle and the initial state (Tables I-II)")
+def lambda_rule(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """Which reading of the paper's rule for ``lambda`` could give the rates of Tables I-II?
+
+    The paper defines the rule in words (Sec. IV, after (39)); its exact form is in the
+    author's Matlab files, which we do not have. On the trials of ``zhang2021-table1`` /
+    ``zhang2021-table2`` (same seed: the first ``trials`` trials of each column), several
+    readings (:data:`RULE_READINGS`, :func:`lambda_rule_chunk`) and the **oracle** (the true
+    support is on the Lasso path: an upper bound for every rule), for q in :data:`VARIANT_Q`
+    (r = 0.5) and r in :data:`VARIANT_R` (q = 5); then, at q = 15, the initial state and the
+    filter initialisation (:data:`INIT_VARIANTS`, :func:`initial_state_chunk`). The paper
+    gives no trial count for this (``trials=None`` runs 200, our choice).
+
+    Headline keys
+    -------------
+    success_rate : dict
+        ``{reading: {column: rate}}`` for the readings of :data:`RULE_READINGS` and ``oracle``;
+        columns ``"q9"``, ``"q15"``, ``"q25"`` (r = 0.5) and ``"r100"``, ``"r200"`` (q = 5).
+    ci95 : dict
+        Same layout, Clopper-Pearson 95 % intervals ``[low, high]``.
+    init_success_rate, init_oracle_rate : dict
+        At q = 15, r = 0.5, per initialisation of :data:`INIT_VARIANTS`: rate of the log rule and
+        of the oracle.
+    init_ci95 : dict
+        ``{"log_<init>" | "oracle_<init>": [low, high]}``.
+    unknown_input_change : float
+        Largest change of the regression when ``d_k`` is set to 0, relative to ``max |y|``
+        (:func:`unknown_input_effect`): rounding error, so ``d_k`` cannot change any rate.
+    """
+    n = 200 if trials is None else trials
+    rates: dict[str, dict[str, float]] = {k: {} for k in RULE_READINGS + ("oracle",)}
+    cis: dict[str, dict[str, list[float]]] = {k: {} for k in rates}
+    for key, q, r in _variant_columns():
+        res = run_monte_carlo(partial(lambda_rule_chunk, q=q, r=r), n, seed=seed, jobs=jobs)
+        for k in rates:
+            c = int(res[k].sum())
+            rates[k][key] = c / n
+            cis[k][key] = list(binomial_ci(c, n))
+    res = run_monte_carlo(partial(initial_state_chunk, q=15, r=0.5), n, seed=seed, jobs=jobs)
+    init_ci = {k: list(binomial_ci(int(v.sum()), n)) for k, v in res.items()}
+    headline = {"success_rate": rates, "ci95": cis,
+                "init_success_rate": {i: float(res[f"log_{i}"].mean()) for i in INIT_VARIANTS},
+                "init_oracle_rate": {i: float(res[f"oracle_{i}"].mean()) for i in INIT_VARIANTS},
+                "init_ci95": init_ci,
+                "unknown_input_change": unknown_input_effect(seed=seed)}
+    paper = {"success_rate": {**{f"q{q}": PAPER_TABLE1[q] for q in VARIANT_Q},
+                              **{f"r{r:g}": PAPER_TABLE2["success_rate"][r] for r in VARIANT_R}}}
+    return ReproductionResult(id="zhang2021-lambda-rule", headline=headline, paper=paper,
+                              settings={"seed": seed, "trials": n, "N": ex.N_DATA, "m": ex.N_PARAMS,
+                                        "lambda_ratio": LAMBDA_RATIO, "grids": list(VARIANT_GRIDS),
+                                        "init_scales": dict(INIT_VARIANTS)},
+                              data={})
+
+
+#: Human labels of the readings of the rule (variants table).
+RULE_LABELS = {"log": "exact path, log width (our rule)", "linear": "exact path, linear width",
+               "grid20": "geometric grid, 20 points", "grid100": "geometric grid, 100 points",
+               "standardised": "standardised X, log width",
+               "oracle": "oracle: true support on the path"}
+#: Human labels of the initialisations (:data:`INIT_VARIANTS`).
+INIT_LABELS = {"paper": "paper's filter start, X₀ ~ N(0, I)",
+               "spread": "X₀ ~ N(0, 100 I), P₀|₀ = 100 I"}
+
+
+def lambda_rule_table(result: ReproductionResult):
+    """The variants table for readers: rates in % with 95 % intervals, the paper's row last."""
+    from fdi_lib.report import fmt_rate, table
+
+    h, n = result.headline, result.settings["trials"]
+    cols = [c for c, _, _ in _variant_columns()]
+    heads = [f"q = {c[1:]}" if c[0] == "q" else f"r = {c[1:]} (q = 5)" for c in cols]
+    rows = {RULE_LABELS[k]: [fmt_rate(h["success_rate"][k][c], h["ci95"][k][c]) for c in cols]
+            for k in RULE_READINGS + ("oracle",)}
+    rows["paper (Tables I-II)"] = [fmt_rate(result.paper["success_rate"][c], digits=3) for c in cols]
+    return table(rows, heads, index_header="success rate (%)",
+                 notes=[f"{n} trials per column, the first {n} trials of the paper tables' "
+                        "columns; 95 % Clopper-Pearson intervals in brackets.",
+                        "q columns: r = 0.5 (Table I); r columns: q = 5 (Table II)."])
+
+
+def initial_state_table(result: ReproductionResult):
+    """Rates of the log rule and the oracle at q = 15 for each initialisation, for readers."""
+    from fdi_lib.report import fmt_rate, table
+
+    h, n = result.headline, result.settings["trials"]
+    rows = {"our default (filter updated with Y₀)": [
+        fmt_rate(h["success_rate"]["log"]["q15"], h["ci95"]["log"]["q15"]),
+        fmt_rate(h["success_rate"]["oracle"]["q15"], h["ci95"]["oracle"]["q15"])]}
+    for i, label in INIT_LABELS.items():
+        rows[label] = [fmt_rate(h["init_success_rate"][i], h["init_ci95"][f"log_{i}"]),
+                       fmt_rate(h["init_oracle_rate"][i], h["init_ci95"][f"oracle_{i}"])]
+    rows["paper (Table I)"] = [fmt_rate(PAPER_TABLE1[15], digits=3), "not given"]
+    return table(rows, ["log rule", "oracle"], index_header="q = 15, r = 0.5",
+                 notes=[f"{n} trials, the same draws in every row except X₀; "
+                        "95 % Clopper-Pearson intervals in brackets."])
+
+
+def paper_between_readings(result: ReproductionResult) -> list[str]:
+    """Columns of a rate table where the paper's rate lies between our linear and log rates (inclusive)."""
+    h, pap = result.headline, result.paper["success_rate"]
+    return [k for k in pap
+            if min(h["success_rate"][k], h["success_rate_linear"][k]) <= pap[k]
+            <= max(h["success_rate"][k], h["success_rate_linear"][k])]
 
 
 # --------------------------------------------------------------------------- Example 2 (Figs 6-7)
@@ -569,3 +866,58 @@ def fig7(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
                               settings={"seed": seed, "N": EX2_N, "m": EX2_M},
                               data={"lasso": d["lasso"], "grid": d["grid"], "theta_ls": d["theta_ls"],
                                     "theta": d["theta"]})
+
+
+# --------------------------------------------------------------------------- tables for readers (Example 1)
+def rate_table(result: ReproductionResult):
+    """Table I or II for readers: the paper's rate, ours (log rule, 95 % interval), the linear rule.
+
+    For ``zhang2021-table2`` the mean SNR of each output (ours / paper, dB) is added.
+    """
+    from fdi_lib.report import fmt_number, fmt_rate, table
+
+    h, pap = result.headline, result.paper["success_rate"]
+    is_t2 = "snr_db" in h
+    cols = ["paper", "ours, log width", "ours, linear width", "paper in our interval"]
+    if is_t2:
+        cols += ["SNR output 1 (dB), ours / paper", "SNR output 2 (dB), ours / paper"]
+    rows = {}
+    for k in pap:
+        cells = [fmt_rate(pap[k], digits=3), fmt_rate(h["success_rate"][k], h["ci95"][k], digits=3),
+                 fmt_rate(h["success_rate_linear"][k], digits=3), bool(h["ci95"][k][0] <= pap[k] <= h["ci95"][k][1])]
+        if is_t2:
+            cells += [f"{fmt_number(h['snr_db'][k][i], 4)} / {fmt_number(result.paper['snr_db'][k][i], 4)}"
+                      for i in range(2)]
+        rows[f"r = {k}" if is_t2 else f"q = {k}"] = cells
+    n = result.settings["trials"]
+    return table(rows, cols, index_header="",
+                 notes=[f"{n} trials per column, the same seeds in every column; 95 % Clopper-Pearson "
+                        "interval of the log-width rate in brackets."])
+
+
+def snr_table(readings: dict[str, np.ndarray], r_values: Sequence[float] = (0.5, 100.0, 200.0)):
+    """Mean SNR (dB, output 1 / output 2) of each reading of :func:`snr_variants` beside Table II's."""
+    from fdi_lib.report import fmt_number, table
+
+    def cell(v: Sequence[float]) -> str:
+        return " / ".join(fmt_number(float(x), 4) for x in v)
+
+    rows = {f"10 log₁₀ {k}": [cell(v[i]) for i in range(len(r_values))] for k, v in readings.items()}
+    rows["paper (Table II)"] = [cell(PAPER_TABLE2["snr_db"][float(r) if r != int(r) else int(r)])
+                                for r in r_values]
+    return table(rows, [f"r = {r:g}" for r in r_values], index_header="SNR reading (dB)")
+
+
+def grid_rule_difference(result: ReproductionResult) -> float:
+    """Largest ``|grid rate - exact log rate|`` over the columns and the grids of :data:`GRID_SIZES`."""
+    h = result.headline
+    return float(max(abs(h[f"success_rate_grid{g}"][k] - h["success_rate"][k])
+                     for g in GRID_SIZES for k in h["success_rate"]))
+
+
+def paper_outside_ci(result: ReproductionResult) -> tuple[int, int]:
+    """``(outside, below)``: paper rates outside our 95 % intervals (log rule), and how many below them."""
+    h, pap = result.headline, result.paper["success_rate"]
+    cis = h["ci95"]
+    return (int(sum(not cis[k][0] <= pap[k] <= cis[k][1] for k in pap)),
+            int(sum(pap[k] < cis[k][0] for k in pap)))
