@@ -133,6 +133,7 @@ def _titled_proof_index(original):
         for _letter, entries in content:
             for (name, subtype, docname, anchor, extra, qualifier, descr) in entries:
                 title, kind = titles.get(anchor, ("", descr))
+                title = re.sub(r"^\s*\((.*)\)\s*$", r"\1", title)  # proof_title_format " (%t)"
                 shown = f"{kind.title()}: {title}" if title else f"{kind.title()} ({name})"
                 renamed.setdefault(shown[0].upper(), []).append(
                     (shown, subtype, docname, anchor, docname, qualifier, ""))
