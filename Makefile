@@ -11,7 +11,7 @@ export OPENBLAS_NUM_THREADS := 1
 export OMP_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 
-.PHONY: book book-fast test venv lock clean benchmarks student
+.PHONY: book book-fast test venv lock clean benchmarks student notebooks browser-test
 
 venv: $(STAMP)
 
@@ -24,9 +24,23 @@ $(STAMP): requirements.lock pyproject.toml
 	touch $(STAMP)
 
 ## Build the whole book, every notebook executed; fails on any cell error or Sphinx warning.
+## The build log drops two lines the kernels print that are not problems of the book: ipykernel's
+## notice that a kernel talks to the build over local TCP without encryption, and the
+## "KeyboardInterrupt caught in kernel" that jupyter_client's interrupt-before-shutdown causes
+## when a kernel is still finishing a message. It ends with the execution time of every chapter.
 book: $(STAMP)
 	rm -rf _build/html _build/.doctrees
-	set -o pipefail; $(BIN)/jupyter-book build . --warningiserror --nitpick --keep-going --builder html 2>&1 | tee _build.log
+	mkdir -p _build
+	set -o pipefail; $(BIN)/jupyter-book build . --warningiserror --nitpick --keep-going --builder html 2>&1 \
+	  | sed -u -e '/Kernel is running over TCP without encryption/d' \
+	           -e '/KeyboardInterrupt caught in kernel/d' | tee _build.log
+	@awk -v root="$(CURDIR)/" '/: Executed notebook in [0-9.]+ seconds/ { \
+	    f = $$1; sub(/:$$/, "", f); sub(root, "", f); \
+	    for (i = 1; i < NF; i++) if ($$i == "in") t = $$(i + 1); \
+	    printf "  %-45s %8.1f s\n", f, t; total += t } \
+	  END { print "  ---------------------------------------------------------"; \
+	        printf "  %-45s %8.1f s\n", "total execution time", total }' _build.log \
+	  | { echo "Execution time per chapter:"; cat; }
 	@echo "Book built: $(abspath _build/html/index.html)"
 
 ## Authoring mode: re-execute only the chapters whose text changed since the last book-fast
@@ -50,6 +64,22 @@ student: $(STAMP)
 	mkdir -p _build/student
 	set -o pipefail; $(BIN)/python tools/student_edition.py build --warningiserror --nitpick --keep-going 2>&1 | tee _build/student/build.log
 	@echo "Student book built: $(abspath _build/student/html/index.html)"
+
+## Plain .ipynb copies of the chapters (outputs not executed) under _build/notebooks/, which the book
+## ignores (a .ipynb beside a chapter is excluded too, see exclude_patterns in _config.yml).
+notebooks: $(STAMP)
+	for f in $$(grep -rl --include='*.md' '^jupytext:' book); do \
+	  mkdir -p "_build/notebooks/$$(dirname $$f)" && $(BIN)/jupytext --quiet --to ipynb --output "_build/notebooks/$${f%.md}.ipynb" "$$f" || exit 1; \
+	done
+	@echo "Notebooks in $(abspath _build/notebooks)"
+
+## Every page of the built book in headless Chromium (Debian's package, installed if absent),
+## at 1280 and 390 px, no network; screenshots in _build/screenshots/ (tests/browser/check_book.py).
+CHROMIUM := /usr/bin/chromium
+browser-test: $(STAMP)
+	@test -f _build/html/index.html || { echo "No built book: run make book first"; exit 2; }
+	test -x $(CHROMIUM) || { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium; }
+	$(BIN)/python tests/browser/check_book.py --html _build/html --screenshots _build/screenshots
 
 ## Run the whole test suite.
 test: $(STAMP)

@@ -2,49 +2,149 @@
 
 Plot functions of the reproductions live next to them (``plot_<figure>(result, fig=None)``)
 and use :func:`figure` so that every figure of the book looks the same.
+
+The style is sized for a phone: every figure is :data:`FIG_WIDTH_IN` inches wide and its
+smallest text is :data:`MIN_FONT_PT` points, so that when a figure is shrunk to the
+``PHONE_COLUMN_PX`` CSS pixels of a 390 px wide phone screen its text is still at least
+``MIN_FONT_PT / 72 * PHONE_COLUMN_PX / FIG_WIDTH_IN`` (about 9.9) CSS pixels high. In a notebook
+(the book), figures are PNG rasters at twice their display resolution (sharp on high-density
+screens) that carry their smallest font size and resolution as PNG text metadata
+(``fdi:min_font_pt``, ``fdi:dpi``); the book's browser test reads them.
 """
 
 from __future__ import annotations
 
+import base64
+import importlib
+import io
+import struct
 from typing import Any
 
 import matplotlib as mpl
 import matplotlib.pyplot as plt
+from matplotlib.figure import Figure
+from matplotlib.text import Text
 
-__all__ = ["STYLE", "use_style", "figure", "PAPER_COLOR", "OURS_COLOR", "THRESHOLD_COLOR"]
+__all__ = ["STYLE", "use_style", "figure", "PAPER_COLOR", "OURS_COLOR", "THRESHOLD_COLOR",
+           "FIG_WIDTH_IN", "STACKED_HEIGHT", "MIN_FONT_PT", "DISPLAY_DPI", "RASTER_SCALE", "PHONE_COLUMN_PX",
+           "smallest_font_pt", "png_for_display"]
 
 OURS_COLOR = "#1f77b4"
 PAPER_COLOR = "#d62728"
 THRESHOLD_COLOR = "#d62728"
 
+#: Width of every figure of the book (inches); ``figure(figsize=...)`` only chooses the height.
+FIG_WIDTH_IN = 5.5
+#: Smallest font of the house style (tick labels, legends), in points.
+MIN_FONT_PT = 11.0
+#: CSS pixels per inch at which a figure is displayed at its natural size (5.5 in -> 605 px).
+DISPLAY_DPI = 110
+#: The PNG holds RASTER_SCALE device pixels per CSS pixel (sharp on high-density screens).
+RASTER_SCALE = 2
+#: Height of each stacked panel, as a fraction of the height asked for one row (see figure).
+STACKED_HEIGHT = 0.8
+#: Width of the text column of the book on a 390 px wide phone, in CSS pixels (measured in
+#: Chromium: 358; the browser test checks every figure against its rendered width).
+PHONE_COLUMN_PX = 358
+
 STYLE: dict[str, Any] = {
-    "figure.figsize": (7.0, 3.6),
-    "figure.dpi": 110,
-    "savefig.dpi": 110,
+    "figure.figsize": (FIG_WIDTH_IN, 3.4),
+    "figure.dpi": DISPLAY_DPI,
+    "savefig.dpi": DISPLAY_DPI * RASTER_SCALE,
+    "font.size": MIN_FONT_PT,
     "axes.grid": True,
     "grid.alpha": 0.3,
     "axes.spines.top": False,
     "axes.spines.right": False,
-    "axes.titlesize": 11,
-    "axes.labelsize": 10,
-    "legend.fontsize": 9,
+    "axes.titlesize": MIN_FONT_PT + 1.5,
+    "axes.labelsize": MIN_FONT_PT + 1.0,
+    "xtick.labelsize": MIN_FONT_PT,
+    "ytick.labelsize": MIN_FONT_PT,
+    "legend.fontsize": MIN_FONT_PT,
+    "legend.title_fontsize": MIN_FONT_PT,
+    "figure.titlesize": MIN_FONT_PT + 1.5,
     "legend.frameon": False,
-    "lines.linewidth": 1.2,
+    "lines.linewidth": 1.4,
 }
 
 
+def smallest_font_pt(fig: Figure) -> float:
+    """The smallest font size (points) of the visible, non-empty texts of ``fig``."""
+    sizes = [t.get_fontsize() for t in fig.findobj(Text)
+             if t.get_visible() and t.get_text().strip()]
+    return float(min(sizes)) if sizes else float(MIN_FONT_PT)
+
+
+def _png_width(data: bytes) -> int:
+    # IHDR is the first chunk: 8-byte signature, 4-byte length, "IHDR", then width (big-endian)
+    return struct.unpack(">I", data[16:20])[0]
+
+
+def png_for_display(fig: Figure) -> tuple[str, dict[str, Any]] | None:
+    """``fig`` as a base64 PNG at ``RASTER_SCALE`` x its display resolution, with the display
+    width as output metadata (IPython ``image/png`` formatter; ``None`` for an empty figure)."""
+    if not fig.axes and not fig.lines and not fig.texts:
+        return None
+    dpi = fig.dpi * RASTER_SCALE
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight", facecolor="white",
+                metadata={"fdi:min_font_pt": f"{smallest_font_pt(fig):g}", "fdi:dpi": f"{dpi:g}"})
+    data = buf.getvalue()
+    width = round(_png_width(data) / RASTER_SCALE)
+    return base64.b64encode(data).decode("ascii"), {"width": width}
+
+
+def _register_display_formatter() -> None:
+    """In IPython (the book's notebooks), display figures with :func:`png_for_display`."""
+    try:
+        from IPython import get_ipython
+    except ImportError:  # pragma: no cover - IPython is a dependency of the book only
+        return
+    shell = get_ipython()
+    if shell is None:
+        return
+    # The inline backend configures IPython's figure formatters when it is first imported (at
+    # the first figure): import it now, so that it does not replace this formatter later.
+    try:
+        backend = mpl.get_backend(auto_select=False)
+    except TypeError:  # matplotlib < 3.10
+        backend = mpl.rcParams._get("backend")
+    if backend in ("inline", "module://matplotlib_inline.backend_inline"):
+        importlib.import_module("matplotlib_inline.backend_inline")
+    formatters = shell.display_formatter.formatters
+    formatters["image/png"].for_type(Figure, png_for_display)
+    for mime in ("image/svg+xml", "image/jpeg", "application/pdf"):
+        formatters[mime].pop(Figure, None)
+
+
 def use_style() -> None:
-    """Apply the book's matplotlib style (idempotent)."""
+    """Apply the book's matplotlib style (idempotent); in IPython, also its figure display."""
     mpl.rcParams.update(STYLE)
+    _register_display_formatter()
 
 
 def figure(nrows: int = 1, ncols: int = 1, *, fig: Any = None, sharex: bool = False,
            figsize: tuple[float, float] | None = None, **kwargs: Any):
-    """A figure with the book's style: ``(fig, axes)``; ``fig`` reuses an existing figure (widgets)."""
+    """A figure with the book's style: ``(fig, axes)``; ``fig`` reuses an existing figure (widgets).
+
+    Every figure is ``FIG_WIDTH_IN`` wide (legible on a phone); ``figsize`` sets the height of
+    one row of panels (its width is ignored). Panels asked for side by side in one row
+    (``nrows == 1``, ``ncols > 1``) are stacked in one column, each ``STACKED_HEIGHT`` of that
+    height, because a phone column has no room for them; ``axes`` keeps the requested shape
+    ``(nrows, ncols)``, so ``axes[0, j]`` is still the j-th panel.
+    """
     use_style()
+    height = STYLE["figure.figsize"][1] if figsize is None else figsize[1]
+    stack = nrows == 1 and ncols > 1
+    if stack:
+        height = height * STACKED_HEIGHT * ncols
     if fig is None:
-        fig = plt.figure(figsize=figsize or STYLE["figure.figsize"], layout="constrained")
+        fig = plt.figure(figsize=(FIG_WIDTH_IN, height), layout="constrained")
     else:
         fig.clear()
-    axes = fig.subplots(nrows, ncols, sharex=sharex, squeeze=False, **kwargs)
+        fig.set_size_inches(FIG_WIDTH_IN, height)
+    if stack:
+        axes = fig.subplots(ncols, 1, sharex=sharex, squeeze=False, **kwargs).reshape(1, ncols)
+    else:
+        axes = fig.subplots(nrows, ncols, sharex=sharex, squeeze=False, **kwargs)
     return fig, axes

@@ -1,0 +1,331 @@
+"""Local Sphinx extension of fdi-book (loaded from ``_config.yml``, ``sphinx.local_extensions``).
+
+1. Offline MathJax: copies MathJax 3 (TeX input, CommonHTML output and the fonts, from the PyPI
+   package ``django-static-mathjax`` that ``requirements.lock`` pins) to ``<html>/mathjax/`` at the
+   end of an HTML build. ``_config.yml`` points ``mathjax_path`` at it with a URL relative to
+   ``_static``, which works at every page depth, from a web server and from ``file://``. It is
+   not under ``_static`` because Jupyter Book adds every ``.js`` found there to every page.
+2. Author-year citations in the bibliography: a pybtex label style whose labels are the in-text
+   author-year citations ("Zhang and Basseville, 2014"), and a formatting style using it
+   (``bibtex_default_style: fdi_author_year``).
+3. The proof index (``prf-prf.html``) lists each proposition by its title and kind instead of its
+   raw label.
+4. Every chapter's header has a ".ipynb" download (the executed notebook, with outputs) next to
+   the ".md" source: sphinx-book-theme adds it only when a launch service (Binder, JupyterHub,
+   Thebe, Colab) is configured, and this book loads nothing from another host.
+5. No Thebe scripts (Thebe is off; sphinx-thebe would reference a CDN and declares its constants
+   twice on every page, a console error).
+6. The catalogue of reproductions (``book/reproductions.md``) is generated when the book is read:
+   from the registry of :mod:`fdi_lib.reproduce`, in book order (the order of the chapters in
+   ``_toc.yml``, then of the first code cell that runs each reproduction), with a link to the figure
+   or section that shows it, its command line and its documentation rendered.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import inspect
+import re
+import shutil
+from pathlib import Path
+from typing import Any
+
+import pybtex.plugin
+from pybtex.richtext import Text
+from pybtex.style.formatting.plain import Style as PlainStyle
+from pybtex.style.labels import BaseLabelStyle
+from sphinx.application import Sphinx
+from sphinx.util import logging
+
+logger = logging.getLogger(__name__)
+
+# What pages load from MathJax's es5 tree: the combined TeX + CommonHTML component, the TeX
+# extensions it autoloads (\begin{aligned}, \boldsymbol, ...), the CommonHTML fonts, the
+# context menu and the accessibility components the menu can switch on.
+MATHJAX_ENTRY = "tex-chtml.js"
+MATHJAX_PARTS = ("tex-chtml.js", "input/tex", "output/chtml", "output/chtml.js", "ui", "a11y",
+                 "sre", "adaptors")
+
+
+def mathjax_source() -> Path:
+    """The ``es5`` folder of the MathJax 3 copy shipped by ``django-static-mathjax``."""
+    spec = importlib.util.find_spec("mathjax")
+    if spec is None or not spec.submodule_search_locations:
+        raise RuntimeError("MathJax not found: install django-static-mathjax (requirements.lock)")
+    es5 = Path(next(iter(spec.submodule_search_locations))) / "static" / "mathjax" / "es5"
+    if not (es5 / MATHJAX_ENTRY).is_file():
+        raise RuntimeError(f"MathJax not found: no {MATHJAX_ENTRY} in {es5}")
+    return es5
+
+
+def copy_mathjax(app: Sphinx, exception: Exception | None) -> None:
+    if exception is not None or app.builder.format != "html":
+        return
+    src, dst = mathjax_source(), Path(app.outdir) / "mathjax"
+    for part in MATHJAX_PARTS:
+        source, target = src / part, dst / part
+        if source.is_dir():
+            shutil.copytree(source, target, dirs_exist_ok=True)
+        elif source.is_file():
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(source, target)
+    logger.info("fdi_book: MathJax copied to %s", dst)
+
+
+def _plain(text: str) -> str:
+    return Text.from_latex(text).render_as("text")
+
+
+class AuthorYearLabelStyle(BaseLabelStyle):
+    """Labels equal to the in-text author-year citation: "Zhang", "Zhang and Basseville" or
+    "Rosa et al.", then ", year" (sphinxcontrib-bibtex ``author_year`` reference style)."""
+
+    def format_labels(self, sorted_entries):
+        seen: dict[str, int] = {}
+        for entry in sorted_entries:
+            label = self.format_label(entry)
+            seen[label] = seen.get(label, 0) + 1
+            # two works with the same authors and year: 2014a, 2014b (never seen in this book)
+            yield label if seen[label] == 1 else f"{label}{chr(ord('a') + seen[label] - 1)}"
+
+    def format_label(self, entry) -> str:
+        persons = entry.persons.get("author") or entry.persons.get("editor") or []
+        names = [_plain(" ".join(p.prelast_names + p.last_names)) for p in persons]
+        if not names:
+            who = _plain(entry.fields.get("title", entry.key))
+        elif len(names) == 1:
+            who = names[0]
+        elif len(names) == 2:
+            who = f"{names[0]} and {names[1]}"
+        else:
+            who = f"{names[0]} et al."
+        year = entry.fields.get("year", "n.d.")
+        return f"{who}, {year}"
+
+
+class AuthorYearStyle(PlainStyle):
+    """pybtex's plain style, sorted by author and year, labelled by author-year."""
+
+    default_label_style = "fdi_author_year"
+    default_sorting_style = "author_year_title"
+
+
+def _record_proof_titles(app: Sphinx, doctree) -> None:
+    titles = app.env.__dict__.setdefault("fdi_proof_titles", {})
+    for node in doctree.findall(lambda n: "realtype" in getattr(n, "attributes", {})):
+        label = node.get("label")
+        if label:
+            titles[label] = (node.get("title") or "", node["realtype"])
+
+
+def _purge_proof_titles(app: Sphinx, env, docname: str) -> None:
+    titles = env.__dict__.get("fdi_proof_titles", {})
+    proofs = getattr(env, "proof_list", {})
+    for label in [k for k in titles if proofs.get(k, {}).get("docname") in (None, docname)]:
+        del titles[label]
+
+
+def _titled_proof_index(original):
+    def generate(self, docnames=None):
+        content, collapse = original(self, docnames)
+        titles = self.domain.env.__dict__.get("fdi_proof_titles", {})
+        renamed: dict[str, list] = {}
+        for _letter, entries in content:
+            for (name, subtype, docname, anchor, extra, qualifier, descr) in entries:
+                title, kind = titles.get(anchor, ("", descr))
+                title = re.sub(r"^\s*\((.*)\)\s*$", r"\1", title)  # proof_title_format " (%t)"
+                shown = f"{kind.title()}: {title}" if title else f"{kind.title()} ({name})"
+                renamed.setdefault(shown[0].upper(), []).append(
+                    (shown, subtype, docname, anchor, docname, qualifier, ""))
+        return sorted((k, sorted(v)) for k, v in renamed.items()), collapse
+
+    return generate
+
+
+CATALOGUE_DOC = "book/reproductions"
+_CELL = re.compile(r"^```\{code-cell\}[^\n]*\n(.*?)^```\s*$", re.S | re.M)
+_CALL = re.compile(r"""\b(?:get|reproduce)\(\s*["']([a-z0-9]+-[a-z0-9-]+)["']""")
+_FIG_NAME = re.compile(r"^\s+name:\s*([\w.-]+)\s*$", re.M)
+_HEADING = re.compile(r"^(#{1,6})\s+(.+?)\s*$", re.M)
+_LABEL = re.compile(r"^\(([\w.-]+)\)=\s*$")
+
+
+def _toc_files(confdir: Path) -> list[str]:
+    import yaml
+
+    toc = yaml.safe_load((confdir / "_toc.yml").read_text())
+    files: list[str] = []
+
+    def walk(items):
+        for item in items or []:
+            if "file" in item:
+                files.append(item["file"])
+            walk(item.get("chapters")), walk(item.get("sections"))
+
+    walk(toc.get("parts")), walk(toc.get("chapters"))
+    return files
+
+
+def _occurrences(doc: str, text: str):
+    """(position, id, figure name or None, heading, heading label or None) for each call of a
+    reproduction in a code cell of a chapter."""
+    headings = []
+    lines = text.splitlines(keepends=True)
+    offsets = [0]
+    for line in lines:
+        offsets.append(offsets[-1] + len(line))
+    fenced = False
+    for i, line in enumerate(lines):
+        if line.startswith("```"):
+            fenced = not fenced
+        m = None if fenced else _HEADING.match(line)
+        if m:
+            prev = lines[i - 1].strip() if i else ""
+            label = _LABEL.match(prev)
+            headings.append((offsets[i], m.group(2), label.group(1) if label else None))
+    for cell in _CELL.finditer(text):
+        body = cell.group(1)
+        name = _FIG_NAME.search(body.split("\n---", 1)[0] if body.startswith("---") else "")
+        for call in _CALL.finditer(body):
+            head = [h for h in headings if h[0] < cell.start()]
+            title, label = (head[-1][1], head[-1][2]) if head else ("", None)
+            yield cell.start() + call.start(), call.group(1), name.group(1) if name else None, \
+                title, label
+
+
+def _paper_item(rid: str, title: str) -> str:
+    m = re.search(r"-(fig|table)(\d+)$", rid)
+    if m:
+        return f"{'Fig.' if m.group(1) == 'fig' else 'Table'} {m.group(2)}"
+    m = re.search(r"(Prop\. \d+|Remark \d+|Solution \d+|Lemma \w+)", title)
+    return m.group(1) if m else "no numbered figure or table"
+
+
+def _docstring_html(func, id_prefix: str) -> str:
+    """The docstring rendered to HTML by docutils (numpydoc sections and definition lists).
+
+    Docstrings are written for ``--describe`` in a terminal, not as strict reStructuredText:
+    docutils renders what it can and its complaints are not shown (a docstring is never a reason
+    for the build to fail); cross-reference roles become literals."""
+    from docutils.core import publish_parts
+
+    doc = re.sub(r":[\w:]+:`~?([^`]+)`", r"``\1``", inspect.getdoc(func) or "")
+    parts = publish_parts(doc, writer_name="html5", settings_overrides={
+        "report_level": 5, "halt_level": 5, "initial_header_level": 4, "doctitle_xform": False,
+        "embed_stylesheet": False, "warning_stream": False, "id_prefix": id_prefix})
+    return parts["body"]
+
+
+def catalogue_markdown(confdir: Path) -> tuple[str, list[Path]]:
+    """The generated part of the catalogue page (MyST) and the files it was made from."""
+    from fdi_lib.reproduce import list_reproductions
+
+    reps = {r.id: r for r in list_reproductions()}
+    seen: dict[str, tuple] = {}
+    order: list[str] = []
+    sources = []
+    for doc in _toc_files(confdir):
+        path = confdir / f"{doc}.md"
+        if doc.count("/") < 2 or not path.is_file():  # chapters only: book/<paper>/<chapter>
+            continue
+        sources.append(path)
+        found: dict[str, list] = {}
+        for occ in sorted(_occurrences(doc, path.read_text())):
+            found.setdefault(occ[1], []).append(occ)
+        for rid, occs in sorted(found.items(), key=lambda kv: kv[1][0][0]):
+            if rid in reps and rid not in seen:
+                with_fig = [o for o in occs if o[2]]
+                seen[rid] = (doc, (with_fig or occs)[0])
+                order.append(rid)
+    order += [rid for rid in reps if rid not in seen]
+    out = []
+    current = None
+    for rid in order:
+        r = reps[rid]
+        doc, occ = seen.get(rid, (None, None))
+        if doc != current:
+            current = doc
+            if doc:
+                title = _HEADING.search((confdir / f"{doc}.md").read_text()).group(2)
+                out.append(f"## {title}\n\nChapter {{doc}}`/{doc}`.\n")
+            else:
+                out.append("## Not shown in a chapter\n")
+        out.append(f"### {r.title}\n")
+        out.append(f"**Paper:** {r.paper}, {_paper_item(rid, r.title)}.  ")
+        if occ is None:
+            out.append("**Shown in:** no chapter yet.  ")
+        elif occ[2]:
+            out.append(f"**Shown in:** {{numref}}`{occ[2]}`, section \"{occ[3]}\" of "
+                       f"{{doc}}`/{doc}`.  ")
+        elif occ[4]:
+            out.append(f"**Shown in:** {{ref}}`{occ[4]}` of {{doc}}`/{doc}`.  ")
+        else:
+            out.append(f"**Shown in:** section \"{occ[3]}\" of {{doc}}`/{doc}`.  ")
+        plot = f" (`--plot FILE.png` draws the figure)" if r.plot else ""
+        trials = ("" if r.default_trials is None
+                  else f"; {r.default_trials} Monte Carlo trials by default (the paper's)")
+        out.append(f"**Command:** `python -m fdi_lib reproduce {rid} --json`{plot}{trials}.\n")
+        out.append(f":::{{dropdown}} What `{rid}` computes and its headline keys\n"
+                   f"```{{raw}} html\n<div class=\"fdi-docstring\">\n{_docstring_html(r.func, rid + '-')}"
+                   f"</div>\n```\n:::\n")
+    modules = {Path(inspect.getsourcefile(r.func)) for r in reps.values()}
+    return "\n".join(out), sources + sorted(modules)
+
+
+def _generate_catalogue(app: Sphinx, docname: str, source: list[str]) -> None:
+    if docname != CATALOGUE_DOC:
+        return
+    text, deps = catalogue_markdown(Path(app.confdir))
+    for dep in deps:
+        app.env.note_dependency(str(dep))
+    source[0] = source[0].rstrip() + "\n\n" + text
+
+
+def _add_notebook_download(app: Sphinx, pagename: str, templatename: str, context: dict,
+                           doctree) -> None:
+    if app.builder.format != "html" or context.get("ipynb_source"):
+        return
+    executed = Path(app.outdir).parent / "jupyter_execute" / f"{pagename}.ipynb"
+    groups = [b for b in context.get("header_buttons", []) if b.get("label") == "download-buttons"]
+    if not executed.is_file() or not groups:
+        return
+    target = Path(app.outdir) / "_sources" / f"{pagename}.ipynb"
+    target.parent.mkdir(parents=True, exist_ok=True)
+    shutil.copy2(executed, target)
+    groups[0]["buttons"].insert(0, {
+        "type": "link", "url": f"{context['pathto']('_sources', 1)}/{pagename}.ipynb",
+        "text": ".ipynb", "icon": "fas fa-code", "tooltip": "Download the notebook (executed)",
+        "label": "download-notebook-button"})
+
+
+def _drop_thebe_scripts(app: Sphinx, env, docnames) -> None:
+    """Remove sphinx-thebe's scripts: Jupyter Book always loads the extension, but this book has
+    no Thebe button (it would load Thebe from a CDN), and the extension declares its constants
+    twice on every page (a console error)."""
+
+    def keep(js) -> bool:  # registry entries are (filename, attributes); builder's are objects
+        name = getattr(js, "filename", js[0] if isinstance(js, tuple) else "") or ""
+        attrs = getattr(js, "attributes", js[1] if isinstance(js, tuple) else {}) or {}
+        return "sphinx-thebe" not in name and "THEBE_JS_URL" not in str(attrs.get("body", ""))
+
+    app.registry.js_files = [js for js in app.registry.js_files if keep(js)]
+    if hasattr(app.builder, "_js_files"):
+        app.builder._js_files = [js for js in app.builder._js_files if keep(js)]
+
+
+def setup(app: Sphinx) -> dict[str, Any]:
+    app.connect("env-before-read-docs", _drop_thebe_scripts, priority=900)
+    app.connect("source-read", _generate_catalogue)
+    # after sphinx-book-theme's header buttons (priority 501)
+    app.connect("html-page-context", _add_notebook_download, priority=502)
+    pybtex.plugin.register_plugin("pybtex.style.labels", "fdi_author_year", AuthorYearLabelStyle)
+    pybtex.plugin.register_plugin("pybtex.style.formatting", "fdi_author_year", AuthorYearStyle)
+    app.connect("build-finished", copy_mathjax)
+    app.connect("doctree-read", _record_proof_titles)
+    app.connect("env-purge-doc", _purge_proof_titles)
+    from sphinx_proof.domain import ProofIndex
+
+    if not getattr(ProofIndex.generate, "_fdi_titled", False):
+        ProofIndex.generate = _titled_proof_index(ProofIndex.generate)
+        ProofIndex.generate._fdi_titled = True
+    return {"version": "1", "parallel_read_safe": False, "parallel_write_safe": True}

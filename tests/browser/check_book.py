@@ -1,0 +1,350 @@
+"""Real-browser test of the built book (``make browser-test``; not collected by pytest).
+
+Opens every page of ``_build/html`` in headless Chromium (Debian's ``/usr/bin/chromium``, driven
+by the ``playwright`` Python package, which downloads no browser), served by a local
+``http.server``, at 1280 px and 390 px wide, with every request to a non-local host blocked and
+recorded. One page is also opened from ``file://``. Fails on:
+
+- ``math``: unrendered TeX (``\\(``, ``\\[``, ``$$``) left in the visible text, or no MathJax;
+- ``network``: any attempted request to a non-local host;
+- ``image``: an image that fails to load;
+- ``console``: any console error or uncaught page error;
+- ``caption``: a figure (an image in a notebook output) without a caption;
+- ``overflow``: an equation, table or figure wider than the text column at 1280 px, or, at
+  390 px, one that is clipped instead of scrolling in a box with a visible scrollbar;
+- ``font``: figure text smaller than 9 CSS px at 390 px, computed from the rendered vs intrinsic
+  image width and the smallest font size and resolution that ``fdi_lib.plotting`` stores in the
+  PNG (``fdi:min_font_pt``, ``fdi:dpi``); a figure without them fails too (size unknown).
+
+Every failure is reported as ``page | viewport | check | element | detail``, followed by counts
+per check and page; the report is also written to ``_build/browser-report.txt`` and
+``_build/browser-report.json``. Full-page screenshots go to ``_build/screenshots/``.
+
+Usage: ``python tests/browser/check_book.py [--html _build/html] [--pages glob ...]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import functools
+import http.server
+import json
+import sys
+import threading
+import time
+import urllib.parse
+from pathlib import Path
+
+CHROMIUM = "/usr/bin/chromium"
+# As root, in a sandbox with no network: no setuid sandbox, and none of Chromium's own
+# background connections (they would be refused, many at a time).
+CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update",
+                 "--disable-sync", "--disable-dev-shm-usage"]
+VIEWPORTS = {"1280": {"width": 1280, "height": 900}, "390": {"width": 390, "height": 844}}
+MIN_TEXT_CSS_PX = 9.0
+SKIP_DIRS = {"_static", "_sources", "_images", "mathjax", "_sphinx_design_static"}
+
+# Runs in the page: collects the failures visible in the DOM. Returns a list of
+# [check, element, detail].
+PAGE_CHECKS_JS = r"""
+([viewport]) => {
+  const out = [];
+  const describe = (el) => {
+    const id = el.id || (el.closest('[id]') || {}).id || '';
+    const cap = el.closest('figure') && el.closest('figure').querySelector('figcaption');
+    let text = (cap ? cap.innerText : (el.innerText || el.getAttribute('src') || '')).trim();
+    text = text.replace(/\s+/g, ' ').slice(0, 70);
+    return `${el.tagName.toLowerCase()}${id ? '#' + id : ''} "${text}"`;
+  };
+  const article = document.querySelector('article.bd-article') || document.querySelector('main');
+  if (!article) { return [['page', 'document', 'no article element']]; }
+  const cs = getComputedStyle(article);
+  const colRect = article.getBoundingClientRect();
+  const colLeft = colRect.left + parseFloat(cs.paddingLeft);
+  const colWidth = article.clientWidth - parseFloat(cs.paddingLeft) - parseFloat(cs.paddingRight);
+  const colRight = colLeft + colWidth;
+
+  // 1. unrendered math in visible text (code blocks excluded)
+  const walker = document.createTreeWalker(document.body, NodeFilter.SHOW_TEXT, {
+    acceptNode: (n) => (n.parentElement.closest('pre, code, script, style, mjx-container, textarea, .highlight')
+      ? NodeFilter.FILTER_REJECT : NodeFilter.FILTER_ACCEPT)});
+  for (let n = walker.nextNode(); n; n = walker.nextNode()) {
+    const t = n.nodeValue;
+    const m = t.match(/\\\(|\\\[|\$\$/);
+    if (m && n.parentElement.offsetParent !== null) {
+      const i = t.indexOf(m[0]);
+      out.push(['math', describe(n.parentElement), t.slice(Math.max(0, i - 20), i + 50).replace(/\s+/g, ' ')]);
+    }
+  }
+  const mathNodes = document.querySelectorAll('.math, span.math, div.math').length;
+  if (mathNodes > 0 && document.querySelectorAll('mjx-container').length === 0) {
+    out.push(['math', 'document', `${mathNodes} math elements but MathJax rendered none`]);
+  }
+
+  // 2. images that failed to load
+  for (const img of document.querySelectorAll('img')) {
+    if (!img.complete || img.naturalWidth === 0) {
+      out.push(['image', describe(img), `not loaded: ${img.getAttribute('src')}`]);
+    }
+  }
+
+  // 3. figures without a caption: every <figure>, and every image in a notebook output
+  for (const fig of article.querySelectorAll('figure')) {
+    const cap = fig.querySelector('figcaption');
+    if (!cap || !cap.innerText.trim()) out.push(['caption', describe(fig), 'figure without caption']);
+  }
+  for (const img of article.querySelectorAll('.cell_output img, .output img')) {
+    if (!img.closest('figure')) out.push(['caption', describe(img), 'notebook image not in a captioned figure']);
+  }
+
+  // 4. overflow of equations, tables, figures
+  const items = [];
+  for (const el of article.querySelectorAll('mjx-container[display="true"]')) {
+    const m = el.querySelector('mjx-math');
+    items.push(['equation', el, m ? m.getBoundingClientRect().width : el.scrollWidth]);
+  }
+  for (const el of article.querySelectorAll('table')) items.push(['table', el, el.getBoundingClientRect().width]);
+  for (const el of article.querySelectorAll('figure, img')) items.push(['figure', el, el.getBoundingClientRect().width]);
+  for (const [kind, el, width] of items) {
+    if (el.offsetParent === null) continue;  // hidden (folded) content
+    if (width <= colWidth + 1) continue;
+    const what = `${kind} ${Math.round(width)} px wide, column ${Math.round(colWidth)} px`;
+    if (viewport === '1280') { out.push(['overflow', describe(el), what]); continue; }
+    // at phone width: must scroll in a box that fits the column, with a visible scrollbar
+    let box = el, ok = false, why = 'no horizontal scroll box (clipped)';
+    while (box && box !== article.parentElement) {
+      const ox = getComputedStyle(box).overflowX;
+      if (ox === 'auto' || ox === 'scroll') {
+        const r = box.getBoundingClientRect();
+        if (r.right > colRight + 1 || r.left < colLeft - 1) { why = 'scroll box wider than the column'; break; }
+        if (box.offsetHeight - box.clientHeight - parseFloat(getComputedStyle(box).borderTopWidth)
+            - parseFloat(getComputedStyle(box).borderBottomWidth) <= 0) { why = 'scrollbar not visible'; break; }
+        ok = true; break;
+      }
+      if (ox === 'hidden' || ox === 'clip') { why = `clipped by ${box.tagName.toLowerCase()}.${box.className}`; break; }
+      box = box.parentElement;
+    }
+    if (!ok) out.push(['overflow', describe(el), `${what}: ${why}`]);
+  }
+  // whole page wider than the viewport (horizontal page scroll)
+  if (document.documentElement.scrollWidth > window.innerWidth + 1) {
+    out.push(['overflow', 'document', `page ${document.documentElement.scrollWidth} px wide in a ${window.innerWidth} px viewport`]);
+  }
+  return out;
+}
+"""
+
+IMAGES_JS = r"""
+() => Array.from(document.querySelectorAll('article img')).filter(i => i.offsetParent !== null).map(i => ({
+  src: i.currentSrc || i.src, width: i.getBoundingClientRect().width, natural: i.naturalWidth,
+  caption: ((i.closest('figure') || {}).innerText || i.getAttribute('alt') || '').trim().replace(/\s+/g, ' ').slice(0, 70),
+  inOutput: !!i.closest('.cell_output, .output')
+}))
+"""
+
+PHONE_PAGE_SCROLLBAR_JS = """
+document.addEventListener('DOMContentLoaded', () => {
+  const style = document.createElement('style');
+  style.textContent = 'html { scrollbar-width: none; }';
+  document.head.appendChild(style);
+});
+"""
+
+WAIT_MATHJAX_JS = r"""
+async () => {
+  const t0 = Date.now();
+  while (Date.now() - t0 < 20000) {
+    if (window.MathJax && window.MathJax.startup && window.MathJax.startup.promise) {
+      await window.MathJax.startup.promise; return true;
+    }
+    if (!document.querySelector('script[src*="mathjax"]')) return true;  // page without math
+    await new Promise(r => setTimeout(r, 100));
+  }
+  return false;
+}
+"""
+
+
+def png_text_chunks(data: bytes) -> dict[str, str]:
+    """The tEXt chunks of a PNG file."""
+    out, pos = {}, 8
+    while pos + 8 <= len(data):
+        length = int.from_bytes(data[pos:pos + 4], "big")
+        kind = data[pos + 4:pos + 8]
+        body = data[pos + 8:pos + 8 + length]
+        if kind == b"tEXt" and b"\0" in body:
+            key, value = body.split(b"\0", 1)
+            out[key.decode("latin-1")] = value.decode("latin-1")
+        if kind == b"IEND":
+            break
+        pos += 12 + length
+    return out
+
+
+class _QuietHandler(http.server.SimpleHTTPRequestHandler):
+    def log_message(self, *args):  # noqa: D102 - silence the access log
+        pass
+
+
+def serve(root: Path) -> tuple[http.server.ThreadingHTTPServer, str]:
+    handler = functools.partial(_QuietHandler, directory=str(root))
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    return server, f"http://127.0.0.1:{server.server_address[1]}/"
+
+
+def is_local(url: str, base: str) -> bool:
+    scheme = urllib.parse.urlsplit(url).scheme
+    return url.startswith(base) or scheme in {"file", "data", "blob", "about"}
+
+
+def font_failures(images: list[dict], html_root: Path, base: str) -> list[tuple[str, str, str]]:
+    out = []
+    for im in images:
+        if not im["inOutput"]:
+            continue
+        url = urllib.parse.unquote(urllib.parse.urlsplit(im["src"]).path)
+        if im["src"].startswith(base):
+            path = html_root / urllib.parse.unquote(im["src"][len(base):]).split("?")[0]
+        else:
+            path = Path(url)
+        element = f'img "{im["caption"]}" ({path.name[:12]})'
+        if path.suffix.lower() != ".png" or not path.is_file():
+            out.append(("font", element, "not a PNG of the book's house style: text size unknown"))
+            continue
+        meta = png_text_chunks(path.read_bytes())
+        if "fdi:min_font_pt" not in meta or "fdi:dpi" not in meta:
+            out.append(("font", element, "PNG without fdi:min_font_pt/fdi:dpi metadata "
+                                         "(not drawn with fdi_lib.plotting): text size unknown"))
+            continue
+        pt, dpi = float(meta["fdi:min_font_pt"]), float(meta["fdi:dpi"])
+        px = pt / 72.0 * dpi * im["width"] / im["natural"]
+        if px < MIN_TEXT_CSS_PX:
+            out.append(("font", element, f"smallest text {px:.1f} CSS px < {MIN_TEXT_CSS_PX:g} "
+                                         f"({pt:g} pt at {dpi:g} dpi shown {im['width']:.0f} of "
+                                         f"{im['natural']} px)"))
+    return out
+
+
+def check_page(context, url: str, page_name: str, viewport: str, html_root: Path, base: str,
+               shots: Path | None) -> list[tuple[str, str, str]]:
+    failures: list[tuple[str, str, str]] = []
+    page = context.new_page()
+    page.on("console", lambda m: failures.append(("console", m.location.get("url", "").rsplit("/", 1)[-1] or "page", m.text[:200]))
+            if m.type == "error" else None)
+    page.on("pageerror", lambda e: failures.append(("console", "uncaught", str(e)[:200])))
+    page.on("requestfailed", lambda r: failures.append(("image", r.url.rsplit("/", 1)[-1][:60], f"request failed: {r.failure}"))
+            if r.resource_type == "image" and is_local(r.url, base) else None)
+    page.goto(url, wait_until="load")
+    if not page.evaluate(WAIT_MATHJAX_JS):
+        failures.append(("math", "document", "MathJax did not finish within 20 s"))
+    # load every image (some are lazy) before checking them
+    page.evaluate("() => Promise.all(Array.from(document.images).map(i => { i.loading = 'eager';"
+                  " return i.decode().catch(() => null); }))")
+    failures += [tuple(f) for f in page.evaluate(PAGE_CHECKS_JS, [viewport])]
+    if viewport == "390":
+        failures += font_failures(page.evaluate(IMAGES_JS), html_root, base)
+    if shots is not None:
+        page.screenshot(path=str(shots / f"{page_name.removesuffix('.html').replace('/', '__')}-{viewport}.png"),
+                        full_page=True)
+    page.close()
+    return failures
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--html", default="_build/html", type=Path)
+    parser.add_argument("--screenshots", default="_build/screenshots", type=Path)
+    parser.add_argument("--report", default="_build/browser-report", type=Path)
+    parser.add_argument("--pages", nargs="*", help="only these pages (paths relative to --html)")
+    args = parser.parse_args(argv)
+    from playwright.sync_api import sync_playwright
+
+    root = args.html.resolve()
+    if not (root / "index.html").is_file():
+        print(f"no built book at {root}: run `make book` first", file=sys.stderr)
+        return 2
+    # every page but redirects (Jupyter Book's root index.html only redirects to the first page)
+    pages = sorted(p.relative_to(root).as_posix() for p in root.rglob("*.html")
+                   if not SKIP_DIRS & set(p.relative_to(root).parts[:-1])
+                   and 'http-equiv="Refresh"' not in p.read_text(errors="replace")[:2000])
+    if args.pages:
+        pages = [p for p in pages if p in args.pages]
+    args.screenshots.mkdir(parents=True, exist_ok=True)
+    server, base = serve(root)
+    blocked: list[str] = []
+    results: list[tuple[str, str, str, str, str]] = []
+
+    def route(r, page_name: str, viewport: str, local_base: str):
+        if is_local(r.request.url, local_base):
+            r.continue_()
+        else:
+            results.append((page_name, viewport, "network", r.request.resource_type,
+                            f"blocked request to {r.request.url[:150]}"))
+            r.abort("blockedbyclient")
+
+    try:
+        with sync_playwright() as pw:
+            # Playwright hides scrollbars in headless mode by default: show them, the test
+            # checks that scrolling boxes have a visible scrollbar.
+            browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS,
+                                         headless=True, ignore_default_args=["--hide-scrollbars"])
+            for viewport, size in VIEWPORTS.items():
+                for name in pages:
+                    context = browser.new_context(viewport=size, device_scale_factor=1,
+                                                  service_workers="block")
+                    if viewport == "390":
+                        # a phone's page scrollbar overlays the page instead of taking 15 px
+                        # of its width (boxes keep theirs: the test checks them)
+                        context.add_init_script(PHONE_PAGE_SCROLLBAR_JS)
+                    context.route("**/*", lambda r, *_, n=name, v=viewport: route(r, n, v, base))
+                    t0 = time.monotonic()
+                    try:
+                        found = check_page(context, base + name, name, viewport, root, base,
+                                           args.screenshots)
+                    except Exception as exc:  # a page that breaks the driver is a failure too
+                        found = [("driver", "page", f"{type(exc).__name__}: {exc}"[:200])]
+                    results.extend((name, viewport, *f) for f in found)
+                    print(f"  {viewport:>4} px {name}: {len(found)} failures "
+                          f"({time.monotonic() - t0:.1f} s)", file=sys.stderr, flush=True)
+                    context.close()
+            # the same book opened from file:// (no server): math and assets must still load
+            for name in [p for p in ("book/intro.html", "book/zb2014/glr.html") if p in pages]:
+                context = browser.new_context(viewport=VIEWPORTS["1280"], device_scale_factor=1)
+                file_base = root.as_uri() + "/"
+                context.route("**/*", lambda r, *_, n=name: route(r, "file://" + n, "1280", file_base))
+                for check, element, detail in check_page(
+                        context, file_base + name, name, "1280", root, file_base, None):
+                    results.append(("file://" + name, "1280", check, element, detail))
+                context.close()
+            browser.close()
+    finally:
+        server.shutdown()
+
+    # text sliced in the page may end inside a UTF-16 surrogate pair
+    results = [tuple(str(x).encode("utf-8", "replace").decode("utf-8") for x in r) for r in results]
+    lines = [" | ".join(r) for r in results]
+    counts = collections.Counter((r[0], r[2]) for r in results)
+    checks = sorted({c for _, c in counts})
+    table = ["", "Failures per page and check:", "page | " + " | ".join(checks)]
+    for name in sorted({p for p, _ in counts}):
+        table.append(f"{name} | " + " | ".join(str(counts.get((name, c), 0)) for c in checks))
+    table.append("total | " + " | ".join(str(sum(v for (p, c), v in counts.items() if c == ck))
+                                         for ck in checks))
+    summary = (f"{len(pages)} pages x {len(VIEWPORTS)} viewports (+ file://): "
+               f"{len(results)} failures")
+    report = "\n".join(lines + (table if results else []) + ["", summary])
+    print(report)
+    args.report.parent.mkdir(parents=True, exist_ok=True)
+    args.report.with_suffix(".txt").write_text(report + "\n")
+    args.report.with_suffix(".json").write_text(json.dumps(
+        [dict(zip(("page", "viewport", "check", "element", "detail"), r)) for r in results],
+        indent=1))
+    print(f"screenshots in {args.screenshots}/, report in {args.report}.txt")
+    return 1 if results else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

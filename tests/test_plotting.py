@@ -1,0 +1,102 @@
+"""The house style of fdi_lib.plotting: phone-legible sizes, 2x PNG with its font metadata."""
+
+from __future__ import annotations
+
+import base64
+import io
+import struct
+
+import matplotlib.pyplot as plt
+import pytest
+
+from fdi_lib import plotting
+from fdi_lib.plotting import (DISPLAY_DPI, FIG_WIDTH_IN, MIN_FONT_PT, PHONE_COLUMN_PX, RASTER_SCALE,
+                              figure, png_for_display, smallest_font_pt)
+
+
+def _png_chunks(data: bytes) -> dict[bytes, list[bytes]]:
+    chunks: dict[bytes, list[bytes]] = {}
+    pos = 8
+    while pos < len(data):
+        (length,) = struct.unpack(">I", data[pos:pos + 4])
+        chunks.setdefault(data[pos + 4:pos + 8], []).append(data[pos + 8:pos + 8 + length])
+        pos += 12 + length
+    return chunks
+
+
+def test_smallest_text_is_legible_on_a_phone():
+    # text height in CSS px when the figure is shrunk to the phone column
+    assert MIN_FONT_PT / 72 * PHONE_COLUMN_PX / FIG_WIDTH_IN >= 9.0
+    for key in ("font.size", "xtick.labelsize", "ytick.labelsize", "legend.fontsize",
+                "axes.labelsize", "axes.titlesize"):
+        assert plotting.STYLE[key] >= MIN_FONT_PT, key
+
+
+@pytest.mark.parametrize("figsize", [None, (9.0, 2.5), (4.0, 5.0)])
+def test_figure_width_is_the_house_width_and_height_is_kept(figsize):
+    fig, axes = figure(2, 2, figsize=figsize)
+    width, height = fig.get_size_inches()
+    assert width == pytest.approx(FIG_WIDTH_IN)
+    assert height == pytest.approx(plotting.STYLE["figure.figsize"][1] if figsize is None
+                                   else figsize[1])
+    assert axes.shape == (2, 2)
+
+
+def test_panels_in_one_row_are_stacked_in_the_requested_shape():
+    fig, axes = figure(1, 3, figsize=(9.0, 3.0), sharey=True)
+    assert axes.shape == (1, 3)
+    assert fig.get_size_inches()[1] == pytest.approx(3 * 3.0 * plotting.STACKED_HEIGHT)
+    fig.canvas.draw()
+    boxes = [ax.get_position() for ax in axes[0]]
+    # one column, top to bottom in the order of axes[0, j]
+    assert all(abs(b.x0 - boxes[0].x0) < 1e-9 for b in boxes)
+    assert boxes[0].y0 > boxes[1].y0 > boxes[2].y0
+    assert axes[0, 2].get_shared_y_axes().joined(axes[0, 0], axes[0, 2])
+
+
+def test_reused_figure_is_resized_and_cleared():
+    fig = plt.figure(figsize=(10.0, 2.0))
+    fig.add_subplot().plot([0, 1])
+    same, axes = figure(2, 1, fig=fig, figsize=(7.0, 4.0))
+    assert same is fig and len(fig.axes) == 2 and axes.shape == (2, 1)
+    assert tuple(fig.get_size_inches()) == pytest.approx((FIG_WIDTH_IN, 4.0))
+
+
+def test_smallest_font_sees_explicit_small_text():
+    fig, axes = figure()
+    axes[0, 0].plot([0, 1], [0, 1], label="a")
+    axes[0, 0].legend()
+    assert smallest_font_pt(fig) == pytest.approx(MIN_FONT_PT)
+    axes[0, 0].text(0.5, 0.5, "tiny", fontsize=6)
+    assert smallest_font_pt(fig) == pytest.approx(6.0)
+    axes[0, 0].text(0.5, 0.2, "", fontsize=2)  # empty texts are not drawn: ignored
+    assert smallest_font_pt(fig) == pytest.approx(6.0)
+
+
+def test_png_for_display_is_a_2x_raster_with_font_metadata():
+    fig, axes = figure()
+    axes[0, 0].plot([0, 1], [1, 0])
+    b64, meta = png_for_display(fig)
+    data = base64.b64decode(b64)
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    chunks = _png_chunks(data)
+    width_px = struct.unpack(">I", chunks[b"IHDR"][0][:4])[0]
+    # display width is half the raster, about the figure's width at DISPLAY_DPI (tight bbox)
+    assert meta["width"] == round(width_px / RASTER_SCALE)
+    assert abs(meta["width"] - FIG_WIDTH_IN * DISPLAY_DPI) < 0.1 * FIG_WIDTH_IN * DISPLAY_DPI
+    text = dict(c.split(b"\0", 1) for c in chunks[b"tEXt"])
+    assert float(text[b"fdi:min_font_pt"]) == pytest.approx(MIN_FONT_PT)
+    assert float(text[b"fdi:dpi"]) == pytest.approx(DISPLAY_DPI * RASTER_SCALE)
+
+
+def test_png_for_display_of_an_empty_figure_is_none():
+    assert png_for_display(plt.figure()) is None
+
+
+def test_cli_savefig_is_also_2x():
+    fig, axes = figure()
+    axes[0, 0].plot([0, 1])
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
+    width_px = struct.unpack(">I", buf.getvalue()[16:20])[0]
+    assert width_px == pytest.approx(FIG_WIDTH_IN * DISPLAY_DPI * RASTER_SCALE, rel=0.01)
