@@ -52,7 +52,7 @@ book-fast: $(STAMP)
 	mkdir -p _build
 	find _build -maxdepth 1 -name '.jupyter_cache-*' ! -name '.jupyter_cache-$(LIB_HASH)' -exec rm -rf {} +  # stale caches
 	sed -e 's|^\(  execute_notebooks:\) force.*|\1 cache|' -e 's|^\(  timeout:.*\)|\1\n  cache: $(FAST_CACHE)|' \
-	    _config.yml > _build/_config_fast.yml
+	    -e 's|^\(    fdi_book:\) _ext|\1 $(CURDIR)/_ext|' _config.yml > _build/_config_fast.yml
 	grep -q 'execute_notebooks: cache' _build/_config_fast.yml
 	set -o pipefail; $(BIN)/jupyter-book build . --config _build/_config_fast.yml --builder html --keep-going 2>&1 | tee _build/book-fast.log
 	@echo "Book built (cached execution): $(abspath _build/html/index.html)"
