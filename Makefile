@@ -24,8 +24,10 @@ $(STAMP): requirements.lock pyproject.toml
 	touch $(STAMP)
 
 ## Build the whole book, every notebook executed; fails on any cell error or Sphinx warning.
+## Reproductions run by the chapters are cached for this build only, for the claims ledger.
+book: export FDI_RESULTS_CACHE := $(CURDIR)/_build/results-cache
 book: $(STAMP)
-	rm -rf _build/html _build/.doctrees
+	rm -rf _build/html _build/.doctrees _build/results-cache
 	set -o pipefail; $(BIN)/jupyter-book build . --warningiserror --nitpick --keep-going --builder html 2>&1 | tee _build.log
 	@echo "Book built: $(abspath _build/html/index.html)"
 
