@@ -15,7 +15,7 @@ import numpy as np
 
 from fdi_lib.filters import KalmanGains, kalman_filter, kalman_gains
 from fdi_lib.glr import WindowGLRResult, first_alarm, glr_window
-from fdi_lib.models import LTVModel, impulse_family, ltv_model
+from fdi_lib.models import FaultFamily, LTVModel, fault_profile, impulse_family, ltv_model
 from fdi_lib.plotting import OURS_COLOR, THRESHOLD_COLOR, figure
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.signatures import fault_signature, willsky_jones
@@ -23,7 +23,9 @@ from fdi_lib.simulate import simulate
 from fdi_lib.systems import zb2014_unstable as ex
 
 __all__ = ["ONSETS", "UnstableRun", "unstable_run", "plot_detection", "plot_fig1", "plot_fig2",
-           "TypoReading", "gamma_lower_bound", "single_entry_readings", "gamma_norm_peaks"]
+           "TypoReading", "gamma_lower_bound", "single_entry_readings", "gamma_norm_peaks",
+           "window_min_eigenvalue", "youngest_onset_information", "plot_persistent_excitation",
+           "plot_null_histograms"]
 
 PAPER = "Zhang & Basseville 2014"
 #: Impulse onsets of Figures 1 and 2.
@@ -219,6 +221,108 @@ def fig1(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
                               settings={"onsets": list(ONSETS), "n_steps": model.n_steps},
                               data={"gamma_norm": norms, "gamma_e1_norm": e1,
                                     "signature_norm": sig_norms})
+
+
+# ----------------------------------------------------------------------------- persistent excitation
+def window_min_eigenvalue(model: LTVModel, gains: KalmanGains, Psi: np.ndarray, s: int) -> np.ndarray:
+    """Smallest eigenvalue of the information of the last ``s`` samples (Section 3.3).
+
+    ``lambda_min( sum_{j=k-s+1}^{k} S_j^T Sigma_j^{-1} S_j )`` for ``k = s-1, ..., N-1``, with
+    ``S_j = H_j Gamma_j`` the signature of the state profile ``Psi``: persistent excitation
+    asks that it stays above some ``alpha > 0``. The window sums are sliding sums of the
+    per-sample terms (no cumulative-sum cancellation).
+
+    Parameters
+    ----------
+    model : LTVModel
+    gains : KalmanGains
+        Kalman gains of ``model``.
+    Psi : array_like
+        State fault profile, ``(n, m)`` or ``(N, n, m)``.
+    s : int
+        Window length.
+    """
+    S = fault_signature(model, gains, fault_profile(model, Psi=Psi)).on_innovation
+    info = np.einsum("kpi,kpq,kqj->kij", S, np.linalg.inv(gains.Sigma), S)
+    windowed = np.lib.stride_tricks.sliding_window_view(info, s, axis=0).sum(axis=-1)
+    return np.linalg.eigvalsh(windowed)[:, 0]
+
+
+def plot_persistent_excitation(curves: dict[str, np.ndarray], s: int, floor: float = 1e-16,
+                               fig: Any = None):
+    """Smallest eigenvalue of the windowed information against ``k``, log scale.
+
+    Parameters
+    ----------
+    curves : dict
+        Legend label to :func:`window_min_eigenvalue` output (values for ``k = s-1, ...``).
+    s : int
+        The window length.
+    floor : float
+        Values below it (rounding level: singular windows) are drawn at it.
+    fig : matplotlib.figure.Figure, optional
+        Figure to draw into.
+    """
+    fig, ax = figure(fig=fig)
+    ax = ax[0, 0]
+    for label, values in curves.items():
+        k = np.arange(s - 1, s - 1 + values.size)
+        ax.semilogy(k, np.maximum(values, floor), label=label)
+    ax.set(xlabel="$k$", ylabel=rf"$\lambda_{{\min}}$ of the information, $s = {s}$")
+    ax.legend()
+    return fig
+
+
+def plot_null_histograms(panels: dict[str, Any], xlabel: str, fig: Any = None):
+    """Histograms of statistics simulated under no fault, with their chi-square density.
+
+    Parameters
+    ----------
+    panels : dict
+        Panel title (may be empty) to a :class:`fdi_lib.calibration.Calibration`; one panel each,
+        side by side, the density of ``chi2(calibration.dof)`` drawn on each.
+    xlabel : str
+        Label of the statistic (mathtext).
+    fig : matplotlib.figure.Figure, optional
+        Figure to draw into.
+    """
+    import scipy.stats
+
+    fig, axes = figure(1, len(panels), fig=fig)
+    for ax, (title, cal) in zip(axes[0], panels.items()):
+        ax.hist(cal.statistics, bins=50, density=True, alpha=0.6, color=OURS_COLOR,
+                label=f"{cal.statistics.size} runs")
+        x = np.linspace(0.02, max(8.0, float(np.quantile(cal.statistics, 0.999))), 300)
+        ax.plot(x, scipy.stats.chi2(cal.dof).pdf(x), "--", color=THRESHOLD_COLOR,
+                label=rf"$\chi^2({cal.dof})$")
+        ax.set(title=title, xlabel=xlabel, ylim=(0, 1.2 if cal.dof == 1 else None))
+    axes[0, 0].set_ylabel("density")
+    axes[0, 0].legend()
+    return fig
+
+
+def youngest_onset_information(model: LTVModel, gains: KalmanGains, family: FaultFamily,
+                               min_samples: int | None = None) -> np.ndarray:
+    """``C_k(k - s)``: the information of the youngest onset the windowed GLR may pick.
+
+    The windowed GLR of :mod:`fdi_lib.glr` sums ``C_k(r)`` over ``j = r .. k`` and admits the
+    onsets ``r <= k - s``; this returns ``C_k(k - s)`` for every ``k >= s`` (shape
+    ``(N - s, m, m)``), computed by the same :func:`fdi_lib.glr.glr_window` with a window of
+    ``s + 1`` onsets. Whether it is invertible depends on the profiles, not on ``s`` alone.
+
+    Parameters
+    ----------
+    model : LTVModel
+    gains : KalmanGains
+    family : FaultFamily
+        Step or impulse profiles.
+    min_samples : int, optional
+        ``s``; default the library's ``ceil(m / p)``.
+    """
+    s = -(-family.m // model.p) if min_samples is None else int(min_samples)
+    res = glr_window(np.zeros((model.n_steps, model.p)), model, gains, family, window=s + 1,
+                     min_samples=s)
+    return res.C_hat[s:]
 
 
 # ----------------------------------------------------------------------------- Figure 2

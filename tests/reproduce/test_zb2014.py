@@ -142,3 +142,67 @@ def test_fig3_fig4_visibility_and_estimate_interval(rid):
     assert h["innovation_max_sigma_after_fault"] == pytest.approx(z[201:].max(), rel=1e-9)
     # the fault is not "hardly visible": the spike dwarfs the pre-fault maximum
     assert h["innovation_max_sigma_after_fault"] > 3 * h["innovation_max_sigma_before_fault"]
+
+
+def test_youngest_onset_information_matches_direct_sums():
+    """C_k(k - s) against a direct sum over j = r .. k of the signature of the onset r."""
+    from fdi_lib.filters import kalman_gains
+    from fdi_lib.models import impulse_family
+    from fdi_lib.reproduce.zb2014 import youngest_onset_information
+    from fdi_lib.signatures import fault_signature
+
+    model = ex.unstable_model(60)
+    gains = kalman_gains(model)
+    fam = impulse_family(model)
+    s = 2
+    C = youngest_onset_information(model, gains, fam)
+    assert C.shape == (60 - s, 2, 2)
+    for k in (5, 30, 59):
+        r = k - s
+        S = fault_signature(model, gains, fam.profile(r)).on_innovation
+        direct = sum(S[j].T @ np.linalg.inv(gains.Sigma[j]) @ S[j] for j in range(r, k + 1))
+        np.testing.assert_allclose(C[k - s], direct, rtol=1e-10)
+
+
+def test_pipeline_youngest_onset_is_singular_with_the_default_s():
+    """The statement of the GLR chapter: s = ceil(m/p) does not make C_k(k-s) invertible."""
+    from fdi_lib.filters import kalman_gains
+    from fdi_lib.reproduce.zb2014 import youngest_onset_information
+    from fdi_lib.systems import gas_pipeline as gp
+
+    model = gp.pipeline_model()
+    fam = gp.input_fault_family(model)
+    C = youngest_onset_information(model, kalman_gains(model), fam)
+    ev = np.linalg.eigvalsh(C)
+    assert np.all(np.abs(ev[:, 0]) <= 1e-12 * ev[:, 1])      # rank one at every k
+    assert np.all(ev[:, 1] > 0)
+
+
+def test_window_min_eigenvalue_constant_versus_varying_profile():
+    from fdi_lib.filters import kalman_gains
+    from fdi_lib.reproduce.zb2014 import window_min_eigenvalue
+
+    model = ex.unstable_model()
+    gains = kalman_gains(model)
+    const = window_min_eigenvalue(model, gains, np.eye(2), 10)
+    k = np.arange(model.n_steps)
+    varying = np.stack([np.diag([np.sin(0.2 * j), np.cos(0.05 * j)]) for j in k])
+    vary = window_min_eigenvalue(model, gains, varying, 10)
+    assert const.shape == vary.shape == (model.n_steps - 9,)
+    assert const[-100:].max() < 1e-10 * vary[-100:].min()
+
+
+def test_chapter_plot_helpers_draw():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from fdi_lib.calibration import Calibration
+    from fdi_lib.reproduce.zb2014 import plot_null_histograms, plot_persistent_excitation
+
+    cal = Calibration(statistics=np.random.default_rng(0).chisquare(2, 200), dof=2,
+                      ks_pvalue=0.5, alpha=0.05, rejection_rate=0.05, rejection_ci=(0.02, 0.09))
+    fig = plot_null_histograms({"a": cal, "b": cal}, xlabel="$l$")
+    assert len(fig.axes) == 2 and all(ax.patches and ax.lines for ax in fig.axes)
+    fig = plot_persistent_excitation({"x": np.ones(5), "y": np.zeros(5)}, s=3)
+    assert len(fig.axes[0].lines) == 2
+    assert fig.axes[0].lines[1].get_ydata().min() == pytest.approx(1e-16)
