@@ -338,11 +338,13 @@ SPECS: dict[str, ClaimSpec] = {
         check=lambda p, o, h: all(lo <= t <= hi for t, (lo, hi) in zip(p, h["theta_estimate_ci"])),
         criterion="each component of the paper's θ in our 95 % interval (θ̂ ± 1.96 σ from C_k(r̂))"),
     "zb2014-fig3:fault_visibility": ClaimSpec(
-        "Fig. 3: the fault shows on the innovation only briefly after 201",
+        "Fig. 3: the fault shows on the innovation only briefly after 201 (ours: samples "
+        "above the pre-fault maximum)",
         ours=lambda h, p: h["innovation_samples_above_premax"],
         check=lambda p, o, h: o <= 10, criterion="at most 10 samples above the pre-fault max |ε_k|"),
     "zb2014-fig4:fault_visibility": ClaimSpec(
-        "Fig. 4: the fault is hardly visible on the innovation", explain="sec-zb-glr-figs",
+        "Fig. 4: the fault is hardly visible on the innovation (ours: largest |ε_k|/σ_k "
+        "from 201)", explain="sec-zb-glr-figs",
         ours=lambda h, p: h["innovation_max_sigma_after_fault"],
         check=lambda p, o, h: o <= h["innovation_max_sigma_before_fault"],
         criterion="largest |ε_k|/σ after 201 within the pre-fault range"),
@@ -454,10 +456,11 @@ def chapter_of(id: str) -> str:
 
 
 def _fig(id: str) -> str:
-    kind, _, num = id.split("-", 1)[1].partition("fig")
-    if kind == "" and num:
-        return f"Fig. {num}"
-    return id.split("-", 1)[1].capitalize()
+    """``"zb2014-fig3"`` -> ``"Fig. 3"``, ``"zb2014-table1"`` -> ``"Table 1"``."""
+    m = re.fullmatch(r"[a-z0-9]+-(fig|table)(\d+)", id)
+    if m:
+        return f"{'Fig.' if m.group(1) == 'fig' else 'Table'} {m.group(2)}"
+    return id.split("-", 1)[-1].capitalize()
 
 
 def _order(id: str) -> tuple[int, str]:
@@ -497,7 +500,7 @@ class Ledger:
         lines = [":::{list-table}", ":header-rows: 1", ":widths: 34 14 22 12 18", "",
                  "* - claim (paper)", "  - paper", "  - ours", "  - status", "  - explained in"]
         for r in self.rows:
-            lines += [f"* - {_md(r.label)}", f"  - {_md(_fmt(r.paper))}",
+            lines += [f"* - {_md(r.label)}", f"  - {_md(_fmt(r.paper, digits=6))}",
                       f"  - {_md(_fmt(r.ours, r.ci, r.paper))}" + (
                           f" ({_md(r.role)})" if r.role else ""),
                       f"  - {r.status}",
@@ -520,8 +523,9 @@ def _is_rate(x: Any) -> bool:
     return _is_number(x) and 0.0 <= float(x) <= 1.0
 
 
-def _fmt(v: Any, ci: tuple[float, float] | None = None, paper: Any = None) -> str:
-    """A cell: rates with an interval in %, numbers with 3-4 digits, lists in brackets."""
+def _fmt(v: Any, ci: tuple[float, float] | None = None, paper: Any = None,
+         digits: int = 4) -> str:
+    """A cell: rates with an interval in %, numbers with ``digits`` digits, lists in brackets."""
     if v is None:
         return "none"
     if isinstance(v, bool):
@@ -532,12 +536,12 @@ def _fmt(v: Any, ci: tuple[float, float] | None = None, paper: Any = None) -> st
             paper is None or _is_rate(paper)):
         return fmt_rate(float(v), (float(ci[0]), float(ci[1])), digits=3)
     if _is_number(v):
-        out = fmt_number(v, 4)
+        out = fmt_number(v, digits)
         if ci is not None:
             out += f" [{fmt_number(ci[0], 3)}, {fmt_number(ci[1], 3)}]"
         return out
     if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(_fmt(x) for x in v) + "]"
+        return "[" + ", ".join(_fmt(x, digits=digits) for x in v) + "]"
     if isinstance(v, Mapping):
         return ", ".join(f"{k}: {_fmt(x)}" for k, x in v.items())
     return str(v)
@@ -616,7 +620,12 @@ def collect_results(*, max_trials: int | None = None, ids: Sequence[str] | None 
     results, sources = {}, {}
     for id in wanted:
         if id in cached:
-            results[id], sources[id] = cached[id], "cached (the chapter's run)"
+            results[id] = cached[id]
+            st = cached[id].settings
+            trials = st.get("trials", st.get("trials_per_fault"))
+            sources[id] = "cached in this build" + (
+                f" (seed {st['seed']}" + (f", {trials} trials" if trials else "") + ")"
+                if "seed" in st else "")
             continue
         rep = get(id)
         trials = rep.default_trials

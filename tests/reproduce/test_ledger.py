@@ -176,3 +176,28 @@ def test_cli_ledger_json(monkeypatch, capsys, cheap_results):
     assert sum(d["counts"].values()) == len(d["rows"]) > 20
     assert cli.main(["reproduce", "--ledger"]) == 0
     assert "differs" in capsys.readouterr().out
+
+
+@pytest.mark.slow
+def test_every_registered_paper_value_appears_in_the_ledger():
+    """All reproductions (Monte Carlo ones with 2 trials): strict build, nothing left out."""
+    results = {r.id: r(trials=None if r.default_trials is None else 2)
+               for r in list_reproductions()}
+    led = L.build_ledger(results, strict=True)      # raises on a claim without a rule
+    listed = _listed(led)
+    n_claims = 0
+    for id, res in results.items():
+        for path in L.claim_paths(res.paper):
+            n_claims += 1
+            spec = L.spec_for(id, path)
+            owner = spec.shown_under if spec and spec.shown_under else id
+            assert (owner, path) in listed, (id, path)
+    shown_twice = sum(1 for id, res in results.items() for p in L.claim_paths(res.paper)
+                      if (s := L.spec_for(id, p)) and s.shown_under)
+    assert len(led.rows) == n_claims - shown_twice
+    assert all(r.status in L.STATUSES for r in led.rows)
+    for r in led.rows:
+        if r.id in L.SURROGATE_IDS:
+            assert r.role in (L.CALIBRATION, L.PREDICTION)
+        else:
+            assert r.role is None
