@@ -154,16 +154,26 @@ def single_entry_readings(eigenvalue: float = ex.QUOTED_UNSTABLE_EIGENVALUE,
 
 
 def plot_fig1(result: ReproductionResult, fig: Any = None):
-    """Paper Fig. 1: ``||Gamma_k||_2`` (solid) and ``||Gamma_k e_1||_2`` (dotted) against ``k``."""
-    fig, ax = figure(fig=fig)
-    ax = ax[0, 0]
+    """Paper Fig. 1: ``||Gamma_k||_2`` against ``k`` (left); zoom on ``r = 101`` with ``||Gamma_k e_1||_2``.
+
+    The right panel also draws the floor ``||F e_2||`` (:func:`gamma_lower_bound`).
+    """
+    fig, axes = figure(1, 2, fig=fig, gridspec_kw={"width_ratios": [2, 1]})
+    left, right = axes[0]
     for r, norms in result.data["gamma_norm"].items():
-        line, = ax.plot(np.arange(norms.size), norms, label=f"$r = {r}$")
-        e1 = result.data["gamma_e1_norm"][r]
-        ax.plot(np.arange(e1.size), e1, ls=":", color=line.get_color())
-    ax.axhline(1.0, color="k", lw=0.8, ls="--", label="paper's bound 1")
-    ax.set(xlabel="$k$", ylabel=r"$\|\Gamma_k\|_2$ (solid), $\|\Gamma_k e_1\|_2$ (dotted)")
-    ax.legend(ncols=5, loc="upper right")
+        left.plot(np.arange(norms.size), norms, label=f"$r = {r}$")
+    left.axhline(1.0, color="k", lw=0.8, ls="--", label="paper's bound 1")
+    left.set(xlabel="$k$", ylabel=r"$\|\Gamma_k\|_2$")
+    left.legend(ncols=3, loc="upper right")
+    r = "101" if "101" in result.data["gamma_norm"] else next(iter(result.data["gamma_norm"]))
+    k = np.arange(int(r) - 2, int(r) + 15)
+    right.plot(k, result.data["gamma_norm"][r][k], label=r"$\|\Gamma_k\|_2$")
+    right.plot(k, result.data["gamma_e1_norm"][r][k], ls=":", label=r"$\|\Gamma_k e_1\|_2$")
+    right.axhline(1.0, color="k", lw=0.8, ls="--")
+    right.axhline(result.headline["gamma_lower_bound"], color="0.4", lw=0.8, ls="-.",
+                  label=r"$\|F e_2\|_2$")
+    right.set(xlabel="$k$", title=f"zoom on $r = {r}$")
+    right.legend(loc="center right")
     return fig
 
 
@@ -333,8 +343,8 @@ def plot_fig2(result: ReproductionResult, fig: Any = None):
     for r, norms in result.data["alpha_norm"].items():
         k = np.arange(norms.size)
         mask = norms > 0
-        ax.semilogy(k[mask], norms[mask], label=f"r = {r}")
-    ax.set(xlabel="k", ylabel=r"$\|\alpha_k(r)\|_2$", title="Willsky-Jones recursion (A.6)")
+        ax.semilogy(k[mask], norms[mask], label=f"$r = {r}$")
+    ax.set(xlabel="$k$", ylabel=r"$\|\alpha_k(r)\|_2$", title="Willsky-Jones recursion (A.6)")
     ax.legend(ncols=4, loc="upper left")
     return fig
 
@@ -444,16 +454,17 @@ def plot_detection(run: UnstableRun, fig: Any = None, title: str | None = None):
     top.plot(k, run.innovations, color=OURS_COLOR, lw=0.8)
     top.axvline(run.onset, color="k", ls=":", lw=0.8)
     top.set(ylabel=r"$\varepsilon_k$",
-            title=title or f"theta = {list(run.theta)}, onset {run.onset}, w = {run.window}")
+            title=title or (rf"$\theta = [{run.theta[0]:g}, {run.theta[1]:g}]$, "
+                            rf"onset $r = {run.onset}$, $w = {run.window}$"))
     bottom.plot(k, run.glr.statistic, color=OURS_COLOR)
     if run.threshold is not None:
         bottom.axhline(run.threshold, color=THRESHOLD_COLOR, ls="--", lw=0.8,
                        label=f"threshold {run.threshold:g}")
-    bottom.axvline(run.onset, color="k", ls=":", lw=0.8, label=f"onset {run.onset}")
+    bottom.axvline(run.onset, color="k", ls=":", lw=0.8, label=f"onset $r = {run.onset}$")
     if run.alarm >= 0:
         bottom.plot([run.alarm], [run.glr.statistic[run.alarm]], "o", color=THRESHOLD_COLOR,
-                    label=f"alarm at k = {run.alarm}")
-    bottom.set(xlabel="k", ylabel=r"$l_k$")
+                    label=f"alarm at $k = {run.alarm}$")
+    bottom.set(xlabel="$k$", ylabel=r"$l_k$")
     bottom.legend(loc="upper left")
     return fig
 

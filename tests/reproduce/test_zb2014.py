@@ -50,14 +50,15 @@ def test_plot_functions_draw_the_figures():
     matplotlib.use("Agg")
     from fdi_lib.reproduce import get
 
-    for rid, n_axes in [("zb2014-fig1", 1), ("zb2014-fig2", 1), ("zb2014-fig3", 2), ("zb2014-fig4", 2)]:
+    for rid, n_axes in [("zb2014-fig1", 2), ("zb2014-fig2", 1), ("zb2014-fig3", 2), ("zb2014-fig4", 2)]:
         rep = get(rid)
         fig = rep.plot(rep())
         assert len(fig.axes) == n_axes
         assert all(ax.lines for ax in fig.axes), f"{rid}: an empty panel"
     fig1 = get("zb2014-fig1").plot(get("zb2014-fig1")())
-    # per onset ||Gamma_k|| and ||Gamma_k e_1||, plus the paper's bound
-    assert len(fig1.axes[0].lines) == 2 * len(ONSETS) + 1
+    assert len(fig1.axes[0].lines) == len(ONSETS) + 1  # one curve per onset + the paper's bound
+    # zoom: ||Gamma_k||, ||Gamma_k e_1||, the bound 1 and the floor ||F e_2||
+    assert len(fig1.axes[1].lines) == 4
 
 
 def _gamma_by_hand(F, r, n_steps=ex.N_STEPS):
