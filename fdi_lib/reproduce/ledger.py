@@ -624,7 +624,8 @@ def collect_results(*, max_trials: int | None = None, ids: Sequence[str] | None 
             st = cached[id].settings
             trials = st.get("trials", st.get("trials_per_fault"))
             sources[id] = "cached in this build" + (
-                f" (seed {st['seed']}" + (f", {trials} trials" if trials else "") + ")"
+                f" (seed {st['seed']}" + (f", {fmt_count(trials)} trial" + "s" * (trials != 1)
+                                          if trials else "") + ")"
                 if "seed" in st else "")
             continue
         rep = get(id)
