@@ -28,8 +28,10 @@ $(STAMP): requirements.lock pyproject.toml
 ## notice that a kernel talks to the build over local TCP without encryption, and the
 ## "KeyboardInterrupt caught in kernel" that jupyter_client's interrupt-before-shutdown causes
 ## when a kernel is still finishing a message. It ends with the execution time of every chapter.
+## Reproductions run by the chapters are cached for this build only, for the claims ledger.
+book: export FDI_RESULTS_CACHE := $(CURDIR)/_build/results-cache
 book: $(STAMP)
-	rm -rf _build/html _build/.doctrees
+	rm -rf _build/html _build/.doctrees _build/results-cache
 	mkdir -p _build
 	set -o pipefail; $(BIN)/jupyter-book build . --warningiserror --nitpick --keep-going --builder html 2>&1 \
 	  | sed -u -e '/Kernel is running over TCP without encryption/d' \

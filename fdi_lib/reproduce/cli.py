@@ -1,4 +1,9 @@
-"""Command line: ``python -m fdi_lib reproduce [--list | ID [--seed S] [--trials N] [--jobs J] [--json]]``.
+"""Command line: ``python -m fdi_lib reproduce [--list | --ledger | ID [--seed S] [--trials N] [--jobs J] [--json]]``.
+
+``--ledger`` prints the claims ledger (:mod:`fdi_lib.reproduce.ledger`): every value the
+papers state, ours, and the computed status; with ``--json``, one object
+``{"counts", "rows", "sources"}``; ``--trials N`` caps the Monte Carlo trials of the runs it
+makes (results cached by a book build, ``$FDI_RESULTS_CACHE``, are read instead).
 
 ``--json`` prints exactly one JSON object ``{"id", "headline", "paper", "settings"}``
 on standard output; the ``headline`` keys of each identifier are documented in
@@ -22,6 +27,8 @@ def _parser() -> argparse.ArgumentParser:
     rep = sub.add_parser("reproduce", help="reproduce a figure or table of the papers")
     rep.add_argument("id", nargs="?", help="reproduction identifier, e.g. zb2014-fig3")
     rep.add_argument("--list", action="store_true", help="list the identifiers and exit")
+    rep.add_argument("--ledger", action="store_true",
+                     help="print the claims ledger of the four papers (with --json: one object)")
     rep.add_argument("--describe", action="store_true", help="print the documentation of ID and exit")
     rep.add_argument("--seed", type=int, default=None, help="random seed (default: the reproduction's)")
     rep.add_argument("--trials", type=int, default=None,
@@ -39,8 +46,10 @@ def main(argv: list[str] | None = None) -> int:
             trials = "" if r.default_trials is None else f"  [{r.default_trials} trials]"
             print(f"{r.id:<22} {r.paper:<28} {r.title}{trials}")
         return 0
+    if args.ledger:
+        return _print_ledger(args)
     if not args.id:
-        print("error: give a reproduction ID or --list", file=sys.stderr)
+        print("error: give a reproduction ID, --list or --ledger", file=sys.stderr)
         return 2
     try:
         rep = get(args.id)
@@ -66,6 +75,27 @@ def main(argv: list[str] | None = None) -> int:
         for key, value in result.headline.items():
             paper = result.paper.get(key, "")
             print(f"  {key:<28} ours: {value!s:<40} paper: {paper}")
+    return 0
+
+
+def _print_ledger(args: argparse.Namespace) -> int:
+    import json
+
+    from fdi_lib.reproduce.ledger import ledger
+
+    try:
+        led = ledger(max_trials=args.trials)
+    except FDIError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    if args.json:
+        print(json.dumps(led.to_json_dict()))
+        return 0
+    print("  ".join(f"{status}: {n}" for status, n in led.counts().items()))
+    for r in led.rows:
+        print(f"{r.status:<17} {r.label}\n{'':<17} paper: {r.paper}  ours: {r.ours}"
+              + (f"  95 % interval: [{r.ci[0]:.4g}, {r.ci[1]:.4g}]" if r.ci else "")
+              + (f"  ({r.role})" if r.role else "") + (f"  see {r.explain}" if r.explain else ""))
     return 0
 
 

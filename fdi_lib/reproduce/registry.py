@@ -5,19 +5,38 @@ registered with :func:`register`. Its identifier (``zb2014-fig3``), the keys of
 its ``headline`` dictionary and their meaning (documented in the function's
 docstring) are a public contract used by the book, the tests and the CLI
 ``python -m fdi_lib reproduce ID --json``: keep them stable.
+
+Results cache
+-------------
+If the environment variable ``FDI_RESULTS_CACHE`` names a directory, every call of a
+registered reproduction first looks there for a result computed with the same
+``(id, seed, trials, keyword arguments)`` by the same code (a hash of every source file of
+:mod:`fdi_lib`, :func:`code_version`), and stores what it computes. ``jobs`` is not part of
+the key: results are identical for any number of jobs. ``make book`` sets the variable so
+that a result computed by a chapter is reused by the claims ledger
+(:mod:`fdi_lib.reproduce.ledger`) instead of being computed twice. Without the variable
+nothing is read or written.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
+import os
+import pickle
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 
 from fdi_lib.errors import ModelError, UnknownReproductionError
 
-__all__ = ["Reproduction", "ReproductionResult", "register", "get", "list_reproductions", "reproduce"]
+__all__ = ["Reproduction", "ReproductionResult", "register", "get", "list_reproductions", "reproduce",
+           "code_version", "cache_dir", "cached_results", "CACHE_ENV"]
+
+#: Environment variable naming the results cache directory (see the module docstring).
+CACHE_ENV = "FDI_RESULTS_CACHE"
 
 
 @dataclass(frozen=True)
@@ -74,12 +93,77 @@ class Reproduction:
             raise ModelError(f"trials: expected a positive integer, got {trials!r}")
         if not isinstance(jobs, (int, np.integer)) or jobs == 0:
             raise ModelError(f"jobs: expected a non-zero integer (-1 = all cores), got {jobs!r}")
-        result = self.func(seed=int(seed), trials=None if trials is None else int(trials),
-                           jobs=int(jobs), **kwargs)
+        trials = None if trials is None else int(trials)
+        path = _cache_path(self.id, int(seed), trials, kwargs)
+        if path is not None and path.exists():
+            path.touch()  # the newest entry of an id is the one last used (see cached_results)
+            with path.open("rb") as fh:
+                return pickle.load(fh)
+        result = self.func(seed=int(seed), trials=trials, jobs=int(jobs), **kwargs)
         if not isinstance(result, ReproductionResult) or result.id != self.id:
             raise TypeError(f"reproduction {self.id!r} returned {type(result).__name__} "
                             f"with id {getattr(result, 'id', None)!r}")
+        if path is not None:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            tmp = path.with_suffix(f".{os.getpid()}.tmp")
+            try:
+                with tmp.open("wb") as fh:
+                    pickle.dump(result, fh)
+            except (pickle.PicklingError, TypeError, AttributeError):
+                tmp.unlink(missing_ok=True)  # not picklable: this result is simply not cached
+            else:
+                tmp.replace(path)  # atomic: a concurrent reader never sees half a file
         return result
+
+
+_CODE_VERSION: str | None = None
+
+
+def code_version() -> str:
+    """SHA-256 of the source of every module of :mod:`fdi_lib` (part of the cache key)."""
+    global _CODE_VERSION
+    if _CODE_VERSION is None:
+        root = Path(__file__).resolve().parents[1]
+        h = hashlib.sha256()
+        for f in sorted(root.rglob("*.py")):
+            h.update(str(f.relative_to(root)).encode())
+            h.update(f.read_bytes())
+        _CODE_VERSION = h.hexdigest()
+    return _CODE_VERSION
+
+
+def cache_dir() -> Path | None:
+    """The results cache directory (``$FDI_RESULTS_CACHE``), or ``None`` when caching is off."""
+    value = os.environ.get(CACHE_ENV, "").strip()
+    return Path(value) if value else None
+
+
+def _cache_path(id: str, seed: int, trials: int | None, kwargs: dict[str, Any]) -> Path | None:
+    root = cache_dir()
+    if root is None:
+        return None
+    key = json.dumps([id, seed, trials, sorted((k, repr(v)) for k, v in kwargs.items())])
+    digest = hashlib.sha256(key.encode()).hexdigest()[:24]
+    return root / id / f"{code_version()[:16]}-{digest}.pkl"
+
+
+def cached_results() -> dict[str, ReproductionResult]:
+    """For each id, the cached result of the current code that was used last, if any.
+
+    Reads ``$FDI_RESULTS_CACHE`` (empty dictionary when caching is off): in a book build,
+    these are the results the chapters computed.
+    """
+    root = cache_dir()
+    out: dict[str, ReproductionResult] = {}
+    if root is None or not root.is_dir():
+        return out
+    prefix = code_version()[:16]
+    for sub in sorted(p for p in root.iterdir() if p.is_dir()):
+        entries = sorted(sub.glob(f"{prefix}-*.pkl"), key=lambda p: p.stat().st_mtime)
+        if entries:
+            with entries[-1].open("rb") as fh:
+                out[sub.name] = pickle.load(fh)
+    return out
 
 
 _REGISTRY: dict[str, Reproduction] = {}
