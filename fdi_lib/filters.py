@@ -26,8 +26,9 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from fdi_lib.errors import NonFiniteError
+from fdi_lib.errors import ModelError, NonFiniteError
 from fdi_lib.models import LTVModel, as_record
+from fdi_lib.validation import check_gains, cholesky, initial_state, measurements
 
 __all__ = ["KalmanGains", "KalmanResult", "kalman_gains", "kalman_filter", "as_outputs"]
 
@@ -89,6 +90,8 @@ def kalman_gains(model: LTVModel) -> KalmanGains:
     >>> round(float(g.P[-1, 0, 0]), 4)  # DARE P^2 - 0.81 P - 1 = 0: P = (0.81 + sqrt(0.81**2 + 4)) / 2
     1.4839
     """
+    if not isinstance(model, LTVModel):
+        raise ModelError(f"model: expected an LTVModel, got {type(model).__name__}")
     N, n, p = model.n_steps, model.n, model.p
     K = np.empty((N, n, p))
     P = np.empty((N + 1, n, n))
@@ -103,7 +106,7 @@ def kalman_gains(model: LTVModel) -> KalmanGains:
         F, H, Pk = model.F[k], model.H[k], P[k]
         S = H @ Pk @ H.T + model.R[k]
         S = 0.5 * (S + S.T)
-        c, low = scipy.linalg.cho_factor(S, lower=True)
+        c, low = cholesky(S, step=k, what="the Riccati recursion")
         Kk = scipy.linalg.cho_solve((c, low), H @ Pk).T  # P H^T S^{-1} without forming S^{-1}
         IKH = eye - Kk @ H
         Pf = IKH @ Pk @ IKH.T + Kk @ model.R[k] @ Kk.T  # Joseph form: stays PSD
@@ -156,7 +159,8 @@ def kalman_filter(model: LTVModel, y: Any, u: Any = None, *, gains: KalmanGains 
     model : LTVModel
         The fault-free model the filter is designed for (Remark 1 of the paper).
     y : array_like
-        Outputs, shape ``(*batch, N, p)``.
+        Outputs, shape ``(*batch, N, p)``. A sample with a NaN is missing: the filter predicts
+        without updating and its innovation is NaN (:mod:`fdi_lib.validation`).
     u : array_like, optional
         Inputs, shape ``(*batch, N, l)`` or ``(N, l)``; default zeros.
     gains : KalmanGains, optional
@@ -169,12 +173,17 @@ def kalman_filter(model: LTVModel, y: Any, u: Any = None, *, gains: KalmanGains 
     KalmanResult
     """
     N, n, l = model.n_steps, model.n, model.l
-    y_arr = as_outputs(model, y)
+    y_arr, missing = measurements(y, n_steps=N, width=model.p, name="y")
     u_arr = as_record(u, n_steps=N, width=l, name="u")
     batch = y_arr.shape[:-2]
-    g = kalman_gains(model) if gains is None else gains
+    if gains is None:
+        g = kalman_gains(model)
+    else:
+        check_gains(model, gains)
+        g = gains
     xh = np.empty((*batch, N + 1, n))
-    xh[..., 0, :] = model.x0 if x0 is None else np.asarray(x0, dtype=float)
+    xh[..., 0, :] = initial_state(model, x0)
+    any_missing = bool(missing.any())
     eps = np.empty(y_arr.shape)
     xf = np.empty((*batch, N, n))
     # Known input contributions, computed for all k at once.
@@ -185,6 +194,8 @@ def kalman_filter(model: LTVModel, y: Any, u: Any = None, *, gains: KalmanGains 
     for k in range(N):
         e = ybar[..., k, :] - xh[..., k, :] @ model.H[k].T
         eps[..., k, :] = e
+        if any_missing:  # a missing sample: predict without updating
+            e = np.where(missing[..., k, None], 0.0, e)
         xf[..., k, :] = xh[..., k, :] + e @ g.K[k].T
         xh[..., k + 1, :] = xf[..., k, :] @ model.F[k].T + Gu[..., k, :]
     upd = ybar - np.einsum("kij,...kj->...ki", model.H, xf)

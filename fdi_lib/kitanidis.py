@@ -55,8 +55,8 @@ import numpy as np
 import scipy.linalg
 
 from fdi_lib.errors import NonFiniteError, RankConditionError, ShapeError
-from fdi_lib.filters import as_outputs
 from fdi_lib.models import FaultProfile, LTVModel, as_record, as_sequence
+from fdi_lib.validation import check_finite, cholesky, initial_state, measurements
 
 __all__ = [
     "KitanidisGains",
@@ -174,7 +174,7 @@ def kitanidis_gains(model: LTVModel, E: Any) -> KitanidisGains:
         H, Pk, Rk = model.H[k], P[k], model.R[k]
         S = H @ Pk @ H.T + Rk
         S = 0.5 * (S + S.T)
-        c, low = scipy.linalg.cho_factor(S, lower=True)
+        c, low = cholesky(S, step=k, what="the Kitanidis covariance recursion")
         Kk = scipy.linalg.cho_solve((c, low), H @ Pk).T  # P H^T S^{-1} by Cholesky solves
         Pf = Pk - Kk @ H @ Pk
         Kbar = Kk
@@ -252,7 +252,8 @@ def kitanidis_filter(model: LTVModel, y: Any, u: Any = None, E: Any = None, *,
     model : LTVModel
         Fault-free model (without the unknown input term).
     y : array_like
-        Outputs ``(*batch, N, p)``.
+        Outputs ``(*batch, N, p)``. A sample with a NaN is missing: the filter predicts without
+        updating and its innovation and residual are NaN (:mod:`fdi_lib.validation`).
     u : array_like, optional
         Known inputs ``(*batch, N, l)`` or ``(N, l)``; default zeros.
     E : array_like or callable, optional
@@ -272,19 +273,22 @@ def kitanidis_filter(model: LTVModel, y: Any, u: Any = None, E: Any = None, *,
         gains = kitanidis_gains(model, E)
     else:
         _check_gains(model, gains)
-    y_arr = as_outputs(model, y)
+    y_arr, missing = measurements(y, n_steps=model.n_steps, width=model.p, name="y")
     batch = y_arr.shape[:-2]
     N, n = model.n_steps, model.n
+    any_missing = bool(missing.any())
     u_arr = as_record(u, n_steps=model.n_steps, width=model.l, name="u")
     Gu = np.broadcast_to(np.einsum("kij,...kj->...ki", model.G, u_arr), (*batch, N, n))
     ybar = y_arr - np.einsum("kij,...kj->...ki", model.J, u_arr)
     xp = np.empty((*batch, N + 1, n))
     xf = np.empty((*batch, N, n))
     eps = np.empty(y_arr.shape)
-    xp[..., 0, :] = model.x0 if x0 is None else np.asarray(x0, dtype=float)
+    xp[..., 0, :] = initial_state(model, x0)
     for k in range(N):
         e = ybar[..., k, :] - xp[..., k, :] @ model.H[k].T
         eps[..., k, :] = e
+        if any_missing:  # a missing sample: predict without updating
+            e = np.where(missing[..., k, None], 0.0, e)
         xf[..., k, :] = xp[..., k, :] + e @ gains.K[k].T
         xp[..., k + 1, :] = xf[..., k, :] @ model.F[k].T + Gu[..., k, :]
     res = ybar - np.einsum("kij,...kj->...ki", model.H, xf)
@@ -360,8 +364,7 @@ def residual_signature(model: LTVModel, gains: Any, fault: FaultProfile | None =
     if Phi_a.ndim < 3 or Phi_a.shape[-3:-1] != (N, p) or Phi_a.shape[-1] != Psi_a.shape[-1]:
         raise ShapeError(f"Phi: expected shape (..., {N}, {p}, {Psi_a.shape[-1]}), got {Phi_a.shape}")
     for arr, name in ((Psi_a, "Psi"), (Phi_a, "Phi")):
-        if not np.all(np.isfinite(arr)):
-            raise NonFiniteError(f"{name}: expected finite values")
+        check_finite(arr, name)
     batch = np.broadcast_shapes(Psi_a.shape[:-3], Phi_a.shape[:-3])
     m = Psi_a.shape[-1]
     Psi_a = np.broadcast_to(Psi_a, (*batch, N, n, m))

@@ -20,7 +20,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from fdi_lib.errors import CovarianceError, ModelError, NonFiniteError, ShapeError
+from fdi_lib.errors import ModelError, ShapeError
+from fdi_lib.validation import check_finite, covariance
 
 __all__ = [
     "LTVModel",
@@ -36,15 +37,6 @@ __all__ = [
 ]
 
 MatrixLike = Any  # array_like | Callable[[int], array_like]
-
-#: Relative tolerance of the symmetry and positive semi-definiteness checks.
-COV_RTOL = 1e-9
-
-
-def _check_finite(arr: np.ndarray, name: str) -> None:
-    if not np.all(np.isfinite(arr)):
-        idx = tuple(int(i) for i in np.argwhere(~np.isfinite(arr))[0])
-        raise NonFiniteError(f"{name}: expected finite values, got {float(arr[idx])} at index {idx}")
 
 
 def as_sequence(value: MatrixLike, *, n_steps: int, shape: tuple[int, ...], name: str) -> np.ndarray:
@@ -89,7 +81,7 @@ def as_sequence(value: MatrixLike, *, n_steps: int, shape: tuple[int, ...], name
         elif arr.shape != (n_steps, *shape):
             raise ShapeError(f"{name}: expected shape {shape} (constant) or {(n_steps, *shape)} "
                              f"(per step), got {arr.shape}")
-    _check_finite(arr, name)
+    check_finite(arr, name)
     arr = np.asarray(arr)
     if arr.flags.writeable and arr.base is None:
         arr.setflags(write=False)
@@ -109,32 +101,8 @@ def as_record(value: Any, *, n_steps: int, width: int, name: str) -> np.ndarray:
         arr = arr[:, None]
     if arr.ndim < 2 or arr.shape[-2:] != (n_steps, width):
         raise ShapeError(f"{name}: expected shape (..., {n_steps}, {width}), got {np.shape(value)}")
-    _check_finite(arr, name)
+    check_finite(arr, name)
     return arr
-
-
-def _distinct_steps(arr: np.ndarray) -> np.ndarray:
-    """The steps worth checking: one for a broadcast constant, all otherwise."""
-    return arr[:1] if arr.strides[0] == 0 else arr
-
-
-def _check_covariance(arr: np.ndarray, name: str, *, definite: bool) -> None:
-    steps = _distinct_steps(arr)
-    scale = np.maximum(1.0, np.abs(steps).max(axis=(-2, -1)))
-    asym = np.abs(steps - np.swapaxes(steps, -1, -2)).max(axis=(-2, -1))
-    bad = np.nonzero(asym > COV_RTOL * scale)[0]
-    if bad.size:
-        k = int(bad[0])
-        raise CovarianceError(f"{name}: expected a symmetric matrix, got asymmetry {asym[k]:.3g} at step {k}")
-    eig = np.linalg.eigvalsh(steps)
-    emin = eig[:, 0]
-    limit = COV_RTOL * np.maximum(1.0, eig[:, -1]) if not definite else 0.0
-    bad = np.nonzero(emin <= limit if definite else emin < -limit)[0]
-    if bad.size:
-        k = int(bad[0])
-        kind = "positive definite" if definite else "positive semi-definite"
-        raise CovarianceError(f"{name}: expected a {kind} matrix, got smallest eigenvalue "
-                              f"{emin[k]:.6g} at step {k}")
 
 
 @dataclass(frozen=True)
@@ -241,17 +209,17 @@ def ltv_model(*, F: MatrixLike, H: MatrixLike, Q: MatrixLike, R: MatrixLike, n_s
           else as_sequence(J, n_steps=n_steps, shape=(p, l), name="J"))
     Qs = as_sequence(Q, n_steps=n_steps, shape=(n, n), name="Q")
     Rs = as_sequence(R, n_steps=n_steps, shape=(p, p), name="R")
-    _check_covariance(Qs, "Q", definite=False)
-    _check_covariance(Rs, "R", definite=True)
+    covariance(Qs, "Q", definite=False)
+    covariance(Rs, "R", definite=True)
     x0a = np.zeros(n) if x0 is None else np.asarray(x0, dtype=float)
     if x0a.shape != (n,):
         raise ShapeError(f"x0: expected shape ({n},), got {x0a.shape}")
-    _check_finite(x0a, "x0")
+    check_finite(x0a, "x0")
     P0a = np.eye(n) if P0 is None else np.asarray(P0, dtype=float)
     if P0a.shape != (n, n):
         raise ShapeError(f"P0: expected shape ({n}, {n}), got {P0a.shape}")
-    _check_finite(P0a, "P0")
-    _check_covariance(P0a[None], "P0", definite=False)
+    check_finite(P0a, "P0")
+    covariance(P0a[None], "P0", definite=False)
     return LTVModel(F=Fs, G=Gs, H=Hs, J=Js, Q=Qs, R=Rs, x0=x0a, P0=P0a)
 
 
@@ -278,7 +246,7 @@ def lpv_model(*, scheduling: Any, F0: Any, H0: Any, Q: MatrixLike, R: MatrixLike
         p_sched = p_sched[:, None]
     if p_sched.ndim != 2 or p_sched.shape[0] < 1:
         raise ShapeError(f"scheduling: expected shape (N,) or (N, q), got {np.shape(scheduling)}")
-    _check_finite(p_sched, "scheduling")
+    check_finite(p_sched, "scheduling")
     n_steps, q = p_sched.shape
 
     def affine(name: str, base: Any, parts: Any) -> np.ndarray | None:

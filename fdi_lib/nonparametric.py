@@ -59,6 +59,7 @@ from fdi_lib.kitanidis import KitanidisGains, as_unknown_input_matrix, kitanidis
 from fdi_lib.models import FaultFamily, LTVModel, fault_profile, ltv_model, step_family
 from fdi_lib.rls import RLSResult, rls_track
 from fdi_lib.signatures import fault_signature
+from fdi_lib.validation import array, integer, missing_samples, probability
 
 __all__ = [
     "kitanidis_predictor_gains", "InnovationSplit", "innovation_split", "nonparametric_signature",
@@ -339,29 +340,42 @@ def energy_statistic(residuals: Any, Sigma_chol: np.ndarray, window: int) -> np.
     Parameters
     ----------
     residuals : array_like
-        ``(*batch, N, p)``.
+        ``(*batch, N, p)``; a sample with a NaN is missing and left out of its windows
+        (:mod:`fdi_lib.validation`).
     Sigma_chol : numpy.ndarray
-        ``(N, p, p)`` lower Cholesky factors.
+        ``(N, p, p)`` lower Cholesky factors (positive diagonal).
     window : int
-        ``w >= 1``.
+        ``w``, ``1 <= w <= N``.
+
+    Notes
+    -----
+    Each window is summed directly (a sliding window view), not as a difference of running
+    totals, so one huge residual (a glitch) only affects the ``w`` windows that contain it.
     """
-    L = np.asarray(Sigma_chol, dtype=float)
+    L = array(Sigma_chol, "Sigma_chol", ndim=3)
     N, p = L.shape[:2]
-    r = _series(residuals, N, p, "residuals")
-    if not isinstance(window, (int, np.integer)) or not 1 <= window <= N:
-        raise ModelError(f"window: expected an integer in [1, {N}], got {window!r}")
-    z = np.linalg.solve(L, r[..., None])[..., 0]
-    c = np.cumsum(np.sum(z * z, axis=-1), axis=-1)
-    out = np.full(c.shape, np.nan)
-    out[..., window - 1] = c[..., window - 1]
-    out[..., window:] = c[..., window:] - c[..., :-window]
+    if L.shape != (N, p, p) or N < 1 or p < 1:
+        raise ShapeError(f"Sigma_chol: expected shape (N, p, p), got {L.shape}")
+    diag = np.diagonal(L, axis1=-2, axis2=-1)
+    if np.any(diag <= 0) or np.any(np.triu(L, 1)):
+        k = int(np.argwhere((diag <= 0).any(axis=-1) | np.triu(L, 1).any(axis=(-2, -1)))[0, 0])
+        raise ModelError(f"Sigma_chol: expected lower-triangular factors with a positive diagonal, "
+                         f"got {L[k].tolist()} at step {k}")
+    r = array(_series(residuals, N, p, "residuals"), "residuals", finite=False)
+    missing = missing_samples(r, "residuals")
+    window = integer(window, "window", low=1, high=N)
+    z = np.linalg.solve(L, np.where(missing[..., None], 0.0, r)[..., None])[..., 0]
+    energy = np.sum(z * z, axis=-1)
+    out = np.full(energy.shape, np.nan)
+    out[..., window - 1:] = np.lib.stride_tricks.sliding_window_view(energy, window, axis=-1).sum(axis=-1)
     return out
 
 
 def energy_threshold(window: int, p: int, alpha: float) -> float:
     """``chi2.ppf(1 - alpha, w p)``: per-sample false-alarm probability ``alpha`` of the energy test."""
-    if not 0.0 < alpha < 1.0:
-        raise ModelError(f"alpha: expected a probability in (0, 1), got {alpha!r}")
+    window = integer(window, "window", low=1)
+    p = integer(p, "p", low=1)
+    alpha = probability(alpha, "alpha")
     return float(scipy.stats.chi2.ppf(1.0 - alpha, window * p))
 
 

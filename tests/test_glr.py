@@ -122,9 +122,9 @@ def test_bad_arguments():
     m = ex.unstable_model(20)
     g = kalman_gains(m)
     fam = impulse_family(m)
-    with pytest.raises(ModelError, match=r"window: expected a positive integer, got 0"):
+    with pytest.raises(ModelError, match=r"window: expected an integer in \[1, 20\], got 0"):
         WindowedGLR(m, g, fam, window=0)
-    with pytest.raises(ModelError, match=r"min_samples: expected an integer in \[0, window=5\), got 5"):
+    with pytest.raises(ModelError, match=r"min_samples: expected an integer in \[0, 4\], got 5"):
         WindowedGLR(m, g, fam, window=5, min_samples=5)
     with pytest.raises(ShapeError, match=r"innovations: expected shape \(\.\.\., 20, 1\), got \(19, 1\)"):
         glr_window(np.zeros((19, 1)), m, g, fam, window=5)
