@@ -102,19 +102,20 @@ def kalman_gains(model: LTVModel) -> KalmanGains:
     FK = np.empty((N, n, p))
     eye = np.eye(n)
     P[0] = model.P0
-    for k in range(N):
-        F, H, Pk = model.F[k], model.H[k], P[k]
-        S = H @ Pk @ H.T + model.R[k]
-        S = 0.5 * (S + S.T)
-        c, low = cholesky(S, step=k, what="the Riccati recursion")
-        Kk = scipy.linalg.cho_solve((c, low), H @ Pk).T  # P H^T S^{-1} without forming S^{-1}
-        IKH = eye - Kk @ H
-        Pf = IKH @ Pk @ IKH.T + Kk @ model.R[k] @ Kk.T  # Joseph form: stays PSD
-        Pf = 0.5 * (Pf + Pf.T)
-        Pn = F @ Pf @ F.T + model.Q[k]
-        K[k], P_filt[k], Sigma[k], A[k], FK[k] = Kk, Pf, S, F @ IKH, F @ Kk
-        L[k] = np.tril(c)
-        P[k + 1] = 0.5 * (Pn + Pn.T)
+    with np.errstate(over="ignore", invalid="ignore"):  # divergence is reported below, by step
+        for k in range(N):
+            F, H, Pk = model.F[k], model.H[k], P[k]
+            S = H @ Pk @ H.T + model.R[k]
+            S = 0.5 * (S + S.T)
+            c, low = cholesky(S, step=k, what="the Riccati recursion")
+            Kk = scipy.linalg.cho_solve((c, low), H @ Pk).T  # P H^T S^{-1} without forming S^{-1}
+            IKH = eye - Kk @ H
+            Pf = IKH @ Pk @ IKH.T + Kk @ model.R[k] @ Kk.T  # Joseph form: stays PSD
+            Pf = 0.5 * (Pf + Pf.T)
+            Pn = F @ Pf @ F.T + model.Q[k]
+            K[k], P_filt[k], Sigma[k], A[k], FK[k] = Kk, Pf, S, F @ IKH, F @ Kk
+            L[k] = np.tril(c)
+            P[k + 1] = 0.5 * (Pn + Pn.T)
     if not np.all(np.isfinite(P)):
         k = int(np.argwhere(~np.isfinite(P))[0, 0])
         raise NonFiniteError(f"model: the Riccati recursion diverged (non-finite P_k at step {k})")

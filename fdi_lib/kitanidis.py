@@ -170,42 +170,43 @@ def kitanidis_gains(model: LTVModel, E: Any) -> KitanidisGains:
     Xi = np.zeros((N, s, s))
     Rcov = np.empty((N, p, p))
     P[0] = model.P0
-    for k in range(N):
-        H, Pk, Rk = model.H[k], P[k], model.R[k]
-        S = H @ Pk @ H.T + Rk
-        S = 0.5 * (S + S.T)
-        c, low = cholesky(S, step=k, what="the Kitanidis covariance recursion")
-        Kk = scipy.linalg.cho_solve((c, low), H @ Pk).T  # P H^T S^{-1} by Cholesky solves
-        Pf = Pk - Kk @ H @ Pk
-        Kbar = Kk
-        if k > 0 and s > 0:
-            HE = H @ Es[k - 1]
-            sv = np.linalg.svd(HE, compute_uv=False)
-            if sv.size < s or sv[-1] <= RANK_RTOL * max(1.0, sv[0]):
-                smin = float(sv[-1]) if sv.size == s else 0.0
-                raise RankConditionError(
-                    f"E: assumption (iv) needs H_{{k+1}} E_k of full column rank {s}; at k = {k - 1}, "
-                    f"H_{k} E_{k - 1} has shape {HE.shape} and smallest singular value {smin:.3g}")
-            # Square-root form: with Sigma = L L^T and L^{-1} H E = Qw Rw (thin QR), Xi = Rw^T Rw and
-            # Xi^{-1} E^T H^T Sigma^{-1} = Rw^{-1} Qw^T L^{-1}, a left inverse of H E accurate to
-            # cond(Rw) = sqrt(cond(Xi)) rather than cond(Xi): identity (30) then holds to that precision.
-            Lk = np.tril(c)
-            W = scipy.linalg.solve_triangular(Lk, HE, lower=True)
-            Qw, Rw = np.linalg.qr(W)
-            Linv = scipy.linalg.solve_triangular(Lk, np.eye(p), lower=True)
-            M = scipy.linalg.solve_triangular(Rw, Qw.T @ Linv)  # (s, p), M H E = I
-            Gam = Es[k - 1] - Kk @ HE  # (24c)
-            Kbar = Kk + Gam @ M  # (24g)
-            GR = scipy.linalg.solve_triangular(Rw, Gam.T, trans="T").T  # Gamma Rw^{-1}
-            Pf = Pf + GR @ GR.T  # (24f): + Gamma Xi^{-1} Gamma^T
-            Xi[k] = W.T @ W  # (24d)
-        Pf = 0.5 * (Pf + Pf.T)
-        HK = H @ Kbar
-        Rc = H @ Pf @ H.T + Rk - HK @ Rk - Rk @ HK.T
-        Rcov[k] = 0.5 * (Rc + Rc.T)
-        K[k], Kc[k], P_filt[k], Sigma[k], L[k] = Kbar, Kk, Pf, S, np.tril(c)
-        Pn = model.F[k] @ Pf @ model.F[k].T + model.Q[k]
-        P[k + 1] = 0.5 * (Pn + Pn.T)
+    with np.errstate(over="ignore", invalid="ignore"):  # divergence is reported below, by step
+        for k in range(N):
+            H, Pk, Rk = model.H[k], P[k], model.R[k]
+            S = H @ Pk @ H.T + Rk
+            S = 0.5 * (S + S.T)
+            c, low = cholesky(S, step=k, what="the Kitanidis covariance recursion")
+            Kk = scipy.linalg.cho_solve((c, low), H @ Pk).T  # P H^T S^{-1} by Cholesky solves
+            Pf = Pk - Kk @ H @ Pk
+            Kbar = Kk
+            if k > 0 and s > 0:
+                HE = H @ Es[k - 1]
+                sv = np.linalg.svd(HE, compute_uv=False)
+                if sv.size < s or sv[-1] <= RANK_RTOL * max(1.0, sv[0]):
+                    smin = float(sv[-1]) if sv.size == s else 0.0
+                    raise RankConditionError(
+                        f"E: assumption (iv) needs H_{{k+1}} E_k of full column rank {s}; at k = {k - 1}, "
+                        f"H_{k} E_{k - 1} has shape {HE.shape} and smallest singular value {smin:.3g}")
+                # Square-root form: with Sigma = L L^T and L^{-1} H E = Qw Rw (thin QR), Xi = Rw^T Rw and
+                # Xi^{-1} E^T H^T Sigma^{-1} = Rw^{-1} Qw^T L^{-1}, a left inverse of H E accurate to
+                # cond(Rw) = sqrt(cond(Xi)) rather than cond(Xi): identity (30) then holds to that precision.
+                Lk = np.tril(c)
+                W = scipy.linalg.solve_triangular(Lk, HE, lower=True)
+                Qw, Rw = np.linalg.qr(W)
+                Linv = scipy.linalg.solve_triangular(Lk, np.eye(p), lower=True)
+                M = scipy.linalg.solve_triangular(Rw, Qw.T @ Linv)  # (s, p), M H E = I
+                Gam = Es[k - 1] - Kk @ HE  # (24c)
+                Kbar = Kk + Gam @ M  # (24g)
+                GR = scipy.linalg.solve_triangular(Rw, Gam.T, trans="T").T  # Gamma Rw^{-1}
+                Pf = Pf + GR @ GR.T  # (24f): + Gamma Xi^{-1} Gamma^T
+                Xi[k] = W.T @ W  # (24d)
+            Pf = 0.5 * (Pf + Pf.T)
+            HK = H @ Kbar
+            Rc = H @ Pf @ H.T + Rk - HK @ Rk - Rk @ HK.T
+            Rcov[k] = 0.5 * (Rc + Rc.T)
+            K[k], Kc[k], P_filt[k], Sigma[k], L[k] = Kbar, Kk, Pf, S, np.tril(c)
+            Pn = model.F[k] @ Pf @ model.F[k].T + model.Q[k]
+            P[k + 1] = 0.5 * (Pn + Pn.T)
     if not np.all(np.isfinite(P)):
         k = int(np.argwhere(~np.isfinite(P))[0, 0])
         raise NonFiniteError(f"model: the Kitanidis covariance recursion diverged (non-finite P at step {k})")

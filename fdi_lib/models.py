@@ -21,7 +21,7 @@ from typing import Any, Literal
 import numpy as np
 
 from fdi_lib.errors import ModelError, ShapeError
-from fdi_lib.validation import check_finite, covariance
+from fdi_lib.validation import check_finite, covariance, integer
 
 __all__ = [
     "LTVModel",
@@ -183,9 +183,7 @@ def ltv_model(*, F: MatrixLike, H: MatrixLike, Q: MatrixLike, R: MatrixLike, n_s
     >>> (m.n, m.l, m.p, m.n_steps)
     (2, 1, 1, 10)
     """
-    if not isinstance(n_steps, (int, np.integer)) or n_steps < 1:
-        raise ModelError(f"n_steps: expected a positive integer, got {n_steps!r}")
-    n_steps = int(n_steps)
+    n_steps = integer(n_steps, "n_steps", low=1)
     F_first = np.asarray(F(0) if callable(F) else F, dtype=float)
     if F_first.ndim not in (2, 3) or F_first.shape[-1] != F_first.shape[-2]:
         raise ShapeError(f"F: expected square matrices (n, n) or (N, n, n), got shape {F_first.shape}")

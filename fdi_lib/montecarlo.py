@@ -36,6 +36,7 @@ import scipy.stats
 from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.models import LTVModel
 from fdi_lib.simulate import Noise, draw_noise
+from fdi_lib.validation import integer, probability, seed as check_seed
 
 __all__ = ["trial_seeds", "trial_rngs", "run_monte_carlo", "draw_noise_batch", "binomial_ci",
            "default_chunk_size"]
@@ -44,10 +45,10 @@ ChunkFn = Callable[[Sequence[np.random.SeedSequence]], dict[str, np.ndarray]]
 
 
 def trial_seeds(seed: int, n_trials: int) -> list[np.random.SeedSequence]:
-    """One independent :class:`~numpy.random.SeedSequence` per realisation."""
-    if not isinstance(n_trials, (int, np.integer)) or n_trials < 1:
-        raise ModelError(f"n_trials: expected a positive integer, got {n_trials!r}")
-    return np.random.SeedSequence(seed).spawn(int(n_trials))
+    """One independent :class:`~numpy.random.SeedSequence` per realisation (``seed`` an integer >= 0)."""
+    seed = check_seed(seed)
+    n_trials = integer(n_trials, "n_trials", low=1)
+    return np.random.SeedSequence(seed).spawn(n_trials)
 
 
 def trial_rngs(seeds: Sequence[np.random.SeedSequence]) -> list[np.random.Generator]:
@@ -155,6 +156,9 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
 
 def binomial_ci(successes: int, trials: int, level: float = 0.95) -> tuple[float, float]:
     """Exact (Clopper-Pearson) confidence interval of a binomial proportion (scipy's ``binomtest``)."""
+    successes = integer(successes, "successes", low=0)
+    trials = integer(trials, "trials", low=1)
+    level = probability(level, "level")
     if not 0 <= successes <= trials or trials < 1:
         raise ModelError(f"successes, trials: expected 0 <= successes <= trials, trials >= 1, "
                          f"got {successes}, {trials}")

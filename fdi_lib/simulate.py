@@ -20,6 +20,7 @@ import numpy as np
 
 from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.models import FaultProfile, LTVModel, as_record
+from fdi_lib.validation import array, integer
 
 __all__ = ["Noise", "Simulation", "draw_noise", "simulate", "pi_controller", "covariance_sqrt"]
 
@@ -80,7 +81,7 @@ def draw_noise(model: LTVModel, rng: np.random.Generator, size: int | None = Non
     """
     if not isinstance(rng, np.random.Generator):
         raise ModelError(f"rng: expected a numpy.random.Generator, got {type(rng).__name__}")
-    batch = () if size is None else (int(size),)
+    batch = () if size is None else (integer(size, "size", low=1),)
     N, n, p = model.n_steps, model.n, model.p
 
     def gaussian(cov: np.ndarray, dim: int) -> np.ndarray:
@@ -162,9 +163,10 @@ def simulate(model: LTVModel, *, rng: np.random.Generator | None = None, noise: 
         state_fault = np.zeros((N, n))
         output_fault = np.zeros((N, p))
     else:
-        th = np.asarray(theta, dtype=float)
+        th = array(theta, "theta", finite=False)
         if th.shape != (fault.m,):
             raise ShapeError(f"theta: expected shape ({fault.m},), got {th.shape}")
+        array(th, "theta")
         if fault.Psi.shape[:2] != (N, n) or fault.Phi.shape[:2] != (N, p):
             raise ShapeError(f"fault: expected Psi ({N}, {n}, m) and Phi ({N}, {p}, m), "
                              f"got {fault.Psi.shape} and {fault.Phi.shape}")

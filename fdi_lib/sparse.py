@@ -54,7 +54,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from fdi_lib.errors import ModelError, NonFiniteError, ShapeError
+from fdi_lib.errors import ModelError, ShapeError
+from fdi_lib.validation import array, check_finite, integer, real
 
 __all__ = [
     "RegressionData",
@@ -113,19 +114,19 @@ def regression_data(residuals: Any, on_residual: Any, *, start: int = 1) -> Regr
     -------
     RegressionData
     """
-    r = np.asarray(residuals, dtype=float)
-    S = np.asarray(on_residual, dtype=float)
+    r = array(residuals, "residuals")
+    S = array(on_residual, "on_residual")
     if r.ndim < 2:
         raise ShapeError(f"residuals: expected shape (..., N, p), got {r.shape}")
     if S.ndim < 3 or S.shape[-3:-1] != r.shape[-2:]:
         raise ShapeError(f"on_residual: expected shape (..., {r.shape[-2]}, {r.shape[-1]}, m), got {S.shape}")
     N, p = r.shape[-2:]
-    if not isinstance(start, (int, np.integer)) or not 0 <= start < N:
-        raise ModelError(f"start: expected an integer in [0, {N - 1}], got {start!r}")
-    for arr, name in ((r, "residuals"), (S, "on_residual")):
-        if not np.all(np.isfinite(arr)):
-            raise NonFiniteError(f"{name}: expected finite values")
-    batch = np.broadcast_shapes(r.shape[:-2], S.shape[:-3])
+    start = integer(start, "start", low=0, high=N - 1)
+    try:
+        batch = np.broadcast_shapes(r.shape[:-2], S.shape[:-3])
+    except ValueError:
+        raise ShapeError(f"residuals, on_residual: batch axes {r.shape[:-2]} and {S.shape[:-3]} "
+                         f"do not broadcast") from None
     m = S.shape[-1]
     X = np.broadcast_to(S[..., start:, :, :], (*batch, N - start, p, m)).reshape(*batch, (N - start) * p, m)
     y = np.broadcast_to(r[..., start:, :], (*batch, N - start, p)).reshape(*batch, (N - start) * p)
@@ -133,24 +134,19 @@ def regression_data(residuals: Any, on_residual: Any, *, start: int = 1) -> Regr
 
 
 def _check_xy(X: Any, y: Any) -> tuple[np.ndarray, np.ndarray]:
-    X = np.asarray(X, dtype=float)
-    y = np.asarray(y, dtype=float)
-    if X.ndim != 2:
-        raise ShapeError(f"X: expected a matrix (rows, m), got shape {X.shape}")
+    X = array(X, "X")
+    y = array(y, "y")
+    if X.ndim != 2 or X.shape[0] < 1 or X.shape[1] < 1:
+        raise ShapeError(f"X: expected a non-empty matrix (rows, m), got shape {X.shape}")
     if y.shape != (X.shape[0],):
         raise ShapeError(f"y: expected shape ({X.shape[0]},), got {y.shape}")
-    for arr, name in ((X, "X"), (y, "y")):
-        if not np.all(np.isfinite(arr)):
-            raise NonFiniteError(f"{name}: expected finite values")
     return X, y
 
 
 def _norm(n_samples: int | None, rows: int) -> int:
     if n_samples is None:
         return rows
-    if not isinstance(n_samples, (int, np.integer)) or n_samples < 1:
-        raise ModelError(f"n_samples: expected a positive integer, got {n_samples!r}")
-    return int(n_samples)
+    return integer(n_samples, "n_samples", low=1)
 
 
 @dataclass(frozen=True)
@@ -232,8 +228,10 @@ def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: floa
 
     X, y = _check_xy(X, y)
     N = _norm(n_samples, X.shape[0])
-    if not 0.0 <= lambda_min < 1.0:
-        raise ModelError(f"lambda_min: expected a fraction of lambda_max in [0, 1), got {lambda_min!r}")
+    lambda_min = real(lambda_min, "lambda_min", low=0.0, high=1.0, high_open=True,
+                      what="a fraction of lambda_max")
+    if max_size is not None:
+        max_size = integer(max_size, "max_size", low=1)
     # Exact rescaling X = sx X', y = sy y': theta = (sy / sx) theta', lambda = sx sy lambda'.
     # It keeps LARS's absolute tolerances meaningful whatever the units (e.g. gas flows ~1e5).
     sx = float(np.sqrt(np.mean(X ** 2))) or 1.0
@@ -484,9 +482,19 @@ def grid_flat_range(path: LassoPath, n_grid: int, *, lambda_ratio: float = 1e-4,
 
 
 def least_squares_on_support(X: Any, y: Any, support: Any) -> np.ndarray:
-    """Least-squares re-estimate of the selected components (the others set to 0), shape ``(m,)``."""
+    """Least-squares re-estimate of the selected components (the others set to 0), shape ``(m,)``.
+
+    ``support`` holds distinct column indices in ``[0, m)`` (no negative, Python-style, index).
+    """
     X, y = _check_xy(X, y)
-    idx = np.asarray(support, dtype=int)
+    m = X.shape[1]
+    try:
+        idx = np.asarray([integer(i, "support", low=0, high=m - 1) for i in np.ravel(np.asarray(support))],
+                         dtype=int)
+    except TypeError:
+        raise ModelError(f"support: expected a sequence of column indices, got {support!r}") from None
+    if np.unique(idx).size != idx.size:
+        raise ModelError(f"support: expected distinct column indices, got {idx.tolist()}")
     theta = np.zeros(X.shape[1])
     if idx.size:
         theta[idx] = np.linalg.lstsq(X[:, idx], y, rcond=None)[0]

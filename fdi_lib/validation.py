@@ -107,37 +107,38 @@ def integer(value: Any, name: str, *, low: int | None = None, high: int | None =
     """An integer in ``[low, high]`` (``bool`` and integral floats are rejected)."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
         raise ModelError(f"{name}: expected an integer, got {value!r} ({type(value).__name__})")
+    value = int(value)
     if (low is not None and value < low) or (high is not None and value > high):
-        lo = "-inf" if low is None else low
-        hi = "inf" if high is None else high
-        raise ModelError(f"{name}: expected an integer in [{lo}, {hi}], got {value!r}")
+        if high is None:
+            kind = {0: "a non-negative integer", 1: "a positive integer"}.get(low, f"an integer >= {low}")
+            raise ModelError(f"{name}: expected {kind}, got {value!r}")
+        if low is None:
+            raise ModelError(f"{name}: expected an integer <= {high}, got {value!r}")
+        raise ModelError(f"{name}: expected an integer in [{low}, {high}], got {value!r}")
     return int(value)
 
 
 def real(value: Any, name: str, *, low: float | None = None, high: float | None = None,
-         low_open: bool = False, high_open: bool = False) -> float:
-    """A finite real number in the given (closed or open) interval."""
+         low_open: bool = False, high_open: bool = False, what: str = "a number") -> float:
+    """A finite real number in the given (closed or open) interval; ``what`` names it in errors."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        raise ModelError(f"{name}: expected a real number, got {value!r} ({type(value).__name__})")
+        raise ModelError(f"{name}: expected {what}, got {value!r} ({type(value).__name__})")
     x = float(value)
     if not np.isfinite(x):
         raise NonFiniteError(f"{name}: expected a finite number, got {x}")
     bad = ((low is not None and (x <= low if low_open else x < low))
            or (high is not None and (x >= high if high_open else x > high)))
     if bad:
-        lo = "-inf" if low is None else low
-        hi = "inf" if high is None else high
-        raise ModelError(f"{name}: expected a number in {'(' if low_open else '['}{lo}, {hi}"
-                         f"{')' if high_open else ']'}, got {x!r}")
+        lo = "-inf" if low is None else f"{low:g}"
+        hi = "inf" if high is None else f"{high:g}"
+        raise ModelError(f"{name}: expected {what} in {'(' if low_open else '['}{lo}, {hi}"
+                         f"{')' if high_open else ']'}, got {value!r}")
     return x
 
 
 def probability(value: Any, name: str) -> float:
     """A probability in the open interval ``(0, 1)``."""
-    x = real(value, name)
-    if not 0.0 < x < 1.0:
-        raise ModelError(f"{name}: expected a probability in (0, 1), got {value!r}")
-    return x
+    return real(value, name, low=0.0, high=1.0, low_open=True, high_open=True, what="a probability")
 
 
 def seed(value: Any, name: str = "seed") -> int:

@@ -33,7 +33,8 @@ from typing import Any, Iterable, Sequence
 
 import numpy as np
 
-from fdi_lib.errors import EmptySetError, NonFiniteError, NumericalError, ShapeError, UnboundedSetError
+from fdi_lib.errors import (EmptySetError, ModelError, NonFiniteError, NumericalError, ShapeError,
+                            UnboundedSetError)
 
 __all__ = ["Polytope", "convex_hull", "plot_polytope", "box_corners"]
 
@@ -324,7 +325,7 @@ class Polytope:
         if res.status == 2:
             return True
         if res.status != 0:  # pragma: no cover - HiGHS failures are unexpected
-            raise RuntimeError(f"linprog failed: {res.message}")
+            raise NumericalError(f"linprog failed: {res.message}")
         return bool(-res.fun < -tol)
 
     def contains(self, x: Any, tol: float = 1e-9) -> bool:
@@ -456,7 +457,7 @@ class Polytope:
             V = self._nonempty_vertices("project")
             return Polytope.from_vertices(V[:, dims])
         if method != "fourier-motzkin":
-            raise ValueError(f"method: expected 'fourier-motzkin' or 'vertex', got {method!r}")
+            raise ModelError(f"method: expected 'fourier-motzkin' or 'vertex', got {method!r}")
         import cdd
 
         elim = [d for d in range(self.dim) if d not in dims]

@@ -42,6 +42,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from fdi_lib.errors import EmptySetError, ModelError, NonFiniteError, ShapeError, UnboundedSetError
+from fdi_lib.validation import integer, real
 from fdi_lib.sets.polytope import Polytope, _hull_hrep, _enumerate_vertices, box_corners
 from fdi_lib.threads import single_threaded_blas
 
@@ -213,9 +214,8 @@ class SetValuedObserver:
                  template: np.ndarray | None = None, margin: float = 1e-9,
                  strip_before_hull: bool = False) -> None:
         if not isinstance(X0, Polytope):
-            raise TypeError(f"X0: expected a Polytope, got {type(X0).__name__}")
-        if not isinstance(N, (int, np.integer)) or N < 1:
-            raise ModelError(f"N: expected a positive integer horizon, got {N!r}")
+            raise ModelError(f"X0: expected a Polytope, got {type(X0).__name__}")
+        N = integer(N, "N", low=1)
         if method not in ("template", "exact"):
             raise ModelError(f"method: expected 'template' or 'exact', got {method!r}")
         if X0.is_empty():
@@ -230,7 +230,7 @@ class SetValuedObserver:
         self.template = None if template is None else np.asarray(template, dtype=float)
         if self.template is not None and (self.template.ndim != 2 or self.template.shape[1] != X0.dim):
             raise ShapeError(f"template: expected shape (p, {X0.dim}), got {self.template.shape}")
-        self.margin = float(margin)
+        self.margin = real(margin, "margin", low=0.0, what="a non-negative relative inflation")
         self.strip_before_hull = bool(strip_before_hull)
         self.n = X0.dim
         self._prior = _Entry(X0, V0)
