@@ -56,7 +56,7 @@ import scipy.linalg
 
 from fdi_lib.errors import NonFiniteError, RankConditionError, ShapeError
 from fdi_lib.models import FaultProfile, LTVModel, as_record, as_sequence
-from fdi_lib.validation import check_finite, cholesky, initial_state, measurements
+from fdi_lib.validation import array, check_finite, cholesky, initial_state, measurements
 
 __all__ = [
     "KitanidisGains",
@@ -78,7 +78,7 @@ def as_unknown_input_matrix(model: LTVModel, E: Any) -> np.ndarray:
     Returns a read-only array of shape ``(N, n, s)``; ``E_k`` multiplies ``d_k`` in the
     equation of ``X_{k+1}``.
     """
-    first = np.asarray(E(0) if callable(E) else E, dtype=float)
+    first = array(E(0) if callable(E) else E, "E", finite=False)
     if first.ndim == 1 and first.shape[0] == model.n:
         first = first[:, None]
         if not callable(E):
@@ -351,8 +351,8 @@ def residual_signature(model: LTVModel, gains: Any, fault: FaultProfile | None =
     else:
         if Psi is None and Phi is None:
             raise ShapeError("Psi, Phi: expected at least one fault profile, got None")
-        Psi_a = None if Psi is None else np.asarray(Psi, dtype=float)
-        Phi_a = None if Phi is None else np.asarray(Phi, dtype=float)
+        Psi_a = None if Psi is None else array(Psi, "Psi", finite=False)
+        Phi_a = None if Phi is None else array(Phi, "Phi", finite=False)
         ref = Psi_a if Psi_a is not None else Phi_a
         m = ref.shape[-1]
         batch = ref.shape[:-3]

@@ -21,7 +21,7 @@ from typing import Any, Literal
 import numpy as np
 
 from fdi_lib.errors import ModelError, ShapeError
-from fdi_lib.validation import check_finite, covariance, integer
+from fdi_lib.validation import array, check_finite, covariance, integer
 
 __all__ = [
     "LTVModel",
@@ -63,7 +63,7 @@ def as_sequence(value: MatrixLike, *, n_steps: int, shape: tuple[int, ...], name
     if callable(value):
         steps = []
         for k in range(n_steps):
-            vk = np.asarray(value(k), dtype=float)
+            vk = array(value(k), f"{name}({k})", finite=False)
             if vk.shape != shape and not (vk.ndim == 0 and int(np.prod(shape)) == 1):
                 raise ShapeError(f"{name}({k}): expected shape {shape}, got {vk.shape}")
             steps.append(vk.reshape(shape))
@@ -96,7 +96,7 @@ def as_record(value: Any, *, n_steps: int, width: int, name: str) -> np.ndarray:
     """
     if value is None:
         return np.zeros((n_steps, width))
-    arr = np.asarray(value, dtype=float)
+    arr = array(value, name, finite=False)
     if arr.ndim == 1 and width == 1:
         arr = arr[:, None]
     if arr.ndim < 2 or arr.shape[-2:] != (n_steps, width):
@@ -184,11 +184,11 @@ def ltv_model(*, F: MatrixLike, H: MatrixLike, Q: MatrixLike, R: MatrixLike, n_s
     (2, 1, 1, 10)
     """
     n_steps = integer(n_steps, "n_steps", low=1)
-    F_first = np.asarray(F(0) if callable(F) else F, dtype=float)
+    F_first = array(F(0) if callable(F) else F, "F", finite=False)
     if F_first.ndim not in (2, 3) or F_first.shape[-1] != F_first.shape[-2]:
         raise ShapeError(f"F: expected square matrices (n, n) or (N, n, n), got shape {F_first.shape}")
     n = F_first.shape[-1]
-    H_first = np.asarray(H(0) if callable(H) else H, dtype=float)
+    H_first = array(H(0) if callable(H) else H, "H", finite=False)
     if H_first.ndim not in (2, 3) or H_first.shape[-1] != n:
         raise ShapeError(f"H: expected shape (p, {n}) or (N, p, {n}), got {H_first.shape}")
     p = H_first.shape[-2]
@@ -196,7 +196,7 @@ def ltv_model(*, F: MatrixLike, H: MatrixLike, Q: MatrixLike, R: MatrixLike, n_s
         l = 0
         Gs = np.zeros((n_steps, n, 0))
     else:
-        G_first = np.asarray(G(0) if callable(G) else G, dtype=float)
+        G_first = array(G(0) if callable(G) else G, "G", finite=False)
         if G_first.ndim not in (2, 3) or G_first.shape[-2] != n:
             raise ShapeError(f"G: expected shape ({n}, l) or (N, {n}, l), got {G_first.shape}")
         l = G_first.shape[-1]
@@ -209,11 +209,11 @@ def ltv_model(*, F: MatrixLike, H: MatrixLike, Q: MatrixLike, R: MatrixLike, n_s
     Rs = as_sequence(R, n_steps=n_steps, shape=(p, p), name="R")
     covariance(Qs, "Q", definite=False)
     covariance(Rs, "R", definite=True)
-    x0a = np.zeros(n) if x0 is None else np.asarray(x0, dtype=float)
+    x0a = np.zeros(n) if x0 is None else array(x0, "x0", finite=False)
     if x0a.shape != (n,):
         raise ShapeError(f"x0: expected shape ({n},), got {x0a.shape}")
     check_finite(x0a, "x0")
-    P0a = np.eye(n) if P0 is None else np.asarray(P0, dtype=float)
+    P0a = np.eye(n) if P0 is None else array(P0, "P0", finite=False)
     if P0a.shape != (n, n):
         raise ShapeError(f"P0: expected shape ({n}, {n}), got {P0a.shape}")
     check_finite(P0a, "P0")
@@ -239,7 +239,7 @@ def lpv_model(*, scheduling: Any, F0: Any, H0: Any, Q: MatrixLike, R: MatrixLike
     Q, R, x0, P0
         As in :func:`ltv_model`.
     """
-    p_sched = np.asarray(scheduling, dtype=float)
+    p_sched = array(scheduling, "scheduling", finite=False)
     if p_sched.ndim == 1:
         p_sched = p_sched[:, None]
     if p_sched.ndim != 2 or p_sched.shape[0] < 1:
@@ -250,7 +250,7 @@ def lpv_model(*, scheduling: Any, F0: Any, H0: Any, Q: MatrixLike, R: MatrixLike
     def affine(name: str, base: Any, parts: Any) -> np.ndarray | None:
         if base is None:
             return None
-        b = np.asarray(base, dtype=float)
+        b = array(base, f"{name}0", finite=False)
         if parts is None:
             return b
         plist = [np.asarray(parts, dtype=float)] if np.ndim(parts) == b.ndim else [
@@ -302,7 +302,7 @@ def fault_profile(model: LTVModel, *, Psi: MatrixLike | None = None,
         raise ModelError("fault_profile: give Psi, Phi or both")
     if m is None:
         first = Psi if Psi is not None else Phi
-        arr = np.asarray(first(0) if callable(first) else first, dtype=float)
+        arr = array(first(0) if callable(first) else first, "Psi" if Psi is not None else "Phi", finite=False)
         if arr.ndim not in (2, 3):
             raise ShapeError(f"{'Psi' if Psi is not None else 'Phi'}: expected a matrix (rows, m) or "
                              f"(N, rows, m), got shape {arr.shape}")

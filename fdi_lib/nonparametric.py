@@ -115,7 +115,7 @@ def _check_gains(model: LTVModel, gains: KalmanGains) -> None:
 
 
 def _series(arr: Any, N: int, width: int, name: str) -> np.ndarray:
-    a = np.asarray(arr, dtype=float)
+    a = array(arr, name, finite=False)
     if a.ndim == 1 and width == 1:
         a = a[:, None]
     if a.ndim < 2 or a.shape[-2:] != (N, width):
@@ -361,7 +361,7 @@ def energy_statistic(residuals: Any, Sigma_chol: np.ndarray, window: int) -> np.
         k = int(np.argwhere((diag <= 0).any(axis=-1) | np.triu(L, 1).any(axis=(-2, -1)))[0, 0])
         raise ModelError(f"Sigma_chol: expected lower-triangular factors with a positive diagonal, "
                          f"got {L[k].tolist()} at step {k}")
-    r = array(_series(residuals, N, p, "residuals"), "residuals", finite=False)
+    r = _series(residuals, N, p, "residuals")
     missing = missing_samples(r, "residuals")
     window = integer(window, "window", low=1, high=N)
     z = np.linalg.solve(L, np.where(missing[..., None], 0.0, r)[..., None])[..., 0]

@@ -65,6 +65,8 @@ def check_finite(arr: np.ndarray, name: str) -> None:
 
 def array(value: Any, name: str, *, ndim: int | None = None, finite: bool = True) -> np.ndarray:
     """``value`` as a float array (typed errors for objects, strings, wrong ``ndim`` or non-finite)."""
+    if value is None or np.iscomplexobj(value):
+        raise ShapeError(f"{name}: expected a real numeric array, got {type(value).__name__}")
     try:
         arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as exc:

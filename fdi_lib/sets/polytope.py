@@ -35,6 +35,7 @@ import numpy as np
 
 from fdi_lib.errors import (EmptySetError, ModelError, NonFiniteError, NumericalError, ShapeError,
                             UnboundedSetError)
+from fdi_lib.validation import array
 
 __all__ = ["Polytope", "convex_hull", "plot_polytope", "box_corners"]
 
@@ -42,7 +43,7 @@ _TOL = 1e-9
 
 
 def _as_2d(name: str, a: Any, ncols: int | None = None) -> np.ndarray:
-    arr = np.asarray(a, dtype=float)
+    arr = array(a, name, finite=False)
     if arr.ndim != 2:
         raise ShapeError(f"{name}: expected a 2-D array, got shape {arr.shape}")
     if ncols is not None and arr.shape[1] != ncols:
@@ -251,7 +252,7 @@ class Polytope:
 
     def __post_init__(self) -> None:
         M = _as_2d("M", self.M)
-        m = np.asarray(self.m, dtype=float)
+        m = array(self.m, "m", finite=False)
         if m.ndim != 1 or m.shape[0] != M.shape[0]:
             raise ShapeError(f"m: expected shape ({M.shape[0]},) to match M {M.shape}, got {m.shape}")
         _check_finite("m", m)
@@ -264,8 +265,8 @@ class Polytope:
     @classmethod
     def box(cls, lower: Sequence[float], upper: Sequence[float]) -> "Polytope":
         """The axis-aligned box {lower <= x <= upper}."""
-        lo = np.atleast_1d(np.asarray(lower, dtype=float))
-        hi = np.atleast_1d(np.asarray(upper, dtype=float))
+        lo = np.atleast_1d(array(lower, "lower"))
+        hi = np.atleast_1d(array(upper, "upper"))
         if lo.shape != hi.shape or lo.ndim != 1:
             raise ShapeError(f"lower, upper: expected equal 1-D shapes, got {lo.shape} and {hi.shape}")
         n = lo.size
