@@ -19,11 +19,36 @@ def test_list_contains_the_foundation_ids(capsys):
         assert rid in out
 
 
-def test_every_registered_reproduction_is_documented():
+def documented_keys(rep) -> set[str]:
+    """Keys of the "Headline keys" section of ``rep``'s docstring, following "keys as X" references."""
+    import inspect
+
+    doc = inspect.getdoc(rep.func) or ""
+    if not re.search(r"Headline keys[^\n]*\n-+\n", doc):
+        ref = re.search(r"[Kk]eys:? as (?::func:`(\w+)`|``([\w-]+)``)", doc)
+        assert ref, f"{rep.id}: no 'Headline keys' section and no 'keys as ...' reference"
+        if ref.group(1):
+            module = __import__(rep.func.__module__, fromlist=["_"])
+            target = next(r for r in list_reproductions() if r.func is getattr(module, ref.group(1)))
+        else:
+            target = get(ref.group(2))
+        return documented_keys(target)
+    section = re.split(r"Headline keys[^\n]*\n-+\n", doc, maxsplit=1)[1]
+    section = re.split(r"\n\S[^\n]*\n-+\n", section, maxsplit=1)[0]      # up to the next section
+    names = re.findall(r"^(\w+(?:, \w+)*) :", section, flags=re.M)
+    return {key for entry in names for key in entry.split(", ")}
+
+
+def test_every_registered_reproduction_documents_its_headline_keys():
     for rep in list_reproductions():
-        doc = rep.func.__doc__ or ""
-        assert len(doc) > 40, f"{rep.id} has no docstring documenting its headline keys"
+        assert len(documented_keys(rep)) >= 1, rep.id
         assert rep.plot is None or callable(rep.plot)
+
+
+@pytest.mark.parametrize("rid", ["zb2014-fig1", "zb2014-fig2", "zb2014-fig4", "rosa2013-fig9"])
+def test_headline_keys_are_exactly_the_documented_ones(rid):
+    result = reproduce(rid)
+    assert set(result.headline) == documented_keys(get(rid))
 
 
 def test_json_is_one_object_with_the_contract_keys():
