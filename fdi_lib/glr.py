@@ -346,6 +346,14 @@ def first_alarm(statistic: np.ndarray, threshold: float, start: int = 0) -> np.n
         Finite alarm threshold.
     start : int
         First admissible index, ``0 <= start <= N``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> first_alarm(np.array([[0.5, 7.0, 9.0], [0.1, 0.2, 0.3]]), 6.63)
+    array([ 1, -1])
+    >>> first_alarm(np.array([np.nan, 7.0, 9.0]), 6.63, start=2)   # a leading warm-up NaN is fine
+    array(2)
     """
     stat = array(statistic, "statistic", finite=False)
     if stat.ndim < 1:

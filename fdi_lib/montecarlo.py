@@ -155,7 +155,22 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
 
 
 def binomial_ci(successes: int, trials: int, level: float = 0.95) -> tuple[float, float]:
-    """Exact (Clopper-Pearson) confidence interval of a binomial proportion (scipy's ``binomtest``)."""
+    """Exact (Clopper-Pearson) confidence interval of a binomial proportion (scipy's ``binomtest``).
+
+    Parameters
+    ----------
+    successes : int
+        Number of successes, ``0 <= successes <= trials``.
+    trials : int
+        Number of trials, ``>= 1``.
+    level : float
+        Confidence level in ``(0, 1)``.
+
+    Examples
+    --------
+    >>> [round(v, 4) for v in binomial_ci(3, 100)]
+    [0.0062, 0.0852]
+    """
     successes = integer(successes, "successes", low=0)
     trials = integer(trials, "trials", low=1)
     level = probability(level, "level")

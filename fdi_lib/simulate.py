@@ -140,6 +140,15 @@ def simulate(model: LTVModel, *, rng: np.random.Generator | None = None, noise: 
     Returns
     -------
     Simulation
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> m = ltv_model(F=[[0.9]], H=[[1.0]], Q=0.01, R=0.01, n_steps=50)
+    >>> s = simulate(m, rng=np.random.default_rng(0), size=3)
+    >>> s.x.shape, s.y.shape
+    ((3, 51, 1), (3, 50, 1))
     """
     N, n, p, l = model.n_steps, model.n, model.p, model.l
     if (rng is None) == (noise is None):

@@ -484,7 +484,21 @@ def grid_flat_range(path: LassoPath, n_grid: int, *, lambda_ratio: float = 1e-4,
 def least_squares_on_support(X: Any, y: Any, support: Any) -> np.ndarray:
     """Least-squares re-estimate of the selected components (the others set to 0), shape ``(m,)``.
 
-    ``support`` holds distinct column indices in ``[0, m)`` (no negative, Python-style, index).
+    Parameters
+    ----------
+    X : array_like
+        ``(rows, m)``.
+    y : array_like
+        ``(rows,)``.
+    support : sequence of int
+        Distinct column indices in ``[0, m)`` (no negative, Python-style, index).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> X = np.array([[1.0, 0.0, 2.0], [0.0, 1.0, 1.0], [1.0, 1.0, 0.0]])
+    >>> least_squares_on_support(X, X @ [2.0, 0.0, -1.0], [0, 2])
+    array([ 2.,  0., -1.])
     """
     X, y = _check_xy(X, y)
     m = X.shape[1]

@@ -106,7 +106,17 @@ def measurements(value: Any, *, n_steps: int, width: int, name: str) -> tuple[np
 
 
 def integer(value: Any, name: str, *, low: int | None = None, high: int | None = None) -> int:
-    """An integer in ``[low, high]`` (``bool`` and integral floats are rejected)."""
+    """An integer in ``[low, high]`` (``bool`` and integral floats are rejected).
+
+    Examples
+    --------
+    >>> integer(3, "window", low=1)
+    3
+    >>> integer(True, "window")
+    Traceback (most recent call last):
+    ...
+    fdi_lib.errors.ModelError: window: expected an integer, got True (bool)
+    """
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
         raise ModelError(f"{name}: expected an integer, got {value!r} ({type(value).__name__})")
     value = int(value)
