@@ -147,7 +147,10 @@ class KalmanResult:
 
 
 def as_outputs(model: LTVModel, y: Any, name: str = "y") -> np.ndarray:
-    """Validate an output record ``(*batch, N, p)`` against ``model`` (see :func:`~fdi_lib.models.as_record`)."""
+    """Validate an output record ``y`` ``(*batch, N, p)`` against ``model`` (see :func:`~fdi_lib.models.as_record`).
+
+    ``name`` is the argument named in errors.
+    """
     return as_record(y, n_steps=model.n_steps, width=model.p, name=name)
 
 

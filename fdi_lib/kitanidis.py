@@ -73,7 +73,7 @@ RANK_RTOL = 1e-10
 
 
 def as_unknown_input_matrix(model: LTVModel, E: Any) -> np.ndarray:
-    """Validate ``E_k`` (constant ``(n, s)``, per step ``(N, n, s)`` or callable of ``k``).
+    """Validate ``E`` = ``E_k`` against ``model`` (constant ``(n, s)``, per step ``(N, n, s)`` or callable of ``k``).
 
     Returns a read-only array of shape ``(N, n, s)``; ``E_k`` multiplies ``d_k`` in the
     equation of ``X_{k+1}``.

@@ -89,10 +89,10 @@ def as_sequence(value: MatrixLike, *, n_steps: int, shape: tuple[int, ...], name
 
 
 def as_record(value: Any, *, n_steps: int, width: int, name: str) -> np.ndarray:
-    """Validate a data record (inputs or outputs) of shape ``(*batch, n_steps, width)``.
+    """Validate a data record ``value`` (inputs or outputs) of shape ``(*batch, n_steps, width)``.
 
-    ``None`` gives zeros ``(n_steps, width)``; a 1-D array of length ``n_steps`` is accepted
-    when ``width == 1``. Raises :class:`ShapeError` or :class:`NonFiniteError` (with the index).
+    ``width`` is the number of columns, ``name`` the argument named in errors. ``None`` gives
+    zeros ``(n_steps, width)``; a 1-D array of length ``n_steps`` is accepted when ``width == 1``. Raises :class:`ShapeError` or :class:`NonFiniteError` (with the index).
     """
     if value is None:
         return np.zeros((n_steps, width))
@@ -345,13 +345,17 @@ class FaultFamily:
 
 def step_family(model: LTVModel, *, Psi: MatrixLike | None = None,
                 Phi: MatrixLike | None = None) -> FaultFamily:
-    """Step (jump) faults of eq. (4) with known profiles ``Psi~_k`` and/or ``Phi~_k``."""
+    """Step (jump) faults of eq. (4) with known profiles ``Psi`` = ``Psi~_k`` and/or ``Phi`` = ``Phi~_k``.
+
+    Both are validated against ``model`` as in :func:`fault_profile`.
+    """
     prof = fault_profile(model, Psi=Psi, Phi=Phi)
     return FaultFamily(kind="step", Psi_tilde=prof.Psi, Phi_tilde=prof.Phi)
 
 
 def impulse_family(model: LTVModel, *, Psi: MatrixLike | None = None) -> FaultFamily:
-    """Impulsive faults ``Psi_k = Psi~_k delta_{r,k+1}``; default ``Psi~ = I`` (Willsky-Jones, ``m = n``)."""
+    """Impulsive faults ``Psi_k = Psi~_k delta_{r,k+1}`` of ``model``; ``Psi`` is ``Psi~_k``, default
+    ``Psi~ = I`` (Willsky-Jones, ``m = n``)."""
     prof = fault_profile(model, Psi=np.eye(model.n) if Psi is None else Psi)
     return FaultFamily(kind="impulse", Psi_tilde=prof.Psi, Phi_tilde=prof.Phi)
 

@@ -45,26 +45,30 @@ ChunkFn = Callable[[Sequence[np.random.SeedSequence]], dict[str, np.ndarray]]
 
 
 def trial_seeds(seed: int, n_trials: int) -> list[np.random.SeedSequence]:
-    """One independent :class:`~numpy.random.SeedSequence` per realisation (``seed`` an integer >= 0)."""
+    """One independent :class:`~numpy.random.SeedSequence` per realisation.
+
+    ``seed`` is an integer >= 0, ``n_trials`` the number of realisations (>= 1).
+    """
     seed = check_seed(seed)
     n_trials = integer(n_trials, "n_trials", low=1)
     return np.random.SeedSequence(seed).spawn(n_trials)
 
 
 def trial_rngs(seeds: Sequence[np.random.SeedSequence]) -> list[np.random.Generator]:
-    """A :class:`~numpy.random.Generator` per seed sequence."""
+    """A :class:`~numpy.random.Generator` per seed sequence of ``seeds``."""
     return [np.random.default_rng(s) for s in seeds]
 
 
 def draw_noise_batch(model: LTVModel, seeds: Sequence[np.random.SeedSequence]) -> Noise:
-    """Noise for a chunk of realisations, each drawn from its own stream, stacked on axis 0."""
+    """Noise of ``model`` for a chunk of realisations, one per entry of ``seeds`` (each its own
+    stream), stacked on axis 0."""
     draws = [draw_noise(model, rng) for rng in trial_rngs(seeds)]
     return Noise(x0=np.stack([d.x0 for d in draws]), w=np.stack([d.w for d in draws]),
                  v=np.stack([d.v for d in draws]))
 
 
 def default_chunk_size(n_trials: int) -> int:
-    """Default realisations per chunk: ``min(250, ceil(n_trials / 4))``, independent of the job count.
+    """Default realisations per chunk for ``n_trials``: ``min(250, ceil(n_trials / 4))``, independent of the job count.
 
     Four chunks or more keep two workers busy; about 250 realisations per chunk
     amortise the noise-independent work of a chunk (e.g. the windowed GLR's

@@ -242,6 +242,15 @@ def kitanidis_lag_covariance(model: LTVModel, kgains: KitanidisGains, lag: int =
     zero for the Kalman filter (``D = 0``) but not for the Kitanidis filter: the paper's
     Prop. 2 (whiteness) does not hold for the innovation (27).
 
+    Parameters
+    ----------
+    model : LTVModel
+        Fault-free model.
+    kgains : KitanidisGains
+        :func:`fdi_lib.kitanidis.kitanidis_gains` of ``model``.
+    lag : int
+        ``j``, ``1 <= j < N``.
+
     Returns
     -------
     numpy.ndarray
@@ -271,7 +280,8 @@ def rejection_projection(model: LTVModel, kgains: KitanidisGains) -> np.ndarray:
     input acts yet) ``E_0`` is used so that the dimension stays ``p - q``.
 
     scipy's ``null_space`` (an SVD) gives the orthonormal complement of the whitened
-    ``Sigma_k^{-1/2} H_k E_{k-1}``.
+    ``Sigma_k^{-1/2} H_k E_{k-1}``; ``model`` is the fault-free model and ``kgains`` its
+    :func:`fdi_lib.kitanidis.kitanidis_gains`.
     """
     N, p = model.n_steps, model.p
     Es = kgains.E
@@ -312,7 +322,11 @@ class ReducedResidual:
 
 def reduce_residual(model: LTVModel, kgains: KitanidisGains, innovations: Any,
                     T: np.ndarray | None = None) -> ReducedResidual:
-    """Project the Kitanidis innovation (27) with :func:`rejection_projection`."""
+    """Project the Kitanidis ``innovations`` (27) with :func:`rejection_projection`.
+
+    ``model`` and ``kgains`` as there; ``T`` is a precomputed projection ``(N, r, p)`` (default:
+    computed).
+    """
     N, p = model.n_steps, model.p
     eps = _series(innovations, N, p, "innovations")
     T = rejection_projection(model, kgains) if T is None else np.asarray(T, dtype=float)
@@ -372,7 +386,10 @@ def energy_statistic(residuals: Any, Sigma_chol: np.ndarray, window: int) -> np.
 
 
 def energy_threshold(window: int, p: int, alpha: float) -> float:
-    """``chi2.ppf(1 - alpha, w p)``: per-sample false-alarm probability ``alpha`` of the energy test."""
+    """``chi2.ppf(1 - alpha, w p)``: per-sample false-alarm probability ``alpha`` of the energy test.
+
+    ``window`` is ``w`` and ``p`` the residual dimension (both integers >= 1).
+    """
     window = integer(window, "window", low=1)
     p = integer(p, "p", low=1)
     alpha = probability(alpha, "alpha")
@@ -380,7 +397,10 @@ def energy_threshold(window: int, p: int, alpha: float) -> float:
 
 
 def first_alarm_after(statistic: np.ndarray, threshold: float, start: int = 0) -> np.ndarray:
-    """:func:`fdi_lib.glr.first_alarm` (``-1`` if none); re-exported for the reproductions."""
+    """:func:`fdi_lib.glr.first_alarm` of ``statistic`` above ``threshold`` from ``start`` (``-1`` if none).
+
+    Re-exported for the reproductions.
+    """
     return first_alarm(statistic, threshold, start)
 
 

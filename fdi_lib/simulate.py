@@ -60,7 +60,7 @@ class Simulation:
 
 
 def covariance_sqrt(cov: np.ndarray) -> np.ndarray:
-    """A square root ``S`` with ``S S^T = cov`` for symmetric PSD matrices (batched, via ``eigh``).
+    """A square root ``S`` with ``S S^T = cov`` for symmetric PSD matrices ``cov`` (batched, via ``eigh``).
 
     ``eigh`` rather than Cholesky so that singular PSD covariances (e.g. rank-one ``Q``) work.
     """
@@ -95,6 +95,8 @@ def draw_noise(model: LTVModel, rng: np.random.Generator, size: int | None = Non
 
 def pi_controller(kp: float, ki: float, setpoint: float = 0.0) -> Callable[[int, np.ndarray], np.ndarray]:
     """A discrete PI controller ``C(z) = kp + ki / (z - 1)`` acting on ``e_k = setpoint - y_k``.
+
+    ``kp`` and ``ki`` are the proportional and integral gains, ``setpoint`` the reference.
 
     Returns a fresh stateful callback ``u_k = controller(k, y_k)`` for :func:`simulate`
     (single-output, single-input; works element-wise on a batch of realisations).

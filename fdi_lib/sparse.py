@@ -263,6 +263,17 @@ def lasso_cvxpy(X: Any, y: Any, lam: float, *, n_samples: int | None = None) -> 
     cvxpy does the hard part (conic reformulation of the l1 norm and an interior-point
     solver); it is slow for Monte Carlo but reads like the maths.
 
+    Parameters
+    ----------
+    X : array_like
+        ``(rows, m)``.
+    y : array_like
+        ``(rows,)``.
+    lam : float
+        ``lambda > 0``.
+    n_samples : int, optional
+        The ``N`` of the ``1/(2N)`` in (39); default ``rows``.
+
     Returns
     -------
     numpy.ndarray
@@ -541,7 +552,17 @@ class Diagnosis:
 def diagnose(X: Any, y: Any, *, n_samples: int | None = None, scale: Scale = "log",
              lambda_ratio: float = 1e-4, max_size: int | None = None,
              path: LassoPath | None = None) -> Diagnosis:
-    """Lasso path, the flat-range rule, then least squares on the selected support (Zhang 2021, Sec. IV-V)."""
+    """Lasso path, the flat-range rule, then least squares on the selected support (Zhang 2021, Sec. IV-V).
+
+    Parameters
+    ----------
+    X, y, n_samples
+        As in :func:`lasso_path`.
+    scale, lambda_ratio, max_size
+        As in :func:`flat_range`.
+    path : LassoPath, optional
+        A precomputed :func:`lasso_path` of ``X``, ``y``.
+    """
     X, y = _check_xy(X, y)
     path = lasso_path(X, y, n_samples=n_samples) if path is None else path
     flat = flat_range(path, scale=scale, lambda_ratio=lambda_ratio, max_size=max_size)

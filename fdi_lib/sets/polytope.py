@@ -484,7 +484,7 @@ class Polytope:
 
 
 def convex_hull(polytopes: Iterable[Polytope]) -> Polytope:
-    """co{P_1, ..., P_r}: hull of the union of their vertices (eq. (4) of Rosa & Silvestre 2013).
+    """co{P_1, ..., P_r} of ``polytopes``: hull of the union of their vertices (eq. (4) of Rosa & Silvestre 2013).
 
     Empty members are ignored; raises :class:`EmptySetError` if all are empty.
     """
@@ -503,7 +503,10 @@ def convex_hull(polytopes: Iterable[Polytope]) -> Polytope:
 
 
 def plot_polytope(P: Polytope, ax: Any, **kwargs: Any) -> Any:
-    """Draw a 2-D polytope as a filled polygon on ``ax``; returns ``ax``. Empty sets draw nothing."""
+    """Draw a 2-D polytope ``P`` as a filled polygon on ``ax``; returns ``ax``. Empty sets draw nothing.
+
+    ``**kwargs`` go to matplotlib's ``fill``.
+    """
     if P.dim != 2:
         raise ShapeError(f"P: expected a 2-D polytope, got dimension {P.dim}")
     V = P.vertices()
