@@ -2,7 +2,7 @@
 
 Usage::
 
-    python benchmarks/mutation_check.py [REV]      # default REV: HEAD
+    python benchmarks/mutation_check.py [REV [TEXT]]   # default REV: HEAD; TEXT: only mutants containing it
 
 The tree of git revision ``REV`` is exported to a temporary folder; each mutant replaces one
 exact line fragment of one module (it must occur exactly once), then the unit tests that
@@ -46,7 +46,7 @@ MUTANTS = [
     # glr
     ("fdi_lib/glr.py", "np.sum(V * (q * inv)[..., None, :], axis=-1)", "np.sum(V * q[..., None, :], axis=-1)"),
     ("fdi_lib/glr.py", "RANK_RTOL = 1e-10", "RANK_RTOL = 1e-1"),
-    ("fdi_lib/glr.py", "active = (r >= 0) & (k - 1 >= r)", "active = (r >= 0) & (k >= r)"),
+    ("fdi_lib/glr.py", "sig = sig + fam.Phi_tilde[k]", "sig = sig + fam.Phi_tilde[k - 1]"),
     ("fdi_lib/glr.py", "(self._onset <= k - self.min_samples)", "(self._onset <= k)"),
     ("fdi_lib/glr.py", "s = -(-m // p) if min_samples is None else min_samples",
      "s = m // p if min_samples is None else min_samples"),
@@ -116,7 +116,7 @@ def tests_for(tree: Path, module: str) -> list[str]:
     return out
 
 
-def main(rev: str = "HEAD") -> None:
+def main(rev: str = "HEAD", only: str | None = None) -> None:
     with tempfile.TemporaryDirectory(prefix="mutants-") as tmp:
         tree = Path(tmp)
         archive = subprocess.run(["git", "-C", str(ROOT), "archive", rev], capture_output=True, check=True).stdout
@@ -124,6 +124,8 @@ def main(rev: str = "HEAD") -> None:
         env = {**os.environ, "PYTHONPATH": str(tree), "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
         killed, total, survivors = 0, 0, []
         for module, old, new in MUTANTS:
+            if only is not None and only not in old:
+                continue
             path = tree / module
             src = path.read_text()
             if src.count(old) != 1:

@@ -87,13 +87,16 @@ def test_missing_measurement_predicts_without_update():
     y[50] = np.nan
     kf = kalman_filter(m, y, gains=g)
     # Independent scalar filter with the same gains.
-    xh, eps = 0.0, []
+    xh, eps, filt = 0.0, [], []
     for k in range(N):
         e = y[k, 0] - xh
         eps.append(e)
         xf = xh if np.isnan(e) else xh + g.K[k, 0, 0] * e
+        filt.append(xf)
         xh = 0.9 * xf
-    eps = np.array(eps)
+    eps, filt = np.array(eps), np.array(filt)
+    np.testing.assert_allclose(kf.x_filt[:, 0], filt, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(kf.updated_residuals[:, 0], y[:, 0] - filt, rtol=1e-12, atol=1e-14, equal_nan=True)
     assert np.isnan(kf.innovations[50, 0]) and np.isnan(eps[50])
     assert np.count_nonzero(np.isnan(kf.innovations)) == 1
     np.testing.assert_allclose(kf.innovations[:, 0], eps, rtol=1e-12, atol=1e-14)
