@@ -114,15 +114,14 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
         Each entry concatenated over realisations (leading axis ``n_trials``).
     """
     seeds = trial_seeds(seed, n_trials)
-    if not isinstance(jobs, (int, np.integer)) or jobs == 0:
+    if isinstance(jobs, (bool, np.bool_)) or not isinstance(jobs, (int, np.integer)) or jobs == 0:
         raise ModelError(f"jobs: expected a non-zero integer (-1 = all cores), got {jobs!r}")
     import joblib
 
     n_workers = joblib.cpu_count() if jobs < 0 else int(jobs)
     if chunk_size is None:
         chunk_size = default_chunk_size(n_trials)
-    if not isinstance(chunk_size, (int, np.integer)) or chunk_size < 1:
-        raise ModelError(f"chunk_size: expected a positive integer, got {chunk_size!r}")
+    chunk_size = integer(chunk_size, "chunk_size", low=1)
     parts = _chunks(len(seeds), int(chunk_size))
     if progress:
         from tqdm.auto import tqdm
