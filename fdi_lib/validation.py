@@ -117,6 +117,8 @@ def integer(value: Any, name: str, *, low: int | None = None, high: int | None =
     ...
     fdi_lib.errors.ModelError: window: expected an integer, got True (bool)
     """
+    if isinstance(value, np.ndarray) and value.ndim == 0:   # a 0-d array counts as its scalar
+        value = value[()]
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
         raise ModelError(f"{name}: expected an integer, got {value!r} ({type(value).__name__})")
     value = int(value)
@@ -133,6 +135,8 @@ def integer(value: Any, name: str, *, low: int | None = None, high: int | None =
 def real(value: Any, name: str, *, low: float | None = None, high: float | None = None,
          low_open: bool = False, high_open: bool = False, what: str = "a number") -> float:
     """A finite real number in the given (closed or open) interval; ``what`` names it in errors."""
+    if isinstance(value, np.ndarray) and value.ndim == 0:   # a 0-d array counts as its scalar
+        value = value[()]
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
         raise ModelError(f"{name}: expected {what}, got {value!r} ({type(value).__name__})")
     x = float(value)
