@@ -198,9 +198,12 @@ def kalman_filter(model: LTVModel, y: Any, u: Any = None, *, gains: KalmanGains 
     for k in range(N):
         e = ybar[..., k, :] - xh[..., k, :] @ model.H[k].T
         eps[..., k, :] = e
-        if any_missing:  # a missing sample: predict without updating
+        if any_missing:  # a missing sample (NaN in any component): NaN innovation, no update
+            eps[..., k, :] = np.where(missing[..., k, None], np.nan, e)
             e = np.where(missing[..., k, None], 0.0, e)
         xf[..., k, :] = xh[..., k, :] + e @ g.K[k].T
         xh[..., k + 1, :] = xf[..., k, :] @ model.F[k].T + Gu[..., k, :]
     upd = ybar - np.einsum("kij,...kj->...ki", model.H, xf)
+    if any_missing:
+        upd = np.where(missing[..., None], np.nan, upd)
     return KalmanResult(innovations=eps, x_pred=xh, x_filt=xf, updated_residuals=upd, gains=g)

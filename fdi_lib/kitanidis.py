@@ -288,11 +288,14 @@ def kitanidis_filter(model: LTVModel, y: Any, u: Any = None, E: Any = None, *,
     for k in range(N):
         e = ybar[..., k, :] - xp[..., k, :] @ model.H[k].T
         eps[..., k, :] = e
-        if any_missing:  # a missing sample: predict without updating
+        if any_missing:  # a missing sample (NaN in any component): NaN innovation, no update
+            eps[..., k, :] = np.where(missing[..., k, None], np.nan, e)
             e = np.where(missing[..., k, None], 0.0, e)
         xf[..., k, :] = xp[..., k, :] + e @ gains.K[k].T
         xp[..., k + 1, :] = xf[..., k, :] @ model.F[k].T + Gu[..., k, :]
     res = ybar - np.einsum("kij,...kj->...ki", model.H, xf)
+    if any_missing:
+        res = np.where(missing[..., None], np.nan, res)
     return KitanidisResult(residuals=res, x_filt=xf, x_pred=xp, innovations=eps, gains=gains)
 
 

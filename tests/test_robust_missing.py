@@ -197,3 +197,18 @@ def test_energy_skips_missing_samples():
     en = energy_statistic(r, np.ones((n, 1, 1)), w)
     assert np.all(np.isfinite(en[w - 1:]))
     np.testing.assert_allclose(en, _energy_loop(r[:, 0], w), rtol=1e-12, equal_nan=True)
+
+
+def test_kitanidis_filter_predicts_without_update_on_a_missing_sample():
+    from fdi_lib.kitanidis import kitanidis_filter, kitanidis_gains
+
+    m = ltv_model(F=0.5 * np.eye(2), H=np.eye(2), Q=np.eye(2), R=np.eye(2), n_steps=20)
+    kg = kitanidis_gains(m, [[1.0], [0.0]])
+    y = np.random.default_rng(2).standard_normal((20, 2))
+    y[7, 1] = np.nan                                     # one component missing: the whole sample is
+    res = kitanidis_filter(m, y, gains=kg)
+    assert np.isnan(res.innovations[7]).all() and np.count_nonzero(np.isnan(res.innovations)) == 2
+    np.testing.assert_array_equal(res.x_filt[7], res.x_pred[7])       # no update
+    np.testing.assert_allclose(res.x_pred[8], 0.5 * res.x_pred[7], rtol=1e-15)
+    clean = kitanidis_filter(m, np.where(np.arange(20)[:, None] == 7, 0.0, y), gains=kg)
+    np.testing.assert_allclose(res.x_filt[:7], clean.x_filt[:7], rtol=1e-15)
