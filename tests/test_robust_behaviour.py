@@ -107,6 +107,9 @@ def test_projection_of_empty_and_flat_sets():
     empty = Polytope(M, np.array([1.0, 1.0, 1.0, 1.0, 1.0, 1.0, -3.0]))    # x + y <= -3 inside the unit cube
     assert empty.is_empty()
     assert empty.project([0, 2]).is_empty()
+    # emptiness carried only by the eliminated coordinate: x <= -1 and x >= 1, |y| <= 1
+    slab = Polytope(np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]]), np.array([-1.0, -1.0, 1.0, 1.0]))
+    assert slab.is_empty() and slab.project([1]).is_empty()
     flat = Polytope(M[:6], np.array([1.0, 1.0, 1.0, 1.0, 0.0, 0.0]))       # z = 0: a square in R^3
     P = flat.project([0, 1])
     assert not P.is_empty()
