@@ -89,7 +89,7 @@ def test_unknown_keyword_is_rejected_by_name():
     (["zb2014-fig1", "--plot", "fig.docx"], r"--plot: expected an image file"),
     (["zb2014-table1", "--plot", "fig.png"], r"--plot: zb2014-table1 has no figure"),
     (["zb2014-fig1", "--trials", "5"], r"trials: zb2014-fig1 is one deterministic or seeded run"),
-    (["zhang2021-table1", "--trials", "1"], r"trials: expected at least 2"),
+    (["zhang2021-table1", "--trials", "1"], r"--trials: expected at least 2"),
     (["zhang2021-table1", "--jobs", "0"], r"jobs: expected a non-zero integer"),
 ])
 def test_cli_checks_arguments_before_computing(argv, pattern, capsys, monkeypatch):

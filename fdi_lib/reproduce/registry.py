@@ -75,7 +75,7 @@ class Reproduction:
             ins.opname.startswith("LOAD") and ins.argval == "trials" for ins in dis.get_instructions(self.func))
 
     def check_arguments(self, *, seed: int | None = None, trials: int | None = None, jobs: int = 1) -> None:
-        """Validate ``seed`` (integer >= 0), ``trials`` (integer >= 2, only for a Monte Carlo
+        """Validate ``seed`` (integer >= 0), ``trials`` (positive integer, only for a Monte Carlo
         reproduction) and ``jobs`` (non-zero integer) before anything is computed."""
         if seed is not None:
             check_seed(seed)
@@ -85,8 +85,6 @@ class Reproduction:
             if not self.monte_carlo:
                 raise ModelError(f"trials: {self.id} is one deterministic or seeded run; expected no "
                                  f"trial count, got {trials!r}")
-            if trials < 2:
-                raise ModelError(f"trials: expected at least 2 (a 95 % interval needs two trials), got {trials!r}")
         if isinstance(jobs, (bool, np.bool_)) or not isinstance(jobs, (int, np.integer)) or jobs == 0:
             raise ModelError(f"jobs: expected a non-zero integer (-1 = all cores), got {jobs!r}")
 
