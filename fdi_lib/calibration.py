@@ -117,6 +117,14 @@ def glr_null_calibration(model: LTVModel, fault: FaultProfile, *, n_runs: int, s
         Parallel workers of :func:`fdi_lib.montecarlo.run_monte_carlo` (same results for any value).
     u : array_like, optional
         Known input ``(N, l)``; default zeros.
+
+    Examples
+    --------
+    >>> from fdi_lib.models import fault_profile, ltv_model
+    >>> m = ltv_model(F=[[0.9]], H=[[1.0]], Q=0.01, R=0.01, n_steps=50)
+    >>> c = glr_null_calibration(m, fault_profile(m, Psi=[[1.0]]), n_runs=200, seed=1)
+    >>> c.dof, c.rejection_rate, bool(c.ks_pvalue > 0.01)
+    (1, 0.04, True)
     """
     _check(model, fault, n_runs, alpha)
     out = _run(model, fault, np.zeros(fault.m), u, n_runs, seed, jobs)

@@ -26,8 +26,9 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from fdi_lib.errors import NonFiniteError
+from fdi_lib.errors import ModelError, NonFiniteError
 from fdi_lib.models import LTVModel, as_record
+from fdi_lib.validation import check_gains, cholesky, initial_state, measurements
 
 __all__ = ["KalmanGains", "KalmanResult", "kalman_gains", "kalman_filter", "as_outputs"]
 
@@ -89,6 +90,8 @@ def kalman_gains(model: LTVModel) -> KalmanGains:
     >>> round(float(g.P[-1, 0, 0]), 4)  # DARE P^2 - 0.81 P - 1 = 0: P = (0.81 + sqrt(0.81**2 + 4)) / 2
     1.4839
     """
+    if not isinstance(model, LTVModel):
+        raise ModelError(f"model: expected an LTVModel, got {type(model).__name__}")
     N, n, p = model.n_steps, model.n, model.p
     K = np.empty((N, n, p))
     P = np.empty((N + 1, n, n))
@@ -99,19 +102,20 @@ def kalman_gains(model: LTVModel) -> KalmanGains:
     FK = np.empty((N, n, p))
     eye = np.eye(n)
     P[0] = model.P0
-    for k in range(N):
-        F, H, Pk = model.F[k], model.H[k], P[k]
-        S = H @ Pk @ H.T + model.R[k]
-        S = 0.5 * (S + S.T)
-        c, low = scipy.linalg.cho_factor(S, lower=True)
-        Kk = scipy.linalg.cho_solve((c, low), H @ Pk).T  # P H^T S^{-1} without forming S^{-1}
-        IKH = eye - Kk @ H
-        Pf = IKH @ Pk @ IKH.T + Kk @ model.R[k] @ Kk.T  # Joseph form: stays PSD
-        Pf = 0.5 * (Pf + Pf.T)
-        Pn = F @ Pf @ F.T + model.Q[k]
-        K[k], P_filt[k], Sigma[k], A[k], FK[k] = Kk, Pf, S, F @ IKH, F @ Kk
-        L[k] = np.tril(c)
-        P[k + 1] = 0.5 * (Pn + Pn.T)
+    with np.errstate(over="ignore", invalid="ignore"):  # divergence is reported below, by step
+        for k in range(N):
+            F, H, Pk = model.F[k], model.H[k], P[k]
+            S = H @ Pk @ H.T + model.R[k]
+            S = 0.5 * (S + S.T)
+            c, low = cholesky(S, step=k, what="the Riccati recursion")
+            Kk = scipy.linalg.cho_solve((c, low), H @ Pk).T  # P H^T S^{-1} without forming S^{-1}
+            IKH = eye - Kk @ H
+            Pf = IKH @ Pk @ IKH.T + Kk @ model.R[k] @ Kk.T  # Joseph form: stays PSD
+            Pf = 0.5 * (Pf + Pf.T)
+            Pn = F @ Pf @ F.T + model.Q[k]
+            K[k], P_filt[k], Sigma[k], A[k], FK[k] = Kk, Pf, S, F @ IKH, F @ Kk
+            L[k] = np.tril(c)
+            P[k + 1] = 0.5 * (Pn + Pn.T)
     if not np.all(np.isfinite(P)):
         k = int(np.argwhere(~np.isfinite(P))[0, 0])
         raise NonFiniteError(f"model: the Riccati recursion diverged (non-finite P_k at step {k})")
@@ -143,7 +147,10 @@ class KalmanResult:
 
 
 def as_outputs(model: LTVModel, y: Any, name: str = "y") -> np.ndarray:
-    """Validate an output record ``(*batch, N, p)`` against ``model`` (see :func:`~fdi_lib.models.as_record`)."""
+    """Validate an output record ``y`` ``(*batch, N, p)`` against ``model`` (see :func:`~fdi_lib.models.as_record`).
+
+    ``name`` is the argument named in errors.
+    """
     return as_record(y, n_steps=model.n_steps, width=model.p, name=name)
 
 
@@ -156,7 +163,8 @@ def kalman_filter(model: LTVModel, y: Any, u: Any = None, *, gains: KalmanGains 
     model : LTVModel
         The fault-free model the filter is designed for (Remark 1 of the paper).
     y : array_like
-        Outputs, shape ``(*batch, N, p)``.
+        Outputs, shape ``(*batch, N, p)``. A sample with a NaN is missing: the filter predicts
+        without updating and its innovation is NaN (:mod:`fdi_lib.validation`).
     u : array_like, optional
         Inputs, shape ``(*batch, N, l)`` or ``(N, l)``; default zeros.
     gains : KalmanGains, optional
@@ -169,12 +177,17 @@ def kalman_filter(model: LTVModel, y: Any, u: Any = None, *, gains: KalmanGains 
     KalmanResult
     """
     N, n, l = model.n_steps, model.n, model.l
-    y_arr = as_outputs(model, y)
+    y_arr, missing = measurements(y, n_steps=N, width=model.p, name="y")
     u_arr = as_record(u, n_steps=N, width=l, name="u")
     batch = y_arr.shape[:-2]
-    g = kalman_gains(model) if gains is None else gains
+    if gains is None:
+        g = kalman_gains(model)
+    else:
+        check_gains(model, gains)
+        g = gains
     xh = np.empty((*batch, N + 1, n))
-    xh[..., 0, :] = model.x0 if x0 is None else np.asarray(x0, dtype=float)
+    xh[..., 0, :] = initial_state(model, x0)
+    any_missing = bool(missing.any())
     eps = np.empty(y_arr.shape)
     xf = np.empty((*batch, N, n))
     # Known input contributions, computed for all k at once.
@@ -185,7 +198,12 @@ def kalman_filter(model: LTVModel, y: Any, u: Any = None, *, gains: KalmanGains 
     for k in range(N):
         e = ybar[..., k, :] - xh[..., k, :] @ model.H[k].T
         eps[..., k, :] = e
+        if any_missing:  # a missing sample (NaN in any component): NaN innovation, no update
+            eps[..., k, :] = np.where(missing[..., k, None], np.nan, e)
+            e = np.where(missing[..., k, None], 0.0, e)
         xf[..., k, :] = xh[..., k, :] + e @ g.K[k].T
         xh[..., k + 1, :] = xf[..., k, :] @ model.F[k].T + Gu[..., k, :]
     upd = ybar - np.einsum("kij,...kj->...ki", model.H, xf)
+    if any_missing:
+        upd = np.where(missing[..., None], np.nan, upd)
     return KalmanResult(innovations=eps, x_pred=xh, x_filt=xf, updated_residuals=upd, gains=g)

@@ -29,9 +29,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fdi_lib.errors import ModelError, ShapeError
+from fdi_lib.errors import ModelError, NonFiniteError, ShapeError
 from fdi_lib.filters import KalmanGains
 from fdi_lib.models import FaultFamily, LTVModel
+from fdi_lib.validation import array, check_gains, integer, missing_samples, real
 
 __all__ = ["GLRResult", "glr_known_profile", "WindowGLRResult", "WindowedGLR", "glr_window",
            "quadratic_form", "first_alarm"]
@@ -112,11 +113,12 @@ def quadratic_form(C: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return np.sum(q * q * inv, axis=-1), np.sum(V * (q * inv)[..., None, :], axis=-1)
 
 
-def _check_innovations(eps: np.ndarray, N: int, p: int) -> np.ndarray:
-    eps = np.asarray(eps, dtype=float)
+def _check_innovations(eps: np.ndarray, N: int, p: int) -> tuple[np.ndarray, np.ndarray]:
+    """Innovations ``(..., N, p)`` and their missing samples ``(..., N)`` (NaN rows, :mod:`fdi_lib.validation`)."""
+    eps = array(eps, "innovations", finite=False)
     if eps.ndim < 2 or eps.shape[-2:] != (N, p):
         raise ShapeError(f"innovations: expected shape (..., {N}, {p}), got {eps.shape}")
-    return eps
+    return eps, missing_samples(eps, "innovations")
 
 
 @dataclass(frozen=True)
@@ -136,7 +138,8 @@ def glr_known_profile(innovations: np.ndarray, gains: KalmanGains, signature: np
     Parameters
     ----------
     innovations : array_like
-        ``eps_k``, shape ``(*batch, N, p)``.
+        ``eps_k``, shape ``(*batch, N, p)``; a sample with a NaN is missing and skipped
+        (:mod:`fdi_lib.validation`).
     gains : KalmanGains
         Provides ``Sigma_k``.
     signature : array_like
@@ -146,18 +149,25 @@ def glr_known_profile(innovations: np.ndarray, gains: KalmanGains, signature: np
     -------
     GLRResult
         ``statistic[..., k] = l_k`` uses ``eps_0 .. eps_k``; under no fault and persistent
-        excitation it is chi-square with ``m`` degrees of freedom.
+        excitation it is chi-square with ``m`` degrees of freedom. With missing samples,
+        ``C`` has the batch axes of the innovations, ``(*batch, N, m, m)``.
     """
-    S = np.asarray(signature, dtype=float)
+    if np.ndim(getattr(gains, "Sigma_chol", None)) != 3 or np.ndim(getattr(gains, "Sigma", None)) != 3:
+        raise ModelError(f"gains: expected KalmanGains (Sigma, Sigma_chol of shape (N, p, p)), "
+                         f"got {type(gains).__name__}")
+    S = array(signature, "signature")
     N, p = gains.Sigma.shape[:2]
     if S.ndim != 3 or S.shape[:2] != (N, p):
         raise ShapeError(f"signature: expected shape ({N}, {p}, m), got {S.shape}")
-    eps = _check_innovations(innovations, N, p)
+    eps, missing = _check_innovations(innovations, N, p)
+    if missing.any():  # a missing sample contributes nothing: zero its innovation and signature rows
+        eps = np.where(missing[..., None], 0.0, eps)
+        S = np.where(missing[..., None, None], 0.0, S)
     # Whitened regressors and innovations: Sigma^{-1/2} S and Sigma^{-1/2} eps (Cholesky solves).
     Sw = np.linalg.solve(gains.Sigma_chol, S)
     ew = gains.whiten(eps)
-    C = np.cumsum(np.einsum("kpi,kpj->kij", Sw, Sw), axis=0)          # (27)
-    d = np.cumsum(np.einsum("kpi,...kp->...ki", Sw, ew), axis=-2)     # (28)
+    C = np.cumsum(np.einsum("...kpi,...kpj->...kij", Sw, Sw), axis=-3)   # (27)
+    d = np.cumsum(np.einsum("...kpi,...kp->...ki", Sw, ew), axis=-2)     # (28)
     stat, theta = quadratic_form(C, d)                                # (30), (24)
     return GLRResult(statistic=stat, theta_hat=theta, C=C, d=d)
 
@@ -218,15 +228,17 @@ class WindowedGLR:
 
     def __init__(self, model: LTVModel, gains: KalmanGains, family: FaultFamily, window: int,
                  min_samples: int | None = None, batch_shape: tuple[int, ...] = ()) -> None:
+        if not isinstance(model, LTVModel) or not isinstance(family, FaultFamily):
+            raise ModelError(f"model, family: expected an LTVModel and a FaultFamily, got "
+                             f"{type(model).__name__} and {type(family).__name__}")
+        check_gains(model, gains)
         N, n, p, m = model.n_steps, model.n, model.p, family.m
         if family.Psi_tilde.shape[:2] != (N, n) or family.Phi_tilde.shape[:2] != (N, p):
             raise ShapeError(f"family: expected Psi~ ({N}, {n}, m) and Phi~ ({N}, {p}, m), "
                              f"got {family.Psi_tilde.shape} and {family.Phi_tilde.shape}")
-        if not isinstance(window, (int, np.integer)) or window < 1:
-            raise ModelError(f"window: expected a positive integer, got {window!r}")
+        window = integer(window, "window", low=1, high=N)
         s = -(-m // p) if min_samples is None else min_samples
-        if not isinstance(s, (int, np.integer)) or not 0 <= s < window:
-            raise ModelError(f"min_samples: expected an integer in [0, window={window}), got {s!r}")
+        s = integer(s, "min_samples", low=0, high=window - 1)
         if family.kind == "impulse" and np.any(family.Phi_tilde):
             raise ModelError("family: impulsive profiles act on the state only (Phi~ must be zero)")
         self.model, self.gains, self.family = model, gains, family
@@ -237,6 +249,8 @@ class WindowedGLR:
         # Scores d_k(r) stored as (w, m, B), slot = r mod w, realisations last: every per-onset
         # product below is then a BLAS matrix product with B columns.
         self._d = np.zeros((self.window, m, self._B))
+        # Information of the missing samples still in the window, per slot (subtracted from C_k(r)).
+        self._C_missing = np.zeros((self.window, m, m))
         self.k = 0
 
     def _shared(self) -> None:
@@ -289,26 +303,46 @@ class WindowedGLR:
     def update(self, eps_k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Process innovation ``eps_k`` ``(*batch, p)``.
 
+        A NaN ``eps_k`` (missing sample) must be missing in every realisation of the batch; the
+        sample is then skipped (it adds nothing to ``C_k(r)`` and ``d_k(r)``).
+
         Returns ``(l_k, r_hat_k, theta_hat_k, C_k(r_hat), d_k(r_hat))`` (``nan``/``-1`` when
         no onset is admissible yet).
         """
         model, k, w, m = self.model, self.k, self.window, self.family.m
         if k >= model.n_steps:
             raise ModelError(f"update: the model horizon N={model.n_steps} is exhausted")
-        eps_k = np.asarray(eps_k, dtype=float)
+        eps_k = array(eps_k, "eps_k", finite=False)
         if eps_k.shape != (*self.batch_shape, model.p):
             raise ShapeError(f"eps_k: expected shape {(*self.batch_shape, model.p)}, got {eps_k.shape}")
+        missing = missing_samples(eps_k, "eps_k")
+        skip = bool(np.all(missing))
+        if np.any(missing) and not skip:
+            i = tuple(int(j) for j in np.argwhere(missing)[0])
+            raise NonFiniteError(f"eps_k: expected a sample missing (NaN) in all realisations or in none, "
+                                 f"got NaN at batch index {i} only (step {k})")
         # New onset r = k enters the window (replacing r = k - w); scores (33), recursively (28).
-        self._d[k % w] = 0.0
-        e_w = self._Linv[k] @ eps_k.reshape(self._B, model.p).T         # (p, B)
-        self._d += self._sig_wT[k] @ e_w
+        slot = k % w
+        self._d[slot] = 0.0
+        self._C_missing[slot] = 0.0
+        if skip:  # a missing sample contributes nothing: its score term is zero, its information
+            # term (precomputed in C_k(r)) is subtracted for every onset it belongs to
+            self._C_missing += self._sig_wT[k] @ np.swapaxes(self._sig_wT[k], -1, -2)
+        else:
+            e_w = self._Linv[k] @ eps_k.reshape(self._B, model.p).T     # (p, B)
+            self._d += self._sig_wT[k] @ e_w
         self.k = k + 1
         shape = self.batch_shape
         slots = self._admissible[k]
         if not slots.size:
             return (np.full(shape, np.nan), np.full(shape, -1), np.full((*shape, m), np.nan),
                     np.full((*shape, m, m), np.nan), np.full((*shape, m), np.nan))
+        C = self._Cs[k, slots]
         root = self._root[k, slots]                  # shared by all realisations
+        if np.any(self._C_missing[slots]):           # missing samples in the window
+            C = C - self._C_missing[slots]
+            V, inv = _pinv_factors(C)
+            root = V * np.sqrt(inv)[..., None, :]
         d = self._d[slots]                           # (S, m, B)
         q = np.swapaxes(root, -1, -2) @ d            # (S, m, B)
         stat = np.einsum("smb,smb->sb", q, q)        # (35) for every admissible onset, (S, B)
@@ -319,7 +353,7 @@ class WindowedGLR:
         d_hat = d[best, :, cols]
         l_k, th, d_hat = l_k.reshape(shape), th.reshape(*shape, m), d_hat.reshape(*shape, m)
         best_onset = self._onsets[k, slots][best].reshape(shape)
-        C_hat = self._Cs[k, slots][best].reshape(*shape, m, m)
+        C_hat = C[best].reshape(*shape, m, m)
         return l_k, best_onset, th, C_hat, d_hat
 
 
@@ -381,7 +415,8 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
     ----------
     innovations : array_like
         ``eps_k``, shape ``(*batch, N, p)``; several realisations share the
-        noise-independent computations.
+        noise-independent computations. A sample with a NaN is missing and skipped
+        (realisations with different missing samples are run as separate groups).
     model, gains, family, window, min_samples
         As in :class:`WindowedGLR`.
 
@@ -389,10 +424,17 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
     -------
     WindowGLRResult
     """
-    eps = _check_innovations(innovations, model.n_steps, model.p)
+    if not isinstance(model, LTVModel):
+        raise ModelError(f"model: expected an LTVModel, got {type(model).__name__}")
+    eps, missing = _check_innovations(innovations, model.n_steps, model.p)
     batch = eps.shape[:-2]
+    if missing.any() and batch:
+        flat_missing = missing.reshape(-1, model.n_steps)
+        patterns, group = np.unique(flat_missing, axis=0, return_inverse=True)
+        if len(patterns) > 1:
+            return _grouped_glr_window(eps, group.reshape(-1), model, gains, family, window, min_samples)
     det = WindowedGLR(model, gains, family, window, min_samples, batch_shape=batch)
-    if det._B <= _RECORD_MAX_BATCH:
+    if det._B <= _RECORD_MAX_BATCH and not missing.any():
         return det._record(eps)
     # many realisations: one update per sample already works on wide arrays
     N, m = model.n_steps, family.m
@@ -413,9 +455,57 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
 _RECORD_MAX_BATCH = 4
 
 
+def _grouped_glr_window(eps: np.ndarray, group: np.ndarray, model: LTVModel, gains: KalmanGains,
+                        family: FaultFamily, window: int, min_samples: int | None) -> WindowGLRResult:
+    """:func:`glr_window` run once per group of realisations sharing the same missing samples."""
+    batch, N, m = eps.shape[:-2], model.n_steps, family.m
+    flat = eps.reshape(-1, N, model.p)
+    B = flat.shape[0]
+    out = {"statistic": np.empty((B, N)), "onset": np.empty((B, N), dtype=int),
+           "theta_hat": np.empty((B, N, m)), "C_hat": np.empty((B, N, m, m)), "d_hat": np.empty((B, N, m))}
+    res = None
+    for i in np.unique(group):
+        rows = np.nonzero(group == i)[0]
+        res = glr_window(flat[rows], model, gains, family, window, min_samples)
+        for key, arr in out.items():
+            arr[rows] = getattr(res, key)
+    return WindowGLRResult(**{key: arr.reshape(*batch, *arr.shape[1:]) for key, arr in out.items()},
+                           window=res.window, min_samples=res.min_samples)
+
+
 def first_alarm(statistic: np.ndarray, threshold: float, start: int = 0) -> np.ndarray:
-    """Index of the first ``k >= start`` with ``statistic[..., k] > threshold`` (``-1`` if none)."""
-    stat = np.asarray(statistic, dtype=float)
+    """Index of the first ``k >= start`` with ``statistic[..., k] > threshold`` (``-1`` if none).
+
+    Parameters
+    ----------
+    statistic : array_like
+        ``(..., N)``. NaN is allowed only as a leading warm-up (a windowed statistic not yet
+        defined); a NaN after a finite value, or an infinite value, raises
+        :class:`~fdi_lib.errors.NonFiniteError` with its index: NaN is never read as "no alarm".
+    threshold : float
+        Finite alarm threshold.
+    start : int
+        First admissible index, ``0 <= start <= N``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> first_alarm(np.array([[0.5, 7.0, 9.0], [0.1, 0.2, 0.3]]), 6.63)
+    array([ 1, -1])
+    >>> first_alarm(np.array([np.nan, 7.0, 9.0]), 6.63, start=2)   # a leading warm-up NaN is fine
+    array(2)
+    """
+    stat = array(statistic, "statistic", finite=False)
+    if stat.ndim < 1:
+        raise ShapeError("statistic: expected an array (..., N), got a scalar")
+    threshold = real(threshold, "threshold")
+    start = integer(start, "start", low=0, high=stat.shape[-1])
+    nan = np.isnan(stat)
+    bad = np.isinf(stat) | (nan & np.logical_or.accumulate(~nan, axis=-1))
+    if bad.any():
+        i = tuple(int(j) for j in np.argwhere(bad)[0])
+        raise NonFiniteError(f"statistic: expected finite values after the warm-up, got {stat[i]} "
+                             f"at index {i}")
     over = np.nan_to_num(stat, nan=-np.inf) > threshold
     over[..., :start] = False
     hit = over.any(axis=-1)

@@ -23,6 +23,7 @@ import scipy.stats
 
 from fdi_lib.errors import ModelError, PersistentExcitationError, ShapeError
 from fdi_lib.filters import KalmanGains
+from fdi_lib.validation import array, covariance, integer, missing_samples, probability, real
 
 __all__ = ["information", "minmax_statistic", "MinmaxDecision", "minmax_isolation"]
 
@@ -34,30 +35,47 @@ def information(innovations: np.ndarray, signature: np.ndarray, gains: KalmanGai
     Parameters
     ----------
     innovations : array_like
-        ``(*batch, N, p)``.
+        ``(*batch, N, p)``; a sample with a NaN is missing and skipped (:mod:`fdi_lib.validation`).
     signature : array_like
         ``H_k Gamma_k(r_hat) + Phi_k``, shape ``(N, p, m)``.
     gains : KalmanGains
         Provides ``Sigma_k`` (the blocks of ``R`` in (39)).
     start, stop : int
         Sample range (the paper: ``r_hat + 1 .. k*``).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``F`` ``(m, m)`` (``(*batch, m, m)`` when samples are missing) and ``zeta`` ``(*batch, m)``.
     """
-    eps = np.asarray(innovations, dtype=float)
-    S = np.asarray(signature, dtype=float)
+    if np.ndim(getattr(gains, "Sigma_chol", None)) != 3 or np.ndim(getattr(gains, "Sigma", None)) != 3:
+        raise ModelError(f"gains: expected KalmanGains (Sigma, Sigma_chol of shape (N, p, p)), "
+                         f"got {type(gains).__name__}")
+    eps = array(innovations, "innovations", finite=False)
+    S = array(signature, "signature")
     N, p = gains.Sigma.shape[:2]
-    if S.ndim != 3 or S.shape[:2] != (N, p) or eps.shape[-2:] != (N, p):
+    if S.ndim != 3 or S.shape[:2] != (N, p) or eps.ndim < 2 or eps.shape[-2:] != (N, p):
         raise ShapeError(f"signature/innovations: expected ({N}, {p}, m) and (..., {N}, {p}), "
                          f"got {S.shape} and {eps.shape}")
-    if not 0 <= start < stop <= N:
-        raise ModelError(f"start, stop: expected 0 <= start < stop <= {N}, got {start}, {stop}")
+    start = integer(start, "start", low=0, high=N - 1)
+    stop = integer(stop, "stop", low=start + 1, high=N)
+    S, eps = S[start:stop], eps[..., start:stop, :]
+    missing = missing_samples(eps, "innovations")
+    if missing.any():  # a missing sample contributes nothing: zero its innovation and signature rows
+        eps = np.where(missing[..., None], 0.0, eps)
+        S = np.where(missing[..., None, None], 0.0, S)
     L = gains.Sigma_chol[start:stop]
-    Sw = np.linalg.solve(L, S[start:stop])
-    ew = np.linalg.solve(L, eps[..., start:stop, :, None])[..., 0]
-    return np.einsum("kpi,kpj->ij", Sw, Sw), np.einsum("kpi,...kp->...i", Sw, ew)
+    Sw = np.linalg.solve(L, S)
+    ew = np.linalg.solve(L, eps[..., None])[..., 0]
+    return np.einsum("...kpi,...kpj->...ij", Sw, Sw), np.einsum("...kpi,...kp->...i", Sw, ew)
 
 
 def _index(a: Sequence[int], m: int) -> tuple[np.ndarray, np.ndarray]:
-    a_idx = np.asarray(sorted(set(int(i) for i in a)), dtype=int)
+    try:
+        a = [integer(i, "a") for i in a]
+    except TypeError:
+        raise ModelError(f"a: expected a sequence of component indices, got {a!r}") from None
+    a_idx = np.asarray(sorted(set(a)), dtype=int)
     if a_idx.size == 0 or a_idx.min() < 0 or a_idx.max() >= m or a_idx.size != len(a):
         raise ModelError(f"a: expected distinct component indices in [0, {m}), got {list(a)}")
     b_idx = np.setdiff1d(np.arange(m), a_idx)
@@ -88,10 +106,15 @@ def minmax_statistic(F: np.ndarray, zeta: np.ndarray, a: Sequence[int]) -> np.nd
     >>> float(minmax_statistic(F, zeta, [0]))  # zeta_a* = 1 - 1/2, F_a* = 2 - 1/2
     0.16666666666666666
     """
-    F = np.asarray(F, dtype=float)
-    zeta = np.asarray(zeta, dtype=float)
-    if F.ndim < 2 or F.shape[-1] != F.shape[-2] or zeta.shape[-1] != F.shape[-1]:
+    F = array(F, "F")
+    zeta = array(zeta, "zeta")
+    if F.ndim < 2 or F.shape[-1] != F.shape[-2] or zeta.ndim < 1 or zeta.shape[-1] != F.shape[-1]:
         raise ShapeError(f"F, zeta: expected (..., m, m) and (..., m), got {F.shape} and {zeta.shape}")
+    try:
+        np.broadcast_shapes(F.shape[:-2], zeta.shape[:-1])
+    except ValueError:
+        raise ShapeError(f"F, zeta: leading axes {F.shape[:-2]} and {zeta.shape[:-1]} do not broadcast") from None
+    covariance(F.reshape(-1, *F.shape[-2:]), "F", definite=False)   # symmetric PSD (an information)
     a_idx, b_idx = _index(a, F.shape[-1])
     Faa = F[..., a_idx[:, None], a_idx]
     Fab = F[..., a_idx[:, None], b_idx]
@@ -155,8 +178,9 @@ def minmax_isolation(F: np.ndarray, zeta: np.ndarray, partitions: Sequence[Seque
     """
     if thresholds is not None and len(thresholds) != len(partitions):
         raise ModelError(f"thresholds: expected {len(partitions)} values, got {len(thresholds)}")
-    if not 0.0 < alpha < 1.0:
-        raise ModelError(f"alpha: expected a probability in (0, 1), got {alpha!r}")
+    alpha = probability(alpha, "alpha")
+    if thresholds is not None:
+        thresholds = [real(t, f"thresholds[{i}]") for i, t in enumerate(thresholds)]
     out = []
     for i, a in enumerate(partitions):
         stat = minmax_statistic(F, zeta, a)

@@ -55,8 +55,8 @@ import numpy as np
 import scipy.linalg
 
 from fdi_lib.errors import NonFiniteError, RankConditionError, ShapeError
-from fdi_lib.filters import as_outputs
 from fdi_lib.models import FaultProfile, LTVModel, as_record, as_sequence
+from fdi_lib.validation import array, check_finite, cholesky, initial_state, measurements
 
 __all__ = [
     "KitanidisGains",
@@ -73,12 +73,12 @@ RANK_RTOL = 1e-10
 
 
 def as_unknown_input_matrix(model: LTVModel, E: Any) -> np.ndarray:
-    """Validate ``E_k`` (constant ``(n, s)``, per step ``(N, n, s)`` or callable of ``k``).
+    """Validate ``E`` = ``E_k`` against ``model`` (constant ``(n, s)``, per step ``(N, n, s)`` or callable of ``k``).
 
     Returns a read-only array of shape ``(N, n, s)``; ``E_k`` multiplies ``d_k`` in the
     equation of ``X_{k+1}``.
     """
-    first = np.asarray(E(0) if callable(E) else E, dtype=float)
+    first = array(E(0) if callable(E) else E, "E", finite=False)
     if first.ndim == 1 and first.shape[0] == model.n:
         first = first[:, None]
         if not callable(E):
@@ -170,42 +170,43 @@ def kitanidis_gains(model: LTVModel, E: Any) -> KitanidisGains:
     Xi = np.zeros((N, s, s))
     Rcov = np.empty((N, p, p))
     P[0] = model.P0
-    for k in range(N):
-        H, Pk, Rk = model.H[k], P[k], model.R[k]
-        S = H @ Pk @ H.T + Rk
-        S = 0.5 * (S + S.T)
-        c, low = scipy.linalg.cho_factor(S, lower=True)
-        Kk = scipy.linalg.cho_solve((c, low), H @ Pk).T  # P H^T S^{-1} by Cholesky solves
-        Pf = Pk - Kk @ H @ Pk
-        Kbar = Kk
-        if k > 0 and s > 0:
-            HE = H @ Es[k - 1]
-            sv = np.linalg.svd(HE, compute_uv=False)
-            if sv.size < s or sv[-1] <= RANK_RTOL * max(1.0, sv[0]):
-                smin = float(sv[-1]) if sv.size == s else 0.0
-                raise RankConditionError(
-                    f"E: assumption (iv) needs H_{{k+1}} E_k of full column rank {s}; at k = {k - 1}, "
-                    f"H_{k} E_{k - 1} has shape {HE.shape} and smallest singular value {smin:.3g}")
-            # Square-root form: with Sigma = L L^T and L^{-1} H E = Qw Rw (thin QR), Xi = Rw^T Rw and
-            # Xi^{-1} E^T H^T Sigma^{-1} = Rw^{-1} Qw^T L^{-1}, a left inverse of H E accurate to
-            # cond(Rw) = sqrt(cond(Xi)) rather than cond(Xi): identity (30) then holds to that precision.
-            Lk = np.tril(c)
-            W = scipy.linalg.solve_triangular(Lk, HE, lower=True)
-            Qw, Rw = np.linalg.qr(W)
-            Linv = scipy.linalg.solve_triangular(Lk, np.eye(p), lower=True)
-            M = scipy.linalg.solve_triangular(Rw, Qw.T @ Linv)  # (s, p), M H E = I
-            Gam = Es[k - 1] - Kk @ HE  # (24c)
-            Kbar = Kk + Gam @ M  # (24g)
-            GR = scipy.linalg.solve_triangular(Rw, Gam.T, trans="T").T  # Gamma Rw^{-1}
-            Pf = Pf + GR @ GR.T  # (24f): + Gamma Xi^{-1} Gamma^T
-            Xi[k] = W.T @ W  # (24d)
-        Pf = 0.5 * (Pf + Pf.T)
-        HK = H @ Kbar
-        Rc = H @ Pf @ H.T + Rk - HK @ Rk - Rk @ HK.T
-        Rcov[k] = 0.5 * (Rc + Rc.T)
-        K[k], Kc[k], P_filt[k], Sigma[k], L[k] = Kbar, Kk, Pf, S, np.tril(c)
-        Pn = model.F[k] @ Pf @ model.F[k].T + model.Q[k]
-        P[k + 1] = 0.5 * (Pn + Pn.T)
+    with np.errstate(over="ignore", invalid="ignore"):  # divergence is reported below, by step
+        for k in range(N):
+            H, Pk, Rk = model.H[k], P[k], model.R[k]
+            S = H @ Pk @ H.T + Rk
+            S = 0.5 * (S + S.T)
+            c, low = cholesky(S, step=k, what="the Kitanidis covariance recursion")
+            Kk = scipy.linalg.cho_solve((c, low), H @ Pk).T  # P H^T S^{-1} by Cholesky solves
+            Pf = Pk - Kk @ H @ Pk
+            Kbar = Kk
+            if k > 0 and s > 0:
+                HE = H @ Es[k - 1]
+                sv = np.linalg.svd(HE, compute_uv=False)
+                if sv.size < s or sv[-1] <= RANK_RTOL * max(1.0, sv[0]):
+                    smin = float(sv[-1]) if sv.size == s else 0.0
+                    raise RankConditionError(
+                        f"E: assumption (iv) needs H_{{k+1}} E_k of full column rank {s}; at k = {k - 1}, "
+                        f"H_{k} E_{k - 1} has shape {HE.shape} and smallest singular value {smin:.3g}")
+                # Square-root form: with Sigma = L L^T and L^{-1} H E = Qw Rw (thin QR), Xi = Rw^T Rw and
+                # Xi^{-1} E^T H^T Sigma^{-1} = Rw^{-1} Qw^T L^{-1}, a left inverse of H E accurate to
+                # cond(Rw) = sqrt(cond(Xi)) rather than cond(Xi): identity (30) then holds to that precision.
+                Lk = np.tril(c)
+                W = scipy.linalg.solve_triangular(Lk, HE, lower=True)
+                Qw, Rw = np.linalg.qr(W)
+                Linv = scipy.linalg.solve_triangular(Lk, np.eye(p), lower=True)
+                M = scipy.linalg.solve_triangular(Rw, Qw.T @ Linv)  # (s, p), M H E = I
+                Gam = Es[k - 1] - Kk @ HE  # (24c)
+                Kbar = Kk + Gam @ M  # (24g)
+                GR = scipy.linalg.solve_triangular(Rw, Gam.T, trans="T").T  # Gamma Rw^{-1}
+                Pf = Pf + GR @ GR.T  # (24f): + Gamma Xi^{-1} Gamma^T
+                Xi[k] = W.T @ W  # (24d)
+            Pf = 0.5 * (Pf + Pf.T)
+            HK = H @ Kbar
+            Rc = H @ Pf @ H.T + Rk - HK @ Rk - Rk @ HK.T
+            Rcov[k] = 0.5 * (Rc + Rc.T)
+            K[k], Kc[k], P_filt[k], Sigma[k], L[k] = Kbar, Kk, Pf, S, np.tril(c)
+            Pn = model.F[k] @ Pf @ model.F[k].T + model.Q[k]
+            P[k + 1] = 0.5 * (Pn + Pn.T)
     if not np.all(np.isfinite(P)):
         k = int(np.argwhere(~np.isfinite(P))[0, 0])
         raise NonFiniteError(f"model: the Kitanidis covariance recursion diverged (non-finite P at step {k})")
@@ -252,7 +253,8 @@ def kitanidis_filter(model: LTVModel, y: Any, u: Any = None, E: Any = None, *,
     model : LTVModel
         Fault-free model (without the unknown input term).
     y : array_like
-        Outputs ``(*batch, N, p)``.
+        Outputs ``(*batch, N, p)``. A sample with a NaN is missing: the filter predicts without
+        updating and its innovation and residual are NaN (:mod:`fdi_lib.validation`).
     u : array_like, optional
         Known inputs ``(*batch, N, l)`` or ``(N, l)``; default zeros.
     E : array_like or callable, optional
@@ -272,22 +274,28 @@ def kitanidis_filter(model: LTVModel, y: Any, u: Any = None, E: Any = None, *,
         gains = kitanidis_gains(model, E)
     else:
         _check_gains(model, gains)
-    y_arr = as_outputs(model, y)
+    y_arr, missing = measurements(y, n_steps=model.n_steps, width=model.p, name="y")
     batch = y_arr.shape[:-2]
     N, n = model.n_steps, model.n
+    any_missing = bool(missing.any())
     u_arr = as_record(u, n_steps=model.n_steps, width=model.l, name="u")
     Gu = np.broadcast_to(np.einsum("kij,...kj->...ki", model.G, u_arr), (*batch, N, n))
     ybar = y_arr - np.einsum("kij,...kj->...ki", model.J, u_arr)
     xp = np.empty((*batch, N + 1, n))
     xf = np.empty((*batch, N, n))
     eps = np.empty(y_arr.shape)
-    xp[..., 0, :] = model.x0 if x0 is None else np.asarray(x0, dtype=float)
+    xp[..., 0, :] = initial_state(model, x0)
     for k in range(N):
         e = ybar[..., k, :] - xp[..., k, :] @ model.H[k].T
         eps[..., k, :] = e
+        if any_missing:  # a missing sample (NaN in any component): NaN innovation, no update
+            eps[..., k, :] = np.where(missing[..., k, None], np.nan, e)
+            e = np.where(missing[..., k, None], 0.0, e)
         xf[..., k, :] = xp[..., k, :] + e @ gains.K[k].T
         xp[..., k + 1, :] = xf[..., k, :] @ model.F[k].T + Gu[..., k, :]
     res = ybar - np.einsum("kij,...kj->...ki", model.H, xf)
+    if any_missing:
+        res = np.where(missing[..., None], np.nan, res)
     return KitanidisResult(residuals=res, x_filt=xf, x_pred=xp, innovations=eps, gains=gains)
 
 
@@ -346,8 +354,8 @@ def residual_signature(model: LTVModel, gains: Any, fault: FaultProfile | None =
     else:
         if Psi is None and Phi is None:
             raise ShapeError("Psi, Phi: expected at least one fault profile, got None")
-        Psi_a = None if Psi is None else np.asarray(Psi, dtype=float)
-        Phi_a = None if Phi is None else np.asarray(Phi, dtype=float)
+        Psi_a = None if Psi is None else array(Psi, "Psi", finite=False)
+        Phi_a = None if Phi is None else array(Phi, "Phi", finite=False)
         ref = Psi_a if Psi_a is not None else Phi_a
         m = ref.shape[-1]
         batch = ref.shape[:-3]
@@ -360,8 +368,7 @@ def residual_signature(model: LTVModel, gains: Any, fault: FaultProfile | None =
     if Phi_a.ndim < 3 or Phi_a.shape[-3:-1] != (N, p) or Phi_a.shape[-1] != Psi_a.shape[-1]:
         raise ShapeError(f"Phi: expected shape (..., {N}, {p}, {Psi_a.shape[-1]}), got {Phi_a.shape}")
     for arr, name in ((Psi_a, "Psi"), (Phi_a, "Phi")):
-        if not np.all(np.isfinite(arr)):
-            raise NonFiniteError(f"{name}: expected finite values")
+        check_finite(arr, name)
     batch = np.broadcast_shapes(Psi_a.shape[:-3], Phi_a.shape[:-3])
     m = Psi_a.shape[-1]
     Psi_a = np.broadcast_to(Psi_a, (*batch, N, n, m))

@@ -20,7 +20,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from fdi_lib.errors import CovarianceError, ModelError, NonFiniteError, ShapeError
+from fdi_lib.errors import ModelError, ShapeError
+from fdi_lib.validation import array, check_finite, covariance, integer
 
 __all__ = [
     "LTVModel",
@@ -36,15 +37,6 @@ __all__ = [
 ]
 
 MatrixLike = Any  # array_like | Callable[[int], array_like]
-
-#: Relative tolerance of the symmetry and positive semi-definiteness checks.
-COV_RTOL = 1e-9
-
-
-def _check_finite(arr: np.ndarray, name: str) -> None:
-    if not np.all(np.isfinite(arr)):
-        idx = tuple(int(i) for i in np.argwhere(~np.isfinite(arr))[0])
-        raise NonFiniteError(f"{name}: expected finite values, got {float(arr[idx])} at index {idx}")
 
 
 def as_sequence(value: MatrixLike, *, n_steps: int, shape: tuple[int, ...], name: str) -> np.ndarray:
@@ -71,7 +63,7 @@ def as_sequence(value: MatrixLike, *, n_steps: int, shape: tuple[int, ...], name
     if callable(value):
         steps = []
         for k in range(n_steps):
-            vk = np.asarray(value(k), dtype=float)
+            vk = array(value(k), f"{name}({k})", finite=False)
             if vk.shape != shape and not (vk.ndim == 0 and int(np.prod(shape)) == 1):
                 raise ShapeError(f"{name}({k}): expected shape {shape}, got {vk.shape}")
             steps.append(vk.reshape(shape))
@@ -89,7 +81,7 @@ def as_sequence(value: MatrixLike, *, n_steps: int, shape: tuple[int, ...], name
         elif arr.shape != (n_steps, *shape):
             raise ShapeError(f"{name}: expected shape {shape} (constant) or {(n_steps, *shape)} "
                              f"(per step), got {arr.shape}")
-    _check_finite(arr, name)
+    check_finite(arr, name)
     arr = np.asarray(arr)
     if arr.flags.writeable and arr.base is None:
         arr.setflags(write=False)
@@ -97,44 +89,20 @@ def as_sequence(value: MatrixLike, *, n_steps: int, shape: tuple[int, ...], name
 
 
 def as_record(value: Any, *, n_steps: int, width: int, name: str) -> np.ndarray:
-    """Validate a data record (inputs or outputs) of shape ``(*batch, n_steps, width)``.
+    """Validate a data record ``value`` (inputs or outputs) of shape ``(*batch, n_steps, width)``.
 
-    ``None`` gives zeros ``(n_steps, width)``; a 1-D array of length ``n_steps`` is accepted
-    when ``width == 1``. Raises :class:`ShapeError` or :class:`NonFiniteError` (with the index).
+    ``width`` is the number of columns, ``name`` the argument named in errors. ``None`` gives
+    zeros ``(n_steps, width)``; a 1-D array of length ``n_steps`` is accepted when ``width == 1``. Raises :class:`ShapeError` or :class:`NonFiniteError` (with the index).
     """
     if value is None:
         return np.zeros((n_steps, width))
-    arr = np.asarray(value, dtype=float)
+    arr = array(value, name, finite=False)
     if arr.ndim == 1 and width == 1:
         arr = arr[:, None]
     if arr.ndim < 2 or arr.shape[-2:] != (n_steps, width):
         raise ShapeError(f"{name}: expected shape (..., {n_steps}, {width}), got {np.shape(value)}")
-    _check_finite(arr, name)
+    check_finite(arr, name)
     return arr
-
-
-def _distinct_steps(arr: np.ndarray) -> np.ndarray:
-    """The steps worth checking: one for a broadcast constant, all otherwise."""
-    return arr[:1] if arr.strides[0] == 0 else arr
-
-
-def _check_covariance(arr: np.ndarray, name: str, *, definite: bool) -> None:
-    steps = _distinct_steps(arr)
-    scale = np.maximum(1.0, np.abs(steps).max(axis=(-2, -1)))
-    asym = np.abs(steps - np.swapaxes(steps, -1, -2)).max(axis=(-2, -1))
-    bad = np.nonzero(asym > COV_RTOL * scale)[0]
-    if bad.size:
-        k = int(bad[0])
-        raise CovarianceError(f"{name}: expected a symmetric matrix, got asymmetry {asym[k]:.3g} at step {k}")
-    eig = np.linalg.eigvalsh(steps)
-    emin = eig[:, 0]
-    limit = COV_RTOL * np.maximum(1.0, eig[:, -1]) if not definite else 0.0
-    bad = np.nonzero(emin <= limit if definite else emin < -limit)[0]
-    if bad.size:
-        k = int(bad[0])
-        kind = "positive definite" if definite else "positive semi-definite"
-        raise CovarianceError(f"{name}: expected a {kind} matrix, got smallest eigenvalue "
-                              f"{emin[k]:.6g} at step {k}")
 
 
 @dataclass(frozen=True)
@@ -215,14 +183,12 @@ def ltv_model(*, F: MatrixLike, H: MatrixLike, Q: MatrixLike, R: MatrixLike, n_s
     >>> (m.n, m.l, m.p, m.n_steps)
     (2, 1, 1, 10)
     """
-    if not isinstance(n_steps, (int, np.integer)) or n_steps < 1:
-        raise ModelError(f"n_steps: expected a positive integer, got {n_steps!r}")
-    n_steps = int(n_steps)
-    F_first = np.asarray(F(0) if callable(F) else F, dtype=float)
+    n_steps = integer(n_steps, "n_steps", low=1)
+    F_first = array(F(0) if callable(F) else F, "F", finite=False)
     if F_first.ndim not in (2, 3) or F_first.shape[-1] != F_first.shape[-2]:
         raise ShapeError(f"F: expected square matrices (n, n) or (N, n, n), got shape {F_first.shape}")
     n = F_first.shape[-1]
-    H_first = np.asarray(H(0) if callable(H) else H, dtype=float)
+    H_first = array(H(0) if callable(H) else H, "H", finite=False)
     if H_first.ndim not in (2, 3) or H_first.shape[-1] != n:
         raise ShapeError(f"H: expected shape (p, {n}) or (N, p, {n}), got {H_first.shape}")
     p = H_first.shape[-2]
@@ -230,7 +196,7 @@ def ltv_model(*, F: MatrixLike, H: MatrixLike, Q: MatrixLike, R: MatrixLike, n_s
         l = 0
         Gs = np.zeros((n_steps, n, 0))
     else:
-        G_first = np.asarray(G(0) if callable(G) else G, dtype=float)
+        G_first = array(G(0) if callable(G) else G, "G", finite=False)
         if G_first.ndim not in (2, 3) or G_first.shape[-2] != n:
             raise ShapeError(f"G: expected shape ({n}, l) or (N, {n}, l), got {G_first.shape}")
         l = G_first.shape[-1]
@@ -241,17 +207,17 @@ def ltv_model(*, F: MatrixLike, H: MatrixLike, Q: MatrixLike, R: MatrixLike, n_s
           else as_sequence(J, n_steps=n_steps, shape=(p, l), name="J"))
     Qs = as_sequence(Q, n_steps=n_steps, shape=(n, n), name="Q")
     Rs = as_sequence(R, n_steps=n_steps, shape=(p, p), name="R")
-    _check_covariance(Qs, "Q", definite=False)
-    _check_covariance(Rs, "R", definite=True)
-    x0a = np.zeros(n) if x0 is None else np.asarray(x0, dtype=float)
+    covariance(Qs, "Q", definite=False)
+    covariance(Rs, "R", definite=True)
+    x0a = np.zeros(n) if x0 is None else array(x0, "x0", finite=False)
     if x0a.shape != (n,):
         raise ShapeError(f"x0: expected shape ({n},), got {x0a.shape}")
-    _check_finite(x0a, "x0")
-    P0a = np.eye(n) if P0 is None else np.asarray(P0, dtype=float)
+    check_finite(x0a, "x0")
+    P0a = np.eye(n) if P0 is None else array(P0, "P0", finite=False)
     if P0a.shape != (n, n):
         raise ShapeError(f"P0: expected shape ({n}, {n}), got {P0a.shape}")
-    _check_finite(P0a, "P0")
-    _check_covariance(P0a[None], "P0", definite=False)
+    check_finite(P0a, "P0")
+    covariance(P0a[None], "P0", definite=False)
     return LTVModel(F=Fs, G=Gs, H=Hs, J=Js, Q=Qs, R=Rs, x0=x0a, P0=P0a)
 
 
@@ -273,18 +239,18 @@ def lpv_model(*, scheduling: Any, F0: Any, H0: Any, Q: MatrixLike, R: MatrixLike
     Q, R, x0, P0
         As in :func:`ltv_model`.
     """
-    p_sched = np.asarray(scheduling, dtype=float)
+    p_sched = array(scheduling, "scheduling", finite=False)
     if p_sched.ndim == 1:
         p_sched = p_sched[:, None]
     if p_sched.ndim != 2 or p_sched.shape[0] < 1:
         raise ShapeError(f"scheduling: expected shape (N,) or (N, q), got {np.shape(scheduling)}")
-    _check_finite(p_sched, "scheduling")
+    check_finite(p_sched, "scheduling")
     n_steps, q = p_sched.shape
 
     def affine(name: str, base: Any, parts: Any) -> np.ndarray | None:
         if base is None:
             return None
-        b = np.asarray(base, dtype=float)
+        b = array(base, f"{name}0", finite=False)
         if parts is None:
             return b
         plist = [np.asarray(parts, dtype=float)] if np.ndim(parts) == b.ndim else [
@@ -336,7 +302,7 @@ def fault_profile(model: LTVModel, *, Psi: MatrixLike | None = None,
         raise ModelError("fault_profile: give Psi, Phi or both")
     if m is None:
         first = Psi if Psi is not None else Phi
-        arr = np.asarray(first(0) if callable(first) else first, dtype=float)
+        arr = array(first(0) if callable(first) else first, "Psi" if Psi is not None else "Phi", finite=False)
         if arr.ndim not in (2, 3):
             raise ShapeError(f"{'Psi' if Psi is not None else 'Phi'}: expected a matrix (rows, m) or "
                              f"(N, rows, m), got shape {arr.shape}")
@@ -379,13 +345,17 @@ class FaultFamily:
 
 def step_family(model: LTVModel, *, Psi: MatrixLike | None = None,
                 Phi: MatrixLike | None = None) -> FaultFamily:
-    """Step (jump) faults of eq. (4) with known profiles ``Psi~_k`` and/or ``Phi~_k``."""
+    """Step (jump) faults of eq. (4) with known profiles ``Psi`` = ``Psi~_k`` and/or ``Phi`` = ``Phi~_k``.
+
+    Both are validated against ``model`` as in :func:`fault_profile`.
+    """
     prof = fault_profile(model, Psi=Psi, Phi=Phi)
     return FaultFamily(kind="step", Psi_tilde=prof.Psi, Phi_tilde=prof.Phi)
 
 
 def impulse_family(model: LTVModel, *, Psi: MatrixLike | None = None) -> FaultFamily:
-    """Impulsive faults ``Psi_k = Psi~_k delta_{r,k+1}``; default ``Psi~ = I`` (Willsky-Jones, ``m = n``)."""
+    """Impulsive faults ``Psi_k = Psi~_k delta_{r,k+1}`` of ``model``; ``Psi`` is ``Psi~_k``, default
+    ``Psi~ = I`` (Willsky-Jones, ``m = n``)."""
     prof = fault_profile(model, Psi=np.eye(model.n) if Psi is None else Psi)
     return FaultFamily(kind="impulse", Psi_tilde=prof.Psi, Phi_tilde=prof.Phi)
 

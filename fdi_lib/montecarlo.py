@@ -38,6 +38,7 @@ import scipy.stats
 from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.models import LTVModel
 from fdi_lib.simulate import Noise, draw_noise
+from fdi_lib.validation import integer, probability, seed as check_seed
 
 __all__ = ["trial_seeds", "trial_rngs", "run_monte_carlo", "draw_noise_batch", "binomial_ci",
            "default_chunk_size"]
@@ -46,26 +47,30 @@ ChunkFn = Callable[[Sequence[np.random.SeedSequence]], dict[str, np.ndarray]]
 
 
 def trial_seeds(seed: int, n_trials: int) -> list[np.random.SeedSequence]:
-    """One independent :class:`~numpy.random.SeedSequence` per realisation."""
-    if not isinstance(n_trials, (int, np.integer)) or n_trials < 1:
-        raise ModelError(f"n_trials: expected a positive integer, got {n_trials!r}")
-    return np.random.SeedSequence(seed).spawn(int(n_trials))
+    """One independent :class:`~numpy.random.SeedSequence` per realisation.
+
+    ``seed`` is an integer >= 0, ``n_trials`` the number of realisations (>= 1).
+    """
+    seed = check_seed(seed)
+    n_trials = integer(n_trials, "n_trials", low=1)
+    return np.random.SeedSequence(seed).spawn(n_trials)
 
 
 def trial_rngs(seeds: Sequence[np.random.SeedSequence]) -> list[np.random.Generator]:
-    """A :class:`~numpy.random.Generator` per seed sequence."""
+    """A :class:`~numpy.random.Generator` per seed sequence of ``seeds``."""
     return [np.random.default_rng(s) for s in seeds]
 
 
 def draw_noise_batch(model: LTVModel, seeds: Sequence[np.random.SeedSequence]) -> Noise:
-    """Noise for a chunk of realisations, each drawn from its own stream, stacked on axis 0."""
+    """Noise of ``model`` for a chunk of realisations, one per entry of ``seeds`` (each its own
+    stream), stacked on axis 0."""
     draws = [draw_noise(model, rng) for rng in trial_rngs(seeds)]
     return Noise(x0=np.stack([d.x0 for d in draws]), w=np.stack([d.w for d in draws]),
                  v=np.stack([d.v for d in draws]))
 
 
 def default_chunk_size(n_trials: int) -> int:
-    """Default realisations per chunk: ``min(250, ceil(n_trials / 4))``, independent of the job count.
+    """Default realisations per chunk for ``n_trials``: ``min(250, ceil(n_trials / 4))``, independent of the job count.
 
     Four chunks or more keep two workers busy; about 250 realisations per chunk
     amortise the noise-independent work of a chunk (e.g. the windowed GLR's
@@ -111,15 +116,14 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
         Each entry concatenated over realisations (leading axis ``n_trials``).
     """
     seeds = trial_seeds(seed, n_trials)
-    if not isinstance(jobs, (int, np.integer)) or jobs == 0:
+    if isinstance(jobs, (bool, np.bool_)) or not isinstance(jobs, (int, np.integer)) or jobs == 0:
         raise ModelError(f"jobs: expected a non-zero integer (-1 = all cores), got {jobs!r}")
     import joblib
 
     n_workers = joblib.cpu_count() if jobs < 0 else int(jobs)
     if chunk_size is None:
         chunk_size = default_chunk_size(n_trials)
-    if not isinstance(chunk_size, (int, np.integer)) or chunk_size < 1:
-        raise ModelError(f"chunk_size: expected a positive integer, got {chunk_size!r}")
+    chunk_size = integer(chunk_size, "chunk_size", low=1)
     parts = _chunks(len(seeds), int(chunk_size))
     if progress:
         from tqdm.auto import tqdm
@@ -236,7 +240,25 @@ def _run_chunks(chunk_fn: ChunkFn, chunks: list[Sequence[np.random.SeedSequence]
     return [results[i] for i in range(len(chunks))]
 
 def binomial_ci(successes: int, trials: int, level: float = 0.95) -> tuple[float, float]:
-    """Exact (Clopper-Pearson) confidence interval of a binomial proportion (scipy's ``binomtest``)."""
+    """Exact (Clopper-Pearson) confidence interval of a binomial proportion (scipy's ``binomtest``).
+
+    Parameters
+    ----------
+    successes : int
+        Number of successes, ``0 <= successes <= trials``.
+    trials : int
+        Number of trials, ``>= 1``.
+    level : float
+        Confidence level in ``(0, 1)``.
+
+    Examples
+    --------
+    >>> [round(v, 4) for v in binomial_ci(3, 100)]
+    [0.0062, 0.0852]
+    """
+    successes = integer(successes, "successes", low=0)
+    trials = integer(trials, "trials", low=1)
+    level = probability(level, "level")
     if not 0 <= successes <= trials or trials < 1:
         raise ModelError(f"successes, trials: expected 0 <= successes <= trials, trials >= 1, "
                          f"got {successes}, {trials}")

@@ -59,6 +59,7 @@ from fdi_lib.kitanidis import KitanidisGains, as_unknown_input_matrix, kitanidis
 from fdi_lib.models import FaultFamily, LTVModel, fault_profile, ltv_model, step_family
 from fdi_lib.rls import RLSResult, rls_track
 from fdi_lib.signatures import fault_signature
+from fdi_lib.validation import array, integer, missing_samples, probability
 
 __all__ = [
     "kitanidis_predictor_gains", "InnovationSplit", "innovation_split", "nonparametric_signature",
@@ -114,7 +115,7 @@ def _check_gains(model: LTVModel, gains: KalmanGains) -> None:
 
 
 def _series(arr: Any, N: int, width: int, name: str) -> np.ndarray:
-    a = np.asarray(arr, dtype=float)
+    a = array(arr, name, finite=False)
     if a.ndim == 1 and width == 1:
         a = a[:, None]
     if a.ndim < 2 or a.shape[-2:] != (N, width):
@@ -241,6 +242,15 @@ def kitanidis_lag_covariance(model: LTVModel, kgains: KitanidisGains, lag: int =
     zero for the Kalman filter (``D = 0``) but not for the Kitanidis filter: the paper's
     Prop. 2 (whiteness) does not hold for the innovation (27).
 
+    Parameters
+    ----------
+    model : LTVModel
+        Fault-free model.
+    kgains : KitanidisGains
+        :func:`fdi_lib.kitanidis.kitanidis_gains` of ``model``.
+    lag : int
+        ``j``, ``1 <= j < N``.
+
     Returns
     -------
     numpy.ndarray
@@ -270,7 +280,8 @@ def rejection_projection(model: LTVModel, kgains: KitanidisGains) -> np.ndarray:
     input acts yet) ``E_0`` is used so that the dimension stays ``p - q``.
 
     scipy's ``null_space`` (an SVD) gives the orthonormal complement of the whitened
-    ``Sigma_k^{-1/2} H_k E_{k-1}``.
+    ``Sigma_k^{-1/2} H_k E_{k-1}``; ``model`` is the fault-free model and ``kgains`` its
+    :func:`fdi_lib.kitanidis.kitanidis_gains`.
     """
     N, p = model.n_steps, model.p
     Es = kgains.E
@@ -311,7 +322,11 @@ class ReducedResidual:
 
 def reduce_residual(model: LTVModel, kgains: KitanidisGains, innovations: Any,
                     T: np.ndarray | None = None) -> ReducedResidual:
-    """Project the Kitanidis innovation (27) with :func:`rejection_projection`."""
+    """Project the Kitanidis ``innovations`` (27) with :func:`rejection_projection`.
+
+    ``model`` and ``kgains`` as there; ``T`` is a precomputed projection ``(N, r, p)`` (default:
+    computed).
+    """
     N, p = model.n_steps, model.p
     eps = _series(innovations, N, p, "innovations")
     T = rejection_projection(model, kgains) if T is None else np.asarray(T, dtype=float)
@@ -339,34 +354,53 @@ def energy_statistic(residuals: Any, Sigma_chol: np.ndarray, window: int) -> np.
     Parameters
     ----------
     residuals : array_like
-        ``(*batch, N, p)``.
+        ``(*batch, N, p)``; a sample with a NaN is missing and left out of its windows
+        (:mod:`fdi_lib.validation`).
     Sigma_chol : numpy.ndarray
-        ``(N, p, p)`` lower Cholesky factors.
+        ``(N, p, p)`` lower Cholesky factors (positive diagonal).
     window : int
-        ``w >= 1``.
+        ``w``, ``1 <= w <= N``.
+
+    Notes
+    -----
+    Each window is summed directly (a sliding window view), not as a difference of running
+    totals, so one huge residual (a glitch) only affects the ``w`` windows that contain it.
     """
-    L = np.asarray(Sigma_chol, dtype=float)
+    L = array(Sigma_chol, "Sigma_chol", ndim=3)
     N, p = L.shape[:2]
+    if L.shape != (N, p, p) or N < 1 or p < 1:
+        raise ShapeError(f"Sigma_chol: expected shape (N, p, p), got {L.shape}")
+    diag = np.diagonal(L, axis1=-2, axis2=-1)
+    if np.any(diag <= 0) or np.any(np.triu(L, 1)):
+        k = int(np.argwhere((diag <= 0).any(axis=-1) | np.triu(L, 1).any(axis=(-2, -1)))[0, 0])
+        raise ModelError(f"Sigma_chol: expected lower-triangular factors with a positive diagonal, "
+                         f"got {L[k].tolist()} at step {k}")
     r = _series(residuals, N, p, "residuals")
-    if not isinstance(window, (int, np.integer)) or not 1 <= window <= N:
-        raise ModelError(f"window: expected an integer in [1, {N}], got {window!r}")
-    z = np.linalg.solve(L, r[..., None])[..., 0]
-    c = np.cumsum(np.sum(z * z, axis=-1), axis=-1)
-    out = np.full(c.shape, np.nan)
-    out[..., window - 1] = c[..., window - 1]
-    out[..., window:] = c[..., window:] - c[..., :-window]
+    missing = missing_samples(r, "residuals")
+    window = integer(window, "window", low=1, high=N)
+    z = np.linalg.solve(L, np.where(missing[..., None], 0.0, r)[..., None])[..., 0]
+    energy = np.sum(z * z, axis=-1)
+    out = np.full(energy.shape, np.nan)
+    out[..., window - 1:] = np.lib.stride_tricks.sliding_window_view(energy, window, axis=-1).sum(axis=-1)
     return out
 
 
 def energy_threshold(window: int, p: int, alpha: float) -> float:
-    """``chi2.ppf(1 - alpha, w p)``: per-sample false-alarm probability ``alpha`` of the energy test."""
-    if not 0.0 < alpha < 1.0:
-        raise ModelError(f"alpha: expected a probability in (0, 1), got {alpha!r}")
+    """``chi2.ppf(1 - alpha, w p)``: per-sample false-alarm probability ``alpha`` of the energy test.
+
+    ``window`` is ``w`` and ``p`` the residual dimension (both integers >= 1).
+    """
+    window = integer(window, "window", low=1)
+    p = integer(p, "p", low=1)
+    alpha = probability(alpha, "alpha")
     return float(scipy.stats.chi2.ppf(1.0 - alpha, window * p))
 
 
 def first_alarm_after(statistic: np.ndarray, threshold: float, start: int = 0) -> np.ndarray:
-    """:func:`fdi_lib.glr.first_alarm` (``-1`` if none); re-exported for the reproductions."""
+    """:func:`fdi_lib.glr.first_alarm` of ``statistic`` above ``threshold`` from ``start`` (``-1`` if none).
+
+    Re-exported for the reproductions.
+    """
     return first_alarm(statistic, threshold, start)
 
 

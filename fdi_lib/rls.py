@@ -29,6 +29,7 @@ import numpy as np
 import scipy.linalg
 
 from fdi_lib.errors import ModelError, NonFiniteError, ShapeError
+from fdi_lib.validation import array, check_finite, cholesky, covariance, real
 
 __all__ = ["RLSGains", "rls_gains", "RLSResult", "rls_track"]
 
@@ -56,30 +57,33 @@ def rls_gains(regressor: Any, Sigma: Any, *, lam: float, P0: Any = None) -> RLSG
     P0 : array_like, optional
         ``(m, m)``, default identity (the paper's choice).
     """
-    M = np.asarray(regressor, dtype=float)
-    S_all = np.asarray(Sigma, dtype=float)
+    M = array(regressor, "regressor")
+    S_all = array(Sigma, "Sigma")
     if M.ndim != 3:
         raise ShapeError(f"regressor: expected shape (N, p, m), got {M.shape}")
     N, p, m = M.shape
     if S_all.shape != (N, p, p):
         raise ShapeError(f"Sigma: expected shape ({N}, {p}, {p}), got {S_all.shape}")
-    if not (isinstance(lam, (int, float, np.floating)) and 0.0 < float(lam) <= 1.0):
-        raise ModelError(f"lam: expected a forgetting factor in (0, 1], got {lam!r}")
-    lam = float(lam)
+    covariance(S_all, "Sigma", definite=True)
+    lam = real(lam, "lam", low=0.0, high=1.0, low_open=True, what="a forgetting factor")
     P = np.empty((N + 1, m, m))
-    P[0] = np.eye(m) if P0 is None else np.asarray(P0, dtype=float)
-    if P[0].shape != (m, m):
+    P0a = np.eye(m) if P0 is None else array(P0, "P0")
+    if P0a.shape != (m, m):
         raise ShapeError(f"P0: expected shape ({m}, {m}), got {np.shape(P0)}")
+    covariance(P0a[None], "P0", definite=False)
+    P[0] = P0a
     L = np.empty((N, m, p))
     for k in range(N):
         Pk, Mk = P[k], M[k]
         S = lam * S_all[k] + Mk @ Pk @ Mk.T
-        c = scipy.linalg.cho_factor(0.5 * (S + S.T), lower=True)
+        c = cholesky(0.5 * (S + S.T), step=k, what="the RLS gain recursion", name="Sigma")
         Lk = scipy.linalg.cho_solve(c, Mk @ Pk).T          # P M^T S^{-1}
         Pn = (Pk - Lk @ Mk @ Pk) / lam
         L[k], P[k + 1] = Lk, 0.5 * (Pn + Pn.T)
     if not np.all(np.isfinite(P)):
-        raise NonFiniteError("lam: the RLS covariance diverged (regressor not persistently exciting?)")
+        k = int(np.argwhere(~np.isfinite(P))[0, 0])
+        raise NonFiniteError(f"lam: the RLS covariance diverged (non-finite P_k at step {k}; regressor "
+                             f"not persistently exciting for lam = {lam}?)")
     return RLSGains(L=L, P=P, lam=lam)
 
 
@@ -116,6 +120,9 @@ def rls_track(innovations: Any, regressor: Any, Sigma: Any, *, lam: float, P0: A
         As in :func:`rls_gains`.
     theta0 : array_like, optional
         ``theta_0^`` ``(m,)``, default zero.
+
+    A NaN innovation (missing sample) is an error here: the gains are computed in advance
+    for every sample (:mod:`fdi_lib.validation`).
     gains : RLSGains, optional
         Precomputed gains (shared across chunks).
 
@@ -132,17 +139,25 @@ def rls_track(innovations: Any, regressor: Any, Sigma: Any, *, lam: float, P0: A
     2.0
     """
     g = rls_gains(regressor, Sigma, lam=lam, P0=P0) if gains is None else gains
-    M = np.asarray(regressor, dtype=float)
+    M = array(regressor, "regressor")
+    if M.ndim != 3:
+        raise ShapeError(f"regressor: expected shape (N, p, m), got {M.shape}")
     N, p, m = M.shape
-    eps = np.asarray(innovations, dtype=float)
+    if np.shape(getattr(g, "L", None)) != (N, m, p):
+        raise ShapeError(f"gains: expected RLSGains with L of shape {(N, m, p)}, "
+                         f"got {np.shape(getattr(g, 'L', None))}")
+    eps = array(innovations, "innovations", finite=False)
     if eps.ndim < 2 or eps.shape[-2:] != (N, p):
         raise ShapeError(f"innovations: expected shape (..., {N}, {p}), got {eps.shape}")
-    if not np.all(np.isfinite(eps)):
-        raise NonFiniteError("innovations: expected finite values")
+    check_finite(eps, "innovations")   # RLS cannot skip a missing sample (fdi_lib.validation)
     batch = eps.shape[:-2]
-    th = np.zeros((*batch, m)) if theta0 is None else np.broadcast_to(np.asarray(theta0, float), (*batch, m))
-    if th.shape[-1] != m:
-        raise ShapeError(f"theta0: expected shape ({m},), got {np.shape(theta0)}")
+    if theta0 is None:
+        th = np.zeros((*batch, m))
+    else:
+        th0 = array(theta0, "theta0")
+        if th0.shape != (m,):
+            raise ShapeError(f"theta0: expected shape ({m},), got {th0.shape}")
+        th = np.broadcast_to(th0, (*batch, m))
     theta = np.empty((*batch, N, m))
     prior = np.empty(eps.shape)
     for k in range(N):

@@ -112,6 +112,8 @@ def _check_onset(onset: int, N: int) -> int:
 def willsky_jones(model: LTVModel, gains: KalmanGains, onset: int) -> WillskyJones:
     """Willsky-Jones recursions (A.6)-(A.8) for a jump ``delta_{r,k+1} theta`` in the state.
 
+    For ``model`` with the Kalman ``gains`` of its fault-free version, jump time ``onset`` = ``r``.
+
     Initial conditions ``alpha_r(r) = I``, ``xi_r(r) = K_r H_r``, ``rho_r(r) = H_r``;
     all matrices vanish before ``r``. ``alpha`` obeys ``alpha_{k+1} = F_k alpha_k`` and
     therefore diverges when ``F_k`` is unstable, although ``rho_k(r) = H_k Gamma_k(r)``
@@ -137,6 +139,7 @@ def willsky_jones(model: LTVModel, gains: KalmanGains, onset: int) -> WillskyJon
 def revisited_gamma(model: LTVModel, gains: KalmanGains, onset: int) -> np.ndarray:
     """Revisited Willsky-Jones recursion (A.17): ``gamma_{k+1} = F_k (I - K_k H_k) gamma_k``, ``gamma_r = I``.
 
+    For ``model`` and its Kalman ``gains``, ``onset`` = ``r``.
     Returns ``gamma_k(r)`` for ``k = 0 .. N``, shape ``(N+1, n, n)`` (zero before ``r``);
     it equals ``Gamma_k`` of eq. (12) for ``Psi_k = delta_{r,k+1} I``.
     """

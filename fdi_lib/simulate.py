@@ -20,6 +20,7 @@ import numpy as np
 
 from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.models import FaultProfile, LTVModel, as_record
+from fdi_lib.validation import array, integer
 
 __all__ = ["Noise", "Simulation", "draw_noise", "simulate", "pi_controller", "covariance_sqrt"]
 
@@ -59,7 +60,7 @@ class Simulation:
 
 
 def covariance_sqrt(cov: np.ndarray) -> np.ndarray:
-    """A square root ``S`` with ``S S^T = cov`` for symmetric PSD matrices (batched, via ``eigh``).
+    """A square root ``S`` with ``S S^T = cov`` for symmetric PSD matrices ``cov`` (batched, via ``eigh``).
 
     ``eigh`` rather than Cholesky so that singular PSD covariances (e.g. rank-one ``Q``) work.
     """
@@ -80,7 +81,7 @@ def draw_noise(model: LTVModel, rng: np.random.Generator, size: int | None = Non
     """
     if not isinstance(rng, np.random.Generator):
         raise ModelError(f"rng: expected a numpy.random.Generator, got {type(rng).__name__}")
-    batch = () if size is None else (int(size),)
+    batch = () if size is None else (integer(size, "size", low=1),)
     N, n, p = model.n_steps, model.n, model.p
 
     def gaussian(cov: np.ndarray, dim: int) -> np.ndarray:
@@ -94,6 +95,8 @@ def draw_noise(model: LTVModel, rng: np.random.Generator, size: int | None = Non
 
 def pi_controller(kp: float, ki: float, setpoint: float = 0.0) -> Callable[[int, np.ndarray], np.ndarray]:
     """A discrete PI controller ``C(z) = kp + ki / (z - 1)`` acting on ``e_k = setpoint - y_k``.
+
+    ``kp`` and ``ki`` are the proportional and integral gains, ``setpoint`` the reference.
 
     Returns a fresh stateful callback ``u_k = controller(k, y_k)`` for :func:`simulate`
     (single-output, single-input; works element-wise on a batch of realisations).
@@ -139,6 +142,15 @@ def simulate(model: LTVModel, *, rng: np.random.Generator | None = None, noise: 
     Returns
     -------
     Simulation
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> m = ltv_model(F=[[0.9]], H=[[1.0]], Q=0.01, R=0.01, n_steps=50)
+    >>> s = simulate(m, rng=np.random.default_rng(0), size=3)
+    >>> s.x.shape, s.y.shape
+    ((3, 51, 1), (3, 50, 1))
     """
     N, n, p, l = model.n_steps, model.n, model.p, model.l
     if (rng is None) == (noise is None):
@@ -162,9 +174,10 @@ def simulate(model: LTVModel, *, rng: np.random.Generator | None = None, noise: 
         state_fault = np.zeros((N, n))
         output_fault = np.zeros((N, p))
     else:
-        th = np.asarray(theta, dtype=float)
+        th = array(theta, "theta", finite=False)
         if th.shape != (fault.m,):
             raise ShapeError(f"theta: expected shape ({fault.m},), got {th.shape}")
+        array(th, "theta")
         if fault.Psi.shape[:2] != (N, n) or fault.Phi.shape[:2] != (N, p):
             raise ShapeError(f"fault: expected Psi ({N}, {n}, m) and Phi ({N}, {p}, m), "
                              f"got {fault.Psi.shape} and {fault.Phi.shape}")

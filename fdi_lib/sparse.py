@@ -56,7 +56,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from fdi_lib.errors import ModelError, NonFiniteError, ShapeError
+from fdi_lib.errors import ModelError, ShapeError
+from fdi_lib.validation import array, integer, real
 
 __all__ = [
     "RegressionData",
@@ -116,19 +117,19 @@ def regression_data(residuals: Any, on_residual: Any, *, start: int = 1) -> Regr
     -------
     RegressionData
     """
-    r = np.asarray(residuals, dtype=float)
-    S = np.asarray(on_residual, dtype=float)
+    r = array(residuals, "residuals")
+    S = array(on_residual, "on_residual")
     if r.ndim < 2:
         raise ShapeError(f"residuals: expected shape (..., N, p), got {r.shape}")
     if S.ndim < 3 or S.shape[-3:-1] != r.shape[-2:]:
         raise ShapeError(f"on_residual: expected shape (..., {r.shape[-2]}, {r.shape[-1]}, m), got {S.shape}")
     N, p = r.shape[-2:]
-    if not isinstance(start, (int, np.integer)) or not 0 <= start < N:
-        raise ModelError(f"start: expected an integer in [0, {N - 1}], got {start!r}")
-    for arr, name in ((r, "residuals"), (S, "on_residual")):
-        if not np.all(np.isfinite(arr)):
-            raise NonFiniteError(f"{name}: expected finite values")
-    batch = np.broadcast_shapes(r.shape[:-2], S.shape[:-3])
+    start = integer(start, "start", low=0, high=N - 1)
+    try:
+        batch = np.broadcast_shapes(r.shape[:-2], S.shape[:-3])
+    except ValueError:
+        raise ShapeError(f"residuals, on_residual: batch axes {r.shape[:-2]} and {S.shape[:-3]} "
+                         f"do not broadcast") from None
     m = S.shape[-1]
     X = np.broadcast_to(S[..., start:, :, :], (*batch, N - start, p, m)).reshape(*batch, (N - start) * p, m)
     y = np.broadcast_to(r[..., start:, :], (*batch, N - start, p)).reshape(*batch, (N - start) * p)
@@ -136,24 +137,19 @@ def regression_data(residuals: Any, on_residual: Any, *, start: int = 1) -> Regr
 
 
 def _check_xy(X: Any, y: Any) -> tuple[np.ndarray, np.ndarray]:
-    X = np.asarray(X, dtype=float)
-    y = np.asarray(y, dtype=float)
-    if X.ndim != 2:
-        raise ShapeError(f"X: expected a matrix (rows, m), got shape {X.shape}")
+    X = array(X, "X")
+    y = array(y, "y")
+    if X.ndim != 2 or X.shape[0] < 1 or X.shape[1] < 1:
+        raise ShapeError(f"X: expected a non-empty matrix (rows, m), got shape {X.shape}")
     if y.shape != (X.shape[0],):
         raise ShapeError(f"y: expected shape ({X.shape[0]},), got {y.shape}")
-    for arr, name in ((X, "X"), (y, "y")):
-        if not np.all(np.isfinite(arr)):
-            raise NonFiniteError(f"{name}: expected finite values")
     return X, y
 
 
 def _norm(n_samples: int | None, rows: int) -> int:
     if n_samples is None:
         return rows
-    if not isinstance(n_samples, (int, np.integer)) or n_samples < 1:
-        raise ModelError(f"n_samples: expected a positive integer, got {n_samples!r}")
-    return int(n_samples)
+    return integer(n_samples, "n_samples", low=1)
 
 
 @dataclass(frozen=True)
@@ -269,22 +265,16 @@ def lasso_paths(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: flo
     list of LassoPath
         One per problem, each identical to :func:`lasso_path` of that problem alone.
     """
-    X = np.asarray(X, dtype=float)
-    y = np.asarray(y, dtype=float)
-    if X.ndim != 3:
-        raise ShapeError(f"X: expected shape (B, rows, m), got {X.shape}")
+    X = array(X, "X", ndim=3)
+    y = array(y, "y")
     if y.shape != X.shape[:2]:
         raise ShapeError(f"y: expected shape {X.shape[:2]}, got {y.shape}")
-    for arr, name in ((X, "X"), (y, "y")):
-        if not np.all(np.isfinite(arr)):
-            raise NonFiniteError(f"{name}: expected finite values")
     rows = X.shape[1]
     N = _norm(n_samples, rows)
-    if not 0.0 <= lambda_min < 1.0:
-        raise ModelError(f"lambda_min: expected a fraction of lambda_max in [0, 1), got {lambda_min!r}")
-    if max_size is not None and (isinstance(max_size, bool) or not isinstance(max_size, (int, np.integer))
-                                 or max_size < 1):
-        raise ModelError(f"max_size: expected a positive integer, got {max_size!r}")
+    lambda_min = real(lambda_min, "lambda_min", low=0.0, high=1.0, high_open=True,
+                      what="a fraction of lambda_max")
+    if max_size is not None:
+        max_size = integer(max_size, "max_size", low=1)
     # Exact rescaling X = sx X', y = sy y' per problem: theta = (sy / sx) theta', lambda = sx sy lambda'
     # (keeps the homotopy's tolerances meaningful whatever the units, e.g. gas flows ~1e5).
     Gram = np.matmul(X.transpose(0, 2, 1), X)
@@ -414,6 +404,17 @@ def lasso_cvxpy(X: Any, y: Any, lam: float, *, n_samples: int | None = None) -> 
 
     cvxpy does the hard part (conic reformulation of the l1 norm and an interior-point
     solver); it is slow for Monte Carlo but reads like the maths.
+
+    Parameters
+    ----------
+    X : array_like
+        ``(rows, m)``.
+    y : array_like
+        ``(rows,)``.
+    lam : float
+        ``lambda > 0``.
+    n_samples : int, optional
+        The ``N`` of the ``1/(2N)`` in (39); default ``rows``.
 
     Returns
     -------
@@ -641,9 +642,33 @@ def _unit_grid(n_grid: int, lambda_ratio: float) -> np.ndarray:
 
 
 def least_squares_on_support(X: Any, y: Any, support: Any) -> np.ndarray:
-    """Least-squares re-estimate of the selected components (the others set to 0), shape ``(m,)``."""
+    """Least-squares re-estimate of the selected components (the others set to 0), shape ``(m,)``.
+
+    Parameters
+    ----------
+    X : array_like
+        ``(rows, m)``.
+    y : array_like
+        ``(rows,)``.
+    support : sequence of int
+        Distinct column indices in ``[0, m)`` (no negative, Python-style, index).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> X = np.array([[1.0, 0.0, 2.0], [0.0, 1.0, 1.0], [1.0, 1.0, 0.0]])
+    >>> least_squares_on_support(X, X @ [2.0, 0.0, -1.0], [0, 2])
+    array([ 2.,  0., -1.])
+    """
     X, y = _check_xy(X, y)
-    idx = np.asarray(support, dtype=int)
+    m = X.shape[1]
+    try:
+        idx = np.asarray([integer(i, "support", low=0, high=m - 1) for i in np.ravel(np.asarray(support))],
+                         dtype=int)
+    except TypeError:
+        raise ModelError(f"support: expected a sequence of column indices, got {support!r}") from None
+    if np.unique(idx).size != idx.size:
+        raise ModelError(f"support: expected distinct column indices, got {idx.tolist()}")
     theta = np.zeros(X.shape[1])
     if idx.size:
         theta[idx] = np.linalg.lstsq(X[:, idx], y, rcond=None)[0]
@@ -676,7 +701,17 @@ class Diagnosis:
 def diagnose(X: Any, y: Any, *, n_samples: int | None = None, scale: Scale = "log",
              lambda_ratio: float = 1e-4, max_size: int | None = None,
              path: LassoPath | None = None) -> Diagnosis:
-    """Lasso path, the flat-range rule, then least squares on the selected support (Zhang 2021, Sec. IV-V)."""
+    """Lasso path, the flat-range rule, then least squares on the selected support (Zhang 2021, Sec. IV-V).
+
+    Parameters
+    ----------
+    X, y, n_samples
+        As in :func:`lasso_path`.
+    scale, lambda_ratio, max_size
+        As in :func:`flat_range`.
+    path : LassoPath, optional
+        A precomputed :func:`lasso_path` of ``X``, ``y``.
+    """
     X, y = _check_xy(X, y)
     path = lasso_path(X, y, n_samples=n_samples) if path is None else path
     flat = flat_range(path, scale=scale, lambda_ratio=lambda_ratio, max_size=max_size)

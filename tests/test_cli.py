@@ -1,6 +1,7 @@
 """The reproduction CLI and registry: a public contract (ids, JSON keys, errors)."""
 
 import json
+import re
 import subprocess
 import sys
 
@@ -18,11 +19,36 @@ def test_list_contains_the_foundation_ids(capsys):
         assert rid in out
 
 
-def test_every_registered_reproduction_is_documented():
+def documented_keys(rep) -> set[str]:
+    """Keys of the "Headline keys" section of ``rep``'s docstring, following "keys as X" references."""
+    import inspect
+
+    doc = inspect.getdoc(rep.func) or ""
+    if not re.search(r"Headline keys[^\n]*\n-+\n", doc):
+        ref = re.search(r"[Kk]eys:? as (?::func:`(\w+)`|``([\w-]+)``)", doc)
+        assert ref, f"{rep.id}: no 'Headline keys' section and no 'keys as ...' reference"
+        if ref.group(1):
+            module = __import__(rep.func.__module__, fromlist=["_"])
+            target = next(r for r in list_reproductions() if r.func is getattr(module, ref.group(1)))
+        else:
+            target = get(ref.group(2))
+        return documented_keys(target)
+    section = re.split(r"Headline keys[^\n]*\n-+\n", doc, maxsplit=1)[1]
+    section = re.split(r"\n\S[^\n]*\n-+\n", section, maxsplit=1)[0]      # up to the next section
+    names = re.findall(r"^(\w+(?:, \w+)*) :", section, flags=re.M)
+    return {key for entry in names for key in entry.split(", ")}
+
+
+def test_every_registered_reproduction_documents_its_headline_keys():
     for rep in list_reproductions():
-        doc = rep.func.__doc__ or ""
-        assert len(doc) > 40, f"{rep.id} has no docstring documenting its headline keys"
+        assert len(documented_keys(rep)) >= 1, rep.id
         assert rep.plot is None or callable(rep.plot)
+
+
+@pytest.mark.parametrize("rid", ["zb2014-fig1", "zb2014-fig2", "zb2014-fig4", "rosa2013-fig9"])
+def test_headline_keys_are_exactly_the_documented_ones(rid):
+    result = reproduce(rid)
+    assert set(result.headline) == documented_keys(get(rid))
 
 
 def test_json_is_one_object_with_the_contract_keys():
@@ -53,3 +79,38 @@ def test_describe_prints_the_docstring(capsys):
 def test_unknown_keyword_is_rejected_by_name():
     with pytest.raises(TypeError, match="unexpected keyword argument 'sed'"):
         reproduce("zb2014-fig1", sed=3)
+
+
+@pytest.mark.parametrize("argv, pattern", [
+    (["zb2014-fig1", "--seed", "-1"], r"seed: expected a non-negative integer, got -1"),
+    (["zb2014-fig1", "--seed", "abc"], r"argument --seed: invalid int value: 'abc'"),
+    (["zb2014-fig1", "--seed", "1.5"], r"argument --seed: invalid int value: '1.5'"),
+    (["zb2014-fig1", "--plot", "/no/such/folder/fig.png"], r"--plot: expected a file in an existing folder"),
+    (["zb2014-fig1", "--plot", "fig.docx"], r"--plot: expected an image file"),
+    (["zb2014-table1", "--plot", "fig.png"], r"--plot: zb2014-table1 has no figure"),
+    (["zb2014-fig1", "--trials", "5"], r"trials: zb2014-fig1 is one deterministic or seeded run"),
+    (["zhang2021-table1", "--trials", "1"], r"--trials: expected at least 2"),
+    (["zhang2021-table1", "--jobs", "0"], r"jobs: expected a non-zero integer"),
+])
+def test_cli_checks_arguments_before_computing(argv, pattern, capsys, monkeypatch):
+    """A one-line error and exit code 2, before anything is computed (no traceback)."""
+    from fdi_lib.reproduce.registry import Reproduction
+
+    def no_compute(self, **kwargs):
+        raise AssertionError("the reproduction ran before its arguments were checked")
+
+    monkeypatch.setattr(Reproduction, "__call__", no_compute)
+    try:
+        code = main(["reproduce", *argv])
+    except SystemExit as exc:  # argparse's own checks (invalid int)
+        code = exc.code
+    assert code == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1, err
+    assert err.startswith("error: ")
+    assert re.search(pattern, err), err
+
+
+def test_monte_carlo_flag_follows_the_use_of_trials():
+    assert get("zb2014-fig7").monte_carlo and get("bz-whiteness").monte_carlo
+    assert not get("zb2014-fig3").monte_carlo and not get("rosa2013-fig8").monte_carlo

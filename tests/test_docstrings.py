@@ -37,8 +37,10 @@ def test_parameters_section_matches_signature(qualname, func):
     doc = inspect.getdoc(func) or ""
     assert doc, f"{qualname} has no docstring"
     documented = _documented(doc)
-    if not documented:  # one-line docstrings of small helpers document their arguments inline
-        return
     params = {p.name for p in inspect.signature(func).parameters.values()}
+    if not documented:  # short docstrings of small helpers document each argument inline, as ``name``
+        inline = {p for p in params if re.search(rf"``\**{p}``", doc)}
+        assert inline == params, f"{qualname}: no Parameters section and {params - inline} not mentioned"
+        return
     assert documented <= params, f"{qualname} documents parameters it does not take: {documented - params}"
     assert params <= documented, f"{qualname} takes undocumented parameters: {params - documented}"

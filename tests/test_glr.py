@@ -35,8 +35,12 @@ def test_known_profile_glr_equals_brute_force_least_squares():
 
 
 def _naive_window(eps, model, gains, family, w, s):
-    """Per-onset triple loop straight from (31)-(36): for each k, each r, sum over j."""
+    """Per-onset triple loop straight from (31)-(36): for each k, each r, sum over j.
+
+    A sample whose innovation has a NaN is missing: it is left out of both sums.
+    """
     N = model.n_steps
+    kept = [j for j in range(N) if not np.isnan(eps[j]).any()]
     stat = np.full(N, np.nan)
     onset = np.full(N, -1)
     for k in range(N):
@@ -44,8 +48,8 @@ def _naive_window(eps, model, gains, family, w, s):
         for r in range(max(0, k - w + 1), k - s + 1):
             prof = family.profile(r)
             S = fault_signature(model, gains, prof).on_innovation
-            C = sum(S[j].T @ np.linalg.solve(gains.Sigma[j], S[j]) for j in range(k + 1))
-            d = sum(S[j].T @ np.linalg.solve(gains.Sigma[j], eps[j]) for j in range(k + 1))
+            C = sum(S[j].T @ np.linalg.solve(gains.Sigma[j], S[j]) for j in kept if j <= k)
+            d = sum(S[j].T @ np.linalg.solve(gains.Sigma[j], eps[j]) for j in kept if j <= k)
             val = d @ np.linalg.pinv(C) @ d
             if val > best:
                 best, onset[k] = val, r
@@ -69,6 +73,15 @@ def test_windowed_glr_equals_naive_triple_loop(kind):
     stat, onset = _naive_window(eps, m, g, fam, 8, 2)
     np.testing.assert_allclose(fast.statistic, stat, rtol=1e-9, equal_nan=True)
     np.testing.assert_array_equal(fast.onset, onset)
+    # Missing samples (NaN) are left out of the sums, online and batched, for every window
+    # that contains them (the information precomputed for the window is corrected).
+    eps[[13, 15]] = np.nan
+    stat, onset = _naive_window(eps, m, g, fam, 8, 2)
+    for res in (glr_window(eps, m, g, fam, window=8, min_samples=2),
+                glr_window(np.stack([eps, eps]), m, g, fam, window=8, min_samples=2)):
+        np.testing.assert_allclose(res.statistic[..., 14:], np.broadcast_to(stat[14:], res.statistic[..., 14:].shape),
+                                   rtol=1e-9)
+        np.testing.assert_array_equal(res.onset[..., 14:], np.broadcast_to(onset[14:], res.onset[..., 14:].shape))
 
 
 def test_online_updates_equal_batch_and_realisations_are_independent():
@@ -122,9 +135,9 @@ def test_bad_arguments():
     m = ex.unstable_model(20)
     g = kalman_gains(m)
     fam = impulse_family(m)
-    with pytest.raises(ModelError, match=r"window: expected a positive integer, got 0"):
+    with pytest.raises(ModelError, match=r"window: expected an integer in \[1, 20\], got 0"):
         WindowedGLR(m, g, fam, window=0)
-    with pytest.raises(ModelError, match=r"min_samples: expected an integer in \[0, window=5\), got 5"):
+    with pytest.raises(ModelError, match=r"min_samples: expected an integer in \[0, 4\], got 5"):
         WindowedGLR(m, g, fam, window=5, min_samples=5)
     with pytest.raises(ShapeError, match=r"innovations: expected shape \(\.\.\., 20, 1\), got \(19, 1\)"):
         glr_window(np.zeros((19, 1)), m, g, fam, window=5)

@@ -31,7 +31,14 @@ def test_rls_equals_weighted_least_squares_closed_form():
         theta = np.linalg.solve(A, b[..., None])[..., 0]
         assert np.allclose(res.theta_hat[:, k], theta, rtol=1e-8, atol=1e-10)
         assert np.allclose(res.gains.P[k + 1], np.linalg.inv(A), rtol=1e-8, atol=1e-12)
-    assert np.allclose(res.errors, eps - np.einsum("kpm,bkm->bkp", M, res.theta_hat))
+        # tracking error with the closed-form estimate (not the library's own theta_hat)
+        np.testing.assert_allclose(res.errors[:, k], eps[:, k] - theta @ M[k].T, rtol=1e-8, atol=1e-10)
+        if k > 0:  # prior error: the estimate of k-1 from the same closed form
+            w1 = lam ** (k - 1 - np.arange(k))
+            A1 = lam ** k * np.eye(2) + np.einsum("j,jpi,jpq,jqk->ik", w1, M[:k], Si[:k], M[:k])
+            b1 = np.einsum("j,jpi,jpq,...jq->...i", w1, M[:k], Si[:k], eps[:, :k])
+            prior = eps[:, k] - np.linalg.solve(A1, b1[..., None])[..., 0] @ M[k].T
+            np.testing.assert_allclose(res.prior_errors[:, k], prior, rtol=1e-8, atol=1e-10)
 
 
 def test_rls_converges_to_constant_theta_without_nonparametric_fault():

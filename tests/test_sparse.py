@@ -100,9 +100,14 @@ def test_diagnose_recovers_a_clean_sparse_vector_and_least_squares_is_unbiased()
     np.testing.assert_allclose(d.theta_ls, theta, atol=0.05)
     # the Lasso estimate is shrunk towards zero, the LS re-estimate is not
     assert np.all(np.abs(d.theta_lasso[d.support]) < np.abs(d.theta_ls[d.support]))
-    ref = np.zeros(30)
-    ref[d.support] = np.linalg.lstsq(X[:, d.support], y, rcond=None)[0]
-    np.testing.assert_allclose(least_squares_on_support(X, y, d.support), ref, rtol=1e-12)
+    # least squares by its defining property: the residual is orthogonal to the selected columns
+    # (normal equations), and the other components are exactly zero
+    th = least_squares_on_support(X, y, d.support)
+    off = np.setdiff1d(np.arange(30), d.support)
+    assert np.all(th[off] == 0.0)
+    Xs = X[:, d.support]
+    np.testing.assert_allclose(Xs.T @ (y - X @ th), 0.0, atol=1e-10 * np.abs(Xs.T @ y).max())
+    np.testing.assert_allclose(th[d.support], np.linalg.solve(Xs.T @ Xs, Xs.T @ y), rtol=1e-10)
 
 
 def test_regression_data_stacks_rows_in_time_order():

@@ -15,15 +15,39 @@ from __future__ import annotations
 import argparse
 import inspect
 import sys
+from pathlib import Path
 
-from fdi_lib.errors import FDIError
+from fdi_lib.errors import FDIError, ModelError
 from fdi_lib.reproduce.registry import get, list_reproductions
 
 
+class _Parser(argparse.ArgumentParser):
+    """Argument errors as one line on standard error and exit code 2 (no usage block)."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        print(f"error: {message} (see python -m fdi_lib reproduce --help)", file=sys.stderr)
+        raise SystemExit(2)
+
+
+def _check_plot(path: str) -> None:
+    """``--plot FILE``: an existing folder and an image format matplotlib writes."""
+    folder = Path(path).expanduser().resolve().parent
+    if not folder.is_dir():
+        raise ModelError(f"--plot: expected a file in an existing folder, got {path!r} ({folder} does not exist)")
+    suffix = Path(path).suffix.lstrip(".").lower()
+    if suffix:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+
+        formats = FigureCanvasAgg(Figure()).get_supported_filetypes()
+        if suffix not in formats:
+            raise ModelError(f"--plot: expected an image file ({', '.join(sorted(formats))}), got {path!r}")
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="python -m fdi_lib", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = parser.add_subparsers(dest="command", required=True)
+    parser = _Parser(prog="python -m fdi_lib", description=__doc__,
+                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     rep = sub.add_parser("reproduce", help="reproduce a figure or table of the papers")
     rep.add_argument("id", nargs="?", help="reproduction identifier, e.g. zb2014-fig3")
     rep.add_argument("--list", action="store_true", help="list the identifiers and exit")
@@ -56,6 +80,15 @@ def main(argv: list[str] | None = None) -> int:
         if args.describe:
             print(inspect.getdoc(rep.func))
             return 0
+        # Every argument is checked before anything is computed.
+        rep.check_arguments(seed=args.seed, trials=args.trials, jobs=args.jobs)
+        if args.trials is not None and args.trials < 2:
+            raise ModelError(f"--trials: expected at least 2 (the JSON's 95 % intervals need two trials), "
+                             f"got {args.trials}")
+        if args.plot:
+            if rep.plot is None:
+                raise ModelError(f"--plot: {args.id} has no figure")
+            _check_plot(args.plot)
         result = rep(seed=args.seed, trials=args.trials, jobs=args.jobs)
     except FDIError as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -64,10 +97,11 @@ def main(argv: list[str] | None = None) -> int:
         import matplotlib
 
         matplotlib.use("Agg")
-        if rep.plot is None:
-            print(f"error: {args.id} has no figure", file=sys.stderr)
+        try:
+            rep.plot(result).savefig(args.plot, dpi=120, bbox_inches="tight")
+        except OSError as exc:
+            print(f"error: --plot: could not write {args.plot!r}: {exc.strerror or exc}", file=sys.stderr)
             return 2
-        rep.plot(result).savefig(args.plot, dpi=120, bbox_inches="tight")
     if args.json:
         print(result.to_json())
     else:

@@ -21,6 +21,7 @@ nothing is read or written.
 from __future__ import annotations
 
 import hashlib
+import dis
 import json
 import os
 import pickle
@@ -31,6 +32,7 @@ from typing import Any, Callable
 import numpy as np
 
 from fdi_lib.errors import ModelError, UnknownReproductionError
+from fdi_lib.validation import seed as check_seed
 
 __all__ = ["Reproduction", "ReproductionResult", "register", "get", "list_reproductions", "reproduce",
            "code_version", "cache_dir", "cached_results", "CACHE_ENV"]
@@ -85,14 +87,31 @@ class Reproduction:
     default_trials: int | None
     default_seed: int
 
+    @property
+    def monte_carlo(self) -> bool:
+        """Whether the reproduction uses ``trials`` (a paper count, or a function that reads it)."""
+        return self.default_trials is not None or any(
+            ins.opname.startswith("LOAD") and ins.argval == "trials" for ins in dis.get_instructions(self.func))
+
+    def check_arguments(self, *, seed: int | None = None, trials: int | None = None, jobs: int = 1) -> None:
+        """Validate ``seed`` (integer >= 0), ``trials`` (positive integer, only for a Monte Carlo
+        reproduction) and ``jobs`` (non-zero integer) before anything is computed."""
+        if seed is not None:
+            check_seed(seed)
+        if trials is not None:
+            if isinstance(trials, (bool, np.bool_)) or not isinstance(trials, (int, np.integer)) or trials < 1:
+                raise ModelError(f"trials: expected a positive integer, got {trials!r}")
+            if not self.monte_carlo:
+                raise ModelError(f"trials: {self.id} is one deterministic or seeded run; expected no "
+                                 f"trial count, got {trials!r}")
+        if isinstance(jobs, (bool, np.bool_)) or not isinstance(jobs, (int, np.integer)) or jobs == 0:
+            raise ModelError(f"jobs: expected a non-zero integer (-1 = all cores), got {jobs!r}")
+
     def __call__(self, *, seed: int | None = None, trials: int | None = None, jobs: int = 1,
                  **kwargs: Any) -> ReproductionResult:
+        self.check_arguments(seed=seed, trials=trials, jobs=jobs)
         seed = self.default_seed if seed is None else seed
         trials = self.default_trials if trials is None else trials
-        if trials is not None and (not isinstance(trials, (int, np.integer)) or trials < 1):
-            raise ModelError(f"trials: expected a positive integer, got {trials!r}")
-        if not isinstance(jobs, (int, np.integer)) or jobs == 0:
-            raise ModelError(f"jobs: expected a non-zero integer (-1 = all cores), got {jobs!r}")
         trials = None if trials is None else int(trials)
         path = _cache_path(self.id, int(seed), trials, kwargs)
         if path is not None and path.exists():

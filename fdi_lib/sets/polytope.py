@@ -33,7 +33,9 @@ from typing import Any, Iterable, Sequence
 
 import numpy as np
 
-from fdi_lib.errors import EmptySetError, NonFiniteError, NumericalError, ShapeError, UnboundedSetError
+from fdi_lib.errors import (EmptySetError, ModelError, NonFiniteError, NumericalError, ShapeError,
+                            UnboundedSetError)
+from fdi_lib.validation import array
 
 __all__ = ["Polytope", "convex_hull", "plot_polytope", "box_corners"]
 
@@ -41,7 +43,7 @@ _TOL = 1e-9
 
 
 def _as_2d(name: str, a: Any, ncols: int | None = None) -> np.ndarray:
-    arr = np.asarray(a, dtype=float)
+    arr = array(a, name, finite=False)
     if arr.ndim != 2:
         raise ShapeError(f"{name}: expected a 2-D array, got shape {arr.shape}")
     if ncols is not None and arr.shape[1] != ncols:
@@ -287,7 +289,7 @@ class Polytope:
 
     def __post_init__(self) -> None:
         M = _as_2d("M", self.M)
-        m = np.asarray(self.m, dtype=float)
+        m = array(self.m, "m", finite=False)
         if m.ndim != 1 or m.shape[0] != M.shape[0]:
             raise ShapeError(f"m: expected shape ({M.shape[0]},) to match M {M.shape}, got {m.shape}")
         _check_finite("m", m)
@@ -300,8 +302,8 @@ class Polytope:
     @classmethod
     def box(cls, lower: Sequence[float], upper: Sequence[float]) -> "Polytope":
         """The axis-aligned box {lower <= x <= upper}."""
-        lo = np.atleast_1d(np.asarray(lower, dtype=float))
-        hi = np.atleast_1d(np.asarray(upper, dtype=float))
+        lo = np.atleast_1d(array(lower, "lower"))
+        hi = np.atleast_1d(array(upper, "upper"))
         if lo.shape != hi.shape or lo.ndim != 1:
             raise ShapeError(f"lower, upper: expected equal 1-D shapes, got {lo.shape} and {hi.shape}")
         n = lo.size
@@ -361,7 +363,7 @@ class Polytope:
         if res.status == 2:
             return True
         if res.status != 0:  # pragma: no cover - HiGHS failures are unexpected
-            raise RuntimeError(f"linprog failed: {res.message}")
+            raise NumericalError(f"linprog failed: {res.message}")
         return bool(-res.fun < -tol)
 
     def contains(self, x: Any, tol: float = 1e-9) -> bool:
@@ -493,7 +495,7 @@ class Polytope:
             V = self._nonempty_vertices("project")
             return Polytope.from_vertices(V[:, dims])
         if method != "fourier-motzkin":
-            raise ValueError(f"method: expected 'fourier-motzkin' or 'vertex', got {method!r}")
+            raise ModelError(f"method: expected 'fourier-motzkin' or 'vertex', got {method!r}")
         import cdd
 
         elim = [d for d in range(self.dim) if d not in dims]
@@ -519,7 +521,7 @@ class Polytope:
 
 
 def convex_hull(polytopes: Iterable[Polytope]) -> Polytope:
-    """co{P_1, ..., P_r}: hull of the union of their vertices (eq. (4) of Rosa & Silvestre 2013).
+    """co{P_1, ..., P_r} of ``polytopes``: hull of the union of their vertices (eq. (4) of Rosa & Silvestre 2013).
 
     Empty members are ignored; raises :class:`EmptySetError` if all are empty.
     """
@@ -538,7 +540,10 @@ def convex_hull(polytopes: Iterable[Polytope]) -> Polytope:
 
 
 def plot_polytope(P: Polytope, ax: Any, **kwargs: Any) -> Any:
-    """Draw a 2-D polytope as a filled polygon on ``ax``; returns ``ax``. Empty sets draw nothing."""
+    """Draw a 2-D polytope ``P`` as a filled polygon on ``ax``; returns ``ax``. Empty sets draw nothing.
+
+    ``**kwargs`` go to matplotlib's ``fill``.
+    """
     if P.dim != 2:
         raise ShapeError(f"P: expected a 2-D polytope, got dimension {P.dim}")
     V = P.vertices()

@@ -48,6 +48,7 @@ import numpy as np
 
 from fdi_lib.errors import (EmptySetError, ModelError, NonFiniteError, NumericalError, ShapeError,
                             UnboundedSetError)
+from fdi_lib.validation import integer, real
 from fdi_lib.sets.polytope import Polytope, _hull_hrep, _enumerate_vertices, box_corners
 from fdi_lib.threads import single_threaded_blas
 
@@ -168,7 +169,8 @@ class SVOModel:
 
 
 def default_template(n: int, C: np.ndarray | None = None) -> np.ndarray:
-    """Template directions: +-e_i, plus +-normalised rows of C not parallel to those, shape (p, n)."""
+    """Template directions in dimension ``n``: +-e_i, plus +-normalised rows of ``C`` not parallel
+    to those, shape (p, n)."""
     rows = list(np.eye(n))
     if C is not None:
         for c in np.asarray(C, dtype=float):
@@ -241,9 +243,8 @@ class SetValuedObserver:
                  template: np.ndarray | None = None, margin: float = 1e-9,
                  strip_before_hull: bool = False, scale: Any = None, joint: bool = False) -> None:
         if not isinstance(X0, Polytope):
-            raise TypeError(f"X0: expected a Polytope, got {type(X0).__name__}")
-        if not isinstance(N, (int, np.integer)) or N < 1:
-            raise ModelError(f"N: expected a positive integer horizon, got {N!r}")
+            raise ModelError(f"X0: expected a Polytope, got {type(X0).__name__}")
+        N = integer(N, "N", low=1)
         if method not in ("template", "exact"):
             raise ModelError(f"method: expected 'template' or 'exact', got {method!r}")
         if X0.is_empty():
@@ -268,7 +269,7 @@ class SetValuedObserver:
             X0, V0 = Polytope(X0.M * sc[None, :], X0.m), V0 / sc[None, :]
             if self.template is not None:   # D x = (D S) z
                 self.template = self.template * sc[None, :]
-        self.margin = float(margin)
+        self.margin = real(margin, "margin", low=0.0, what="a non-negative relative inflation")
         self.strip_before_hull = bool(strip_before_hull)
         self.joint = bool(joint)
         self.n = X0.dim
@@ -683,7 +684,14 @@ def run_architecture_ii(nominal: ModelSpec, global_model: ModelSpec, faults: Map
     """Architecture II (§4.2, Fig. 6(b)): nominal SVO for detection, a Global SVO valid for the
     healthy and every faulty plant, and fault SVOs started from the Global SVO's set at detection.
 
-    The fault models need not contain the nominal plant. Parameters as in :func:`run_architecture_i`.
+    The fault models need not contain the nominal plant.
+
+    Parameters
+    ----------
+    nominal, faults, u, y, X0, N, method, template, stop_when_isolated
+        As in :func:`run_architecture_i`.
+    global_model : SVOModel, sequence or callable
+        A model valid for the healthy plant and for every fault model.
     """
     y, u, T = _bank({"nominal": nominal, "global": global_model, **faults}, u, y, X0, N, method, template)
     nom = SetValuedObserver(X0, N=N, method=method, template=template, scale=scale)
@@ -734,7 +742,8 @@ def _replace(model: SVOModel, **changes: Any) -> SVOModel:
 
 
 def actuator_effectiveness_model(model: SVOModel, input_index: int, lowest: float) -> SVOModel:
-    """Fault hypothesis "loss of effectiveness" of one actuator (Table 1): gain in [lowest, 1].
+    """Fault hypothesis "loss of effectiveness" of actuator ``input_index`` of ``model`` (Table 1):
+    gain in [``lowest``, 1].
 
     The column b of B becomes b (1 + lowest)/2 + Delta b (1 - lowest)/2, |Delta| <= 1, i.e. an
     uncertain input matrix handled as a disturbance (§2). It contains the healthy plant
@@ -752,7 +761,8 @@ def actuator_effectiveness_model(model: SVOModel, input_index: int, lowest: floa
 
 
 def sensor_bias_model(model: SVOModel, output_index: int, bound: float) -> SVOModel:
-    """Fault hypothesis "biased sensor" (Table 2): an additive fault |q| <= bound on one output,
+    """Fault hypothesis "biased sensor" (Table 2) of ``model``: an additive fault |q| <= ``bound`` on
+    output ``output_index``,
     folded into that sensor's noise bound (how SVO #2 of §6 is built). Contains the healthy plant."""
     if not 0 <= output_index < model.n_y:
         raise ModelError(f"output_index: expected 0 <= index < {model.n_y}, got {output_index}")
@@ -764,7 +774,8 @@ def sensor_bias_model(model: SVOModel, output_index: int, bound: float) -> SVOMo
 
 
 def dynamics_entry_model(model: SVOModel, row: int, col: int, low: float, high: float) -> SVOModel:
-    """Fault hypothesis "system dynamics" (§4.3.1): entry A[row, col] anywhere in [low, high].
+    """Fault hypothesis "system dynamics" (§4.3.1) of ``model``: entry A[``row``, ``col``] anywhere in
+    [``low``, ``high``].
 
     Adds the direction (high - low)/2 E_{row,col} to the parametric uncertainty and moves the
     entry to the middle of the interval. Include the healthy value in [low, high] for Architecture I.

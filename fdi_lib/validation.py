@@ -1,0 +1,229 @@
+"""Input validation shared by every public function, and the policy for missing and non-finite data.
+
+Policy
+------
+*A NaN measurement means "missing"; nothing else may be non-finite.*
+
+* Measurements and the quantities computed sample by sample from them (outputs ``y``,
+  innovations, residuals) may contain NaN: a sample (time step) with a NaN in any of
+  its components is **missing as a whole**, and is handled explicitly:
+
+  - :func:`fdi_lib.filters.kalman_filter` and :func:`fdi_lib.kitanidis.kitanidis_filter`
+    predict without updating (``Xhat_{k|k} = Xhat_k``); the innovation of a missing
+    sample is NaN, which marks it for the tests downstream. The gains are those of the
+    complete record (they do not depend on the data), so for a few samples after a gap
+    the true innovation covariance is somewhat larger than ``Sigma_k``;
+  - the GLR tests (:func:`fdi_lib.glr.glr_known_profile`, :func:`fdi_lib.glr.glr_window`),
+    :func:`fdi_lib.isolation.information` and :func:`fdi_lib.nonparametric.energy_statistic`
+    skip the sample: its innovation and its signature rows contribute nothing to the sums
+    (the energy of a window with missing samples is a sum of fewer terms, so the
+    chi-square threshold of the full window is conservative);
+  - the statistics stay finite.
+
+  Functions that cannot skip a sample (RLS tracking, regression data for the Lasso,
+  set-valued observers) raise :class:`~fdi_lib.errors.NonFiniteError` naming the argument
+  and the first bad index.
+* An infinite measurement, and any non-finite model matrix, covariance, parameter,
+  threshold or fault vector, is a :class:`~fdi_lib.errors.NonFiniteError` naming the
+  argument and the first bad index. A recursion that diverges (Riccati, Kitanidis, RLS)
+  raises a typed error naming the step.
+* No statistic is NaN without an error, with one documented exception: the windowed
+  statistics (:func:`fdi_lib.glr.glr_window`, :func:`fdi_lib.nonparametric.energy_statistic`)
+  are NaN on their warm-up, before the first admissible onset or full window.
+  :func:`fdi_lib.glr.first_alarm` accepts such a leading warm-up and raises
+  :class:`~fdi_lib.errors.NonFiniteError` for any NaN after it: NaN is never read as
+  "no alarm".
+
+Every error is a subclass of :class:`~fdi_lib.errors.FDIError` and names the argument,
+what was expected and what was received.
+"""
+
+from __future__ import annotations
+
+import numbers
+from typing import Any
+
+import numpy as np
+import scipy.linalg
+
+from fdi_lib.errors import CovarianceError, ModelError, NonFiniteError, ShapeError
+
+__all__ = ["COV_RTOL", "check_finite", "measurements", "missing_samples", "integer", "real",
+           "probability", "seed", "covariance", "array", "check_gains", "initial_state", "cholesky"]
+
+#: Relative tolerance of the symmetry and positive semi-definiteness checks.
+COV_RTOL = 1e-9
+
+
+def check_finite(arr: np.ndarray, name: str) -> None:
+    """Raise :class:`NonFiniteError` naming ``name`` and the first non-finite index of ``arr``."""
+    arr = np.asarray(arr)
+    if arr.dtype.kind in "fc" and not np.all(np.isfinite(arr)):
+        idx = tuple(int(i) for i in np.argwhere(~np.isfinite(arr))[0])
+        raise NonFiniteError(f"{name}: expected finite values, got {arr[idx]} at index {idx}")
+
+
+def array(value: Any, name: str, *, ndim: int | None = None, finite: bool = True) -> np.ndarray:
+    """``value`` as a float array (typed errors for objects, strings, wrong ``ndim`` or non-finite)."""
+    if value is None or np.iscomplexobj(value):
+        raise ShapeError(f"{name}: expected a real numeric array, got {type(value).__name__}")
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ShapeError(f"{name}: expected a numeric array, got {type(value).__name__}") from exc
+    if ndim is not None and arr.ndim != ndim:
+        raise ShapeError(f"{name}: expected a {ndim}-d array, got shape {arr.shape}")
+    if finite:
+        check_finite(arr, name)
+    return arr
+
+
+def missing_samples(arr: np.ndarray, name: str) -> np.ndarray:
+    """Missing samples of a measurement-like array ``(..., N, p)``: rows with a NaN.
+
+    Returns a boolean array ``(..., N)``; raises :class:`NonFiniteError` for an infinite value.
+    """
+    inf = np.isinf(arr)
+    if inf.any():
+        idx = tuple(int(i) for i in np.argwhere(inf)[0])
+        raise NonFiniteError(f"{name}: expected finite values or NaN (missing), got {arr[idx]} "
+                             f"at index {idx}")
+    return np.isnan(arr).any(axis=-1)
+
+
+def measurements(value: Any, *, n_steps: int, width: int, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """A measurement record ``(*batch, n_steps, width)`` where NaN marks a missing sample.
+
+    A 1-D array of length ``n_steps`` is accepted when ``width == 1``. Returns the array and
+    the boolean mask ``(*batch, n_steps)`` of missing samples.
+    """
+    arr = array(value, name, finite=False)
+    if arr.ndim == 1 and width == 1:
+        arr = arr[:, None]
+    if arr.ndim < 2 or arr.shape[-2:] != (n_steps, width):
+        raise ShapeError(f"{name}: expected shape (..., {n_steps}, {width}), got {np.shape(value)}")
+    return arr, missing_samples(arr, name)
+
+
+def integer(value: Any, name: str, *, low: int | None = None, high: int | None = None) -> int:
+    """An integer in ``[low, high]`` (``bool`` and integral floats are rejected).
+
+    Examples
+    --------
+    >>> integer(3, "window", low=1)
+    3
+    >>> integer(True, "window")
+    Traceback (most recent call last):
+    ...
+    fdi_lib.errors.ModelError: window: expected an integer, got True (bool)
+    """
+    if isinstance(value, np.ndarray) and value.ndim == 0:   # a 0-d array counts as its scalar
+        value = value[()]
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
+        raise ModelError(f"{name}: expected an integer, got {value!r} ({type(value).__name__})")
+    value = int(value)
+    if (low is not None and value < low) or (high is not None and value > high):
+        if high is None:
+            kind = {0: "a non-negative integer", 1: "a positive integer"}.get(low, f"an integer >= {low}")
+            raise ModelError(f"{name}: expected {kind}, got {value!r}")
+        if low is None:
+            raise ModelError(f"{name}: expected an integer <= {high}, got {value!r}")
+        raise ModelError(f"{name}: expected an integer in [{low}, {high}], got {value!r}")
+    return int(value)
+
+
+def real(value: Any, name: str, *, low: float | None = None, high: float | None = None,
+         low_open: bool = False, high_open: bool = False, what: str = "a number") -> float:
+    """A finite real number in the given (closed or open) interval; ``what`` names it in errors."""
+    if isinstance(value, np.ndarray) and value.ndim == 0:   # a 0-d array counts as its scalar
+        value = value[()]
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ModelError(f"{name}: expected {what}, got {value!r} ({type(value).__name__})")
+    x = float(value)
+    if not np.isfinite(x):
+        raise NonFiniteError(f"{name}: expected a finite number, got {x}")
+    bad = ((low is not None and (x <= low if low_open else x < low))
+           or (high is not None and (x >= high if high_open else x > high)))
+    if bad:
+        lo = "-inf" if low is None else f"{low:g}"
+        hi = "inf" if high is None else f"{high:g}"
+        raise ModelError(f"{name}: expected {what} in {'(' if low_open else '['}{lo}, {hi}"
+                         f"{')' if high_open else ']'}, got {value!r}")
+    return x
+
+
+def probability(value: Any, name: str) -> float:
+    """A probability in the open interval ``(0, 1)``."""
+    return real(value, name, low=0.0, high=1.0, low_open=True, high_open=True, what="a probability")
+
+
+def seed(value: Any, name: str = "seed") -> int:
+    """A root seed for :class:`numpy.random.SeedSequence`: a non-negative integer."""
+    return integer(value, name, low=0)
+
+
+def covariance(arr: np.ndarray, name: str, *, definite: bool) -> None:
+    """Check symmetric positive (semi-)definite matrices ``(N, m, m)``; the error names the step.
+
+    A broadcast constant (stride 0 on the first axis) is checked once.
+    """
+    arr = np.asarray(arr, dtype=float)
+    check_finite(arr, name)
+    steps = arr[:1] if arr.strides[0] == 0 else arr
+    if steps.size == 0:
+        return
+    scale = np.maximum(1.0, np.abs(steps).max(axis=(-2, -1)))
+    asym = np.abs(steps - np.swapaxes(steps, -1, -2)).max(axis=(-2, -1))
+    bad = np.nonzero(asym > COV_RTOL * scale)[0]
+    if bad.size:
+        k = int(bad[0])
+        raise CovarianceError(f"{name}: expected a symmetric matrix, got asymmetry {asym[k]:.3g} at step {k}")
+    eig = np.linalg.eigvalsh(steps)
+    emin = eig[:, 0]
+    limit = COV_RTOL * np.maximum(1.0, eig[:, -1]) if not definite else 0.0
+    bad = np.nonzero(emin <= limit if definite else emin < -limit)[0]
+    if bad.size:
+        k = int(bad[0])
+        kind = "positive definite" if definite else "positive semi-definite"
+        raise CovarianceError(f"{name}: expected a {kind} matrix, got smallest eigenvalue "
+                              f"{emin[k]:.6g} at step {k}")
+
+
+
+def check_gains(model: Any, gains: Any, name: str = "gains") -> None:
+    """Check that filter ``gains`` (``K`` ``(N, n, p)``, ``Sigma_chol`` ``(N, p, p)``) belong to ``model``.
+
+    Gains of a longer or differently shaped model are an error, never silently truncated.
+    """
+    shape = (model.n_steps, model.n, model.p)
+    if np.shape(getattr(gains, "K", None)) != shape or np.shape(
+            getattr(gains, "Sigma_chol", None)) != (model.n_steps, model.p, model.p):
+        raise ShapeError(f"{name}: expected gains with K of shape {shape} for this model, got "
+                         f"{type(gains).__name__} with K {np.shape(getattr(gains, 'K', None))}")
+
+
+def initial_state(model: Any, x0: Any, name: str = "x0") -> np.ndarray:
+    """``x0`` (default ``model.x0``) checked to be a finite vector of shape ``(n,)`` (no broadcasting)."""
+    if x0 is None:
+        return model.x0
+    x = array(x0, name, finite=False)
+    if x.shape != (model.n,):
+        raise ShapeError(f"{name}: expected shape ({model.n},), got {x.shape}")
+    check_finite(x, name)
+    return x
+
+
+def cholesky(S: np.ndarray, *, step: int, what: str, name: str = "model") -> tuple[np.ndarray, bool]:
+    """``scipy.linalg.cho_factor(S, lower=True)`` inside a recursion, with typed errors naming the step.
+
+    A non-finite ``S`` means the recursion ``what`` diverged (:class:`NonFiniteError`); a matrix
+    that is not positive definite raises :class:`CovarianceError`.
+    """
+    if not np.all(np.isfinite(S)):
+        raise NonFiniteError(f"{name}: {what} diverged (non-finite values at step {step})")
+    try:
+        return scipy.linalg.cho_factor(S, lower=True)
+    except np.linalg.LinAlgError as exc:
+        raise CovarianceError(f"{name}: {what} lost positive definiteness at step {step} (expected a "
+                              f"positive definite matrix, smallest eigenvalue "
+                              f"{np.linalg.eigvalsh(S)[0]:.3g})") from exc
