@@ -144,7 +144,13 @@ def figure(nrows: int = 1, ncols: int = 1, *, fig: Any = None, sharex: bool = Fa
         fig.clear()
         fig.set_size_inches(FIG_WIDTH_IN, height)
     if stack:
-        axes = fig.subplots(ncols, 1, sharex=sharex, squeeze=False, **kwargs).reshape(1, ncols)
+        # the requested widths of side-by-side panels become the heights of the stacked ones
+        grid = dict(kwargs.pop("gridspec_kw", None) or {})
+        ratios = kwargs.pop("width_ratios", None) or grid.pop("width_ratios", None)
+        if ratios is not None:
+            grid["height_ratios"] = ratios
+        axes = fig.subplots(ncols, 1, sharex=sharex, squeeze=False, gridspec_kw=grid or None,
+                            **kwargs).reshape(1, ncols)
     else:
         axes = fig.subplots(nrows, ncols, sharex=sharex, squeeze=False, **kwargs)
     return fig, axes

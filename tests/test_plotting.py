@@ -100,3 +100,10 @@ def test_cli_savefig_is_also_2x():
     fig.savefig(buf, format="png")
     width_px = struct.unpack(">I", buf.getvalue()[16:20])[0]
     assert width_px == pytest.approx(FIG_WIDTH_IN * DISPLAY_DPI * RASTER_SCALE, rel=0.01)
+
+
+def test_stacked_panels_keep_the_requested_width_ratios_as_heights():
+    fig, axes = figure(1, 2, gridspec_kw={"width_ratios": [2, 1]})
+    h = [ax.get_position().height for ax in axes[0]]
+    assert axes.shape == (1, 2)
+    assert h[0] / h[1] == pytest.approx(2.0, rel=0.05)

@@ -688,7 +688,7 @@ def run_architecture_ii(nominal: ModelSpec, global_model: ModelSpec, faults: Map
 
     Parameters
     ----------
-    nominal, faults, u, y, X0, N, method, template, stop_when_isolated
+    nominal, faults, u, y, X0, N, method, template, stop_when_isolated, scale
         As in :func:`run_architecture_i`.
     global_model : SVOModel, sequence or callable
         A model valid for the healthy plant and for every fault model.
