@@ -25,7 +25,10 @@ from fdi_lib.reproduce.bz import SOL1, SOL2, _simulate, setup
 from fdi_lib.simulate import draw_noise
 from fdi_lib.systems import bz_example as ex
 
-__all__ = ["BZRun", "bz_run", "explore_bz"]
+__all__ = ["BZRun", "bz_run", "explore_bz", "GRID"]
+
+#: Slider values of the explorable (drift speed at its default 3e-4).
+GRID = {"lam": (0.8, 0.85, 0.9, 0.95, 0.98, 1.0), "f_size": (0.0, 0.1, 0.2, 0.3, 0.4, 0.5)}
 
 
 @dataclass(frozen=True)

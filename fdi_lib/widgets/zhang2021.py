@@ -8,6 +8,7 @@ its support as circles and the truth as asterisks, beside the support-size stair
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import numpy as np
@@ -19,7 +20,22 @@ from fdi_lib.reproduce.zhang2021 import example1_regression
 from fdi_lib.sparse import flat_range, lasso_path, least_squares_on_support
 from fdi_lib.systems import zhang2021_example1 as ex
 
-__all__ = ["explore_sparse"]
+__all__ = ["explore_sparse", "GRID"]
+
+#: Slider values of the explorable: the Lasso path and support against lambda for several q.
+GRID = {"q": (1, 3, 5, 10, 15, 25), "lam_scale": (0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0)}
+
+
+@functools.lru_cache(maxsize=8)
+def _trial_path(q: int, r: float, seed: int):
+    # the trial, its regression and its exact Lasso path do not depend on lambda: a lambda
+    # slider only reads the path (cached for the last few (q, r, seed))
+    model = ex.example1_model(r=r)
+    trials = ex.draw_trials(model, trial_rngs(trial_seeds(seed, 1)), q=q)
+    reg, _ = example1_regression(trials, r=r)
+    X, y = reg.X[0], reg.y[0]
+    path = lasso_path(X, y, n_samples=reg.n_samples)
+    return X, y, path, flat_range(path, scale="log"), np.flatnonzero(trials.theta[0])
 
 
 def explore_sparse(q: int = 5, r: float = 0.5, lam_scale: float = 1.0, seed: int = 0, fig: Any = None):
@@ -42,17 +58,11 @@ def explore_sparse(q: int = 5, r: float = 0.5, lam_scale: float = 1.0, seed: int
         raise ModelError(f"q: expected an integer in [1, 25], got {q!r}")
     if not np.isfinite(lam_scale) or lam_scale <= 0:
         raise ModelError(f"lam_scale: expected a positive number, got {lam_scale!r}")
-    model = ex.example1_model(r=r)
-    trials = ex.draw_trials(model, trial_rngs(trial_seeds(seed, 1)), q=int(q))
-    reg, _ = example1_regression(trials, r=r)
-    X, y = reg.X[0], reg.y[0]
-    path = lasso_path(X, y, n_samples=reg.n_samples)
-    fr = flat_range(path, scale="log")
+    X, y, path, fr, truth = _trial_path(int(q), float(r), int(seed))
     lam = lam_scale * fr.middle
     coef = path.coef(lam)
     support = np.flatnonzero(coef)
     ls = least_squares_on_support(X, y, support)
-    truth = np.flatnonzero(trials.theta[0])
     ok = np.array_equal(support, truth)
 
     fig, axes = figure(1, 2, fig=fig, figsize=(9.0, 3.4))
