@@ -92,7 +92,9 @@ def _png_frame(fig: Figure) -> str:
 _SCRIPT = """(function () {
   const root = document.getElementById(%(id)s), F = %(frames)s, L = %(labels)s, S = %(strides)s;
   const img = root.querySelector("img"), ins = root.querySelectorAll("input[type=range]");
-  const pics = F.map(function (b) { const p = new Image(); p.src = "data:image/png;base64," + b; return p; });
+  const pics = F.map(function (b) {
+    const p = new Image(); p.src = "data:image/png;base64," + b; p.decode().catch(function () {}); return p;
+  });
   function show() {
     let i = 0;
     ins.forEach(function (e, j) { i += S[j] * Number(e.value); e.nextElementSibling.textContent = L[j][e.value]; });
