@@ -19,6 +19,7 @@ from fdi_lib.models import impulse_family
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.reproduce.zb2014 import plot_detection, unstable_run
 from fdi_lib.signatures import fault_signature, willsky_jones
+from fdi_lib.widgets import keep_artists, reusable_artists
 from fdi_lib.systems import zb2014_unstable as ex
 
 __all__ = ["explore_glr", "explore_signature", "DEFAULTS", "GLR_GRID", "SIGNATURE_GRID"]
@@ -56,21 +57,35 @@ def explore_signature(onset: int = 101, fig: Any = None):
     r = int(onset)
     sig = fault_signature(model, gains, impulse_family(model).profile(r))
     alpha = np.linalg.norm(willsky_jones(model, gains, r).alpha, ord=2, axis=(-2, -1))
-    fig, axes = figure(2, 1, fig=fig, sharex=True, figsize=(7.0, 5.0))
-    top, bottom = axes[:, 0]
-    k = np.arange(sig.Gamma.shape[0])
-    top.plot(k, np.linalg.norm(sig.Gamma, ord=2, axis=(-2, -1)), color=OURS_COLOR,
-             label=r"$\|\Gamma_k\|_2$")
-    top.plot(np.arange(sig.on_innovation.shape[0]), np.linalg.norm(sig.on_innovation, ord=2, axis=(-2, -1)),
-             color="0.4", lw=1.0, label=r"$\|H_k\Gamma_k\|_2$")
-    top.axvline(r, color="k", ls=":", lw=0.8)
-    top.set(ylabel="norm", title=f"impulse at r = {r}")
-    top.legend(loc="upper right")
+    gamma = np.linalg.norm(sig.Gamma, ord=2, axis=(-2, -1))
+    h_gamma = np.linalg.norm(sig.on_innovation, ord=2, axis=(-2, -1))
     ka = np.arange(alpha.size)
-    bottom.semilogy(ka[alpha > 0], alpha[alpha > 0], color=PAPER_COLOR, label=r"$\|\alpha_k(r)\|_2$")
-    bottom.axvline(r, color="k", ls=":", lw=0.8)
-    bottom.set(xlabel="k", ylabel=r"$\|\alpha_k(r)\|_2$", xlim=(0, alpha.size - 1), ylim=(0.1, 1e45))
-    bottom.legend(loc="upper left")
+    alpha_k, alpha_v = ka[alpha > 0], alpha[alpha > 0]
+    art = reusable_artists(fig, "explore_signature")
+    if art is None:  # first call: build the figure; later calls only move its artists
+        fig, axes = figure(2, 1, fig=fig, sharex=True, figsize=(7.0, 5.0))
+        top, bottom = axes[:, 0]
+        art = {"gamma": top.plot(np.arange(gamma.size), gamma, color=OURS_COLOR,
+                                 label=r"$\|\Gamma_k\|_2$")[0],
+               "h_gamma": top.plot(np.arange(h_gamma.size), h_gamma, color="0.4", lw=1.0,
+                                   label=r"$\|H_k\Gamma_k\|_2$")[0],
+               "r_top": top.axvline(r, color="k", ls=":", lw=0.8),
+               "alpha": bottom.semilogy(alpha_k, alpha_v, color=PAPER_COLOR, label=r"$\|\alpha_k(r)\|_2$")[0],
+               "r_bottom": bottom.axvline(r, color="k", ls=":", lw=0.8), "top": top}
+        top.set(ylabel="norm")
+        top.legend(loc="upper right")
+        bottom.set(xlabel="k", ylabel=r"$\|\alpha_k(r)\|_2$", xlim=(0, alpha.size - 1), ylim=(0.1, 1e45))
+        bottom.legend(loc="upper left")
+        keep_artists(fig, "explore_signature", art)
+    else:
+        art["gamma"].set_ydata(gamma)
+        art["h_gamma"].set_ydata(h_gamma)
+        art["alpha"].set_data(alpha_k, alpha_v)
+        for line in (art["r_top"], art["r_bottom"]):
+            line.set_xdata([r, r])
+        art["top"].relim()
+        art["top"].autoscale_view()
+    art["top"].set_title(f"impulse at r = {r}")
     return fig
 
 #: Default slider values (paper Fig. 3 setting, plus an illustrative threshold).
