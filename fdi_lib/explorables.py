@@ -159,9 +159,10 @@ class Explorable:
         start = sum(s * d for s, d in zip(self.strides, self.default))
         shown = [[_fmt(v) for v in g] for g in self.grid]
         sliders = "".join(
-            f'<label style="display:block;margin:0.2em 0">{label} '
-            f'<input type="range" min="0" max="{len(g) - 1}" step="1" value="{d}" '
-            f'aria-label="{html.escape(label, quote=True)}" style="vertical-align:middle;width:12em"> '
+            # wraps on a phone: label, slider and value each on their own line if need be
+            f'<label style="display:flex;flex-wrap:wrap;align-items:center;gap:0.2em 0.6em;margin:0.2em 0">'
+            f'<span>{label}</span><input type="range" min="0" max="{len(g) - 1}" step="1" value="{d}" '
+            f'aria-label="{html.escape(label, quote=True)}" style="width:12em;max-width:100%">'
             f"<output>{s[d]}</output></label>"
             for label, g, d, s in zip(self.labels, self.grid, self.default, shown))
         script = _SCRIPT % {"id": json.dumps(uid), "frames": json.dumps(list(self.frames)),
