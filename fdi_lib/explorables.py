@@ -104,7 +104,7 @@ _SCRIPT = """(function () {
 })();"""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Explorable:
     """Frames of a callback over a grid of slider values, displayed as HTML with sliders.
 
@@ -148,6 +148,11 @@ class Explorable:
                 raise ModelError(f"{name}: expected one of the grid values {list(g)}, got {values[name]!r}")
             i += s * g.index(values[name])
         return i
+
+    def __repr__(self) -> str:
+        # the notebook's text/plain beside the HTML: a summary, not megabytes of frames
+        sizes = " x ".join(f"{n} ({len(g)})" for n, g in zip(self.names, self.grid))
+        return f"<Explorable {sizes}: {len(self.frames)} frames, {self.nbytes / 1e6:.2f} MB>"
 
     @property
     def nbytes(self) -> int:
@@ -222,8 +227,7 @@ def explorable(callback: Callable[..., Figure], grid: Mapping[str, Sequence[Any]
     frames, data = [], []
     for point in itertools.product(*values):
         fig = callback(**dict(zip(names, point)), **fixed, fig=fig)
-        fig.canvas.draw()
-        frames.append(_png_frame(fig))
+        frames.append(_png_frame(fig))  # savefig renders the figure once
         data.append(figure_data(fig))
     plt.close(fig)
     labels = dict(labels or {})

@@ -59,6 +59,7 @@ def test_frames_follow_the_product_order_and_the_page_indexes_them_the_same_way(
     assert f'data-frame="{ex.index(a=2.0, b=20)}"' in page
     assert "<figcaption>toy</figcaption>" in page and "$a$" in page
     assert "http" not in page.replace("data:image/png", "")  # nothing fetched from elsewhere
+    assert repr(ex).startswith("<Explorable a (3) x b (2): 6 frames, 0.") and len(repr(ex)) < 80
 
 
 def test_frames_are_house_style_pngs_with_font_metadata():
