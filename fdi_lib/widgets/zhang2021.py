@@ -96,7 +96,7 @@ def explore_sparse(q: int = 5, r: float = 0.5, lam_scale: float = 1.0, seed: int
     ls_line = ax.plot(idx[support], ls[support], "o", mfc="none", mec="k", ms=10, label="least squares")[0]
     ax.plot(idx[truth], np.ones(truth.size), "*", color=PAPER_COLOR, ms=10, label="true")
     ax.set(xlabel=r"component of $\theta$", ylabel="value", xlim=(0, X.shape[1] + 1), title=title)
-    ax.legend(loc="upper right")
+    ax.legend(loc="best")
     keep_artists(fig, f"explore_sparse {q} {r!r} {seed}",
                  {"lam": lam_line, "lam_label": legend.get_texts()[1], "lasso": lasso, "ls": ls_line,
                   "right": ax})
