@@ -82,6 +82,7 @@ browser-test: $(STAMP)
 	@test -f _build/html/index.html || { echo "No built book: run make book first"; exit 2; }
 	test -x $(CHROMIUM) || { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium; }
 	$(BIN)/python tests/browser/check_book.py --html _build/html --screenshots _build/screenshots
+	$(BIN)/python tests/browser/check_explorables.py --html _build/html
 
 ## Run the whole test suite.
 test: $(STAMP)

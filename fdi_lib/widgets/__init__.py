@@ -10,7 +10,32 @@ from __future__ import annotations
 
 from typing import Any, Callable
 
-__all__ = ["interactive_figure"]
+__all__ = ["interactive_figure", "keep_artists", "reusable_artists"]
+
+_ARTISTS = "_fdi_widget_artists"
+
+
+def keep_artists(fig: Any, key: str, artists: dict[str, Any]) -> None:
+    """Remember on ``fig`` the artists a callback ``key`` drew, for :func:`reusable_artists`."""
+    setattr(fig, _ARTISTS, (key, artists))
+    fig.set_layout_engine("constrained")  # a new figure is laid out at its next draw
+
+
+def reusable_artists(fig: Any, key: str) -> dict[str, Any] | None:
+    """The artists that callback ``key`` kept on ``fig`` (``None``: draw the figure anew).
+
+    A callback that finds its own artists on the figure it is given updates their data instead
+    of clearing and rebuilding the figure: a slider move then costs the computation and one
+    render without a new layout (issue 10, redraw <= 100 ms). Any other figure (or ``None``)
+    is rebuilt and laid out anew by :func:`keep_artists`.
+    """
+    kept = getattr(fig, _ARTISTS, None) if fig is not None else None
+    if kept is None or kept[0] != key or not kept[1]:
+        return None
+    # Moving artists keeps the layout the figure was last drawn with: the constrained layout,
+    # half of a render, is not redone (the panels also stay put between slider values).
+    fig.set_layout_engine("none")
+    return kept[1]
 
 
 def interactive_figure(callback: Callable[..., Any], **sliders: Any):

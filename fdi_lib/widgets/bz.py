@@ -12,6 +12,7 @@
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any
 
@@ -24,8 +25,13 @@ from fdi_lib.plotting import OURS_COLOR, THRESHOLD_COLOR, figure
 from fdi_lib.reproduce.bz import SOL1, SOL2, _simulate, setup
 from fdi_lib.simulate import draw_noise
 from fdi_lib.systems import bz_example as ex
+from fdi_lib.widgets import keep_artists, reusable_artists
 
-__all__ = ["BZRun", "bz_run", "explore_bz"]
+__all__ = ["BZRun", "bz_run", "explore_bz", "GRID"]
+
+#: Slider values of the explorable (drift speed at its default 3e-4); lambda moves fastest,
+#: so that the build redraws only solution 2 between neighbouring frames.
+GRID = {"f_size": (0.0, 0.1, 0.2, 0.3, 0.4, 0.5), "lam": (0.8, 0.85, 0.9, 0.95, 0.98, 1.0)}
 
 
 @dataclass(frozen=True)
@@ -56,6 +62,17 @@ def bz_run(lam: float = 0.95, delta: float = 3e-4, f_size: float = 0.2, *, seed:
         raise ModelError(f"lam: expected a forgetting factor in (0, 1], got {lam!r}")
     if delta < 0 or f_size < 0:
         raise ModelError(f"delta, f_size: expected non-negative values, got {delta!r}, {f_size!r}")
+    th, f, sim, s1 = _record(float(delta), float(f_size), int(seed))
+    model, kal = setup(SOL2["n_steps"])[:2]
+    s2 = solution2(model, sim.y, sim.u, Psi=ex.PSI, lam=lam, energy_window=SOL2["energy_window"],
+                   energy_alpha=SOL2["energy_alpha"], start=SOL2["warmup"], kalman=kal)
+    return BZRun(theta_path=th, f=f, sol1=s1, sol2=s2)
+
+
+@functools.lru_cache(maxsize=8)
+def _record(delta: float, f_size: float, seed: int):
+    # the record and solution 1 do not depend on the forgetting factor: a lambda slider
+    # reruns only the RLS of solution 2 (cached for the last few (delta, f_size, seed))
     n = SOL2["n_steps"]
     model, kal, kg, _, T = setup(n)
     noise = draw_noise(model, np.random.default_rng(seed))
@@ -66,9 +83,7 @@ def bz_run(lam: float = 0.95, delta: float = 3e-4, f_size: float = 0.2, *, seed:
     s1 = solution1(model, sim.y, sim.u, E=ex.E, Psi=ex.PSI, window=SOL1["window"], glr_threshold=thr,
                    energy_window=SOL1["energy_window"], energy_alpha=SOL1["energy_alpha"], kgains=kg,
                    kalman=kal, T=T)
-    s2 = solution2(model, sim.y, sim.u, Psi=ex.PSI, lam=lam, energy_window=SOL2["energy_window"],
-                   energy_alpha=SOL2["energy_alpha"], start=SOL2["warmup"], kalman=kal)
-    return BZRun(theta_path=th, f=f, sol1=s1, sol2=s2)
+    return th, f, sim, s1
 
 
 def explore_bz(lam: float = 0.95, delta: float = 3e-4, f_size: float = 0.2, fig: Any = None, *,
@@ -80,30 +95,52 @@ def explore_bz(lam: float = 0.95, delta: float = 3e-4, f_size: float = 0.2, fig:
     matplotlib.figure.Figure
     """
     run = bz_run(lam, delta, f_size, seed=seed)
+    title = rf"RLS tracking, $\lambda$ = {lam:g}, $\delta$ = {delta:.1e}, $f$ amplitude {f_size:g}"
+    alarm2 = int(run.sol2.energy_alarm)
+    # the same record (only lambda moved): move the artists of solution 2
+    art = reusable_artists(fig, f"explore_bz {delta!r} {f_size!r} {seed}")
+    if art is not None:
+        for i, line in enumerate(art["theta_hat"]):
+            line.set_ydata(run.sol2.rls.theta_hat[:, i])
+        art["energy"].set_ydata(run.sol2.energy)
+        art["threshold"].set_ydata([run.sol2.energy_threshold] * 2)
+        art["alarm"].set_xdata([max(alarm2, 0)] * 2)
+        art["alarm"].set_visible(alarm2 >= 0)
+        art["top"].set_title(title)
+        for ax in (art["top"], art["middle"]):
+            ax.relim()
+            ax.autoscale_view(scalex=False)
+        return fig
+
     fig, axes = figure(3, 1, fig=fig, sharex=True, figsize=(7.5, 7.0))
     k = np.arange(run.theta_path.shape[0])
     ax = axes[0, 0]
+    theta_hat = []
     for i, c in enumerate((OURS_COLOR, "#ff7f0e")):
         ax.plot(k, run.theta_path[:, i], color=c, ls="--", lw=1.0)
-        ax.plot(k, run.sol2.rls.theta_hat[:, i], color=c, label=rf"$\hat\theta^{{({i + 1})}}_k$ (dashed: true)")
+        theta_hat += ax.plot(k, run.sol2.rls.theta_hat[:, i], color=c,
+                             label=rf"$\hat\theta^{{({i + 1})}}_k$ (dashed: true)")
     ax.axvline(SOL2["f_onset"], color="0.5", lw=0.8, ls=":")
-    ax.set(ylabel=r"$\theta_k$", title=rf"RLS tracking, $\lambda$ = {lam:g}, $\delta$ = {delta:.1e}, "
-                                       rf"$f$ amplitude {f_size:g}")
+    ax.set(ylabel=r"$\theta_k$", title=title)
     ax.legend(loc="upper left", ncols=2)
     ax = axes[1, 0]
-    ax.semilogy(k, run.sol2.energy, color=OURS_COLOR, label="RLS error energy (solution 2)")
+    energy = ax.semilogy(k, run.sol2.energy, color=OURS_COLOR, label="RLS error energy (solution 2)")[0]
     ax.semilogy(k, run.sol1.energy, color="0.5", lw=0.9, label="Kalman innovation energy (solution 1)")
-    ax.axhline(run.sol2.energy_threshold, color=THRESHOLD_COLOR, ls="--", lw=0.9, label="threshold")
-    for a, c in ((int(run.sol2.energy_alarm), OURS_COLOR), (int(run.sol1.nonparametric_alarm), "0.5")):
-        if a >= 0:
-            ax.axvline(a, color=c, ls=":", lw=1.0)
+    threshold = ax.axhline(run.sol2.energy_threshold, color=THRESHOLD_COLOR, ls="--", lw=0.9, label="threshold")
+    # alarm of solution 2 (hidden, at 0, when there is none) and of solution 1's energy test
+    alarm = ax.axvline(max(alarm2, 0), color=OURS_COLOR, ls=":", lw=1.0, visible=alarm2 >= 0)
+    if int(run.sol1.nonparametric_alarm) >= 0:
+        ax.axvline(int(run.sol1.nonparametric_alarm), color="0.5", ls=":", lw=1.0)
     ax.axvline(SOL2["f_onset"], color="0.5", lw=0.8, ls=":")
     ax.set(ylabel="energy (w = 20)")
-    ax.legend(loc="upper left", fontsize=8)
+    ax.legend(loc="upper left")
     ax = axes[2, 0]
     ax.plot(k, run.sol1.glr.statistic, color=OURS_COLOR, label="GLR on projected Kitanidis residual")
     ax.axhline(run.sol1.glr_threshold, color=THRESHOLD_COLOR, ls="--", lw=0.9, label="threshold")
     ax.axvline(SOL2["f_onset"], color="0.5", lw=0.8, ls=":")
     ax.set(xlabel="k", ylabel=r"$l_k$")
-    ax.legend(loc="upper left", fontsize=8)
+    ax.legend(loc="upper left")
+    keep_artists(fig, f"explore_bz {delta!r} {f_size!r} {seed}",
+                 {"theta_hat": theta_hat, "energy": energy, "threshold": threshold, "alarm": alarm,
+                  "top": axes[0, 0], "middle": axes[1, 0]})
     return fig

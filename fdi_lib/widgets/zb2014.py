@@ -1,16 +1,97 @@
-"""Widget callback of the GLR chapter: fault size, onset, window and threshold on the unstable example."""
+"""Widget callbacks of the Zhang & Basseville (2014) chapters on the unstable example.
+
+:func:`explore_signature`: ``||Gamma_k(r)||`` against the Willsky-Jones ``||alpha_k(r)||`` for
+one onset (signature chapter); :func:`explore_glr`: fault size, onset, window and threshold of
+the windowed GLR (GLR chapter). ``*_GRID`` are the slider values of the static book's
+explorables (:mod:`fdi_lib.explorables`).
+"""
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
-from fdi_lib.errors import ModelError
-from fdi_lib.reproduce.zb2014 import plot_detection, unstable_run
+import numpy as np
 
-__all__ = ["explore_glr", "DEFAULTS"]
+from fdi_lib.errors import ModelError
+from fdi_lib.filters import kalman_gains
+from fdi_lib.models import impulse_family
+from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
+from fdi_lib.reproduce.zb2014 import plot_detection, unstable_run
+from fdi_lib.signatures import fault_signature, willsky_jones
+from fdi_lib.widgets import keep_artists, reusable_artists
+from fdi_lib.systems import zb2014_unstable as ex
+
+__all__ = ["explore_glr", "explore_signature", "DEFAULTS", "GLR_GRID", "SIGNATURE_GRID"]
+
+#: Onsets of the signature explorable (paper Figs. 1-2 show r = 1, 101, 201, 301).
+SIGNATURE_GRID = {"onset": (1, 51, 101, 151, 201, 251, 301, 351, 401, 451)}
+
+
+@functools.lru_cache(maxsize=1)
+def _unstable_setup():
+    # model and Kalman gains do not depend on any slider: computed once per process
+    model = ex.unstable_model(ex.N_STEPS)
+    return model, kalman_gains(model)
+
+
+def explore_signature(onset: int = 101, fig: Any = None):
+    """Spectral norms of ``Gamma_k(r)``, ``H_k Gamma_k(r)`` and Willsky-Jones ``alpha_k(r)``.
+
+    Parameters
+    ----------
+    onset : int
+        Impulse time ``r`` in ``[1, N - 2]`` (``Psi_k = delta_{r,k+1} I``).
+    fig : matplotlib.figure.Figure, optional
+        Figure to redraw into.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Top: ``||Gamma_k||_2`` and ``||H_k Gamma_k||_2`` (bounded); bottom: ``||alpha_k(r)||_2``
+        on a log scale (diverges with the unstable mode of ``F``).
+    """
+    model, gains = _unstable_setup()
+    if isinstance(onset, bool) or int(onset) != onset or not 1 <= onset <= model.n_steps - 2:
+        raise ModelError(f"onset: expected an integer in [1, {model.n_steps - 2}], got {onset!r}")
+    r = int(onset)
+    sig = fault_signature(model, gains, impulse_family(model).profile(r))
+    alpha = np.linalg.norm(willsky_jones(model, gains, r).alpha, ord=2, axis=(-2, -1))
+    gamma = np.linalg.norm(sig.Gamma, ord=2, axis=(-2, -1))
+    h_gamma = np.linalg.norm(sig.on_innovation, ord=2, axis=(-2, -1))
+    ka = np.arange(alpha.size)
+    alpha_k, alpha_v = ka[alpha > 0], alpha[alpha > 0]
+    art = reusable_artists(fig, "explore_signature")
+    if art is None:  # first call: build the figure; later calls only move its artists
+        fig, axes = figure(2, 1, fig=fig, sharex=True, figsize=(7.0, 5.0))
+        top, bottom = axes[:, 0]
+        art = {"gamma": top.plot(np.arange(gamma.size), gamma, color=OURS_COLOR,
+                                 label=r"$\|\Gamma_k\|_2$")[0],
+               "h_gamma": top.plot(np.arange(h_gamma.size), h_gamma, color="0.4", lw=1.0,
+                                   label=r"$\|H_k\Gamma_k\|_2$")[0],
+               "r_top": top.axvline(r, color="k", ls=":", lw=0.8),
+               "alpha": bottom.semilogy(alpha_k, alpha_v, color=PAPER_COLOR, label=r"$\|\alpha_k(r)\|_2$")[0],
+               "r_bottom": bottom.axvline(r, color="k", ls=":", lw=0.8), "top": top}
+        top.set(ylabel="norm")
+        top.legend(loc="upper right")
+        bottom.set(xlabel="k", ylabel=r"$\|\alpha_k(r)\|_2$", xlim=(0, alpha.size - 1), ylim=(0.1, 1e45))
+        bottom.legend(loc="upper left")
+        keep_artists(fig, "explore_signature", art)
+    else:
+        art["gamma"].set_ydata(gamma)
+        art["h_gamma"].set_ydata(h_gamma)
+        art["alpha"].set_data(alpha_k, alpha_v)
+        for line in (art["r_top"], art["r_bottom"]):
+            line.set_xdata([r, r])
+        art["top"].relim()
+        art["top"].autoscale_view()
+    art["top"].set_title(f"impulse at r = {r}")
+    return fig
 
 #: Default slider values (paper Fig. 3 setting, plus an illustrative threshold).
 DEFAULTS = {"fault_size": 1.5, "onset": 201, "window": 100, "threshold": 20.0, "seed": 0}
+#: Slider values of the GLR explorable (the other arguments at their defaults).
+GLR_GRID = {"fault_size": (0.0, 0.5, 1.0, 1.5, 2.0, 3.0), "window": (10, 25, 50, 100, 150, 200)}
 
 
 def explore_glr(fault_size: float = DEFAULTS["fault_size"], onset: int = DEFAULTS["onset"],

@@ -8,10 +8,12 @@ from fdi_lib.errors import ModelError
 from fdi_lib.reproduce.registry import ReproductionResult
 from fdi_lib.reproduce.zb2014_pipeline import plot_single_run, single_run
 
-__all__ = ["explore_pipeline", "DEFAULTS"]
+__all__ = ["explore_pipeline", "DEFAULTS", "GRID"]
 
 #: Default slider values: Fig. 5 (fault 1, Table 1 size, threshold 50, w = 160).
 DEFAULTS = {"fault_size_e5": -2.0, "fault": 1, "threshold": 50.0, "window": 160, "seed": 0}
+#: Slider values of the pipeline explorable (the other arguments at their defaults).
+GRID = {"fault_size_e5": (-10.0, -6.0, -4.0, -2.0, -1.0, 0.0), "window": (40, 80, 120, 160, 200, 250)}
 
 
 def explore_pipeline(fault_size_e5: float = DEFAULTS["fault_size_e5"], fault: int = DEFAULTS["fault"],

@@ -8,6 +8,7 @@ its support as circles and the truth as asterisks, beside the support-size stair
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import numpy as np
@@ -18,8 +19,24 @@ from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.reproduce.zhang2021 import example1_regression
 from fdi_lib.sparse import flat_range, lasso_path, least_squares_on_support
 from fdi_lib.systems import zhang2021_example1 as ex
+from fdi_lib.widgets import keep_artists, reusable_artists
 
-__all__ = ["explore_sparse"]
+__all__ = ["explore_sparse", "GRID"]
+
+#: Slider values of the explorable: the Lasso path and support against lambda for several q.
+GRID = {"q": (1, 3, 5, 10, 15, 25), "lam_scale": (0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0)}
+
+
+@functools.lru_cache(maxsize=8)
+def _trial_path(q: int, r: float, seed: int):
+    # the trial, its regression and its exact Lasso path do not depend on lambda: a lambda
+    # slider only reads the path (cached for the last few (q, r, seed))
+    model = ex.example1_model(r=r)
+    trials = ex.draw_trials(model, trial_rngs(trial_seeds(seed, 1)), q=q)
+    reg, _ = example1_regression(trials, r=r)
+    X, y = reg.X[0], reg.y[0]
+    path = lasso_path(X, y, n_samples=reg.n_samples)
+    return X, y, path, flat_range(path, scale="log"), np.flatnonzero(trials.theta[0])
 
 
 def explore_sparse(q: int = 5, r: float = 0.5, lam_scale: float = 1.0, seed: int = 0, fig: Any = None):
@@ -42,18 +59,26 @@ def explore_sparse(q: int = 5, r: float = 0.5, lam_scale: float = 1.0, seed: int
         raise ModelError(f"q: expected an integer in [1, 25], got {q!r}")
     if not np.isfinite(lam_scale) or lam_scale <= 0:
         raise ModelError(f"lam_scale: expected a positive number, got {lam_scale!r}")
-    model = ex.example1_model(r=r)
-    trials = ex.draw_trials(model, trial_rngs(trial_seeds(seed, 1)), q=int(q))
-    reg, _ = example1_regression(trials, r=r)
-    X, y = reg.X[0], reg.y[0]
-    path = lasso_path(X, y, n_samples=reg.n_samples)
-    fr = flat_range(path, scale="log")
+    X, y, path, fr, truth = _trial_path(int(q), float(r), int(seed))
     lam = lam_scale * fr.middle
     coef = path.coef(lam)
     support = np.flatnonzero(coef)
     ls = least_squares_on_support(X, y, support)
-    truth = np.flatnonzero(trials.theta[0])
     ok = np.array_equal(support, truth)
+
+    idx = np.arange(1, X.shape[1] + 1)
+    title = f"q = {q}, r = {r:g}: {'isolated' if ok else 'NOT isolated'}"
+    # the same trial as the figure shows (only lambda moved): move the lambda-dependent artists
+    art = reusable_artists(fig, f"explore_sparse {q} {r!r} {seed}")
+    if art is not None:
+        art["lam"].set_xdata([lam, lam])
+        art["lam_label"].set_text(rf"$\lambda$ = {lam:.3g}")
+        art["lasso"].set_data(idx[support], coef[support])
+        art["ls"].set_data(idx[support], ls[support])
+        art["right"].set_title(title)
+        art["right"].relim()
+        art["right"].autoscale_view(scalex=False)
+        return fig
 
     fig, axes = figure(1, 2, fig=fig, figsize=(9.0, 3.4))
     ax = axes[0, 0]
@@ -62,16 +87,17 @@ def explore_sparse(q: int = 5, r: float = 0.5, lam_scale: float = 1.0, seed: int
     edges = np.concatenate([np.clip(lam_b[::-1], floor, None), [3 * lam_b[0]]])
     ax.stairs(np.concatenate([sizes[::-1], [0]]), edges, color=OURS_COLOR, baseline=None)
     ax.axvspan(fr.low, fr.high, color=PAPER_COLOR, alpha=0.15, label="flat range")
-    ax.axvline(lam, color="k", ls="--", lw=1, label=rf"$\lambda$ = {lam:.3g}")
+    lam_line = ax.axvline(lam, color="k", ls="--", lw=1, label=rf"$\lambda$ = {lam:.3g}")
     ax.set(xscale="log", xlabel=r"$\lambda$", ylabel="non-zero components", xlim=(floor, 3 * lam_b[0]),
            title=f"support size (flat range: {fr.size})")
-    ax.legend(loc="upper right")
+    legend = ax.legend(loc="upper right")
     ax = axes[0, 1]
-    idx = np.arange(1, X.shape[1] + 1)
-    ax.plot(idx[support], coef[support], "D", color=OURS_COLOR, ms=5, label="Lasso")
-    ax.plot(idx[support], ls[support], "o", mfc="none", mec="k", ms=10, label="least squares")
+    lasso = ax.plot(idx[support], coef[support], "D", color=OURS_COLOR, ms=5, label="Lasso")[0]
+    ls_line = ax.plot(idx[support], ls[support], "o", mfc="none", mec="k", ms=10, label="least squares")[0]
     ax.plot(idx[truth], np.ones(truth.size), "*", color=PAPER_COLOR, ms=10, label="true")
-    ax.set(xlabel=r"component of $\theta$", ylabel="value", xlim=(0, X.shape[1] + 1),
-           title=f"q = {q}, r = {r:g}: {'isolated' if ok else 'NOT isolated'}")
+    ax.set(xlabel=r"component of $\theta$", ylabel="value", xlim=(0, X.shape[1] + 1), title=title)
     ax.legend(loc="best")
+    keep_artists(fig, f"explore_sparse {q} {r!r} {seed}",
+                 {"lam": lam_line, "lam_label": legend.get_texts()[1], "lasso": lasso, "ls": ls_line,
+                  "right": ax})
     return fig

@@ -26,6 +26,7 @@ Usage: ``python tests/browser/check_book.py [--html _build/html] [--pages glob .
 from __future__ import annotations
 
 import argparse
+import base64
 import collections
 import functools
 import http.server
@@ -205,6 +206,12 @@ def font_failures(images: list[dict], html_root: Path, base: str) -> list[tuple[
     for im in images:
         if not im["inOutput"]:
             continue
+        if im["src"].startswith("data:image/png;base64,"):  # frames of fdi_lib.explorables
+            data = base64.b64decode(im["src"].split(",", 1)[1])
+            meta = png_text_chunks(data)
+            element = f'img "{im["caption"]}" (data: PNG)'
+            out += _font_failure(element, meta, im)
+            continue
         url = urllib.parse.unquote(urllib.parse.urlsplit(im["src"]).path)
         if im["src"].startswith(base):
             path = html_root / urllib.parse.unquote(im["src"][len(base):]).split("?")[0]
@@ -214,18 +221,21 @@ def font_failures(images: list[dict], html_root: Path, base: str) -> list[tuple[
         if path.suffix.lower() != ".png" or not path.is_file():
             out.append(("font", element, "not a PNG of the book's house style: text size unknown"))
             continue
-        meta = png_text_chunks(path.read_bytes())
-        if "fdi:min_font_pt" not in meta or "fdi:dpi" not in meta:
-            out.append(("font", element, "PNG without fdi:min_font_pt/fdi:dpi metadata "
-                                         "(not drawn with fdi_lib.plotting): text size unknown"))
-            continue
-        pt, dpi = float(meta["fdi:min_font_pt"]), float(meta["fdi:dpi"])
-        px = pt / 72.0 * dpi * im["width"] / im["natural"]
-        if px < MIN_TEXT_CSS_PX:
-            out.append(("font", element, f"smallest text {px:.1f} CSS px < {MIN_TEXT_CSS_PX:g} "
-                                         f"({pt:g} pt at {dpi:g} dpi shown {im['width']:.0f} of "
-                                         f"{im['natural']} px)"))
+        out += _font_failure(element, png_text_chunks(path.read_bytes()), im)
     return out
+
+
+def _font_failure(element: str, meta: dict[str, str], im: dict) -> list[tuple[str, str, str]]:
+    if "fdi:min_font_pt" not in meta or "fdi:dpi" not in meta:
+        return [("font", element, "PNG without fdi:min_font_pt/fdi:dpi metadata "
+                                  "(not drawn with fdi_lib.plotting): text size unknown")]
+    pt, dpi = float(meta["fdi:min_font_pt"]), float(meta["fdi:dpi"])
+    px = pt / 72.0 * dpi * im["width"] / im["natural"]
+    if px < MIN_TEXT_CSS_PX:
+        return [("font", element, f"smallest text {px:.1f} CSS px < {MIN_TEXT_CSS_PX:g} "
+                                  f"({pt:g} pt at {dpi:g} dpi shown {im['width']:.0f} of "
+                                  f"{im['natural']} px)")]
+    return []
 
 
 def check_page(context, url: str, page_name: str, viewport: str, html_root: Path, base: str,

@@ -1,0 +1,116 @@
+"""Kernel-free explorables: frames over a grid of slider values equal the callback's output."""
+
+from __future__ import annotations
+
+import base64
+import io
+import json
+import re
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from PIL import Image  # noqa: E402
+
+from fdi_lib.errors import ModelError  # noqa: E402
+from fdi_lib.explorables import explorable, figure_data  # noqa: E402
+from fdi_lib.plotting import DISPLAY_DPI, FIG_WIDTH_IN, figure  # noqa: E402
+from fdi_lib.widgets import bz, rosa2013, zb2014, zb2014_pipeline, zhang2021  # noqa: E402
+
+
+def _line(a, b, fig=None, offset=0.0):
+    fig, ax = figure(fig=fig)
+    ax[0, 0].plot([0.0, 1.0, 2.0], [a, b + offset, a * b])
+    ax[0, 0].set_title(f"a = {a}, b = {b}")
+    return fig
+
+
+def assert_same_data(got, expected):
+    """Element-by-element equality of two figure_data outputs (NaN equal to NaN)."""
+    assert len(got) == len(expected)
+    for g, e in zip(got, expected):
+        if isinstance(e, str):
+            assert g == e
+        elif isinstance(e, list):
+            assert_same_data(g, e)
+        else:
+            np.testing.assert_allclose(np.asarray(g, float), np.asarray(e, float), rtol=0, atol=1e-12,
+                                       equal_nan=True)
+
+
+def test_frames_follow_the_product_order_and_the_page_indexes_them_the_same_way():
+    ex = explorable(_line, {"a": (1.0, 2.0, 3.0), "b": (10, 20)}, caption="toy",
+                    labels={"a": "$a$"}, default={"a": 2.0, "b": 20}, offset=0.5)
+    assert ex.strides == (2, 1) and len(ex.frames) == 6
+    for a in (1.0, 2.0, 3.0):
+        for b in (10, 20):
+            i = ex.index(a=a, b=b)
+            y = ex.data[i][0][5][0][:, 1]   # axes 0, lines, line 0, y column
+            np.testing.assert_array_equal(y, [a, b + 0.5, a * b])
+    page = ex._repr_html_()
+    # the strides and labels the script uses, and one range input per slider starting at the default
+    assert json.loads(re.search(r"S = (\[[^\]]*\])", page).group(1)) == [2, 1]
+    assert json.loads(re.search(r"L = (\[\[.*?\]\])", page).group(1)) == [["1", "2", "3"], ["10", "20"]]
+    assert re.findall(r'<input type="range" min="0" max="(\d)" step="1" value="(\d)"', page) == [("2", "1"), ("1", "1")]
+    assert f'data-frame="{ex.index(a=2.0, b=20)}"' in page
+    assert "<figcaption>toy</figcaption>" in page and "$a$" in page
+    assert "http" not in page.replace("data:image/png", "")  # nothing fetched from elsewhere
+    assert repr(ex).startswith("<Explorable a (3) x b (2): 6 frames, 0.") and len(repr(ex)) < 80
+
+
+def test_frames_are_house_style_pngs_with_font_metadata():
+    ex = explorable(_line, {"a": (1.0, 2.0), "b": (1, 2)}, caption="toy")
+    img = Image.open(io.BytesIO(base64.b64decode(ex.frames[0])))
+    assert img.format == "PNG" and img.mode == "P"
+    assert img.width == round(FIG_WIDTH_IN * DISPLAY_DPI)
+    assert img.text["fdi:dpi"] == f"{DISPLAY_DPI:g}" and float(img.text["fdi:min_font_pt"]) >= 11
+    assert len(set(ex.frames)) == 4   # every point draws something different
+
+
+@pytest.mark.parametrize("grid, default, message", [
+    ({}, None, "grid: expected at least one name"),
+    ({"a": (1.0,), "b": (1, 2)}, None, "grid: expected at least one name with two or more values"),
+    ({"a": (1.0, 2.0), "b": (1, 2)}, {"c": 1}, r"default: expected names of the grid \['a', 'b'\], got \['c'\]"),
+    ({"a": (1.0, 2.0), "b": (1, 2)}, {"a": 5.0}, r"default: expected a among the grid values \[1.0, 2.0\], got 5.0"),
+])
+def test_bad_grids_are_rejected(grid, default, message):
+    with pytest.raises(ModelError, match=message):
+        explorable(_line, grid, caption="x", default=default)
+
+
+def test_index_rejects_values_off_the_grid():
+    ex = explorable(_line, {"a": (1.0, 2.0), "b": (1, 2)}, caption="toy")
+    with pytest.raises(ModelError, match=r"b: expected one of the grid values \[1, 2\], got 3"):
+        ex.index(a=1.0, b=3)
+
+
+# The chapters' explorables: the corners of each grid (every slider at its first and last value),
+# drawn into one reused figure as the build does, against fresh calls of the callback.
+CHAPTERS = {
+    "signature": (zb2014.explore_signature, zb2014.SIGNATURE_GRID, {}),
+    "glr": (zb2014.explore_glr, zb2014.GLR_GRID, {}),
+    "pipeline": (zb2014_pipeline.explore_pipeline, zb2014_pipeline.GRID, {}),
+    "sparse": (zhang2021.explore_sparse, zhang2021.GRID, {}),
+    "bz": (bz.explore_bz, bz.GRID, {}),
+    "svo": (rosa2013.explore_svo, rosa2013.GRID, {}),
+}
+
+
+@pytest.mark.parametrize("name", list(CHAPTERS))
+def test_chapter_frames_equal_the_callback_at_the_same_slider_values(name):
+    callback, grid, fixed = CHAPTERS[name]
+    assert all(len(v) >= 6 for v in grid.values()) or name == "svo"
+    corners = {k: (v[0], v[-1]) for k, v in grid.items()}
+    ex = explorable(callback, corners, caption=name, **fixed)
+    for i, values in enumerate(np.array(np.meshgrid(*corners.values(), indexing="ij"), dtype=object)
+                               .reshape(len(corners), -1).T):
+        point = dict(zip(corners, values))
+        assert ex.index(**point) == i
+        fig = callback(**point, **fixed)
+        assert_same_data(ex.data[i], figure_data(fig))
+        plt.close(fig)
+    assert len(set(ex.frames)) == len(ex.frames)   # each slider changes the picture
