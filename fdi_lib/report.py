@@ -14,13 +14,16 @@ Conventions
 - other numbers get 3 significant digits, a plain decimal form between 1e-3 and 1e5 and a
   ``×10^n`` form outside it; numbers below ``tiny`` in magnitude print as ``< tiny``
   (``fmt_number``);
-- a missing value is written ``n/a`` and a note under the table says why (:data:`NA`).
+- a missing value is written ``n/a`` and a note under the table says why (:data:`NA`);
+- a number and its unit, and the two bounds of an interval, are joined by a no-break space
+  (:data:`NBSP`; shown as a space in the examples below), so a narrow cell wraps only between a
+  rate and its interval.
 
 Examples
 --------
->>> fmt_rate(0.017, (0.0098, 0.027))
+>>> fmt_rate(0.017, (0.0098, 0.027)).replace(NBSP, " ")
 '1.7 % [0.98, 2.7]'
->>> fmt_time(0.00122)
+>>> fmt_time(0.00122).replace(NBSP, " ")
 '1.22 ms'
 >>> fmt_number(5.351584e-235)
 '< 10⁻¹⁵'
@@ -38,10 +41,14 @@ from typing import Any, Mapping, Sequence
 
 from .errors import ModelError
 
-__all__ = ["NA", "fmt_count", "fmt_rate", "fmt_time", "fmt_number", "fmt_value", "Table", "table"]
+__all__ = ["NA", "NBSP", "fmt_count", "fmt_rate", "fmt_time", "fmt_number", "fmt_value", "Table", "table"]
 
 #: What a table cell shows when a value does not exist; the table's notes say why.
 NA = "n/a"
+
+#: No-break space: a number stays with its unit and an interval's bounds stay together, so that a
+#: narrow table cell wraps only between a rate and its interval.
+NBSP = "\u00a0"
 
 _SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 
@@ -125,14 +132,14 @@ def fmt_rate(rate: Any, ci: Sequence[float] | None = None, digits: int = 2) -> s
     r = _finite_number(rate, "rate")
     if not 0.0 <= r <= 1.0:
         raise ModelError(f"rate must be a fraction in [0, 1], got {rate!r}")
-    out = f"{_pct(r, digits)} %"
+    out = f"{_pct(r, digits)}{NBSP}%"
     if ci is not None:
         if len(ci) != 2:
             raise ModelError(f"ci must be a pair (low, high), got {ci!r}")
         lo, hi = (_finite_number(c, "ci") for c in ci)
         if not 0.0 <= lo <= hi <= 1.0:
             raise ModelError(f"ci must satisfy 0 <= low <= high <= 1, got {ci!r}")
-        out += f" [{_pct(lo, digits)}, {_pct(hi, digits)}]"
+        out += f" [{_pct(lo, digits)},{NBSP}{_pct(hi, digits)}]"
     return out
 
 
@@ -157,14 +164,14 @@ def fmt_time(seconds: Any, digits: int = 3) -> str:
     if s < 0:
         raise ModelError(f"seconds must be non-negative, got {seconds!r}")
     if s == 0:
-        return "0 s"
+        return f"0{NBSP}s"
     if s < 1e-3:
-        return f"{_sig(s * 1e6, digits)} µs"
+        return f"{_sig(s * 1e6, digits)}{NBSP}µs"
     if s < 1.0:
-        return f"{_sig(s * 1e3, digits)} ms"
+        return f"{_sig(s * 1e3, digits)}{NBSP}ms"
     if s < 120.0:
-        return f"{_sig(s, digits)} s"
-    return f"{_sig(s / 60.0, digits)} min"
+        return f"{_sig(s, digits)}{NBSP}s"
+    return f"{_sig(s / 60.0, digits)}{NBSP}min"
 
 
 def fmt_value(v: Any, digits: int = 3) -> str:

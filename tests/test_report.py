@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from fdi_lib.errors import ModelError
-from fdi_lib.report import NA, fmt_count, fmt_number, fmt_rate, fmt_time, fmt_value, table
+from fdi_lib.report import NA, NBSP, fmt_count, fmt_number, fmt_rate, fmt_time, fmt_value, table
 
 
 @pytest.mark.parametrize("x, expected", [
@@ -35,7 +35,10 @@ def test_fmt_number(x, expected):
     (None, None, NA),
 ])
 def test_fmt_rate(rate, ci, expected):
-    assert fmt_rate(rate, ci) == expected
+    out = fmt_rate(rate, ci)
+    assert out.replace(NBSP, " ") == expected
+    # the only breakable space separates the rate from its interval
+    assert out.count(" ") == (ci is not None)
 
 
 @pytest.mark.parametrize("rate, ci, match", [
@@ -51,7 +54,7 @@ def test_fmt_rate_rejects(rate, ci, match):
     (0.00122, "1.22 ms"), (2.5e-5, "25 µs"), (89.4, "89.4 s"), (211.0, "3.52 min"), (0, "0 s"),
 ])
 def test_fmt_time(s, expected):
-    assert fmt_time(s) == expected
+    assert fmt_time(s) == expected.replace(" ", NBSP)
 
 
 def test_fmt_value_dispatch():
@@ -66,7 +69,7 @@ def test_fmt_value_dispatch():
 def test_table_html_and_text():
     t = table({"false alarms (of 2000 runs)": [0, 7], "type I error": [fmt_rate(0.01), None]},
               ["ours", "paper"], notes=["the paper gives no type I error for this case"])
-    html = t._repr_html_()
+    html = t._repr_html_().replace(NBSP, " ")
     assert html.count("<tr>") == 3 and "fdi-table" in html and "n/a" in html
     assert "the paper gives no type I error" in html
     assert t.to_frame().loc["type I error", "paper"] == NA

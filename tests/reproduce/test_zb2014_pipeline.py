@@ -203,7 +203,7 @@ def test_isolation_power_depends_on_relative_variation_of_p():
 
 
 def test_format_rate_and_reader_plots():
-    assert zp.format_rate({"rate": 0.017, "ci95": [0.0098, 0.027]}) == "1.7 % [0.98, 2.7]"
+    assert zp.format_rate({"rate": 0.017, "ci95": [0.0098, 0.027]}).replace("\u00a0", " ") == "1.7 % [0.98, 2.7]"
     assert zp.format_rate({"rate": None, "count": 0, "n": 0, "ci95": [None, None]}) == "n/a"
     fig = zp.plot_signals()
     assert fig.axes[1].get_ylabel() == r"$p_k$"
