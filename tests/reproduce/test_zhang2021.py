@@ -204,7 +204,7 @@ def test_reader_tables_and_counts():
                              settings={"trials": 1000})
     assert paper_outside_ci(res) == (1, 1)
     assert grid_rule_difference(res) == pytest.approx(0.02)
-    text = str(rate_table(res))
+    text = str(rate_table(res)).replace("\u00a0", " ")
     assert "q = 15" in text and "46 % [43, 49]" in text and "29.5 %" in text
     t = str(snr_table({"var(Y) / var(V)": np.array([[34.5, 32.8]])}, (0.5,)))
     assert "34.5 / 32.8" in t and "34.06 / 32.63" in t
