@@ -169,9 +169,15 @@ class SVOModel:
 
 def default_template(n: int, C: np.ndarray | None = None) -> np.ndarray:
     """Template directions: +-e_i, plus +-normalised rows of C not parallel to those, shape (p, n)."""
+    C = None if C is None else np.asarray(C, dtype=float)
+    return _default_template(int(n), None if C is None else C.tobytes(), None if C is None else C.shape).copy()
+
+
+@functools.lru_cache(maxsize=64)
+def _default_template(n: int, key: bytes | None, shape: tuple | None) -> np.ndarray:
     rows = list(np.eye(n))
-    if C is not None:
-        for c in np.asarray(C, dtype=float):
+    if key is not None:
+        for c in np.frombuffer(key, dtype=float).reshape(shape):
             c = c / np.linalg.norm(c)
             if all(abs(abs(c @ r) - 1.0) > 1e-6 for r in rows):
                 rows.append(c)
