@@ -216,11 +216,14 @@ def _bases(key: bytes, p: int, n: int) -> _Bases | None:
     sub = U[idx]
     ok = np.abs(np.linalg.det(sub)) > 1e-10
     idx, inv = idx[ok], np.linalg.inv(sub[ok])
-    try:
-        bounded = _cdd_dd_vertices(U, np.ones(q)).shape[0] > 0
-    except UnboundedSetError:
-        bounded = False
-    return _Bases(norms, zero, pad, U, idx, inv, bounded)
+    # bounded iff {d : U d <= 0} = {0} iff rank U = n and U^T lam = 0 for some lam > 0 (Gordan);
+    # lam = 1 + mu, mu >= 0, found by non-negative least squares
+    from scipy.optimize import nnls
+
+    rhs = -U.sum(axis=0)
+    _, resid = nnls(U.T, rhs)
+    bounded = len(idx) > 0 and resid <= 1e-9 * (1.0 + np.linalg.norm(rhs))
+    return _Bases(norms, zero, pad, U, idx, inv, bool(bounded))
 
 
 def _basis_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray | None:

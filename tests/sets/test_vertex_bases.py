@@ -111,3 +111,25 @@ def test_uav_template_svo_same_with_either_route(monkeypatch):
         assert np.all(np.abs(lo_a[ok] - lo_b[ok]) <= 1e-9 * scale)
         assert np.all(np.abs(hi_a[ok] - hi_b[ok]) <= 1e-9 * scale)
         np.testing.assert_array_equal(nv_a, nv_b)
+
+
+def test_boundedness_matches_lp():
+    """The cached boundedness flag (Gordan / NNLS) against HiGHS: Set(U, 1) is bounded iff every
+    coordinate is bounded above and below on it."""
+    from scipy.optimize import linprog
+
+    rng = np.random.default_rng(7)
+    seen = set()
+    for _ in range(60):
+        n = int(rng.integers(2, 4))
+        q = int(rng.integers(n, n + 4))
+        U = rng.normal(size=(q, n))
+        if rng.random() < 0.5:
+            U[:, 0] = np.abs(U[:, 0])          # all normals in a half-space: unbounded
+        U /= np.linalg.norm(U, axis=1, keepdims=True)
+        b = polytope._bases(U.tobytes(), q, n)
+        lp = all(linprog(s * np.eye(n)[i], A_ub=U, b_ub=np.ones(q), bounds=[(None, None)] * n,
+                         method="highs").status == 0 for i in range(n) for s in (1, -1))
+        assert b.bounded == lp
+        seen.add(lp)
+    assert seen == {True, False}
