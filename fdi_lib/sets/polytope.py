@@ -241,10 +241,13 @@ def _basis_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray | None:
     n = M.shape[1]
     if np.any(m[b.zero] < 0):
         return np.zeros((0, n))
-    mu = np.append(m / b.norms, np.inf)[b.pad].min(axis=1)
-    X = np.einsum("kij,kj->ki", b.inv, mu[b.idx])
+    mp = np.empty(len(m) + 1)
+    np.divide(m, b.norms, out=mp[:-1])
+    mp[-1] = np.inf
+    mu = mp[b.pad].min(axis=1)
+    X = (b.inv * mu[b.idx][:, None, :]).sum(axis=2)
     tol = 1e-12 * (1.0 + np.abs(mu).max())
-    X = X[np.all(X @ b.U.T <= mu + tol, axis=1)]
+    X = X[(X @ b.U.T <= mu + tol).all(axis=1)]
     if X.shape[0] == 0:
         return np.zeros((0, n))
     # a vertex on more than n facets is found once per basis: merge (as for qhull's output)
