@@ -35,8 +35,9 @@ the book chapter as well):
 * **Excitation.** A known multisine is added to the LQG command on both inputs (the paper
   does not describe its manoeuvre) so that elevator and M_u faults have an effect to detect.
 * **Discretisation.** Ts = 10 ms, zero-order hold: python-control's ``c2d`` for the
-  controller design; the per-step SVO models use the same ZOH formula via ``scipy.linalg.expm``
-  (cross-checked against ``c2d`` in the tests) because they are rebuilt at every sample.
+  controller design; the per-step SVO models use the same ZOH formula with a vectorised matrix
+  exponential (cross-checked against ``c2d`` and ``scipy.linalg.expm`` in the tests) because they
+  are rebuilt at every sample.
 """
 
 from __future__ import annotations
@@ -178,7 +179,8 @@ def discretize(V: float, mu_scale: float = 1.0, elevator_eff: float = 1.0, Ts: f
 
 def discretize_many(V: np.ndarray, mu_scale: float = 1.0, elevator_eff: float = 1.0, Ts: float = TS,
                     eta_unit: str = ETA_UNIT) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`discretize` for an array of airspeeds at once (one batched matrix exponential).
+    """:func:`discretize` for an array of airspeeds at once (one batched matrix exponential,
+    :func:`_expm_many`).
 
     Returns A_d of shape (len(V), 4, 4) and B_d of shape (len(V), 4, 2).
     """
@@ -188,8 +190,27 @@ def discretize_many(V: np.ndarray, mu_scale: float = 1.0, elevator_eff: float = 
     P = _polynomial(float(mu_scale), float(elevator_eff), eta_unit)
     E = np.zeros((V.size, 6, 6))
     E[:, :4, :] = (P[0][None] + V[:, None, None] * P[1][None] + V[:, None, None] ** 2 * P[2][None])
-    F = expm(E * Ts)
+    F = _expm_many(E * Ts)
     return F[:, :4, :4], F[:, :4, 4:]
+
+
+def _expm_many(E: np.ndarray) -> np.ndarray:
+    """Matrix exponentials of a stack E (b, m, m), vectorised: scaling and squaring with a degree-16
+    Taylor polynomial. Each matrix is scaled by 2^-s (its own s) to an infinity norm <= 1/4, where
+    the truncation error is below 0.25^17 / 17! ~ 2e-25 (relative to 1), then squared s times;
+    each result depends on its own matrix only. Agrees with :func:`scipy.linalg.expm` to rounding
+    (tested); scipy's version loops over the stack in Python, 100x slower for the UAV's records.
+    """
+    norm = np.abs(E).sum(axis=2).max(axis=1)
+    s = np.maximum(0, np.ceil(np.log2(np.maximum(norm, 1e-300) / 0.25))).astype(int)
+    X = E * (0.5 ** s)[:, None, None]
+    eye = np.eye(E.shape[1])
+    F = np.broadcast_to(eye, E.shape).copy()
+    for k in range(16, 0, -1):   # Horner: I + X (I + X/2 (I + X/3 (...)))
+        F = eye + (X @ F) / k
+    for j in range(int(s.max(initial=0))):
+        F = np.where((j < s)[:, None, None], F @ F, F)
+    return F
 
 
 @lru_cache(maxsize=64)

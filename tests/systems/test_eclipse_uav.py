@@ -203,3 +203,17 @@ def test_simulate_many_matches_one_run_loops_and_is_batch_independent():
         assert (one.fault, one.scenario, one.onset_step) == (r.fault, r.scenario, r.onset_step)
     with pytest.raises(ShapeError, match="rngs"):
         uav.simulate_many(cases, [np.random.default_rng(0)])
+
+
+def test_batched_expm_against_scipy():
+    """The vectorised exponential against scipy.linalg.expm on random stacks of several norms
+    (zero, small, and large enough to need squaring), and batch independence."""
+    from scipy.linalg import expm
+
+    rng = np.random.default_rng(3)
+    E = rng.normal(size=(12, 6, 6)) * np.array([0, 1e-3, 0.1, 0.5, 1, 2, 4, 8, 0.01, 0.2, 3, 6])[:, None, None]
+    F = uav._expm_many(E)
+    for e, f in zip(E, F):
+        ref = expm(e)
+        assert np.abs(f - ref).max() <= 1e-12 * (1.0 + np.abs(ref).max())
+    np.testing.assert_array_equal(uav._expm_many(E[3:5]), F[3:5])
