@@ -7,6 +7,8 @@ Reported, on this machine and its current load:
 * template rule: wall time per update against the horizon N = 1, 2, 3 (healthy 10 s run), model
   construction included (the batched ZOH of :func:`eclipse_uav.svo_models`, shared per step,
   plus the step's ``SVOModel``), with the ratio to the target;
+* the same N = 1 run with the vertex enumeration of the previous implementation (qhull after a
+  Chebyshev-centre LP: the basis route switched off), for the speed-up ratio;
 * the joint horizon form (``joint=True``) at N = 2 on the first second, for comparison;
 * the four SVOs of the Architecture I bank together, against Ts = 10 ms;
 * the number of facets and vertices of the template sets over the 10 s run;
@@ -26,6 +28,7 @@ import time
 import numpy as np
 
 from fdi_lib.reproduce.rosa2013 import UAV_X0
+from fdi_lib.sets import polytope
 from fdi_lib.sets.svo import run_svo
 from fdi_lib.systems import eclipse_uav as uav
 from fdi_lib.threads import single_threaded_blas
@@ -44,6 +47,7 @@ def _models(run, kind):
 
 @single_threaded_blas
 def main() -> None:
+    max_bases = polytope._MAX_BASES
     run = uav.simulate("none", "step", rng=np.random.default_rng(0), duration=10.0)
     print(f"UAV healthy run: {len(run.u)} samples (10 s at Ts = 10 ms), eta per {run.eta_unit}")
 
@@ -58,6 +62,21 @@ def main() -> None:
               f"(model share {build * 1e3:.3f} ms)  ratio to the {TEMPLATE_TARGET_MS} ms target "
               f"{med / TEMPLATE_TARGET_MS:.2f}  alarm: {res.empty_at}")
         counts = counts or res
+
+    print("\n== reference: the same N = 1 run with vertices by qhull (basis route off, as before issue 14's"
+          " speed-up)")
+    models, build = _models(run, "nominal")
+    fast = run_svo(models, run.u, run.y, UAV_X0)
+    polytope._MAX_BASES = 0
+    polytope._bases.cache_clear()
+    try:
+        ref = run_svo(models, run.u, run.y, UAV_X0)
+    finally:
+        polytope._MAX_BASES = max_bases
+        polytope._bases.cache_clear()
+    med_fast, med_ref = (float(np.median(r.step_time + build)) * 1e3 for r in (fast, ref))
+    print(f"qhull route: median {med_ref:.3f} ms, bases: {med_fast:.3f} ms per update "
+          f"(speed-up x{med_ref / med_fast:.1f}); same alarm: {fast.empty_at == ref.empty_at}")
 
     print("\n== joint horizon form (eq. 3, shared disturbances), N = 2, first 1 s")
     models, build = _models(run, "nominal")

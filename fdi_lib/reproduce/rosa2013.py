@@ -288,9 +288,15 @@ def fig10(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
 def _one_uav_run(fault: str, scenario: str, seed: "int | np.random.SeedSequence", duration: float,
                  eta_unit: str = uav.ETA_UNIT, fault_mode: str = "deviation", method: str = "template",
                  N: int = 1) -> dict:
-    """One closed-loop run and its Architecture I bank (the fault SVOs only if the nominal one empties)."""
+    """One closed-loop run and its Architecture I bank (see :func:`_bank_outcome`)."""
     run = uav.simulate(fault, scenario, rng=np.random.default_rng(seed), duration=duration,
                        eta_unit=eta_unit, fault_mode=fault_mode)
+    return _bank_outcome(run, method, N)
+
+
+def _bank_outcome(run: "uav.UAVRun", method: str = "template", N: int = 1) -> dict:
+    """The Architecture I bank on one run (the fault SVOs only if the nominal one empties)."""
+    fault, scenario = run.fault, run.scenario
     nominal = uav.svo_models(run, "nominal")
     # Isolation is declared only after detection, and the nominal SVO does not depend on the
     # others: when it never empties (healthy runs, hidden faults) the fault SVOs play no part.
@@ -320,11 +326,13 @@ def uav_study(seed: int, trials: int, jobs: int = 1, duration: float = DURATION,
     streams = np.random.SeedSequence(seed).spawn(int(trials))
     cases = [("none", "step", ss) for ss in streams]   # the scenario is irrelevant without fault
     cases += [(f, s, ss) for f in uav.FAULTS for s in uav.SCENARIOS for ss in streams]
-    args = (duration, eta_unit, fault_mode)
+    # the closed loops are simulated together (vectorised, each run independent of the batch)
+    sims = uav.simulate_many([(f, s) for f, s, _ in cases], [np.random.default_rng(ss) for _, _, ss in cases],
+                             duration=duration, eta_unit=eta_unit, fault_mode=fault_mode)
     if jobs == 1:
-        out = [_one_uav_run(f, s, ss, *args) for f, s, ss in cases]
+        out = [_bank_outcome(r) for r in sims]
     else:
-        out = Parallel(n_jobs=jobs)(delayed(_one_uav_run)(f, s, ss, *args) for f, s, ss in cases)
+        out = Parallel(n_jobs=jobs)(delayed(_bank_outcome)(r) for r in sims)
     return tuple(out)
 
 
@@ -467,7 +475,9 @@ def fault_mode_study(seed: int, trials: int, eta_unit: str = uav.ETA_UNIT, durat
     for f in ("elevator", "dynamics"):
         out[f] = {}
         for mode in uav.FAULT_MODES:
-            rs = tuple(_one_uav_run(f, "step", ss, duration, eta_unit, mode) for ss in streams)
+            sims = uav.simulate_many([(f, "step")] * len(streams), [np.random.default_rng(ss) for ss in streams],
+                                     duration=duration, eta_unit=eta_unit, fault_mode=mode)
+            rs = tuple(_bank_outcome(r) for r in sims)
             det = _summarise_one(rs, "detection", f)
             iso = _summarise_one(rs, "isolation", f)
             out[f][mode] = {"detected": sum(r["detection"] is not None for r in rs), "detection_ms": det,

@@ -27,7 +27,9 @@ Examples
 
 from __future__ import annotations
 
+import functools
 import itertools
+import math
 from dataclasses import dataclass, field
 from typing import Any, Iterable, Sequence
 
@@ -53,6 +55,8 @@ def _as_2d(name: str, a: Any, ncols: int | None = None) -> np.ndarray:
 
 
 def _check_finite(name: str, arr: np.ndarray) -> None:
+    if np.isfinite(arr).all():
+        return
     bad = np.argwhere(~np.isfinite(arr))
     if bad.size:
         raise NonFiniteError(f"{name}: non-finite value at index {tuple(int(i) for i in bad[0])}")
@@ -174,15 +178,102 @@ def _qhull_vertices(M: np.ndarray, m: np.ndarray, centre: np.ndarray) -> np.ndar
     return V[np.unique(key, axis=0, return_index=True)[1]]
 
 
+#: Largest number of row subsets (bases) for which vertices are found by enumerating bases
+#: (:func:`_basis_vertices`) rather than by qhull / cddlib.
+_MAX_BASES = 2000
+
+
+@dataclass(frozen=True, eq=False)
+class _Bases:
+    """What the vertex enumeration by bases needs for a fixed normal matrix M (cached per M)."""
+
+    norms: np.ndarray      # (p,) row norms of M (1 for zero rows)
+    zero: np.ndarray       # (p,) rows of M that are zero
+    pad: np.ndarray        # (q, r) indices into [m / norms, +inf]: the rows of each distinct unit normal
+    U: np.ndarray          # (q, n) distinct unit normals
+    idx: np.ndarray        # (K, n) the non-singular n-subsets of U's rows
+    inv: np.ndarray        # (K, n, n) inverses of U[idx[k]]
+    bounded: bool          # whether Set(U, 1) is bounded (then every non-empty Set(M, m) is a polytope)
+
+
+@functools.lru_cache(maxsize=64)
+def _bases(key: bytes, p: int, n: int) -> _Bases | None:
+    """Structure of Set(M, m) for M = frombuffer(key).reshape(p, n); None when there are too many bases."""
+    M = np.frombuffer(key, dtype=float).reshape(p, n)
+    norms = np.linalg.norm(M, axis=1)
+    zero = norms < 1e-14
+    norms = np.where(zero, 1.0, norms)
+    unit = np.round(M / norms[:, None], 12)
+    U, group = np.unique(unit[~zero], axis=0, return_inverse=True)
+    rows = np.flatnonzero(~zero)
+    q = U.shape[0]
+    if q < n or math.comb(q, n) > _MAX_BASES:
+        return None
+    members = [rows[group.reshape(-1) == g] for g in range(q)]
+    width = max(len(r) for r in members)
+    pad = np.full((q, width), p)
+    for g, r in enumerate(members):
+        pad[g, :len(r)] = r
+    idx = np.array(list(itertools.combinations(range(q), n)), dtype=int).reshape(-1, n)
+    sub = U[idx]
+    ok = np.abs(np.linalg.det(sub)) > 1e-10
+    idx, inv = idx[ok], np.linalg.inv(sub[ok])
+    # bounded iff {d : U d <= 0} = {0} iff rank U = n and U^T lam = 0 for some lam > 0 (Gordan);
+    # lam = 1 + mu, mu >= 0, found by non-negative least squares
+    from scipy.optimize import nnls
+
+    rhs = -U.sum(axis=0)
+    _, resid = nnls(U.T, rhs)
+    bounded = len(idx) > 0 and resid <= 1e-9 * (1.0 + np.linalg.norm(rhs))
+    return _Bases(norms, zero, pad, U, idx, inv, bool(bounded))
+
+
+def _basis_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray | None:
+    """Vertices of Set(M, m) as the feasible basic solutions: x = U_S^-1 m_S for every non-singular
+    n-subset S of the distinct unit rows U (rows with the same normal keep the tightest offset),
+    feasible to 1e-12 (1 + max |m|), the emptiness threshold of the Chebyshev test of
+    :func:`_enumerate_vertices`. Exact in exact arithmetic, vectorised, and cheap when M has few rows;
+    the structure (subsets, inverses, boundedness) is cached per M, so a sequence of sets with the
+    same normals (an SVO template) pays for it once. None when the route does not apply (too many
+    subsets, or normals that do not bound the set).
+    """
+    b = _bases(M.tobytes(), M.shape[0], M.shape[1])
+    if b is None or not b.bounded:
+        return None
+    n = M.shape[1]
+    if np.any(m[b.zero] < 0):
+        return np.zeros((0, n))
+    mp = np.empty(len(m) + 1)
+    np.divide(m, b.norms, out=mp[:-1])
+    mp[-1] = np.inf
+    mu = mp[b.pad].min(axis=1)
+    X = (b.inv * mu[b.idx][:, None, :]).sum(axis=2)
+    tol = 1e-12 * (1.0 + np.abs(mu).max())
+    X = X[(X @ b.U.T <= mu + tol).all(axis=1)]
+    if X.shape[0] == 0:
+        return np.zeros((0, n))
+    # a vertex on more than n facets is found once per basis: merge (as for qhull's output)
+    key = np.round(X / (1e-9 * (1.0 + np.abs(X).max())), 0)
+    order = np.lexsort(key.T)
+    key, X = key[order], X[order]
+    first = np.ones(len(X), dtype=bool)
+    first[1:] = np.any(key[1:] != key[:-1], axis=1)
+    return X[first]
+
+
 def _enumerate_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray:
     """Vertices of Set(M, m), shape (v, n); (0, n) if empty; raises if unbounded.
 
-    Rows are normalised and de-duplicated; a Chebyshev centre is found by LP (cddlib). A
+    Few rows (at most :data:`_MAX_BASES` n-subsets of distinct normals) and normals that bound
+    the set: :func:`_basis_vertices`. Otherwise rows are normalised and de-duplicated; a Chebyshev centre is found by LP (cddlib). A
     full-dimensional set goes to qhull's halfspace intersection, which is robust in floating
     point; cddlib's double description in floating point can silently drop vertices when
     nearly parallel inequalities are present. Flat sets (radius ~ 0), which qhull cannot
     handle, go to cddlib.
     """
+    V = _basis_vertices(M, m)
+    if V is not None:
+        return V
     M, m = _normalise(M, m)
     n = M.shape[1]
     status, centre, radius = _chebyshev(M, m)
@@ -338,7 +429,8 @@ class Polytope:
     def vertices(self) -> np.ndarray:
         """Vertices, shape (v, n); (0, n) if empty. Raises :class:`UnboundedSetError` if unbounded.
 
-        Vertex enumeration by cddlib (double description method).
+        Vertex enumeration by bases for few inequalities, otherwise by qhull (cddlib for flat sets);
+        see :func:`_enumerate_vertices`.
         """
         if "V" not in self._cache:
             self._cache["V"] = _enumerate_vertices(self.M, self.m)

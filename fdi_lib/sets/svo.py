@@ -171,9 +171,15 @@ class SVOModel:
 def default_template(n: int, C: np.ndarray | None = None) -> np.ndarray:
     """Template directions in dimension ``n``: +-e_i, plus +-normalised rows of ``C`` not parallel
     to those, shape (p, n)."""
+    C = None if C is None else np.asarray(C, dtype=float)
+    return _default_template(int(n), None if C is None else C.tobytes(), None if C is None else C.shape).copy()
+
+
+@functools.lru_cache(maxsize=64)
+def _default_template(n: int, key: bytes | None, shape: tuple | None) -> np.ndarray:
     rows = list(np.eye(n))
-    if C is not None:
-        for c in np.asarray(C, dtype=float):
+    if key is not None:
+        for c in np.frombuffer(key, dtype=float).reshape(shape):
             c = c / np.linalg.norm(c)
             if all(abs(abs(c @ r) - 1.0) > 1e-6 for r in rows):
                 rows.append(c)
@@ -381,17 +387,15 @@ class SetValuedObserver:
         first): (Phi, c, G) such that x(k+1) in Phi X(k-j) + c + G [-1, 1]^g (eqs. (3)-(4))."""
         out = []
         # sequences built recursively: prefix over steps k, k-1, ..., k-j
-        level = [(np.eye(self.n), np.zeros(self.n), np.zeros((self.n, 0)))]
         for j, e in enumerate(entries):
             model, u = e.model, e.u
             G_step = model.generators(u)
             Bu = model.B @ u
-            new = []
-            for Phi, c, G in level:
-                # Phi maps x(k-j+1) to x(k+1); add step k-j
-                for Av in model.vertex_matrices():
-                    new.append((Phi @ Av, c + Phi @ Bu, np.column_stack([G, Phi @ G_step])))
-            level = new
+            if j == 0:   # x(k+1) = A_v x(k) + B u(k) + G s
+                level = [(Av, Bu, G_step) for Av in model.vertex_matrices()]
+            else:        # Phi maps x(k-j+1) to x(k+1); add step k-j
+                level = [(Phi @ Av, c + Phi @ Bu, np.column_stack([G, Phi @ G_step]))
+                         for Phi, c, G in level for Av in model.vertex_matrices()]
             out.append(level)
         return out
 
@@ -468,7 +472,8 @@ class SetValuedObserver:
             rho = np.maximum(h[p:p + q], h[p + q:p + 2 * q])  # max |C_c x| over the prediction
             nb = nb + rho.reshape(model_next.C_unc.shape[:2]).sum(axis=0)
         nb = nb * (1.0 + self.margin) + self.margin
-        return Polytope(D, h[:p]).intersect_strip(model_next.C, y, nb)
+        C = model_next.C
+        return Polytope(np.vstack([D, C, -C]), np.concatenate([h[:p], nb + y, nb - y]))
 
     def _update_exact(self, entries: list[_Entry], model_next: SVOModel, y: np.ndarray) -> Polytope | None:
         props = self._propagations(entries)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fdi_lib.errors import ModelError
+from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.sets.svo import run_svo
 from fdi_lib.systems import eclipse_uav as uav
 from fdi_lib.reproduce.rosa2013 import UAV_X0
@@ -156,3 +156,64 @@ def test_integration_step_is_fine_enough():
     a = uav.simulate("elevator", "hard", rng=np.random.default_rng(1), duration=2.0)
     b = uav.simulate("elevator", "hard", rng=np.random.default_rng(1), duration=2.0, substeps=10)
     assert np.all(np.abs(a.y - b.y).max(axis=0) < 1e-5 * uav.NOISE_BOUND)
+
+
+def _reference_loop(fault, scenario, rng, duration, substeps=2):
+    """The closed loop written out one run at a time with matrix products and plant_derivative."""
+    K = int(round(duration / uav.TS))
+    t = np.arange(K + 1) * uav.TS
+    lqg = uav.design_lqg()
+    dist = uav._bounded_lowpass(rng, K, 3, 0.9)
+    noise = uav._bounded_lowpass(rng, K + 1, 4, 0.5) * uav.NOISE_BOUND
+    p = uav.fault_profile(t, scenario) * uav._fault_size(fault, scenario)
+    exc = uav.excitation(t[:-1])
+    x, xhat, h = np.zeros(4), np.zeros(4), uav.TS / substeps
+    ys = []
+    for k in range(K + 1):
+        y = uav.measure(x) + noise[k] + np.r_[0.0, p[k] * (fault == "alpha"), 0.0, 0.0]
+        ys.append(y)
+        if k == K:
+            break
+        uk = -lqg.K @ xhat + exc[k]
+        xhat = lqg.A @ xhat + lqg.B @ uk + lqg.L @ (y - lqg.C @ xhat)
+        mu = 1.0 + p[k] * (fault == "dynamics")
+        eff = 1.0 - p[k] * (fault == "elevator")
+
+        def f(z):
+            return uav.plant_derivative(z, uk, dist[k], mu, eff)
+        for _ in range(substeps):
+            k1 = f(x)
+            k2 = f(x + h / 2 * k1)
+            k3 = f(x + h / 2 * k2)
+            k4 = f(x + h * k3)
+            x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return np.array(ys)
+
+
+def test_simulate_many_matches_one_run_loops_and_is_batch_independent():
+    cases = [("none", "step"), ("alpha", "hard"), ("elevator", "step"), ("dynamics", "soft")]
+    seeds = np.random.SeedSequence(11).spawn(len(cases))
+    runs = uav.simulate_many(cases, [np.random.default_rng(s) for s in seeds], duration=0.8)
+    for (fault, scenario), s, r in zip(cases, seeds, runs):
+        ref = _reference_loop(fault, scenario, np.random.default_rng(s), 0.8)
+        assert np.all(np.abs(r.y - ref) <= 1e-9 * uav.NOISE_BOUND)
+        one = uav.simulate(fault, scenario, rng=np.random.default_rng(s), duration=0.8)
+        np.testing.assert_array_equal(one.y, r.y)
+        np.testing.assert_array_equal(one.x, r.x)
+        assert (one.fault, one.scenario, one.onset_step) == (r.fault, r.scenario, r.onset_step)
+    with pytest.raises(ShapeError, match="rngs"):
+        uav.simulate_many(cases, [np.random.default_rng(0)])
+
+
+def test_batched_expm_against_scipy():
+    """The vectorised exponential against scipy.linalg.expm on random stacks of several norms
+    (zero, small, and large enough to need squaring), and batch independence."""
+    from scipy.linalg import expm
+
+    rng = np.random.default_rng(3)
+    E = rng.normal(size=(12, 6, 6)) * np.array([0, 1e-3, 0.1, 0.5, 1, 2, 4, 8, 0.01, 0.2, 3, 6])[:, None, None]
+    F = uav._expm_many(E)
+    for e, f in zip(E, F):
+        ref = expm(e)
+        assert np.abs(f - ref).max() <= 1e-12 * (1.0 + np.abs(ref).max())
+    np.testing.assert_array_equal(uav._expm_many(E[3:5]), F[3:5])
