@@ -88,14 +88,11 @@ def plot_fig1(result: ReproductionResult, fig: Any = None):
     """3-D lifted polytope (vertices and edges of its hull) and its shadow on the x1-x2 plane."""
     from scipy.spatial import ConvexHull
 
-    import matplotlib.pyplot as plt
-
-    if fig is None:
-        fig = plt.figure(figsize=(7.0, 3.6), layout="constrained")
-    else:
-        fig.clear()
+    fig, axes = figure(1, 2, fig=fig)   # the book's style: two panels stacked on a phone
+    spec = axes[0, 0].get_subplotspec()
+    axes[0, 0].remove()
+    ax = fig.add_subplot(spec, projection="3d")
     V = result.data["lifted_vertices"]
-    ax = fig.add_subplot(1, 2, 1, projection="3d")
     hull = ConvexHull(V)
     for s in hull.simplices:
         tri = V[np.r_[s, s[0]]]
@@ -110,7 +107,7 @@ def plot_fig1(result: ReproductionResult, fig: Any = None):
     ax.set_ylabel("$x_2(k+1)$")
     ax.set_zlabel("$d(k)$")
     ax.set_title("Set(P, p) and its shadow")
-    ax2 = fig.add_subplot(1, 2, 2)
+    ax2 = axes[0, 1]
     plot_polytope(P, ax2, color=PAPER_COLOR)
     ax2.set_xlabel("$x_1(k+1)$")
     ax2.set_ylabel("$x_2(k+1)$")
@@ -394,7 +391,7 @@ def _bar_plot(result: ReproductionResult, key: str, title: str, fig: Any = None)
         bars = ax.bar(x + (i - 1) * width, h, width, label=s)
         for b, f in zip(bars, uav.FAULTS):
             if vals[f][s] is None:
-                ax.text(b.get_x() + b.get_width() / 2, 1.0, "n.d.", ha="center", va="bottom", fontsize=7,
+                ax.text(b.get_x() + b.get_width() / 2, 1.0, "n.d.", ha="center", va="bottom",
                         rotation=90)
     ax.set_xticks(x, [r"$\alpha$ sensor", r"elevator $\eta$", r"$M_u$ (dynamics)"])
     ax.set_yscale("symlog", linthresh=10)
