@@ -59,6 +59,27 @@ def test_claim_paths_skip_values_that_state_nothing():
     paper = {"a": 1, "b": {"x": "< 1", "y": None}, "c": "not stated", "d": [1, 2],
              "e": "illustration, no numbers"}
     assert L.claim_paths(paper) == [("a",), ("b", "x"), ("d",)]
+    declared = {"a": 1, "calibrated_to": ["a"], "predictions": [], "b": {"predictions": 2}}
+    assert L.claim_paths(declared) == [("a",), ("b", "predictions")]   # role lists: top level only
+
+
+def test_surrogate_role_is_the_reproductions_declaration():
+    paper = {"x": 1, "y": 2, "z": 3, "calibrated_to": ["x"], "predictions": ["y"]}
+    typed = L.ClaimSpec(role=L.CALIBRATION)
+    assert [L.surrogate_role("zb2014-fig9", paper, (k,), typed) for k in "xyz"] == [
+        L.CALIBRATION, L.PREDICTION, L.INPUT]                 # the typed role is ignored
+    assert L.surrogate_role("rosa2013-fig8", {"x": 1}, ("x",), typed) == L.CALIBRATION
+    assert L.surrogate_role("rosa2013-fig8", {"x": 1}, ("x",)) == L.PREDICTION
+    assert L.surrogate_role("zb2014-fig1", {"x": 1}, ("x",), typed) is None
+    # moving a key between the lists moves its row
+    res = ReproductionResult(id="zb2014-fig9", headline={"x": 1.0, "y": 2.0},
+                             paper={"x": 1.0, "y": 2.0, "calibrated_to": ["x"], "predictions": ["y"]},
+                             settings={})
+    roles = {r.path: r.role for r in L.build_ledger({"zb2014-fig9": res}).rows}
+    assert roles == {("x",): L.CALIBRATION, ("y",): L.PREDICTION}
+    swapped = dataclasses.replace(res, paper={**res.paper, "calibrated_to": ["y"], "predictions": ["x"]})
+    roles = {r.path: r.role for r in L.build_ledger({"zb2014-fig9": swapped}).rows}
+    assert roles == {("x",): L.PREDICTION, ("y",): L.CALIBRATION}
 
 
 # ----------------------------------------------------------------------------- the ledger
@@ -109,16 +130,19 @@ def test_within_interval_from_a_stochastic_result():
 
 
 def test_every_difference_links_to_an_existing_target(cheap_results):
-    labels = set()
+    labels, figures = set(), set()
     for md in (ROOT / "book").rglob("*.md"):
         text = md.read_text()
         labels |= set(re.findall(r"^\(([\w-]+)\)=", text, flags=re.M))
         labels |= set(re.findall(r"^:label: ([\w-]+)", text, flags=re.M))
+        figures |= set(re.findall(r"^ +name: (fig-[\w-]+)", text, flags=re.M))
     targets = {s.explain for s in L.SPECS.values() if s.explain}
     targets |= {doc for _, doc in L.CHAPTERS}
     for t in targets:
         if "/" in t:
             assert (ROOT / f"{t}.md").exists(), t
+        elif t.startswith("fig-"):
+            assert t in figures, t
         else:
             assert t in labels, t
     for r in L.build_ledger(cheap_results).rows:
@@ -142,8 +166,9 @@ def test_json_and_summary(cheap_results):
     assert {"paper", "ours", "ci95", "status", "explanation", "surrogate"} <= set(d["rows"][0])
     html = led.summary()._repr_html_()
     assert all(s in html for s in L.STATUSES)
-    calib = [r for r in led.rows if r.id == "zb2014-table1"]
-    assert calib and all(r.role == L.CALIBRATION for r in calib)
+    inputs = [r for r in led.rows if r.id == "zb2014-table1"]      # declared: neither list
+    assert inputs and all(r.role == L.INPUT for r in inputs)
+    assert {r.role for r in led.rows if r.id == "rosa2013-fig8"} == {L.INPUT, L.PREDICTION}
     assert all(r.role is None for r in led.rows if r.id.startswith("zb2014-fig1"))
 
 
@@ -198,6 +223,21 @@ def test_every_registered_paper_value_appears_in_the_ledger():
     assert all(r.status in L.STATUSES for r in led.rows)
     for r in led.rows:
         if r.id in L.SURROGATE_IDS:
-            assert r.role in (L.CALIBRATION, L.PREDICTION)
+            assert r.role in (L.CALIBRATION, L.PREDICTION, L.INPUT)
         else:
             assert r.role is None
+    # declarations: every declared key is compared (a paper value or a headline key), and the
+    # ledger's roles follow them (fig 7: "missed" calibrated, fig 9: the level calibrated)
+    for id, res in results.items():
+        if any(k in res.paper for k in L.ROLE_KEYS):
+            assert id in L.SURROGATE_IDS, id
+            for k in res.paper.get("calibrated_to", []) + res.paper.get("predictions", []):
+                assert k in res.paper or k in res.headline, (id, k)
+    roles = {(r.id, r.path): r.role for r in led.rows}
+    assert roles[("zb2014-fig7", ("missed", "2"))] == L.CALIBRATION
+    assert roles[("zb2014-fig9", ("glr_level_over_threshold",))] == L.CALIBRATION
+    assert roles[("zb2014-fig5", ("alarm_time_min",))] == L.PREDICTION
+    # every rule is used by some claim (no dead rule)
+    keys = [f"{id}:{'/'.join(p)}" for id, res in results.items() for p in L.claim_paths(res.paper)]
+    for pattern in L.SPECS:
+        assert any(L.fnmatch.fnmatchcase(k, pattern) for k in keys), pattern

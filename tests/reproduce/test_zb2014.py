@@ -165,18 +165,24 @@ def test_youngest_onset_information_matches_direct_sums():
         np.testing.assert_allclose(C[k - s], direct, rtol=1e-10)
 
 
-def test_pipeline_youngest_onset_is_singular_with_the_default_s():
-    """The statement of the GLR chapter: s = ceil(m/p) does not make C_k(k-s) invertible."""
+def test_pipeline_youngest_onset_information_with_the_default_s():
+    """The statement of the GLR chapter: s = ceil(m/p) does not make C_k(k-s) invertible on
+    the designed surrogate (rank one at every k); on the physical default it has rank two
+    but is badly conditioned."""
     from fdi_lib.filters import kalman_gains
     from fdi_lib.reproduce.zb2014 import youngest_onset_information
     from fdi_lib.systems import gas_pipeline as gp
 
-    model = gp.pipeline_model()
-    fam = gp.input_fault_family(model)
-    C = youngest_onset_information(model, kalman_gains(model), fam)
-    ev = np.linalg.eigvalsh(C)
-    assert np.all(np.abs(ev[:, 0]) <= 1e-12 * ev[:, 1])      # rank one at every k
-    assert np.all(ev[:, 1] > 0)
+    ev = {}
+    for variant in ("designed", "physical"):
+        model = gp.pipeline_model(variant=variant)
+        fam = gp.input_fault_family(model, variant=variant)
+        ev[variant] = np.linalg.eigvalsh(youngest_onset_information(model, kalman_gains(model), fam))
+        assert np.all(ev[variant][:, 1] > 0)
+    d, p = ev["designed"], ev["physical"]
+    assert np.all(np.abs(d[:, 0]) <= 1e-12 * d[:, 1])          # rank one at every k
+    assert np.all(p[:, 0] >= 1e-13 * p[:, 1])                  # rank two at every k ...
+    assert (p[:, 0] / p[:, 1]).min() < 1e-8                    # ... barely invertible
 
 
 def test_window_min_eigenvalue_constant_versus_varying_profile():
