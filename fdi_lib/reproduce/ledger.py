@@ -45,7 +45,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Mapping, Sequence
 
 from fdi_lib.errors import ModelError
-from fdi_lib.report import fmt_count, fmt_number, fmt_rate, table
+from fdi_lib.report import NA, fmt_count, fmt_number, fmt_rate, table
 from fdi_lib.reproduce.registry import ReproductionResult, cached_results, get, list_reproductions
 
 __all__ = ["STATUSES", "ROLE_KEYS", "CALIBRATION", "PREDICTION", "INPUT", "surrogate_role", "FALLBACK_TRIALS", "REPRODUCED", "WITHIN", "DIFFERS", "NOT_REPRODUCIBLE", "DEFAULT_RTOL",
@@ -603,7 +603,7 @@ def _fmt(v: Any, ci: tuple[float, float] | None = None, paper: Any = None,
          digits: int = 4) -> str:
     """A cell: rates with an interval in %, numbers with ``digits`` digits, lists in brackets."""
     if v is None:
-        return "none"
+        return NA
     if isinstance(v, bool):
         return "yes" if v else "no"
     if isinstance(v, str):

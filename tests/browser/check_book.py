@@ -263,6 +263,15 @@ def check_page(context, url: str, page_name: str, viewport: str, html_root: Path
     return failures
 
 
+def built_book(html: Path) -> Path | None:
+    """The resolved HTML folder, or ``None`` (with a message) when no book has been built there."""
+    root = html.resolve()
+    if not (root / "index.html").is_file():
+        print(f"no built book at {root}: run `make book` first", file=sys.stderr)
+        return None
+    return root
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--html", default="_build/html", type=Path)
@@ -272,9 +281,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     from playwright.sync_api import sync_playwright
 
-    root = args.html.resolve()
-    if not (root / "index.html").is_file():
-        print(f"no built book at {root}: run `make book` first", file=sys.stderr)
+    root = built_book(args.html)
+    if root is None:
         return 2
     # every page but redirects (Jupyter Book's root index.html only redirects to the first page)
     pages = sorted(p.relative_to(root).as_posix() for p in root.rglob("*.html")
@@ -284,7 +292,6 @@ def main(argv: list[str] | None = None) -> int:
         pages = [p for p in pages if p in args.pages]
     args.screenshots.mkdir(parents=True, exist_ok=True)
     server, base = serve(root)
-    blocked: list[str] = []
     results: list[tuple[str, str, str, str, str]] = []
 
     def route(r, page_name: str, viewport: str, local_base: str):

@@ -22,7 +22,7 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from check_book import CHROMIUM, CHROMIUM_ARGS, VIEWPORTS, is_local, serve  # noqa: E402
+from check_book import CHROMIUM, CHROMIUM_ARGS, VIEWPORTS, built_book, is_local, serve  # noqa: E402
 
 MAX_RESPONSE_MS = 50.0
 # The chapters with an Explore section (issue 10); each must have at least one explorable.
@@ -121,9 +121,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     from playwright.sync_api import sync_playwright
 
-    root = args.html.resolve()
-    if not (root / "index.html").is_file():
-        print(f"no built book at {root}: run `make book` first", file=sys.stderr)
+    root = built_book(args.html)
+    if root is None:
         return 2
     pages = sorted(p.relative_to(root).as_posix() for p in root.rglob("*.html")
                    if "fdi-explorable" in p.read_text(errors="replace"))
