@@ -37,7 +37,7 @@ import scipy.stats
 
 from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.models import LTVModel
-from fdi_lib.simulate import Noise, draw_noise
+from fdi_lib.simulate import Noise, draw_noise, noise_roots
 from fdi_lib.validation import integer, probability, seed as check_seed
 
 __all__ = ["trial_seeds", "trial_rngs", "run_monte_carlo", "draw_noise_batch", "binomial_ci",
@@ -64,7 +64,8 @@ def trial_rngs(seeds: Sequence[np.random.SeedSequence]) -> list[np.random.Genera
 def draw_noise_batch(model: LTVModel, seeds: Sequence[np.random.SeedSequence]) -> Noise:
     """Noise of ``model`` for a chunk of realisations, one per entry of ``seeds`` (each its own
     stream), stacked on axis 0."""
-    draws = [draw_noise(model, rng) for rng in trial_rngs(seeds)]
+    roots = noise_roots(model)  # covariance roots shared by all the draws
+    draws = [draw_noise(model, rng, roots=roots) for rng in trial_rngs(seeds)]
     return Noise(x0=np.stack([d.x0 for d in draws]), w=np.stack([d.w for d in draws]),
                  v=np.stack([d.v for d in draws]))
 
@@ -149,9 +150,9 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
 
 def _call(chunk_fn: ChunkFn, seeds: Sequence[np.random.SeedSequence]) -> dict[str, np.ndarray]:
     """One chunk, with the BLAS on one thread (the same floating-point operations in every process)."""
-    from threadpoolctl import threadpool_limits
+    from fdi_lib.threads import blas_single_thread
 
-    with threadpool_limits(limits=1, user_api="blas"):
+    with blas_single_thread():
         return chunk_fn(seeds)
 
 

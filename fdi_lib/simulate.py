@@ -22,7 +22,7 @@ from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.models import FaultProfile, LTVModel, as_record
 from fdi_lib.validation import array, integer
 
-__all__ = ["Noise", "Simulation", "draw_noise", "simulate", "pi_controller", "covariance_sqrt"]
+__all__ = ["Noise", "NoiseRoots", "Simulation", "noise_roots", "draw_noise", "simulate", "pi_controller", "covariance_sqrt"]
 
 
 @dataclass(frozen=True)
@@ -68,7 +68,37 @@ def covariance_sqrt(cov: np.ndarray) -> np.ndarray:
     return vec * np.sqrt(np.clip(eig, 0.0, None))[..., None, :]
 
 
-def draw_noise(model: LTVModel, rng: np.random.Generator, size: int | None = None) -> Noise:
+@dataclass(frozen=True)
+class NoiseRoots:
+    """Square roots ``S S^T = cov`` of a model's noise covariances (:func:`covariance_sqrt`).
+
+    Attributes
+    ----------
+    P0 : numpy.ndarray
+        Root of ``P0``, ``(n, n)``.
+    Q, R : numpy.ndarray
+        Roots of ``Q_k``, ``(N, n, n)``, and ``R_k``, ``(N, p, p)`` (read-only broadcasts of one root
+        when the covariance is constant).
+    """
+
+    P0: np.ndarray
+    Q: np.ndarray
+    R: np.ndarray
+
+
+def noise_roots(model: LTVModel) -> NoiseRoots:
+    """The covariance roots :func:`draw_noise` uses, to compute once for many draws from ``model``."""
+    N = model.n_steps
+
+    def root(cov: np.ndarray, dim: int) -> np.ndarray:
+        r = covariance_sqrt(cov[:1] if cov.strides[0] == 0 else cov)  # one root for constants
+        return np.broadcast_to(r, (N, dim, dim))
+
+    return NoiseRoots(P0=covariance_sqrt(model.P0), Q=root(model.Q, model.n), R=root(model.R, model.p))
+
+
+def draw_noise(model: LTVModel, rng: np.random.Generator, size: int | None = None, *,
+               roots: NoiseRoots | None = None) -> Noise:
     """Draw ``X_0 ~ N(x0, P0)``, ``W_k ~ N(0, Q_k)``, ``V_k ~ N(0, R_k)``.
 
     Parameters
@@ -78,19 +108,23 @@ def draw_noise(model: LTVModel, rng: np.random.Generator, size: int | None = Non
         The only source of randomness (no global state).
     size : int, optional
         Number of independent realisations (leading batch axis); ``None`` for one.
+    roots : NoiseRoots, optional
+        ``noise_roots(model)``, when drawing many times from the same model (the three ``eigh``
+        are then done once); the draws are the same.
     """
     if not isinstance(rng, np.random.Generator):
         raise ModelError(f"rng: expected a numpy.random.Generator, got {type(rng).__name__}")
     batch = () if size is None else (integer(size, "size", low=1),)
     N, n, p = model.n_steps, model.n, model.p
+    if roots is None:
+        roots = noise_roots(model)
 
-    def gaussian(cov: np.ndarray, dim: int) -> np.ndarray:
-        root = covariance_sqrt(cov[:1] if cov.strides[0] == 0 else cov)  # one root for constants
+    def gaussian(root: np.ndarray, dim: int) -> np.ndarray:
         z = rng.standard_normal((*batch, N, dim))
-        return np.einsum("kij,...kj->...ki", np.broadcast_to(root, (N, dim, dim)), z)
+        return np.einsum("kij,...kj->...ki", root, z)
 
-    x0 = model.x0 + rng.standard_normal((*batch, n)) @ covariance_sqrt(model.P0).T
-    return Noise(x0=x0, w=gaussian(model.Q, n), v=gaussian(model.R, p))
+    x0 = model.x0 + rng.standard_normal((*batch, n)) @ roots.P0.T
+    return Noise(x0=x0, w=gaussian(roots.Q, n), v=gaussian(roots.R, p))
 
 
 def pi_controller(kp: float, ki: float, setpoint: float = 0.0) -> Callable[[int, np.ndarray], np.ndarray]:

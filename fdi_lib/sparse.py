@@ -65,11 +65,17 @@ __all__ = [
     "LassoPath",
     "lasso_path",
     "lasso_paths",
+    "lasso_path_batch",
+    "PathBatch",
     "lasso_cvxpy",
     "FlatRange",
     "flat_range",
     "GridFlatRange",
     "grid_flat_range",
+    "FlatRanges",
+    "flat_ranges",
+    "GridFlatRanges",
+    "grid_flat_ranges",
     "Diagnosis",
     "diagnose",
     "least_squares_on_support",
@@ -186,14 +192,18 @@ class LassoPath:
         return (1 - t) * self.coefs[:, i] + t * self.coefs[:, i + 1]
 
     @functools.cached_property
+    def _activity(self) -> tuple[float, np.ndarray]:
+        tol, act = _activity(self.coefs.T[None])
+        return float(tol[0]), act[0].T  # (m, K), computed once per path
+
+    @property
     def _tol(self) -> float:
         """Magnitude below which a coefficient counts as zero (relative to the largest)."""
-        return 1e-12 * max(1.0, float(np.abs(self.coefs).max(initial=0.0)))
+        return self._activity[0]
 
-    @functools.cached_property
+    @property
     def _support_matrix(self) -> np.ndarray:
-        mid = 0.5 * (self.coefs[:, :-1] + self.coefs[:, 1:])
-        return np.abs(mid) > self._tol  # (m, K), computed once per path
+        return self._activity[1]
 
     def _active(self) -> np.ndarray:
         return self._support_matrix
@@ -206,6 +216,86 @@ class LassoPath:
     def support_sizes(self) -> np.ndarray:
         """Number of non-zero components on each interval ``(lambda_{i+1}, lambda_i)``, shape ``(K,)``."""
         return self._active().sum(axis=0)
+
+
+def _activity(coefs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Zero tolerance ``(B,)`` and support on each interval ``(B, S-1, m)`` of paths ``coefs`` ``(B, S, m)``.
+
+    A coefficient counts as zero below ``1e-12 max(1, max |theta_hat|)`` (per path); the support of
+    an interval is read at the mean of its two end breakpoints.
+    """
+    tol = 1e-12 * np.maximum(1.0, np.abs(coefs).max(axis=(1, 2), initial=0.0))
+    mid = 0.5 * (coefs[:, :-1] + coefs[:, 1:])
+    return tol, np.abs(mid) > tol[:, None, None]
+
+
+@dataclass(frozen=True)
+class PathBatch:
+    """Exact Lasso paths of a batch of problems, padded to a common number of breakpoints.
+
+    The batched form of :class:`LassoPath`, for Monte Carlo chunks: :func:`flat_ranges` and
+    :func:`grid_flat_ranges` apply the rules for ``lambda`` to all the paths at once.
+
+    Attributes
+    ----------
+    lambdas : numpy.ndarray
+        ``(B, S)``: the breakpoints of path ``b`` in ``lambdas[b, :n_points[b]]``, then ``-inf``.
+    coefs : numpy.ndarray
+        ``(B, S, m)``: ``theta_hat`` at the breakpoints, then zeros.
+    n_points : numpy.ndarray
+        ``(B,)`` numbers of breakpoints (``K + 1`` of each :class:`LassoPath`).
+    n_samples : int
+        The ``N`` of (39).
+    """
+
+    lambdas: np.ndarray
+    coefs: np.ndarray
+    n_points: np.ndarray
+    n_samples: int
+
+    def __len__(self) -> int:
+        return int(self.n_points.size)
+
+    def path(self, b: int) -> LassoPath:
+        """Path ``b`` as a :class:`LassoPath`."""
+        k = int(self.n_points[b])
+        return LassoPath(lambdas=self.lambdas[b, :k].copy(), coefs=self.coefs[b, :k].T.copy(),
+                         n_samples=self.n_samples)
+
+    def paths(self) -> list[LassoPath]:
+        """All the paths, as :class:`LassoPath` objects."""
+        return [self.path(b) for b in range(len(self))]
+
+    def has_interval_support(self, support: Any) -> np.ndarray:
+        """Whether ``support[b]`` (``(B, m)`` booleans) is the support of some interval of path ``b``, ``(B,)``.
+
+        The supports are those of :meth:`LassoPath.interval_supports`.
+        """
+        mask = np.asarray(support, dtype=bool)
+        if mask.shape != (len(self), self.coefs.shape[2]):
+            raise ShapeError(f"support: expected shape {(len(self), self.coefs.shape[2])}, got {mask.shape}")
+        _, act = _activity(self.coefs)
+        valid = np.arange(act.shape[1]) < (self.n_points - 1)[:, None]
+        return np.any(valid & np.all(act == mask[:, None, :], axis=2), axis=1)
+
+    @classmethod
+    def of(cls, paths: Any) -> "PathBatch":
+        """The batch of a sequence of :class:`LassoPath` (same number ``m`` of components)."""
+        paths = list(paths)
+        if not paths or not all(isinstance(p, LassoPath) for p in paths):
+            raise ModelError(f"paths: expected a non-empty sequence of LassoPath, got {paths!r:.80}")
+        m = paths[0].coefs.shape[0]
+        if any(p.coefs.shape[0] != m for p in paths):
+            raise ShapeError(f"paths: expected paths of {m} components each, got "
+                             f"{sorted({p.coefs.shape[0] for p in paths})}")
+        n_points = np.array([p.lambdas.size for p in paths])
+        S = int(n_points.max())
+        lambdas = np.full((len(paths), S), -np.inf)
+        coefs = np.zeros((len(paths), S, m))
+        for b, p in enumerate(paths):
+            lambdas[b, : p.lambdas.size] = p.lambdas
+            coefs[b, : p.lambdas.size] = p.coefs.T
+        return cls(lambdas=lambdas, coefs=coefs, n_points=n_points, n_samples=paths[0].n_samples)
 
 
 def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: float = 0.0,
@@ -240,12 +330,23 @@ def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: floa
     LassoPath
     """
     X, y = _check_xy(X, y)
-    return lasso_paths(X[None], y[None], n_samples=n_samples, lambda_min=lambda_min, max_size=max_size)[0]
+    return lasso_path_batch(X[None], y[None], n_samples=n_samples, lambda_min=lambda_min,
+                            max_size=max_size).path(0)
 
 
 def lasso_paths(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: float = 0.0,
                 max_size: int | None = None) -> list[LassoPath]:
     """Exact Lasso paths of a batch of problems, as :func:`lasso_path` for each.
+
+    Parameters and computation as :func:`lasso_path_batch`; returns one :class:`LassoPath` per
+    problem, each identical to :func:`lasso_path` of that problem alone.
+    """
+    return lasso_path_batch(X, y, n_samples=n_samples, lambda_min=lambda_min, max_size=max_size).paths()
+
+
+def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: float = 0.0,
+                     max_size: int | None = None) -> PathBatch:
+    """Exact Lasso paths of a batch of problems, followed together, as a :class:`PathBatch`.
 
     Parameters
     ----------
@@ -262,8 +363,8 @@ def lasso_paths(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: flo
 
     Returns
     -------
-    list of LassoPath
-        One per problem, each identical to :func:`lasso_path` of that problem alone.
+    PathBatch
+        Path ``b`` (``.path(b)``) is identical to :func:`lasso_path` of problem ``b`` alone.
     """
     X = array(X, "X", ndim=3)
     y = array(y, "y")
@@ -286,10 +387,11 @@ def lasso_paths(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: flo
     Xy = np.einsum("bri,br->bi", X, y) / (sx * sy)[:, None]
     levels, coefs, n_points = _homotopy(Gram, Xy, lambda_min * np.abs(Xy).max(axis=1), max_size)
     # the correlation level c is rows * alpha (scikit-learn's 1/(2 rows)); (39) has 1/(2N): lambda = c / N
-    lam = levels * (sx * sy / N)[:, None]
-    th = coefs * (sy / sx)[:, None, None]
-    return [LassoPath(lambdas=lam[b, :k].copy(), coefs=th[b, :k].T.copy(), n_samples=N)
-            for b, k in enumerate(n_points)]
+    S = int(n_points.max())
+    lam = levels[:, :S] * (sx * sy / N)[:, None]
+    lam[np.arange(S) >= n_points[:, None]] = -np.inf  # padding
+    th = coefs[:, :S] * (sy / sx)[:, None, None]  # zeros in the padding
+    return PathBatch(lambdas=lam, coefs=th, n_points=n_points, n_samples=N)
 
 
 def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
@@ -464,32 +566,125 @@ class FlatRange:
     scale: str
 
 
-def _ranges(path: LassoPath, lambda_ratio: float, max_size: int | None) -> list[tuple[float, float, int]]:
-    """Maximal ranges of constant support size ``(low, high, size)`` clipped to the window."""
-    a = path.lambdas
-    floor = lambda_ratio * float(a[0])
-    top = path.coefs.shape[0] // 2 if max_size is None else max_size
-    sizes = path.support_sizes()
-    over = np.flatnonzero(sizes > top)
-    if over.size:  # the window stops where the support first exceeds max_size
-        floor = max(floor, float(a[over[0]]))
-        sizes = sizes[: over[0]]
-    out: list[tuple[float, float, int]] = []
-    i = 0
-    while i < sizes.size:
-        j = i
-        while j + 1 < sizes.size and sizes[j + 1] == sizes[i]:
-            j += 1
-        low, high = max(float(a[j + 1]), floor), float(a[i])
-        if 1 <= sizes[i] <= top and high > low:
-            out.append((low, high, int(sizes[i])))
-        i = j + 1
-    return out
+@dataclass(frozen=True)
+class FlatRanges:
+    """:class:`FlatRange` of each path of a :class:`PathBatch` (:func:`flat_ranges`), as arrays.
+
+    Attributes
+    ----------
+    low, high, middle, width : numpy.ndarray
+        ``(B,)``, as in :class:`FlatRange`.
+    size : numpy.ndarray
+        ``(B,)`` integers.
+    support : numpy.ndarray
+        ``(B, m)`` booleans: the non-zero components at ``middle``.
+    scale : str
+    """
+
+    low: np.ndarray
+    high: np.ndarray
+    middle: np.ndarray
+    size: np.ndarray
+    support: np.ndarray
+    width: np.ndarray
+    scale: str
+
+
+def _check_rule(lambda_ratio: Any, max_size: Any) -> None:
+    if not 0 < lambda_ratio < 1:
+        raise ModelError(f"lambda_ratio: expected a number in (0, 1), got {lambda_ratio!r}")
+    if max_size is not None and (isinstance(max_size, bool) or not isinstance(max_size, (int, np.integer))
+                                 or max_size < 1):
+        raise ModelError(f"max_size: expected a positive integer, got {max_size!r}")
+
+
+def _name(b: int, single: bool) -> str:
+    return "path" if single else f"paths[{b}]"
+
+
+def _runs(sizes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Maximal runs of equal values along axis 1 of ``sizes`` ``(B, n)``: row, first and one-past-last
+    column of each run, in row-major order (runs never cross rows)."""
+    B, n = sizes.shape
+    first = np.ones((B, n + 1), bool)
+    first[:, 1:n] = sizes[:, 1:] != sizes[:, :-1]  # column n: a sentinel start closing each row
+    rows, cols = np.nonzero(first)
+    stops = np.roll(cols, -1)  # the next start: in the same row, thanks to the sentinel
+    real = cols < n
+    return rows[real], cols[real], stops[real]
+
+
+def _coef_at(paths: PathBatch, lam: np.ndarray) -> np.ndarray:
+    """``theta_hat(lam[b])`` of each path ``(B, m)``, as :meth:`LassoPath.coef` (linear between breakpoints)."""
+    a, c = paths.lambdas, paths.coefs
+    rows = np.arange(len(paths))
+    last = paths.n_points - 1
+    i = (a >= lam[:, None]).sum(axis=1) - 1  # a[i] >= lam > a[i+1] (the padding is -inf)
+    i = np.clip(i, 0, np.maximum(last - 1, 0))
+    j = np.minimum(i + 1, last)
+    with np.errstate(divide="ignore", invalid="ignore"):  # only in the branches not taken
+        t = (a[rows, i] - lam) / (a[rows, i] - a[rows, j])
+        inner = (1 - t)[:, None] * c[rows, i] + t[:, None] * c[rows, j]
+    return np.where((lam >= a[:, 0])[:, None], 0.0,
+                    np.where((lam <= a[rows, last])[:, None], c[rows, last], inner))
+
+
+def flat_ranges(paths: PathBatch, *, scale: Scale = "log", lambda_ratio: float = 1e-4,
+                max_size: int | None = None) -> FlatRanges:
+    """:func:`flat_range` of every path of a batch at once (the same results, as arrays).
+
+    Raises :class:`~fdi_lib.errors.ModelError` naming the first path with no candidate range.
+    """
+    return _flat_ranges(paths, scale, lambda_ratio, max_size, single=False)
+
+
+def _flat_ranges(paths: PathBatch, scale: Any, lambda_ratio: Any, max_size: Any, *,
+                 single: bool) -> FlatRanges:
+    if scale not in ("log", "linear"):
+        raise ModelError(f"scale: expected 'log' or 'linear', got {scale!r}")
+    _check_rule(lambda_ratio, max_size)
+    a = paths.lambdas
+    B, S = a.shape
+    tol, act = _activity(paths.coefs)
+    top = paths.coefs.shape[2] // 2 if max_size is None else int(max_size)
+    K = paths.n_points - 1  # intervals (a[i+1], a[i]) of each path
+    sizes = np.where(np.arange(S - 1) < K[:, None], act.sum(axis=2), -1)
+    floor = lambda_ratio * a[:, 0]
+    over = sizes > top
+    first_over = np.where(over.any(axis=1), over.argmax(axis=1), S - 1)
+    rows = np.arange(B)
+    # the window stops where the support first exceeds max_size
+    floor = np.where(first_over < S - 1, np.maximum(floor, a[rows, np.minimum(first_over, S - 1)]), floor)
+    sizes = np.where(np.arange(S - 1) < first_over[:, None], sizes, -1)
+    # maximal ranges of constant support size: interval i (first) to stop - 1, i.e. (a[stop], a[i])
+    rb, first, stop = _runs(sizes)
+    size = sizes[rb, first]
+    high, low = a[rb, first], np.maximum(a[rb, stop], floor[rb])
+    cand = (size >= 1) & (size <= top) & (high > low)
+    widths = np.full((B, max(S - 1, 1)), -np.inf)  # at the first interval of each candidate range
+    widths[rb[cand], first[cand]] = (np.log(high[cand] / low[cand]) if scale == "log"
+                                     else high[cand] - low[cand])
+    best = widths.argmax(axis=1)  # the first (largest lambda) on ties
+    bad = np.flatnonzero(widths[rows, best] == -np.inf)
+    if bad.size:
+        raise ModelError(f"{_name(int(bad[0]), single)}: no range of lambda in the window with "
+                         "between 1 and max_size non-zero components")
+    # run of each best interval (its index among the runs of its row)
+    k = np.flatnonzero(cand)[np.searchsorted(rb[cand] * S + first[cand], rows * S + best)]
+    lo, h = low[k], high[k]
+    mid = np.sqrt(lo * h) if scale == "log" else 0.5 * (lo + h)
+    c = _coef_at(paths, mid)
+    return FlatRanges(low=lo, high=h, middle=mid, size=size[k], support=np.abs(c) > tol[:, None],
+                      width=widths[rows, best], scale=scale)
 
 
 def flat_range(path: LassoPath, *, scale: Scale = "log", lambda_ratio: float = 1e-4,
                max_size: int | None = None) -> FlatRange:
     """The paper's rule for ``lambda``: the middle of the widest range of constant support size.
+
+    Ranges are maximal runs of path intervals with the same support size, clipped to the window;
+    the widest candidate wins (ties: the one at the larger ``lambda``). :func:`flat_ranges` applies
+    the rule to a whole :class:`PathBatch` at once (this function is that, for a batch of one).
 
     Parameters
     ----------
@@ -506,26 +701,10 @@ def flat_range(path: LassoPath, *, scale: Scale = "log", lambda_ratio: float = 1
     -------
     FlatRange
     """
-    if scale not in ("log", "linear"):
-        raise ModelError(f"scale: expected 'log' or 'linear', got {scale!r}")
-    if not 0 < lambda_ratio < 1:
-        raise ModelError(f"lambda_ratio: expected a number in (0, 1), got {lambda_ratio!r}")
-    if max_size is not None and (not isinstance(max_size, (int, np.integer)) or max_size < 1):
-        raise ModelError(f"max_size: expected a positive integer, got {max_size!r}")
-    cands = _ranges(path, lambda_ratio, max_size)
-    if not cands:
-        raise ModelError("path: no range of lambda in the window with between 1 and max_size "
-                         "non-zero components")
-    if scale == "log":
-        widths = [np.log(h / lo) for lo, h, _ in cands]
-    else:
-        widths = [h - lo for lo, h, _ in cands]
-    best = int(np.argmax(widths))
-    lo, h, size = cands[best]
-    mid = float(np.sqrt(lo * h)) if scale == "log" else 0.5 * (lo + h)
-    c = path.coef(mid)
-    return FlatRange(low=lo, high=h, middle=mid, size=size, support=np.flatnonzero(np.abs(c) > path._tol),
-                     width=float(widths[best]), scale=scale)
+    fr = _flat_ranges(PathBatch.of([path]), scale, lambda_ratio, max_size, single=True)
+    return FlatRange(low=float(fr.low[0]), high=float(fr.high[0]), middle=float(fr.middle[0]),
+                     size=int(fr.size[0]), support=np.flatnonzero(fr.support[0]), width=float(fr.width[0]),
+                     scale=scale)
 
 
 @dataclass(frozen=True)
@@ -557,6 +736,31 @@ class GridFlatRange:
     stop: int
     middle: float
     size: int
+    support: np.ndarray
+
+
+@dataclass(frozen=True)
+class GridFlatRanges:
+    """:class:`GridFlatRange` of each path of a :class:`PathBatch` (:func:`grid_flat_ranges`), as arrays.
+
+    Attributes
+    ----------
+    grid, sizes : numpy.ndarray
+        ``(B, n_grid)``, as in :class:`GridFlatRange`.
+    start, stop, size : numpy.ndarray
+        ``(B,)`` integers.
+    middle : numpy.ndarray
+        ``(B,)``.
+    support : numpy.ndarray
+        ``(B, m)`` booleans: the support of the path interval that holds ``middle``.
+    """
+
+    grid: np.ndarray
+    sizes: np.ndarray
+    start: np.ndarray
+    stop: np.ndarray
+    middle: np.ndarray
+    size: np.ndarray
     support: np.ndarray
 
 
@@ -592,45 +796,68 @@ def grid_flat_range(path: LassoPath, n_grid: int, *, lambda_ratio: float = 1e-4,
     -------
     GridFlatRange
     """
+    g = _grid_flat_ranges(PathBatch.of([path]), n_grid, lambda_ratio, max_size, single=True)
+    return GridFlatRange(grid=g.grid[0], sizes=g.sizes[0], start=int(g.start[0]), stop=int(g.stop[0]),
+                         middle=float(g.middle[0]), size=int(g.size[0]), support=np.flatnonzero(g.support[0]))
+
+
+def grid_flat_ranges(paths: PathBatch, n_grid: int, *, lambda_ratio: float = 1e-4,
+                     max_size: int | None = None) -> GridFlatRanges:
+    """:func:`grid_flat_range` of every path of a batch at once (the same results, as arrays).
+
+    Raises :class:`~fdi_lib.errors.ModelError` naming the first path the rule cannot be applied to.
+    """
+    return _grid_flat_ranges(paths, n_grid, lambda_ratio, max_size, single=False)
+
+
+def _grid_flat_ranges(paths: PathBatch, n_grid: Any, lambda_ratio: Any, max_size: Any, *,
+                      single: bool) -> GridFlatRanges:
     if isinstance(n_grid, bool) or not isinstance(n_grid, (int, np.integer)) or n_grid < 3:
         raise ModelError(f"n_grid: expected an integer >= 3, got {n_grid!r}")
-    if not 0 < lambda_ratio < 1:
-        raise ModelError(f"lambda_ratio: expected a number in (0, 1), got {lambda_ratio!r}")
-    if max_size is not None and (isinstance(max_size, bool) or not isinstance(max_size, (int, np.integer))
-                                 or max_size < 1):
-        raise ModelError(f"max_size: expected a positive integer, got {max_size!r}")
-    a = path.lambdas
-    if a.size < 2 or not a[0] > 0:
-        raise ModelError("path: expected at least two breakpoints and lambda_max > 0")
-    top = path.coefs.shape[0] // 2 if max_size is None else int(max_size)
-    grid = float(a[0]) * _unit_grid(int(n_grid), float(lambda_ratio))  # geometric, from lambda_max
-    grid[0] = a[0]
-    act = path._active()  # (m, K): support on each interval (a[i+1], a[i])
-    isz = act.sum(axis=0)
-    # interval i is (a[i+1], a[i]); lambda >= a[0] has the empty support
-    idx = np.searchsorted(-a, -grid, side="right") - 1
-    sizes = np.where(grid >= a[0], 0, isz[np.clip(idx, 0, isz.size - 1)])  # theta_hat(lambda_max) = 0
-    over = np.flatnonzero(isz > top)
-    if over.size:  # the window ends where the support first exceeds max_size
-        end = float(a[over[0]])
-    elif a[-1] <= grid[-1] * (1 + 1e-9):  # the path covers the grid (up to rounding of its lower end)
-        end = float(grid[-1])
-    else:
-        raise ModelError(f"path: stops at lambda = {a[-1]:g} > lambda_ratio * lambda_max = {grid[-1]:g} "
-                         "with no support above max_size; compute it further (lasso_path lambda_min)")
-    sizes = np.where(grid >= end, sizes, -1)
-    starts = np.concatenate([[0], np.flatnonzero(np.diff(sizes)) + 1])  # runs of equal size
-    stops = np.append(starts[1:], grid.size)
-    lengths = np.where((sizes[starts] >= 1) & (sizes[starts] <= top), stops - starts, 0)
-    best = int(np.argmax(lengths))  # the first (largest lambda) on ties
-    if lengths[best] == 0:
-        raise ModelError(f"path: no grid point of the {n_grid}-point grid has between 1 and max_size "
-                         "non-zero components")
-    start, stop = int(starts[best]), int(stops[best])
+    _check_rule(lambda_ratio, max_size)
+    a = paths.lambdas
+    B, S = a.shape
+    rows = np.arange(B)
+    bad = np.flatnonzero((paths.n_points < 2) | ~(a[:, 0] > 0))
+    if bad.size:
+        raise ModelError(f"{_name(int(bad[0]), single)}: expected at least two breakpoints "
+                         "and lambda_max > 0")
+    top = paths.coefs.shape[2] // 2 if max_size is None else int(max_size)
+    grid = a[:, :1] * _unit_grid(int(n_grid), float(lambda_ratio))  # geometric, from lambda_max
+    grid[:, 0] = a[:, 0]
+    _, act = _activity(paths.coefs)  # (B, S-1, m): support on each interval (a[i+1], a[i])
+    K = paths.n_points - 1
+    isz = np.where(np.arange(S - 1) < K[:, None], act.sum(axis=2), -1)
+    # interval i is (a[i+1], a[i]); lambda >= a[0] has the empty support (the padding of a is -inf)
+    idx = np.clip((a[:, None, :] >= grid[:, :, None]).sum(axis=2) - 1, 0, (K - 1)[:, None])
+    sizes = np.where(grid >= a[:, :1], 0, isz[rows[:, None], idx])  # theta_hat(lambda_max) = 0
+    over = isz > top
+    has_over = over.any(axis=1)
+    last = a[rows, K]
+    covers = last <= grid[:, -1] * (1 + 1e-9)  # the path covers the grid (up to rounding of its lower end)
+    bad = np.flatnonzero(~has_over & ~covers)
+    if bad.size:
+        b = int(bad[0])
+        raise ModelError(f"{_name(b, single)}: stops at lambda = {last[b]:g} > lambda_ratio * "
+                         f"lambda_max = {grid[b, -1]:g} with no support above max_size; compute it "
+                         "further (lasso_path lambda_min)")
+    # the window ends where the support first exceeds max_size
+    end = np.where(has_over, a[rows, over.argmax(axis=1)], grid[:, -1])
+    sizes = np.where(grid >= end[:, None], sizes, -1)
+    rb, first, stop = _runs(sizes)  # runs of equal size
+    ok = (sizes[rb, first] >= 1) & (sizes[rb, first] <= top)
+    lengths = np.zeros((B, int(n_grid)), int)  # at the first point of each candidate run
+    lengths[rb[ok], first[ok]] = (stop - first)[ok]
+    start = lengths.argmax(axis=1)  # the first (largest lambda) on ties
+    bad = np.flatnonzero(lengths[rows, start] == 0)
+    if bad.size:
+        raise ModelError(f"{_name(int(bad[0]), single)}: no grid point of the {n_grid}-point grid "
+                         "has between 1 and max_size non-zero components")
+    stop = start + lengths[rows, start]
     k = (start + stop - 1) // 2
-    support = np.flatnonzero(act[:, min(max(int(idx[k]), 0), isz.size - 1)])  # support of the interval of grid[k]
-    return GridFlatRange(grid=grid, sizes=sizes, start=start, stop=stop, middle=float(grid[k]),
-                         size=int(sizes[start]), support=support)
+    support = act[rows, idx[rows, k]]  # support of the interval of grid[k]
+    return GridFlatRanges(grid=grid, sizes=sizes, start=start, stop=stop, middle=grid[rows, k],
+                          size=sizes[rows, start], support=support)
 
 
 @functools.lru_cache(maxsize=16)

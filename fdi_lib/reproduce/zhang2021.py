@@ -32,8 +32,8 @@ from fdi_lib.errors import ModelError
 from fdi_lib.montecarlo import binomial_ci, run_monte_carlo, trial_rngs, trial_seeds
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.reproduce.registry import ReproductionResult, register
-from fdi_lib.sparse import (RegressionData, flat_range, grid_flat_range, lasso_path, lasso_paths,
-                            least_squares_on_support, regression_data)
+from fdi_lib.sparse import (RegressionData, flat_range, flat_ranges, grid_flat_range, grid_flat_ranges,
+                            lasso_path, lasso_path_batch, least_squares_on_support, regression_data)
 from fdi_lib.systems import zhang2021_example1 as ex
 from fdi_lib.threads import single_threaded_blas
 
@@ -167,20 +167,17 @@ def example1_chunk(seeds: Sequence[np.random.SeedSequence], *, q: int, r: float)
     model, _ = _example1_setup(float(r))
     trials = ex.draw_trials(model, trial_rngs(seeds), q=q)
     reg, y = example1_regression(trials, r=r)
-    out = {f"success_{s}": np.zeros(len(seeds), bool) for s in SCALES}
-    out.update({f"size_{s}": np.zeros(len(seeds), int) for s in SCALES})
-    out.update({f"success_grid{n}": np.zeros(len(seeds), bool) for n in GRID_SIZES})
-    paths = lasso_paths(reg.X, reg.y, n_samples=reg.n_samples, lambda_min=LAMBDA_RATIO,
-                        max_size=reg.X.shape[-1] // 2)  # all the chunk's paths at once
-    for b, path in enumerate(paths):
-        true = np.flatnonzero(trials.theta[b])
-        for s in SCALES:
-            fr = flat_range(path, scale=s)
-            out[f"size_{s}"][b] = fr.size
-            out[f"success_{s}"][b] = np.array_equal(fr.support, true)
-        for n in GRID_SIZES:
-            g = grid_flat_range(path, n, lambda_ratio=LAMBDA_RATIO)
-            out[f"success_grid{n}"][b] = np.array_equal(g.support, true)
+    true = trials.theta != 0  # (trials, m)
+    paths = lasso_path_batch(reg.X, reg.y, n_samples=reg.n_samples, lambda_min=LAMBDA_RATIO,
+                             max_size=reg.X.shape[-1] // 2)  # all the chunk's paths at once
+    out = {}
+    for s in SCALES:
+        fr = flat_ranges(paths, scale=s)
+        out[f"success_{s}"] = np.all(fr.support == true, axis=1)
+        out[f"size_{s}"] = fr.size
+    for n in GRID_SIZES:
+        g = grid_flat_ranges(paths, n, lambda_ratio=LAMBDA_RATIO)
+        out[f"success_grid{n}"] = np.all(g.support == true, axis=1)
     out["snr_db"] = snr_db(y, trials.noise.v)
     return out
 
@@ -490,11 +487,6 @@ INIT_VARIANTS = {"paper": 1.0, "spread": 10.0}
 _R0_IGNORE = 1e12
 
 
-def _oracle(path: Any, true: np.ndarray) -> bool:
-    """Whether the true support is the support of some interval of the (full) Lasso path."""
-    return any(np.array_equal(s, true) for s in path.interval_supports())
-
-
 @single_threaded_blas
 def lambda_rule_chunk(seeds: Sequence[np.random.SeedSequence], *, q: int,
                       r: float) -> dict[str, np.ndarray]:
@@ -513,23 +505,19 @@ def lambda_rule_chunk(seeds: Sequence[np.random.SeedSequence], *, q: int,
     model = ex.example1_model(r=r)
     trials = ex.draw_trials(model, trial_rngs(seeds), q=q)
     reg, _ = example1_regression(trials, r=r)
-    keys = RULE_READINGS + ("oracle",)
-    out = {k: np.zeros(len(seeds), bool) for k in keys}
-    for b in range(len(seeds)):
-        X, y = reg.X[b], reg.y[b]
-        true = np.flatnonzero(trials.theta[b])
-        path = lasso_path(X, y, n_samples=reg.n_samples)
-        for s in SCALES:
-            out[s][b] = np.array_equal(flat_range(path, scale=s, lambda_ratio=LAMBDA_RATIO).support, true)
-        for n in VARIANT_GRIDS:
-            g = grid_flat_range(path, n, lambda_ratio=LAMBDA_RATIO)
-            out[f"grid{n}"][b] = np.array_equal(g.support, true)
-        out["oracle"][b] = _oracle(path, true)
-        scale = np.sqrt(np.mean(X ** 2, axis=0))
-        path_s = lasso_path(X / scale, y, n_samples=reg.n_samples, lambda_min=LAMBDA_RATIO,
-                            max_size=X.shape[1] // 2)
-        sup = flat_range(path_s, lambda_ratio=LAMBDA_RATIO).support
-        out["standardised"][b] = np.array_equal(sup, true)
+    true = trials.theta != 0  # (trials, m)
+    paths = lasso_path_batch(reg.X, reg.y, n_samples=reg.n_samples)  # full paths, all trials at once
+    out = {}
+    for s in SCALES:
+        out[s] = np.all(flat_ranges(paths, scale=s, lambda_ratio=LAMBDA_RATIO).support == true, axis=1)
+    for n in VARIANT_GRIDS:
+        g = grid_flat_ranges(paths, n, lambda_ratio=LAMBDA_RATIO)
+        out[f"grid{n}"] = np.all(g.support == true, axis=1)
+    out["oracle"] = paths.has_interval_support(true)
+    scale = np.sqrt(np.mean(reg.X ** 2, axis=1))  # (trials, m): root mean square of each column
+    paths_s = lasso_path_batch(reg.X / scale[:, None, :], reg.y, n_samples=reg.n_samples,
+                               lambda_min=LAMBDA_RATIO, max_size=reg.X.shape[-1] // 2)
+    out["standardised"] = np.all(flat_ranges(paths_s, lambda_ratio=LAMBDA_RATIO).support == true, axis=1)
     return out
 
 
@@ -577,12 +565,10 @@ def initial_state_chunk(seeds: Sequence[np.random.SeedSequence], *, q: int,
         res = kitanidis_filter(filt, y, gains=gains)
         sig = residual_signature(filt, gains, Psi=trials.Psi)
         reg = regression_data(res.residuals, sig.on_residual, start=1)
-        ok, orc = np.zeros(len(seeds), bool), np.zeros(len(seeds), bool)
-        for b in range(len(seeds)):
-            true = np.flatnonzero(trials.theta[b])
-            path = lasso_path(reg.X[b], reg.y[b], n_samples=reg.n_samples)
-            ok[b] = np.array_equal(flat_range(path, lambda_ratio=LAMBDA_RATIO).support, true)
-            orc[b] = _oracle(path, true)
+        true = trials.theta != 0
+        paths = lasso_path_batch(reg.X, reg.y, n_samples=reg.n_samples)  # full paths, all trials at once
+        ok = np.all(flat_ranges(paths, lambda_ratio=LAMBDA_RATIO).support == true, axis=1)
+        orc = paths.has_interval_support(true)
         out[f"log_{init}"], out[f"oracle_{init}"] = ok, orc
     return out
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from fdi_lib.errors import ModelError
 from fdi_lib.models import LTVModel, ltv_model
-from fdi_lib.simulate import Noise, draw_noise, simulate
+from fdi_lib.simulate import Noise, draw_noise, noise_roots, simulate
 
 __all__ = ["N_DATA", "N_PARAMS", "PSI_HALF_WIDTH", "E", "C", "state_matrices", "example1_model",
            "Example1Trial", "draw_trial", "draw_trials", "simulate_trials"]
@@ -90,27 +90,37 @@ class Example1Trial:
 
 def draw_trial(model: LTVModel, rng: np.random.Generator, *, q: int, m: int = N_PARAMS) -> Example1Trial:
     """Draw one trial (batch of 1): support of ``theta``, ``Psi_k``, ``d_k`` and the noise, in that order."""
-    if not isinstance(q, (int, np.integer)) or not 0 <= q <= m:
-        raise ModelError(f"q: expected an integer in [0, {m}], got {q!r}")
-    N = model.n_steps
-    theta = np.zeros(m)
-    theta[rng.choice(m, size=int(q), replace=False)] = 1.0
-    Psi = rng.uniform(-PSI_HALF_WIDTH, PSI_HALF_WIDTH, size=(N, 3, m))
-    d = 10.0 * np.sin(0.1 * np.arange(N)) + rng.standard_normal(N) + 100.0
-    noise = draw_noise(model, rng)
-    return Example1Trial(Psi=Psi[None], theta=theta[None], d=d[None, :, None],
-                         noise=Noise(x0=noise.x0[None], w=noise.w[None], v=noise.v[None]))
+    return draw_trials(model, [rng], q=q, m=m)
 
 
 def draw_trials(model: LTVModel, rngs: list[np.random.Generator], *, q: int, m: int = N_PARAMS) -> Example1Trial:
-    """One :func:`draw_trial` per generator, stacked (trial ``i`` depends on ``rngs[i]`` only)."""
-    parts = [draw_trial(model, rng, q=q, m=m) for rng in rngs]
-    return Example1Trial(Psi=np.concatenate([p.Psi for p in parts]),
-                         theta=np.concatenate([p.theta for p in parts]),
-                         d=np.concatenate([p.d for p in parts]),
-                         noise=Noise(x0=np.concatenate([p.noise.x0 for p in parts]),
-                                     w=np.concatenate([p.noise.w for p in parts]),
-                                     v=np.concatenate([p.noise.v for p in parts])))
+    """One trial per generator, stacked: trial ``i`` depends on ``rngs[i]`` only.
+
+    Each generator draws, in this order, the support of ``theta`` (``q`` of ``m`` components,
+    without replacement), ``Psi_k`` (uniform on ``[-17.3, 17.3]``), the white part ``eps_k`` of
+    ``d_k`` and the noise (:func:`fdi_lib.simulate.draw_noise`). The loop over generators only
+    draws (into preallocated arrays); the affine maps of the draws are applied to the whole batch.
+    """
+    if isinstance(q, bool) or not isinstance(q, (int, np.integer)) or not 0 <= q <= m:
+        raise ModelError(f"q: expected an integer in [0, {m}], got {q!r}")
+    N, B = model.n_steps, len(rngs)
+    theta = np.zeros((B, m))
+    Psi = np.empty((B, N, 3, m))
+    eps = np.empty((B, N))
+    roots = noise_roots(model)  # covariance roots shared by all the draws
+    noises = []
+    for b, rng in enumerate(rngs):
+        theta[b, rng.choice(m, size=int(q), replace=False)] = 1.0
+        rng.random(out=Psi[b])  # the uniform draws of rng.uniform(low, high), before their affine map
+        rng.standard_normal(out=eps[b])
+        noises.append(draw_noise(model, rng, roots=roots))
+    # rng.uniform(low, high) returns low + (high - low) * U for the same U: the same map here, bit for bit
+    Psi *= PSI_HALF_WIDTH - (-PSI_HALF_WIDTH)
+    Psi += -PSI_HALF_WIDTH
+    d = 10.0 * np.sin(0.1 * np.arange(N)) + eps + 100.0
+    return Example1Trial(Psi=Psi, theta=theta, d=d[:, :, None],
+                         noise=Noise(x0=np.stack([z.x0 for z in noises]), w=np.stack([z.w for z in noises]),
+                                     v=np.stack([z.v for z in noises])))
 
 
 def simulate_trials(model: LTVModel, trials: Example1Trial, *, theta_scale: float = 1.0) -> np.ndarray:
