@@ -406,19 +406,29 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
     (rank-one up/down-date when a component joins or drops); the next event is the first join
     (an inactive correlation reaching ``c``), drop (an active coefficient reaching 0, the Lasso
     modification; the dropped component cannot rejoin at once with its old sign), or the end of
-    the window. Problems that have finished are dropped from the working arrays whenever they
-    are half of them. The tests check it against scikit-learn's ``lars_path`` to 1e-9.
+    the window. The active set is stored compactly, in join order (a dropped component's slot
+    takes the last one): the inverse ``(B, K, K)`` and the active columns of the Gram matrix
+    ``(B, m, K)`` span ``K = min(m, max_size + 1)`` slots, not ``m``. ``K`` does not depend on
+    the batch, so that every floating-point operation on a problem is the same whatever the
+    other problems of its batch: a path is bit for bit the same computed alone or in any chunk.
+    Problems that have finished are dropped from the working arrays whenever they are half of
+    them. The tests check it against scikit-learn's ``lars_path`` to 1e-9.
 
     Returns the correlation levels ``(B, S)`` and coefficients ``(B, S, m)`` at the
     breakpoints, and the number ``(B,)`` of breakpoints of each problem (the tails are padding).
     """
     B, m = Xy.shape
+    K = m if max_size is None else min(m, max_size + 1)  # most components active at once
     rows = np.arange(B)
     beta = np.zeros((B, m))
     cov = Xy.copy()
     sign = np.zeros((B, m))
     active = np.zeros((B, m), bool)
-    inv = np.zeros((B, m, m))  # inverse of Gram_AA, zero outside A x A
+    order = np.zeros((B, K), int)  # active components in their slots (the first n_act[b] slots)
+    slot = np.zeros((B, m), int)  # slot of each active component
+    n_act = np.zeros(B, int)
+    inv = np.zeros((B, K, K))  # inverse of Gram_AA in slot order, zero outside the used slots
+    GA = np.zeros((B, m, K))  # Gram[:, :, order]: the active columns, zero in unused slots
     j = np.abs(cov).argmax(axis=1)
     c = np.abs(cov[rows, j])
     cap = 2 * m + 4  # breakpoints stored per problem (grown if needed)
@@ -434,30 +444,50 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
     while running.any():
         if running.sum() <= rows.size // 2 and rows.size >= 16:  # drop finished problems
             keep = running
-            Gram, c_min, beta, cov, sign, active, inv, c, j = (
-                x[keep] for x in (Gram, c_min, beta, cov, sign, active, inv, c, j))
+            Gram, c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j = (
+                x[keep] for x in (Gram, c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j))
             joining, dropping, barred, barred_sign, running, ids = (
                 x[keep] for x in (joining, dropping, barred, barred_sign, running, ids))
             rows = np.arange(ids.size)
-        # rank-one change of inv: + w w^T / schur (j joins), - col col^T / col_j (j drops)
-        g = Gram[rows, :, j]
+        # slot of the event: a joining component takes the next free slot
+        s_ev = np.where(joining, n_act, slot[rows, j])
+        # rank-one change of inv: + w w^T / schur (j joins), - col col^T / col_s (j drops)
+        g = GA[rows, j]  # Gram[j, A] (zero in unused slots)
         u = np.einsum("bij,bj->bi", inv, g)
-        u[rows, j] = -1.0  # u = w: then G_jj - g_A^T inv g_A = -g^T w
-        schur = -np.einsum("bi,bi->b", g, u)
-        col = inv[rows, :, j]
+        schur = Gram[rows, j, j] - np.einsum("bi,bi->b", g, u)  # G_jj - g_A^T inv g_A
+        u[rows[joining], s_ev[joining]] = -1.0  # w: the new column of inv is -w / schur
+        col = inv[rows, :, s_ev]
         z = np.where(joining[:, None], u, col)
         with np.errstate(divide="ignore", invalid="ignore"):
-            f = np.where(joining, 1.0 / schur, np.where(dropping, -1.0 / col[rows, j], 0.0))
+            f = np.where(joining, 1.0 / schur, np.where(dropping, -1.0 / col[rows, s_ev], 0.0))
         inv += (z * f[:, None])[:, :, None] * z[:, None, :]
-        if dropping.any():
+        if joining.any():
+            b = rows[joining]
+            GA[b, :, s_ev[b]] = Gram[b, :, j[b]]
+            order[b, s_ev[b]] = j[b]
+            slot[b, j[b]] = s_ev[b]
+            n_act[b] += 1
+        if dropping.any():  # the last used slot moves into the freed one
             b = rows[dropping]
-            inv[b, j[b], :] = 0.0
-            inv[b, :, j[b]] = 0.0
+            sd, last = s_ev[b], n_act[b] - 1
+            inv[b, sd, :] = inv[b, last, :]
+            inv[b, :, sd] = inv[b, :, last]
+            inv[b, last, :] = 0.0
+            inv[b, :, last] = 0.0
+            GA[b, :, sd] = GA[b, :, last]
+            GA[b, :, last] = 0.0
+            order[b, sd] = order[b, last]
+            slot[b, order[b, sd]] = sd
+            n_act[b] -= 1
         active[rows, j] |= joining
         active[rows, j] &= ~dropping
         sign[rows, j] = np.where(joining, np.sign(cov[rows, j]), np.where(dropping, 0.0, sign[rows, j]))
-        d = np.einsum("bij,bj->bi", inv, sign)
-        a = np.einsum("bij,bj->bi", Gram, d)
+        used = np.arange(K) < n_act[:, None]
+        dA = np.einsum("bij,bj->bi", inv, np.where(used, sign[rows[:, None], order], 0.0))
+        a = np.einsum("bij,bj->bi", GA, dA)
+        d = np.zeros((rows.size, m))
+        ub, us = np.nonzero(used)
+        d[ub, order[ub, us]] = dA[ub, us]
         with np.errstate(divide="ignore", invalid="ignore"):
             up = (c[:, None] - cov) / (1.0 - a)
             down = (c[:, None] + cov) / (1.0 + a)
