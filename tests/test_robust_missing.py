@@ -212,3 +212,20 @@ def test_kitanidis_filter_predicts_without_update_on_a_missing_sample():
     np.testing.assert_allclose(res.x_pred[8], 0.5 * res.x_pred[7], rtol=1e-15)
     clean = kitanidis_filter(m, np.where(np.arange(20)[:, None] == 7, 0.0, y), gains=kg)
     np.testing.assert_allclose(res.x_filt[:7], clean.x_filt[:7], rtol=1e-15)
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_check_finite_on_large_arrays_names_the_first_bad_index(bad):
+    """Large arrays take a fast path (a finite sum); it must neither miss a bad value nor
+    reject finite values whose sum overflows."""
+    from fdi_lib.validation import check_finite
+
+    x = np.full((70, 80), 1e308)  # the sum overflows, every value is finite
+    check_finite(x, "x")
+    x[[0, 33], [5, 7]] = [-np.inf, bad]  # with a NaN or an inf elsewhere
+    with pytest.raises(NonFiniteError, match=r"x: expected finite values, got -inf at index \(0, 5\)"):
+        check_finite(x, "x")
+    y = np.zeros(10_000)
+    y[9_999] = bad
+    with pytest.raises(NonFiniteError, match=r"y: expected finite values, got .* at index \(9999,\)"):
+        check_finite(y, "y")
