@@ -407,8 +407,8 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
     (an inactive correlation reaching ``c``), drop (an active coefficient reaching 0, the Lasso
     modification; the dropped component cannot rejoin at once with its old sign), or the end of
     the window. The active set is stored compactly, in join order (a dropped component's slot
-    takes the last one): the inverse ``(B, K, K)`` and the active columns of the Gram matrix
-    ``(B, m, K)`` span ``K = min(m, max_size + 1)`` slots, not ``m``. ``K`` does not depend on
+    takes the last one): the inverse ``(B, K, K)`` and the active rows of the Gram matrix
+    ``(B, K, m)`` span ``K = min(m, max_size + 1)`` slots, not ``m``. ``K`` does not depend on
     the batch, so that every floating-point operation on a problem is the same whatever the
     other problems of its batch: a path is bit for bit the same computed alone or in any chunk.
     Problems that have finished are dropped from the working arrays whenever they are half of
@@ -428,7 +428,7 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
     slot = np.zeros((B, m), int)  # slot of each active component
     n_act = np.zeros(B, int)
     inv = np.zeros((B, K, K))  # inverse of Gram_AA in slot order, zero outside the used slots
-    GA = np.zeros((B, m, K))  # Gram[:, :, order]: the active columns, zero in unused slots
+    GA = np.zeros((B, K, m))  # Gram[:, order, :]: the active rows, zero in unused slots
     j = np.abs(cov).argmax(axis=1)
     c = np.abs(cov[rows, j])
     cap = 2 * m + 4  # breakpoints stored per problem (grown if needed)
@@ -451,19 +451,23 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
             rows = np.arange(ids.size)
         # slot of the event: a joining component takes the next free slot
         s_ev = np.where(joining, n_act, slot[rows, j])
+        # Slots 0 .. k-1 are all that the batch uses in this step: the rows and columns of inv
+        # beyond are zero and stay so, so only the sums (over all K slots) need them.
+        k = min(K, int(n_act.max()) + int(joining.any()))
         # rank-one change of inv: + w w^T / schur (j joins), - col col^T / col_s (j drops)
-        g = GA[rows, j]  # Gram[j, A] (zero in unused slots)
-        u = np.einsum("bij,bj->bi", inv, g)
+        g = GA[rows, :, j]  # Gram[A, j] (zero in unused slots)
+        u = np.zeros((rows.size, K))
+        u[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], g)
         schur = Gram[rows, j, j] - np.einsum("bi,bi->b", g, u)  # G_jj - g_A^T inv g_A
         u[rows[joining], s_ev[joining]] = -1.0  # w: the new column of inv is -w / schur
-        col = inv[rows, :, s_ev]
-        z = np.where(joining[:, None], u, col)
+        col = inv[rows, :k, s_ev]
+        z = np.where(joining[:, None], u[:, :k], col)
         with np.errstate(divide="ignore", invalid="ignore"):
-            f = np.where(joining, 1.0 / schur, np.where(dropping, -1.0 / col[rows, s_ev], 0.0))
-        inv += (z * f[:, None])[:, :, None] * z[:, None, :]
+            f = np.where(joining, 1.0 / schur, np.where(dropping, -1.0 / inv[rows, s_ev, s_ev], 0.0))
+        inv[:, :k, :k] += (z * f[:, None])[:, :, None] * z[:, None, :]
         if joining.any():
             b = rows[joining]
-            GA[b, :, s_ev[b]] = Gram[b, :, j[b]]
+            GA[b, s_ev[b]] = Gram[b, j[b]]  # row j (the Gram matrix is symmetric)
             order[b, s_ev[b]] = j[b]
             slot[b, j[b]] = s_ev[b]
             n_act[b] += 1
@@ -474,8 +478,8 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
             inv[b, :, sd] = inv[b, :, last]
             inv[b, last, :] = 0.0
             inv[b, :, last] = 0.0
-            GA[b, :, sd] = GA[b, :, last]
-            GA[b, :, last] = 0.0
+            GA[b, sd] = GA[b, last]
+            GA[b, last] = 0.0
             order[b, sd] = order[b, last]
             slot[b, order[b, sd]] = sd
             n_act[b] -= 1
@@ -483,8 +487,9 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
         active[rows, j] &= ~dropping
         sign[rows, j] = np.where(joining, np.sign(cov[rows, j]), np.where(dropping, 0.0, sign[rows, j]))
         used = np.arange(K) < n_act[:, None]
-        dA = np.einsum("bij,bj->bi", inv, np.where(used, sign[rows[:, None], order], 0.0))
-        a = np.einsum("bij,bj->bi", GA, dA)
+        dA = np.zeros((rows.size, K))
+        dA[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], np.where(used, sign[rows[:, None], order], 0.0))
+        a = np.einsum("bji,bj->bi", GA, dA)
         d = np.zeros((rows.size, m))
         ub, us = np.nonzero(used)
         d[ub, order[ub, us]] = dA[ub, us]
