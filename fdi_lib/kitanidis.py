@@ -356,13 +356,11 @@ def residual_signature(model: LTVModel, gains: Any, fault: FaultProfile | None =
             raise ShapeError("Psi, Phi: expected at least one fault profile, got None")
         Psi_a = None if Psi is None else array(Psi, "Psi", finite=False)
         Phi_a = None if Phi is None else array(Phi, "Phi", finite=False)
-        ref = Psi_a if Psi_a is not None else Phi_a
-        m = ref.shape[-1]
-        batch = ref.shape[:-3]
-        if Psi_a is None:
-            Psi_a = np.zeros((*batch, N, n, m))
+        m = (Psi_a if Psi_a is not None else Phi_a).shape[-1]
+        if Psi_a is None:  # one zero profile, broadcast over the realisations below
+            Psi_a = np.zeros((N, n, m))
         if Phi_a is None:
-            Phi_a = np.zeros((*batch, N, p, m))
+            Phi_a = np.zeros((N, p, m))
     if Psi_a.ndim < 3 or Psi_a.shape[-3:-1] != (N, n):
         raise ShapeError(f"Psi: expected shape (..., {N}, {n}, m), got {Psi_a.shape}")
     if Phi_a.ndim < 3 or Phi_a.shape[-3:-1] != (N, p) or Phi_a.shape[-1] != Psi_a.shape[-1]:
