@@ -22,7 +22,7 @@ from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.models import FaultProfile, LTVModel, as_record
 from fdi_lib.validation import array, integer
 
-__all__ = ["Noise", "NoiseRoots", "Simulation", "noise_roots", "draw_noise", "simulate", "pi_controller", "covariance_sqrt"]
+__all__ = ["Noise", "NoiseRoots", "Simulation", "noise_roots", "draw_noise", "noise_from_standard", "simulate", "pi_controller", "covariance_sqrt"]
 
 
 @dataclass(frozen=True)
@@ -116,15 +116,26 @@ def draw_noise(model: LTVModel, rng: np.random.Generator, size: int | None = Non
         raise ModelError(f"rng: expected a numpy.random.Generator, got {type(rng).__name__}")
     batch = () if size is None else (integer(size, "size", low=1),)
     N, n, p = model.n_steps, model.n, model.p
+    z0 = rng.standard_normal((*batch, n))
+    zw = rng.standard_normal((*batch, N, n))
+    zv = rng.standard_normal((*batch, N, p))
+    return noise_from_standard(model, z0, zw, zv, roots=roots)
+
+
+def noise_from_standard(model: LTVModel, z0: np.ndarray, zw: np.ndarray, zv: np.ndarray, *,
+                        roots: NoiseRoots | None = None) -> Noise:
+    """The noise :func:`draw_noise` makes of its standard normal draws.
+
+    ``X_0 = x0 + S_0 z0``, ``W_k = S_{Q,k} zw_k``, ``V_k = S_{R,k} zv_k`` (``S`` the roots of
+    :func:`noise_roots`), for ``z0`` ``(*batch, n)``, ``zw`` ``(*batch, N, n)``, ``zv``
+    ``(*batch, N, p)``: draws made elsewhere (e.g. one generator per realisation, each drawing
+    ``z0``, ``zw``, ``zv`` in this order, as :func:`draw_noise` does) are mapped at once.
+    """
     if roots is None:
         roots = noise_roots(model)
-
-    def gaussian(root: np.ndarray, dim: int) -> np.ndarray:
-        z = rng.standard_normal((*batch, N, dim))
-        return np.einsum("kij,...kj->...ki", root, z)
-
-    x0 = model.x0 + rng.standard_normal((*batch, n)) @ roots.P0.T
-    return Noise(x0=x0, w=gaussian(roots.Q, n), v=gaussian(roots.R, p))
+    x0 = model.x0 + z0 @ roots.P0.T
+    return Noise(x0=x0, w=np.einsum("kij,...kj->...ki", roots.Q, zw),
+                 v=np.einsum("kij,...kj->...ki", roots.R, zv))
 
 
 def pi_controller(kp: float, ki: float, setpoint: float = 0.0) -> Callable[[int, np.ndarray], np.ndarray]:

@@ -31,6 +31,25 @@ def test_noise_has_the_model_covariances():
     np.testing.assert_allclose(nz.v.var(), 0.3, rtol=0.03)
 
 
+def test_shared_noise_roots_change_no_draw():
+    from fdi_lib.simulate import noise_from_standard, noise_roots
+
+    m = ltv_model(F=np.eye(2), H=[[1.0, 0.0]], Q=[[2.0, 0.6], [0.6, 0.5]], R=0.3, n_steps=20,
+                  P0=[[1.0, 0.2], [0.2, 0.4]])
+    a = draw_noise(m, np.random.default_rng(5), size=3)
+    b = draw_noise(m, np.random.default_rng(5), size=3, roots=noise_roots(m))
+    rng = np.random.default_rng(5)
+    z0, zw, zv = rng.standard_normal((3, 2)), rng.standard_normal((3, 20, 2)), rng.standard_normal((3, 20, 1))
+    c = noise_from_standard(m, z0, zw, zv)
+    for x, y, z in ((a.x0, b.x0, c.x0), (a.w, b.w, c.w), (a.v, b.v, c.v)):
+        np.testing.assert_array_equal(x, y)
+        np.testing.assert_array_equal(x, z)
+    roots = noise_roots(m)  # square roots of the covariances
+    np.testing.assert_allclose(roots.Q[7] @ roots.Q[7].T, [[2.0, 0.6], [0.6, 0.5]], rtol=1e-12)
+    np.testing.assert_allclose(roots.P0 @ roots.P0.T, [[1.0, 0.2], [0.2, 0.4]], rtol=1e-12)
+    np.testing.assert_allclose(a.x0, m.x0 + z0 @ roots.P0.T, rtol=1e-12)
+
+
 def test_rank_one_process_noise_is_supported():
     q = np.array([[1.0, 1.0], [1.0, 1.0]])  # singular PSD
     m = ltv_model(F=np.eye(2), H=[[1.0, 0.0]], Q=q, R=1.0, n_steps=10)

@@ -23,7 +23,7 @@ import numpy as np
 
 from fdi_lib.errors import ModelError
 from fdi_lib.models import LTVModel, ltv_model
-from fdi_lib.simulate import Noise, draw_noise, noise_roots, simulate
+from fdi_lib.simulate import Noise, noise_from_standard, simulate
 
 __all__ = ["N_DATA", "N_PARAMS", "PSI_HALF_WIDTH", "E", "C", "state_matrices", "example1_model",
            "Example1Trial", "draw_trial", "draw_trials", "simulate_trials"]
@@ -98,29 +98,31 @@ def draw_trials(model: LTVModel, rngs: list[np.random.Generator], *, q: int, m: 
 
     Each generator draws, in this order, the support of ``theta`` (``q`` of ``m`` components,
     without replacement), ``Psi_k`` (uniform on ``[-17.3, 17.3]``), the white part ``eps_k`` of
-    ``d_k`` and the noise (:func:`fdi_lib.simulate.draw_noise`). The loop over generators only
-    draws (into preallocated arrays); the affine maps of the draws are applied to the whole batch.
+    ``d_k`` and the noise (the standard normal draws of :func:`fdi_lib.simulate.draw_noise`). The
+    loop over generators only draws, into preallocated arrays; the noise covariance roots are
+    applied to the whole batch (:func:`fdi_lib.simulate.noise_from_standard`). The covariances of
+    Example 1 are multiples of the identity, whose roots are diagonal: each trial is then bit for
+    bit the one its generator gives alone (:func:`draw_trial`, or ``draw_noise`` for the noise).
     """
     if isinstance(q, bool) or not isinstance(q, (int, np.integer)) or not 0 <= q <= m:
         raise ModelError(f"q: expected an integer in [0, {m}], got {q!r}")
-    N, B = model.n_steps, len(rngs)
+    N, n, p, B = model.n_steps, model.n, model.p, len(rngs)
     theta = np.zeros((B, m))
     Psi = np.empty((B, N, 3, m))
     eps = np.empty((B, N))
-    roots = noise_roots(model)  # covariance roots shared by all the draws
-    noises = []
+    z0, zw, zv = np.empty((B, n)), np.empty((B, N, n)), np.empty((B, N, p))
+    span = PSI_HALF_WIDTH - (-PSI_HALF_WIDTH)
     for b, rng in enumerate(rngs):
         theta[b, rng.choice(m, size=int(q), replace=False)] = 1.0
-        rng.random(out=Psi[b])  # the uniform draws of rng.uniform(low, high), before their affine map
+        P = Psi[b]
+        rng.random(out=P)  # rng.uniform(low, high) is low + (high - low) U for these U, bit for bit:
+        P *= span
+        P += -PSI_HALF_WIDTH
         rng.standard_normal(out=eps[b])
-        noises.append(draw_noise(model, rng, roots=roots))
-    # rng.uniform(low, high) returns low + (high - low) * U for the same U: the same map here, bit for bit
-    Psi *= PSI_HALF_WIDTH - (-PSI_HALF_WIDTH)
-    Psi += -PSI_HALF_WIDTH
+        for z in (z0[b], zw[b], zv[b]):  # the draws of fdi_lib.simulate.draw_noise, in its order
+            rng.standard_normal(out=z)
     d = 10.0 * np.sin(0.1 * np.arange(N)) + eps + 100.0
-    return Example1Trial(Psi=Psi, theta=theta, d=d[:, :, None],
-                         noise=Noise(x0=np.stack([z.x0 for z in noises]), w=np.stack([z.w for z in noises]),
-                                     v=np.stack([z.v for z in noises])))
+    return Example1Trial(Psi=Psi, theta=theta, d=d[:, :, None], noise=noise_from_standard(model, z0, zw, zv))
 
 
 def simulate_trials(model: LTVModel, trials: Example1Trial, *, theta_scale: float = 1.0) -> np.ndarray:
