@@ -40,7 +40,7 @@ from fdi_lib.models import LTVModel
 from fdi_lib.simulate import Noise, draw_noise, noise_roots
 from fdi_lib.validation import integer, probability, seed as check_seed
 
-__all__ = ["trial_seeds", "trial_rngs", "run_monte_carlo", "draw_noise_batch", "binomial_ci",
+__all__ = ["trial_seeds", "trial_rngs", "run_monte_carlo", "run_monte_carlo_many", "draw_noise_batch", "binomial_ci",
            "default_chunk_size"]
 
 ChunkFn = Callable[[Sequence[np.random.SeedSequence]], dict[str, np.ndarray]]
@@ -116,9 +116,26 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
     dict of numpy.ndarray
         Each entry concatenated over realisations (leading axis ``n_trials``).
     """
+    return run_monte_carlo_many([chunk_fn], n_trials, seed=seed, jobs=jobs, chunk_size=chunk_size,
+                                progress=progress, description=description)[0]
+
+
+def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: int, jobs: int = 1,
+                         chunk_size: int | None = None, progress: bool = False,
+                         description: str = "Monte Carlo") -> list[dict[str, np.ndarray]]:
+    """:func:`run_monte_carlo` of several chunk functions on the same realisations, in one pool.
+
+    E.g. the columns of a table (common random numbers: realisation ``i`` of every column uses
+    the same seed). Result ``c`` is exactly ``run_monte_carlo(chunk_fns[c], n_trials, ...)``
+    with the same arguments; but the chunks of all the columns are handed out together, so
+    that no process waits at the end of a column for the others to finish theirs.
+    """
     seeds = trial_seeds(seed, n_trials)
     if isinstance(jobs, (bool, np.bool_)) or not isinstance(jobs, (int, np.integer)) or jobs == 0:
         raise ModelError(f"jobs: expected a non-zero integer (-1 = all cores), got {jobs!r}")
+    chunk_fns = list(chunk_fns)
+    if not chunk_fns:
+        raise ModelError("chunk_fns: expected at least one chunk function, got none")
     import joblib
 
     n_workers = joblib.cpu_count() if jobs < 0 else int(jobs)
@@ -126,26 +143,29 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
         chunk_size = default_chunk_size(n_trials)
     chunk_size = integer(chunk_size, "chunk_size", low=1)
     parts = _chunks(len(seeds), int(chunk_size))
+    tasks = [(fn, seeds[sl]) for fn in chunk_fns for sl in parts]
     if progress:
         from tqdm.auto import tqdm
 
-        bar: Any = tqdm(total=len(parts), desc=description, unit="chunk")
+        bar: Any = tqdm(total=len(tasks), desc=description, unit="chunk")
     else:
         bar = None
-    results = _run_chunks(chunk_fn, [seeds[sl] for sl in parts], n_workers,
-                          None if bar is None else bar.update)
+    results = _run_chunks(tasks, n_workers, None if bar is None else bar.update)
     if bar is not None:
         bar.close()
-    keys = results[0].keys()
-    out = {}
-    for key in keys:
-        arrays = [np.asarray(r[key]) for r in results]
-        for sl, arr in zip(parts, arrays):
-            if arr.shape[:1] != (sl.stop - sl.start,):
-                raise ShapeError(f"chunk_fn: entry {key!r} must have one row per realisation "
-                                 f"({sl.stop - sl.start}), got shape {arr.shape}")
-        out[key] = np.concatenate(arrays, axis=0)
-    return out
+    outs = []
+    for c in range(len(chunk_fns)):
+        col = results[c * len(parts): (c + 1) * len(parts)]
+        out = {}
+        for key in col[0].keys():
+            arrays = [np.asarray(r[key]) for r in col]
+            for sl, arr in zip(parts, arrays):
+                if arr.shape[:1] != (sl.stop - sl.start,):
+                    raise ShapeError(f"chunk_fn: entry {key!r} must have one row per realisation "
+                                     f"({sl.stop - sl.start}), got shape {arr.shape}")
+            out[key] = np.concatenate(arrays, axis=0)
+        outs.append(out)
+    return outs
 
 
 def _call(chunk_fn: ChunkFn, seeds: Sequence[np.random.SeedSequence]) -> dict[str, np.ndarray]:
@@ -156,9 +176,10 @@ def _call(chunk_fn: ChunkFn, seeds: Sequence[np.random.SeedSequence]) -> dict[st
         return chunk_fn(seeds)
 
 
-def _run_chunks(chunk_fn: ChunkFn, chunks: list[Sequence[np.random.SeedSequence]], n_workers: int,
+def _run_chunks(tasks: list[tuple[ChunkFn, Sequence[np.random.SeedSequence]]], n_workers: int,
                 done: Callable[[], Any] | None) -> list[dict[str, np.ndarray]]:
-    """Results of ``chunk_fn`` on every chunk, in order, on this process and ``n_workers - 1`` others.
+    """Results of every task ``(chunk_fn, seeds)`` (a chunk), in order, on this process and
+    ``n_workers - 1`` others.
 
     The calling process computes chunks too: it is warm (modules imported, per-process caches of
     a chunk function's set-up filled), while a worker process pays its start-up (about a second
@@ -169,10 +190,10 @@ def _run_chunks(chunk_fn: ChunkFn, chunks: list[Sequence[np.random.SeedSequence]
     same): more jobs are never much slower than one. Workers are a reusable loky pool, kept
     between calls: the start-up is paid once per session.
     """
-    if n_workers == 1 or len(chunks) == 1:
+    if n_workers == 1 or len(tasks) == 1:
         out = []
-        for c in chunks:
-            out.append(_call(chunk_fn, c))
+        for task in tasks:
+            out.append(_call(*task))
             if done is not None:
                 done()
         return out
@@ -186,7 +207,7 @@ def _run_chunks(chunk_fn: ChunkFn, chunks: list[Sequence[np.random.SeedSequence]
         executor = get_reusable_executor(max_workers=n_workers - 1, timeout=600)
     lock = threading.Lock()
     delivered = threading.Event()  # a worker has delivered a chunk (set) or failed
-    todo = list(range(len(chunks)))
+    todo = list(range(len(tasks)))
     pending: set[int] = set()
     results: dict[int, dict[str, np.ndarray]] = {}
     errors: list[BaseException] = []
@@ -207,7 +228,7 @@ def _run_chunks(chunk_fn: ChunkFn, chunks: list[Sequence[np.random.SeedSequence]
                 i = todo.pop()
                 pending.add(i)
             try:
-                res = executor.submit(_call, chunk_fn, chunks[i]).result()
+                res = executor.submit(_call, *tasks[i]).result()
             except BaseException as exc:  # re-raised by the calling thread
                 with lock:
                     errors.append(exc)
@@ -232,13 +253,13 @@ def _run_chunks(chunk_fn: ChunkFn, chunks: list[Sequence[np.random.SeedSequence]
         if i is None:
             break
         if i not in results:
-            store(i, _call(chunk_fn, chunks[i]))
+            store(i, _call(*tasks[i]))
     for t in threads:  # wait for the chunks still running in workers (not for taken-over ones)
-        while t.is_alive() and len(results) < len(chunks) and not errors:
+        while t.is_alive() and len(results) < len(tasks) and not errors:
             t.join(0.01)
-    if len(results) < len(chunks):
+    if len(results) < len(tasks):
         raise errors[0]
-    return [results[i] for i in range(len(chunks))]
+    return [results[i] for i in range(len(tasks))]
 
 def binomial_ci(successes: int, trials: int, level: float = 0.95) -> tuple[float, float]:
     """Exact (Clopper-Pearson) confidence interval of a binomial proportion (scipy's ``binomtest``).

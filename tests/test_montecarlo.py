@@ -9,7 +9,7 @@ from statsmodels.stats.proportion import proportion_confint
 from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.models import ltv_model
 from fdi_lib.montecarlo import (binomial_ci, default_chunk_size, draw_noise_batch, run_monte_carlo,
-                                trial_seeds)
+                                run_monte_carlo_many, trial_seeds)
 from fdi_lib.simulate import draw_noise
 
 
@@ -58,6 +58,22 @@ def test_results_do_not_depend_on_jobs_or_chunks(chunk_size):
     # A realisation's draws depend only on (seed, i): the first 10 of 23 are those of 10.
     short = run_monte_carlo(fn, 10, seed=11)
     np.testing.assert_array_equal(short["x"], ref["x"][:10])
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_many_chunk_functions_in_one_pool_give_each_run(jobs):
+    fns = [functools.partial(_gaussian_chunk, dim=d) for d in (2, 3, 1)]
+    many = run_monte_carlo_many(fns, 23, seed=4, jobs=jobs, chunk_size=5)
+    assert len(many) == 3
+    for fn, res in zip(fns, many):
+        ref = run_monte_carlo(fn, 23, seed=4, jobs=1, chunk_size=5)
+        assert res.keys() == ref.keys()
+        for key in ref:
+            np.testing.assert_array_equal(res[key], ref[key])
+    # common random numbers: the first two components of dim 3 are the draws of dim 2
+    np.testing.assert_array_equal(many[1]["x"][:, :2], many[0]["x"])
+    with pytest.raises(ModelError, match="chunk_fns: expected at least one chunk function"):
+        run_monte_carlo_many([], 4, seed=0)
 
 
 def test_default_chunk_size_is_job_independent():

@@ -29,7 +29,7 @@ import numpy as np
 
 from fdi_lib.kitanidis import kitanidis_filter, kitanidis_gains, residual_signature
 from fdi_lib.errors import ModelError
-from fdi_lib.montecarlo import binomial_ci, run_monte_carlo, trial_rngs, trial_seeds
+from fdi_lib.montecarlo import binomial_ci, run_monte_carlo_many, trial_rngs, trial_seeds
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.sparse import (RegressionData, flat_range, flat_ranges, grid_flat_range, grid_flat_ranges,
@@ -193,8 +193,9 @@ def example1_rates(*, q_values: Sequence[int], r_values: Sequence[float], trials
     cols: dict[str, list[Any]] = {"success_log": [], "success_linear": [], "ci_log": [], "snr_db": [],
                                   "mean_size_log": []}
     cols.update({f"success_grid{n}": [] for n in GRID_SIZES})
-    for q, r in zip(q_values, r_values):
-        res = run_monte_carlo(partial(example1_chunk, q=int(q), r=float(r)), trials, seed=seed, jobs=jobs)
+    columns = run_monte_carlo_many([partial(example1_chunk, q=int(q), r=float(r))
+                                    for q, r in zip(q_values, r_values)], trials, seed=seed, jobs=jobs)
+    for res in columns:
         k_log = int(res["success_log"].sum())
         cols["success_log"].append(k_log)
         cols["success_linear"].append(int(res["success_linear"].sum()))
@@ -626,13 +627,15 @@ def lambda_rule(*, seed: int, trials: int | None, jobs: int) -> ReproductionResu
     n = 200 if trials is None else trials
     rates: dict[str, dict[str, float]] = {k: {} for k in RULE_READINGS + ("oracle",)}
     cis: dict[str, dict[str, list[float]]] = {k: {} for k in rates}
-    for key, q, r in _variant_columns():
-        res = run_monte_carlo(partial(lambda_rule_chunk, q=q, r=r), n, seed=seed, jobs=jobs)
+    cols = _variant_columns()
+    # one pool for the variants' columns and the initial-state runs (same trials)
+    *results, res = run_monte_carlo_many([partial(lambda_rule_chunk, q=q, r=r) for _, q, r in cols]
+                                         + [partial(initial_state_chunk, q=15, r=0.5)], n, seed=seed, jobs=jobs)
+    for (key, _, _), col in zip(cols, results):
         for k in rates:
-            c = int(res[k].sum())
+            c = int(col[k].sum())
             rates[k][key] = c / n
             cis[k][key] = list(binomial_ci(c, n))
-    res = run_monte_carlo(partial(initial_state_chunk, q=15, r=0.5), n, seed=seed, jobs=jobs)
     init_ci = {k: list(binomial_ci(int(v.sum()), n)) for k, v in res.items()}
     headline = {"success_rate": rates, "ci95": cis,
                 "init_success_rate": {i: float(res[f"log_{i}"].mean()) for i in INIT_VARIANTS},
