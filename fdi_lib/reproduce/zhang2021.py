@@ -543,6 +543,14 @@ def initial_state_models(r: float, init: str) -> tuple[Any, Any]:
     return base, filt
 
 
+@lru_cache(maxsize=16)
+def _initial_state_setup(r: float, init: str) -> tuple[Any, Any, Any]:
+    """:func:`initial_state_models` and the filter model's Kitanidis gains (noise-independent:
+    computed once per process, shared by all the chunks)."""
+    sim_model, filt = initial_state_models(r, init)
+    return sim_model, filt, kitanidis_gains(filt, ex.E)
+
+
 @single_threaded_blas
 def initial_state_chunk(seeds: Sequence[np.random.SeedSequence], *, q: int,
                         r: float) -> dict[str, np.ndarray]:
@@ -558,11 +566,10 @@ def initial_state_chunk(seeds: Sequence[np.random.SeedSequence], *, q: int,
     trials0 = ex.draw_trials(base, trial_rngs(seeds), q=q)
     out: dict[str, np.ndarray] = {}
     for init, s in INIT_VARIANTS.items():
-        sim_model, filt = initial_state_models(r, init)
+        sim_model, filt, gains = _initial_state_setup(float(r), init)
         noise = dataclasses.replace(trials0.noise, x0=s * trials0.noise.x0)
         trials = dataclasses.replace(trials0, noise=noise)
         y = ex.simulate_trials(sim_model, trials)
-        gains = kitanidis_gains(filt, ex.E)
         res = kitanidis_filter(filt, y, gains=gains)
         sig = residual_signature(filt, gains, Psi=trials.Psi)
         reg = regression_data(res.residuals, sig.on_residual, start=1)
