@@ -373,7 +373,8 @@ def residual_signature(model: LTVModel, gains: Any, fault: FaultProfile | None =
     Phi_a = np.broadcast_to(Phi_a, (*batch, N, p, m))
     nb = int(np.prod(batch, dtype=int))
     # The recursion acts column by column: stack the columns of all realisations side by side,
-    # (N, rows, batch * m), so that each step is one plain matrix product (one BLAS call).
+    # (N, rows, batch * m), so that each step is one plain matrix product (one BLAS call). Profiles
+    # already in that layout (a (N, n, batch, m) array seen as (batch, N, n, m)) are not copied.
     # An all-zero Phi (the usual state-fault case) is skipped rather than multiplied.
     has_phi = bool(np.any(Phi_a))
     Psi_c = np.moveaxis(Psi_a.reshape(nb, N, n, m), 0, 2).reshape(N, n, nb * m)
@@ -381,14 +382,17 @@ def residual_signature(model: LTVModel, gains: Any, fault: FaultProfile | None =
     K = gains.K
     IKH = np.eye(n) - K @ model.H  # (N, n, n)
     U = np.empty((N, n, nb * m))
+    HU = np.empty((N, p, nb * m))  # H_k Upsilon_k, one product per sample, while U[k] is in cache
     U[0] = -K[0] @ Phi_c[0] if has_phi else 0.0
+    HU[0] = model.H[0] @ U[0]
     for k in range(N - 1):
         U[k + 1] = IKH[k + 1] @ (model.F[k] @ U[k] + Psi_c[k])
         if has_phi:
             U[k + 1] -= K[k + 1] @ Phi_c[k + 1]
+        HU[k + 1] = model.H[k + 1] @ U[k + 1]
     # back to (*batch, N, rows, m) as views of the stacked arrays (no copy)
     Ups = np.moveaxis(U.reshape(N, n, nb, m), 2, 0).reshape(*batch, N, n, m)
-    HU = (model.H @ U).reshape(N, p, nb, m)  # H_k Upsilon_k, one product per sample
+    HU = HU.reshape(N, p, nb, m)
     on_res = np.moveaxis(HU, 2, 0).reshape(*batch, N, p, m)
     if has_phi:
         on_res = on_res + Phi_a

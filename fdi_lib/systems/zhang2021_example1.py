@@ -108,21 +108,23 @@ def draw_trials(model: LTVModel, rngs: list[np.random.Generator], *, q: int, m: 
         raise ModelError(f"q: expected an integer in [0, {m}], got {q!r}")
     N, n, p, B = model.n_steps, model.n, model.p, len(rngs)
     theta = np.zeros((B, m))
-    Psi = np.empty((B, N, 3, m))
+    # Psi in the layout of fdi_lib.kitanidis.residual_signature, (N, 3, B, m), seen as (B, N, 3, m)
+    Psi_s = np.empty((N, 3, B, m))
+    P = np.empty((N, 3, m))  # one trial's draws (in cache while they are scaled)
     eps = np.empty((B, N))
     z0, zw, zv = np.empty((B, n)), np.empty((B, N, n)), np.empty((B, N, p))
     span = PSI_HALF_WIDTH - (-PSI_HALF_WIDTH)
     for b, rng in enumerate(rngs):
         theta[b, rng.choice(m, size=int(q), replace=False)] = 1.0
-        P = Psi[b]
         rng.random(out=P)  # rng.uniform(low, high) is low + (high - low) U for these U, bit for bit:
         P *= span
         P += -PSI_HALF_WIDTH
+        Psi_s[:, :, b] = P
         rng.standard_normal(out=eps[b])
         for z in (z0[b], zw[b], zv[b]):  # the draws of fdi_lib.simulate.draw_noise, in its order
             rng.standard_normal(out=z)
     d = 10.0 * np.sin(0.1 * np.arange(N)) + eps + 100.0
-    return Example1Trial(Psi=Psi, theta=theta, d=d[:, :, None], noise=noise_from_standard(model, z0, zw, zv))
+    return Example1Trial(Psi=Psi_s.transpose(2, 0, 1, 3), theta=theta, d=d[:, :, None], noise=noise_from_standard(model, z0, zw, zv))
 
 
 def simulate_trials(model: LTVModel, trials: Example1Trial, *, theta_scale: float = 1.0) -> np.ndarray:
