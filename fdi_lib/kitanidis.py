@@ -382,18 +382,19 @@ def residual_signature(model: LTVModel, gains: Any, fault: FaultProfile | None =
     K = gains.K
     IKH = np.eye(n) - K @ model.H  # (N, n, n)
     U = np.empty((N, n, nb * m))
-    HU = np.empty((N, p, nb * m))  # H_k Upsilon_k, one product per sample, while U[k] is in cache
+    # H_k Upsilon_k, one product per sample while Upsilon_k is in cache, stored realisation first
+    # (the layout of the regression (36)-(38) built from it)
+    HU = np.empty((nb, N, p, m))
     U[0] = -K[0] @ Phi_c[0] if has_phi else 0.0
-    HU[0] = model.H[0] @ U[0]
-    for k in range(N - 1):
-        U[k + 1] = IKH[k + 1] @ (model.F[k] @ U[k] + Psi_c[k])
-        if has_phi:
-            U[k + 1] -= K[k + 1] @ Phi_c[k + 1]
-        HU[k + 1] = model.H[k + 1] @ U[k + 1]
+    for k in range(N):
+        if k > 0:
+            U[k] = IKH[k] @ (model.F[k - 1] @ U[k - 1] + Psi_c[k - 1])
+            if has_phi:
+                U[k] -= K[k] @ Phi_c[k]
+        HU[:, k] = (model.H[k] @ U[k]).reshape(p, nb, m).transpose(1, 0, 2)
     # back to (*batch, N, rows, m) as views of the stacked arrays (no copy)
     Ups = np.moveaxis(U.reshape(N, n, nb, m), 2, 0).reshape(*batch, N, n, m)
-    HU = HU.reshape(N, p, nb, m)
-    on_res = np.moveaxis(HU, 2, 0).reshape(*batch, N, p, m)
+    on_res = HU.reshape(*batch, N, p, m)
     if has_phi:
         on_res = on_res + Phi_a
     return ResidualSignature(Upsilon=Ups, on_residual=on_res)

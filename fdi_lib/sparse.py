@@ -94,6 +94,9 @@ class RegressionData:
         Stacked ``H_k Upsilon_k + Phi_k`` for ``k = start .. N-1``, shape ``(*batch, (N - start) p, m)``.
     y : numpy.ndarray
         Stacked residuals, shape ``(*batch, (N - start) p)``.
+
+    ``X`` and ``y`` are read-only views of the residuals and signature when their layout allows
+    (e.g. :func:`fdi_lib.kitanidis.residual_signature`'s), copies otherwise.
     n_samples : int
         Number of time samples ``N - start`` (the ``N`` of the Lasso normalisation (39)).
     """
@@ -139,7 +142,7 @@ def regression_data(residuals: Any, on_residual: Any, *, start: int = 1) -> Regr
     m = S.shape[-1]
     X = np.broadcast_to(S[..., start:, :, :], (*batch, N - start, p, m)).reshape(*batch, (N - start) * p, m)
     y = np.broadcast_to(r[..., start:, :], (*batch, N - start, p)).reshape(*batch, (N - start) * p)
-    return RegressionData(X=np.ascontiguousarray(X), y=np.ascontiguousarray(y), n_samples=int(N - start))
+    return RegressionData(X=X, y=y, n_samples=int(N - start))  # views of the inputs when their layout allows
 
 
 def _check_xy(X: Any, y: Any) -> tuple[np.ndarray, np.ndarray]:
