@@ -259,6 +259,10 @@ class PathBatch:
     def __len__(self) -> int:
         return int(self.n_points.size)
 
+    @functools.cached_property
+    def _activity(self) -> tuple[np.ndarray, np.ndarray]:
+        return _activity(self.coefs)  # computed once per batch, shared by the rules
+
     def path(self, b: int) -> LassoPath:
         """Path ``b`` as a :class:`LassoPath`."""
         k = int(self.n_points[b])
@@ -277,7 +281,7 @@ class PathBatch:
         mask = np.asarray(support, dtype=bool)
         if mask.shape != (len(self), self.coefs.shape[2]):
             raise ShapeError(f"support: expected shape {(len(self), self.coefs.shape[2])}, got {mask.shape}")
-        _, act = _activity(self.coefs)
+        _, act = self._activity
         valid = np.arange(act.shape[1]) < (self.n_points - 1)[:, None]
         return np.any(valid & np.all(act == mask[:, None, :], axis=2), axis=1)
 
@@ -492,7 +496,7 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
         used = np.arange(K) < n_act[:, None]
         dA = np.zeros((rows.size, K))
         dA[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], np.where(used, sign[rows[:, None], order], 0.0))
-        a = np.einsum("bji,bj->bi", GA, dA)
+        a = np.einsum("bji,bj->bi", GA[:, :k], dA[:, :k])  # a sum in slot order: unused slots add 0
         d = np.zeros((rows.size, m))
         ub, us = np.nonzero(used)
         d[ub, order[ub, us]] = dA[ub, us]
@@ -683,7 +687,7 @@ def _flat_ranges(paths: PathBatch, scale: Any, lambda_ratio: Any, max_size: Any,
     _check_rule(lambda_ratio, max_size)
     a = paths.lambdas
     B, S = a.shape
-    tol, act = _activity(paths.coefs)
+    tol, act = paths._activity
     top = paths.coefs.shape[2] // 2 if max_size is None else int(max_size)
     K = paths.n_points - 1  # intervals (a[i+1], a[i]) of each path
     sizes = np.where(np.arange(S - 1) < K[:, None], act.sum(axis=2), -1)
@@ -863,11 +867,14 @@ def _grid_flat_ranges(paths: PathBatch, n_grid: Any, lambda_ratio: Any, max_size
     top = paths.coefs.shape[2] // 2 if max_size is None else int(max_size)
     grid = a[:, :1] * _unit_grid(int(n_grid), float(lambda_ratio))  # geometric, from lambda_max
     grid[:, 0] = a[:, 0]
-    _, act = _activity(paths.coefs)  # (B, S-1, m): support on each interval (a[i+1], a[i])
+    _, act = paths._activity  # (B, S-1, m): support on each interval (a[i+1], a[i])
     K = paths.n_points - 1
     isz = np.where(np.arange(S - 1) < K[:, None], act.sum(axis=2), -1)
-    # interval i is (a[i+1], a[i]); lambda >= a[0] has the empty support (the padding of a is -inf)
-    idx = np.clip((a[:, None, :] >= grid[:, :, None]).sum(axis=2) - 1, 0, (K - 1)[:, None])
+    # interval i is (a[i+1], a[i]); lambda >= a[0] has the empty support
+    idx = np.empty(grid.shape, int)
+    for b in range(B):  # one sorted search per path
+        idx[b] = np.searchsorted(-a[b, : K[b] + 1], -grid[b], side="right") - 1
+    idx = np.clip(idx, 0, (K - 1)[:, None])
     sizes = np.where(grid >= a[:, :1], 0, isz[rows[:, None], idx])  # theta_hat(lambda_max) = 0
     over = isz > top
     has_over = over.any(axis=1)
