@@ -19,8 +19,12 @@ Two solvers, which must agree:
   one ``lambda`` at a time);
 * :func:`lasso_path` - the exact, piecewise-linear Lasso path by the LARS-Lasso homotopy of
   Efron et al. (2004), the algorithm of scikit-learn's ``lars_path(method="lasso")``, here in
-  Gram form and batched over problems (:func:`lasso_paths`, for Monte Carlo chunks): every
+  Gram form and batched over problems (:func:`lasso_path_batch`, for Monte Carlo chunks): every
   breakpoint (every change of support) comes out, with no ``lambda`` grid.
+
+The rules for ``lambda`` below have batched forms too (:func:`flat_ranges`,
+:func:`grid_flat_ranges` on a :class:`PathBatch`): a Monte Carlo chunk applies them to all its
+paths at once, with the same results as one path at a time.
 
 The paper's rule for ``lambda`` (:func:`flat_range`): take the widest range of ``lambda``
 over which the *number* of non-zero components stays constant and pick its middle; then
@@ -313,7 +317,7 @@ def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: floa
     change of support) to the next, with the drop rule that turns LARS into the Lasso: it is
     exact at every breakpoint, which a hand-written ``lambda`` grid would not be. It is the
     algorithm of scikit-learn's ``lars_path(method="lasso")`` (the tests check that both give
-    the same breakpoints), written here batched over problems (:func:`lasso_paths`) so that a
+    the same breakpoints), written here batched over problems (:func:`lasso_path_batch`) so that a
     Monte Carlo chunk follows all its paths at once.
 
     Parameters
