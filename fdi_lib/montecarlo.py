@@ -129,6 +129,18 @@ def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: i
     the same seed). Result ``c`` is exactly ``run_monte_carlo(chunk_fns[c], n_trials, ...)``
     with the same arguments; but the chunks of all the columns are handed out together, so
     that no process waits at the end of a column for the others to finish theirs.
+
+    Parameters
+    ----------
+    chunk_fns : sequence of callable
+        Chunk functions, as ``chunk_fn`` of :func:`run_monte_carlo`.
+    n_trials, seed, jobs, chunk_size, progress, description
+        As in :func:`run_monte_carlo` (the progress bar counts the chunks of all the functions).
+
+    Returns
+    -------
+    list of dict of numpy.ndarray
+        One per chunk function, as :func:`run_monte_carlo` returns.
     """
     seeds = trial_seeds(seed, n_trials)
     if isinstance(jobs, (bool, np.bool_)) or not isinstance(jobs, (int, np.integer)) or jobs == 0:

@@ -127,9 +127,24 @@ def noise_from_standard(model: LTVModel, z0: np.ndarray, zw: np.ndarray, zv: np.
     """The noise :func:`draw_noise` makes of its standard normal draws.
 
     ``X_0 = x0 + S_0 z0``, ``W_k = S_{Q,k} zw_k``, ``V_k = S_{R,k} zv_k`` (``S`` the roots of
-    :func:`noise_roots`), for ``z0`` ``(*batch, n)``, ``zw`` ``(*batch, N, n)``, ``zv``
-    ``(*batch, N, p)``: draws made elsewhere (e.g. one generator per realisation, each drawing
+    :func:`noise_roots`): draws made elsewhere (e.g. one generator per realisation, each drawing
     ``z0``, ``zw``, ``zv`` in this order, as :func:`draw_noise` does) are mapped at once.
+
+    Parameters
+    ----------
+    model : LTVModel
+    z0 : numpy.ndarray
+        ``(*batch, n)``.
+    zw : numpy.ndarray
+        ``(*batch, N, n)``.
+    zv : numpy.ndarray
+        ``(*batch, N, p)``.
+    roots : NoiseRoots, optional
+        ``noise_roots(model)``, computed if not given.
+
+    Returns
+    -------
+    Noise
     """
     if roots is None:
         roots = noise_roots(model)

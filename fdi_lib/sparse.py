@@ -349,8 +349,15 @@ def lasso_paths(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: flo
                 max_size: int | None = None) -> list[LassoPath]:
     """Exact Lasso paths of a batch of problems, as :func:`lasso_path` for each.
 
-    Parameters and computation as :func:`lasso_path_batch`; returns one :class:`LassoPath` per
-    problem, each identical to :func:`lasso_path` of that problem alone.
+    Parameters
+    ----------
+    X, y, n_samples, lambda_min, max_size
+        As in :func:`lasso_path_batch`, which computes the paths.
+
+    Returns
+    -------
+    list of LassoPath
+        One per problem, each identical to :func:`lasso_path` of that problem alone.
     """
     return lasso_path_batch(X, y, n_samples=n_samples, lambda_min=lambda_min, max_size=max_size).paths()
 
@@ -679,7 +686,21 @@ def flat_ranges(paths: PathBatch, *, scale: Scale = "log", lambda_ratio: float =
                 max_size: int | None = None) -> FlatRanges:
     """:func:`flat_range` of every path of a batch at once (the same results, as arrays).
 
-    Raises :class:`~fdi_lib.errors.ModelError` naming the first path with no candidate range.
+    Parameters
+    ----------
+    paths : PathBatch
+        E.g. from :func:`lasso_path_batch`.
+    scale, lambda_ratio, max_size
+        As in :func:`flat_range`.
+
+    Returns
+    -------
+    FlatRanges
+
+    Raises
+    ------
+    ModelError
+        Naming the first path with no candidate range.
     """
     return _flat_ranges(paths, scale, lambda_ratio, max_size, single=False)
 
@@ -851,7 +872,21 @@ def grid_flat_ranges(paths: PathBatch, n_grid: int, *, lambda_ratio: float = 1e-
                      max_size: int | None = None) -> GridFlatRanges:
     """:func:`grid_flat_range` of every path of a batch at once (the same results, as arrays).
 
-    Raises :class:`~fdi_lib.errors.ModelError` naming the first path the rule cannot be applied to.
+    Parameters
+    ----------
+    paths : PathBatch
+        E.g. from :func:`lasso_path_batch`.
+    n_grid, lambda_ratio, max_size
+        As in :func:`grid_flat_range`.
+
+    Returns
+    -------
+    GridFlatRanges
+
+    Raises
+    ------
+    ModelError
+        Naming the first path the rule cannot be applied to.
     """
     return _grid_flat_ranges(paths, n_grid, lambda_ratio, max_size, single=False)
 
