@@ -134,3 +134,21 @@ def test_calling_process_shares_the_work_and_results_keep_their_order():
         two = run_monte_carlo(fn, 40, seed=3, jobs=2, chunk_size=4)
         np.testing.assert_array_equal(two["x"], ref["x"])
         assert two["here"][:4].all()  # the calling process takes the first chunk itself
+
+
+def test_single_threaded_blas_limits_every_blas_and_restores_it():
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from fdi_lib.threads import blas_single_thread, single_threaded_blas
+
+    def blas_threads():
+        return [lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"]
+
+    with threadpool_limits(limits=2, user_api="blas"):  # a known state to restore
+        before = blas_threads()
+        assert before
+        with blas_single_thread():
+            assert blas_threads() == [1] * len(before)
+        assert blas_threads() == before
+        assert single_threaded_blas(blas_threads)() == [1] * len(before)
+        assert blas_threads() == before
