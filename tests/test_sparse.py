@@ -291,3 +291,90 @@ def test_batched_paths_match_scikit_learn_on_example1_and_stop_at_max_size():
         sizes = path.support_sizes()
         # stopped at the end of the first interval with more than 25 components (or at the window's end)
         assert (sizes[-1] > 25 and sizes[:-1].max() <= 25) or path.lambdas[-1] == pytest.approx(lam[-1])
+
+
+def _rule_by_loops(path, scale, lambda_ratio, top):
+    """The flat-range rule written as plain loops over the breakpoints (reference)."""
+    a, c = path.lambdas, path.coefs
+    tol = 1e-12 * max(1.0, float(np.abs(c).max()))
+    sizes = [int(np.sum(np.abs(0.5 * (c[:, i] + c[:, i + 1])) > tol)) for i in range(a.size - 1)]
+    floor = lambda_ratio * a[0]
+    for i, s in enumerate(sizes):
+        if s > top:
+            floor, sizes = max(floor, a[i]), sizes[:i]
+            break
+    best, i = None, 0
+    while i < len(sizes):
+        j = i
+        while j + 1 < len(sizes) and sizes[j + 1] == sizes[i]:
+            j += 1
+        low, high = max(a[j + 1], floor), a[i]
+        if 1 <= sizes[i] <= top and high > low:
+            width = np.log(high / low) if scale == "log" else high - low
+            if best is None or width > best[0]:
+                best = (width, low, high, sizes[i])
+        i = j + 1
+    width, low, high, size = best
+    mid = np.sqrt(low * high) if scale == "log" else 0.5 * (low + high)
+    return low, high, size, np.flatnonzero(np.abs(path.coef(mid)) > tol)
+
+
+def _grid_by_loops(path, n_grid, lambda_ratio, top):
+    """The grid reading of the rule with plain loops (reference): sizes at each grid point."""
+    a, c = path.lambdas, path.coefs
+    tol = 1e-12 * max(1.0, float(np.abs(c).max()))
+    grid = a[0] * np.geomspace(1.0, lambda_ratio, n_grid)
+    grid[0] = a[0]
+    act = [np.abs(0.5 * (c[:, i] + c[:, i + 1])) > tol for i in range(a.size - 1)]
+    end = grid[-1]
+    for i, s in enumerate(act):
+        if s.sum() > top:
+            end = a[i]
+            break
+    sizes, ints = [], []
+    for g in grid:
+        i = max(k for k in range(a.size) if a[k] >= g) if g < a[0] else 0
+        i = min(i, len(act) - 1)
+        ints.append(i)
+        sizes.append(0 if g >= a[0] else (int(act[i].sum()) if g >= end else -1))
+    best, start = (0, 0, 0), 0
+    for k in range(1, n_grid + 1):
+        if k == n_grid or sizes[k] != sizes[start]:
+            if 1 <= sizes[start] <= top and k - start > best[0]:
+                best = (k - start, start, k)
+            start = k
+    _, start, stop = best
+    mid = (start + stop - 1) // 2
+    return start, stop, grid[mid], np.flatnonzero(act[ints[mid]])
+
+
+def test_batched_rules_match_plain_loops_on_paths_of_different_lengths():
+    """flat_ranges / grid_flat_ranges on one padded batch: full paths, truncated ones, hand-made ones."""
+    from fdi_lib.sparse import PathBatch, flat_ranges, grid_flat_ranges, lasso_path_batch
+
+    problems = [_problem(seed=40 + i, rows=60, m=20, q=1 + i % 6, noise=0.2 + 0.3 * i) for i in range(10)]
+    X = np.stack([p[0] for p in problems])
+    y = np.stack([p[1] for p in problems])
+    full = lasso_path_batch(X, y, n_samples=30).paths()
+    short = lasso_path_batch(X, y, n_samples=30, lambda_min=1e-4, max_size=10).paths()
+    hand = [_hand_path([10, 6, 5, 0.5, 0.01, 0.0], [1, 2, 3, 4, 5], m=20),
+            _hand_path([10, 8, 4, 3, 1], [1, 1, 2, 3], m=20)]
+    paths = full + short + hand
+    assert len({p.lambdas.size for p in paths}) > 5  # really different lengths in one batch
+    batch = PathBatch.of(paths)
+    for scale in ("log", "linear"):
+        fr = flat_ranges(batch, scale=scale, lambda_ratio=1e-3, max_size=10)
+        for b, p in enumerate(paths):
+            low, high, size, support = _rule_by_loops(p, scale, 1e-3, 10)
+            assert (fr.low[b], fr.high[b], fr.size[b]) == (low, high, size)
+            np.testing.assert_array_equal(np.flatnonzero(fr.support[b]), support)
+    with pytest.raises(ModelError, match=r"paths\[21\]: stops at lambda = 1 > lambda_ratio"):
+        grid_flat_ranges(batch, 60, lambda_ratio=1e-3, max_size=10)  # the last path stops at 1
+    g = grid_flat_ranges(PathBatch.of(paths[:-1]), 60, lambda_ratio=1e-3, max_size=10)
+    for b, p in enumerate(paths[:-1]):
+        start, stop, middle, support = _grid_by_loops(p, 60, 1e-3, 10)
+        assert (g.start[b], g.stop[b], g.middle[b]) == (start, stop, middle)
+        np.testing.assert_array_equal(np.flatnonzero(g.support[b]), support)
+    with pytest.raises(ModelError, match=r"paths\[1\]: no range of lambda"):
+        flat_ranges(PathBatch.of([hand[0], LassoPath(lambdas=np.array([1.0, 0.0]), coefs=np.zeros((20, 2)),
+                                                             n_samples=5)]))
