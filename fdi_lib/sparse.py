@@ -440,9 +440,9 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
     rows = np.arange(B)
     beta = np.zeros((B, m))
     cov = Xy.copy()
-    sign = np.zeros((B, m))
+    sign = np.zeros((B, m + 1))  # column m: the (zero) sign of an unused slot
     active = np.zeros((B, m), bool)
-    order = np.zeros((B, K), int)  # active components in their slots (the first n_act[b] slots)
+    order = np.full((B, K), m)  # active components in their slots (the first n_act[b]); m when unused
     slot = np.zeros((B, m), int)  # slot of each active component
     n_act = np.zeros(B, int)
     inv = np.zeros((B, K, K))  # inverse of Gram_AA in slot order, zero outside the used slots
@@ -453,6 +453,7 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
     levels, coefs = np.zeros((B, cap)), np.zeros((B, cap, m))
     levels[:, 0] = c
     n_points = np.ones(B, int)
+    step = 1  # breakpoints so far of every problem still running (each step adds one to each)
     ids = np.arange(B)  # problems still followed (the arrays below are compacted to them)
     running = c > c_min
     joining = running.copy()  # problems whose event is the join of component j
@@ -500,17 +501,17 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
             GA[b, last] = 0.0
             order[b, sd] = order[b, last]
             slot[b, order[b, sd]] = sd
+            order[b, last] = m
             n_act[b] -= 1
         active[rows, j] |= joining
         active[rows, j] &= ~dropping
         sign[rows, j] = np.where(joining, np.sign(cov[rows, j]), np.where(dropping, 0.0, sign[rows, j]))
-        used = np.arange(K) < n_act[:, None]
         dA = np.zeros((rows.size, K))
-        dA[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], np.where(used, sign[rows[:, None], order], 0.0))
+        dA[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], sign[rows[:, None], order])
         a = np.einsum("bji,bj->bi", GA[:, :k], dA[:, :k])  # a sum in slot order: unused slots add 0
-        d = np.zeros((rows.size, m))
-        ub, us = np.nonzero(used)
-        d[ub, order[ub, us]] = dA[ub, us]
+        d = np.zeros((rows.size, m + 1))
+        d[rows[:, None], order[:, :k]] = dA[:, :k]  # unused slots write into column m, dropped
+        d = d[:, :m]
         with np.errstate(divide="ignore", invalid="ignore"):
             up = (c[:, None] - cov) / (1.0 - a)
             down = (c[:, None] + cov) / (1.0 + a)
@@ -539,12 +540,14 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
         barred = np.where(dropping, j, -1)
         barred_sign = sign[rows, j]
         at = ids[running]
-        if n_points[at].max() >= cap:
+        point = step  # the index of the next breakpoint, the same for every running problem
+        step += 1
+        if point >= cap:
             levels = np.concatenate([levels, np.zeros_like(levels)], axis=1)
             coefs = np.concatenate([coefs, np.zeros_like(coefs)], axis=1)
             cap *= 2
-        levels[at, n_points[at]] = c[running]
-        coefs[at, n_points[at]] = beta[running]
+        levels[at, point] = c[running]
+        coefs[at, point] = beta[running]
         n_points[at] += 1
         if max_size is not None:  # the interval just followed had more than max_size components
             running &= active.sum(axis=1) <= max_size
