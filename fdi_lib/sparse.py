@@ -199,18 +199,8 @@ class LassoPath:
         return (1 - t) * self.coefs[:, i] + t * self.coefs[:, i + 1]
 
     @functools.cached_property
-    def _activity(self) -> tuple[float, np.ndarray]:
-        tol, act = _activity(self.coefs.T[None])
-        return float(tol[0]), act[0].T  # (m, K), computed once per path
-
-    @property
-    def _tol(self) -> float:
-        """Magnitude below which a coefficient counts as zero (relative to the largest)."""
-        return self._activity[0]
-
-    @property
     def _support_matrix(self) -> np.ndarray:
-        return self._activity[1]
+        return _activity(self.coefs.T[None])[1][0].T  # (m, K), computed once per path
 
     def _active(self) -> np.ndarray:
         return self._support_matrix
