@@ -36,6 +36,7 @@ from matplotlib.figure import Figure
 
 from fdi_lib.errors import ModelError
 from fdi_lib.plotting import DISPLAY_DPI, smallest_font_pt
+from fdi_lib.widgets import render
 
 __all__ = ["Explorable", "explorable", "figure_data", "PALETTE_COLOURS"]
 
@@ -81,8 +82,9 @@ def _png_frame(fig: Figure) -> str:
     from PIL import Image
     from PIL.PngImagePlugin import PngInfo
 
-    fig.set_dpi(DISPLAY_DPI)
-    fig.canvas.draw()
+    if fig.dpi != DISPLAY_DPI:
+        fig.set_dpi(DISPLAY_DPI)
+    render(fig)   # the callback moved its artists: draws what changed only
     img = Image.frombuffer("RGBA", fig.canvas.get_width_height(), fig.canvas.buffer_rgba(), "raw", "RGBA", 0, 1)
     img = img.convert("RGB").quantize(colors=PALETTE_COLOURS, method=Image.Quantize.FASTOCTREE)
     info = PngInfo()

@@ -2,11 +2,19 @@
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
+import numpy as np
+
 from fdi_lib.errors import ModelError
+from fdi_lib.filters import kalman_filter
+from fdi_lib.glr import first_alarm, glr_window
 from fdi_lib.reproduce.registry import ReproductionResult
-from fdi_lib.reproduce.zb2014_pipeline import plot_single_run, single_run
+from fdi_lib.reproduce.zb2014_pipeline import (FAULT_ONSET, GLR_START, SingleRun, fault_theta, pipeline_setup,
+                                               plot_single_run)
+from fdi_lib.simulate import simulate
+from fdi_lib.systems import gas_pipeline as gp
 
 __all__ = ["explore_pipeline", "DEFAULTS", "GRID"]
 
@@ -46,8 +54,15 @@ def explore_pipeline(fault_size_e5: float = DEFAULTS["fault_size_e5"], fault: in
         raise ModelError(f"window: expected an integer in [10, 250], got {window!r}")
     if not threshold > 0:
         raise ModelError(f"threshold: expected a positive number, got {threshold!r}")
-    run = single_run(seed=int(seed), fault=int(fault), delta=float(fault_size_e5) * 1e-5,
-                     threshold=float(threshold), window=int(window))
+    st = pipeline_setup()
+    eps_noise = _noise_innovations(int(seed))
+    # the innovation is linear in the fault: the noise's part plus the signature of the step at
+    # 600 min times theta (tests: equal to single_run's)
+    eps = eps_noise + st.known_signature @ fault_theta(int(fault), float(fault_size_e5) * 1e-5)
+    glr = glr_window(eps, st.model, st.gains, st.input_family, int(window))
+    run = SingleRun(t_min=np.arange(st.model.n_steps) * gp.TS_MIN, innovations=eps[:, 0],
+                    statistic=glr.statistic, onset=glr.onset, true_onset=FAULT_ONSET, threshold=float(threshold),
+                    alarm=int(first_alarm(glr.statistic, float(threshold), start=GLR_START)))
     if run.alarm < 0:
         status = "no alarm"
     elif run.alarm < run.true_onset:
@@ -56,4 +71,15 @@ def explore_pipeline(fault_size_e5: float = DEFAULTS["fault_size_e5"], fault: in
         status = f"delay {run.detection_delay_min:g} min"
     title = f"fault {fault}, change {fault_size_e5:g}e-5, w = {window}: {status}"
     result = ReproductionResult(id="explore", headline={}, settings={"title": title}, data={"run": run})
-    return plot_single_run(result, fig=fig)
+    return plot_single_run(result, fig=fig, widget=True)
+
+
+@functools.lru_cache(maxsize=8)
+def _noise_innovations(seed: int) -> np.ndarray:
+    # the fault-free innovations of the seed's noise record (simulate draws the noise before the
+    # fault acts): what no slider but the seed changes
+    st = pipeline_setup()
+    profile = st.input_family.profile(FAULT_ONSET)
+    sim = simulate(st.model, rng=np.random.default_rng(seed), u=st.u, fault=profile,
+                   theta=np.zeros(st.input_family.m))
+    return kalman_filter(st.model, sim.y, st.u, gains=st.gains).innovations
