@@ -130,7 +130,7 @@ def _static_regions(fig: Any, renderer: Any) -> dict[Any, tuple[int, int, int, i
     regions = {}
     for ax in fig.axes:
         x0, y0, x1, y1 = _static_box(ax, renderer)
-        regions[ax] = (x0 - 2, height - y1 - 2, x1 + 2, height - y0 + 2)   # rows from the top
+        regions[ax] = (x0 - 1, height - y1 - 1, x1 + 1, height - y0 + 1)   # rows from the top
     boxes = list(regions.values())
     for i, a in enumerate(boxes):
         for b in boxes[i + 1:]:
