@@ -13,7 +13,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from fdi_lib.errors import ModelError
+from fdi_lib.errors import FDIError, ModelError
 
 __all__ = ["interactive_figure", "keep_artists", "reusable_artists", "render", "set_limits", "stepped_limit",
            "stepped_range", "widget_png"]
@@ -285,7 +285,7 @@ def interactive_figure(callback: Callable[..., Any], **sliders: Any):
     Returns
     -------
     ipywidgets.VBox
-        The sliders above the image of the figure (and the error of a bad value, if any).
+        The sliders above the image of the figure (and the message of a bad value, if any).
     """
     import ipywidgets as widgets
     import matplotlib.pyplot as plt
@@ -299,18 +299,21 @@ def interactive_figure(callback: Callable[..., Any], **sliders: Any):
     image = widgets.Image(format="png", width=round(FIG_WIDTH_IN * DISPLAY_DPI),
                           layout=widgets.Layout(max_width="100%", height="auto"))
 
-    errors = widgets.Output()   # a bad value's error is shown below the figure
+    errors = widgets.Output()   # the message of a bad value, below the figure
 
     def redraw(_change: Any = None) -> None:
-        errors.clear_output()
-        with errors:
+        errors.outputs = ()
+        try:
             fig = callback(**{k: w.value for k, w in sliders.items()}, fig=state["fig"])
-            if fig is not state["fig"]:
-                # shown in the image widget only: keep pyplot from showing it again at the end
-                # of the cell (a closed figure can still be redrawn by the next callback)
-                plt.close(fig)
-                state["fig"] = fig
-            image.value = widget_png(fig)
+        except FDIError as exc:   # a typed error of a bad value: say why, keep the last figure
+            errors.append_stdout(f"{type(exc).__name__}: {exc}\n")
+            return
+        if fig is not state["fig"]:
+            # shown in the image widget only: keep pyplot from showing it again at the end of the
+            # cell (a closed figure can still be redrawn by the next callback)
+            plt.close(fig)
+            state["fig"] = fig
+        image.value = widget_png(fig)
 
     for w in sliders.values():
         w.observe(redraw, names="value")
