@@ -15,7 +15,9 @@ larger) of ``REPEATS`` moves of one slider between two values:
 * ``+ PNG``: encoding the PNG that the image widget shows.
 
 The two values of each slider cross a step of the round axis limits where they do (then the
-axes whose limits change are drawn again: the ``move`` column includes that).
+axes whose limits change are drawn again: the ``move`` column includes that). The widgets' caches
+of GLR results (``batched_glr``) are emptied before every timed move: each move computes its
+GLR, as a move to a value not seen before does.
 
 Explorables. For each chapter's explorable (:func:`fdi_lib.explorables.explorable` over the
 chapter's grid, as its cell runs it, per-process caches of the widgets cold) the CPU time of all
@@ -48,6 +50,8 @@ AIM_MS = 60.0
 FRAMES_TARGET_S = 2.5
 PAGE_TARGET_MB = 3.0
 REPEATS = 5
+#: Results the widgets keep per slider value (emptied before every timed move)
+RESULT_CACHES = (zb2014._GLR_CACHE, zb2014_pipeline._GLR_CACHE)
 
 # widget: (callback, the slider moved, two values it alternates between)
 WIDGETS = {
@@ -94,11 +98,16 @@ def bench_widget(name: str) -> None:
             fig = callback(**{slider: values[1]}, fig=fig)
             render(fig)
 
+        for cache in RESULT_CACHES:   # a value not seen before: its GLR is computed
+            cache.clear()
+
         moves.append(_cpu_ms(move))
         png.append(_cpu_ms(lambda: _encode_png(fig)))   # what widget_png adds to the render
 
         def move_all():
             nonlocal fig
+            for cache in RESULT_CACHES:
+                cache.clear()
             fig = callback(**{slider: values[0]}, fig=fig)
             for ax in fig.axes:
                 ax.stale = True

@@ -21,7 +21,7 @@ from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.reproduce.zb2014 import UnstableRun, plot_detection
 from fdi_lib.simulate import simulate
 from fdi_lib.signatures import fault_signature, willsky_jones
-from fdi_lib.widgets import keep_artists, reusable_artists, set_limits, stepped_limit
+from fdi_lib.widgets import batched_glr, keep_artists, reusable_artists, set_limits, stepped_limit
 from fdi_lib.systems import zb2014_unstable as ex
 
 __all__ = ["explore_glr", "explore_signature", "DEFAULTS", "GLR_GRID", "SIGNATURE_GRID"]
@@ -35,6 +35,10 @@ def _unstable_setup():
     # model and Kalman gains do not depend on any slider: computed once per process
     model = ex.unstable_model(ex.N_STEPS)
     return model, kalman_gains(model)
+
+
+#: Windowed GLRs of the records already computed, (onset, seed, window, fault size) -> result
+_GLR_CACHE: dict = {}
 
 
 @functools.lru_cache(maxsize=16)
@@ -145,12 +149,16 @@ def explore_glr(fault_size: float = DEFAULTS["fault_size"], onset: int = DEFAULT
         raise ModelError(f"threshold: expected a positive number, got {threshold!r}")
     model, gains = _unstable_setup()
     fam, eps_noise, eps_fault = _glr_record(int(onset), int(seed))
-    # the innovation is linear in theta (Kalman filter of a linear closed loop): the noise's
-    # part plus the fault signature H_k Gamma_k(r) theta (tests: equal to unstable_run's)
-    eps = eps_noise + eps_fault[:, 0] * float(fault_size)
-    glr = glr_window(eps[:, None], model, gains, fam, window=int(window))
-    run = UnstableRun(innovations=eps, glr=glr, theta=(float(fault_size), 0.0), onset=int(onset),
-                      window=int(window), threshold=float(threshold), seed=int(seed),
+
+    def innovations(size: float) -> np.ndarray:
+        # linear in theta (Kalman filter of a linear closed loop): the noise's part plus the
+        # fault signature H_k Gamma_k(r) theta (tests: equal to unstable_run's)
+        return (eps_noise + eps_fault[:, 0] * size)[:, None]
+
+    glr = batched_glr(_GLR_CACHE, (int(onset), int(seed), int(window)), float(fault_size), GLR_GRID["fault_size"],
+                      innovations, lambda eps: glr_window(eps, model, gains, fam, window=int(window)))
+    run = UnstableRun(innovations=innovations(float(fault_size))[:, 0], glr=glr, theta=(float(fault_size), 0.0),
+                      onset=int(onset), window=int(window), threshold=float(threshold), seed=int(seed),
                       alarm=int(first_alarm(glr.statistic, float(threshold))))
     delay = run.alarm - run.onset if run.alarm >= run.onset else None
     status = ("no alarm" if run.alarm < 0 else

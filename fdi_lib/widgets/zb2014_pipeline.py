@@ -15,6 +15,7 @@ from fdi_lib.reproduce.zb2014_pipeline import (FAULT_ONSET, GLR_START, SingleRun
                                                plot_single_run)
 from fdi_lib.simulate import simulate
 from fdi_lib.systems import gas_pipeline as gp
+from fdi_lib.widgets import batched_glr
 
 __all__ = ["explore_pipeline", "DEFAULTS", "GRID"]
 
@@ -56,11 +57,15 @@ def explore_pipeline(fault_size_e5: float = DEFAULTS["fault_size_e5"], fault: in
         raise ModelError(f"threshold: expected a positive number, got {threshold!r}")
     st = pipeline_setup()
     eps_noise = _noise_innovations(int(seed))
-    # the innovation is linear in the fault: the noise's part plus the signature of the step at
-    # 600 min times theta (tests: equal to single_run's)
-    eps = eps_noise + st.known_signature @ fault_theta(int(fault), float(fault_size_e5) * 1e-5)
-    glr = glr_window(eps, st.model, st.gains, st.input_family, int(window))
-    run = SingleRun(t_min=np.arange(st.model.n_steps) * gp.TS_MIN, innovations=eps[:, 0],
+
+    def innovations(size: float) -> np.ndarray:
+        # linear in the fault: the noise's part plus the signature of the step at 600 min times
+        # theta (tests: equal to single_run's)
+        return eps_noise + st.known_signature @ fault_theta(int(fault), size * 1e-5)
+
+    glr = batched_glr(_GLR_CACHE, (int(seed), int(fault), int(window)), float(fault_size_e5), GRID["fault_size_e5"],
+                      innovations, lambda eps: glr_window(eps, st.model, st.gains, st.input_family, int(window)))
+    run = SingleRun(t_min=np.arange(st.model.n_steps) * gp.TS_MIN, innovations=innovations(float(fault_size_e5))[:, 0],
                     statistic=glr.statistic, onset=glr.onset, true_onset=FAULT_ONSET, threshold=float(threshold),
                     alarm=int(first_alarm(glr.statistic, float(threshold), start=GLR_START)))
     if run.alarm < 0:
@@ -72,6 +77,10 @@ def explore_pipeline(fault_size_e5: float = DEFAULTS["fault_size_e5"], fault: in
     title = f"fault {fault}, change {fault_size_e5:g}e-5, w = {window}: {status}"
     result = ReproductionResult(id="explore", headline={}, settings={"title": title}, data={"run": run})
     return plot_single_run(result, fig=fig, widget=True)
+
+
+#: Windowed GLRs of the records already computed, (seed, fault, window, fault size) -> result
+_GLR_CACHE: dict = {}
 
 
 @functools.lru_cache(maxsize=8)

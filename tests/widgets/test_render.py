@@ -25,8 +25,9 @@ from fdi_lib.errors import ModelError  # noqa: E402
 from fdi_lib.plotting import DISPLAY_DPI, RASTER_SCALE, figure  # noqa: E402
 from fdi_lib.reproduce.zb2014 import unstable_run  # noqa: E402
 from fdi_lib.reproduce.zb2014_pipeline import single_run  # noqa: E402
-from fdi_lib.widgets import (bz, keep_artists, render, reusable_artists, stepped_limit, stepped_range,  # noqa: E402
-                             widget_png, zb2014, zb2014_pipeline, zhang2021)
+from fdi_lib.glr import glr_window  # noqa: E402
+from fdi_lib.widgets import (batched_glr, bz, keep_artists, render, reusable_artists, stepped_limit,  # noqa: E402
+                             stepped_range, widget_png, zb2014, zb2014_pipeline, zhang2021)
 
 
 @pytest.fixture
@@ -203,3 +204,28 @@ def test_pipeline_widget_equals_single_run():
         if run.alarm >= 0:
             assert alarm.get_xdata()[0] == run.alarm_time_min
         plt.close(fig)
+
+
+def test_batched_glr_computes_a_few_grid_values_with_the_asked_one_and_forgets_the_oldest():
+    calls = []
+
+    def run(eps):
+        calls.append(eps.shape[0])
+        return glr_window(eps, model, gains, fam, window=20)
+
+    model, gains = zb2014._unstable_setup()
+    fam, eps_noise, eps_fault = zb2014._glr_record(201, 0)
+
+    def innovations(size):
+        return (eps_noise + eps_fault[:, 0] * size)[:, None]
+
+    cache = {}
+    got = batched_glr(cache, ("k",), 0.7, (0.0, 0.7, 1.0, 2.0, 3.0), innovations, run, batch=3, keep=4)
+    assert calls == [3] and set(cache) == {("k", 0.7), ("k", 0.0), ("k", 1.0)}
+    alone = glr_window(innovations(0.7), model, gains, fam, window=20)
+    np.testing.assert_allclose(got.statistic, alone.statistic, rtol=1e-9, equal_nan=True)
+    np.testing.assert_array_equal(got.onset, alone.onset)
+    assert got.theta_hat.shape == alone.theta_hat.shape and got.window == 20
+    assert batched_glr(cache, ("k",), 1.0, (), innovations, run) is cache[("k", 1.0)] and calls == [3]
+    batched_glr(cache, ("k",), 2.0, (0.0, 2.0, 3.0), innovations, run, batch=3, keep=4)
+    assert calls == [3, 2] and list(cache) == [("k", 0.0), ("k", 1.0), ("k", 2.0), ("k", 3.0)]
