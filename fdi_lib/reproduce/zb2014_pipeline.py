@@ -301,9 +301,14 @@ def plot_single_run(result: ReproductionResult, fig: Any = None, *, widget: bool
                      if alarm else ("no alarm", "no onset estimate")))
     limits = {}
     if widget:
-        # innovation symmetric about 0; l_k up to at least a decade above the threshold
-        limits = {0: stepped_range(run.innovations, symmetric=True),
-                  1: stepped_range([*stat, 10 * run.threshold], log=True)}
+        # innovation symmetric about 0; l_k from two decades below the threshold's (the warm-up's
+        # smaller values do not matter to the test) to at least a decade above the threshold
+        # (the innovation's from ``settings["innovation_bound"]`` if given: a bound that does
+        # not depend on the noise record)
+        low = 10.0 ** (np.floor(np.log10(run.threshold)) - 2)
+        bound = result.settings.get("innovation_bound")
+        limits = {0: stepped_range(run.innovations if bound is None else [bound], symmetric=True),
+                  1: (low, stepped_range([*stat, 10 * run.threshold], log=True)[1])}
     key = f"plot_single_run {run.t_min.size} {widget}"
     art = reusable_artists(fig, key)
     if art is None:

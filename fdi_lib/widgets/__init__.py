@@ -99,7 +99,7 @@ def render(fig: Any) -> None:
     renderer = canvas.get_renderer()
     stale = [ax for ax in fig.axes if ax.stale]
     full = (saved is None or saved[0] != state or (fig.stale and not stale) or (stale and saved[2] is None)
-            or len(stale) == len(fig.axes))
+            or 2 * len(stale) > len(fig.axes))   # most axes changed: drawing all is cheaper
     if not full:
         canvas.restore_region(saved[1])
         if stale:   # draw the stale axes again over their part of the picture, save the result

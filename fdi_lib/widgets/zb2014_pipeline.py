@@ -75,7 +75,12 @@ def explore_pipeline(fault_size_e5: float = DEFAULTS["fault_size_e5"], fault: in
     else:
         status = f"delay {run.detection_delay_min:g} min"
     title = f"fault {fault}, change {fault_size_e5:g}e-5, w = {window}: {status}"
-    result = ReproductionResult(id="explore", headline={}, settings={"title": title}, data={"run": run})
+    # the innovation's panel: the fault's part and 4.5 standard deviations of the noise's, which
+    # a record exceeds with probability below 1 % (a new seed keeps the axes)
+    theta = fault_theta(int(fault), float(fault_size_e5) * 1e-5)
+    bound = float(np.max(np.abs(st.known_signature @ theta)[:, 0] + 4.5 * np.sqrt(st.gains.Sigma[:, 0, 0])))
+    result = ReproductionResult(id="explore", headline={}, settings={"title": title, "innovation_bound": bound},
+                                data={"run": run})
     return plot_single_run(result, fig=fig, widget=True)
 
 
