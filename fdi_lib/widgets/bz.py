@@ -95,7 +95,8 @@ def explore_bz(lam: float = 0.95, delta: float = 3e-4, f_size: float = 0.2, fig:
     matplotlib.figure.Figure
     """
     run = bz_run(lam, delta, f_size, seed=seed)
-    title = rf"RLS tracking, $\lambda$ = {lam:g}, $\delta$ = {delta:.1e}, $f$ amplitude {f_size:g}"
+    # plain text (Unicode symbols): a title in mathtext would be parsed anew at every slider value
+    title = f"RLS tracking, λ = {lam:g}, δ = {delta:.1e}, f amplitude {f_size:g}"
     alarm2, alarm1 = int(run.sol2.energy_alarm), int(run.sol1.nonparametric_alarm)
     # round limits: a move that keeps the curves within the same steps redraws only the data
     limits = (stepped_range([*run.theta_path.ravel(), *run.sol2.rls.theta_hat.ravel()], symmetric=True),

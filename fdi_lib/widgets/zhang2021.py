@@ -75,15 +75,14 @@ def explore_sparse(q: int = 5, r: float = 0.5, lam_scale: float = 1.0, seed: int
     # round limits (decades of lambda): a move within the same steps redraws only the data
     limits = {"left": (stepped_range([floor, 3 * lam_b[0]], log=True), stepped_range(steps)),
               "right": stepped_range([*coef[support], *ls[support], 1.0, 0.0])}
-    left_title = f"support size (flat range: {fr.size})"
-    lam_label = rf"$\lambda$ = {lam:.3g}"
+    # the value in the title, in plain text: a mathtext label would be parsed anew at every value
+    left_title = f"support size (flat range: {fr.size}), λ = {lam:.3g}"
     art = reusable_artists(fig, "explore_sparse")
     if art is not None:  # the figure of an earlier call: move its artists
         art["steps"].set_data(steps, edges)
         art["flat"].set_x(fr.low)
         art["flat"].set_width(fr.high - fr.low)
         art["lam"].set_xdata([lam, lam])
-        art["left_legend"].get_texts()[1].set_text(lam_label)
         art["left_title"].set_text(left_title)
         art["lasso"].set_data(idx[support], coef[support])
         art["ls"].set_data(idx[support], ls[support])
@@ -99,11 +98,11 @@ def explore_sparse(q: int = 5, r: float = 0.5, lam_scale: float = 1.0, seed: int
     # moving artists are then all above the axis, which render() keeps as background
     art = {"steps": ax.stairs(steps, edges, color=OURS_COLOR, baseline=None, zorder=1.6),
            "flat": ax.axvspan(fr.low, fr.high, color=PAPER_COLOR, alpha=0.15, label="flat range", zorder=1.6),
-           "lam": ax.axvline(lam, color="k", ls="--", lw=1, label=lam_label)}
+           "lam": ax.axvline(lam, color="k", ls="--", lw=1, label=r"chosen $\lambda$")}
     ax.set(xscale="log", xlabel=r"$\lambda$", ylabel="non-zero components", xlim=limits["left"][0],
            ylim=limits["left"][1])
     art["left_title"] = ax.set_title(left_title)
-    art["left_legend"] = ax.legend(loc="upper right")
+    ax.legend(loc="upper right")
     ax = axes[0, 1]
     art["lasso"] = ax.plot(idx[support], coef[support], "D", color=OURS_COLOR, ms=5, label="Lasso")[0]
     art["ls"] = ax.plot(idx[support], ls[support], "o", mfc="none", mec="k", ms=10, label="least squares")[0]
