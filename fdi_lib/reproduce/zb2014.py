@@ -498,7 +498,7 @@ def plot_detection(run: UnstableRun, fig: Any = None, title: str | None = None, 
         art = {"eps": top.plot(k, run.innovations, color=OURS_COLOR, lw=0.8)[0], "top": top, "bottom": bottom}
         art["onsets"] = [top.axvline(run.onset, color="k", ls=":", lw=0.8)]
         top.set(ylabel=r"$\varepsilon_k$")
-        art["title"] = top.set_title(title)
+        art["title"] = top.set_title(title, y=1.0)   # fixed: no re-placement at each draw
         art["stat"] = bottom.plot(k, stat, color=OURS_COLOR)[0]
         if run.threshold is not None:
             art["threshold"] = bottom.axhline(run.threshold, color=THRESHOLD_COLOR, ls="--", lw=0.8,

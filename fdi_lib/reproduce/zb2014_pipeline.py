@@ -317,7 +317,7 @@ def plot_single_run(result: ReproductionResult, fig: Any = None, *, widget: bool
         art = {"eps": ax0.plot(run.t_min, run.innovations, color=OURS_COLOR, lw=0.8)[0],
                "onsets": [ax0.axvline(run.true_onset * gp.TS_MIN, color="k", ls=":", lw=1, label="true onset")]}
         ax0.set(ylabel=r"$\varepsilon_k$ (Nm$^3$/h)")
-        art["title"] = ax0.set_title(title)
+        art["title"] = ax0.set_title(title, y=1.0)   # fixed: no re-placement at each draw
         legends = [ax0.legend(loc="lower left")]
         art["stat"] = ax1.semilogy(run.t_min, stat, color=OURS_COLOR, label=r"$l_k$ (35)")[0]
         art["threshold"] = ax1.axhline(run.threshold, color=THRESHOLD_COLOR, ls="--", label=labels[0])

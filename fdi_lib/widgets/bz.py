@@ -114,7 +114,7 @@ def explore_bz(lam: float = 0.95, delta: float = 3e-4, f_size: float = 0.2, fig:
                                         label=rf"$\hat\theta^{{({i + 1})}}_k$ (dashed: true)")
         ax.axvline(SOL2["f_onset"], color="0.5", lw=0.8, ls=":")
         ax.set(ylabel=r"$\theta_k$")
-        art["title"] = ax.set_title(title)
+        art["title"] = ax.set_title(title, y=1.0)   # fixed: no re-placement at each draw
         # fixed legends under the curves: render() keeps them in its saved background
         ax.legend(loc="upper left", ncols=2).set_zorder(1.9)
         ax = axes[1, 0]

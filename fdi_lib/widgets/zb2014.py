@@ -93,7 +93,7 @@ def explore_signature(onset: int = 101, fig: Any = None):
                                    label=r"$\|H_k\Gamma_k\|_2$")[0],
                "r_top": top.axvline(r, color="k", ls=":", lw=0.8),
                "alpha": bottom.semilogy(alpha_k, alpha_v, color=PAPER_COLOR, label=r"$\|\alpha_k(r)\|_2$")[0],
-               "r_bottom": bottom.axvline(r, color="k", ls=":", lw=0.8), "title": top.set_title(title),
+               "r_bottom": bottom.axvline(r, color="k", ls=":", lw=0.8), "title": top.set_title(title, y=1.0),
                "top": top}
         top.set(ylabel="norm", ylim=top_ylim)
         # fixed legends under the curves: render() keeps them in its saved background

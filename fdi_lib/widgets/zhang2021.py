@@ -101,14 +101,14 @@ def explore_sparse(q: int = 5, r: float = 0.5, lam_scale: float = 1.0, seed: int
            "lam": ax.axvline(lam, color="k", ls="--", lw=1, label=r"chosen $\lambda$")}
     ax.set(xscale="log", xlabel=r"$\lambda$", ylabel="non-zero components", xlim=limits["left"][0],
            ylim=limits["left"][1])
-    art["left_title"] = ax.set_title(left_title)
+    art["left_title"] = ax.set_title(left_title, y=1.0)   # fixed: no re-placement at each draw
     ax.legend(loc="upper right")
     ax = axes[0, 1]
     art["lasso"] = ax.plot(idx[support], coef[support], "D", color=OURS_COLOR, ms=5, label="Lasso")[0]
     art["ls"] = ax.plot(idx[support], ls[support], "o", mfc="none", mec="k", ms=10, label="least squares")[0]
     art["truth"] = ax.plot(idx[truth], np.ones(truth.size), "*", color=PAPER_COLOR, ms=10, label="true")[0]
     ax.set(xlabel=r"component of $\theta$", ylabel="value", xlim=(0, X.shape[1] + 1), ylim=limits["right"])
-    art["right_title"] = ax.set_title(title)
+    art["right_title"] = ax.set_title(title, y=1.0)
     art["right_legend"] = ax.legend(loc="best")
     art["axes"] = (axes[0, 0], ax)
     keep_artists(fig, "explore_sparse", art)
