@@ -36,10 +36,13 @@ def keep_artists(fig: Any, key: str, artists: dict[str, Any]) -> None:
     setattr(fig, _ARTISTS, (key, artists))
     setattr(fig, _BACKGROUND, None)
     fig.set_layout_engine("constrained")  # a new figure is laid out at its next draw
+    from matplotlib.artist import Artist
+    from matplotlib.axes import Axes
+
     dynamic = set()
     for value in artists.values():
         for a in value if isinstance(value, (list, tuple)) else (value,):
-            if hasattr(a, "set_animated") and not hasattr(a, "get_xlim"):  # an artist, not an Axes
+            if isinstance(a, Artist) and not isinstance(a, Axes):
                 dynamic.add(id(a))
     for ax in fig.axes:
         above = False
@@ -142,9 +145,12 @@ def _static_regions(fig: Any, renderer: Any) -> dict[Any, tuple[int, int, int, i
 
 def _static_box(ax: Any, renderer: Any) -> tuple[int, int, int, int]:
     """Pixel box ``(x0, y0, x1, y1)`` (display coordinates) of what ``ax`` draws statically: its
-    frame with the tick marks outside it, the tick labels in view, the axis labels and offsets
-    and the titles that are not animated (cheaper than ``get_tightbbox``, which also lays out
-    every minor tick)."""
+    frame with the tick marks outside it, the tick labels in view, the axis labels and offsets,
+    and its texts (titles included) and legends that are not animated (cheaper than
+    ``get_tightbbox``, which also lays out every minor tick). Its other artists are clipped to
+    the frame."""
+    from matplotlib.legend import Legend
+    from matplotlib.text import Text
     from matplotlib.transforms import Bbox
 
     frame = ax.bbox
@@ -158,7 +164,7 @@ def _static_box(ax: Any, renderer: Any) -> tuple[int, int, int, int]:
                 continue
             first = ticks[0]
             # tick marks point outwards by their size (points), on the sides where they are drawn
-            out = (first.tick1line.get_markersize() + first.tick1line.get_markeredgewidth()) * ax.figure.dpi / 72
+            out = (first.tick1line.get_markersize() + first.tick1line.get_markeredgewidth()) * renderer.dpi / 72
             if first.tick1line.get_visible():
                 x0, y0 = (x0, y0 - out) if low == "y0" else (x0 - out, y0)
             if first.tick2line.get_visible():
@@ -169,8 +175,9 @@ def _static_box(ax: Any, renderer: Any) -> tuple[int, int, int, int]:
                               if t.get_visible() and t.get_text()]
         boxes += [t.get_window_extent(renderer) for t in (axis.label, axis.offsetText)
                   if t.get_visible() and t.get_text()]
-    boxes += [t.get_window_extent(renderer) for t in (ax.title, ax._left_title, ax._right_title)
-              if t.get_visible() and t.get_text() and not t.get_animated()]
+    boxes += [a.get_window_extent(renderer) for a in ax.get_children()
+              if isinstance(a, (Text, Legend)) and a.get_visible() and not a.get_animated()
+              and (isinstance(a, Legend) or a.get_text())]
     box = Bbox.union([Bbox([[x0, y0], [x1, y1]]), *boxes])
     return int(np.floor(box.x0)), int(np.floor(box.y0)), int(np.ceil(box.x1)), int(np.ceil(box.y1))
 

@@ -130,7 +130,8 @@ def explore_bz(lam: float = 0.95, delta: float = 3e-4, f_size: float = 0.2, fig:
         ax.set(ylabel="energy (w = 20)")
         ax.legend(loc="upper left").set_zorder(1.9)
         ax = axes[2, 0]
-        art["glr"] = ax.plot(k, run.sol1.glr.statistic, color=OURS_COLOR, label="GLR on projected Kitanidis residual")[0]
+        art["glr"] = ax.plot(k, run.sol1.glr.statistic, color=OURS_COLOR,
+                             label="GLR on projected Kitanidis residual")[0]
         art["glr_threshold"] = ax.axhline(run.sol1.glr_threshold, color=THRESHOLD_COLOR, ls="--", lw=0.9,
                                           label="threshold")
         ax.axvline(SOL2["f_onset"], color="0.5", lw=0.8, ls=":")
