@@ -30,6 +30,8 @@ __all__ = ["interactive_figure", "keep_artists", "reusable_artists", "render", "
 
 _ARTISTS = "_fdi_widget_artists"
 _BACKGROUND = "_fdi_widget_background"
+_DRAW_HOOK = "_fdi_widget_draw_hook"
+_RENDERING = "_fdi_widget_rendering"
 
 
 def keep_artists(fig: Any, key: str, artists: dict[str, Any]) -> None:
@@ -40,10 +42,15 @@ def keep_artists(fig: Any, key: str, artists: dict[str, Any]) -> None:
     move. It is animated, and so is everything its axes draws after it (higher z-order): a full
     draw leaves them out and :func:`render` draws them over the saved rest of the picture, in
     the same order as a full draw. Saving the figure (``savefig``, the book's PNGs) draws
-    everything as usual.
+    everything as usual, and so does any other draw of the figure (``canvas.draw()``, an
+    interactive backend): a draw-event hook adds the animated artists.
     """
     setattr(fig, _ARTISTS, (key, artists))
     setattr(fig, _BACKGROUND, None)
+    if not getattr(fig, _DRAW_HOOK, False):
+        # a plain draw (an interactive backend, ipympl, canvas.draw()) still shows everything
+        fig.canvas.mpl_connect("draw_event", _draw_dynamic)
+        setattr(fig, _DRAW_HOOK, True)
     fig.set_layout_engine("constrained")  # a new figure is laid out at its next draw
     from matplotlib.artist import Artist
     from matplotlib.axes import Axes
@@ -61,6 +68,23 @@ def keep_artists(fig: Any, key: str, artists: dict[str, Any]) -> None:
             # not mark the axes stale either
             for part in a.findobj():
                 part.set_animated(above)
+
+
+def _draw_dynamic(event: Any) -> None:
+    # after a plain draw of a figure that keep_artists set up (not render's own, not savefig's,
+    # which both draw the animated artists themselves): draw them over it
+    fig = event.canvas.figure
+    if getattr(fig, _RENDERING, False) or event.canvas.is_saving():
+        return
+    _draw_animated(fig, event.renderer)
+
+
+def _draw_animated(fig: Any, renderer: Any) -> None:
+    for ax in fig.axes:
+        for a in _draw_order(ax):
+            if a.get_animated() and a.get_visible():
+                a.draw(renderer)
+    # (the parts of an animated artist are animated too: drawing them marks nothing stale)
 
 
 def _draw_order(ax: Any) -> list[Any]:
@@ -119,18 +143,14 @@ def render(fig: Any) -> None:
             if not full:
                 setattr(fig, _BACKGROUND, (state, canvas.copy_from_bbox(fig.bbox), saved[2]))
     if full:
-        canvas.draw()   # everything static (animated artists are left out)
+        setattr(fig, _RENDERING, True)
+        try:
+            canvas.draw()   # everything static (animated artists are left out)
+        finally:
+            setattr(fig, _RENDERING, False)
         renderer = canvas.get_renderer()
         setattr(fig, _BACKGROUND, (state, canvas.copy_from_bbox(fig.bbox), _static_regions(fig, renderer)))
-    for ax in fig.axes:
-        for a in _draw_order(ax):
-            if a.get_animated() and a.get_visible():
-                a.draw(renderer)
-    # Drawing a legend moves its own parts, which marks the axes stale: that is not a change
-    # of the static picture, which is what the flag means at the next call.
-    for ax in fig.axes:
-        ax.stale = False
-    fig.stale = False
+    _draw_animated(fig, renderer)
 
 
 def _static_regions(fig: Any, renderer: Any) -> dict[Any, tuple[int, int, int, int]] | None:

@@ -110,12 +110,12 @@ def test_a_changed_static_artist_is_drawn_and_other_figures_are_drawn_in_full(dr
     fig.axes[1].set_ylim(0.1, 1e40)   # a change that no dynamic artist holds: that axes is drawn again
     render(fig)
     assert draws == {"full": 1, "axes": 1}
-    np.testing.assert_array_equal(np.asarray(fig.canvas.buffer_rgba()), full_draw(fig))
+    np.testing.assert_array_equal(np.array(fig.canvas.buffer_rgba()), full_draw(fig))   # a copy
     before = dict(draws)   # (savefig draws in full too)
     fig.set_size_inches(5.5, 4.0)   # a new size: everything
     render(fig)
     assert draws == {"full": before["full"] + 1, "axes": 1}
-    np.testing.assert_array_equal(np.asarray(fig.canvas.buffer_rgba()), full_draw(fig))
+    np.testing.assert_array_equal(np.array(fig.canvas.buffer_rgba()), full_draw(fig))   # a copy
     before = dict(draws)
     plain, ax = figure()
     ax[0, 0].plot([0, 1], [1, 0])
@@ -229,3 +229,15 @@ def test_batched_glr_computes_a_few_grid_values_with_the_asked_one_and_forgets_t
     assert batched_glr(cache, ("k",), 1.0, (), innovations, run) is cache[("k", 1.0)] and calls == [3]
     batched_glr(cache, ("k",), 2.0, (0.0, 2.0, 3.0), innovations, run, batch=3, keep=4)
     assert calls == [3, 2] and list(cache) == [("k", 0.0), ("k", 1.0), ("k", 2.0), ("k", 3.0)]
+
+
+def test_a_plain_draw_of_a_widget_figure_shows_its_moving_artists_too():
+    # an interactive backend (or ipympl) calls canvas.draw(), which leaves animated artists
+    # out: the draw-event hook of keep_artists adds them, once
+    fig = zb2014.explore_glr()
+    fig = zb2014.explore_glr(fault_size=2.5, fig=fig)
+    fig.canvas.draw()
+    np.testing.assert_array_equal(np.array(fig.canvas.buffer_rgba()), full_draw(fig))   # a copy
+    render(fig)   # and render's own draws are not drawn over twice
+    np.testing.assert_array_equal(np.array(fig.canvas.buffer_rgba()), full_draw(fig))   # a copy
+    plt.close(fig)
