@@ -23,6 +23,9 @@ from fdi_lib.errors import ModelError
 from fdi_lib.nonparametric import Solution1Result, Solution2Result, solution1, solution2
 from fdi_lib.plotting import OURS_COLOR, THRESHOLD_COLOR, figure
 from fdi_lib.reproduce.bz import SOL1, SOL2, _simulate, setup
+from fdi_lib.models import fault_profile
+from fdi_lib.rls import RLSGains, rls_gains
+from fdi_lib.signatures import fault_signature
 from fdi_lib.simulate import draw_noise
 from fdi_lib.systems import bz_example as ex
 from fdi_lib.widgets import keep_artists, reusable_artists, set_limits, stepped_range
@@ -65,8 +68,17 @@ def bz_run(lam: float = 0.95, delta: float = 3e-4, f_size: float = 0.2, *, seed:
     th, f, sim, s1 = _record(float(delta), float(f_size), int(seed))
     model, kal = setup(SOL2["n_steps"])[:2]
     s2 = solution2(model, sim.y, sim.u, Psi=ex.PSI, lam=lam, energy_window=SOL2["energy_window"],
-                   energy_alpha=SOL2["energy_alpha"], start=SOL2["warmup"], kalman=kal)
+                   energy_alpha=SOL2["energy_alpha"], start=SOL2["warmup"], kalman=kal, rls=_rls_gains(float(lam)))
     return BZRun(theta_path=th, f=f, sol1=s1, sol2=s2)
+
+
+@functools.lru_cache(maxsize=16)
+def _rls_gains(lam: float) -> RLSGains:
+    # the RLS gains of solution 2 depend on lambda only (not on the record): a move of the drift
+    # or of the fault reuses them, and the explorable computes one per value of lambda
+    model, kal = setup(SOL2["n_steps"])[:2]
+    regressor = fault_signature(model, kal, fault_profile(model, Psi=ex.PSI)).on_innovation
+    return rls_gains(regressor, kal.Sigma, lam=lam)
 
 
 @functools.lru_cache(maxsize=8)
