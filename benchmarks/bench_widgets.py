@@ -16,9 +16,9 @@ larger) of ``REPEATS`` moves of one slider between two values:
 
 The two values of each slider cross a step of the round axis limits where they do (then the
 axes whose limits change are drawn again: the ``move`` column includes that). Before every timed
-move the widgets' caches of per-value results (GLR records, noise records, Lasso paths) hold only
-what the start value left there: the move computes what a move to a value not seen before
-computes.
+move the widgets' caches of per-value results hold only what the start value left there (GLR
+and noise records, Lasso paths, RLS gains): the move
+computes what a move to a value not seen before computes.
 
 Explorables. For each chapter's explorable (:func:`fdi_lib.explorables.explorable` over the
 chapter's grid, as its cell runs it, per-process caches of the widgets cold) the CPU time of all
@@ -54,7 +54,7 @@ REPEATS = 5
 #: The widgets' caches of results per slider value (what does not depend on a slider stays)
 CACHE_CLEARS = (zb2014._GLR_CACHE.clear, zb2014._glr_record.cache_clear, zb2014_pipeline._GLR_CACHE.clear,
                 zb2014_pipeline._noise_innovations.cache_clear, zhang2021._trial_path.cache_clear,
-                bz._record.cache_clear)
+                bz._record.cache_clear, bz._rls_gains.cache_clear)
 
 # widget: (callback, the slider moved, two values it alternates between; the second value of a
 # fault size is not on the explorable's grid, whose GLR records batched_glr computes together)
