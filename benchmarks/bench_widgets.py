@@ -17,8 +17,8 @@ larger) of ``REPEATS`` moves of one slider between two values:
 The two values of each slider cross a step of the round axis limits where they do (then the
 axes whose limits change are drawn again: the ``move`` column includes that). Before every timed
 move the widgets' caches of per-value results hold only what the start value left there (GLR
-and noise records, Lasso paths, RLS gains): the move
-computes what a move to a value not seen before computes.
+and noise records, Lasso paths, RLS gains): the move computes what a move to a value not seen
+before computes.
 
 Explorables. For each chapter's explorable (:func:`fdi_lib.explorables.explorable` over the
 chapter's grid, as its cell runs it, per-process caches of the widgets cold) the CPU time of all
