@@ -250,8 +250,8 @@ def stepped_limit(value: float, *, log: bool = False) -> float:
 def stepped_range(values: Any, *, log: bool = False, symmetric: bool = False) -> tuple[float, float]:
     """Axis limits in :func:`stepped_limit` steps that hold the finite ``values`` with a 5 % margin.
 
-    Linear: each side at a round number (``symmetric``: ``-a, a``); a side without data sits
-    at 5 % of the other, as matplotlib's margin would. ``log``: whole decades around the
+    Linear: each side at a round number (``symmetric``: ``-a, a``), and at least 5 % of the
+    other side away from 0, as matplotlib's margin would. ``log``: whole decades around the
     positive values.
     """
     v = np.asarray(values, dtype=float)
@@ -265,11 +265,12 @@ def stepped_range(values: Any, *, log: bool = False, symmetric: bool = False) ->
     if symmetric:
         a = stepped_limit(1.05 * max(-lo, hi)) if max(-lo, hi) > 0 else 1.0
         return -a, a
-    top = stepped_limit(1.05 * hi) if hi > 0 else None
-    bottom = -stepped_limit(-1.05 * lo) if lo < 0 else None
-    if top is None and bottom is None:
+    top = stepped_limit(1.05 * hi) if hi > 0 else 0.0
+    bottom = -stepped_limit(-1.05 * lo) if lo < 0 else 0.0
+    if top == bottom == 0.0:
         return -0.05, 1.0
-    return (-0.05 * top if bottom is None else bottom), (-0.05 * bottom if top is None else top)
+    # each side at least 5 % of the other (a value at 0 is not drawn on the frame)
+    return min(bottom, -0.05 * top), max(top, -0.05 * bottom)
 
 
 def set_limits(ax: Any, *, xlim: tuple[float, float] | None = None, ylim: tuple[float, float] | None = None) -> None:

@@ -109,7 +109,9 @@ def explore_sparse(q: int = 5, r: float = 0.5, lam_scale: float = 1.0, seed: int
     art["truth"] = ax.plot(idx[truth], np.ones(truth.size), "*", color=PAPER_COLOR, ms=10, label="true")[0]
     ax.set(xlabel=r"component of $\theta$", ylabel="value", xlim=(0, X.shape[1] + 1), ylim=limits["right"])
     art["right_title"] = ax.set_title(title, y=1.0)
-    art["right_legend"] = ax.legend(loc="best")
+    # a fixed place under the markers (z-order 1.9): render() keeps it in its saved background
+    # ("best" would move it, so draw it, at every value)
+    ax.legend(loc="upper right").set_zorder(1.9)
     art["axes"] = (axes[0, 0], ax)
     keep_artists(fig, "explore_sparse", art)
     return fig

@@ -165,6 +165,7 @@ def test_stepped_range_holds_the_data_with_a_margin():
     assert stepped_range([-0.3, 1.34], symmetric=True) == (-2.0, 2.0)
     assert stepped_range([-31922.0, 28432.0]) == (-50000.0, 30000.0)
     assert stepped_range([-4.0, -1.0]) == (-5.0, 0.25)
+    assert stepped_range([-0.001, 1.9]) == (pytest.approx(-0.1), 2.0)   # 0 is not on the frame
     lo, hi = stepped_range([0.085, np.nan, 91.4, 0.0], log=True)
     assert lo == pytest.approx(0.01) and hi == pytest.approx(100.0)
     assert stepped_range([np.nan]) == (-0.05, 1.0)
