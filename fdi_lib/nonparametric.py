@@ -57,7 +57,7 @@ from fdi_lib.glr import WindowGLRResult, first_alarm, glr_window
 from fdi_lib.isolation import minmax_isolation
 from fdi_lib.kitanidis import KitanidisGains, as_unknown_input_matrix, kitanidis_gains
 from fdi_lib.models import FaultFamily, LTVModel, fault_profile, ltv_model, step_family
-from fdi_lib.rls import RLSResult, rls_track
+from fdi_lib.rls import RLSGains, RLSResult, rls_track
 from fdi_lib.signatures import fault_signature
 from fdi_lib.validation import array, integer, missing_samples, probability
 
@@ -550,7 +550,8 @@ class Solution2Result:
 
 
 def solution2(model: LTVModel, y: Any, u: Any = None, *, Psi: Any, lam: float, energy_window: int,
-              energy_alpha: float, start: int = 0, kalman: KalmanGains | None = None) -> Solution2Result:
+              energy_alpha: float, start: int = 0, kalman: KalmanGains | None = None,
+              rls: RLSGains | None = None) -> Solution2Result:
     """Solution 2: Kalman filter (46), RLS with forgetting factor on (47), energy of ``E_k``.
 
     Parameters
@@ -570,11 +571,16 @@ def solution2(model: LTVModel, y: Any, u: Any = None, *, Psi: Any, lam: float, e
         First sample at which an energy alarm may be raised (RLS warm-up).
     kalman : KalmanGains, optional
         Precomputed :func:`fdi_lib.filters.kalman_gains` of ``model`` (shared across calls).
+    rls : RLSGains, optional
+        Precomputed :func:`fdi_lib.rls.rls_gains` of the regressor ``H_k Gamma_k``, ``Sigma_k``
+        and ``lam`` (they do not depend on the record: shared across calls).
     """
     kal = kalman_gains(model) if kalman is None else kalman
+    if rls is not None and rls.lam != lam:
+        raise ModelError(f"rls: expected RLS gains for lam = {lam}, got gains for lam = {rls.lam}")
     eps = kalman_filter(model, y, u, gains=kal).innovations
     sig = fault_signature(model, kal, fault_profile(model, Psi=Psi))
-    res = rls_track(eps, sig.on_innovation, kal.Sigma, lam=lam)
+    res = rls_track(eps, sig.on_innovation, kal.Sigma, lam=lam, gains=rls)
     thr = energy_threshold(energy_window, model.p, energy_alpha)
     en = energy_statistic(res.errors, kal.Sigma_chol, energy_window)
     return Solution2Result(rls=res, regressor=sig.on_innovation, energy=en,

@@ -446,26 +446,84 @@ def unstable_run(theta: tuple[float, float] = (4.0, 0.0), onset: int = 201, wind
                        window=window, threshold=threshold, seed=seed, alarm=alarm)
 
 
-def plot_detection(run: UnstableRun, fig: Any = None, title: str | None = None):
-    """Innovation (top) and GLR statistic ``l_k`` (bottom), as in paper Figs. 3-4."""
-    fig, axes = figure(2, 1, fig=fig, sharex=True, figsize=(7.0, 4.6))
+def plot_detection(run: UnstableRun, fig: Any = None, title: str | None = None, *, widget: bool = False):
+    """Innovation (top) and GLR statistic ``l_k`` (bottom), as in paper Figs. 3-4.
+
+    With a threshold, the legend has an alarm entry ("no alarm" when there is none). Given
+    the figure it drew before for a run of the same length, it moves its artists to ``run``
+    (a widget's slider move, :func:`fdi_lib.widgets.reusable_artists`). ``widget``: round y
+    limits (:func:`fdi_lib.widgets.stepped_range`) instead of the data's, which stay put while
+    the slider moves within a step, and a fixed legend (the values are in the sliders and the
+    title) drawn under the curves, which :func:`fdi_lib.widgets.render` keeps in its saved
+    background.
+    """
+    from fdi_lib.widgets import keep_artists, reusable_artists, set_limits, stepped_range
+
     k = np.arange(run.innovations.size)
-    top, bottom = axes[0, 0], axes[1, 0]
-    top.plot(k, run.innovations, color=OURS_COLOR, lw=0.8)
-    top.axvline(run.onset, color="k", ls=":", lw=0.8)
-    top.set(ylabel=r"$\varepsilon_k$",
-            title=title or (rf"$\theta = [{run.theta[0]:g}, {run.theta[1]:g}]$, "
-                            rf"onset $r = {run.onset}$, $w = {run.window}$"))
-    bottom.plot(k, run.glr.statistic, color=OURS_COLOR)
-    if run.threshold is not None:
-        bottom.axhline(run.threshold, color=THRESHOLD_COLOR, ls="--", lw=0.8,
-                       label=f"threshold {run.threshold:g}")
-    bottom.axvline(run.onset, color="k", ls=":", lw=0.8, label=f"onset $r = {run.onset}$")
-    if run.alarm >= 0:
-        bottom.plot([run.alarm], [run.glr.statistic[run.alarm]], "o", color=THRESHOLD_COLOR,
-                    label=f"alarm at $k = {run.alarm}$")
-    bottom.set(xlabel="$k$", ylabel=r"$l_k$")
-    bottom.legend(loc="upper left")
+    stat = run.glr.statistic
+    title = title or (rf"$\theta = [{run.theta[0]:g}, {run.theta[1]:g}]$, "
+                      rf"onset $r = {run.onset}$, $w = {run.window}$")
+    has_alarm = run.threshold is not None and run.alarm >= 0
+    alarm_xy = ([run.alarm], [stat[run.alarm]]) if has_alarm else ([], [])
+    # legend entries: [threshold, onset, alarm] with a threshold, [onset] without
+    if widget:
+        labels = ("threshold", "onset $r$", "alarm")
+    else:
+        labels = (f"threshold {run.threshold:g}" if run.threshold is not None else "", f"onset $r = {run.onset}$",
+                  f"alarm at $k = {run.alarm}$" if has_alarm else "no alarm")
+    limits = {}
+    if widget:
+        limits = {"top": stepped_range(run.innovations, symmetric=True),
+                  "bottom": stepped_range([*stat, run.threshold or 0.0])}
+    key = f"plot_detection {k.size} {run.threshold is None} {widget}"
+    art = reusable_artists(fig, key)
+    if art is not None:
+        art["eps"].set_ydata(run.innovations)
+        art["stat"].set_ydata(stat)
+        for line in art["onsets"]:
+            line.set_xdata([run.onset, run.onset])
+        art["title"].set_text(title)
+        if run.threshold is not None:
+            art["threshold"].set_ydata([run.threshold, run.threshold])
+            art["alarm"].set_data(*alarm_xy)
+        for ax in ("top", "bottom"):
+            if limits:
+                set_limits(art[ax], ylim=limits[ax])
+            else:
+                art[ax].relim()
+                art[ax].autoscale_view()
+    else:
+        fig, axes = figure(2, 1, fig=fig, sharex=True, figsize=(7.0, 4.6))
+        top, bottom = axes[0, 0], axes[1, 0]
+        art = {"eps": top.plot(k, run.innovations, color=OURS_COLOR, lw=0.8)[0], "top": top, "bottom": bottom}
+        art["onsets"] = [top.axvline(run.onset, color="k", ls=":", lw=0.8)]
+        top.set(ylabel=r"$\varepsilon_k$")
+        art["title"] = top.set_title(title, y=1.0)   # fixed: no re-placement at each draw
+        art["stat"] = bottom.plot(k, stat, color=OURS_COLOR)[0]
+        if run.threshold is not None:
+            art["threshold"] = bottom.axhline(run.threshold, color=THRESHOLD_COLOR, ls="--", lw=0.8,
+                                              label=labels[0])
+        art["onsets"].append(bottom.axvline(run.onset, color="k", ls=":", lw=0.8, label=labels[1]))
+        if run.threshold is not None:
+            art["alarm"] = bottom.plot(*alarm_xy, "o", color=THRESHOLD_COLOR, label=labels[2])[0]
+        bottom.set(xlabel="$k$", ylabel=r"$l_k$")
+        legend = bottom.legend(loc="upper left")
+        if widget:
+            legend.set_zorder(1.9)
+        else:   # its texts change with the run
+            art["legend"] = legend
+        if limits:
+            top.set_ylim(limits["top"])
+            bottom.set_ylim(limits["bottom"])
+        keep_artists(fig, key, art)
+    if not widget:
+        texts = art["legend"].get_texts()
+        if run.threshold is None:
+            texts[0].set_text(labels[1])
+        else:
+            for text, label in zip(texts, labels):
+                text.set_text(label)
+            art["legend"].legend_handles[2].set_visible(has_alarm)
     return fig
 
 

@@ -274,26 +274,90 @@ def onset_profile(run: SingleRun, *, fault: int = 1, columns: str = "both",
     return {"onsets": onsets, "statistic": np.array(stat), "theta_hat": np.array(theta), "fault": fault}
 
 
-def plot_single_run(result: ReproductionResult, fig: Any = None):
-    """Paper Figs 5, 6, 9: innovation (top) and GLR statistic ``l_k`` (bottom, log scale)."""
+def plot_single_run(result: ReproductionResult, fig: Any = None, *, widget: bool = False):
+    """Paper Figs 5, 6, 9: innovation (top) and GLR statistic ``l_k`` (bottom, log scale).
+
+    The legend gives the threshold, the alarm time and the onset estimate ("no alarm" when
+    there is none). Given the figure it drew before for a run of the same length, it moves its
+    artists to the new run (a widget's slider move, :func:`fdi_lib.widgets.reusable_artists`).
+    ``widget``: round y limits (:func:`fdi_lib.widgets.stepped_range`) instead of the data's,
+    which stay put while the slider moves within a step, and fixed legends (the values are in
+    the slider and the title) drawn under the curves, which :func:`fdi_lib.widgets.render`
+    keeps in its saved background.
+    """
+    from fdi_lib.widgets import keep_artists, reusable_artists, set_limits, stepped_range
+
     run: SingleRun = result.data["run"]
-    fig, axes = figure(2, 1, fig=fig, sharex=True, figsize=(7.0, 5.0))
-    ax0, ax1 = axes[:, 0]
-    ax0.plot(run.t_min, run.innovations, color=OURS_COLOR, lw=0.8)
-    ax0.axvline(run.true_onset * gp.TS_MIN, color="k", ls=":", lw=1, label="true onset")
-    ax0.set(ylabel=r"$\varepsilon_k$ (Nm$^3$/h)", title=result.settings.get("title", ""))
-    ax0.legend(loc="lower left")
-    ax1.semilogy(run.t_min, np.where(run.statistic > 0, run.statistic, np.nan), color=OURS_COLOR,
-                 label=r"$l_k$ (35)")
-    ax1.axhline(run.threshold, color=THRESHOLD_COLOR, ls="--", label=f"threshold {run.threshold:g}")
-    ax1.axvspan(0, gp.DISABLED_MIN, color="0.9", label="GLR disabled")
-    ax1.axvline(run.true_onset * gp.TS_MIN, color="k", ls=":", lw=1)
-    if run.alarm >= 0:
-        ax1.axvline(run.alarm_time_min, color=PAPER_COLOR, lw=1, label=f"alarm {run.alarm_time_min:g} min")
-        ax1.axvline(run.onset_estimate_min, color="tab:green", lw=1,
-                    label=f"onset estimate {run.onset_estimate_min:g} min")
-    ax1.set(xlabel=r"$t = k T_s$ (min)", ylabel=r"$l_k$")
-    ax1.legend(loc="lower right", ncols=2)
+    stat = np.where(run.statistic > 0, run.statistic, np.nan)
+    title = result.settings.get("title", "")
+    alarm = run.alarm >= 0
+    alarm_x = [run.alarm_time_min if alarm else 0.0] * 2
+    onset_x = [run.onset_estimate_min if alarm else 0.0] * 2
+    if widget:
+        labels = ("threshold", "alarm", "onset estimate")
+    else:
+        labels = ((f"threshold {run.threshold:g}",)
+                  + ((f"alarm {run.alarm_time_min:g} min", f"onset estimate {run.onset_estimate_min:g} min")
+                     if alarm else ("no alarm", "no onset estimate")))
+    limits = {}
+    if widget:
+        # innovation symmetric about 0; l_k from three decades below the threshold's (room for
+        # the legend under the curve; the warm-up's smaller values do not matter to the test)
+        # to at least a decade above the threshold (the innovation's from
+        # ``settings["innovation_bound"]`` if given: a bound that does not depend on the noise)
+        low = 10.0 ** (np.floor(np.log10(run.threshold)) - 3)
+        bound = result.settings.get("innovation_bound")
+        limits = {0: stepped_range(run.innovations if bound is None else [bound], symmetric=True),
+                  1: (low, stepped_range([*stat, 10 * run.threshold], log=True)[1])}
+    key = f"plot_single_run {run.t_min.size} {widget}"
+    art = reusable_artists(fig, key)
+    if art is None:
+        fig, axes = figure(2, 1, fig=fig, sharex=True, figsize=(7.0, 5.0))
+        ax0, ax1 = axes[:, 0]
+        art = {"eps": ax0.plot(run.t_min, run.innovations, color=OURS_COLOR, lw=0.8)[0],
+               "onsets": [ax0.axvline(run.true_onset * gp.TS_MIN, color="k", ls=":", lw=1, label="true onset")]}
+        ax0.set(ylabel=r"$\varepsilon_k$ (Nm$^3$/h)")
+        art["title"] = ax0.set_title(title, y=1.0)   # fixed: no re-placement at each draw
+        legends = [ax0.legend(loc="lower left")]
+        art["stat"] = ax1.semilogy(run.t_min, stat, color=OURS_COLOR, label=r"$l_k$ (35)")[0]
+        art["threshold"] = ax1.axhline(run.threshold, color=THRESHOLD_COLOR, ls="--", label=labels[0])
+        ax1.axvspan(0, gp.DISABLED_MIN, color="0.9", label="GLR disabled")
+        art["onsets"].append(ax1.axvline(run.true_onset * gp.TS_MIN, color="k", ls=":", lw=1))
+        art["alarm"] = [ax1.axvline(alarm_x[0], color=PAPER_COLOR, lw=1, label=labels[1], visible=alarm),
+                        ax1.axvline(onset_x[0], color="tab:green", lw=1, label=labels[2], visible=alarm)]
+        ax1.set(xlabel=r"$t = k T_s$ (min)", ylabel=r"$l_k$")
+        legends.append(ax1.legend(loc="lower right", ncols=2))
+        if widget:
+            for legend in legends:
+                legend.set_zorder(1.9)
+        else:   # its texts change with the run
+            art["legend"] = legends[1]
+        art["axes"] = (ax0, ax1)
+        for i, ylim in limits.items():
+            art["axes"][i].set_ylim(ylim)
+        keep_artists(fig, key, art)
+    else:
+        art["eps"].set_ydata(run.innovations)
+        art["stat"].set_ydata(stat)
+        for line in art["onsets"]:
+            line.set_xdata([run.true_onset * gp.TS_MIN] * 2)
+        art["title"].set_text(title)
+        art["threshold"].set_ydata([run.threshold] * 2)
+        for line, x in zip(art["alarm"], (alarm_x, onset_x)):
+            line.set_xdata(x)
+            line.set_visible(alarm)
+        for i, ax in enumerate(art["axes"]):
+            if limits:
+                set_limits(ax, ylim=limits[i])
+            else:
+                ax.relim()
+                ax.autoscale_view()
+    if not widget:
+        texts = art["legend"].get_texts()
+        for i, text in zip((1, 3, 4), labels):
+            texts[i].set_text(text)
+        for i in (3, 4):
+            art["legend"].legend_handles[i].set_visible(alarm)
     return fig
 
 

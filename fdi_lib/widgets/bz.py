@@ -23,14 +23,17 @@ from fdi_lib.errors import ModelError
 from fdi_lib.nonparametric import Solution1Result, Solution2Result, solution1, solution2
 from fdi_lib.plotting import OURS_COLOR, THRESHOLD_COLOR, figure
 from fdi_lib.reproduce.bz import SOL1, SOL2, _simulate, setup
+from fdi_lib.models import fault_profile
+from fdi_lib.rls import RLSGains, rls_gains
+from fdi_lib.signatures import fault_signature
 from fdi_lib.simulate import draw_noise
 from fdi_lib.systems import bz_example as ex
-from fdi_lib.widgets import keep_artists, reusable_artists
+from fdi_lib.widgets import keep_artists, reusable_artists, set_limits, stepped_range
 
 __all__ = ["BZRun", "bz_run", "explore_bz", "GRID"]
 
 #: Slider values of the explorable (drift speed at its default 3e-4); lambda moves fastest,
-#: so that the build redraws only solution 2 between neighbouring frames.
+#: so that the build recomputes only solution 2 between neighbouring frames.
 GRID = {"f_size": (0.0, 0.1, 0.2, 0.3, 0.4, 0.5), "lam": (0.8, 0.85, 0.9, 0.95, 0.98, 1.0)}
 
 
@@ -65,8 +68,17 @@ def bz_run(lam: float = 0.95, delta: float = 3e-4, f_size: float = 0.2, *, seed:
     th, f, sim, s1 = _record(float(delta), float(f_size), int(seed))
     model, kal = setup(SOL2["n_steps"])[:2]
     s2 = solution2(model, sim.y, sim.u, Psi=ex.PSI, lam=lam, energy_window=SOL2["energy_window"],
-                   energy_alpha=SOL2["energy_alpha"], start=SOL2["warmup"], kalman=kal)
+                   energy_alpha=SOL2["energy_alpha"], start=SOL2["warmup"], kalman=kal, rls=_rls_gains(float(lam)))
     return BZRun(theta_path=th, f=f, sol1=s1, sol2=s2)
+
+
+@functools.lru_cache(maxsize=16)
+def _rls_gains(lam: float) -> RLSGains:
+    # the RLS gains of solution 2 depend on lambda only (not on the record): a move of the drift
+    # or of the fault reuses them, and the explorable computes one per value of lambda
+    model, kal = setup(SOL2["n_steps"])[:2]
+    regressor = fault_signature(model, kal, fault_profile(model, Psi=ex.PSI)).on_innovation
+    return rls_gains(regressor, kal.Sigma, lam=lam)
 
 
 @functools.lru_cache(maxsize=8)
@@ -95,52 +107,66 @@ def explore_bz(lam: float = 0.95, delta: float = 3e-4, f_size: float = 0.2, fig:
     matplotlib.figure.Figure
     """
     run = bz_run(lam, delta, f_size, seed=seed)
-    title = rf"RLS tracking, $\lambda$ = {lam:g}, $\delta$ = {delta:.1e}, $f$ amplitude {f_size:g}"
-    alarm2 = int(run.sol2.energy_alarm)
-    # the same record (only lambda moved): move the artists of solution 2
-    art = reusable_artists(fig, f"explore_bz {delta!r} {f_size!r} {seed}")
-    if art is not None:
-        for i, line in enumerate(art["theta_hat"]):
-            line.set_ydata(run.sol2.rls.theta_hat[:, i])
-        art["energy"].set_ydata(run.sol2.energy)
-        art["threshold"].set_ydata([run.sol2.energy_threshold] * 2)
-        art["alarm"].set_xdata([max(alarm2, 0)] * 2)
-        art["alarm"].set_visible(alarm2 >= 0)
-        art["top"].set_title(title)
-        for ax in (art["top"], art["middle"]):
-            ax.relim()
-            ax.autoscale_view(scalex=False)
+    # plain text (Unicode symbols): a title in mathtext would be parsed anew at every slider value
+    title = f"RLS tracking, λ = {lam:g}, δ = {delta:.1e}, f amplitude {f_size:g}"
+    alarm2, alarm1 = int(run.sol2.energy_alarm), int(run.sol1.nonparametric_alarm)
+    # round limits: a move that keeps the curves within the same steps redraws only the data
+    limits = (stepped_range([*run.theta_path.ravel(), *run.sol2.rls.theta_hat.ravel()], symmetric=True),
+              stepped_range([*run.sol2.energy, *run.sol1.energy, run.sol2.energy_threshold], log=True),
+              stepped_range([*run.sol1.glr.statistic, run.sol1.glr_threshold]))
+    art = reusable_artists(fig, "explore_bz")
+    if art is None:  # first call: build the figure; later calls move its artists
+        fig, axes = figure(3, 1, fig=fig, sharex=True, figsize=(7.5, 7.0))
+        k = np.arange(run.theta_path.shape[0])
+        ax = axes[0, 0]
+        art = {"theta": [], "theta_hat": []}
+        for i, c in enumerate((OURS_COLOR, "#ff7f0e")):
+            art["theta"] += ax.plot(k, run.theta_path[:, i], color=c, ls="--", lw=1.0)
+            art["theta_hat"] += ax.plot(k, run.sol2.rls.theta_hat[:, i], color=c,
+                                        label=rf"$\hat\theta^{{({i + 1})}}_k$ (dashed: true)")
+        ax.axvline(SOL2["f_onset"], color="0.5", lw=0.8, ls=":")
+        ax.set(ylabel=r"$\theta_k$")
+        art["title"] = ax.set_title(title, y=1.0)   # fixed: no re-placement at each draw
+        # fixed legends under the curves: render() keeps them in its saved background
+        ax.legend(loc="upper left", ncols=2).set_zorder(1.9)
+        ax = axes[1, 0]
+        art["energy"] = ax.semilogy(k, run.sol2.energy, color=OURS_COLOR, label="RLS error energy (solution 2)")[0]
+        art["energy1"] = ax.semilogy(k, run.sol1.energy, color="0.5", lw=0.9,
+                                     label="Kalman innovation energy (solution 1)")[0]
+        art["threshold"] = ax.axhline(run.sol2.energy_threshold, color=THRESHOLD_COLOR, ls="--", lw=0.9,
+                                      label="threshold")
+        # alarms of solution 2 and of solution 1's energy test (hidden, at 0, when there is none)
+        art["alarms"] = [ax.axvline(max(a, 0), color=c, ls=":", lw=1.0, visible=a >= 0)
+                         for a, c in ((alarm2, OURS_COLOR), (alarm1, "0.5"))]
+        ax.axvline(SOL2["f_onset"], color="0.5", lw=0.8, ls=":")
+        ax.set(ylabel="energy (w = 20)")
+        ax.legend(loc="upper left").set_zorder(1.9)
+        ax = axes[2, 0]
+        art["glr"] = ax.plot(k, run.sol1.glr.statistic, color=OURS_COLOR,
+                             label="GLR on projected Kitanidis residual")[0]
+        art["glr_threshold"] = ax.axhline(run.sol1.glr_threshold, color=THRESHOLD_COLOR, ls="--", lw=0.9,
+                                          label="threshold")
+        ax.axvline(SOL2["f_onset"], color="0.5", lw=0.8, ls=":")
+        ax.set(xlabel="k", ylabel=r"$l_k$")
+        ax.legend(loc="upper left").set_zorder(1.9)
+        art["axes"] = tuple(axes[:, 0])
+        for ax, ylim in zip(art["axes"], limits):
+            ax.set_ylim(ylim)
+        keep_artists(fig, "explore_bz", art)
         return fig
-
-    fig, axes = figure(3, 1, fig=fig, sharex=True, figsize=(7.5, 7.0))
-    k = np.arange(run.theta_path.shape[0])
-    ax = axes[0, 0]
-    theta_hat = []
-    for i, c in enumerate((OURS_COLOR, "#ff7f0e")):
-        ax.plot(k, run.theta_path[:, i], color=c, ls="--", lw=1.0)
-        theta_hat += ax.plot(k, run.sol2.rls.theta_hat[:, i], color=c,
-                             label=rf"$\hat\theta^{{({i + 1})}}_k$ (dashed: true)")
-    ax.axvline(SOL2["f_onset"], color="0.5", lw=0.8, ls=":")
-    ax.set(ylabel=r"$\theta_k$", title=title)
-    ax.legend(loc="upper left", ncols=2)
-    ax = axes[1, 0]
-    energy = ax.semilogy(k, run.sol2.energy, color=OURS_COLOR, label="RLS error energy (solution 2)")[0]
-    ax.semilogy(k, run.sol1.energy, color="0.5", lw=0.9, label="Kalman innovation energy (solution 1)")
-    threshold = ax.axhline(run.sol2.energy_threshold, color=THRESHOLD_COLOR, ls="--", lw=0.9, label="threshold")
-    # alarm of solution 2 (hidden, at 0, when there is none) and of solution 1's energy test
-    alarm = ax.axvline(max(alarm2, 0), color=OURS_COLOR, ls=":", lw=1.0, visible=alarm2 >= 0)
-    if int(run.sol1.nonparametric_alarm) >= 0:
-        ax.axvline(int(run.sol1.nonparametric_alarm), color="0.5", ls=":", lw=1.0)
-    ax.axvline(SOL2["f_onset"], color="0.5", lw=0.8, ls=":")
-    ax.set(ylabel="energy (w = 20)")
-    ax.legend(loc="upper left")
-    ax = axes[2, 0]
-    ax.plot(k, run.sol1.glr.statistic, color=OURS_COLOR, label="GLR on projected Kitanidis residual")
-    ax.axhline(run.sol1.glr_threshold, color=THRESHOLD_COLOR, ls="--", lw=0.9, label="threshold")
-    ax.axvline(SOL2["f_onset"], color="0.5", lw=0.8, ls=":")
-    ax.set(xlabel="k", ylabel=r"$l_k$")
-    ax.legend(loc="upper left")
-    keep_artists(fig, f"explore_bz {delta!r} {f_size!r} {seed}",
-                 {"theta_hat": theta_hat, "energy": energy, "threshold": threshold, "alarm": alarm,
-                  "top": axes[0, 0], "middle": axes[1, 0]})
+    for i, line in enumerate(art["theta"]):
+        line.set_ydata(run.theta_path[:, i])
+    for i, line in enumerate(art["theta_hat"]):
+        line.set_ydata(run.sol2.rls.theta_hat[:, i])
+    art["title"].set_text(title)
+    art["energy"].set_ydata(run.sol2.energy)
+    art["energy1"].set_ydata(run.sol1.energy)
+    art["threshold"].set_ydata([run.sol2.energy_threshold] * 2)
+    for line, a in zip(art["alarms"], (alarm2, alarm1)):
+        line.set_xdata([max(a, 0)] * 2)
+        line.set_visible(a >= 0)
+    art["glr"].set_ydata(run.sol1.glr.statistic)
+    art["glr_threshold"].set_ydata([run.sol1.glr_threshold] * 2)
+    for ax, ylim in zip(art["axes"], limits):
+        set_limits(ax, ylim=ylim)
     return fig

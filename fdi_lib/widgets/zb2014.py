@@ -14,12 +14,14 @@ from typing import Any
 import numpy as np
 
 from fdi_lib.errors import ModelError
-from fdi_lib.filters import kalman_gains
+from fdi_lib.filters import kalman_filter, kalman_gains
+from fdi_lib.glr import first_alarm, glr_window
 from fdi_lib.models import impulse_family
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
-from fdi_lib.reproduce.zb2014 import plot_detection, unstable_run
+from fdi_lib.reproduce.zb2014 import UnstableRun, plot_detection
+from fdi_lib.simulate import simulate
 from fdi_lib.signatures import fault_signature, willsky_jones
-from fdi_lib.widgets import keep_artists, reusable_artists
+from fdi_lib.widgets import batched_glr, keep_artists, reusable_artists, set_limits, stepped_limit
 from fdi_lib.systems import zb2014_unstable as ex
 
 __all__ = ["explore_glr", "explore_signature", "DEFAULTS", "GLR_GRID", "SIGNATURE_GRID"]
@@ -33,6 +35,24 @@ def _unstable_setup():
     # model and Kalman gains do not depend on any slider: computed once per process
     model = ex.unstable_model(ex.N_STEPS)
     return model, kalman_gains(model)
+
+
+#: Windowed GLRs of the records already computed, (onset, seed, window, fault size) -> result
+_GLR_CACHE: dict = {}
+
+
+@functools.lru_cache(maxsize=16)
+def _glr_record(onset: int, seed: int):
+    # what a fault size does not change: the fault-free innovation of the seed's noise record
+    # (simulate draws the noise before the fault acts) and the innovation signature of a unit
+    # jump of the first state at the onset
+    model, gains = _unstable_setup()
+    fam = impulse_family(model)
+    profile = fam.profile(onset)
+    sim = simulate(model, rng=np.random.default_rng(seed), controller=ex.controller(), fault=profile,
+                   theta=np.zeros(fam.m))
+    eps = kalman_filter(model, sim.y, sim.u, gains=gains).innovations[:, 0]
+    return fam, eps, fault_signature(model, gains, profile).on_innovation[:, 0, :]
 
 
 def explore_signature(onset: int = 101, fig: Any = None):
@@ -61,6 +81,8 @@ def explore_signature(onset: int = 101, fig: Any = None):
     h_gamma = np.linalg.norm(sig.on_innovation, ord=2, axis=(-2, -1))
     ka = np.arange(alpha.size)
     alpha_k, alpha_v = ka[alpha > 0], alpha[alpha > 0]
+    top_ylim = (-0.05 * stepped_limit(gamma.max()), stepped_limit(gamma.max()))
+    title = f"impulse at r = {r}"
     art = reusable_artists(fig, "explore_signature")
     if art is None:  # first call: build the figure; later calls only move its artists
         fig, axes = figure(2, 1, fig=fig, sharex=True, figsize=(7.0, 5.0))
@@ -71,11 +93,13 @@ def explore_signature(onset: int = 101, fig: Any = None):
                                    label=r"$\|H_k\Gamma_k\|_2$")[0],
                "r_top": top.axvline(r, color="k", ls=":", lw=0.8),
                "alpha": bottom.semilogy(alpha_k, alpha_v, color=PAPER_COLOR, label=r"$\|\alpha_k(r)\|_2$")[0],
-               "r_bottom": bottom.axvline(r, color="k", ls=":", lw=0.8), "top": top}
-        top.set(ylabel="norm")
-        top.legend(loc="upper right")
+               "r_bottom": bottom.axvline(r, color="k", ls=":", lw=0.8), "title": top.set_title(title, y=1.0),
+               "top": top}
+        top.set(ylabel="norm", ylim=top_ylim)
+        # fixed legends under the curves: render() keeps them in its saved background
+        top.legend(loc="upper right").set_zorder(1.9)
         bottom.set(xlabel="k", ylabel=r"$\|\alpha_k(r)\|_2$", xlim=(0, alpha.size - 1), ylim=(0.1, 1e45))
-        bottom.legend(loc="upper left")
+        bottom.legend(loc="upper left").set_zorder(1.9)
         keep_artists(fig, "explore_signature", art)
     else:
         art["gamma"].set_ydata(gamma)
@@ -83,9 +107,8 @@ def explore_signature(onset: int = 101, fig: Any = None):
         art["alpha"].set_data(alpha_k, alpha_v)
         for line in (art["r_top"], art["r_bottom"]):
             line.set_xdata([r, r])
-        art["top"].relim()
-        art["top"].autoscale_view()
-    art["top"].set_title(f"impulse at r = {r}")
+        art["title"].set_text(title)
+        set_limits(art["top"], ylim=top_ylim)
     return fig
 
 #: Default slider values (paper Fig. 3 setting, plus an illustrative threshold).
@@ -124,10 +147,21 @@ def explore_glr(fault_size: float = DEFAULTS["fault_size"], onset: int = DEFAULT
         raise ModelError(f"window: expected an integer in [5, 200], got {window!r}")
     if not threshold > 0:
         raise ModelError(f"threshold: expected a positive number, got {threshold!r}")
-    run = unstable_run(theta=(float(fault_size), 0.0), onset=int(onset), window=int(window),
-                       threshold=float(threshold), seed=int(seed))
+    model, gains = _unstable_setup()
+    fam, eps_noise, eps_fault = _glr_record(int(onset), int(seed))
+
+    def innovations(size: float) -> np.ndarray:
+        # linear in theta (Kalman filter of a linear closed loop): the noise's part plus the
+        # fault signature H_k Gamma_k(r) theta (tests: equal to unstable_run's)
+        return (eps_noise + eps_fault[:, 0] * size)[:, None]
+
+    glr = batched_glr(_GLR_CACHE, (int(onset), int(seed), int(window)), float(fault_size), GLR_GRID["fault_size"],
+                      innovations, lambda eps: glr_window(eps, model, gains, fam, window=int(window)))
+    run = UnstableRun(innovations=innovations(float(fault_size))[:, 0], glr=glr, theta=(float(fault_size), 0.0),
+                      onset=int(onset), window=int(window), threshold=float(threshold), seed=int(seed),
+                      alarm=int(first_alarm(glr.statistic, float(threshold))))
     delay = run.alarm - run.onset if run.alarm >= run.onset else None
     status = ("no alarm" if run.alarm < 0 else
               f"false alarm at k = {run.alarm}" if delay is None else f"alarm after {delay} samples")
     return plot_detection(run, fig=fig, title=f"theta = [{fault_size:g}, 0], onset {onset}, "
-                                              f"w = {window}: {status}")
+                                              f"w = {window}: {status}", widget=True)

@@ -2,11 +2,20 @@
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
+import numpy as np
+
 from fdi_lib.errors import ModelError
+from fdi_lib.filters import kalman_filter
+from fdi_lib.glr import first_alarm, glr_window
 from fdi_lib.reproduce.registry import ReproductionResult
-from fdi_lib.reproduce.zb2014_pipeline import plot_single_run, single_run
+from fdi_lib.reproduce.zb2014_pipeline import (FAULT_ONSET, GLR_START, SingleRun, fault_theta, pipeline_setup,
+                                               plot_single_run)
+from fdi_lib.simulate import simulate
+from fdi_lib.systems import gas_pipeline as gp
+from fdi_lib.widgets import batched_glr
 
 __all__ = ["explore_pipeline", "DEFAULTS", "GRID"]
 
@@ -46,8 +55,19 @@ def explore_pipeline(fault_size_e5: float = DEFAULTS["fault_size_e5"], fault: in
         raise ModelError(f"window: expected an integer in [10, 250], got {window!r}")
     if not threshold > 0:
         raise ModelError(f"threshold: expected a positive number, got {threshold!r}")
-    run = single_run(seed=int(seed), fault=int(fault), delta=float(fault_size_e5) * 1e-5,
-                     threshold=float(threshold), window=int(window))
+    st = pipeline_setup()
+    eps_noise = _noise_innovations(int(seed))
+
+    def innovations(size: float) -> np.ndarray:
+        # linear in the fault: the noise's part plus the signature of the step at 600 min times
+        # theta (tests: equal to single_run's)
+        return eps_noise + st.known_signature @ fault_theta(int(fault), size * 1e-5)
+
+    glr = batched_glr(_GLR_CACHE, (int(seed), int(fault), int(window)), float(fault_size_e5), GRID["fault_size_e5"],
+                      innovations, lambda eps: glr_window(eps, st.model, st.gains, st.input_family, int(window)))
+    run = SingleRun(t_min=np.arange(st.model.n_steps) * gp.TS_MIN, innovations=innovations(float(fault_size_e5))[:, 0],
+                    statistic=glr.statistic, onset=glr.onset, true_onset=FAULT_ONSET, threshold=float(threshold),
+                    alarm=int(first_alarm(glr.statistic, float(threshold), start=GLR_START)))
     if run.alarm < 0:
         status = "no alarm"
     elif run.alarm < run.true_onset:
@@ -55,5 +75,25 @@ def explore_pipeline(fault_size_e5: float = DEFAULTS["fault_size_e5"], fault: in
     else:
         status = f"delay {run.detection_delay_min:g} min"
     title = f"fault {fault}, change {fault_size_e5:g}e-5, w = {window}: {status}"
-    result = ReproductionResult(id="explore", headline={}, settings={"title": title}, data={"run": run})
-    return plot_single_run(result, fig=fig)
+    # the innovation's panel: the fault's part and 4.5 standard deviations of the noise's, which
+    # a record exceeds with probability below 1 % (a new seed keeps the axes)
+    theta = fault_theta(int(fault), float(fault_size_e5) * 1e-5)
+    bound = float(np.max(np.abs(st.known_signature @ theta)[:, 0] + 4.5 * np.sqrt(st.gains.Sigma[:, 0, 0])))
+    result = ReproductionResult(id="explore", headline={}, settings={"title": title, "innovation_bound": bound},
+                                data={"run": run})
+    return plot_single_run(result, fig=fig, widget=True)
+
+
+#: Windowed GLRs of the records already computed, (seed, fault, window, fault size) -> result
+_GLR_CACHE: dict = {}
+
+
+@functools.lru_cache(maxsize=8)
+def _noise_innovations(seed: int) -> np.ndarray:
+    # the fault-free innovations of the seed's noise record (simulate draws the noise before the
+    # fault acts): what no slider but the seed changes
+    st = pipeline_setup()
+    profile = st.input_family.profile(FAULT_ONSET)
+    sim = simulate(st.model, rng=np.random.default_rng(seed), u=st.u, fault=profile,
+                   theta=np.zeros(st.input_family.m))
+    return kalman_filter(st.model, sim.y, st.u, gains=st.gains).innovations

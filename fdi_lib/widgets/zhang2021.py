@@ -19,7 +19,7 @@ from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.reproduce.zhang2021 import example1_regression
 from fdi_lib.sparse import flat_range, lasso_path, least_squares_on_support
 from fdi_lib.systems import zhang2021_example1 as ex
-from fdi_lib.widgets import keep_artists, reusable_artists
+from fdi_lib.widgets import keep_artists, reusable_artists, set_limits, stepped_range
 
 __all__ = ["explore_sparse", "GRID"]
 
@@ -68,36 +68,50 @@ def explore_sparse(q: int = 5, r: float = 0.5, lam_scale: float = 1.0, seed: int
 
     idx = np.arange(1, X.shape[1] + 1)
     title = f"q = {q}, r = {r:g}: {'isolated' if ok else 'NOT isolated'}"
-    # the same trial as the figure shows (only lambda moved): move the lambda-dependent artists
-    art = reusable_artists(fig, f"explore_sparse {q} {r!r} {seed}")
-    if art is not None:
+    lam_b, sizes = path.lambdas, path.support_sizes()
+    floor = 1e-4 * lam_b[0]
+    edges = np.concatenate([np.clip(lam_b[::-1], floor, None), [3 * lam_b[0]]])
+    steps = np.concatenate([sizes[::-1], [0]])
+    # round limits (decades of lambda): a move within the same steps redraws only the data
+    limits = {"left": (stepped_range([floor, 3 * lam_b[0]], log=True), stepped_range(steps)),
+              "right": stepped_range([*coef[support], *ls[support], 1.0, 0.0])}
+    # the value in the title, in plain text: a mathtext label would be parsed anew at every value
+    left_title = f"support size (flat range: {fr.size}), λ = {lam:.3g}"
+    art = reusable_artists(fig, "explore_sparse")
+    if art is not None:  # the figure of an earlier call: move its artists
+        art["steps"].set_data(steps, edges)
+        art["flat"].set_x(fr.low)
+        art["flat"].set_width(fr.high - fr.low)
         art["lam"].set_xdata([lam, lam])
-        art["lam_label"].set_text(rf"$\lambda$ = {lam:.3g}")
+        art["left_title"].set_text(left_title)
         art["lasso"].set_data(idx[support], coef[support])
         art["ls"].set_data(idx[support], ls[support])
-        art["right"].set_title(title)
-        art["right"].relim()
-        art["right"].autoscale_view(scalex=False)
+        art["truth"].set_data(idx[truth], np.ones(truth.size))
+        art["right_title"].set_text(title)
+        set_limits(art["axes"][0], xlim=limits["left"][0], ylim=limits["left"][1])
+        set_limits(art["axes"][1], ylim=limits["right"])
         return fig
 
     fig, axes = figure(1, 2, fig=fig, figsize=(9.0, 3.4))
     ax = axes[0, 0]
-    lam_b, sizes = path.lambdas, path.support_sizes()
-    floor = 1e-4 * lam_b[0]
-    edges = np.concatenate([np.clip(lam_b[::-1], floor, None), [3 * lam_b[0]]])
-    ax.stairs(np.concatenate([sizes[::-1], [0]]), edges, color=OURS_COLOR, baseline=None)
-    ax.axvspan(fr.low, fr.high, color=PAPER_COLOR, alpha=0.15, label="flat range")
-    lam_line = ax.axvline(lam, color="k", ls="--", lw=1, label=rf"$\lambda$ = {lam:.3g}")
-    ax.set(xscale="log", xlabel=r"$\lambda$", ylabel="non-zero components", xlim=(floor, 3 * lam_b[0]),
-           title=f"support size (flat range: {fr.size})")
-    legend = ax.legend(loc="upper right")
+    # the staircase and the flat range over the grid (z-order 1.6, not the patches' 1): the
+    # moving artists are then all above the axis, which render() keeps as background
+    art = {"steps": ax.stairs(steps, edges, color=OURS_COLOR, baseline=None, zorder=1.6),
+           "flat": ax.axvspan(fr.low, fr.high, color=PAPER_COLOR, alpha=0.15, label="flat range", zorder=1.6),
+           "lam": ax.axvline(lam, color="k", ls="--", lw=1, label=r"chosen $\lambda$")}
+    ax.set(xscale="log", xlabel=r"$\lambda$", ylabel="non-zero components", xlim=limits["left"][0],
+           ylim=limits["left"][1])
+    art["left_title"] = ax.set_title(left_title, y=1.0)   # fixed: no re-placement at each draw
+    ax.legend(loc="upper right")
     ax = axes[0, 1]
-    lasso = ax.plot(idx[support], coef[support], "D", color=OURS_COLOR, ms=5, label="Lasso")[0]
-    ls_line = ax.plot(idx[support], ls[support], "o", mfc="none", mec="k", ms=10, label="least squares")[0]
-    ax.plot(idx[truth], np.ones(truth.size), "*", color=PAPER_COLOR, ms=10, label="true")
-    ax.set(xlabel=r"component of $\theta$", ylabel="value", xlim=(0, X.shape[1] + 1), title=title)
-    ax.legend(loc="best")
-    keep_artists(fig, f"explore_sparse {q} {r!r} {seed}",
-                 {"lam": lam_line, "lam_label": legend.get_texts()[1], "lasso": lasso, "ls": ls_line,
-                  "right": ax})
+    art["lasso"] = ax.plot(idx[support], coef[support], "D", color=OURS_COLOR, ms=5, label="Lasso")[0]
+    art["ls"] = ax.plot(idx[support], ls[support], "o", mfc="none", mec="k", ms=10, label="least squares")[0]
+    art["truth"] = ax.plot(idx[truth], np.ones(truth.size), "*", color=PAPER_COLOR, ms=10, label="true")[0]
+    ax.set(xlabel=r"component of $\theta$", ylabel="value", xlim=(0, X.shape[1] + 1), ylim=limits["right"])
+    art["right_title"] = ax.set_title(title, y=1.0)
+    # a fixed place under the markers (z-order 1.9): render() keeps it in its saved background
+    # ("best" would move it, so draw it, at every value)
+    ax.legend(loc="upper right").set_zorder(1.9)
+    art["axes"] = (axes[0, 0], ax)
+    keep_artists(fig, "explore_sparse", art)
     return fig

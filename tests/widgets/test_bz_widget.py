@@ -38,3 +38,22 @@ def test_bad_values():
         explore_bz(lam=0)
     with pytest.raises(ModelError, match="delta, f_size: expected non-negative values"):
         explore_bz(f_size=-1.0)
+
+
+def test_cached_rls_gains_give_solution2_exactly():
+    from fdi_lib.nonparametric import solution2
+    from fdi_lib.reproduce.bz import SOL2, setup
+    from fdi_lib.systems import bz_example as ex
+    from fdi_lib.widgets.bz import _record
+
+    run = bz_run(0.9, 3e-4, 0.2)
+    model, kal = setup(SOL2["n_steps"])[:2]
+    sim = _record(3e-4, 0.2, 0)[2]
+    alone = solution2(model, sim.y, sim.u, Psi=ex.PSI, lam=0.9, energy_window=SOL2["energy_window"],
+                      energy_alpha=SOL2["energy_alpha"], start=SOL2["warmup"], kalman=kal)
+    np.testing.assert_array_equal(run.sol2.rls.theta_hat, alone.rls.theta_hat)
+    np.testing.assert_array_equal(run.sol2.energy, alone.energy)
+    assert run.sol2.energy_alarm == alone.energy_alarm
+    with pytest.raises(ModelError, match="rls: expected RLS gains for lam = 0.8, got gains for lam = 0.9"):
+        solution2(model, sim.y, sim.u, Psi=ex.PSI, lam=0.8, energy_window=SOL2["energy_window"],
+                  energy_alpha=SOL2["energy_alpha"], kalman=kal, rls=run.sol2.rls.gains)
