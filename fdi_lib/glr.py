@@ -300,6 +300,22 @@ class WindowedGLR:
         V, inv = _pinv_factors(C)
         self._root = V * np.sqrt(inv)[..., None, :]                      # C^+ = root root^T
 
+    def fresh(self, batch_shape: tuple[int, ...] = ()) -> "WindowedGLR":
+        """A new detector at ``k = 0`` for innovations of leading shape ``batch_shape``.
+
+        It shares this detector's noise-independent arrays (signatures, informations and the
+        factors of their pseudo-inverses, which :meth:`update` only reads), so that many batches
+        of realisations (Monte Carlo chunks) pay their construction once.
+        """
+        new = object.__new__(WindowedGLR)
+        new.__dict__.update(self.__dict__)
+        new.batch_shape = tuple(batch_shape)
+        new._B = int(np.prod(new.batch_shape, dtype=int))
+        new._d = np.zeros((self.window, self.family.m, new._B))
+        new._C_missing = np.zeros((self.window, self.family.m, self.family.m))
+        new.k = 0
+        return new
+
     def update(self, eps_k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Process innovation ``eps_k`` ``(*batch, p)``.
 
@@ -408,7 +424,8 @@ class WindowedGLR:
 
 
 def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, family: FaultFamily,
-               window: int, min_samples: int | None = None) -> WindowGLRResult:
+               window: int, min_samples: int | None = None, *, shared: WindowedGLR | None = None
+               ) -> WindowGLRResult:
     """Windowed GLR with unknown onset (35)-(37) over a whole record.
 
     Parameters
@@ -419,6 +436,11 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
         (realisations with different missing samples are run as separate groups).
     model, gains, family, window, min_samples
         As in :class:`WindowedGLR`.
+    shared : WindowedGLR, optional
+        A detector built with these same ``model``, ``gains`` and ``family`` objects, ``window``
+        and ``min_samples``, whose noise-independent quantities are reused
+        (:meth:`WindowedGLR.fresh`) instead of computed again: for many batches of the same
+        setting, e.g. Monte Carlo chunks. The results are the same.
 
     Returns
     -------
@@ -432,8 +454,19 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
         flat_missing = missing.reshape(-1, model.n_steps)
         patterns, group = np.unique(flat_missing, axis=0, return_inverse=True)
         if len(patterns) > 1:
-            return _grouped_glr_window(eps, group.reshape(-1), model, gains, family, window, min_samples)
-    det = WindowedGLR(model, gains, family, window, min_samples, batch_shape=batch)
+            return _grouped_glr_window(eps, group.reshape(-1), model, gains, family, window, min_samples,
+                                       shared)
+    if shared is None:
+        det = WindowedGLR(model, gains, family, window, min_samples, batch_shape=batch)
+    else:
+        s = -(-family.m // model.p) if min_samples is None else min_samples
+        if (not isinstance(shared, WindowedGLR) or shared.model is not model or shared.gains is not gains
+                or shared.family is not family or (shared.window, shared.min_samples) != (window, s)):
+            raise ModelError("shared: expected a WindowedGLR built with the same model, gains and family "
+                             f"objects, window {window} and min_samples {s}, got "
+                             f"{type(shared).__name__} with window {getattr(shared, 'window', None)} "
+                             f"and min_samples {getattr(shared, 'min_samples', None)}")
+        det = shared.fresh(batch)
     if det._B <= _RECORD_MAX_BATCH and not missing.any():
         return det._record(eps)
     # many realisations: one update per sample already works on wide arrays
@@ -456,7 +489,8 @@ _RECORD_MAX_BATCH = 4
 
 
 def _grouped_glr_window(eps: np.ndarray, group: np.ndarray, model: LTVModel, gains: KalmanGains,
-                        family: FaultFamily, window: int, min_samples: int | None) -> WindowGLRResult:
+                        family: FaultFamily, window: int, min_samples: int | None,
+                        shared: WindowedGLR | None) -> WindowGLRResult:
     """:func:`glr_window` run once per group of realisations sharing the same missing samples."""
     batch, N, m = eps.shape[:-2], model.n_steps, family.m
     flat = eps.reshape(-1, N, model.p)
@@ -466,7 +500,7 @@ def _grouped_glr_window(eps: np.ndarray, group: np.ndarray, model: LTVModel, gai
     res = None
     for i in np.unique(group):
         rows = np.nonzero(group == i)[0]
-        res = glr_window(flat[rows], model, gains, family, window, min_samples)
+        res = glr_window(flat[rows], model, gains, family, window, min_samples, shared=shared)
         for key, arr in out.items():
             arr[rows] = getattr(res, key)
     return WindowGLRResult(**{key: arr.reshape(*batch, *arr.shape[1:]) for key, arr in out.items()},
