@@ -36,7 +36,7 @@ from fdi_lib.errors import ModelError
 from fdi_lib.filters import KalmanGains, kalman_filter, kalman_gains
 from fdi_lib.glr import WindowedGLR, first_alarm, glr_window
 from fdi_lib.isolation import information, minmax_statistic
-from fdi_lib.models import FaultFamily, LTVModel, step_family
+from fdi_lib.models import FaultFamily, FaultProfile, LTVModel, step_family
 from fdi_lib.montecarlo import binomial_ci, draw_noise_batch, run_monte_carlo
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, THRESHOLD_COLOR, figure
 from fdi_lib.report import fmt_rate
@@ -270,9 +270,16 @@ def onset_profile(run: SingleRun, *, fault: int = 1, columns: str = "both",
     k = run.alarm
     onsets = np.arange(max(0, k - gp.WINDOW + 1), k)
     eps = run.innovations[:, None]
+    m = fam.m
+    # every onset's profile side by side (columns j m .. j m + m - 1 for onsets[j]): one signature
+    # recursion for all of them, each column computed as alone (the filter acts column-wise)
+    profiles = [fam.profile(int(r)) for r in onsets]
+    sigs = fault_signature(st.model, st.gains, FaultProfile(
+        Psi=np.concatenate([pr.Psi for pr in profiles], axis=-1),
+        Phi=np.concatenate([pr.Phi for pr in profiles], axis=-1))).on_innovation
     stat, theta = [], []
-    for r in onsets:
-        sig = fault_signature(st.model, st.gains, fam.profile(int(r))).on_innovation
+    for j, r in enumerate(onsets):
+        sig = sigs[:, :, j * m:(j + 1) * m]
         C, d = information(eps, sig, st.gains, int(r), k + 1)
         th = np.linalg.pinv(C) @ d
         stat.append(float(d @ th))
