@@ -510,7 +510,7 @@ def detection_chunk(seeds, *, fault: int, variant: str = "physical", schedule: s
     sim = simulate(st.model, noise=noise, u=st.u, fault=st.input_family.profile(FAULT_ONSET),
                    theta=fault_theta(fault))
     eps = kalman_filter(st.model, sim.y, st.u, gains=st.gains).innovations
-    res = glr_window(eps, st.model, st.gains, st.input_family, gp.WINDOW, shared=st.glr)
+    res = glr_window(eps, st.model, st.gains, st.input_family, gp.WINDOW, shared=st.glr, start=GLR_START)
     alarm = first_alarm(res.statistic, gp.THRESHOLD, start=GLR_START)
     B = alarm.shape[0]
     k = np.where(alarm >= 0, alarm, 0)
