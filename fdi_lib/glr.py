@@ -456,6 +456,7 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
     if not isinstance(model, LTVModel):
         raise ModelError(f"model: expected an LTVModel, got {type(model).__name__}")
     eps, missing = _check_innovations(innovations, model.n_steps, model.p)
+    start = integer(start, "start", low=0, high=model.n_steps)
     batch = eps.shape[:-2]
     if missing.any() and batch:
         flat_missing = missing.reshape(-1, model.n_steps)
@@ -474,7 +475,6 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
                              f"{type(shared).__name__} with window {getattr(shared, 'window', None)} "
                              f"and min_samples {getattr(shared, 'min_samples', None)}")
         det = shared.fresh(batch)
-    start = integer(start, "start", low=0, high=model.n_steps)
     if det._B <= _RECORD_MAX_BATCH and not missing.any():
         res = det._record(eps)
         if start:  # the same outputs as sample by sample: none before start
