@@ -38,7 +38,9 @@ TARGET_S = 30.0
 CHAPTERS = ("zb2014/signature", "zb2014/glr", "zb2014/pipeline", "zhang2021/sparse",
             "bz/parametric-nonparametric", "rosa2013/svo")
 WIDGET_CALL = re.compile(r"^\s*interactive_figure\(", re.MULTILINE)
-CELL_TIMEOUT_S = 1200
+#: A cell with no reply after this long fails the benchmark (no chapter cell takes a tenth of it on
+#: this machine; a kernel that stops answering, seen with ipykernel 7, must not stall CI for long).
+CELL_TIMEOUT_S = 300
 
 
 def tree_cpu_seconds(proc: psutil.Process) -> float:
