@@ -2,7 +2,7 @@
 
 For each chapter with a widget, the chapter (``book/<chapter>.md``) is converted to a notebook
 with jupytext, as the page's .ipynb download or ``make notebooks`` gives it, and run top to
-bottom with nbclient in a fresh ``python3`` kernel of this environment, the way a student runs
+bottom in a fresh ``python3`` kernel (jupyter_client) of this environment, the way a student runs
 it in JupyterLab: the kernel's working directory is the chapter's folder and the book build's
 results cache (``$FDI_RESULTS_CACHE``) is *not* set, so nothing is read from a previous build.
 The clock starts when the kernel is asked to start and stops when the first cell that calls
@@ -26,11 +26,12 @@ import re
 import sys
 import time
 from pathlib import Path
+from queue import Empty
 
 import jupytext
 import psutil
 from _record import record
-from nbclient import NotebookClient
+from jupyter_client import KernelManager
 
 ROOT = Path(__file__).resolve().parents[1]
 TARGET_S = 30.0
@@ -38,8 +39,8 @@ TARGET_S = 30.0
 CHAPTERS = ("zb2014/signature", "zb2014/glr", "zb2014/pipeline", "zhang2021/sparse",
             "bz/parametric-nonparametric", "rosa2013/svo")
 WIDGET_CALL = re.compile(r"^\s*interactive_figure\(", re.MULTILINE)
-#: A cell with no reply after this long fails the benchmark (no chapter cell takes a tenth of it on
-#: this machine; a kernel that stops answering, seen with ipykernel 7, must not stall CI for long).
+#: A cell with no reply after this long fails the benchmark (no chapter cell takes a fifth of it on
+#: this machine).
 CELL_TIMEOUT_S = 300
 
 
@@ -57,6 +58,38 @@ def tree_cpu_seconds(proc: psutil.Process) -> float:
     return total
 
 
+def run_cell(kc, km, code: str, label: str) -> None:
+    """Execute ``code`` and wait for its reply; raise on an error, a dead kernel or after
+    :data:`CELL_TIMEOUT_S`.
+
+    The replies are read with the blocking client's synchronous sockets (level-triggered polls),
+    not nbclient's asyncio ones: under load those sometimes missed a reply of a widget cell until
+    their timeout (tens of stalls of exactly the timeout in a stress test, with ipykernel 7 and 6),
+    which would be counted here as the chapter's time.
+    """
+    msg_id = kc.execute(code, allow_stdin=False, stop_on_error=True)
+    deadline = time.monotonic() + CELL_TIMEOUT_S
+    while True:
+        try:
+            reply = kc.get_shell_msg(timeout=1.0)
+        except Empty:
+            if not km.is_alive():
+                raise RuntimeError(f"{label}: the kernel died") from None
+            if time.monotonic() > deadline:
+                raise TimeoutError(f"{label}: no reply after {CELL_TIMEOUT_S} s") from None
+            continue
+        if reply["parent_header"].get("msg_id") == msg_id:
+            break
+    while True:  # outputs: not kept, only drained
+        try:
+            kc.get_iopub_msg(timeout=0)
+        except Empty:
+            break
+    content = reply["content"]
+    if content["status"] != "ok":
+        raise RuntimeError(f"{label}: {content.get('ename')}: {content.get('evalue')}")
+
+
 def run_to_widget(chapter: str) -> dict[str, float | int | str]:
     """Run ``book/<chapter>.md`` in a fresh kernel up to its first widget cell (see the module docstring)."""
     path = ROOT / "book" / f"{chapter}.md"
@@ -66,21 +99,26 @@ def run_to_widget(chapter: str) -> dict[str, float | int | str]:
     if widget is None:
         raise SystemExit(f"{path}: no cell calls interactive_figure")
     env = {k: v for k, v in os.environ.items() if k != "FDI_RESULTS_CACHE"}
-    client = NotebookClient(nb, timeout=CELL_TIMEOUT_S, kernel_name="python3",
-                            resources={"metadata": {"path": str(path.parent)}})
     slowest, slowest_cell = 0.0, -1
+    km = KernelManager(kernel_name="python3")
     t0 = time.perf_counter()
-    with client.setup_kernel(env=env):
-        kernel = psutil.Process(client.km.provisioner.pid)
-        client.wait_for_reply(client.kc.kernel_info())
+    km.start_kernel(cwd=str(path.parent), env=env)
+    kc = km.client()
+    try:
+        kc.start_channels()
+        kc.wait_for_ready(timeout=120)
+        kernel = psutil.Process(km.provisioner.pid)
         started = time.perf_counter() - t0
         for i in code[:code.index(widget) + 1]:
             c0 = time.perf_counter()
-            client.execute_cell(nb.cells[i], i)
+            run_cell(kc, km, nb.cells[i].source, f"{chapter}, cell {i}")
             if time.perf_counter() - c0 > slowest:
                 slowest, slowest_cell = time.perf_counter() - c0, i
         wall = time.perf_counter() - t0
         cpu = tree_cpu_seconds(kernel)
+    finally:
+        kc.stop_channels()
+        km.shutdown_kernel(now=True)
     first_line = nb.cells[slowest_cell].source.strip().splitlines()[0][:50]
     return {"wall": wall, "cpu": cpu, "start": started, "cells": code.index(widget) + 1,
             "slowest": slowest, "slowest_cell": f"cell {slowest_cell}: {first_line}"}
