@@ -63,9 +63,10 @@ def run_cell(kc, km, code: str, label: str) -> None:
     :data:`CELL_TIMEOUT_S`.
 
     The replies are read with the blocking client's synchronous sockets (level-triggered polls),
-    not nbclient's asyncio ones: under load those sometimes missed a reply of a widget cell until
-    their timeout (tens of stalls of exactly the timeout in a stress test, with ipykernel 7 and 6),
-    which would be counted here as the chapter's time.
+    not nbclient's asyncio ones: under load those sometimes missed the reply of a widget cell
+    until their timeout (in a stress test of the bz widget cell, 6 stalls of exactly the timeout
+    in 120 cells with nbclient, ipykernel 7.4 or 6.30; none in 60 cells this way), which would be
+    counted here as the chapter's time.
     """
     msg_id = kc.execute(code, allow_stdin=False, stop_on_error=True)
     deadline = time.monotonic() + CELL_TIMEOUT_S
