@@ -10,9 +10,10 @@ The clock starts when the kernel is asked to start and stops when the first cell
 
 Reported per chapter: the wall time (kernel start-up included), the CPU time of the kernel and
 of every process it started (Monte Carlo workers included), the kernel start-up alone, and the
-slowest cell before the widget. The verdict uses the CPU time, what the chapter costs on one free
-core (the machine is shared: the wall time under load is larger); both are recorded for the
-book's status page.
+slowest cell before the widget. The verdict uses the smaller of the wall and CPU times, an upper
+bound of the wait on an idle machine: under load the wall time grows while the CPU time does not,
+and a chapter whose Monte Carlo runs on two processes waits less than its CPU time. Both times
+go to the book's status page.
 
 Run: OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_notebooks.py [chapter ...]
 (chapters as ``zb2014/glr``; default: all of :data:`CHAPTERS`). ``make benchmarks`` runs it
@@ -127,15 +128,16 @@ def run_to_widget(chapter: str) -> dict[str, float | int | str]:
 
 def main(chapters: list[str]) -> None:
     print(f"load average {os.getloadavg()[0]:.1f}; target: widget reached in <= {TARGET_S:g} s "
-          f"(verdict on the kernel's CPU time)")
+          f"(verdict on min(wall, CPU))")
     print(f"{'chapter':30s} {'wall':>7s} {'CPU':>7s} {'start':>6s} {'cells':>5s}  slowest cell")
     for chapter in chapters:
         r = run_to_widget(chapter)
         print(f"{chapter:30s} {r['wall']:6.1f}s {r['cpu']:6.1f}s {r['start']:5.1f}s {r['cells']:5d}  "
               f"{r['slowest']:.1f} s, {r['slowest_cell']}", flush=True)
-        record(f"notebook {chapter} reaches its widget", r["cpu"], "s CPU", TARGET_S,
-               note=f"wall {r['wall']:.1f} s, load average {os.getloadavg()[0]:.1f}, "
-                    f"fresh kernel, {r['cells']} code cells")
+        record(f"notebook {chapter} reaches its widget", min(r["wall"], r["cpu"]), "s", TARGET_S,
+               note=f"min of wall {r['wall']:.1f} s and CPU {r['cpu']:.1f} s (kernel and its "
+                    f"workers), load average {os.getloadavg()[0]:.1f}, fresh kernel, "
+                    f"{r['cells']} code cells")
 
 
 if __name__ == "__main__":
