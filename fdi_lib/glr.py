@@ -300,14 +300,33 @@ class WindowedGLR:
         V, inv = _pinv_factors(C)
         self._root = V * np.sqrt(inv)[..., None, :]                      # C^+ = root root^T
 
-    def update(self, eps_k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def fresh(self, batch_shape: tuple[int, ...] = ()) -> "WindowedGLR":
+        """A new detector at ``k = 0`` for innovations of leading shape ``batch_shape``.
+
+        It shares this detector's noise-independent arrays (signatures, informations and the
+        factors of their pseudo-inverses, which :meth:`update` only reads), so that many batches
+        of realisations (Monte Carlo chunks) pay their construction once.
+        """
+        new = object.__new__(WindowedGLR)
+        new.__dict__.update(self.__dict__)
+        new.batch_shape = tuple(batch_shape)
+        new._B = int(np.prod(new.batch_shape, dtype=int))
+        new._d = np.zeros((self.window, self.family.m, new._B))
+        new._C_missing = np.zeros((self.window, self.family.m, self.family.m))
+        new.k = 0
+        return new
+
+    def update(self, eps_k: np.ndarray, *, statistics: bool = True
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Process innovation ``eps_k`` ``(*batch, p)``.
 
         A NaN ``eps_k`` (missing sample) must be missing in every realisation of the batch; the
         sample is then skipped (it adds nothing to ``C_k(r)`` and ``d_k(r)``).
 
         Returns ``(l_k, r_hat_k, theta_hat_k, C_k(r_hat), d_k(r_hat))`` (``nan``/``-1`` when
-        no onset is admissible yet).
+        no onset is admissible yet). With ``statistics=False`` only the scores are updated and
+        the ``nan``/``-1`` values are returned (a sample at which the test is not run, e.g. while
+        it is disabled: the statistics of later samples are unchanged).
         """
         model, k, w, m = self.model, self.k, self.window, self.family.m
         if k >= model.n_steps:
@@ -334,7 +353,7 @@ class WindowedGLR:
         self.k = k + 1
         shape = self.batch_shape
         slots = self._admissible[k]
-        if not slots.size:
+        if not slots.size or not statistics:
             return (np.full(shape, np.nan), np.full(shape, -1), np.full((*shape, m), np.nan),
                     np.full((*shape, m, m), np.nan), np.full((*shape, m), np.nan))
         C = self._Cs[k, slots]
@@ -408,7 +427,8 @@ class WindowedGLR:
 
 
 def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, family: FaultFamily,
-               window: int, min_samples: int | None = None) -> WindowGLRResult:
+               window: int, min_samples: int | None = None, *, shared: WindowedGLR | None = None,
+               start: int = 0) -> WindowGLRResult:
     """Windowed GLR with unknown onset (35)-(37) over a whole record.
 
     Parameters
@@ -419,6 +439,15 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
         (realisations with different missing samples are run as separate groups).
     model, gains, family, window, min_samples
         As in :class:`WindowedGLR`.
+    shared : WindowedGLR, optional
+        A detector built with these same ``model``, ``gains`` and ``family`` objects, ``window``
+        and ``min_samples``, whose noise-independent quantities are reused
+        (:meth:`WindowedGLR.fresh`) instead of computed again: for many batches of the same
+        setting, e.g. Monte Carlo chunks. The results are the same.
+    start : int
+        First sample whose statistics are wanted (``0 <= start <= N``): before it the outputs are
+        ``nan``/``-1`` and only the scores are accumulated, which saves the statistics of a
+        period where the test is disabled; the outputs from ``start`` on are unchanged.
 
     Returns
     -------
@@ -427,15 +456,32 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
     if not isinstance(model, LTVModel):
         raise ModelError(f"model: expected an LTVModel, got {type(model).__name__}")
     eps, missing = _check_innovations(innovations, model.n_steps, model.p)
+    start = integer(start, "start", low=0, high=model.n_steps)
     batch = eps.shape[:-2]
     if missing.any() and batch:
         flat_missing = missing.reshape(-1, model.n_steps)
         patterns, group = np.unique(flat_missing, axis=0, return_inverse=True)
         if len(patterns) > 1:
-            return _grouped_glr_window(eps, group.reshape(-1), model, gains, family, window, min_samples)
-    det = WindowedGLR(model, gains, family, window, min_samples, batch_shape=batch)
+            return _grouped_glr_window(eps, group.reshape(-1), model, gains, family, window, min_samples,
+                                       shared, start)
+    if shared is None:
+        det = WindowedGLR(model, gains, family, window, min_samples, batch_shape=batch)
+    else:
+        s = -(-family.m // model.p) if min_samples is None else min_samples
+        if (not isinstance(shared, WindowedGLR) or shared.model is not model or shared.gains is not gains
+                or shared.family is not family or (shared.window, shared.min_samples) != (window, s)):
+            raise ModelError("shared: expected a WindowedGLR built with the same model, gains and family "
+                             f"objects, window {window} and min_samples {s}, got "
+                             f"{type(shared).__name__} with window {getattr(shared, 'window', None)} "
+                             f"and min_samples {getattr(shared, 'min_samples', None)}")
+        det = shared.fresh(batch)
     if det._B <= _RECORD_MAX_BATCH and not missing.any():
-        return det._record(eps)
+        res = det._record(eps)
+        if start:  # the same outputs as sample by sample: none before start
+            for arr, undefined in ((res.statistic, np.nan), (res.onset, -1), (res.theta_hat, np.nan),
+                                   (res.C_hat, np.nan), (res.d_hat, np.nan)):
+                arr[(slice(None),) * len(batch) + (slice(0, start),)] = undefined
+        return res
     # many realisations: one update per sample already works on wide arrays
     N, m = model.n_steps, family.m
     stat = np.empty((*batch, N))
@@ -445,7 +491,7 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
     d_hat = np.empty((*batch, N, m))
     for k in range(N):
         (stat[..., k], onset[..., k], theta[..., k, :], C_hat[..., k, :, :],
-         d_hat[..., k, :]) = det.update(eps[..., k, :])
+         d_hat[..., k, :]) = det.update(eps[..., k, :], statistics=k >= start)
     return WindowGLRResult(statistic=stat, onset=onset, theta_hat=theta, C_hat=C_hat, d_hat=d_hat,
                            window=det.window, min_samples=det.min_samples)
 
@@ -456,7 +502,8 @@ _RECORD_MAX_BATCH = 4
 
 
 def _grouped_glr_window(eps: np.ndarray, group: np.ndarray, model: LTVModel, gains: KalmanGains,
-                        family: FaultFamily, window: int, min_samples: int | None) -> WindowGLRResult:
+                        family: FaultFamily, window: int, min_samples: int | None,
+                        shared: WindowedGLR | None, start: int) -> WindowGLRResult:
     """:func:`glr_window` run once per group of realisations sharing the same missing samples."""
     batch, N, m = eps.shape[:-2], model.n_steps, family.m
     flat = eps.reshape(-1, N, model.p)
@@ -466,7 +513,7 @@ def _grouped_glr_window(eps: np.ndarray, group: np.ndarray, model: LTVModel, gai
     res = None
     for i in np.unique(group):
         rows = np.nonzero(group == i)[0]
-        res = glr_window(flat[rows], model, gains, family, window, min_samples)
+        res = glr_window(flat[rows], model, gains, family, window, min_samples, shared=shared, start=start)
         for key, arr in out.items():
             arr[rows] = getattr(res, key)
     return WindowGLRResult(**{key: arr.reshape(*batch, *arr.shape[1:]) for key, arr in out.items()},

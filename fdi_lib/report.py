@@ -41,7 +41,8 @@ from typing import Any, Mapping, Sequence
 
 from .errors import ModelError
 
-__all__ = ["NA", "NBSP", "fmt_count", "fmt_rate", "fmt_time", "fmt_number", "fmt_value", "Table", "table"]
+__all__ = ["NA", "NBSP", "fmt_count", "fmt_rate", "fmt_time", "fmt_number", "fmt_value", "Table", "table",
+           "glue"]
 
 #: What a table cell shows when a value does not exist; the table's notes say why.
 NA = "n/a"
@@ -280,3 +281,34 @@ def table(rows: Mapping[str, Sequence[Any]], columns: Sequence[str], *, notes: S
     if any(NA in cells for _, cells in out) and not notes:
         raise ModelError("a cell is n/a: add a note saying why")
     return Table(columns=columns, rows=tuple(out), notes=tuple(notes), index_header=index_header)
+
+
+#: MIME-type prefix of a glued value that is not displayed (myst-nb's ``GLUE_PREFIX``).
+GLUE_PREFIX = "application/papermill.record/"
+
+
+def glue(name: str, variable: Any, display: bool = True) -> None:
+    """Glue a value into the notebook for ``{glue:text}`name``` in the text: ``myst_nb.glue``, same output.
+
+    The same display message as :func:`myst_nb.glue` (myst-nb 1.x: the value's display data,
+    prefixed by :data:`GLUE_PREFIX` unless ``display``, with ``scrapbook`` metadata naming it;
+    ``tests/test_report.py`` compares the two), without its import: ``myst_nb.glue`` imports
+    nbformat, hence jsonschema, whose URI-format checks compile some 40 grammars at import
+    (about 1.2 s of CPU in every chapter kernel of the book build).
+
+    Parameters
+    ----------
+    name : str
+        Key used in the text.
+    variable : object
+        The value; what is stored is its display data (``text/plain`` etc.).
+    display : bool
+        Also show the value in the cell's output.
+    """
+    from IPython.core.formatters import format_display_data
+    from IPython.display import display as ipy_display
+
+    bundle, metadata = format_display_data(variable)
+    prefix = "" if display else GLUE_PREFIX
+    metadata["scrapbook"] = dict(name=name, mime_prefix=prefix)
+    ipy_display({prefix + k: v for k, v in bundle.items()}, raw=True, metadata=metadata)

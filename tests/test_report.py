@@ -83,3 +83,25 @@ def test_table_rejects():
         table({"a": [1, None]}, ["ours", "paper"])
     with pytest.raises(ModelError, match="row labels"):
         table({"": [1]}, ["ours"])
+
+
+@pytest.mark.parametrize("value, display", [(1.2345, False), (7, True), ("text", False),
+                                            (np.float64(-2.5e-5), False)])
+def test_glue_same_message_as_myst_nb(value, display):
+    """fdi_lib.report.glue sends the display message of myst_nb.glue (data and metadata)."""
+    from IPython.core.interactiveshell import InteractiveShell
+    from IPython.utils.capture import capture_output
+    from myst_nb import glue as myst_glue
+
+    from fdi_lib.report import glue
+
+    InteractiveShell.instance()
+    with capture_output() as ours:
+        glue("key", value, display=display)
+    with capture_output() as theirs:
+        myst_glue("key", value, display=display)
+    assert len(ours.outputs) == len(theirs.outputs) == 1
+    assert ours.outputs[0].data == theirs.outputs[0].data
+    assert ours.outputs[0].metadata == theirs.outputs[0].metadata
+    assert ours.outputs[0].metadata["scrapbook"]["name"] == "key"
+    assert any(k.startswith("application/papermill.record/") for k in ours.outputs[0].data) != display

@@ -8,6 +8,8 @@
 
 from __future__ import annotations
 
+import functools
+
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,7 +38,9 @@ def _spectral_norms(mats: np.ndarray) -> np.ndarray:
     return np.linalg.norm(mats, ord=2, axis=(-2, -1))
 
 
+@functools.lru_cache(maxsize=4)
 def _setup(n_steps: int = ex.N_STEPS) -> tuple[LTVModel, KalmanGains]:
+    """The Section 6.1 model and its Kalman gains (noise-independent; computed once per length)."""
     model = ex.unstable_model(n_steps)
     return model, kalman_gains(model)
 

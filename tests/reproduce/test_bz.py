@@ -97,3 +97,21 @@ def test_reader_tables(results):
     assert "%" in dict(t.rows)[LABELS["glr_false_alarm_rate"]][0]
     t2 = solution2_table(results["bz-solution2"])
     assert t2.columns == ("λ = 0.9", "λ = 0.95", "λ = 0.98", "λ = 0.995")
+
+
+@pytest.mark.parametrize("shape, lags", [((6, 120, 3), 10), ((4, 37, 1), 5), ((3, 550, 2), 10)])
+def test_ljung_box_pvalues_equal_statsmodels(shape, lags):
+    """The vectorised Ljung-Box p-values are statsmodels' acorr_ljungbox, bit for bit (white,
+    trending and correlated series)."""
+    from statsmodels.stats.diagnostic import acorr_ljungbox
+
+    from fdi_lib.reproduce.bz import ljung_box_pvalues
+
+    rng = np.random.default_rng(shape[1])
+    series = 3.0 * rng.standard_normal(shape) + 1.0
+    series[..., 0] = 0.05 * np.cumsum(series[..., 0], axis=1)              # strongly correlated
+    ours = ljung_box_pvalues(series, lags)
+    ref = np.array([[float(acorr_ljungbox(series[i, :, j], lags=[lags])["lb_pvalue"].iloc[0])
+                     for j in range(shape[2])] for i in range(shape[0])])
+    np.testing.assert_array_equal(ours, ref)
+    assert ours[:, 0].max() < 1e-6 and ours.shape == shape[::2]

@@ -64,6 +64,19 @@ def test_monte_carlo_identical_for_one_and_two_jobs():
     assert not np.array_equal(one[1]["l1_known"], one[2]["l1_known"])
 
 
+@pytest.mark.parametrize("variant, schedule", [("physical", None), ("designed", "centred")])
+def test_monte_carlo_identical_for_any_chunk_size(variant, schedule):
+    """The detection chunk is batch-invariant: surrogate_sensitivity's one chunk per fault gives
+    the numbers of the default chunks, bit for bit."""
+    zp._MC_CACHE.clear()
+    default = zp.pipeline_monte_carlo(seed=9, trials=20, variant=variant, schedule=schedule)  # 4 chunks
+    one = zp.pipeline_monte_carlo(seed=9, trials=20, chunk_size=20, variant=variant, schedule=schedule)
+    zp._MC_CACHE.clear()
+    for fault in (1, 2):
+        for key in default[fault]:
+            np.testing.assert_array_equal(one[fault][key], default[fault][key])
+
+
 def test_known_onset_minmax_type1_is_nominal():
     """With the onset known (no selection), each minmax test on the absent fault is chi2(1)."""
     st = zp.pipeline_setup()
