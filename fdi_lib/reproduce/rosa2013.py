@@ -16,7 +16,7 @@ import numpy as np
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.sets.polytope import Polytope, convex_hull, plot_polytope
-from fdi_lib.sets.svo import SVOModel, run_architecture_i, run_svo
+from fdi_lib.sets.svo import SVOModel, run_architecture_i_many, run_svo, run_svo_many
 from fdi_lib.threads import single_threaded_blas
 from fdi_lib.systems import eclipse_uav as uav
 
@@ -283,28 +283,38 @@ def fig10(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
 
 
 def _one_uav_run(fault: str, scenario: str, seed: "int | np.random.SeedSequence", duration: float,
-                 eta_unit: str = uav.ETA_UNIT, fault_mode: str = "deviation", method: str = "template",
-                 N: int = 1) -> dict:
-    """One closed-loop run and its Architecture I bank (see :func:`_bank_outcome`)."""
+                 eta_unit: str = uav.ETA_UNIT, fault_mode: str = "deviation") -> dict:
+    """One closed-loop run and its Architecture I bank (see :func:`_bank_outcomes`)."""
     run = uav.simulate(fault, scenario, rng=np.random.default_rng(seed), duration=duration,
                        eta_unit=eta_unit, fault_mode=fault_mode)
-    return _bank_outcome(run, method, N)
+    return _bank_outcomes([run])[0]
 
 
-def _bank_outcome(run: "uav.UAVRun", method: str = "template", N: int = 1) -> dict:
-    """The Architecture I bank on one run (the fault SVOs only if the nominal one empties)."""
-    fault, scenario = run.fault, run.scenario
-    nominal = uav.svo_models(run, "nominal")
-    # Isolation is declared only after detection, and the nominal SVO does not depend on the
-    # others: when it never empties (healthy runs, hidden faults) the fault SVOs play no part.
-    e = run_svo(nominal, run.u, run.y, UAV_X0, N=N, method=method).empty_at
-    if e is None or fault == "none":
-        return {"fault": fault, "scenario": scenario, "onset": run.onset_step, "detection": e,
-                "isolation": None, "isolated": None, "empty_at": {"nominal": e}}
-    res = run_architecture_i(nominal, {f: uav.svo_models(run, f) for f in uav.FAULTS},
-                             run.u, run.y, UAV_X0, N=N, method=method)
-    return {"fault": fault, "scenario": scenario, "onset": run.onset_step, "detection": res.detection_step,
-            "isolation": res.isolation_step, "isolated": res.isolated, "empty_at": dict(res.empty_at)}
+def _bank_outcomes(runs: "list[uav.UAVRun]") -> list[dict]:
+    """The Architecture I bank (template SVOs, N = 1) on each run, all runs stepped together.
+
+    Isolation is declared only after detection, and the nominal SVO does not depend on the others:
+    the nominal SVOs of all runs go first (:func:`run_svo_many`), and the fault SVOs are run, from
+    sample 0, only on the runs whose nominal SVO empties (:func:`run_architecture_i_many`; on the
+    others, healthy runs and hidden faults, they play no part). Each run's outcome is the one of
+    :func:`fdi_lib.sets.svo.run_architecture_i` on it alone (tested).
+    """
+    if not runs:
+        return []
+    u = np.stack([r.u for r in runs])
+    y = np.stack([r.y for r in runs])
+    nominal = [uav.svo_models(r, "nominal") for r in runs]
+    det = run_svo_many(nominal, u, y, UAV_X0).empty_at
+    out = [{"fault": r.fault, "scenario": r.scenario, "onset": r.onset_step, "detection": e, "isolation": None,
+            "isolated": None, "empty_at": {"nominal": e}} for r, e in zip(runs, det)]
+    todo = [i for i, r in enumerate(runs) if det[i] is not None and r.fault != "none"]
+    banks = run_architecture_i_many([nominal[i] for i in todo],
+                                    [{f: uav.svo_models(runs[i], f) for f in uav.FAULTS} for i in todo],
+                                    u[todo], y[todo], UAV_X0)
+    for i, res in zip(todo, banks):
+        out[i].update({"detection": res.detection_step, "isolation": res.isolation_step, "isolated": res.isolated,
+                       "empty_at": dict(res.empty_at)})
+    return out
 
 
 @lru_cache(maxsize=16)
@@ -327,10 +337,11 @@ def uav_study(seed: int, trials: int, jobs: int = 1, duration: float = DURATION,
     sims = uav.simulate_many([(f, s) for f, s, _ in cases], [np.random.default_rng(ss) for _, _, ss in cases],
                              duration=duration, eta_unit=eta_unit, fault_mode=fault_mode)
     if jobs == 1:
-        out = [_bank_outcome(r) for r in sims]
-    else:
-        out = Parallel(n_jobs=jobs)(delayed(_bank_outcome)(r) for r in sims)
-    return tuple(out)
+        return tuple(_bank_outcomes(sims))
+    # contiguous chunks, one per job: each run's outcome does not depend on its batch
+    bounds = np.linspace(0, len(sims), int(jobs) + 1).astype(int)
+    parts = Parallel(n_jobs=jobs)(delayed(_bank_outcomes)(sims[a:b]) for a, b in zip(bounds[:-1], bounds[1:]))
+    return tuple(o for part in parts for o in part)
 
 
 def _summarise_one(rs, which: str, fault: str) -> float | None:
@@ -474,7 +485,7 @@ def fault_mode_study(seed: int, trials: int, eta_unit: str = uav.ETA_UNIT, durat
         for mode in uav.FAULT_MODES:
             sims = uav.simulate_many([(f, "step")] * len(streams), [np.random.default_rng(ss) for ss in streams],
                                      duration=duration, eta_unit=eta_unit, fault_mode=mode)
-            rs = tuple(_bank_outcome(r) for r in sims)
+            rs = tuple(_bank_outcomes(sims))
             det = _summarise_one(rs, "detection", f)
             iso = _summarise_one(rs, "isolation", f)
             out[f][mode] = {"detected": sum(r["detection"] is not None for r in rs), "detection_ms": det,
@@ -686,18 +697,19 @@ def hidden_fault_study(seed: int, duration: float = 3.0, eta_unit: str = uav.ETA
     outputs = ("airspeed", "alpha", "theta", "q")
     effect = {f: dict(zip(outputs, (np.abs(runs[f].y - runs["none"].y).max(axis=0) / nb).tolist()))
               for f in ("elevator", "dynamics")}
-    template, svo_runs = {}, {}
-    for s in HIDDEN_SCALES:
-        template[s] = {}
-        for f, r in runs.items():
-            svo_runs[s, f] = run_svo(uav.svo_models(r, "nominal", dist_scale=s), r.u, r.y, UAV_X0)
-            e = svo_runs[s, f].empty_at
-            template[s][f] = None if e is None else (e - onset + 1) * uav.TS * 1e3
+    # the nominal template SVOs of every scale and run, stepped together
+    keys = [(s, f) for s in HIDDEN_SCALES for f in runs]
+    svo = run_svo_many([uav.svo_models(runs[f], "nominal", dist_scale=s) for s, f in keys],
+                       np.stack([runs[f].u for _, f in keys]), np.stack([runs[f].y for _, f in keys]), UAV_X0,
+                       bounds=True)
+    template = {s: {} for s in HIDDEN_SCALES}
+    for (s, f), e in zip(keys, svo.empty_at):
+        template[s][f] = None if e is None else (e - onset + 1) * uav.TS * 1e3
     width, needed = {}, {}
     A37, _ = uav.lpv_matrices(uav.V_TRIM, eta_unit=eta_unit)
     for f in ("elevator", "dynamics"):
-        res = svo_runs[1.0, f]
-        w = np.nanmedian(res.upper[onset:] - res.lower[onset:], axis=0)
+        i = keys.index((1.0, f))
+        w = np.nanmedian(svo.upper[i, onset:] - svo.lower[i, onset:], axis=0)
         width[f] = dict(zip(("u", "w", "theta", "q"), w.tolist()))
         # one-step pitch-rate effect of the fault, from the true states and inputs, and the w offset doing the same
         dq = np.abs(runs[f].x[onset + 1:, 3] - runs[f].x[onset:-1, 3]
