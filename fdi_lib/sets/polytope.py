@@ -309,12 +309,18 @@ def _cdd_dd_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray:
 
 
 def _hull_hrep(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """H-representation (M, m) of conv(V).
+    """H-representation (M, m) of conv(V) (see :func:`_hull`)."""
+    return _hull(V)[:2]
+
+
+def _hull(V: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """H-representation (M, m) of conv(V), and the indices of the points of V that span it.
 
     Full-dimensional point sets go to qhull (:class:`scipy.spatial.ConvexHull`), retried with the
-    options of :data:`_QHULL_RETRIES` on a topology error; flat (lower-dimensional) sets, which
-    qhull rejects, go to cddlib, whose equalities become pairs of inequalities. Every result is
-    verified (all points inside, to 1e-9 relative); a failed verification raises
+    options of :data:`_QHULL_RETRIES` on a topology error, and the spanning points are qhull's
+    vertices; flat (lower-dimensional) sets, which qhull rejects, go to cddlib, whose equalities
+    become pairs of inequalities, and keep every point (in dimension 1: the two extremes). Every
+    result is verified (all points inside, to 1e-9 relative); a failed verification raises
     :class:`NumericalError` rather than returning a wrong set.
     """
     from scipy.spatial import ConvexHull, QhullError
@@ -330,11 +336,12 @@ def _hull_hrep(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             eq = eq[np.unique(np.round(eq, 12), axis=0, return_index=True)[1]]
             M, m = eq[:, :-1].copy(), -eq[:, -1]
             if _all_inside(V, M, m, 1e-9 * scale):
-                return M, m
+                return M, m, hull.vertices
     M, m = _cdd_hull_exact(V)
     if not _all_inside(V, M, m, 1e-9 * scale):
         raise NumericalError(f"conv(V): the facets found in floating point exclude some of the {len(V)} points")
-    return M, m
+    keep = np.unique([V[:, 0].argmin(), V[:, 0].argmax()]) if V.shape[1] == 1 else np.arange(len(V))
+    return M, m, keep
 
 
 def _cdd_hull_exact(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -49,7 +49,7 @@ import numpy as np
 from fdi_lib.errors import (EmptySetError, ModelError, NonFiniteError, NumericalError, ShapeError,
                             UnboundedSetError)
 from fdi_lib.validation import integer, real
-from fdi_lib.sets.polytope import Polytope, _hull_hrep, _enumerate_vertices, box_corners
+from fdi_lib.sets.polytope import Polytope, _hull, _hull_hrep, _enumerate_vertices, box_corners
 from fdi_lib.threads import single_threaded_blas
 
 __all__ = ["SVOModel", "SetValuedObserver", "SVORun", "run_svo", "FDIResult", "run_architecture_i",
@@ -214,6 +214,7 @@ class _Entry:
     V: np.ndarray
     model: SVOModel | None = None
     u: np.ndarray | None = None
+    P: np.ndarray | None = None   # "exact" rule: points spanning X's propagation to the latest step
 
 
 class SetValuedObserver:
@@ -333,7 +334,7 @@ class SetValuedObserver:
             raise EmptySetError("other: the observer to copy from has no non-empty set")
         if (self._s is None) != (other._s is None) or (self._s is not None and np.any(self._s != other._s)):
             raise ModelError("other: expected an observer with the same state scaling")
-        self.history = [_Entry(e.X, e.V, e.model, e.u) for e in other.history]
+        self.history = [_Entry(e.X, e.V, e.model, e.u, e.P) for e in other.history]
         self.empty = False
 
     def update(self, model: SVOModel, u: np.ndarray, y_next: np.ndarray) -> Polytope | None:
@@ -497,20 +498,26 @@ class SetValuedObserver:
         return Polytope(np.vstack([D, C, -C]), np.concatenate([h[:p], nb + y, nb - y]))
 
     def _update_exact(self, entries: list[_Entry], model_next: SVOModel, y: np.ndarray) -> Polytope | None:
-        props = self._propagations(entries)
+        # Level j is co over the 2^(n_A (j+1)) vertex sequences of {Phi_v X̂(k-j) + c_v + G_v [-1, 1]^g}.
+        # Linear maps and Minkowski sums commute with convex hulls, so it is one step (k) of level
+        # j-1 of the previous update: each entry keeps the points spanning its propagation so far
+        # (``P``), and an update costs N one-step hulls instead of hulls over 2^(N n_A) sequences.
+        model, u = entries[0].model, entries[0].u
+        corners = box_corners(model.generators(u))
+        Bu = model.B @ u
         H = []
         imgs0 = None
         per_vertex = []
-        for j, level in enumerate(props):
-            V = entries[j].V
-            pts_all = []
-            for Phi, c, G in level:
-                pts = ((V @ Phi.T + c)[:, None, :] + box_corners(G)[None, :, :]).reshape(-1, self.n)
-                pts_all.append(pts)
+        for j, e in enumerate(entries):
+            P = e.V if e.P is None else e.P
+            imgs = [((P @ Av.T + Bu)[:, None, :] + corners[None, :, :]).reshape(-1, self.n)
+                    for Av in model.vertex_matrices()]
             if j == 0:
-                imgs0 = pts_all
+                imgs0 = imgs
             # co_v{Prop_j(v)}: hull of the union of the vertex images (qhull / cddlib)
-            M, m = _hull_hrep(np.vstack(pts_all))
+            pts = np.vstack(imgs)
+            M, m, keep = _hull(pts)
+            e.P = pts[keep]
             H.append(np.column_stack([M, m + self.margin * (1.0 + np.abs(m))]))
         nb = model_next.noise + self._c_unc_bound(model_next, np.vstack(imgs0))
         nb = nb * (1.0 + self.margin) + self.margin
