@@ -39,7 +39,7 @@ from fdi_lib.errors import (EmptySetError, ModelError, NonFiniteError, Numerical
                             UnboundedSetError)
 from fdi_lib.validation import array
 
-__all__ = ["Polytope", "convex_hull", "plot_polytope", "box_corners"]
+__all__ = ["Polytope", "convex_hull", "plot_polytope", "polygon_outline", "box_corners"]
 
 _TOL = 1e-9
 
@@ -638,19 +638,25 @@ def convex_hull(polytopes: Iterable[Polytope]) -> Polytope:
     return Polytope.from_vertices(np.vstack(V))
 
 
+def polygon_outline(P: Polytope) -> np.ndarray:
+    """Vertices of a 2-D polytope ``P`` in counter-clockwise order, shape (v, 2) ((0, 2) if empty)."""
+    if P.dim != 2:
+        raise ShapeError(f"P: expected a 2-D polytope, got dimension {P.dim}")
+    V = P.vertices()
+    if V.shape[0] == 0:
+        return V
+    c = V.mean(axis=0)
+    return V[np.argsort(np.arctan2(V[:, 1] - c[1], V[:, 0] - c[0]))]
+
+
 def plot_polytope(P: Polytope, ax: Any, **kwargs: Any) -> Any:
     """Draw a 2-D polytope ``P`` as a filled polygon on ``ax``; returns ``ax``. Empty sets draw nothing.
 
     ``**kwargs`` go to matplotlib's ``fill``.
     """
-    if P.dim != 2:
-        raise ShapeError(f"P: expected a 2-D polytope, got dimension {P.dim}")
-    V = P.vertices()
+    V = polygon_outline(P)
     if V.shape[0] == 0:
         return ax
-    c = V.mean(axis=0)
-    order = np.argsort(np.arctan2(V[:, 1] - c[1], V[:, 0] - c[0]))
-    V = V[order]
     kwargs.setdefault("alpha", 0.35)
     ax.fill(V[:, 0], V[:, 1], **kwargs)
     edge = kwargs.get("color", kwargs.get("facecolor", "k"))
