@@ -217,6 +217,48 @@ class _Entry:
     P: np.ndarray | None = None   # "exact" rule: points spanning X's propagation to the latest step
 
 
+def _lp_maxima(D: np.ndarray, A_ub: np.ndarray, b_ub: np.ndarray, A_eq: np.ndarray, b_eq: np.ndarray,
+               bounds: list) -> np.ndarray:
+    """max d . x[:n] over {A_ub x <= b_ub, A_eq x = b_eq, bounds} for every row d of ``D`` (HiGHS).
+
+    One HiGHS model for all the directions: only the objective changes between them, so each
+    solve starts from the previous optimal basis (``scipy.optimize.linprog`` would set the
+    problem up again every time, at several times the cost of the solve). ``-inf`` everywhere when
+    the set is empty.
+    """
+    import highspy
+
+    nv, inf = A_ub.shape[1], highspy.kHighsInf
+    A = np.vstack([A_ub, A_eq])
+    lp = highspy.HighsLp()
+    lp.num_col_, lp.num_row_ = nv, A.shape[0]
+    lp.col_cost_ = np.zeros(nv)
+    lp.col_lower_ = np.array([-inf if lo is None else lo for lo, _ in bounds], dtype=float)
+    lp.col_upper_ = np.array([inf if hi is None else hi for _, hi in bounds], dtype=float)
+    lp.row_lower_ = np.concatenate([np.full(len(b_ub), -inf), b_eq])
+    lp.row_upper_ = np.concatenate([b_ub, b_eq])
+    rows, cols = np.nonzero(A)
+    lp.a_matrix_.format_ = highspy.MatrixFormat.kRowwise
+    lp.a_matrix_.start_ = np.searchsorted(rows, np.arange(A.shape[0] + 1)).astype(np.int32)
+    lp.a_matrix_.index_ = cols.astype(np.int32)
+    lp.a_matrix_.value_ = A[rows, cols]
+    solver = highspy.Highs()
+    solver.setOptionValue("output_flag", False)
+    solver.passModel(lp)
+    out = np.full(D.shape[0], -np.inf)
+    idx = np.arange(D.shape[1], dtype=np.int32)
+    for i, d in enumerate(D):
+        solver.changeColsCost(len(idx), idx, -d)
+        solver.run()
+        status = solver.getModelStatus()
+        if status == highspy.HighsModelStatus.kInfeasible:
+            return out   # this vertex sequence explains nothing: no contribution to the hull
+        if status != highspy.HighsModelStatus.kOptimal:
+            raise NumericalError(f"joint horizon: the support LP failed ({solver.modelStatusToString(status)})")
+        out[i] = -solver.getInfo().objective_function_value
+    return out
+
+
 class SetValuedObserver:
     """Recursive SVO of Rosa & Silvestre (2013), §2, with horizon N (eq. (3)).
 
@@ -428,8 +470,6 @@ class SetValuedObserver:
         coefficients: row j uses the first g_j columns of v's generator matrix (its own prefix).
         Variables (x(k+1), x(k), ..., x(k-N'+1), s); x(k-j) in X̂(k-j), |s| <= 1.
         """
-        from scipy.optimize import linprog
-
         n, Np = self.n, len(props)
         full = props[-1]
         g_full = full[0][2].shape[1]
@@ -458,15 +498,7 @@ class SetValuedObserver:
                 A_eq.append(row)
                 b_eq.append(c_j)
             A_eq, b_eq = np.vstack(A_eq), np.concatenate(b_eq)
-            for i, d in enumerate(Dall):
-                c = np.zeros(nv)
-                c[:n] = -d
-                res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b_eq, bounds=bounds, method="highs")
-                if res.status == 2:
-                    continue   # this vertex sequence explains nothing: no contribution to the hull
-                if res.status != 0:
-                    raise NumericalError(f"joint horizon: the support LP failed ({res.message})")
-                h[i] = max(h[i], -res.fun)
+            h = np.maximum(h, _lp_maxima(Dall, A_ub, b_ub, A_eq, b_eq, bounds))
         return h
 
     def _update_template(self, entries: list[_Entry], model_next: SVOModel, y: np.ndarray) -> Polytope | None:
