@@ -561,6 +561,15 @@ def timing(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
 # ----------------------------------------------------------------------------- why the elevator and M_u faults stay hidden
 
 
+def _block_diagonal(blocks: np.ndarray):
+    """Sparse block-diagonal matrix of ``blocks`` (shape (T, r, c)), its non-zero entries only."""
+    import scipy.sparse as sp
+
+    T, r, c = blocks.shape
+    t, i, j = np.nonzero(blocks)
+    return sp.coo_matrix((blocks[t, i, j], (t * r + i, t * c + j)), shape=(T * r, T * c))
+
+
 def explanation_scale(run: "uav.UAVRun", *, kind: str = "nominal", scale: str = "disturbance", start: int = 0,
                       stop: int | None = None, dist_scale: float = 1.0) -> float:
     """Smallest multiplier s of one bound for which the SVO model still explains the record (one LP).
@@ -611,23 +620,23 @@ def explanation_scale(run: "uav.UAVRun", *, kind: str = "nominal", scale: str = 
         raise ModelError(f"start, stop: expected 0 <= start < stop <= {K}, got ({start}, {stop})")
     start = int(start)
     models = uav.svo_models(run, kind, dist_scale=1.0)
-    ms = [models(k) for k in range(start, stop + 1)]
-    T, n, nd = stop - start, 4, ms[0].L.shape[1]
+    T, n, nd = stop - start, 4, models.L.shape[1]
     nx, nv = (T + 1) * n, (T + 1) * n + T * nd + 1      # variables: x(start..stop), d(start..stop-1), s
     si = nv - 1
     # Dynamics x(j+1) - A(j) x(j) - L(j) d(j) = B(j) u(j), as sparse blocks over the window.
     shift = sp.hstack([sp.csr_matrix((T * n, n)), sp.identity(T * n)])            # picks x(j+1)
-    dyn = sp.hstack([sp.block_diag([m.A for m in ms[:T]]), sp.csr_matrix((T * n, n))])  # A(j) x(j)
-    Aeq = sp.hstack([shift - dyn, -sp.block_diag([m.L for m in ms[:T]]), sp.csr_matrix((T * n, 1))])
-    beq = np.concatenate([m.B @ run.u[start + j] for j, m in enumerate(ms[:T])])
+    dyn = sp.hstack([_block_diagonal(models.A[start:stop]), sp.csr_matrix((T * n, n))])  # A(j) x(j)
+    Aeq = sp.hstack([shift - dyn, -_block_diagonal(np.broadcast_to(models.L, (T,) + models.L.shape)),
+                     sp.csr_matrix((T * n, 1))])
+    beq = np.concatenate([models.B[start + j] @ run.u[start + j] for j in range(T)])
     # Disturbances: +-d <= s (scaled) or +-d <= dist_scale.
     pm = np.array([[1.0], [-1.0]])
     d_rows = sp.hstack([sp.csr_matrix((2 * T * nd, nx)), sp.kron(sp.identity(T * nd), pm),
                         sp.csr_matrix((2 * T * nd, 1))])
     # Measurements: +-(C x - y) <= nbar (or s nbar when the noise bound is scaled).
-    C = sp.block_diag([sp.kron(pm, m.C) for m in ms])                              # rows (+C; -C) per sample
+    C = _block_diagonal(np.broadcast_to(np.vstack([models.C, -models.C]), (T + 1, 2 * models.C.shape[0], n)))
     y_pm = np.concatenate([np.concatenate([run.y[start + j], -run.y[start + j]]) for j in range(T + 1)])
-    nbar = np.concatenate([np.concatenate([m.noise, m.noise]) for m in ms])
+    nbar = np.tile(np.concatenate([models.noise, models.noise]), T + 1)
     y_rows = sp.hstack([C, sp.csr_matrix((C.shape[0], T * nd + 1))])
     if scale == "disturbance":
         d_rows = d_rows - sp.csr_matrix((np.ones(2 * T * nd), (np.arange(2 * T * nd), np.full(2 * T * nd, si))),
