@@ -515,7 +515,7 @@ class Polytope:
         """Drop redundant inequalities (cddlib ``matrix_canonicalize``); empty sets are returned unchanged."""
         import cdd
 
-        if self.is_empty():
+        if _chebyshev(*_normalise(self.M, self.m))[0] == "infeasible":   # empty (cddlib's LP, HiGHS if unsure)
             return self
         mat = cdd.matrix_from_array(np.column_stack([self.m, -self.M]), rep_type=cdd.RepType.INEQUALITY)
         cdd.matrix_canonicalize(mat)

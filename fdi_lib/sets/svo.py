@@ -317,13 +317,13 @@ class SetValuedObserver:
         N = integer(N, "N", low=1)
         if method not in ("template", "exact"):
             raise ModelError(f"method: expected 'template' or 'exact', got {method!r}")
-        if X0.is_empty():
-            raise EmptySetError("X0: the initial set Set(M_0, m_0) is empty")
-        try:
+        try:   # vertex enumeration decides emptiness too (an empty set has no vertex)
             V0 = X0.vertices()
         except UnboundedSetError:
             raise UnboundedSetError("X0: the initial set Set(M_0, m_0) is unbounded; "
                                     "give finite bounds on every state") from None
+        if V0.shape[0] == 0:
+            raise EmptySetError("X0: the initial set Set(M_0, m_0) is empty")
         self.N = int(N)
         self.method = method
         self.template = None if template is None else np.asarray(template, dtype=float)
