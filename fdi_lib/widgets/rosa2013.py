@@ -6,6 +6,7 @@ then wires to sliders with :func:`fdi_lib.widgets.interactive_figure`.
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import numpy as np
@@ -23,6 +24,20 @@ __all__ = ["explore_svo", "GRID", "MAX_HORIZON"]
 MAX_HORIZON = 6
 #: Slider values of the SVO explorable.
 GRID = {"delta_bound": (0.0, 0.2, 0.4, 0.6, 0.8, 1.0), "horizon": (1, 2, 3, 4, 5, 6)}
+
+
+@functools.lru_cache(maxsize=1)
+def _example(delta_bound: float, noise: float, seed: int, steps: int) -> tuple:
+    """What the horizon slider does not change: the model, the record and the hull panel (kept
+    for the last values only, so that moving any other slider recomputes them)."""
+    from fdi_lib.reproduce.rosa2013 import _fig2_sets, simulate_toy, toy_model, toy_prior
+
+    model = toy_model(delta_bound=delta_bound, noise=noise)
+    x, u, y = simulate_toy(model, rng=np.random.default_rng(seed), steps=steps)
+    per_vertex, hull, _, _ = _fig2_sets(model, toy_prior(), np.array([0.0]), np.array([0.2]))
+    for a in (x, u, y):
+        a.flags.writeable = False
+    return model, x, u, y, per_vertex, hull, hull.volume()
 
 
 def _limits(lo: float, hi: float) -> tuple[float, float]:
@@ -56,7 +71,7 @@ def explore_svo(delta_bound: float = 0.4, horizon: int = 1, noise: float = 0.5, 
     matplotlib.figure.Figure
         Left: per-vertex sets and hull for one step; right: bounds on x2(k) with the true state.
     """
-    from fdi_lib.reproduce.rosa2013 import _fig2_sets, simulate_toy, toy_model, toy_prior
+    from fdi_lib.reproduce.rosa2013 import toy_prior
 
     if not (0.0 <= delta_bound <= 1.0):
         raise ModelError(f"delta_bound: expected a value in [0, 1], got {delta_bound!r}")
@@ -64,10 +79,8 @@ def explore_svo(delta_bound: float = 0.4, horizon: int = 1, noise: float = 0.5, 
         raise ModelError(f"noise: expected a value in (0, 2], got {noise!r}")
     if int(horizon) != horizon or not (1 <= horizon <= MAX_HORIZON):
         raise ModelError(f"horizon: expected an integer in 1..{MAX_HORIZON}, got {horizon!r}")
-    model = toy_model(delta_bound=delta_bound, noise=noise)
-    x, u, y = simulate_toy(model, rng=np.random.default_rng(seed), steps=steps)
+    model, x, u, y, per_vertex, hull, area = _example(float(delta_bound), float(noise), int(seed), int(steps))
     res = run_svo(model, u, y, toy_prior(), N=int(horizon), method="exact", keep_sets=True)
-    per_vertex, hull, _, _ = _fig2_sets(model, toy_prior(), np.array([0.0]), np.array([0.2]))
     k = np.arange(len(x))
     shapes = [polygon_outline(P) for P in (hull, *per_vertex)]
     box = shapes[0]   # the hull contains the per-vertex sets
@@ -100,6 +113,6 @@ def explore_svo(delta_bound: float = 0.4, horizon: int = 1, noise: float = 0.5, 
     ax.set_ylim(*_limits(box[:, 1].min(), box[:, 1].max()))
     ax2.set_xlim(*_limits(0.0, float(k[-1])))
     ax2.set_ylim(*_limits(float(np.nanmin(shown)), float(np.nanmax(shown))))
-    ax.set_title(f"hull: area {hull.volume():.3f}, union-to-hull gap shown grey")
+    ax.set_title(f"hull: area {area:.3f}, union-to-hull gap shown grey")
     ax2.set_title(f"N = {int(horizon)}: true state inside every set: {inside}")
     return fig
