@@ -903,9 +903,10 @@ def _vertices_many(M: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray
     np.divide(m, b.norms, out=mp[:, :-1])
     mp[:, -1] = np.inf
     mu = mp[:, b.pad].min(axis=2)                                  # (B, q) tightest offset per normal
-    X = _dot(b.inv, mu[:, b.idx])                                     # (B, K, n): inv_k mu_k
+    X = np.einsum("kij,bkj->bki", b.inv, mu[:, b.idx])               # (B, K, n): inv_k mu_k
     tol = 1e-12 * (1.0 + np.abs(mu).max(axis=1))
-    F = (_dot(b.U, X) <= mu[:, None, :] + tol[:, None, None]).all(axis=2)
+    # one (K, n) x (n, q) product per set: the same shapes, hence the same rounding, in any batch
+    F = (np.matmul(X, b.U.T) <= mu[:, None, :] + tol[:, None, None]).all(axis=2)
     F &= ~np.any(m[:, b.zero] < 0, axis=1)[:, None]
     return X, F
 
@@ -918,9 +919,10 @@ class TemplateBatch:
     and 3 hold as for one observer): the support of X̂(k+1) in each template direction is the
     largest one over the vertices of X̂(k) and the vertex matrices, then the vertices of X̂(k+1)
     are the basic solutions of its fixed normals (:func:`_vertices_many`), for all observers with
-    the same model structure at once. The arithmetic is elementwise, so each observer's sets do
-    not depend on the batch; against :class:`SetValuedObserver` (BLAS products, duplicate vertices
-    merged) they agree to rounding (tested), far inside the relative ``margin`` added at every step.
+    the same model structure at once. Each observer's sets do not depend on the batch (tested bit
+    for bit): the products are elementwise, or one matrix product of fixed shapes per observer.
+    Against :class:`SetValuedObserver` (other products, duplicate vertices merged) they agree to
+    rounding (tested), far inside the relative ``margin`` added at every step.
 
     Parameters
     ----------
@@ -1018,7 +1020,7 @@ class TemplateBatch:
         order = np.argsort(~F, axis=1, kind="stable")[:, :count.max()]
         order = np.where(np.arange(order.shape[1])[None] < count[:, None], order, order[:, :1])
         V = np.take_along_axis(V, order[:, :, None], axis=1)                      # (a, v, n)
-        DPhi = np.swapaxes(_dot(D, np.swapaxes(g["vA"][a, k - 1], -1, -2)), -1, -2)   # (a, 2^n_A, p, n): D A_v
+        DPhi = np.matmul(D, g["vA"][a, k - 1])                                    # (a, 2^n_A, p, n): D A_v
         W = _dot(DPhi[:, :, None], V[:, None])                                   # (a, 2^n_A, v, p)
         uk = self.u[obs, k - 1]
         c = _dot(D, _dot(g["B"][a, k - 1], uk))                                  # D B u
