@@ -479,13 +479,19 @@ def fault_mode_study(seed: int, trials: int, eta_unit: str = uav.ETA_UNIT, durat
     :func:`uav_study` (same seed) and records of ``duration`` s.
     """
     streams = np.random.SeedSequence(seed).spawn(int(trials))
+    faults = ("elevator", "dynamics")
+    sims = {mode: uav.simulate_many([(f, "step") for f in faults for _ in streams],
+                                    [np.random.default_rng(ss) for _ in faults for ss in streams],
+                                    duration=duration, eta_unit=eta_unit, fault_mode=mode)
+            for mode in uav.FAULT_MODES}
+    # every run's bank at once (each run's outcome does not depend on the batch)
+    outcomes = _bank_outcomes([r for mode in uav.FAULT_MODES for r in sims[mode]])
     out: dict = {}
-    for f in ("elevator", "dynamics"):
+    for i, f in enumerate(faults):
         out[f] = {}
-        for mode in uav.FAULT_MODES:
-            sims = uav.simulate_many([(f, "step")] * len(streams), [np.random.default_rng(ss) for ss in streams],
-                                     duration=duration, eta_unit=eta_unit, fault_mode=mode)
-            rs = tuple(_bank_outcomes(sims))
+        for j, mode in enumerate(uav.FAULT_MODES):
+            first = (j * len(faults) + i) * len(streams)
+            rs = outcomes[first:first + len(streams)]
             det = _summarise_one(rs, "detection", f)
             iso = _summarise_one(rs, "isolation", f)
             out[f][mode] = {"detected": sum(r["detection"] is not None for r in rs), "detection_ms": det,
