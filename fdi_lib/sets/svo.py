@@ -18,7 +18,9 @@ Two update rules are offered (``method``):
     Minkowski sum with the disturbance zonotope, facet and vertex enumeration by cddlib,
     intersection with the measurement strip), and X̂(k+1) = co{X̂_v(k+1)}. Complexity
     grows with time: on the 4-state UAV model (run with ``scale``) the sets reach hundreds of
-    vertices after two steps; used for the 2-D figures and the comparisons of the book.
+    vertices after two steps; used for the 2-D figures and the comparisons of the book. With
+    N > 1 the hull over the 2^(N n_A) vertex sequences is built recursively, one one-step hull
+    per horizon level and update (hulls commute with linear maps and Minkowski sums).
 ``"template"``
     A fixed-complexity outer approximation of the same set: the support function of each
     X̂_v in a fixed set of directions D (template) is computed in closed form from the
@@ -28,6 +30,10 @@ Two update rules are offered (``method``):
     With N > 1 each row of the horizon is projected on its own and the results intersected
     (disturbances not shared between rows); ``joint=True`` solves the stacked form of eq. (3)
     with shared disturbances by linear programming (tighter, slower).
+
+Many records at once: :class:`TemplateBatch` steps many template observers (N = 1) together on
+stacked arrays (:class:`ModelSequence`), with :func:`run_svo_many` and
+:func:`run_architecture_i_many` on top; each observer's result is the one it gets alone.
 
 B uncertainty is folded into the disturbance as in the paper (L_d(k) = B_b(k) u(k)). C
 uncertainty is handled by the relaxation idea of eq. (11) applied directly to the output:
