@@ -705,8 +705,10 @@ def hidden_fault_study(seed: int, duration: float = 3.0, eta_unit: str = uav.ETA
         SVO with that multiplier (None: never empty within ``duration``);
         ``onset``: the onset sample.
     """
-    runs = {f: uav.simulate(f, "step", rng=np.random.default_rng(seed), duration=duration, eta_unit=eta_unit)
-            for f in ("none", "elevator", "dynamics")}
+    faults = ("none", "elevator", "dynamics")   # simulated together, each from its own default_rng(seed)
+    runs = dict(zip(faults, uav.simulate_many([(f, "step") for f in faults],
+                                              [np.random.default_rng(seed) for _ in faults],
+                                              duration=duration, eta_unit=eta_unit)))
     onset = runs["elevator"].onset_step
     nb = uav.NOISE_BOUND + uav.SVO_NOISE_MARGIN
     outputs = ("airspeed", "alpha", "theta", "q")
