@@ -338,10 +338,13 @@ def uav_study(seed: int, trials: int, jobs: int = 1, duration: float = DURATION,
                              duration=duration, eta_unit=eta_unit, fault_mode=fault_mode)
     if jobs == 1:
         return tuple(_bank_outcomes(sims))
-    # contiguous chunks, one per job: each run's outcome does not depend on its batch
-    bounds = np.linspace(0, len(sims), int(jobs) + 1).astype(int)
-    parts = Parallel(n_jobs=jobs)(delayed(_bank_outcomes)(sims[a:b]) for a, b in zip(bounds[:-1], bounds[1:]))
-    return tuple(o for part in parts for o in part)
+    # one chunk per job, every jobs-th run (the cases are listed in blocks, so each job gets some of
+    # each); each run's outcome does not depend on its batch
+    parts = Parallel(n_jobs=jobs)(delayed(_bank_outcomes)(sims[j::jobs]) for j in range(jobs))
+    out = [None] * len(sims)
+    for j, part in enumerate(parts):
+        out[j::jobs] = part
+    return tuple(out)
 
 
 def _summarise_one(rs, which: str, fault: str) -> float | None:
