@@ -290,6 +290,7 @@ def _one_uav_run(fault: str, scenario: str, seed: "int | np.random.SeedSequence"
     return _bank_outcomes([run])[0]
 
 
+@single_threaded_blas
 def _bank_outcomes(runs: "list[uav.UAVRun]") -> list[dict]:
     """The Architecture I bank (template SVOs, N = 1) on each run, all runs stepped together.
 
@@ -328,7 +329,7 @@ def uav_study(seed: int, trials: int, jobs: int = 1, duration: float = DURATION,
     compared on the same realisations). ``eta_unit`` and ``fault_mode`` are passed to
     :func:`fdi_lib.systems.eclipse_uav.simulate`. Cached.
     """
-    from joblib import Parallel, delayed
+    from joblib.externals.loky import get_reusable_executor
 
     streams = np.random.SeedSequence(seed).spawn(int(trials))
     cases = [("none", "step", ss) for ss in streams]   # the scenario is irrelevant without fault
@@ -339,8 +340,10 @@ def uav_study(seed: int, trials: int, jobs: int = 1, duration: float = DURATION,
     if jobs == 1:
         return tuple(_bank_outcomes(sims))
     # one chunk per job, every jobs-th run (the cases are listed in blocks, so each job gets some of
-    # each); each run's outcome does not depend on its batch
-    parts = Parallel(n_jobs=jobs)(delayed(_bank_outcomes)(sims[j::jobs]) for j in range(jobs))
+    # each); each run's outcome does not depend on its batch. The pool is loky's reusable one, as in
+    # fdi_lib.montecarlo (joblib.Parallel fails on a pool that montecarlo started).
+    pool = get_reusable_executor(max_workers=int(jobs), timeout=600)
+    parts = list(pool.map(_bank_outcomes, [sims[j::jobs] for j in range(jobs)]))
     out = [None] * len(sims)
     for j, part in enumerate(parts):
         out[j::jobs] = part
