@@ -118,3 +118,18 @@ def test_uav_study_is_the_same_for_any_number_of_jobs():
     one = R.uav_study(4, 1, 1, duration=0.9)
     assert one == R.uav_study(4, 1, 2, duration=0.9)
     assert sum(r["detection"] is not None for r in one) >= 3
+
+
+def test_staged_banks_equal_banks_on_the_whole_records():
+    """_bank_outcomes runs the fault banks on a first stretch of the records, then the undecided ones
+    again: the outcomes are those of run_architecture_i on each whole record."""
+    runs = uav.simulate_many([("alpha", "step"), ("alpha", "soft"), ("elevator", "hard"), ("elevator", "soft")],
+                             [np.random.default_rng(s) for s in range(4)], duration=3.5)
+    staged = R._bank_outcomes(runs)
+    dets = [o["detection"] for o in staged]
+    assert max(dets) > 2 * np.median(dets)   # one bank is still undecided after the first stretch
+    for r, o in zip(runs, staged):
+        nominal = uav.svo_models(r, "nominal")
+        ref = run_architecture_i(nominal, {f: uav.svo_models(r, f) for f in uav.FAULTS}, r.u, r.y, R.UAV_X0)
+        assert (o["detection"], o["isolation"], o["isolated"], o["empty_at"]) == \
+            (ref.detection_step, ref.isolation_step, ref.isolated, dict(ref.empty_at))
