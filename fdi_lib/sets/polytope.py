@@ -197,6 +197,14 @@ class _Bases:
 
 
 @functools.lru_cache(maxsize=64)
+def _combinations(q: int, n: int) -> np.ndarray:
+    """The n-subsets of range(q) in lexicographic order, shape (comb(q, n), n) (read-only)."""
+    idx = np.array(list(itertools.combinations(range(q), n)), dtype=int).reshape(-1, n)
+    idx.flags.writeable = False
+    return idx
+
+
+@functools.lru_cache(maxsize=64)
 def _bases(key: bytes, p: int, n: int) -> _Bases | None:
     """Structure of Set(M, m) for M = frombuffer(key).reshape(p, n); None when there are too many bases."""
     M = np.frombuffer(key, dtype=float).reshape(p, n)
@@ -209,12 +217,13 @@ def _bases(key: bytes, p: int, n: int) -> _Bases | None:
     q = U.shape[0]
     if q < n or math.comb(q, n) > _MAX_BASES:
         return None
-    members = [rows[group.reshape(-1) == g] for g in range(q)]
-    width = max(len(r) for r in members)
-    pad = np.full((q, width), p)
-    for g, r in enumerate(members):
-        pad[g, :len(r)] = r
-    idx = np.array(list(itertools.combinations(range(q), n)), dtype=int).reshape(-1, n)
+    # pad[g] = the rows with normal g, in increasing order, then p (an index for +inf)
+    group = group.reshape(-1)
+    order = np.argsort(group, kind="stable")
+    counts = np.bincount(group, minlength=q)
+    pad = np.full((q, counts.max()), p)
+    pad[group[order], np.arange(len(order)) - np.repeat(np.cumsum(counts) - counts, counts)] = rows[order]
+    idx = _combinations(q, n)
     sub = U[idx]
     ok = np.abs(np.linalg.det(sub)) > 1e-10
     idx, inv = idx[ok], np.linalg.inv(sub[ok])
