@@ -12,6 +12,10 @@ Reported, on this machine and its current load:
 * the joint horizon form (``joint=True``) at N = 2 on the first second, for comparison;
 * the four SVOs of the Architecture I bank together, against Ts = 10 ms;
 * the number of facets and vertices of the template sets over the 10 s run;
+* many records at once (:func:`fdi_lib.sets.svo.run_svo_many`, as the Figs 11-12 study runs
+  them): CPU time per observer and sample against one observer at a time;
+* the exact rule on the book's 2-D example for N = 1..6: one one-step hull per horizon level, so
+  the time grows about linearly with N, not with the 2^N vertex sequences;
 * the exact rule (scaled coordinates) at N = 1, 2, 3 on the first ``EXACT_STEPS`` samples: its
   sets grow at every step, so the time per step grows too.
 
@@ -27,15 +31,17 @@ import time
 
 import numpy as np
 
-from fdi_lib.reproduce.rosa2013 import UAV_X0
+from fdi_lib.reproduce.rosa2013 import UAV_X0, simulate_toy, toy_model, toy_prior
 from fdi_lib.sets import polytope
-from fdi_lib.sets.svo import run_svo
+from fdi_lib.sets.svo import run_svo, run_svo_many
 from fdi_lib.systems import eclipse_uav as uav
 from fdi_lib.threads import single_threaded_blas
 
 TEMPLATE_TARGET_MS = 0.5
 EXACT_TARGET_MS = 5.0
 EXACT_STEPS = 2
+BATCH = 100        # records stepped together (the Figs 11-12 study has 100 per reading)
+ONE_BY_ONE = 10    # of which run one at a time for the ratio
 
 
 def _models(run, kind):
@@ -97,6 +103,31 @@ def main() -> None:
         print(f"{kind:>9}: median {np.median(res.step_time + build) * 1e3:.3f} ms")
     print(f"     bank: median {np.median(total) * 1e3:.3f} ms per sample, "
           f"{np.mean(total * 1e3 > 10.0) * 100:.1f} % of samples above Ts = 10 ms")
+
+    print(f"\n== many records at once (TemplateBatch), nominal SVOs of {BATCH} healthy 6 s records")
+    runs = uav.simulate_many([("none", "step")] * BATCH,
+                             [np.random.default_rng(s) for s in np.random.SeedSequence(1).spawn(BATCH)])
+    seqs = [uav.svo_models(r, "nominal") for r in runs]
+    u, y = np.stack([r.u for r in runs]), np.stack([r.y for r in runs])
+    c0 = time.process_time()
+    many = run_svo_many(seqs, u, y, UAV_X0)
+    c_many = (time.process_time() - c0) / (BATCH * len(runs[0].u))
+    c0 = time.process_time()
+    one = [run_svo(m, r.u, r.y, UAV_X0) for m, r in zip(seqs[:ONE_BY_ONE], runs[:ONE_BY_ONE])]
+    c_one = (time.process_time() - c0) / (ONE_BY_ONE * len(runs[0].u))
+    same = [o.empty_at for o in one] == list(many.empty_at[:ONE_BY_ONE])
+    print(f"CPU per observer and sample: batch {c_many * 1e6:.1f} us, one at a time {c_one * 1e6:.1f} us "
+          f"(first {ONE_BY_ONE} records; x{c_one / c_many:.1f}); same alarms: {same}")
+
+    print("\n== exact rule, 2-D example of the book, horizon N: one-step hulls per level (recursion)")
+    toy = toy_model()
+    x, u1, y1 = simulate_toy(toy, rng=np.random.default_rng(0), steps=25)
+    for N in range(1, 7):
+        c0 = time.process_time()
+        res = run_svo(toy, u1, y1, toy_prior(), N=N, method="exact")
+        ms = (time.process_time() - c0) * 1e3 / len(u1)
+        print(f"N = {N}: {ms:.2f} ms CPU per update ({2 ** N} vertex sequences for the oldest set), "
+              f"max facets {res.n_facets.max()}, alarm: {res.empty_at}")
 
     print(f"\n== exact rule (vertex images + hulls, scaled), first {EXACT_STEPS} updates")
     short = slice(0, EXACT_STEPS)

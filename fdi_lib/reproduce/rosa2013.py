@@ -8,6 +8,7 @@ bounds the paper does not give: see that module and the book chapter for our cho
 
 from __future__ import annotations
 
+import dataclasses
 from functools import lru_cache
 from typing import Any
 
@@ -16,7 +17,7 @@ import numpy as np
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.sets.polytope import Polytope, convex_hull, plot_polytope
-from fdi_lib.sets.svo import SVOModel, run_architecture_i, run_svo
+from fdi_lib.sets.svo import SVOModel, run_architecture_i_many, run_svo, run_svo_many
 from fdi_lib.threads import single_threaded_blas
 from fdi_lib.systems import eclipse_uav as uav
 
@@ -283,28 +284,55 @@ def fig10(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
 
 
 def _one_uav_run(fault: str, scenario: str, seed: "int | np.random.SeedSequence", duration: float,
-                 eta_unit: str = uav.ETA_UNIT, fault_mode: str = "deviation", method: str = "template",
-                 N: int = 1) -> dict:
-    """One closed-loop run and its Architecture I bank (see :func:`_bank_outcome`)."""
+                 eta_unit: str = uav.ETA_UNIT, fault_mode: str = "deviation") -> dict:
+    """One closed-loop run and its Architecture I bank (see :func:`_bank_outcomes`)."""
     run = uav.simulate(fault, scenario, rng=np.random.default_rng(seed), duration=duration,
                        eta_unit=eta_unit, fault_mode=fault_mode)
-    return _bank_outcome(run, method, N)
+    return _bank_outcomes([run])[0]
 
 
-def _bank_outcome(run: "uav.UAVRun", method: str = "template", N: int = 1) -> dict:
-    """The Architecture I bank on one run (the fault SVOs only if the nominal one empties)."""
-    fault, scenario = run.fault, run.scenario
-    nominal = uav.svo_models(run, "nominal")
-    # Isolation is declared only after detection, and the nominal SVO does not depend on the
-    # others: when it never empties (healthy runs, hidden faults) the fault SVOs play no part.
-    e = run_svo(nominal, run.u, run.y, UAV_X0, N=N, method=method).empty_at
-    if e is None or fault == "none":
-        return {"fault": fault, "scenario": scenario, "onset": run.onset_step, "detection": e,
-                "isolation": None, "isolated": None, "empty_at": {"nominal": e}}
-    res = run_architecture_i(nominal, {f: uav.svo_models(run, f) for f in uav.FAULTS},
-                             run.u, run.y, UAV_X0, N=N, method=method)
-    return {"fault": fault, "scenario": scenario, "onset": run.onset_step, "detection": res.detection_step,
-            "isolation": res.isolation_step, "isolated": res.isolated, "empty_at": dict(res.empty_at)}
+@single_threaded_blas
+def _bank_outcomes(runs: "list[uav.UAVRun]") -> list[dict]:
+    """The Architecture I bank (template SVOs, N = 1) on each run, all runs stepped together.
+
+    Isolation is declared only after detection, and the nominal SVO does not depend on the others:
+    the nominal SVOs of all runs go first (:func:`run_svo_many`), and the fault SVOs are run, from
+    sample 0, only on the runs whose nominal SVO empties (:func:`run_architecture_i_many`; on the
+    others, healthy runs and hidden faults, they play no part). Each run's outcome is the one of
+    :func:`fdi_lib.sets.svo.run_architecture_i` on it alone (tested).
+    """
+    if not runs:
+        return []
+    u = np.stack([r.u for r in runs])
+    y = np.stack([r.y for r in runs])
+    nominal = [uav.svo_models(r, "nominal") for r in runs]
+    det = run_svo_many(nominal, u, y, UAV_X0).empty_at
+    out = [{"fault": r.fault, "scenario": r.scenario, "onset": r.onset_step, "detection": e, "isolation": None,
+            "isolated": None, "empty_at": {"nominal": e}} for r, e in zip(runs, det)]
+    todo = [i for i, r in enumerate(runs) if det[i] is not None and r.fault != "none"]
+    # A bank's outcome up to sample k depends on the record up to k only, and most banks decide
+    # soon after detection: they first run (fault models built) up to twice the median detection
+    # sample; the banks still undecided there run again on the whole record.
+    T = u.shape[1]
+    for stop in (min(T, 2 * int(np.median([det[i] for i in todo]))) if todo else T, T):
+        if not todo:
+            break
+        cut = [dataclasses.replace(runs[i], t=runs[i].t[:stop + 1], x=runs[i].x[:stop + 1],
+                                   y=runs[i].y[:stop + 1], u=runs[i].u[:stop]) for i in todo]
+        banks = run_architecture_i_many([nominal[i] for i in todo], [{f: uav.svo_models(r, f) for f in uav.FAULTS}
+                                                                     for r in cut],
+                                        u[todo, :stop], y[todo, :stop + 1], UAV_X0)
+        left = []
+        for i, res in zip(todo, banks):
+            decided = res.detection_step is not None and (
+                res.isolation_step is not None or all(res.empty_at[f] is not None for f in uav.FAULTS))
+            if stop < T and not decided:
+                left.append(i)
+                continue
+            out[i].update({"detection": res.detection_step, "isolation": res.isolation_step,
+                           "isolated": res.isolated, "empty_at": dict(res.empty_at)})
+        todo = left
+    return out
 
 
 @lru_cache(maxsize=16)
@@ -318,7 +346,7 @@ def uav_study(seed: int, trials: int, jobs: int = 1, duration: float = DURATION,
     compared on the same realisations). ``eta_unit`` and ``fault_mode`` are passed to
     :func:`fdi_lib.systems.eclipse_uav.simulate`. Cached.
     """
-    from joblib import Parallel, delayed
+    from joblib.externals.loky import get_reusable_executor
 
     streams = np.random.SeedSequence(seed).spawn(int(trials))
     cases = [("none", "step", ss) for ss in streams]   # the scenario is irrelevant without fault
@@ -327,9 +355,15 @@ def uav_study(seed: int, trials: int, jobs: int = 1, duration: float = DURATION,
     sims = uav.simulate_many([(f, s) for f, s, _ in cases], [np.random.default_rng(ss) for _, _, ss in cases],
                              duration=duration, eta_unit=eta_unit, fault_mode=fault_mode)
     if jobs == 1:
-        out = [_bank_outcome(r) for r in sims]
-    else:
-        out = Parallel(n_jobs=jobs)(delayed(_bank_outcome)(r) for r in sims)
+        return tuple(_bank_outcomes(sims))
+    # one chunk per job, every jobs-th run (the cases are listed in blocks, so each job gets some of
+    # each); each run's outcome does not depend on its batch. The pool is loky's reusable one, as in
+    # fdi_lib.montecarlo (joblib.Parallel fails on a pool that montecarlo started).
+    pool = get_reusable_executor(max_workers=int(jobs), timeout=600)
+    parts = list(pool.map(_bank_outcomes, [sims[j::jobs] for j in range(jobs)]))
+    out = [None] * len(sims)
+    for j, part in enumerate(parts):
+        out[j::jobs] = part
     return tuple(out)
 
 
@@ -468,13 +502,19 @@ def fault_mode_study(seed: int, trials: int, eta_unit: str = uav.ETA_UNIT, durat
     :func:`uav_study` (same seed) and records of ``duration`` s.
     """
     streams = np.random.SeedSequence(seed).spawn(int(trials))
+    faults = ("elevator", "dynamics")
+    sims = {mode: uav.simulate_many([(f, "step") for f in faults for _ in streams],
+                                    [np.random.default_rng(ss) for _ in faults for ss in streams],
+                                    duration=duration, eta_unit=eta_unit, fault_mode=mode)
+            for mode in uav.FAULT_MODES}
+    # every run's bank at once (each run's outcome does not depend on the batch)
+    outcomes = _bank_outcomes([r for mode in uav.FAULT_MODES for r in sims[mode]])
     out: dict = {}
-    for f in ("elevator", "dynamics"):
+    for i, f in enumerate(faults):
         out[f] = {}
-        for mode in uav.FAULT_MODES:
-            sims = uav.simulate_many([(f, "step")] * len(streams), [np.random.default_rng(ss) for ss in streams],
-                                     duration=duration, eta_unit=eta_unit, fault_mode=mode)
-            rs = tuple(_bank_outcome(r) for r in sims)
+        for j, mode in enumerate(uav.FAULT_MODES):
+            first = (j * len(faults) + i) * len(streams)
+            rs = outcomes[first:first + len(streams)]
             det = _summarise_one(rs, "detection", f)
             iso = _summarise_one(rs, "isolation", f)
             out[f][mode] = {"detected": sum(r["detection"] is not None for r in rs), "detection_ms": det,
@@ -550,6 +590,15 @@ def timing(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
 # ----------------------------------------------------------------------------- why the elevator and M_u faults stay hidden
 
 
+def _block_diagonal(blocks: np.ndarray):
+    """Sparse block-diagonal matrix of ``blocks`` (shape (T, r, c)), its non-zero entries only."""
+    import scipy.sparse as sp
+
+    T, r, c = blocks.shape
+    t, i, j = np.nonzero(blocks)
+    return sp.coo_matrix((blocks[t, i, j], (t * r + i, t * c + j)), shape=(T * r, T * c))
+
+
 def explanation_scale(run: "uav.UAVRun", *, kind: str = "nominal", scale: str = "disturbance", start: int = 0,
                       stop: int | None = None, dist_scale: float = 1.0) -> float:
     """Smallest multiplier s of one bound for which the SVO model still explains the record (one LP).
@@ -600,23 +649,23 @@ def explanation_scale(run: "uav.UAVRun", *, kind: str = "nominal", scale: str = 
         raise ModelError(f"start, stop: expected 0 <= start < stop <= {K}, got ({start}, {stop})")
     start = int(start)
     models = uav.svo_models(run, kind, dist_scale=1.0)
-    ms = [models(k) for k in range(start, stop + 1)]
-    T, n, nd = stop - start, 4, ms[0].L.shape[1]
+    T, n, nd = stop - start, 4, models.L.shape[1]
     nx, nv = (T + 1) * n, (T + 1) * n + T * nd + 1      # variables: x(start..stop), d(start..stop-1), s
     si = nv - 1
     # Dynamics x(j+1) - A(j) x(j) - L(j) d(j) = B(j) u(j), as sparse blocks over the window.
     shift = sp.hstack([sp.csr_matrix((T * n, n)), sp.identity(T * n)])            # picks x(j+1)
-    dyn = sp.hstack([sp.block_diag([m.A for m in ms[:T]]), sp.csr_matrix((T * n, n))])  # A(j) x(j)
-    Aeq = sp.hstack([shift - dyn, -sp.block_diag([m.L for m in ms[:T]]), sp.csr_matrix((T * n, 1))])
-    beq = np.concatenate([m.B @ run.u[start + j] for j, m in enumerate(ms[:T])])
+    dyn = sp.hstack([_block_diagonal(models.A[start:stop]), sp.csr_matrix((T * n, n))])  # A(j) x(j)
+    Aeq = sp.hstack([shift - dyn, -_block_diagonal(np.broadcast_to(models.L, (T,) + models.L.shape)),
+                     sp.csr_matrix((T * n, 1))])
+    beq = np.concatenate([models.B[start + j] @ run.u[start + j] for j in range(T)])
     # Disturbances: +-d <= s (scaled) or +-d <= dist_scale.
     pm = np.array([[1.0], [-1.0]])
     d_rows = sp.hstack([sp.csr_matrix((2 * T * nd, nx)), sp.kron(sp.identity(T * nd), pm),
                         sp.csr_matrix((2 * T * nd, 1))])
     # Measurements: +-(C x - y) <= nbar (or s nbar when the noise bound is scaled).
-    C = sp.block_diag([sp.kron(pm, m.C) for m in ms])                              # rows (+C; -C) per sample
+    C = _block_diagonal(np.broadcast_to(np.vstack([models.C, -models.C]), (T + 1, 2 * models.C.shape[0], n)))
     y_pm = np.concatenate([np.concatenate([run.y[start + j], -run.y[start + j]]) for j in range(T + 1)])
-    nbar = np.concatenate([np.concatenate([m.noise, m.noise]) for m in ms])
+    nbar = np.tile(np.concatenate([models.noise, models.noise]), T + 1)
     y_rows = sp.hstack([C, sp.csr_matrix((C.shape[0], T * nd + 1))])
     if scale == "disturbance":
         d_rows = d_rows - sp.csr_matrix((np.ones(2 * T * nd), (np.arange(2 * T * nd), np.full(2 * T * nd, si))),
@@ -679,25 +728,28 @@ def hidden_fault_study(seed: int, duration: float = 3.0, eta_unit: str = uav.ETA
         SVO with that multiplier (None: never empty within ``duration``);
         ``onset``: the onset sample.
     """
-    runs = {f: uav.simulate(f, "step", rng=np.random.default_rng(seed), duration=duration, eta_unit=eta_unit)
-            for f in ("none", "elevator", "dynamics")}
+    faults = ("none", "elevator", "dynamics")   # simulated together, each from its own default_rng(seed)
+    runs = dict(zip(faults, uav.simulate_many([(f, "step") for f in faults],
+                                              [np.random.default_rng(seed) for _ in faults],
+                                              duration=duration, eta_unit=eta_unit)))
     onset = runs["elevator"].onset_step
     nb = uav.NOISE_BOUND + uav.SVO_NOISE_MARGIN
     outputs = ("airspeed", "alpha", "theta", "q")
     effect = {f: dict(zip(outputs, (np.abs(runs[f].y - runs["none"].y).max(axis=0) / nb).tolist()))
               for f in ("elevator", "dynamics")}
-    template, svo_runs = {}, {}
-    for s in HIDDEN_SCALES:
-        template[s] = {}
-        for f, r in runs.items():
-            svo_runs[s, f] = run_svo(uav.svo_models(r, "nominal", dist_scale=s), r.u, r.y, UAV_X0)
-            e = svo_runs[s, f].empty_at
-            template[s][f] = None if e is None else (e - onset + 1) * uav.TS * 1e3
+    # the nominal template SVOs of every scale and run, stepped together
+    keys = [(s, f) for s in HIDDEN_SCALES for f in runs]
+    svo = run_svo_many([uav.svo_models(runs[f], "nominal", dist_scale=s) for s, f in keys],
+                       np.stack([runs[f].u for _, f in keys]), np.stack([runs[f].y for _, f in keys]), UAV_X0,
+                       bounds=True)
+    template = {s: {} for s in HIDDEN_SCALES}
+    for (s, f), e in zip(keys, svo.empty_at):
+        template[s][f] = None if e is None else (e - onset + 1) * uav.TS * 1e3
     width, needed = {}, {}
     A37, _ = uav.lpv_matrices(uav.V_TRIM, eta_unit=eta_unit)
     for f in ("elevator", "dynamics"):
-        res = svo_runs[1.0, f]
-        w = np.nanmedian(res.upper[onset:] - res.lower[onset:], axis=0)
+        i = keys.index((1.0, f))
+        w = np.nanmedian(svo.upper[i, onset:] - svo.lower[i, onset:], axis=0)
         width[f] = dict(zip(("u", "w", "theta", "q"), w.tolist()))
         # one-step pitch-rate effect of the fault, from the true states and inputs, and the w offset doing the same
         dq = np.abs(runs[f].x[onset + 1:, 3] - runs[f].x[onset:-1, 3]

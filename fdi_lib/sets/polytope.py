@@ -39,7 +39,7 @@ from fdi_lib.errors import (EmptySetError, ModelError, NonFiniteError, Numerical
                             UnboundedSetError)
 from fdi_lib.validation import array
 
-__all__ = ["Polytope", "convex_hull", "plot_polytope", "box_corners"]
+__all__ = ["Polytope", "convex_hull", "plot_polytope", "polygon_outline", "box_corners"]
 
 _TOL = 1e-9
 
@@ -197,6 +197,14 @@ class _Bases:
 
 
 @functools.lru_cache(maxsize=64)
+def _combinations(q: int, n: int) -> np.ndarray:
+    """The n-subsets of range(q) in lexicographic order, shape (comb(q, n), n) (read-only)."""
+    idx = np.array(list(itertools.combinations(range(q), n)), dtype=int).reshape(-1, n)
+    idx.flags.writeable = False
+    return idx
+
+
+@functools.lru_cache(maxsize=64)
 def _bases(key: bytes, p: int, n: int) -> _Bases | None:
     """Structure of Set(M, m) for M = frombuffer(key).reshape(p, n); None when there are too many bases."""
     M = np.frombuffer(key, dtype=float).reshape(p, n)
@@ -209,12 +217,13 @@ def _bases(key: bytes, p: int, n: int) -> _Bases | None:
     q = U.shape[0]
     if q < n or math.comb(q, n) > _MAX_BASES:
         return None
-    members = [rows[group.reshape(-1) == g] for g in range(q)]
-    width = max(len(r) for r in members)
-    pad = np.full((q, width), p)
-    for g, r in enumerate(members):
-        pad[g, :len(r)] = r
-    idx = np.array(list(itertools.combinations(range(q), n)), dtype=int).reshape(-1, n)
+    # pad[g] = the rows with normal g, in increasing order, then p (an index for +inf)
+    group = group.reshape(-1)
+    order = np.argsort(group, kind="stable")
+    counts = np.bincount(group, minlength=q)
+    pad = np.full((q, counts.max()), p)
+    pad[group[order], np.arange(len(order)) - np.repeat(np.cumsum(counts) - counts, counts)] = rows[order]
+    idx = _combinations(q, n)
     sub = U[idx]
     ok = np.abs(np.linalg.det(sub)) > 1e-10
     idx, inv = idx[ok], np.linalg.inv(sub[ok])
@@ -309,12 +318,18 @@ def _cdd_dd_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray:
 
 
 def _hull_hrep(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """H-representation (M, m) of conv(V).
+    """H-representation (M, m) of conv(V) (see :func:`_hull`)."""
+    return _hull(V)[:2]
+
+
+def _hull(V: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """H-representation (M, m) of conv(V), and the indices of the points of V that span it.
 
     Full-dimensional point sets go to qhull (:class:`scipy.spatial.ConvexHull`), retried with the
-    options of :data:`_QHULL_RETRIES` on a topology error; flat (lower-dimensional) sets, which
-    qhull rejects, go to cddlib, whose equalities become pairs of inequalities. Every result is
-    verified (all points inside, to 1e-9 relative); a failed verification raises
+    options of :data:`_QHULL_RETRIES` on a topology error, and the spanning points are qhull's
+    vertices; flat (lower-dimensional) sets, which qhull rejects, go to cddlib, whose equalities
+    become pairs of inequalities, and keep every point (in dimension 1: the two extremes). Every
+    result is verified (all points inside, to 1e-9 relative); a failed verification raises
     :class:`NumericalError` rather than returning a wrong set.
     """
     from scipy.spatial import ConvexHull, QhullError
@@ -330,11 +345,12 @@ def _hull_hrep(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             eq = eq[np.unique(np.round(eq, 12), axis=0, return_index=True)[1]]
             M, m = eq[:, :-1].copy(), -eq[:, -1]
             if _all_inside(V, M, m, 1e-9 * scale):
-                return M, m
+                return M, m, hull.vertices
     M, m = _cdd_hull_exact(V)
     if not _all_inside(V, M, m, 1e-9 * scale):
         raise NumericalError(f"conv(V): the facets found in floating point exclude some of the {len(V)} points")
-    return M, m
+    keep = np.unique([V[:, 0].argmin(), V[:, 0].argmax()]) if V.shape[1] == 1 else np.arange(len(V))
+    return M, m, keep
 
 
 def _cdd_hull_exact(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -508,7 +524,7 @@ class Polytope:
         """Drop redundant inequalities (cddlib ``matrix_canonicalize``); empty sets are returned unchanged."""
         import cdd
 
-        if self.is_empty():
+        if _chebyshev(*_normalise(self.M, self.m))[0] == "infeasible":   # empty (cddlib's LP, HiGHS if unsure)
             return self
         mat = cdd.matrix_from_array(np.column_stack([self.m, -self.M]), rep_type=cdd.RepType.INEQUALITY)
         cdd.matrix_canonicalize(mat)
@@ -631,19 +647,25 @@ def convex_hull(polytopes: Iterable[Polytope]) -> Polytope:
     return Polytope.from_vertices(np.vstack(V))
 
 
+def polygon_outline(P: Polytope) -> np.ndarray:
+    """Vertices of a 2-D polytope ``P`` in counter-clockwise order, shape (v, 2) ((0, 2) if empty)."""
+    if P.dim != 2:
+        raise ShapeError(f"P: expected a 2-D polytope, got dimension {P.dim}")
+    V = P.vertices()
+    if V.shape[0] == 0:
+        return V
+    c = V.mean(axis=0)
+    return V[np.argsort(np.arctan2(V[:, 1] - c[1], V[:, 0] - c[0]))]
+
+
 def plot_polytope(P: Polytope, ax: Any, **kwargs: Any) -> Any:
     """Draw a 2-D polytope ``P`` as a filled polygon on ``ax``; returns ``ax``. Empty sets draw nothing.
 
     ``**kwargs`` go to matplotlib's ``fill``.
     """
-    if P.dim != 2:
-        raise ShapeError(f"P: expected a 2-D polytope, got dimension {P.dim}")
-    V = P.vertices()
+    V = polygon_outline(P)
     if V.shape[0] == 0:
         return ax
-    c = V.mean(axis=0)
-    order = np.argsort(np.arctan2(V[:, 1] - c[1], V[:, 0] - c[0]))
-    V = V[order]
     kwargs.setdefault("alpha", 0.35)
     ax.fill(V[:, 0], V[:, 1], **kwargs)
     edge = kwargs.get("color", kwargs.get("facecolor", "k"))

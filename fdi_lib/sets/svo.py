@@ -18,7 +18,9 @@ Two update rules are offered (``method``):
     Minkowski sum with the disturbance zonotope, facet and vertex enumeration by cddlib,
     intersection with the measurement strip), and X̂(k+1) = co{X̂_v(k+1)}. Complexity
     grows with time: on the 4-state UAV model (run with ``scale``) the sets reach hundreds of
-    vertices after two steps; used for the 2-D figures and the comparisons of the book.
+    vertices after two steps; used for the 2-D figures and the comparisons of the book. With
+    N > 1 the hull over the 2^(N n_A) vertex sequences is built recursively, one one-step hull
+    per horizon level and update (hulls commute with linear maps and Minkowski sums).
 ``"template"``
     A fixed-complexity outer approximation of the same set: the support function of each
     X̂_v in a fixed set of directions D (template) is computed in closed form from the
@@ -28,6 +30,10 @@ Two update rules are offered (``method``):
     With N > 1 each row of the horizon is projected on its own and the results intersected
     (disturbances not shared between rows); ``joint=True`` solves the stacked form of eq. (3)
     with shared disturbances by linear programming (tighter, slower).
+
+Many records at once: :class:`TemplateBatch` steps many template observers (N = 1) together on
+stacked arrays (:class:`ModelSequence`), with :func:`run_svo_many` and
+:func:`run_architecture_i_many` on top; each observer's result is the one it gets alone.
 
 B uncertainty is folded into the disturbance as in the paper (L_d(k) = B_b(k) u(k)). C
 uncertainty is handled by the relaxation idea of eq. (11) applied directly to the output:
@@ -49,12 +55,13 @@ import numpy as np
 from fdi_lib.errors import (EmptySetError, ModelError, NonFiniteError, NumericalError, ShapeError,
                             UnboundedSetError)
 from fdi_lib.validation import integer, real
-from fdi_lib.sets.polytope import Polytope, _hull_hrep, _enumerate_vertices, box_corners
+from fdi_lib.sets.polytope import Polytope, _hull, _hull_hrep, _enumerate_vertices, box_corners
 from fdi_lib.threads import single_threaded_blas
 
 __all__ = ["SVOModel", "SetValuedObserver", "SVORun", "run_svo", "FDIResult", "run_architecture_i",
            "run_architecture_ii", "default_template", "actuator_effectiveness_model", "sensor_bias_model",
-           "dynamics_entry_model"]
+           "dynamics_entry_model", "ModelSequence", "TemplateBatch", "SVOBatchRun", "run_svo_many",
+           "run_architecture_i_many"]
 
 
 def _arr(name: str, a: Any, ndim: int) -> np.ndarray:
@@ -73,6 +80,17 @@ def _cube_vertices(n_A: int) -> np.ndarray:
     v = np.array(list(itertools.product((-1.0, 1.0), repeat=n_A)), dtype=float).reshape(2 ** n_A, n_A)
     v.flags.writeable = False
     return v
+
+
+def _vertex_matrices(A: np.ndarray, A_unc: np.ndarray) -> np.ndarray:
+    """A + sum_i v_i A_i for every vertex v of the cube (eq. (4)): shape (..., 2**n_A, n, n) for A of
+    shape (..., n, n) and A_unc of shape (..., n_A, n, n). The signs are +-1, so each entry is one
+    sum of exact terms, the same whatever the leading (batch) dimensions."""
+    signs = _cube_vertices(A_unc.shape[-3])
+    acc = np.zeros(A.shape[:-2] + (signs.shape[0],) + A.shape[-2:])
+    for i in range(signs.shape[1]):   # the uncertain part first, then A (as the paper's sum)
+        acc = acc + signs[:, i, None, None] * A_unc[..., i:i + 1, :, :]
+    return A[..., None, :, :] + acc
 
 
 @dataclass(frozen=True, eq=False)
@@ -142,8 +160,17 @@ class SVOModel:
         for name, val in [("A", A), ("C", C), ("B", B), ("L", L), ("noise", noise), ("A_unc", Au),
                           ("B_unc", Bu), ("C_unc", Cu)]:
             object.__setattr__(self, name, val)
-        signs = _cube_vertices(Au.shape[0])
-        object.__setattr__(self, "_vertex_A", A[None] + np.einsum("vi,ijk->vjk", signs, Au))
+        object.__setattr__(self, "_vertex_A", _vertex_matrices(A, Au))
+
+    @classmethod
+    def _checked_parts(cls, A: np.ndarray, C: np.ndarray, B: np.ndarray, L: np.ndarray, noise: np.ndarray,
+                       A_unc: np.ndarray, B_unc: np.ndarray, vertex_A: np.ndarray) -> "SVOModel":
+        """A model from parts that :class:`ModelSequence` has already checked (no second check)."""
+        model = object.__new__(cls)
+        for name, val in (("A", A), ("C", C), ("B", B), ("L", L), ("noise", noise), ("A_unc", A_unc),
+                          ("B_unc", B_unc), ("C_unc", np.zeros((0,) + C.shape)), ("_vertex_A", vertex_A)):
+            object.__setattr__(model, name, val)
+        return model
 
     @property
     def n(self) -> int:
@@ -193,6 +220,49 @@ class _Entry:
     V: np.ndarray
     model: SVOModel | None = None
     u: np.ndarray | None = None
+    P: np.ndarray | None = None   # "exact" rule: points spanning X's propagation to the latest step
+
+
+def _lp_maxima(D: np.ndarray, A_ub: np.ndarray, b_ub: np.ndarray, A_eq: np.ndarray, b_eq: np.ndarray,
+               bounds: list) -> np.ndarray:
+    """max d . x[:n] over {A_ub x <= b_ub, A_eq x = b_eq, bounds} for every row d of ``D`` (HiGHS).
+
+    One HiGHS model for all the directions: only the objective changes between them, so each
+    solve starts from the previous optimal basis (``scipy.optimize.linprog`` would set the
+    problem up again every time, at several times the cost of the solve). ``-inf`` everywhere when
+    the set is empty.
+    """
+    import highspy
+
+    nv, inf = A_ub.shape[1], highspy.kHighsInf
+    A = np.vstack([A_ub, A_eq])
+    lp = highspy.HighsLp()
+    lp.num_col_, lp.num_row_ = nv, A.shape[0]
+    lp.col_cost_ = np.zeros(nv)
+    lp.col_lower_ = np.array([-inf if lo is None else lo for lo, _ in bounds], dtype=float)
+    lp.col_upper_ = np.array([inf if hi is None else hi for _, hi in bounds], dtype=float)
+    lp.row_lower_ = np.concatenate([np.full(len(b_ub), -inf), b_eq])
+    lp.row_upper_ = np.concatenate([b_ub, b_eq])
+    rows, cols = np.nonzero(A)
+    lp.a_matrix_.format_ = highspy.MatrixFormat.kRowwise
+    lp.a_matrix_.start_ = np.searchsorted(rows, np.arange(A.shape[0] + 1)).astype(np.int32)
+    lp.a_matrix_.index_ = cols.astype(np.int32)
+    lp.a_matrix_.value_ = A[rows, cols]
+    solver = highspy.Highs()
+    solver.setOptionValue("output_flag", False)
+    solver.passModel(lp)
+    out = np.full(D.shape[0], -np.inf)
+    idx = np.arange(D.shape[1], dtype=np.int32)
+    for i, d in enumerate(D):
+        solver.changeColsCost(len(idx), idx, -d)
+        solver.run()
+        status = solver.getModelStatus()
+        if status == highspy.HighsModelStatus.kInfeasible:
+            return out   # this vertex sequence explains nothing: no contribution to the hull
+        if status != highspy.HighsModelStatus.kOptimal:
+            raise NumericalError(f"joint horizon: the support LP failed ({solver.modelStatusToString(status)})")
+        out[i] = -solver.getInfo().objective_function_value
+    return out
 
 
 class SetValuedObserver:
@@ -253,13 +323,13 @@ class SetValuedObserver:
         N = integer(N, "N", low=1)
         if method not in ("template", "exact"):
             raise ModelError(f"method: expected 'template' or 'exact', got {method!r}")
-        if X0.is_empty():
-            raise EmptySetError("X0: the initial set Set(M_0, m_0) is empty")
-        try:
+        try:   # vertex enumeration decides emptiness too (an empty set has no vertex)
             V0 = X0.vertices()
         except UnboundedSetError:
             raise UnboundedSetError("X0: the initial set Set(M_0, m_0) is unbounded; "
                                     "give finite bounds on every state") from None
+        if V0.shape[0] == 0:
+            raise EmptySetError("X0: the initial set Set(M_0, m_0) is empty")
         self.N = int(N)
         self.method = method
         self.template = None if template is None else np.asarray(template, dtype=float)
@@ -312,7 +382,7 @@ class SetValuedObserver:
             raise EmptySetError("other: the observer to copy from has no non-empty set")
         if (self._s is None) != (other._s is None) or (self._s is not None and np.any(self._s != other._s)):
             raise ModelError("other: expected an observer with the same state scaling")
-        self.history = [_Entry(e.X, e.V, e.model, e.u) for e in other.history]
+        self.history = [_Entry(e.X, e.V, e.model, e.u, e.P) for e in other.history]
         self.empty = False
 
     def update(self, model: SVOModel, u: np.ndarray, y_next: np.ndarray) -> Polytope | None:
@@ -406,8 +476,6 @@ class SetValuedObserver:
         coefficients: row j uses the first g_j columns of v's generator matrix (its own prefix).
         Variables (x(k+1), x(k), ..., x(k-N'+1), s); x(k-j) in X̂(k-j), |s| <= 1.
         """
-        from scipy.optimize import linprog
-
         n, Np = self.n, len(props)
         full = props[-1]
         g_full = full[0][2].shape[1]
@@ -436,15 +504,7 @@ class SetValuedObserver:
                 A_eq.append(row)
                 b_eq.append(c_j)
             A_eq, b_eq = np.vstack(A_eq), np.concatenate(b_eq)
-            for i, d in enumerate(Dall):
-                c = np.zeros(nv)
-                c[:n] = -d
-                res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b_eq, bounds=bounds, method="highs")
-                if res.status == 2:
-                    continue   # this vertex sequence explains nothing: no contribution to the hull
-                if res.status != 0:
-                    raise NumericalError(f"joint horizon: the support LP failed ({res.message})")
-                h[i] = max(h[i], -res.fun)
+            h = np.maximum(h, _lp_maxima(Dall, A_ub, b_ub, A_eq, b_eq, bounds))
         return h
 
     def _update_template(self, entries: list[_Entry], model_next: SVOModel, y: np.ndarray) -> Polytope | None:
@@ -476,20 +536,26 @@ class SetValuedObserver:
         return Polytope(np.vstack([D, C, -C]), np.concatenate([h[:p], nb + y, nb - y]))
 
     def _update_exact(self, entries: list[_Entry], model_next: SVOModel, y: np.ndarray) -> Polytope | None:
-        props = self._propagations(entries)
+        # Level j is co over the 2^(n_A (j+1)) vertex sequences of {Phi_v X̂(k-j) + c_v + G_v [-1, 1]^g}.
+        # Linear maps and Minkowski sums commute with convex hulls, so it is one step (k) of level
+        # j-1 of the previous update: each entry keeps the points spanning its propagation so far
+        # (``P``), and an update costs N one-step hulls instead of hulls over 2^(N n_A) sequences.
+        model, u = entries[0].model, entries[0].u
+        corners = box_corners(model.generators(u))
+        Bu = model.B @ u
         H = []
         imgs0 = None
         per_vertex = []
-        for j, level in enumerate(props):
-            V = entries[j].V
-            pts_all = []
-            for Phi, c, G in level:
-                pts = ((V @ Phi.T + c)[:, None, :] + box_corners(G)[None, :, :]).reshape(-1, self.n)
-                pts_all.append(pts)
+        for j, e in enumerate(entries):
+            P = e.V if e.P is None else e.P
+            imgs = [((P @ Av.T + Bu)[:, None, :] + corners[None, :, :]).reshape(-1, self.n)
+                    for Av in model.vertex_matrices()]
             if j == 0:
-                imgs0 = pts_all
+                imgs0 = imgs
             # co_v{Prop_j(v)}: hull of the union of the vertex images (qhull / cddlib)
-            M, m = _hull_hrep(np.vstack(pts_all))
+            pts = np.vstack(imgs)
+            M, m, keep = _hull(pts)
+            e.P = pts[keep]
             H.append(np.column_stack([M, m + self.margin * (1.0 + np.abs(m))]))
         nb = model_next.noise + self._c_unc_bound(model_next, np.vstack(imgs0))
         nb = nb * (1.0 + self.margin) + self.margin
@@ -735,6 +801,381 @@ def run_architecture_ii(nominal: ModelSpec, global_model: ModelSpec, faults: Map
             if not alive:
                 break
     return FDIResult("II", det, iso, isolated, empty_at)
+
+
+# ----------------------------------------------------------------------------- many observers at once
+
+
+@dataclass(frozen=True, eq=False)
+class ModelSequence:
+    """A time-varying model (1) stored as arrays: step k is the :class:`SVOModel` with ``A[k]``,
+    ``B[k]``, ``A_unc[k]``, ``B_unc[k]`` and the constant ``C``, ``L``, ``noise`` (no output
+    uncertainty).
+
+    It is a model specification like a callable ``k -> SVOModel`` (:func:`run_svo`), checked once
+    here rather than at every step, and the input of :class:`TemplateBatch`, which steps many
+    observers together on the stacked arrays.
+
+    Parameters
+    ----------
+    A : ndarray, shape (T, n, n)
+    B : ndarray, shape (T, n, n_u)
+    C : ndarray, shape (n_y, n)
+    L : ndarray, shape (n, n_d)
+    noise : ndarray, shape (n_y,)
+    A_unc : ndarray, shape (T, n_A, n, n), optional
+    B_unc : ndarray, shape (T, n_B, n, n_u), optional
+        As in :class:`SVOModel`, one slice per step.
+    """
+
+    A: Any
+    B: Any
+    C: Any
+    L: Any
+    noise: Any
+    A_unc: Any = None
+    B_unc: Any = None
+    _vertex_A: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        A = _arr("A", self.A, 3)
+        T, n = A.shape[0], A.shape[1]
+        if A.shape != (T, n, n):
+            raise ShapeError(f"A: expected shape (T, n, n), got {A.shape}")
+        C = _arr("C", self.C, 2)
+        if C.shape[1] != n:
+            raise ShapeError(f"C: expected {n} columns, got shape {C.shape}")
+        B = _arr("B", self.B, 3)
+        if B.shape[:2] != (T, n):
+            raise ShapeError(f"B: expected shape ({T}, {n}, n_u), got {B.shape}")
+        L = _arr("L", self.L, 2)
+        if L.shape[0] != n:
+            raise ShapeError(f"L: expected {n} rows, got shape {L.shape}")
+        noise = _arr("noise", self.noise, 1)
+        if noise.shape != (C.shape[0],) or np.any(noise < 0):
+            raise ModelError(f"noise: expected {C.shape[0]} non-negative bounds, got {noise}")
+        Au = np.zeros((T, 0, n, n)) if self.A_unc is None else _arr("A_unc", self.A_unc, 4)
+        if Au.shape[:1] + Au.shape[2:] != (T, n, n):
+            raise ShapeError(f"A_unc: expected shape ({T}, n_A, {n}, {n}), got {Au.shape}")
+        Bu = np.zeros((T, 0) + B.shape[1:]) if self.B_unc is None else _arr("B_unc", self.B_unc, 4)
+        if Bu.shape[:1] + Bu.shape[2:] != B.shape:
+            raise ShapeError(f"B_unc: expected shape ({T}, n_B, {n}, {B.shape[2]}), got {Bu.shape}")
+        for name, val in (("A", A), ("B", B), ("C", C), ("L", L), ("noise", noise), ("A_unc", Au),
+                          ("B_unc", Bu), ("_vertex_A", _vertex_matrices(A, Au))):
+            val.flags.writeable = False
+            object.__setattr__(self, name, val)
+
+    def __len__(self) -> int:
+        return int(self.A.shape[0])
+
+    def __call__(self, k: int) -> SVOModel:
+        """The model of step ``k``."""
+        if not 0 <= k < len(self):
+            raise ModelError(f"k: expected a step in [0, {len(self)}), got {k}")
+        return SVOModel._checked_parts(self.A[k], self.C, self.B[k], self.L, self.noise, self.A_unc[k],
+                                       self.B_unc[k], self._vertex_A[k])
+
+
+def _dot(M: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """M x over the last axes (M (..., r, c), x (..., c), broadcast), as elementwise products added
+    in column order: each result depends on its own operands only, whatever the batch (a BLAS
+    product may round differently with the batch size)."""
+    out = M[..., 0] * x[..., None, 0]
+    for j in range(1, M.shape[-1]):
+        out = out + M[..., j] * x[..., None, j]
+    return out
+
+
+def _vertices_many(M: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices of Set(M, m[b]) for every row b of m, shape (B, K, n), with a mask (B, K) of the
+    rows that are vertices; a set is empty when its mask is all False.
+
+    The basic solutions of :func:`fdi_lib.sets.polytope._basis_vertices`, for all sets at once (the
+    same normals M, hence the same bases); a vertex on more than n facets may appear several times.
+    When that route does not apply, each set's vertices are enumerated on their own and padded.
+    """
+    from fdi_lib.sets.polytope import _bases
+
+    b = _bases(M.tobytes(), M.shape[0], M.shape[1])
+    if b is None or not b.bounded:
+        Vs = [_enumerate_vertices(M, row) for row in m]
+        K = max(1, max(len(V) for V in Vs))
+        X = np.zeros((len(Vs), K, M.shape[1]))
+        F = np.zeros((len(Vs), K), dtype=bool)
+        for i, V in enumerate(Vs):
+            X[i, :len(V)], F[i, :len(V)] = V, True
+        return X, F
+    mp = np.empty((m.shape[0], m.shape[1] + 1))
+    np.divide(m, b.norms, out=mp[:, :-1])
+    mp[:, -1] = np.inf
+    mu = mp[:, b.pad].min(axis=2)                                  # (B, q) tightest offset per normal
+    X = np.einsum("kij,bkj->bki", b.inv, mu[:, b.idx])               # (B, K, n): inv_k mu_k
+    tol = 1e-12 * (1.0 + np.abs(mu).max(axis=1))
+    # one (K, n) x (n, q) product per set: the same shapes, hence the same rounding, in any batch
+    F = (np.matmul(X, b.U.T) <= mu[:, None, :] + tol[:, None, None]).all(axis=2)
+    F &= ~np.any(m[:, b.zero] < 0, axis=1)[:, None]
+    return X, F
+
+
+class TemplateBatch:
+    """Many independent template SVOs (horizon N = 1) stepped together.
+
+    Observer b runs on ``models[b]``, ``u[b]``, ``y[b]`` and computes the sets of
+    ``SetValuedObserver(X0, method="template", template=template, margin=margin)`` (Proposition 2
+    and 3 hold as for one observer): the support of X̂(k+1) in each template direction is the
+    largest one over the vertices of X̂(k) and the vertex matrices, then the vertices of X̂(k+1)
+    are the basic solutions of its fixed normals (:func:`_vertices_many`), for all observers with
+    the same model structure at once. Each observer's sets do not depend on the batch (tested bit
+    for bit): the products are elementwise, or one matrix product of fixed shapes per observer.
+    Against :class:`SetValuedObserver` (other products, duplicate vertices merged) they agree to
+    rounding (tested), far inside the relative ``margin`` added at every step.
+
+    Parameters
+    ----------
+    models : sequence of ModelSequence
+        One per observer, each of length at least T (step k uses ``models[b](k)``).
+    u : ndarray, shape (B, T, n_u)
+        Inputs of each observer.
+    y : ndarray, shape (B, T + 1, n_y)
+        Measurements of each observer.
+    X0 : Polytope
+        Prior set of x(0), shared.
+    template : ndarray, shape (p, n), optional
+        Template directions (default :func:`default_template` of each model's C).
+    margin : float
+        As in :class:`SetValuedObserver`.
+
+    Attributes
+    ----------
+    alive : ndarray of bool, shape (B,)
+        Observers whose set is not empty.
+    """
+
+    def __init__(self, models: Sequence[ModelSequence], u: Any, y: Any, X0: Polytope, *,
+                 template: np.ndarray | None = None, margin: float = 1e-9) -> None:
+        if not isinstance(X0, Polytope):
+            raise ModelError(f"X0: expected a Polytope, got {type(X0).__name__}")
+        models = list(models)
+        for b, mdl in enumerate(models):
+            if not isinstance(mdl, ModelSequence):
+                raise ModelError(f"models[{b}]: expected a ModelSequence, got {type(mdl).__name__}")
+        y = _arr("y", y, 3)
+        Bn, T = y.shape[0], y.shape[1] - 1
+        u = _arr("u", u, 3)
+        if u.shape[:2] != (Bn, T) or len(models) != Bn:
+            raise ShapeError(f"u, models: expected u of shape ({Bn}, {T}, n_u) and {Bn} models (from y "
+                             f"{y.shape}), got u {u.shape} and {len(models)} models")
+        for b, mdl in enumerate(models):
+            if len(mdl) < T or mdl.A.shape[1] != X0.dim or mdl.C.shape[0] != y.shape[2] \
+                    or mdl.B.shape[2] != u.shape[2]:
+                raise ShapeError(f"models[{b}]: expected at least {T} steps, n = {X0.dim}, n_y = {y.shape[2]}, "
+                                 f"n_u = {u.shape[2]}, got A {mdl.A.shape}, C {mdl.C.shape}, B {mdl.B.shape}")
+        self.margin = real(margin, "margin", low=0.0, what="a non-negative relative inflation")
+        self.T, self.n, self.u, self.y, self.X0 = T, X0.dim, u, y, X0
+        self.template = None if template is None else _arr("template", template, 2)
+        self.alive = np.ones(Bn, dtype=bool)
+        # observers with the same array shapes and C are stepped together
+        groups: dict = {}
+        for b, mdl in enumerate(models):
+            key = (mdl.A_unc.shape[1], mdl.B_unc.shape[1], mdl.L.shape[1], mdl.C.tobytes())
+            groups.setdefault(key, []).append(b)
+        self._groups = []
+        for idx in groups.values():
+            first = models[idx[0]]
+            D = self.template if self.template is not None else default_template(self.n, first.C)
+            L = np.stack([models[b].L for b in idx])
+            self._groups.append({
+                "idx": np.array(idx), "D": D, "C": first.C,
+                "M": np.vstack([D, first.C, -first.C]),
+                "vA": np.stack([models[b]._vertex_A[:T] for b in idx]),
+                "B": np.stack([models[b].B[:T] for b in idx]),
+                "B_unc": np.stack([models[b].B_unc[:T] for b in idx]),
+                "noise": np.stack([models[b].noise for b in idx]),
+                # sum_c |D L|_{:, c}: the fixed columns of the generators (disturbance)
+                "sL": np.abs((D[None, :, :, None] * L[:, None, :, :]).sum(axis=2)).sum(axis=2),
+                "V": None, "F": None})
+
+    def start(self) -> np.ndarray:
+        """X̂(0) = X(0) ∩ strip of y(0) for every observer; returns the mask of empty ones."""
+        for g in self._groups:
+            y0 = self.y[g["idx"], 0]
+            m = np.column_stack([np.broadcast_to(self.X0.m, (len(y0), self.X0.m.size)), g["noise"] + y0,
+                                 g["noise"] - y0])
+            g["V"], g["F"] = _vertices_many(np.vstack([self.X0.M, g["C"], -g["C"]]), m)
+            self.alive[g["idx"]] = g["F"].any(axis=1)
+        return ~self.alive
+
+    def update(self, k: int, which: np.ndarray | None = None) -> np.ndarray:
+        """X̂(k) from X̂(k-1) for the live observers in the mask ``which`` (default all);
+        returns the mask of the observers that became empty at k."""
+        if not 1 <= k <= self.T:
+            raise ModelError(f"k: expected a sample in [1, {self.T}], got {k}")
+        which = self.alive if which is None else self.alive & np.asarray(which, dtype=bool)
+        before = self.alive.copy()
+        for g in self._groups:
+            a = np.flatnonzero(which[g["idx"]])
+            if a.size:
+                self._step(g, a, k)
+        return before & ~self.alive
+
+    def _step(self, g: dict, a: np.ndarray, k: int) -> None:
+        D, obs = g["D"], g["idx"][a]
+        V, F = g["V"][a], g["F"][a]
+        # the live vertex candidates of each set first (padded with its first vertex)
+        count = F.sum(axis=1)
+        order = np.argsort(~F, axis=1, kind="stable")[:, :count.max()]
+        order = np.where(np.arange(order.shape[1])[None] < count[:, None], order, order[:, :1])
+        V = np.take_along_axis(V, order[:, :, None], axis=1)                      # (a, v, n)
+        DPhi = np.matmul(D, g["vA"][a, k - 1])                                    # (a, 2^n_A, p, n): D A_v
+        W = _dot(DPhi[:, :, None], V[:, None])                                   # (a, 2^n_A, v, p)
+        uk = self.u[obs, k - 1]
+        c = _dot(D, _dot(g["B"][a, k - 1], uk))                                  # D B u
+        s = g["sL"][a]
+        Gu = _dot(g["B_unc"][a, k - 1], uk[:, None, :])                           # (a, n_B, n): B_b u
+        for j in range(Gu.shape[1]):
+            s = s + np.abs(_dot(D, Gu[:, j]))
+        h = W.max(axis=(1, 2)) + c + s
+        h = h + self.margin * (1.0 + np.abs(h))
+        nb = g["noise"][a] * (1.0 + self.margin) + self.margin
+        yk = self.y[obs, k]
+        X, Fn = _vertices_many(g["M"], np.column_stack([h, nb + yk, nb - yk]))
+        if g["V"].shape[1] < X.shape[1]:
+            pad = X.shape[1] - g["V"].shape[1]
+            g["V"] = np.concatenate([g["V"], np.zeros((len(g["idx"]), pad, self.n))], axis=1)
+            g["F"] = np.concatenate([g["F"], np.zeros((len(g["idx"]), pad), dtype=bool)], axis=1)
+        g["V"][a, :X.shape[1]], g["F"][a, :X.shape[1]] = X, Fn
+        g["F"][a, X.shape[1]:] = False
+        self.alive[obs] = Fn.any(axis=1)
+
+    def bounding_boxes(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper corners of the bounding box of every current set, shape (B, n) each
+        (NaN for the empty ones)."""
+        lower = np.full((len(self.alive), self.n), np.nan)
+        upper = lower.copy()
+        for g in self._groups:
+            live = self.alive[g["idx"]]
+            V, F = g["V"][live], g["F"][live][:, :, None]
+            lower[g["idx"][live]] = np.where(F, V, np.inf).min(axis=1)
+            upper[g["idx"][live]] = np.where(F, V, -np.inf).max(axis=1)
+        return lower, upper
+
+
+@dataclass(frozen=True)
+class SVOBatchRun:
+    """Result of :func:`run_svo_many`.
+
+    Attributes
+    ----------
+    empty_at : tuple of (int or None)
+        First sample at which each observer's set is empty (None: never).
+    lower, upper : ndarray, shape (B, T+1, n), or None
+        Bounding boxes of the sets (NaN once empty), when asked for.
+    """
+
+    empty_at: tuple
+    lower: np.ndarray | None = field(default=None, repr=False)
+    upper: np.ndarray | None = field(default=None, repr=False)
+
+
+@single_threaded_blas
+def run_svo_many(models: Sequence[ModelSequence], u: Any, y: Any, X0: Polytope, *,
+                 template: np.ndarray | None = None, bounds: bool = False) -> SVOBatchRun:
+    """:func:`run_svo` (template rule, N = 1) for many records at once (:class:`TemplateBatch`).
+
+    Parameters
+    ----------
+    models : sequence of ModelSequence
+        One per record.
+    u : ndarray, shape (B, T, n_u)
+    y : ndarray, shape (B, T+1, n_y)
+        Inputs and measurements of each record.
+    X0 : Polytope
+        Prior set of x(0).
+    template : ndarray, shape (p, n), optional
+        See :class:`SetValuedObserver`.
+    bounds : bool
+        Also return the bounding boxes of every set.
+
+    Returns
+    -------
+    SVOBatchRun
+    """
+    bank = TemplateBatch(models, u, y, X0, template=template)
+    T = bank.T
+    empty_at = np.where(bank.start(), 0, -1)
+    lower = upper = None
+    if bounds:
+        lower = np.full((len(empty_at), T + 1, bank.n), np.nan)
+        upper = lower.copy()
+        lower[:, 0], upper[:, 0] = bank.bounding_boxes()
+    for k in range(1, T + 1):
+        if not bank.alive.any():
+            break
+        empty_at[bank.update(k)] = k
+        if bounds:
+            lower[:, k], upper[:, k] = bank.bounding_boxes()
+    return SVOBatchRun(tuple(None if e < 0 else int(e) for e in empty_at), lower, upper)
+
+
+@single_threaded_blas
+def run_architecture_i_many(nominal: Sequence[ModelSequence], faults: Sequence[Mapping[str, ModelSequence]],
+                            u: Any, y: Any, X0: Polytope, *, template: np.ndarray | None = None) -> list[FDIResult]:
+    """:func:`run_architecture_i` (template rule, N = 1, ``stop_when_isolated=True``) for many
+    records at once: every SVO of every bank in one :class:`TemplateBatch`, each bank stopped
+    where :func:`run_architecture_i` stops it.
+
+    Parameters
+    ----------
+    nominal : sequence of ModelSequence
+        The nominal model of each record.
+    faults : sequence of dict name -> ModelSequence
+        The fault models of each record (the same names, in the same order, for every record).
+    u : ndarray, shape (R, T, n_u)
+    y : ndarray, shape (R, T+1, n_y)
+        Inputs and measurements of each record.
+    X0 : Polytope
+        Prior set of x(0).
+    template : ndarray, shape (p, n), optional
+        See :class:`SetValuedObserver`.
+
+    Returns
+    -------
+    list of FDIResult
+        One per record, equal to what :func:`run_architecture_i` returns on it.
+    """
+    R = len(nominal)
+    if len(faults) != R:
+        raise ShapeError(f"faults: expected one dict per record ({R}), got {len(faults)}")
+    names = list(faults[0]) if R else []
+    if any(list(f) != names for f in faults):
+        raise ModelError(f"faults: expected the same fault names {names} for every record")
+    y = _arr("y", y, 3)
+    u = _arr("u", u, 3)
+    per = 1 + len(names)                           # observers per record: nominal, then the faults
+    models = [m for r in range(R) for m in [nominal[r], *(faults[r][f] for f in names)]]
+    bank = TemplateBatch(models, np.repeat(u, per, axis=0), np.repeat(y, per, axis=0), X0, template=template)
+    empty_at = np.where(bank.start(), 0, -1).reshape(R, per)
+    det = np.full(R, -1)
+    iso = np.full(R, -1)
+    done = np.zeros(R, dtype=bool)
+    for k in range(bank.T + 1):
+        if k > 0:
+            empty_at.reshape(-1)[bank.update(k, np.repeat(~done, per))] = k
+        det = np.where((det < 0) & (empty_at[:, 0] >= 0), k, det)
+        live = (empty_at[:, 1:] < 0).sum(axis=1)
+        found = ~done & (det >= 0) & (live == 1)
+        iso[found] = k
+        done |= found | ((det >= 0) & (live == 0))
+        if done.all():
+            break
+    out = []
+    for r in range(R):
+        e = {name: None if v < 0 else int(v) for name, v in zip(["nominal", *names], empty_at[r])}
+        alive = [f for f in names if e[f] is None]
+        isolated = alive[0] if iso[r] >= 0 else None
+        out.append(FDIResult("I", None if det[r] < 0 else int(det[r]), None if iso[r] < 0 else int(iso[r]),
+                             isolated, e))
+    return out
 
 
 # ----------------------------------------------------------------------------- fault models (Tables 1-2)

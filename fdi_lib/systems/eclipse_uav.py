@@ -560,7 +560,8 @@ def svo_scale() -> np.ndarray:
 
 
 def svo_models(run: UAVRun, kind: str = "nominal", *, dist_scale: float = 1.0, noise_scale: float = 1.0):
-    """Per-step SVO models (callable k -> SVOModel) for the nominal plant or a fault hypothesis.
+    """Per-step SVO models (a :class:`fdi_lib.sets.svo.ModelSequence`, callable k -> SVOModel) for the
+    nominal plant or a fault hypothesis.
 
     Parameters
     ----------
@@ -584,7 +585,7 @@ def svo_models(run: UAVRun, kind: str = "nominal", *, dist_scale: float = 1.0, n
     Airspeed uncertainty: V in [V_hat - dV, V_hat + dV], dV = noise bound + margin, gives the
     parametric uncertainty A_1 = (A_d(V+) - A_d(V-)) / 2 (n_A = 1) and B_1 likewise.
     """
-    from fdi_lib.sets.svo import SVOModel
+    from fdi_lib.sets.svo import ModelSequence
 
     if kind not in ("nominal", "global") + FAULTS:
         raise ModelError(f"kind: expected 'nominal', 'global' or one of {FAULTS}, got {kind!r}")
@@ -613,10 +614,5 @@ def svo_models(run: UAVRun, kind: str = "nominal", *, dist_scale: float = 1.0, n
         _, Bhi = discretize_many(Vh, mu_c, eff_c + eff_r, eta_unit=run.eta_unit)
         _, Blo = discretize_many(Vh, mu_c, eff_c - eff_r, eta_unit=run.eta_unit)
         B_unc.append((Bhi - Blo) / 2)
-    A_c, B_c = (Ap + Am) / 2, (Bp + Bm) / 2
-    A_unc, B_unc = np.stack(A_unc, axis=1), np.stack(B_unc, axis=1)
-
-    def model(k: int) -> SVOModel:
-        return SVOModel(A=A_c[k], B=B_c[k], C=C, L=L, noise=noise, A_unc=A_unc[k], B_unc=B_unc[k])
-
-    return model
+    return ModelSequence(A=(Ap + Am) / 2, B=(Bp + Bm) / 2, C=C, L=L, noise=noise,
+                         A_unc=np.stack(A_unc, axis=1), B_unc=np.stack(B_unc, axis=1))

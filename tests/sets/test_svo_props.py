@@ -230,3 +230,42 @@ def test_joint_horizon_can_lose_the_true_state_when_a_is_uncertain():
 
     out = horizon_comparison(2013, runs=3, steps=6, horizons=(2,))[2]
     assert out["alarms"] >= 1 and out["outside"] >= 1
+
+
+def test_exact_horizon_equals_the_hull_over_all_vertex_sequences():
+    """The exact rule's recursion (one step per level) against eq. (3)-(4) by brute force: every
+    sequence of Delta-vertices over the horizon, every disturbance corner, one hull per level, then
+    the intersection with the strip, whose support is found by linear programming (HiGHS)."""
+    import itertools
+
+    from scipy.optimize import linprog
+    from scipy.spatial import ConvexHull
+
+    rng = np.random.default_rng(17)
+    model = random_system(rng)
+    x, u, y = simulate(model, rng, T=7)
+    N = 3
+    svo = SetValuedObserver(X0, N=N, method="exact")
+    sets = [svo.start(model, y[0])]
+    D = np.array([[np.cos(a), np.sin(a)] for a in np.linspace(0, 2 * np.pi, 24, endpoint=False)])
+    signs = np.array(list(itertools.product((-1.0, 1.0), repeat=3)))
+    Avs = [model.A + s * model.A_unc[0] for s in (-1.0, 1.0)]
+    for k in range(7):
+        sets.append(svo.update(model, u[k], y[k + 1]))
+        rows, rhs = [model.C, -model.C], [model.noise + y[k + 1], model.noise - y[k + 1]]
+        for j in range(min(N, k + 1)):
+            pts_all = []
+            for seq in itertools.product(range(2), repeat=j + 1):
+                pts = sets[k - j].vertices()
+                for step, a in zip(range(k - j, k + 1), seq):
+                    # disturbance L d and input uncertainty B_1 u(step) Delta_b: corners of their box
+                    corners = signs @ np.column_stack([model.L, model.B_unc[0] @ u[step]]).T
+                    pts = ((pts @ Avs[a].T + model.B @ u[step])[:, None, :] + corners[None]).reshape(-1, 2)
+                pts_all.append(pts)
+            eq = ConvexHull(np.vstack(pts_all)).equations
+            rows.append(eq[:, :2])
+            rhs.append(-eq[:, 2])
+        A_ub, b_ub = np.vstack(rows), np.concatenate(rhs)
+        brute = np.array([-linprog(-d, A_ub=A_ub, b_ub=b_ub, bounds=[(None, None)] * 2).fun for d in D])
+        np.testing.assert_allclose(sets[-1].support(D), brute, rtol=0, atol=1e-7)
+        assert sets[-1].contains(x[k + 1], 1e-9)

@@ -1,0 +1,135 @@
+"""Many template SVOs stepped together (:class:`TemplateBatch`) against one observer at a time."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fdi_lib.errors import ModelError, ShapeError
+from fdi_lib.reproduce import rosa2013 as R
+from fdi_lib.sets import Polytope
+from fdi_lib.sets.svo import (ModelSequence, SVOModel, TemplateBatch, run_architecture_i,
+                              run_architecture_i_many, run_svo, run_svo_many)
+from fdi_lib.systems import eclipse_uav as uav
+
+from tests.sets.test_svo_props import random_system, simulate
+
+X0 = Polytope.box([-1.0, -1.0], [1.0, 1.0])
+
+
+def _constant(model: SVOModel, T: int) -> ModelSequence:
+    """``model`` at every one of T steps, as a ModelSequence."""
+    rep = lambda a: np.repeat(a[None], T, axis=0)   # noqa: E731
+    return ModelSequence(A=rep(model.A), B=rep(model.B), C=model.C, L=model.L, noise=model.noise,
+                         A_unc=rep(model.A_unc), B_unc=rep(model.B_unc))
+
+
+def _records(seed: int, count: int, T: int = 25):
+    """Random 2-D systems and records; every other one with a sensor fault from k = 10."""
+    rng = np.random.default_rng(seed)
+    models, us, ys = [], [], []
+    for i in range(count):
+        m = random_system(rng)
+        _, u, y = simulate(m, rng, T, fault=(10, 1.5) if i % 2 else None)
+        models.append(m)
+        us.append(u)
+        ys.append(y)
+    return models, np.stack(us), np.stack(ys)
+
+
+def test_model_sequence_steps_equal_the_direct_models():
+    rng = np.random.default_rng(3)
+    m = random_system(rng)
+    A2 = np.concatenate([m.A_unc, 0.05 * rng.standard_normal((1, 2, 2))])   # two uncertain directions
+    direct = SVOModel(A=m.A, B=m.B, C=m.C, L=m.L, noise=m.noise, A_unc=A2, B_unc=m.B_unc)
+    seq = _constant(direct, 4)
+    step = seq(2)
+    for name in ("A", "B", "C", "L", "noise", "A_unc", "B_unc", "C_unc"):
+        np.testing.assert_array_equal(getattr(step, name), getattr(direct, name))
+    np.testing.assert_array_equal(step.vertex_matrices(), direct.vertex_matrices())
+    # the vertex matrices against a brute-force sum over the sign vectors of the cube
+    brute = [m.A + s1 * A2[0] + s2 * A2[1] for s1 in (-1, 1) for s2 in (-1, 1)]
+    np.testing.assert_allclose(step.vertex_matrices(), brute, rtol=0, atol=1e-15)
+    assert len(seq) == 4
+
+
+def test_model_sequence_and_batch_reject_bad_input():
+    m = random_system(np.random.default_rng(0))
+    with pytest.raises(ShapeError, match=r"A: expected a 3-D array"):
+        ModelSequence(A=m.A, B=m.B[None], C=m.C, L=m.L, noise=m.noise)
+    with pytest.raises(ShapeError, match=r"B: expected shape \(2, 2, n_u\)"):
+        ModelSequence(A=np.stack([m.A] * 2), B=m.B[None], C=m.C, L=m.L, noise=m.noise)
+    with pytest.raises(ModelError, match=r"noise: expected 1 non-negative bounds"):
+        ModelSequence(A=m.A[None], B=m.B[None], C=m.C, L=m.L, noise=np.array([-1.0]))
+    seq = _constant(m, 3)
+    with pytest.raises(ModelError, match=r"k: expected a step in \[0, 3\), got 3"):
+        seq(3)
+    with pytest.raises(ModelError, match=r"models\[0\]: expected a ModelSequence, got SVOModel"):
+        TemplateBatch([m], np.zeros((1, 3, 1)), np.zeros((1, 4, 1)), X0)
+    with pytest.raises(ShapeError, match=r"models\[0\]: expected at least 5 steps"):
+        TemplateBatch([seq], np.zeros((1, 5, 1)), np.zeros((1, 6, 1)), X0)
+    with pytest.raises(ShapeError, match=r"u, models: expected u of shape \(1, 3, n_u\)"):
+        TemplateBatch([seq], np.zeros((1, 2, 1)), np.zeros((1, 4, 1)), X0)
+    bank = TemplateBatch([seq], np.zeros((1, 3, 1)), np.zeros((1, 4, 1)), X0)
+    bank.start()
+    with pytest.raises(ModelError, match=r"k: expected a sample in \[1, 3\], got 4"):
+        bank.update(4)
+
+
+def test_batch_equals_one_observer_at_a_time_on_random_systems():
+    """Same alarms as run_svo, bounding boxes equal to rounding (the 1e-9 margin is far larger)."""
+    models, u, y = _records(11, 16)
+    many = run_svo_many([_constant(m, u.shape[1]) for m in models], u, y, X0, bounds=True)
+    alarms = 0
+    for i, m in enumerate(models):
+        one = run_svo(m, u[i], y[i], X0)
+        assert many.empty_at[i] == one.empty_at
+        alarms += one.empty_at is not None
+        np.testing.assert_allclose(many.lower[i], one.lower, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(many.upper[i], one.upper, rtol=0, atol=1e-12)
+    assert alarms >= 4   # the faulty records do raise alarms: the comparison covers both outcomes
+
+
+def test_each_observer_is_independent_of_its_batch():
+    """Bit for bit: an observer alone, or in a batch of any size, gives the same sets."""
+    models, u, y = _records(5, 6)
+    seqs = [_constant(m, u.shape[1]) for m in models]
+    whole = run_svo_many(seqs, u, y, X0, bounds=True)
+    for i in (0, 3):
+        alone = run_svo_many(seqs[i:i + 1], u[i:i + 1], y[i:i + 1], X0, bounds=True)
+        assert alone.empty_at[0] == whole.empty_at[i]
+        np.testing.assert_array_equal(alone.lower[0], whole.lower[i])
+        np.testing.assert_array_equal(alone.upper[0], whole.upper[i])
+
+
+def test_architecture_i_batch_equals_one_bank_at_a_time_on_the_uav():
+    runs = uav.simulate_many([("alpha", "hard"), ("alpha", "step"), ("elevator", "step"), ("dynamics", "soft"),
+                              ("none", "step")], [np.random.default_rng(s) for s in range(5)], duration=1.5)
+    nominal = [uav.svo_models(r, "nominal") for r in runs]
+    faults = [{f: uav.svo_models(r, f) for f in uav.FAULTS} for r in runs]
+    many = run_architecture_i_many(nominal, faults, np.stack([r.u for r in runs]), np.stack([r.y for r in runs]),
+                                   R.UAV_X0)
+    for r, n, f, res in zip(runs, nominal, faults, many):
+        assert res == run_architecture_i(n, f, r.u, r.y, R.UAV_X0)
+    assert many[0].isolated == "alpha" and many[4].detection_step is None
+
+
+def test_uav_study_is_the_same_for_any_number_of_jobs():
+    one = R.uav_study(4, 1, 1, duration=0.9)
+    assert one == R.uav_study(4, 1, 2, duration=0.9)
+    assert sum(r["detection"] is not None for r in one) >= 3
+
+
+def test_staged_banks_equal_banks_on_the_whole_records():
+    """_bank_outcomes runs the fault banks on a first stretch of the records, then the undecided ones
+    again: the outcomes are those of run_architecture_i on each whole record."""
+    runs = uav.simulate_many([("alpha", "step"), ("alpha", "soft"), ("elevator", "hard"), ("elevator", "soft")],
+                             [np.random.default_rng(s) for s in range(4)], duration=3.5)
+    staged = R._bank_outcomes(runs)
+    dets = [o["detection"] for o in staged]
+    assert max(dets) > 2 * np.median(dets)   # one bank is still undecided after the first stretch
+    for r, o in zip(runs, staged):
+        nominal = uav.svo_models(r, "nominal")
+        ref = run_architecture_i(nominal, {f: uav.svo_models(r, f) for f in uav.FAULTS}, r.u, r.y, R.UAV_X0)
+        assert (o["detection"], o["isolation"], o["isolated"], o["empty_at"]) == \
+            (ref.detection_step, ref.isolation_step, ref.isolated, dict(ref.empty_at))
