@@ -261,7 +261,7 @@ def catalogue_markdown(confdir: Path) -> tuple[str, list[Path]]:
             out.append(f"**Shown in:** {{ref}}`{occ[4]}` of {{doc}}`/{doc}`.  ")
         else:
             out.append(f"**Shown in:** section \"{occ[3]}\" of {{doc}}`/{doc}`.  ")
-        plot = f" (`--plot FILE.png` draws the figure)" if r.plot else ""
+        plot = " (`--plot FILE.png` draws the figure)" if r.plot else ""
         trials = ("" if r.default_trials is None
                   else f"; {r.default_trials} Monte Carlo trials by default (the paper's)")
         out.append(f"**Command:** `python -m fdi_lib reproduce {rid} --json`{plot}{trials}.\n")

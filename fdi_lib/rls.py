@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from fdi_lib.errors import ModelError, NonFiniteError, ShapeError
+from fdi_lib.errors import NonFiniteError, ShapeError
 from fdi_lib.validation import array, check_finite, cholesky, covariance, real
 
 __all__ = ["RLSGains", "rls_gains", "RLSResult", "rls_track"]

@@ -32,7 +32,7 @@ from fdi_lib.errors import ModelError
 from fdi_lib.montecarlo import binomial_ci, run_monte_carlo_many, trial_rngs, trial_seeds
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.reproduce.registry import ReproductionResult, register
-from fdi_lib.sparse import (RegressionData, flat_range, flat_ranges, grid_flat_range, grid_flat_ranges,
+from fdi_lib.sparse import (RegressionData, flat_range, flat_ranges, grid_flat_ranges,
                             lasso_path, lasso_path_batch, least_squares_on_support, regression_data)
 from fdi_lib.systems import zhang2021_example1 as ex
 from fdi_lib.threads import single_threaded_blas
