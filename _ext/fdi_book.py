@@ -19,6 +19,8 @@
    from the registry of :mod:`fdi_lib.reproduce`, in book order (the order of the chapters in
    ``_toc.yml``, then of the first code cell that runs each reproduction), with a link to the figure
    or section that shows it, its command line and its documentation rendered.
+7. The execution table of the status page (myst-nb's ``nb-exec-table``) says "ok" / "failed"
+   instead of emoji, which show as empty boxes without an emoji font.
 """
 
 from __future__ import annotations
@@ -29,6 +31,8 @@ import re
 import shutil
 from pathlib import Path
 from typing import Any
+
+from docutils import nodes
 
 import pybtex.plugin
 from pybtex.richtext import Text
@@ -313,6 +317,20 @@ def _drop_thebe_scripts(app: Sphinx, env, docnames) -> None:
         app.builder._js_files = [js for js in app.builder._js_files if keep(js)]
 
 
+#: myst-nb's execution table marks a chapter's status with emoji, which a reader without an
+#: emoji font (headless Chromium on Debian, many offline Linux machines) sees as empty boxes.
+_STATUS_WORDS = {"\u2705": "ok", "\u274c": "failed"}
+
+
+def _plain_status_words(app: Sphinx, doctree, docname: str) -> None:
+    """The execution table's status in words (after myst-nb's post-transform has built it)."""
+    for table in doctree.findall(nodes.table):
+        for text in list(table.findall(nodes.Text)):
+            word = _STATUS_WORDS.get(text.astext())
+            if word is not None:
+                text.parent.replace(text, nodes.Text(word))
+
+
 def setup(app: Sphinx) -> dict[str, Any]:
     app.connect("env-before-read-docs", _drop_thebe_scripts, priority=900)
     app.connect("source-read", _generate_catalogue)
@@ -321,6 +339,7 @@ def setup(app: Sphinx) -> dict[str, Any]:
     pybtex.plugin.register_plugin("pybtex.style.labels", "fdi_author_year", AuthorYearLabelStyle)
     pybtex.plugin.register_plugin("pybtex.style.formatting", "fdi_author_year", AuthorYearStyle)
     app.connect("build-finished", copy_mathjax)
+    app.connect("doctree-resolved", _plain_status_words)
     app.connect("doctree-read", _record_proof_titles)
     app.connect("env-purge-doc", _purge_proof_titles)
     from sphinx_proof.domain import ProofIndex
