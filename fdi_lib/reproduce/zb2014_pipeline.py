@@ -314,11 +314,11 @@ def plot_single_run(result: ReproductionResult, fig: Any = None, *, widget: bool
                      if alarm else ("no alarm", "no onset estimate")))
     limits = {}
     if widget:
-        # innovation symmetric about 0; l_k from three decades below the threshold's (room for
+        # innovation symmetric about 0; l_k from four decades below the threshold's (room for
         # the legend under the curve; the warm-up's smaller values do not matter to the test)
         # to at least a decade above the threshold (the innovation's from
         # ``settings["innovation_bound"]`` if given: a bound that does not depend on the noise)
-        low = 10.0 ** (np.floor(np.log10(run.threshold)) - 3)
+        low = 10.0 ** (np.floor(np.log10(run.threshold)) - 4)
         bound = result.settings.get("innovation_bound")
         limits = {0: stepped_range(run.innovations if bound is None else [bound], symmetric=True),
                   1: (low, stepped_range([*stat, 10 * run.threshold], log=True)[1])}

@@ -162,6 +162,7 @@ def explore_glr(fault_size: float = DEFAULTS["fault_size"], onset: int = DEFAULT
                       alarm=int(first_alarm(glr.statistic, float(threshold))))
     delay = run.alarm - run.onset if run.alarm >= run.onset else None
     status = ("no alarm" if run.alarm < 0 else
-              f"false alarm at k = {run.alarm}" if delay is None else f"alarm after {delay} samples")
-    return plot_detection(run, fig=fig, title=f"theta = [{fault_size:g}, 0], onset {onset}, "
-                                              f"w = {window}: {status}", widget=True)
+              f"false alarm at {run.alarm}" if delay is None else f"alarm after {delay} samples")
+    # short enough to fit above the axes in every frame (the title is not re-laid out)
+    return plot_detection(run, fig=fig, title=f"θ₁ = {fault_size:g}, r = {onset}, w = {window}: {status}",
+                          widget=True)
