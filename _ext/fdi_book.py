@@ -17,8 +17,11 @@
    twice on every page, a console error).
 6. The catalogue of reproductions (``book/reproductions.md``) is generated when the book is read:
    from the registry of :mod:`fdi_lib.reproduce`, in book order (the order of the chapters in
-   ``_toc.yml``, then of the first code cell that runs each reproduction), with a link to the figure
-   or section that shows it, its command line and its documentation rendered.
+   ``_toc.yml``, then of the first code cell that calls each reproduction), with a link to the
+   figure that draws it (the figure label of the cell that calls ``get(ID).plot``) or else to the
+   section that runs it, the command line that recomputes it at the book's settings
+   (:func:`fdi_lib.reproduce.book.book_command`, the settings the chapters' ``book_run`` uses) and
+   its documentation rendered.
 7. The execution table of the status page (myst-nb's ``nb-exec-table``) says "ok" / "failed"
    instead of emoji, which show as empty boxes without an emoji font.
 """
@@ -148,7 +151,8 @@ def _titled_proof_index(original):
 
 CATALOGUE_DOC = "book/reproductions"
 _CELL = re.compile(r"^```\{code-cell\}[^\n]*\n(.*?)^```\s*$", re.S | re.M)
-_CALL = re.compile(r"""\b(?:get|reproduce)\(\s*["']([a-z0-9]+-[a-z0-9-]+)["']""")
+_RUN = re.compile(r"""\b(?:book_run|reproduce)\(\s*["']([a-z0-9]+-[a-z0-9-]+)["']""")
+_PLOT = re.compile(r"""\bget\(\s*["']([a-z0-9]+-[a-z0-9-]+)["']\s*\)\s*\.plot\(""")
 _FIG_NAME = re.compile(r"^\s+name:\s*([\w.-]+)\s*$", re.M)
 _HEADING = re.compile(r"^(#{1,6})\s+(.+?)\s*$", re.M)
 _LABEL = re.compile(r"^\(([\w.-]+)\)=\s*$")
@@ -170,9 +174,10 @@ def _toc_files(confdir: Path) -> list[str]:
     return files
 
 
-def _occurrences(doc: str, text: str):
-    """(position, id, figure name or None, heading, heading label or None) for each call of a
-    reproduction in a code cell of a chapter."""
+def _occurrences(text: str):
+    """(position, id, kind, figure name or None, heading, heading label or None) for each call of
+    a reproduction in a code cell of a chapter: kind ``"run"`` for ``book_run``/``reproduce``,
+    ``"plot"`` for ``get(ID).plot(``; the figure name is the ``name:`` of the cell's figure."""
     headings = []
     lines = text.splitlines(keepends=True)
     offsets = [0]
@@ -190,11 +195,35 @@ def _occurrences(doc: str, text: str):
     for cell in _CELL.finditer(text):
         body = cell.group(1)
         name = _FIG_NAME.search(body.split("\n---", 1)[0] if body.startswith("---") else "")
-        for call in _CALL.finditer(body):
-            head = [h for h in headings if h[0] < cell.start()]
-            title, label = (head[-1][1], head[-1][2]) if head else ("", None)
-            yield cell.start() + call.start(), call.group(1), name.group(1) if name else None, \
-                title, label
+        head = [h for h in headings if h[0] < cell.start()]
+        title, label = (head[-1][1], head[-1][2]) if head else ("", None)
+        for kind, pattern in (("run", _RUN), ("plot", _PLOT)):
+            for call in pattern.finditer(body):
+                yield (cell.start() + call.start(), call.group(1), kind, name.group(1) if name else None,
+                       title, label)
+
+
+def shown_in(confdir: Path) -> dict[str, dict]:
+    """Where the book shows each reproduction, from the chapter sources (in book order).
+
+    Returns
+    -------
+    dict
+        id -> ``{"doc", "figure", "section", "label"}``: the chapter (``book/<paper>/<name>``),
+        the figure label (``name:``) of the first cell that *plots* the id (``get(ID).plot(``),
+        ``None`` if no figure of the book draws it; the heading and heading label of the section
+        of its first call. Ids are in the order of their first call in the book.
+    """
+    out: dict[str, dict] = {}
+    for doc in _toc_files(confdir):
+        path = confdir / f"{doc}.md"
+        if doc.count("/") < 2 or not path.is_file():  # chapters only: book/<paper>/<chapter>
+            continue
+        for _pos, rid, kind, name, title, label in sorted(_occurrences(path.read_text())):
+            entry = out.setdefault(rid, {"doc": doc, "figure": None, "section": title, "label": label})
+            if entry["doc"] == doc and kind == "plot" and name and entry["figure"] is None:
+                entry["figure"] = name
+    return out
 
 
 def _paper_item(rid: str, title: str) -> str:
@@ -223,30 +252,19 @@ def _docstring_html(func, id_prefix: str) -> str:
 def catalogue_markdown(confdir: Path) -> tuple[str, list[Path]]:
     """The generated part of the catalogue page (MyST) and the files it was made from."""
     from fdi_lib.reproduce import list_reproductions
+    from fdi_lib.reproduce.book import book_command, book_settings
 
     reps = {r.id: r for r in list_reproductions()}
-    seen: dict[str, tuple] = {}
-    order: list[str] = []
-    sources = []
-    for doc in _toc_files(confdir):
-        path = confdir / f"{doc}.md"
-        if doc.count("/") < 2 or not path.is_file():  # chapters only: book/<paper>/<chapter>
-            continue
-        sources.append(path)
-        found: dict[str, list] = {}
-        for occ in sorted(_occurrences(doc, path.read_text())):
-            found.setdefault(occ[1], []).append(occ)
-        for rid, occs in sorted(found.items(), key=lambda kv: kv[1][0][0]):
-            if rid in reps and rid not in seen:
-                with_fig = [o for o in occs if o[2]]
-                seen[rid] = (doc, (with_fig or occs)[0])
-                order.append(rid)
-    order += [rid for rid in reps if rid not in seen]
+    where = {rid: w for rid, w in shown_in(confdir).items() if rid in reps}
+    order = list(where) + [rid for rid in reps if rid not in where]
+    sources = [confdir / f"{doc}.md" for doc in _toc_files(confdir)
+               if doc.count("/") >= 2 and (confdir / f"{doc}.md").is_file()]
     out = []
     current = None
     for rid in order:
         r = reps[rid]
-        doc, occ = seen.get(rid, (None, None))
+        w = where.get(rid)
+        doc = w["doc"] if w else None
         if doc != current:
             current = doc
             if doc:
@@ -256,24 +274,30 @@ def catalogue_markdown(confdir: Path) -> tuple[str, list[Path]]:
                 out.append("## Not shown in a chapter\n")
         out.append(f"### {r.title}\n")
         out.append(f"**Paper:** {r.paper}, {_paper_item(rid, r.title)}.  ")
-        if occ is None:
+        if w is None:
             out.append("**Shown in:** no chapter yet.  ")
-        elif occ[2]:
-            out.append(f"**Shown in:** {{numref}}`{occ[2]}`, section \"{occ[3]}\" of "
+        elif w["figure"]:
+            out.append(f"**Shown in:** {{numref}}`{w['figure']}`, section \"{w['section']}\" of "
                        f"{{doc}}`/{doc}`.  ")
-        elif occ[4]:
-            out.append(f"**Shown in:** {{ref}}`{occ[4]}` of {{doc}}`/{doc}`.  ")
+        elif w["label"]:
+            out.append(f"**Shown in:** {{ref}}`{w['label']}` of {{doc}}`/{doc}`.  ")
         else:
-            out.append(f"**Shown in:** section \"{occ[3]}\" of {{doc}}`/{doc}`.  ")
+            out.append(f"**Shown in:** section \"{w['section']}\" of {{doc}}`/{doc}`.  ")
         plot = " (`--plot FILE.png` draws the figure)" if r.plot else ""
-        trials = ("" if r.default_trials is None
-                  else f"; {r.default_trials} Monte Carlo trials by default (the paper's)")
-        out.append(f"**Command:** `python -m fdi_lib reproduce {rid} --json`{plot}{trials}.\n")
+        s = book_settings(rid)
+        trials = ("" if s.trials is None else
+                  f"; {s.trials} Monte Carlo trial{'s' * (s.trials != 1)}, "
+                  + ("the paper's count" if s.trials == r.default_trials
+                     else f"the paper's {r.default_trials} with `--trials {r.default_trials}`"
+                     if r.default_trials else "the book's count"))
+        out.append(f"**Command (the book's settings):** `{book_command(rid)}`{plot}{trials}.\n")
         out.append(f":::{{dropdown}} What `{rid}` computes and its headline keys\n"
                    f"```{{raw}} html\n<div class=\"fdi-docstring\">\n{_docstring_html(r.func, rid + '-')}"
                    f"</div>\n```\n:::\n")
     modules = {Path(inspect.getsourcefile(r.func)) for r in reps.values()}
-    return "\n".join(out), sources + sorted(modules)
+    import fdi_lib.reproduce.book as book
+
+    return "\n".join(out), sources + sorted(modules | {Path(inspect.getsourcefile(book))})
 
 
 def _generate_catalogue(app: Sphinx, docname: str, source: list[str]) -> None:

@@ -82,9 +82,9 @@ def main(argv: list[str] | None = None) -> int:
             return 0
         # Every argument is checked before anything is computed.
         rep.check_arguments(seed=args.seed, trials=args.trials, jobs=args.jobs)
-        if args.trials is not None and args.trials < 2:
-            raise ModelError(f"--trials: expected at least 2 (the JSON's 95 % intervals need two trials), "
-                             f"got {args.trials}")
+        if args.trials is not None and args.trials < rep.min_trials:
+            raise ModelError(f"--trials: expected at least {rep.min_trials} (the JSON's 95 % intervals need "
+                             f"two trials), got {args.trials}")
         if args.plot:
             if rep.plot is None:
                 raise ModelError(f"--plot: {args.id} has no figure")

@@ -35,7 +35,7 @@ from fdi_lib.errors import ModelError, UnknownReproductionError
 from fdi_lib.validation import seed as check_seed
 
 __all__ = ["Reproduction", "ReproductionResult", "register", "get", "list_reproductions", "reproduce",
-           "code_version", "cache_dir", "cached_results", "CACHE_ENV"]
+           "code_version", "cache_dir", "cached_run", "cached_results", "CACHE_ENV"]
 
 #: Environment variable naming the results cache directory (see the module docstring).
 CACHE_ENV = "FDI_RESULTS_CACHE"
@@ -86,12 +86,20 @@ class Reproduction:
     plot: Callable[..., Any] | None
     default_trials: int | None
     default_seed: int
+    min_trials: int = 2
 
     @property
     def monte_carlo(self) -> bool:
         """Whether the reproduction uses ``trials`` (a paper count, or a function that reads it)."""
-        return self.default_trials is not None or any(
-            ins.opname.startswith("LOAD") and ins.argval == "trials" for ins in dis.get_instructions(self.func))
+        return self.default_trials is not None or self._reads("trials")
+
+    @property
+    def seeded(self) -> bool:
+        """Whether the reproduction reads its ``seed`` (a deterministic one ignores it)."""
+        return self._reads("seed")
+
+    def _reads(self, name: str) -> bool:
+        return any(ins.opname.startswith("LOAD") and ins.argval == name for ins in dis.get_instructions(self.func))
 
     def check_arguments(self, *, seed: int | None = None, trials: int | None = None, jobs: int = 1) -> None:
         """Validate ``seed`` (integer >= 0), ``trials`` (positive integer, only for a Monte Carlo
@@ -116,8 +124,7 @@ class Reproduction:
         path = _cache_path(self.id, int(seed), trials, kwargs)
         if path is not None and path.exists():
             path.touch()  # the newest entry of an id is the one last used (see cached_results)
-            with path.open("rb") as fh:
-                return pickle.load(fh)
+            return _load(path)
         result = self.func(seed=int(seed), trials=trials, jobs=int(jobs), **kwargs)
         if not isinstance(result, ReproductionResult) or result.id != self.id:
             raise TypeError(f"reproduction {self.id!r} returned {type(result).__name__} "
@@ -166,6 +173,26 @@ def _cache_path(id: str, seed: int, trials: int | None, kwargs: dict[str, Any]) 
     return root / id / f"{code_version()[:16]}-{digest}.pkl"
 
 
+def cached_run(id: str, *, seed: int | None = None, trials: int | None = None,
+               **kwargs: Any) -> ReproductionResult | None:
+    """The cached result of ``reproduce(id, seed=seed, trials=trials, **kwargs)`` for the current
+    code, or ``None`` if no run with exactly these settings was cached (or caching is off).
+
+    Defaults resolve as in :meth:`Reproduction.__call__`: in a book build, this says whether a
+    chapter ran ``id`` at these settings, and what it got.
+    """
+    rep = get(id)
+    seed = rep.default_seed if seed is None else seed
+    trials = rep.default_trials if trials is None else trials
+    path = _cache_path(id, int(seed), None if trials is None else int(trials), kwargs)
+    return _load(path) if path is not None and path.exists() else None
+
+
+def _load(path: Path) -> ReproductionResult:
+    with path.open("rb") as fh:
+        return pickle.load(fh)
+
+
 def cached_results() -> dict[str, ReproductionResult]:
     """For each id, the cached result of the current code that was used last, if any.
 
@@ -180,8 +207,7 @@ def cached_results() -> dict[str, ReproductionResult]:
     for sub in sorted(p for p in root.iterdir() if p.is_dir()):
         entries = sorted(sub.glob(f"{prefix}-*.pkl"), key=lambda p: p.stat().st_mtime)
         if entries:
-            with entries[-1].open("rb") as fh:
-                out[sub.name] = pickle.load(fh)
+            out[sub.name] = _load(entries[-1])
     return out
 
 
@@ -189,19 +215,22 @@ _REGISTRY: dict[str, Reproduction] = {}
 
 
 def register(id: str, *, paper: str, title: str, default_trials: int | None = None,
-             default_seed: int = 0, plot: Callable[..., Any] | None = None
+             default_seed: int = 0, plot: Callable[..., Any] | None = None, min_trials: int = 2
              ) -> Callable[[Callable[..., ReproductionResult]], Callable[..., ReproductionResult]]:
     """Decorator registering a reproduction function under ``id``.
 
     ``default_trials`` is the paper's own number of Monte Carlo trials (``None``
     for deterministic or single-run figures); ``plot(result, fig=None)`` draws it.
+    ``min_trials`` is the fewest trials the command line accepts: 2 where the JSON has 95 %
+    intervals (they need two trials), 1 for a reproduction whose JSON has none.
     """
 
     def decorator(func: Callable[..., ReproductionResult]) -> Callable[..., ReproductionResult]:
         if id in _REGISTRY:
             raise ModelError(f"reproduction id {id!r} registered twice")
         _REGISTRY[id] = Reproduction(id=id, paper=paper, title=title, func=func, plot=plot,
-                                     default_trials=default_trials, default_seed=default_seed)
+                                     default_trials=default_trials, default_seed=default_seed,
+                                     min_trials=min_trials)
         return func
 
     return decorator

@@ -448,7 +448,7 @@ def plot_fig12(result: ReproductionResult, fig: Any = None):
 
 
 @register("rosa2013-fig11", paper=PAPER, title="Mean fault detection times (Fig. 11)", default_trials=10,
-          plot=plot_fig11)
+          plot=plot_fig11, min_trials=1)
 def fig11(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Fig. 11: mean detection time per fault and scenario over ``trials`` runs (paper: 10).
 
@@ -474,21 +474,21 @@ def fig11(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
 
 
 @register("rosa2013-fig12", paper=PAPER, title="Mean fault isolation times (Fig. 12)", default_trials=10,
-          plot=plot_fig12)
+          plot=plot_fig12, min_trials=1)
 def fig12(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Fig. 12: mean isolation time per fault and scenario (same runs and keys as :func:`fig11`)."""
     return _study_result("rosa2013-fig12", seed, trials or 10, jobs)
 
 
 @register("rosa2013-fig11-rad", paper=PAPER, title="Mean fault detection times, elevator read per radian (Fig. 11)",
-          default_trials=10, plot=plot_fig11)
+          default_trials=10, plot=plot_fig11, min_trials=1)
 def fig11_rad(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Fig. 11 with the elevator coefficients of (16) read per radian (keys as :func:`fig11`)."""
     return _study_result("rosa2013-fig11-rad", seed, trials or 10, jobs, eta_unit="rad")
 
 
 @register("rosa2013-fig12-rad", paper=PAPER, title="Mean fault isolation times, elevator read per radian (Fig. 12)",
-          default_trials=10, plot=plot_fig12)
+          default_trials=10, plot=plot_fig12, min_trials=1)
 def fig12_rad(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Fig. 12 with the elevator coefficients of (16) read per radian (keys as :func:`fig11`)."""
     return _study_result("rosa2013-fig12-rad", seed, trials or 10, jobs, eta_unit="rad")

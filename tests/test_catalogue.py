@@ -1,0 +1,190 @@
+"""The catalogue of reproductions: its commands recompute what the chapters show, its "shown in"
+links point at the figure that draws each reproduction.
+
+The full comparison of every command at the papers' trial counts with the results of a book
+build is the post-build check ``tools/check_catalogue.py``; here the commands are parsed and
+checked against the book's settings, the CLI is driven through each of them, and one seeded
+command is run for real.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.util
+import io
+import json
+import re
+import sys
+from pathlib import Path
+
+import pytest
+
+from fdi_lib.reproduce import cli
+from fdi_lib.reproduce.book import BOOK_RUNS, CHAPTER_SEEDS, book_argv, book_run, book_settings
+from fdi_lib.reproduce.registry import CACHE_ENV, Reproduction, ReproductionResult, get, list_reproductions
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _load(name: str, path: Path):
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+EXT = _load("fdi_book_ext", ROOT / "_ext" / "fdi_book.py")
+sys.path.insert(0, str(ROOT / "tools"))
+CHECK = _load("check_catalogue", ROOT / "tools" / "check_catalogue.py")
+
+_COMMAND = re.compile(r"`python -m fdi_lib (reproduce [^`]+)`")
+
+
+@pytest.fixture(scope="module")
+def commands() -> dict[str, list[str]]:
+    """The catalogue page's commands (generated as in a build), by id."""
+    text, _ = EXT.catalogue_markdown(ROOT)
+    argvs = [m.group(1).split() for m in _COMMAND.finditer(text)]
+    ids = [a[1] for a in argvs]
+    assert len(ids) == len(set(ids)), "one command per reproduction"
+    return dict(zip(ids, argvs))
+
+
+def _chapters() -> dict[str, str]:
+    return {doc: (ROOT / f"{doc}.md").read_text() for doc in EXT._toc_files(ROOT)
+            if doc.count("/") >= 2 and (ROOT / f"{doc}.md").is_file()}
+
+
+def test_every_reproduction_has_a_command_with_the_book_settings(commands):
+    assert set(commands) == {r.id for r in list_reproductions()}
+    for rid, argv in commands.items():
+        args = cli._parser().parse_args(argv)
+        s, rep = book_settings(rid), get(rid)
+        assert args.json and args.id == rid
+        assert args.seed == (s.seed if rep.seeded else None), rid
+        assert args.trials == s.trials, rid
+    # the 13 reproductions that the book runs at a seed other than the registry's default
+    assert sum(book_settings(r.id).seed != r.default_seed for r in list_reproductions()) == 13
+    assert commands["zb2014-fig3"] == ["reproduce", "zb2014-fig3", "--seed", "2015", "--json"]
+    assert commands["rosa2013-fig11-rad"][-3:] == ["--trials", "1", "--json"]
+
+
+def test_book_runs_name_registered_reproductions_with_valid_settings():
+    for rid in BOOK_RUNS:
+        s = book_settings(rid)
+        get(rid).check_arguments(seed=s.seed, trials=s.trials)
+    assert set(CHAPTER_SEEDS) <= {doc.removeprefix("book/") for doc in _chapters()}
+
+
+def test_chapters_run_every_reproduction_through_the_book_settings():
+    """No chapter calls ``reproduce`` or passes its own seed or trial count to a reproduction."""
+    called = set()
+    for doc, text in _chapters().items():
+        for cell in EXT._CELL.finditer(text):
+            body = cell.group(1)
+            assert not re.search(r"\breproduce\(", body), f"{doc}: call book_run(ID), not reproduce"
+            for m in re.finditer(r"\bbook_run\(([^)]*)\)", body):
+                args = [a.strip() for a in m.group(1).split(",")]
+                assert re.fullmatch(r"""["'][a-z0-9-]+["']""", args[0]), (doc, m.group(0))
+                assert all(a.startswith("jobs=") for a in args[1:]), (doc, m.group(0))
+                called.add(args[0].strip("\"'"))
+    assert called == {r.id for r in list_reproductions()}   # the book shows every reproduction
+
+
+def test_the_cli_runs_each_command_at_the_settings_of_book_run(commands, monkeypatch):
+    """Each printed command passes the CLI's argument checks and calls the reproduction with the
+    seed and trial count that the chapters' ``book_run`` passes (calls recorded, not computed)."""
+    calls = []
+
+    def record(self, *, seed=None, trials=None, jobs=1, **kwargs):
+        calls.append((self.id, seed, trials, kwargs))
+        return ReproductionResult(self.id, headline={})
+
+    monkeypatch.setattr(Reproduction, "__call__", record)
+    for rid, argv in commands.items():
+        with contextlib.redirect_stdout(io.StringIO()):
+            assert cli.main(argv) == 0, argv
+        book_run(rid)
+        cli_call, book_call = calls[-2:]
+        rep = get(rid)
+        resolved = [(i, rep.default_seed if s is None else s, rep.default_trials if t is None else t, k)
+                    for i, s, t, k in (cli_call, book_call)]
+        assert resolved[0] == resolved[1], rid
+
+
+def test_a_printed_command_recomputes_the_chapter_result(commands, monkeypatch):
+    """zb2014-fig3 for real: the command's JSON is the result the chapter shows (206 / 1886), and
+    the command without the book's seed would not be (208 / 1729)."""
+    monkeypatch.delenv(CACHE_ENV, raising=False)
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        assert cli.main(commands["zb2014-fig3"]) == 0
+    got = json.loads(out.getvalue())
+    book = json.loads(book_run("zb2014-fig3").to_json())
+    assert got == book
+    default = get("zb2014-fig3")().headline
+    assert (got["headline"]["glr_argmax_time"], round(got["headline"]["glr_max_after_fault"])) == (206, 1886)
+    assert (default["glr_argmax_time"], round(default["glr_max_after_fault"])) == (208, 1729)
+
+
+def test_shown_in_links_the_figure_that_draws_each_reproduction():
+    chapters = _chapters()
+    where = EXT.shown_in(ROOT)
+    figures = {}
+    for rid, w in where.items():
+        if w["figure"] is None:
+            continue
+        figures.setdefault(w["figure"], []).append(rid)
+        cell = next(c.group(1) for c in EXT._CELL.finditer(chapters[w["doc"]])
+                    if re.search(rf"^\s+name:\s*{re.escape(w['figure'])}\s*$", c.group(1), re.M))
+        assert re.search(rf"""\bget\(["']{re.escape(rid)}["']\)\.plot\(""", cell), (rid, w["figure"])
+    assert all(len(ids) == 1 for ids in figures.values()), figures   # no figure claimed twice
+    # the two links that pointed at the figure of the neighbouring reproduction
+    assert where["zb2014-fig6"]["figure"] == "fig-pipeline-fig6"
+    assert where["zb2014-fig8"]["figure"] == "fig-pipeline-fig8"
+    # every id plotted in a captioned figure is linked to a figure
+    for doc, text in chapters.items():
+        for cell in EXT._CELL.finditer(text):
+            if re.search(r"^\s+name:\s*fig-", cell.group(1), re.M):
+                for m in EXT._PLOT.finditer(cell.group(1)):
+                    assert where[m.group(1)]["figure"] is not None, m.group(1)
+
+
+def test_post_build_check_reads_the_commands_of_the_rendered_page():
+    # the markup Sphinx writes for an inline literal (one span per word)
+    page = ('<p><strong>Command:</strong> <code class="docutils literal notranslate"><span class="pre">python</span> '
+            '<span class="pre">-m</span> <span class="pre">fdi_lib</span> <span class="pre">reproduce</span> '
+            '<span class="pre">zb2014-fig3</span>&#160;<span class="pre">--seed</span> <span class="pre">2015</span> '
+            '<span class="pre">--json</span></code> and <code>--plot FILE.png</code></p>')
+    assert CHECK.page_commands(page) == [["reproduce", "zb2014-fig3", "--seed", "2015", "--json"]]
+
+
+def test_post_build_check_compares_the_command_with_the_cached_chapter_result(tmp_path, monkeypatch):
+    """A cache holding the chapter's run: the book's command passes, a command at another seed is
+    'not run' (the chapters never ran it), and a cached result that the command does not
+    recompute 'differs'."""
+    monkeypatch.setenv(CACHE_ENV, str(tmp_path))
+    book_run("zb2014-fig1")   # deterministic and fast: the chapter's run, cached
+    argv = book_argv("zb2014-fig1")
+    runs = []
+    real_run = CHECK.subprocess.run
+
+    def run_once(*args, **kwargs):   # one real subprocess; the second check reuses its output
+        if not runs:
+            runs.append(real_run(*args, **kwargs))
+        return runs[0]
+
+    monkeypatch.setattr(CHECK.subprocess, "run", run_once)
+    assert CHECK.check_command(argv, tmp_path)[1:] == ("ok", "")
+    assert CHECK.check_command(["reproduce", "zb2014-fig3", "--seed", "1", "--json"], tmp_path)[1] == "not run"
+    # tamper with the cached chapter result: the fresh command no longer matches it
+    from fdi_lib.reproduce.registry import _cache_path, cached_run
+    import dataclasses
+    import pickle
+
+    cached = cached_run("zb2014-fig1")
+    key = next(iter(cached.headline))
+    tampered = dataclasses.replace(cached, headline={**cached.headline, key: "tampered"})
+    _cache_path("zb2014-fig1", get("zb2014-fig1").default_seed, None, {}).write_bytes(pickle.dumps(tampered))
+    rid, status, detail = CHECK.check_command(argv, tmp_path)
+    assert status == "differs" and key in detail
