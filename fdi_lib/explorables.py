@@ -66,7 +66,10 @@ def figure_data(fig: Figure) -> list[Any]:
         for c in ax.collections:
             paths = [p.vertices for p in c.get_paths()]
             colls.append(np.concatenate(paths) if paths else np.asarray(c.get_offsets(), dtype=float))
-        patches = [np.asarray(p.get_path().vertices, dtype=float) for p in ax.patches]
+        # in the patch's own coordinates (a Rectangle's path is the unit square; its position and
+        # size are in its patch transform)
+        patches = [np.asarray(p.get_patch_transform().transform(p.get_path().vertices), dtype=float)
+                   for p in ax.patches]
         out.append([ax.get_title(), ax.get_xlabel(), ax.get_ylabel(), np.asarray(ax.get_xlim()),
                     np.asarray(ax.get_ylim()), lines, colls, patches])
     return out

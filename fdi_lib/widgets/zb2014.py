@@ -24,7 +24,8 @@ from fdi_lib.signatures import fault_signature, willsky_jones
 from fdi_lib.widgets import batched_glr, keep_artists, reusable_artists, set_limits, stepped_limit
 from fdi_lib.systems import zb2014_unstable as ex
 
-__all__ = ["explore_glr", "explore_signature", "DEFAULTS", "GLR_GRID", "SIGNATURE_GRID"]
+__all__ = ["explore_glr", "explore_signature", "glr_run", "glr_grid_alarms", "DEFAULTS", "GLR_GRID",
+           "SIGNATURE_GRID"]
 
 #: Onsets of the signature explorable (paper Figs. 1-2 show r = 1, 101, 201, 301).
 SIGNATURE_GRID = {"onset": (1, 51, 101, 151, 201, 251, 301, 351, 401, 451)}
@@ -141,6 +142,19 @@ def explore_glr(fault_size: float = DEFAULTS["fault_size"], onset: int = DEFAULT
     -------
     matplotlib.figure.Figure
     """
+    run = glr_run(fault_size, onset, window, threshold, seed)
+    delay = run.alarm - run.onset if run.alarm >= run.onset else None
+    status = ("no alarm" if run.alarm < 0 else
+              f"false alarm at {run.alarm}" if delay is None else f"alarm after {delay} samples")
+    # short enough to fit above the axes in every frame (the title is not re-laid out)
+    return plot_detection(run, fig=fig, title=f"θ₁ = {fault_size:g}, r = {onset}, w = {window}: {status}",
+                          widget=True)
+
+
+def glr_run(fault_size: float = DEFAULTS["fault_size"], onset: int = DEFAULTS["onset"],
+            window: int = DEFAULTS["window"], threshold: float = DEFAULTS["threshold"],
+            seed: int = DEFAULTS["seed"]) -> UnstableRun:
+    """The run that :func:`explore_glr` draws (same arguments): innovation, windowed GLR, alarm."""
     if not 10 <= onset <= 490:
         raise ModelError(f"onset: expected an integer in [10, 490], got {onset!r}")
     if not 5 <= window <= 200:
@@ -157,12 +171,27 @@ def explore_glr(fault_size: float = DEFAULTS["fault_size"], onset: int = DEFAULT
 
     glr = batched_glr(_GLR_CACHE, (int(onset), int(seed), int(window)), float(fault_size), GLR_GRID["fault_size"],
                       innovations, lambda eps: glr_window(eps, model, gains, fam, window=int(window)))
-    run = UnstableRun(innovations=innovations(float(fault_size))[:, 0], glr=glr, theta=(float(fault_size), 0.0),
-                      onset=int(onset), window=int(window), threshold=float(threshold), seed=int(seed),
-                      alarm=int(first_alarm(glr.statistic, float(threshold))))
-    delay = run.alarm - run.onset if run.alarm >= run.onset else None
-    status = ("no alarm" if run.alarm < 0 else
-              f"false alarm at {run.alarm}" if delay is None else f"alarm after {delay} samples")
-    # short enough to fit above the axes in every frame (the title is not re-laid out)
-    return plot_detection(run, fig=fig, title=f"θ₁ = {fault_size:g}, r = {onset}, w = {window}: {status}",
-                          widget=True)
+    return UnstableRun(innovations=innovations(float(fault_size))[:, 0], glr=glr, theta=(float(fault_size), 0.0),
+                       onset=int(onset), window=int(window), threshold=float(threshold), seed=int(seed),
+                       alarm=int(first_alarm(glr.statistic, float(threshold))))
+
+
+def glr_grid_alarms(grid: dict = GLR_GRID) -> dict[str, Any]:
+    """What the window and the fault size do to the alarm over the explorable's grid.
+
+    Returns
+    -------
+    dict
+        ``delay``: (fault size, window) -> samples from the onset to the alarm (negative: a
+        false alarm), ``None`` without alarm; ``above``: (fault size, window) -> number of samples with ``l_k`` above the
+        threshold; ``peak``: (fault size, window) -> largest ``l_k``; ``threshold``.
+    """
+    out: dict[str, Any] = {"delay": {}, "above": {}, "peak": {}, "threshold": DEFAULTS["threshold"]}
+    for size in grid["fault_size"]:
+        for window in grid["window"]:
+            run = glr_run(size, window=window)
+            key = (size, window)
+            out["delay"][key] = run.alarm - run.onset if run.alarm >= 0 else None
+            out["above"][key] = int(np.sum(run.glr.statistic > run.threshold))
+            out["peak"][key] = float(np.nanmax(run.glr.statistic))
+    return out

@@ -21,7 +21,7 @@ from fdi_lib.sparse import flat_range, lasso_path, least_squares_on_support
 from fdi_lib.systems import zhang2021_example1 as ex
 from fdi_lib.widgets import keep_artists, reusable_artists, set_limits, stepped_range
 
-__all__ = ["explore_sparse", "GRID"]
+__all__ = ["explore_sparse", "sparse_grid_facts", "GRID"]
 
 #: Slider values of the explorable: the Lasso path and support against lambda for several q.
 GRID = {"q": (1, 3, 5, 10, 15, 25), "lam_scale": (0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0)}
@@ -115,3 +115,27 @@ def explore_sparse(q: int = 5, r: float = 0.5, lam_scale: float = 1.0, seed: int
     art["axes"] = (axes[0, 0], ax)
     keep_artists(fig, "explore_sparse", art)
     return fig
+
+
+def sparse_grid_facts(grid: dict = GRID, *, r: float = 0.5, seed: int = 0) -> dict[str, Any]:
+    """What the sliders of the explorable do, frame by frame (the values :func:`explore_sparse` draws).
+
+    Returns
+    -------
+    dict
+        ``false_alarms``, ``missed``: (q, lam_scale) -> components wrongly in / wrongly out of the
+        Lasso support; ``position``: (q, lam_scale) -> ``"below"``, ``"in"`` or ``"above"`` the
+        flat range; ``flat_ratio``: q -> high / low end of the flat range (its length in decades
+        is the log10 of it).
+    """
+    out: dict[str, Any] = {"false_alarms": {}, "missed": {}, "position": {}, "flat_ratio": {}}
+    for q in grid["q"]:
+        _, _, path, fr, truth = _trial_path(int(q), float(r), int(seed))
+        out["flat_ratio"][q] = float(fr.high / fr.low)
+        for scale in grid["lam_scale"]:
+            lam = scale * fr.middle
+            support = np.flatnonzero(path.coef(lam))
+            out["false_alarms"][(q, scale)] = int(np.setdiff1d(support, truth).size)
+            out["missed"][(q, scale)] = int(np.setdiff1d(truth, support).size)
+            out["position"][(q, scale)] = "below" if lam < fr.low else "above" if lam > fr.high else "in"
+    return out

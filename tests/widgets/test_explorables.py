@@ -103,7 +103,7 @@ CHAPTERS = {
 @pytest.mark.parametrize("name", list(CHAPTERS))
 def test_chapter_frames_equal_the_callback_at_the_same_slider_values(name):
     callback, grid, fixed = CHAPTERS[name]
-    assert all(len(v) >= 6 for v in grid.values())
+    assert all(len(v) >= 4 for v in grid.values())   # the SVO's horizon: 1-4 (N = 5, 6 add nothing)
     corners = {k: (v[0], v[-1]) for k, v in grid.items()}
     ex = explorable(callback, corners, caption=name, **fixed)
     for i, values in enumerate(np.array(np.meshgrid(*corners.values(), indexing="ij"), dtype=object)
