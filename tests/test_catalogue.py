@@ -152,7 +152,8 @@ def test_shown_in_links_the_figure_that_draws_each_reproduction():
 
 def test_post_build_check_reads_the_commands_of_the_rendered_page():
     # the markup Sphinx writes for an inline literal (one span per word)
-    page = ('<p><strong>Command:</strong> <code class="docutils literal notranslate"><span class="pre">python</span> '
+    page = ('<p>Introduction: <code>python -m fdi_lib reproduce ID --describe</code></p>'
+            '<p><strong>Command (the book’s settings):</strong> <code class="docutils literal notranslate"><span class="pre">python</span> '
             '<span class="pre">-m</span> <span class="pre">fdi_lib</span> <span class="pre">reproduce</span> '
             '<span class="pre">zb2014-fig3</span>&#160;<span class="pre">--seed</span> <span class="pre">2015</span> '
             '<span class="pre">--json</span></code> and <code>--plot FILE.png</code></p>')

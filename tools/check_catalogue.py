@@ -37,11 +37,14 @@ sys.path.insert(0, str(ROOT))
 from fdi_lib.reproduce.cli import _parser  # noqa: E402
 from fdi_lib.reproduce.registry import CACHE_ENV, cached_run, list_reproductions  # noqa: E402
 
-_CODE = re.compile(r"<code[^>]*>(.*?)</code>", re.S)
+# the command of each entry: the literal after the bold "Command" label (the page's introduction
+# shows other, generic, commands)
+_CODE = re.compile(r"<strong>Command[^<]*</strong>\s*<code[^>]*>(.*?)</code>", re.S)
 
 
 def page_commands(page: str) -> list[list[str]]:
-    """The ``python -m fdi_lib reproduce ...`` commands of a catalogue page (HTML), as argv lists."""
+    """The ``python -m fdi_lib reproduce ...`` command of each entry of a catalogue page (HTML),
+    as argv lists."""
     out = []
     for m in _CODE.finditer(page):
         text = html.unescape(re.sub(r"<[^>]+>", "", m.group(1))).replace("\xa0", " ")
@@ -57,8 +60,9 @@ def check_command(argv: list[str], cache: Path) -> tuple[str, str, str]:
     os.environ[CACHE_ENV] = str(cache)
     book = cached_run(args.id, seed=args.seed, trials=args.trials)
     if book is None:
-        return args.id, "not run", (f"no result of the build at seed {args.seed}, trials {args.trials}: "
-                                    "the chapters ran other settings")
+        seed = "the default seed" if args.seed is None else f"seed {args.seed}"
+        trials = "" if args.trials is None else f", {args.trials} trials"
+        return args.id, "not run", f"no result of the build at {seed}{trials}: the chapters ran other settings"
     env = {k: v for k, v in os.environ.items() if k != CACHE_ENV}
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), env.get("PYTHONPATH")]))
     proc = subprocess.run([sys.executable, "-m", "fdi_lib", *argv], capture_output=True, text=True,
