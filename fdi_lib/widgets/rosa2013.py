@@ -119,7 +119,7 @@ def explore_svo(delta_bound: float = 0.4, horizon: int = 1, noise: float = 0.5, 
                "exact": ax2.plot(k, exact.lower[:, 1], "--", k, exact.upper[:, 1], "--", color=PAPER_COLOR,
                                  lw=1.0),
                "true": ax2.plot(k, x[:, 1], "k.-", lw=0.8, label="true $x_2$")[0]}
-        art["exact"][0].set_label("exact SVO, any N")
+        art["exact"][0].set_label("exact SVO, N = 1 to 6")
         ax2.set_xlabel("k")
         ax2.set_ylabel("bounds on $x_2$")
         ax2.legend(loc="upper right")
