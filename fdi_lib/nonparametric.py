@@ -105,7 +105,7 @@ def kitanidis_predictor_gains(model: LTVModel, E: Any, kgains: KitanidisGains | 
         raise ShapeError(f"kgains: expected K of shape {(model.n_steps, model.n, model.p)}, got {g.K.shape}")
     IKH = np.eye(model.n) - g.K @ model.H
     return KalmanGains(K=g.K, P=g.P, P_filt=g.P_filt, Sigma=g.Sigma, Sigma_chol=g.Sigma_chol,
-                       A=model.F @ IKH, FK=model.F @ g.K)
+                       A=model.F @ IKH, FK=model.F @ g.K, missing=g.missing)
 
 
 def _check_gains(model: LTVModel, gains: KalmanGains) -> None:
