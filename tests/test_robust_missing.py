@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import scipy.stats
 
-from fdi_lib.errors import FDIError, NonFiniteError
+from fdi_lib.errors import CovarianceError, FDIError, ModelError, NonFiniteError
 from fdi_lib.filters import kalman_filter, kalman_gains
 from fdi_lib.glr import first_alarm, glr_known_profile, glr_window
 from fdi_lib.isolation import information
@@ -490,3 +490,63 @@ def test_theta_hat_with_five_percent_missing_samples_is_unbiased():
         theta[b] = glr_known_profile(kf.innovations, kf.gains, sig).theta_hat[-1, 0]
     se = theta.std(ddof=1) / np.sqrt(runs)
     assert abs(theta.mean() - THETA) < 2 * se, (theta.mean(), se)
+
+
+# --- Issue 21, section 4: typed errors at the edges ----------------------------------------------
+@pytest.mark.parametrize("case, error, message", [
+    ("nan", NonFiniteError, r"C: expected finite values, got nan at index \(1, 0, 1\)"),
+    ("asymmetric", CovarianceError, r"C: expected symmetric matrices, got asymmetry 0\.5 .* at index \(1,\)"),
+    ("indefinite", CovarianceError, r"C: expected positive semi-definite matrices, got smallest eigenvalue -1 "
+                                    r".* at index \(1,\)"),
+    ("d_nan", NonFiniteError, r"d: expected finite values, got nan at index \(0, 1\)"),
+])
+def test_quadratic_form_rejects_a_bad_information_matrix(case, error, message):
+    """Before: a NaN C gave a NaN statistic, a non-symmetric or indefinite C a number, silently."""
+    from fdi_lib.glr import quadratic_form
+
+    C = np.stack([np.eye(2), np.diag([2.0, 1.0])])
+    d = np.ones((2, 2))
+    if case == "nan":
+        C[1, 0, 1] = np.nan
+    elif case == "asymmetric":
+        C[1, 0, 1] = 0.5
+    elif case == "indefinite":
+        C[1] = np.diag([2.0, -1.0])
+    else:
+        d[0, 1] = np.nan
+    with pytest.raises(error, match=message):
+        quadratic_form(C, d)
+
+
+def test_quadratic_form_accepts_round_off_and_singular_matrices():
+    from fdi_lib.glr import quadratic_form
+
+    v = np.array([1.0, 1e-3])
+    C = np.outer(v, v)                                   # rank one: a round-off eigenvalue ~ -1e-22
+    stat, theta = quadratic_form(C, 2.0 * v)
+    assert stat == pytest.approx(4.0, rel=1e-12)
+    np.testing.assert_allclose(C @ theta, 2.0 * v, rtol=1e-12)
+
+
+def test_first_alarm_on_an_all_nan_statistic_is_an_error():
+    """Before: -1 ("no alarm") for a record whose statistic is NaN throughout."""
+    stat = np.array([[np.nan, 0.5, 9.0], [np.nan, np.nan, np.nan]])
+    with pytest.raises(NonFiniteError, match=r"statistic: .*only NaN in record \(1,\)"):
+        first_alarm(stat, 1.0)
+    with pytest.raises(NonFiniteError, match="only NaN"):
+        first_alarm(np.full(4, np.nan), 1.0)
+    # the documented warm-up of a windowed statistic still works, row by row
+    assert list(first_alarm(stat[:1], 1.0)) == [2]
+    m, g, _, sim = _setup()
+    eps = kalman_filter(m, sim.y, gains=g).innovations
+    w = glr_window(eps, m, g, step_family(m, Psi=[[1.0]]), window=30, min_samples=5)
+    assert np.isnan(w.statistic[:5]).all() and first_alarm(w.statistic, THRESHOLD) > ONSET
+
+
+def test_information_with_start_after_stop_is_an_error_naming_both():
+    m, g, sig, sim = _setup()
+    eps = kalman_filter(m, sim.y, gains=g).innovations
+    for start, stop in ((120, 110), (120, 120)):
+        with pytest.raises(ModelError, match=rf"stop: expected an integer in \(start, N\] = \({start}, {N}\] "
+                                             rf"\(start = {start}.*got {stop}"):
+            information(eps, sig, g, start, stop)
