@@ -8,16 +8,32 @@ Policy
   innovations, residuals) may contain NaN: a sample (time step) with a NaN in any of
   its components is **missing as a whole**, and is handled explicitly:
 
-  - :func:`fdi_lib.filters.kalman_filter` and :func:`fdi_lib.kitanidis.kitanidis_filter`
-    predict without updating (``Xhat_{k|k} = Xhat_k``); the innovation of a missing
-    sample is NaN, which marks it for the tests downstream. The gains are those of the
-    complete record (they do not depend on the data), so for a few samples after a gap
-    the true innovation covariance is somewhat larger than ``Sigma_k``;
-  - the GLR tests (:func:`fdi_lib.glr.glr_known_profile`, :func:`fdi_lib.glr.glr_window`),
-    :func:`fdi_lib.isolation.information` and :func:`fdi_lib.nonparametric.energy_statistic`
-    skip the sample: its innovation and its signature rows contribute nothing to the sums
-    (the energy of a window with missing samples is a sum of fewer terms, so the
-    chi-square threshold of the full window is conservative);
+  - the filters know the missing samples: :func:`fdi_lib.filters.kalman_gains` and
+    :func:`fdi_lib.kitanidis.kitanidis_gains` take the pattern (``missing=``, booleans
+    ``(N,)``) and set ``K_k = 0``, ``P_{k|k} = P_k`` there (as ``filterpy``'s
+    ``KalmanFilter.update(None)``), so that the later gains, the innovation covariances
+    ``Sigma_k``, the closed-loop matrices ``A_k = F_k`` and hence the fault signatures
+    (:func:`fdi_lib.signatures.fault_signature`, the windowed GLR's ``Gamma_k(r)``) are those
+    of the record actually observed. :func:`fdi_lib.filters.kalman_filter` and
+    :func:`fdi_lib.kitanidis.kitanidis_filter` compute such gains from ``y`` by default
+    (all realisations must then miss the same samples); they predict without updating
+    (``Xhat_{k|k} = Xhat_k``) and return a NaN innovation, which marks the sample for the
+    tests downstream. A NaN in ``y`` at a sample that given gains observe is a
+    :class:`~fdi_lib.errors.NonFiniteError`: gains of the complete record on a record with
+    gaps keep an update that did not happen (a biased fault estimate, issue 21). The
+    Kitanidis filter rejects, at the first sample after a gap, the unknown inputs pending
+    since the gap;
+  - the GLR tests (:func:`fdi_lib.glr.glr_known_profile`, :func:`fdi_lib.glr.glr_window`,
+    :class:`fdi_lib.glr.WindowedGLR`), :func:`fdi_lib.isolation.information` and
+    :func:`fdi_lib.nonparametric.energy_statistic` skip a NaN sample: its innovation and its
+    signature rows contribute nothing to the sums. Given these gains (and their
+    ``Sigma_chol`` for the energy), the sums are exactly those of the observed samples. They
+    require NaN at the samples the gains skip (a finite value there comes from another
+    filter: :class:`~fdi_lib.errors.ModelError`); a NaN at a sample the gains observe (an
+    innovation dropped after the filter used it) is skipped too, which leaves the other
+    innovations and their signatures unchanged. The energy of a window with missing
+    samples is a sum of fewer terms, so the chi-square threshold of the full window is
+    conservative;
   - the statistics stay finite.
 
   Functions that cannot skip a sample (RLS tracking, regression data for the Lasso,
@@ -31,8 +47,8 @@ Policy
   statistics (:func:`fdi_lib.glr.glr_window`, :func:`fdi_lib.nonparametric.energy_statistic`)
   are NaN on their warm-up, before the first admissible onset or full window.
   :func:`fdi_lib.glr.first_alarm` accepts such a leading warm-up and raises
-  :class:`~fdi_lib.errors.NonFiniteError` for any NaN after it: NaN is never read as
-  "no alarm".
+  :class:`~fdi_lib.errors.NonFiniteError` for any NaN after it (and for a record that is NaN
+  throughout): NaN is never read as "no alarm".
 
 Every error is a subclass of :class:`~fdi_lib.errors.FDIError` and names the argument,
 what was expected and what was received.

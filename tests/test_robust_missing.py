@@ -293,14 +293,13 @@ def _filterpy(model, y, missing):
 
 def _filterpy_signature(model, prof, missing):
     """(H_k Gamma_k + Phi_k): filterpy's innovations of a noise-free record driven by theta = e_i."""
+    assert not model.x0.any()                         # the filter starts at the true (zero) state
     cols = []
     for i in range(prof.Psi.shape[-1]):
         x, y = np.zeros(model.n), np.empty((model.n_steps, model.p))
         for k in range(model.n_steps):
             y[k] = model.H[k] @ x + prof.Phi[k, :, i]
             x = model.F[k] @ x + prof.Psi[k, :, i]
-        quiet = model.x0.copy()
-        assert not quiet.any()
         cols.append(_filterpy(model, y, missing)["eps"])
     return np.stack(cols, axis=-1)                                      # (N, p, m), NaN where missing
 
