@@ -15,6 +15,11 @@ pseudo-inverse) is computed once, for all samples at once, when the detector is 
 shared by all realisations of a batch of innovations ``(*batch, N, p)``; a record of few
 realisations is then evaluated by blocks of samples.
 
+Missing samples: the gains know them (:func:`fdi_lib.filters.kalman_gains` with ``missing=``),
+hence so do ``Sigma_k`` and the signatures; the innovations are NaN there and the sample adds
+nothing to ``C`` and ``d`` (folded into the precomputed ``C_k(r)`` of the windowed test, so
+that its block evaluation stays available).
+
 Quadratic forms use the Moore-Penrose pseudo-inverse of ``C`` (via its eigen-decomposition:
 one Jacobi rotation per 2 x 2 matrix, applied to all matrices at once, LAPACK's ``eigh`` beyond
 4 x 4):
