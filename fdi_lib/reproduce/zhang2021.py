@@ -46,7 +46,8 @@ __all__ = ["VARIANT_Q", "VARIANT_R", "VARIANT_GRIDS", "RULE_READINGS", "INIT_VAR
            "unknown_input_effect", "lambda_rule_table", "initial_state_table", "paper_between_readings",
            "rate_table", "snr_table", "grid_rule_difference", "paper_outside_ci", "example1_rates",
            "example2_setup", "example2_input", "example2_intervention_chunk", "EX2_INTERVENTIONS",
-           "ORACLE_PATHS", "scaled_regressors", "oracle_table", "intervention_table", "plot_fig2", "plot_fig3", "plot_table1", "plot_table2", "plot_fig6", "plot_fig7"]
+           "ORACLE_PATHS", "scaled_regressors", "oracle_table", "intervention_table", "plot_fig2",
+           "plot_fig3", "plot_table1", "plot_table2", "plot_fig6", "plot_fig7"]
 
 PAPER = "Zhang 2021"
 Q_VALUES = tuple(range(5, 26))
