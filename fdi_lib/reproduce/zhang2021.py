@@ -799,7 +799,7 @@ def intervention_table(result: ReproductionResult):
     h = result.headline
     n = h["records"]
     rows = {INTERVENTION_LABELS[k]: [f"{h['isolated'][k]} / {n}", f"{h['on_path'][k]} / {n}",
-                                     fmt_number(h["min_neighbour_correlation"][k], digits=4)]
+                                     fmt_number(h["min_neighbour_correlation"][k], digits=6)]
             for k in EX2_INTERVENTIONS}
     return table(rows, ["rule isolates {10, 15}", "{10, 15} on the path",
                         "median min |corr| of neighbouring columns"],
