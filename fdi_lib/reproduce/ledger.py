@@ -1009,7 +1009,9 @@ class FigureClaim:
         :data:`AGREES` (input and calibration rows are not compared), :data:`REDRAWS` when no
         row is compared, :data:`COMPARE` otherwise.
     differs : str
-        Empty, or a short parenthesis naming what does not agree, to follow the citation.
+        Empty, or ``"; differs: ..."`` naming briefly what does not agree (the first
+        :data:`CAPTION_ITEMS` differences, then counts), to close the caption's parenthesis
+        after the reproduction's identifier.
     rows : tuple of LedgerRow
         The reproduction's ledger rows.
     """
@@ -1020,9 +1022,8 @@ class FigureClaim:
 
 
 def _short(r: LedgerRow) -> str:
-    """The row's label without its "Fig. N: " prefix."""
-    head, _, rest = r.label.partition(": ")
-    return rest if rest and head == _fig(r.id) else r.label
+    """The row's label without its "Fig. N: " or "Table I: " prefix (the caption names it)."""
+    return re.sub(r"^(Fig\.|Table) [^:]*: ", "", r.label)
 
 
 def _difference(r: LedgerRow) -> str:
@@ -1054,7 +1055,7 @@ def figure_claim(result: ReproductionResult) -> FigureClaim:
     if unscaled:
         items.append(f"{fmt_count(len(unscaled))} claim{'s' * (len(unscaled) > 1)} "
                      + unscaled[0].status_detail)
-    return FigureClaim(COMPARE, " (" + "; ".join(items) + ")", rows)
+    return FigureClaim(COMPARE, "; differs: " + "; ".join(items), rows)
 
 
 def glue_caption(result: ReproductionResult) -> FigureClaim:
@@ -1062,7 +1063,7 @@ def glue_caption(result: ReproductionResult) -> FigureClaim:
 
     Keys ``caption-<id>-verb`` (:attr:`FigureClaim.verb`) and ``caption-<id>-differs``
     (:attr:`FigureClaim.differs`), used as ``{glue:text}`caption-<id>-verb` paper Fig. N of
-    {cite:t}`key`{glue:text}`caption-<id>-differs```. Returns the claim.
+    {cite:t}`key` (<id>{glue:text}`caption-<id>-differs`)``. Returns the claim.
     """
     from fdi_lib.report import glue
 
