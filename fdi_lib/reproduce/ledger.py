@@ -190,7 +190,9 @@ class ClaimSpec:
     cause_if : callable, optional
         ``cause_if(paper_value, ours, headline, path) -> bool``: the cause applies to this row
         only when it holds (e.g. the paper's rate lies between two readings of a rule that the
-        section measures); ``cause_text`` says in words what was measured.
+        section measures); ``cause_text`` says in words what was measured. ``ruled_out``
+        names the candidate causes measured and excluded, for a difference whose cause is
+        unknown.
     missing : str, optional
         What our value ``None`` means (e.g. "not detected in the 6 s record"): a result that
         differs from a number. Without it, ``None`` means we have no value ("not computed").
@@ -218,6 +220,7 @@ class ClaimSpec:
     cause: str | None = None
     cause_if: Callable[[Any, Any, Mapping[str, Any], tuple[str, ...]], bool] | None = None
     cause_text: str = ""
+    ruled_out: str = ""
     missing: str | None = None
     reason: str | None = None
     role: str | None = None
@@ -468,6 +471,8 @@ def _between_readings(paper: Any, ours: Any, h: Mapping[str, Any], path: tuple[s
 
 _READINGS_TEXT = ("the paper's rate lies between our log-width and linear-width readings of the "
                   "rule for λ on the same trials")
+_RULED_OUT = ("our readings of the rule for λ (the paper's rate lies outside them), the unknown "
+              "input d_k, and at q = 15 the initial state")
 _UNSCALED = "not computed at paper scale"
 _NOT_DETECTED = "not detected in any run of the 6 s record"
 _NOT_ISOLATED = "not isolated in any run of the 6 s record"
@@ -530,11 +535,13 @@ SPECS: dict[str, ClaimSpec] = {
     "zb2014-fig6:alarm_time_min": ClaimSpec(
         "Fig. 6: alarm time (min), fault 1 doubled", explain="fig-pipeline-fig6",
         cause="sec-pipeline-calibration-sensitivity",
-        cause_text="the delay depends on the calibrated state2_scale of the surrogate"),
+        cause_text="the alarm time and the delay depend on the calibrated state2_scale of the "
+                   "surrogate"),
     "zb2014-fig6:detection_delay_min": ClaimSpec(
         "Fig. 6: detection delay (min), fault 1 doubled", explain="fig-pipeline-fig6",
         cause="sec-pipeline-calibration-sensitivity",
-        cause_text="the delay depends on the calibrated state2_scale of the surrogate"),
+        cause_text="the alarm time and the delay depend on the calibrated state2_scale of the "
+                   "surrogate"),
     "zb2014-fig7:false_alarms": ClaimSpec("Fig. 7: false alarms in 2 × 1000 runs", ci=_count_ci,
                                           explain="fig-pipeline-fig7"),
     # the same claim as the count (7 of 2000 runs): one row
@@ -568,10 +575,12 @@ SPECS: dict[str, ClaimSpec] = {
         ours=lambda h, p: sorted(h["support"]) == sorted(h["true_support"])),
     "zhang2021-table1:success_rate/*": ClaimSpec(
         "Table I: success rate, q = {0}", ci=_ci_of("ci95"), explain="zhang2021-lambda-rule",
-        cause="sec-zhang2021-oracles", cause_if=_between_readings, cause_text=_READINGS_TEXT),
+        cause="sec-zhang2021-oracles", cause_if=_between_readings, cause_text=_READINGS_TEXT,
+        ruled_out=_RULED_OUT),
     "zhang2021-table2:success_rate/*": ClaimSpec(
         "Table II: success rate, r = {0}", ci=_ci_of("ci95"), explain="zhang2021-lambda-rule",
-        cause="sec-zhang2021-oracles", cause_if=_between_readings, cause_text=_READINGS_TEXT),
+        cause="sec-zhang2021-oracles", cause_if=_between_readings, cause_text=_READINGS_TEXT,
+        ruled_out=_RULED_OUT),
     "zhang2021-table2:snr_db/*": ClaimSpec("Table II: SNR of outputs 1 and 2 (dB), r = {0}",
                                            rtol=0.0, atol=0.5, explain="fig-zhang2021-5"),
     # the values of Tables I-II that the λ-rule study checks again on fewer trials: one row,
@@ -761,7 +770,8 @@ class Ledger:
             why = [_md(r.status_detail)] if r.status_detail else []
             if r.cause:
                 why.append(f"cause measured in {_link(r.cause)}")
-            why.append(f"shown in {_link(r.explain or r.where)}")
+            if (r.explain or r.where) != r.cause:
+                why.append(f"shown in {_link(r.explain or r.where)}")
             if r.note:
                 why.append(_md(r.note))
             lines += [f"* - {r.status}", f"  - {_md(r.claim)}",
@@ -871,7 +881,8 @@ def _row_status(outcome: str, how: str, *, spec: ClaimSpec, role: str | None, pa
         return outcome, "", None
     if spec.cause and (spec.cause_if is None or spec.cause_if(paper, ours, headline, path)):
         return DIFFERS_MEASURED, spec.cause_text, spec.cause
-    return DIFFERS_UNKNOWN, "no measurement of the cause yet", None
+    return DIFFERS_UNKNOWN, (f"ruled out by measurement: {spec.ruled_out}" if spec.ruled_out
+                             else "no measurement of the cause yet"), None
 
 
 def build_ledger(results: Mapping[str, ReproductionResult], *, strict: bool = False,
@@ -894,7 +905,7 @@ def build_ledger(results: Mapping[str, ReproductionResult], *, strict: bool = Fa
         for path in claim_paths(res.paper):
             spec = spec_for(id, path) or ClaimSpec()
             owner = _owner(id, path, spec)
-            if owner[0] != id and (note := _also_note(res, path, spec)):
+            if spec.same_path and owner[0] != id and (note := _also_note(res, path, spec)):
                 also.setdefault(owner, []).append(note)
     rows: list[LedgerRow] = []
     for id in sorted(results, key=_order):

@@ -7,6 +7,7 @@ against the ledger of the build's cached results, and the rendered captions.
 """
 
 import dataclasses
+import html
 import re
 from pathlib import Path
 
@@ -105,3 +106,43 @@ def test_caption_verbs_come_from_the_ledger(doc, caption, source):
     var = re.search(rf'^glue_caption\((\w+)\)$', source, flags=re.M)
     assert var, (doc, "the figure cell must call glue_caption(result)")
     assert re.search(rf'get\("{id}"\)\.plot\({var.group(1)}\b', source), (doc, id, source)
+
+
+# ----------------------------------------------------------------------------- the post-build check
+def _load_check():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("check_captions",
+                                                  ROOT / "tests" / "browser" / "check_captions.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_post_build_check_fails_on_a_caption_that_disagrees(tmp_path, monkeypatch):
+    """``tests/browser/check_captions.py`` on a hand-made built page and results cache."""
+    from fdi_lib.reproduce import reproduce
+
+    check = _load_check()
+    monkeypatch.setenv("FDI_RESULTS_CACHE", str(tmp_path / "cache"))
+    f1, f3 = reproduce("zb2014-fig1"), reproduce("zb2014-fig3")     # cached, as in a build
+    c1, c3 = L.figure_claim(f1), L.figure_claim(f3)
+    assert (c1.verb, c3.verb) == (L.COMPARE, L.REPRODUCES)        # Γ_k over 1; Fig. 3 agrees
+
+    def page(*caps):
+        (tmp_path / "html").mkdir(exist_ok=True)
+        body = "".join(f"<figure><figcaption><p><span>{c}</span></p></figcaption></figure>"
+                       for c in caps)
+        (tmp_path / "html" / "page.html").write_text(f"<html><body>{body}</body></html>")
+        return check.check(tmp_path / "html")
+
+    good1 = (f"Norms; <span class='pasted-text'>{c1.verb}</span> paper Fig. 1 of Z "
+             f"(zb2014-fig1{html.escape(c1.differs)}).")
+    good3 = f"GLR; {c3.verb} paper Fig. 3 of Z (zb2014-fig3)."
+    assert page(good1, good3, "Not in the paper.") == []
+    kinds = [f[1] for f in page(good1.replace(c1.verb, "reproduces"), good3)]
+    assert kinds == ["verb"]
+    assert [f[1] for f in page(good1.replace(html.escape(c1.differs), ""))] == ["differs"]
+    assert [f[1] for f in page("Paper Fig. 11 under the other reading (rosa2013-fig11-rad).")] == [
+        "caption"]
+    assert [f[1] for f in page("GLR; reproduces paper Fig. 4 of Z (zb2014-fig4).")] == ["result"]
