@@ -816,8 +816,10 @@ def fault_runs(*, seed: int, trials: int, fault: int, jobs: int = 1, delta: floa
 
     Fault ``f`` uses the root seed ``SeedSequence([seed, f])`` whatever its size ``delta``, so
     runs of fault 1 at two sizes are *paired* (same noise, run by run), as Figs 5 and 6 are.
-    Cached per arguments when ``chunk_size`` is the default; a run with ``isolate`` also
-    serves a request without it.
+    Cached per arguments except ``jobs``, ``progress`` and ``chunk_size``, which do not change
+    the numbers (:func:`detection_chunk` is batch-invariant bit for bit,
+    ``tests/reproduce/test_zb2014_pipeline.py``); a run with ``isolate`` also serves a request
+    without it.
 
     Parameters
     ----------
@@ -833,18 +835,16 @@ def fault_runs(*, seed: int, trials: int, fault: int, jobs: int = 1, delta: floa
     theta = fault_theta(fault, delta)
     key = (int(seed), int(trials), int(fault), tuple(theta.tolist()), variant, schedule,
            None if state2_scale is None else float(state2_scale))
-    if chunk_size is None:
-        for iso in ((True,) if isolate else (True, False)):
-            if key + (iso,) in _MC_CACHE:
-                return _MC_CACHE[key + (iso,)]
+    for iso in ((True,) if isolate else (True, False)):
+        if key + (iso,) in _MC_CACHE:
+            return _MC_CACHE[key + (iso,)]
     if progress is None:
         progress = bool(getattr(sys.stderr, "isatty", lambda: False)())
     chunk = functools.partial(detection_chunk, fault=fault, delta=delta, variant=variant, schedule=schedule,
                               state2_scale=state2_scale, isolate=isolate)
     out = run_monte_carlo(chunk, trials, seed=_fault_seed(seed, fault), jobs=jobs, chunk_size=chunk_size,
                           progress=progress, description=f"fault {fault}")
-    if chunk_size is None:
-        _MC_CACHE[key + (bool(isolate),)] = out
+    _MC_CACHE[key + (bool(isolate),)] = out
     return out
 
 
@@ -876,7 +876,7 @@ def pipeline_monte_carlo(*, seed: int, trials: int, jobs: int = 1, progress: boo
     -------
     dict
         ``{1: arrays, 2: arrays}`` with the entries of :func:`detection_chunk` (from
-        :func:`fault_runs`, cached when ``chunk_size`` is the default).
+        :func:`fault_runs`, cached).
     """
     return {fault: fault_runs(seed=seed, trials=trials, fault=fault, jobs=jobs, progress=progress,
                               chunk_size=chunk_size, variant=variant, schedule=schedule,
@@ -1193,6 +1193,54 @@ def surrogate_sensitivity(*, seed: int, trials: int, jobs: int = 1) -> list[dict
                 row["type2_rate_known_onset"][f] = _rate(int(np.sum(present_known <= MINMAX_THRESHOLD)), trials)
             row["false_alarm_rate"] = _rate(fa, 2 * trials)
             rows.append(row)
+    return rows
+
+
+def calibration_sensitivity(*, seed: int, trials: int, jobs: int = 1,
+                            scales: tuple[float, ...] = (1.0, 3.0, 10.0, 30.0)) -> list[dict[str, Any]]:
+    """Every prediction of Figs 5-9 on the physical surrogate calibrated with each ``state2_scale``.
+
+    For each scale, the section length and the swing are recalibrated so that both declared
+    targets still hold (:func:`~fdi_lib.systems.gas_pipeline.calibration_for`), and the
+    reproductions ``zb2014-fig5`` to ``zb2014-fig9`` run with the option ``state2_scale`` at the
+    same seed and ``trials`` (runs per fault, and spread runs). The functions are called
+    directly, not through :func:`~fdi_lib.reproduce.registry.reproduce`: the results cache keeps
+    for each id the entry used last, which must stay the book's default run.
+
+    Parameters
+    ----------
+    seed : int
+        Root seed (common random numbers across scales).
+    trials : int
+        Runs per fault and scale (also the spread runs of Figs 5-6).
+    jobs : int
+        Parallel workers (results do not depend on it).
+    scales : tuple of float
+        Values of ``state2_scale`` (default four of the calibration grid).
+
+    Returns
+    -------
+    list of dict
+        One per scale: ``state2_scale``, ``constants`` (the calibrated constants),
+        ``targets`` (:func:`~fdi_lib.systems.gas_pipeline.calibration_targets`), ``limits``
+        (:func:`~fdi_lib.systems.gas_pipeline.surrogate_limits`) and ``headlines`` (``{id:
+        headline}`` of the five reproductions).
+    """
+    rows = []
+    for k2 in scales:
+        cal = gp.calibration_for(float(k2))
+        # the runs first, one chunk per fault (faster than the default four for a few hundred
+        # runs; same numbers), so that the reproductions find them in the cache
+        for fault, delta in ((1, None), (2, None), (1, gp.FAULT1_DOUBLED_DELTA)):
+            fault_runs(seed=seed, trials=trials, fault=fault, delta=delta, jobs=jobs, isolate=delta is None,
+                       chunk_size=min(trials, 250), progress=False, state2_scale=float(k2))
+        heads = {rid: func(seed=seed, trials=trials, jobs=jobs, state2_scale=float(k2)).headline
+                 for rid, func in (("zb2014-fig5", fig5), ("zb2014-fig6", fig6), ("zb2014-fig7", fig7),
+                                   ("zb2014-fig8", fig8), ("zb2014-fig9", fig9))}
+        rows.append({"state2_scale": float(k2), "constants": cal,
+                     "targets": gp.calibration_targets(cal["section_length_km"], cal["state2_scale"],
+                                                       cal["pressure_swing_bar"]),
+                     "limits": gp.surrogate_limits(float(k2)), "headlines": heads})
     return rows
 
 
