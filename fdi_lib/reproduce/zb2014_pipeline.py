@@ -152,10 +152,12 @@ def calibration_settings(state2_scale: float | None = None) -> dict[str, Any]:
     return {"constants": gp.calibration_for(state2_scale), "fixed_by": dict(gp.CALIBRATION["free"])}
 
 
-@functools.lru_cache(maxsize=8)
 def pipeline_setup(variant: str = "physical", schedule: str | None = None,
                    state2_scale: float | None = None) -> PipelineSetup:
     """The shared model, input, Kalman gains, fault families and true-onset signature.
+
+    Computed once per surrogate: the arguments are normalised (the default schedule and the
+    calibrated scale spelt out or not, positional or keyword) before the cache.
 
     Parameters
     ----------
@@ -167,7 +169,16 @@ def pipeline_setup(variant: str = "physical", schedule: str | None = None,
         Physical surrogate calibrated with this scale of the pressure-drop state
         (:func:`~fdi_lib.systems.gas_pipeline.calibration_for`); default the calibrated one.
     """
+    gp._check_variant(variant)
     _check_scale(variant, state2_scale)
+    schedule = DEFAULT_SCHEDULE[variant] if schedule is None else schedule
+    if state2_scale is not None and float(state2_scale) == gp.CALIBRATION["fitted"]["state2_scale"]:
+        state2_scale = None
+    return _pipeline_setup(variant, schedule, None if state2_scale is None else float(state2_scale))
+
+
+@functools.lru_cache(maxsize=8)
+def _pipeline_setup(variant: str, schedule: str, state2_scale: float | None) -> PipelineSetup:
     if variant == "physical":
         model, u, _ = gp.surrogate(**gp.calibration_for(state2_scale))
     else:
