@@ -5,18 +5,23 @@ All runs use the *physical* surrogate pipeline model of
 2011 is not public), the Kalman filter of the fault-free model, and the windowed GLR
 test (35)-(37) with ``w = 160`` samples, threshold 50, disabled during the first 320 min.
 The surrogate was calibrated on two paper observations only (the Fig 9 level and fault 2
-detected in every run, :data:`fdi_lib.systems.gas_pipeline.CALIBRATION`); each
-reproduction's ``paper`` dict lists them under ``calibrated_to`` and every other compared
-headline key under ``predictions``.
+detected in every run, :data:`fdi_lib.systems.gas_pipeline.CALIBRATION`), plus a stated
+criterion for its third free constant ``state2_scale``; each reproduction's ``paper`` dict
+lists the observations under ``calibrated_to`` and every other compared headline key under
+``predictions``, and its ``settings["calibration"]`` the three constants it ran with and what
+fixed each (:func:`calibration_settings`). Figs 5-9 take the option ``state2_scale`` (the
+surrogate recalibrated with that scale; :func:`calibration_sensitivity` runs them all).
 
 * ``zb2014-table1``: nominal and changed ``G0(1)``, ``Gp(1)``, ``Psi_k`` and ``theta``.
-* ``zb2014-fig5``, ``zb2014-fig6``: one run of fault 1 (``dG0(1) = -2e-5`` and ``-4e-5``).
+* ``zb2014-fig5``, ``zb2014-fig6``: one run of fault 1 (``dG0(1) = -2e-5`` and ``-4e-5``), and
+  the run-to-run spread of its values over 1000 runs (:func:`single_run_spread`).
 * ``zb2014-fig7``: 1000 runs per fault: detection delays and onset-estimation errors.
-* ``zb2014-fig8``: minmax isolation (41) after each alarm, threshold 6.6349.
+* ``zb2014-fig8``: minmax isolation (41) after each alarm, threshold 6.6349; option
+  ``isolation_window`` (up to the alarm, the paper's, or up to the end of the record).
 * ``zb2014-fig9``: output-end leak of -43980 at 700 min (``Phi_k = 1``, eq. (46)).
 
-Figs 7 and 8 come from one Monte Carlo experiment (:func:`pipeline_monte_carlo`),
-cached per ``(seed, trials, variant, schedule)`` so that the book and the CLI run it once.
+Figs 5-8 share one Monte Carlo experiment (:func:`fault_runs`, :func:`pipeline_monte_carlo`),
+cached per seed, trials, fault, size and surrogate so that the book and the CLI run it once.
 :func:`surrogate_sensitivity` repeats it for both surrogates and both origins of ``p_k``
 in the fault-2 column; :func:`onset_profile` recomputes the GLR of every candidate onset
 at an alarm.
