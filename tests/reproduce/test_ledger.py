@@ -203,14 +203,6 @@ def test_every_difference_links_to_where_it_is_shown(cheap_results):
         assert (r.cause is not None) == (r.status == L.DIFFERS_MEASURED), (r.id, r.path)
 
 
-#: Labels of the sections measuring causes that other branches of issue 20 add to the chapters;
-#: until they are merged the test below reports XFAIL naming the missing ones, after the merge
-#: it must PASS (any other missing label FAILS at once).
-PENDING_CAUSE_LABELS = {"sec-pipeline-isolation-window", "sec-pipeline-calibration-sensitivity",
-                        "sec-pipeline-fig5-spread", "sec-zhang2021-example2-causes",
-                        "sec-zhang2021-oracles"}
-
-
 def _book_labels():
     labels = set()
     for md in (ROOT / "book").rglob("*.md"):
@@ -226,9 +218,7 @@ def test_every_cause_and_explanation_names_an_existing_book_label():
     book's sources: ``(label)=``, ``:label:``, figure ``name:``)."""
     targets = {t for s in L.SPECS.values() for t in (s.cause, s.explain) if t and "/" not in t}
     missing = sorted(targets - _book_labels())
-    assert set(missing) <= PENDING_CAUSE_LABELS, missing
-    if missing:
-        pytest.xfail(f"sections not merged yet: {', '.join(missing)}")
+    assert not missing, missing
 
 
 def test_every_rule_names_a_registered_reproduction():
