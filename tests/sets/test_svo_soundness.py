@@ -215,3 +215,23 @@ def test_soundness_on_the_uav_inside_its_envelope(eta_unit):
                       keep_sets=True)
         assert res.empty_at is None
         assert all(S.contains(short.x[k], 1e-7) for k, S in enumerate(res.sets))
+
+
+def test_vertices_found_with_wide_merges_are_expanded_outward(monkeypatch):
+    """qhull's wide merges ("Q12") can drop vertices; the vertices found so are moved away from the
+    Chebyshev centre so that their hull holds the set (support >= the LP's) and stays close to it."""
+    from scipy.optimize import linprog
+
+    rng = np.random.default_rng(4)
+    D = rng.standard_normal((40, 3))
+    P = Polytope(D / np.linalg.norm(D, axis=1)[:, None], rng.uniform(0.5, 1.0, 40))
+    assert poly._bases(P.M.tobytes(), *P.M.shape) is None           # the general route is taken
+    plain = P.vertices()
+    monkeypatch.setattr(poly, "_QHULL_RETRIES", ("Q12",))
+    merged = poly._enumerate_vertices(P.M, P.m)
+    dirs = rng.standard_normal((60, 3))
+    lp = np.array([-linprog(-d, A_ub=P.M, b_ub=P.m, bounds=[(None, None)] * 3, method="highs").fun
+                   for d in dirs])
+    for V, low, high in ((plain, -1e-9, 1e-9), (merged, 1e-7, 1e-4)):
+        excess = (V @ dirs.T).max(axis=0) - lp
+        assert low <= excess.min() and excess.max() <= high
