@@ -505,7 +505,10 @@ class Polytope:
         """Vertices, shape (v, n); (0, n) if empty. Raises :class:`UnboundedSetError` if unbounded.
 
         Vertex enumeration by bases for few inequalities, otherwise by qhull (cddlib for flat sets);
-        see :func:`_enumerate_vertices`.
+        see :func:`_enumerate_vertices`. Emptiness is decided by a linear program
+        (:data:`_EMPTY_TOL`); an enumeration that finds no vertex of a non-empty set raises
+        :class:`NumericalError`. Vertices that qhull found with wide merges are moved outward by at
+        most about :data:`_MERGE_EXPANSION` relative (their hull contains the set).
         """
         if "V" not in self._cache:
             self._cache["V"] = _enumerate_vertices(self.M, self.m)
