@@ -507,8 +507,8 @@ class Polytope:
         Vertex enumeration by bases for few inequalities, otherwise by qhull (cddlib for flat sets);
         see :func:`_enumerate_vertices`. Emptiness is decided by a linear program
         (:data:`_EMPTY_TOL`); an enumeration that finds no vertex of a non-empty set raises
-        :class:`NumericalError`. Vertices that qhull found with wide merges are moved outward by at
-        most about :data:`_MERGE_EXPANSION` relative (their hull contains the set).
+        :class:`NumericalError`. Vertices that qhull found with wide merges are moved away from the
+        Chebyshev centre (:data:`_MERGE_EXPANSION`) so that their hull contains the set.
         """
         if "V" not in self._cache:
             self._cache["V"] = _enumerate_vertices(self.M, self.m)
