@@ -19,6 +19,9 @@ __all__ = [
     "EmptySetError",
     "UnboundedSetError",
     "NumericalError",
+    "FDIWarning",
+    "UnsoundOptionWarning",
+    "EnvelopeWarning",
 ]
 
 
@@ -71,3 +74,17 @@ class UnboundedSetError(FDIError, ValueError):
 
 class NumericalError(FDIError, ArithmeticError):
     """A floating-point geometric computation (e.g. vertex enumeration of a very thin polytope) failed."""
+
+
+class FDIWarning(UserWarning):
+    """Base class of all warnings issued by :mod:`fdi_lib`."""
+
+
+class UnsoundOptionWarning(FDIWarning):
+    """An option was used that can lose the true state (e.g. a set-valued observer's ``joint=True``
+    or ``strip_before_hull=True`` with an uncertain A): an empty set is then no proof of a fault."""
+
+
+class EnvelopeWarning(FDIWarning):
+    """A record leaves the range in which a model's stated margins were measured to hold (e.g. the
+    UAV's manoeuvre envelope): the model's guarantees, such as containment of the true state, may fail."""
