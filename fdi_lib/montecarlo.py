@@ -226,8 +226,8 @@ _PROGRESS: contextvars.ContextVar[bool] = contextvars.ContextVar("fdi_lib_progre
 
 @contextlib.contextmanager
 def progress_bars(enabled: bool = True) -> Iterator[None]:
-    """Context manager: Monte Carlo runs inside show (or hide) a progress bar on standard error,
-    unless their ``progress`` argument says otherwise."""
+    """Context manager: Monte Carlo runs inside show a progress bar on standard error if ``enabled``
+    (hide it otherwise), unless their ``progress`` argument says otherwise."""
     token = _PROGRESS.set(bool(enabled))
     try:
         yield
