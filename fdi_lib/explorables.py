@@ -224,7 +224,7 @@ def _check_grid(grid: Any, fixed: Mapping[str, Any]) -> tuple[tuple[str, ...], t
         if isinstance(vals, (str, bytes, Mapping)) or np.ndim(vals) != 1:
             what = f"shape {np.shape(vals)}" if np.ndim(vals) > 1 else type(vals).__name__
             raise ShapeError(f"grid[{name!r}]: expected a 1-D sequence of values, got {what}")
-        vals = tuple(vals.tolist() if isinstance(vals, np.ndarray) else vals)
+        vals = tuple(vals)
         for i, v in enumerate(vals):
             if isinstance(v, (float, np.floating)) and not np.isfinite(v):
                 raise NonFiniteError(f"grid[{name!r}]: expected finite values, got {v} at index {i}")
