@@ -166,8 +166,6 @@ def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: i
     """
     seed = check_seed(seed)
     n_trials = integer(n_trials, "n_trials", low=1)
-    if isinstance(jobs, (bool, np.bool_)) or not isinstance(jobs, (int, np.integer)) or jobs == 0:
-        raise ModelError(f"jobs: expected a non-zero integer (-1 = all cores), got {jobs!r}")
     chunk_fns = list(chunk_fns)
     if not chunk_fns:
         raise ModelError("chunk_fns: expected at least one chunk function, got none")
@@ -177,6 +175,7 @@ def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: i
     root = np.random.SeedSequence(seed)
     n_parts = -(-n_trials // chunk_size)
     n_tasks = len(chunk_fns) * n_parts
+    n_workers = effective_jobs(jobs, n_tasks)
 
     def part(j: int) -> slice:
         return slice(j * chunk_size, min((j + 1) * chunk_size, n_trials))
@@ -198,7 +197,6 @@ def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: i
         _check_memory(first, part(0), n_trials, len(chunk_fns))
         if bar is not None:
             bar.update()
-        n_workers = effective_jobs(jobs, n_tasks)
         results = _run_chunks(task, n_tasks, first, n_workers, None if bar is None else bar.update)
     finally:
         if bar is not None:
