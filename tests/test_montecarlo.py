@@ -252,3 +252,14 @@ def test_progress_bar_on_standard_error(capsys):
     assert "5/5" in capsys.readouterr().err
     run_monte_carlo(slow, 5, seed=0, chunk_size=1)      # default: no bar
     assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize("id", ["rosa2013-fig11", "rosa2013-fig12"])
+def test_the_uav_studies_refuse_a_trillion_trials_at_once(id):
+    """The UAV studies spawn their own streams (a batch of runs per job): through trial_seeds, so
+    10^12 trials are refused before anything is made (they used to grow memory silently)."""
+    from fdi_lib.errors import ResourceError
+    from fdi_lib.reproduce import reproduce
+
+    with pytest.raises(ResourceError, match=r"n_trials: 1000000000000 seed sequences"):
+        reproduce(id, trials=10**12)

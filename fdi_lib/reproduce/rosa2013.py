@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from fdi_lib.errors import EnvelopeWarning, UnsoundOptionWarning
+from fdi_lib.montecarlo import trial_seeds
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.sets.polytope import Polytope, convex_hull, plot_polytope
@@ -350,7 +351,7 @@ def uav_study(seed: int, trials: int, jobs: int = 1, duration: float = DURATION,
     """
     from joblib.externals.loky import get_reusable_executor
 
-    streams = np.random.SeedSequence(seed).spawn(int(trials))
+    streams = trial_seeds(seed, int(trials))  # refuses a count that would not fit in memory
     cases = [("none", "step", ss) for ss in streams]   # the scenario is irrelevant without fault
     cases += [(f, s, ss) for f in uav.FAULTS for s in uav.SCENARIOS for ss in streams]
     # the closed loops are simulated together (vectorised, each run independent of the batch)
@@ -503,7 +504,7 @@ def fault_mode_study(seed: int, trials: int, eta_unit: str = uav.ETA_UNIT, durat
     correct isolations, "isolation_ms": mean or None, "runs": trials}, on the streams of
     :func:`uav_study` (same seed) and records of ``duration`` s.
     """
-    streams = np.random.SeedSequence(seed).spawn(int(trials))
+    streams = trial_seeds(seed, int(trials))  # refuses a count that would not fit in memory
     faults = ("elevator", "dynamics")
     sims = {mode: uav.simulate_many([(f, "step") for f in faults for _ in streams],
                                     [np.random.default_rng(ss) for _ in faults for ss in streams],
