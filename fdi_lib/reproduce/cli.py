@@ -161,9 +161,11 @@ def _print_ledger(args: argparse.Namespace) -> int:
         return 0
     print("  ".join(f"{status}: {n}" for status, n in led.counts().items()))
     for r in led.rows:
-        print(f"{r.status:<17} {r.label}\n{'':<17} paper: {r.paper}  ours: {r.ours}"
+        print(f"{r.status:<24} {r.claim}\n{'':<24} paper: {r.paper}  ours: {r.ours}"
               + (f"  95 % interval: [{r.ci[0]:.4g}, {r.ci[1]:.4g}]" if r.ci else "")
-              + (f"  ({r.role})" if r.role else "") + (f"  see {r.explain}" if r.explain else ""))
+              + (f"  ({r.role})" if r.role else "")
+              + (f"  see {r.cause or r.explain}" if r.cause or r.explain else "")
+              + (f"\n{'':<24} {r.status_detail}" if r.status_detail else ""))
     return 0
 
 
