@@ -732,9 +732,11 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
             down = (c[:, None] + cov) / (1.0 + a)
             zero = -beta / d
         # A correlation exactly at the level (a tie, e.g. at lambda_max) that would overtake it joins
-        # at once (gamma = 0); one that moves away from it (up = -0.0) does not.
-        join = np.where((up > 0) | ((up == 0) & (a < 1)), up, np.inf)
-        join = np.minimum(join, np.where((down > 0) | ((down == 0) & (a > -1)), down, np.inf))
+        # at once (gamma = 0); one that moves away from it (up = -0.0) does not, nor one that moves
+        # with it to 1e-9 (a column in the span of the active ones, e.g. a duplicate: joining would
+        # make Gram_AA singular, and staying out keeps the KKT conditions to 1e-9 lambda).
+        join = np.where((up > 0) | ((up == 0) & (a < 1 - 1e-9)), up, np.inf)
+        join = np.minimum(join, np.where((down > 0) | ((down == 0) & (a > -1 + 1e-9)), down, np.inf))
         join[active] = np.inf
         hit = barred >= 0
         b = rows[hit]
