@@ -535,8 +535,8 @@ def _kkt(g: np.ndarray, levels: np.ndarray, coefs: np.ndarray, n_points: np.ndar
     B, S, m = coefs.shape
     valid = np.arange(S) < n_points[:, None]  # (B, S)
     with np.errstate(all="ignore"):
-        absb = np.abs(coefs)
-        zero = 1e-12 * np.maximum(1.0, absb.max(axis=(1, 2), initial=0.0))[:, None, None]
+        top = np.maximum(coefs.max(axis=(1, 2), initial=0.0), -coefs.min(axis=(1, 2), initial=0.0))
+        zero = 1e-12 * np.maximum(1.0, top)[:, None, None]
         # the signs theta_j has at breakpoint i or on an interval next to it (as _activity reads them)
         pos, neg = coefs > zero, coefs < -zero
         mid = coefs[:, :-1] + coefs[:, 1:]
@@ -544,21 +544,17 @@ def _kkt(g: np.ndarray, levels: np.ndarray, coefs: np.ndarray, n_points: np.ndar
         for mask, on in ((pos, mid > 2 * zero), (neg, mid < -2 * zero)):
             mask[:, :-1] |= on
             mask[:, 1:] |= on
-        # |g_j| - c (no sign), |g_j - c sigma| (sign sigma), |g_j| + c (both signs: a sign change on an
-        # interval) in one expression: |g_j - c (pos - neg)| + c (pos + neg - 1)
-        sigma = pos.astype(float)
-        sigma -= neg
-        k = pos.astype(float)
-        k += neg
-        k -= 1.0
-        c = levels[:, :, None]
-        viol = np.abs(g - c * sigma)
-        viol += c * k
+        # |g_j| <= c for every j; c - g_j <= 0 where theta_j > 0 and c + g_j <= 0 where theta_j < 0 (with
+        # the first, g_j = c sign(theta_j); a sign change on an interval gives c + |g_j|): four
+        # reductions over j
+        worst = np.maximum(g.max(axis=2), -g.min(axis=2)) - levels
+        np.maximum(worst, levels - np.where(pos, g, np.inf).min(axis=2), out=worst)
+        np.maximum(worst, levels + np.where(neg, g, -np.inf).max(axis=2), out=worst)
         # rounding bound of g_j = X_j^T (y - X beta), every j (Cauchy-Schwarz on each product)
         rounding = (4 * np.finfo(float).eps * np.sqrt(rows + m)) * norms.max(axis=1, keepdims=True) * (
-            ynorm[:, None] + np.einsum("bsi,bi->bs", absb, norms))
+            ynorm[:, None] + np.einsum("bsi,bi->bs", np.abs(coefs), norms))
         scale = np.maximum(np.maximum(levels, KKT_FLOOR * levels[:, :1]), np.finfo(float).tiny)
-        res = np.where(valid, (viol.max(axis=2) - rounding) / scale, -np.inf).max(axis=1)
+        res = np.where(valid, (worst - rounding) / scale, -np.inf).max(axis=1)
     return np.where(np.isnan(res), np.inf, np.maximum(res, 0.0))  # NaN, anywhere in a path, fails
 
 
