@@ -441,10 +441,12 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
     if max_size is not None:
         max_size = integer(max_size, "max_size", low=1)
     # Exact rescaling X = sx X', y = sy y' per problem: theta = (sy / sx) theta', lambda = sx sy lambda'
-    # (keeps the homotopy's tolerances meaningful whatever the units, e.g. gas flows ~1e5).
+    # (keeps the homotopy's tolerances meaningful whatever the units, e.g. gas flows ~1e5). sx and sy
+    # are the powers of 2 nearest to the RMS of X and y: exact, so an exact tie stays one.
     Gram = np.matmul(X.transpose(0, 2, 1), X)
-    sx = np.sqrt(np.einsum("bii->b", Gram) / (rows * X.shape[2]))  # sqrt(mean(X^2))
-    sy = np.sqrt(np.einsum("br,br->b", y, y) / rows)
+    with np.errstate(divide="ignore"):
+        sx = np.exp2(np.round(np.log2(np.einsum("bii->b", Gram) / (rows * X.shape[2])) / 2))  # ~sqrt(mean(X^2))
+        sy = np.exp2(np.round(np.log2(np.einsum("br,br->b", y, y) / rows) / 2))
     sx[sx == 0] = 1.0
     sy[sy == 0] = 1.0
     Gram /= (sx * sx)[:, None, None]
@@ -738,7 +740,9 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
         b = rows[hit]
         join[b, barred[b]] = np.where(barred_sign[b] > 0, down[b, barred[b]], up[b, barred[b]])
         join[b, barred[b]] = np.where(join[b, barred[b]] > 0, join[b, barred[b]], np.inf)
-        zero = np.where(active & (zero > 0), zero, np.inf)
+        # a component that joined in a tie (beta_j = 0) but whose direction opposes its sign leaves
+        # at once (gamma = 0): it cannot stay active (its coefficient would take the wrong sign)
+        zero = np.where(active & ((zero > 0) | ((beta == 0) & (d * sign[:, :m] < 0))), zero, np.inf)
         j_join, j_drop = join.argmin(axis=1), zero.argmin(axis=1)
         g_join, g_drop = join[rows, j_join], zero[rows, j_drop]
         g_end = c - c_min
@@ -764,9 +768,12 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
         levels[at, point] = c[running]
         coefs[at, point] = beta[running]
         n_points[at] += 1
+        if step > 50 * m + 100:  # far more steps than a path has (a cycle of zero-length steps on a
+            levels[at, point] = np.nan  # degenerate design): NaN makes the KKT check reject the path
+            running[:] = False
         if max_size is not None:  # the interval just followed had more than max_size components
             running &= active.sum(axis=1) <= max_size
-        running &= ~ended & np.isfinite(c)  # a non-finite step ends the path: the KKT check rejects it
+        running &= ~ended & np.isfinite(c) & np.isfinite(beta).all(axis=1)  # the KKT check rejects it
         joining &= running
         dropping &= running
     return levels, coefs, n_points
