@@ -356,7 +356,9 @@ def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: floa
         The ``N`` of the ``1/(2N)`` in (39); default ``rows`` (scikit-learn's convention).
     lambda_min : float
         Stop the path at this ``lambda`` (as a fraction of ``lambda_max``), e.g. the lower end of the
-        window explored by :func:`flat_range`; the path is exact down to it. Default 0: the full path.
+        window explored by :func:`flat_range`; the path is exact down to it. Default 0: the full path
+        (which ends earlier at an exact fit, ``y`` in the span of the columns: once ``lambda`` falls
+        to ``1e-12 lambda_max``, only rounding is left to follow).
     max_size : int, optional
         Also stop at the end of the first interval where the support has more than ``max_size``
         components (the other end of the window of :func:`flat_range`); the path is exact up to
@@ -494,8 +496,8 @@ def kkt_residual(X: Any, y: Any, path: "LassoPath") -> float:
     ``|g_j| - lambda_i``, or ``|g_j - sigma lambda_i|`` when ``theta_j`` has the sign ``sigma`` at
     ``lambda_i`` or on one of the two intervals next to it (supports and signs as
     :meth:`LassoPath.interval_supports` reads them; a sign change across an interval thus counts
-    as ``|g_j| + lambda_i``). The residual is the largest violation in excess of the rounding bound of
-    ``g_j`` (``4 eps sqrt(rows + m) max_k ||X_k|| (||y|| + sum_k ||X_k|| |theta_k|) / N``, which matters only
+    as ``|g_j| + lambda_i``). The residual is the largest violation in excess of a rounding allowance
+    for ``g_j`` (``8 eps (rows + m) max_k ||X_k|| (||y|| + sum_k ||X_k|| |theta_k|) / N``, which matters only
     near ``lambda = 0`` on ill-conditioned designs), divided by ``max(lambda_i, KKT_FLOOR lambda_0)``.
     It is 0 for a path exact to rounding, ``inf`` for a path with a NaN.
 
@@ -552,8 +554,9 @@ def _kkt(g: np.ndarray, levels: np.ndarray, coefs: np.ndarray, n_points: np.ndar
         worst = np.maximum(g.max(axis=2), -g.min(axis=2)) - levels
         np.maximum(worst, levels - np.where(pos, g, np.inf).min(axis=2), out=worst)
         np.maximum(worst, levels + np.where(neg, g, -np.inf).max(axis=2), out=worst)
-        # rounding bound of g_j = X_j^T (y - X beta), every j (Cauchy-Schwarz on each product)
-        rounding = (4 * np.finfo(float).eps * np.sqrt(rows + m)) * norms.max(axis=1, keepdims=True) * (
+        # rounding allowance of g_j = X_j^T (y - X beta), every j: the n eps bound of a dot product of
+        # length n = rows + m (Cauchy-Schwarz on each), times 8 for the backward error of the solve
+        rounding = (8 * np.finfo(float).eps * (rows + m)) * norms.max(axis=1, keepdims=True) * (
             ynorm[:, None] + np.einsum("bsi,bi->bs", np.abs(coefs), norms))
         scale = np.maximum(np.maximum(levels, KKT_FLOOR * levels[:, :1]), np.finfo(float).tiny)
         res = np.where(valid, (worst - rounding) / scale, -np.inf).max(axis=1)
@@ -578,7 +581,8 @@ def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | N
 
     Returns the levels ``(S,)``, the coefficients ``(S, m)`` (the path stopped as the homotopy's
     would be, at ``c_min`` or after the first interval with more than ``max_size`` components) and
-    the KKT residual.
+    the KKT residual. A path that stops above ``c_min`` is accepted only below ``1e-9`` times its
+    first level (where only rounding is left on the degenerate designs that come here).
 
     Raises
     ------
@@ -616,10 +620,10 @@ def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | N
         if over.size:  # stop after the first interval with more than max_size components
             levels, coefs = levels[: over[0] + 2], coefs[: over[0] + 2]
         res = _kkt_direct(X, y, levels, coefs)
-        if res <= KKT_TOL and (over.size or levels[-1] <= c_min + 1e-12 * levels[0]):
+        done = over.size or levels[-1] <= max(c_min, 1e-9 * levels[0])  # lars_path's own tail ends
+        if res <= KKT_TOL and done:
             return levels, coefs, res
-        tried.append(f"{res:.3g} lambda" + ("" if over.size or levels[-1] <= c_min + 1e-12 * levels[0] else
-                                          f" (stopped at {levels[-1] / levels[0]:.3g} lambda_max)"))
+        tried.append(f"{res:.3g} lambda" + ("" if done else f" (stopped at {levels[-1] / levels[0]:.3g} lambda_max)"))
     raise NumericalError(f"X, y (problem {b}): the Lasso path violates the optimality (KKT) conditions by "
                          f"{kkt:.3g} lambda with the homotopy and by {', '.join(tried)} with scikit-learn's "
                          f"lars_path; expected at most KKT_TOL = {KKT_TOL:g} down to lambda_min")
@@ -662,6 +666,7 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
     GA = np.zeros((B, K, m))  # Gram[:, order, :]: the active rows, zero in unused slots
     j = np.abs(cov).argmax(axis=1)
     c = np.abs(cov[rows, j])
+    near = 1e-12 * c  # a correlation this close to the level ties with it (rounding of cov, ~eps c_0)
     cap = 2 * m + 4  # breakpoints stored per problem (grown if needed)
     levels, coefs = np.zeros((B, cap)), np.zeros((B, cap, m))
     levels[:, 0] = c
@@ -676,8 +681,8 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
     while running.any():
         if running.sum() <= rows.size // 2 and rows.size >= 16:  # drop finished problems
             keep = running
-            Gram, c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j = (
-                x[keep] for x in (Gram, c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j))
+            Gram, c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j, near = (
+                x[keep] for x in (Gram, c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j, near))
             joining, dropping, barred, barred_sign, running, ids = (
                 x[keep] for x in (joining, dropping, barred, barred_sign, running, ids))
             rows = np.arange(ids.size)
@@ -729,12 +734,15 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
             up = (c[:, None] - cov) / (1.0 - a)
             down = (c[:, None] + cov) / (1.0 + a)
             zero = -beta / d
-        # A correlation exactly at the level (a tie, e.g. at lambda_max) that would overtake it joins
-        # at once (gamma = 0); one that moves away from it (up = -0.0) does not, nor one that moves
-        # with it to 1e-9 (a column in the span of the active ones, e.g. a duplicate: joining would
-        # make Gram_AA singular, and staying out keeps the KKT conditions to 1e-9 lambda).
-        join = np.where((up > 0) | ((up == 0) & (a < 1 - 1e-9)), up, np.inf)
-        join = np.minimum(join, np.where((down > 0) | ((down == 0) & (a > -1 + 1e-9)), down, np.inf))
+        join = np.minimum(np.where(up > 0, up, np.inf), np.where(down > 0, down, np.inf))
+        # A correlation at the level (a tie, e.g. at lambda_max; to rounding, `near`, while the level
+        # is well above it) that would overtake it joins at once (gamma = 0); one that moves away
+        # from it does not, nor one that moves with it to 1e-9 (a column in the span of the active
+        # ones, e.g. a duplicate: joining would make Gram_AA singular, and staying out keeps the KKT
+        # conditions to 1e-9 lambda).
+        tol = np.where(c > 1e3 * near, near, 0.0)[:, None]
+        tie = (((c[:, None] - cov <= tol) & (a < 1 - 1e-9)) | ((c[:, None] + cov <= tol) & (a > -1 + 1e-9)))
+        join[tie] = 0.0
         join[active] = np.inf
         hit = barred >= 0
         b = rows[hit]
@@ -752,6 +760,7 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
         c = c - gamma
         ended = running & (g_end <= np.minimum(g_join, g_drop))
         c[ended] = c_min[ended]
+        ended |= running & (c <= near)  # an exact fit: below, only rounding is left to follow
         dropping = running & ~ended & (g_drop < g_join)
         joining = running & ~ended & ~dropping
         j = np.where(dropping, j_drop, j_join)

@@ -179,30 +179,31 @@ def test_lambda_exactly_at_a_breakpoint():
 
 
 def test_batched_and_single_paths_agree_on_a_mixed_batch():
-    """Degenerate and generic problems in one batch: each path is bit for bit its single-problem path,
-    the generic ones are the homotopy's (and the same as in a batch of generic problems only)."""
-    probs = [degenerate(kind, seed)[:2] for kind, seed in (("x2", 3), ("x-0.5", 3), ("zero", 0))]
-    generic = []
+    """Nearly collinear (recomputed by lars_path), duplicated-column and generic problems in one
+    batch: each path is bit for bit its single-problem path and satisfies the KKT conditions; the
+    homotopy's paths are the same as in a batch without the recomputed ones."""
+    probs = [collinear(0), collinear(1)]
+    rng, X, theta = _base(30, rows=50, m=15)
+    X[:, 1] = X[:, int(np.flatnonzero(theta)[0])]  # a duplicated column of the support
+    probs.append((X, X @ theta + 0.3 * rng.standard_normal(50)))
     for seed in range(3):
-        rng, X, theta = _base(20 + seed)
-        generic.append((X, X @ theta + 0.4 * rng.standard_normal(60)))
-    allp = probs + generic
-    X = np.stack([p[0] for p in allp])
-    y = np.stack([p[1] for p in allp])
-    batch = lasso_path_batch(X, y, n_samples=30)
+        rng, X, theta = _base(20 + seed, rows=50, m=15)
+        probs.append((X, X @ theta + 0.4 * rng.standard_normal(50)))
+    X = np.stack([p[0] for p in probs])
+    y = np.stack([p[1] for p in probs])
+    batch = lasso_path_batch(X, y, n_samples=25)
     assert batch.solver.shape == batch.kkt_residual.shape == (6,)
     assert np.all(batch.kkt_residual <= KKT_TOL)
-    assert list(batch.solver[:2]) == ["sklearn-fallback"] * 2 and list(batch.solver[2:]) == ["homotopy"] * 4
-    for b, path in enumerate(lasso_paths(X, y, n_samples=30)):
-        single = lasso_path(X[b], y[b], n_samples=30)
+    assert list(batch.solver) == ["sklearn-fallback"] * 2 + ["homotopy"] * 4
+    for b, path in enumerate(lasso_paths(X, y, n_samples=25)):
+        single = lasso_path(X[b], y[b], n_samples=25)
         assert single.solver == path.solver == batch.solver[b]
         np.testing.assert_array_equal(single.lambdas, path.lambdas)
         np.testing.assert_array_equal(single.coefs, path.coefs)
         assert kkt_violation(X[b], y[b], path) <= TOL
-    only = lasso_path_batch(X[3:], y[3:], n_samples=30)
-    assert list(only.solver) == ["homotopy"] * 3
-    for b in range(3):
-        np.testing.assert_array_equal(only.path(b).coefs, batch.path(3 + b).coefs)
+    only = lasso_path_batch(X[2:], y[2:], n_samples=25)
+    for b in range(4):
+        np.testing.assert_array_equal(only.path(b).coefs, batch.path(2 + b).coefs)
 
 
 @pytest.fixture(scope="module")
