@@ -160,6 +160,25 @@ def test_exact_tie_at_lambda_max(seed):
     np.testing.assert_allclose(path.coefs[:, :k], ref.coefs[:, :k], atol=1e-12 * np.abs(ref.coefs).max())
 
 
+def test_four_way_tie_where_a_joined_component_must_leave_at_once():
+    """0/1 design with X^T y = (4, 4, 4, 4): three components tie at lambda_max, and the equiangular
+    direction of the three points against the sign of one, which must leave at once. scikit-learn's
+    lars_path violates the KKT conditions here (by 2 lambda), so the reference is cvxpy's solution."""
+    from fdi_lib.sparse import lasso_cvxpy
+
+    X = np.array([[0, 0, 0, 0], [1, 0, 1, 0], [0, 0, 1, 1], [1, 1, 0, 1], [1, 0, 0, 0], [1, 1, 1, 1]], float)
+    y = np.array([1.0, 2.0, 0.0, 2.0, -2.0, 2.0])
+    np.testing.assert_array_equal(X.T @ y, [4.0, 4.0, 4.0, 4.0])
+    path = lasso_path(X, y, n_samples=6, lambda_min=0.3)
+    assert path.solver == "homotopy" and path.kkt_residual <= KKT_TOL
+    assert kkt_violation(X, y, path) <= TOL
+    assert kkt_violation(X, y, sklearn_path(X, y, 6, 0.3)) > 1.0
+    for frac in (0.9, 0.6, 0.35):
+        lam = frac * path.lambdas[0]
+        a, b = path.coef(lam), lasso_cvxpy(X, y, lam, n_samples=6)
+        assert objective(X, y, 6, lam, a) <= objective(X, y, 6, lam, b) + 1e-9  # cvxpy: interior-point accuracy
+
+
 def test_lambda_exactly_at_a_breakpoint():
     """At a breakpoint, coef() returns the stored solution, which is scikit-learn's there and optimal."""
     rng, X, theta = _base(7, rows=50, m=12, q=4)
