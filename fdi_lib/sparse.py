@@ -568,8 +568,7 @@ def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | N
     """The path of one problem whose homotopy path failed the KKT check, by scikit-learn's ``lars_path``.
 
     Why not only the homotopy: its inverse of ``Gram_AA`` is up/down-dated (fast, batched) and loses
-    accuracy when active columns are nearly collinear; a duplicated, scaled or zero column makes
-    ``Gram_AA`` singular. scikit-learn's ``lars_path(method="lasso")`` keeps a Cholesky factor
+    accuracy when active columns are nearly collinear, which makes ``Gram_AA`` nearly singular. scikit-learn's ``lars_path(method="lasso")`` keeps a Cholesky factor
     (stable) and handles ties. It is tried on the whole design, then, if that path fails the check
     (scikit-learn drops a degenerate regressor for good, which can violate the conditions later),
     on the design with its parallel columns (``|cos| >= 1 - 1e-12``: duplicated or scaled) merged
@@ -648,6 +647,13 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
     other problems of its batch: a path is bit for bit the same computed alone or in any chunk.
     Problems that have finished are dropped from the working arrays whenever they are half of
     them. The tests check it against scikit-learn's ``lars_path`` to 1e-9.
+
+    Degenerate designs: components tied with the level (to ``1e-12 c_0``) join in zero-length
+    steps, one per step; a component that joined so with a direction against its sign leaves at
+    once; a column in the span of the active ones is kept out; a path ends at an exact fit (``c``
+    down to ``1e-12 c_0``). A path that meets a singular step (NaN) or runs more than
+    ``50 m + 100`` steps (a cycle) ends with a NaN, which :func:`lasso_path_batch`'s KKT check
+    rejects.
 
     Returns the correlation levels ``(B, S)`` and coefficients ``(B, S, m)`` at the
     breakpoints, and the number ``(B,)`` of breakpoints of each problem (the tails are padding).
