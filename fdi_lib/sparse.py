@@ -568,10 +568,10 @@ def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | N
     """The path of one problem whose homotopy path failed the KKT check, by scikit-learn's ``lars_path``.
 
     Why not only the homotopy: its inverse of ``Gram_AA`` is up/down-dated (fast, batched) and loses
-    accuracy when active columns are nearly collinear, which makes ``Gram_AA`` nearly singular. scikit-learn's ``lars_path(method="lasso")`` keeps a Cholesky factor
-    (stable) and handles ties. It is tried on the whole design, then, if that path fails the check
-    (scikit-learn drops a degenerate regressor for good, which can violate the conditions later),
-    on the design with its parallel columns (``|cos| >= 1 - 1e-12``: duplicated or scaled) merged
+    accuracy when active columns are nearly collinear (``Gram_AA`` nearly singular); scikit-learn's
+    ``lars_path(method="lasso")`` keeps a Cholesky factor (stable) and handles ties. It is tried on
+    the whole design, then, if that path fails the check (scikit-learn drops a degenerate regressor
+    for good, which can violate the conditions later), on the design with its parallel columns (``|cos| >= 1 - 1e-12``: duplicated or scaled) merged
     into the longest of each group and its zero columns removed (an exact reduction for exactly
     parallel columns: the Lasso puts a group's whole weight on its longest column, and the others'
     correlations are multiples of its own by at most 1 in absolute value). ``X``, ``y`` are the
