@@ -571,10 +571,11 @@ def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | N
     accuracy when active columns are nearly collinear (``Gram_AA`` nearly singular); scikit-learn's
     ``lars_path(method="lasso")`` keeps a Cholesky factor (stable) and handles ties. It is tried on
     the whole design, then, if that path fails the check (scikit-learn drops a degenerate regressor
-    for good, which can violate the conditions later), on the design with its parallel columns (``|cos| >= 1 - 1e-12``: duplicated or scaled) merged
-    into the longest of each group and its zero columns removed (an exact reduction for exactly
-    parallel columns: the Lasso puts a group's whole weight on its longest column, and the others'
-    correlations are multiples of its own by at most 1 in absolute value). ``X``, ``y`` are the
+    for good, which can violate the conditions later), on the design with its parallel columns
+    (``|cos| >= 1 - 1e-12``: duplicated or scaled) merged into the longest of each group and its
+    zero columns removed (an exact reduction for exactly parallel columns: the Lasso puts a group's
+    whole weight on its longest column, and the others' correlations are multiples of its own by at
+    most 1 in absolute value). ``X``, ``y`` are the
     scaled ones of :func:`lasso_path_batch`, ``c_min`` the lower end of the path in levels, ``b`` and
     ``kkt`` the problem's index and homotopy residual (for the error message).
 
