@@ -1,5 +1,11 @@
 """``python -m fdi_lib reproduce ...``: see :mod:`fdi_lib.reproduce.cli`."""
 
-from fdi_lib.reproduce.cli import main
+try:
+    from fdi_lib.reproduce.cli import main
+except KeyboardInterrupt:  # Ctrl-C while the library is still being imported
+    import sys
+
+    print("interrupted", file=sys.stderr)
+    raise SystemExit(130) from None
 
 raise SystemExit(main())

@@ -2,7 +2,8 @@
 
 Every error subclasses a builtin (``ValueError`` or ``TypeError``) so that
 generic handlers keep working, and every message names the offending argument
-together with what was expected and what was received.
+together with what was expected and what was received. Warnings subclass
+:class:`FDIWarning` (a ``UserWarning``: shown by default, once per place).
 """
 
 from __future__ import annotations
@@ -19,6 +20,12 @@ __all__ = [
     "EmptySetError",
     "UnboundedSetError",
     "NumericalError",
+    "ResourceError",
+    "FDIWarning",
+    "UnsoundOptionWarning",
+    "EnvelopeWarning",
+    "JobsCappedWarning",
+    "CacheWarning",
 ]
 
 
@@ -71,3 +78,30 @@ class UnboundedSetError(FDIError, ValueError):
 
 class NumericalError(FDIError, ArithmeticError):
     """A floating-point geometric computation (e.g. vertex enumeration of a very thin polytope) failed."""
+
+
+class ResourceError(FDIError, ValueError):
+    """A request would exceed a resource limit (memory, frames, page weight); the message gives
+    the estimate and the limit."""
+
+
+class FDIWarning(UserWarning):
+    """Base class of all warnings issued by :mod:`fdi_lib`."""
+
+
+class UnsoundOptionWarning(FDIWarning):
+    """An option was used that can lose the true state (e.g. a set-valued observer's ``joint=True``
+    or ``strip_before_hull=True`` with an uncertain A): an empty set is then no proof of a fault."""
+
+
+class EnvelopeWarning(FDIWarning):
+    """A record leaves the range in which a model's stated margins were measured to hold (e.g. the
+    UAV's manoeuvre envelope): the model's guarantees, such as containment of the true state, may fail."""
+
+
+class JobsCappedWarning(FDIWarning):
+    """More parallel jobs were requested than can run (CPU cores, chunks of work): fewer are used."""
+
+
+class CacheWarning(FDIWarning):
+    """The results cache cannot be read or written (corrupt entry, not a directory): treated as a miss."""

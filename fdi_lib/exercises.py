@@ -124,11 +124,16 @@ class Exercise:
         return self.reference is not None
 
     @property
+    def integer(self) -> bool:
+        """Whether the answer is a count (integers): tolerance ``rtol = 0, atol = 0.5``."""
+        return self.rtol == 0 and self.atol == 0.5
+
+    @property
     def tolerance(self) -> str:
         """The tolerance in words."""
         if self.rtol == 0 and self.atol == 0:
             return "exact"
-        if self.rtol == 0 and self.atol == 0.5:
+        if self.integer:
             return "exact (integers)"
         parts = []
         if self.rtol:
@@ -944,7 +949,8 @@ def _as_answer(answer: Any, exercise_id: str) -> np.ndarray:
 
 
 def _close(a: np.ndarray, ref: np.ndarray, ex: Exercise) -> np.ndarray:
-    return np.abs(a - ref) <= ex.atol + ex.rtol * np.abs(ref)
+    with np.errstate(over="ignore"):  # |a - ref| beyond the float range (1e308 against -1e308): inf, not close
+        return np.abs(a - ref) <= ex.atol + ex.rtol * np.abs(ref)
 
 
 def _scalar_diagnosis(a: float, ref: float, ex: Exercise) -> str:
@@ -954,11 +960,13 @@ def _scalar_diagnosis(a: float, ref: float, ex: Exercise) -> str:
         return "it is zero, and should not be"
     if ref == 0:
         return "it should be zero"
-    ratio = abs(a / ref)
-    decades = math.log10(ratio)
+    # the ratio's decades as a difference of logarithms: a / ref itself under- or overflows for
+    # answers such as 5e-324 or 1e308 (the smallest subnormal, the largest decade of a double)
+    decades = math.log10(abs(a)) - math.log10(abs(ref))
     if abs(decades) >= 0.95:
         word = "large" if decades > 0 else "small"
         return f"it is too {word} by about a factor 10^{abs(round(decades))}"
+    ratio = abs(a / ref)
     if abs(ratio - 1) <= 0.1:
         return f"it is close (within 10 %) but outside the tolerance ({ex.tolerance})"
     return f"it is too {'large' if ratio > 1 else 'small'}, with the right sign and order of magnitude"
@@ -1021,6 +1029,11 @@ def check(exercise_id: str, answer: Any) -> CheckResult:
         elif a.size == ref.size and np.all(_close(a.reshape(ref.shape), ref, ex)):
             msg += f" The numbers are right: reshape to {ref.shape}."
         return fail(msg)
+    if ex.integer and not np.all(a == np.round(a)):
+        idx = tuple(int(i) for i in np.argwhere(a != np.round(a))[0])
+        where = f" (entry {_index_text(idx)})" if a.ndim else ""
+        return fail(f"Expected {ex.answer}; got {float(a[idx])!r}{where}, which is not a whole number "
+                    "(a count is an integer).")
     ok = _close(a, ref, ex)
     if np.all(ok):
         return CheckResult(exercise_id, True, f"{exercise_id}: correct (tolerance: {ex.tolerance}).")

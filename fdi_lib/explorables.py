@@ -34,14 +34,21 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 from matplotlib.figure import Figure
 
-from fdi_lib.errors import ModelError
+from fdi_lib.errors import ModelError, NonFiniteError, ResourceError, ShapeError
 from fdi_lib.plotting import DISPLAY_DPI, smallest_font_pt
 from fdi_lib.widgets import render
 
-__all__ = ["Explorable", "explorable", "figure_data", "PALETTE_COLOURS"]
+__all__ = ["Explorable", "explorable", "figure_data", "PALETTE_COLOURS", "MAX_FRAMES", "MAX_BYTES"]
 
 #: Colours of the palette PNG of a frame (the house style uses a handful; 64 keeps antialiasing).
 PALETTE_COLOURS = 64
+
+#: Most frames of one explorable: each is a callback call and a PNG encoding at build time and
+#: 20-70 kB of page (the chapters' grids have 10 to 42 points).
+MAX_FRAMES = 100
+
+#: Most bytes of one explorable's HTML, its page weight (the chapters' measure 0.15 to 1.6 MB).
+MAX_BYTES = 3_000_000
 
 
 def figure_data(fig: Figure) -> list[Any]:
@@ -198,6 +205,40 @@ def _fmt(v: Any) -> str:
     return f"{v:g}" if isinstance(v, (float, np.floating)) else str(v)
 
 
+def _name(callback: Any) -> str:
+    return getattr(callback, "__qualname__", None) or type(callback).__name__
+
+
+def _check_grid(grid: Any, fixed: Mapping[str, Any]) -> tuple[tuple[str, ...], tuple[tuple[Any, ...], ...]]:
+    """The names and values of a grid, each value list checked: a 1-D sequence of at least two
+    distinct values, finite where they are numbers (a NaN would match no slider position)."""
+    if not isinstance(grid, Mapping):
+        raise ModelError(f"grid: expected a mapping of keyword names to sequences of values, got "
+                         f"{type(grid).__name__}")
+    if not grid or any(not isinstance(v, (str, bytes)) and np.ndim(v) >= 1 and len(v) < 2
+                       for v in grid.values()):
+        raise ModelError(f"grid: expected at least one name with two or more values each, got {dict(grid)!r}")
+    names, values = [], []
+    for name, vals in grid.items():
+        if not isinstance(name, str) or not name.isidentifier() or name == "fig":
+            raise ModelError(f"grid: expected keyword names of the callback (not 'fig'), got {name!r}")
+        if name in fixed:
+            raise ModelError(f"grid: {name!r} is also given as a fixed keyword argument; expected one or the other")
+        if isinstance(vals, (str, bytes, Mapping)) or np.ndim(vals) != 1:
+            what = f"shape {np.shape(vals)}" if np.ndim(vals) > 1 else type(vals).__name__
+            raise ShapeError(f"grid[{name!r}]: expected a 1-D sequence of values, got {what}")
+        vals = tuple(vals)
+        for i, v in enumerate(vals):
+            if isinstance(v, (float, np.floating)) and not np.isfinite(v):
+                raise NonFiniteError(f"grid[{name!r}]: expected finite values, got {v} at index {i}")
+            j = vals.index(v)
+            if j != i:
+                raise ModelError(f"grid[{name!r}]: expected distinct values, got {v!r} at indices {j} and {i}")
+        names.append(name)
+        values.append(vals)
+    return tuple(names), tuple(values)
+
+
 def explorable(callback: Callable[..., Figure], grid: Mapping[str, Sequence[Any]], *, caption: str,
                labels: Mapping[str, str] | None = None, default: Mapping[str, Any] | None = None,
                **fixed: Any) -> Explorable:
@@ -222,13 +263,29 @@ def explorable(callback: Callable[..., Figure], grid: Mapping[str, Sequence[Any]
     -------
     Explorable
         Displays as HTML (``_repr_html_``) in a notebook.
+
+    Raises
+    ------
+    ModelError, ShapeError, NonFiniteError
+        A grid that is not a mapping of keyword names to 1-D sequences of at least two distinct
+        (finite) values, a name also given in ``fixed``, bad ``labels``/``default``/``caption``,
+        or a callback that does not return a matplotlib Figure (the message names the point).
+    ResourceError
+        More than :data:`MAX_FRAMES` grid points (before anything is drawn), or frames heavier
+        than :data:`MAX_BYTES` in all (as soon as they are).
     """
     import matplotlib.pyplot as plt
 
-    if not grid or any(len(v) < 2 for v in grid.values()):
-        raise ModelError(f"grid: expected at least one name with two or more values each, got {dict(grid)!r}")
-    names = tuple(grid)
-    values = tuple(tuple(grid[n]) for n in names)
+    names, values = _check_grid(grid, fixed)
+    if not callable(callback):
+        raise ModelError(f"callback: expected a function drawing into fig and returning it, got "
+                         f"{type(callback).__name__}")
+    if not isinstance(caption, str):
+        raise ModelError(f"caption: expected a string, got {type(caption).__name__}")
+    if labels is not None and (not isinstance(labels, Mapping) or set(labels) - set(names)):
+        raise ModelError(f"labels: expected a mapping of grid names {list(names)} to labels, got {labels!r}")
+    if default is not None and not isinstance(default, Mapping):
+        raise ModelError(f"default: expected a mapping of grid names to values, got {type(default).__name__}")
     default = dict(default or {})
     unknown = set(default) - set(names)
     if unknown:
@@ -238,13 +295,40 @@ def explorable(callback: Callable[..., Figure], grid: Mapping[str, Sequence[Any]
         if n in default and default[n] not in g:
             raise ModelError(f"default: expected {n} among the grid values {list(g)}, got {default[n]!r}")
         start.append(g.index(default[n]) if n in default else 0)
+    n_frames = int(np.prod([len(g) for g in values]))
+    if n_frames > MAX_FRAMES:
+        sizes = " x ".join(f"{len(g)} ({n})" for n, g in zip(names, values))
+        raise ResourceError(f"grid: expected at most {MAX_FRAMES} frames (MAX_FRAMES), got {sizes} = "
+                            f"{n_frames}: use fewer values")
     fig = None
-    frames, data = [], []
-    for point in itertools.product(*values):
-        fig = callback(**dict(zip(names, point)), **fixed, fig=fig)
-        frames.append(_png_frame(fig))
-        data.append(figure_data(fig))
-    plt.close(fig)
+    frames: list[str] = []
+    data = []
+    weight = 0
+    try:
+        for point in itertools.product(*values):
+            kwargs = dict(zip(names, point))
+            try:
+                out = callback(**kwargs, **fixed, fig=fig)
+            except Exception as exc:
+                exc.add_note(f"explorable: while drawing the frame at {kwargs}")
+                raise
+            if not isinstance(out, Figure):
+                raise ModelError(f"callback: expected a matplotlib Figure from {_name(callback)}({kwargs}), "
+                                 f"got {type(out).__name__}")
+            if fig is not None and out is not fig:
+                plt.close(fig)  # the callback drew a new figure instead of reusing this one
+            fig = out
+            frames.append(_png_frame(fig))
+            data.append(figure_data(fig))
+            weight += len(frames[-1])
+            if weight > MAX_BYTES:
+                raise ResourceError(f"grid: expected at most {MAX_BYTES / 1e6:g} MB of frames (MAX_BYTES), got "
+                                    f"{weight / 1e6:.2f} MB after {len(frames)} of {n_frames} frames (about "
+                                    f"{weight / len(frames) * n_frames / 1e6:.1f} MB for all): use fewer "
+                                    f"values or a simpler figure")
+    finally:
+        if fig is not None:
+            plt.close(fig)
     labels = dict(labels or {})
     return Explorable(names=names, labels=tuple(labels.get(n, n) for n in names), grid=values,
                       frames=tuple(frames), data=tuple(data), default=tuple(start), caption=caption)

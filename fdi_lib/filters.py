@@ -16,6 +16,11 @@ and :func:`kalman_filter` runs the data recursion, vectorised over any leading
 axes of independent realisations (the Monte Carlo engine shares the gains).
 Numerics: gains by Cholesky solves (no explicit inverse of ``Sigma_k``), the
 covariance update in Joseph form, symmetrised at every step.
+
+Missing samples (NaN outputs, :mod:`fdi_lib.validation`) are part of the gains: at a missing
+sample ``K_k = 0`` and ``P_{k|k} = P_k`` (the filter predicts without updating, as
+``filterpy``'s ``KalmanFilter.update(None)``), so ``P_k``, ``Sigma_k``, ``A_k = F_k`` and the
+fault signatures built from the gains are those of the record actually observed.
 """
 
 from __future__ import annotations
@@ -28,7 +33,8 @@ import scipy.linalg
 
 from fdi_lib.errors import ModelError, NonFiniteError
 from fdi_lib.models import LTVModel, as_record
-from fdi_lib.validation import check_gains, cholesky, initial_state, measurements
+from fdi_lib.validation import (check_gains, check_missing_known, cholesky, common_pattern, gains_missing,
+                                initial_state, measurements, missing_pattern)
 
 __all__ = ["KalmanGains", "KalmanResult", "kalman_gains", "kalman_filter", "as_outputs"]
 
@@ -54,6 +60,9 @@ class KalmanGains:
         dynamics of the prediction error and of the fault signature, eq. (12).
     FK : numpy.ndarray
         Predictor gains ``F_k K_k`` of eq. (6), ``(N, n, p)``.
+    missing : numpy.ndarray or None
+        Booleans ``(N,)``: the samples the gains skip (``K_k = 0``, ``P_{k|k} = P_k``,
+        ``A_k = F_k``); ``None``: a fully observed record.
     """
 
     K: np.ndarray
@@ -63,19 +72,25 @@ class KalmanGains:
     Sigma_chol: np.ndarray
     A: np.ndarray
     FK: np.ndarray
+    missing: np.ndarray | None = None
 
     def whiten(self, residual: np.ndarray) -> np.ndarray:
         """``L_k^{-1} r_k`` with ``Sigma_k = L_k L_k^T``: unit-covariance innovations, ``(..., N, p)``."""
         return np.linalg.solve(self.Sigma_chol, residual[..., None])[..., 0]
 
 
-def kalman_gains(model: LTVModel) -> KalmanGains:
+def kalman_gains(model: LTVModel, missing: Any = None) -> KalmanGains:
     """Run the Riccati recursion (7)-(8) of the Kalman filter designed for the fault-free model.
 
     Parameters
     ----------
     model : LTVModel
         The fault-free model (1); ``P_0 = model.P0``.
+    missing : array_like of bool, optional
+        ``(N,)``, ``True`` at the samples that are missing (e.g. ``numpy.isnan(y).any(axis=-1)``):
+        there ``K_k = 0`` and ``P_{k|k} = P_k`` (no update); ``Sigma_k`` is still
+        ``H_k P_k H_k^T + R_k``, the covariance of the output that was not observed.
+        Default: none missing.
 
     Returns
     -------
@@ -93,6 +108,7 @@ def kalman_gains(model: LTVModel) -> KalmanGains:
     if not isinstance(model, LTVModel):
         raise ModelError(f"model: expected an LTVModel, got {type(model).__name__}")
     N, n, p = model.n_steps, model.n, model.p
+    skip = missing_pattern(missing, N)
     K = np.empty((N, n, p))
     P = np.empty((N + 1, n, n))
     P_filt = np.empty((N, n, n))
@@ -108,10 +124,13 @@ def kalman_gains(model: LTVModel) -> KalmanGains:
             S = H @ Pk @ H.T + model.R[k]
             S = 0.5 * (S + S.T)
             c, low = cholesky(S, step=k, what="the Riccati recursion")
-            Kk = scipy.linalg.cho_solve((c, low), H @ Pk).T  # P H^T S^{-1} without forming S^{-1}
-            IKH = eye - Kk @ H
-            Pf = IKH @ Pk @ IKH.T + Kk @ model.R[k] @ Kk.T  # Joseph form: stays PSD
-            Pf = 0.5 * (Pf + Pf.T)
+            if skip[k]:  # missing sample: no update
+                Kk, IKH, Pf = np.zeros((n, p)), eye, Pk
+            else:
+                Kk = scipy.linalg.cho_solve((c, low), H @ Pk).T  # P H^T S^{-1} without forming S^{-1}
+                IKH = eye - Kk @ H
+                Pf = IKH @ Pk @ IKH.T + Kk @ model.R[k] @ Kk.T  # Joseph form: stays PSD
+                Pf = 0.5 * (Pf + Pf.T)
             Pn = F @ Pf @ F.T + model.Q[k]
             K[k], P_filt[k], Sigma[k], A[k], FK[k] = Kk, Pf, S, F @ IKH, F @ Kk
             L[k] = np.tril(c)
@@ -119,7 +138,8 @@ def kalman_gains(model: LTVModel) -> KalmanGains:
     if not np.all(np.isfinite(P)):
         k = int(np.argwhere(~np.isfinite(P))[0, 0])
         raise NonFiniteError(f"model: the Riccati recursion diverged (non-finite P_k at step {k})")
-    return KalmanGains(K=K, P=P, P_filt=P_filt, Sigma=Sigma, Sigma_chol=L, A=A, FK=FK)
+    return KalmanGains(K=K, P=P, P_filt=P_filt, Sigma=Sigma, Sigma_chol=L, A=A, FK=FK,
+                       missing=skip if skip.any() else None)
 
 
 @dataclass(frozen=True)
@@ -164,11 +184,15 @@ def kalman_filter(model: LTVModel, y: Any, u: Any = None, *, gains: KalmanGains 
         The fault-free model the filter is designed for (Remark 1 of the paper).
     y : array_like
         Outputs, shape ``(*batch, N, p)``. A sample with a NaN is missing: the filter predicts
-        without updating and its innovation is NaN (:mod:`fdi_lib.validation`).
+        without updating and its innovation is NaN (:mod:`fdi_lib.validation`). The gains must
+        know it (``gains.missing``); all realisations then miss the same samples.
     u : array_like, optional
         Inputs, shape ``(*batch, N, l)`` or ``(N, l)``; default zeros.
     gains : KalmanGains, optional
-        Precomputed :func:`kalman_gains` (shared across realisations).
+        Precomputed :func:`kalman_gains` (shared across realisations); default
+        ``kalman_gains(model, missing=...)`` for the missing samples of ``y``. The samples they
+        mark missing are skipped (NaN innovation) even where ``y`` is finite; a NaN in ``y`` at a
+        sample they observe is a :class:`~fdi_lib.errors.NonFiniteError`.
     x0 : array_like, optional
         Initial prediction ``Xhat_0``; default ``model.x0``.
 
@@ -181,13 +205,15 @@ def kalman_filter(model: LTVModel, y: Any, u: Any = None, *, gains: KalmanGains 
     u_arr = as_record(u, n_steps=N, width=l, name="u")
     batch = y_arr.shape[:-2]
     if gains is None:
-        g = kalman_gains(model)
+        g = kalman_gains(model, missing=common_pattern(missing, "y") if missing.any() else None)
     else:
         check_gains(model, gains)
         g = gains
+    check_missing_known(missing, g, "y")
+    skip = gains_missing(g)
+    any_skip = bool(skip.any())
     xh = np.empty((*batch, N + 1, n))
     xh[..., 0, :] = initial_state(model, x0)
-    any_missing = bool(missing.any())
     eps = np.empty(y_arr.shape)
     xf = np.empty((*batch, N, n))
     # Known input contributions, computed for all k at once.
@@ -196,14 +222,15 @@ def kalman_filter(model: LTVModel, y: Any, u: Any = None, *, gains: KalmanGains 
     Gu = np.broadcast_to(Gu, (*batch, N, n))
     ybar = y_arr - Ju
     for k in range(N):
-        e = ybar[..., k, :] - xh[..., k, :] @ model.H[k].T
-        eps[..., k, :] = e
-        if any_missing:  # a missing sample (NaN in any component): NaN innovation, no update
-            eps[..., k, :] = np.where(missing[..., k, None], np.nan, e)
-            e = np.where(missing[..., k, None], 0.0, e)
-        xf[..., k, :] = xh[..., k, :] + e @ g.K[k].T
+        if any_skip and skip[k]:  # a missing sample: NaN innovation, no update (K_k = 0)
+            eps[..., k, :] = np.nan
+            xf[..., k, :] = xh[..., k, :]
+        else:
+            e = ybar[..., k, :] - xh[..., k, :] @ model.H[k].T
+            eps[..., k, :] = e
+            xf[..., k, :] = xh[..., k, :] + e @ g.K[k].T
         xh[..., k + 1, :] = xf[..., k, :] @ model.F[k].T + Gu[..., k, :]
     upd = ybar - np.einsum("kij,...kj->...ki", model.H, xf)
-    if any_missing:
-        upd = np.where(missing[..., None], np.nan, upd)
+    if any_skip:
+        upd = np.where(skip[:, None], np.nan, upd)
     return KalmanResult(innovations=eps, x_pred=xh, x_filt=xf, updated_residuals=upd, gains=g)

@@ -15,6 +15,11 @@ pseudo-inverse) is computed once, for all samples at once, when the detector is 
 shared by all realisations of a batch of innovations ``(*batch, N, p)``; a record of few
 realisations is then evaluated by blocks of samples.
 
+Missing samples: the gains know them (:func:`fdi_lib.filters.kalman_gains` with ``missing=``),
+hence so do ``Sigma_k`` and the signatures; the innovations are NaN there and the sample adds
+nothing to ``C`` and ``d`` (folded into the precomputed ``C_k(r)`` of the windowed test, so
+that its block evaluation stays available).
+
 Quadratic forms use the Moore-Penrose pseudo-inverse of ``C`` (via its eigen-decomposition:
 one Jacobi rotation per 2 x 2 matrix, applied to all matrices at once, LAPACK's ``eigh`` beyond
 4 x 4):
@@ -29,10 +34,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fdi_lib.errors import ModelError, NonFiniteError, ShapeError
+from fdi_lib.errors import CovarianceError, ModelError, NonFiniteError, ShapeError
 from fdi_lib.filters import KalmanGains
 from fdi_lib.models import FaultFamily, LTVModel
-from fdi_lib.validation import array, check_gains, integer, missing_samples, real
+from fdi_lib.validation import (COV_RTOL, array, check_gains, check_skipped, gains_missing, integer,
+                                missing_samples, real)
 
 __all__ = ["GLRResult", "glr_known_profile", "WindowGLRResult", "WindowedGLR", "glr_window",
            "quadratic_form", "first_alarm"]
@@ -43,10 +49,19 @@ RANK_RTOL = 1e-10
 
 def _pinv_factors(C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(V, inv)`` with ``C^+ = V diag(inv) V^T`` for symmetric PSD ``C`` ``(..., m, m)``."""
-    lam, V = _small_eigh(C) if C.shape[-1] <= _JACOBI_MAX_M else np.linalg.eigh(C)
+    lam, V = _eigh(C)
+    return V, _pinv_diagonal(lam)
+
+
+def _eigh(C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(lam, V)`` of symmetric ``C`` ``(..., m, m)``: :func:`_small_eigh` up to 4 x 4, LAPACK beyond."""
+    return _small_eigh(C) if C.shape[-1] <= _JACOBI_MAX_M else np.linalg.eigh(C)
+
+
+def _pinv_diagonal(lam: np.ndarray) -> np.ndarray:
+    """``1 / lam`` above the cut-off ``RANK_RTOL * max(lam)``, 0 below: the pseudo-inverse's eigenvalues."""
     cutoff = RANK_RTOL * np.maximum(lam.max(axis=-1, keepdims=True), np.finfo(float).tiny)
-    inv = np.where(lam > cutoff, 1.0 / np.where(lam > cutoff, lam, 1.0), 0.0)
-    return V, inv
+    return np.where(lam > cutoff, 1.0 / np.where(lam > cutoff, lam, 1.0), 0.0)
 
 
 #: Largest size decomposed by :func:`_small_eigh` (cyclic Jacobi); larger ones go to LAPACK.
@@ -107,8 +122,33 @@ def quadratic_form(C: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray
 
     ``C`` may have fewer leading axes than ``d`` (it is shared across the extra
     leading axes of ``d``, e.g. Monte Carlo realisations).
+
+    Raises
+    ------
+    NonFiniteError
+        A NaN or infinite value in ``C`` or ``d`` (named, with its index).
+    CovarianceError
+        ``C`` not symmetric, or not positive semi-definite (an eigenvalue below
+        ``-COV_RTOL`` times the largest magnitude), with the index of the matrix.
     """
-    V, inv = _pinv_factors(C)
+    C = array(C, "C")
+    d = array(d, "d")
+    if C.ndim < 2 or C.shape[-1] != C.shape[-2] or d.ndim < 1 or d.shape[-1] != C.shape[-1]:
+        raise ShapeError(f"C, d: expected shapes (..., m, m) and (..., m), got {C.shape} and {d.shape}")
+    scale = np.abs(C).max(axis=(-2, -1))
+    asym = np.abs(C - np.swapaxes(C, -1, -2)).max(axis=(-2, -1))
+    bad = asym > COV_RTOL * scale
+    if bad.any():
+        i = tuple(int(j) for j in np.argwhere(bad)[0])
+        raise CovarianceError(f"C: expected symmetric matrices, got asymmetry {asym[i]:.3g} "
+                              f"(largest entry {scale[i]:.3g}) at index {i}")
+    lam, V = _eigh(C)
+    bad = lam.min(axis=-1) < -COV_RTOL * np.abs(lam).max(axis=-1)
+    if bad.any():
+        i = tuple(int(j) for j in np.argwhere(bad)[0])
+        raise CovarianceError(f"C: expected positive semi-definite matrices, got smallest eigenvalue "
+                              f"{lam[i].min():.6g} (largest magnitude {np.abs(lam[i]).max():.3g}) at index {i}")
+    inv = _pinv_diagonal(lam)
     q = np.sum(V * d[..., :, None], axis=-2)          # V^T d
     return np.sum(q * q * inv, axis=-1), np.sum(V * (q * inv)[..., None, :], axis=-1)
 
@@ -139,11 +179,14 @@ def glr_known_profile(innovations: np.ndarray, gains: KalmanGains, signature: np
     ----------
     innovations : array_like
         ``eps_k``, shape ``(*batch, N, p)``; a sample with a NaN is missing and skipped
-        (:mod:`fdi_lib.validation`).
+        (:mod:`fdi_lib.validation`). It must be NaN at the samples the gains skip
+        (``gains.missing``).
     gains : KalmanGains
-        Provides ``Sigma_k``.
+        Provides ``Sigma_k``; those of the filter that produced the innovations, which knew its
+        missing samples (:func:`fdi_lib.filters.kalman_gains` with ``missing=``).
     signature : array_like
-        ``H_k Gamma_k + Phi_k``, shape ``(N, p, m)`` (:attr:`Signature.on_innovation`).
+        ``H_k Gamma_k + Phi_k``, shape ``(N, p, m)`` (:attr:`Signature.on_innovation`), from
+        :func:`fdi_lib.signatures.fault_signature` with the same gains.
 
     Returns
     -------
@@ -160,6 +203,7 @@ def glr_known_profile(innovations: np.ndarray, gains: KalmanGains, signature: np
     if S.ndim != 3 or S.shape[:2] != (N, p):
         raise ShapeError(f"signature: expected shape ({N}, {p}, m), got {S.shape}")
     eps, missing = _check_innovations(innovations, N, p)
+    check_skipped(missing, gains, "innovations")
     if missing.any():  # a missing sample contributes nothing: zero its innovation and signature rows
         eps = np.where(missing[..., None], 0.0, eps)
         S = np.where(missing[..., None, None], 0.0, S)
@@ -242,6 +286,7 @@ class WindowedGLR:
         if family.kind == "impulse" and np.any(family.Phi_tilde):
             raise ModelError("family: impulsive profiles act on the state only (Phi~ must be zero)")
         self.model, self.gains, self.family = model, gains, family
+        self._skipped = gains_missing(gains)     # samples the filter skipped: no information, no score
         self.window, self.min_samples = int(window), int(s)
         self.batch_shape = tuple(batch_shape)
         self._B = int(np.prod(self.batch_shape, dtype=int))
@@ -285,6 +330,8 @@ class WindowedGLR:
             sig = sig + (onset >= 0)[:, None, :, None] * fam.Phi_tilde[:, :, None, :]
         self._Linv = np.linalg.inv(g.Sigma_chol)                         # Sigma_k^{-1/2}, (N, p, p)
         sig_w = (self._Linv @ sig.reshape(N, -1, w * m)).reshape(sig.shape)
+        if self._skipped.any():  # a sample the filter skipped adds nothing to C_k(r) and d_k(r)
+            sig_w[self._skipped] = 0.0
         self._sig_wT = np.ascontiguousarray(np.transpose(sig_w, (0, 2, 3, 1)))  # (N, w, m, p)
         inc = np.einsum("kpwi,kpwj->kwij", sig_w, sig_w)                 # (N, w, m, m)
         C = np.empty_like(inc)
@@ -321,7 +368,8 @@ class WindowedGLR:
         """Process innovation ``eps_k`` ``(*batch, p)``.
 
         A NaN ``eps_k`` (missing sample) must be missing in every realisation of the batch; the
-        sample is then skipped (it adds nothing to ``C_k(r)`` and ``d_k(r)``).
+        sample is then skipped (it adds nothing to ``C_k(r)`` and ``d_k(r)``). At a sample the
+        gains skip (``gains.missing``) ``eps_k`` must be NaN.
 
         Returns ``(l_k, r_hat_k, theta_hat_k, C_k(r_hat), d_k(r_hat))`` (``nan``/``-1`` when
         no onset is admissible yet). With ``statistics=False`` only the scores are updated and
@@ -340,14 +388,18 @@ class WindowedGLR:
             i = tuple(int(j) for j in np.argwhere(missing)[0])
             raise NonFiniteError(f"eps_k: expected a sample missing (NaN) in all realisations or in none, "
                                  f"got NaN at batch index {i} only (step {k})")
+        known = bool(self._skipped[k])   # skipped by the filter: nothing in C_k(r), d_k(r) (see _shared)
+        if known and not skip:
+            raise ModelError(f"eps_k: expected NaN at step {k}, a sample the gains skip (missing), got a "
+                             f"finite value: innovations and gains of different filters")
         # New onset r = k enters the window (replacing r = k - w); scores (33), recursively (28).
         slot = k % w
         self._d[slot] = 0.0
         self._C_missing[slot] = 0.0
-        if skip:  # a missing sample contributes nothing: its score term is zero, its information
-            # term (precomputed in C_k(r)) is subtracted for every onset it belongs to
+        if skip and not known:  # a dropped innovation contributes nothing: its score term is zero,
+            # its information term (precomputed in C_k(r)) is subtracted for every onset it belongs to
             self._C_missing += self._sig_wT[k] @ np.swapaxes(self._sig_wT[k], -1, -2)
-        else:
+        elif not skip:
             e_w = self._Linv[k] @ eps_k.reshape(self._B, model.p).T     # (p, B)
             self._d += self._sig_wT[k] @ e_w
         self.k = k + 1
@@ -387,6 +439,8 @@ class WindowedGLR:
         N, p = model.n_steps, model.p
         if self.k != 0:
             raise ModelError("_record: expected a fresh detector")
+        if self._skipped.any():  # NaN there; their signature rows are zero (_shared)
+            eps = np.where(self._skipped[:, None], 0.0, eps)
         e_w = self._Linv @ np.moveaxis(eps.reshape(B, N, p), 0, 2)        # (N, p, B)
         stat = np.full((N, B), np.nan)
         onset = np.full((N, B), -1)
@@ -436,7 +490,9 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
     innovations : array_like
         ``eps_k``, shape ``(*batch, N, p)``; several realisations share the
         noise-independent computations. A sample with a NaN is missing and skipped
-        (realisations with different missing samples are run as separate groups).
+        (realisations with different missing samples are run as separate groups). It must be
+        NaN at the samples the gains skip (``gains.missing``): the samples the filter did not
+        update at, which the signatures ``Gamma_k(r)`` computed from the gains know.
     model, gains, family, window, min_samples
         As in :class:`WindowedGLR`.
     shared : WindowedGLR, optional
@@ -458,6 +514,9 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
     eps, missing = _check_innovations(innovations, model.n_steps, model.p)
     start = integer(start, "start", low=0, high=model.n_steps)
     batch = eps.shape[:-2]
+    check_gains(model, gains)
+    check_skipped(missing, gains, "innovations")
+    missing = missing & ~gains_missing(gains)   # dropped innovations the gains do not know
     if missing.any() and batch:
         flat_missing = missing.reshape(-1, model.n_steps)
         patterns, group = np.unique(flat_missing, axis=0, return_inverse=True)
@@ -527,8 +586,9 @@ def first_alarm(statistic: np.ndarray, threshold: float, start: int = 0) -> np.n
     ----------
     statistic : array_like
         ``(..., N)``. NaN is allowed only as a leading warm-up (a windowed statistic not yet
-        defined); a NaN after a finite value, or an infinite value, raises
-        :class:`~fdi_lib.errors.NonFiniteError` with its index: NaN is never read as "no alarm".
+        defined); a NaN after a finite value, a record that is NaN throughout, or an infinite
+        value raises :class:`~fdi_lib.errors.NonFiniteError` with its index: NaN is never read
+        as "no alarm".
     threshold : float
         Finite alarm threshold.
     start : int
@@ -553,6 +613,10 @@ def first_alarm(statistic: np.ndarray, threshold: float, start: int = 0) -> np.n
         i = tuple(int(j) for j in np.argwhere(bad)[0])
         raise NonFiniteError(f"statistic: expected finite values after the warm-up, got {stat[i]} "
                              f"at index {i}")
+    if stat.shape[-1] and nan[..., -1].any():   # NaN to the end: no value at all, never "no alarm"
+        i = tuple(int(j) for j in np.argwhere(nan[..., -1])[0])
+        raise NonFiniteError(f"statistic: expected finite values after the warm-up, got only NaN in "
+                             f"record {i}")
     over = np.nan_to_num(stat, nan=-np.inf) > threshold
     over[..., :start] = False
     hit = over.any(axis=-1)

@@ -23,7 +23,7 @@ import scipy.stats
 
 from fdi_lib.errors import ModelError, PersistentExcitationError, ShapeError
 from fdi_lib.filters import KalmanGains
-from fdi_lib.validation import array, covariance, integer, missing_samples, probability, real
+from fdi_lib.validation import array, check_skipped, covariance, integer, missing_samples, probability, real
 
 __all__ = ["information", "minmax_statistic", "MinmaxDecision", "minmax_isolation"]
 
@@ -35,13 +35,14 @@ def information(innovations: np.ndarray, signature: np.ndarray, gains: KalmanGai
     Parameters
     ----------
     innovations : array_like
-        ``(*batch, N, p)``; a sample with a NaN is missing and skipped (:mod:`fdi_lib.validation`).
+        ``(*batch, N, p)``; a sample with a NaN is missing and skipped (:mod:`fdi_lib.validation`);
+        NaN at the samples the gains skip (``gains.missing``).
     signature : array_like
         ``H_k Gamma_k(r_hat) + Phi_k``, shape ``(N, p, m)``.
     gains : KalmanGains
         Provides ``Sigma_k`` (the blocks of ``R`` in (39)).
     start, stop : int
-        Sample range (the paper: ``r_hat + 1 .. k*``).
+        Sample range (the paper: ``r_hat + 1 .. k*``), ``0 <= start < stop <= N``.
 
     Returns
     -------
@@ -58,7 +59,11 @@ def information(innovations: np.ndarray, signature: np.ndarray, gains: KalmanGai
         raise ShapeError(f"signature/innovations: expected ({N}, {p}, m) and (..., {N}, {p}), "
                          f"got {S.shape} and {eps.shape}")
     start = integer(start, "start", low=0, high=N - 1)
-    stop = integer(stop, "stop", low=start + 1, high=N)
+    stop = integer(stop, "stop")
+    if not start < stop <= N:
+        raise ModelError(f"stop: expected an integer in (start, N] = ({start}, {N}] (start = {start}, the "
+                         f"first sample; stop excluded), got {stop}")
+    check_skipped(missing_samples(eps, "innovations"), gains, "innovations")
     S, eps = S[start:stop], eps[..., start:stop, :]
     missing = missing_samples(eps, "innovations")
     if missing.any():  # a missing sample contributes nothing: zero its innovation and signature rows

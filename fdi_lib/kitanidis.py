@@ -44,6 +44,13 @@ updated residual ``Y_k - J_k U_k - H_k Xhat_k`` (25) does not depend on ``d`` at
 The gains do not depend on the data: :func:`kitanidis_gains` computes them once
 and :func:`kitanidis_filter` runs the data recursion, vectorised over any leading
 axes of independent realisations.
+
+Missing samples (NaN outputs, :mod:`fdi_lib.validation`) are part of the gains: at a missing
+sample ``K_k = 0`` and ``P_{k|k} = P_k`` (no update). The unknown input ``d_{k-1}`` that the
+update at ``k`` would have rejected then stays in the estimation error: the next observed
+sample ``j`` rejects all the pending directions ``[F_{j-1} ... F_k E_{k-1}, ..., E_{j-1}]``
+(the gain (24g) with an orthonormal basis of their span in place of ``E_{j-1}``, whose image
+under ``H_j`` must have full column rank).
 """
 
 from __future__ import annotations
@@ -56,7 +63,8 @@ import scipy.linalg
 
 from fdi_lib.errors import NonFiniteError, RankConditionError, ShapeError
 from fdi_lib.models import FaultProfile, LTVModel, as_record, as_sequence
-from fdi_lib.validation import array, check_finite, cholesky, initial_state, measurements
+from fdi_lib.validation import (array, check_finite, check_missing_known, cholesky, common_pattern,
+                                gains_missing, initial_state, measurements, missing_pattern)
 
 __all__ = [
     "KitanidisGains",
@@ -90,6 +98,12 @@ def as_unknown_input_matrix(model: LTVModel, E: Any) -> np.ndarray:
     return as_sequence(E, n_steps=model.n_steps, shape=(model.n, s), name="E")
 
 
+def _span(M: np.ndarray) -> np.ndarray:
+    """Orthonormal basis ``(n, r)`` of the column space of ``M`` (rank by :data:`RANK_RTOL`, an SVD)."""
+    U, sv, _ = np.linalg.svd(M, full_matrices=False)
+    return U[:, : int(np.count_nonzero(sv > RANK_RTOL * max(1.0, sv[0] if sv.size else 0.0)))]
+
+
 @dataclass(frozen=True)
 class KitanidisGains:
     """Data-independent quantities of the Kitanidis filter on ``k = 0 .. N-1``.
@@ -111,11 +125,15 @@ class KitanidisGains:
         Lower Cholesky factors of ``Sigma_k``.
     Xi : numpy.ndarray
         ``E_{k-1}^T H_k^T Sigma_k^{-1} H_k E_{k-1}`` (24d), ``(N, s, s)``; ``Xi[0] = 0`` (no unknown input
-        acts on ``X_0``).
+        acts on ``X_0``); also 0 at a missing sample and at the first observed sample after one
+        (which rejects the inputs pending since the gap, not ``d_{k-1}`` alone).
     residual_cov : numpy.ndarray
         Covariance of the fault-free residual (25), ``H P_{k|k} H^T + R - H K R - R K^T H^T``, ``(N, p, p)``.
     E : numpy.ndarray
         The unknown-input matrices used, ``(N, n, s)``.
+    missing : numpy.ndarray or None
+        Booleans ``(N,)``: the samples the gains skip (``K_k = 0``, ``P_{k|k} = P_k``); ``None``:
+        a fully observed record.
     """
 
     K: np.ndarray
@@ -127,9 +145,10 @@ class KitanidisGains:
     Xi: np.ndarray
     residual_cov: np.ndarray
     E: np.ndarray
+    missing: np.ndarray | None = None
 
 
-def kitanidis_gains(model: LTVModel, E: Any) -> KitanidisGains:
+def kitanidis_gains(model: LTVModel, E: Any, missing: Any = None) -> KitanidisGains:
     """Run the covariance recursion (24a)-(24g) of the Kitanidis filter.
 
     Parameters
@@ -138,6 +157,8 @@ def kitanidis_gains(model: LTVModel, E: Any) -> KitanidisGains:
         Fault-free model; ``P_0 = model.P0``.
     E : array_like or callable
         Unknown-input matrices ``E_k``, ``(n, s)`` constant, ``(N, n, s)`` per step or ``k -> (n, s)``.
+    missing : array_like of bool, optional
+        ``(N,)``, ``True`` at the missing samples: no update there (see the module docstring).
 
     Returns
     -------
@@ -146,7 +167,8 @@ def kitanidis_gains(model: LTVModel, E: Any) -> KitanidisGains:
     Raises
     ------
     RankConditionError
-        If some ``H_{k+1} E_k`` (``k = 0 .. N-2``) does not have full column rank ``s`` (assumption (iv)).
+        If some ``H_{k+1} E_k`` (``k = 0 .. N-2``) does not have full column rank ``s`` (assumption (iv));
+        after missing samples, ``H_j`` times all the pending unknown-input directions.
 
     Examples
     --------
@@ -161,6 +183,8 @@ def kitanidis_gains(model: LTVModel, E: Any) -> KitanidisGains:
     Es = as_unknown_input_matrix(model, E)
     N, n, p = model.n_steps, model.n, model.p
     s = Es.shape[2]
+    skip = missing_pattern(missing, N)
+    pending = np.zeros((n, 0))  # unknown-input directions not yet rejected by an update
     K = np.empty((N, n, p))
     Kc = np.empty((N, n, p))
     P = np.empty((N + 1, n, n))
@@ -176,16 +200,24 @@ def kitanidis_gains(model: LTVModel, E: Any) -> KitanidisGains:
             S = H @ Pk @ H.T + Rk
             S = 0.5 * (S + S.T)
             c, low = cholesky(S, step=k, what="the Kitanidis covariance recursion")
-            Kk = scipy.linalg.cho_solve((c, low), H @ Pk).T  # P H^T S^{-1} by Cholesky solves
-            Pf = Pk - Kk @ H @ Pk
-            Kbar = Kk
-            if k > 0 and s > 0:
-                HE = H @ Es[k - 1]
+            if k > 0:  # d_{k-1} joins the directions still to reject (after a gap, propagated ones too)
+                pending = _span(np.hstack([model.F[k - 1] @ pending, Es[k - 1]])) if skip[k - 1] else Es[k - 1]
+            q = pending.shape[1]
+            if skip[k]:  # missing sample: no update, the pending inputs wait for the next sample
+                Kk = Kbar = np.zeros((n, p))
+                Pf = Pk
+            else:
+                Kk = scipy.linalg.cho_solve((c, low), H @ Pk).T  # P H^T S^{-1} by Cholesky solves
+                Pf = Pk - Kk @ H @ Pk
+                Kbar = Kk
+            if q > 0 and not skip[k]:
+                HE = H @ pending
                 sv = np.linalg.svd(HE, compute_uv=False)
-                if sv.size < s or sv[-1] <= RANK_RTOL * max(1.0, sv[0]):
-                    smin = float(sv[-1]) if sv.size == s else 0.0
+                if sv.size < q or sv[-1] <= RANK_RTOL * max(1.0, sv[0]):
+                    smin = float(sv[-1]) if sv.size == q else 0.0
+                    gap = " (with the unknown inputs pending since the missing samples)" if skip[k - 1] else ""
                     raise RankConditionError(
-                        f"E: assumption (iv) needs H_{{k+1}} E_k of full column rank {s}; at k = {k - 1}, "
+                        f"E: assumption (iv) needs H_{{k+1}} E_k of full column rank {q}{gap}; at k = {k - 1}, "
                         f"H_{k} E_{k - 1} has shape {HE.shape} and smallest singular value {smin:.3g}")
                 # Square-root form: with Sigma = L L^T and L^{-1} H E = Qw Rw (thin QR), Xi = Rw^T Rw and
                 # Xi^{-1} E^T H^T Sigma^{-1} = Rw^{-1} Qw^T L^{-1}, a left inverse of H E accurate to
@@ -195,11 +227,12 @@ def kitanidis_gains(model: LTVModel, E: Any) -> KitanidisGains:
                 Qw, Rw = np.linalg.qr(W)
                 Linv = scipy.linalg.solve_triangular(Lk, np.eye(p), lower=True)
                 M = scipy.linalg.solve_triangular(Rw, Qw.T @ Linv)  # (s, p), M H E = I
-                Gam = Es[k - 1] - Kk @ HE  # (24c)
+                Gam = pending - Kk @ HE  # (24c)
                 Kbar = Kk + Gam @ M  # (24g)
                 GR = scipy.linalg.solve_triangular(Rw, Gam.T, trans="T").T  # Gamma Rw^{-1}
                 Pf = Pf + GR @ GR.T  # (24f): + Gamma Xi^{-1} Gamma^T
-                Xi[k] = W.T @ W  # (24d)
+                if not skip[k - 1]:
+                    Xi[k] = W.T @ W  # (24d)
             Pf = 0.5 * (Pf + Pf.T)
             HK = H @ Kbar
             Rc = H @ Pf @ H.T + Rk - HK @ Rk - Rk @ HK.T
@@ -211,7 +244,7 @@ def kitanidis_gains(model: LTVModel, E: Any) -> KitanidisGains:
         k = int(np.argwhere(~np.isfinite(P))[0, 0])
         raise NonFiniteError(f"model: the Kitanidis covariance recursion diverged (non-finite P at step {k})")
     return KitanidisGains(K=K, K_kalman=Kc, P=P, P_filt=P_filt, Sigma=Sigma, Sigma_chol=L, Xi=Xi,
-                          residual_cov=Rcov, E=Es)
+                          residual_cov=Rcov, E=Es, missing=skip if skip.any() else None)
 
 
 @dataclass(frozen=True)
@@ -254,13 +287,15 @@ def kitanidis_filter(model: LTVModel, y: Any, u: Any = None, E: Any = None, *,
         Fault-free model (without the unknown input term).
     y : array_like
         Outputs ``(*batch, N, p)``. A sample with a NaN is missing: the filter predicts without
-        updating and its innovation and residual are NaN (:mod:`fdi_lib.validation`).
+        updating and its innovation and residual are NaN (:mod:`fdi_lib.validation`). The gains
+        must know it (``gains.missing``), as in :func:`fdi_lib.filters.kalman_filter`.
     u : array_like, optional
         Known inputs ``(*batch, N, l)`` or ``(N, l)``; default zeros.
     E : array_like or callable, optional
         Unknown-input matrices (required unless ``gains`` is given).
     gains : KitanidisGains, optional
-        Precomputed :func:`kitanidis_gains` (shared across realisations).
+        Precomputed :func:`kitanidis_gains` (shared across realisations); default
+        ``kitanidis_gains(model, E, missing=...)`` for the missing samples of ``y``.
     x0 : array_like, optional
         ``Xpred_0``; default ``model.x0``.
 
@@ -268,16 +303,18 @@ def kitanidis_filter(model: LTVModel, y: Any, u: Any = None, E: Any = None, *,
     -------
     KitanidisResult
     """
+    y_arr, missing = measurements(y, n_steps=model.n_steps, width=model.p, name="y")
     if gains is None:
         if E is None:
             raise ShapeError("E: expected the unknown-input matrices (or precomputed gains=), got None")
-        gains = kitanidis_gains(model, E)
+        gains = kitanidis_gains(model, E, missing=common_pattern(missing, "y") if missing.any() else None)
     else:
         _check_gains(model, gains)
-    y_arr, missing = measurements(y, n_steps=model.n_steps, width=model.p, name="y")
+    check_missing_known(missing, gains, "y")
+    skip = gains_missing(gains)
+    any_skip = bool(skip.any())
     batch = y_arr.shape[:-2]
     N, n = model.n_steps, model.n
-    any_missing = bool(missing.any())
     u_arr = as_record(u, n_steps=model.n_steps, width=model.l, name="u")
     Gu = np.broadcast_to(np.einsum("kij,...kj->...ki", model.G, u_arr), (*batch, N, n))
     ybar = y_arr - np.einsum("kij,...kj->...ki", model.J, u_arr)
@@ -286,16 +323,17 @@ def kitanidis_filter(model: LTVModel, y: Any, u: Any = None, E: Any = None, *,
     eps = np.empty(y_arr.shape)
     xp[..., 0, :] = initial_state(model, x0)
     for k in range(N):
-        e = ybar[..., k, :] - xp[..., k, :] @ model.H[k].T
-        eps[..., k, :] = e
-        if any_missing:  # a missing sample (NaN in any component): NaN innovation, no update
-            eps[..., k, :] = np.where(missing[..., k, None], np.nan, e)
-            e = np.where(missing[..., k, None], 0.0, e)
-        xf[..., k, :] = xp[..., k, :] + e @ gains.K[k].T
+        if any_skip and skip[k]:  # a missing sample: NaN innovation, no update (K_k = 0)
+            eps[..., k, :] = np.nan
+            xf[..., k, :] = xp[..., k, :]
+        else:
+            e = ybar[..., k, :] - xp[..., k, :] @ model.H[k].T
+            eps[..., k, :] = e
+            xf[..., k, :] = xp[..., k, :] + e @ gains.K[k].T
         xp[..., k + 1, :] = xf[..., k, :] @ model.F[k].T + Gu[..., k, :]
     res = ybar - np.einsum("kij,...kj->...ki", model.H, xf)
-    if any_missing:
-        res = np.where(missing[..., None], np.nan, res)
+    if any_skip:
+        res = np.where(skip[:, None], np.nan, res)
     return KitanidisResult(residuals=res, x_filt=xf, x_pred=xp, innovations=eps, gains=gains)
 
 

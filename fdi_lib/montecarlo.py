@@ -30,29 +30,40 @@ the innovations, so its shared quantities are unchanged; nothing runs per realis
 
 from __future__ import annotations
 
-from typing import Any, Callable, Sequence
+import contextlib
+import contextvars
+import sys
+import warnings
+from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
 import scipy.stats
 
-from fdi_lib.errors import ModelError, ShapeError
+from fdi_lib.errors import JobsCappedWarning, ModelError, ResourceError, ShapeError
 from fdi_lib.models import LTVModel
 from fdi_lib.simulate import Noise, draw_noise, noise_roots
 from fdi_lib.validation import integer, probability, seed as check_seed
 
 __all__ = ["trial_seeds", "trial_rngs", "run_monte_carlo", "run_monte_carlo_many", "draw_noise_batch", "binomial_ci",
-           "default_chunk_size"]
+           "default_chunk_size", "effective_jobs", "progress_bars", "available_memory", "check_memory"]
 
 ChunkFn = Callable[[Sequence[np.random.SeedSequence]], dict[str, np.ndarray]]
+
+#: Bytes held by one spawned SeedSequence (470 measured with tracemalloc over 10^4 of them, numpy 2).
+_SEED_BYTES = 470
 
 
 def trial_seeds(seed: int, n_trials: int) -> list[np.random.SeedSequence]:
     """One independent :class:`~numpy.random.SeedSequence` per realisation.
 
-    ``seed`` is an integer >= 0, ``n_trials`` the number of realisations (>= 1).
+    ``seed`` is an integer >= 0, ``n_trials`` the number of realisations (>= 1). A list that
+    would not fit in memory (about 0.5 kB a realisation) is refused with a
+    :class:`~fdi_lib.errors.ResourceError` before anything is made; :func:`run_monte_carlo`
+    makes each chunk's seeds when it runs the chunk instead.
     """
     seed = check_seed(seed)
     n_trials = integer(n_trials, "n_trials", low=1)
+    check_memory(_SEED_BYTES * n_trials, "n_trials", f"{n_trials} seed sequences")
     return np.random.SeedSequence(seed).spawn(n_trials)
 
 
@@ -80,12 +91,8 @@ def default_chunk_size(n_trials: int) -> int:
     return max(1, min(250, -(-int(n_trials) // 4)))
 
 
-def _chunks(n: int, size: int) -> list[slice]:
-    return [slice(i, min(i + size, n)) for i in range(0, n, size)]
-
-
 def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 1,
-                    chunk_size: int | None = None, progress: bool = False,
+                    chunk_size: int | None = None, progress: bool | None = None,
                     description: str = "Monte Carlo") -> dict[str, np.ndarray]:
     """Run ``n_trials`` realisations of ``chunk_fn`` and concatenate the results.
 
@@ -100,14 +107,17 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
     seed : int
         Root seed; realisation ``i`` uses ``SeedSequence(seed).spawn(n_trials)[i]``.
     jobs : int
-        Parallel workers (joblib, processes); ``-1`` for all cores.
+        Parallel workers (joblib, processes); ``-1`` for all cores. Capped at the number of
+        cores and of chunks (:func:`effective_jobs`, a warning when a positive request is cut).
     chunk_size : int, optional
         Realisations per call of ``chunk_fn``; default :func:`default_chunk_size`, which
         does not depend on ``jobs`` (same chunks, hence bit-identical results, for any
         number of workers). Changes only memory and speed when ``chunk_fn`` is exactly
         batch-invariant; give it explicitly to reproduce a run bit for bit.
-    progress : bool
-        Show a tqdm progress bar over chunks.
+    progress : bool, optional
+        Show a tqdm progress bar over chunks on standard error (once the run has lasted a
+        second); ``None`` (default): as set by :func:`progress_bars` (off unless the command
+        line turned it on).
     description : str
         Label of the progress bar.
 
@@ -115,13 +125,19 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
     -------
     dict of numpy.ndarray
         Each entry concatenated over realisations (leading axis ``n_trials``).
+
+    Raises
+    ------
+    ResourceError
+        The results would not fit in the available memory: the first chunk's size per
+        realisation times ``n_trials``, checked before any other chunk runs.
     """
     return run_monte_carlo_many([chunk_fn], n_trials, seed=seed, jobs=jobs, chunk_size=chunk_size,
                                 progress=progress, description=description)[0]
 
 
 def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: int, jobs: int = 1,
-                         chunk_size: int | None = None, progress: bool = False,
+                         chunk_size: int | None = None, progress: bool | None = None,
                          description: str = "Monte Carlo") -> list[dict[str, np.ndarray]]:
     """:func:`run_monte_carlo` of several chunk functions on the same realisations, in one pool.
 
@@ -141,43 +157,154 @@ def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: i
     -------
     list of dict of numpy.ndarray
         One per chunk function, as :func:`run_monte_carlo` returns.
+
+    Raises
+    ------
+    ResourceError
+        The results of ``n_trials`` realisations would not fit in the available memory (estimated
+        from the first chunk, before any other is run).
     """
-    seeds = trial_seeds(seed, n_trials)
-    if isinstance(jobs, (bool, np.bool_)) or not isinstance(jobs, (int, np.integer)) or jobs == 0:
-        raise ModelError(f"jobs: expected a non-zero integer (-1 = all cores), got {jobs!r}")
+    seed = check_seed(seed)
+    n_trials = integer(n_trials, "n_trials", low=1)
     chunk_fns = list(chunk_fns)
     if not chunk_fns:
         raise ModelError("chunk_fns: expected at least one chunk function, got none")
-    import joblib
-
-    n_workers = joblib.cpu_count() if jobs < 0 else int(jobs)
     if chunk_size is None:
         chunk_size = default_chunk_size(n_trials)
     chunk_size = integer(chunk_size, "chunk_size", low=1)
-    parts = _chunks(len(seeds), int(chunk_size))
-    tasks = [(fn, seeds[sl]) for fn in chunk_fns for sl in parts]
-    if progress:
+    root = np.random.SeedSequence(seed)
+    n_parts = -(-n_trials // chunk_size)
+    n_tasks = len(chunk_fns) * n_parts
+    n_workers = effective_jobs(jobs, n_tasks)
+
+    def part(j: int) -> slice:
+        return slice(j * chunk_size, min((j + 1) * chunk_size, n_trials))
+
+    def task(i: int) -> tuple[ChunkFn, list[np.random.SeedSequence]]:
+        # task i: chunk i % n_parts of function i // n_parts, its seeds made when it is handed out
+        c, j = divmod(i, n_parts)
+        sl = part(j)
+        return chunk_fns[c], _spawned(root, sl.start, sl.stop)
+
+    bar: Any = None
+    if progress if progress is not None else _PROGRESS.get():
         from tqdm.auto import tqdm
 
-        bar: Any = tqdm(total=len(tasks), desc=description, unit="chunk")
-    else:
-        bar = None
-    results = _run_chunks(tasks, n_workers, None if bar is None else bar.update)
-    if bar is not None:
-        bar.close()
+        # on standard error, and only once a run has lasted a second (no flicker on short ones)
+        bar = tqdm(total=n_tasks, desc=description, unit="chunk", file=sys.stderr, delay=1.0)
+    try:
+        first = _call(*task(0))  # the calling process's first chunk, also the memory probe
+        _check_memory(first, part(0), n_trials, len(chunk_fns))
+        if bar is not None:
+            bar.update()
+        results = _run_chunks(task, n_tasks, first, n_workers, None if bar is None else bar.update)
+    finally:
+        if bar is not None:
+            bar.close()
     outs = []
     for c in range(len(chunk_fns)):
-        col = results[c * len(parts): (c + 1) * len(parts)]
+        col = results[c * n_parts: (c + 1) * n_parts]
         out = {}
         for key in col[0].keys():
             arrays = [np.asarray(r[key]) for r in col]
-            for sl, arr in zip(parts, arrays):
+            for j, arr in enumerate(arrays):
+                sl = part(j)
                 if arr.shape[:1] != (sl.stop - sl.start,):
                     raise ShapeError(f"chunk_fn: entry {key!r} must have one row per realisation "
                                      f"({sl.stop - sl.start}), got shape {arr.shape}")
             out[key] = np.concatenate(arrays, axis=0)
         outs.append(out)
     return outs
+
+
+#: Whether :func:`run_monte_carlo` shows a progress bar when its ``progress`` is ``None`` (see
+#: :func:`progress_bars`; the command line turns it on for an interactive terminal).
+_PROGRESS: contextvars.ContextVar[bool] = contextvars.ContextVar("fdi_lib_progress", default=False)
+
+
+@contextlib.contextmanager
+def progress_bars(enabled: bool = True) -> Iterator[None]:
+    """Context manager: Monte Carlo runs inside show a progress bar on standard error if ``enabled``
+    (hide it otherwise), unless their ``progress`` argument says otherwise."""
+    token = _PROGRESS.set(bool(enabled))
+    try:
+        yield
+    finally:
+        _PROGRESS.reset(token)
+
+
+def _spawned(root: np.random.SeedSequence, start: int, stop: int) -> list[np.random.SeedSequence]:
+    """``root.spawn(n)[start:stop]`` of a fresh ``root``, for any ``n >= stop``.
+
+    Built as numpy's ``SeedSequence.spawn`` builds its children (same entropy and pool size,
+    spawn key extended by the child's index), but only for the chunk at hand: spawning all
+    ``n_trials`` children up front would hold one object per realisation (about 0.5 kB each)
+    before anything runs. ``tests/test_montecarlo.py`` checks the identity with ``spawn``.
+    """
+    return [np.random.SeedSequence(root.entropy, spawn_key=(*root.spawn_key, i), pool_size=root.pool_size)
+            for i in range(start, stop)]
+
+
+def available_memory() -> int | None:
+    """Bytes of memory available to a new allocation without swapping (psutil's ``available``),
+    or ``None`` when it cannot be read (no psutil: then nothing is refused)."""
+    try:
+        import psutil
+    except ImportError:  # pragma: no cover (psutil is present wherever Jupyter is)
+        return None
+    return int(psutil.virtual_memory().available)
+
+
+def check_memory(needed: float, name: str, what: str) -> None:
+    """Raise :class:`~fdi_lib.errors.ResourceError` naming ``name`` when ``needed`` bytes exceed
+    :func:`available_memory`; ``what`` says what would need them."""
+    available = available_memory()
+    if available is not None and needed > available:
+        raise ResourceError(f"{name}: {what} would need about {_bytes_text(needed)} of memory; "
+                            f"{_bytes_text(available)} is available: use fewer")
+
+
+def _bytes_text(n: float) -> str:
+    for unit in ("B", "kB", "MB", "GB", "TB", "PB"):
+        if abs(n) < 1000 or unit == "PB":
+            return f"{n:.3g} {unit}"
+        n /= 1000
+    raise AssertionError  # unreachable
+
+
+def _check_memory(first: dict[str, np.ndarray], sl: slice, n_trials: int, n_fns: int) -> None:
+    """Refuse a run whose results would not fit in memory, from the size of its first chunk.
+
+    The run keeps every chunk's arrays and then their concatenation (twice the results), for each
+    chunk function; the first function's size per realisation stands for all of them.
+    """
+    per_trial = sum(np.asarray(v).nbytes for v in first.values()) / (sl.stop - sl.start)
+    needed = 2.0 * per_trial * n_trials * n_fns
+    check_memory(needed, "n_trials", f"{n_trials} realisations x {n_fns} chunk function(s) at "
+                                      f"{_bytes_text(per_trial)} each (measured on the first chunk)")
+
+
+def effective_jobs(jobs: int, n_tasks: int | None = None) -> int:
+    """The number of processes that ``jobs`` asks for and that can run: ``min(jobs, cores, n_tasks)``.
+
+    ``jobs = -1`` (any negative value) means every core; ``n_tasks`` (optional) is the number of
+    chunks of work. A positive request above that issues a :class:`~fdi_lib.errors.JobsCappedWarning`
+    (results do not depend on the number of processes, only the time does).
+    """
+    if isinstance(jobs, (bool, np.bool_)) or not isinstance(jobs, (int, np.integer)) or jobs == 0:
+        raise ModelError(f"jobs: expected a non-zero integer (-1 = all cores), got {jobs!r}")
+    import joblib
+
+    cores = max(1, int(joblib.cpu_count()))  # loky's count: CPU affinity and cgroup quotas included
+    limit = cores if n_tasks is None else min(cores, max(1, int(n_tasks)))
+    used = limit if jobs < 0 else min(int(jobs), limit)
+    if jobs > used:
+        why = f"{cores} CPU core{'s' * (cores > 1)}"
+        if n_tasks is not None and n_tasks < cores:
+            why = f"{n_tasks} chunk{'s' * (n_tasks > 1)} of work"
+        warnings.warn(JobsCappedWarning(f"jobs: {jobs} requested, {used} used ({why}); the results "
+                                        f"do not depend on it"), stacklevel=3)
+    return used
 
 
 def _call(chunk_fn: ChunkFn, seeds: Sequence[np.random.SeedSequence]) -> dict[str, np.ndarray]:
@@ -188,10 +315,11 @@ def _call(chunk_fn: ChunkFn, seeds: Sequence[np.random.SeedSequence]) -> dict[st
         return chunk_fn(seeds)
 
 
-def _run_chunks(tasks: list[tuple[ChunkFn, Sequence[np.random.SeedSequence]]], n_workers: int,
+def _run_chunks(task: Callable[[int], tuple[ChunkFn, Sequence[np.random.SeedSequence]]], n_tasks: int,
+                first: dict[str, np.ndarray], n_workers: int,
                 done: Callable[[], Any] | None) -> list[dict[str, np.ndarray]]:
-    """Results of every task ``(chunk_fn, seeds)`` (a chunk), in order, on this process and
-    ``n_workers - 1`` others.
+    """Results of every task ``task(i) = (chunk_fn, seeds)`` (a chunk), in order, on this process
+    and ``n_workers - 1`` others; ``first`` is the result of task 0, already computed here.
 
     The calling process computes chunks too: it is warm (modules imported, per-process caches of
     a chunk function's set-up filled), while a worker process pays its start-up (about a second
@@ -200,17 +328,17 @@ def _run_chunks(tasks: list[tuple[ChunkFn, Sequence[np.random.SeedSequence]]], n
     soon as it is free. When no new chunk is left and no worker has delivered yet (still
     starting), this process recomputes a pending chunk rather than wait for it (the result is the
     same): more jobs are never much slower than one. Workers are a reusable loky pool, kept
-    between calls: the start-up is paid once per session.
+    between calls: the start-up is paid once per session. An interruption (``KeyboardInterrupt``)
+    kills the workers before it propagates: no process is left computing.
     """
-    if n_workers == 1 or len(tasks) == 1:
-        out = []
-        for task in tasks:
-            out.append(_call(*task))
+    if n_workers == 1 or n_tasks == 1:
+        out = [first]
+        for i in range(1, n_tasks):
+            out.append(_call(*task(i)))
             if done is not None:
                 done()
         return out
     import threading
-    import warnings
 
     from joblib.externals.loky import get_reusable_executor
 
@@ -219,9 +347,9 @@ def _run_chunks(tasks: list[tuple[ChunkFn, Sequence[np.random.SeedSequence]]], n
         executor = get_reusable_executor(max_workers=n_workers - 1, timeout=600)
     lock = threading.Lock()
     delivered = threading.Event()  # a worker has delivered a chunk (set) or failed
-    todo = list(range(len(tasks)))
+    todo = [1, n_tasks]  # the chunks not handed out yet: range(todo[0], todo[1])
     pending: set[int] = set()
-    results: dict[int, dict[str, np.ndarray]] = {}
+    results: dict[int, dict[str, np.ndarray]] = {0: first}
     errors: list[BaseException] = []
 
     def store(i: int, res: dict[str, np.ndarray]) -> None:
@@ -235,12 +363,13 @@ def _run_chunks(tasks: list[tuple[ChunkFn, Sequence[np.random.SeedSequence]]], n
     def drive_worker() -> None:
         while True:
             with lock:
-                if not todo or errors:
+                if todo[0] >= todo[1] or errors:
                     return
-                i = todo.pop()
+                todo[1] -= 1
+                i = todo[1]
                 pending.add(i)
             try:
-                res = executor.submit(_call, *tasks[i]).result()
+                res = executor.submit(_call, *task(i)).result()
             except BaseException as exc:  # re-raised by the calling thread
                 with lock:
                     errors.append(exc)
@@ -250,28 +379,36 @@ def _run_chunks(tasks: list[tuple[ChunkFn, Sequence[np.random.SeedSequence]]], n
             delivered.set()
 
     threads = [threading.Thread(target=drive_worker, daemon=True) for _ in range(n_workers - 1)]
-    for t in threads:
-        t.start()
-    while True:
+    try:
+        for t in threads:
+            t.start()
+        while True:
+            with lock:
+                if errors:
+                    raise errors[0]
+                if todo[0] < todo[1]:
+                    i: int | None = todo[0]
+                    todo[0] += 1
+                elif pending and not delivered.is_set():
+                    i = max(pending)  # workers still starting: take over the chunk given out last
+                else:
+                    i = None
+            if i is None:
+                break
+            if i not in results:
+                store(i, _call(*task(i)))
+        for t in threads:  # wait for the chunks still running in workers (not for taken-over ones)
+            while t.is_alive() and len(results) < n_tasks and not errors:
+                t.join(0.01)
+    except KeyboardInterrupt:
         with lock:
-            if errors:
-                raise errors[0]
-            if todo:
-                i: int | None = todo.pop(0)
-            elif pending and not delivered.is_set():
-                i = max(pending)  # workers still starting: take over the chunk given out last
-            else:
-                i = None
-        if i is None:
-            break
-        if i not in results:
-            store(i, _call(*tasks[i]))
-    for t in threads:  # wait for the chunks still running in workers (not for taken-over ones)
-        while t.is_alive() and len(results) < len(tasks) and not errors:
-            t.join(0.01)
-    if len(results) < len(tasks):
+            todo[0] = todo[1]  # nothing more is handed out
+        executor.shutdown(wait=False, kill_workers=True)
+        raise
+    if len(results) < n_tasks:
         raise errors[0]
-    return [results[i] for i in range(len(tasks))]
+    return [results[i] for i in range(n_tasks)]
+
 
 def binomial_ci(successes: int, trials: int, level: float = 0.95) -> tuple[float, float]:
     """Exact (Clopper-Pearson) confidence interval of a binomial proportion (scipy's ``binomtest``).

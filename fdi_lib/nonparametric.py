@@ -105,7 +105,7 @@ def kitanidis_predictor_gains(model: LTVModel, E: Any, kgains: KitanidisGains | 
         raise ShapeError(f"kgains: expected K of shape {(model.n_steps, model.n, model.p)}, got {g.K.shape}")
     IKH = np.eye(model.n) - g.K @ model.H
     return KalmanGains(K=g.K, P=g.P, P_filt=g.P_filt, Sigma=g.Sigma, Sigma_chol=g.Sigma_chol,
-                       A=model.F @ IKH, FK=model.F @ g.K)
+                       A=model.F @ IKH, FK=model.F @ g.K, missing=g.missing)
 
 
 def _check_gains(model: LTVModel, gains: KalmanGains) -> None:
@@ -357,7 +357,10 @@ def energy_statistic(residuals: Any, Sigma_chol: np.ndarray, window: int) -> np.
         ``(*batch, N, p)``; a sample with a NaN is missing and left out of its windows
         (:mod:`fdi_lib.validation`).
     Sigma_chol : numpy.ndarray
-        ``(N, p, p)`` lower Cholesky factors (positive diagonal).
+        ``(N, p, p)`` lower Cholesky factors (positive diagonal): those of the gains of the filter
+        that produced ``residuals``, which know its missing samples
+        (:func:`fdi_lib.filters.kalman_gains` with ``missing=``), so that every observed term is
+        chi-square with ``p`` degrees of freedom also after a gap.
     window : int
         ``w``, ``1 <= w <= N``.
 

@@ -54,7 +54,10 @@ def fault_signature(model: LTVModel, gains: KalmanGains, fault: FaultProfile) ->
     ----------
     model : LTVModel
     gains : KalmanGains
-        From :func:`fdi_lib.filters.kalman_gains` on the fault-free model.
+        From :func:`fdi_lib.filters.kalman_gains` on the fault-free model, with the missing
+        samples of the record (``missing=``): there ``K_k = 0``, so ``Gamma_{k+1} = F_k Gamma_k +
+        Psi_k``, the fault effect the filter did not correct. Gains of the complete record would
+        give the signature of updates that did not happen.
     fault : FaultProfile
         ``Psi_k`` ``(N, n, m)`` and ``Phi_k`` ``(N, p, m)``.
 

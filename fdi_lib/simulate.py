@@ -18,9 +18,9 @@ from typing import Any, Callable
 
 import numpy as np
 
-from fdi_lib.errors import ModelError, ShapeError
+from fdi_lib.errors import ModelError, NonFiniteError, ShapeError
 from fdi_lib.models import FaultProfile, LTVModel, as_record
-from fdi_lib.validation import array, integer
+from fdi_lib.validation import array, check_finite, integer
 
 __all__ = ["Noise", "NoiseRoots", "Simulation", "noise_roots", "draw_noise", "noise_from_standard", "simulate", "pi_controller", "covariance_sqrt"]
 
@@ -175,6 +175,21 @@ def pi_controller(kp: float, ki: float, setpoint: float = 0.0) -> Callable[[int,
     return controller
 
 
+def _controller_input(u_k: Any, k: int, shape: tuple[int, ...]) -> np.ndarray:
+    """The controller's input at step ``k``, broadcast to ``shape`` ``(*batch, l)``: a typed error for a
+    wrong shape or a non-finite value (which would otherwise run through every later state)."""
+    try:
+        out = np.broadcast_to(np.asarray(u_k, dtype=float), shape)
+    except (TypeError, ValueError) as exc:
+        raise ShapeError(f"controller: expected an input u_k broadcastable to {shape} at step {k}, got "
+                         f"{type(u_k).__name__} of shape {np.shape(u_k)}") from exc
+    if not np.all(np.isfinite(out)):
+        idx = tuple(int(i) for i in np.argwhere(~np.isfinite(out))[0])
+        raise NonFiniteError(f"controller: expected a finite input u_k, got {out[idx]} at step {k}, "
+                             f"index {idx} of u_k")
+    return out
+
+
 def simulate(model: LTVModel, *, rng: np.random.Generator | None = None, noise: Noise | None = None,
              u: Any = None, controller: Callable[[int, np.ndarray], np.ndarray] | None = None,
              fault: FaultProfile | None = None, theta: Any = None, size: int | None = None) -> Simulation:
@@ -203,6 +218,12 @@ def simulate(model: LTVModel, *, rng: np.random.Generator | None = None, noise: 
     -------
     Simulation
 
+    Raises
+    ------
+    NonFiniteError
+        A NaN or infinite input ``u`` (or a replayed ``noise``), naming the argument and the first
+        index, before anything is simulated; a non-finite controller output, naming the step.
+
     Examples
     --------
     >>> import numpy as np
@@ -223,6 +244,8 @@ def simulate(model: LTVModel, *, rng: np.random.Generator | None = None, noise: 
     if noise.w.shape != (*batch, N, n) or noise.v.shape != (*batch, N, p):
         raise ShapeError(f"noise: expected w {(*batch, N, n)} and v {(*batch, N, p)}, "
                          f"got {noise.w.shape} and {noise.v.shape}")
+    for field in ("x0", "w", "v"):  # a replayed record: a NaN would run silently through every state
+        check_finite(getattr(noise, field), f"noise.{field}")
     if u is not None and controller is not None:
         raise ModelError("simulate: give u (open loop) or controller (closed loop), not both")
     if controller is not None and np.any(model.J):
@@ -252,7 +275,7 @@ def simulate(model: LTVModel, *, rng: np.random.Generator | None = None, noise: 
     for k in range(N):
         y_k = x[..., k, :] @ H[k].T + noise.v[..., k, :] + output_fault[k]
         if controller is not None:
-            us[..., k, :] = np.broadcast_to(controller(k, y_k), (*batch, l))
+            us[..., k, :] = _controller_input(controller(k, y_k), k, (*batch, l))
         else:
             y_k = y_k + us[..., k, :] @ J[k].T
         y[..., k, :] = y_k

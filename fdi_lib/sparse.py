@@ -20,7 +20,11 @@ Two solvers, which must agree:
 * :func:`lasso_path` - the exact, piecewise-linear Lasso path by the LARS-Lasso homotopy of
   Efron et al. (2004), the algorithm of scikit-learn's ``lars_path(method="lasso")``, here in
   Gram form and batched over problems (:func:`lasso_path_batch`, for Monte Carlo chunks): every
-  breakpoint (every change of support) comes out, with no ``lambda`` grid.
+  breakpoint (every change of support) comes out, with no ``lambda`` grid. Every path returned
+  satisfies the optimality (KKT) conditions to :data:`KKT_TOL` relative to ``lambda``
+  (:func:`kkt_residual`); on a degenerate design (duplicated, scaled, zero or nearly collinear
+  columns) where the homotopy's path does not, scikit-learn's ``lars_path`` recomputes it, and
+  :attr:`LassoPath.solver` says so.
 
 The rules for ``lambda`` below have batched forms too (:func:`flat_ranges`,
 :func:`grid_flat_ranges` on a :class:`PathBatch`): a Monte Carlo chunk applies them to all its
@@ -60,14 +64,17 @@ from typing import Any, Literal
 
 import numpy as np
 
-from fdi_lib.errors import ModelError, ShapeError
+from fdi_lib.errors import ModelError, NumericalError, ShapeError
 from fdi_lib.validation import array, integer, real
 
 __all__ = [
     "RegressionData",
     "regression_data",
+    "KKT_TOL",
+    "KKT_FLOOR",
     "LassoPath",
     "lasso_path",
+    "kkt_residual",
     "lasso_paths",
     "lasso_path_batch",
     "PathBatch",
@@ -86,6 +93,13 @@ __all__ = [
 ]
 
 Scale = Literal["log", "linear"]
+
+#: Largest violation of the optimality (KKT) conditions accepted on a returned path, relative to
+#: ``lambda`` (:func:`kkt_residual`); a homotopy path above it is recomputed (:func:`lasso_path_batch`).
+KKT_TOL = 1e-6
+#: Below ``KKT_FLOOR * lambda_max`` the KKT tolerance is absolute, ``KKT_TOL * KKT_FLOOR * lambda_max``
+#: (:func:`kkt_residual`; at ``lambda = 0``, the end of a full path, a relative one has no meaning).
+KKT_FLOOR = 1e-6
 
 
 @dataclass(frozen=True)
@@ -178,11 +192,20 @@ class LassoPath:
         ``theta_hat`` at each breakpoint, shape ``(m, K+1)``.
     n_samples : int
         The ``N`` of (39).
+    solver : str
+        What computed the path: ``"homotopy"`` (this module's batched homotopy), ``"sklearn-fallback"``
+        (scikit-learn's ``lars_path``, after the homotopy's path failed the KKT check; see
+        :func:`lasso_path_batch`), or ``"given"`` (a path built by hand).
+    kkt_residual : float
+        Largest violation of the optimality conditions along the path, relative to ``lambda``
+        (:func:`kkt_residual`; at most :data:`KKT_TOL` for a computed path); NaN when not checked.
     """
 
     lambdas: np.ndarray
     coefs: np.ndarray
     n_samples: int
+    solver: str = "given"
+    kkt_residual: float = float("nan")
 
     def coef(self, lam: float) -> np.ndarray:
         """``theta_hat(lambda)``, shape ``(m,)``, by linear interpolation between breakpoints (exact)."""
@@ -243,12 +266,18 @@ class PathBatch:
         ``(B,)`` numbers of breakpoints (``K + 1`` of each :class:`LassoPath`).
     n_samples : int
         The ``N`` of (39).
+    solver : numpy.ndarray
+        ``(B,)`` strings: :attr:`LassoPath.solver` of each path.
+    kkt_residual : numpy.ndarray
+        ``(B,)``: :attr:`LassoPath.kkt_residual` of each path.
     """
 
     lambdas: np.ndarray
     coefs: np.ndarray
     n_points: np.ndarray
     n_samples: int
+    solver: np.ndarray
+    kkt_residual: np.ndarray
 
     def __len__(self) -> int:
         return int(self.n_points.size)
@@ -261,7 +290,8 @@ class PathBatch:
         """Path ``b`` as a :class:`LassoPath`."""
         k = int(self.n_points[b])
         return LassoPath(lambdas=self.lambdas[b, :k].copy(), coefs=self.coefs[b, :k].T.copy(),
-                         n_samples=self.n_samples)
+                         n_samples=self.n_samples, solver=str(self.solver[b]),
+                         kkt_residual=float(self.kkt_residual[b]))
 
     def paths(self) -> list[LassoPath]:
         """All the paths, as :class:`LassoPath` objects."""
@@ -296,7 +326,9 @@ class PathBatch:
         for b, p in enumerate(paths):
             lambdas[b, : p.lambdas.size] = p.lambdas
             coefs[b, : p.lambdas.size] = p.coefs.T
-        return cls(lambdas=lambdas, coefs=coefs, n_points=n_points, n_samples=paths[0].n_samples)
+        return cls(lambdas=lambdas, coefs=coefs, n_points=n_points, n_samples=paths[0].n_samples,
+                   solver=np.array([p.solver for p in paths], dtype=object),
+                   kkt_residual=np.array([p.kkt_residual for p in paths]))
 
 
 def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: float = 0.0,
@@ -308,7 +340,11 @@ def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: floa
     exact at every breakpoint, which a hand-written ``lambda`` grid would not be. It is the
     algorithm of scikit-learn's ``lars_path(method="lasso")`` (the tests check that both give
     the same breakpoints), written here batched over problems (:func:`lasso_path_batch`) so that a
-    Monte Carlo chunk follows all its paths at once.
+    Monte Carlo chunk follows all its paths at once. Every path returned has passed the check of
+    the optimality conditions (:func:`kkt_residual`, at most :data:`KKT_TOL` relative to
+    ``lambda``); a homotopy path that fails it (a degenerate design: duplicated, scaled, zero or
+    nearly collinear columns) is recomputed by scikit-learn's ``lars_path``, and
+    :attr:`LassoPath.solver` says which.
 
     Parameters
     ----------
@@ -320,7 +356,9 @@ def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: floa
         The ``N`` of the ``1/(2N)`` in (39); default ``rows`` (scikit-learn's convention).
     lambda_min : float
         Stop the path at this ``lambda`` (as a fraction of ``lambda_max``), e.g. the lower end of the
-        window explored by :func:`flat_range`; the path is exact down to it. Default 0: the full path.
+        window explored by :func:`flat_range`; the path is exact down to it. Default 0: the full path
+        (which ends earlier at an exact fit, ``y`` in the span of the columns: once ``lambda`` falls
+        to ``1e-12 lambda_max``, only rounding is left to follow).
     max_size : int, optional
         Also stop at the end of the first interval where the support has more than ``max_size``
         components (the other end of the window of :func:`flat_range`); the path is exact up to
@@ -329,6 +367,11 @@ def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: floa
     Returns
     -------
     LassoPath
+
+    Raises
+    ------
+    NumericalError
+        When no path passes the KKT check (neither the homotopy's nor scikit-learn's).
     """
     X, y = _check_xy(X, y)
     return lasso_path_batch(X[None], y[None], n_samples=n_samples, lambda_min=lambda_min,
@@ -373,6 +416,21 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
     -------
     PathBatch
         Path ``b`` (``.path(b)``) is identical to :func:`lasso_path` of problem ``b`` alone.
+
+    Raises
+    ------
+    NumericalError
+        Naming the first problem whose path passes the KKT check neither from the homotopy nor
+        from scikit-learn's ``lars_path`` (see :func:`lasso_path`).
+
+    Notes
+    -----
+    Every path is checked against the optimality conditions (:func:`kkt_residual`): the whole
+    batch at once in the Gram form of the homotopy (one batched product and a few passes over
+    the breakpoints), then, for the paths above :data:`KKT_TOL`, from ``X`` and ``y`` (no Gram
+    rounding). A path that fails both is recomputed alone by scikit-learn's
+    ``lars_path(method="lasso")`` (``solver="sklearn-fallback"``), on the whole design, then, if
+    that path fails too, with its duplicated or scaled columns merged and its zero columns removed.
     """
     X = array(X, "X", ndim=3)
     y = array(y, "y")
@@ -385,21 +443,190 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
     if max_size is not None:
         max_size = integer(max_size, "max_size", low=1)
     # Exact rescaling X = sx X', y = sy y' per problem: theta = (sy / sx) theta', lambda = sx sy lambda'
-    # (keeps the homotopy's tolerances meaningful whatever the units, e.g. gas flows ~1e5).
+    # (keeps the homotopy's tolerances meaningful whatever the units, e.g. gas flows ~1e5). sx and sy
+    # are the powers of 2 nearest to the RMS of X and y: exact, so an exact tie stays one.
     Gram = np.matmul(X.transpose(0, 2, 1), X)
-    sx = np.sqrt(np.einsum("bii->b", Gram) / (rows * X.shape[2]))  # sqrt(mean(X^2))
-    sy = np.sqrt(np.einsum("br,br->b", y, y) / rows)
+    with np.errstate(divide="ignore"):
+        sx = np.exp2(np.round(np.log2(np.einsum("bii->b", Gram) / (rows * X.shape[2])) / 2))  # ~sqrt(mean(X^2))
+        sy = np.exp2(np.round(np.log2(np.einsum("br,br->b", y, y) / rows) / 2))
     sx[sx == 0] = 1.0
     sy[sy == 0] = 1.0
     Gram /= (sx * sx)[:, None, None]
     Xy = np.einsum("bri,br->bi", X, y) / (sx * sy)[:, None]
-    levels, coefs, n_points = _homotopy(Gram, Xy, lambda_min * np.abs(Xy).max(axis=1), max_size)
-    # the correlation level c is rows * alpha (scikit-learn's 1/(2 rows)); (39) has 1/(2N): lambda = c / N
+    B = X.shape[0]
+    c_min = lambda_min * np.abs(Xy).max(axis=1)
+    with np.errstate(all="ignore"):  # a singular step (a degenerate design) gives NaN: the KKT check rejects it
+        levels, coefs, n_points = _homotopy(Gram, Xy, c_min, max_size)
     S = int(n_points.max())
-    lam = levels[:, :S] * (sx * sy / N)[:, None]
+    levels, coefs = levels[:, :S], coefs[:, :S]
+    # KKT check of every path: a batched screen with the Gram matrix (one product), then, for the
+    # paths it does not pass, the exact check from X and y, and a recomputation if that fails too.
+    with np.errstate(all="ignore"):
+        kkt = _kkt(Xy[:, None, :] - np.matmul(coefs, Gram), levels, coefs, n_points,
+                   np.sqrt(np.einsum("bii->bi", Gram)), np.sqrt(np.einsum("br,br->b", y, y)) / sy, rows)
+    solver = np.full(B, "homotopy", dtype=object)
+    fixed = []
+    for b in np.flatnonzero(kkt > KKT_TOL):  # rare: degenerate or ill-conditioned designs
+        Xb, yb = X[b] / sx[b], y[b] / sy[b]
+        kkt[b] = _kkt_direct(Xb, yb, levels[b, :n_points[b]], coefs[b, :n_points[b]])
+        if kkt[b] > KKT_TOL:
+            fixed.append((b, *_lars_fallback(Xb, yb, float(c_min[b]), max_size, b, float(kkt[b]))))
+    if fixed:
+        S = max(S, *(lev.size for _, lev, _, _ in fixed))
+        levels = np.pad(levels, ((0, 0), (0, S - levels.shape[1])))
+        coefs = np.pad(coefs, ((0, 0), (0, S - coefs.shape[1]), (0, 0)))
+        for b, lev, co, res in fixed:
+            levels[b], coefs[b] = 0.0, 0.0
+            levels[b, :lev.size], coefs[b, :lev.size] = lev, co
+            n_points[b], kkt[b], solver[b] = lev.size, res, "sklearn-fallback"
+    # the correlation level c is rows * alpha (scikit-learn's 1/(2 rows)); (39) has 1/(2N): lambda = c / N
+    lam = levels * (sx * sy / N)[:, None]
     lam[np.arange(S) >= n_points[:, None]] = -np.inf  # padding
-    th = coefs[:, :S] * (sy / sx)[:, None, None]  # zeros in the padding
-    return PathBatch(lambdas=lam, coefs=th, n_points=n_points, n_samples=N)
+    th = coefs * (sy / sx)[:, None, None]  # zeros in the padding
+    return PathBatch(lambdas=lam, coefs=th, n_points=n_points, n_samples=N, solver=solver, kkt_residual=kkt)
+
+
+def kkt_residual(X: Any, y: Any, path: "LassoPath") -> float:
+    """Largest violation of the Lasso optimality (KKT) conditions of (39) along ``path``, relative to ``lambda``.
+
+    ``theta`` is the Lasso solution at ``lambda`` if and only if the gradient
+    ``g = X^T (y - X theta) / N`` has ``|g_j| <= lambda`` for every ``j`` and ``g_j = lambda sign(theta_j)``
+    where ``theta_j != 0``. The path is linear between breakpoints, so checking both ends of each
+    interval checks all of it. At each breakpoint ``lambda_i`` and for each ``j``, the violation is
+    ``|g_j| - lambda_i``, or ``|g_j - sigma lambda_i|`` when ``theta_j`` has the sign ``sigma`` at
+    ``lambda_i`` or on one of the two intervals next to it (supports and signs as
+    :meth:`LassoPath.interval_supports` reads them; a sign change across an interval thus counts
+    as ``|g_j| + lambda_i``). The residual is the largest violation in excess of a rounding allowance
+    for ``g_j`` (``8 eps (rows + m) max_k ||X_k|| (||y|| + sum_k ||X_k|| |theta_k|) / N``, which matters only
+    near ``lambda = 0`` on ill-conditioned designs), divided by ``max(lambda_i, KKT_FLOOR lambda_0)``.
+    It is 0 for a path exact to rounding, ``inf`` for a path with a NaN.
+
+    :func:`lasso_path_batch` checks every path it returns (a batched screen with the Gram matrix,
+    then this exact form, from ``X`` and ``y``, for the paths the screen does not pass) and stores
+    the residual in :attr:`LassoPath.kkt_residual`; it is at most :data:`KKT_TOL`.
+
+    Parameters
+    ----------
+    X, y : array_like
+        The problem of ``path``: ``(rows, m)``, ``(rows,)``.
+    path : LassoPath
+        Its ``n_samples`` is the ``N`` of (39).
+
+    Returns
+    -------
+    float
+    """
+    X, y = _check_xy(X, y)
+    if not isinstance(path, LassoPath) or path.coefs.shape[0] != X.shape[1]:
+        raise ModelError(f"path: expected a LassoPath of {X.shape[1]} components, got {path!r:.80}")
+    return _kkt_direct(X, y, path.lambdas * path.n_samples, path.coefs.T)
+
+
+def _kkt_direct(X: np.ndarray, y: np.ndarray, levels: np.ndarray, coefs: np.ndarray) -> float:
+    """:func:`kkt_residual` of one path, levels ``(S,)`` (``N lambda``) and coefficients ``(S, m)``."""
+    with np.errstate(all="ignore"):
+        g = (y[None, :] - coefs @ X.T) @ X
+    return float(_kkt(g[None], levels[None], coefs[None], np.array([levels.size]),
+                      np.sqrt(np.einsum("ri,ri->i", X, X))[None], np.sqrt(y @ y)[None], X.shape[0])[0])
+
+
+def _kkt(g: np.ndarray, levels: np.ndarray, coefs: np.ndarray, n_points: np.ndarray, norms: np.ndarray,
+         ynorm: np.ndarray, rows: int) -> np.ndarray:
+    """The residuals of :func:`kkt_residual` ``(B,)`` from the gradients ``g`` ``(B, S, m)`` (without the
+    ``1/N``) at the levels ``levels`` ``(B, S)`` (``N lambda``) of paths ``coefs`` ``(B, S, m)`` padded
+    after ``n_points``; ``norms`` ``(B, m)`` are the column norms of ``X`` and ``ynorm`` ``(B,)`` the norm
+    of ``y`` (for the rounding bound). Vectorised over the batch: a few passes over ``(B, S, m)``."""
+    B, S, m = coefs.shape
+    valid = np.arange(S) < n_points[:, None]  # (B, S)
+    with np.errstate(all="ignore"):
+        top = np.maximum(coefs.max(axis=(1, 2), initial=0.0), -coefs.min(axis=(1, 2), initial=0.0))
+        zero = 1e-12 * np.maximum(1.0, top)[:, None, None]
+        # the signs theta_j has at breakpoint i or on an interval next to it (as _activity reads them)
+        pos, neg = coefs > zero, coefs < -zero
+        mid = coefs[:, :-1] + coefs[:, 1:]
+        mid[~valid[:, 1:]] = 0.0
+        for mask, on in ((pos, mid > 2 * zero), (neg, mid < -2 * zero)):
+            mask[:, :-1] |= on
+            mask[:, 1:] |= on
+        # |g_j| <= c for every j; c - g_j <= 0 where theta_j > 0 and c + g_j <= 0 where theta_j < 0 (with
+        # the first, g_j = c sign(theta_j); a sign change on an interval gives c + |g_j|): four
+        # reductions over j
+        worst = np.maximum(g.max(axis=2), -g.min(axis=2)) - levels
+        np.maximum(worst, levels - np.where(pos, g, np.inf).min(axis=2), out=worst)
+        np.maximum(worst, levels + np.where(neg, g, -np.inf).max(axis=2), out=worst)
+        # rounding allowance of g_j = X_j^T (y - X beta), every j: the n eps bound of a dot product of
+        # length n = rows + m (Cauchy-Schwarz on each), times 8 for the backward error of the solve
+        rounding = (8 * np.finfo(float).eps * (rows + m)) * norms.max(axis=1, keepdims=True) * (
+            ynorm[:, None] + np.einsum("bsi,bi->bs", np.abs(coefs), norms))
+        scale = np.maximum(np.maximum(levels, KKT_FLOOR * levels[:, :1]), np.finfo(float).tiny)
+        res = np.where(valid, (worst - rounding) / scale, -np.inf).max(axis=1)
+    return np.where(np.isnan(res), np.inf, np.maximum(res, 0.0))  # NaN, anywhere in a path, fails
+
+
+def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | None, b: int,
+                   kkt: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """The path of one problem whose homotopy path failed the KKT check, by scikit-learn's ``lars_path``.
+
+    Why not only the homotopy: its inverse of ``Gram_AA`` is up/down-dated (fast, batched) and loses
+    accuracy when active columns are nearly collinear (``Gram_AA`` nearly singular); scikit-learn's
+    ``lars_path(method="lasso")`` keeps a Cholesky factor (stable) and handles ties. It is tried on
+    the whole design, then, if that path fails the check (scikit-learn drops a degenerate regressor
+    for good, which can violate the conditions later), on the design with its parallel columns
+    (``|cos| >= 1 - 1e-12``: duplicated or scaled) merged into the longest of each group and its
+    zero columns removed (an exact reduction for exactly parallel columns: the Lasso puts a group's
+    whole weight on its longest column, and the others' correlations are multiples of its own by at
+    most 1 in absolute value). ``X``, ``y`` are the
+    scaled ones of :func:`lasso_path_batch`, ``c_min`` the lower end of the path in levels, ``b`` and
+    ``kkt`` the problem's index and homotopy residual (for the error message).
+
+    Returns the levels ``(S,)``, the coefficients ``(S, m)`` (the path stopped as the homotopy's
+    would be, at ``c_min`` or after the first interval with more than ``max_size`` components) and
+    the KKT residual. A path that stops above ``c_min`` is accepted only below ``1e-9`` times its
+    first level (where only rounding is left on the degenerate designs that come here).
+
+    Raises
+    ------
+    NumericalError
+        When no path passes the KKT check (naming the problem and the residuals).
+    """
+    import warnings
+
+    from sklearn.exceptions import ConvergenceWarning
+    from sklearn.linear_model import lars_path
+
+    rows, m = X.shape
+    norms = np.sqrt(np.einsum("ri,ri->i", X, X))
+    keep = np.flatnonzero(norms > 0)
+    cos = np.abs(X[:, keep].T @ X[:, keep]) / np.outer(norms[keep], norms[keep])
+    longest = np.ones(keep.size, bool)  # the longest column of each parallel group (the first on ties)
+    for i in range(keep.size):
+        par = cos[i] >= 1 - 1e-12
+        longest[i] = not np.any(par & ((norms[keep] > norms[keep[i]])
+                                       | ((norms[keep] == norms[keep[i]]) & (np.arange(keep.size) < i))))
+    designs = [np.arange(m)] + ([keep[longest]] if longest.sum() < m else [])
+    # lars_path stops once alpha <= alpha_min + float32 eps (an absolute tolerance): y is scaled by a
+    # power of 2 (exact) so that alpha_max is about 1e8, which puts that stop 15 decades down.
+    t = 2.0 ** np.round(np.log2(1e8 * rows / max(float(np.abs(X.T @ y).max()), np.finfo(float).tiny)))
+    tried = []
+    for cols in designs:
+        with warnings.catch_warnings():  # degenerate-regressor warnings: the KKT check below decides
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            alphas, _, co = lars_path(X[:, cols], t * y, method="lasso", alpha_min=t * c_min / rows,
+                                      max_iter=50 * m + 100)
+        levels = alphas * (rows / t)
+        coefs = np.zeros((levels.size, m))
+        coefs[:, cols] = co.T / t
+        over = np.flatnonzero(_activity(coefs[None])[1][0].sum(axis=1) > (m if max_size is None else max_size))
+        if over.size:  # stop after the first interval with more than max_size components
+            levels, coefs = levels[: over[0] + 2], coefs[: over[0] + 2]
+        res = _kkt_direct(X, y, levels, coefs)
+        done = over.size or levels[-1] <= max(c_min, 1e-9 * levels[0])  # lars_path's own tail ends
+        if res <= KKT_TOL and done:
+            return levels, coefs, res
+        tried.append(f"{res:.3g} lambda" + ("" if done else f" (stopped at {levels[-1] / levels[0]:.3g} lambda_max)"))
+    raise NumericalError(f"X, y (problem {b}): the Lasso path violates the optimality (KKT) conditions by "
+                         f"{kkt:.3g} lambda with the homotopy and by {', '.join(tried)} with scikit-learn's "
+                         f"lars_path; expected at most KKT_TOL = {KKT_TOL:g} down to lambda_min")
 
 
 def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
@@ -422,6 +649,13 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
     Problems that have finished are dropped from the working arrays whenever they are half of
     them. The tests check it against scikit-learn's ``lars_path`` to 1e-9.
 
+    Degenerate designs: components tied with the level (to ``1e-12 c_0``) join in zero-length
+    steps, one per step; a component that joined so with a direction against its sign leaves at
+    once; a column in the span of the active ones is kept out; a path ends at an exact fit (``c``
+    down to ``1e-12 c_0``). A path that meets a singular step (NaN) or runs more than
+    ``50 m + 100`` steps (a cycle) ends with a NaN, which :func:`lasso_path_batch`'s KKT check
+    rejects.
+
     Returns the correlation levels ``(B, S)`` and coefficients ``(B, S, m)`` at the
     breakpoints, and the number ``(B,)`` of breakpoints of each problem (the tails are padding).
     """
@@ -439,6 +673,7 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
     GA = np.zeros((B, K, m))  # Gram[:, order, :]: the active rows, zero in unused slots
     j = np.abs(cov).argmax(axis=1)
     c = np.abs(cov[rows, j])
+    near = 1e-12 * c  # a correlation this close to the level ties with it (rounding of cov, ~eps c_0)
     cap = 2 * m + 4  # breakpoints stored per problem (grown if needed)
     levels, coefs = np.zeros((B, cap)), np.zeros((B, cap, m))
     levels[:, 0] = c
@@ -453,8 +688,8 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
     while running.any():
         if running.sum() <= rows.size // 2 and rows.size >= 16:  # drop finished problems
             keep = running
-            Gram, c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j = (
-                x[keep] for x in (Gram, c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j))
+            Gram, c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j, near = (
+                x[keep] for x in (Gram, c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j, near))
             joining, dropping, barred, barred_sign, running, ids = (
                 x[keep] for x in (joining, dropping, barred, barred_sign, running, ids))
             rows = np.arange(ids.size)
@@ -506,14 +741,23 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
             up = (c[:, None] - cov) / (1.0 - a)
             down = (c[:, None] + cov) / (1.0 + a)
             zero = -beta / d
-        join = np.where(up > 0, up, np.inf)
-        join = np.minimum(join, np.where(down > 0, down, np.inf))
+        join = np.minimum(np.where(up > 0, up, np.inf), np.where(down > 0, down, np.inf))
+        # A correlation at the level (a tie, e.g. at lambda_max; to rounding, `near`, while the level
+        # is well above it) that would overtake it joins at once (gamma = 0); one that moves away
+        # from it does not, nor one that moves with it to 1e-9 (a column in the span of the active
+        # ones, e.g. a duplicate: joining would make Gram_AA singular, and staying out keeps the KKT
+        # conditions to 1e-9 lambda).
+        tol = np.where(c > 1e3 * near, near, 0.0)[:, None]
+        tie = (((c[:, None] - cov <= tol) & (a < 1 - 1e-9)) | ((c[:, None] + cov <= tol) & (a > -1 + 1e-9)))
+        join[tie] = 0.0
         join[active] = np.inf
         hit = barred >= 0
         b = rows[hit]
         join[b, barred[b]] = np.where(barred_sign[b] > 0, down[b, barred[b]], up[b, barred[b]])
         join[b, barred[b]] = np.where(join[b, barred[b]] > 0, join[b, barred[b]], np.inf)
-        zero = np.where(active & (zero > 0), zero, np.inf)
+        # a component that joined in a tie (beta_j = 0) but whose direction opposes its sign leaves
+        # at once (gamma = 0): it cannot stay active (its coefficient would take the wrong sign)
+        zero = np.where(active & ((zero > 0) | ((beta == 0) & (d * sign[:, :m] < 0))), zero, np.inf)
         j_join, j_drop = join.argmin(axis=1), zero.argmin(axis=1)
         g_join, g_drop = join[rows, j_join], zero[rows, j_drop]
         g_end = c - c_min
@@ -523,6 +767,7 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
         c = c - gamma
         ended = running & (g_end <= np.minimum(g_join, g_drop))
         c[ended] = c_min[ended]
+        ended |= running & (c <= near)  # an exact fit: below, only rounding is left to follow
         dropping = running & ~ended & (g_drop < g_join)
         joining = running & ~ended & ~dropping
         j = np.where(dropping, j_drop, j_join)
@@ -539,9 +784,12 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
         levels[at, point] = c[running]
         coefs[at, point] = beta[running]
         n_points[at] += 1
+        if step > 50 * m + 100:  # far more steps than a path has (a cycle of zero-length steps on a
+            levels[at, point] = np.nan  # degenerate design): NaN makes the KKT check reject the path
+            running[:] = False
         if max_size is not None:  # the interval just followed had more than max_size components
             running &= active.sum(axis=1) <= max_size
-        running &= ~ended
+        running &= ~ended & np.isfinite(c) & np.isfinite(beta).all(axis=1)  # the KKT check rejects it
         joining &= running
         dropping &= running
     return levels, coefs, n_points

@@ -8,16 +8,32 @@ Policy
   innovations, residuals) may contain NaN: a sample (time step) with a NaN in any of
   its components is **missing as a whole**, and is handled explicitly:
 
-  - :func:`fdi_lib.filters.kalman_filter` and :func:`fdi_lib.kitanidis.kitanidis_filter`
-    predict without updating (``Xhat_{k|k} = Xhat_k``); the innovation of a missing
-    sample is NaN, which marks it for the tests downstream. The gains are those of the
-    complete record (they do not depend on the data), so for a few samples after a gap
-    the true innovation covariance is somewhat larger than ``Sigma_k``;
-  - the GLR tests (:func:`fdi_lib.glr.glr_known_profile`, :func:`fdi_lib.glr.glr_window`),
-    :func:`fdi_lib.isolation.information` and :func:`fdi_lib.nonparametric.energy_statistic`
-    skip the sample: its innovation and its signature rows contribute nothing to the sums
-    (the energy of a window with missing samples is a sum of fewer terms, so the
-    chi-square threshold of the full window is conservative);
+  - the filters know the missing samples: :func:`fdi_lib.filters.kalman_gains` and
+    :func:`fdi_lib.kitanidis.kitanidis_gains` take the pattern (``missing=``, booleans
+    ``(N,)``) and set ``K_k = 0``, ``P_{k|k} = P_k`` there (as ``filterpy``'s
+    ``KalmanFilter.update(None)``), so that the later gains, the innovation covariances
+    ``Sigma_k``, the closed-loop matrices ``A_k = F_k`` and hence the fault signatures
+    (:func:`fdi_lib.signatures.fault_signature`, the windowed GLR's ``Gamma_k(r)``) are those
+    of the record actually observed. :func:`fdi_lib.filters.kalman_filter` and
+    :func:`fdi_lib.kitanidis.kitanidis_filter` compute such gains from ``y`` by default
+    (all realisations must then miss the same samples); they predict without updating
+    (``Xhat_{k|k} = Xhat_k``) and return a NaN innovation, which marks the sample for the
+    tests downstream. A NaN in ``y`` at a sample that given gains observe is a
+    :class:`~fdi_lib.errors.NonFiniteError`: gains of the complete record on a record with
+    gaps keep an update that did not happen (a biased fault estimate, issue 21). The
+    Kitanidis filter rejects, at the first sample after a gap, the unknown inputs pending
+    since the gap;
+  - the GLR tests (:func:`fdi_lib.glr.glr_known_profile`, :func:`fdi_lib.glr.glr_window`,
+    :class:`fdi_lib.glr.WindowedGLR`), :func:`fdi_lib.isolation.information` and
+    :func:`fdi_lib.nonparametric.energy_statistic` skip a NaN sample: its innovation and its
+    signature rows contribute nothing to the sums. Given these gains (and their
+    ``Sigma_chol`` for the energy), the sums are exactly those of the observed samples. They
+    require NaN at the samples the gains skip (a finite value there comes from another
+    filter: :class:`~fdi_lib.errors.ModelError`); a NaN at a sample the gains observe (an
+    innovation dropped after the filter used it) is skipped too, which leaves the other
+    innovations and their signatures unchanged. The energy of a window with missing
+    samples is a sum of fewer terms, so the chi-square threshold of the full window is
+    conservative;
   - the statistics stay finite.
 
   Functions that cannot skip a sample (RLS tracking, regression data for the Lasso,
@@ -31,8 +47,8 @@ Policy
   statistics (:func:`fdi_lib.glr.glr_window`, :func:`fdi_lib.nonparametric.energy_statistic`)
   are NaN on their warm-up, before the first admissible onset or full window.
   :func:`fdi_lib.glr.first_alarm` accepts such a leading warm-up and raises
-  :class:`~fdi_lib.errors.NonFiniteError` for any NaN after it: NaN is never read as
-  "no alarm".
+  :class:`~fdi_lib.errors.NonFiniteError` for any NaN after it (and for a record that is NaN
+  throughout): NaN is never read as "no alarm".
 
 Every error is a subclass of :class:`~fdi_lib.errors.FDIError` and names the argument,
 what was expected and what was received.
@@ -48,7 +64,8 @@ import scipy.linalg
 
 from fdi_lib.errors import CovarianceError, ModelError, NonFiniteError, ShapeError
 
-__all__ = ["COV_RTOL", "check_finite", "measurements", "missing_samples", "integer", "real",
+__all__ = ["COV_RTOL", "check_finite", "measurements", "missing_samples", "missing_pattern",
+           "common_pattern", "gains_missing", "check_missing_known", "check_skipped", "integer", "real",
            "probability", "seed", "covariance", "array", "check_gains", "initial_state", "cholesky"]
 
 #: Relative tolerance of the symmetry and positive semi-definiteness checks.
@@ -95,6 +112,82 @@ def missing_samples(arr: np.ndarray, name: str) -> np.ndarray:
         raise NonFiniteError(f"{name}: expected finite values or NaN (missing), got {arr[idx]} "
                              f"at index {idx}")
     return np.isnan(arr).any(axis=-1)
+
+
+def missing_pattern(value: Any, n_steps: int, name: str = "missing") -> np.ndarray:
+    """A missing-sample pattern: booleans ``(n_steps,)``, ``True`` where the sample is missing.
+
+    ``None`` means fully observed. Returns a read-only boolean array.
+    """
+    if value is None:
+        out = np.zeros(n_steps, dtype=bool)
+    else:
+        arr = np.asarray(value)
+        if arr.dtype != bool:
+            raise ModelError(f"{name}: expected booleans (True: missing), got dtype {arr.dtype}")
+        if arr.shape != (n_steps,):
+            raise ShapeError(f"{name}: expected shape ({n_steps},), one pattern for the record, got {arr.shape}")
+        out = arr.copy()
+    out.flags.writeable = False
+    return out
+
+
+def common_pattern(missing: np.ndarray, name: str) -> np.ndarray:
+    """The one missing-sample pattern ``(N,)`` shared by all realisations of ``missing`` ``(..., N)``.
+
+    Gains depend on the missing samples, so realisations that miss different samples cannot share
+    them: :class:`NonFiniteError` naming the first realisation that differs.
+    """
+    flat = missing.reshape(-1, missing.shape[-1])
+    if flat.shape[0] == 0:
+        return np.zeros(missing.shape[-1], dtype=bool)
+    differ = (flat != flat[0]).any(axis=-1)
+    if differ.any():
+        b = int(np.argmax(differ))
+        k = int(np.argmax(flat[b] != flat[0]))
+        raise NonFiniteError(
+            f"{name}: expected the same missing samples in every realisation (the gains depend on them), "
+            f"got realisation {np.unravel_index(b, missing.shape[:-1])} differing from the first at "
+            f"sample {k}: filter each pattern with its own gains (missing=...)")
+    return flat[0]
+
+
+def gains_missing(gains: Any) -> np.ndarray:
+    """The missing samples ``(N,)`` the filter ``gains`` were computed for (all ``False``: none)."""
+    miss = getattr(gains, "missing", None)
+    return np.zeros(np.shape(gains.Sigma)[0], dtype=bool) if miss is None else miss
+
+
+def check_missing_known(missing: np.ndarray, gains: Any, name: str) -> None:
+    """Raise :class:`NonFiniteError` if a sample of ``missing`` ``(..., N)`` is observed in ``gains``.
+
+    A filter skips a sample only where its gains say so (``K_k = 0``, ``P_{k|k} = P_k``): a sample
+    missing in the data but not in the gains would leave the gains, the innovation covariances and
+    the fault signatures those of an update that did not happen (a biased fault estimate).
+    """
+    unknown = missing & ~gains_missing(gains)
+    if unknown.any():
+        idx = tuple(int(i) for i in np.argwhere(unknown)[0])
+        raise NonFiniteError(
+            f"{name}: a sample missing (NaN) at index {idx} is observed in the gains: compute the gains "
+            f"for the missing samples (kalman_gains(model, missing=...) or kitanidis_gains(model, E, "
+            f"missing=...), with missing = numpy.isnan(y).any(axis=-1))")
+
+
+def check_skipped(missing: np.ndarray, gains: Any, name: str) -> None:
+    """Raise :class:`ModelError` if ``name`` (innovations) is finite at a sample the ``gains`` skip.
+
+    ``missing`` ``(..., N)`` marks the NaN samples of ``name``. A filter run with these gains
+    returns NaN there: a finite value comes from another filter, whose innovation covariances and
+    fault signatures are not those of ``gains``.
+    """
+    skipped = gains_missing(gains)
+    if skipped.any():
+        bad = skipped & ~missing
+        if bad.any():
+            idx = tuple(int(i) for i in np.argwhere(bad)[0])
+            raise ModelError(f"{name}: expected NaN at index {idx}, a sample the gains skip (missing), got a "
+                             f"finite value: innovations and gains of different filters")
 
 
 def measurements(value: Any, *, n_steps: int, width: int, name: str) -> tuple[np.ndarray, np.ndarray]:

@@ -178,6 +178,48 @@ def test_typical_wrong_answers_get_the_right_message(exercise_id, wrong, expecte
     assert expected in result.message
 
 
+CHECKABLE = [e.id for e in EXERCISES.values() if e.checkable]
+EXTREMES = [5e-324, -5e-324, 2.2e-308, 1e308, -1e308, 1.7976931348623157e308, -1.7976931348623157e308]
+
+
+@pytest.mark.parametrize("exercise_id", CHECKABLE)
+def test_extreme_answers_get_a_message_not_a_crash(exercise_id):
+    """5e-324 crashed the diagnosis (a / ref underflowed to 0, then log10(0)) and 1e308 too
+    (a / ref overflowed to inf, then round(inf)); every extreme now gets a "not yet" message."""
+    import warnings
+
+    ref = reference(exercise_id)
+    first = np.arange(ref.size).reshape(ref.shape) == 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")                       # no overflow or underflow warning either
+        for v in EXTREMES:
+            for answer in (np.full(ref.shape, v), np.where(first, v, ref), np.where(first, v, -ref)):
+                result = check(exercise_id, answer)
+                assert not result and result.message.startswith(f"{exercise_id}: not yet."), (v, result)
+    if ref.size == 1 and E.get_exercise(exercise_id).tolerance != "exact (integers)" and float(ref) != 0:
+        assert "too small by about a factor 10^" in check(exercise_id, 5e-324 * np.sign(ref)).message
+        assert "too large by about a factor 10^" in check(exercise_id, 1e308 * np.sign(ref)).message
+
+
+@pytest.mark.parametrize("exercise_id", [e.id for e in EXERCISES.values()
+                                         if e.checkable and e.tolerance == "exact (integers)"])
+def test_integer_answers_must_be_whole_numbers(exercise_id):
+    """97.5 passed as the count 98 (within the 0.5 tolerance of an integer answer)."""
+    ref = reference(exercise_id)
+    for answer in (ref + 0.5, ref - 0.4999, ref + 1e-9):
+        result = check(exercise_id, answer)
+        assert not result and "which is not a whole number (a count is an integer)" in result.message
+        assert f"{float(ref.ravel()[0])!r}" not in result.message.replace(f"{float(answer.ravel()[0])!r}", "")
+    assert check(exercise_id, ref.astype(float)) and check(exercise_id, ref.astype(np.int64))
+
+
+def test_glr5_rejects_97_5():
+    result = check("glr-5", 97.5)
+    assert not result
+    assert result.message == ("glr-5: not yet. Expected an integer: the number of candidate onsets r at "
+                              "time k; got 97.5, which is not a whole number (a count is an integer).")
+
+
 def test_unknown_exercise_is_a_typed_error_with_suggestions():
     with pytest.raises(UnknownExerciseError, match=r"no exercise 'glr-33'; did you mean 'glr-3'"):
         check("glr-33", 1.0)

@@ -4,7 +4,10 @@ Random shapes, dtypes, NaN/inf placements, non-symmetric and indefinite matrices
 keyword values: every call either returns finite, well-shaped output (NaN only where the
 missing-data policy of :mod:`fdi_lib.validation` documents it) or raises a subclass of
 :class:`fdi_lib.errors.FDIError`. Any other exception (numpy, scipy, a RuntimeWarning made an
-error by the test configuration) fails the test. Deterministic profile (tests/conftest.py).
+error by the test configuration) fails the test. A scalar argument outside its documented range
+(a window longer than the record, a probability of 1.5, start > stop, a negative seed, ...) must
+raise a typed error: returning anything, finite or not, fails the test (issue 21).
+Deterministic profile (tests/conftest.py).
 """
 
 from __future__ import annotations
@@ -65,12 +68,39 @@ def matrix(draw, shape, kind="any"):
     return a
 
 
-def attempt(fn):
-    """Call ``fn``: its value, or None when it raised an FDIError; anything else fails the test."""
+def attempt(fn, invalid=None):
+    """Call ``fn``: its value, or None when it raised an FDIError; anything else fails the test.
+
+    ``invalid`` (a description of an argument outside its range, or None): then the call must
+    raise an FDIError; a returned value fails the test.
+    """
     try:
-        return fn()
+        out = fn()
     except FDIError:
         return None
+    assert not invalid, f"accepted an argument outside its range: {invalid}"
+    return out
+
+
+def is_int(v):
+    return isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_))
+
+
+def out_of(v, low=None, high=None):
+    """Whether ``v`` is not an integer in ``[low, high]``."""
+    return not is_int(v) or (low is not None and v < low) or (high is not None and v > high)
+
+
+def bad_real(v, low, high, low_open=False, high_open=False):
+    """Whether ``v`` is not a finite real number in the interval."""
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.number)) or not np.isfinite(v):
+        return True
+    return v < low or v > high or (low_open and v == low) or (high_open and v == high)
+
+
+def why(**conditions):
+    """The names of the conditions that hold (``None`` when none do)."""
+    return ", ".join(name for name, bad in conditions.items() if bad) or None
 
 
 def assert_finite(x, name, allow_nan=None):
@@ -103,7 +133,8 @@ def good_model(draw):
 @FUZZ
 @given(model_inputs())
 def test_fuzz_ltv_model_and_kalman(kwargs):
-    m = attempt(lambda: ltv_model(**kwargs))
+    steps = kwargs["n_steps"]
+    m = attempt(lambda: ltv_model(**kwargs), why(**{f"n_steps={steps!r}": out_of(steps, 1)}))
     if m is None:
         return
     g = attempt(lambda: kalman_gains(m))
@@ -138,12 +169,17 @@ def test_fuzz_filters_and_glr(data):
     if res is not None:
         assert res.statistic.shape == eps.shape[:-1]
         assert_finite(res.statistic, "glr statistic")
-        alarm = attempt(lambda: first_alarm(res.statistic, draw(st.sampled_from([3.0, np.nan, -1.0])),
-                                            draw(st.sampled_from([0, N, -3, N + 1, True]))))
+        thr, first = draw(st.sampled_from([3.0, np.nan, -1.0])), draw(st.sampled_from([0, N, -3, N + 1, True]))
+        alarm = attempt(lambda: first_alarm(res.statistic, thr, first),
+                        why(threshold_nan=np.isnan(thr), start_out_of_0_N=out_of(first, 0, N)))
         assert alarm is None or np.all((alarm >= -1) & (alarm < N))
     fam = step_family(m, Psi=np.ones((n, 1)))
     window = draw(st.sampled_from([1, 2, N, N + 1, 0, 2.0]))
-    w = attempt(lambda: glr_window(eps, m, g, fam, window, draw(st.sampled_from([None, 0, 1, -1]))))
+    min_samples = draw(st.sampled_from([None, 0, 1, -1]))
+    bad_window = out_of(window, 1, N)
+    w = attempt(lambda: glr_window(eps, m, g, fam, window, min_samples),
+                why(window_out_of_1_N=bad_window, min_samples_out_of_0_window_minus_1=not bad_window
+                    and min_samples is not None and out_of(min_samples, 0, window - 1)))
     if w is not None:
         defined = w.onset >= 0
         assert_finite(w.statistic, "window statistic", allow_nan=~defined)
@@ -151,7 +187,9 @@ def test_fuzz_filters_and_glr(data):
         alarm = attempt(lambda: first_alarm(w.statistic, 5.0))
         assert alarm is not None, "first_alarm rejected a windowed statistic with only a warm-up NaN"
     start, stop = draw(st.integers(-1, N)), draw(st.integers(0, N + 1))
-    info = attempt(lambda: information(eps, sig, g, start, stop))
+    info = attempt(lambda: information(eps, sig, g, start, stop),
+                   why(start_out_of_0_N_minus_1=out_of(start, 0, N - 1),
+                       stop_out_of_start_plus_1_N=out_of(stop, start + 1, N)))
     if info is not None:
         assert_finite(info[0], "F")
         assert_finite(info[1], "zeta")
@@ -165,11 +203,14 @@ def test_fuzz_minmax(data):
     F = draw(matrix((m, m), "pd"))
     zeta = draw(matrix((m,)))
     a = draw(st.sampled_from([[0], [m - 1], [0, 0], [m], [-1], [], [0.5]]))
-    stat = attempt(lambda: minmax_statistic(F, zeta, a))
+    bad_a = not a or len(set(a)) != len(a) or any(out_of(i, 0, m - 1) for i in a)
+    stat = attempt(lambda: minmax_statistic(F, zeta, a), why(**{f"a={a}": bad_a}))
     if stat is not None:
         assert_finite(stat, "minmax")
         assert float(stat) >= -1e-9 * (1 + np.abs(np.asarray(zeta, float)).max() ** 2)
-    attempt(lambda: minmax_isolation(F, zeta, [[0]], alpha=draw(st.sampled_from([0.01, 0.0, 1.5, np.nan]))))
+    alpha = draw(st.sampled_from([0.01, 0.0, 1.5, np.nan]))
+    attempt(lambda: minmax_isolation(F, zeta, [[0]], alpha=alpha),
+            why(**{f"alpha={alpha}": bad_real(alpha, 0, 1, True, True)}))
 
 
 @FUZZ
@@ -185,18 +226,22 @@ def test_fuzz_energy_and_rls(data):
     elif L == "upper" and p > 1:
         chol[0, 0, 1] = 1.0
     window = draw(st.sampled_from([1, N, N + 1, 0, 3.0, True]))
-    en = attempt(lambda: energy_statistic(r, chol, window))
+    en = attempt(lambda: energy_statistic(r, chol, window),
+                 why(**{f"window={window!r}": out_of(window, 1, N)}))
     if en is not None:
         assert en.shape == (N,)
         assert_finite(en[window - 1:], "energy after warm-up")
-    thr = attempt(lambda: energy_threshold(draw(st.sampled_from([1, 0, 3])), p,
-                                           draw(st.sampled_from([0.01, 0.0, 2.0, np.nan]))))
+    w_thr, alpha = draw(st.sampled_from([1, 0, 3])), draw(st.sampled_from([0.01, 0.0, 2.0, np.nan]))
+    thr = attempt(lambda: energy_threshold(w_thr, p, alpha),
+                  why(**{f"window={w_thr}": out_of(w_thr, 1), f"alpha={alpha}": bad_real(alpha, 0, 1, True, True)}))
     assert thr is None or np.isfinite(thr)
     m = draw(dims)
     M = draw(matrix((N, p, m)))
     S = draw(matrix((N, p, p), "pd"))
     lam = draw(st.sampled_from([0.9, 1.0, 0.0, 1.5, np.nan, True]))
-    res = attempt(lambda: rls_track(r, M, S, lam=lam, theta0=draw(st.one_of(st.none(), matrix((m,))))))
+    theta0 = draw(st.one_of(st.none(), matrix((m,))))
+    res = attempt(lambda: rls_track(r, M, S, lam=lam, theta0=theta0),
+                  why(**{f"lam={lam!r}": bad_real(lam, 0, 1, low_open=True)}))
     if res is not None:
         assert_finite(res.theta_hat, "theta_hat")
         assert res.theta_hat.shape == (N, m)
@@ -209,19 +254,26 @@ def test_fuzz_sparse(data):
     rows, m = draw(st.integers(1, 10)), draw(st.integers(1, 4))
     X = draw(matrix((rows, m)))
     y = draw(matrix((rows,)))
-    path = attempt(lambda: lasso_path(X, y, max_size=draw(st.sampled_from([None, 1, 0, -2, 1.5])),
-                                      lambda_min=draw(st.sampled_from([0.0, 0.5, 1.0, -0.1, np.nan]))))
+    max_size = draw(st.sampled_from([None, 1, 0, -2, 1.5]))
+    lambda_min = draw(st.sampled_from([0.0, 0.5, 1.0, -0.1, np.nan]))
+    path = attempt(lambda: lasso_path(X, y, max_size=max_size, lambda_min=lambda_min),
+                   why(**{f"max_size={max_size}": max_size is not None and out_of(max_size, 1),
+                          f"lambda_min={lambda_min}": bad_real(lambda_min, 0, 1, high_open=True)}))
     if path is not None:
         assert_finite(path.coefs, "coefs")
         assert_finite(path.lambdas, "lambdas")
     support = draw(st.sampled_from([[], [0], [-1], [m], [0, 0], [0.5], "a"]))
-    th = attempt(lambda: least_squares_on_support(X, y, support))
+    bad_support = isinstance(support, str) or len(set(support)) != len(support) or any(out_of(i, 0, m - 1)
+                                                                                        for i in support)
+    th = attempt(lambda: least_squares_on_support(X, y, support), why(**{f"support={support!r}": bad_support}))
     if th is not None:
         assert th.shape == (m,)
         assert_finite(th, "least squares")
     N, p = draw(st.integers(1, 6)), draw(dims)
-    reg = attempt(lambda: regression_data(draw(matrix((N, p))), draw(matrix((N, p, m))),
-                                          start=draw(st.sampled_from([0, 1, N, -1]))))
+    residuals, on_residual = draw(matrix((N, p))), draw(matrix((N, p, m)))
+    start = draw(st.sampled_from([0, 1, N, -1]))
+    reg = attempt(lambda: regression_data(residuals, on_residual, start=start),
+                  why(**{f"start={start} (N={N})": out_of(start, 0, N - 1)}))
     if reg is not None:
         assert_finite(reg.X, "X")
         assert_finite(reg.y, "y")
@@ -237,9 +289,11 @@ def test_fuzz_simulate_signature_kitanidis(data):
     prof = attempt(lambda: fault_profile(m, Psi=draw(matrix((n, k_m)))))
     theta = draw(matrix((k_m,)))
     seed = draw(st.sampled_from([0, 7, -1, 1.5, "abc"]))
+    size = draw(st.sampled_from([None, 2, 0, 1.5]))
     sim = attempt(lambda: simulate(m, rng=np.random.default_rng(trial_seeds(seed, 1)[0]), fault=prof,
-                                   theta=theta if prof is not None else None,
-                                   size=draw(st.sampled_from([None, 2, 0, 1.5]))))
+                                   theta=theta if prof is not None else None, size=size),
+                  why(**{f"seed={seed!r}": out_of(seed, 0),
+                         f"size={size}": size is not None and out_of(size, 1)}))
     if sim is not None:
         assert_finite(sim.y, "y")
     if prof is not None:
@@ -260,8 +314,11 @@ def test_fuzz_simulate_signature_kitanidis(data):
 @given(st.data())
 def test_fuzz_small_helpers(data):
     draw = data.draw
-    ci = attempt(lambda: binomial_ci(draw(st.sampled_from([0, 3, -1, 11, 2.5])), draw(st.sampled_from([10, 0, True])),
-                                     level=draw(st.sampled_from([0.95, 1.5, 0.0, np.nan]))))
+    k, n = draw(st.sampled_from([0, 3, -1, 11, 2.5])), draw(st.sampled_from([10, 0, True]))
+    level = draw(st.sampled_from([0.95, 1.5, 0.0, np.nan]))
+    ci = attempt(lambda: binomial_ci(k, n, level=level),
+                 why(**{f"trials={n!r}": out_of(n, 1), f"successes={k!r}": out_of(k, 0, n if is_int(n) else None),
+                        f"level={level}": bad_real(level, 0, 1, True, True)}))
     if ci is not None:
         assert 0.0 <= ci[0] <= ci[1] <= 1.0
     d = draw(dims)

@@ -152,3 +152,114 @@ def test_single_threaded_blas_limits_every_blas_and_restores_it():
         assert blas_threads() == before
         assert single_threaded_blas(blas_threads)() == [1] * len(before)
         assert blas_threads() == before
+
+
+# ----------------------------------------------------------------------------- edges (issue 21)
+def _counting_chunk(seeds, *, calls, width=1):
+    calls.append(len(seeds))
+    return {"x": np.stack([np.random.default_rng(s).standard_normal(width) for s in seeds])}
+
+
+def test_chunk_seeds_made_on_demand_are_the_spawned_ones():
+    """The engine makes each chunk's seeds when it runs it; they are SeedSequence.spawn's children."""
+    from fdi_lib.montecarlo import _spawned
+
+    root = np.random.SeedSequence(7)
+    ref = np.random.SeedSequence(7).spawn(12)
+    got = _spawned(root, 5, 9)
+    assert [s.spawn_key for s in got] == [s.spawn_key for s in ref[5:9]]
+    for a, b in zip(got, ref[5:9]):
+        np.testing.assert_array_equal(a.generate_state(4), b.generate_state(4))
+
+
+def test_jobs_are_capped_at_cores_and_chunks_with_a_warning(monkeypatch):
+    """jobs=1000 on 8 trials started 65 worker processes: now min(jobs, cores, chunks)."""
+    import joblib
+
+    import fdi_lib.montecarlo as mc
+    from fdi_lib.errors import JobsCappedWarning
+
+    monkeypatch.setattr(joblib, "cpu_count", lambda *a, **k: 2)
+    with pytest.warns(JobsCappedWarning, match=r"jobs: 1000 requested, 2 used \(2 CPU cores\)"):
+        assert mc.effective_jobs(1000, 4) == 2
+    with pytest.warns(JobsCappedWarning, match=r"jobs: 2 requested, 1 used \(1 chunk of work\)"):
+        assert mc.effective_jobs(2, 1) == 1
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert mc.effective_jobs(-1, 8) == 2 and mc.effective_jobs(-1, 1) == 1   # "all cores": no warning
+        assert mc.effective_jobs(1, 8) == 1 and mc.effective_jobs(2) == 2
+    # the engine starts the capped number of processes, and the results are those of one job
+    monkeypatch.setattr(joblib, "cpu_count", lambda *a, **k: 64)
+    used = []
+    real = mc._run_chunks
+    monkeypatch.setattr(mc, "_run_chunks", lambda task, n, first, n_workers, done: used.append(n_workers)
+                        or real(task, n, first, 1, done))
+    fn = functools.partial(_gaussian_chunk, dim=2)
+    with pytest.warns(JobsCappedWarning, match=r"1000 requested, 4 used \(4 chunks of work\)"):
+        out = run_monte_carlo(fn, 8, seed=2, jobs=1000)
+    assert used == [4]
+    np.testing.assert_array_equal(out["x"], run_monte_carlo(fn, 8, seed=2, jobs=1)["x"])
+
+
+def test_a_run_too_large_for_memory_is_refused_after_one_chunk(monkeypatch):
+    import fdi_lib.montecarlo as mc
+    from fdi_lib.errors import ResourceError
+
+    calls = []
+    fn = functools.partial(_counting_chunk, calls=calls, width=50)   # 400 B per realisation
+    monkeypatch.setattr(mc, "available_memory", lambda: 1_000_000)
+    with pytest.raises(ResourceError, match=r"n_trials: 2000 realisations x 1 chunk function\(s\) at 400 B "
+                                            r"each \(measured on the first chunk\) would need about 1.6 MB of "
+                                            r"memory; 1 MB is available"):
+        run_monte_carlo(fn, 2000, seed=0, chunk_size=100)
+    assert calls == [100]                                            # only the probe chunk ran
+    calls.clear()
+    assert run_monte_carlo(fn, 1000, seed=0, chunk_size=100)["x"].shape == (1000, 50)   # 800 kB: runs
+    assert sum(calls) == 1000
+
+
+def test_a_trillion_trials_are_refused_at_once():
+    """10^12 realisations used to spawn 10^12 seed sequences first (memory growing silently)."""
+    from fdi_lib.errors import ResourceError
+
+    calls = []
+    with pytest.raises(ResourceError, match=r"n_trials: 1000000000000 realisations .* would need about "
+                                            r"16 TB of memory"):
+        run_monte_carlo(functools.partial(_counting_chunk, calls=calls), 10**12, seed=0)
+    assert calls == [250]
+    with pytest.raises(ResourceError, match=r"n_trials: 1000000000000 seed sequences would need about 470 TB"):
+        trial_seeds(0, 10**12)
+
+
+def test_progress_bar_on_standard_error(capsys):
+    """progress=True, or progress_bars() around a run, draws a tqdm bar on standard error once a
+    run lasts more than a second; nothing on standard output."""
+    import time
+
+    from fdi_lib.montecarlo import progress_bars
+
+    def slow(seeds):
+        time.sleep(0.3)
+        return {"x": np.zeros(len(seeds))}
+
+    run_monte_carlo(slow, 5, seed=0, chunk_size=1, progress=True, description="toy run")
+    out, err = capsys.readouterr()
+    assert out == "" and "toy run" in err and "5/5" in err
+    with progress_bars():
+        run_monte_carlo(slow, 5, seed=0, chunk_size=1)
+    assert "5/5" in capsys.readouterr().err
+    run_monte_carlo(slow, 5, seed=0, chunk_size=1)      # default: no bar
+    assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize("id", ["rosa2013-fig11", "rosa2013-fig12"])
+def test_the_uav_studies_refuse_a_trillion_trials_at_once(id):
+    """The UAV studies spawn their own streams (a batch of runs per job): through trial_seeds, so
+    10^12 trials are refused before anything is made (they used to grow memory silently)."""
+    from fdi_lib.errors import ResourceError
+    from fdi_lib.reproduce import reproduce
+
+    with pytest.raises(ResourceError, match=r"n_trials: 1000000000000 seed sequences"):
+        reproduce(id, trials=10**12)

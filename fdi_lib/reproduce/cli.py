@@ -8,6 +8,12 @@ makes (results cached by a book build, ``$FDI_RESULTS_CACHE``, are read instead)
 ``--json`` prints exactly one JSON object ``{"id", "headline", "paper", "settings"}``
 on standard output; the ``headline`` keys of each identifier are documented in
 the docstring of its reproduction function (``--describe ID`` prints it).
+
+Standard error carries everything else, one line each: ``error: ...`` (exit code 2),
+``warning: ...`` (e.g. ``--jobs`` above the number of CPU cores, which is then used instead:
+results do not depend on it), a progress bar for Monte Carlo runs longer than a second when
+standard error is a terminal, and ``interrupted`` on Ctrl-C (SIGINT; exit code 130, the worker
+processes stopped).
 """
 
 from __future__ import annotations
@@ -15,9 +21,12 @@ from __future__ import annotations
 import argparse
 import inspect
 import sys
+import warnings
 from pathlib import Path
+from typing import Any
 
 from fdi_lib.errors import FDIError, ModelError
+from fdi_lib.montecarlo import effective_jobs, progress_bars
 from fdi_lib.reproduce.registry import get, list_reproductions
 
 
@@ -63,7 +72,28 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Exit code of an interrupted run (SIGINT): 128 + 2, as a shell reports it.
+EXIT_INTERRUPTED = 130
+
+
+def _warning_line(message: Any, category: type[Warning], *args: Any, **kwargs: Any) -> None:
+    """A warning as one line on standard error (no file, line and source text)."""
+    print(f"warning: {message}", file=sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Run the command line; returns the exit code (0, 2 on an error, 130 when interrupted)."""
+    with warnings.catch_warnings():  # restores the warning display on return
+        warnings.showwarning = _warning_line
+        try:
+            return _main(argv)
+        except KeyboardInterrupt:
+            # the Monte Carlo engine has stopped its workers before the interruption reached here
+            print("interrupted", file=sys.stderr)
+            return EXIT_INTERRUPTED
+
+
+def _main(argv: list[str] | None) -> int:
     args = _parser().parse_args(argv)
     if args.list:
         for r in list_reproductions():
@@ -89,7 +119,11 @@ def main(argv: list[str] | None = None) -> int:
             if rep.plot is None:
                 raise ModelError(f"--plot: {args.id} has no figure")
             _check_plot(args.plot)
-        result = rep(seed=args.seed, trials=args.trials, jobs=args.jobs)
+        # --jobs above the CPU cores (or -1) becomes the core count here, so that every reproduction,
+        # including those with their own pool, starts no more processes than can run
+        jobs = effective_jobs(args.jobs)
+        with progress_bars(bool(getattr(sys.stderr, "isatty", lambda: False)())):
+            result = rep(seed=args.seed, trials=args.trials, jobs=jobs)
     except FDIError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -127,9 +161,11 @@ def _print_ledger(args: argparse.Namespace) -> int:
         return 0
     print("  ".join(f"{status}: {n}" for status, n in led.counts().items()))
     for r in led.rows:
-        print(f"{r.status:<17} {r.label}\n{'':<17} paper: {r.paper}  ours: {r.ours}"
+        print(f"{r.status:<24} {r.claim}\n{'':<24} paper: {r.paper}  ours: {r.ours}"
               + (f"  95 % interval: [{r.ci[0]:.4g}, {r.ci[1]:.4g}]" if r.ci else "")
-              + (f"  ({r.role})" if r.role else "") + (f"  see {r.explain}" if r.explain else ""))
+              + (f"  ({r.role})" if r.role else "")
+              + (f"  see {r.cause or r.explain}" if r.cause or r.explain else "")
+              + (f"\n{'':<24} {r.status_detail}" if r.status_detail else ""))
     return 0
 
 

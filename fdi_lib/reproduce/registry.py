@@ -15,7 +15,9 @@ registered reproduction first looks there for a result computed with the same
 the key: results are identical for any number of jobs. ``make book`` sets the variable so
 that a result computed by a chapter is reused by the claims ledger
 (:mod:`fdi_lib.reproduce.ledger`) instead of being computed twice. Without the variable
-nothing is read or written.
+nothing is read or written. A cache entry that cannot be read (damaged, truncated) is a miss,
+and a cache that cannot be written (the variable names a file) is skipped, each with a
+:class:`~fdi_lib.errors.CacheWarning`: the result is computed as without a cache.
 """
 
 from __future__ import annotations
@@ -25,13 +27,14 @@ import dis
 import json
 import os
 import pickle
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 
-from fdi_lib.errors import ModelError, UnknownReproductionError
+from fdi_lib.errors import CacheWarning, ModelError, UnknownReproductionError
 from fdi_lib.validation import seed as check_seed
 
 __all__ = ["Reproduction", "ReproductionResult", "register", "get", "list_reproductions", "reproduce",
@@ -122,23 +125,15 @@ class Reproduction:
         trials = self.default_trials if trials is None else trials
         trials = None if trials is None else int(trials)
         path = _cache_path(self.id, int(seed), trials, kwargs)
-        if path is not None and path.exists():
-            path.touch()  # the newest entry of an id is the one last used (see cached_results)
-            return _load(path)
+        cached = None if path is None else _cache_read(path, self.id)
+        if cached is not None:
+            return cached
         result = self.func(seed=int(seed), trials=trials, jobs=int(jobs), **kwargs)
         if not isinstance(result, ReproductionResult) or result.id != self.id:
             raise TypeError(f"reproduction {self.id!r} returned {type(result).__name__} "
                             f"with id {getattr(result, 'id', None)!r}")
         if path is not None:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_suffix(f".{os.getpid()}.tmp")
-            try:
-                with tmp.open("wb") as fh:
-                    pickle.dump(result, fh)
-            except (pickle.PicklingError, TypeError, AttributeError):
-                tmp.unlink(missing_ok=True)  # not picklable: this result is simply not cached
-            else:
-                tmp.replace(path)  # atomic: a concurrent reader never sees half a file
+            _cache_write(path, result)
         return result
 
 
@@ -185,12 +180,55 @@ def cached_run(id: str, *, seed: int | None = None, trials: int | None = None,
     seed = rep.default_seed if seed is None else seed
     trials = rep.default_trials if trials is None else trials
     path = _cache_path(id, int(seed), None if trials is None else int(trials), kwargs)
-    return _load(path) if path is not None and path.exists() else None
+    return None if path is None else _cache_read(path, id)
 
 
-def _load(path: Path) -> ReproductionResult:
-    with path.open("rb") as fh:
-        return pickle.load(fh)
+def _cache_read(path: Path, id: str) -> ReproductionResult | None:
+    """The result cached at ``path``, or ``None`` (a miss) when there is none or it cannot be read:
+    a damaged entry is a miss with a :class:`~fdi_lib.errors.CacheWarning` (and is overwritten by
+    the result computed instead), never a traceback."""
+    try:
+        if not path.is_file():
+            return None
+        path.touch()  # the newest entry of an id is the one last used (see cached_results)
+        with path.open("rb") as fh:
+            result = pickle.load(fh)
+    except Exception as exc:  # unpickling damaged bytes can raise almost any type (EOFError,
+        # UnpicklingError, ValueError, KeyError, a stale class's AttributeError, ...): all are a miss
+        warnings.warn(CacheWarning(f"{CACHE_ENV}: cannot read the cached result {path} "
+                                   f"({type(exc).__name__}: {exc}); computing it again"), stacklevel=3)
+        return None
+    if not isinstance(result, ReproductionResult) or result.id != id:
+        warnings.warn(CacheWarning(f"{CACHE_ENV}: expected a result of {id!r} in {path}, got "
+                                   f"{type(result).__name__} {getattr(result, 'id', '')!r}; computing it again"),
+                      stacklevel=3)
+        return None
+    return result
+
+
+def _cache_write(path: Path, result: ReproductionResult) -> None:
+    """Store ``result`` at ``path`` atomically; a cache that cannot be written (``$FDI_RESULTS_CACHE``
+    a file, no permission, disk full) is skipped with a :class:`~fdi_lib.errors.CacheWarning`."""
+    tmp = path.with_suffix(f".{os.getpid()}.tmp")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with tmp.open("wb") as fh:
+            pickle.dump(result, fh)
+    except (pickle.PicklingError, TypeError, AttributeError):
+        tmp.unlink(missing_ok=True)  # not picklable: this result is simply not cached
+    except OSError as exc:
+        _unlink_quietly(tmp)
+        warnings.warn(CacheWarning(f"{CACHE_ENV}: cannot store the result in {path.parent} "
+                                   f"({exc.strerror or exc}); not cached"), stacklevel=3)
+    else:
+        tmp.replace(path)  # atomic: a concurrent reader never sees half a file
+
+
+def _unlink_quietly(path: Path) -> None:
+    try:
+        path.unlink(missing_ok=True)
+    except OSError:  # its folder is not a folder: there is nothing to remove
+        pass
 
 
 def cached_results() -> dict[str, ReproductionResult]:
@@ -201,13 +239,19 @@ def cached_results() -> dict[str, ReproductionResult]:
     """
     root = cache_dir()
     out: dict[str, ReproductionResult] = {}
+    if root is not None and root.exists() and not root.is_dir():
+        warnings.warn(CacheWarning(f"{CACHE_ENV}: expected a directory, got the file {root}; no cached "
+                                   f"result is read"), stacklevel=2)
     if root is None or not root.is_dir():
         return out
     prefix = code_version()[:16]
     for sub in sorted(p for p in root.iterdir() if p.is_dir()):
         entries = sorted(sub.glob(f"{prefix}-*.pkl"), key=lambda p: p.stat().st_mtime)
-        if entries:
-            out[sub.name] = _load(entries[-1])
+        for entry in reversed(entries):  # the newest readable one (a damaged one is warned about)
+            result = _cache_read(entry, sub.name)
+            if result is not None:
+                out[sub.name] = result
+                break
     return out
 
 

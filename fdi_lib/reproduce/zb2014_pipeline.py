@@ -5,18 +5,23 @@ All runs use the *physical* surrogate pipeline model of
 2011 is not public), the Kalman filter of the fault-free model, and the windowed GLR
 test (35)-(37) with ``w = 160`` samples, threshold 50, disabled during the first 320 min.
 The surrogate was calibrated on two paper observations only (the Fig 9 level and fault 2
-detected in every run, :data:`fdi_lib.systems.gas_pipeline.CALIBRATION`); each
-reproduction's ``paper`` dict lists them under ``calibrated_to`` and every other compared
-headline key under ``predictions``.
+detected in every run, :data:`fdi_lib.systems.gas_pipeline.CALIBRATION`), plus a stated
+criterion for its third free constant ``state2_scale``; each reproduction's ``paper`` dict
+lists the observations under ``calibrated_to`` and every other compared headline key under
+``predictions``, and its ``settings["calibration"]`` the three constants it ran with and what
+fixed each (:func:`calibration_settings`). Figs 5-9 take the option ``state2_scale`` (the
+surrogate recalibrated with that scale; :func:`calibration_sensitivity` runs them all).
 
 * ``zb2014-table1``: nominal and changed ``G0(1)``, ``Gp(1)``, ``Psi_k`` and ``theta``.
-* ``zb2014-fig5``, ``zb2014-fig6``: one run of fault 1 (``dG0(1) = -2e-5`` and ``-4e-5``).
+* ``zb2014-fig5``, ``zb2014-fig6``: one run of fault 1 (``dG0(1) = -2e-5`` and ``-4e-5``), and
+  the run-to-run spread of its values over 1000 runs (:func:`single_run_spread`).
 * ``zb2014-fig7``: 1000 runs per fault: detection delays and onset-estimation errors.
-* ``zb2014-fig8``: minmax isolation (41) after each alarm, threshold 6.6349.
+* ``zb2014-fig8``: minmax isolation (41) after each alarm, threshold 6.6349; option
+  ``isolation_window`` (up to the alarm, the paper's, or up to the end of the record).
 * ``zb2014-fig9``: output-end leak of -43980 at 700 min (``Phi_k = 1``, eq. (46)).
 
-Figs 7 and 8 come from one Monte Carlo experiment (:func:`pipeline_monte_carlo`),
-cached per ``(seed, trials, variant, schedule)`` so that the book and the CLI run it once.
+Figs 5-8 share one Monte Carlo experiment (:func:`fault_runs`, :func:`pipeline_monte_carlo`),
+cached per seed, trials, fault, size and surrogate so that the book and the CLI run it once.
 :func:`surrogate_sensitivity` repeats it for both surrogates and both origins of ``p_k``
 in the fault-2 column; :func:`onset_profile` recomputes the GLR of every candidate onset
 at an alarm.
@@ -46,7 +51,9 @@ from fdi_lib.simulate import simulate
 from fdi_lib.systems import gas_pipeline as gp
 
 __all__ = ["MINMAX_THRESHOLD", "PipelineSetup", "pipeline_setup", "SingleRun", "single_run",
-           "detection_chunk", "pipeline_monte_carlo", "known_onset_isolation_power", "fault_theta", "plot_single_run",
+           "detection_chunk", "fault_runs", "pipeline_monte_carlo", "calibration_settings",
+           "single_run_spread", "calibration_sensitivity", "ISOLATION_WINDOWS", "SPREAD_RUNS",
+           "known_onset_isolation_power", "fault_theta", "plot_single_run",
            "SCHEDULES", "DEFAULT_SCHEDULE", "fault_schedule", "surrogate_sensitivity", "onset_profile",
            "plot_signals", "plot_onset_profile", "format_rate",
            "plot_fig7", "plot_fig8"]
@@ -96,7 +103,8 @@ SCHEDULES = ("centred", "absolute")
 DEFAULT_SCHEDULE = {"physical": "centred", "designed": "absolute"}
 
 
-def fault_schedule(variant: str = "physical", schedule: str | None = None) -> np.ndarray:
+def fault_schedule(variant: str = "physical", schedule: str | None = None,
+                   state2_scale: float | None = None) -> np.ndarray:
     """``p_k`` in the fault profile ``Psi_k = [[U_k, p_k U_k], [0, 0]]`` for a surrogate and a schedule origin.
 
     ``physical``: centred is the deviation ``p_k`` of the model; absolute moves its origin
@@ -110,22 +118,51 @@ def fault_schedule(variant: str = "physical", schedule: str | None = None) -> np
         Surrogate (:data:`fdi_lib.systems.gas_pipeline.VARIANTS`).
     schedule : {"centred", "absolute"}, optional
         Default: the variant's own (:data:`DEFAULT_SCHEDULE`).
+    state2_scale : float, optional
+        Physical surrogate calibrated with this scale (:func:`~fdi_lib.systems.gas_pipeline.calibration_for`).
     """
     gp._check_variant(variant)
+    _check_scale(variant, state2_scale)
     schedule = DEFAULT_SCHEDULE[variant] if schedule is None else schedule
     if schedule not in SCHEDULES:
         raise ModelError(f"schedule: expected one of {SCHEDULES}, got {schedule!r}")
-    p = gp.pipeline_schedule(variant=variant)
+    if variant == "physical":
+        cal = gp.calibration_for(state2_scale)
+        p = gp.surrogate(**cal)[2]
+    else:
+        p = gp.pipeline_schedule(variant=variant)
     if schedule == DEFAULT_SCHEDULE[variant]:
         return p
     if variant == "physical":
-        return p - gp.MEAN_PRESSURE_BAR / gp.physical_section().bar_per_unit
+        return p - gp.MEAN_PRESSURE_BAR / gp.physical_section(cal["section_length_km"]).bar_per_unit
     return p - gp.NOMINAL_PRESSURE
 
 
-@functools.lru_cache(maxsize=4)
-def pipeline_setup(variant: str = "physical", schedule: str | None = None) -> PipelineSetup:
+def _check_scale(variant: str, state2_scale: float | None) -> None:
+    if state2_scale is not None and variant != "physical":
+        raise ModelError(f"state2_scale: expected None for the {variant!r} surrogate (it has no such "
+                         f"constant), got {state2_scale!r}")
+
+
+def calibration_settings(state2_scale: float | None = None) -> dict[str, Any]:
+    """The calibrated constants of the physical surrogate a reproduction ran with (its ``settings``).
+
+    Returns
+    -------
+    dict
+        ``constants`` (``section_length_km``, ``state2_scale``, ``pressure_swing_bar``, from
+        :func:`~fdi_lib.systems.gas_pipeline.calibration_for`) and ``fixed_by`` (the target
+        or criterion that fixed each one, ``CALIBRATION["free"]``).
+    """
+    return {"constants": gp.calibration_for(state2_scale), "fixed_by": dict(gp.CALIBRATION["free"])}
+
+
+def pipeline_setup(variant: str = "physical", schedule: str | None = None,
+                   state2_scale: float | None = None) -> PipelineSetup:
     """The shared model, input, Kalman gains, fault families and true-onset signature.
+
+    Computed once per surrogate: the arguments are normalised (the default schedule and the
+    calibrated scale spelt out or not, positional or keyword) before the cache.
 
     Parameters
     ----------
@@ -133,11 +170,26 @@ def pipeline_setup(variant: str = "physical", schedule: str | None = None) -> Pi
         Surrogate.
     schedule : {"centred", "absolute"}, optional
         Origin of ``p_k`` in the fault-2 column (:func:`fault_schedule`).
+    state2_scale : float, optional
+        Physical surrogate calibrated with this scale of the pressure-drop state
+        (:func:`~fdi_lib.systems.gas_pipeline.calibration_for`); default the calibrated one.
     """
-    model = gp.pipeline_model(variant=variant)
-    u = gp.pipeline_input(variant=variant)
+    gp._check_variant(variant)
+    _check_scale(variant, state2_scale)
+    schedule = DEFAULT_SCHEDULE[variant] if schedule is None else schedule
+    if state2_scale is not None and float(state2_scale) == gp.CALIBRATION["fitted"]["state2_scale"]:
+        state2_scale = None
+    return _pipeline_setup(variant, schedule, None if state2_scale is None else float(state2_scale))
+
+
+@functools.lru_cache(maxsize=8)
+def _pipeline_setup(variant: str, schedule: str, state2_scale: float | None) -> PipelineSetup:
+    if variant == "physical":
+        model, u, _ = gp.surrogate(**gp.calibration_for(state2_scale))
+    else:
+        model, u = gp.pipeline_model(variant=variant), gp.pipeline_input(variant=variant)
     gains = kalman_gains(model)
-    fam = gp.input_fault_family(model, schedule=fault_schedule(variant, schedule), u=u)
+    fam = gp.input_fault_family(model, schedule=fault_schedule(variant, schedule, state2_scale), u=u)
     sig = fault_signature(model, gains, fam.profile(FAULT_ONSET)).on_innovation
     return PipelineSetup(model=model, u=u, gains=gains, input_family=fam,
                          leak_family=gp.output_leak_family(model), known_signature=sig,
@@ -196,8 +248,8 @@ class SingleRun:
 
 
 def single_run(*, seed: int, kind: str = "input", fault: int = 1, delta: float | None = None,
-               threshold: float = gp.THRESHOLD, window: int = gp.WINDOW, variant: str = "physical"
-               ) -> SingleRun:
+               threshold: float = gp.THRESHOLD, window: int = gp.WINDOW, variant: str = "physical",
+               state2_scale: float | None = None) -> SingleRun:
     """Simulate one record and run the windowed GLR (Figs 5, 6 and 9).
 
     Parameters
@@ -215,8 +267,10 @@ def single_run(*, seed: int, kind: str = "input", fault: int = 1, delta: float |
         GLR threshold and window ``w``.
     variant : {"physical", "designed"}
         Surrogate (its own schedule).
+    state2_scale : float, optional
+        Physical surrogate calibrated with this scale (:func:`pipeline_setup`).
     """
-    st = pipeline_setup(variant)
+    st = pipeline_setup(variant, state2_scale=state2_scale)
     if kind == "input":
         fam, onset, theta = st.input_family, FAULT_ONSET, fault_theta(fault, delta)
     elif kind == "output":
@@ -235,7 +289,7 @@ def single_run(*, seed: int, kind: str = "input", fault: int = 1, delta: float |
 
 
 def onset_profile(run: SingleRun, *, fault: int = 1, columns: str = "both",
-                  variant: str = "physical") -> dict[str, np.ndarray]:
+                  variant: str = "physical", state2_scale: float | None = None) -> dict[str, np.ndarray]:
     """GLR statistic and ``theta_hat`` of every candidate onset at the alarm of an input-fault run.
 
     Recomputed independently of the detector: for each onset ``r`` of the window at the
@@ -253,6 +307,8 @@ def onset_profile(run: SingleRun, *, fault: int = 1, columns: str = "both",
         Both columns of ``Psi_k`` (the paper's test) or the ``U_k`` column alone (``m = 1``).
     variant : {"physical", "designed"}
         Surrogate of the run.
+    state2_scale : float, optional
+        Calibration of the physical surrogate of the run (:func:`pipeline_setup`).
 
     Returns
     -------
@@ -263,7 +319,7 @@ def onset_profile(run: SingleRun, *, fault: int = 1, columns: str = "both",
         raise ModelError("run: expected a run with an alarm, got one without")
     if columns not in ("both", "U"):
         raise ModelError(f"columns: expected 'both' or 'U', got {columns!r}")
-    st = pipeline_setup(variant)
+    st = pipeline_setup(variant, state2_scale=state2_scale)
     fam = st.input_family
     if columns == "U":
         fam = step_family(st.model, Psi=fam.Psi_tilde[:, :, :1])
@@ -414,10 +470,69 @@ def _single_result(rid: str, run: SingleRun, paper: dict[str, Any], settings: di
     return ReproductionResult(id=rid, headline=headline, paper=paper, settings=settings, data={"run": run})
 
 
+#: Runs of the spread of a single-run figure by default: the paper's count for the same fault in Fig 7.
+SPREAD_RUNS = 1000
+
+
+def single_run_spread(paper: dict[str, Any], *, seed: int, trials: int, jobs: int = 1,
+                      delta: float | None = None, state2_scale: float | None = None) -> dict[str, Any]:
+    """Run-to-run spread of the single-run keys of Figs 5-6, and where the paper's run falls in it.
+
+    ``trials`` runs of fault 1 of size ``delta`` (:func:`fault_runs`; for Table 1's size these
+    are the fault-1 runs of Figs 7-8 with the same seed). The distribution is over the runs
+    whose first alarm is at or after the onset (as the delays of Fig 7); runs with a false
+    alarm or no alarm are counted in ``spread_excluded``.
+
+    Parameters
+    ----------
+    paper : dict
+        The paper's single-run values (keys of ``_SINGLE_KEYS``; ``None`` = not given: skipped).
+    seed, trials, jobs, delta, state2_scale
+        As in :func:`fault_runs`.
+
+    Returns
+    -------
+    dict
+        For each key ``K`` the paper gives: ``K_spread95`` (2.5 % and 97.5 % quantiles of our
+        runs), ``K_paper_percentile`` (percentile of the paper's value among them,
+        :func:`scipy.stats.percentileofscore` with ``kind="mean"``: ties count half) and, for the
+        delay, ``detection_delay_min_at_least_paper`` (rate dict: runs whose delay is at least
+        the paper's); ``spread_runs`` (runs in the distribution) and ``spread_excluded``
+        (``false_alarm``, ``missed``).
+    """
+    runs = fault_runs(seed=seed, trials=trials, fault=1, delta=delta, jobs=jobs, isolate=delta is None,
+                      state2_scale=state2_scale)
+    alarm, onset = runs["alarm"], runs["onset_hat"]
+    hit = alarm >= FAULT_ONSET
+    values = {"alarm_time_min": alarm[hit] * gp.TS_MIN, "onset_estimate_min": onset[hit] * gp.TS_MIN,
+              "detection_delay_min": (alarm[hit] - FAULT_ONSET) * gp.TS_MIN}
+    out: dict[str, Any] = {}
+    for key in _SINGLE_KEYS:
+        value, x = paper.get(key), values[key]
+        if value is None or x.size == 0:
+            continue
+        out[f"{key}_spread95"] = np.quantile(x, [0.025, 0.975]).tolist()
+        out[f"{key}_paper_percentile"] = float(scipy.stats.percentileofscore(x, value, kind="mean"))
+    if paper.get("detection_delay_min") is not None:
+        x = values["detection_delay_min"]
+        out["detection_delay_min_at_least_paper"] = _rate(int(np.sum(x >= paper["detection_delay_min"])),
+                                                          int(x.size))
+    out["spread_runs"] = int(hit.sum())
+    out["spread_excluded"] = {"false_alarm": int(np.sum((alarm >= 0) & (alarm < FAULT_ONSET))),
+                              "missed": int(np.sum(alarm < 0))}
+    return out
+
+
 @register("zb2014-fig5", paper=PAPER, title="Gas pipeline, fault 1 (dG0(1) = -2e-5): innovation and GLR",
           plot=plot_single_run)
-def fig5(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+def fig5(*, seed: int, trials: int | None, jobs: int, state2_scale: float | None = None
+         ) -> ReproductionResult:
     """Paper Fig. 5: one run of fault 1 (``G0(1) - 2e-5`` at 600 min), threshold 50, ``w = 160``.
+
+    ``trials`` (default 1000) runs give the spread of the single-run keys; with the same seed
+    they are the fault-1 runs of ``zb2014-fig7``. Option ``state2_scale``: the physical
+    surrogate calibrated with that scale of the pressure-drop state
+    (:func:`~fdi_lib.systems.gas_pipeline.calibration_for`; default the calibrated 10).
 
     Headline keys
     -------------
@@ -436,15 +551,30 @@ def fig5(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
         Its first component over the true one.
     onset_estimate_u_only_min : float
         The onset estimate (min) of the same noise with the ``U_k`` column alone (``m = 1``).
+    spread_runs : int
+        Runs in our distribution of these keys: of ``trials`` runs (default 1000, the paper's
+        count for this fault in Fig 7) of the same fault with independent noise, those whose
+        first alarm is at or after the onset (:func:`single_run_spread`).
+    spread_excluded : dict
+        ``false_alarm``, ``missed``: the other runs.
+    alarm_time_min_spread95, onset_estimate_min_spread95, detection_delay_min_spread95 : list of float
+        2.5 % and 97.5 % quantiles of each key over our runs (only for keys the paper gives).
+    alarm_time_min_paper_percentile, onset_estimate_min_paper_percentile, detection_delay_min_paper_percentile : float
+        Percentile (0-100) of the paper's value in our distribution (ties count half).
+    detection_delay_min_at_least_paper : dict
+        ``rate``, ``count``, ``n``, ``ci95``: our runs whose delay is at least the paper's.
     """
-    run = single_run(seed=seed, fault=1, delta=gp.FAULT1_DELTA)
-    res = _single_result("zb2014-fig5", run,
-                          {"alarm_time_min": 786.0, "onset_estimate_min": 618.0, "detection_delay_min": 186.0,
-                           "calibrated_to": [], "predictions": list(_SINGLE_KEYS)},
-                          {"seed": seed, "theta": fault_theta(1).tolist(), "window": gp.WINDOW,
-                           "threshold": gp.THRESHOLD, "title": r"Fault 1, $\tilde G_0 = -2\times10^{-5}$"})
+    trials = SPREAD_RUNS if trials is None else trials
+    run = single_run(seed=seed, fault=1, delta=gp.FAULT1_DELTA, state2_scale=state2_scale)
+    paper = {"alarm_time_min": 786.0, "onset_estimate_min": 618.0, "detection_delay_min": 186.0}
+    res = _single_result("zb2014-fig5", run, {**paper, "calibrated_to": [], "predictions": list(_SINGLE_KEYS)},
+                         {"seed": seed, "theta": fault_theta(1).tolist(), "window": gp.WINDOW,
+                          "threshold": gp.THRESHOLD, "spread_trials": trials,
+                          "calibration": calibration_settings(state2_scale),
+                          "title": r"Fault 1, $\tilde G_0 = -2\times10^{-5}$"})
     if run.alarm >= 0:
-        both, alone = onset_profile(run), onset_profile(run, columns="U")
+        both, alone = (onset_profile(run, state2_scale=state2_scale),
+                       onset_profile(run, columns="U", state2_scale=state2_scale))
         best = int(np.argmax(both["statistic"]))
         res.headline.update({
             "onsets_within_2_of_max": int(np.sum(both["statistic"] >= both["statistic"].max() - 2.0)),
@@ -452,33 +582,56 @@ def fig5(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
             "theta_hat_ratio": float(both["theta_hat"][best][0] / gp.FAULT1_DELTA),
             "onset_estimate_u_only_min": float(alone["onsets"][np.argmax(alone["statistic"])] * gp.TS_MIN)})
         res.data.update({"profile": both, "profile_u_only": alone})
+    res.headline.update(single_run_spread(paper, seed=seed, trials=trials, jobs=jobs, state2_scale=state2_scale))
     return res
 
 
 @register("zb2014-fig6", paper=PAPER, title="Gas pipeline, fault 1 doubled (dG0(1) = -4e-5): innovation and GLR",
           plot=plot_single_run)
-def fig6(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+def fig6(*, seed: int, trials: int | None, jobs: int, state2_scale: float | None = None
+         ) -> ReproductionResult:
     """Paper Fig. 6: as Fig. 5 with the fault doubled (``-4e-5``), same noise (same seed).
 
-    Headline keys: as ``zb2014-fig5`` (paper: detection delay 88 min, so alarm at 688 min;
-    the paper gives no onset estimate for this run).
+    ``trials`` (default 1000) runs of the doubled fault give the spread, paired run by run
+    with those of ``zb2014-fig5`` (same noise). Option ``state2_scale`` as in ``zb2014-fig5``.
+
+    Headline keys
+    -------------
+    alarm_time_min, onset_estimate_min, detection_delay_min : float
+        As in ``zb2014-fig5`` (paper: detection delay 88 min, so alarm at 688 min; no onset
+        estimate, hence no spread keys for it).
+    spread_runs : int
+        Runs of the doubled fault in our distribution (as in ``zb2014-fig5``).
+    spread_excluded : dict
+        ``false_alarm``, ``missed``: the other runs.
+    alarm_time_min_spread95, detection_delay_min_spread95 : list of float
+        2.5 % and 97.5 % quantiles over our runs.
+    alarm_time_min_paper_percentile, detection_delay_min_paper_percentile : float
+        Percentile (0-100) of the paper's value in our distribution (ties count half).
+    detection_delay_min_at_least_paper : dict
+        ``rate``, ``count``, ``n``, ``ci95``: our runs whose delay is at least the paper's 88 min.
     """
-    run = single_run(seed=seed, fault=1, delta=gp.FAULT1_DOUBLED_DELTA)
-    return _single_result("zb2014-fig6", run,
-                          {"alarm_time_min": 688.0, "onset_estimate_min": None, "detection_delay_min": 88.0,
-                           "calibrated_to": [], "predictions": list(_SINGLE_KEYS)},
-                          {"seed": seed, "theta": fault_theta(1, gp.FAULT1_DOUBLED_DELTA).tolist(),
-                           "window": gp.WINDOW, "threshold": gp.THRESHOLD,
-                           "title": r"Fault 1 doubled, $\tilde G_0 = -4\times10^{-5}$"})
+    trials = SPREAD_RUNS if trials is None else trials
+    run = single_run(seed=seed, fault=1, delta=gp.FAULT1_DOUBLED_DELTA, state2_scale=state2_scale)
+    paper = {"alarm_time_min": 688.0, "onset_estimate_min": None, "detection_delay_min": 88.0}
+    res = _single_result("zb2014-fig6", run, {**paper, "calibrated_to": [], "predictions": list(_SINGLE_KEYS)},
+                         {"seed": seed, "theta": fault_theta(1, gp.FAULT1_DOUBLED_DELTA).tolist(),
+                          "window": gp.WINDOW, "threshold": gp.THRESHOLD, "spread_trials": trials,
+                          "calibration": calibration_settings(state2_scale),
+                          "title": r"Fault 1 doubled, $\tilde G_0 = -4\times10^{-5}$"})
+    res.headline.update(single_run_spread(paper, seed=seed, trials=trials, jobs=jobs,
+                                          delta=gp.FAULT1_DOUBLED_DELTA, state2_scale=state2_scale))
+    return res
 
 
 @register("zb2014-fig9", paper=PAPER, title="Gas pipeline, output-end leak of -43980 at 700 min",
           plot=plot_single_run)
-def fig9(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+def fig9(*, seed: int, trials: int | None, jobs: int, state2_scale: float | None = None
+         ) -> ReproductionResult:
     """Paper Fig. 9: bias of -43980 (10 % of the mean output flow) on the output from 700 min.
 
     The GLR uses the step family ``Phi_k(r) = 1{k >= r}`` (``m = 1``) and the signature with
-    output faults, eq. (46).
+    output faults, eq. (46). Option ``state2_scale`` as in ``zb2014-fig5``.
 
     Headline keys
     -------------
@@ -498,8 +651,8 @@ def fig9(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
         ``(leak / innovation_sd)^2 / 50``: the level the GLR reaches on average from one sample
         (``l_k >= (leak / sigma)^2``).
     """
-    run = single_run(seed=seed, kind="output")
-    st = pipeline_setup()
+    run = single_run(seed=seed, kind="output", state2_scale=state2_scale)
+    st = pipeline_setup(state2_scale=state2_scale)
     sd = float(np.sqrt(st.gains.Sigma[LEAK_ONSET, 0, 0]))
     after = run.statistic[run.alarm:] / gp.THRESHOLD if run.alarm >= 0 else np.array([np.nan])
     headline = {"alarm_time_min": run.alarm_time_min,
@@ -516,6 +669,7 @@ def fig9(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
                                                      "innovation_recovery"]},
                               settings={"seed": seed, "leak": gp.LEAK_SIZE, "onset_min": gp.LEAK_ONSET_MIN,
                                         "window": gp.WINDOW, "threshold": gp.THRESHOLD,
+                                        "calibration": calibration_settings(state2_scale),
                                         "title": "Output-end leak of -43980 at 700 min"},
                               data={"run": run})
 
@@ -550,29 +704,35 @@ def table1(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
 
 
 # ----------------------------------------------------------------------------- Monte Carlo (Figs 7-8)
-def detection_chunk(seeds, *, fault: int, variant: str = "physical", schedule: str | None = None
-                    ) -> dict[str, np.ndarray]:
-    """Detection and isolation for a chunk of realisations of input-end fault ``fault`` (Table 1 size).
+def detection_chunk(seeds, *, fault: int, variant: str = "physical", schedule: str | None = None,
+                    delta: float | None = None, state2_scale: float | None = None,
+                    isolate: bool = True) -> dict[str, np.ndarray]:
+    """Detection and isolation for a chunk of realisations of input-end fault ``fault``.
 
     Vectorised over the chunk: noise (one stream per realisation), simulation, Kalman
     innovations, windowed GLR (shared signatures and informations), first alarm,
     onset estimate, and the two minmax statistics (41) from the estimated onset to the
-    alarm (``F = C_{k*}(r_hat)``, ``zeta = d_{k*}(r_hat)``). Also the minmax statistics
-    with the onset *known* (samples 300 .. 499), free of the detector's selection.
-    ``variant`` and ``schedule`` select the surrogate (:func:`pipeline_setup`).
+    alarm (``F = C_{k*}(r_hat)``, ``zeta = d_{k*}(r_hat)``, the paper's isolation window) and
+    from the estimated onset to the end of the record (``r_hat .. N-1``). Also the minmax
+    statistics with the onset *known* (samples 300 .. 499), free of the detector's selection.
+    ``variant``, ``schedule`` and ``state2_scale`` select the surrogate (:func:`pipeline_setup`);
+    ``delta`` the fault size (default Table 1).
 
     Returns
     -------
     dict
-        ``alarm``, ``onset_hat`` (sample indices, ``-1`` if none), ``l1``, ``l2`` (minmax
-        focusing on fault 1 / fault 2; ``nan`` without alarm), ``cos2`` (squared cosine
-        ``F12^2 / (F11 F22)`` between the two fault directions at the alarm) and
-        ``l1_known``, ``l2_known``, ``max_prefault`` (largest ``l_k`` from 320 min to the onset).
+        ``alarm``, ``onset_hat`` (sample indices, ``-1`` if none), ``max_prefault`` (largest
+        ``l_k`` from 320 min to the onset); with ``isolate`` also ``l1``, ``l2`` (minmax
+        focusing on fault 1 / fault 2 at the alarm; ``nan`` without alarm), ``cos2`` (squared
+        cosine ``F12^2 / (F11 F22)`` between the two fault directions at the alarm),
+        ``info_alarm`` ``(B, 2, 2)`` (the Fisher information ``F`` used at the alarm),
+        ``l1_record``, ``l2_record``, ``info_record`` (the same from ``r_hat`` to the end of
+        the record) and ``l1_known``, ``l2_known``.
     """
-    st = pipeline_setup(variant, schedule)
+    st = pipeline_setup(variant, schedule, state2_scale)
     noise = draw_noise_batch(st.model, seeds)
     sim = simulate(st.model, noise=noise, u=st.u, fault=st.input_family.profile(FAULT_ONSET),
-                   theta=fault_theta(fault))
+                   theta=fault_theta(fault, delta))
     eps = kalman_filter(st.model, sim.y, st.u, gains=st.gains).innovations
     res = glr_window(eps, st.model, st.gains, st.input_family, gp.WINDOW, shared=st.glr, start=GLR_START)
     alarm = first_alarm(res.statistic, gp.THRESHOLD, start=GLR_START)
@@ -580,24 +740,44 @@ def detection_chunk(seeds, *, fault: int, variant: str = "physical", schedule: s
     k = np.where(alarm >= 0, alarm, 0)
     rows = np.arange(B)
     onset_hat = np.where(alarm >= 0, res.onset[rows, k], -1)
+    pre = np.nan_to_num(res.statistic[:, GLR_START:FAULT_ONSET], nan=0.0).max(axis=1)
+    out = {"alarm": alarm, "onset_hat": onset_hat, "max_prefault": pre}
+    if not isolate:
+        return out
     C, d = res.C_hat[rows, k], res.d_hat[rows, k]
     ok = alarm >= 0
-    l1 = np.full(B, np.nan)
-    l2 = np.full(B, np.nan)
+    nan = np.full(B, np.nan)
+    l1, l2, l1_rec, l2_rec, cos2 = nan.copy(), nan.copy(), nan.copy(), nan.copy(), nan.copy()
+    info_alarm, info_rec = np.full((B, 2, 2), np.nan), np.full((B, 2, 2), np.nan)
     if ok.any():
         l1[ok] = minmax_statistic(C[ok], d[ok], [0])
         l2[ok] = minmax_statistic(C[ok], d[ok], [1])
+        cos2[ok] = C[ok, 0, 1] ** 2 / (C[ok, 0, 0] * C[ok, 1, 1])
+        info_alarm[ok] = C[ok]
+        # to the end of the record: the signature of each distinct onset estimate, all in one
+        # recursion (profiles side by side, as in onset_profile), then F, zeta per onset
+        onsets = np.unique(onset_hat[ok])
+        profiles = [st.input_family.profile(int(r)) for r in onsets]
+        sigs = fault_signature(st.model, st.gains, FaultProfile(
+            Psi=np.concatenate([pr.Psi for pr in profiles], axis=-1),
+            Phi=np.concatenate([pr.Phi for pr in profiles], axis=-1))).on_innovation
+        for j, r in enumerate(onsets):
+            sel = ok & (onset_hat == r)
+            F, zeta = information(eps[sel], sigs[:, :, 2 * j:2 * j + 2], st.gains, int(r), st.model.n_steps)
+            info_rec[sel] = F
+            l1_rec[sel] = minmax_statistic(F, zeta, [0])
+            l2_rec[sel] = minmax_statistic(F, zeta, [1])
     F, zeta = information(eps, st.known_signature, st.gains, FAULT_ONSET, st.model.n_steps)
-    cos2 = np.full(B, np.nan)
-    cos2[ok] = C[ok, 0, 1] ** 2 / (C[ok, 0, 0] * C[ok, 1, 1])
-    pre = np.nan_to_num(res.statistic[:, GLR_START:FAULT_ONSET], nan=0.0).max(axis=1)
-    return {"alarm": alarm, "onset_hat": onset_hat, "l1": l1, "l2": l2, "cos2": cos2, "max_prefault": pre,
-            "l1_known": minmax_statistic(F, zeta, [0]), "l2_known": minmax_statistic(F, zeta, [1])}
+    out.update({"l1": l1, "l2": l2, "cos2": cos2, "info_alarm": info_alarm,
+                "l1_record": l1_rec, "l2_record": l2_rec, "info_record": info_rec,
+                "l1_known": minmax_statistic(F, zeta, [0]), "l2_known": minmax_statistic(F, zeta, [1])})
+    return out
 
 
 def known_onset_isolation_power(*, schedule: np.ndarray | None = None, start: int = FAULT_ONSET,
                                 stop: int = gp.N_STEPS, alpha_threshold: float = MINMAX_THRESHOLD,
-                                variant: str = "physical") -> dict[str, dict[str, float]]:
+                                variant: str = "physical", state2_scale: float | None = None
+                                ) -> dict[str, dict[str, float]]:
     """Closed-form power of each minmax test with the onset known (no Monte Carlo).
 
     With the onset and the samples ``start .. stop-1`` fixed, the minmax statistic (41) for
@@ -616,16 +796,26 @@ def known_onset_isolation_power(*, schedule: np.ndarray | None = None, start: in
         Threshold of each test (default 6.6349).
     variant : {"physical", "designed"}
         Surrogate.
+    state2_scale : float, optional
+        Physical surrogate calibrated with this scale (:func:`pipeline_setup`); only with the
+        surrogate's own schedule (``schedule=None``).
 
     Returns
     -------
     dict
         Per fault ("1", "2"): ``cos2`` (``F12^2 / (F11 F22)``), ``noncentrality`` and ``power``.
     """
-    u = gp.pipeline_input(variant=variant)
-    model = gp.pipeline_model(variant=variant, schedule=schedule, u=u)
-    gains = kalman_gains(model)
-    fam = gp.input_fault_family(model, schedule=schedule, u=u, variant=variant)
+    if state2_scale is None:
+        u = gp.pipeline_input(variant=variant)
+        model = gp.pipeline_model(variant=variant, schedule=schedule, u=u)
+        gains = kalman_gains(model)
+        fam = gp.input_fault_family(model, schedule=schedule, u=u, variant=variant)
+    elif schedule is not None:
+        raise ModelError(f"schedule: expected None with state2_scale={state2_scale!r} (the schedule is "
+                         f"that surrogate's own), got an array")
+    else:
+        st = pipeline_setup(variant, state2_scale=state2_scale)
+        model, gains, fam = st.model, st.gains, st.input_family
     sig = fault_signature(model, gains, fam.profile(start)).on_innovation
     F, _ = information(np.zeros((model.n_steps, model.p)), sig, gains, start, stop)
     out = {}
@@ -643,12 +833,53 @@ def _fault_seed(seed: int, fault: int) -> int:
     return int(np.random.SeedSequence([int(seed), int(fault)]).generate_state(1)[0])
 
 
-_MC_CACHE: dict[tuple, dict[int, dict[str, np.ndarray]]] = {}
+_MC_CACHE: dict[tuple, dict[str, np.ndarray]] = {}
+
+
+def fault_runs(*, seed: int, trials: int, fault: int, jobs: int = 1, delta: float | None = None,
+               isolate: bool = True, progress: bool | None = None, chunk_size: int | None = None,
+               variant: str = "physical", schedule: str | None = None, state2_scale: float | None = None
+               ) -> dict[str, np.ndarray]:
+    """``trials`` runs of input-end fault ``fault`` (:func:`detection_chunk`), one stream per run.
+
+    Fault ``f`` uses the root seed ``SeedSequence([seed, f])`` whatever its size ``delta``, so
+    runs of fault 1 at two sizes are *paired* (same noise, run by run), as Figs 5 and 6 are.
+    Cached per arguments except ``jobs``, ``progress`` and ``chunk_size``, which do not change
+    the numbers (:func:`detection_chunk` is batch-invariant bit for bit,
+    ``tests/reproduce/test_zb2014_pipeline.py``); a run with ``isolate`` also serves a request
+    without it.
+
+    Parameters
+    ----------
+    seed, trials, fault, jobs, progress, chunk_size, variant, schedule
+        As in :func:`pipeline_monte_carlo`.
+    delta : float, optional
+        Fault size (default Table 1).
+    isolate : bool
+        Also compute the isolation statistics (:func:`detection_chunk`).
+    state2_scale : float, optional
+        Physical surrogate calibrated with this scale (:func:`pipeline_setup`).
+    """
+    theta = fault_theta(fault, delta)
+    key = (int(seed), int(trials), int(fault), tuple(theta.tolist()), variant, schedule,
+           None if state2_scale is None else float(state2_scale))
+    for iso in ((True,) if isolate else (True, False)):
+        if key + (iso,) in _MC_CACHE:
+            return _MC_CACHE[key + (iso,)]
+    if progress is None:
+        progress = bool(getattr(sys.stderr, "isatty", lambda: False)())
+    chunk = functools.partial(detection_chunk, fault=fault, delta=delta, variant=variant, schedule=schedule,
+                              state2_scale=state2_scale, isolate=isolate)
+    out = run_monte_carlo(chunk, trials, seed=_fault_seed(seed, fault), jobs=jobs, chunk_size=chunk_size,
+                          progress=progress, description=f"fault {fault}")
+    _MC_CACHE[key + (bool(isolate),)] = out
+    return out
 
 
 def pipeline_monte_carlo(*, seed: int, trials: int, jobs: int = 1, progress: bool | None = None,
                          chunk_size: int | None = None, variant: str = "physical",
-                         schedule: str | None = None) -> dict[int, dict[str, np.ndarray]]:
+                         schedule: str | None = None, state2_scale: float | None = None
+                         ) -> dict[int, dict[str, np.ndarray]]:
     """The Monte Carlo experiment of Figs 7 and 8: ``trials`` runs of each input-end fault.
 
     Parameters
@@ -666,27 +897,19 @@ def pipeline_monte_carlo(*, seed: int, trials: int, jobs: int = 1, progress: boo
         Passed to :func:`~fdi_lib.montecarlo.run_monte_carlo`.
     variant, schedule : str
         Surrogate and schedule origin (:func:`pipeline_setup`).
+    state2_scale : float, optional
+        Physical surrogate calibrated with this scale (:func:`pipeline_setup`).
 
     Returns
     -------
     dict
-        ``{1: arrays, 2: arrays}`` with the entries of :func:`detection_chunk`. Cached per
-        ``(seed, trials, variant, schedule)`` when ``chunk_size`` is the default.
+        ``{1: arrays, 2: arrays}`` with the entries of :func:`detection_chunk` (from
+        :func:`fault_runs`, cached).
     """
-    key = (int(seed), int(trials), variant, schedule)
-    if chunk_size is None and key in _MC_CACHE:
-        return _MC_CACHE[key]
-    if progress is None:
-        progress = bool(getattr(sys.stderr, "isatty", lambda: False)())
-    out = {}
-    for fault in (1, 2):
-        chunk = functools.partial(detection_chunk, fault=fault, variant=variant, schedule=schedule)
-        out[fault] = run_monte_carlo(chunk, trials,
-                                     seed=_fault_seed(seed, fault), jobs=jobs, chunk_size=chunk_size,
-                                     progress=progress, description=f"fault {fault}")
-    if chunk_size is None:
-        _MC_CACHE[key] = out
-    return out
+    return {fault: fault_runs(seed=seed, trials=trials, fault=fault, jobs=jobs, progress=progress,
+                              chunk_size=chunk_size, variant=variant, schedule=schedule,
+                              state2_scale=state2_scale)
+            for fault in (1, 2)}
 
 
 def _quartiles(x: np.ndarray) -> dict[str, float | None]:
@@ -727,11 +950,12 @@ def plot_fig7(result: ReproductionResult, fig: Any = None):
 
 @register("zb2014-fig7", paper=PAPER, title="Gas pipeline: histograms of detection delay and onset error",
           default_trials=1000, plot=plot_fig7)
-def fig7(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+def fig7(*, seed: int, trials: int | None, jobs: int, state2_scale: float | None = None
+         ) -> ReproductionResult:
     """Paper Fig. 7: ``trials`` runs per input-end fault (paper: 1000 each, 2000 in all).
 
     Delays and onset errors are over runs whose first alarm is at or after the onset
-    (600 min); an alarm before it is a false alarm.
+    (600 min); an alarm before it is a false alarm. Option ``state2_scale`` as in ``zb2014-fig5``.
 
     Headline keys
     -------------
@@ -760,7 +984,7 @@ def fig7(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     surrogate (:data:`fdi_lib.systems.gas_pipeline.CALIBRATION`); the other keys are predictions.
     """
     trials = 1000 if trials is None else trials
-    mc = pipeline_monte_carlo(seed=seed, trials=trials, jobs=jobs)
+    mc = pipeline_monte_carlo(seed=seed, trials=trials, jobs=jobs, state2_scale=state2_scale)
     delays, errs, fa, missed, hits, fa_f = {}, {}, 0, {}, {}, {}
     for fault, res in mc.items():
         alarm, onset = res["alarm"], res["onset_hat"]
@@ -784,7 +1008,8 @@ def fig7(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
                              "max_prefault_statistic"]}
     return ReproductionResult(id="zb2014-fig7", headline=headline, paper=paper,
                               settings={"seed": seed, "trials_per_fault": trials, "window": gp.WINDOW,
-                                        "threshold": gp.THRESHOLD, "start_min": gp.DISABLED_MIN},
+                                        "threshold": gp.THRESHOLD, "start_min": gp.DISABLED_MIN,
+                                        "calibration": calibration_settings(state2_scale)},
                               data={"delay_min": delays, "onset_error_min": errs})
 
 
@@ -809,14 +1034,34 @@ def plot_fig8(result: ReproductionResult, fig: Any = None):
     return fig
 
 
+#: Samples the minmax tests use after an alarm at ``k*``: from the onset estimate ``r_hat`` to the alarm
+#: (the paper, Section 4.3) or to the end of the record (``N - 1``).
+ISOLATION_WINDOWS = ("alarm", "record_end")
+
+
+def _efficient_noncentrality(info: np.ndarray, fault: int) -> np.ndarray:
+    """``theta_a^2 F_a*``, ``F_a* = F_aa - F_ab^2 / F_bb``: the non-centrality of the minmax test of the
+    present component ``a`` (chi-square(1) with the onset and the samples fixed), per run ``(B,)``."""
+    a, b = (0, 1) if fault == 1 else (1, 0)
+    return fault_theta(fault)[a] ** 2 * (info[:, a, a] - info[:, a, b] ** 2 / info[:, b, b])
+
+
 @register("zb2014-fig8", paper=PAPER, title="Gas pipeline: minmax isolation after each alarm (threshold 6.6349)",
           default_trials=1000, plot=plot_fig8)
-def fig8(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+def fig8(*, seed: int, trials: int | None, jobs: int, isolation_window: str = "alarm",
+         state2_scale: float | None = None) -> ReproductionResult:
     """Paper Fig. 8: two parallel minmax tests (41) after each alarm, threshold 6.6349.
 
     Same runs as ``zb2014-fig7``; rates over the runs with a detection at or after the onset.
     Type I: the test on the *absent* fault rejects; type II: the test on the *present* fault
     does not.
+
+    Options: ``isolation_window`` (:data:`ISOLATION_WINDOWS`): the samples the tests use,
+    ``"alarm"`` (default, the paper's Section 4.3: from the onset estimate to the alarm) or
+    ``"record_end"`` (from the onset estimate to the end of the record, ``N - 1``); it sets
+    ``type1_rate``, ``type2_rate``, ``mean_absent_statistic``, ``median_cos2``, the
+    ``*_onset_error_*`` rates and the histograms; every other key covers both windows.
+    ``state2_scale`` as in ``zb2014-fig5``.
 
     Headline keys
     -------------
@@ -838,39 +1083,76 @@ def fig8(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
         Per fault: mean of the absent-fault statistic at the alarm (chi2(k) has mean k).
     median_cos2 : dict
         Per fault: median squared cosine ``F12^2 / (F11 F22)`` of the two fault directions over
-        the samples used at the alarm (1 = indistinguishable).
+        the samples used (1 = indistinguishable).
     type1_rate_onset_error_le10, type2_rate_onset_error_le10 : dict
         Per fault: the rates over detected runs whose onset estimate is within 10 min of 600.
     type1_rate_onset_error_gt40, type2_rate_onset_error_gt40 : dict
         The same over detected runs whose onset estimate is more than 40 min off.
+    samples_at_alarm, samples_to_record_end : dict
+        Per fault: ``q1``, ``median``, ``q3`` over detected runs of the number of samples each
+        window holds (``k* - r_hat + 1`` and ``N - r_hat``).
+    noncentrality_at_alarm, noncentrality_to_record_end : dict
+        Per fault: ``q1``, ``median``, ``q3`` over detected runs of the non-centrality
+        ``theta_a^2 F_a*`` of the test on the present fault ``a`` (``F_a* = F_aa - F_ab^2 /
+        F_bb``, the information on ``theta_a`` left once the other fault is allowed for), with
+        ``F`` from the onset estimate to the alarm / to the end of the record: what each window
+        holds to isolate the fault.
+    type2_rate_expected_at_alarm, type2_rate_expected_to_record_end : dict
+        Per fault: mean over detected runs of ``P(chi2(1, theta_a^2 F_a*) <= 6.6349)``, the type II
+        rate that information alone predicts (the onset estimate and the stopping time taken as
+        fixed, so without the detector's selection of the noise).
+    median_cos2_to_record_end : dict
+        Per fault: ``median_cos2`` over the samples to the end of the record.
 
     All rates are predictions (``paper["predictions"]``); nothing here was calibrated.
     """
+    if isolation_window not in ISOLATION_WINDOWS:
+        raise ModelError(f"isolation_window: expected one of {ISOLATION_WINDOWS}, got {isolation_window!r}")
     trials = 1000 if trials is None else trials
-    mc = pipeline_monte_carlo(seed=seed, trials=trials, jobs=jobs)
+    mc = pipeline_monte_carlo(seed=seed, trials=trials, jobs=jobs, state2_scale=state2_scale)
     t1, t2, t1k, ks1, ks2, mean_abs, minmax, cos2 = {}, {}, {}, {}, {}, {}, {}, {}
     t2k, t2k_theory, t1_le, t2_le, t1_gt, t2_gt = {}, {}, {}, {}, {}, {}
-    power = known_onset_isolation_power()
+    info_keys = ("samples_at_alarm", "samples_to_record_end", "noncentrality_at_alarm",
+                 "noncentrality_to_record_end", "type2_rate_expected_at_alarm",
+                 "type2_rate_expected_to_record_end", "median_cos2_to_record_end")
+    info: dict[str, dict[str, Any]] = {key: {} for key in info_keys}
+    power = known_onset_isolation_power(state2_scale=state2_scale)
+    suffix = "" if isolation_window == "alarm" else "_record"
     for fault, res in mc.items():
+        f = str(fault)
         hit = res["alarm"] >= FAULT_ONSET
-        present, absent = (res["l1"], res["l2"]) if fault == 1 else (res["l2"], res["l1"])
+        l1, l2 = res["l1" + suffix], res["l2" + suffix]
+        present, absent = (l1, l2) if fault == 1 else (l2, l1)
         absent_known = res["l2_known"] if fault == 1 else res["l1_known"]
         present_known = res["l1_known"] if fault == 1 else res["l2_known"]
-        t2k[str(fault)] = _rate(int(np.sum(present_known <= MINMAX_THRESHOLD)), present_known.size)
-        t2k_theory[str(fault)] = 1.0 - power[str(fault)]["power"]
+        t2k[f] = _rate(int(np.sum(present_known <= MINMAX_THRESHOLD)), present_known.size)
+        t2k_theory[f] = 1.0 - power[f]["power"]
         n = int(hit.sum())
-        t1[str(fault)] = _rate(int(np.sum(absent[hit] > MINMAX_THRESHOLD)), n)
+        t1[f] = _rate(int(np.sum(absent[hit] > MINMAX_THRESHOLD)), n)
         err = np.abs(res["onset_hat"] - FAULT_ONSET) * gp.TS_MIN
         for sel, d1, d2 in ((hit & (err <= 10), t1_le, t2_le), (hit & (err > 40), t1_gt, t2_gt)):
-            d1[str(fault)] = _rate(int(np.sum(absent[sel] > MINMAX_THRESHOLD)), int(sel.sum()))
-            d2[str(fault)] = _rate(int(np.sum(present[sel] <= MINMAX_THRESHOLD)), int(sel.sum()))
-        t2[str(fault)] = _rate(int(np.sum(present[hit] <= MINMAX_THRESHOLD)), n)
-        t1k[str(fault)] = _rate(int(np.sum(absent_known > MINMAX_THRESHOLD)), absent_known.size)
-        ks1[str(fault)] = float(scipy.stats.kstest(absent_known, scipy.stats.chi2(1).cdf).pvalue)
-        ks2[str(fault)] = float(scipy.stats.kstest(absent_known, scipy.stats.chi2(2).cdf).pvalue)
-        mean_abs[str(fault)] = float(np.mean(absent[hit])) if n else None
-        minmax[fault] = {1: res["l1"][hit], 2: res["l2"][hit]}
-        cos2[str(fault)] = float(np.median(res["cos2"][hit])) if n else None
+            d1[f] = _rate(int(np.sum(absent[sel] > MINMAX_THRESHOLD)), int(sel.sum()))
+            d2[f] = _rate(int(np.sum(present[sel] <= MINMAX_THRESHOLD)), int(sel.sum()))
+        t2[f] = _rate(int(np.sum(present[hit] <= MINMAX_THRESHOLD)), n)
+        t1k[f] = _rate(int(np.sum(absent_known > MINMAX_THRESHOLD)), absent_known.size)
+        ks1[f] = float(scipy.stats.kstest(absent_known, scipy.stats.chi2(1).cdf).pvalue)
+        ks2[f] = float(scipy.stats.kstest(absent_known, scipy.stats.chi2(2).cdf).pvalue)
+        mean_abs[f] = float(np.mean(absent[hit])) if n else None
+        minmax[fault] = {1: l1[hit], 2: l2[hit]}
+        cos2_by = {}
+        for window, key in (("alarm", "info_alarm"), ("record_end", "info_record")):
+            F = res[key][hit]
+            cos2_by[window] = F[:, 0, 1] ** 2 / (F[:, 0, 0] * F[:, 1, 1])
+            lam = _efficient_noncentrality(F, fault)
+            tag = "at_alarm" if window == "alarm" else "to_record_end"
+            info[f"noncentrality_{tag}"][f] = _quartiles(lam)
+            info[f"type2_rate_expected_{tag}"][f] = (
+                float(np.mean(scipy.stats.ncx2.cdf(MINMAX_THRESHOLD, 1, lam))) if n else None)
+        r_hat = res["onset_hat"][hit]
+        info["samples_at_alarm"][f] = _quartiles(res["alarm"][hit] - r_hat + 1)
+        info["samples_to_record_end"][f] = _quartiles(gp.N_STEPS - r_hat)
+        info["median_cos2_to_record_end"][f] = float(np.median(cos2_by["record_end"])) if n else None
+        cos2[f] = float(np.median(cos2_by[isolation_window])) if n else None
     dof = int(np.argmin([abs(scipy.stats.chi2.ppf(0.99, k) - MINMAX_THRESHOLD) for k in (1, 2, 3)]) + 1)
     headline = {"type1_rate": t1, "type2_rate": t2, "type1_rate_known_onset": t1k,
                 "type2_rate_known_onset": t2k, "type2_rate_known_onset_theory": t2k_theory,
@@ -878,13 +1160,15 @@ def fig8(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
                 "ks_pvalue_dof1": ks1, "ks_pvalue_dof2": ks2, "mean_absent_statistic": mean_abs,
                 "median_cos2": cos2,
                 "type1_rate_onset_error_le10": t1_le, "type2_rate_onset_error_le10": t2_le,
-                "type1_rate_onset_error_gt40": t1_gt, "type2_rate_onset_error_gt40": t2_gt}
+                "type1_rate_onset_error_gt40": t1_gt, "type2_rate_onset_error_gt40": t2_gt, **info}
     paper = {"type1_rate": {"1": {"rate": 0.017}, "2": {"rate": 0.013}},
              "type2_rate": {"1": {"rate": 0.0}, "2": {"rate": 0.0}}, "threshold_dof": "1 (caption) / 2 (text)",
              "calibrated_to": [], "predictions": ["type1_rate", "type2_rate"]}
     return ReproductionResult(id="zb2014-fig8", headline=headline, paper=paper,
                               settings={"seed": seed, "trials_per_fault": trials,
-                                        "minmax_threshold": MINMAX_THRESHOLD},
+                                        "minmax_threshold": MINMAX_THRESHOLD,
+                                        "isolation_window": isolation_window,
+                                        "calibration": calibration_settings(state2_scale)},
                               data={"minmax": minmax})
 
 
@@ -937,6 +1221,54 @@ def surrogate_sensitivity(*, seed: int, trials: int, jobs: int = 1) -> list[dict
                 row["type2_rate_known_onset"][f] = _rate(int(np.sum(present_known <= MINMAX_THRESHOLD)), trials)
             row["false_alarm_rate"] = _rate(fa, 2 * trials)
             rows.append(row)
+    return rows
+
+
+def calibration_sensitivity(*, seed: int, trials: int, jobs: int = 1,
+                            scales: tuple[float, ...] = (1.0, 3.0, 10.0, 30.0)) -> list[dict[str, Any]]:
+    """Every prediction of Figs 5-9 on the physical surrogate calibrated with each ``state2_scale``.
+
+    For each scale, the section length and the swing are recalibrated so that both declared
+    targets still hold (:func:`~fdi_lib.systems.gas_pipeline.calibration_for`), and the
+    reproductions ``zb2014-fig5`` to ``zb2014-fig9`` run with the option ``state2_scale`` at the
+    same seed and ``trials`` (runs per fault, and spread runs). The functions are called
+    directly, not through :func:`~fdi_lib.reproduce.registry.reproduce`: the results cache keeps
+    for each id the entry used last, which must stay the book's default run.
+
+    Parameters
+    ----------
+    seed : int
+        Root seed (common random numbers across scales).
+    trials : int
+        Runs per fault and scale (also the spread runs of Figs 5-6).
+    jobs : int
+        Parallel workers (results do not depend on it).
+    scales : tuple of float
+        Values of ``state2_scale`` (default four of the calibration grid).
+
+    Returns
+    -------
+    list of dict
+        One per scale: ``state2_scale``, ``constants`` (the calibrated constants),
+        ``targets`` (:func:`~fdi_lib.systems.gas_pipeline.calibration_targets`), ``limits``
+        (:func:`~fdi_lib.systems.gas_pipeline.surrogate_limits`) and ``headlines`` (``{id:
+        headline}`` of the five reproductions).
+    """
+    rows = []
+    for k2 in scales:
+        cal = gp.calibration_for(float(k2))
+        # the runs first, one chunk per fault (faster than the default four for a few hundred
+        # runs; same numbers), so that the reproductions find them in the cache
+        for fault, delta in ((1, None), (2, None), (1, gp.FAULT1_DOUBLED_DELTA)):
+            fault_runs(seed=seed, trials=trials, fault=fault, delta=delta, jobs=jobs, isolate=delta is None,
+                       chunk_size=min(trials, 250), progress=False, state2_scale=float(k2))
+        heads = {rid: func(seed=seed, trials=trials, jobs=jobs, state2_scale=float(k2)).headline
+                 for rid, func in (("zb2014-fig5", fig5), ("zb2014-fig6", fig6), ("zb2014-fig7", fig7),
+                                   ("zb2014-fig8", fig8), ("zb2014-fig9", fig9))}
+        rows.append({"state2_scale": float(k2), "constants": cal,
+                     "targets": gp.calibration_targets(cal["section_length_km"], cal["state2_scale"],
+                                                       cal["pressure_swing_bar"]),
+                     "limits": gp.surrogate_limits(float(k2)), "headlines": heads})
     return rows
 
 

@@ -150,32 +150,53 @@ def _all_inside(V: np.ndarray, M: np.ndarray, m: np.ndarray, tol: float) -> bool
 _QHULL_RETRIES = (None, "Q12", "Q12 Q14")
 
 
-def _qhull_vertices(M: np.ndarray, m: np.ndarray, centre: np.ndarray) -> np.ndarray:
-    """Vertices by qhull's halfspace intersection around an interior point.
+#: Outward expansion of a vertex set that qhull found with wide merges ("Q12", "Q14"): such merges
+#: can drop vertices, so the hull of the vertices found can miss part of the set. On the healthy UAV
+#: records of issue 21 (exact rule, scaled coordinates, 11 records, 12 such sets) the largest support
+#: shortfall against HiGHS in 150 random directions per set was 7.3e-8 for sets of size 1.2 to 1.9;
+#: the vertices are moved away from the Chebyshev centre so that the support grows by at least
+#: ``_MERGE_EXPANSION (1 + size)``, some 40 times that shortfall (size: largest |v - centre|).
+_MERGE_EXPANSION = 1e-6
+
+
+def _qhull_vertices(M: np.ndarray, m: np.ndarray, centre: np.ndarray, radius: float) -> np.ndarray:
+    """Vertices by qhull's halfspace intersection around an interior point (the Chebyshev centre,
+    ball of radius ``radius``).
 
     Many nearly parallel inequalities (the hull of thousands of vertex images) make qhull's
-    default merging fail with a topology error; the options of :data:`_QHULL_RETRIES` are then
-    tried in turn, and a result is accepted only if every vertex satisfies every inequality to
-    1e-9 (relative). Raises the last qhull error if none works.
+    default merging fail with a topology error. Each option of :data:`_QHULL_RETRIES` is then tried
+    in the given coordinates and in coordinates centred on ``centre`` (vertex enumeration commutes
+    with translations, qhull's rounding does not: on the UAV records of issue 21 the default
+    failed in both and "Q12" worked in the second). A result is accepted only if every vertex
+    satisfies every inequality to 1e-9 (relative). A result found with wide merges is expanded
+    about ``centre`` (:data:`_MERGE_EXPANSION`) so that its hull still contains the set: a slightly
+    larger set is sound for an observer, a smaller one is not. Raises the last qhull error if no
+    option works.
     """
     from scipy.spatial import HalfspaceIntersection, QhullError
 
     err: Exception | None = None
     for opts in _QHULL_RETRIES:
-        try:
-            hs = HalfspaceIntersection(np.column_stack([M, -m]), centre, qhull_options=opts)
-        except QhullError as exc:
-            err = exc
-            continue
-        V = hs.intersections
-        if _all_inside(V, M, m, 1e-9 * (1.0 + np.abs(m))):
-            break
-        err = NumericalError(f"qhull ({opts}): vertices violate the inequalities")
-    else:
-        raise err  # type: ignore[misc]
-    # merge vertices reported once per incident facet
-    key = np.round(V / (1e-9 * (1.0 + np.abs(V).max())), 0)
-    return V[np.unique(key, axis=0, return_index=True)[1]]
+        for shift in (np.zeros_like(centre), centre):
+            ms = m - M @ shift   # Set(M, m) - shift
+            try:
+                hs = HalfspaceIntersection(np.column_stack([M, -ms]), centre - shift, qhull_options=opts)
+            except QhullError as exc:
+                err = exc
+                continue
+            V = hs.intersections + shift
+            if not _all_inside(V, M, m, 1e-9 * (1.0 + np.abs(m))):
+                err = NumericalError(f"qhull ({opts}): vertices violate the inequalities")
+                continue
+            # merge vertices reported once per incident facet
+            key = np.round(V / (1e-9 * (1.0 + np.abs(V).max())), 0)
+            V = V[np.unique(key, axis=0, return_index=True)[1]]
+            if opts is not None:
+                # conv(V) holds B(centre, radius), so (1 + s)(conv(V) - centre) holds conv(V) + s radius B
+                size = np.abs(V - centre).max()
+                V = centre + (V - centre) * (1.0 + _MERGE_EXPANSION * (1.0 + size) / radius)
+            return V
+    raise err  # type: ignore[misc]
 
 
 #: Largest number of row subsets (bases) for which vertices are found by enumerating bases
@@ -270,36 +291,68 @@ def _basis_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray | None:
     return X[first]
 
 
+#: Emptiness tolerance: Set(M, m) (rows of unit norm) is empty when the largest ball it holds has
+#: a radius below ``-_EMPTY_TOL (1 + max |m|)`` (the Chebyshev LP, :func:`_chebyshev`), that is
+#: when no point violates every inequality by less than that. The same tolerance as the
+#: feasibility test of the basis route (:func:`_basis_vertices`).
+_EMPTY_TOL = 1e-12
+
+
 def _enumerate_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray:
     """Vertices of Set(M, m), shape (v, n); (0, n) if empty; raises if unbounded.
 
+    Emptiness is decided by linear programming, never by an empty enumeration: (0, n) is returned
+    only when the Chebyshev LP (:func:`_chebyshev`, cddlib verified, HiGHS when unsure) finds no
+    ball of radius above ``-_EMPTY_TOL (1 + max |m|)`` (:data:`_EMPTY_TOL`).
+
     Few rows (at most :data:`_MAX_BASES` n-subsets of distinct normals) and normals that bound
-    the set: :func:`_basis_vertices`. Otherwise rows are normalised and de-duplicated; a Chebyshev centre is found by LP (cddlib). A
-    full-dimensional set goes to qhull's halfspace intersection, which is robust in floating
-    point; cddlib's double description in floating point can silently drop vertices when
-    nearly parallel inequalities are present. Flat sets (radius ~ 0), which qhull cannot
-    handle, go to cddlib.
+    the set: :func:`_basis_vertices`; when it finds no vertex, the LP decides. Otherwise rows are
+    normalised and de-duplicated and the Chebyshev centre is found. A full-dimensional set goes to
+    qhull's halfspace intersection (:func:`_qhull_vertices`, several options and frames), which is
+    robust in floating point; cddlib's double description in floating point can silently drop
+    vertices when nearly parallel inequalities are present, so it is the last resort and its
+    answer is verified too. Flat sets (radius ~ 0), which qhull cannot handle, go to cddlib. When
+    every enumeration fails, or finds no vertex of a set the LP found non-empty, a
+    :class:`NumericalError` is raised (an exact-arithmetic retry would need cddlib's GMP build,
+    which ``pycddlib-standalone`` does not ship): a failure is never reported as an empty set.
     """
     V = _basis_vertices(M, m)
-    if V is not None:
+    if V is not None and V.shape[0]:
         return V
     M, m = _normalise(M, m)
     n = M.shape[1]
     status, centre, radius = _chebyshev(M, m)
-    if status == "infeasible" or radius < -1e-12:
+    if status == "infeasible" or radius < -_EMPTY_TOL * (1.0 + np.abs(m).max(initial=0.0)):
         return np.zeros((0, n))
     if status == "unbounded" or radius >= 1e6 * (1 - 1e-12):
         raise UnboundedSetError("Set(M, m): the polytope is unbounded (it contains arbitrarily large balls)")
-    if radius > 1e-9 * (1.0 + np.abs(m).max()):
+    scale = 1e-9 * (1.0 + np.abs(m).max())
+    if radius > scale:
         try:
-            return _qhull_vertices(M, m, centre)
-        except Exception:  # pragma: no cover - qhull precision failure: fall back to cddlib
-            pass
+            V = _qhull_vertices(M, m, centre, radius)
+        except Exception:  # qhull precision failure: fall back to cddlib
+            V = None
+        if V is not None and _spans_ball(V, centre, radius, scale):
+            return V
     try:
-        return _cdd_dd_vertices(M, m)
+        V = _cdd_dd_vertices(M, m)
     except RuntimeError as exc:  # cddlib: "Numerical inconsistency is found"
         raise NumericalError(f"Set(M, m): vertex enumeration failed in floating point for {len(m)} "
                              f"inequalities in dimension {n} (Chebyshev radius {radius:.3g}): {exc}") from None
+    if not (V.shape[0] and _all_inside(V, M, m, 1e-9 * (1.0 + np.abs(m)))
+            and _spans_ball(V, centre, max(radius, 0.0), scale)):
+        raise NumericalError(f"Set(M, m): the linear program finds a ball of radius {radius:.3g} in the set "
+                             f"({len(m)} inequalities, dimension {n}), but vertex enumeration in floating point "
+                             f"(qhull, cddlib) found {V.shape[0]} vertices that do not span it; the set is not "
+                             f"empty (no alarm), its vertices are unknown")
+    return V
+
+
+def _spans_ball(V: np.ndarray, centre: np.ndarray, radius: float, tol: float) -> bool:
+    """Whether the bounding box of V holds the ball B(centre, radius) (to ``tol``): a necessary
+    condition for conv(V) to be the set in which the Chebyshev LP found that ball."""
+    return bool(V.shape[0]) and bool(np.all(V.min(axis=0) <= centre - radius + tol)
+                                      and np.all(V.max(axis=0) >= centre + radius - tol))
 
 
 def _cdd_dd_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray:
@@ -325,32 +378,38 @@ def _hull_hrep(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _hull(V: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """H-representation (M, m) of conv(V), and the indices of the points of V that span it.
 
+    In dimension 1 the hull is the interval between the two extreme points, computed exactly.
     Full-dimensional point sets go to qhull (:class:`scipy.spatial.ConvexHull`), retried with the
-    options of :data:`_QHULL_RETRIES` on a topology error, and the spanning points are qhull's
-    vertices; flat (lower-dimensional) sets, which qhull rejects, go to cddlib, whose equalities
-    become pairs of inequalities, and keep every point (in dimension 1: the two extremes). Every
-    result is verified (all points inside, to 1e-9 relative); a failed verification raises
-    :class:`NumericalError` rather than returning a wrong set.
+    options of :data:`_QHULL_RETRIES` on a topology error, on the points as given and then centred
+    on their mean, and the spanning points are qhull's vertices; flat (lower-dimensional) sets,
+    which qhull rejects, go to cddlib, whose equalities become pairs of inequalities, and keep
+    every point. Every result is verified (all points inside, to 1e-9 relative); a failed
+    verification raises :class:`NumericalError` rather than returning a wrong set.
     """
     from scipy.spatial import ConvexHull, QhullError
 
     scale = 1.0 + np.abs(V).max()
-    if V.shape[1] >= 2 and V.shape[0] > V.shape[1]:
-        for opts in _QHULL_RETRIES:
-            try:
-                hull = ConvexHull(V, qhull_options=opts)
-            except QhullError:
-                continue
-            eq = hull.equations  # rows [a, b] with a x + b <= 0 (unit normals)
-            eq = eq[np.unique(np.round(eq, 12), axis=0, return_index=True)[1]]
-            M, m = eq[:, :-1].copy(), -eq[:, -1]
-            if _all_inside(V, M, m, 1e-9 * scale):
-                return M, m, hull.vertices
+    if V.shape[1] == 1:   # an interval: its end points, exactly (cddlib's float answer can miss them)
+        keep = np.unique([V[:, 0].argmin(), V[:, 0].argmax()])
+        return np.array([[1.0], [-1.0]]), np.array([V[:, 0].max(), -V[:, 0].min()]), keep
+    if V.shape[0] > V.shape[1]:
+        # the points as given, then centred on their mean (a hull commutes with translations,
+        # qhull's rounding does not: see _qhull_vertices)
+        for shift in (np.zeros(V.shape[1]), V.mean(axis=0)):
+            for opts in _QHULL_RETRIES:
+                try:
+                    hull = ConvexHull(V - shift, qhull_options=opts)
+                except QhullError:
+                    continue
+                eq = hull.equations  # rows [a, b] with a (x - shift) + b <= 0 (unit normals)
+                eq = eq[np.unique(np.round(eq, 12), axis=0, return_index=True)[1]]
+                M, m = eq[:, :-1].copy(), -eq[:, -1] + eq[:, :-1] @ shift
+                if _all_inside(V, M, m, 1e-9 * scale):
+                    return M, m, hull.vertices
     M, m = _cdd_hull_exact(V)
     if not _all_inside(V, M, m, 1e-9 * scale):
         raise NumericalError(f"conv(V): the facets found in floating point exclude some of the {len(V)} points")
-    keep = np.unique([V[:, 0].argmin(), V[:, 0].argmax()]) if V.shape[1] == 1 else np.arange(len(V))
-    return M, m, keep
+    return M, m, np.arange(len(V))
 
 
 def _cdd_hull_exact(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -446,7 +505,10 @@ class Polytope:
         """Vertices, shape (v, n); (0, n) if empty. Raises :class:`UnboundedSetError` if unbounded.
 
         Vertex enumeration by bases for few inequalities, otherwise by qhull (cddlib for flat sets);
-        see :func:`_enumerate_vertices`.
+        see :func:`_enumerate_vertices`. Emptiness is decided by a linear program
+        (:data:`_EMPTY_TOL`); an enumeration that finds no vertex of a non-empty set raises
+        :class:`NumericalError`. Vertices that qhull found with wide merges are moved away from the
+        Chebyshev centre (:data:`_MERGE_EXPANSION`) so that their hull contains the set.
         """
         if "V" not in self._cache:
             self._cache["V"] = _enumerate_vertices(self.M, self.m)

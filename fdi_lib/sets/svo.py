@@ -31,6 +31,17 @@ Two update rules are offered (``method``):
     (disturbances not shared between rows); ``joint=True`` solves the stacked form of eq. (3)
     with shared disturbances by linear programming (tighter, slower).
 
+Soundness. With the default options both rules contain every state compatible with the model
+and the data (Proposition 2), so an empty set proves a fault (Proposition 3); emptiness is decided
+by a linear program with a stated tolerance (:data:`fdi_lib.sets.polytope._EMPTY_TOL`), never by
+an empty vertex enumeration, and an enumeration that contradicts it raises
+:class:`~fdi_lib.errors.NumericalError` rather than an alarm. Two options trade this guarantee for
+tightness and **can lose the true state when A is uncertain** (``A_unc`` given): ``joint=True``
+with N > 1 (template rule) and ``strip_before_hull=True`` (exact rule, the paper's literal order
+of Fig. 2). With either, a healthy record can empty the set (a false alarm); both issue an
+:class:`~fdi_lib.errors.UnsoundOptionWarning` at the first update with an uncertain A, and the
+book measures how often they fail (:func:`fdi_lib.reproduce.rosa2013.horizon_comparison`).
+
 Many records at once: :class:`TemplateBatch` steps many template observers (N = 1) together on
 stacked arrays (:class:`ModelSequence`), with :func:`run_svo_many` and
 :func:`run_architecture_i_many` on top; each observer's result is the one it gets alone.
@@ -52,8 +63,10 @@ from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
+import warnings
+
 from fdi_lib.errors import (EmptySetError, ModelError, NonFiniteError, NumericalError, ShapeError,
-                            UnboundedSetError)
+                            UnboundedSetError, UnsoundOptionWarning)
 from fdi_lib.validation import integer, real
 from fdi_lib.sets.polytope import Polytope, _hull, _hull_hrep, _enumerate_vertices, box_corners
 from fdi_lib.threads import single_threaded_blas
@@ -295,12 +308,14 @@ class SetValuedObserver:
         per direction and Delta-vertex sequence (HiGHS); tighter, and much slower. Sound (contains
         every compatible state) when A is known (no ``A_unc``); with an uncertain A the hull over
         vertex sequences can miss the true state, as the paper's strip-before-hull order can
-        (:func:`fdi_lib.reproduce.rosa2013.horizon_comparison` measures it).
+        (:func:`fdi_lib.reproduce.rosa2013.horizon_comparison` measures it): an
+        :class:`~fdi_lib.errors.UnsoundOptionWarning` is issued at the first update with an uncertain A.
     strip_before_hull : bool
         ``"exact"`` method only. False (default): X̂(k+1) = ∩_j co_v{Prop_j(v)} ∩ S, which always
         contains the true state. True: the paper's literal construction co_v{Prop_0(v) ∩ S} (Fig. 2),
         which is tighter but can exclude the true state when the uncertain parameter is strictly
-        inside the cube (a counter-example is in the tests and the book).
+        inside the cube (a counter-example is in the tests and the book): an
+        :class:`~fdi_lib.errors.UnsoundOptionWarning` is issued at the first update with an uncertain A.
 
     Examples
     --------
@@ -323,7 +338,7 @@ class SetValuedObserver:
         N = integer(N, "N", low=1)
         if method not in ("template", "exact"):
             raise ModelError(f"method: expected 'template' or 'exact', got {method!r}")
-        try:   # vertex enumeration decides emptiness too (an empty set has no vertex)
+        try:   # no vertex only when the Chebyshev LP finds the set empty (_enumerate_vertices)
             V0 = X0.vertices()
         except UnboundedSetError:
             raise UnboundedSetError("X0: the initial set Set(M_0, m_0) is unbounded; "
@@ -348,6 +363,7 @@ class SetValuedObserver:
         self.margin = real(margin, "margin", low=0.0, what="a non-negative relative inflation")
         self.strip_before_hull = bool(strip_before_hull)
         self.joint = bool(joint)
+        self._warned = False
         self.n = X0.dim
         self._prior = _Entry(X0, V0)
         self.history: list[_Entry] = []  # most recent first
@@ -401,6 +417,7 @@ class SetValuedObserver:
         self.history[0].model = model
         self.history[0].u = u
         entries = self.history[: self.N]
+        self._warn_unsound(model)
         if self.method == "template":
             X = self._update_template(entries, model, y_next)
         else:
@@ -408,6 +425,18 @@ class SetValuedObserver:
         return self._wrap(self._push(X))
 
     # -------------------------------------------------------------- internals
+    def _warn_unsound(self, model: SVOModel) -> None:
+        """Warn once if an option that can lose the true state meets an uncertain A (module docstring)."""
+        if self._warned or model.A_unc.shape[0] == 0:
+            return
+        option = ("strip_before_hull=True" if self.method == "exact" and self.strip_before_hull else
+                  "joint=True" if self.method == "template" and self.joint and self.N > 1 else None)
+        if option is not None:
+            self._warned = True
+            warnings.warn(f"{option}: with an uncertain A (A_unc has {model.A_unc.shape[0]} directions) the set can "
+                          f"lose the true state, so an empty set is no proof of a fault; use the default "
+                          f"{option.split('=')[0]}=False for detection", UnsoundOptionWarning, stacklevel=3)
+
     def _wrap(self, X: Polytope | None) -> Polytope | None:
         return None if X is None else self.current
 
@@ -642,6 +671,8 @@ def run_svo(models: ModelSpec, u: Any, y: Any, X0: Polytope, *, N: int = 1, meth
     SVORun
     """
     y = _arr("y", y, 2)
+    if y.shape[0] == 0:
+        raise ShapeError(f"y: expected at least one measurement y(0) (shape (T+1, n_y), T >= 0), got shape {y.shape}")
     T = y.shape[0] - 1
     u = _arr("u", np.asarray(u, dtype=float).reshape(T, -1) if np.size(u) == 0 else u, 2)
     if u.shape[0] != T:
@@ -699,6 +730,8 @@ class FDIResult:
 
 def _bank(named_models: Mapping[str, ModelSpec], u, y, X0, N, method, template):
     y = _arr("y", y, 2)
+    if y.shape[0] == 0:
+        raise ShapeError(f"y: expected at least one measurement y(0) (shape (T+1, n_y), T >= 0), got shape {y.shape}")
     T = y.shape[0] - 1
     u = _arr("u", u, 2)
     if u.shape[0] != T:
@@ -888,7 +921,8 @@ def _dot(M: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 def _vertices_many(M: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Vertices of Set(M, m[b]) for every row b of m, shape (B, K, n), with a mask (B, K) of the
-    rows that are vertices; a set is empty when its mask is all False.
+    rows that are vertices; a set is empty when its mask is all False, which the Chebyshev LP
+    confirms (a set with no feasible basis but a point goes to :func:`_enumerate_vertices`).
 
     The basic solutions of :func:`fdi_lib.sets.polytope._basis_vertices`, for all sets at once (the
     same normals M, hence the same bases); a vertex on more than n facets may appear several times.
@@ -914,6 +948,13 @@ def _vertices_many(M: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray
     # one (K, n) x (n, q) product per set: the same shapes, hence the same rounding, in any batch
     F = (np.matmul(X, b.U.T) <= mu[:, None, :] + tol[:, None, None]).all(axis=2)
     F &= ~np.any(m[:, b.zero] < 0, axis=1)[:, None]
+    # no feasible basis is not a proof of emptiness: the Chebyshev LP decides (_enumerate_vertices)
+    for i in np.flatnonzero(~F.any(axis=1)):
+        V = _enumerate_vertices(M, m[i])
+        if len(V) > X.shape[1]:
+            X = np.concatenate([X, np.zeros((X.shape[0], len(V) - X.shape[1], X.shape[2]))], axis=1)
+            F = np.concatenate([F, np.zeros((F.shape[0], len(V) - F.shape[1]), dtype=bool)], axis=1)
+        X[i, :len(V)], F[i, :len(V)] = V, True
     return X, F
 
 

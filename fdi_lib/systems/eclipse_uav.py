@@ -34,6 +34,21 @@ the book chapter as well):
   [-1, 1], so it never leaves the bound.
 * **Excitation.** A known multisine is added to the LQG command on both inputs (the paper
   does not describe its manoeuvre) so that elevator and M_u faults have an effect to detect.
+* **Manoeuvre envelope** (:data:`ENVELOPE_AIRSPEED`). The SVO models' margins
+  (:data:`SVO_NOISE_MARGIN`, :data:`SVO_DIST_MARGIN`, :data:`SVO_V_MARGIN`) cover the sensor
+  linearisation and the neglected nonlinear terms only for moderate manoeuvres: with larger airspeed
+  commands (the ``amplitude`` of :func:`simulate`) the true state leaves the nominal SVO's sets and a
+  healthy record can raise an alarm. Measured on healthy 3 s runs
+  (:func:`fdi_lib.reproduce.rosa2013.envelope_study`, seeds 0-9, square-wave commands of 1 to 7 m/s,
+  90 runs per reading): with ±7 m/s commands the true state left the set in 3 to 40 of 301 samples
+  per run (elevator read per degree). Over the runs that lost it, the smallest airspeed deviation
+  reached up to the loss was 4.19 m/s per degree and 2.96 m/s per radian; runs reached up to
+  5.54 m/s and 2.43 m/s without a loss. The envelope is the measured airspeed deviation
+  |y_V(k)| <= 4 m/s (per degree) and 2.5 m/s (per radian), the largest multiples of 0.5 m/s below
+  those losses; :func:`svo_models` issues an :class:`~fdi_lib.errors.EnvelopeWarning` for a record
+  that leaves it (:func:`envelope_exceedance`). The study's records (no extra command) stay well
+  inside (below 0.8 m/s at seed 2013, healthy or faulty), except with the "total" M_u fault read
+  per radian (13 m/s: the fault itself drives the airspeed away, and the SVO detects it).
 * **Discretisation.** Ts = 10 ms, zero-order hold: python-control's ``c2d`` for the
   controller design; the per-step SVO models use the same ZOH formula with a vectorised matrix
   exponential (cross-checked against ``c2d`` and ``scipy.linalg.expm`` in the tests) because they
@@ -50,14 +65,17 @@ from typing import Sequence
 import numpy as np
 from scipy.linalg import expm
 
-from fdi_lib.errors import ModelError, ShapeError
+import warnings
+
+from fdi_lib.errors import EnvelopeWarning, ModelError, ShapeError
 from fdi_lib.threads import single_threaded_blas
 
 __all__ = ["TABLE3", "V_TRIM", "ALPHA_TRIM", "TS", "MU_READING", "NOISE_BOUND", "DIST_ACCEL",
            "ETA_UNITS", "ETA_UNIT", "FAULT_MODES", "ETA_TRIM", "RHO", "pitch_authority",
            "FAULTS", "SCENARIOS", "lpv_matrices", "zoh", "discretize", "measurement_matrix",
            "trim_state", "measure", "plant_derivative", "simulate_many", "LQG", "design_lqg", "fault_profile",
-           "UAVRun", "simulate", "svo_models", "svo_scale", "discretize_many", "excitation"]
+           "UAVRun", "simulate", "svo_models", "svo_scale", "discretize_many", "excitation",
+           "ENVELOPE_AIRSPEED", "envelope_exceedance"]
 
 #: Table 3 of the paper (SI units). Only documentary: the LPV model (16) already folds them in.
 TABLE3 = {"S": 2.365, "c": 1.34, "aspect_ratio": 2.047, "m": 39.7, "x_cg": 1.217, "I_y": 10.43}
@@ -550,6 +568,19 @@ SVO_NOISE_MARGIN = np.array([0.05, np.deg2rad(0.06), 1e-5, 1e-5])  # linearisati
 SVO_DIST_MARGIN = np.array([2e-3, 1e-3, 2e-6, 2e-5])                # per-step: nonlinear terms, ZOH
 
 
+#: Manoeuvre envelope of the SVO margins (module docstring): the largest measured airspeed deviation
+#: |y_V(k)| (m/s) per reading of the elevator coefficients, a multiple of 0.5 m/s below the smallest
+#: deviation at which the true state was seen outside the nominal SVO's set
+#: (:func:`fdi_lib.reproduce.rosa2013.envelope_study`; a test keeps the two consistent).
+ENVELOPE_AIRSPEED = {"deg": 4.0, "rad": 2.5}
+
+
+def envelope_exceedance(run: UAVRun) -> np.ndarray:
+    """Samples k of ``run`` whose measured airspeed deviation |y_V(k)| exceeds the manoeuvre envelope
+    :data:`ENVELOPE_AIRSPEED` of its elevator reading (empty: the record stays inside)."""
+    return np.flatnonzero(np.abs(run.y[:, 0]) > ENVELOPE_AIRSPEED[run.eta_unit])
+
+
 def svo_scale() -> np.ndarray:
     """State scaling for the SVOs (argument ``scale`` of :func:`fdi_lib.sets.svo.run_svo`).
 
@@ -580,6 +611,13 @@ def svo_models(run: UAVRun, kind: str = "nominal", *, dist_scale: float = 1.0, n
         Multiplier of the sensor noise bounds (noise bound plus margin, before the alpha-fault
         enlargement of SVO #2), likewise.
 
+    Warns
+    -----
+    EnvelopeWarning
+        When the record leaves the manoeuvre envelope (:func:`envelope_exceedance`): the margins
+        may then fail to cover the nonlinear terms, the sets may lose the true state, and an empty
+        set is no longer a proof of a fault.
+
     Notes
     -----
     Airspeed uncertainty: V in [V_hat - dV, V_hat + dV], dV = noise bound + margin, gives the
@@ -592,6 +630,10 @@ def svo_models(run: UAVRun, kind: str = "nominal", *, dist_scale: float = 1.0, n
     for name, val in (("dist_scale", dist_scale), ("noise_scale", noise_scale)):
         if not isinstance(val, (int, float, np.integer, np.floating)) or not np.isfinite(val) or val < 0:
             raise ModelError(f"{name}: expected a finite non-negative number, got {val!r}")
+    if envelope_exceedance(run).size:
+        warnings.warn(f"run: the measured airspeed deviation leaves the manoeuvre envelope of the SVO margins "
+                      f"(|y_V| <= {ENVELOPE_AIRSPEED[run.eta_unit]} m/s, eta_unit={run.eta_unit!r}); the sets may lose "
+                      f"the true state (see uav.envelope_exceedance)", EnvelopeWarning, stacklevel=2)
     C = measurement_matrix()
     noise = (NOISE_BOUND + SVO_NOISE_MARGIN) * float(noise_scale)
     if kind in ("alpha", "global"):

@@ -46,8 +46,8 @@ uses a **surrogate**. Two are provided (argument ``variant``):
       the pressure-drop state decides how that noise splits between the flow and the
       stored gas. ``s2 = k s2*`` with ``s2*`` the scale for which ``G0(2) / G0(1) =
       Q12 / Q11`` (``k = 1``: the noise is an error on the input flow, passing through
-      ``G``) and ``k = state2_scale`` fixed in :data:`CALIBRATION` (``k = 10``: most
-      of the noise acts on the flow; see the criterion recorded there).
+      ``G``) and ``k = state2_scale`` calibrated in :data:`CALIBRATION` (``k = 10``:
+      most of the noise acts on the flow; see the criterion recorded there).
 
     Then ``Fp``, ``Gp(2)`` follow from the physics, ``H0 = [1 / s1, 0]``,
     ``Hp = 0``, ``J0 = Jp = 0`` (the output is the flow leaving the section).
@@ -57,16 +57,27 @@ uses a **surrogate**. Two are provided (argument ``variant``):
     pressure 60 bar, viscosity 1.1e-5 Pa s, the Darcy friction factor from the
     Colebrook-White equation at the operating point (Menon 2005).
 
-    Two constants are left free by physics and fixed by the declared calibration
+    Three constants are left free by physics and fixed by the declared calibration
     :data:`CALIBRATION` (see :func:`calibrate`): the section length ``L`` (target:
-    the Fig 9 level, ``l_k`` about 50 times the threshold) and the daily swing of the
+    the Fig 9 level, ``l_k`` about 50 times the threshold), the daily swing of the
     mean pressure (target: fault 2 detected in every run; the fit asks for a quarter
-    of the mean pressure, which is large). Every other number the book reports on
-    this surrogate is a prediction. Two consequences, measured and reported in the
+    of the mean pressure, which is large) and ``state2_scale`` (by a stated criterion:
+    the smallest scale of a half-decade grid whose fitted swing is within 5 % of the
+    least; both targets hold at every scale, :func:`calibration_for`, so the criterion,
+    not the targets, picks it, and the book publishes the sensitivity of every
+    prediction to it). Every other number the book reports on this surrogate is a
+    prediction. Two consequences, measured and reported in the
     book: with the stated signs a depression of ``G0(1)`` raises the steady outlet
     flow slightly (``X1`` is oriented against the flow), and the Kalman filter does
     not absorb the output leak of Fig 9 (the paper's innovation returns to its
     level; ours stays shifted by the leak).
+
+    Limits, measured by :func:`design_report`: both time constants of the lumped
+    section (``~ I / R`` and ``~ R C``) are shorter than the 2 min sample, so the
+    surrogate has no slow line-pack mode; and ``p_k`` only schedules the friction
+    resistance: the gas that a daily swing of the mean pressure stores in and draws
+    from the section (``C d pbar / dt``) is not in its mass balance, which keeps the
+    steady outlet flow equal to the inlet flow at every pressure.
 
 ``variant="designed"``: the book's first surrogate (kept for comparison)
     Matrices chosen by criteria rather than derived: ``F`` constant lower triangular
@@ -110,6 +121,7 @@ __all__ = [
     "FAULT_ONSET_MIN", "FAULT1_DELTA", "FAULT2_DELTA", "FAULT1_DOUBLED_DELTA",
     "LEAK_ONSET_MIN", "LEAK_SIZE", "WINDOW", "THRESHOLD", "DISABLED_MIN", "VARIANTS",
     "CALIBRATION", "PhysicalSection", "physical_section", "calibrate", "calibration_targets",
+    "calibration_for", "select_state2_scale", "surrogate", "surrogate_limits",
     "projected_q", "pipeline_schedule", "pipeline_input", "PipelineMatrices", "pipeline_matrices",
     "pipeline_model", "input_fault_psi", "input_fault_family", "output_leak_family",
     "minutes_to_index", "index_to_minutes", "design_report", "noise_free_output",
@@ -185,11 +197,22 @@ CALIBRATION = {
         },
     },
     "free": {"section_length_km": "fixed by fig9_level_over_threshold",
-             "pressure_swing_bar": "fixed by fault2_miss_probability"},
-    "fixed": {"state2_scale": 10.0,
-              "criterion": "the swing needed for the fault 2 target falls as state2_scale grows "
-                           "(52 bar at 1, 19 at 3, 15.2 at 10, 14.6 at 100): 10 is within 5 % of "
-                           "the smallest swing, i.e. the state noise acts mostly on the flow"},
+             "pressure_swing_bar": "fixed by fault2_miss_probability",
+             "state2_scale": "fixed by the criterion of CALIBRATION['state2_scale']"},
+    "state2_scale": {
+        "grid": [1.0, 3.0, 10.0, 30.0, 100.0],
+        "tolerance": 0.05,
+        "criterion": "the smallest value of the grid (half-decade steps) whose fitted swing is within "
+                     "5 % of the swing at the largest value: the fault 2 target then asks for about "
+                     "the least swing any scale allows, i.e. the state noise acts mostly on the flow. "
+                     "Stated after the value 10 was chosen; the book publishes the sensitivity of "
+                     "every prediction to it",
+        # section length and swing fitted at each grid value (_fit_length_and_swing), recorded
+        # so that the criterion and the book's sensitivity table need no refit; tests refit some
+        "fits": {1.0: (43.67765844, 52.00357037), 3.0: (18.94085875, 19.24090093),
+                 10.0: (15.14551644, 15.19536685), 30.0: (14.5378379, 14.71995906),
+                 100.0: (14.35169323, 14.58700266)},
+    },
     "fitted": {"section_length_km": 15.14551644124154, "state2_scale": 10.0,
                "pressure_swing_bar": 15.19536685052103},
     "not_used": ["Fig 5-6 alarm, onset and delay", "Fig 7 delays, onset errors, false alarms",
@@ -607,6 +630,38 @@ def output_leak_family(model: LTVModel) -> FaultFamily:
 
 
 # ----------------------------------------------------------------------------- calibration
+def surrogate(section_length_km: float, state2_scale: float, pressure_swing_bar: float
+              ) -> tuple[LTVModel, np.ndarray, np.ndarray]:
+    """The physical surrogate for given free constants: model, input flow and schedule.
+
+    With the calibrated constants (:data:`CALIBRATION` ``["fitted"]``) this is
+    :func:`pipeline_model`, :func:`pipeline_input` and :func:`pipeline_schedule` of the
+    physical variant; other constants give the surrogates of the calibration and of its
+    sensitivity (:func:`calibration_for`).
+
+    Parameters
+    ----------
+    section_length_km, state2_scale, pressure_swing_bar : float
+        Section length, scale of the pressure-drop state, daily swing of the mean pressure
+        (the keys of ``CALIBRATION["fitted"]`` and of :func:`calibration_for`).
+
+    Returns
+    -------
+    tuple
+        ``(model, u, p)``: :class:`~fdi_lib.models.LTVModel` over ``N_STEPS`` samples, ``U_k``
+        (scaled to the stated mean outlet flow) and ``p_k``, each ``(N_STEPS,)``.
+    """
+    sec = physical_section(section_length_km, state2_scale)
+    mats = _physical_matrices(section_length_km, state2_scale)
+    shape = _demand_shape(N_STEPS)
+    daily = np.cos(2 * np.pi * (_hours(N_STEPS) - PRESSURE_PEAK_HOUR) / 24.0)
+    p = -pressure_swing_bar * daily / sec.bar_per_unit
+    y = _model_from(mats, p, shape)
+    zero = Noise(x0=y.x0, w=np.zeros((N_STEPS, 2)), v=np.zeros((N_STEPS, 1)))
+    u = MEAN_FLOW * shape / simulate(y, noise=zero, u=shape).y[:, 0].mean()
+    return _model_from(mats, p, u), u, p
+
+
 def calibration_targets(length_km: float, state2_scale: float, pressure_swing_bar: float
                         ) -> dict[str, float]:
     """The two calibration quantities of :data:`CALIBRATION` for given free constants.
@@ -633,15 +688,7 @@ def calibration_targets(length_km: float, state2_scale: float, pressure_swing_ba
     from fdi_lib.isolation import information
     from fdi_lib.signatures import fault_signature
 
-    sec = physical_section(length_km, state2_scale)
-    mats = _physical_matrices(length_km, state2_scale)
-    shape = _demand_shape(N_STEPS)
-    daily = np.cos(2 * np.pi * (_hours(N_STEPS) - PRESSURE_PEAK_HOUR) / 24.0)
-    p = -pressure_swing_bar * daily / sec.bar_per_unit
-    y = _model_from(mats, p, shape)
-    zero = Noise(x0=y.x0, w=np.zeros((N_STEPS, 2)), v=np.zeros((N_STEPS, 1)))
-    u = MEAN_FLOW * shape / simulate(y, noise=zero, u=shape).y[:, 0].mean()
-    model = _model_from(mats, p, u)
+    model, u, p = surrogate(length_km, state2_scale, pressure_swing_bar)
     gains = kalman_gains(model)
     leak_on = minutes_to_index(LEAK_ONSET_MIN)
     sig = fault_signature(model, gains, output_leak_family(model).profile(leak_on)).on_innovation
@@ -658,44 +705,145 @@ def calibration_targets(length_km: float, state2_scale: float, pressure_swing_ba
 
 
 def _fit_length_and_swing(k2: float) -> tuple[float, float]:
-    """For a given ``state2_scale``: the length meeting the Fig 9 target and the swing meeting fault 2's."""
+    """For a given ``state2_scale``: the length meeting the Fig 9 target and the swing meeting fault 2's.
+
+    Alternating Brent root findings (each target is monotone in its own constant, so this
+    finds the right branch from any start) to a relative change of ``1e-3``, then
+    Gauss-Newton steps on both log-residuals together (scipy ``least_squares``), which
+    converge quadratically where the alternation is only linear (about 10 s instead of 35 s).
+    """
     tgt = CALIBRATION["targets"]
     level, miss = tgt["fig9_level_over_threshold"]["value"], tgt["fault2_miss_probability"]["value"]
+
+    def residuals(L: float, a: float) -> np.ndarray:
+        t = calibration_targets(L, k2, a)
+        return np.log([t["fig9_level_over_threshold"] / level,
+                       max(t["fault2_miss_probability"], 1e-300) / miss])
+
     L, a = 20.0, 10.0
     for _ in range(30):
-        L_new = scipy.optimize.brentq(
-            lambda x: np.log(calibration_targets(x, k2, a)["fig9_level_over_threshold"] / level), 2.0, 300.0,
-            xtol=1e-10, rtol=1e-12)
-        a_new = scipy.optimize.brentq(
-            lambda x: np.log(max(calibration_targets(L_new, k2, x)["fault2_miss_probability"], 1e-300) / miss),
-            0.5, 60.0,
-            xtol=1e-10, rtol=1e-12)
-        done = abs(L_new - L) < 1e-9 * L and abs(a_new - a) < 1e-9 * a
+        L_new = scipy.optimize.brentq(lambda x: residuals(x, a)[0], 2.0, 300.0, rtol=1e-4)
+        a_new = scipy.optimize.brentq(lambda x: residuals(L_new, x)[1], 0.5, 60.0, rtol=1e-4)
+        done = abs(L_new - L) < 1e-3 * L and abs(a_new - a) < 1e-3 * a
         L, a = L_new, a_new
         if done:
             break
-    return L, a
+    sol = scipy.optimize.least_squares(lambda z: residuals(*np.exp(z)), np.log([L, a]),
+                                       xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    if not (sol.success and np.max(np.abs(sol.fun)) < 1e-8):
+        raise ModelError(f"state2_scale: expected both calibration targets to be met at {k2!r}, "
+                         f"got log-residuals {sol.fun.tolist()}")
+    L, a = np.exp(sol.x)
+    return float(L), float(a)
+
+
+def select_state2_scale(swings: dict[float, float], tolerance: float | None = None) -> float:
+    """The criterion of ``CALIBRATION["state2_scale"]``: the smallest scale whose swing is near the least.
+
+    Parameters
+    ----------
+    swings : dict
+        ``{state2_scale: fitted pressure swing (bar)}`` over a grid.
+    tolerance : float, optional
+        Relative excess allowed over the swing at the largest scale (default 5 %).
+
+    Returns
+    -------
+    float
+        The smallest ``state2_scale`` whose swing is at most ``(1 + tolerance)`` times the
+        swing at the largest scale of the grid.
+    """
+    tol = CALIBRATION["state2_scale"]["tolerance"] if tolerance is None else float(tolerance)
+    if not swings:
+        raise ModelError("swings: expected at least one (state2_scale, swing) pair, got none")
+    limit = swings[max(swings)]
+    return float(min(k for k, a in swings.items() if a <= (1.0 + tol) * limit))
+
+
+@functools.lru_cache(maxsize=16)
+def calibration_for(state2_scale: float | None = None) -> dict[str, float]:
+    """The free constants of the physical surrogate calibrated with a given ``state2_scale``.
+
+    The two targets of :data:`CALIBRATION` are met whatever ``state2_scale``; the section
+    length and the swing then follow (:func:`_fit_length_and_swing`). Values of the grid of
+    ``CALIBRATION["state2_scale"]`` are read from their recorded fits; any other value is
+    fitted here (about 10 s).
+
+    Parameters
+    ----------
+    state2_scale : float, optional
+        Default: the calibrated one (``CALIBRATION["fitted"]``).
+
+    Returns
+    -------
+    dict
+        ``section_length_km``, ``state2_scale``, ``pressure_swing_bar`` (the keywords of
+        :func:`surrogate`).
+    """
+    if state2_scale is None:
+        return dict(CALIBRATION["fitted"])
+    k2 = float(state2_scale)
+    if not (np.isfinite(k2) and k2 > 0):
+        raise ModelError(f"state2_scale: expected a positive number, got {state2_scale!r}")
+    if k2 == CALIBRATION["fitted"]["state2_scale"]:
+        return dict(CALIBRATION["fitted"])
+    fits = CALIBRATION["state2_scale"]["fits"]
+    L, a = fits[k2] if k2 in fits else _fit_length_and_swing(k2)
+    return {"section_length_km": float(L), "state2_scale": k2, "pressure_swing_bar": float(a)}
 
 
 def calibrate() -> dict[str, float]:
     """Perform the declared calibration of the physical surrogate once (see :data:`CALIBRATION`).
 
-    With ``state2_scale`` fixed (``CALIBRATION["fixed"]``), the section length is set by
-    the Fig 9 target and the pressure swing by the fault 2 target, by alternating Brent
-    root findings until both change by less than ``1e-9`` (relative). The result is
-    recorded in ``CALIBRATION["fitted"]``; the tests check that this function reproduces it.
+    ``state2_scale`` by the criterion of ``CALIBRATION["state2_scale"]`` applied to the
+    recorded fits of its grid (:func:`select_state2_scale`; the tests refit grid values);
+    then, for that scale, the section length by the Fig 9 target and the pressure swing by
+    the fault 2 target (:func:`_fit_length_and_swing`). The result is recorded in
+    ``CALIBRATION["fitted"]``; the tests check that this function reproduces it.
 
     Returns
     -------
     dict
         ``section_length_km``, ``state2_scale``, ``pressure_swing_bar``.
     """
-    k2 = float(CALIBRATION["fixed"]["state2_scale"])
+    k2 = select_state2_scale({k: a for k, (_, a) in CALIBRATION["state2_scale"]["fits"].items()})
     L, a = _fit_length_and_swing(k2)
     return {"section_length_km": float(L), "state2_scale": k2, "pressure_swing_bar": float(a)}
 
 
 # ----------------------------------------------------------------------------- report
+def surrogate_limits(state2_scale: float | None = None) -> dict[str, float]:
+    """What the physical surrogate leaves out, measured (the book states these limits).
+
+    Parameters
+    ----------
+    state2_scale : float, optional
+        Surrogate calibrated with this scale (:func:`calibration_for`); default the calibrated one.
+
+    Returns
+    -------
+    dict
+        ``tau_fast_s``, ``tau_slow_s`` (time constants of the two modes of the section) and
+        ``sample_s`` (``Ts``); ``eig_F0`` (the two eigenvalue moduli of ``F0``, ascending: the
+        fraction of each mode left after one sample); ``linepack_imbalance`` (largest rate
+        ``C |d pbar / dt|`` at which the daily swing of the mean pressure stores gas in the
+        section, as a fraction of the mean flow: the imbalance between inlet and outlet flow
+        that the surrogate's mass balance leaves out); ``linepack_imbalance_sd`` (the same
+        flow in stationary innovation standard deviations).
+    """
+    cal = calibration_for(state2_scale)
+    sec = physical_section(cal["section_length_km"], cal["state2_scale"])
+    mats = _physical_matrices(cal["section_length_km"], cal["state2_scale"])
+    sigma = float(np.sqrt((mats.H0 @ mats.P0 @ mats.H0.T + mats.R)[0, 0]))
+    # pbar - mean = a cos(2 pi t / 1 day): largest |d pbar / dt| = a 2 pi / day (Pa/s)
+    rate_kg = sec.capacity * cal["pressure_swing_bar"] * 1e5 * 2 * np.pi / 86400.0
+    q_kg = MEAN_FLOW * NORMAL_DENSITY / 3600.0
+    return {"tau_fast_s": sec.tau_fast_s, "tau_slow_s": 60.0 * sec.tau_slow_min, "sample_s": 60.0 * TS_MIN,
+            "eig_F0": np.sort(np.abs(np.linalg.eigvals(sec.F0))).tolist(),
+            "linepack_imbalance": float(rate_kg / q_kg),
+            "linepack_imbalance_sd": float(rate_kg / q_kg * MEAN_FLOW / sigma)}
+
+
 def design_report(model: LTVModel | None = None, *, variant: str = "physical") -> dict[str, float]:
     """Numbers that check the surrogate's design (used by the tests and the book).
 

@@ -8,6 +8,7 @@ matplotlib.use("Agg")
 
 import numpy as np
 import pytest
+import scipy.stats
 
 from fdi_lib.reproduce.registry import get, reproduce
 
@@ -82,6 +83,12 @@ def test_updated_residual_is_free_of_f_white_and_singular(results):
     assert h["updated_f_change"] < 1e-10
     assert h["updated_cov_rank"] == model.p - ex.E.shape[1]
     assert h["lag1_corr_updated_max"] < 2 * h["lag1_corr_updated_halfwidth"]
+    # the maximum is over the pairs of components with non-zero variance (here p - 1 of them)
+    assert h["lag1_corr_updated_entries"] == (model.p - 1) ** 2
+    assert h["lag1_corr_updated_bonferroni_z"] == pytest.approx(
+        scipy.stats.norm.ppf(1 - 0.05 / (2 * h["lag1_corr_updated_entries"])), rel=1e-12)
+    # the entry of the largest |correlation| has a half-width at most the largest one
+    assert h["lag1_corr_updated_zmax"] >= 1.96 * h["lag1_corr_updated_max"] / h["lag1_corr_updated_halfwidth"]
     assert abs(h["lag1_corr_theory"]) > 5 * h["lag1_cov_updated_theory_max"] + 0.05
 
 

@@ -32,7 +32,13 @@ def test_status_of_numbers_lists_and_intervals():
     assert L.claim_status([4.0, 0.0], [4.0, 0.0])[0] == L.REPRODUCED
     assert L.claim_status([4.0, 0.0], [4.0, 0.1])[0] == L.DIFFERS
     assert L.claim_status([4.0, 0.0], [4.0])[0] == L.DIFFERS
-    assert L.claim_status(20, None)[0] == L.DIFFERS                  # we have no value
+    assert L.claim_status(20, None)[0] == L.NOT_COMPUTED             # we have no value
+    never = L.ClaimSpec(missing="not detected")                      # None is a result
+    assert L.claim_status(20, None, spec=never) == (L.DIFFERS, "ours: not detected")
+    # a single run: inside the 95 % range of our runs, or not
+    assert L.claim_status(786.0, 778.0, spread=(700.0, 800.0))[0] == L.WITHIN_SPREAD
+    assert L.claim_status(88.0, 36.0, spread=(20.0, 60.0))[0] == L.DIFFERS
+    assert L.claim_status(786.0, 786.0, spread=(700.0, 800.0))[0] == L.REPRODUCED
     assert L.claim_status(True, True)[0] == L.REPRODUCED
     assert L.claim_status(True, False)[0] == L.DIFFERS
 
@@ -92,9 +98,8 @@ def test_every_paper_value_appears(cheap_results):
     listed = _listed(led)
     for id, res in cheap_results.items():
         for path in L.claim_paths(res.paper):
-            spec = L.spec_for(id, path)
-            owner = spec.shown_under if spec and spec.shown_under else id
-            assert (owner, path) in listed or owner not in cheap_results, (id, path)
+            owner = L._owner(id, path, L.spec_for(id, path) or L.ClaimSpec())
+            assert owner in listed or owner[0] not in cheap_results, (id, path)
     assert sum(led.counts().values()) == len(led.rows)
     # rows in book order
     order = [L.BOOK_ORDER.index(r.id) for r in led.rows]
@@ -104,8 +109,8 @@ def test_every_paper_value_appears(cheap_results):
 def test_statuses_are_computed_not_typed(cheap_results):
     """Perturb a paper value: the status follows the numbers."""
     base = {(r.id, r.path): r.status for r in L.build_ledger(cheap_results).rows}
-    assert base[("zb2014-table1", ("G0_1_nominal",))] == L.REPRODUCED
-    assert base[("zb2014-fig1", ("gamma_norm_max", "101"))] == L.DIFFERS
+    assert base[("zb2014-table1", ("G0_1_nominal",))] == L.INPUT_VALUE      # set by the book
+    assert base[("zb2014-fig1", ("gamma_norm_max", "101"))] == L.DIFFERS_MEASURED
     t1 = cheap_results["zb2014-table1"]
     moved = dataclasses.replace(t1, paper={**t1.paper, "G0_1_nominal": t1.paper["G0_1_nominal"] * 1.01})
     f1 = cheap_results["zb2014-fig1"]
@@ -113,11 +118,12 @@ def test_statuses_are_computed_not_typed(cheap_results):
     rows = {(r.id, r.path): r.status
             for r in L.build_ledger({**cheap_results, "zb2014-table1": moved,
                                      "zb2014-fig1": relaxed}).rows}
-    assert rows[("zb2014-table1", ("G0_1_nominal",))] == L.DIFFERS
+    assert rows[("zb2014-table1", ("G0_1_nominal",))] == L.DIFFERS_UNKNOWN  # an input we miss
     assert rows[("zb2014-fig1", ("gamma_norm_max", "101"))] == L.REPRODUCED
-    # the status column of the rendered table is the computed one
+    # the status column (the first) of the rendered table is the computed one
     text = L.build_ledger(cheap_results).to_myst()
-    assert text.count("  - differs") == sum(s == L.DIFFERS for s in base.values())
+    for status in L.STATUSES:
+        assert text.count(f"* - {status}\n") == sum(s == status for s in base.values()), status
 
 
 def test_within_interval_from_a_stochastic_result():
@@ -125,29 +131,94 @@ def test_within_interval_from_a_stochastic_result():
         "success_rate": {"15": 0.31, "16": 0.46}, "ci95": {"15": [0.28, 0.34], "16": [0.43, 0.49]}},
         paper={"success_rate": {"15": 0.295, "16": 0.251}}, settings={"trials": 1000})
     rows = L.build_ledger({"zhang2021-table1": res}, strict=True).rows
-    assert [r.status for r in rows] == [L.WITHIN, L.DIFFERS]
+    assert [r.status for r in rows] == [L.WITHIN, L.DIFFERS_UNKNOWN]
     assert rows[0].ci == (0.28, 0.34) and rows[1].explain and rows[0].trials == 1000
+    assert rows[1].cause is None and rows[0].paper_trials == 1000
+    # the paper's rate between our two readings of the rule, measured on the same trials
+    between = dataclasses.replace(res, headline={**res.headline,
+                                                 "success_rate_linear": {"15": 0.30, "16": 0.20}})
+    rows = L.build_ledger({"zhang2021-table1": between}, strict=True).rows
+    assert [r.status for r in rows] == [L.WITHIN, L.DIFFERS_MEASURED]
+    assert rows[1].cause == "sec-zhang2021-oracles" and rows[1].status_detail
+    # both cells of a rate in %: no paper fraction beside a percentage of ours
+    text = L.build_ledger({"zhang2021-table1": res}).to_myst().replace("\u00a0", " ")
+    assert "25.1 %" in text and "46 %" in text and "0.251" not in text
 
 
-def test_every_difference_links_to_an_existing_target(cheap_results):
-    labels, figures = set(), set()
+def test_statuses_need_the_papers_trial_count():
+    """A Monte Carlo result with fewer trials than the paper's gives no comparison status."""
+    res = ReproductionResult(id="zhang2021-table1", headline={
+        "success_rate": {"15": 0.31, "16": 0.46}, "ci95": {"15": [0.0, 0.9], "16": [0.0, 0.9]}},
+        paper={"success_rate": {"15": 0.295, "16": 0.251}}, settings={"trials": L.FALLBACK_TRIALS})
+    rows = L.build_ledger({"zhang2021-table1": res}, strict=True).rows
+    assert {r.status for r in rows} == {L.NOT_COMPUTED}       # not "within interval" (huge CI)
+    assert all(r.status_detail.startswith("not computed at paper scale") for r in rows)
+    assert L.get("zhang2021-table1").default_trials == rows[0].paper_trials == 1000
+    # an input stays an input at any trial count
+    f8 = ReproductionResult(id="zb2014-fig8", headline={"threshold_dof": 1},
+                            paper={"threshold_dof": "1 (caption) / 2 (text)", "calibrated_to": [],
+                                   "predictions": []}, settings={"trials": 2})
+    assert [r.status for r in L.build_ledger({"zb2014-fig8": f8}).rows] == [L.INPUT_VALUE]
+
+
+def test_within_spread_of_a_single_run():
+    """Figs. 5-6 of the pipeline: one run of the paper against our run-to-run distribution."""
+    paper = {"alarm_time_min": 786.0, "detection_delay_min": 186.0,
+             "calibrated_to": [], "predictions": ["alarm_time_min", "detection_delay_min"]}
+    head = {"alarm_time_min": 778.0, "detection_delay_min": 178.0}
+    plain = ReproductionResult(id="zb2014-fig5", headline=head, paper=paper, settings={})
+    assert {r.status for r in L.build_ledger({"zb2014-fig5": plain}).rows} == {L.DIFFERS_UNKNOWN}
+    spread = dataclasses.replace(plain, headline={
+        **head, "alarm_time_min_spread95": [700.0, 800.0], "alarm_time_min_paper_percentile": 71.0,
+        "detection_delay_min_spread95": [100.0, 180.0], "spread_runs": 1000})
+    rows = {r.path[0]: r for r in L.build_ledger({"zb2014-fig5": spread}).rows}
+    assert rows["alarm_time_min"].status == L.WITHIN_SPREAD
+    assert "71" in rows["alarm_time_min"].status_detail and "1 000" in rows[
+        "alarm_time_min"].status_detail.replace("\u202f", " ")
+    assert rows["detection_delay_min"].status in L.DIFFERING      # 186 outside [100, 180]
+
+
+def test_one_row_per_claim():
+    """The Table I/II values the λ-rule study checks again are listed once, under the table."""
+    t1 = ReproductionResult(id="zhang2021-table1", headline={
+        "success_rate": {"15": 0.465}, "ci95": {"15": [0.43, 0.50]}},
+        paper={"success_rate": {"15": 0.295}}, settings={"trials": 1000})
+    lr = ReproductionResult(id="zhang2021-lambda-rule", headline={
+        "success_rate": {"log": {"q15": 0.455}}, "ci95": {"log": {"q15": [0.38, 0.53]}}},
+        paper={"success_rate": {"q15": 0.295}}, settings={"trials": 200})
+    rows = L.build_ledger({"zhang2021-table1": t1, "zhang2021-lambda-rule": lr}, strict=True).rows
+    assert [(r.id, r.path) for r in rows] == [("zhang2021-table1", ("success_rate", "15"))]
+    assert "zhang2021-lambda-rule on 200 trials: 45.5" in rows[0].note
+
+
+def test_every_difference_links_to_where_it_is_shown(cheap_results):
+    for _, doc in L.CHAPTERS:
+        assert (ROOT / f"{doc}.md").exists(), doc
+    for s in L.SPECS.values():
+        if s.explain and "/" in s.explain:
+            assert (ROOT / f"{s.explain}.md").exists(), s.explain
+    for r in L.build_ledger(cheap_results).rows:
+        if r.status in (*L.DIFFERING, L.NOT_REPRODUCIBLE, L.NOT_COMPUTED):
+            assert r.explain, (r.id, r.path)
+        assert (r.cause is not None) == (r.status == L.DIFFERS_MEASURED), (r.id, r.path)
+
+
+def _book_labels():
+    labels = set()
     for md in (ROOT / "book").rglob("*.md"):
         text = md.read_text()
         labels |= set(re.findall(r"^\(([\w-]+)\)=", text, flags=re.M))
         labels |= set(re.findall(r"^:label: ([\w-]+)", text, flags=re.M))
-        figures |= set(re.findall(r"^ +name: (fig-[\w-]+)", text, flags=re.M))
-    targets = {s.explain for s in L.SPECS.values() if s.explain}
-    targets |= {doc for _, doc in L.CHAPTERS}
-    for t in targets:
-        if "/" in t:
-            assert (ROOT / f"{t}.md").exists(), t
-        elif t.startswith("fig-"):
-            assert t in figures, t
-        else:
-            assert t in labels, t
-    for r in L.build_ledger(cheap_results).rows:
-        if r.status in (L.DIFFERS, L.NOT_REPRODUCIBLE):
-            assert r.explain, (r.id, r.path)
+        labels |= set(re.findall(r"^ +name: (fig-[\w-]+)", text, flags=re.M))
+    return labels
+
+
+def test_every_cause_and_explanation_names_an_existing_book_label():
+    """A "differs, measured cause" row links a section of the book that exists (read from the
+    book's sources: ``(label)=``, ``:label:``, figure ``name:``)."""
+    targets = {t for s in L.SPECS.values() for t in (s.cause, s.explain) if t and "/" not in t}
+    missing = sorted(targets - _book_labels())
+    assert not missing, missing
 
 
 def test_every_rule_names_a_registered_reproduction():
@@ -162,10 +233,21 @@ def test_json_and_summary(cheap_results):
     led = L.build_ledger(cheap_results, sources={id: "computed" for id in cheap_results})
     d = json.loads(json.dumps(led.to_json_dict()))
     assert set(d["counts"]) == set(L.STATUSES)
+    assert set(d["counts_by_paper"]) == set(L.PAPERS)
+    assert sum(sum(c.values()) for c in d["counts_by_paper"].values()) == len(d["rows"])
     assert len(d["rows"]) == len(led.rows)
-    assert {"paper", "ours", "ci95", "status", "explanation", "surrogate"} <= set(d["rows"][0])
+    old_keys = {"id", "key", "claim", "paper", "ours", "ci95", "status", "where", "explanation",
+                "note", "surrogate", "trials", "source"}                # backward compatible
+    assert old_keys | {"paper_id", "status_detail", "cause", "paper_trials"} == set(d["rows"][0])
+    for row in d["rows"]:
+        assert row["status"] in L.STATUSES
+        assert row["claim"].startswith(L.PAPERS[row["paper_id"]] + ", ")
+        assert row["id"].startswith(row["paper_id"] + "-")
+        if row["surrogate"] == L.INPUT:                 # never counted as reproduced
+            assert row["status"] != L.REPRODUCED, row
     html = led.summary()._repr_html_()
     assert all(s in html for s in L.STATUSES)
+    assert "<thead><tr><th>status</th>" in html                         # status first
     inputs = [r for r in led.rows if r.id == "zb2014-table1"]      # declared: neither list
     assert inputs and all(r.role == L.INPUT for r in inputs)
     assert {r.role for r in led.rows if r.id == "rosa2013-fig8"} == {L.INPUT, L.PREDICTION}
@@ -200,7 +282,7 @@ def test_cli_ledger_json(monkeypatch, capsys, cheap_results):
     d = json.loads(capsys.readouterr().out)
     assert sum(d["counts"].values()) == len(d["rows"]) > 20
     assert cli.main(["reproduce", "--ledger"]) == 0
-    assert "differs" in capsys.readouterr().out
+    assert "differs, measured cause" in capsys.readouterr().out
 
 
 @pytest.mark.slow
@@ -214,13 +296,15 @@ def test_every_registered_paper_value_appears_in_the_ledger():
     for id, res in results.items():
         for path in L.claim_paths(res.paper):
             n_claims += 1
-            spec = L.spec_for(id, path)
-            owner = spec.shown_under if spec and spec.shown_under else id
-            assert (owner, path) in listed, (id, path)
+            assert L._owner(id, path, L.spec_for(id, path) or L.ClaimSpec()) in listed, (id, path)
     shown_twice = sum(1 for id, res in results.items() for p in L.claim_paths(res.paper)
                       if (s := L.spec_for(id, p)) and s.shown_under)
     assert len(led.rows) == n_claims - shown_twice
     assert all(r.status in L.STATUSES for r in led.rows)
+    # 2 trials: no Monte Carlo claim gets a comparison status
+    for r in led.rows:
+        if r.paper_trials is not None and r.status not in (L.INPUT_VALUE, L.NOT_REPRODUCIBLE):
+            assert r.status == L.NOT_COMPUTED, (r.id, r.path, r.status)
     for r in led.rows:
         if r.id in L.SURROGATE_IDS:
             assert r.role in (L.CALIBRATION, L.PREDICTION, L.INPUT)

@@ -64,6 +64,30 @@ def test_step_times_keys():
     assert out["empty_at"] is None and out["median_ms"] > 0 and out["max_facets"] <= 20
 
 
+def test_exact_step_times_keys():
+    """The exact rule's timing of rosa2013-timing (one update here: its sets grow tenfold per update)."""
+    out = R.exact_step_times(1, 0, steps=1)
+    assert set(out) == {"ms", "vertices", "empty_at"}
+    assert len(out["ms"]) == 1 and out["ms"][0] > 0 and out["vertices"][0] >= 5 and out["empty_at"] is None
+
+
+def test_timing_reports_the_exact_rule_per_horizon(monkeypatch):
+    """rosa2013-timing's headline: the template keys plus the exact rule's, per N, each documented.
+    The step timers are shortened here (one exact update, 0.1 s of template updates)."""
+    import re
+
+    short, exact = R.step_times, R.exact_step_times
+    monkeypatch.setattr(R, "step_times", lambda N, seed: short(N, seed, duration=0.1))
+    monkeypatch.setattr(R, "exact_step_times", lambda N, seed: exact(N, seed, steps=1))
+    h = R.timing(seed=0, trials=None, jobs=1).headline
+    for key in ("step_ms", "step_ms_exact", "step_ms_exact_each", "vertices_exact", "exact_within_ts"):
+        assert set(h[key]) == {1, 2, 3}, key
+    assert h["exact_steps"] == R.EXACT_TIMED_STEPS
+    assert all(h["step_ms_exact"][N] == h["step_ms_exact_each"][N][0] for N in (1, 2, 3))
+    documented = set(re.findall(r"^    (\w+(?:, \w+)*) :", R.timing.__doc__, flags=re.M))
+    assert set(h) == {k for entry in documented for k in entry.split(", ")}
+
+
 def test_explanation_scale_agrees_with_the_svo():
     """Two independent routes to (in)consistency: the LP (frozen parameters) and the SVO (all of them).
 

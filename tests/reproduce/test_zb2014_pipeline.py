@@ -70,6 +70,7 @@ def test_monte_carlo_identical_for_any_chunk_size(variant, schedule):
     the numbers of the default chunks, bit for bit."""
     zp._MC_CACHE.clear()
     default = zp.pipeline_monte_carlo(seed=9, trials=20, variant=variant, schedule=schedule)  # 4 chunks
+    zp._MC_CACHE.clear()   # the cache ignores chunk_size (because of this very property)
     one = zp.pipeline_monte_carlo(seed=9, trials=20, chunk_size=20, variant=variant, schedule=schedule)
     zp._MC_CACHE.clear()
     for fault in (1, 2):
@@ -118,8 +119,11 @@ def test_table1():
     assert abs(h["leak_fraction_fault2"]) < 0.05
 
 
+SPREAD = 30    # spread runs in the tests of Figs 5-6 (the book: 1000)
+
+
 def test_fig5_fig6_single_runs():
-    r5, r6 = reproduce("zb2014-fig5"), reproduce("zb2014-fig6")
+    r5, r6 = reproduce("zb2014-fig5", trials=SPREAD), reproduce("zb2014-fig6", trials=SPREAD)
     for r in (r5, r6):
         assert set(r.headline) >= {"alarm_time_min", "onset_estimate_min", "detection_delay_min"}
         assert r.headline["alarm_time_min"] > 600.0
@@ -136,14 +140,19 @@ def test_onset_profile_matches_the_detector():
         best = int(np.argmax(prof["statistic"]))
         assert prof["onsets"][best] == run.onset[run.alarm]
         assert prof["statistic"][best] == pytest.approx(run.statistic[run.alarm], rel=1e-8)
-    h = reproduce("zb2014-fig5").headline
+    h = reproduce("zb2014-fig5", trials=SPREAD).headline
     assert h["onsets_within_2_of_max"] >= 1
 
 
 def test_paper_dicts_mark_calibration_and_predictions():
     for rid in ("zb2014-table1", "zb2014-fig5", "zb2014-fig6", "zb2014-fig9"):
-        paper = reproduce(rid).paper
-        assert set(paper["calibrated_to"]) | set(paper["predictions"]) <= set(reproduce(rid).headline)
+        kw = {"trials": SPREAD} if rid in ("zb2014-fig5", "zb2014-fig6") else {}
+        res = reproduce(rid, **kw)
+        assert set(res.paper["calibrated_to"]) | set(res.paper["predictions"]) <= set(res.headline)
+        if rid != "zb2014-table1":    # the calibrated constants each ran with, and what fixed them
+            cal = res.settings["calibration"]
+            assert cal["constants"] == gp.CALIBRATION["fitted"]
+            assert set(cal["fixed_by"]) == set(cal["constants"])
     assert reproduce("zb2014-fig9").paper["calibrated_to"] == ["glr_level_over_threshold"]
 
 
@@ -220,9 +229,117 @@ def test_format_rate_and_reader_plots():
     assert zp.format_rate({"rate": None, "count": 0, "n": 0, "ci95": [None, None]}) == "n/a"
     fig = zp.plot_signals()
     assert fig.axes[1].get_ylabel() == r"$p_k$"
-    r5 = reproduce("zb2014-fig5")
+    r5 = reproduce("zb2014-fig5", trials=SPREAD)
     fig = zp.plot_onset_profile(r5)
     assert fig.axes[0].get_ylabel() == r"$l_{k^*}(r)$"
     assert len(fig.axes[0].lines) == 3
     import matplotlib.pyplot as plt
     plt.close("all")
+
+
+# ----------------------------------------------------------------------------- issue 20: measured causes
+def test_fig5_fig6_spread_keys_against_their_runs():
+    """Spread keys recomputed from the runs themselves; Fig 5's runs are Fig 7's fault-1 runs."""
+    zp._MC_CACHE.clear()
+    r5, r6 = reproduce("zb2014-fig5", trials=SPREAD), reproduce("zb2014-fig6", trials=SPREAD)
+    runs5 = zp.pipeline_monte_carlo(seed=0, trials=SPREAD)[1]
+    runs6 = zp.fault_runs(seed=0, trials=SPREAD, fault=1, delta=gp.FAULT1_DOUBLED_DELTA, isolate=False)
+    zp._MC_CACHE.clear()
+    fresh = zp.fault_runs(seed=0, trials=SPREAD, fault=1, chunk_size=SPREAD)
+    np.testing.assert_array_equal(fresh["alarm"], runs5["alarm"])      # same runs as Fig 7's
+    zp._MC_CACHE.clear()
+    for r, runs in ((r5, runs5), (r6, runs6)):
+        h = r.headline
+        hit = runs["alarm"] >= zp.FAULT_ONSET
+        assert h["spread_runs"] == hit.sum()
+        assert h["spread_runs"] + h["spread_excluded"]["false_alarm"] + h["spread_excluded"]["missed"] == SPREAD
+        values = {"alarm_time_min": 2.0 * runs["alarm"][hit], "onset_estimate_min": 2.0 * runs["onset_hat"][hit],
+                  "detection_delay_min": 2.0 * runs["alarm"][hit] - 600.0}
+        for key, x in values.items():
+            if r.paper[key] is None:
+                assert f"{key}_spread95" not in h and f"{key}_paper_percentile" not in h
+                continue
+            v = r.paper[key]
+            below, ties = sum(xi < v for xi in x), sum(xi == v for xi in x)   # by hand, ties half
+            assert h[f"{key}_paper_percentile"] == pytest.approx(100 * (below + ties / 2) / x.size, abs=1e-9)
+            xs = sorted(x)
+            for q, got in zip((0.025, 0.975), h[f"{key}_spread95"]):   # linear interpolation (type 7)
+                pos = (len(xs) - 1) * q
+                j = int(pos)
+                assert got == pytest.approx(xs[j] + (pos - j) * (xs[min(j + 1, len(xs) - 1)] - xs[j]), abs=1e-9)
+        d = h["detection_delay_min_at_least_paper"]
+        assert d["count"] == int(np.sum(values["detection_delay_min"] >= r.paper["detection_delay_min"]))
+        assert d["n"] == h["spread_runs"]
+    # Figs 5 and 6 share their noise run by run: the doubled fault is seen at least as early
+    # on average (the GLR is monotone in the fault size only on average, not run by run).
+    assert np.mean(runs6["alarm"]) < np.mean(runs5["alarm"])
+
+
+def test_fig8_isolation_window_option_and_information():
+    """The record-end statistics against a per-run recomputation; the information keys."""
+    from fdi_lib.errors import ModelError
+    from fdi_lib.isolation import information
+    from fdi_lib.signatures import fault_signature
+
+    st = zp.pipeline_setup()
+    seeds = trial_seeds(11, 4)
+    out = zp.detection_chunk(seeds, fault=2)
+    for i, s in enumerate(seeds):
+        # per run: own noise, own filter, the signature of its own onset estimate alone
+        sim = simulate(st.model, noise=draw_noise(st.model, np.random.default_rng(s)), u=st.u,
+                       fault=st.input_family.profile(zp.FAULT_ONSET), theta=zp.fault_theta(2))
+        eps = kalman_filter(st.model, sim.y, st.u, gains=st.gains).innovations
+        r = int(out["onset_hat"][i])
+        sig = fault_signature(st.model, st.gains, st.input_family.profile(r)).on_innovation
+        F, zeta = information(eps, sig, st.gains, r, st.model.n_steps)
+        np.testing.assert_allclose(out["info_record"][i], F, rtol=1e-9)
+        assert out["l1_record"][i] == pytest.approx(float(minmax_statistic(F, zeta, [0])), rel=1e-7)
+        assert out["l2_record"][i] == pytest.approx(float(minmax_statistic(F, zeta, [1])), rel=1e-7)
+        # efficient information by the Schur complement identity F_a* = 1 / (F^-1)_aa
+        lam = zp._efficient_noncentrality(F[None], 2)[0]
+        assert lam == pytest.approx(1e-10 / np.linalg.inv(F)[1, 1], rel=1e-9)
+    zp._MC_CACHE.clear()
+    alarm = reproduce("zb2014-fig8", trials=SPREAD)
+    end = zp.fig8(seed=0, trials=SPREAD, jobs=1, isolation_window="record_end")
+    zp._MC_CACHE.clear()
+    assert alarm.settings["isolation_window"] == "alarm" and end.settings["isolation_window"] == "record_end"
+    ha, he = alarm.headline, end.headline
+    for key in ("noncentrality_at_alarm", "noncentrality_to_record_end", "samples_at_alarm",
+                "type2_rate_expected_at_alarm", "type2_rate_expected_to_record_end", "median_cos2_to_record_end"):
+        assert ha[key] == he[key]                    # the information keys cover both windows
+    for f in ("1", "2"):
+        assert ha["type2_rate"][f]["n"] == he["type2_rate"][f]["n"]
+        # the cause, measured: far more information on the present fault up to the record's end
+        assert he["median_cos2"][f] == ha["median_cos2_to_record_end"][f] < ha["median_cos2"][f]
+        assert ha["noncentrality_to_record_end"][f]["median"] > 10 * ha["noncentrality_at_alarm"][f]["median"]
+        assert ha["samples_to_record_end"][f]["median"] > ha["samples_at_alarm"][f]["median"]
+        assert ha["type2_rate_expected_to_record_end"][f] < 1e-3 < 0.5 < ha["type2_rate_expected_at_alarm"][f]
+        assert he["type2_rate"][f]["count"] == 0 < ha["type2_rate"][f]["count"]
+    with pytest.raises(ModelError, match="isolation_window: expected one of"):
+        zp.fig8(seed=0, trials=2, jobs=1, isolation_window="alarm_time")
+
+
+def test_state2_scale_option_and_sensitivity():
+    from fdi_lib.errors import ModelError
+
+    assert zp.pipeline_setup() is zp.pipeline_setup("physical", "centred", 10.0)   # one setup
+    st3 = zp.pipeline_setup(state2_scale=3.0)
+    assert not np.allclose(st3.model.F, zp.pipeline_setup().model.F)
+    rows = zp.calibration_sensitivity(seed=0, trials=SPREAD, scales=(3.0,))
+    (row,) = rows
+    assert row["constants"] == gp.calibration_for(3.0)
+    for key, spec in gp.CALIBRATION["targets"].items():     # both targets still hold at 3 ...
+        assert row["targets"][key] == pytest.approx(spec["value"], rel=1e-6)
+    h3 = row["headlines"]
+    h10 = zp.fig7(seed=0, trials=SPREAD, jobs=1).headline
+    # ... yet fault 1 is missed in some runs at 3 and in none at 10 (the same noise)
+    assert h3["zb2014-fig7"]["missed"]["1"] > 0 == h10["missed"]["1"]
+    assert h3["zb2014-fig5"]["spread_runs"] == SPREAD - h3["zb2014-fig7"]["missed"]["1"] \
+        - h3["zb2014-fig7"]["false_alarms_per_fault"]["1"]
+    assert zp.fig9(seed=0, trials=None, jobs=1, state2_scale=3.0).settings["calibration"]["constants"] \
+        == gp.calibration_for(3.0)
+    zp._MC_CACHE.clear()
+    with pytest.raises(ModelError, match="state2_scale: expected None for the 'designed' surrogate"):
+        zp.pipeline_setup("designed", state2_scale=3.0)
+    with pytest.raises(ModelError, match="state2_scale: expected a positive number"):
+        gp.calibration_for(-1.0)

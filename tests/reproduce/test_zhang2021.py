@@ -98,6 +98,11 @@ def test_example2_surrogate_pipeline_contract_and_collinearity():
     json.loads(f6.to_json())
     json.loads(f7.to_json())
     assert f7.headline["true_support"] == [9, 14]
+    # the paper's own indexing ("the 10-th and the 15-th components"), ours beside it
+    assert f7.paper["support_1based"] == f7.paper["true_support_1based"] == [10, 15]
+    assert "support" not in f7.paper and "true_support" not in f7.paper
+    assert f7.headline["true_support_1based"] == [10, 15]
+    assert f7.headline["support_1based"] == [j + 1 for j in f7.headline["support"]]
     assert f6.headline["min_neighbour_correlation"] > 0.999
     # On the physical surrogate the signature filter is short: the correlation comes from the
     # smooth input, not from a long filter.
@@ -125,8 +130,11 @@ def test_lambda_rule_chunk_oracle_bounds_every_rule_and_matches_an_independent_s
     b = example1_chunk(seeds, q=15, r=0.5)
     np.testing.assert_array_equal(a["log"], b["success_log"])
     np.testing.assert_array_equal(a["linear"], b["success_linear"])
-    for k in RULE_READINGS:
+    for k in ("log", "linear", "grid20", "grid100"):  # the readings of the raw path
         assert not np.any(a[k] & ~a["oracle"]), k
+    for k in ("standardised", "matlab"):  # a scaled path has its own oracle
+        assert not np.any(a[k] & ~a[f"oracle_{k}"]), k
+    assert set(RULE_READINGS) <= set(a)
     assert 0 < a["oracle"].sum() < 12  # both outcomes occur on these trials
     tr = ex.draw_trials(ex.example1_model(), trial_rngs(seeds), q=15)
     reg, _ = example1_regression(tr)
@@ -141,6 +149,126 @@ def test_lambda_rule_chunk_oracle_bounds_every_rule_and_matches_an_independent_s
             coef = fit.fit(X, y).coef_
             found |= np.array_equal(np.flatnonzero(np.abs(coef) > 1e-6), true)
         assert found == a["oracle"][i], i
+
+
+def _on_path_by_coordinate_descent(X, y, lambdas, n_samples, *, intercept=False):
+    """Supports of scikit-learn's coordinate-descent Lasso at the middle of every interval of a path."""
+    from sklearn.linear_model import Lasso
+
+    mids = np.sqrt(lambdas[:-1] * np.maximum(lambdas[1:], 1e-3 * lambdas[0]))
+    out = []
+    for m in mids:
+        fit = Lasso(alpha=m * n_samples / X.shape[0], fit_intercept=intercept, tol=1e-12, max_iter=100000)
+        out.append(np.flatnonzero(np.abs(fit.fit(X, y).coef_) > 1e-6))
+    return out
+
+
+def test_scaled_regressors():
+    from fdi_lib.errors import ModelError
+    from fdi_lib.reproduce.zhang2021 import scaled_regressors
+
+    rng = np.random.default_rng(0)
+    X, y = 3.0 + rng.standard_normal((2, 40, 5)) * [1, 2, 3, 4, 5], rng.standard_normal((2, 40))
+    Xr, yr = scaled_regressors(X, y, "raw")
+    assert Xr is X and yr is y
+    Xs, ys = scaled_regressors(X, y, "standardised")
+    np.testing.assert_allclose(np.sqrt((Xs ** 2).mean(axis=1)), 1.0, rtol=1e-12)
+    assert ys is y
+    Xm, ym = scaled_regressors(X, y, "matlab")  # Matlab's lasso: centred, unit variance, intercept
+    from sklearn.preprocessing import StandardScaler
+
+    np.testing.assert_allclose(Xm[1], StandardScaler().fit_transform(X[1]), atol=1e-12)
+    np.testing.assert_allclose(ym[1], y[1] - y[1].mean(), atol=1e-12)
+    with pytest.raises(ModelError, match="path: expected one of"):
+        scaled_regressors(X, y, "unit")
+
+
+def test_a_scaled_path_can_solve_what_the_raw_oracle_excludes():
+    """The book's claim (sec-zhang2021-oracles): on some trial the log rule on the unit-RMS path
+    selects the true support although no lambda gives it on the raw path; checked on that trial
+    with scikit-learn's coordinate descent, on the raw path and on the Matlab-style path (whose
+    centring sklearn's intercept does)."""
+    from sklearn.linear_model import Lasso
+
+    from fdi_lib.montecarlo import trial_rngs, trial_seeds
+    from fdi_lib.reproduce.zhang2021 import (example1_regression, lambda_rule_chunk,
+                                             scaled_regressors)
+    from fdi_lib.sparse import flat_range, lasso_path
+    from fdi_lib.systems import zhang2021_example1 as ex
+
+    seeds = trial_seeds(0, 80)  # the first trials of the book's q = 15 column
+    a = lambda_rule_chunk(seeds, q=15, r=0.5)
+    beyond = np.flatnonzero(a["standardised"] & ~a["oracle"])
+    assert beyond.size >= 1
+    i = int(beyond[0])
+    tr = ex.draw_trials(ex.example1_model(), trial_rngs(seeds[i:i + 1]), q=15)
+    reg, _ = example1_regression(tr)
+    X, y, N, true = reg.X[0], reg.y[0], reg.n_samples, np.flatnonzero(tr.theta[0])
+    raw = _on_path_by_coordinate_descent(X, y, lasso_path(X, y, n_samples=N).lambdas, N)
+    assert not any(np.array_equal(s, true) for s in raw)
+    Xs, ys = scaled_regressors(X, y, "standardised")
+    lam = flat_range(lasso_path(Xs, ys, n_samples=N)).middle
+    coef = Lasso(alpha=lam * N / X.shape[0], fit_intercept=False, tol=1e-12, max_iter=100000).fit(Xs, ys).coef_
+    np.testing.assert_array_equal(np.flatnonzero(np.abs(coef) > 1e-6), true)
+    Xm, ym = scaled_regressors(X, y, "matlab")
+    mat = _on_path_by_coordinate_descent(Xm, y, lasso_path(Xm, ym, n_samples=N).lambdas, N, intercept=True)
+    assert any(np.array_equal(s, true) for s in mat) == a["oracle_matlab"][i]
+
+
+def test_example2_inputs_and_noise_interventions():
+    from fdi_lib.errors import ModelError
+    from fdi_lib.reproduce.zhang2021 import (EX2_INTERVENTIONS, EX2_N, EX2_Q, EX2_R, example2_input,
+                                             example2_setup)
+    from fdi_lib.systems import gas_pipeline as gp
+
+    demand = gp.pipeline_input(EX2_N)
+    for k in ("nominal", "state_noise", "output_noise"):
+        np.testing.assert_array_equal(example2_input(k, np.random.default_rng(0)), demand)
+    rel = {k: example2_input(k, np.random.default_rng(1)) / demand - 1 for k in EX2_INTERVENTIONS}
+    assert np.abs(rel["white_uniform"]).max() <= 0.3 and np.abs(rel["white_uniform"]).max() > 0.29
+    assert 0.27 < rel["white"].std() < 0.33  # 30 % standard deviation
+    assert np.all(np.abs(np.diff(rel["white"])) > 1e-9)  # white: changes at every sample
+    for k in ("steps", "steps_uniform"):
+        change = np.flatnonzero(np.abs(np.diff(rel[k])) > 1e-9) + 1  # rounding of u / demand
+        runs = np.diff(np.concatenate([[0], change]))
+        assert runs.min() >= 10 and runs.max() <= 30, k  # held 20-60 min at 2 min per sample
+    assert np.abs(rel["steps_uniform"]).max() <= 0.3
+    np.testing.assert_allclose(example2_input("steps", np.random.default_rng(1)), demand * (1 + rel["steps"]),
+                               rtol=1e-12)  # the same rng, the same input
+    with pytest.raises(ModelError, match="intervention: expected one of"):
+        example2_input("pink", np.random.default_rng(0))
+    # the model for another input and other noise levels: steady state of u_0, as the surrogate's own
+    u = demand * (1 + rel["white"])
+    model, u2, Psi = example2_setup(u, q_scale=1e-6, r_scale=2.0)
+    ref = gp.pipeline_model(EX2_N, u=u)
+    np.testing.assert_allclose(model.x0, ref.x0, rtol=1e-12)
+    np.testing.assert_allclose(model.F[0] @ model.x0 + model.G[0, :, 0] * u[0], model.x0, rtol=1e-12)
+    np.testing.assert_allclose(model.Q[3], 1e-6 * EX2_Q)
+    np.testing.assert_allclose(model.R[3], 2.0 * EX2_R)
+    np.testing.assert_array_equal(Psi[20, 0, 9], -u[10])
+
+
+def test_example2_interventions_reproduction():
+    """The chapter's reading of the study (sec-zhang2021-example2-causes), at the book's settings:
+    white input variations separate the leaks, smaller noise does not, and steps held 20-60 min
+    put the leaks on the path more often than the rule finds them."""
+    from fdi_lib.reproduce.zhang2021 import EX2_INTERVENTIONS, intervention_table
+
+    r = reproduce("zhang2021-example2-interventions")
+    json.loads(r.to_json())
+    h, n = r.headline, r.headline["records"]
+    assert n == 10 and list(h["isolated"]) == list(EX2_INTERVENTIONS)
+    f7 = reproduce("zhang2021-fig7")
+    assert h["supports_1based"]["nominal"][0] == f7.headline["support_1based"]  # the same record
+    for k in EX2_INTERVENTIONS:
+        assert h["isolated"][k] <= h["on_path"][k] <= n
+        assert h["isolated"][k] == sum(s == [10, 15] for s in h["supports_1based"][k])
+    assert h["isolated"]["nominal"] == h["isolated"]["state_noise"] == h["isolated"]["output_noise"] == 0
+    assert h["isolated"]["white"] >= 9 and h["isolated"]["white_uniform"] >= 5
+    for k in ("steps", "steps_uniform"):
+        assert h["isolated"][k] < h["on_path"][k]
+        assert h["min_neighbour_correlation"][k] > 10 * h["min_neighbour_correlation"]["white"]
+    assert "rule isolates {10, 15}" in str(intervention_table(r))
 
 
 def test_initial_state_models_start_like_the_paper():
@@ -183,12 +311,21 @@ def test_lambda_rule_reproduction_contract():
     r = reproduce("zhang2021-lambda-rule", trials=3)
     json.loads(r.to_json())
     h = r.headline
-    assert set(h["success_rate"]) == {"log", "linear", "grid20", "grid100", "standardised", "oracle"}
+    assert set(h["success_rate"]) == {"log", "linear", "grid20", "grid100", "standardised", "matlab", "oracle"}
     assert set(h["success_rate"]["oracle"]) == set(r.paper["success_rate"]) == {"q9", "q15", "q25", "r100", "r200"}
+    assert set(h["oracle_rate"]) == {"raw", "standardised", "matlab", "union"}
+    assert h["oracle_rate"]["raw"] == h["success_rate"]["oracle"]
+    for c in h["oracle_rate"]["union"]:
+        assert h["oracle_rate"]["union"][c] >= max(h["oracle_rate"][p][c] for p in ("raw", "standardised", "matlab"))
+        assert all(h["beyond_raw_oracle"][k][c] == 0 for k in ("log", "linear", "grid20", "grid100"))
+        assert h["success_rate"]["standardised"][c] <= h["oracle_rate"]["standardised"][c]
     assert set(h["init_success_rate"]) == {"paper", "spread"}
     from fdi_lib.reproduce.zhang2021 import initial_state_table, lambda_rule_table
 
     assert "oracle: true support on the path" in str(lambda_rule_table(r))
+    from fdi_lib.reproduce.zhang2021 import oracle_table
+
+    assert "any of the three paths" in str(oracle_table(r))
     assert "not given" in str(initial_state_table(r))
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -217,3 +219,28 @@ def test_batched_expm_against_scipy():
         ref = expm(e)
         assert np.abs(f - ref).max() <= 1e-12 * (1.0 + np.abs(ref).max())
     np.testing.assert_array_equal(uav._expm_many(E[3:5]), F[3:5])
+
+
+@pytest.mark.parametrize("eta_unit,seed,amplitude", [("deg", 3, 5.0), ("rad", 3, 3.0)])
+def test_envelope_lies_below_the_measured_loss_of_the_true_state(eta_unit, seed, amplitude):
+    """The runs of the envelope study that lost the true state at the smallest airspeed deviation:
+    the envelope is the largest multiple of 0.5 m/s below it (4.19 -> 4, 2.97 -> 2.5 measured)."""
+    from fdi_lib.reproduce.rosa2013 import containment_check
+
+    c = containment_check(eta_unit, seed, amplitude=amplitude)
+    assert c["outside"] > 0
+    assert uav.ENVELOPE_AIRSPEED[eta_unit] < c["loss_airspeed"] <= uav.ENVELOPE_AIRSPEED[eta_unit] + 0.5
+
+
+def test_svo_models_warn_when_a_record_leaves_the_envelope():
+    from fdi_lib.errors import EnvelopeWarning
+
+    big = uav.simulate("none", "step", rng=np.random.default_rng(0), duration=1.5, amplitude=7.0)
+    assert uav.envelope_exceedance(big).size > 0
+    with pytest.warns(EnvelopeWarning, match=r"\|y_V\| <= 4.0 m/s"):
+        uav.svo_models(big)
+    calm = uav.simulate("none", "step", rng=np.random.default_rng(0), duration=1.5)
+    assert uav.envelope_exceedance(calm).size == 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", EnvelopeWarning)
+        uav.svo_models(calm)

@@ -201,3 +201,60 @@ def test_noise_free_output_equals_a_direct_recursion():
         x = (mats.F0 + mats.Fp * p[k]) @ x + (mats.G0[:, 0] + mats.Gp[:, 0] * p[k]) * u[k]
     np.testing.assert_allclose(gp.noise_free_output(u, p), expected, rtol=1e-12)
     assert abs(gp.noise_free_output(u, p).mean() - gp.MEAN_FLOW) < 1e-6 * gp.MEAN_FLOW
+
+
+# ----------------------------------------------------------------------------- issue 20: the third constant
+def test_state2_scale_is_calibrated_by_its_criterion():
+    spec = gp.CALIBRATION["state2_scale"]
+    swings = {k: a for k, (_, a) in spec["fits"].items()}
+    assert sorted(swings) == spec["grid"]
+    assert gp.select_state2_scale(swings) == gp.CALIBRATION["fitted"]["state2_scale"] == 10.0
+    # the criterion by hand: smallest scale within 5 % of the swing at the largest
+    assert min(k for k in swings if swings[k] <= 1.05 * swings[100.0]) == 10.0
+    assert gp.select_state2_scale(swings, tolerance=0.001) == 100.0
+    assert gp.select_state2_scale({1.0: 5.0, 2.0: 9.0}) == 1.0     # not monotone: still the rule
+    # a recorded grid fit is reproduced, and both targets hold there (they hold at every scale)
+    L, a = gp._fit_length_and_swing(3.0)
+    assert (L, a) == pytest.approx(spec["fits"][3.0], rel=1e-6)
+    tg = gp.calibration_targets(L, 3.0, a)
+    for key, target in gp.CALIBRATION["targets"].items():
+        assert tg[key] == pytest.approx(target["value"], rel=1e-6), key
+    assert gp.calibration_for(3.0) == {"section_length_km": spec["fits"][3.0][0], "state2_scale": 3.0,
+                                       "pressure_swing_bar": spec["fits"][3.0][1]}
+    assert gp.calibration_for(None) == gp.calibration_for(10.0) == gp.CALIBRATION["fitted"]
+    with pytest.raises(ModelError, match="state2_scale: expected a positive number"):
+        gp.calibration_for(0.0)
+    with pytest.raises(ModelError, match="swings: expected at least one"):
+        gp.select_state2_scale({})
+
+
+def test_surrogate_builder_is_the_default_model():
+    model, u, p = gp.surrogate(**gp.CALIBRATION["fitted"])
+    ref = gp.pipeline_model()
+    for name in ("F", "G", "H", "J", "Q", "R", "x0", "P0"):
+        np.testing.assert_array_equal(getattr(model, name), getattr(ref, name))
+    np.testing.assert_array_equal(u, gp.pipeline_input())
+    np.testing.assert_array_equal(p, gp.pipeline_schedule())
+
+
+def test_surrogate_limits_from_first_principles():
+    lim = gp.surrogate_limits()
+    sec = gp.physical_section()
+    # time constants: eigenvalues of the continuous section [[-R/I, 1/I], [-1/C, 0]]
+    lam = np.linalg.eigvals(np.array([[-sec.resistance / sec.inertance, 1 / sec.inertance],
+                                      [-1 / sec.capacity, 0.0]]))
+    taus = sorted(-1 / lam.real)
+    assert lim["tau_fast_s"] == pytest.approx(taus[0], rel=1e-6)
+    assert lim["tau_slow_s"] == pytest.approx(taus[1], rel=1e-6)
+    assert lim["tau_fast_s"] < lim["tau_slow_s"] < lim["sample_s"] == 120.0      # no slow mode
+    np.testing.assert_allclose(lim["eig_F0"], np.exp(-120.0 / np.array(taus)), rtol=1e-6)
+    # line pack: mass stored C pbar(t) over a fine day grid, its largest rate over the mean flow
+    t = np.linspace(0.0, 86400.0, 200001)
+    stored = sec.capacity * gp.CALIBRATION["fitted"]["pressure_swing_bar"] * 1e5 * np.cos(2 * np.pi * t / 86400)
+    rate = np.max(np.abs(np.gradient(stored, t)))
+    q_kg = gp.MEAN_FLOW * gp.NORMAL_DENSITY / 3600
+    assert lim["linepack_imbalance"] == pytest.approx(rate / q_kg, rel=1e-6)
+    assert 0.05 < lim["linepack_imbalance"] < 0.07
+    # the surrogate leaves it out: steady outlet flow = inlet flow at every frozen pressure
+    rep = gp.design_report()
+    assert abs(rep["dc_gain_min"] - 1) < 0.02 and abs(rep["dc_gain_max"] - 1) < 0.02

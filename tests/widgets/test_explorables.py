@@ -16,7 +16,7 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 from PIL import Image  # noqa: E402
 
-from fdi_lib.errors import ModelError  # noqa: E402
+from fdi_lib.errors import ModelError, NonFiniteError, ShapeError  # noqa: E402
 from fdi_lib.explorables import explorable, figure_data  # noqa: E402
 from fdi_lib.plotting import DISPLAY_DPI, FIG_WIDTH_IN, figure  # noqa: E402
 from fdi_lib.widgets import bz, rosa2013, zb2014, zb2014_pipeline, zhang2021  # noqa: E402
@@ -114,3 +114,63 @@ def test_chapter_frames_equal_the_callback_at_the_same_slider_values(name):
         assert_same_data(ex.data[i], figure_data(fig))
         plt.close(fig)
     assert len(set(ex.frames)) == len(ex.frames)   # each slider changes the picture
+
+
+# ----------------------------------------------------------------------------- edges (issue 21)
+@pytest.mark.parametrize("grid, error, message", [
+    ([("a", (1.0, 2.0))], ModelError, r"grid: expected a mapping of keyword names to sequences of values, got list"),
+    ({"a": 3.0}, ShapeError, r"grid\['a'\]: expected a 1-D sequence of values, got float"),
+    ({"a": "abc"}, ShapeError, r"grid\['a'\]: expected a 1-D sequence of values, got str"),
+    ({"a": np.ones((2, 2))}, ShapeError, r"grid\['a'\]: expected a 1-D sequence of values, got shape \(2, 2\)"),
+    ({"a": (1.0, np.nan)}, NonFiniteError, r"grid\['a'\]: expected finite values, got nan at index 1"),
+    ({"a": (1.0, 2.0, 1.0)}, ModelError, r"grid\['a'\]: expected distinct values, got 1.0 at indices 0 and 2"),
+    ({3: (1.0, 2.0)}, ModelError, r"grid: expected keyword names of the callback \(not 'fig'\), got 3"),
+    ({"fig": (1.0, 2.0)}, ModelError, r"got 'fig'"),
+    ({"offset": (1.0, 2.0), "a": (1.0, 2.0)}, ModelError, r"grid: 'offset' is also given as a fixed keyword"),
+])
+def test_bad_grid_values_are_typed_errors_naming_the_entry(grid, error, message):
+    with pytest.raises(error, match=message):
+        explorable(_line, grid, caption="x", b=1.0, offset=0.0)
+
+
+def test_a_callback_must_return_a_figure():
+    with pytest.raises(ModelError, match=r"callback: expected a matplotlib Figure from .*\(\{'a': 1.0, "
+                                         r"'b': 1\}\), got NoneType"):
+        explorable(lambda a, b, fig=None: None, {"a": (1.0, 2.0), "b": (1, 2)}, caption="x")
+    with pytest.raises(ModelError, match=r"callback: expected a function drawing into fig"):
+        explorable(None, {"a": (1.0, 2.0)}, caption="x")
+    with pytest.raises(ModelError, match=r"caption: expected a string, got int"):
+        explorable(_line, {"a": (1.0, 2.0), "b": (1, 2)}, caption=3)
+    with pytest.raises(ModelError, match=r"labels: expected a mapping of grid names \['a', 'b'\]"):
+        explorable(_line, {"a": (1.0, 2.0), "b": (1, 2)}, caption="x", labels={"c": "C"})
+
+
+def test_a_failing_callback_says_at_which_point():
+    def bad(a, fig=None):
+        raise ZeroDivisionError("boom")
+
+    with pytest.raises(ZeroDivisionError) as info:
+        explorable(bad, {"a": (1.0, 2.0)}, caption="x")
+    assert "explorable: while drawing the frame at {'a': 1.0}" in info.value.__notes__
+
+
+def test_size_guards_refuse_too_many_frames_before_drawing_and_too_heavy_pages(monkeypatch):
+    import fdi_lib.explorables as exp
+    from fdi_lib.errors import ResourceError
+
+    calls = []
+
+    def counted(a, b, fig=None):
+        calls.append((a, b))
+        return _line(a, b, fig=fig)
+
+    with pytest.raises(ResourceError, match=r"grid: expected at most 100 frames \(MAX_FRAMES\), got "
+                                            r"1000 \(a\) x 1000 \(b\) = 1000000: use fewer values"):
+        explorable(counted, {"a": range(1000), "b": range(1000)}, caption="x")
+    assert calls == []                                          # refused before any frame
+    monkeypatch.setattr(exp, "MAX_BYTES", 30_000)               # a frame of this toy weighs ~10-20 kB
+    with pytest.raises(ResourceError, match=r"grid: expected at most 0.03 MB of frames \(MAX_BYTES\), got "
+                                            r"0.0\d MB after \d of 9 frames \(about 0.\d MB for all\)"):
+        explorable(counted, {"a": (1.0, 2.0, 3.0), "b": (1, 2, 3)}, caption="x")
+    assert len(calls) < 9                                       # stopped as soon as the budget is exceeded
+    assert plt.get_fignums() == []                              # and the figure closed

@@ -1,0 +1,148 @@
+"""Figure captions say "reproduces" only when the claims ledger says so.
+
+The rule (:func:`fdi_lib.reproduce.ledger.figure_claim`) is tested on hand-made results; the
+chapters are checked to take every caption verb about a paper figure from the ledger (a glued
+value, never typed). ``tests/browser/check_captions.py`` checks the built book: each glued verb
+against the ledger of the build's cached results, and the rendered captions.
+"""
+
+import dataclasses
+import html
+import re
+from pathlib import Path
+
+import jupytext
+import pytest
+
+from fdi_lib.reproduce import ledger as L
+from fdi_lib.reproduce import list_reproductions
+from fdi_lib.reproduce.registry import ReproductionResult
+
+ROOT = Path(__file__).resolve().parents[2]
+
+# ----------------------------------------------------------------------------- the verb rule
+RATES = ReproductionResult(
+    id="zhang2021-table1",
+    headline={"success_rate": {"5": 0.998, "15": 0.31}, "ci95": {"5": [0.99, 1.0], "15": [0.28, 0.34]}},
+    paper={"success_rate": {"5": 0.995, "15": 0.295}}, settings={"trials": 1000})
+
+
+def test_verb_reproduces_only_when_every_compared_claim_agrees():
+    claim = L.figure_claim(RATES)                          # within interval, twice
+    assert (claim.verb, claim.differs) == (L.REPRODUCES, "")
+    off = dataclasses.replace(RATES, headline={"success_rate": {"5": 0.998, "15": 0.465},
+                                               "ci95": {"5": [0.99, 1.0], "15": [0.43, 0.50]}})
+    claim = L.figure_claim(off)
+    assert claim.verb == L.COMPARE
+    assert claim.differs.replace("\u00a0", " ") == (
+        "; differs: success rate, q = 15: paper 29.5 %, ours 46.5 %")   # both in %
+
+
+def test_verb_ignores_inputs_and_calibration_targets():
+    """Input rows count neither way: only inputs gives "redraws", inputs do not spoil agreement."""
+    paper = {"onset_s": 0.5, "detection_time_ms": 10}
+    res = ReproductionResult(id="rosa2013-fig8", headline={"onset_s": 0.5, "detection_time_ms": 10.0},
+                             paper=paper, settings={})
+    statuses = {r.path[0]: r.status for r in L.figure_claim(res).rows}
+    assert statuses == {"onset_s": L.INPUT_VALUE, "detection_time_ms": L.REPRODUCED}
+    assert L.figure_claim(res).verb == L.REPRODUCES
+    only_inputs = dataclasses.replace(res, paper={"onset_s": 0.5})
+    assert L.figure_claim(only_inputs).verb == L.REDRAWS
+    missed = dataclasses.replace(res, headline={"onset_s": 0.5, "detection_time_ms": 24.0})
+    claim = L.figure_claim(missed)
+    assert claim.verb == L.COMPARE and "detection time (ms): paper 10, ours 24" in claim.differs
+    calibrated = ReproductionResult(
+        id="zb2014-fig9", headline={"glr_level_over_threshold": 50.6},
+        paper={"glr_level_over_threshold": 50.0, "calibrated_to": ["glr_level_over_threshold"],
+               "predictions": []}, settings={})
+    assert L.figure_claim(calibrated).verb == L.REDRAWS
+
+
+def test_verb_with_too_few_trials_and_many_differences():
+    few = dataclasses.replace(RATES, settings={"trials": 2})
+    claim = L.figure_claim(few)
+    assert claim.verb == L.COMPARE and "not computed at paper scale" in claim.differs
+    many = dataclasses.replace(RATES, paper={"success_rate": {str(q): 0.9 for q in range(5, 9)}},
+                               headline={"success_rate": {str(q): 0.1 for q in range(5, 9)},
+                                         "ci95": {str(q): [0.05, 0.15] for q in range(5, 9)}})
+    claim = L.figure_claim(many)
+    assert claim.differs.replace("\u00a0", " ").count("paper 90 %") == L.CAPTION_ITEMS
+    assert "2 more in the claims ledger" in claim.differs
+
+
+# ----------------------------------------------------------------------------- the chapters
+CHAPTERS = sorted(p for p in (ROOT / "book").rglob("*.md") if p.read_text().startswith("---\njupytext"))
+_GLUED = re.compile(r"\{glue:text\}`caption-(?P<id>[\w-]+)-verb` paper (Fig|Table)")
+_TYPED = re.compile(r"\b([Rr]eproduces|[Cc]ompare with|[Rr]edraws)\b")
+
+
+def _figure_cells():
+    for md in CHAPTERS:
+        for cell in jupytext.read(md).cells:
+            caption = cell.metadata.get("mystnb", {}).get("figure", {}).get("caption")
+            if cell.cell_type == "code" and caption:
+                yield md.relative_to(ROOT), " ".join(str(caption).split()), cell.source
+
+
+def test_chapters_have_figures():
+    assert len(list(_figure_cells())) >= 24
+
+
+@pytest.mark.parametrize("doc, caption, source", list(_figure_cells()),
+                         ids=lambda v: str(v)[:40] if isinstance(v, Path) else "")
+def test_caption_verbs_come_from_the_ledger(doc, caption, source):
+    """A caption naming a paper figure or table takes its verb and "what differs" from
+    ``glue_caption`` of the result it plots; no verb about a paper figure is typed."""
+    ids = {r.id for r in list_reproductions()}
+    glued = _GLUED.search(caption)
+    without_glue = re.sub(r"\{glue:text\}`[^`]*`", "", caption)
+    assert not _TYPED.search(without_glue), (doc, caption)
+    if not glued:
+        assert not re.search(r"paper (Fig|Table)\.? ?[IVX\d]", caption), (doc, caption)
+        return
+    id = glued.group("id")
+    assert id in ids, (doc, id)
+    assert f"{{glue:text}}`caption-{id}-differs`" in caption, (doc, caption)
+    var = re.search(rf'^glue_caption\((\w+)\)$', source, flags=re.M)
+    assert var, (doc, "the figure cell must call glue_caption(result)")
+    assert re.search(rf'get\("{id}"\)\.plot\({var.group(1)}\b', source), (doc, id, source)
+
+
+# ----------------------------------------------------------------------------- the post-build check
+def _load_check():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("check_captions",
+                                                  ROOT / "tests" / "browser" / "check_captions.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_post_build_check_fails_on_a_caption_that_disagrees(tmp_path, monkeypatch):
+    """``tests/browser/check_captions.py`` on a hand-made built page and results cache."""
+    from fdi_lib.reproduce import reproduce
+
+    check = _load_check()
+    monkeypatch.setenv("FDI_RESULTS_CACHE", str(tmp_path / "cache"))
+    f1, f3 = reproduce("zb2014-fig1"), reproduce("zb2014-fig3")     # cached, as in a build
+    c1, c3 = L.figure_claim(f1), L.figure_claim(f3)
+    assert (c1.verb, c3.verb) == (L.COMPARE, L.REPRODUCES)        # Γ_k over 1; Fig. 3 agrees
+
+    def page(*caps):
+        (tmp_path / "html").mkdir(exist_ok=True)
+        body = "".join(f"<figure><figcaption><p><span>{c}</span></p></figcaption></figure>"
+                       for c in caps)
+        (tmp_path / "html" / "page.html").write_text(f"<html><body>{body}</body></html>")
+        return check.check(tmp_path / "html")
+
+    good1 = (f"Norms; <span class='pasted-text'>{c1.verb}</span> paper Fig. 1 of Z "
+             f"(zb2014-fig1{html.escape(c1.differs)}).")
+    good3 = f"GLR; {c3.verb} paper Fig. 3 of Z (zb2014-fig3)."
+    assert page(good1, good3, "Not in the paper.") == []
+    kinds = [f[1] for f in page(good1.replace(c1.verb, "reproduces"), good3)]
+    assert kinds == ["verb"]
+    assert [f[1] for f in page(good1.replace(html.escape(c1.differs), ""))] == ["differs"]
+    assert [f[1] for f in page("Paper Fig. 11 under the other reading (rosa2013-fig11-rad).")] == [
+        "caption"]
+    assert [f[1] for f in page("GLR; reproduces paper Fig. 4 of Z (zb2014-fig4).")] == ["result"]
