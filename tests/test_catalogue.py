@@ -77,7 +77,8 @@ def test_book_runs_name_registered_reproductions_with_valid_settings():
 
 
 def test_chapters_run_every_reproduction_through_the_book_settings():
-    """No chapter calls ``reproduce`` or passes its own seed or trial count to a reproduction."""
+    """No chapter calls ``reproduce`` or passes its own seed or trial count to a reproduction
+    (``jobs`` and the reproduction's own keyword options are allowed)."""
     called = set()
     for doc, text in _chapters().items():
         for cell in EXT._CELL.finditer(text):
@@ -86,7 +87,7 @@ def test_chapters_run_every_reproduction_through_the_book_settings():
             for m in re.finditer(r"\bbook_run\(([^)]*)\)", body):
                 args = [a.strip() for a in m.group(1).split(",")]
                 assert re.fullmatch(r"""["'][a-z0-9-]+["']""", args[0]), (doc, m.group(0))
-                assert all(a.startswith("jobs=") for a in args[1:]), (doc, m.group(0))
+                assert not any(re.match(r"(seed|trials)\s*=", a) for a in args[1:]), (doc, m.group(0))
                 called.add(args[0].strip("\"'"))
     assert called <= {r.id for r in list_reproductions()}
     assert "zb2014-fig3" in called and "rosa2013-fig11-rad" in called
@@ -190,3 +191,27 @@ def test_post_build_check_compares_the_command_with_the_cached_chapter_result(tm
     _cache_path("zb2014-fig1", get("zb2014-fig1").default_seed, None, {}).write_bytes(pickle.dumps(tampered))
     rid, status, detail = CHECK.check_command(argv, tmp_path)
     assert status == "differs" and key in detail
+
+
+def test_options_reach_the_reproduction_from_book_run_and_the_printed_command(monkeypatch):
+    """``book_run(id, **options)`` and ``book_command(id, **options)`` (``--option NAME=VALUE``)
+    make the same call; an option the reproduction does not take is a typed error naming it."""
+    from fdi_lib.reproduce import cli
+    from fdi_lib.reproduce.book import book_argv, book_run
+    from fdi_lib.reproduce.registry import Reproduction
+
+    calls = []
+
+    def record(self, *, seed=None, trials=None, jobs=1, **kwargs):
+        calls.append((self.id, seed, trials, kwargs))
+        return get("zb2014-table1").func(seed=0, trials=None, jobs=1)
+
+    monkeypatch.setattr(Reproduction, "__call__", record)
+    book_run("zb2014-fig8", isolation_window="record_end", state2_scale=3.0)
+    argv = book_argv("zb2014-fig8", isolation_window="record_end", state2_scale=3.0)
+    assert cli.main(argv) == 0
+    assert calls[0] == calls[1] == ("zb2014-fig8", 0, 1000,
+                                    {"isolation_window": "record_end", "state2_scale": 3.0})
+    assert cli.main(["reproduce", "zb2014-fig8", "--option", "window=1", "--json"]) == 2
+    assert cli.main(["reproduce", "zb2014-fig8", "--option", "isolation_window", "--json"]) == 2
+    assert len(calls) == 2

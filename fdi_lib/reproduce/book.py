@@ -16,8 +16,11 @@ registry's defaults. :func:`book_settings` resolves both against the registry.
 
 from __future__ import annotations
 
+import json
 import shlex
 from dataclasses import dataclass
+from typing import Any
+
 from fdi_lib.errors import ModelError
 from fdi_lib.reproduce.registry import ReproductionResult, get
 
@@ -89,14 +92,20 @@ def book_settings(id: str) -> BookRun:
                    trials=rep.default_trials if run.trials is None else run.trials)
 
 
-def book_run(id: str, *, jobs: int = 1) -> ReproductionResult:
-    """Run ``id`` at the book's settings (:func:`book_settings`); ``jobs`` changes no result."""
+def book_run(id: str, *, jobs: int = 1, **options: Any) -> ReproductionResult:
+    """Run ``id`` at the book's settings (:func:`book_settings`); ``jobs`` changes no result.
+
+    ``options`` are the reproduction's own keyword options (e.g. ``isolation_window`` of
+    ``zb2014-fig8``), as ``--option NAME=VALUE`` on the command line (:func:`book_argv`). The
+    claims ledger reads the run without options (:func:`fdi_lib.reproduce.ledger.collect_results`).
+    """
     s = book_settings(id)
-    return get(id)(seed=s.seed, trials=s.trials, jobs=jobs)
+    return get(id)(seed=s.seed, trials=s.trials, jobs=jobs, **options)
 
 
-def book_argv(id: str) -> list[str]:
-    """Arguments of ``python -m fdi_lib`` that recompute ``id`` as the book does, with ``--json``.
+def book_argv(id: str, **options: Any) -> list[str]:
+    """Arguments of ``python -m fdi_lib`` that recompute ``id`` as the book does, with ``--json``
+    (``options`` as ``--option NAME=VALUE``, values in JSON).
 
     ``--seed`` appears for every reproduction that reads its seed, ``--trials`` for every one
     with a trial count, so the command does not depend on the registry's defaults.
@@ -110,10 +119,12 @@ def book_argv(id: str) -> list[str]:
         raise ModelError(f"BOOK_RUNS[{id!r}].seed: {id} reads no seed; expected none, got {s.seed!r}")
     if s.trials is not None:
         argv += ["--trials", str(s.trials)]
+    for name, value in options.items():
+        argv += ["--option", f"{name}={json.dumps(value)}"]
     return argv + ["--json"]
 
 
-def book_command(id: str) -> str:
+def book_command(id: str, **options: Any) -> str:
     """The shell command that recomputes ``id`` as the book does (:func:`book_argv`)."""
-    return shlex.join(["python", "-m", "fdi_lib", *book_argv(id)])
+    return shlex.join(["python", "-m", "fdi_lib", *book_argv(id, **options)])
 

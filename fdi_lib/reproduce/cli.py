@@ -1,4 +1,8 @@
-"""Command line: ``python -m fdi_lib reproduce [--list | --ledger | ID [--seed S] [--trials N] [--jobs J] [--json]]``.
+"""Command line: ``python -m fdi_lib reproduce [--list | --ledger | ID [--seed S] [--trials N] [--jobs J]
+[--option NAME=VALUE ...] [--json]]``.
+
+``--option NAME=VALUE`` passes a keyword option of the reproduction (listed by ``--describe``),
+e.g. ``zb2014-fig8 --option isolation_window=record_end``.
 
 ``--ledger`` prints the claims ledger (:mod:`fdi_lib.reproduce.ledger`): every value the
 papers state, ours, and the computed status; with ``--json``, one object
@@ -67,6 +71,9 @@ def _parser() -> argparse.ArgumentParser:
     rep.add_argument("--trials", type=int, default=None,
                      help="Monte Carlo trials (default: the paper's own count)")
     rep.add_argument("--jobs", type=int, default=1, help="parallel jobs, -1 for all cores (default 1)")
+    rep.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
+                     help="a keyword option of the reproduction (its --describe lists them), VALUE "
+                          "in JSON or a plain string, e.g. isolation_window=record_end; repeatable")
     rep.add_argument("--json", action="store_true", help="print one JSON object of headline numbers")
     rep.add_argument("--plot", metavar="FILE", default=None, help="also save the figure to FILE")
     return parser
@@ -112,6 +119,7 @@ def _main(argv: list[str] | None) -> int:
             return 0
         # Every argument is checked before anything is computed.
         rep.check_arguments(seed=args.seed, trials=args.trials, jobs=args.jobs)
+        options = _options(rep, args.option)
         if args.trials is not None and args.trials < rep.min_trials:
             raise ModelError(f"--trials: expected at least {rep.min_trials} (the JSON's 95 % intervals need "
                              f"two trials), got {args.trials}")
@@ -123,7 +131,7 @@ def _main(argv: list[str] | None) -> int:
         # including those with their own pool, starts no more processes than can run
         jobs = effective_jobs(args.jobs)
         with progress_bars(bool(getattr(sys.stderr, "isatty", lambda: False)())):
-            result = rep(seed=args.seed, trials=args.trials, jobs=jobs)
+            result = rep(seed=args.seed, trials=args.trials, jobs=jobs, **options)
     except FDIError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -144,6 +152,28 @@ def _main(argv: list[str] | None) -> int:
             paper = result.paper.get(key, "")
             print(f"  {key:<28} ours: {value!s:<40} paper: {paper}")
     return 0
+
+
+def _options(rep: Any, items: list[str]) -> dict[str, Any]:
+    """``--option NAME=VALUE`` items as keyword arguments of ``rep``: VALUE parsed as JSON, else
+    kept as a string; a name the reproduction does not take is an error naming it."""
+    import json
+
+    known = [n for n, p in inspect.signature(rep.func).parameters.items()
+             if p.kind is p.KEYWORD_ONLY and n not in ("seed", "trials", "jobs")]
+    out: dict[str, Any] = {}
+    for item in items:
+        name, sep, text = item.partition("=")
+        if not sep or not name:
+            raise ModelError(f"--option: expected NAME=VALUE, got {item!r}")
+        if name not in known:
+            raise ModelError(f"--option: {rep.id} has no option {name!r}; expected one of "
+                             f"{', '.join(known) or 'none'}")
+        try:
+            out[name] = json.loads(text)
+        except ValueError:
+            out[name] = text
+    return out
 
 
 def _print_ledger(args: argparse.Namespace) -> int:

@@ -74,9 +74,10 @@ A leaf without a rule in :data:`SPECS` still appears (numbers and inequalities n
 a text claim without a check appears as ``not reproducible`` with the reason "no check
 defined", and the tests fail until one is written.
 
-Results come from :func:`fdi_lib.reproduce.registry.cached_results` when the book build has
-cached them (the chapters' own runs), else they are computed at the reproduction's defaults
-(Monte Carlo reproductions with at most ``max_trials`` trials, reported per row).
+Results are those of the book's settings (:func:`fdi_lib.reproduce.book.book_settings`: the seed
+and trials the chapters use, without options): read from the book build's results cache
+(:func:`fdi_lib.reproduce.registry.cached_run`, the chapters' own runs), else computed (Monte
+Carlo reproductions with at most ``max_trials`` trials, reported per row).
 """
 
 from __future__ import annotations
@@ -91,7 +92,7 @@ from typing import Any, Callable, Mapping, Sequence
 
 from fdi_lib.errors import ModelError, UnknownReproductionError
 from fdi_lib.report import NA, fmt_count, fmt_number, fmt_rate, table
-from fdi_lib.reproduce.registry import ReproductionResult, cached_results, get, list_reproductions
+from fdi_lib.reproduce.registry import ReproductionResult, cached_run, get, list_reproductions
 
 __all__ = ["STATUSES", "ROLE_KEYS", "CALIBRATION", "PREDICTION", "INPUT", "surrogate_role", "FALLBACK_TRIALS",
            "REPRODUCED", "WITHIN", "WITHIN_SPREAD", "DIFFERS", "DIFFERS_MEASURED", "DIFFERS_UNKNOWN",
@@ -952,7 +953,9 @@ def build_ledger(results: Mapping[str, ReproductionResult], *, strict: bool = Fa
 
 def collect_results(*, max_trials: int | None = None, ids: Sequence[str] | None = None,
                     use_cache: bool = True) -> tuple[dict[str, ReproductionResult], dict[str, str]]:
-    """A result per reproduction: the cached one if the build has it, else a fresh run.
+    """A result per reproduction at the book's settings (:func:`fdi_lib.reproduce.book.book_settings`,
+    the seed and trials the chapters use, without options): the run the build cached, else a
+    fresh one.
 
     Parameters
     ----------
@@ -962,7 +965,7 @@ def collect_results(*, max_trials: int | None = None, ids: Sequence[str] | None 
     ids : sequence of str, optional
         Restrict to these identifiers (default: all registered).
     use_cache : bool
-        Read :func:`~fdi_lib.reproduce.registry.cached_results` first.
+        Read the build's run first (:func:`~fdi_lib.reproduce.registry.cached_run`).
 
     Returns
     -------
@@ -970,26 +973,26 @@ def collect_results(*, max_trials: int | None = None, ids: Sequence[str] | None 
         The results and, per id, ``"cached"`` or ``"computed"`` (with the trial count used
         and the run time).
     """
+    from fdi_lib.reproduce.book import book_settings  # book imports this module's registry
+
     wanted = [r.id for r in list_reproductions()] if ids is None else list(ids)
-    cached = cached_results() if use_cache else {}
     results, sources = {}, {}
     for id in wanted:
-        if id in cached:
-            results[id] = cached[id]
-            st = cached[id].settings
-            trials = st.get("trials", st.get("trials_per_fault"))
-            sources[id] = "cached in this build" + (
-                f" (seed {st['seed']}" + (f", {fmt_count(trials)} trial" + "s" * (trials != 1)
-                                          if trials else "") + ")"
-                if "seed" in st else "")
+        book = book_settings(id)
+        hit = cached_run(id, seed=book.seed, trials=book.trials) if use_cache else None
+        if hit is not None:
+            results[id] = hit
+            sources[id] = f"cached in this build (seed {book.seed}" + (
+                f", {fmt_count(book.trials)} trial" + "s" * (book.trials != 1)
+                if book.trials else "") + ")"
             continue
-        rep = get(id)
-        trials = rep.default_trials
+        trials = book.trials
         if max_trials is not None and trials is not None and trials > max_trials:
             trials = max_trials
         t0 = time.perf_counter()
-        results[id] = rep(trials=trials)
-        sources[id] = (f"computed here ({'' if trials is None else f'{trials} trials, '}"
+        results[id] = get(id)(seed=book.seed, trials=trials)
+        sources[id] = (f"computed here (seed {book.seed}, "
+                       f"{'' if trials is None else f'{trials} trials, '}"
                        f"{time.perf_counter() - t0:.1f} s)")
     return results, sources
 
