@@ -11,7 +11,7 @@ export OPENBLAS_NUM_THREADS := 1
 export OMP_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 
-.PHONY: book book-fast test venv lock clean benchmarks student notebooks browser-test
+.PHONY: book book-fast test venv lock clean benchmarks student notebooks browser-test check-book
 
 venv: $(STAMP)
 
@@ -83,6 +83,16 @@ browser-test: $(STAMP)
 	test -x $(CHROMIUM) || { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium; }
 	$(BIN)/python tests/browser/check_book.py --html _build/html --screenshots _build/screenshots
 	$(BIN)/python tests/browser/check_explorables.py --html _build/html
+
+## Post-build checks of what the built book claims (after `make book`, which leaves its results
+## cache): every figure caption's verb ("reproduces" / "compare with") agrees with the claims ledger
+## (tests/browser/check_captions.py), and every command printed by the catalogue, run afresh without
+## the cache, gives the result the chapter showed (tools/check_catalogue.py; it recomputes every
+## reproduction at the book's trial counts, about as long as the book's execution).
+check-book: $(STAMP)
+	@test -f _build/html/index.html || { echo "No built book: run make book first"; exit 2; }
+	$(BIN)/python tests/browser/check_captions.py --html _build/html --cache _build/results-cache
+	$(BIN)/python tools/check_catalogue.py --html _build/html --cache _build/results-cache --jobs 2
 
 ## Run the whole test suite.
 test: $(STAMP)
