@@ -1062,13 +1062,16 @@ def figure_claim(result: ReproductionResult) -> FigureClaim:
         return FigureClaim(REPRODUCES, "", rows)
     unscaled = [r for r in bad if r.status_detail.startswith(_UNSCALED)]
     shown = [r for r in bad if r not in unscaled]
-    items = [_difference(r) for r in shown[:CAPTION_ITEMS]]
-    if len(shown) > CAPTION_ITEMS:
-        items.append(f"{fmt_count(len(shown) - CAPTION_ITEMS)} more in the claims ledger")
-    if unscaled:
-        items.append(f"{fmt_count(len(unscaled))} claim{'s' * (len(unscaled) > 1)} "
+    parts = []
+    if shown:
+        items = [_difference(r) for r in shown[:CAPTION_ITEMS]]
+        if len(shown) > CAPTION_ITEMS:
+            items.append(f"{fmt_count(len(shown) - CAPTION_ITEMS)} more in the claims ledger")
+        parts.append("differs: " + "; ".join(items))
+    if unscaled:  # not a difference: no status at all until the paper's trial count is run
+        parts.append(f"{fmt_count(len(unscaled))} claim{'s' * (len(unscaled) > 1)} "
                      + unscaled[0].status_detail)
-    return FigureClaim(COMPARE, "; differs: " + "; ".join(items), rows)
+    return FigureClaim(COMPARE, "; " + "; ".join(parts), rows)
 
 
 def glue_caption(result: ReproductionResult) -> FigureClaim:

@@ -62,6 +62,7 @@ def test_verb_with_too_few_trials_and_many_differences():
     few = dataclasses.replace(RATES, settings={"trials": 2})
     claim = L.figure_claim(few)
     assert claim.verb == L.COMPARE and "not computed at paper scale" in claim.differs
+    assert "differs" not in claim.differs          # too few trials is no difference
     many = dataclasses.replace(RATES, paper={"success_rate": {str(q): 0.9 for q in range(5, 9)}},
                                headline={"success_rate": {str(q): 0.1 for q in range(5, 9)},
                                          "ci95": {str(q): [0.05, 0.15] for q in range(5, 9)}})
