@@ -45,6 +45,7 @@ from _record import record  # noqa: E402
 from fdi_lib.explorables import explorable  # noqa: E402
 from fdi_lib.plotting import DISPLAY_DPI, RASTER_SCALE  # noqa: E402
 from fdi_lib.widgets import _encode_png, bz, render, rosa2013, zb2014, zb2014_pipeline, zhang2021  # noqa: E402
+from fdi_lib.widgets.explorables import EXPLORABLES  # noqa: E402
 
 TARGET_MS = 100.0
 AIM_MS = 60.0
@@ -79,15 +80,6 @@ WIDGETS = {
     "explore_svo (horizon)": (rosa2013.explore_svo, "horizon", (1, 2)),
 }
 
-# explorable: (callback, grid) as in the chapters
-EXPLORABLES = {
-    "signature": (zb2014.explore_signature, zb2014.SIGNATURE_GRID),
-    "GLR": (zb2014.explore_glr, zb2014.GLR_GRID),
-    "pipeline": (zb2014_pipeline.explore_pipeline, zb2014_pipeline.GRID),
-    "sparse": (zhang2021.explore_sparse, zhang2021.GRID),
-    "parametric/non-parametric": (bz.explore_bz, bz.GRID),
-    "SVO": (rosa2013.explore_svo, rosa2013.GRID),
-}
 
 
 def _cpu_ms(f) -> float:

@@ -723,13 +723,18 @@ INIT_LABELS = {"paper": "paper's filter start, X₀ ~ N(0, I)",
                "spread": "X₀ ~ N(0, 100 I), P₀|₀ = 100 I"}
 
 
+def _table_columns() -> tuple[list[str], list[str]]:
+    """The columns of the λ-rule study (``q5``, ..., ``r40``) and their headers for readers."""
+    cols = [c for c, _, _ in _variant_columns()]
+    return cols, [f"q = {c[1:]}" if c[0] == "q" else f"r = {c[1:]} (q = 5)" for c in cols]
+
+
 def lambda_rule_table(result: ReproductionResult):
     """The variants table for readers: rates in % with 95 % intervals, the paper's row last."""
     from fdi_lib.report import fmt_rate, table
 
     h, n = result.headline, result.settings["trials"]
-    cols = [c for c, _, _ in _variant_columns()]
-    heads = [f"q = {c[1:]}" if c[0] == "q" else f"r = {c[1:]} (q = 5)" for c in cols]
+    cols, heads = _table_columns()
     rows = {RULE_LABELS[k]: [fmt_rate(h["success_rate"][k][c], h["ci95"][k][c]) for c in cols]
             for k in RULE_READINGS + ("oracle",)}
     rows["paper (Tables I-II)"] = [fmt_rate(result.paper["success_rate"][c], digits=3) for c in cols]
@@ -767,8 +772,7 @@ def oracle_table(result: ReproductionResult):
     from fdi_lib.report import fmt_rate, table
 
     h, n = result.headline, result.settings["trials"]
-    cols = [c for c, _, _ in _variant_columns()]
-    heads = [f"q = {c[1:]}" if c[0] == "q" else f"r = {c[1:]} (q = 5)" for c in cols]
+    cols, heads = _table_columns()
     rows = {ORACLE_LABELS[k]: [fmt_rate(h["oracle_rate"][k][c], h["oracle_ci95"][k][c]) for c in cols]
             for k in ORACLE_LABELS}
     rows["log rule on a scaled path, raw oracle false"] = [

@@ -24,15 +24,8 @@ import pytest  # noqa: E402
 from fdi_lib.explorables import figure_data  # noqa: E402
 from fdi_lib.reproduce.bz import SOL2  # noqa: E402
 from fdi_lib.widgets import bz, rosa2013, zb2014, zb2014_pipeline, zhang2021  # noqa: E402
+from fdi_lib.widgets.explorables import EXPLORABLES  # noqa: E402
 
-EXPLORABLES = {
-    "signature": (zb2014.explore_signature, zb2014.SIGNATURE_GRID),
-    "glr": (zb2014.explore_glr, zb2014.GLR_GRID),
-    "pipeline": (zb2014_pipeline.explore_pipeline, zb2014_pipeline.GRID),
-    "sparse": (zhang2021.explore_sparse, zhang2021.GRID),
-    "bz": (bz.explore_bz, bz.GRID),
-    "svo": (rosa2013.explore_svo, rosa2013.GRID),
-}
 
 
 @functools.lru_cache(maxsize=None)
@@ -101,7 +94,7 @@ def _glr_frame(d):
 def test_glr_statements():
     """Shrinking the fault removes the alarm; a shorter window shortens the plateau of l_k but
     moves neither the alarm nor the peak of l_k (the chapter's text, with its glued numbers)."""
-    grid, data = zb2014.GLR_GRID, frames("glr")
+    grid, data = zb2014.GLR_GRID, frames("GLR")
     facts = zb2014.glr_grid_alarms()
     onset = zb2014.DEFAULTS["onset"]
     for size in grid["fault_size"]:
@@ -184,7 +177,7 @@ def test_sparse_statements():
 def test_bz_statements():
     """With f = 0 the GLR crosses its threshold on the drift alone; f does not move the GLR;
     lambda towards 1 makes theta_hat lag the drift and the RLS error energy rise."""
-    grid, data = bz.GRID, frames("bz")
+    grid, data = bz.GRID, frames("parametric/non-parametric")
     onset = SOL2["f_onset"]
     for lam in grid["lam"]:
         glr0 = data[(0.0, lam)][2][5][0][:, 1]
@@ -210,7 +203,7 @@ def test_svo_statements():
     from fdi_lib.reproduce.rosa2013 import toy_prior
     from fdi_lib.sets.svo import run_svo
 
-    grid, data = rosa2013.GRID, frames("svo")
+    grid, data = rosa2013.GRID, frames("SVO")
     shown = {}
     for db in grid["delta_bound"]:
         widths = []
