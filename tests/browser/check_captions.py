@@ -13,6 +13,10 @@ claims ledger page shows). It fails when
 - ``result``: no cached result for the caption's identifier (the ledger could not show it);
 - ``caption``: a caption names a paper figure without a verb or an identifier.
 
+The explorables (``<figure class="fdi-explorable">``, sliders over a widget callback) are not
+results: their captions say "as paper Fig. N" for the setting they redraw and carry no ledger
+claim, so they are not checked.
+
 Usage: ``python tests/browser/check_captions.py [--html _build/html] [--cache _build/results-cache]``
 (run with the library that built the book: the cache is keyed by the code's hash). Prints
 ``page | check | detail`` per failure and exits 1 if there is any.
@@ -34,10 +38,12 @@ SKIP_DIRS = {"_static", "_sources", "_images", "mathjax", "_sphinx_design_static
 
 
 def captions(page: Path) -> list[str]:
-    """The plain text of every ``<figcaption>`` of an HTML page (tags removed, entities and
-    typographic quotes undone, white space collapsed)."""
+    """The plain text of every ``<figcaption>`` of an HTML page but the explorables' (tags
+    removed, entities and typographic quotes undone, white space collapsed)."""
     out = []
-    for raw in re.findall(r"<figcaption>(.*?)</figcaption>", page.read_text(), flags=re.S):
+    figures = re.findall(r"<figure\b([^>]*)>(.*?)</figure>", page.read_text(), flags=re.S)
+    for raw in (c for attrs, body in figures if "fdi-explorable" not in attrs
+                for c in re.findall(r"<figcaption>(.*?)</figcaption>", body, flags=re.S)):
         text = html.unescape(re.sub(r"<[^>]+>", "", raw))
         text = text.replace("\u2019", "'").replace("\u00b6", "")
         out.append(" ".join(text.split()))

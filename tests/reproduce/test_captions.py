@@ -132,9 +132,9 @@ def test_post_build_check_fails_on_a_caption_that_disagrees(tmp_path, monkeypatc
     c1, c3 = L.figure_claim(f1), L.figure_claim(f3)
     assert (c1.verb, c3.verb) == (L.COMPARE, L.REPRODUCES)        # Γ_k over 1; Fig. 3 agrees
 
-    def page(*caps):
+    def page(*caps, attrs=""):
         (tmp_path / "html").mkdir(exist_ok=True)
-        body = "".join(f"<figure><figcaption><p><span>{c}</span></p></figcaption></figure>"
+        body = "".join(f"<figure{attrs}><figcaption><p><span>{c}</span></p></figcaption></figure>"
                        for c in caps)
         (tmp_path / "html" / "page.html").write_text(f"<html><body>{body}</body></html>")
         return check.check(tmp_path / "html")
@@ -149,3 +149,7 @@ def test_post_build_check_fails_on_a_caption_that_disagrees(tmp_path, monkeypatc
     assert [f[1] for f in page("Paper Fig. 11 under the other reading (rosa2013-fig11-rad).")] == [
         "caption"]
     assert [f[1] for f in page("GLR; reproduces paper Fig. 4 of Z (zb2014-fig4).")] == ["result"]
+    # an explorable redraws a paper figure's setting and claims nothing: not checked
+    sliders = "SVO hull against the bound (as paper Fig. 2)."
+    assert [f[1] for f in page(sliders)] == ["caption"]
+    assert page(sliders, attrs=' class="fdi-explorable" id="x"') == []
