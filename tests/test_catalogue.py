@@ -191,6 +191,19 @@ def test_post_build_check_compares_the_command_with_the_cached_chapter_result(tm
     _cache_path("zb2014-fig1", get("zb2014-fig1").default_seed, None, {}).write_bytes(pickle.dumps(tampered))
     rid, status, detail = CHECK.check_command(argv, tmp_path)
     assert status == "differs" and key in detail
+    # a key the reproduction declares a wall time of this machine is not compared
+    monkeypatch.setattr(CHECK, "get", lambda id: dataclasses.replace(get(id), timed_keys=(key,)))
+    assert CHECK.check_command(argv, tmp_path)[1:] == ("ok", "")
+
+
+def test_only_wall_times_are_declared_timed():
+    """``timed_keys`` name documented headline keys, and only the timing reproduction has any."""
+    import inspect
+
+    timed = {r.id: r.timed_keys for r in list_reproductions() if r.timed_keys}
+    assert set(timed) == {"rosa2013-timing"}
+    doc = inspect.getdoc(get("rosa2013-timing").func)
+    assert all(re.search(rf"^{k}\b.*:", doc, flags=re.M) for k in timed["rosa2013-timing"])
 
 
 def test_options_reach_the_reproduction_from_book_run_and_the_printed_command(monkeypatch):

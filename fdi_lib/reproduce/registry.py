@@ -90,6 +90,9 @@ class Reproduction:
     default_trials: int | None
     default_seed: int
     min_trials: int = 2
+    #: Headline keys that measure this machine's wall time (they change from run to run and are
+    #: never compared between runs, e.g. by the catalogue's post-build check).
+    timed_keys: tuple[str, ...] = ()
 
     @property
     def monte_carlo(self) -> bool:
@@ -259,7 +262,8 @@ _REGISTRY: dict[str, Reproduction] = {}
 
 
 def register(id: str, *, paper: str, title: str, default_trials: int | None = None,
-             default_seed: int = 0, plot: Callable[..., Any] | None = None, min_trials: int = 2
+             default_seed: int = 0, plot: Callable[..., Any] | None = None, min_trials: int = 2,
+             timed_keys: tuple[str, ...] = ()
              ) -> Callable[[Callable[..., ReproductionResult]], Callable[..., ReproductionResult]]:
     """Decorator registering a reproduction function under ``id``.
 
@@ -267,6 +271,8 @@ def register(id: str, *, paper: str, title: str, default_trials: int | None = No
     for deterministic or single-run figures); ``plot(result, fig=None)`` draws it.
     ``min_trials`` is the fewest trials the command line accepts: 2 where the JSON has 95 %
     intervals (they need two trials), 1 for a reproduction whose JSON has none.
+    ``timed_keys`` are the headline keys that measure wall time on this machine (not
+    reproducible from run to run).
     """
 
     def decorator(func: Callable[..., ReproductionResult]) -> Callable[..., ReproductionResult]:
@@ -274,7 +280,7 @@ def register(id: str, *, paper: str, title: str, default_trials: int | None = No
             raise ModelError(f"reproduction id {id!r} registered twice")
         _REGISTRY[id] = Reproduction(id=id, paper=paper, title=title, func=func, plot=plot,
                                      default_trials=default_trials, default_seed=default_seed,
-                                     min_trials=min_trials)
+                                     min_trials=min_trials, timed_keys=tuple(timed_keys))
         return func
 
     return decorator

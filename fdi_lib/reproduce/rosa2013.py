@@ -588,7 +588,8 @@ def plot_timing(result: ReproductionResult, fig: Any = None):
 
 
 @register("rosa2013-timing", paper=PAPER, title="Wall time per SVO step against the horizon N (Remark 4)",
-          plot=plot_timing)
+          plot=plot_timing, timed_keys=("step_ms", "step_ms_p90", "step_ms_exact", "step_ms_exact_each",
+                                        "exact_within_ts"))
 def timing(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Remark 4: wall time of one SVO update of the UAV model (n = 4) for N = 1, 2, 3.
 
