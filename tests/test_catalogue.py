@@ -66,7 +66,7 @@ def test_every_reproduction_has_a_command_with_the_book_settings(commands):
     # the 13 reproductions that the book runs at a seed other than the registry's default
     assert sum(book_settings(r.id).seed != r.default_seed for r in list_reproductions()) == 13
     assert commands["zb2014-fig3"] == ["reproduce", "zb2014-fig3", "--seed", "2015", "--json"]
-    assert commands["rosa2013-fig11-rad"][-3:] == ["--trials", "1", "--json"]
+    assert commands["rosa2013-fig11-rad"][-3:] == ["--trials", "10", "--json"]   # the paper's count
 
 
 def test_book_runs_name_registered_reproductions_with_valid_settings():

@@ -650,19 +650,21 @@ SPECS: dict[str, ClaimSpec] = {
     "rosa2013-fig11:detection_time_ms/*/*": ClaimSpec(
         "{fig}: mean detection time (ms), {0}, {1}", explain="fig-rosa2013-11",
         missing=_NOT_DETECTED),
+    # the other reading of the elevator (per radian) checks the same paper claims: a note in the
+    # row of the reading per degree (one row per claim), its own statuses in its caption
     "rosa2013-fig11-rad:detection_time_ms/*/*": ClaimSpec(
         "{fig}: mean detection time (ms), {0}, {1}", explain="fig-rosa2013-11-rad",
-        missing=_NOT_DETECTED),
+        missing=_NOT_DETECTED, shown_under="rosa2013-fig11", same_path=lambda p: p),
     "rosa2013-fig12:detection_time_ms/*/*": ClaimSpec(shown_under="rosa2013-fig11"),
-    "rosa2013-fig12-rad:detection_time_ms/*/*": ClaimSpec(shown_under="rosa2013-fig11-rad"),
+    "rosa2013-fig12-rad:detection_time_ms/*/*": ClaimSpec(shown_under="rosa2013-fig11"),
     "rosa2013-fig11:isolation_time_ms/*/*": ClaimSpec(shown_under="rosa2013-fig12"),
-    "rosa2013-fig11-rad:isolation_time_ms/*/*": ClaimSpec(shown_under="rosa2013-fig12-rad"),
+    "rosa2013-fig11-rad:isolation_time_ms/*/*": ClaimSpec(shown_under="rosa2013-fig12"),
     "rosa2013-fig12:isolation_time_ms/*/*": ClaimSpec(
         "{fig}: mean isolation time (ms), {0}, {1}", explain="fig-rosa2013-12",
         missing=_NOT_ISOLATED),
     "rosa2013-fig12-rad:isolation_time_ms/*/*": ClaimSpec(
         "{fig}: mean isolation time (ms), {0}, {1}", explain="fig-rosa2013-12-rad",
-        missing=_NOT_ISOLATED),
+        missing=_NOT_ISOLATED, shown_under="rosa2013-fig12", same_path=lambda p: p),
     "rosa2013-timing:step_ms": ClaimSpec(
         "Remark 4: 5 to 200 ms per SVO step (exact rule) depending on N",
         ours=lambda h, p: h.get("step_ms_exact"),
@@ -855,8 +857,9 @@ def _also_note(res: ReproductionResult, path: tuple[str, ...], spec: ClaimSpec) 
     ci = spec.ci(res.headline, path) if spec.ci else _default_ci(res.headline, path)
     trials = res.settings.get("trials")
     rate = ("rate" in path[0] and ci is not None and _is_rate(ours))
-    return (f"also checked by {res.id}" + (f" on {fmt_count(trials)} trials" if trials else "")
-            + f": {_fmt(ours, ci, rate=rate)}")
+    value = spec.missing if ours is None and spec.missing else _fmt(ours, ci, rate=rate)
+    return (f"also checked by {res.id}" + (f" on {fmt_count(trials)} trial" + "s" * (trials != 1)
+                                           if trials else "") + f": {value}")
 
 
 def _row_status(outcome: str, how: str, *, spec: ClaimSpec, role: str | None, paper: Any,
@@ -886,7 +889,7 @@ def _row_status(outcome: str, how: str, *, spec: ClaimSpec, role: str | None, pa
 
 
 def build_ledger(results: Mapping[str, ReproductionResult], *, strict: bool = False,
-                 sources: Mapping[str, str] | None = None) -> Ledger:
+                 sources: Mapping[str, str] | None = None, own_readings: bool = False) -> Ledger:
     """The ledger of the given results (one per reproduction id), rows in book order.
 
     Parameters
@@ -899,6 +902,10 @@ def build_ledger(results: Mapping[str, ReproductionResult], *, strict: bool = Fa
         a claim is listed as "not computed" with the reason.
     sources : mapping of id to str, optional
         Where each result came from (shown in the JSON).
+    own_readings : bool
+        List a result's other readings of claims shown under another reproduction (rules with
+        ``shown_under`` and ``same_path``, e.g. the λ-rule study, the per-radian UAV figures) as
+        its own rows: the rows of that result's figure (:func:`figure_claim`), not the ledger's.
     """
     also: dict[tuple[str, tuple[str, ...]], list[str]] = {}
     for id, res in results.items():
@@ -915,7 +922,7 @@ def build_ledger(results: Mapping[str, ReproductionResult], *, strict: bool = Fa
         trials = None if trials is None else int(trials)
         for path in claim_paths(res.paper):
             spec = spec_for(id, path) or ClaimSpec()
-            if spec.shown_under:
+            if spec.shown_under and not (own_readings and spec.same_path):
                 continue
             paper = _at(res.paper, path)
             label = (spec.label or f"{_fig(id)}: {' '.join(path)}").format(
@@ -1049,11 +1056,12 @@ def _difference(r: LedgerRow) -> str:
 def figure_claim(result: ReproductionResult) -> FigureClaim:
     """The caption verb of the figure that plots ``result``, from its ledger rows.
 
-    Built from ``build_ledger({result.id: result})``: the same rules, trial counts and causes
-    as the claims ledger. Claims listed under another reproduction (``shown_under``) belong to
-    that figure.
+    Built from ``build_ledger({result.id: result}, own_readings=True)``: the same rules, trial
+    counts and causes as the claims ledger. Claims listed under another reproduction
+    (``shown_under``) belong to that figure, except this result's own reading of them
+    (``same_path``: the per-radian UAV figures), which its figure shows.
     """
-    rows = build_ledger({result.id: result}).rows
+    rows = build_ledger({result.id: result}, own_readings=True).rows
     compared = [r for r in rows if r.status not in (INPUT_VALUE, CALIBRATION_TARGET)]
     if not compared:
         return FigureClaim(REDRAWS, "", rows)

@@ -192,6 +192,22 @@ def test_one_row_per_claim():
     assert "zhang2021-lambda-rule on 200 trials: 45.5" in rows[0].note
 
 
+def test_the_other_reading_of_a_figure_is_a_note_and_its_caption_has_its_own_statuses():
+    """The per-radian UAV figures check the paper's Figs 11-12 again: one row per claim (the
+    per-degree reading's), the other reading in its note; its own figure's caption judges it."""
+    deg = ReproductionResult(id="rosa2013-fig11", headline={
+        "detection_time_ms": {"alpha": {"step": 10.0}}}, paper={
+        "detection_time_ms": {"alpha": {"step": 10}}}, settings={"trials": 10})
+    rad = dataclasses.replace(deg, id="rosa2013-fig11-rad", headline={
+        "detection_time_ms": {"alpha": {"step": None}}})
+    rows = L.build_ledger({"rosa2013-fig11": deg, "rosa2013-fig11-rad": rad}, strict=True).rows
+    assert [(r.id, r.status) for r in rows] == [("rosa2013-fig11", L.REPRODUCED)]
+    assert "rosa2013-fig11-rad on 10 trials: not detected in any run" in rows[0].note
+    claim = L.figure_claim(rad)
+    assert claim.verb == L.COMPARE and "not detected" in claim.differs
+    assert L.figure_claim(deg).verb == L.REPRODUCES
+
+
 def test_every_difference_links_to_where_it_is_shown(cheap_results):
     for _, doc in L.CHAPTERS:
         assert (ROOT / f"{doc}.md").exists(), doc
