@@ -24,6 +24,12 @@
    its documentation rendered.
 7. The execution table of the status page (myst-nb's ``nb-exec-table``) says "ok" / "failed"
    instead of emoji, which show as empty boxes without an emoji font.
+8. Maths as readable text where it cannot be typeset: the text of references to a heading with
+   maths (``{ref}`` to "The rule for $\\lambda$" reads "The rule for λ", not "\\lambda"; pages
+   such as the ledger load no MathJax), and the alt text of every figure's image, taken from
+   its caption (Sphinx would otherwise write the image's file path). :func:`tex_to_text` does
+   the conversion; the catalogue's headings (from the registry's ASCII titles, "Gamma_k") are
+   written in real maths by :func:`title_markdown`.
 """
 
 from __future__ import annotations
@@ -32,6 +38,7 @@ import importlib.util
 import inspect
 import re
 import shutil
+import unicodedata
 from pathlib import Path
 from typing import Any
 
@@ -43,6 +50,9 @@ from pybtex.style.formatting.plain import Style as PlainStyle
 from pybtex.style.labels import BaseLabelStyle
 from sphinx.application import Sphinx
 from sphinx.util import logging
+from sphinx.util.nodes import clean_astext
+
+from fdi_lib.explorables import script_text
 
 logger = logging.getLogger(__name__)
 
@@ -249,6 +259,28 @@ def _docstring_html(func, id_prefix: str) -> str:
     return parts["body"]
 
 
+_GREEK = ("alpha beta gamma delta epsilon zeta eta theta iota kappa lambda mu nu xi pi rho sigma tau "
+          "upsilon phi chi psi omega").split()
+_ASCII_MATH = re.compile(
+    r"(?<![\w\\$])(?:(?P<greek>" + "|".join(_GREEK + [g.title() for g in _GREEK]) + r")|(?P<letter>[A-Za-z]))"
+    r"(?:_(?P<sub>[A-Za-z0-9]+))?(?P<arg>\([a-z]\))?(?!\w)")
+
+
+def title_markdown(title: str) -> str:
+    """A registry title (plain ASCII for the terminal: "Spectral norm of Gamma_k", "GLR l_k")
+    as MyST with its symbols in maths: "Spectral norm of $\\Gamma_k$", "GLR $l_k$". A symbol is
+    a Greek letter's name or a letter with a subscript, with an optional one-letter argument."""
+
+    def maths(m: re.Match) -> str:
+        if not (m["greek"] or m["sub"]):
+            return m[0]
+        sub = m["sub"] or ""
+        sub = f"_{{{sub}}}" if len(sub) > 1 else f"_{sub}" if sub else ""
+        return f"${chr(92) + m['greek'] if m['greek'] else m['letter']}{sub}{m['arg'] or ''}$"
+
+    return _ASCII_MATH.sub(maths, title)
+
+
 def catalogue_markdown(confdir: Path) -> tuple[str, list[Path]]:
     """The generated part of the catalogue page (MyST) and the files it was made from."""
     from fdi_lib.reproduce import list_reproductions
@@ -272,7 +304,7 @@ def catalogue_markdown(confdir: Path) -> tuple[str, list[Path]]:
                 out.append(f"## {title}\n\nChapter {{doc}}`/{doc}`.\n")
             else:
                 out.append("## Not shown in a chapter\n")
-        out.append(f"### {r.title}\n")
+        out.append(f"### {title_markdown(r.title)}\n")
         out.append(f"**Paper:** {r.paper}, {_paper_item(rid, r.title)}.  ")
         if w is None:
             out.append("**Shown in:** no chapter yet.  ")
@@ -355,6 +387,188 @@ def _plain_status_words(app: Sphinx, doctree, docname: str) -> None:
                 text.parent.replace(text, nodes.Text(word))
 
 
+# --- 8. Maths as readable text -------------------------------------------------------------
+# Written here rather than taken from a library: the environment has no TeX-to-Unicode
+# converter (latexcodec, which pybtex uses, leaves maths as it is; pylatexenc would be a new
+# dependency for a few dozen symbols). It covers the maths the book writes in headings and
+# captions; an unknown command is shown by its name, never with its backslash.
+
+def _greek(name: str) -> str:
+    base = name[3:] if name.startswith("var") else name
+    case = "CAPITAL" if base[0].isupper() else "SMALL"
+    try:
+        return unicodedata.lookup(f"GREEK {case} LETTER {base.upper().replace('LAMBDA', 'LAMDA')}")
+    except KeyError:
+        return ""
+
+
+_SYMBOLS = {
+    "le": "≤", "leq": "≤", "ge": "≥", "geq": "≥", "ne": "≠", "neq": "≠", "sim": "~",
+    "approx": "≈", "equiv": "≡", "propto": "∝", "ll": "≪", "gg": "≫", "in": "∈",
+    "notin": "∉", "subset": "⊂", "subseteq": "⊆", "cup": "∪", "cap": "∩", "emptyset": "∅",
+    "times": "×", "cdot": "·", "pm": "±", "mp": "∓", "infty": "∞", "to": "→",
+    "rightarrow": "→", "leftarrow": "←", "mapsto": "↦", "ldots": "…", "dots": "…", "cdots": "⋯",
+    "sum": "Σ", "prod": "Π", "int": "∫", "partial": "∂", "nabla": "∇", "top": "ᵀ",
+    "prime": "′", "forall": "∀", "exists": "∃", "ell": "ℓ", "circ": "∘", "otimes": "⊗",
+    "oplus": "⊕", "star": "⋆", "ast": "*", "mid": "|", "vert": "|", "lvert": "|", "rvert": "|",
+    "Vert": "‖", "lVert": "‖", "rVert": "‖", "langle": "⟨", "rangle": "⟩", "quad": " ",
+    "qquad": " ", "setminus": "∖", "perp": "⊥", "dagger": "†", "lfloor": "⌊", "rfloor": "⌋",
+    "lceil": "⌈", "rceil": "⌉", "neg": "¬", "land": "∧", "lor": "∨", "Rightarrow": "⇒",
+    "iff": "⇔", "implies": "⇒",
+}
+_ESCAPES = {",": " ", ";": " ", ":": " ", " ": " ", "!": "", "|": "‖", "{": "{", "}": "}",
+            "\\": "; ", "%": "%", "$": "$", "&": "&", "#": "#", "_": "_"}
+_FONTS = {"mathrm", "mathit", "mathbf", "mathsf", "mathcal", "mathscr", "mathfrak", "boldsymbol",
+          "bm", "text", "textrm", "textit", "textbf", "mbox", "operatorname", "mathbb"}
+_ACCENTS = {"hat": "\u0302", "widehat": "\u0302", "bar": "\u0304", "overline": "\u0305",
+            "tilde": "\u0303", "widetilde": "\u0303", "dot": "\u0307", "ddot": "\u0308",
+            "vec": "\u20d7", "check": "\u030c", "breve": "\u0306"}
+_SIZES = {"left", "right", "big", "Big", "bigg", "Bigg", "bigl", "bigr", "Bigl", "Bigr",
+          "biggl", "biggr", "displaystyle", "textstyle", "scriptstyle", "limits", "nolimits"}
+
+
+class _TexText:
+    """Recursive reader of a TeX maths string; :meth:`read` returns its readable text."""
+
+    def __init__(self, tex: str, macros: dict[str, str]):
+        self.s, self.i, self.macros, self.depth = tex, 0, macros, 0
+
+    def read(self, stop: str = "") -> str:
+        out = []
+        while self.i < len(self.s) and self.s[self.i] not in stop:
+            c = self.s[self.i]
+            if c in "^_":
+                self.i += 1
+                out.append(script_text(self.atom(), c))
+            elif c == "&":
+                self.i += 1
+                out.append(" ")
+            elif c == "~" or c.isspace():  # the source's spacing, collapsed at the end
+                self.i += 1
+                out.append(" ")
+            else:
+                out.append(self.atom())
+        return "".join(out)
+
+    def atom(self) -> str:
+        """One group, command (with its arguments) or character."""
+        while self.i < len(self.s) and self.s[self.i] == " ":
+            self.i += 1
+        if self.i >= len(self.s):
+            return ""
+        c = self.s[self.i]
+        if c == "{":
+            self.i += 1
+            text = self.read("}")
+            self.i += 1
+            return text
+        if c != "\\":
+            self.i += 1
+            return "−" if c == "-" else c
+        m = re.match(r"\\([a-zA-Z]+)", self.s[self.i:])
+        if not m:
+            self.i += 2
+            return _ESCAPES.get(self.s[self.i - 1:self.i], self.s[self.i - 1:self.i])
+        self.i += m.end()
+        return self.command(m.group(1))
+
+    def command(self, name: str) -> str:
+        if name in self.macros and self.depth < 10:
+            inner = _TexText(self.macros[name], self.macros)
+            inner.depth = self.depth + 1
+            return inner.read()
+        if name == "mathbb":
+            arg = self.atom()
+            for prefix in ("", "MATHEMATICAL "):
+                try:
+                    return "".join(unicodedata.lookup(f"{prefix}DOUBLE-STRUCK CAPITAL {a}") for a in arg)
+                except KeyError:
+                    continue
+            return arg
+        if name in _FONTS:
+            return self.atom()
+        if name in _ACCENTS:
+            return self.atom() + _ACCENTS[name]
+        if name in ("frac", "dfrac", "tfrac"):
+            num, den = self.atom(), self.atom()
+            wrap = lambda t: t if len(t) <= 1 or t.isalnum() else f"({t})"  # noqa: E731
+            return f"{wrap(num)}/{wrap(den)}"
+        if name == "sqrt":
+            if self.s.startswith("[", self.i):
+                self.i = self.s.index("]", self.i) + 1
+            arg = self.atom()
+            return f"√{arg}" if len(arg) <= 1 else f"√({arg})"
+        if name in ("begin", "end"):
+            self.atom()
+            return " " if name == "end" else ""
+        if name in _SIZES:
+            return ""
+        return _SYMBOLS.get(name) or _greek(name) or name
+
+
+def tex_to_text(tex: str, macros: dict[str, str] | None = None) -> str:
+    """TeX maths as readable plain text: Greek letters and symbols in Unicode, sub- and
+    superscripts in Unicode where they exist, accents as combining marks, font commands
+    dropped. ``macros`` are the book's own (``mathjax3_config``), expanded first.
+
+    >>> tex_to_text(r"\\hat\\theta_k \\le \\|\\alpha_k(r)\\|_2, A^\\T", {"T": r"\\mathsf{T}"})
+    'θ̂ₖ ≤ ‖αₖ(r)‖₂, Aᵀ'
+    """
+    return re.sub(r"\\s+", " ", _TexText(tex, macros or {}).read()).strip()
+
+
+def _book_macros(config) -> dict[str, str]:
+    macros = ((getattr(config, "mathjax3_config", None) or {}).get("tex") or {}).get("macros") or {}
+    return {k: v if isinstance(v, str) else v[0] for k, v in macros.items()}
+
+
+def readable_text(node: nodes.Node, macros: dict[str, str]) -> str:
+    """The text of ``node`` with its maths as :func:`tex_to_text` (raw nodes left out, as
+    :func:`sphinx.util.nodes.clean_astext` does)."""
+    parts = []
+    for n in node.findall(lambda n: isinstance(n, (nodes.Text, nodes.math))):
+        if isinstance(n, nodes.math):
+            parts.append(tex_to_text(n.astext(), macros))
+        elif not any(isinstance(a, (nodes.math, nodes.raw)) for a in _ancestors(n, node)):
+            parts.append(n.astext())
+    return re.sub(r"\s+", " ", "".join(parts)).strip()
+
+
+def _ancestors(n: nodes.Node, top: nodes.Node):
+    n = n.parent
+    while n is not None and n is not top:
+        yield n
+        n = n.parent
+
+
+def _readable_section_labels(app: Sphinx, doctree) -> None:
+    """References to a heading with maths carry its readable text: the standard domain records a
+    heading's text for ``{ref}`` as the raw TeX of its maths ("The rule for \\\\lambda")."""
+    labels = app.env.get_domain("std").labels
+    macros = _book_macros(app.config)
+    docname = app.env.docname
+    for name, (doc, labelid, sectname) in list(labels.items()):
+        if doc != docname or not sectname:
+            continue
+        section = doctree.ids.get(labelid)
+        if not isinstance(section, nodes.section) or not any(section[0].findall(nodes.math)):
+            continue
+        if clean_astext(section[0]) == sectname:
+            labels[name] = (doc, labelid, readable_text(section[0], macros))
+
+
+def _alt_from_captions(app: Sphinx, doctree, docname: str) -> None:
+    """Every figure's image has its caption as alt text (Sphinx writes the file path when a
+    figure, such as myst-nb's, gives none)."""
+    macros = _book_macros(app.config)
+    for figure in doctree.findall(nodes.figure):
+        captions = [c for c in figure.findall(nodes.caption)]
+        text = readable_text(captions[0], macros) if captions else ""
+        for image in figure.findall(nodes.image):
+            if text and (not image.get("alt") or image.get("alt") == image.get("uri")):
+                image["alt"] = text
+
+
 def setup(app: Sphinx) -> dict[str, Any]:
     app.connect("env-before-read-docs", _drop_thebe_scripts, priority=900)
     app.connect("source-read", _generate_catalogue)
@@ -364,6 +578,8 @@ def setup(app: Sphinx) -> dict[str, Any]:
     pybtex.plugin.register_plugin("pybtex.style.formatting", "fdi_author_year", AuthorYearStyle)
     app.connect("build-finished", copy_mathjax)
     app.connect("doctree-resolved", _plain_status_words)
+    app.connect("doctree-resolved", _alt_from_captions)
+    app.connect("doctree-read", _readable_section_labels)
     app.connect("doctree-read", _record_proof_titles)
     app.connect("env-purge-doc", _purge_proof_titles)
     from sphinx_proof.domain import ProofIndex

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import base64
 import html
+import html.parser
 import io
 import itertools
 import json
@@ -196,9 +197,58 @@ class Explorable:
                             "labels": json.dumps(shown), "strides": json.dumps(list(self.strides))}
         return (f'<figure class="fdi-explorable" id="{uid}" data-frame="{start}">'
                 f'<div class="fdi-explorable-sliders">{sliders}</div>'
-                f'<img src="data:image/png;base64,{self.frames[start]}" alt="explorable figure" '
+                f'<img src="data:image/png;base64,{self.frames[start]}" '
+                f'alt="{html.escape(caption_text(self.caption), quote=True)}" '
                 f'style="max-width:100%;height:auto">'
                 f"<figcaption>{self.caption}</figcaption></figure><script>{script}</script>")
+
+
+#: Characters with a Unicode subscript ("_") or superscript ("^") form, and those forms.
+_SCRIPTS = {"_": ("0123456789+-=()aehijklmnoprstuvx", "₀₁₂₃₄₅₆₇₈₉₊₋₌₍₎ₐₑₕᵢⱼₖₗₘₙₒₚᵣₛₜᵤᵥₓ"),
+            "^": ("0123456789+-=()niT", "⁰¹²³⁴⁵⁶⁷⁸⁹⁺⁻⁼⁽⁾ⁿⁱᵀ")}
+
+
+def script_text(text: str, mark: str) -> str:
+    """``text`` as a subscript (``mark`` "_") or superscript ("^") in plain text: in Unicode
+    scripts where every character has one ("k" → "ₖ"), else after the mark ("_N", "_(k|k-1)").
+    Used for alt texts, here and by the book's extension (``_ext/fdi_book.py``)."""
+    plain, scripted = _SCRIPTS[mark]
+    text = text.replace("\u2212", "-")
+    if text and all(c in plain for c in text):
+        return text.translate(str.maketrans(plain, scripted))
+    return f"{mark}{text}" if len(text) == 1 else f"{mark}({text})"
+
+
+class _CaptionText(html.parser.HTMLParser):
+    """Collects the text of an HTML caption, ``<sub>``/``<sup>`` text by :func:`script_text`."""
+
+    def __init__(self):
+        super().__init__(convert_charrefs=True)
+        self.parts: list[str] = []
+        self.open: list[str] = []
+
+    def handle_starttag(self, tag, attrs):
+        self.open.append(tag)
+
+    def handle_endtag(self, tag):
+        if tag in self.open:
+            del self.open[len(self.open) - 1 - self.open[::-1].index(tag)]
+
+    def handle_data(self, data):
+        kind = next((t for t in reversed(self.open) if t in ("sub", "sup")), None)
+        self.parts.append(data if kind is None else script_text(data, "_" if kind == "sub" else "^"))
+
+
+def caption_text(caption: str) -> str:
+    """The plain text of an HTML caption, for the image's alt text.
+
+    >>> caption_text("GLR l<sub>k</sub> &amp; <i>w</i> = 100")
+    'GLR lₖ & w = 100'
+    """
+    parser = _CaptionText()
+    parser.feed(caption)
+    parser.close()
+    return " ".join("".join(parser.parts).split())
 
 
 def _fmt(v: Any) -> str:

@@ -6,6 +6,10 @@ by the ``playwright`` Python package, which downloads no browser), served by a l
 recorded. One page is also opened from ``file://``. Fails on:
 
 - ``math``: unrendered TeX (``\\(``, ``\\[``, ``$$``) left in the visible text, or no MathJax;
+- ``macro``: a raw TeX macro (``\\lambda``: a backslash and two letters or more) in the visible
+  text outside maths (a link to a heading with maths, a title written in TeX);
+- ``alt``: an image in the text whose alt text is empty, a file name or path, or raw TeX (it
+  must say what the figure shows: its caption);
 - ``network``: any attempted request to a non-local host;
 - ``image``: an image that fails to load;
 - ``console``: any console error or uncaught page error;
@@ -79,6 +83,19 @@ PAGE_CHECKS_JS = r"""
       out.push(['math', describe(n.parentElement), t.slice(Math.max(0, i - 20), i + 50).replace(/\s+/g, ' ')]);
     }
   }
+  // 1b. a raw TeX macro (\\lambda) in visible text outside maths: MathJax's output and the
+  // unrendered \\( \\) left to check 1 are excluded
+  const macro = /\\[a-zA-Z]{2,}/;
+  const walker2 = document.createTreeWalker(document.body, NodeFilter.SHOW_TEXT, {
+    acceptNode: (n) => (n.parentElement.closest('pre, code, script, style, mjx-container, textarea, .highlight, .math')
+      ? NodeFilter.FILTER_REJECT : NodeFilter.FILTER_ACCEPT)});
+  for (let n = walker2.nextNode(); n; n = walker2.nextNode()) {
+    const t = n.nodeValue, m = t.match(macro);
+    if (m && !/\\\(|\\\[|\$\$/.test(t) && n.parentElement.offsetParent !== null) {
+      const i = t.indexOf(m[0]);
+      out.push(['macro', describe(n.parentElement), t.slice(Math.max(0, i - 30), i + 40).replace(/\s+/g, ' ')]);
+    }
+  }
   const mathNodes = document.querySelectorAll('.math, span.math, div.math').length;
   if (mathNodes > 0 && document.querySelectorAll('mjx-container').length === 0) {
     out.push(['math', 'document', `${mathNodes} math elements but MathJax rendered none`]);
@@ -89,6 +106,17 @@ PAGE_CHECKS_JS = r"""
     if (!img.complete || img.naturalWidth === 0) {
       out.push(['image', describe(img), `not loaded: ${img.getAttribute('src')}`]);
     }
+  }
+
+  // 2b. alt text: every image in the text has one, neither empty, nor a file name or path,
+  // nor raw TeX
+  for (const img of article.querySelectorAll('img')) {
+    const alt = (img.getAttribute('alt') || '').trim();
+    const src = img.getAttribute('src') || '';
+    if (!alt) out.push(['alt', describe(img), 'image without alt text']);
+    else if (alt === src || /^\S*\.(png|jpe?g|gif|svg|webp)$/i.test(alt) || alt.startsWith('data:'))
+      out.push(['alt', describe(img), `alt text is a file name: ${alt.slice(0, 60)}`]);
+    else if (macro.test(alt)) out.push(['alt', describe(img), `raw TeX in alt text: ${alt.slice(0, 60)}`]);
   }
 
   // 3. figures without a caption: every <figure>, and every image in a notebook output

@@ -1,0 +1,107 @@
+"""Maths as readable text in the built book (``_ext/fdi_book.py``, item 8): references to a heading
+with maths, the alt text of figures (from their captions, also the explorables'), and the
+catalogue's headings. The real-browser check of the whole book is ``tests/browser/check_book.py``
+(``macro`` and ``alt``)."""
+
+from __future__ import annotations
+
+import base64
+import importlib.util
+import io
+import re
+import sys
+from pathlib import Path
+
+import pytest
+
+from fdi_lib.explorables import caption_text, explorable, script_text
+from fdi_lib.plotting import figure
+from fdi_lib.reproduce import list_reproductions
+
+ROOT = Path(__file__).resolve().parents[1]
+_spec = importlib.util.spec_from_file_location("fdi_book_text_ext", ROOT / "_ext" / "fdi_book.py")
+EXT = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(EXT)
+MACROS = {"R": r"\mathbb{R}", "T": r"\mathsf{T}", "E": r"\mathbb{E}"}  # as _config.yml
+
+
+@pytest.mark.parametrize("tex, text", [
+    (r"\lambda", "λ"),
+    (r"\theta = [4, 0]", "θ = [4, 0]"),
+    (r"\hat\theta_j", "θ̂ⱼ"),
+    (r"\hat{r}", "r̂"),
+    (r"\|\alpha_k(r)\|_2", "‖αₖ(r)‖₂"),
+    (r"W_k \sim \mathcal N(0, Q_k)", "Wₖ ~ N(0, Qₖ)"),
+    (r"x \in \R^n, A^\T", "x ∈ ℝⁿ, Aᵀ"),
+    (r"\chi^2(2)", "χ²(2)"),
+    (r"C_k(r)^{-1}", "Cₖ(r)⁻¹"),
+    (r"X_{k|k-1}", "X_(k|k-1)"),          # no Unicode subscript for "|": written out
+    (r"l_N", "l_N"),
+    (r"\frac{1}{2}\,\sigma^2", "1/2 σ²"),
+    (r"N > 1", "N > 1"),
+    (r"\left( a \right) \foo", "( a ) foo"),  # an unknown command: its name, no backslash
+])
+def test_tex_to_text(tex, text):
+    assert EXT.tex_to_text(tex, MACROS) == text
+
+
+def test_script_text_and_caption_text():
+    assert script_text("k", "_") == "ₖ" and script_text("-1", "^") == "⁻¹"
+    assert script_text("N", "_") == "_N" and script_text("k|k", "_") == "_(k|k)"
+    assert caption_text("Spectral norms of Γ<sub>k</sub>(r) &amp; x<sup>2</sup>, <i>w</i>\n = 1") == \
+        "Spectral norms of Γₖ(r) & x², w = 1"
+
+
+def _frame(a, fig=None):
+    fig, ax = figure(fig=fig)
+    ax[0, 0].plot([0.0, 1.0], [0.0, a])
+    return fig
+
+
+def test_explorable_image_has_its_caption_as_alt_text():
+    page = explorable(_frame, {"a": (1.0, 2.0)}, caption='GLR l<sub>k</sub> for "w" &lt; 3')._repr_html_()
+    assert re.search(r'<img [^>]*alt="([^"]*)"', page).group(1) == "GLR lₖ for &quot;w&quot; &lt; 3"
+
+
+def test_catalogue_titles_are_written_in_maths():
+    assert EXT.title_markdown("Spectral norm of Willsky-Jones alpha_k(r), GLR l_k, theta = [4, 0], "
+                              "dG0(1), Set(P, p), r = 1") == \
+        r"Spectral norm of Willsky-Jones $\alpha_k(r)$, GLR $l_k$, $\theta$ = [4, 0], dG0(1), Set(P, p), r = 1"
+    greek = re.compile(r"\b(?:" + "|".join(EXT._GREEK + [g.title() for g in EXT._GREEK]) + r")\b")
+    for r in list_reproductions():
+        text = re.sub(r"\$[^$]*\$", "", EXT.title_markdown(r.title))  # what is left outside maths
+        assert not re.search(r"[A-Za-z]_\w", text) and not greek.search(text), (r.id, text)
+
+
+# a 1x1 PNG
+_PNG = base64.b64decode("iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAAAAAA6fptVAAAACklEQVR4nGP4DwABAQEAG1o0oAAAAABJRU5ErkJggg==")
+
+
+def test_references_and_alt_texts_in_a_sphinx_build(tmp_path):
+    """A two-page project built with the extension: a ``{ref}`` to a heading with maths reads
+    "The rule for λ", and a figure without ``:alt:`` has its caption as alt text."""
+    from sphinx.application import Sphinx
+
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "conf.py").write_text(
+        "import sys\n"
+        f"sys.path.insert(0, {str(ROOT / '_ext')!r})\n"
+        "extensions = ['myst_parser', 'fdi_book']\n"
+        "myst_enable_extensions = ['dollarmath']\n"
+        f"mathjax3_config = {{'tex': {{'macros': {MACROS!r}}}}}\n")
+    (src / "fig.png").write_bytes(_PNG)
+    (src / "index.md").write_text(
+        "# Index\n\n```{toctree}\nother\n```\n\n(lambda-rule)=\n## The rule for $\\lambda$\n\n"
+        "```{figure} fig.png\n:name: fig-a\n\nInnovation $\\varepsilon_k$ and GLR $l_k$ for "
+        "$\\theta = [4, 0]$.\n```\n\n```{figure} fig.png\n:alt: own words\n\nKept.\n```\n")
+    (src / "other.md").write_text("# Other\n\nSee {ref}`lambda-rule`.\n")
+    warnings = io.StringIO()
+    app = Sphinx(str(src), str(src), str(tmp_path / "out"), str(tmp_path / "doctrees"), "xml",
+                 status=None, warning=warnings, freshenv=True)
+    app.build()
+    assert not warnings.getvalue()
+    other = (tmp_path / "out" / "other.xml").read_text()
+    assert "The rule for λ" in other and "\\lambda" not in other
+    alts = re.findall(r'<image alt="([^"]*)"', (tmp_path / "out" / "index.xml").read_text())
+    assert alts == ["Innovation εₖ and GLR lₖ for θ = [4, 0].", "own words"]
