@@ -39,7 +39,7 @@ from fdi_lib.errors import ModelError, NonFiniteError, ResourceError, ShapeError
 from fdi_lib.plotting import DISPLAY_DPI, smallest_font_pt
 from fdi_lib.widgets import render
 
-__all__ = ["Explorable", "explorable", "figure_data", "PALETTE_COLOURS", "MAX_FRAMES", "MAX_BYTES"]
+__all__ = ["Explorable", "explorable", "figure_data", "caption_text", "script_text", "PALETTE_COLOURS", "MAX_FRAMES", "MAX_BYTES"]
 
 #: Colours of the palette PNG of a frame (the house style uses a handful; 64 keeps antialiasing).
 PALETTE_COLOURS = 64
