@@ -288,6 +288,16 @@ def single_run(*, seed: int, kind: str = "input", fault: int = 1, delta: float |
                      threshold=float(threshold))
 
 
+def _onset_signatures(st: PipelineSetup, family: Any, onsets: np.ndarray) -> np.ndarray:
+    """Signatures on the innovation of ``family``'s profile at each onset, side by side (columns
+    ``j m .. j m + m - 1`` for ``onsets[j]``): one recursion for all of them, each column computed
+    as alone (the filter acts column-wise)."""
+    profiles = [family.profile(int(r)) for r in onsets]
+    return fault_signature(st.model, st.gains, FaultProfile(
+        Psi=np.concatenate([pr.Psi for pr in profiles], axis=-1),
+        Phi=np.concatenate([pr.Phi for pr in profiles], axis=-1))).on_innovation
+
+
 def onset_profile(run: SingleRun, *, fault: int = 1, columns: str = "both",
                   variant: str = "physical", state2_scale: float | None = None) -> dict[str, np.ndarray]:
     """GLR statistic and ``theta_hat`` of every candidate onset at the alarm of an input-fault run.
@@ -327,12 +337,7 @@ def onset_profile(run: SingleRun, *, fault: int = 1, columns: str = "both",
     onsets = np.arange(max(0, k - gp.WINDOW + 1), k)
     eps = run.innovations[:, None]
     m = fam.m
-    # every onset's profile side by side (columns j m .. j m + m - 1 for onsets[j]): one signature
-    # recursion for all of them, each column computed as alone (the filter acts column-wise)
-    profiles = [fam.profile(int(r)) for r in onsets]
-    sigs = fault_signature(st.model, st.gains, FaultProfile(
-        Psi=np.concatenate([pr.Psi for pr in profiles], axis=-1),
-        Phi=np.concatenate([pr.Phi for pr in profiles], axis=-1))).on_innovation
+    sigs = _onset_signatures(st, fam, onsets)
     stat, theta = [], []
     for j, r in enumerate(onsets):
         sig = sigs[:, :, j * m:(j + 1) * m]
@@ -754,13 +759,10 @@ def detection_chunk(seeds, *, fault: int, variant: str = "physical", schedule: s
         l2[ok] = minmax_statistic(C[ok], d[ok], [1])
         cos2[ok] = C[ok, 0, 1] ** 2 / (C[ok, 0, 0] * C[ok, 1, 1])
         info_alarm[ok] = C[ok]
-        # to the end of the record: the signature of each distinct onset estimate, all in one
-        # recursion (profiles side by side, as in onset_profile), then F, zeta per onset
+        # to the end of the record: the signature of each distinct onset estimate, then F, zeta
+        # per onset
         onsets = np.unique(onset_hat[ok])
-        profiles = [st.input_family.profile(int(r)) for r in onsets]
-        sigs = fault_signature(st.model, st.gains, FaultProfile(
-            Psi=np.concatenate([pr.Psi for pr in profiles], axis=-1),
-            Phi=np.concatenate([pr.Phi for pr in profiles], axis=-1))).on_innovation
+        sigs = _onset_signatures(st, st.input_family, onsets)
         for j, r in enumerate(onsets):
             sel = ok & (onset_hat == r)
             F, zeta = information(eps[sel], sigs[:, :, 2 * j:2 * j + 2], st.gains, int(r), st.model.n_steps)
