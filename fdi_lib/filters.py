@@ -36,7 +36,7 @@ from fdi_lib.models import LTVModel, as_record
 from fdi_lib.validation import (check_gains, check_missing_known, cholesky, common_pattern, gains_missing,
                                 initial_state, measurements, missing_pattern)
 
-__all__ = ["KalmanGains", "KalmanResult", "kalman_gains", "kalman_filter", "as_outputs"]
+__all__ = ["KalmanGains", "KalmanResult", "kalman_gains", "kalman_filter", "predictor_recursion", "as_outputs"]
 
 
 @dataclass(frozen=True)
@@ -200,27 +200,44 @@ def kalman_filter(model: LTVModel, y: Any, u: Any = None, *, gains: KalmanGains 
     -------
     KalmanResult
     """
-    N, n, l = model.n_steps, model.n, model.l
-    y_arr, missing = measurements(y, n_steps=N, width=model.p, name="y")
-    u_arr = as_record(u, n_steps=N, width=l, name="u")
-    batch = y_arr.shape[:-2]
+    y_arr, missing = measurements(y, n_steps=model.n_steps, width=model.p, name="y")
+    u_arr = as_record(u, n_steps=model.n_steps, width=model.l, name="u")
     if gains is None:
         g = kalman_gains(model, missing=common_pattern(missing, "y") if missing.any() else None)
     else:
         check_gains(model, gains)
         g = gains
     check_missing_known(missing, g, "y")
-    skip = gains_missing(g)
+    eps, xh, xf, upd = predictor_recursion(model, y_arr, u_arr, g.K, gains_missing(g), x0)
+    return KalmanResult(innovations=eps, x_pred=xh, x_filt=xf, updated_residuals=upd, gains=g)
+
+
+def predictor_recursion(model: LTVModel, y: np.ndarray, u: np.ndarray, K: np.ndarray,
+                        skip: np.ndarray, x0: Any = None
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The state recursion of the Kalman filter and of the Kitanidis filter (same form, each with
+    its own gains ``K``), over checked records.
+
+    ``eps_k = ybar_k - H_k Xhat_k``, ``Xfilt_k = Xhat_k + K_k eps_k``,
+    ``Xhat_{k+1} = F_k Xfilt_k + G_k u_k`` with ``ybar_k = y_k - J_k u_k``; at a sample marked in
+    ``skip`` (missing) there is no update (``K_k = 0``) and the innovation and updated residual are
+    NaN. ``y`` is ``(*batch, N, p)``, ``u`` ``(N, l)`` or ``(*batch, N, l)``.
+
+    Returns
+    -------
+    innovations, x_pred, x_filt, updated_residuals : numpy.ndarray
+        ``(*batch, N, p)``, ``(*batch, N + 1, n)``, ``(*batch, N, n)``, ``(*batch, N, p)``.
+    """
+    N, n = model.n_steps, model.n
+    batch = y.shape[:-2]
     any_skip = bool(skip.any())
     xh = np.empty((*batch, N + 1, n))
     xh[..., 0, :] = initial_state(model, x0)
-    eps = np.empty(y_arr.shape)
+    eps = np.empty(y.shape)
     xf = np.empty((*batch, N, n))
     # Known input contributions, computed for all k at once.
-    Gu = np.einsum("kij,...kj->...ki", model.G, u_arr)
-    Ju = np.einsum("kij,...kj->...ki", model.J, u_arr)
-    Gu = np.broadcast_to(Gu, (*batch, N, n))
-    ybar = y_arr - Ju
+    Gu = np.broadcast_to(np.einsum("kij,...kj->...ki", model.G, u), (*batch, N, n))
+    ybar = y - np.einsum("kij,...kj->...ki", model.J, u)
     for k in range(N):
         if any_skip and skip[k]:  # a missing sample: NaN innovation, no update (K_k = 0)
             eps[..., k, :] = np.nan
@@ -228,9 +245,9 @@ def kalman_filter(model: LTVModel, y: Any, u: Any = None, *, gains: KalmanGains 
         else:
             e = ybar[..., k, :] - xh[..., k, :] @ model.H[k].T
             eps[..., k, :] = e
-            xf[..., k, :] = xh[..., k, :] + e @ g.K[k].T
+            xf[..., k, :] = xh[..., k, :] + e @ K[k].T
         xh[..., k + 1, :] = xf[..., k, :] @ model.F[k].T + Gu[..., k, :]
     upd = ybar - np.einsum("kij,...kj->...ki", model.H, xf)
     if any_skip:
         upd = np.where(skip[:, None], np.nan, upd)
-    return KalmanResult(innovations=eps, x_pred=xh, x_filt=xf, updated_residuals=upd, gains=g)
+    return eps, xh, xf, upd

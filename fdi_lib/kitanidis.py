@@ -62,9 +62,10 @@ import numpy as np
 import scipy.linalg
 
 from fdi_lib.errors import NonFiniteError, RankConditionError, ShapeError
+from fdi_lib.filters import predictor_recursion
 from fdi_lib.models import FaultProfile, LTVModel, as_record, as_sequence
 from fdi_lib.validation import (array, check_finite, check_missing_known, cholesky, common_pattern,
-                                gains_missing, initial_state, measurements, missing_pattern)
+                                gains_missing, measurements, missing_pattern)
 
 __all__ = [
     "KitanidisGains",
@@ -311,29 +312,8 @@ def kitanidis_filter(model: LTVModel, y: Any, u: Any = None, E: Any = None, *,
     else:
         _check_gains(model, gains)
     check_missing_known(missing, gains, "y")
-    skip = gains_missing(gains)
-    any_skip = bool(skip.any())
-    batch = y_arr.shape[:-2]
-    N, n = model.n_steps, model.n
     u_arr = as_record(u, n_steps=model.n_steps, width=model.l, name="u")
-    Gu = np.broadcast_to(np.einsum("kij,...kj->...ki", model.G, u_arr), (*batch, N, n))
-    ybar = y_arr - np.einsum("kij,...kj->...ki", model.J, u_arr)
-    xp = np.empty((*batch, N + 1, n))
-    xf = np.empty((*batch, N, n))
-    eps = np.empty(y_arr.shape)
-    xp[..., 0, :] = initial_state(model, x0)
-    for k in range(N):
-        if any_skip and skip[k]:  # a missing sample: NaN innovation, no update (K_k = 0)
-            eps[..., k, :] = np.nan
-            xf[..., k, :] = xp[..., k, :]
-        else:
-            e = ybar[..., k, :] - xp[..., k, :] @ model.H[k].T
-            eps[..., k, :] = e
-            xf[..., k, :] = xp[..., k, :] + e @ gains.K[k].T
-        xp[..., k + 1, :] = xf[..., k, :] @ model.F[k].T + Gu[..., k, :]
-    res = ybar - np.einsum("kij,...kj->...ki", model.H, xf)
-    if any_skip:
-        res = np.where(skip[:, None], np.nan, res)
+    eps, xp, xf, res = predictor_recursion(model, y_arr, u_arr, gains.K, gains_missing(gains), x0)
     return KitanidisResult(residuals=res, x_filt=xf, x_pred=xp, innovations=eps, gains=gains)
 
 
