@@ -221,7 +221,22 @@ def predictor_recursion(model: LTVModel, y: np.ndarray, u: np.ndarray, K: np.nda
     ``eps_k = ybar_k - H_k Xhat_k``, ``Xfilt_k = Xhat_k + K_k eps_k``,
     ``Xhat_{k+1} = F_k Xfilt_k + G_k u_k`` with ``ybar_k = y_k - J_k u_k``; at a sample marked in
     ``skip`` (missing) there is no update (``K_k = 0``) and the innovation and updated residual are
-    NaN. ``y`` is ``(*batch, N, p)``, ``u`` ``(N, l)`` or ``(*batch, N, l)``.
+    NaN.
+
+    Parameters
+    ----------
+    model : LTVModel
+        The system (``F``, ``G``, ``H``, ``J`` per step).
+    y : numpy.ndarray
+        Checked measurements, ``(*batch, N, p)``.
+    u : numpy.ndarray
+        Checked inputs, ``(N, l)`` or ``(*batch, N, l)``.
+    K : numpy.ndarray
+        Gains ``(N, n, p)`` of the filter.
+    skip : numpy.ndarray
+        Boolean ``(N,)``: the samples the gains treat as missing.
+    x0 : array_like, optional
+        Initial prediction ``Xhat_0``; default ``model.x0``.
 
     Returns
     -------
