@@ -30,12 +30,24 @@
    its caption (Sphinx would otherwise write the image's file path). :func:`tex_to_text` does
    the conversion; the catalogue's headings (from the registry's ASCII titles, "Gamma_k") are
    written in real maths by :func:`title_markdown`.
+9. Lighter pages (issue 23): no Font Awesome script (1.5 MB on every page; the theme's own
+   Font Awesome stylesheet and web font draw the icons: ``templates/layout.html`` with the
+   filter :func:`without_script`), and MathJax only on pages with maths of their own
+   (:func:`_mathjax_where_needed`; Sphinx also loads it on the root page because its toctree
+   includes pages with maths).
+10. Hover previews offline (sphinx-tippy): tippy.js and Popper are served from the build
+   (``static/vendor/tippy``, committed with their licences; ``_config.yml`` ``tippy_js``), the
+   maths of a preview is typeset by ``static/fdi-previews.js`` (loading MathJax on demand on a
+   page without maths: :func:`_mathjax_where_needed` gives it the address and configuration)
+   and styled by ``static/fdi-previews.css``; a preview holds no script or slider
+   (:func:`preview_html`).
 """
 
 from __future__ import annotations
 
 import importlib.util
 import inspect
+import json
 import re
 import shutil
 import unicodedata
@@ -43,12 +55,14 @@ from pathlib import Path
 from typing import Any
 
 from docutils import nodes
+from markupsafe import Markup
 
 import pybtex.plugin
 from pybtex.richtext import Text
 from pybtex.style.formatting.plain import Style as PlainStyle
 from pybtex.style.labels import BaseLabelStyle
 from sphinx.application import Sphinx
+from sphinx.errors import ExtensionError
 from sphinx.util import logging
 from sphinx.util.nodes import clean_astext
 
@@ -569,6 +583,104 @@ def _alt_from_captions(app: Sphinx, doctree, docname: str) -> None:
                 image["alt"] = text
 
 
+# --- 9. Lighter pages; 10. hover previews offline ------------------------------------------
+EXT_DIR = Path(__file__).resolve().parent
+PREVIEWS_JS = "fdi-previews.js"
+PREVIEWS_CSS = "fdi-previews.css"
+TIPPY_JS_PREFIX = "vendor/tippy/"
+
+
+def _add_ext_paths(app: Sphinx, config) -> None:
+    """This extension's templates (the layout without the Font Awesome script) and static files
+    (tippy.js, Popper, the previews script), which the build copies to ``_static``. They live
+    here, not in the book's ``_static``, where Jupyter Book adds every script to every page."""
+    config.templates_path = [*config.templates_path, str(EXT_DIR / "templates")]
+    config.html_static_path = [*config.html_static_path, str(EXT_DIR / "static")]
+
+
+def without_script(html: str, name: str) -> Markup:
+    """``html`` without its ``<script src=...name...>`` tag (a Jinja filter of the layout).
+
+    Raises :class:`~sphinx.errors.ExtensionError` when there is no such tag: the theme has
+    changed how it loads the script, and ``templates/layout.html`` must follow."""
+    tag = re.compile(r"\s*<script\b[^>]*\bsrc=\"[^\"]*" + re.escape(name) + r"[^\"]*\"[^>]*>\s*</script>")
+    out, count = tag.subn("", str(html))
+    if count == 0:
+        raise ExtensionError(f"fdi_book: the theme's page head has no <script> for {name!r} to drop; "
+                             "update _ext/templates/layout.html")
+    return Markup(out)
+
+
+def _register_filters(app: Sphinx) -> None:
+    environment = getattr(getattr(app.builder, "templates", None), "environment", None)
+    if environment is not None:
+        environment.filters["fdi_without_script"] = without_script
+
+
+def _static_name(js) -> str:
+    """A page script's path under ``_static`` (the builder stores ``_static/NAME``)."""
+    return str(js.filename or "").removeprefix("_static/")
+
+
+def _has_previews(scripts) -> bool:
+    return any(_static_name(js).startswith(TIPPY_JS_PREFIX) for js in scripts)
+
+
+def _mathjax_where_needed(app: Sphinx, pagename: str, templatename: str, context: dict,
+                          doctree) -> None:
+    """MathJax (1.2 MB with its fonts) only on a page with maths of its own.
+
+    Sphinx's test also counts the maths of the pages a page's toctree includes (for the
+    single-page builder), so the root page, whose toctree is the whole book, loads MathJax for
+    none. Here a page without maths of its own loses MathJax's scripts; if it has previews,
+    ``window.fdiMathJax`` tells ``fdi-previews.js`` where MathJax is and how the book configures
+    it, to load it when a preview with maths is first shown."""
+    if app.builder.format != "html" or "script_files" not in context:
+        return
+    if app.env.get_domain("math").data["has_equations"].get(pagename, False):
+        return
+    scripts = context["script_files"]
+
+    def is_mathjax(js) -> bool:
+        return (_static_name(js) == app.config.mathjax_path
+                or str(js.attributes.get("body", "")).startswith("window.MathJax"))
+
+    scripts[:] = [js for js in scripts if not is_mathjax(js)]
+    if _has_previews(scripts):
+        lazy = {"src": context["pathto"](f"_static/{app.config.mathjax_path}", 1),
+                "config": app.config.mathjax3_config or {}}
+        app.builder.add_js_file("", body=f"window.fdiMathJax = {json.dumps(lazy)}")
+
+
+def _add_previews_script(app: Sphinx, pagename: str, templatename: str, context: dict,
+                         doctree) -> None:
+    """``fdi-previews.js`` (after tippy.js) and ``fdi-previews.css`` on every page that
+    sphinx-tippy gives previews."""
+    if app.builder.format == "html" and _has_previews(context.get("script_files", [])):
+        app.builder.add_js_file(PREVIEWS_JS, defer="defer")
+        app.builder.add_css_file(PREVIEWS_CSS)
+
+
+def preview_html(html: str) -> str:
+    """A preview's HTML without what only works on its own page: scripts (an explorable's
+    holds all its frames, megabytes), sliders and permalink anchors; the image stays."""
+    from bs4 import BeautifulSoup
+
+    soup = BeautifulSoup(html, "html.parser")
+    for tag in soup.select("script, .fdi-explorable-sliders, a.headerlink"):
+        tag.decompose()
+    return str(soup)
+
+
+def _lighter_previews(app: Sphinx, exception: Exception | None) -> None:
+    """Applies :func:`preview_html` to every preview before sphinx-tippy writes them (its
+    ``build-finished`` handler runs at the default priority, after this one)."""
+    if exception is not None or app.builder.format != "html":
+        return
+    for page in getattr(app.env, "tippy_data", {}).get("pages", {}).values():
+        page["id_to_html"] = {key: preview_html(html) for key, html in page["id_to_html"].items()}
+
+
 def setup(app: Sphinx) -> dict[str, Any]:
     app.connect("env-before-read-docs", _drop_thebe_scripts, priority=900)
     app.connect("source-read", _generate_catalogue)
@@ -577,6 +689,12 @@ def setup(app: Sphinx) -> dict[str, Any]:
     pybtex.plugin.register_plugin("pybtex.style.labels", "fdi_author_year", AuthorYearLabelStyle)
     pybtex.plugin.register_plugin("pybtex.style.formatting", "fdi_author_year", AuthorYearStyle)
     app.connect("build-finished", copy_mathjax)
+    app.connect("config-inited", _add_ext_paths)
+    app.connect("builder-inited", _register_filters)
+    # after Sphinx's MathJax (500) and sphinx-tippy's scripts (450)
+    app.connect("html-page-context", _mathjax_where_needed, priority=600)
+    app.connect("html-page-context", _add_previews_script, priority=600)
+    app.connect("build-finished", _lighter_previews, priority=400)
     app.connect("doctree-resolved", _plain_status_words)
     app.connect("doctree-resolved", _alt_from_captions)
     app.connect("doctree-read", _readable_section_labels)

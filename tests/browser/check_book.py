@@ -300,6 +300,14 @@ def built_book(html: Path) -> Path | None:
     return root
 
 
+def book_pages(root: Path) -> list[str]:
+    """Every page of the built book at ``root`` (paths relative to it), but redirects (Jupyter
+    Book's root index.html only redirects to the first page) and the asset folders."""
+    return sorted(p.relative_to(root).as_posix() for p in root.rglob("*.html")
+                  if not SKIP_DIRS & set(p.relative_to(root).parts[:-1])
+                  and 'http-equiv="Refresh"' not in p.read_text(errors="replace")[:2000])
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--html", default="_build/html", type=Path)
@@ -312,10 +320,7 @@ def main(argv: list[str] | None = None) -> int:
     root = built_book(args.html)
     if root is None:
         return 2
-    # every page but redirects (Jupyter Book's root index.html only redirects to the first page)
-    pages = sorted(p.relative_to(root).as_posix() for p in root.rglob("*.html")
-                   if not SKIP_DIRS & set(p.relative_to(root).parts[:-1])
-                   and 'http-equiv="Refresh"' not in p.read_text(errors="replace")[:2000])
+    pages = book_pages(root)
     if args.pages:
         pages = [p for p in pages if p in args.pages]
     args.screenshots.mkdir(parents=True, exist_ok=True)

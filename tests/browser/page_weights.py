@@ -1,0 +1,164 @@
+"""What each page of the built book loads, measured in a real browser (``make browser-test``;
+also used by ``tools/build_report.py`` for the status page's table after ``make book``).
+
+Every page is opened in headless Chromium as ``check_book.py`` opens it (served by a local
+``http.server``, every request to another host blocked), in a fresh browser context (an empty
+cache: what a first visit loads), at 1280 px. Once the page has loaded, MathJax has finished and
+every image (lazy ones too) is loaded, and the network has been idle for half a second, the
+weight of the page is the sum of the sizes of every file it requested: the HTML, scripts,
+stylesheets, fonts and images (``data:`` images are inside the HTML). The local server sends
+files as they are on disk (no compression), so a file's size is what it transfers; a web server
+that compresses would send less (MathJax's scripts by about 3x, PNG images not at all).
+
+Fails (exit status 1) on:
+
+- ``weight``: a page that loads more than :data:`PAGE_BUDGET_MB`;
+- ``mathjax``: a page that loads MathJax but has no maths (no ``.math`` element);
+- ``fontawesome``: a page that loads the theme's 1.5 MB Font Awesome script (the icons come
+  from the theme's Font Awesome stylesheet and font).
+
+Usage: ``python tests/browser/page_weights.py [--html _build/html] [--pages ...] [--json FILE]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import urllib.parse
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from check_book import (CHROMIUM, CHROMIUM_ARGS, VIEWPORTS, WAIT_MATHJAX_JS, book_pages,  # noqa: E402
+                        built_book, is_local, serve)
+
+#: Most bytes a page may load on a first visit (HTML and every asset). The heaviest chapters
+#: load about 3.6 MB since issue 23 (4.2-6.2 MB before: 1.5 MB of them a Font Awesome script).
+PAGE_BUDGET_MB = 4.0
+
+MATHJAX_ENTRY = "mathjax/tex-chtml.js"
+FONTAWESOME_JS = "scripts/fontawesome.js"
+
+_LOAD_ALL_IMAGES_JS = ("() => Promise.all(Array.from(document.images).map(i => { i.loading = 'eager';"
+                       " return i.decode().catch(() => null); }))")
+
+
+def _kind(path: str, resource_type: str) -> str:
+    suffix = Path(path).suffix.lower()
+    if resource_type == "document" or suffix == ".html":
+        return "html"
+    if suffix in {".woff", ".woff2", ".ttf", ".otf"}:
+        return "font"
+    if suffix in {".png", ".jpg", ".jpeg", ".gif", ".svg", ".webp", ".ico"}:
+        return "image"
+    return {".js": "script", ".css": "stylesheet"}.get(suffix, "other")
+
+
+def measure_page(browser, base: str, root: Path, name: str) -> dict:
+    """What the page ``name`` (a path under ``root``) loads on a first visit.
+
+    Returns
+    -------
+    dict
+        ``page``, ``bytes`` (total), ``by_kind`` (html, script, stylesheet, font, image,
+        other: bytes), ``assets`` (``[path, bytes]`` of every file, largest first),
+        ``has_math`` (the page has a ``.math`` element).
+    """
+    context = browser.new_context(viewport=VIEWPORTS["1280"], device_scale_factor=1,
+                                  service_workers="block")
+    requested: dict[str, str] = {}
+    # another host is never asked (check_book.py reports such requests)
+    context.route("**/*", lambda r: r.continue_() if is_local(r.request.url, base) else r.abort("blockedbyclient"))
+    page = context.new_page()
+    last = [time.monotonic()]
+
+    def on_request(r):
+        last[0] = time.monotonic()
+        if r.url.startswith(base):
+            requested.setdefault(r.url, r.resource_type)
+
+    page.on("request", on_request)
+    page.goto(base + name, wait_until="load")
+    page.evaluate(WAIT_MATHJAX_JS)
+    page.evaluate(_LOAD_ALL_IMAGES_JS)
+    # no request for half a second (MathJax asks for its fonts after typesetting), at most 10 s
+    start = time.monotonic()
+    while time.monotonic() - last[0] < 0.5 and time.monotonic() - start < 10:
+        page.wait_for_timeout(100)
+    has_math = page.evaluate("() => document.querySelector('article .math, article mjx-container') !== null")
+    context.close()
+    assets: dict[str, int] = {}
+    for url, resource_type in requested.items():
+        path = urllib.parse.unquote(urllib.parse.urlsplit(url).path).lstrip("/")
+        file = root / path
+        if file.is_file():
+            assets[path] = file.stat().st_size
+    by_kind: dict[str, int] = {}
+    for path, size in assets.items():
+        kind = _kind(path, requested.get(base + path, ""))
+        by_kind[kind] = by_kind.get(kind, 0) + size
+    return {"page": name, "bytes": sum(assets.values()), "by_kind": by_kind,
+            "assets": sorted(([p, s] for p, s in assets.items()), key=lambda a: -a[1]),
+            "has_math": has_math}
+
+
+def measure(root: Path, pages: list[str]) -> list[dict]:
+    """:func:`measure_page` for each page, in one headless Chromium."""
+    from playwright.sync_api import sync_playwright
+
+    server, base = serve(root)
+    try:
+        with sync_playwright() as pw:
+            browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True)
+            out = []
+            for name in pages:
+                out.append(measure_page(browser, base, root, name))
+                print(f"  measured {name}: {out[-1]['bytes'] / 1e6:.2f} MB", file=sys.stderr, flush=True)
+            browser.close()
+    finally:
+        server.shutdown()
+    return out
+
+
+def failures(weights: list[dict], budget_mb: float = PAGE_BUDGET_MB) -> list[tuple[str, str, str]]:
+    """``(page, check, detail)`` for every page over budget, with MathJax but no maths, or with
+    the Font Awesome script."""
+    out = []
+    for w in weights:
+        loaded = {path for path, _ in w["assets"]}
+        if w["bytes"] > budget_mb * 1e6:
+            top = ", ".join(f"{Path(p).name} {s / 1e6:.2f} MB" for p, s in w["assets"][:3])
+            out.append((w["page"], "weight", f"{w['bytes'] / 1e6:.2f} MB > {budget_mb:g} MB ({top})"))
+        if any(p.endswith(MATHJAX_ENTRY) for p in loaded) and not w["has_math"]:
+            out.append((w["page"], "mathjax", "loads MathJax but has no maths"))
+        if any(p.endswith(FONTAWESOME_JS) for p in loaded):
+            out.append((w["page"], "fontawesome", f"loads {FONTAWESOME_JS}"))
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--html", default="_build/html", type=Path)
+    parser.add_argument("--pages", nargs="*", help="only these pages (paths relative to --html)")
+    parser.add_argument("--json", type=Path, help="write the measured weights there")
+    args = parser.parse_args(argv)
+    root = built_book(args.html)
+    if root is None:
+        return 2
+    pages = [p for p in book_pages(root) if not args.pages or p in args.pages]
+    weights = measure(root, pages)
+    for w in weights:
+        top = ", ".join(f"{Path(p).name} {s / 1e6:.2f}" for p, s in w["assets"][:3])
+        print(f"  {w['bytes'] / 1e6:6.2f} MB  {w['page']:45s} ({top})")
+    if args.json:
+        args.json.write_text(json.dumps(weights, indent=1))
+    found = failures(weights)
+    for page, check, detail in found:
+        print(f"{page} | {check} | {detail}")
+    print(f"{len(weights)} pages: {len(found)} failures (budget {PAGE_BUDGET_MB:g} MB a page)")
+    return 1 if found else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,157 @@
+"""What the book's pages load (``_ext/fdi_book.py``, items 9 and 10; issue 23): no Font Awesome
+script, MathJax only on pages with maths of their own, hover previews served from the build with
+a lazy MathJax, previews without scripts; and the post-build report of ``make book``
+(``tools/build_report.py``). The real-browser checks of the whole book are
+``tests/browser/check_previews.py`` and ``tests/browser/page_weights.py``."""
+
+from __future__ import annotations
+
+import importlib.util
+import io
+import json
+import re
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _load(name: str, path: Path):
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+EXT = _load("fdi_book_assets_ext", ROOT / "_ext" / "fdi_book.py")
+REPORT = _load("fdi_build_report", ROOT / "tools" / "build_report.py")
+
+
+def _scripts(html: str) -> list[str]:
+    return re.findall(r'<script[^>]*\bsrc="([^"]+)"', html)
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory) -> Path:
+    """A three-page book with the book's theme, sphinx-tippy and this extension, configured as
+    ``_config.yml`` does: the root page has no maths of its own but its toctree includes a page
+    with maths (Sphinx would load MathJax on it); ``other`` has an equation and a figure with a
+    script in it; ``plain`` refers to both."""
+    import yaml
+    from sphinx.application import Sphinx
+
+    config = yaml.safe_load((ROOT / "_config.yml").read_text())["sphinx"]["config"]
+    tippy = {k: v for k, v in config.items() if k.startswith("tippy_")}
+    tmp = tmp_path_factory.mktemp("book")
+    src = tmp / "src"
+    src.mkdir()
+    (src / "conf.py").write_text(
+        "import sys\n"
+        f"sys.path.insert(0, {str(ROOT / '_ext')!r})\n"
+        "extensions = ['myst_parser', 'sphinx_tippy', 'fdi_book']\n"
+        "html_theme = 'sphinx_book_theme'\n"
+        "myst_enable_extensions = ['dollarmath', 'amsmath']\n"
+        f"mathjax_path = {config['mathjax_path']!r}\n"
+        f"mathjax3_config = {config['mathjax3_config']!r}\n"
+        + "".join(f"{k} = {v!r}\n" for k, v in tippy.items()))
+    (src / "index.md").write_text("# Index\n\n```{toctree}\nother\nplain\n```\n\nNo maths here.\n")
+    (src / "other.md").write_text(
+        "# Other\n\n$$\nx_k \\in \\R^n\n$$ (eq-x)\n\n"
+        "````{admonition} Live $y$\n:name: fig-live\n\n```{raw} html\n<img src=\"data:image/png;base64,AAAA\" "
+        "alt=\"a\"><script>var frames = ['MANY-FRAMES'];</script>\n```\n````\n")
+    (src / "plain.md").write_text("# Plain\n\nSee {eq}`eq-x` and\n<a href=\"other.html#fig-live\">the live "
+                                  "figure</a>.\n")
+    warnings = io.StringIO()
+    app = Sphinx(str(src), str(src), str(tmp / "out"), str(tmp / "doctrees"), "html",
+                 status=None, warning=warnings, freshenv=True)
+    app.build()
+    assert not warnings.getvalue()
+    return tmp / "out"
+
+
+def test_no_font_awesome_script(built):
+    for page in ("index.html", "other.html", "plain.html"):
+        html = (built / page).read_text()
+        assert not [s for s in _scripts(html) if "fontawesome" in s], page
+        # the theme's stylesheet (with Font Awesome's CSS and web font) still draws the icons
+        assert "styles/pydata-sphinx-theme.css" in html and 'class="fa-solid fa-bars"' in html
+
+
+def test_mathjax_only_on_pages_with_maths(built):
+    other, index = (built / "other.html").read_text(), (built / "index.html").read_text()
+    assert [s for s in _scripts(other) if s.endswith("mathjax/tex-chtml.js")]
+    assert "window.fdiMathJax" not in other
+    for page in ("index.html", "plain.html"):
+        html = (built / page).read_text()
+        assert not [s for s in _scripts(html) if "mathjax" in s], page
+        assert "window.MathJax" not in html, page
+        # the previews' MathJax, loaded on demand: where it is, and the book's macros
+        lazy = json.loads(re.search(r"window\.fdiMathJax = (\{.*?\})</script>", html).group(1))
+        assert lazy["src"].endswith("mathjax/tex-chtml.js")
+        assert lazy["config"]["tex"]["macros"]["R"] == "\\mathbb{R}"
+    assert 'src="_static/../mathjax/tex-chtml.js"' not in index
+
+
+def test_previews_are_served_from_the_build(built):
+    html = (built / "plain.html").read_text()
+    scripts = _scripts(html)
+    assert not [s for s in scripts if s.startswith(("http:", "https:", "//"))]
+    names = [s.split("?")[0].rsplit("/", 1)[-1] for s in scripts]
+    tippy_at = names.index("tippy-bundle.umd.min.js")
+    assert names.index("popper.min.js") < tippy_at < names.index("fdi-previews.js")
+    for name in ("popper.min.js", "tippy-bundle.umd.min.js"):
+        assert (built / "_static" / "vendor" / "tippy" / name).stat().st_size > 10_000
+    assert (built / "_static" / "fdi-previews.js").is_file()
+    assert "_static/fdi-previews.css" in html
+
+
+def test_previews_hold_the_target_without_its_scripts(built):
+    tips = next((built / "_static" / "tippy").glob("plain.*.js")).read_text()
+    assert 'a[href=\\"other.html#equation-eq-x\\"]' in tips and "x_k \\\\in \\\\R^n" in tips
+    assert 'a[href=\\"other.html#fig-live\\"]' in tips and "Live" in tips
+    assert "MANY-FRAMES" not in tips and "<script" not in tips
+
+
+def test_preview_html_drops_scripts_sliders_and_permalinks():
+    html = ('<figure class="fdi-explorable" id="f"><div class="fdi-explorable-sliders"><input type="range">'
+            '</div><img src="data:image/png;base64,AAAA" alt="x"><script>var F = [1, 2];</script>'
+            '<figcaption>Caption <a class="headerlink" href="#f">#</a></figcaption></figure>')
+    out = EXT.preview_html(html)
+    assert "<script" not in out and "range" not in out and "headerlink" not in out
+    assert '<img alt="x" src="data:image/png;base64,AAAA"/>' in out and "Caption" in out
+
+
+def test_without_script_drops_one_tag_and_fails_when_there_is_none():
+    head = ('<link href="a.css" rel="stylesheet" />\n  <script defer src="../_static/scripts/fontawesome.js'
+            '?digest=55c"></script>\n  <link rel="preload" as="script" href="b.js" />')
+    out = EXT.without_script(head, "scripts/fontawesome.js")
+    assert "fontawesome" not in out and 'href="a.css"' in out and 'href="b.js"' in out
+    with pytest.raises(EXT.ExtensionError, match="fontawesome"):
+        EXT.without_script(out, "scripts/fontawesome.js")
+
+
+def test_execution_times_from_the_build_log():
+    log = (f"{ROOT}/book/zb2014/glr.md: Executing notebook using local CWD [mystnb]\n"
+           f"{ROOT}/book/zb2014/glr.md: Executed notebook in 12.50 seconds [mystnb]\n"
+           f"{ROOT}/book/status.md: Using cached notebook: ID=3 [mystnb]\n"
+           f"{ROOT}/book/intro.md: Executed notebook in 0.75 seconds [mystnb]\n")
+    assert REPORT.execution_times(log, ROOT) == {"book/zb2014/glr.md": 12.5, "book/intro.md": 0.75}
+
+
+def test_inject_replaces_the_placeholder_only(tmp_path):
+    page = tmp_path / "status.html"
+    page.write_text('<p>a</p><div id="fdi-x"><p>Not filled in</p></div><!-- /fdi-x --><div>b</div>')
+    REPORT.inject(page, "fdi-x", "<div><table><tr><td>1 s</td></tr></table></div>")
+    REPORT.inject(page, "fdi-x", "<div><table><tr><td>2 s</td></tr></table></div>")  # again
+    assert page.read_text() == ('<p>a</p><div id="fdi-x"><div><table><tr><td>2 s</td></tr></table></div>'
+                                '</div><!-- /fdi-x --><div>b</div>')
+    with pytest.raises(SystemExit, match="fdi-y"):
+        REPORT.inject(page, "fdi-y", "")
+
+
+def test_status_page_has_the_placeholders():
+    text = (ROOT / "book" / "status.md").read_text()
+    for ident in ("fdi-build-time", "fdi-page-weights"):
+        assert re.search(rf'<div id="{ident}">.*?</div><!-- /{ident} -->', text, re.S), ident
