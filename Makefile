@@ -23,26 +23,29 @@ $(STAMP): requirements.lock pyproject.toml
 	$(BIN)/python -m ipykernel install --prefix $(VENV) --name python3 >/dev/null
 	touch $(STAMP)
 
+## Headless Chromium for the browser test and the page weights of `make book`: Debian's package.
+CHROMIUM := /usr/bin/chromium
+$(CHROMIUM):
+	apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium
+
 ## Build the whole book, every notebook executed; fails on any cell error or Sphinx warning.
 ## The build log drops two lines the kernels print that are not problems of the book: ipykernel's
 ## notice that a kernel talks to the build over local TCP without encryption, and the
 ## "KeyboardInterrupt caught in kernel" that jupyter_client's interrupt-before-shutdown causes
-## when a kernel is still finishing a message. It ends with the execution time of every chapter.
-## Reproductions run by the chapters are cached for this build only, for the claims ledger.
+## when a kernel is still finishing a message. Reproductions run by the chapters are cached for
+## this build only, for the claims ledger. Then tools/build_report.py prints the execution time
+## of every chapter and the wall time of the build, measures what each page loads (headless
+## Chromium, installed if absent as for the browser test) and writes both into the built status
+## page, which is executed before any page is written and cannot measure them itself.
 book: export FDI_RESULTS_CACHE := $(CURDIR)/_build/results-cache
-book: $(STAMP)
+book: BOOK_STARTED := $(shell date +%s)
+book: $(STAMP) $(CHROMIUM)
 	rm -rf _build/html _build/.doctrees _build/results-cache
 	mkdir -p _build
 	set -o pipefail; $(BIN)/jupyter-book build . --warningiserror --nitpick --keep-going --builder html 2>&1 \
 	  | sed -u -e '/Kernel is running over TCP without encryption/d' \
 	           -e '/KeyboardInterrupt caught in kernel/d' | tee _build.log
-	@awk -v root="$(CURDIR)/" '/: Executed notebook in [0-9.]+ seconds/ { \
-	    f = $$1; sub(/:$$/, "", f); sub(root, "", f); \
-	    for (i = 1; i < NF; i++) if ($$i == "in") t = $$(i + 1); \
-	    printf "  %-45s %8.1f s\n", f, t; total += t } \
-	  END { print "  ---------------------------------------------------------"; \
-	        printf "  %-45s %8.1f s (budget 120 s)\n", "total execution time", total }' _build.log \
-	  | { echo "Execution time per chapter:"; cat; }
+	$(BIN)/python tools/build_report.py --html _build/html --log _build.log --started $(BOOK_STARTED)
 	@echo "Book built: $(abspath _build/html/index.html)"
 
 ## Authoring mode: re-execute only the chapters whose text changed since the last book-fast
@@ -76,13 +79,15 @@ notebooks: $(STAMP)
 	@echo "Notebooks in $(abspath _build/notebooks)"
 
 ## Every page of the built book in headless Chromium (Debian's package, installed if absent),
-## at 1280 and 390 px, no network; screenshots in _build/screenshots/ (tests/browser/check_book.py).
-CHROMIUM := /usr/bin/chromium
-browser-test: $(STAMP)
+## at 1280 and 390 px, no network; screenshots in _build/screenshots/ (tests/browser/check_book.py);
+## hover previews (check_previews.py); what each page loads against the page budget
+## (page_weights.py).
+browser-test: $(STAMP) $(CHROMIUM)
 	@test -f _build/html/index.html || { echo "No built book: run make book first"; exit 2; }
-	test -x $(CHROMIUM) || { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium; }
 	$(BIN)/python tests/browser/check_book.py --html _build/html --screenshots _build/screenshots
 	$(BIN)/python tests/browser/check_explorables.py --html _build/html
+	$(BIN)/python tests/browser/check_previews.py --html _build/html
+	$(BIN)/python tests/browser/page_weights.py --html _build/html
 
 ## Post-build checks of what the built book claims (after `make book`, which leaves its results
 ## cache): every figure caption's verb ("reproduces" / "compare with") agrees with the claims ledger

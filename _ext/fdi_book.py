@@ -663,12 +663,17 @@ def _add_previews_script(app: Sphinx, pagename: str, templatename: str, context:
 
 def preview_html(html: str) -> str:
     """A preview's HTML without what only works on its own page: scripts (an explorable's
-    holds all its frames, megabytes), sliders and permalink anchors; the image stays."""
+    holds all its frames, megabytes), sliders and permalink anchors. Its images stay, loaded
+    lazily: tippy.js builds every preview of a page when the page loads, and an image file in
+    one would be fetched then, shown or not (a data: image is in the previews' script already)."""
     from bs4 import BeautifulSoup
 
     soup = BeautifulSoup(html, "html.parser")
     for tag in soup.select("script, .fdi-explorable-sliders, a.headerlink"):
         tag.decompose()
+    for img in soup.find_all("img"):
+        if not str(img.get("src", "")).startswith("data:"):
+            img["loading"] = "lazy"
     return str(soup)
 
 

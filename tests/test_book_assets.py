@@ -121,6 +121,9 @@ def test_preview_html_drops_scripts_sliders_and_permalinks():
     out = EXT.preview_html(html)
     assert "<script" not in out and "range" not in out and "headerlink" not in out
     assert '<img alt="x" src="data:image/png;base64,AAAA"/>' in out and "Caption" in out
+    # an image file is fetched only when its preview is shown
+    assert EXT.preview_html('<figure id="g"><img alt="y" src="../_images/g.png"/></figure>') == (
+        '<figure id="g"><img alt="y" loading="lazy" src="../_images/g.png"/></figure>')
 
 
 def test_without_script_drops_one_tag_and_fails_when_there_is_none():

@@ -41,6 +41,14 @@
     onCreate: function (instance) { instance.reference.removeAttribute("title"); },
     onMount: function (instance) {  // in the document: MathJax measures what it typesets
       const box = instance.popper;
+      // a figure's image loads (lazily) once shown: place the preview again when it has
+      box.querySelectorAll("img").forEach(function (img) {
+        if (!img.complete) {
+          img.addEventListener("load", function () {
+            if (instance.popperInstance) instance.popperInstance.update();
+          }, {once: true});
+        }
+      });
       if (box.dataset.fdiTypeset || !box.querySelector(".math")) return;
       const ready = mathJaxReady();
       if (!ready) return;

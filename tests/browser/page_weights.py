@@ -33,9 +33,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from check_book import (CHROMIUM, CHROMIUM_ARGS, VIEWPORTS, WAIT_MATHJAX_JS, book_pages,  # noqa: E402
                         built_book, is_local, serve)
 
-#: Most bytes a page may load on a first visit (HTML and every asset). The heaviest chapters
-#: load about 3.6 MB since issue 23 (4.2-6.2 MB before: 1.5 MB of them a Font Awesome script).
-PAGE_BUDGET_MB = 4.0
+#: Most bytes a page may load on a first visit (HTML and every asset). Issue 23 measured the
+#: chapters at 4.3-6.2 MB, 1.5 MB of them a Font Awesome script on every page; without it the
+#: heaviest chapter (its explorable frames inside the HTML) loads 4.8 MB. The build's status page
+#: shows every page's weight.
+PAGE_BUDGET_MB = 5.0
 
 MATHJAX_ENTRY = "mathjax/tex-chtml.js"
 FONTAWESOME_JS = "scripts/fontawesome.js"
