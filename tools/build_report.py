@@ -70,21 +70,41 @@ def times_html(times: dict[str, float], wall: float) -> str:
     return table(rows, ["time"], notes=notes, index_header="")._repr_html_()
 
 
+#: What a page's bytes are, the columns of the status page's table of page weights.
+PARTS = ("HTML", "MathJax", "images", "theme and scripts")
+
+
+def weight_parts(w: dict) -> dict[str, int]:
+    """A page's bytes by :data:`PARTS`: its HTML, MathJax (scripts and fonts), image files
+    (figures), and the rest (theme, icon font, search index, previews)."""
+    parts = dict.fromkeys(PARTS, 0)
+    for path, size in w["assets"]:
+        if path == w["page"]:
+            parts["HTML"] += size
+        elif path.startswith("mathjax/"):
+            parts["MathJax"] += size
+        elif Path(path).suffix.lower() in {".png", ".jpg", ".jpeg", ".gif", ".svg", ".webp"}:
+            parts["images"] += size
+        else:
+            parts["theme and scripts"] += size
+    return parts
+
+
 def weights_html(weights: list[dict], budget_mb: float) -> str:
-    mathjax = max(sum(s for p, s in w["assets"] if p.startswith("mathjax/")) for w in weights)
     rows = {}
     for w in sorted(weights, key=lambda w: -w["bytes"]):
-        others = [(p, s) for p, s in w["assets"] if p != w["page"]][:3]
-        rows[w["page"]] = [_mb(w["bytes"]), _mb(w["by_kind"].get("html", 0)),
-                           "yes" if any(p.endswith("mathjax/tex-chtml.js") for p, _ in w["assets"]) else "no",
-                           "; ".join(f"{Path(p).name} {_mb(s)}" for p, s in others)]
+        parts = weight_parts(w)
+        rows[w["page"].removeprefix("book/").removesuffix(".html")] = [
+            _mb(w["bytes"]), *(_mb(v) if v else "none" for v in parts.values())]
     notes = [f"What a first visit to the page loads (empty cache): the HTML (explorable frames are "
-             f"inside it), scripts, stylesheets, fonts and every image, measured in headless Chromium "
-             f"from a local server that does not compress (tests/browser/page_weights.py). Budget: "
-             f"{fmt_number(budget_mb)}{NBSP}MB a page, checked by make browser-test.",
-             f"MathJax ({_mb(mathjax)} with its fonts on the page that uses most of them) is loaded only "
-             "by pages with maths; on another page a preview with maths loads it when first shown."]
-    return table(rows, ["loaded", "HTML", "MathJax", "largest files"], notes=notes,
+             f"inside it), MathJax's scripts and fonts, the figures' image files, and the rest: the "
+             f"theme's stylesheets and scripts, its icon font, the search index, the previews; measured "
+             f"in headless Chromium from a local server that does not compress "
+             f"(tests/browser/page_weights.py). Budget: {fmt_number(budget_mb)}{NBSP}MB a page, checked "
+             "by make browser-test.",
+             "MathJax is loaded only by pages with maths; on another page a preview with maths loads it "
+             "when first shown."]
+    return table(rows, ["loaded", *PARTS], notes=notes,
                  index_header="page")._repr_html_()
 
 
