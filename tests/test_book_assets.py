@@ -41,6 +41,7 @@ def built(tmp_path_factory) -> Path:
     script in it; ``plain`` refers to both."""
     import yaml
     from sphinx.application import Sphinx
+    from sphinx.util.docutils import docutils_namespace
 
     config = yaml.safe_load((ROOT / "_config.yml").read_text())["sphinx"]["config"]
     tippy = {k: v for k, v in config.items() if k.startswith("tippy_")}
@@ -64,9 +65,10 @@ def built(tmp_path_factory) -> Path:
     (src / "plain.md").write_text("# Plain\n\nSee {eq}`eq-x` and\n<a href=\"other.html#fig-live\">the live "
                                   "figure</a>.\n")
     warnings = io.StringIO()
-    app = Sphinx(str(src), str(src), str(tmp / "out"), str(tmp / "doctrees"), "html",
-                 status=None, warning=warnings, freshenv=True)
-    app.build()
+    with docutils_namespace():  # the directives and nodes it registers go with it
+        app = Sphinx(str(src), str(src), str(tmp / "out"), str(tmp / "doctrees"), "html",
+                     status=None, warning=warnings, freshenv=True)
+        app.build()
     assert not warnings.getvalue()
     return tmp / "out"
 

@@ -81,6 +81,7 @@ def test_references_and_alt_texts_in_a_sphinx_build(tmp_path):
     """A two-page project built with the extension: a ``{ref}`` to a heading with maths reads
     "The rule for λ", and a figure without ``:alt:`` has its caption as alt text."""
     from sphinx.application import Sphinx
+    from sphinx.util.docutils import docutils_namespace
 
     src = tmp_path / "src"
     src.mkdir()
@@ -97,9 +98,10 @@ def test_references_and_alt_texts_in_a_sphinx_build(tmp_path):
         "$\\theta = [4, 0]$.\n```\n\n```{figure} fig.png\n:alt: own words\n\nKept.\n```\n")
     (src / "other.md").write_text("# Other\n\nSee {ref}`lambda-rule`.\n")
     warnings = io.StringIO()
-    app = Sphinx(str(src), str(src), str(tmp_path / "out"), str(tmp_path / "doctrees"), "xml",
-                 status=None, warning=warnings, freshenv=True)
-    app.build()
+    with docutils_namespace():  # the directives and nodes it registers go with it
+        app = Sphinx(str(src), str(src), str(tmp_path / "out"), str(tmp_path / "doctrees"), "xml",
+                     status=None, warning=warnings, freshenv=True)
+        app.build()
     assert not warnings.getvalue()
     other = (tmp_path / "out" / "other.xml").read_text()
     assert "The rule for λ" in other and "\\lambda" not in other
