@@ -32,7 +32,9 @@
    written in real maths by :func:`title_markdown`.
 9. Lighter pages (issue 23): no Font Awesome script (1.5 MB on every page; the theme's own
    Font Awesome stylesheet and web font draw the icons: ``templates/layout.html`` with the
-   filter :func:`without_script`), and MathJax only on pages with maths of their own
+   filter :func:`without_script`; the theme's Font Awesome font cut to the icons the pages use:
+   :func:`subset_icon_font`, ``static/fdi-icons.css``), and MathJax only on pages with maths of
+   their own
    (:func:`_mathjax_where_needed`; Sphinx also loads it on the root page because its toctree
    includes pages with maths).
 10. Hover previews offline (sphinx-tippy): tippy.js and Popper are served from the build
@@ -652,6 +654,58 @@ def _mathjax_where_needed(app: Sphinx, pagename: str, templatename: str, context
         app.builder.add_js_file("", body=f"window.fdiMathJax = {json.dumps(lazy)}")
 
 
+ICON_CSS = "fdi-icons.css"
+ICON_FONT = "fdi-icons.woff"
+THEME_CSS = "_static/styles/pydata-sphinx-theme.css"
+THEME_SOLID_FONT = "_static/vendor/fontawesome/webfonts/fa-solid-900.ttf"
+_ICON_RULE = re.compile(r'((?:\.fa-[\w-]+:before,?)+)\{content:"\\([0-9a-f]{4})"\}')
+# a private-use codepoint in a stylesheet, escaped ("\f107") or as the character itself
+_PUA_CONTENT = re.compile(r'\\([ef][0-9a-f]{3})\b|([\ue000-\uf8ff])')
+
+
+def icon_codepoints(outdir: Path) -> set[int]:
+    """The Font Awesome codepoints the built HTML at ``outdir`` can show: the icon classes
+    (``fa-bars``) written in its pages and scripts (the Font Awesome script itself excepted: it
+    names them all), and every icon the stylesheets draw themselves (admonitions, links: any
+    private-use codepoint outside the icon classes' rules, ``--pst-icon-*`` included)."""
+    theme_css = (outdir / THEME_CSS).read_text()
+    classes = {name: int(code, 16) for rule, code in _ICON_RULE.findall(theme_css)
+               for name in re.findall(r"\.(fa-[\w-]+):before", rule)}
+    used: set[str] = set()
+    files = [*outdir.rglob("*.html"), *(p for p in (outdir / "_static").rglob("*.js") if p.name != "fontawesome.js")]
+    for path in files:
+        used |= set(re.findall(r"\bfa-[a-z0-9-]+", path.read_text(errors="replace")))
+    codes = {classes[name] for name in used if name in classes}
+    for css in (outdir / "_static").rglob("*.css"):
+        text = _ICON_RULE.sub("", css.read_text(errors="replace"))
+        codes |= {int(esc, 16) if esc else ord(char) for esc, char in _PUA_CONTENT.findall(text)}
+    return codes
+
+
+def subset_icon_font(app: Sphinx, exception: Exception | None) -> None:
+    """``_static/fdi-icons.woff``: the theme's solid Font Awesome font (its TrueType copy: the
+    WOFF2 one needs brotli to read) with only those of :func:`icon_codepoints` it has, for
+    ``fdi-icons.css``. fontTools (a matplotlib dependency) does the cutting."""
+    if exception is not None or app.builder.format != "html":
+        return
+    from fontTools import subset
+    from fontTools.ttLib import TTFont
+
+    outdir = Path(app.outdir)
+    codes = icon_codepoints(outdir)
+    font = TTFont(outdir / THEME_SOLID_FONT)
+    # the brands and regular faces (GitHub's icon, weight 400) keep the theme's own fonts
+    codes &= set(font.getBestCmap())
+    options = subset.Options()
+    options.flavor = "woff"
+    subsetter = subset.Subsetter(options)
+    subsetter.populate(unicodes=codes)
+    subsetter.subset(font)
+    font.flavor = "woff"
+    font.save(outdir / "_static" / ICON_FONT)
+    logger.info("fdi_book: %d icons in %s", len(codes), ICON_FONT)
+
+
 def _add_previews_script(app: Sphinx, pagename: str, templatename: str, context: dict,
                          doctree) -> None:
     """``fdi-previews.js`` (after tippy.js) and ``fdi-previews.css`` on every page that
@@ -700,6 +754,8 @@ def setup(app: Sphinx) -> dict[str, Any]:
     app.connect("html-page-context", _mathjax_where_needed, priority=600)
     app.connect("html-page-context", _add_previews_script, priority=600)
     app.connect("build-finished", _lighter_previews, priority=400)
+    app.connect("build-finished", subset_icon_font)
+    app.add_css_file(ICON_CSS)
     app.connect("doctree-resolved", _plain_status_words)
     app.connect("doctree-resolved", _alt_from_captions)
     app.connect("doctree-read", _readable_section_labels)

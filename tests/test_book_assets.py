@@ -81,6 +81,20 @@ def test_no_font_awesome_script(built):
         assert "styles/pydata-sphinx-theme.css" in html and 'class="fa-solid fa-bars"' in html
 
 
+def test_icon_font_holds_the_icons_the_pages_use(built):
+    from fontTools.ttLib import TTFont
+
+    html = (built / "index.html").read_text()
+    assert "_static/fdi-icons.css" in html
+    font = TTFont(built / "_static" / "fdi-icons.woff")
+    icons = set(font.getBestCmap())
+    # the header's menu (fa-bars) and search (fa-magnifying-glass), the theme's note icon
+    # (--pst-icon-info-circle, drawn by its stylesheet), the scripts' close button (fa-xmark)
+    assert {0xF0C9, 0xF002, 0xF05A, 0xF00D} <= icons
+    assert 0xF1B9 not in icons  # fa-car: no page shows it
+    assert font.flavor == "woff" and (built / "_static" / "fdi-icons.woff").stat().st_size < 10_000
+
+
 def test_mathjax_only_on_pages_with_maths(built):
     other, index = (built / "other.html").read_text(), (built / "index.html").read_text()
     assert [s for s in _scripts(other) if s.endswith("mathjax/tex-chtml.js")]
