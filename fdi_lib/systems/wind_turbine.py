@@ -928,7 +928,13 @@ def operating_point(v: float, *, params: WindTurbineParams = PARAMS, region: int
     when the region-1 equilibrium meets the switch condition (``P_g >= P_r`` or ``omega_g >=
     Omega_nom``), region 1 otherwise. ``region=2`` below rated (inside the hysteresis band) or
     ``region=1`` above rated ask for that region's equilibrium; a :class:`~fdi_lib.errors.ModelError`
-    if it does not exist (no pitch in ``[beta_min, 45]`` deg balances the torques).
+    if it does not exist. Region 2 has one when a pitch in ``[beta_min, 45]`` deg balances the rated
+    torque at ``Omega_nom`` (the largest such pitch: more pitch, less torque); equilibria with the pitch
+    saturated and ``omega_g < Omega_nom`` are not searched. With the benchmark's parameters there is no
+    region-2 equilibrium in a band of 0.02 m/s just above :func:`rated_wind_speed` (12.957-12.975 m/s):
+    the controller enters region 2 there, its pitch saturates at ``beta_min`` with too little torque,
+    the generator slows below ``Omega_nom - Omega_delta`` and the loop cycles between the regions;
+    ``region=None`` raises the error there too.
 
     Examples
     --------
@@ -951,10 +957,18 @@ def operating_point(v: float, *, params: WindTurbineParams = PARAMS, region: int
         return _torque_balance(v, w2, beta, tau_g, p)
 
     lo, hi = p.beta_min, 45.0
-    if g(lo) < 0 or g(hi) > 0:
+    if g(hi) > 0:
+        raise ModelError(f"v: no region-2 equilibrium at {v} m/s (a pitch of {hi} deg is not enough)")
+    # the torque is not monotonic in the pitch near 0 deg (Cq peaks at -0.75 .. 0 deg): take the largest
+    # root, on the branch where more pitch means less torque (the one the PI loop holds)
+    grid = np.unique(np.r_[lo, BETA_GRID_DEG[(BETA_GRID_DEG > lo) & (BETA_GRID_DEG < hi)], hi])
+    positive = [b for b in grid if g(b) > 0]
+    if not positive:
         raise ModelError(f"v: no region-2 equilibrium at {v} m/s (no pitch in [{lo}, {hi}] deg balances the "
-                         f"rated torque)")
-    return _make_point(v, 2, w2, brentq(g, lo, hi, xtol=1e-13, rtol=1e-14), tau_g, p)
+                         f"rated torque at Omega_nom; the controller cycles between the regions)")
+    b0 = max(positive)
+    return _make_point(v, 2, w2, brentq(g, b0, grid[np.searchsorted(grid, b0) + 1], xtol=1e-13, rtol=1e-14),
+                       tau_g, p)
 
 
 def rated_wind_speed(params: WindTurbineParams = PARAMS) -> float:
@@ -1112,7 +1126,8 @@ def lpv_schedule(v_min: float | None = None, v_max: float | None = None, *, para
 
     Defaults: the scenario's range, the extremes of :data:`WIND_PROFILE` widened by three turbulence
     standard deviations (``vbar (1 -+ 3 I)``). Each grid point uses the region :func:`operating_point`
-    picks.
+    picks; grid points without an equilibrium (the narrow band above the rated wind where the loop
+    cycles, :func:`operating_point`) are left out of ``v_grid``.
     """
     p = params
     lo_default = float(WIND_PROFILE[:, 1].min()) * (1 - 3 * TURBULENCE_INTENSITY)
@@ -1122,13 +1137,15 @@ def lpv_schedule(v_min: float | None = None, v_max: float | None = None, *, para
     if not v_lo < v_hi:
         raise ModelError(f"v_min, v_max: expected v_min < v_max, got {v_lo}, {v_hi}")
     n_grid = integer(n_grid, "n_grid", low=2)
-    v_grid = np.linspace(v_lo, v_hi, n_grid)
-    rho = np.empty((n_grid, 3))
-    region = np.empty(n_grid, dtype=int)
-    for i, v in enumerate(v_grid):
-        op = operating_point(float(v), params=p)
-        region[i] = op.region
-        rho[i] = _aero_partials(op, p)
+    points = []
+    for v in np.linspace(v_lo, v_hi, n_grid):
+        try:
+            points.append(operating_point(float(v), params=p))
+        except ModelError:
+            continue
+    v_grid = np.array([op.v for op in points])
+    region = np.array([op.region for op in points])
+    rho = np.array([_aero_partials(op, p) for op in points])
     m = _open_loop_matrices(p)
     box, vertices = {}, {}
     for g in (1, 2):
@@ -1395,10 +1412,15 @@ def simulate(*, seed: Any, faults: Sequence[Fault] = FAULTS, duration_s: float =
     xint = np.empty(n_real)
     zone = np.empty(n_real, dtype=np.int64)
     for r in range(n_real):
-        op = operating_point(float(v[r, 0]), params=p)
+        try:
+            op = operating_point(float(v[r, 0]), params=p)
+        except ModelError:          # the band just above rated without equilibrium: start in region 1
+            op = operating_point(float(v[r, 0]), params=p, region=1)
         state[r] = op.state
         zone[r] = op.region
-        xint[r] = min(max(op.beta / p.K_i if (op.region == 2 and p.K_i > 0) else p.beta_min, p.beta_min), p.beta_max)
+        # the PI integrator at its equilibrium (zero speed error) or at its lower limit (negative error)
+        settled = op.region == 2 and op.omega_g >= p.omega_nom and p.K_i > 0
+        xint[r] = min(max(op.beta / p.K_i if settled else p.beta_min, p.beta_min), p.beta_max)
     pcache = np.full((n_real, 3, 9), np.nan)
     o_state = np.empty((n_real, n, 10), dtype=dtype)
     o_y = np.empty((n_real, n, 12), dtype=dtype)
@@ -1412,8 +1434,7 @@ def simulate(*, seed: Any, faults: Sequence[Fault] = FAULTS, duration_s: float =
     for k0 in range(0, n, _CHUNK):
         m = min(_CHUNK, n - k0)
         for r in range(n_real):
-            rngs[r].standard_normal(out=noise[r, :, :m])
-            noise[r, :, :m] *= std
+            noise[r, :, :m] = rngs[r].standard_normal((12, m)) * std
         _run(k0, m, v, noise, state, xint, zone, pcache, c, LAMBDA_GRID, BETA_GRID_DEG, CQ_TABLE,
              fz["sf_chan"], fz["sf_kind"], fz["sf_mag"], fz["sf_start"], fz["sf_stop"], fz["sf_ramp"],
              fz["af_blade"], fz["af_wn2"], fz["af_2zw"], fz["af_start"], fz["af_stop"], fz["af_ramp"],
