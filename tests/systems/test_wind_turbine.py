@@ -14,6 +14,7 @@ import math
 import numpy as np
 import pytest
 from scipy.interpolate import RegularGridInterpolator
+from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 from scipy.signal import welch
 
@@ -168,6 +169,30 @@ def test_actuator_step_response_is_the_closed_form_second_order(wn, zeta):
     overshoot = beta.max() - 1.0
     assert overshoot == pytest.approx(math.exp(-math.pi * zeta / math.sqrt(1 - zeta**2)), abs=1e-6)
     assert t[np.argmax(beta)] == pytest.approx(math.pi / wd, abs=ts)
+
+
+def test_sample_and_hold_of_the_aerodynamic_torque_is_accurate():
+    """One sample of plant_step against scipy's DOP853 on the continuous plant (references and wind held)."""
+    A, B = wt._drive_train_continuous(P, P.eta_dt)
+
+    def f(_t, x, beta_r, tau_g_r, v):
+        dx = np.empty(10)
+        for b in range(3):
+            dx[2 * b] = x[2 * b + 1]
+            dx[2 * b + 1] = -2 * P.zeta * P.omega_n * x[2 * b + 1] + P.omega_n**2 * (beta_r - x[2 * b])
+        tau = float(wt.aero_torque(v, x[6], x[[0, 2, 4]]))
+        dx[6:] = A @ x[6:] + B @ np.array([tau, tau_g_r, 0.0])
+        return dx
+
+    for mean in (8.0, 16.0):
+        run = wt.simulate(seed=2, faults=(), duration_s=60.0, wind=turbulent(mean, 60.0, 2))
+        for k in range(500, 6000, 500):
+            x = run.state[k]
+            args = (run.beta_r[k], run.tau_g_r[k], run.v[k])
+            ref = solve_ivp(f, (0.0, P.ts), x, args=args, method="DOP853", rtol=1e-12, atol=1e-12).y[:, -1]
+            got = wt.plant_step(x, beta_r=args[0], tau_g_r=args[1], v=args[2])[0]
+            np.testing.assert_allclose(got[:6], ref[:6], atol=1e-9)
+            assert abs(got[6] - ref[6]) < 2e-5 * ref[6] and abs(got[7] - ref[7]) < 1e-6 * ref[7]
 
 
 @pytest.mark.parametrize("c0, c1", [(50.0, 30.0), (25.0, 10.0), (4.0, 1.0)], ids=["over", "critical", "under"])
