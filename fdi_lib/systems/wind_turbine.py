@@ -8,13 +8,17 @@ description and from the benchmark's own MATLAB/Simulink files, which are public
 that used the benchmark): ``code/FDIBenchMarkData.m`` (the parameter script, headed "kk-electronic - FDI
 Bench Mark Model, by Peter Fogh Odgaard, 7.11.2008"; cited below as *[script]*),
 ``code/FDIBenchMark.mdl.original`` (the Simulink model; *[model]*) and ``code/AeroDynamics.mat`` (the
-aerodynamic tables; *[tables]*). A second cross-check of every parameter value is the MATLAB script of
-a third party that quotes the benchmark (M. S. Felix, 2023, "Benchmark model" parameters: ``R_r``,
-``K_dt``, ``B_dt``, ``B_r``, ``B_g``, ``N_g``, ``J_g``, ``J_r``, ``eta_dt``, ``eta_gc``, ``alpha_gc``,
-``omega_n``, ``xi``, ``K_p``, ``K_i``, ``Omega_nom``, ``Omega_delta``, ``P_r``, ``Cp_max = 0.4554``,
-``lambda_opt = 8``; found through the code index, repository not named there; *[Felix]*) and, for the
-fault schedule, the paper of the thesis (Cohal et al., Control Engineering and Applied Informatics
-19(3), 2017, §5, faults 1, 3, 4, 5, 8; *[CEAI]*). All agree.
+aerodynamic tables; *[tables]*). Second sources, all in agreement with the script: for the plant and
+controller constants, the MATLAB script of a third party that quotes the benchmark (M. S. Felix, 2023,
+"Benchmark model": ``R_r``, ``K_dt``, ``B_dt``, ``B_r``, ``B_g``, ``N_g``, ``J_g``, ``J_r``, ``eta_dt``,
+``eta_gc``, ``alpha_gc``, ``Constant_tau_gc``, ``omega_n``, ``xi``, ``K_p``, ``K_i``, ``Omega_nom``,
+``Omega_delta``, ``P_r``, ``Cp_max = 0.4554``, ``lambda_opt = 8``; *[Felix]*); for the faulty pitch
+parameters, two more public scripts (an LPV controller design on the benchmark: ``omega_n3 = 3.42``,
+``zeta3 = 0.9`` and the drive-train constants; a fault-tolerant pitch-control study: ``wn2 = 5.73``,
+``zeta2 = 0.45`` "(fault 6)", ``wn3 = 3.42``, ``zeta3 = 0.9`` "(fault 7)"); these three were found
+through the code index, which does not name their repositories. For the fault schedule, the paper of
+the thesis (Cohal & Mirea, Control Engineering and Applied Informatics 19(3), 2017, §5, faults 1, 3, 4,
+5, 8; book key ``cohal2017fdi``; *[CEAI]*).
 
 Model (units: pitch angles in degrees, speeds in rad/s, torques in N m, power in W):
 
@@ -55,20 +59,22 @@ update :func:`plant_step` was off by at most 8e-6 relative on ``omega_r`` and 5e
 
 1. *Noise level.* The script names the noise parameters ``sigma_*`` (``sigma_Beta = 0.2``,
    ``sigma_omega_r = 0.004 * 2 pi``, ``sigma_omega_g = 0.05``, ``sigma_tau_g = 90``, ``sigma_P_g = 1e3``),
-   but the Simulink "Random Number" blocks receive them as their **variance**. The data that the
-   benchmark's users scored were made with those variances, so :data:`PARAMS` takes
-   ``std = sqrt(value)`` (e.g. 0.447 deg for the pitch, 9.49 N m for the torque); read as standard
-   deviations, the noise would be larger for the torque and power (90 N m against a 100 N m converter
-   fault that must be detected in 3 samples) and smaller for the speeds. Pass another
-   :class:`WindTurbineParams` to use that reading.
+   but the Simulink "Random Number" blocks receive them as their **variance**. The benchmark's users
+   ran that model, so :data:`PARAMS` takes ``std = sqrt(value)`` (e.g. 0.447 deg for the pitch,
+   9.49 N m for the torque); read as standard deviations, the noise would be larger for the torque
+   and the power (90 N m against a 100 N m converter fault required to be detected in 3 samples) and
+   smaller for the pitch and the speeds. Pass another :class:`WindTurbineParams` for that reading.
 2. *Second generator-speed sensor.* In the Simulink model its noise uses the rotor-speed variance and
    fault 5 multiplies it by ``Gain_Omega_r_m2 = 1.1``; the script defines ``Gain_Omega_g_m1 = 0.9``
    and the thesis paper *[CEAI]* (quoting the 2009 paper) states a gain 0.9 on the **second**
    generator-speed sensor. We follow the papers: the generator-speed noise on both sensors, gain 0.9 on
    ``omega_g,m2``.
-3. *Abrupt actuator fault 6.* The Simulink model switches between two controllable-canonical state
-   spaces, which scales the output by ``(5.73 / 11.11)^2`` at the switching instant (a jump of the pitch
-   to 27 % of its value for one integration step). We switch the physical parameters, without jump.
+3. *Actuator faults.* The Simulink model keeps one controllable-canonical state (``tf2ss``, output
+   ``omega_n^2 x_2``) and switches (fault 6) or mixes (fault 7) the nominal and faulty ``(A, C)``. At
+   the onset of the abrupt fault 6 the blade's pitch therefore drops to ``(5.73 / 11.11)^2 = 27 %`` of
+   its value and recovers with the faulty dynamics, and at its end jumps to 3.8 times its value; the
+   30 s ramps of fault 7 make such effects small. We switch or mix the physical parameters of
+   ``beta``'s equation, without jumps (the same for a constant profile).
 4. *Two aerodynamic tables.* *[tables]* holds ``Cp`` and ``Cq``; they agree to 0.0054 (``Cq`` is not
    exactly ``Cp / lambda``; at ``lambda = 8``, ``beta = 0``: ``Cq lambda = 0.4536`` against ``Cp =
    0.4554``). The plant uses ``Cq`` *[model]*, the controller gain ``K_opt`` uses ``Cp_max = 0.4554``
@@ -466,7 +472,7 @@ class Fault:
             real(self.required_detection_s, f"fault {self.id} required_detection_s", low=0.0, low_open=True)
 
 
-_SRC09 = "Odgaard, Stoustrup & Kinnaert (2009), fault list"
+_SRC09 = "required detection time: Odgaard, Stoustrup & Kinnaert (2009), fault list (not cross-checked)"
 _SRCS = "[script] FDIBenchMarkData.m, 'fault models' and 'Fault signals' (the commented D_Fault lines)"
 #: The benchmark scenario's fault schedule. Times and magnitudes: [script] (the commented ``D_Fault``
 #: lines give the scenario's intervals; fault 7's ramp of 30 s up, 40 s full, 30 s down), cross-checked
@@ -495,7 +501,7 @@ FAULTS: tuple[Fault, ...] = (
           (100.0,), 3 * TS, f"{_SRCS} Constant_tau_gc = 100; [CEAI] 5.3; [model] Generator & Converter; {_SRC09}"),
     Fault(9, "drive train efficiency drop to 0.92", "drive_train", ("drive_train",), 4000.0, 4200.0,
           (0.92,), None, f"{_SRCS} eta_dt2 = .92, D_Fault9; [model] Drive Train; Odgaard, Stoustrup & "
-          "Kinnaert (2013) (its requirement was not found in the sources reachable here)"),
+          "Kinnaert (2013); required detection time not found in the sources reachable here"),
 )
 
 
@@ -1304,8 +1310,8 @@ def _compile_faults(faults: Sequence[Fault], p: WindTurbineParams) -> dict[str, 
         sel = [j for j, bb in enumerate(out["af_blade"]) if bb == b]
         if overlapping([out["af_start"][j] for j in sel], [out["af_stop"][j] for j in sel]):
             raise ModelError(f"faults: actuator faults on pitch_actuator_{b + 1} overlap in time")
-        stuck = [[j for j, (ch, kind) in enumerate(zip(out["sf_chan"], out["sf_kind"])) if ch == 2 * b + m and kind == 0]
-                 for m in (0, 1)]
+        stuck = [[j for j, (ch, kind) in enumerate(zip(out["sf_chan"], out["sf_kind"]))
+                  if ch == 2 * b + m and kind == 0] for m in (0, 1)]
         for j1 in stuck[0]:
             for j2 in stuck[1]:
                 if out["sf_start"][j1] < out["sf_stop"][j2] and out["sf_start"][j2] < out["sf_stop"][j1]:
