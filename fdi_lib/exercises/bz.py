@@ -1,7 +1,7 @@
 """Exercises of "Parametric and non-parametric faults" (bz/parametric-nonparametric): statements
 and data.
 
-A student's variant draws the RLS step's numbers, the impulse time, the sample ``k`` and the
+A student's variant draws the RLS step's numbers, the impulse time and the level, the sample ``k`` and the
 innovation, and the energy test's window, dimension and level.
 """
 
@@ -27,7 +27,8 @@ def _bz2_data(rng):
     from fdi_lib.systems import bz_example as ex
 
     return {"model": ex.bz_model(200), "E": ex.E.copy(),
-            "impulse_at": 100 if rng is None else int(rng.integers(60, 141)), "level": 1e-6}
+            "impulse_at": 100 if rng is None else int(rng.integers(60, 141)),
+            "level": 1e-6 if rng is None else float(rng.choice((1e-4, 1e-5, 1e-7, 1e-8)))}
 
 
 def _bz3_data(rng):

@@ -372,6 +372,14 @@ def check(exercise_id: str, answer: Any, *, student: str | None = None, graded: 
     for hint, perm in _permutations(shape):
         if np.all(oracle.match(None, flat, perm)):
             return fail(hint)
+    if a.size > 2:    # the right numbers in some other order (a perfect matching of entries)
+        import scipy.optimize
+
+        hits = np.array([oracle.match(None, np.full(a.size, v), np.arange(a.size)) for v in flat])
+        rows, cols = scipy.optimize.linear_sum_assignment(hits, maximize=True)
+        if hits[rows, cols].all():
+            return fail("These are the right numbers in another order: check the order the exercise "
+                        "asks for.")
     if a.ndim == 1 and a.size >= 3:
         n = a.size
         if np.all(oracle.match(None, flat[1:], np.arange(n - 1))):
@@ -381,11 +389,15 @@ def check(exercise_id: str, answer: Any, *, student: str | None = None, graded: 
             return fail("The series is one sample early: its entry [k] is the expected entry [k + 1] "
                         "(an index shift; the first entry is k = 0).")
     bad = [tuple(int(i) for i in np.unravel_index(j, shape)) for j in np.flatnonzero(~ok)]
+    where = ", ".join(_index_text(i) for i in bad[:4]) + (", ..." if len(bad) > 4 else "")
+    if a.size > 1:    # the entries that are off match a known mistake or pattern, the rest is right
+        for which, (hint, _) in enumerate(oracle.candidates):
+            if np.all(oracle.match(which, flat[~ok], np.flatnonzero(~ok))):
+                return fail(f"{'Entry' if len(bad) == 1 else 'Entries'} {where} (the rest matches): {hint}")
     if not oracle.exact:
         if a.size == 1:
             return fail("The value is off, and it is none of the mistakes this check knows.")
-        shown = ", ".join(_index_text(i) for i in bad[:4]) + (", ..." if len(bad) > 4 else "")
-        return fail(f"{len(bad)} of {a.size} entries are off: {shown}.")
+        return fail(f"{len(bad)} of {a.size} entries are off: {where}.")
     ref = oracle.ref
     if ref.size == 1:
         return fail(f"The value is off: {_scalar_diagnosis(float(flat[0]), float(ref.ravel()[0]), ex)}.")
@@ -393,5 +405,4 @@ def check(exercise_id: str, answer: Any, *, student: str | None = None, graded: 
         idx = bad[0]
         why = _scalar_diagnosis(float(a[idx]), float(ref[idx]), ex)
         return fail(f"Entry {_index_text(idx)} is off ({why}); the rest matches.")
-    shown = ", ".join(_index_text(i) for i in bad[:4]) + (", ..." if len(bad) > 4 else "")
-    return fail(f"{len(bad)} of {a.size} entries are off: {shown} (tolerance: {ex.tolerance}).")
+    return fail(f"{len(bad)} of {a.size} entries are off: {where} (tolerance: {ex.tolerance}).")

@@ -1,7 +1,7 @@
 """Exercises of "Leak detection on a gas pipeline" (zb2014/pipeline): statements and data.
 
 A student's variant draws the test level, the inflow gains of the designed surrogate, the
-samples of the collinearity window, the onset of the isolation test and the false-alarm count.
+samples of the collinearity window, the end of the isolation test's window and the false-alarm count.
 """
 
 from __future__ import annotations
@@ -45,9 +45,9 @@ def _pipe4_data(rng):
     from fdi_lib.systems import gas_pipeline as gp
 
     st = zp.pipeline_setup()
-    start = zp.FAULT_ONSET + (0 if rng is None else int(rng.integers(0, 60)))
-    return {"signature": st.known_signature, "Sigma": st.gains.Sigma, "start": start,
-            "stop": gp.N_STEPS, "theta": zp.fault_theta(2), "threshold": zp.MINMAX_THRESHOLD}
+    stop = gp.N_STEPS - (0 if rng is None else int(rng.integers(0, 120)))
+    return {"signature": st.known_signature, "Sigma": st.gains.Sigma, "start": zp.FAULT_ONSET,
+            "stop": stop, "theta": zp.fault_theta(2), "threshold": zp.MINMAX_THRESHOLD}
 
 
 def _pipe5_data(rng):
@@ -67,7 +67,7 @@ EXERCISES = [
              time_keys=("first", "last")),
     Exercise("pipe-4", CHAPTER, "Power of the isolation test with the onset known", "core", 20,
              answer="array of shape (2,): [non-centrality, power] for fault 2", rtol=1e-6,
-             data=_pipe4_data, time_keys=("start",)),
+             data=_pipe4_data, time_keys=("stop",)),
     Exercise("pipe-5", CHAPTER, "Are 7 false alarms in 2000 runs surprising?", "core", 10,
              answer="array of shape (2,): [low, high], fractions", rtol=1e-6, data=_pipe5_data),
     Exercise("pipe-6", CHAPTER, "Why centring the pressure helps isolation", "challenge", 25),

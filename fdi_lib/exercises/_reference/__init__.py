@@ -104,7 +104,7 @@ def _frozen(value: Any) -> np.ndarray:
 
 
 def feedback_candidates(exercise_id: str, student: str | None = None
-                        ) -> tuple[np.ndarray, list[tuple[str, np.ndarray]]]:
+                        ) -> tuple[np.ndarray, tuple[tuple[str, np.ndarray], ...]]:
     """The reference and the wrong answers :func:`~fdi_lib.exercises.check` recognises, in the
     order it tries them: the exercise's own mistakes, the generic transformations of the
     reference (:func:`fdi_lib.exercises.checker.generic_candidates`) and the index shifts (the
@@ -113,12 +113,18 @@ def feedback_candidates(exercise_id: str, student: str | None = None
     Candidates that equal the reference within the tolerance, or have another shape, or are not
     finite, are left out.
     """
-    from fdi_lib.exercises import exercise_data, get_exercise
     from fdi_lib.exercises._core import student_id
+
+    return _feedback_candidates(exercise_id, student_id(student))
+
+
+@functools.lru_cache(maxsize=256)
+def _feedback_candidates(exercise_id: str, student: str | None
+                         ) -> tuple[np.ndarray, tuple[tuple[str, np.ndarray], ...]]:
+    from fdi_lib.exercises import exercise_data, get_exercise
     from fdi_lib.exercises.checker import close, generic_candidates
 
     ex = get_exercise(exercise_id)
-    student = student_id(student)
     ref, mistakes = _answers(exercise_id, student)
     out = list(mistakes) + generic_candidates(ex, ref)
     for key in ex.time_keys:
@@ -131,5 +137,6 @@ def feedback_candidates(exercise_id: str, student: str | None = None
                 continue
             out.append((f"This is the answer with `{key}` {word}: an index shift (off by one in "
                         "time); count the samples as the exercise does.", shifted))
-    return ref, [(hint, value) for hint, value in out
-                 if value.shape == ref.shape and np.all(np.isfinite(value)) and not np.all(close(value, ref, ex))]
+    return ref, tuple((hint, _frozen(value)) for hint, value in out
+                      if value.shape == ref.shape and np.all(np.isfinite(value))
+                      and not np.all(close(value, ref, ex)))
