@@ -38,7 +38,7 @@ def with_entry(exercise_id, index, value):
     return a
 
 
-SWAP, SIGN, TRANSPOSE = "are swapped", "wrong sign", "transpose"
+SWAP, SIGN, TRANSPOSE = "are swapped", "The sign is wrong", "transpose"
 SHIFT, COMPLEMENT = "an index shift", "complement 1 - p"
 
 #: (exercise, what the student did, the wrong answer, text the hint must contain)

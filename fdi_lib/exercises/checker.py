@@ -62,7 +62,7 @@ def attempts(exercise_id: str, student: str | None = None) -> int:
 # ----------------------------------------------------------------------------- generic patterns
 #: Constant factors a wrong answer often carries, with what they usually mean.
 FACTORS: tuple[tuple[float, str], ...] = (
-    (-1.0, "Every entry has the wrong sign."),
+    (-1.0, "The sign is wrong."),
     (2.0, "It is twice the expected value: a factor 2 (a term counted twice, a two-sided bound for "
           "a one-sided one, or a 1/2 dropped)."),
     (0.5, "It is half the expected value: a factor 1/2 (a 1/2 too many, or a one-sided bound for a "
