@@ -61,11 +61,16 @@ book-fast: $(STAMP)
 
 ## Student edition: the same book without the exercise solutions (_build/student/html) and one
 ## notebook per chapter with the starter cells (_build/student/notebooks); fails if either still
-## contains solution text (tools/student_edition.py verify).
+## contains solution text (tools/student_edition.py verify). Then the student package, a wheel of
+## fdi_lib without reference answers or reference code (_build/student/dist/fdi_lib-*.whl,
+## tools/student_package.py); `make student STUDENTS=roster.txt` adds the digests of each listed
+## student's own data (one id a line).
 student: $(STAMP)
 	mkdir -p _build/student
 	set -o pipefail; $(BIN)/python tools/student_edition.py build --warningiserror --nitpick --keep-going 2>&1 | tee _build/student/build.log
+	$(BIN)/python tools/student_package.py --out _build/student $(if $(STUDENTS),--students $(STUDENTS))
 	@echo "Student book built: $(abspath _build/student/html/index.html)"
+	@echo "Student package: $$(ls _build/student/dist/fdi_lib-*.whl) (pip install it; no repository needed)"
 
 ## Plain .ipynb copies of the chapters (outputs not executed) under _build/notebooks/, which the book
 ## ignores (a .ipynb beside a chapter is excluded too, see exclude_patterns in _config.yml).

@@ -129,26 +129,32 @@ def close(a: np.ndarray, ref: np.ndarray, ex: Exercise) -> np.ndarray:
 # ----------------------------------------------------------------------------- digests
 def entry_keys(value: float, ex: Exercise, *, around: bool = False) -> set[str]:
     """Tolerance buckets of one entry: the bucket of ``value`` or, with ``around``, every bucket
-    meeting ``[value - tol, value + tol]``.
+    meeting ``[value - tol, value + tol]`` (``tol`` the exercise's tolerance at ``value``).
 
-    Integers are their own bucket; values with ``|v| <= atol`` share the bucket ``"z"``; other
-    values fall in logarithmic buckets of width ``log(1 + rtol)`` (``+k`` / ``-k``), so a bucket
-    says nothing of the magnitude until it is hashed with its exercise and entry.
+    Integers are their own bucket. Where the absolute tolerance dominates (``|v| <= atol /
+    rtol``) buckets are intervals of width ``atol`` (``"l<k>"``); beyond, logarithmic buckets of
+    width ``log(1 + rtol)`` (``"+<k>"`` / ``"-<k>"``): an interval of the tolerance's width meets
+    at most five buckets either way, and a bucket says nothing of the magnitude until it is
+    hashed with its exercise and entry.
     """
     if ex.integer:
         return {f"i{round(value)}"}
     if ex.rtol == 0:
         return {repr(float(value))}
     width = math.log1p(ex.rtol)
+    split = ex.atol / ex.rtol          # |v| <= split: absolute buckets
     tol = ex.atol + ex.rtol * abs(value) if around else 0.0
     lo, hi = value - tol, value + tol
     keys = set()
-    if lo <= ex.atol and hi >= -ex.atol:
-        keys.add("z")
-    for sign, a, b in (("+", max(lo, ex.atol), hi), ("-", max(-hi, ex.atol), -lo)):
-        if b > ex.atol and b >= a and b > 0:
+    if ex.atol > 0 and lo <= split and hi >= -split:
+        a, b = max(lo, -split), min(hi, split)
+        keys.update(f"l{k}" for k in range(math.floor(a / ex.atol), math.floor(b / ex.atol) + 1))
+    for sign, a, b in (("+", max(lo, split), hi), ("-", max(-hi, split), -lo)):
+        if b > split and b >= a:
             first = math.floor(math.log(max(a, 5e-324)) / width)
             keys.update(f"{sign}{k}" for k in range(first, math.floor(math.log(b) / width) + 1))
+    if not keys:                       # value 0 with atol 0
+        keys.add("z")
     return keys
 
 
