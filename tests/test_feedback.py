@@ -151,3 +151,17 @@ def test_sparse3_hint_names_both_causes_of_half_lambda_max():
 def test_svo1_box_arithmetic_is_not_called_a_sign_error():
     message = check("svo-1", mistake("svo-1", 2)).message
     assert "coupling" in message and "sign" not in message
+
+
+@pytest.mark.parametrize("student", ["s001", "s002", "alice", "bob", "carol"])
+def test_a_students_answers_are_not_the_books(student):
+    """Per-student data: every checkable answer differs from the book's (copying the book's
+    number, or a neighbour's, fails), and the data are stable for one student."""
+    from fdi_lib.exercises import exercise_ids
+
+    for exercise_id in exercise_ids(checkable=True):
+        own = reference_answer(exercise_id, student)
+        assert own.shape == ref(exercise_id).shape
+        assert not check(exercise_id, ref(exercise_id), student=student), (exercise_id, student)
+        assert check(exercise_id, own, student=student)
+        assert repr(exercise_data(exercise_id, student)) == repr(exercise_data(exercise_id, student))

@@ -19,7 +19,7 @@ def _bz1_data(rng):
         return {"M": np.array([[1.0, 0.5], [0.0, 2.0]]), "Sigma": 0.5 * np.eye(2), "P0": np.eye(2),
                 "lam": 0.9, "eps": np.array([0.3, -0.4])}
     M = np.array([[uniform(rng, 0.5, 1.5), uniform(rng, -1, 1)], [0.0, uniform(rng, 1.0, 2.5)]])
-    return {"M": M, "Sigma": 0.5 * np.eye(2), "P0": np.eye(2), "lam": uniform(rng, 0.8, 0.99),
+    return {"M": M, "Sigma": 0.5 * np.eye(2), "P0": np.eye(2), "lam": uniform(rng, 0.8, 0.89),
             "eps": rounded_normal(rng, 2, 0.4)}
 
 
@@ -45,14 +45,15 @@ def _bz3_data(rng):
 def _bz4_data(rng):
     from fdi_lib.systems import bz_example as ex
 
-    return {"model": ex.bz_model(20), "E": ex.E.copy(), "k": 10 if rng is None else int(rng.integers(3, 17))}
+    k = 10 if rng is None else int(rng.integers(3, 16))
+    return {"model": ex.bz_model(20), "E": ex.E.copy(), "k": k + (rng is not None and k >= 10)}
 
 
 def _bz5_data(rng):
     if rng is None:
         return {"window": 20, "p_reduced": 2, "alpha": 1e-4}
     return {"window": int(rng.integers(10, 41)), "p_reduced": int(rng.integers(1, 4)),
-            "alpha": float(rng.choice((1e-4, 1e-3, 1e-2)))}
+            "alpha": float(rng.choice((1e-5, 1e-3, 1e-2)))}   # never the book's 1e-4
 
 
 EXERCISES = [

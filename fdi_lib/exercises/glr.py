@@ -10,7 +10,7 @@ import numpy as np
 from fdi_lib.exercises._core import Exercise, rounded_normal, uniform
 
 CHAPTER = "zb2014/glr"
-_LEVELS = (0.001, 0.002, 0.005, 0.01, 0.02, 0.05, 0.1)
+_LEVELS = (0.001, 0.002, 0.005, 0.02, 0.05, 0.1)   # not the book's 0.01
 
 
 def _glr1_data(rng):
@@ -28,7 +28,7 @@ def _glr2_data(rng):
 def _glr3_data(rng):
     from fdi_lib.systems.random_ltv import random_ltv_model
 
-    theta = np.array([0.5, 0.0]) if rng is None else np.array([uniform(rng, 0.3, 0.8), 0.0])
+    theta = np.array([0.5, 0.0]) if rng is None else np.array([uniform(rng, 0.55, 0.8), 0.0])
     rng = np.random.default_rng(2015) if rng is None else rng
     model = random_ltv_model(rng, n=3, p=1, n_steps=60)
     return {"model": model, "Psi": rng.standard_normal((60, 3, 2)), "theta": theta, "alpha": 0.05}
@@ -43,7 +43,7 @@ def _glr4_data(rng):
 def _glr5_data(rng):
     if rng is None:
         return {"k": 150, "w": 100, "s": 2}
-    w = int(rng.integers(40, 121))
+    w = int(rng.integers(40, 96))      # w - s < 98, the book's count
     return {"k": w + int(rng.integers(10, 100)), "w": w, "s": int(rng.integers(1, 6))}
 
 

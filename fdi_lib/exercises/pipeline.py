@@ -20,7 +20,7 @@ def _pipe1_data(rng):
 
 def pipe2_gain_factors(rng) -> tuple[float, float]:
     """Factors on the designed surrogate's ``G0`` and ``Gp`` (1, 1 for the book's data)."""
-    return (1.0, 1.0) if rng is None else (uniform(rng, 0.5, 1.5), uniform(rng, 0.5, 1.5))
+    return (1.0, 1.0) if rng is None else (uniform(rng, 1.05, 1.5), uniform(rng, 0.5, 1.5))
 
 
 def _pipe2_data(rng):
@@ -45,7 +45,7 @@ def _pipe4_data(rng):
     from fdi_lib.systems import gas_pipeline as gp
 
     st = zp.pipeline_setup()
-    stop = gp.N_STEPS - (0 if rng is None else int(rng.integers(0, 120)))
+    stop = gp.N_STEPS - (0 if rng is None else int(rng.integers(1, 120)))
     return {"signature": st.known_signature, "Sigma": st.gains.Sigma, "start": zp.FAULT_ONSET,
             "stop": stop, "theta": zp.fault_theta(2), "threshold": zp.MINMAX_THRESHOLD}
 
@@ -53,7 +53,9 @@ def _pipe4_data(rng):
 def _pipe5_data(rng):
     if rng is None:
         return {"false_alarms": 7, "runs": 2000}
-    return {"false_alarms": int(rng.integers(2, 20)), "runs": int(rng.choice((1000, 2000, 5000)))}
+    runs = int(rng.choice((1000, 2000, 5000)))
+    false_alarms = int(rng.integers(2, 20))
+    return {"false_alarms": false_alarms + (runs == 2000 and false_alarms == 7), "runs": runs}
 
 
 EXERCISES = [

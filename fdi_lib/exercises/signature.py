@@ -15,7 +15,7 @@ CHAPTER = "zb2014/signature"
 
 
 def unstable_model(n_steps: int, rng: np.random.Generator | None):
-    """The unstable example of Section 6.1 (``rng`` given: ``F`` scaled by a factor in [1, 1.1]
+    """The unstable example of Section 6.1 (``rng`` given: ``F`` scaled by a factor in [1.01, 1.1]
     and the measurement noise ``R`` by a factor in [0.5, 2], so the gains and the growth rate
     differ)."""
     from fdi_lib.models import ltv_model
@@ -23,7 +23,7 @@ def unstable_model(n_steps: int, rng: np.random.Generator | None):
 
     if rng is None:
         return ex.unstable_model(n_steps)
-    F = uniform(rng, 1.0, 1.1) * ex.F
+    F = uniform(rng, 1.01, 1.1) * ex.F
     R = uniform(rng, 0.5, 2.0) * ex.R
     return ltv_model(F=F, G=ex.G, H=ex.H, Q=ex.Q, R=R, n_steps=n_steps, P0=ex.Q)
 
@@ -44,7 +44,7 @@ def _sig2_data(rng):
 
 
 def _sig3_data(rng):
-    Phi = np.ones((1, 1)) if rng is None else np.array([[uniform(rng, 0.5, 2.0)]])
+    Phi = np.ones((1, 1)) if rng is None else np.array([[uniform(rng, 1.1, 2.0)]])
     return {"model": unstable_model(5, rng), "Phi": Phi, "k_max": 4}
 
 

@@ -16,13 +16,14 @@ CHAPTER = "zhang2021/sparse"
 def _sparse1_data(rng):
     if rng is None:
         return {"m": 50, "q_max": 5}
-    return {"m": int(rng.integers(30, 81)), "q_max": int(rng.integers(3, 7))}
+    m = int(rng.integers(30, 80))
+    return {"m": m + (m >= 50), "q_max": int(rng.integers(3, 7))}   # never the book's m = 50
 
 
 def _sparse2_data(rng):
     F, E = np.array([[0.8, 0.2], [0.0, 0.6]]), np.array([[1.0], [0.5]])
     if rng is not None:
-        F = np.array([[uniform(rng, 0.5, 0.9), uniform(rng, -0.3, 0.3)], [0.0, uniform(rng, 0.4, 0.8)]])
+        F = np.array([[uniform(rng, 0.5, 0.75), uniform(rng, -0.3, 0.3)], [0.0, uniform(rng, 0.4, 0.8)]])
         E = np.array([[1.0], [uniform(rng, -1.0, 1.0)]])
     return {"F": F, "H": np.eye(2), "Q": 0.1 * np.eye(2), "R": 0.2 * np.eye(2), "P0": np.eye(2),
             "E": E, "k": 1}
