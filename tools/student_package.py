@@ -85,9 +85,10 @@ def digests(students: list[str | None], salt: str | None = None) -> dict:
     return table
 
 
-def stage(target: Path, students: list[str] | None = None) -> Path:
-    """Copy ``fdi_lib`` without the excluded modules to ``target`` with its digests and a
-    ``pyproject.toml``; returns ``target``."""
+def stage(target: Path, students: list[str] | None = None, *, with_digests: bool = True) -> Path:
+    """Copy ``fdi_lib`` without the excluded modules to ``target`` with its digests (unless
+    ``with_digests`` is false: the grader's kernels need none) and a ``pyproject.toml``; returns
+    ``target``."""
     if target.exists():
         shutil.rmtree(target)
     target.mkdir(parents=True)
@@ -95,8 +96,9 @@ def stage(target: Path, students: list[str] | None = None) -> Path:
                     ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "_digests.json"))
     for rel in EXCLUDED:
         shutil.rmtree(target / rel)
-    table = digests([None, *(students or [])])
-    (target / "fdi_lib" / "exercises" / "_digests.json").write_text(json.dumps(table))
+    if with_digests:
+        table = digests([None, *(students or [])])
+        (target / "fdi_lib" / "exercises" / "_digests.json").write_text(json.dumps(table))
     project = _project()
     (target / "pyproject.toml").write_text(_PYPROJECT.format(
         version=project["version"], dependencies=json.dumps(project["dependencies"])))
