@@ -8,7 +8,8 @@ reference answers, the known mistakes' code, the grader's list of forbidden call
 digests are and what they do not protect), builds the wheel into ``OUT/dist`` with
 ``pip wheel`` (no network, no build isolation: the build uses this environment's setuptools),
 then checks the wheel: no file of ``_reference``, and the digests present (the scan of
-the student edition for reference answers is ``tools/student_edition.py``'s). ``pip install OUT/dist/fdi_lib-*.whl`` installs it without the repository.
+the student edition for reference answers is ``tools/student_edition.py``'s).
+``pip install OUT/dist/fdi_lib-*.whl`` installs it without the repository.
 
 The digests are for the book's data, and with ``--students FILE`` (one student id a line) for
 each listed student's data too, so students who set ``FDI_STUDENT_ID`` get feedback on their

@@ -16,7 +16,7 @@ from fdi_lib.errors import FDIError
 
 __all__ = ["DIFFICULTIES", "CHAPTERS", "STUDENT_ENV", "UnknownExerciseError", "AnswerError",
            "ReferenceNotShippedError", "Exercise", "ExerciseData", "CheckResult", "student_id",
-           "student_seed", "student_rng"]
+           "student_seed", "student_rng", "uniform", "rounded_normal"]
 
 #: Difficulty labels, in increasing order.
 DIFFICULTIES = ("warm-up", "core", "challenge")

@@ -1,12 +1,11 @@
 """Exercises of "Leak detection on a gas pipeline" (zb2014/pipeline): statements and data.
 
 A student's variant draws the test level, the inflow gains of the designed surrogate, the
-samples of the collinearity window, the end of the isolation test's window and the false-alarm count.
+samples of the collinearity window, the end of the isolation test's window and the false-alarm
+count.
 """
 
 from __future__ import annotations
-
-import numpy as np
 
 from fdi_lib.exercises._core import Exercise, uniform
 
