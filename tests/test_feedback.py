@@ -165,3 +165,15 @@ def test_a_students_answers_are_not_the_books(student):
         assert not check(exercise_id, ref(exercise_id), student=student), (exercise_id, student)
         assert check(exercise_id, own, student=student)
         assert repr(exercise_data(exercise_id, student)) == repr(exercise_data(exercise_id, student))
+
+
+def test_graded_mode_in_the_full_book():
+    """Pass or fail only, the same sentence for every wrong answer, attempts counted."""
+    from fdi_lib.exercises import attempts
+
+    before = attempts("glr-4")
+    wrong = [check("glr-4", f * ref("glr-4"), graded=True) for f in (0.5, 1.01, -1.0)]
+    assert not any(wrong)
+    assert [w.message for w in wrong] == [f"glr-4: attempt {before + k}: not accepted." for k in (1, 2, 3)]
+    assert check("glr-4", ref("glr-4"), graded=True).message == f"glr-4: attempt {before + 4}: accepted."
+    assert attempts("glr-4") == before + 4

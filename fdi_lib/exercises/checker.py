@@ -29,6 +29,7 @@ attempt number, the same sentence for every wrong answer, in both packages.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import itertools
 import json
@@ -185,13 +186,19 @@ def _load_digests() -> dict | None:
 
 # ----------------------------------------------------------------------------- oracles
 class _Values:
-    """Compares with values (instructor package)."""
+    """Compares with values (instructor package); the wrong answers it recognises are computed
+    on the first wrong answer only (a correct answer costs one reference)."""
 
     exact = True
 
-    def __init__(self, ex: Exercise, ref: np.ndarray, candidates: list[tuple[str, np.ndarray]]):
-        self.ex, self.ref, self.shape = ex, ref, ref.shape
-        self.candidates = [(hint, value.ravel()) for hint, value in candidates]
+    def __init__(self, ex: Exercise, ref: np.ndarray, student: str | None):
+        self.ex, self.ref, self.shape, self.student = ex, ref, ref.shape, student
+
+    @functools.cached_property
+    def candidates(self) -> list[tuple[str, np.ndarray]]:
+        from fdi_lib.exercises._reference import feedback_candidates
+
+        return [(hint, value.ravel()) for hint, value in feedback_candidates(self.ex.id, self.student)[1]]
 
     def match(self, which: int | None, flat: np.ndarray, perm: np.ndarray | None = None) -> np.ndarray:
         target = self.ref.ravel() if which is None else self.candidates[which][1]
@@ -224,12 +231,11 @@ def _oracle(ex: Exercise, student: str | None):
     """The comparison source: values when the reference modules are installed, else digests
     (``None`` when the package has no digests for this student)."""
     try:
-        from fdi_lib.exercises._reference import feedback_candidates
+        from fdi_lib.exercises._reference import reference_answer
     except ImportError:
         pass
     else:
-        ref, candidates = feedback_candidates(ex.id, student)
-        return _Values(ex, ref, candidates)
+        return _Values(ex, reference_answer(ex.id, student), student)
     table = _load_digests()
     if table is None:
         raise ReferenceNotShippedError("check: this package has neither the reference answers nor "
@@ -341,18 +347,17 @@ def check(exercise_id: str, answer: Any, *, student: str | None = None, graded: 
         return CheckResult(exercise_id, False,
                            f"{exercise_id}: no answer yet. Replace `answer = None` by {ex.answer}.")
     a = _as_answer(answer, exercise_id)
-    if graded:
-        n = _ATTEMPTS[exercise_id, student] = _ATTEMPTS.get((exercise_id, student), 0) + 1
-        oracle = _oracle(ex, student)
-        ok = oracle is not None and a.size == int(np.prod(oracle.shape)) and \
-            bool(np.all(oracle.match(None, a.ravel()))) and (a.size == 1 or a.shape == oracle.shape)
-        return CheckResult(exercise_id, ok, f"{exercise_id}: attempt {n}: "
-                                            f"{'accepted' if ok else 'not accepted'}.")
     oracle = _oracle(ex, student)
     fail = lambda msg: CheckResult(exercise_id, False, f"{exercise_id}: not yet. {msg}")  # noqa: E731
     if oracle is None:
         return fail(f"This package holds no reference for student {student!r}: your instructor's grader "
                     f"checks answers on your own data (here the expected form is {ex.answer}).")
+    if graded:
+        n = _ATTEMPTS[exercise_id, student] = _ATTEMPTS.get((exercise_id, student), 0) + 1
+        ok = a.size == int(np.prod(oracle.shape)) and (a.size == 1 or a.shape == oracle.shape) \
+            and bool(np.all(oracle.match(None, a.ravel())))
+        return CheckResult(exercise_id, ok, f"{exercise_id}: attempt {n}: "
+                                            f"{'accepted' if ok else 'not accepted'}.")
     shape = oracle.shape
     if a.size == 1 and int(np.prod(shape)) == 1:
         a = a.reshape(shape)

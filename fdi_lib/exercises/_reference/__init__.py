@@ -81,20 +81,14 @@ def reference_answer(exercise_id: str, student: str | None = None) -> np.ndarray
     if not ex.checkable:
         raise ModelError(f"exercise_id: {exercise_id!r} has no checkable answer (it asks for an "
                          "explanation): compare with its solution")
-    return _answers(exercise_id, student_id(student))[0]
+    return _answers(exercise_id, student_id(student))
 
 
 @functools.lru_cache(maxsize=256)
-def _answers(exercise_id: str, student: str | None) -> tuple[np.ndarray, tuple[tuple[str, np.ndarray], ...]]:
-    """(reference, ((hint, wrong answer), ...)) of one exercise for one student."""
+def _answers(exercise_id: str, student: str | None) -> np.ndarray:
     from fdi_lib.exercises import exercise_data
 
-    ref_spec = REFERENCES[exercise_id]
-    data = exercise_data(exercise_id, student=student)
-    ref = _frozen(ref_spec.answer(data))
-    wrong = [(m.hint, _frozen(m.answer(exercise_data(exercise_id, student=student))))
-             for m in ref_spec.mistakes]
-    return ref, tuple(wrong)
+    return _frozen(REFERENCES[exercise_id].answer(exercise_data(exercise_id, student=student)))
 
 
 def _frozen(value: Any) -> np.ndarray:
@@ -125,8 +119,10 @@ def _feedback_candidates(exercise_id: str, student: str | None
     from fdi_lib.exercises.checker import close, generic_candidates
 
     ex = get_exercise(exercise_id)
-    ref, mistakes = _answers(exercise_id, student)
-    out = list(mistakes) + generic_candidates(ex, ref)
+    ref = _answers(exercise_id, student)
+    out = [(m.hint, np.array(m.answer(exercise_data(exercise_id, student=student)), dtype=float))
+           for m in REFERENCES[exercise_id].mistakes]
+    out += generic_candidates(ex, ref)
     for key in ex.time_keys:
         for step, word in ((1, "one larger"), (-1, "one smaller")):
             data = exercise_data(exercise_id, student=student)
