@@ -21,6 +21,8 @@ How a submission is graded
 3. During both runs ``tools/grader_kernel.py`` makes the library functions that answer the
    exercise in one call raise (``Reference.one_call`` in ``fdi_lib.exercises._reference``) and
    turns ``check`` into a stub without feedback; ``answer`` is recorded after each run.
+   The submissions' code runs as the user who runs the grader, without a container: grade on
+   an account or machine meant for it.
 4. Hidden tests compare each recorded ``answer`` with the reference recomputed here for the same
    data, with the exercise's tolerance: one point for the student's own data, one for the
    hidden data.
