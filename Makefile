@@ -75,10 +75,12 @@ student: $(STAMP)
 ## Grade a class: SUBMISSIONS holds one folder per student id with the submitted notebooks; OUT
 ## gets the gradebook (one row per student, the points of each checkable exercise, the total) and
 ## OUT's .log what failed. The notebooks run against the student package, on each student's own
-## data and on hidden data, with the one-call library answers blocked (tools/grader.py).
+## data and on hidden data, with the one-call library answers blocked (tools/grader.py);
+## GRADE_JOBS kernels at once (default 2).
+GRADE_JOBS ?= 2
 grade: $(STAMP)
 	@test -n "$(SUBMISSIONS)" -a -n "$(OUT)" || { echo "usage: make grade SUBMISSIONS=<dir> OUT=<csv>"; exit 2; }
-	$(BIN)/python tools/grader.py "$(SUBMISSIONS)" "$(OUT)"
+	$(BIN)/python tools/grader.py "$(SUBMISSIONS)" "$(OUT)" --jobs $(GRADE_JOBS)
 
 ## Plain .ipynb copies of the chapters (outputs not executed) under _build/notebooks/, which the book
 ## ignores (a .ipynb beside a chapter is excluded too, see exclude_patterns in _config.yml).

@@ -3,7 +3,7 @@
 The reference solutions get full marks on every checkable exercise, the untouched starters zero,
 and the submission that prints "correct" and takes its answers from the library (the one-call
 functions, ``reference_answer``, or the book's numbers typed in) zero. One kernel per student
-(about 30 s of CPU for the class).
+(about 35 s of CPU for the class, two kernels at once).
 """
 
 from __future__ import annotations
@@ -31,7 +31,8 @@ IDS = exercise_ids(checkable=True)
 def graded(tmp_path_factory):
     root = tmp_path_factory.mktemp("class")
     make_synthetic_class.write_class(root / "submissions")
-    rows = grader.grade(root / "submissions", root / "grades.csv", root / "grades.log", secret="test-secret")
+    rows = grader.grade(root / "submissions", root / "grades.csv", root / "grades.log", secret="test-secret",
+                        jobs=2)
     return rows, root
 
 

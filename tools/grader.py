@@ -1,6 +1,6 @@
 """Grade a class: run every submitted notebook on the student's own data and on hidden data.
 
-    python tools/grader.py SUBMISSIONS OUT.csv [--log OUT.log] [--timeout 120]
+    python tools/grader.py SUBMISSIONS OUT.csv [--log OUT.log] [--timeout 120] [--jobs 1]
     make grade SUBMISSIONS=<dir> OUT=<csv>
 
 ``SUBMISSIONS`` holds one folder per student, named by the student id, with that student's
@@ -187,21 +187,14 @@ def run_student(folder: Path, package: Path, secret: str, timeout: int) -> tuple
     with tempfile.TemporaryDirectory(prefix=f"grade-{student}-") as scratch:
         record = Path(scratch) / "answers.jsonl"
         nb = _grading_notebook(plans, student, hidden_student(student, secret), record)
-        env_path = os.pathsep.join([str(package), str(TOOLS)])
-        saved = os.environ.get("PYTHONPATH")
-        os.environ["PYTHONPATH"] = env_path          # the kernel inherits the environment
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(package), str(TOOLS)]))
         try:
             client = nbclient.NotebookClient(nb, timeout=timeout, kernel_name="python3", allow_errors=True,
                                              interrupt_on_timeout=True,
                                              resources={"metadata": {"path": scratch}})
-            client.execute()
+            client.execute(env=env)   # passed on to the kernel manager's start_kernel
         except Exception as exc:  # noqa: BLE001 -- a dead kernel fails this student, not the class
             log.append(f"kernel failed: {type(exc).__name__}: {exc}")
-        finally:
-            if saved is None:
-                os.environ.pop("PYTHONPATH", None)
-            else:
-                os.environ["PYTHONPATH"] = saved
         for cell in nb.cells:
             where = cell.metadata.get("grader")
             for out in cell.get("outputs", []):
@@ -231,18 +224,27 @@ def score(exercise_id: str, answers: dict, student: str, hidden: str) -> tuple[f
     return test.score, failed
 
 
-def grade(submissions: Path, out: Path, log_path: Path, timeout: int = 120, secret: str | None = None) -> list[dict]:
-    """Grade every student folder of ``submissions``; writes the CSV and the log, returns the rows."""
+def grade(submissions: Path, out: Path, log_path: Path, timeout: int = 120, secret: str | None = None,
+          jobs: int = 1) -> list[dict]:
+    """Grade every student folder of ``submissions``; writes the CSV and the log, returns the rows.
+
+    ``jobs`` kernels run at once (threads driving separate kernel processes); the gradebook is
+    the same for any ``jobs``.
+    """
+    from concurrent.futures import ThreadPoolExecutor
+
     import student_package
 
     secret = secret or os.environ.get("FDI_GRADER_SECRET") or secrets.token_hex(16)
     ids = exercise_ids(checkable=True)
     rows, log = [], [f"grading secret (hidden data): {secret}", ""]
+    folders = sorted(p for p in submissions.iterdir() if p.is_dir())
     with tempfile.TemporaryDirectory(prefix="fdi-student-package-") as tmp:
         package = student_package.stage(Path(tmp) / "package", with_digests=False)
-        for folder in sorted(p for p in submissions.iterdir() if p.is_dir()):
+        with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
+            runs = list(pool.map(lambda folder: run_student(folder, package, secret, timeout), folders))
+        for folder, (answers, notes) in zip(folders, runs):
             student = folder.name
-            answers, notes = run_student(folder, package, secret, timeout)
             hidden = hidden_student(student, secret)
             row = {"student": student}
             for exercise_id in ids:
@@ -273,11 +275,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("out", type=Path)
     parser.add_argument("--log", type=Path)
     parser.add_argument("--timeout", type=int, default=120, help="seconds per cell")
+    parser.add_argument("--jobs", type=int, default=1, help="kernels at once (one per student)")
     args = parser.parse_args(argv)
     if not args.submissions.is_dir():
         parser.error(f"SUBMISSIONS: expected a folder of student folders, got {args.submissions}")
     log = args.log or args.out.with_suffix(".log")
-    rows = grade(args.submissions, args.out, log, args.timeout)
+    rows = grade(args.submissions, args.out, log, args.timeout, jobs=args.jobs)
     print(f"{len(rows)} students graded: {args.out} (what failed: {log})")
     return 0
 
