@@ -177,3 +177,14 @@ def test_graded_mode_in_the_full_book():
     assert [w.message for w in wrong] == [f"glr-4: attempt {before + k}: not accepted." for k in (1, 2, 3)]
     assert check("glr-4", ref("glr-4"), graded=True).message == f"glr-4: attempt {before + 4}: accepted."
     assert attempts("glr-4") == before + 4
+
+
+def test_student_seed_is_the_documented_hash():
+    """The seed formula is a contract with the instructor's page (and with past gradebooks)."""
+    import hashlib
+
+    from fdi_lib.exercises import student_seed
+
+    expected = int.from_bytes(hashlib.sha256(b"fdi-book/glr-3/s1").digest()[:8], "little")
+    assert student_seed("glr-3", "s1") == expected
+    assert exercise_data("glr-1", "") == exercise_data("glr-1")     # an empty id is the book's data
