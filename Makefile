@@ -11,7 +11,7 @@ export OPENBLAS_NUM_THREADS := 1
 export OMP_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 
-.PHONY: book book-fast test venv lock clean benchmarks student notebooks browser-test check-book
+.PHONY: book book-fast test venv lock clean benchmarks student notebooks browser-test check-book grade
 
 venv: $(STAMP)
 
@@ -64,11 +64,26 @@ book-fast: $(STAMP)
 
 ## Student edition: the same book without the exercise solutions (_build/student/html) and one
 ## notebook per chapter with the starter cells (_build/student/notebooks); fails if either still
-## contains solution text (tools/student_edition.py verify).
+## contains solution text (tools/student_edition.py verify). Then the student package, a wheel of
+## fdi_lib without reference answers or reference code (_build/student/dist/fdi_lib-*.whl,
+## tools/student_package.py); `make student STUDENTS=roster.txt` adds the digests of each listed
+## student's own data (one id a line).
 student: $(STAMP)
 	mkdir -p _build/student
 	set -o pipefail; $(BIN)/python tools/student_edition.py build --warningiserror --nitpick --keep-going 2>&1 | tee _build/student/build.log
+	$(BIN)/python tools/student_package.py --out _build/student $(if $(STUDENTS),--students $(STUDENTS))
 	@echo "Student book built: $(abspath _build/student/html/index.html)"
+	@echo "Student package: $$(ls _build/student/dist/fdi_lib-*.whl) (pip install it; no repository needed)"
+
+## Grade a class: SUBMISSIONS holds one folder per student id with the submitted notebooks; OUT
+## gets the gradebook (one row per student, the points of each checkable exercise, the total) and
+## OUT's .log what failed. The notebooks run against the student package, on each student's own
+## data and on hidden data, with the one-call library answers blocked (tools/grader.py);
+## GRADE_JOBS kernels at once (default 2).
+GRADE_JOBS ?= 2
+grade: $(STAMP)
+	@test -n "$(SUBMISSIONS)" -a -n "$(OUT)" || { echo "usage: make grade SUBMISSIONS=<dir> OUT=<csv>"; exit 2; }
+	$(BIN)/python tools/grader.py "$(SUBMISSIONS)" "$(OUT)" --jobs $(GRADE_JOBS)
 
 ## Plain .ipynb copies of the chapters (outputs not executed) under _build/notebooks/, which the book
 ## ignores (a .ipynb beside a chapter is excluded too, see exclude_patterns in _config.yml).
