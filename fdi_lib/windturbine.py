@@ -47,7 +47,7 @@ import numpy as np
 import scipy.linalg
 import scipy.stats
 
-from fdi_lib.errors import ModelError, ShapeError
+from fdi_lib.errors import ModelError, PersistentExcitationError, ShapeError
 from fdi_lib.filters import KalmanGains, kalman_filter, kalman_gains
 from fdi_lib.glr import WindowedGLR, first_alarm, glr_window
 from fdi_lib.isolation import minmax_isolation
@@ -62,7 +62,7 @@ from fdi_lib.validation import integer, real
 
 __all__ = ["SENSORS", "CANDIDATES", "SUBSYSTEMS", "METHODS", "PlantConstants", "plant_constants",
            "Records", "records", "Calibration", "calibrate", "Design", "design", "Segments", "segments",
-           "MethodOutcome", "run_zb", "run_zhang2021", "run_bz", "run_svo_bank", "run_methods",
+           "MethodOutcome", "min_detectable", "run_zb", "run_zhang2021", "run_bz", "run_svo_bank", "run_methods",
            "expected_candidates"]
 
 #: Measured outputs, in the order of :attr:`Records.y` (pitch in deg, speeds in rad/s, torque in kNm).
@@ -347,7 +347,8 @@ class Settings:
     isolation_alpha : float
         Level of each minmax test.
     isolation_extra : int
-        Samples after the alarm added to the Lasso's regression.
+        Samples after the alarm at which the GLR's minmax isolation is decided and that are added to
+        the Lasso's regression (the information at the alarm itself is that of a few samples).
     svo_sigmas : float
         The SVO's noise bound, this many standard deviations of each sensor's Gaussian noise.
     sensor_bias_bound : float
@@ -398,6 +399,31 @@ class SubDesign:
     energy_threshold: float
     bz_glr: WindowedGLR | None  # drive train: GLR on the reduced Kitanidis residual
     bz_red: Any
+
+
+def min_detectable(d: "Design") -> dict[str, dict[str, float]]:
+    """Smallest step of each candidate (in its own units) that the statistical detectors see within
+    ``w`` samples of its onset: ``sqrt(h / I_j)`` for the GLR (``I_j`` the information of candidate
+    ``j`` alone over the window, ``h`` the subsystem's threshold) and ``z / ||X_j||`` for the Lasso
+    test. A candidate whose signature lies along the unknown aerodynamic torque has little information
+    left: this is the measured reason of a miss."""
+    w = d.settings.window
+    out: dict[str, dict[str, float]] = {"zb2014": {}, "zhang2021": {}}
+    for sd in d.subs.values():
+        sig = fault_signature(sd.kf, sd.kf_gains, sd.family.profile(d.onset)).on_innovation
+        Sw = np.linalg.solve(sd.kf_gains.Sigma_chol[d.onset:d.onset + w], sig[d.onset:d.onset + w])
+        info = np.einsum("kpm,kpm->m", Sw, Sw)
+        if sd.sub.E is not None:
+            W = _whitener(sd.kit_gains.residual_cov[-1])
+        else:
+            IHK = np.eye(sd.kit.p) - sd.kit.H[-1] @ sd.kit_gains.K[-1]
+            W = _whitener(IHK @ sd.kit_gains.Sigma[-1] @ IHK.T)
+        kern = np.einsum("ij,kjm->kim", W, sd.kit_signature[d.warmup:d.warmup + w])
+        norm = np.sqrt(np.einsum("kpm,kpm->m", kern, kern))
+        for i, j in enumerate(sd.sub.candidates):
+            out["zb2014"][CANDIDATES[j]] = float(np.sqrt(sd.glr_threshold / info[i])) if info[i] > 0 else float("inf")
+            out["zhang2021"][CANDIDATES[j]] = float(sd.lasso_threshold / norm[i]) if norm[i] > 0 else float("inf")
+    return out
 
 
 @dataclass
@@ -528,7 +554,8 @@ def _innovations(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, np.ndarra
 
 def run_zb(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray] | None = None) -> MethodOutcome:
     """Zhang & Basseville (2014): Kalman innovations, windowed GLR for a jump of all the
-    subsystem's additive candidates, minmax isolation (one test per candidate) at the alarm."""
+    subsystem's additive candidates, minmax isolation (one test per candidate) ``isolation_extra``
+    samples after the alarm, from the onset the window estimates then."""
     eps = _innovations(d, y, u) if eps is None else eps
     B = y.shape[0]
     res = {name: glr_window(eps[name], sd.kf, sd.kf_gains, sd.family, sd.glr.window, shared=sd.glr,
@@ -536,17 +563,37 @@ def run_zb(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray
     names = list(d.subs)
     fa, detect, which, peak = _combine(d, [res[n].statistic for n in names], [d.subs[n].glr_threshold for n in names])
     isolated = np.zeros((B, len(CANDIDATES)), dtype=bool)
+    step = np.where(detect >= 0, np.minimum(detect + d.settings.isolation_extra, d.N - 1), -1)
     for j, name in enumerate(names):
         rows = np.flatnonzero((detect >= 0) & (which == j))
         if rows.size:
-            k = detect[rows]
+            k = step[rows]
             C = res[name].C_hat[rows, k]
             dd = res[name].d_hat[rows, k]
             sd = d.subs[name]
-            for i, dec in enumerate(minmax_isolation(C, dd, [[i] for i in range(sd.family.m)],
-                                                     alpha=d.settings.isolation_alpha)):
-                isolated[rows, sd.sub.candidates[i]] = dec.faulty
-    return MethodOutcome(fa, detect, which, isolated, detect.copy(), peak)
+            isolated[np.ix_(rows, sd.sub.candidates)] = _minmax(C, dd, d.settings.isolation_alpha)
+    return MethodOutcome(fa, detect, which, isolated, step, peak)
+
+
+def _minmax(C: np.ndarray, dd: np.ndarray, alpha: float) -> np.ndarray:
+    """Minmax tests (one per component) on ``(B, m, m)`` informations: ``(B, m)`` decisions "faulty".
+
+    A component whose reduced information ``F_a*`` is singular in a record (it cannot be told from
+    the others with the samples since the estimated onset) is not declared faulty there: the test
+    has no power (:class:`~fdi_lib.errors.PersistentExcitationError` from the library, per record).
+    """
+    m = C.shape[-1]
+    out = np.zeros((C.shape[0], m), dtype=bool)
+    for i in range(m):
+        try:
+            out[:, i] = minmax_isolation(C, dd, [[i]], alpha=alpha)[0].faulty
+        except PersistentExcitationError:
+            for b in range(C.shape[0]):
+                try:
+                    out[b, i] = minmax_isolation(C[b:b + 1], dd[b:b + 1], [[i]], alpha=alpha)[0].faulty[0]
+                except PersistentExcitationError:
+                    out[b, i] = False
+    return out
 
 
 def _whitener(cov: np.ndarray) -> np.ndarray:
