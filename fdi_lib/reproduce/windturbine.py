@@ -21,7 +21,12 @@ from fdi_lib.montecarlo import binomial_ci, run_monte_carlo
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib import windturbine as W
 
-__all__ = ["scoreboard", "chunk", "calibrated_design", "CALIBRATION_RUNS", "PUBLISHED"]
+__all__ = ["scoreboard", "chunk", "calibrated_design", "plot_scoreboard", "CALIBRATION_RUNS", "PUBLISHED",
+           "METHOD_LABELS"]
+
+#: Short labels of the methods (figure legends, table columns).
+METHOD_LABELS = {"zb2014": "GLR + minmax", "zhang2021": "Kitanidis + Lasso", "bz": "parametric + energy",
+                 "rosa2013": "SVO bank"}
 
 PAPER = "Odgaard, Stoustrup & Kinnaert benchmark"
 #: Fault-free realisations (one per fault segment) of the calibration run (:func:`fdi_lib.windturbine.calibrate`).
@@ -180,7 +185,35 @@ def _paper() -> dict[str, Any]:
             "published": dict(PUBLISHED)}
 
 
-@register("windturbine-scoreboard", paper=PAPER, default_trials=10, default_seed=2009,
+def plot_scoreboard(result: ReproductionResult, fig: Any = None):
+    """Detection time per fault and method: mean (dot) and 2.5-97.5 % range (bar), the benchmark's
+    requirement (tick); a fault a method never detects has no dot."""
+    from fdi_lib.plotting import figure
+
+    h = result.headline
+    fig, axes = figure(1, 1, fig=fig, figsize=(6.4, 4.0))
+    ax = axes[0][0]
+    ids = list(h["faults"])
+    for j, (m, label) in enumerate(METHOD_LABELS.items()):
+        y = np.arange(len(ids)) + (j - 1.5) * 0.18
+        t = []
+        for yi, f in zip(y, ids):
+            v = h["faults"][f]["methods"][m]
+            t.append(np.nan if v["detection_time_mean_s"] is None else v["detection_time_mean_s"])
+            if v["detection_time_spread95"] is not None:
+                ax.plot(v["detection_time_spread95"], [yi, yi], color=f"C{j}", lw=1)
+        ax.plot(t, y, "o", color=f"C{j}", label=label, ms=4)
+    req = [h["faults"][f]["required_detection_s"] for f in ids]
+    ax.plot([np.nan if r is None else r for r in req], np.arange(len(ids)), "k|", ms=14, label="required")
+    ax.set_xscale("log")
+    ax.set_yticks(np.arange(len(ids)), ids)
+    ax.invert_yaxis()
+    ax.set_xlabel("detection time (s)")
+    ax.legend(fontsize="small", loc="lower right")
+    return fig
+
+
+@register("windturbine-scoreboard", plot=plot_scoreboard, paper=PAPER, default_trials=10, default_seed=2009,
           title="Wind-turbine FDI benchmark: four methods, nine faults (scoreboard)", timed_keys=("elapsed_s",))
 def scoreboard(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """The scoreboard: every fault of the benchmark scenario x the four methods.
