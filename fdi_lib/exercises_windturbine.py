@@ -50,7 +50,7 @@ WINDTURBINE_EXERCISES = (
                                "A sample leaves the band on either side: count both tails."),)),
     Exercise(id="wt-3", chapter=CHAPTER, title="Why nobody sees the drive-train fault", difficulty="core", minutes=20),
     Exercise(id="wt-4", chapter=CHAPTER, title="Trading the SVO's bound against its false alarms",
-             difficulty="challenge", minutes=40),
+             difficulty="challenge", minutes=30),
 )
 
 

@@ -55,9 +55,9 @@ from fdi_lib.kitanidis import kitanidis_filter, kitanidis_gains, residual_signat
 from fdi_lib.models import LTVModel, fault_profile, ltv_model, step_family
 from fdi_lib.nonparametric import energy_statistic, energy_threshold
 from fdi_lib.sets.polytope import Polytope
-from fdi_lib.sets.svo import (ModelSequence, run_architecture_i_many)
+from fdi_lib.sets.svo import ModelSequence, run_architecture_i_many
 from fdi_lib.signatures import fault_signature
-from fdi_lib.sparse import diagnose, regression_data
+from fdi_lib.sparse import diagnose
 from fdi_lib.validation import integer, real
 
 __all__ = ["SENSORS", "CANDIDATES", "SUBSYSTEMS", "METHODS", "PlantConstants", "plant_constants",
@@ -173,7 +173,8 @@ def records(run: Any) -> Records:
 
     The blade inputs are ``beta_r - (beta_i,m1 + beta_i,m2) / 2``: the benchmark's pitch servo closes
     its loop on the measured pitch, so with this known input the blade's state equation is exact
-    whatever its sensors do (:func:`subsystems`).
+    with healthy sensors (:func:`subsystems`; a faulty pitch sensor changes the loop's gain, which
+    leaves a small discretisation error, measured in the tests).
     """
     def batch(a: Any, tail: int) -> np.ndarray:
         a = np.asarray(a, dtype=float)
@@ -224,7 +225,8 @@ class Subsystem:
 
 def _blade(c: PlantConstants, i: int, wn: float | None = None, zeta: float | None = None) -> Subsystem:
     """Blade ``i`` with input ``w = beta_r - mean measured pitch``: the simulator's exact ZOH
-    ``x+ = Phi x + Gamma (beta_r - nbar)`` with ``nbar = ybar - beta`` is ``(Phi + Gamma e1^T) x + Gamma w``."""
+    ``x+ = Phi x + Gamma (beta_r - nbar)`` with ``nbar = ybar - beta`` (healthy sensors) is
+    ``(Phi + Gamma e1^T) x + Gamma w``."""
     from fdi_lib.systems.wind_turbine import pitch_discretisation
 
     p = c.params
