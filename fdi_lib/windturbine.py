@@ -2,40 +2,41 @@
 
 The plant is :mod:`fdi_lib.systems.wind_turbine`. Every method works on the same linear
 description of the parts of the turbine that the faults of the benchmark act on, split into
-the subsystems that the physics decouples once the aerodynamic torque ``tau_a`` is set apart:
+the subsystems that the physics decouples once the aerodynamic torque ``tau_a`` is set apart
+(:func:`subsystems`, the simulator's own exact zero-order-hold matrices):
 
-* three pitch actuators (blade ``i``): states ``[beta_i, dbeta_i/dt]``, input ``beta_ref_i``,
-  outputs the two pitch sensors of the blade; a second-order hydraulic servo
-  ``beta'' = -wn^2 (beta - beta_ref) - 2 zeta wn beta'``;
-* the drive train with the converter: states ``[omega_r, omega_g, theta_delta, tau_g]`` (twist in
-  mrad, torque in kNm), input ``tau_g_ref``, outputs the two rotor-speed, the two
+* three pitch servos (blade ``i``): states ``[beta_i, dbeta_i/dt]`` (deg), known input
+  ``w_i = beta_r - (beta_i,m1 + beta_i,m2) / 2`` (the servo closes its loop on the measured
+  pitch), outputs the blade's two pitch sensors;
+* the drive train with the converter: states ``[omega_r, omega_g, theta_delta, tau_gc]`` (torsion
+  in mrad, torque in kNm), input ``tau_g,r``, outputs the two rotor-speed and the two
   generator-speed sensors and the torque sensor; the aerodynamic torque ``tau_a`` (MNm) drives
   ``omega_r`` and is not measured.
 
-The pitch and drive-train equations are linear in the benchmark; only ``tau_a`` is nonlinear
-(through the Cp surface). How each method handles it is its design choice:
+Only ``tau_a`` is nonlinear (through the Cq table). How each method handles it is its design choice:
 
 ===========================  ==================================================================
 method                       ``tau_a``
 ===========================  ==================================================================
-Zhang & Basseville (2014)    a random-walk state of the Kalman filter (statistics from a
-                             fault-free calibration run)
+Zhang & Basseville (2014)    a random-walk state of the Kalman filter (increment variance from
+                             fault-free calibration runs)
 Zhang (2021)                 the unknown input of a Kitanidis filter (no model at all)
-Basseville & Zhang           the non-parametric unknown input rejected by the Kitanidis filter
-Rosa & Silvestre (2013)      a state with bounded increments (bound from the calibration run)
+Basseville & Zhang           rejected by the Kitanidis filter for the parametric test; a
+                             random-walk state of the Kalman filter for the energy test
+Rosa & Silvestre (2013)      a state with bounded increments (bound from the calibration runs)
 ===========================  ==================================================================
 
 The fault candidates (:data:`CANDIDATES`) are additive: an offset on each sensor (a fixed value
-or a gain fault is an offset whose size follows the signal), an offset on each actuator input
-(the pitch actuators, the converter: the additive signature of an actuator fault) and an
-internal torque between the two shafts (the drive-train fault). The model-error covariance
-(discretisation, actuator limits) is estimated from the true states of a fault-free calibration
-run (:func:`calibrate`), never from a faulty record.
+or a gain fault is an offset whose size follows the signal), an offset on each servo's input
+(the additive signature of a change of its dynamics), the converter offset (a torque on the
+generator, also seen by the torque sensor) and a generator-side torque not seen by it (the
+drive-train efficiency fault). The model-error statistics and bounds are estimated from the
+true states of fault-free calibration runs (:func:`calibrate`), never from a scored record.
 
-All methods run on the same records: for each fault of the scenario, a segment of every
-realisation from ``pre_s`` before the fault's start to ``post_s`` after it; the first
-``warmup_s`` seconds let the filters and the sets settle, the rest of the pre-fault part is the
-fault-free stretch on which false alarms are counted (:func:`segments`).
+All methods run on the same records (:func:`fault_records`): for each fault of the scenario, a
+segment of every realisation from ``pre_s`` before the fault's start to ``post_s`` after it; the
+first ``warmup_s`` seconds let the filters and the sets settle, the rest of the pre-fault part is
+the fault-free stretch on which false alarms are counted.
 """
 
 from __future__ import annotations
