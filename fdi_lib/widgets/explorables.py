@@ -4,7 +4,7 @@ of the explorables' texts and for ``benchmarks/bench_widgets.py``."""
 
 from __future__ import annotations
 
-from fdi_lib.widgets import bz, rosa2013, zb2014, zb2014_pipeline, zhang2021
+from fdi_lib.widgets import bz, rosa2013, windturbine, zb2014, zb2014_pipeline, zhang2021
 
 __all__ = ["EXPLORABLES"]
 
@@ -16,4 +16,5 @@ EXPLORABLES = {
     "sparse": (zhang2021.explore_sparse, zhang2021.GRID),
     "parametric/non-parametric": (bz.explore_bz, bz.GRID),
     "SVO": (rosa2013.explore_svo, rosa2013.GRID),
+    "wind turbine": (windturbine.explore_windturbine, windturbine.GRID),
 }

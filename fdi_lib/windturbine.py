@@ -1,0 +1,931 @@
+"""The four FDI methods of the book on the wind-turbine FDI benchmark (Odgaard, Stoustrup & Kinnaert).
+
+The plant is :mod:`fdi_lib.systems.wind_turbine`. Every method works on the same linear
+description of the parts of the turbine that the faults of the benchmark act on, split into
+the subsystems that the physics decouples once the aerodynamic torque ``tau_a`` is set apart
+(:func:`subsystems`, the simulator's own exact zero-order-hold matrices):
+
+* three pitch servos (blade ``i``): states ``[beta_i, dbeta_i/dt]`` (deg), known input
+  ``w_i = beta_r - (beta_i,m1 + beta_i,m2) / 2`` (the servo closes its loop on the measured
+  pitch), outputs the blade's two pitch sensors;
+* the drive train with the converter: states ``[omega_r, omega_g, theta_delta, tau_gc]`` (torsion
+  in mrad, torque in kNm), input ``tau_g,r``, outputs the two rotor-speed and the two
+  generator-speed sensors and the torque sensor; the aerodynamic torque ``tau_a`` (MNm) drives
+  ``omega_r`` and is not measured.
+
+Only ``tau_a`` is nonlinear (through the Cq table). How each method handles it is its design choice:
+
+===========================  ==================================================================
+method                       ``tau_a``
+===========================  ==================================================================
+Zhang & Basseville (2014)    a random-walk state of the Kalman filter (increment variance from
+                             fault-free calibration runs)
+Zhang (2021)                 the unknown input of a Kitanidis filter (no model at all)
+Basseville & Zhang           rejected by the Kitanidis filter for the parametric test; a
+                             random-walk state of the Kalman filter for the energy test
+Rosa & Silvestre (2013)      a state with bounded increments (bound from the calibration runs)
+===========================  ==================================================================
+
+The fault candidates (:data:`CANDIDATES`) are additive: an offset on each sensor (a fixed value
+or a gain fault is an offset whose size follows the signal), an offset on each servo's input
+(the additive signature of a change of its dynamics), the converter offset (a torque on the
+generator, also seen by the torque sensor) and a generator-side torque not seen by it (the
+drive-train efficiency fault). The model-error statistics and bounds are estimated from the
+true states of fault-free calibration runs (:func:`calibrate`), never from a scored record.
+
+All methods run on the same records (:func:`fault_records`): for each fault of the scenario, a
+segment of every realisation from ``pre_s`` before the fault's start to ``post_s`` after it; the
+first ``warmup_s`` seconds let the filters and the sets settle, the rest of the pre-fault part is
+the fault-free stretch on which false alarms are counted.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+import scipy.linalg
+import scipy.stats
+
+from fdi_lib.errors import ModelError, PersistentExcitationError, ShapeError
+from fdi_lib.filters import KalmanGains, kalman_filter, kalman_gains
+from fdi_lib.glr import WindowedGLR, first_alarm, glr_window
+from fdi_lib.isolation import minmax_isolation
+from fdi_lib.kitanidis import kitanidis_filter, kitanidis_gains, residual_signature
+from fdi_lib.models import LTVModel, fault_profile, ltv_model, step_family
+from fdi_lib.nonparametric import energy_statistic, energy_threshold
+from fdi_lib.sets.polytope import Polytope
+from fdi_lib.sets.svo import ModelSequence, run_architecture_i_many
+from fdi_lib.signatures import fault_signature
+from fdi_lib.sparse import diagnose
+from fdi_lib.validation import integer, real
+
+__all__ = ["SENSORS", "CANDIDATES", "SUBSYSTEMS", "METHODS", "PlantConstants", "plant_constants",
+           "Records", "records", "Calibration", "calibrate", "Design", "design", "Segments", "segments",
+           "MethodOutcome", "min_detectable", "run_zb", "run_zhang2021", "run_bz", "run_svo_bank", "run_methods",
+           "expected_candidates"]
+
+#: Measured outputs, in the order of :attr:`Records.y` (pitch in deg, speeds in rad/s, torque in kNm).
+SENSORS = ("beta1_m1", "beta1_m2", "beta2_m1", "beta2_m2", "beta3_m1", "beta3_m2",
+           "omega_r_m1", "omega_r_m2", "omega_g_m1", "omega_g_m2", "tau_g_m")
+#: Known inputs, in the order of :attr:`Records.u`: ``beta_r`` minus the mean measured pitch of each
+#: blade (deg), the torque reference (kNm).
+INPUTS = ("w1", "w2", "w3", "tau_g_ref")
+#: Additive fault candidates: the sensors' offsets, then the actuators and the drive train.
+CANDIDATES = SENSORS + ("actuator1", "actuator2", "actuator3", "converter", "drive_train")
+#: Human labels of the candidates (tables, figures).
+CANDIDATE_LABELS = {
+    "beta1_m1": "pitch sensor 1 (blade 1)", "beta1_m2": "pitch sensor 2 (blade 1)",
+    "beta2_m1": "pitch sensor 1 (blade 2)", "beta2_m2": "pitch sensor 2 (blade 2)",
+    "beta3_m1": "pitch sensor 1 (blade 3)", "beta3_m2": "pitch sensor 2 (blade 3)",
+    "omega_r_m1": "rotor speed sensor 1", "omega_r_m2": "rotor speed sensor 2",
+    "omega_g_m1": "generator speed sensor 1", "omega_g_m2": "generator speed sensor 2",
+    "tau_g_m": "generator torque sensor", "actuator1": "pitch actuator 1", "actuator2": "pitch actuator 2",
+    "actuator3": "pitch actuator 3", "converter": "converter torque", "drive_train": "drive train",
+}
+#: Subsystems: name -> (state count, output indices, input indices, candidate indices).
+SUBSYSTEMS = {
+    "blade1": ((0, 1), (0,), (0, 1, 11)),
+    "blade2": ((2, 3), (1,), (2, 3, 12)),
+    "blade3": ((4, 5), (2,), (4, 5, 13)),
+    "drive_train": ((6, 7, 8, 9, 10), (3,), (6, 7, 8, 9, 10, 14, 15)),
+}
+#: The methods of the scoreboard (keys of the JSON) and their labels.
+METHODS = {"zb2014": "Zhang & Basseville: Kalman + windowed GLR + minmax",
+           "zhang2021": "Zhang 2021: Kitanidis + Lasso",
+           "bz": "Basseville & Zhang: parametric GLR + energy",
+           "rosa2013": "Rosa & Silvestre: SVO bank"}
+
+
+# ----------------------------------------------------------------------------- the plant's constants
+@dataclass(frozen=True)
+class PlantConstants:
+    """What the methods take from :class:`~fdi_lib.systems.wind_turbine.WindTurbineParams`.
+
+    Attributes
+    ----------
+    params : WindTurbineParams
+    Ts : float
+        Sample time (s).
+    sigma : numpy.ndarray
+        Standard deviations of the sensor noise, in the units and order of :data:`SENSORS`.
+    actuator_faults : tuple of (float, float)
+        ``(omega_n, zeta)`` of the faulty pitch actuators of the benchmark (pressure drop, high air
+        content): the range the SVO's actuator hypothesis covers.
+    """
+
+    params: Any
+    Ts: float
+    sigma: np.ndarray
+    actuator_faults: tuple[tuple[float, float], ...]
+
+
+def plant_constants(params: Any = None) -> PlantConstants:
+    """:class:`PlantConstants` of a :class:`~fdi_lib.systems.wind_turbine.WindTurbineParams` (default
+    the benchmark's)."""
+    from fdi_lib.systems import wind_turbine as wt
+
+    p = wt.PARAMS if params is None else params
+    sigma = np.array(p.noise_std[:11], dtype=float)
+    sigma[10] /= 1e3                                          # torque in kNm
+    return PlantConstants(params=p, Ts=float(p.ts), sigma=sigma,
+                          actuator_faults=((p.omega_n_pressure_drop, p.zeta_pressure_drop),
+                                           (p.omega_n_air, p.zeta_air)))
+
+
+# ----------------------------------------------------------------------------- records
+@dataclass(frozen=True)
+class Records:
+    """Simulated records in the methods' units (pitch deg, speeds rad/s, torques kNm / MNm).
+
+    Attributes
+    ----------
+    t : numpy.ndarray
+        Time (s), ``(N,)``.
+    y : numpy.ndarray
+        Measurements ``(R, N, 11)`` in the order of :data:`SENSORS`.
+    u : numpy.ndarray
+        Known inputs ``(R, N, 4)`` in the order of :data:`INPUTS`.
+    x : numpy.ndarray
+        True states ``(R, N, 10)``: ``beta_i, dbeta_i`` (i = 1..3), ``omega_r``, ``omega_g``,
+        ``theta_delta`` (mrad), ``tau_gc`` (kNm, the converter's output without its offset).
+    tau_a : numpy.ndarray
+        Aerodynamic torque ``(R, N)`` in MNm.
+    v : numpy.ndarray
+        Wind speed ``(R, N)`` (m/s).
+    """
+
+    t: np.ndarray
+    y: np.ndarray
+    u: np.ndarray
+    x: np.ndarray
+    tau_a: np.ndarray
+    v: np.ndarray
+
+    def window(self, i0: int, i1: int) -> "Records":
+        """Samples ``i0 .. i1 - 1``."""
+        return Records(self.t[i0:i1], self.y[:, i0:i1], self.u[:, i0:i1], self.x[:, i0:i1],
+                       self.tau_a[:, i0:i1], self.v[:, i0:i1])
+
+
+def records(run: Any) -> Records:
+    """:class:`Records` of a :func:`fdi_lib.systems.wind_turbine.simulate` result (realisations first).
+
+    The blade inputs are ``beta_r - (beta_i,m1 + beta_i,m2) / 2``: the benchmark's pitch servo closes
+    its loop on the measured pitch, so with this known input the blade's state equation is exact
+    with healthy sensors (:func:`subsystems`; a faulty pitch sensor changes the loop's gain, which
+    leaves a small discretisation error, measured in the tests).
+    """
+    def batch(a: Any, tail: int) -> np.ndarray:
+        a = np.asarray(a, dtype=float)
+        return a if a.ndim == tail + 2 else a[None]
+
+    y = batch(run.y, 1)[..., :11].copy()
+    y[..., 10] /= 1e3
+    u_run = batch(run.u, 1)
+    ybar = y[..., :6].reshape(*y.shape[:2], 3, 2).mean(axis=-1)
+    u = np.concatenate([u_run[..., :1] - ybar, u_run[..., 1:2] / 1e3], axis=-1)
+    x = batch(run.state, 1).copy()
+    x[..., 8] *= 1e3
+    x[..., 9] /= 1e3
+    return Records(t=np.asarray(run.t, dtype=float), y=y, u=u, x=x, tau_a=batch(run.tau_aero, 0) / 1e6,
+                   v=batch(run.v, 0))
+
+
+# ----------------------------------------------------------------------------- linear subsystems
+@dataclass(frozen=True)
+class Subsystem:
+    """One discretised subsystem (see the module docstring).
+
+    Attributes
+    ----------
+    name : str
+    F, G, H : numpy.ndarray
+        ``x+ = F x + G u (+ E tau_a)``, ``y = H x`` (without the random-walk state of ``tau_a``).
+    E : numpy.ndarray or None
+        Column of ``tau_a`` (MNm) on the states (drive train only).
+    Psi, Phi : numpy.ndarray
+        Additive fault columns ``(n, m_s)`` and ``(p, m_s)`` of its candidates.
+    states, outputs, inputs, candidates : tuple of int
+        Indices in :attr:`Records.x`, :data:`SENSORS`, :data:`INPUTS`, :data:`CANDIDATES`.
+    """
+
+    name: str
+    F: np.ndarray
+    G: np.ndarray
+    H: np.ndarray
+    E: np.ndarray | None
+    Psi: np.ndarray
+    Phi: np.ndarray
+    states: tuple[int, ...]
+    outputs: tuple[int, ...]
+    inputs: tuple[int, ...]
+    candidates: tuple[int, ...]
+
+
+def _blade(c: PlantConstants, i: int, wn: float | None = None, zeta: float | None = None) -> Subsystem:
+    """Blade ``i`` with input ``w = beta_r - mean measured pitch``: the simulator's exact ZOH
+    ``x+ = Phi x + Gamma (beta_r - nbar)`` with ``nbar = ybar - beta`` (healthy sensors) is
+    ``(Phi + Gamma e1^T) x + Gamma w``."""
+    from fdi_lib.systems.wind_turbine import pitch_discretisation
+
+    p = c.params
+    Phi, Gam = pitch_discretisation(p.omega_n if wn is None else wn, p.zeta if zeta is None else zeta, ts=c.Ts)
+    F = Phi + Gam @ np.array([[1.0, 0.0]])
+    outputs, inputs, cands = SUBSYSTEMS[f"blade{i + 1}"]
+    Phi_f = np.zeros((2, 3))
+    Phi_f[0, 0] = Phi_f[1, 1] = 1.0
+    Psi = np.zeros((2, 3))
+    Psi[:, 2] = Gam[:, 0]                       # offset on the actuator's input
+    return Subsystem(f"blade{i + 1}", F, Gam, np.array([[1.0, 0.0], [1.0, 0.0]]), None, Psi, Phi_f,
+                     (2 * i, 2 * i + 1), outputs, inputs, cands)
+
+
+def _drive_train(c: PlantConstants) -> Subsystem:
+    """Drive train + converter: the simulator's exact ZOH, states ``omega_r, omega_g`` (rad/s),
+    ``theta_delta`` (mrad), ``tau_gc`` (kNm); inputs ``tau_a`` (MNm, unknown), ``tau_g,r`` (kNm)."""
+    from fdi_lib.systems.wind_turbine import drive_train_discretisation
+
+    Phi, Gam = drive_train_discretisation(c.params)
+    S = np.diag([1.0, 1.0, 1e3, 1e-3])
+    F = S @ Phi @ np.linalg.inv(S)
+    Gs = S @ Gam @ np.diag([1e6, 1e3, 1e3])
+    E, G, off = Gs[:, :1], Gs[:, 1:2], Gs[:, 2]
+    H = np.array([[1.0, 0, 0, 0], [1.0, 0, 0, 0], [0, 1.0, 0, 0], [0, 1.0, 0, 0], [0, 0, 0, 1.0]])
+    Phi_f = np.zeros((5, 7))
+    Phi_f[np.arange(5), np.arange(5)] = 1.0
+    Phi_f[4, 5] = 1.0                           # converter offset: seen by the torque sensor too
+    Psi = np.zeros((4, 7))
+    Psi[:, 5] = Psi[:, 6] = off                 # torque on the generator (converter; drive-train efficiency)
+    outputs, inputs, cands = SUBSYSTEMS["drive_train"]
+    return Subsystem("drive_train", F, G, H, E, Psi, Phi_f, (6, 7, 8, 9), outputs, inputs, cands)
+
+
+def subsystems(c: PlantConstants) -> list[Subsystem]:
+    """The four subsystems (blades 1-3, drive train) of :class:`PlantConstants` ``c``."""
+    return [_blade(c, 0), _blade(c, 1), _blade(c, 2), _drive_train(c)]
+
+
+# ----------------------------------------------------------------------------- calibration
+@dataclass(frozen=True)
+class Calibration:
+    """What a fault-free calibration run tells the methods about the model error.
+
+    Attributes
+    ----------
+    Q : dict
+        Per subsystem, covariance of the one-step model error of the true states
+        ``x_{k+1} - F x_k - G u_k - E tau_a,k`` (the model is exact up to discretisation and
+        actuator limits), plus a floor of ``1e-12`` on the diagonal.
+    q_tau : float
+        Variance of the increments of ``tau_a`` (MNm^2 per sample): the random walk of the
+        Kalman filter's ``tau_a`` state.
+    bound : dict
+        Per subsystem, the largest one-step model error of each state times ``margin``: the
+        SVO's disturbance bounds.
+    dtau_bound : float
+        Largest increment of ``tau_a`` times ``margin``.
+    margin : float
+    samples : int
+        Samples used.
+    x_range, tau_range : numpy.ndarray
+        ``(2, 10)`` and ``(2,)``: the true states' and ``tau_a``'s range, widened by ``margin``
+        about its middle (the SVO's prior set).
+    """
+
+    Q: dict[str, np.ndarray]
+    q_tau: float
+    bound: dict[str, np.ndarray]
+    dtau_bound: float
+    margin: float
+    samples: int
+    x_range: np.ndarray
+    tau_range: np.ndarray
+
+
+def calibrate(c: PlantConstants, rec: Records, *, margin: float = 1.5) -> Calibration:
+    """Model-error statistics and bounds from the true states of a fault-free record (see
+    :class:`Calibration`)."""
+    margin = real(margin, "margin", low=1.0)
+    Q, bound = {}, {}
+    for s in subsystems(c):
+        x = rec.x[..., list(s.states)]
+        u = rec.u[..., list(s.inputs)]
+        pred = x[:, :-1] @ s.F.T + u[:, :-1] @ s.G.T
+        if s.E is not None:
+            pred = pred + rec.tau_a[:, :-1, None] * s.E[:, 0]
+        err = (x[:, 1:] - pred).reshape(-1, len(s.states))
+        Q[s.name] = np.atleast_2d(np.cov(err, rowvar=False)) + 1e-12 * np.eye(len(s.states))
+        bound[s.name] = margin * np.abs(err).max(axis=0)
+    dtau = np.diff(rec.tau_a, axis=1).reshape(-1)
+
+    def widened(a: np.ndarray) -> np.ndarray:
+        lo, hi = a.min(axis=0), a.max(axis=0)
+        mid, half = (lo + hi) / 2, (hi - lo) / 2 * margin + 1e-3
+        return np.stack([mid - half, mid + half])
+
+    return Calibration(Q=Q, q_tau=float(np.var(dtau)) + 1e-12, bound=bound,
+                       dtau_bound=margin * float(np.abs(dtau).max()), margin=margin,
+                       samples=int(rec.x.shape[0] * (rec.x.shape[1] - 1)),
+                       x_range=widened(rec.x.reshape(-1, rec.x.shape[-1])),
+                       tau_range=widened(rec.tau_a.reshape(-1, 1))[:, 0])
+
+
+# ----------------------------------------------------------------------------- design
+@dataclass(frozen=True)
+class Settings:
+    """The design choices of the four methods (all stated in the book chapter).
+
+    Attributes
+    ----------
+    pre_s, post_s, warmup_s : float
+        Segment before / after a fault's start; the first ``warmup_s`` are not scored.
+    false_alarms_per_hour : float
+        Nominal false-alarm budget of each statistical test on each subsystem: the per-sample
+        level ``alpha = Ts * rate / 3600``, split over the ``w`` onsets of a window (GLR) or the
+        ``m`` candidates (Lasso test) by Bonferroni (conservative by construction).
+    window : int
+        ``w`` of the windowed GLR, of the Lasso test and of the energy test (samples).
+    isolation_alpha : float
+        Level of each minmax test.
+    isolation_extra : int
+        Samples after the alarm at which the GLR's minmax isolation is decided and that are added to
+        the Lasso's regression (the information at the alarm itself is that of a few samples).
+    svo_sigmas : float
+        The SVO's noise bound, this many standard deviations of each sensor's Gaussian noise.
+    sensor_bias_bound : float
+        The SVO bank's sensor-offset hypothesis: an offset up to this many noise standard
+        deviations of the sensor (150 sigma: 30 deg on a pitch sensor).
+    torque_bound : float
+        The SVO bank's converter-offset and drive-train-torque hypotheses (kNm).
+    """
+
+    pre_s: float = 7.0
+    post_s: float = 10.0
+    warmup_s: float = 3.0
+    false_alarms_per_hour: float = 1.0
+    window: int = 50
+    isolation_alpha: float = 0.01
+    isolation_extra: int = 50
+    svo_sigmas: float = 5.0
+    sensor_bias_bound: float = 150.0
+    torque_bound: float = 1e3
+
+
+def _aug(s: Subsystem) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``F, G, H, Psi`` with ``tau_a`` as a last random-walk state (drive train), else unchanged."""
+    if s.E is None:
+        return s.F, s.G, s.H, s.Psi
+    n = s.F.shape[0]
+    F = np.zeros((n + 1, n + 1))
+    F[:n, :n], F[:n, n:], F[n, n] = s.F, s.E, 1.0
+    G = np.vstack([s.G, np.zeros((1, s.G.shape[1]))])
+    H = np.hstack([s.H, np.zeros((s.H.shape[0], 1))])
+    return F, G, H, np.vstack([s.Psi, np.zeros((1, s.Psi.shape[1]))])
+
+
+@dataclass
+class SubDesign:
+    """Noise-independent quantities of one subsystem for one segment length (shared by all records)."""
+
+    sub: Subsystem
+    kf: LTVModel            # Kalman model (tau_a a random-walk state on the drive train)
+    kf_gains: KalmanGains
+    family: Any             # step family of all its candidates (ZB)
+    glr: WindowedGLR
+    glr_threshold: float
+    kit: LTVModel           # Kitanidis model (no tau_a state); Kalman gains on the blades
+    kit_gains: Any
+    kit_signature: np.ndarray   # (N, p, m_s): residual signature, onset at sample 0
+    lasso_threshold: float
+    energy_threshold: float
+    bz_glr: WindowedGLR | None  # drive train: GLR on the reduced Kitanidis residual
+    bz_red: Any
+
+
+def min_detectable(d: "Design") -> dict[str, dict[str, float]]:
+    """Smallest step of each candidate (in its own units) that the statistical detectors see within
+    ``w`` samples of its onset: ``sqrt(h / I_j)`` for the GLR (``I_j`` the information of candidate
+    ``j`` alone over the window, ``h`` the subsystem's threshold) and ``z / ||X_j||`` for the Lasso
+    test. A candidate whose signature lies along the unknown aerodynamic torque has little information
+    left: this is the measured reason of a miss."""
+    w = d.settings.window
+    out: dict[str, dict[str, float]] = {"zb2014": {}, "zhang2021": {}}
+    for sd in d.subs.values():
+        sig = fault_signature(sd.kf, sd.kf_gains, sd.family.profile(d.onset)).on_innovation
+        Sw = np.linalg.solve(sd.kf_gains.Sigma_chol[d.onset:d.onset + w], sig[d.onset:d.onset + w])
+        info = np.einsum("kpm,kpm->m", Sw, Sw)
+        if sd.sub.E is not None:
+            W = _whitener(sd.kit_gains.residual_cov[-1])
+        else:
+            IHK = np.eye(sd.kit.p) - sd.kit.H[-1] @ sd.kit_gains.K[-1]
+            W = _whitener(IHK @ sd.kit_gains.Sigma[-1] @ IHK.T)
+        kern = np.einsum("ij,kjm->kim", W, sd.kit_signature[d.warmup:d.warmup + w])
+        norm = np.sqrt(np.einsum("kpm,kpm->m", kern, kern))
+        for i, j in enumerate(sd.sub.candidates):
+            out["zb2014"][CANDIDATES[j]] = float(np.sqrt(sd.glr_threshold / info[i])) if info[i] > 0 else float("inf")
+            out["zhang2021"][CANDIDATES[j]] = float(sd.lasso_threshold / norm[i]) if norm[i] > 0 else float("inf")
+    return out
+
+
+@dataclass
+class Design:
+    """Everything noise-independent that the methods need for records of ``N`` samples."""
+
+    constants: PlantConstants
+    calibration: Calibration
+    settings: Settings
+    N: int
+    onset: int
+    warmup: int
+    alpha_sample: float
+    subs: dict[str, SubDesign] = field(default_factory=dict)
+
+
+def design(c: PlantConstants, cal: Calibration, x0: np.ndarray, settings: Settings = Settings()) -> Design:
+    """Build :class:`Design` for segments of ``settings.pre_s + settings.post_s`` seconds.
+
+    ``x0`` ``(10,)`` is the prior mean of the true states (the filters' ``model.x0``); the prior
+    covariance is wide (the first ``warmup_s`` seconds are not scored).
+    """
+    from fdi_lib.nonparametric import kitanidis_predictor_gains, reduce_residual
+
+    st = settings
+    N = int(round((st.pre_s + st.post_s) / c.Ts))
+    onset = int(round(st.pre_s / c.Ts))
+    warmup = int(round(st.warmup_s / c.Ts))
+    w = integer(st.window, "window", low=2, high=onset - warmup)
+    alpha = st.false_alarms_per_hour * c.Ts / 3600.0
+    d = Design(constants=c, calibration=cal, settings=st, N=N, onset=onset, warmup=warmup, alpha_sample=alpha)
+    for s in subsystems(c):
+        R = np.diag(c.sigma[list(s.outputs)] ** 2)
+        F, G, H, Psi = _aug(s)
+        Q = cal.Q[s.name]
+        if s.E is not None:
+            Q = scipy.linalg.block_diag(Q, cal.q_tau)
+        xs = x0[list(s.states)]
+        if s.E is not None:
+            xs = np.append(xs, 0.0)
+            P0 = np.diag(np.r_[np.full(len(s.states), 1e2), 1e1])
+        else:
+            P0 = 1e2 * np.eye(len(xs))
+        kf = ltv_model(F=F, G=G, H=H, Q=Q, R=R, n_steps=N, x0=xs, P0=P0)
+        kg = kalman_gains(kf)
+        fam = step_family(kf, Psi=Psi, Phi=s.Phi)
+        m = fam.m
+        glr = WindowedGLR(kf, kg, fam, w)
+        thr = float(scipy.stats.chi2.ppf(1.0 - alpha / w, m))
+        kit = ltv_model(F=s.F, G=s.G, H=s.H, Q=cal.Q[s.name], R=R, n_steps=N, x0=x0[list(s.states)],
+                        P0=1e2 * np.eye(len(s.states)))
+        if s.E is not None:
+            kgains = kitanidis_gains(kit, s.E)
+        else:
+            kgains = kalman_gains(kit)
+        after = (np.arange(N) >= warmup)[:, None, None]           # onset at the end of the warm-up
+        sig = residual_signature(kit, kgains, fault_profile(kit, Psi=s.Psi * after,
+                                                            Phi=s.Phi * after)).on_residual
+        lasso_thr = float(scipy.stats.norm.ppf(1.0 - alpha / (2 * m)))
+        e_thr = energy_threshold(w, kf.p, alpha)
+        bz_glr = bz_red = None
+        if s.E is not None:
+            kpred = kitanidis_predictor_gains(kit, s.E, kgains)
+            red = reduce_residual(kit, kgains, np.zeros((N, kit.p)))
+            bz_fam = step_family(red.model, Psi=s.Psi[:, 6:])     # a torque on the generator
+            bz_glr = WindowedGLR(red.model, red.gains, bz_fam, w)
+            bz_red = (kpred, red.T)
+        d.subs[s.name] = SubDesign(s, kf, kg, fam, glr, thr, kit, kgains, sig, lasso_thr, e_thr, bz_glr, bz_red)
+    return d
+
+
+# ----------------------------------------------------------------------------- the four methods
+@dataclass
+class MethodOutcome:
+    """One method on ``B`` records of ``N`` samples (fault onset at ``design.onset``).
+
+    Attributes
+    ----------
+    false_alarm : numpy.ndarray
+        ``(B,)`` bool: an alarm in the scored fault-free stretch ``[warmup, onset)``.
+    detect : numpy.ndarray
+        ``(B,)`` first alarm at or after the onset (``-1``: none).
+    subsystem : numpy.ndarray
+        ``(B,)`` index (in :data:`SUBSYSTEMS` order) of the subsystem that raised it (``-1``).
+    isolated : numpy.ndarray
+        ``(B, len(CANDIDATES))`` bool: the candidates the method declares faulty.
+    isolate_step : numpy.ndarray
+        ``(B,)`` sample at which the isolation decision is made (``-1``: none).
+    peak : numpy.ndarray
+        ``(B,)`` largest ratio statistic / threshold from the onset on, over the subsystems (a
+        statistical test detects where it exceeds 1; ``nan`` for the SVO, which has no statistic).
+    """
+
+    false_alarm: np.ndarray
+    detect: np.ndarray
+    subsystem: np.ndarray
+    isolated: np.ndarray
+    isolate_step: np.ndarray
+    peak: np.ndarray
+
+
+def _split(d: Design, y: np.ndarray, u: np.ndarray, s: Subsystem) -> tuple[np.ndarray, np.ndarray]:
+    return y[..., list(s.outputs)], u[..., list(s.inputs)]
+
+
+def _combine(d: Design, stats: Sequence[np.ndarray], thresholds: Sequence[float]
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """False alarms, first alarm at/after the onset and the subsystem that raised it, from one
+    statistic per subsystem."""
+    pre = np.stack([first_alarm(st[..., :d.onset], h, start=d.warmup) >= 0 for st, h in zip(stats, thresholds)])
+    post = np.stack([first_alarm(st, h, start=d.onset) for st, h in zip(stats, thresholds)])
+    big = np.where(post < 0, np.iinfo(np.int64).max, post)
+    which = np.argmin(big, axis=0)
+    first = big.min(axis=0)
+    detect = np.where(first == np.iinfo(np.int64).max, -1, first)
+    peak = np.max([np.nanmax(st[..., d.onset:], axis=-1) / h for st, h in zip(stats, thresholds)], axis=0)
+    return pre.any(axis=0), detect, np.where(detect < 0, -1, which), peak
+
+
+def _innovations(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, np.ndarray]:
+    """Kalman innovations of every subsystem (the ZB filters; also the BZ energy test's)."""
+    out = {}
+    for name, sd in d.subs.items():
+        ys, us = _split(d, y, u, sd.sub)
+        out[name] = kalman_filter(sd.kf, ys, us, gains=sd.kf_gains).innovations
+    return out
+
+
+def run_zb(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray] | None = None) -> MethodOutcome:
+    """Zhang & Basseville (2014): Kalman innovations, windowed GLR for a jump of all the
+    subsystem's additive candidates, minmax isolation (one test per candidate) ``isolation_extra``
+    samples after the alarm, from the onset the window estimates then."""
+    eps = _innovations(d, y, u) if eps is None else eps
+    B = y.shape[0]
+    res = {name: glr_window(eps[name], sd.kf, sd.kf_gains, sd.family, sd.glr.window, shared=sd.glr,
+                            start=d.warmup) for name, sd in d.subs.items()}
+    names = list(d.subs)
+    fa, detect, which, peak = _combine(d, [res[n].statistic for n in names], [d.subs[n].glr_threshold for n in names])
+    isolated = np.zeros((B, len(CANDIDATES)), dtype=bool)
+    step = np.where(detect >= 0, np.minimum(detect + d.settings.isolation_extra, d.N - 1), -1)
+    for j, name in enumerate(names):
+        rows = np.flatnonzero((detect >= 0) & (which == j))
+        if rows.size:
+            k = step[rows]
+            C = res[name].C_hat[rows, k]
+            dd = res[name].d_hat[rows, k]
+            sd = d.subs[name]
+            isolated[np.ix_(rows, sd.sub.candidates)] = _minmax(C, dd, d.settings.isolation_alpha)
+    return MethodOutcome(fa, detect, which, isolated, step, peak)
+
+
+def _minmax(C: np.ndarray, dd: np.ndarray, alpha: float) -> np.ndarray:
+    """Minmax tests (one per component) on ``(B, m, m)`` informations: ``(B, m)`` decisions "faulty".
+
+    A component whose reduced information ``F_a*`` is singular in a record (it cannot be told from
+    the others with the samples since the estimated onset) is not declared faulty there: the test
+    has no power (:class:`~fdi_lib.errors.PersistentExcitationError` from the library, per record).
+    """
+    m = C.shape[-1]
+    out = np.zeros((C.shape[0], m), dtype=bool)
+    for i in range(m):
+        try:
+            out[:, i] = minmax_isolation(C, dd, [[i]], alpha=alpha)[0].faulty
+        except PersistentExcitationError:
+            for b in range(C.shape[0]):
+                try:
+                    out[b, i] = minmax_isolation(C[b:b + 1], dd[b:b + 1], [[i]], alpha=alpha)[0].faulty[0]
+                except PersistentExcitationError:
+                    out[b, i] = False
+    return out
+
+
+def _whitener(cov: np.ndarray) -> np.ndarray:
+    """``W`` ``(r, p)`` with ``W cov W^T = I_r`` on the range of a covariance ``(p, p)`` of rank ``r``:
+    the Kitanidis residual has no variance along the direction it spends on the unknown input."""
+    lam, V = np.linalg.eigh(cov)
+    keep = lam > 1e-9 * lam.max()
+    return (V[:, keep] / np.sqrt(lam[keep])).T
+
+
+def _residuals(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Updated residuals of each subsystem (Kitanidis on the drive train, Kalman on the blades),
+    whitened by their steady-state covariance, and the whitened residual signature."""
+    out = {}
+    for name, sd in d.subs.items():
+        ys, us = _split(d, y, u, sd.sub)
+        if sd.sub.E is not None:
+            r = kitanidis_filter(sd.kit, ys, us, gains=sd.kit_gains).residuals
+            cov = sd.kit_gains.residual_cov[-1]
+        else:
+            res = kalman_filter(sd.kit, ys, us, gains=sd.kit_gains)
+            r = res.updated_residuals
+            IHK = np.eye(sd.kit.p) - sd.kit.H[-1] @ sd.kit_gains.K[-1]
+            cov = IHK @ sd.kit_gains.Sigma[-1] @ IHK.T
+        W = _whitener(cov)
+        out[name] = (r @ W.T, np.einsum("ij,kjm->kim", W, sd.kit_signature))
+    return out
+
+
+def run_zhang2021(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
+    """Zhang (2021): Kitanidis residuals (``tau_a`` the unknown input), detection when the Lasso
+    of the last ``w`` samples is not identically zero (``max_j |X_j^T y| / ||X_j||`` above the
+    Bonferroni normal quantile, the KKT condition of the zero solution with a normalised design),
+    then the Lasso path and its flat range on all candidates of all subsystems (global sparse
+    isolation)."""
+    w = d.settings.window
+    B = y.shape[0]
+    res = _residuals(d, y, u)
+    stats = []
+    for name, sd in d.subs.items():
+        r, S = res[name]
+        kern = S[d.warmup:d.warmup + w]                            # (w, p, m): onset at window start
+        norm = np.sqrt(np.einsum("wpm,wpm->m", kern, kern))
+        win = np.lib.stride_tricks.sliding_window_view(r, w, axis=1)    # (B, N-w+1, p, w)
+        t = np.einsum("bkpw,wpm->bkm", win, kern) / norm
+        st = np.full((B, d.N), np.nan)
+        st[:, w - 1:] = np.abs(t).max(axis=-1)
+        stats.append(st)
+    names = list(d.subs)
+    fa, detect, which, peak = _combine(d, stats, [d.subs[n].lasso_threshold for n in names])
+    isolated = np.zeros((B, len(CANDIDATES)), dtype=bool)
+    step = np.full(B, -1)
+    for b in np.flatnonzero(detect >= 0):
+        k = int(detect[b])
+        r0 = max(d.warmup, k - w + 1)
+        k1 = min(d.N, k + d.settings.isolation_extra + 1)
+        Xs, ys = [], []
+        for name, sd in d.subs.items():
+            r, S = res[name]
+            lags = np.arange(k1 - r0)
+            Xb = np.zeros((len(lags), r.shape[-1], len(CANDIDATES)))
+            Xb[..., list(sd.sub.candidates)] = S[d.warmup + lags]
+            Xs.append(Xb.reshape(-1, len(CANDIDATES)))
+            ys.append(r[b, r0:k1].reshape(-1))
+        X, yy = np.vstack(Xs), np.concatenate(ys)
+        scale = np.linalg.norm(X, axis=0)
+        dg = diagnose(X / scale, yy, n_samples=k1 - r0)
+        isolated[b, dg.support] = True
+        step[b] = k1 - 1
+    return MethodOutcome(fa, detect, which, isolated, step, peak)
+
+
+def run_bz(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray] | None = None) -> MethodOutcome:
+    """Basseville & Zhang: parametric tests (the stiffness ``wn^2`` of each pitch actuator, a
+    data-dependent profile ``Psi_k``; the converter offset and the drive-train torque on the
+    Kitanidis residual projected away from ``tau_a``) by windowed GLR, and the non-parametric
+    energy test on the Kalman innovation of each subsystem. An energy alarm before any
+    parametric one is the decision "non-parametric fault" (Section 3.3): isolated to its
+    subsystem only."""
+    eps = _innovations(d, y, u) if eps is None else eps
+    B = y.shape[0]
+    w = d.settings.window
+    names = list(d.subs)
+    par_stats, par_thr, par_onset = [], [], {}
+    isolated = np.zeros((B, len(CANDIDATES)), dtype=bool)
+    glr_res = {}
+    for name, sd in d.subs.items():
+        ys, us = _split(d, y, u, sd.sub)
+        if sd.sub.E is None:
+            # d beta'' = Delta(wn^2) (beta_r - ybar): the profile is the blade's known input
+            col = sd.sub.G[:, 0] / d.constants.params.omega_n ** 2
+            drive = us[..., 0]                                          # (B, N): beta_r - ybar
+            st = np.empty((B, d.N))
+            for b in range(B):
+                fam = step_family(sd.kf, Psi=col[None, :, None] * drive[b, :, None, None])
+                st[b] = glr_window(eps[name][b], sd.kf, sd.kf_gains, fam, w, start=d.warmup).statistic
+            par_stats.append(st)
+            par_thr.append(float(scipy.stats.chi2.ppf(1.0 - d.alpha_sample / w, 1)))
+        else:
+            kpred, T = sd.bz_red
+            from fdi_lib.nonparametric import reduce_residual
+            e_kit = kalman_filter(sd.kit, ys, us, gains=kpred).innovations
+            red = reduce_residual(sd.kit, sd.kit_gains, e_kit, T)
+            g = glr_window(red.residuals, sd.bz_glr.model, sd.bz_glr.gains, sd.bz_glr.family, w,
+                           shared=sd.bz_glr, start=d.warmup)
+            glr_res[name] = g
+            par_stats.append(g.statistic)
+            par_thr.append(float(scipy.stats.chi2.ppf(1.0 - d.alpha_sample / w, 1)))
+    pfa, pdet, pwhich, ppeak = _combine(d, par_stats, par_thr)
+    en = [energy_statistic(eps[n], d.subs[n].kf_gains.Sigma_chol, w) for n in names]
+    efa, edet, ewhich, epeak = _combine(d, en, [d.subs[n].energy_threshold for n in names])
+    big = np.iinfo(np.int64).max
+    p_ = np.where(pdet < 0, big, pdet)
+    e_ = np.where(edet < 0, big, edet)
+    detect = np.where(np.minimum(p_, e_) == big, -1, np.minimum(p_, e_))
+    par_first = (p_ <= e_) & (pdet >= 0)
+    which = np.where(detect < 0, -1, np.where(par_first, pwhich, ewhich))
+    for b in np.flatnonzero(detect >= 0):
+        sub = d.subs[names[which[b]]].sub
+        if par_first[b]:
+            # the blade's actuator; on the drive train a torque on the generator (converter or efficiency)
+            isolated[b, [sub.candidates[2]] if sub.E is None else [sub.candidates[5], sub.candidates[6]]] = True
+        else:
+            isolated[b, list(sub.candidates)] = True            # non-parametric: the subsystem only
+    return MethodOutcome(pfa | efa, detect, which, isolated, detect.copy(), np.maximum(ppeak, epeak))
+
+
+def _const(M: np.ndarray, T: int) -> np.ndarray:
+    return np.broadcast_to(M, (T, *M.shape)).copy()
+
+
+def _interval(mats: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Middle and one direction per varying entry of an entrywise interval hull of ``mats``."""
+    st = np.stack(mats)
+    lo, hi = st.min(axis=0), st.max(axis=0)
+    mid = (lo + hi) / 2
+    dirs = []
+    for idx in zip(*np.nonzero(hi - lo > 1e-15 * (1 + np.abs(mid)))):
+        D = np.zeros_like(mid)
+        D[idx] = (hi - lo)[idx] / 2
+        dirs.append(D)
+    return mid, np.array(dirs).reshape(len(dirs), *mid.shape)
+
+
+def svo_banks(d: Design, T: int) -> dict[str, tuple[ModelSequence, dict[str, ModelSequence]]]:
+    """Per subsystem, the nominal SVO model and the fault hypotheses of the Architecture I bank,
+    for ``T`` steps.
+
+    Noise bounds ``svo_sigmas`` standard deviations; model-error and ``tau_a``-increment bounds
+    from the calibration (:class:`Calibration`); hypotheses: each sensor offset (noise bound
+    plus ``sensor_bias_bound`` sigmas), each pitch actuator with its stiffness and damping
+    anywhere between the nominal and the scenario's faulty values (an uncertain ``A`` and ``B``),
+    the converter offset and the drive-train torque (a disturbance up to ``torque_bound`` kNm).
+    """
+    c, cal, st = d.constants, d.calibration, d.settings
+    out = {}
+    for name, sd in d.subs.items():
+        s = sd.sub
+        F, G, H, _ = _aug(s)
+        sig = c.sigma[list(s.outputs)]
+        noise = st.svo_sigmas * sig
+        bnd = cal.bound[name]
+        L = np.diag(np.r_[bnd, cal.dtau_bound] if s.E is not None else bnd)
+        if s.E is not None:   # a zero column: every hypothesis of the drive train has one structure
+            L = np.hstack([L, np.zeros((L.shape[0], 1))])
+
+        def seq(A=F, B=G, L=L, noise=noise, A_unc=None, B_unc=None):
+            return ModelSequence(A=_const(A, T), B=_const(B, T), C=H, L=L, noise=noise,
+                                 A_unc=None if A_unc is None else _const(A_unc, T),
+                                 B_unc=None if B_unc is None else _const(B_unc, T))
+
+        faults = {}
+        for j, o in enumerate(s.outputs):
+            nz = noise.copy()
+            nz[j] += st.sensor_bias_bound * sig[j]
+            faults[SENSORS[o]] = seq(noise=nz)
+        if s.E is None:
+            i = int(s.name[-1]) - 1
+            variants = [_blade(c, i)] + [_blade(c, i, wn, z) for wn, z in c.actuator_faults]
+            A_mid, A_dirs = _interval([v.F for v in variants])
+            B_mid, B_dirs = _interval([v.G for v in variants])
+            faults[f"actuator{i + 1}"] = seq(A=A_mid, B=B_mid, A_unc=A_dirs, B_unc=B_dirs)
+        else:
+            Psi = _aug(s)[3]
+            nz = noise.copy()
+            nz[4] += st.torque_bound                # the converter offset also shows on the torque sensor
+            for col, cand, nzc in ((5, "converter", nz), (6, "drive_train", noise)):
+                faults[cand] = seq(L=np.hstack([L[:, :-1], st.torque_bound * Psi[:, col:col + 1]]), noise=nzc)
+        out[name] = (seq(), faults)
+    return out
+
+
+def _prior_box(d: Design, s: Subsystem) -> tuple[np.ndarray, np.ndarray]:
+    cal = d.calibration
+    lo, hi = cal.x_range[0, list(s.states)], cal.x_range[1, list(s.states)]
+    if s.E is not None:
+        lo, hi = np.r_[lo, cal.tau_range[0]], np.r_[hi, cal.tau_range[1]]
+    return lo, hi
+
+
+def run_svo_bank(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
+    """Rosa & Silvestre (2013): per subsystem, a template SVO of the nominal model (detection:
+    its set is empty) and an Architecture I bank of the fault hypotheses (:func:`svo_banks`;
+    isolation: one hypothesis left), from the end of the warm-up: an empty nominal set before
+    the onset is a false alarm. The three blades (same model structure) run as one batch."""
+    B = y.shape[0]
+    names = list(d.subs)
+    i0 = d.warmup
+    T = d.N - 1 - i0
+    banks = svo_banks(d, T)
+    det = np.full((len(names), B), -1)
+    iso_step = np.full((len(names), B), -1)
+    iso_name: list[list[str | None]] = [[None] * B for _ in names]
+    groups = [[n for n in names if d.subs[n].sub.E is None], [n for n in names if d.subs[n].sub.E is not None]]
+    for group in groups:
+        nominal, faults, ys, us = [], [], [], []
+        for name in group:
+            nom, fl = banks[name]
+            generic = {_generic(k): v for k, v in fl.items()}
+            nominal += [nom] * B
+            faults += [generic] * B
+            yy, uu = _split(d, y, u, d.subs[name].sub)
+            ys.append(yy[:, i0:])
+            us.append(uu[:, i0:-1])
+        X0 = _prior_group(d, group)
+        res = run_architecture_i_many(nominal, faults, np.concatenate(us), np.concatenate(ys), X0)
+        for gi, name in enumerate(group):
+            j = names.index(name)
+            for b in range(B):
+                r = res[gi * B + b]
+                if r.detection_step is None:
+                    continue
+                det[j, b] = i0 + r.detection_step
+                if r.isolation_step is not None:
+                    iso_step[j, b] = i0 + r.isolation_step
+                    iso_name[j][b] = _specific(r.isolated, name)
+    pre = ((det >= 0) & (det < d.onset)).any(axis=0)
+    det = np.where(det >= d.onset, det, -1)          # a record that emptied earlier stopped there
+    big = np.iinfo(np.int64).max
+    dd = np.where(det < 0, big, det)
+    which = np.argmin(dd, axis=0)
+    first = dd.min(axis=0)
+    detect = np.where(first == big, -1, first)
+    isolated = np.zeros((B, len(CANDIDATES)), dtype=bool)
+    step = np.full(B, -1)
+    for b in np.flatnonzero(detect >= 0):
+        j = which[b]
+        if iso_name[j][b] is not None:
+            isolated[b, CANDIDATES.index(iso_name[j][b])] = True
+            step[b] = iso_step[j, b]
+    return MethodOutcome(pre, detect, np.where(detect < 0, -1, which), isolated, step, np.full(B, np.nan))
+
+
+def _generic(candidate: str) -> str:
+    """A blade's hypothesis name without the blade (``beta2_m1`` -> ``m1``, ``actuator2`` -> ``actuator``)."""
+    if candidate.startswith("beta"):
+        return candidate[-2:]
+    return "actuator" if candidate.startswith("actuator") else candidate
+
+
+def _specific(generic: str, subsystem: str) -> str:
+    if subsystem.startswith("blade"):
+        i = subsystem[-1]
+        return f"actuator{i}" if generic == "actuator" else f"beta{i}_{generic}"
+    return generic
+
+
+def _prior_group(d: Design, group: Sequence[str]) -> Polytope:
+    """Prior set shared by a batch of subsystems: the hull of their boxes."""
+    boxes = [_prior_box(d, d.subs[n].sub) for n in group]
+    return Polytope.box(np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0))
+
+
+def run_methods(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, MethodOutcome]:
+    """The four methods (keys of :data:`METHODS`) on records ``y`` ``(B, N, 11)``, ``u`` ``(B, N, 4)``."""
+    y = np.asarray(y, dtype=float)
+    u = np.asarray(u, dtype=float)
+    if y.ndim != 3 or y.shape[1:] != (d.N, len(SENSORS)) or u.shape != (y.shape[0], d.N, len(INPUTS)):
+        raise ShapeError(f"y, u: expected (B, {d.N}, {len(SENSORS)}) and (B, {d.N}, {len(INPUTS)}), "
+                         f"got {y.shape} and {u.shape}")
+    eps = _innovations(d, y, u)
+    return {"zb2014": run_zb(d, y, u, eps), "zhang2021": run_zhang2021(d, y, u),
+            "bz": run_bz(d, y, u, eps), "rosa2013": run_svo_bank(d, y, u)}
+
+
+# ----------------------------------------------------------------------------- records around each fault
+def _shifted(fault: Any, start_s: float) -> Any:
+    import dataclasses
+
+    return dataclasses.replace(fault, start_s=start_s, stop_s=start_s + (fault.stop_s - fault.start_s))
+
+
+def expected_candidates(fault: Any) -> tuple[str, ...]:
+    """The candidates (:data:`CANDIDATES`) a correct isolation of a benchmark ``fault`` names."""
+    out = []
+    for comp in fault.component:
+        if comp.startswith("beta_"):
+            out.append(f"beta{comp[5]}_{comp[-2:]}")
+        elif comp.startswith("pitch_actuator_"):
+            out.append(f"actuator{comp[-1]}")
+        else:
+            out.append(comp)
+    for name in out:
+        if name not in CANDIDATES:
+            raise ModelError(f"fault {fault.id}: component {name!r} is not a candidate of {CANDIDATES}")
+    return tuple(out)
+
+
+def fault_records(fault: Any, seeds: Sequence[np.random.SeedSequence], *, settings: Settings = Settings(),
+                  params: Any = None, settle_s: float = 20.0, faulty: bool = True) -> Records:
+    """One realisation per seed of the segment around ``fault`` (:class:`Settings` ``pre_s``, ``post_s``).
+
+    The plant (:func:`fdi_lib.systems.wind_turbine.simulate`) runs from ``settle_s + pre_s`` seconds
+    before the fault's start, in the scenario's wind of that stretch (:func:`~fdi_lib.systems.
+    wind_turbine.wind_speed` at those times, seeded by each seed's child 0), with the fault moved
+    accordingly (``faulty=False``: without it); the first ``settle_s`` seconds (the plant leaving its
+    initial equilibrium) are dropped.
+    """
+    from fdi_lib.systems import wind_turbine as wt
+
+    params = wt.PARAMS if params is None else params
+    t0 = settle_s + settings.pre_s
+    duration = t0 + settings.post_s
+    n = int(round(duration / params.ts))
+    t_abs = fault.start_s - t0 + np.arange(n) * params.ts
+    seeds = list(seeds)
+    wind = np.stack([wt.wind_speed(t_abs, seed=np.random.SeedSequence(s.entropy, spawn_key=s.spawn_key + (0,),
+                                                                      pool_size=s.pool_size)) for s in seeds])
+    run = wt.simulate(seed=seeds, faults=(_shifted(fault, t0),) if faulty else (), duration_s=duration,
+                      params=params, wind=wind)
+    i0 = int(round(settle_s / params.ts))
+    return records(run).window(i0, i0 + int(round((settings.pre_s + settings.post_s) / params.ts)))
