@@ -24,7 +24,8 @@ different numbers, and the grader (``tools/grader.py``) recomputes the reference
 Without a student id the data are the book's, identical on every call.
 
 **Layout.** One module per chapter holds its exercises' statements and data
-(:mod:`~fdi_lib.exercises.signature`, ``glr``, ``pipeline``, ``sparse``, ``bz``, ``svo``);
+(:mod:`~fdi_lib.exercises.signature`, ``glr``, ``pipeline``, ``sparse``, ``bz``, ``svo``,
+``windturbine``);
 :mod:`~fdi_lib.exercises.checker` holds :func:`check`; :mod:`~fdi_lib.exercises.book` the
 instructor's tables and the chapter parsing. The reference answers, the known mistakes and the
 list of library calls the grader forbids live in ``fdi_lib.exercises._reference``, which the
@@ -39,7 +40,7 @@ import difflib
 import numpy as np
 
 from fdi_lib.errors import ModelError
-from fdi_lib.exercises import bz, glr, pipeline, signature, sparse, svo
+from fdi_lib.exercises import bz, glr, pipeline, signature, sparse, svo, windturbine
 from fdi_lib.exercises._core import (CHAPTERS, DIFFICULTIES, STUDENT_ENV, AnswerError, CheckResult,
                                      Exercise, ExerciseData, ReferenceNotShippedError,
                                      UnknownExerciseError, student_id, student_rng, student_seed)
@@ -55,7 +56,8 @@ __all__ = ["Exercise", "CheckResult", "ExerciseData", "EXERCISES", "CHAPTERS", "
            "counts_table", "COURSE_PLAN", "plan_table", "strip_solutions", "ChapterExercise",
            "parse_chapter", "exercises_section", "code_cells", "words", "solution_fingerprints"]
 
-_LIST = [e for module in (signature, glr, pipeline, sparse, bz, svo) for e in module.EXERCISES]
+_LIST = [e for module in (signature, glr, pipeline, sparse, bz, svo, windturbine)
+         for e in module.EXERCISES]
 
 #: All exercises, by identifier, in book order.
 EXERCISES: dict[str, Exercise] = {e.id: e for e in _LIST}

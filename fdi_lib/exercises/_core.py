@@ -29,6 +29,7 @@ CHAPTERS = {
     "zhang2021/sparse": "Sparse fault isolation",
     "bz/parametric-nonparametric": "Parametric and non-parametric faults",
     "rosa2013/svo": "Set-valued observers",
+    "windturbine/benchmark": "Four methods on the wind-turbine benchmark",
 }
 
 #: Environment variable holding a student's identifier: when set (and no ``student`` argument is

@@ -43,7 +43,7 @@ def counts_table():
     return table(rows, [*DIFFICULTIES, "checkable", "total", "time"], index_header="chapter")
 
 
-#: A suggested course of eight weeks: (topic, chapters read, exercises set), each exercise once.
+#: A suggested course of nine weeks: (topic, chapters read, exercises set), each exercise once.
 COURSE_PLAN: tuple[tuple[str, tuple[str, ...], tuple[str, ...]], ...] = (
     ("Kalman innovation and fault signatures", ("zb2014/signature",), ("sig-1", "sig-2", "sig-3")),
     ("Boundedness and identifiability", ("zb2014/signature",), ("sig-4", "sig-5", "sig-6")),
@@ -57,6 +57,8 @@ COURSE_PLAN: tuple[tuple[str, tuple[str, ...], tuple[str, ...]], ...] = (
      ("bz-1", "bz-5", "bz-2", "bz-3", "bz-4", "bz-6")),
     ("Set membership: set-valued observers", ("rosa2013/svo",),
      ("svo-1", "svo-2", "svo-5", "svo-3", "svo-4", "svo-6")),
+    ("Case study: four methods on the wind-turbine benchmark", ("windturbine/benchmark",),
+     ("wt-1", "wt-2", "wt-3", "wt-4")),
 )
 
 

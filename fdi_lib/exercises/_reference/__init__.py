@@ -59,10 +59,10 @@ class Reference:
 
 
 def _collect() -> dict[str, Reference]:
-    from fdi_lib.exercises._reference import bz, glr, pipeline, signature, sparse, svo
+    from fdi_lib.exercises._reference import bz, glr, pipeline, signature, sparse, svo, windturbine
 
     out: dict[str, Reference] = {}
-    for module in (signature, glr, pipeline, sparse, bz, svo):
+    for module in (signature, glr, pipeline, sparse, bz, svo, windturbine):
         out.update(module.REFERENCES)
     return out
 
