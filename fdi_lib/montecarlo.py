@@ -301,12 +301,10 @@ def dask_executor(cluster: str, *, timeout: float | None = None) -> Iterator[con
         cannot start).
     """
     kind, sep, rest = str(cluster).partition(":")
-    local = kind == "local"
-    if local:
-        try:
+    n_workers = 0  # of a local cluster; 0 for a scheduler's address
+    if kind == "local":
+        with contextlib.suppress(ValueError):
             n_workers = int(rest)
-        except ValueError:
-            n_workers = 0
         if n_workers < 1:
             raise ModelError(f"cluster: expected local:N with N a positive integer, got {cluster!r}")
     elif not (sep and rest.startswith("//") and len(rest) > 2):
@@ -317,35 +315,75 @@ def dask_executor(cluster: str, *, timeout: float | None = None) -> Iterator[con
     except ImportError:
         raise ModelError("cluster: needs dask.distributed; expected it installed (pip install "
                          "'fdi_lib[cluster]'), got none") from None
-    import logging
 
     timeout = CONNECT_TIMEOUT if timeout is None else float(timeout)
-    with contextlib.ExitStack() as stack:
-        address: Any = cluster
-        if local:
-            try:
-                # processes (one BLAS thread each: Dask's nanny sets OMP/OPENBLAS/MKL_NUM_THREADS=1),
-                # on the loopback interface only, no dashboard (the scheduler's small HTTP server,
-                # health and metrics, on a free loopback port), only errors logged on standard error
-                address = stack.enter_context(distributed.LocalCluster(
-                    n_workers=n_workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                    dashboard_address=None, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
-                    silence_logs=logging.ERROR))
-            except (OSError, RuntimeError) as exc:  # RuntimeError: "Nanny failed to start"
-                raise ClusterError(f"cluster: cannot start a local cluster of {n_workers} workers "
-                                   f"({_one_line(exc)})") from None
+    stack = contextlib.ExitStack()
+    try:
+        # Ctrl-C is held while the cluster starts and while it stops: Dask cannot stop a cluster
+        # interrupted half-way through its start (its exit handler then fails on the workers still
+        # starting), nor finish a stop interrupted by a second Ctrl-C
+        with _sigint_held():
+            executor = _start_dask(stack, distributed, cluster, n_workers, timeout)
+        yield executor
+    finally:
+        with _sigint_held():
+            stack.close()
+
+
+def _start_dask(stack: contextlib.ExitStack, distributed: Any, cluster: str, n_workers: int,
+                timeout: float) -> concurrent.futures.Executor:
+    """The executor of :func:`dask_executor` (``n_workers > 0``: a local cluster of that many
+    workers), its client and cluster entered in ``stack``."""
+    import logging
+
+    address: Any = cluster
+    if n_workers:
         try:
-            client = stack.enter_context(distributed.Client(address, timeout=timeout, set_as_default=False))
-        except OSError as exc:  # including TimeoutError: "Timed out trying to connect to ... after 5 s"
-            raise ClusterError(f"cluster: cannot reach the Dask scheduler at {cluster} within {timeout:g} s "
+            # processes (one BLAS thread each: Dask's nanny sets OMP/OPENBLAS/MKL_NUM_THREADS=1),
+            # on the loopback interface only, no dashboard (the scheduler's small HTTP server,
+            # health and metrics, on a free loopback port); no log on standard error (a chunk's error
+            # reaches the caller as an exception)
+            address = stack.enter_context(distributed.LocalCluster(
+                n_workers=n_workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                dashboard_address=None, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+                silence_logs=logging.CRITICAL))
+        except (OSError, RuntimeError) as exc:  # RuntimeError: "Nanny failed to start"
+            raise ClusterError(f"cluster: cannot start a local cluster of {n_workers} workers "
                                f"({_one_line(exc)})") from None
-        try:  # a scheduler without workers would leave the run waiting for ever
-            client.wait_for_workers(1, timeout=timeout)
-        except OSError:  # TimeoutError
-            raise ClusterError(f"cluster: the Dask scheduler at {cluster} has no worker (none joined within "
-                               f"{timeout:g} s)") from None
-        # random task keys (pure=False): no hashing of the arguments, and every chunk is a new task
-        yield client.get_executor(pure=False)
+    try:
+        client = stack.enter_context(distributed.Client(address, timeout=timeout, set_as_default=False))
+    except OSError as exc:  # including TimeoutError: "Timed out trying to connect to ... after 5 s"
+        raise ClusterError(f"cluster: cannot reach the Dask scheduler at {cluster} within {timeout:g} s "
+                           f"({_one_line(exc)})") from None
+    try:  # a scheduler without workers would leave the run waiting for ever
+        client.wait_for_workers(1, timeout=timeout)
+    except OSError:  # TimeoutError
+        raise ClusterError(f"cluster: the Dask scheduler at {cluster} has no worker (none joined within "
+                           f"{timeout:g} s)") from None
+    # random task keys (pure=False): no hashing of the arguments, and every chunk is a new task
+    return client.get_executor(pure=False)
+
+
+@contextlib.contextmanager
+def _sigint_held() -> Iterator[None]:
+    """Context manager: a Ctrl-C (SIGINT) inside is held, and raised as ``KeyboardInterrupt`` on
+    leaving. SIGINT is blocked (POSIX, main thread), so the processes and threads started inside
+    keep it blocked: the workers of a local cluster are stopped by their nanny, not by the
+    terminal's Ctrl-C in the middle of their start-up."""
+    import signal
+    import threading
+
+    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    from multiprocessing import resource_tracker
+
+    resource_tracker.ensure_running()  # its start unblocks SIGINT: started first, it stays blocked below
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)  # a held SIGINT is delivered here
 
 
 def _one_line(exc: BaseException) -> str:
