@@ -14,10 +14,10 @@ operations, are the same for any number of workers).
 
 Beyond one machine, the chunks go to any :class:`concurrent.futures.Executor` instead
 (``executor=``, or :func:`use_executor` around a whole computation): a Dask cluster
-(:func:`dask_executor`, the command line's ``--cluster``), a process pool, Ray's executor. Each
-chunk is the same call on the same realisations, so the results are bit-identical to ``jobs=1``
-for any executor and number of workers (on workers with the same CPU type and library versions:
-the BLAS picks its kernels by CPU).
+(:func:`dask_executor`, the command line's ``--cluster``), a process pool, an adapter of Ray's
+futures. Each chunk is the same call on the same realisations, so the results are bit-identical
+to ``jobs=1`` for any executor and number of workers (on workers with the same CPU type and
+library versions: the BLAS picks its kernels by CPU).
 
 What is shared and what runs per realisation
 --------------------------------------------
@@ -57,6 +57,8 @@ __all__ = ["trial_seeds", "trial_rngs", "run_monte_carlo", "run_monte_carlo_many
            "available_memory", "check_memory"]
 
 ChunkFn = Callable[[Sequence[np.random.SeedSequence]], dict[str, np.ndarray]]
+#: ``task(i) -> (chunk_fn, root, start, stop)``: chunk ``i`` of a run, as :func:`_call` takes it.
+Task = Callable[[int], tuple[ChunkFn, np.random.SeedSequence, int, int]]
 
 #: Bytes held by one spawned SeedSequence (470 measured with tracemalloc over 10^4 of them, numpy 2).
 _SEED_BYTES = 470
@@ -133,10 +135,15 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
     executor : concurrent.futures.Executor, optional
         Where the chunks run instead of this machine's processes (``jobs`` is then not used): any
         executor, e.g. a Dask cluster's (:func:`dask_executor`, ``Client.get_executor()``), a
-        :class:`~concurrent.futures.ProcessPoolExecutor`, Ray's. The first chunk runs here (the
+        :class:`~concurrent.futures.ProcessPoolExecutor`. The first chunk runs here (the
         memory probe), the others are handed to ``executor`` (at most :data:`IN_FLIGHT` at a
         time); the chunks and their seeds are those of ``jobs=1``, so are the results. Default:
         the executor set by :func:`use_executor`, if any.
+
+    Returns
+    -------
+    dict of numpy.ndarray
+        Each entry concatenated over realisations (leading axis ``n_trials``).
 
     Raises
     ------
@@ -508,9 +515,6 @@ def _call(chunk_fn: ChunkFn, root: np.random.SeedSequence, start: int, stop: int
     seeds = _spawned(root, start, stop)
     with blas_single_thread():
         return chunk_fn(seeds)
-
-
-Task = Callable[[int], tuple[ChunkFn, np.random.SeedSequence, int, int]]
 
 
 def _run_chunks(task: Task, n_tasks: int,
