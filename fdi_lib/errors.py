@@ -1,7 +1,7 @@
 """Typed errors of :mod:`fdi_lib`.
 
-Every error subclasses a builtin (``ValueError`` or ``TypeError``) so that
-generic handlers keep working, and every message names the offending argument
+Every error subclasses a builtin (mostly ``ValueError`` or ``TypeError``; ``ConnectionError``
+for a cluster that cannot be reached) so that generic handlers keep working, and every message names the offending argument
 together with what was expected and what was received. Warnings subclass
 :class:`FDIWarning` (a ``UserWarning``: shown by default, once per place).
 """
@@ -21,6 +21,7 @@ __all__ = [
     "UnboundedSetError",
     "NumericalError",
     "ResourceError",
+    "ClusterError",
     "FDIWarning",
     "UnsoundOptionWarning",
     "EnvelopeWarning",
@@ -83,6 +84,11 @@ class NumericalError(FDIError, ArithmeticError):
 class ResourceError(FDIError, ValueError):
     """A request would exceed a resource limit (memory, frames, page weight); the message gives
     the estimate and the limit."""
+
+
+class ClusterError(FDIError, ConnectionError):
+    """A compute cluster (e.g. the Dask scheduler of ``--cluster tcp://HOST:PORT``) cannot be reached or
+    started; the message names the address and the time waited."""
 
 
 class FDIWarning(UserWarning):

@@ -12,6 +12,13 @@ Since a realisation's random numbers depend only on
 size does not depend on ``jobs``, so the chunks, and hence the floating-point
 operations, are the same for any number of workers).
 
+Beyond one machine, the chunks go to any :class:`concurrent.futures.Executor` instead
+(``executor=``, or :func:`use_executor` around a whole computation): a Dask cluster
+(:func:`dask_executor`, the command line's ``--cluster``), a process pool, an adapter of Ray's
+futures. Each chunk is the same call on the same realisations, so the results are bit-identical
+to ``jobs=1`` for any executor and number of workers (on workers with the same CPU type and
+library versions: the BLAS picks its kernels by CPU).
+
 What is shared and what runs per realisation
 --------------------------------------------
 A chunk function computes once what does not depend on the noise (Kalman gains
@@ -30,6 +37,7 @@ the innovations, so its shared quantities are unchanged; nothing runs per realis
 
 from __future__ import annotations
 
+import concurrent.futures
 import contextlib
 import contextvars
 import sys
@@ -39,15 +47,18 @@ from typing import Any, Callable, Iterator, Sequence
 import numpy as np
 import scipy.stats
 
-from fdi_lib.errors import JobsCappedWarning, ModelError, ResourceError, ShapeError
+from fdi_lib.errors import ClusterError, JobsCappedWarning, ModelError, ResourceError, ShapeError
 from fdi_lib.models import LTVModel
 from fdi_lib.simulate import Noise, draw_noise, noise_roots
 from fdi_lib.validation import integer, probability, seed as check_seed
 
 __all__ = ["trial_seeds", "trial_rngs", "run_monte_carlo", "run_monte_carlo_many", "draw_noise_batch", "binomial_ci",
-           "default_chunk_size", "effective_jobs", "progress_bars", "available_memory", "check_memory"]
+           "default_chunk_size", "effective_jobs", "progress_bars", "use_executor", "dask_executor",
+           "available_memory", "check_memory"]
 
 ChunkFn = Callable[[Sequence[np.random.SeedSequence]], dict[str, np.ndarray]]
+#: ``task(i) -> (chunk_fn, root, start, stop)``: chunk ``i`` of a run, as :func:`_call` takes it.
+Task = Callable[[int], tuple[ChunkFn, np.random.SeedSequence, int, int]]
 
 #: Bytes held by one spawned SeedSequence (470 measured with tracemalloc over 10^4 of them, numpy 2).
 _SEED_BYTES = 470
@@ -93,7 +104,8 @@ def default_chunk_size(n_trials: int) -> int:
 
 def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 1,
                     chunk_size: int | None = None, progress: bool | None = None,
-                    description: str = "Monte Carlo") -> dict[str, np.ndarray]:
+                    description: str = "Monte Carlo",
+                    executor: concurrent.futures.Executor | None = None) -> dict[str, np.ndarray]:
     """Run ``n_trials`` realisations of ``chunk_fn`` and concatenate the results.
 
     Parameters
@@ -101,7 +113,7 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
     chunk_fn : callable
         ``chunk_fn(seeds) -> dict`` of arrays whose leading axis has ``len(seeds)``
         entries, one per realisation (must be a picklable module-level function or
-        :func:`functools.partial` for ``jobs != 1``).
+        :func:`functools.partial` for ``jobs != 1`` or an executor).
     n_trials : int
         Number of realisations.
     seed : int
@@ -120,6 +132,13 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
         line turned it on).
     description : str
         Label of the progress bar.
+    executor : concurrent.futures.Executor, optional
+        Where the chunks run instead of this machine's processes (``jobs`` is then not used): any
+        executor, e.g. a Dask cluster's (:func:`dask_executor`, ``Client.get_executor()``), a
+        :class:`~concurrent.futures.ProcessPoolExecutor`. The first chunk runs here (the
+        memory probe), the others are handed to ``executor`` (at most :data:`IN_FLIGHT` at a
+        time); the chunks and their seeds are those of ``jobs=1``, so are the results. Default:
+        the executor set by :func:`use_executor`, if any.
 
     Returns
     -------
@@ -133,12 +152,13 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
         realisation times ``n_trials``, checked before any other chunk runs.
     """
     return run_monte_carlo_many([chunk_fn], n_trials, seed=seed, jobs=jobs, chunk_size=chunk_size,
-                                progress=progress, description=description)[0]
+                                progress=progress, description=description, executor=executor)[0]
 
 
 def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: int, jobs: int = 1,
                          chunk_size: int | None = None, progress: bool | None = None,
-                         description: str = "Monte Carlo") -> list[dict[str, np.ndarray]]:
+                         description: str = "Monte Carlo",
+                         executor: concurrent.futures.Executor | None = None) -> list[dict[str, np.ndarray]]:
     """:func:`run_monte_carlo` of several chunk functions on the same realisations, in one pool.
 
     E.g. the columns of a table (common random numbers: realisation ``i`` of every column uses
@@ -150,7 +170,7 @@ def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: i
     ----------
     chunk_fns : sequence of callable
         Chunk functions, as ``chunk_fn`` of :func:`run_monte_carlo`.
-    n_trials, seed, jobs, chunk_size, progress, description
+    n_trials, seed, jobs, chunk_size, progress, description, executor
         As in :func:`run_monte_carlo` (the progress bar counts the chunks of all the functions).
 
     Returns
@@ -175,16 +195,18 @@ def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: i
     root = np.random.SeedSequence(seed)
     n_parts = -(-n_trials // chunk_size)
     n_tasks = len(chunk_fns) * n_parts
-    n_workers = effective_jobs(jobs, n_tasks)
+    if executor is None:
+        executor = _EXECUTOR.get()
+    n_workers = effective_jobs(jobs, n_tasks) if executor is None else 1
 
     def part(j: int) -> slice:
         return slice(j * chunk_size, min((j + 1) * chunk_size, n_trials))
 
-    def task(i: int) -> tuple[ChunkFn, list[np.random.SeedSequence]]:
-        # task i: chunk i % n_parts of function i // n_parts, its seeds made when it is handed out
+    def task(i: int) -> tuple[ChunkFn, np.random.SeedSequence, int, int]:
+        # task i: chunk i % n_parts of function i // n_parts (its seeds are made where it runs)
         c, j = divmod(i, n_parts)
         sl = part(j)
-        return chunk_fns[c], _spawned(root, sl.start, sl.stop)
+        return chunk_fns[c], root, sl.start, sl.stop
 
     bar: Any = None
     if progress if progress is not None else _PROGRESS.get():
@@ -197,7 +219,11 @@ def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: i
         _check_memory(first, part(0), n_trials, len(chunk_fns))
         if bar is not None:
             bar.update()
-        results = _run_chunks(task, n_tasks, first, n_workers, None if bar is None else bar.update)
+        done = None if bar is None else bar.update
+        if executor is None:
+            results = _run_chunks(task, n_tasks, first, n_workers, done)
+        else:
+            results = _run_on_executor(executor, task, n_tasks, first, done)
     finally:
         if bar is not None:
             bar.close()
@@ -231,6 +257,179 @@ def progress_bars(enabled: bool = True) -> Iterator[None]:
         yield
     finally:
         _PROGRESS.reset(token)
+
+
+#: The executor that :func:`run_monte_carlo` uses when its ``executor`` is ``None`` (see :func:`use_executor`).
+_EXECUTOR: contextvars.ContextVar[concurrent.futures.Executor | None] = contextvars.ContextVar(
+    "fdi_lib_executor", default=None)
+
+
+@contextlib.contextmanager
+def use_executor(executor: concurrent.futures.Executor | None) -> Iterator[None]:
+    """Context manager: Monte Carlo runs inside hand their chunks to ``executor`` (``None``: this
+    machine's processes, as ``jobs`` says), unless their ``executor`` argument names another.
+
+    So a whole reproduction, or the claims ledger, runs on a cluster without passing the executor
+    down every call (as the command line's ``--cluster`` does). The setting is this thread's.
+    """
+    token = _EXECUTOR.set(executor)
+    try:
+        yield
+    finally:
+        _EXECUTOR.reset(token)
+
+
+#: Seconds to wait for a Dask scheduler (``dask_executor("tcp://...")``) before giving up.
+CONNECT_TIMEOUT = 5.0
+
+
+@contextlib.contextmanager
+def dask_executor(cluster: str, *, timeout: float | None = None) -> Iterator[concurrent.futures.Executor]:
+    """Context manager: the :class:`concurrent.futures.Executor` of a Dask cluster, closed on exit.
+
+    Parameters
+    ----------
+    cluster : str
+        ``"local:N"``: a cluster of ``N`` worker processes on this machine, one thread each, started
+        for the block and stopped at its end (also on an error or Ctrl-C), listening on
+        ``127.0.0.1`` only, without dashboard. ``"tcp://HOST:PORT"`` (or another Dask protocol):
+        an existing scheduler (``dask scheduler``, with workers started by ``dask worker``; they
+        need this version of :mod:`fdi_lib` importable); it is left running.
+    timeout : float, optional
+        Seconds to wait for the scheduler; default :data:`CONNECT_TIMEOUT`.
+
+    Raises
+    ------
+    ModelError
+        ``cluster`` is not of either form, or ``dask.distributed`` is not installed (the ``cluster``
+        extra of the package).
+    ClusterError
+        The scheduler cannot be reached, or has no worker, within ``timeout`` (or the local cluster
+        cannot start).
+    """
+    kind, sep, rest = str(cluster).partition(":")
+    n_workers = 0  # of a local cluster; 0 for a scheduler's address
+    if kind == "local":
+        with contextlib.suppress(ValueError):
+            n_workers = int(rest)
+        if n_workers < 1:
+            raise ModelError(f"cluster: expected local:N with N a positive integer, got {cluster!r}")
+    elif not (sep and rest.startswith("//") and len(rest) > 2):
+        raise ModelError(f"cluster: expected local:N or a scheduler address such as tcp://HOST:PORT, "
+                         f"got {cluster!r}")
+    try:
+        import distributed
+    except ImportError:
+        raise ModelError("cluster: needs dask.distributed; expected it installed (pip install "
+                         "'fdi_lib[cluster]'), got none") from None
+
+    timeout = CONNECT_TIMEOUT if timeout is None else float(timeout)
+    stack = contextlib.ExitStack()
+    try:
+        # Ctrl-C is held while the cluster starts and while it stops: Dask cannot stop a cluster
+        # interrupted half-way through its start (its exit handler then fails on the workers still
+        # starting), nor finish a stop interrupted by a second Ctrl-C
+        with _sigint_held():
+            executor = _start_dask(stack, distributed, cluster, n_workers, timeout)
+        yield executor
+    finally:
+        with _sigint_held():
+            stack.close()
+
+
+def _start_dask(stack: contextlib.ExitStack, distributed: Any, cluster: str, n_workers: int,
+                timeout: float) -> concurrent.futures.Executor:
+    """The executor of :func:`dask_executor` (``n_workers > 0``: a local cluster of that many
+    workers), its client and cluster entered in ``stack``."""
+    import logging
+
+    address: Any = cluster
+    if n_workers:
+        try:
+            # processes (one BLAS thread each: Dask's nanny sets OMP/OPENBLAS/MKL_NUM_THREADS=1),
+            # on the loopback interface only, no dashboard (the scheduler's small HTTP server,
+            # health and metrics, on a free loopback port); no log on standard error (a chunk's error
+            # reaches the caller as an exception)
+            address = stack.enter_context(distributed.LocalCluster(
+                n_workers=n_workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                dashboard_address=None, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+                silence_logs=logging.CRITICAL))
+        except (OSError, RuntimeError) as exc:  # RuntimeError: "Nanny failed to start"
+            raise ClusterError(f"cluster: cannot start a local cluster of {n_workers} workers "
+                               f"({_one_line(exc)})") from None
+    try:
+        client = stack.enter_context(distributed.Client(address, timeout=timeout, set_as_default=False))
+    except OSError as exc:  # including TimeoutError: "Timed out trying to connect to ... after 5 s"
+        raise ClusterError(f"cluster: cannot reach the Dask scheduler at {cluster} within {timeout:g} s "
+                           f"({_one_line(exc)})") from None
+    try:  # a scheduler without workers would leave the run waiting for ever
+        client.wait_for_workers(1, timeout=timeout)
+    except OSError:  # TimeoutError
+        raise ClusterError(f"cluster: the Dask scheduler at {cluster} has no worker (none joined within "
+                           f"{timeout:g} s)") from None
+    # random task keys (pure=False): no hashing of the arguments, and every chunk is a new task
+    return client.get_executor(pure=False)
+
+
+@contextlib.contextmanager
+def _sigint_held() -> Iterator[None]:
+    """Context manager: a Ctrl-C (SIGINT) inside is held, and raised as ``KeyboardInterrupt`` on
+    leaving. SIGINT is blocked (POSIX, main thread), so the processes and threads started inside
+    keep it blocked: the workers of a local cluster are stopped by their nanny, not by the
+    terminal's Ctrl-C in the middle of their start-up."""
+    import signal
+    import threading
+
+    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    from multiprocessing import resource_tracker
+
+    resource_tracker.ensure_running()  # its start unblocks SIGINT: started first, it stays blocked below
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)  # a held SIGINT is delivered here
+
+
+def _one_line(exc: BaseException) -> str:
+    """``exc`` as one line: its type and its message with the line breaks removed."""
+    return f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+
+
+#: At most this many chunks are handed to an executor at a time (:func:`run_monte_carlo`'s
+#: ``executor``): enough to keep a cluster of hundreds of workers busy, few enough that a run of
+#: millions of chunks does not hold millions of pending tasks.
+IN_FLIGHT = 1024
+
+
+def _run_on_executor(executor: concurrent.futures.Executor, task: Task, n_tasks: int,
+                     first: dict[str, np.ndarray], done: Callable[[], Any] | None) -> list[dict[str, np.ndarray]]:
+    """Results of every task ``_call(*task(i))`` (a chunk), in order, ``first`` (task 0) computed
+    already: the others submitted to ``executor``, :data:`IN_FLIGHT` at a time, collected as they
+    finish. On an error (a chunk's, re-raised here) or an interruption, the chunks not yet
+    finished are cancelled (Dask stops them; a process pool, those not started) before it
+    propagates. A worker lost mid-chunk is the executor's to handle (Dask reruns its chunks elsewhere).
+    """
+    results: dict[int, dict[str, np.ndarray]] = {0: first}
+    pending: dict[concurrent.futures.Future, int] = {}
+    given = 1  # tasks handed out: range(1, given)
+    try:
+        while given < n_tasks or pending:
+            while given < n_tasks and len(pending) < IN_FLIGHT:
+                pending[executor.submit(_call, *task(given))] = given
+                given += 1
+            finished, _ = concurrent.futures.wait(pending, return_when=concurrent.futures.FIRST_COMPLETED)
+            for future in finished:
+                results[pending.pop(future)] = future.result()
+                if done is not None:
+                    done()
+    except BaseException:
+        for future in pending:
+            future.cancel()
+        raise
+    return [results[i] for i in range(n_tasks)]
 
 
 def _spawned(root: np.random.SeedSequence, start: int, stop: int) -> list[np.random.SeedSequence]:
@@ -307,18 +506,21 @@ def effective_jobs(jobs: int, n_tasks: int | None = None) -> int:
     return used
 
 
-def _call(chunk_fn: ChunkFn, seeds: Sequence[np.random.SeedSequence]) -> dict[str, np.ndarray]:
-    """One chunk, with the BLAS on one thread (the same floating-point operations in every process)."""
+def _call(chunk_fn: ChunkFn, root: np.random.SeedSequence, start: int, stop: int) -> dict[str, np.ndarray]:
+    """Realisations ``start:stop`` of ``root``'s streams by ``chunk_fn`` (their seeds made here, in
+    the process that runs them), with the BLAS on one thread (the same floating-point operations
+    in every process)."""
     from fdi_lib.threads import blas_single_thread
 
+    seeds = _spawned(root, start, stop)
     with blas_single_thread():
         return chunk_fn(seeds)
 
 
-def _run_chunks(task: Callable[[int], tuple[ChunkFn, Sequence[np.random.SeedSequence]]], n_tasks: int,
+def _run_chunks(task: Task, n_tasks: int,
                 first: dict[str, np.ndarray], n_workers: int,
                 done: Callable[[], Any] | None) -> list[dict[str, np.ndarray]]:
-    """Results of every task ``task(i) = (chunk_fn, seeds)`` (a chunk), in order, on this process
+    """Results of every task ``_call(*task(i))`` (a chunk), in order, on this process
     and ``n_workers - 1`` others; ``first`` is the result of task 0, already computed here.
 
     The calling process computes chunks too: it is warm (modules imported, per-process caches of
@@ -330,6 +532,11 @@ def _run_chunks(task: Callable[[int], tuple[ChunkFn, Sequence[np.random.SeedSequ
     same): more jobs are never much slower than one. Workers are a reusable loky pool, kept
     between calls: the start-up is paid once per session. An interruption (``KeyboardInterrupt``)
     kills the workers before it propagates: no process is left computing.
+
+    This scheduler drives the pool through the standard executor interface (``submit``,
+    ``result``), but is not replaced by :func:`_run_on_executor` over the same pool: there the
+    calling process only waits, and the columns of Table I of Zhang 2021 (5 x 160 trials, chunks
+    of 40, 2 cores) took 1.2 to 1.8 times as long as here, warm or cold (issue 25).
     """
     if n_workers == 1 or n_tasks == 1:
         out = [first]

@@ -1,13 +1,20 @@
-"""Command line: ``python -m fdi_lib reproduce [--list | --ledger | ID [--seed S] [--trials N] [--jobs J]
-[--option NAME=VALUE ...] [--json]]``.
+"""Command line: ``python -m fdi_lib reproduce [--list | --ledger | ID [--seed S] [--trials N]
+[--jobs J | --cluster local:N | --cluster tcp://HOST:PORT] [--option NAME=VALUE ...] [--json]]``.
 
 ``--option NAME=VALUE`` passes a keyword option of the reproduction (listed by ``--describe``),
 e.g. ``zb2014-fig8 --option isolation_window=record_end``.
 
+``--cluster`` runs the Monte Carlo chunks on a Dask cluster (:func:`fdi_lib.montecarlo.dask_executor`):
+``local:N`` starts ``N`` worker processes on this machine for the run and stops them at its end,
+``tcp://HOST:PORT`` uses the scheduler at that address. The chunks and their seeds are those of
+``--jobs 1``, so the ``--json`` output is the same bytes. The UAV studies of Rosa 2013, which keep
+their own pool, then run in this process. A scheduler that cannot be reached is one ``error:`` line.
+
 ``--ledger`` prints the claims ledger (:mod:`fdi_lib.reproduce.ledger`): every value the
 papers state, ours, and the computed status; with ``--json``, one object
 ``{"counts", "rows", "sources"}``; ``--trials N`` caps the Monte Carlo trials of the runs it
-makes (results cached by a book build, ``$FDI_RESULTS_CACHE``, are read instead).
+makes (results cached by a book build, ``$FDI_RESULTS_CACHE``, are read instead); ``--cluster``
+runs them on a cluster.
 
 ``--json`` prints exactly one JSON object ``{"id", "headline", "paper", "settings"}``
 on standard output; the ``headline`` keys of each identifier are documented in
@@ -15,14 +22,16 @@ the docstring of its reproduction function (``--describe ID`` prints it).
 
 Standard error carries everything else, one line each: ``error: ...`` (exit code 2),
 ``warning: ...`` (e.g. ``--jobs`` above the number of CPU cores, which is then used instead:
-results do not depend on it), a progress bar for Monte Carlo runs longer than a second when
-standard error is a terminal, and ``interrupted`` on Ctrl-C (SIGINT; exit code 130, the worker
-processes stopped).
+results do not depend on it), a progress bar over the chunks of Monte Carlo runs longer than a
+second when standard error is a terminal (``--progress`` / ``--no-progress`` to choose), and
+``interrupted`` on Ctrl-C (SIGINT; exit code 130, the worker processes stopped, a local cluster
+shut down).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import inspect
 import sys
 import warnings
@@ -30,7 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from fdi_lib.errors import FDIError, ModelError
-from fdi_lib.montecarlo import effective_jobs, progress_bars
+from fdi_lib.montecarlo import dask_executor, effective_jobs, progress_bars, use_executor
 from fdi_lib.reproduce.registry import get, list_reproductions
 
 
@@ -70,7 +79,14 @@ def _parser() -> argparse.ArgumentParser:
     rep.add_argument("--seed", type=int, default=None, help="random seed (default: the reproduction's)")
     rep.add_argument("--trials", type=int, default=None,
                      help="Monte Carlo trials (default: the paper's own count)")
-    rep.add_argument("--jobs", type=int, default=1, help="parallel jobs, -1 for all cores (default 1)")
+    where = rep.add_mutually_exclusive_group()
+    where.add_argument("--jobs", type=int, default=1, help="parallel jobs, -1 for all cores (default 1)")
+    where.add_argument("--cluster", metavar="local:N|tcp://HOST:PORT", default=None,
+                       help="run the Monte Carlo chunks on a Dask cluster: N local worker processes started "
+                            "for the run, or an existing scheduler (same results as --jobs 1)")
+    rep.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                     help="progress bar over the Monte Carlo chunks on standard error (default: when "
+                          "standard error is a terminal)")
     rep.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
                      help="a keyword option of the reproduction (its --describe lists them), VALUE "
                           "in JSON or a plain string, e.g. isolation_window=record_end; repeatable")
@@ -130,7 +146,7 @@ def _main(argv: list[str] | None) -> int:
         # --jobs above the CPU cores (or -1) becomes the core count here, so that every reproduction,
         # including those with their own pool, starts no more processes than can run
         jobs = effective_jobs(args.jobs)
-        with progress_bars(bool(getattr(sys.stderr, "isatty", lambda: False)())):
+        with _where(args):
             result = rep(seed=args.seed, trials=args.trials, jobs=jobs, **options)
     except FDIError as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -152,6 +168,19 @@ def _main(argv: list[str] | None) -> int:
             paper = result.paper.get(key, "")
             print(f"  {key:<28} ours: {value!s:<40} paper: {paper}")
     return 0
+
+
+@contextlib.contextmanager
+def _where(args: argparse.Namespace) -> Any:
+    """Context of a run: the progress bars (``--progress``, default: standard error is a terminal)
+    and, with ``--cluster``, the Dask cluster's executor for every Monte Carlo run inside (a local
+    cluster is stopped on leaving, also on an error or Ctrl-C)."""
+    show = args.progress if args.progress is not None else bool(getattr(sys.stderr, "isatty", lambda: False)())
+    with contextlib.ExitStack() as stack:
+        if args.cluster is not None:
+            stack.enter_context(use_executor(stack.enter_context(dask_executor(args.cluster))))
+        stack.enter_context(progress_bars(show))
+        yield
 
 
 def _options(rep: Any, items: list[str]) -> dict[str, Any]:
@@ -182,7 +211,8 @@ def _print_ledger(args: argparse.Namespace) -> int:
     from fdi_lib.reproduce.ledger import ledger
 
     try:
-        led = ledger(max_trials=args.trials)
+        with _where(args):
+            led = ledger(max_trials=args.trials)
     except FDIError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
