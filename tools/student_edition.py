@@ -30,13 +30,14 @@ sys.path.insert(0, str(REPO))
 
 from fdi_lib.exercises import parse_chapter, solution_fingerprints, strip_solutions, words  # noqa: E402
 
+sys.path.insert(0, str(REPO / "tools"))
+import notebook_markdown  # noqa: E402
+
 #: Top-level entries of the repository that are not part of the book's sources.
 NOT_SOURCES = {"_build", "fdi_lib", "tests", "benchmarks", "tools", "build"}
 
 
-def chapters(book: Path) -> list[Path]:
-    """The MyST chapters (with a jupytext header) under ``book``."""
-    return sorted(p for p in book.rglob("*.md") if p.read_text().startswith("---\njupytext:"))
+chapters = notebook_markdown.chapters
 
 
 def copy_sources(out: Path) -> Path:
@@ -61,20 +62,14 @@ def copy_sources(out: Path) -> Path:
     return src
 
 
-def write_notebooks(src: Path, out: Path) -> list[Path]:
-    """One unexecuted notebook per chapter of the stripped sources, in ``out/notebooks``."""
-    import jupytext
-
+def write_notebooks(src: Path, out: Path, glue_dir: Path | None = None) -> list[Path]:
+    """One unexecuted notebook per chapter of the stripped sources, in ``out/notebooks``, its
+    MyST markup as plain Markdown and the book's macros defined (:mod:`notebook_markdown`),
+    with the glued values of the student build's executed notebooks ``glue_dir``."""
     target = out / "notebooks"
     if target.exists():
         shutil.rmtree(target)
-    written = []
-    for path in chapters(src / "book"):
-        nb_path = target / path.relative_to(src / "book").with_suffix(".ipynb")
-        nb_path.parent.mkdir(parents=True, exist_ok=True)
-        jupytext.write(jupytext.read(path), nb_path)
-        written.append(nb_path)
-    return written
+    return notebook_markdown.write_notebooks(src, target, glue_dir)
 
 
 def build(out: Path, extra: list[str]) -> None:
@@ -89,7 +84,7 @@ def build(out: Path, extra: list[str]) -> None:
     if html.exists():
         shutil.rmtree(html)
     shutil.move(str(work / "_build" / "html"), str(html))
-    notebooks = write_notebooks(src, out)
+    notebooks = write_notebooks(src, out, work / "_build" / "jupyter_execute")
     print(f"student book: {html / 'index.html'}; {len(notebooks)} notebooks in {out / 'notebooks'}")
 
 
