@@ -40,6 +40,7 @@ import importlib.util
 import inspect
 import re
 import shutil
+import sys
 import unicodedata
 from pathlib import Path
 from typing import Any
@@ -371,7 +372,7 @@ def _render_notebook_downloads(app: Sphinx, exception: Exception | None) -> None
 
     path = Path(fdi_lib.__file__).resolve().parents[1] / "tools" / "notebook_markdown.py"
     spec = importlib.util.spec_from_file_location("notebook_markdown", path)
-    module = importlib.util.module_from_spec(spec)
+    module = sys.modules.setdefault("notebook_markdown", importlib.util.module_from_spec(spec))
     spec.loader.exec_module(module)
     done = module.convert_downloads(Path(app.outdir), Path(app.confdir),
                                     Path(app.outdir).parent / "jupyter_execute", _book_macros(app.config))

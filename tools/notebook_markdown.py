@@ -158,7 +158,7 @@ class BookReferences:
             elif m := re.match(r"^```\{exercise-start\} (.+)$", line):
                 option = re.match(r"^:label:\s*(\S+)", text.splitlines()[line_no + 1])
                 if option:
-                    self.targets[option.group(1)] = (doc, m.group(1).strip())
+                    self.targets[option.group(1)] = (doc, m.group(1).split(" · ")[0].strip())
             if kind is None or kind == "proof" or label is None:
                 continue
             counters[kind] = counters.get(kind, 0) + 1
@@ -246,19 +246,23 @@ def _resolve_doc(doc: str, target: str) -> str:
 
 
 def _citations(bib: Path) -> dict[str, tuple[str, str]]:
-    """Key -> (authors, year), with the label style of the book's bibliography (``_ext/fdi_book.py``)."""
+    """Key -> (authors, year): the labels of the book's bibliography style (``_ext/fdi_book.py``,
+    "Zhang, 2021a" and "Zhang, 2021b" for two works with the same authors and year)."""
     import pybtex.database
+    import pybtex.plugin
 
     sys.path.insert(0, str(REPO / "_ext"))
     try:
-        from fdi_book import AuthorYearLabelStyle
+        from fdi_book import AuthorYearLabelStyle, AuthorYearStyle
     finally:
         sys.path.remove(str(REPO / "_ext"))
-    style = AuthorYearLabelStyle()
+    # as the extension's setup() does (a no-op when it has run)
+    pybtex.plugin.register_plugin("pybtex.style.labels", "fdi_author_year", AuthorYearLabelStyle)
+    entries = pybtex.database.parse_file(str(bib)).entries.values()
     out = {}
-    for key, entry in pybtex.database.parse_file(str(bib)).entries.items():
-        who, year = style.format_label(entry).rsplit(", ", 1)
-        out[key] = (who, year)
+    for formatted in AuthorYearStyle().format_entries(entries):
+        who, year = formatted.label.rsplit(", ", 1)
+        out[formatted.key] = (who, year)
     return out
 
 
@@ -437,17 +441,22 @@ def convert_downloads(html: Path, root: Path, glue_dir: Path,
 _RAW_DIRECTIVE = re.compile(r"^\s*(?:>\s*)*(?:`{3,}|:{3,})\{[\w:.-]+\}", re.M)
 _MATHJAX_CHECK = r"""
 const es5 = process.argv[1];
-const maths = JSON.parse(require('fs').readFileSync(0, 'utf8'));
+const groups = JSON.parse(require('fs').readFileSync(0, 'utf8'));
 require(es5 + '/node-main.js').init({
   loader: {load: ['input/tex-full']},
   // every package JupyterLab's MathJax has, but no red text for an unknown macro: an error
   tex: {packages: {'[-]': ['bussproofs', 'noundefined']}, formatError: (jax, err) => { throw err; }},
 }).then((MathJax) => {
-  const errors = [];
-  for (const [tex, display] of maths) {
-    try { MathJax.tex2mml(tex, {display}); } catch (err) { errors.push([tex, err.message]); }
-  }
-  console.log(JSON.stringify(errors));
+  const out = groups.map((maths) => {
+    MathJax.startup.getComponents();   // a fresh TeX input: no definitions from another notebook
+    MathJax.startup.makeMethods();
+    const errors = [];
+    for (const [tex, display] of maths) {
+      try { MathJax.tex2mml(tex, {display}); } catch (err) { errors.push([tex, err.message]); }
+    }
+    return errors;
+  });
+  console.log(JSON.stringify(out));
 }).catch((err) => { console.error(String(err)); process.exit(2); });
 """
 
@@ -476,17 +485,17 @@ def notebook_maths(nb) -> list[tuple[str, bool]]:
     return out
 
 
-def mathjax_errors(maths: list[tuple[str, bool]]) -> list[tuple[str, str]]:
-    """``(tex, message)`` for every formula MathJax 3 (the copy the book ships, run by node)
-    cannot typeset, in order, definitions made by earlier formulas applying to later ones as
-    in a JupyterLab page."""
+def mathjax_errors(groups: list[list[tuple[str, bool]]]) -> list[list[tuple[str, str]]]:
+    """For each group of formulas (one notebook's, in order), ``(tex, message)`` for every
+    formula MathJax 3 (the copy the book ships, run by node) cannot typeset, definitions made by
+    earlier formulas of the group applying to later ones as in a JupyterLab page."""
     import importlib.util
 
     spec = importlib.util.find_spec("mathjax")
     es5 = Path(next(iter(spec.submodule_search_locations))) / "static" / "mathjax" / "es5"
-    run = subprocess.run(["node", "-e", _MATHJAX_CHECK, str(es5)], input=json.dumps(maths),
+    run = subprocess.run(["node", "-e", _MATHJAX_CHECK, str(es5)], input=json.dumps(groups),
                          capture_output=True, text=True, check=True)
-    return [tuple(e) for e in json.loads(run.stdout)]
+    return [[tuple(e) for e in errors] for errors in json.loads(run.stdout)]
 
 
 def raw_markup(nb) -> list[str]:
@@ -499,11 +508,14 @@ def raw_markup(nb) -> list[str]:
     return found
 
 
-def problems(nb) -> list[str]:
-    """What would not render in Jupyter: raw MyST markup and maths MathJax cannot typeset."""
-    out = [f"raw MyST markup {m!r}" for m in raw_markup(nb)]
-    out += [f"maths error in ${tex}$: {msg}" for tex, msg in mathjax_errors(notebook_maths(nb))]
-    return out
+def problems(*nbs) -> list[str] | list[list[str]]:
+    """What would not render in Jupyter, for each notebook: raw MyST markup and maths MathJax
+    cannot typeset (one list for one notebook; a list per notebook for several, checked by
+    one MathJax)."""
+    maths = mathjax_errors([notebook_maths(nb) for nb in nbs])
+    out = [[f"raw MyST markup {m!r}" for m in raw_markup(nb)]
+           + [f"maths error in ${tex}$: {msg}" for tex, msg in errors] for nb, errors in zip(nbs, maths)]
+    return out[0] if len(nbs) == 1 else out
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -525,12 +537,13 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     import nbformat
 
-    bad = 0
-    for path in args.notebooks:
-        for p in problems(nbformat.read(path, as_version=4)):
+    found = problems(*[nbformat.read(path, as_version=4) for path in args.notebooks])
+    found = [found] if len(args.notebooks) == 1 else found
+    for path, probs in zip(args.notebooks, found):
+        for p in probs:
             print(f"{path}: {p}", file=sys.stderr)
-            bad += 1
-    return 1 if bad else 0
+    print(f"{len(args.notebooks)} notebooks checked: {sum(map(len, found))} problems")
+    return 1 if any(found) else 0
 
 
 if __name__ == "__main__":
