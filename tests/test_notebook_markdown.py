@@ -111,6 +111,14 @@ def test_directives_become_block_quotes_with_numbered_titles(refs):
         "> **What you will learn**\n>\n> * one\n\n> **Note**\n>\n> A note.\n")
 
 
+def test_labelled_equations_are_numbered_and_tagged():
+    refs = NM.BookReferences()
+    refs._read_document("book/x", "# X\n\n$$\na = b\n$$ (eq-a)\n\n$$\nc\n$$ (eq-c)\n", chapter=3)
+    assert refs.targets["eq-c"] == ("book/x", "(3.2)")
+    assert NM.convert_markdown("$$\nc\n$$ (eq-c)\n\nas {eq}`eq-c` says", "book/x", refs) == \
+        "$$\nc\n\\tag{3.2}\n$$\n\nas (3.2) says"
+
+
 def test_exercises_and_solutions_get_bold_headings(refs):
     text = ("```{exercise-start} glr-1 · warm-up · A threshold\n:label: ex-glr-1\n:nonumber:\n```\n\n"
             "Which threshold?\n\n```{exercise-end}\n```\n\n```{solution-start} ex-glr-1\n"

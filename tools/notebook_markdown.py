@@ -137,7 +137,9 @@ class BookReferences:
             self.notebooks.add(doc)
         counters: dict[str, int] = {}
         pending_label = None
-        for line_no, line in enumerate(text.splitlines()):
+        lines = text.splitlines()
+        for line_no, line in enumerate(lines):
+            following = lines[line_no + 1] if line_no + 1 < len(lines) else ""
             if m := re.match(r"^\(([\w.:-]+)\)=\s*$", line):
                 pending_label = m.group(1)
                 continue
@@ -148,22 +150,23 @@ class BookReferences:
             kind = label = None
             if m := re.match(r"^(?:`{3,}|:{3,})\{prf:(\w+)\}", line):
                 kind = m.group(1)
-                option = re.match(r"^:label:\s*(\S+)", text.splitlines()[line_no + 1] if
-                                  line_no + 1 < len(text.splitlines()) else "")
+                option = re.match(r"^:label:\s*(\S+)", following)
                 label = option.group(1) if option else None
             elif m := re.match(r"^ {4}name:\s*([\w.-]+)\s*$", line):   # a myst-nb figure's name
                 kind, label = "figure", m.group(1)
             elif m := re.match(r"^:name:\s*([\w.-]+)\s*$", line):        # a {figure} directive
                 kind, label = "figure", m.group(1)
+            elif m := _EQUATION_LABEL.match(line):                         # $$ ... $$ (label)
+                kind, label = "equation", m.group(1)
             elif m := re.match(r"^```\{exercise-start\} (.+)$", line):
-                option = re.match(r"^:label:\s*(\S+)", text.splitlines()[line_no + 1])
-                if option:
+                option = re.match(r"^:label:\s*(\S+)", following)
+                if option:   # an exercise is unnumbered: its identifier names it
                     self.targets[option.group(1)] = (doc, m.group(1).split(" · ")[0].strip())
             if kind is None or kind == "proof" or label is None:
                 continue
             counters[kind] = counters.get(kind, 0) + 1
             number = f"{chapter}.{counters[kind]}" if chapter else str(counters[kind])
-            self.targets[label] = (doc, f"{kind.title()} {number}")
+            self.targets[label] = (doc, f"({number})" if kind == "equation" else f"{kind.title()} {number}")
 
     # --- rendering of one role
     def link(self, doc: str, target_doc: str, text: str) -> str:
@@ -267,6 +270,7 @@ def _citations(bib: Path) -> dict[str, tuple[str, str]]:
 
 
 # ----------------------------------------------------------------------------- Markdown
+_EQUATION_LABEL = re.compile(r"^\$\$\s*\(([\w.:-]+)\)\s*$")
 _ROLE = re.compile(r"\{(?P<name>[a-z][\w:-]*)\}`(?P<content>[^`]*)`")
 _OPEN = re.compile(r"^(?P<indent> *)(?P<fence>`{3,}|:{3,})\{(?P<name>[\w:.-]+)\}\s*(?P<arg>.*?)\s*$")
 _ADMONITIONS = {"note", "tip", "hint", "important", "warning", "caution", "attention", "danger",
@@ -297,6 +301,11 @@ def convert_markdown(text: str, doc: str, refs: BookReferences) -> str:
             body = "\n".join(x[len(m["indent"]):] for x in lines[j:k])
             out.append(_directive(m["name"], m["arg"], options, body, doc, refs))
             i = k + 1
+            continue
+        if m := _EQUATION_LABEL.match(line):   # a labelled equation: its number as a tag
+            number = refs.targets.get(m.group(1), (doc, ""))[1].strip("()")
+            out += [f"\\tag{{{number}}}" if number else "", "$$"]
+            i += 1
             continue
         if re.match(r"^\([\w.:-]+\)=\s*$", line) or re.match(r"^%", line):
             i += 1   # a target label or a MyST comment: nothing to show
