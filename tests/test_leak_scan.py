@@ -108,6 +108,20 @@ def test_numbers_too_short_or_printed_by_the_book_are_not_answers(material):
     assert value not in printed.answers
 
 
+def test_what_the_chapters_print_outside_their_exercises_is_not_a_leak(tmp_path):
+    """An answer a chapter prints itself (sig-5's slope in the claims ledger) is allowed; what a
+    starter cell of the Exercises section prints is not."""
+    nb = nbformat.v4.new_notebook(cells=[
+        nbformat.v4.new_code_cell("slope", outputs=[nbformat.v4.new_output(
+            "execute_result", data={"text/plain": "0.07918"}, execution_count=1)]),
+        nbformat.v4.new_markdown_cell("## Exercises"),
+        nbformat.v4.new_code_cell("print(data)", outputs=[nbformat.v4.new_output("stream", text="x = 3.1803\n")])])
+    nbformat.write(nb, tmp_path / "ch.ipynb")
+    (tmp_path / "ch.glue.json").write_text('{"k": {"data": {"text/plain": "17.683"}}}')
+    printed = S.printed_by_the_book(tmp_path)
+    assert "0.07918" in printed and "17.683" in printed and "3.1803" not in printed
+
+
 def test_solution_code_is_caught(clean_edition, material, tmp_path):
     out = _copy(clean_edition, tmp_path)
     line = next(x for x in _solution("glr-2").splitlines() if x.startswith("C_inv"))

@@ -276,6 +276,25 @@ def scan_text(text: str, material: SolutionMaterial) -> list[str]:
     return found
 
 
+def printed_by_the_book(executed: Path) -> str:
+    """What the student build's executed notebooks (``executed``, myst-nb's ``jupyter_execute``)
+    print outside their Exercises sections: the glued values and the outputs of the chapters'
+    cells. They come from the stripped sources, so an answer among them is one the chapter prints
+    itself (sig-5's slope in the claims ledger), not a leak; the outputs of the exercises'
+    starter cells are not in it."""
+    import nbformat
+
+    parts = [p.read_text() for p in sorted(executed.rglob("*.glue.json"))]
+    for path in sorted(executed.rglob("*.ipynb")):
+        for cell in nbformat.read(path, as_version=4).cells:
+            if cell.cell_type == "markdown" and re.search(r"^## Exercises\s*$", cell.source, re.M):
+                break
+            for output in cell.get("outputs", []):
+                data = output.get("data", {})
+                parts += [output.get("text", "")] + [v for k, v in data.items() if k.startswith("text/")]
+    return "\n".join(p if isinstance(p, str) else "".join(p) for p in parts)
+
+
 def _page_text(path: Path) -> tuple[str, list[str]]:
     """Visible text of an HTML page, and the solution blocks it has (by their class)."""
     from bs4 import BeautifulSoup
@@ -348,8 +367,7 @@ def verify(out: Path, book: Path = REPO / "book", material: SolutionMaterial | N
     student wheel (``out/dist/*.whl``, when built). ``material`` defaults to
     :func:`solution_material` of ``book``, the student build's glued values being printed."""
     if material is None:
-        glue = (out / "build" / "_build" / "jupyter_execute").rglob("*.glue.json")
-        material = solution_material(book, printed="\n".join(p.read_text() for p in glue))
+        material = solution_material(book, printed=printed_by_the_book(out / "build" / "_build" / "jupyter_execute"))
     problems = []
     n_exercises = sum(len(parse_chapter(p.read_text())) for p in chapters(book))
     pages = {p.relative_to(book).with_suffix("").as_posix() for p in chapters(book)}
@@ -390,7 +408,8 @@ def main(argv: list[str] | None = None) -> int:
     for p in problems:
         print("student edition:", p, file=sys.stderr)
     if not problems:
-        print(f"student edition verified: no solution text in {out / 'html'} and {out / 'notebooks'}")
+        print(f"student edition verified: no solution material in {out / 'html'}, {out / 'notebooks'}"
+              f"{' or ' + str(out / 'dist') if list((out / 'dist').glob('*.whl')) else ''}")
     return 1 if problems else 0
 
 
