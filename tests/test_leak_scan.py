@@ -46,7 +46,8 @@ def clean_edition(tmp_path_factory):
         path.write_text(strip_solutions(path.read_text()))
     S.write_notebooks(src, out)
     (out / "html").mkdir()
-    page = f"<html><body><div class='exercise'>{strip_solutions((BOOK / 'zb2014' / 'glr.md').read_text())}</div></body></html>"
+    chapter = strip_solutions((BOOK / "zb2014" / "glr.md").read_text())
+    page = f"<html><body><div class='exercise'>{chapter}</div></body></html>"
     (out / "html" / "glr.html").write_text(page)
     return out
 

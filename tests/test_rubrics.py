@@ -11,7 +11,8 @@ import pytest
 from fdi_lib.exercises import CHAPTERS, EXERCISES, code_cells, parse_chapter, strip_solutions
 
 BOOK = Path(__file__).resolve().parents[1] / "book"
-_RUBRIC = re.compile(r"^\*\*Rubric\*\* \(instructor's edition only; hand-graded, (\d+) points\): ((?:[^\n]+\n)*?[^\n]+)\n\n"
+_RUBRIC = re.compile(r"^\*\*Rubric\*\* \(instructor's edition only; hand-graded, (\d+) points\): "
+                     r"((?:[^\n]+\n)*?[^\n]+)\n\n"
                      r"(?P<criteria>(?:\* .+\n(?:  .+\n)*)+)\n\*Model answer:\* \S", re.M)
 _POINTS = re.compile(r"^\* \*\*(\d+)\*\* points?: ", re.M)
 
@@ -26,7 +27,8 @@ def plans() -> dict:
 
 @pytest.fixture(scope="module")
 def solutions() -> dict[str, str]:
-    return {ex.id: ex.solution for chapter in CHAPTERS for ex in parse_chapter((BOOK / f"{chapter}.md").read_text())}
+    return {ex.id: ex.solution for chapter in CHAPTERS
+            for ex in parse_chapter((BOOK / f"{chapter}.md").read_text())}
 
 
 def test_every_hand_graded_item_has_one_rubric_with_its_points(plans, solutions):

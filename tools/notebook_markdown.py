@@ -36,7 +36,6 @@ them with the built book's Sphinx environment when there is one.
 from __future__ import annotations
 
 import argparse
-import base64
 import json
 import os
 import re
@@ -296,8 +295,9 @@ def convert_markdown(text: str, doc: str, refs: BookReferences) -> str:
             j, options = _options(lines, i + 1)
             k = j
             fence = m["fence"]
-            while k < len(lines) and not (set(lines[k].strip()) == {fence[0]} and len(lines[k].strip()) >= len(fence)):
-                k += 1
+            while k < len(lines) and not (set(lines[k].strip()) == {fence[0]}
+                                          and len(lines[k].strip()) >= len(fence)):
+                k += 1   # the closing fence: the same character, at least as many
             body = "\n".join(x[len(m["indent"]):] for x in lines[j:k])
             out.append(_directive(m["name"], m["arg"], options, body, doc, refs))
             i = k + 1
@@ -342,7 +342,8 @@ def _quote(title: str, body: str) -> str:
 
 def _directive(name: str, arg: str, options: dict[str, str], body: str, doc: str,
                refs: BookReferences) -> str:
-    body = convert_markdown(body, doc, refs) if name not in ("raw", "code-block", "code", "math") else body
+    if name not in ("raw", "code-block", "code", "math"):
+        body = convert_markdown(body, doc, refs)
     if name == "exercise-start":
         return f"**Exercise {arg}**\n"
     if name == "solution-start":
@@ -361,7 +362,8 @@ def _directive(name: str, arg: str, options: dict[str, str], body: str, doc: str
     if name in ("admonition", "dropdown"):
         return _quote(f"**{arg}**", body)
     if name in _ADMONITIONS:
-        return _quote(f"**{'See also' if name == 'seealso' else name.title()}**" + (f" {arg}" if arg else ""), body)
+        title = "See also" if name == "seealso" else name.title()
+        return _quote(f"**{title}**" + (f" {arg}" if arg else ""), body)
     if name == "figure":
         label = options.get("name")
         number = refs.targets.get(label, (doc, "Figure"))[1] if label else "Figure"

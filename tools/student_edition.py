@@ -311,8 +311,8 @@ def _names_solution(metadata: Any) -> bool:
     ``"solution": true``) or a tag naming one (not any value: a figure may be named
     ``fig-bz-solution1``)."""
     if isinstance(metadata, dict):
-        return any("solution" in str(k).lower() or (k == "tags" and any("solution" in str(t).lower() for t in v))
-                   or _names_solution(v) for k, v in metadata.items())
+        tagged = any("solution" in str(t).lower() for t in metadata.get("tags", []))
+        return tagged or any("solution" in str(k).lower() or _names_solution(v) for k, v in metadata.items())
     return isinstance(metadata, list) and any(_names_solution(v) for v in metadata)
 
 
@@ -367,7 +367,8 @@ def verify(out: Path, book: Path = REPO / "book", material: SolutionMaterial | N
     student wheel (``out/dist/*.whl``, when built). ``material`` defaults to
     :func:`solution_material` of ``book``, the student build's glued values being printed."""
     if material is None:
-        material = solution_material(book, printed=printed_by_the_book(out / "build" / "_build" / "jupyter_execute"))
+        executed = out / "build" / "_build" / "jupyter_execute"
+        material = solution_material(book, printed=printed_by_the_book(executed))
     problems = []
     n_exercises = sum(len(parse_chapter(p.read_text())) for p in chapters(book))
     pages = {p.relative_to(book).with_suffix("").as_posix() for p in chapters(book)}
