@@ -502,6 +502,11 @@ def mathjax_errors(groups: list[list[tuple[str, bool]]]) -> list[list[tuple[str,
     earlier formulas of the group applying to later ones as in a JupyterLab page."""
     import importlib.util
 
+    import shutil
+
+    if shutil.which("node") is None:
+        raise RuntimeError("node not found: the maths check runs the book's MathJax in Node.js "
+                           "(Debian: apt-get install nodejs)")
     spec = importlib.util.find_spec("mathjax")
     es5 = Path(next(iter(spec.submodule_search_locations))) / "static" / "mathjax" / "es5"
     run = subprocess.run(["node", "-e", _MATHJAX_CHECK, str(es5)], input=json.dumps(groups),
