@@ -86,12 +86,14 @@ grade: $(STAMP)
 	$(BIN)/python tools/grader.py "$(SUBMISSIONS)" "$(OUT)" --jobs $(GRADE_JOBS)
 
 ## Plain .ipynb copies of the chapters (outputs not executed) under _build/notebooks/, which the book
-## ignores (a .ipynb beside a chapter is excluded too, see exclude_patterns in _config.yml).
+## ignores (a .ipynb beside a chapter is excluded too, see exclude_patterns in _config.yml), in
+## Markdown that Jupyter renders: the book's macros defined, roles and directives resolved, glued
+## values from the last book build (_build/jupyter_execute) or, without one, a placeholder naming
+## the value (tools/notebook_markdown.py).
 notebooks: $(STAMP)
-	for f in $$(grep -rl --include='*.md' '^jupytext:' book); do \
-	  mkdir -p "_build/notebooks/$$(dirname $$f)" && $(BIN)/jupytext --quiet --to ipynb --output "_build/notebooks/$${f%.md}.ipynb" "$$f" || exit 1; \
-	done
-	@echo "Notebooks in $(abspath _build/notebooks)"
+	rm -rf _build/notebooks
+	$(BIN)/python tools/notebook_markdown.py notebooks --out _build/notebooks
+	$(BIN)/python tools/notebook_markdown.py check $$(find _build/notebooks -name '*.ipynb')
 
 ## Every page of the built book in headless Chromium (Debian's package, installed if absent),
 ## at 1280 and 390 px, no network; screenshots in _build/screenshots/ (tests/browser/check_book.py);

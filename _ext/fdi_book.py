@@ -12,7 +12,9 @@
    raw label.
 4. Every chapter's header has a ".ipynb" download (the executed notebook, with outputs) next to
    the ".md" source: sphinx-book-theme adds it only when a launch service (Binder, JupyterHub,
-   Thebe, Colab) is configured, and this book loads nothing from another host.
+   Thebe, Colab) is configured, and this book loads nothing from another host. At the end of
+   the build the downloads are rewritten in Markdown that Jupyter renders (macros defined,
+   roles and glue references resolved: ``tools/notebook_markdown.py``).
 5. No Thebe scripts (Thebe is off; sphinx-thebe would reference a CDN and declares its constants
    twice on every page, a console error).
 6. The catalogue of reproductions (``book/reproductions.md``) is generated when the book is read:
@@ -52,6 +54,7 @@ import inspect
 import json
 import re
 import shutil
+import sys
 import unicodedata
 from pathlib import Path
 from typing import Any
@@ -372,6 +375,24 @@ def _add_notebook_download(app: Sphinx, pagename: str, templatename: str, contex
         "type": "link", "url": f"{context['pathto']('_sources', 1)}/{pagename}.ipynb",
         "text": ".ipynb", "icon": "fas fa-code", "tooltip": "Download the notebook (executed)",
         "label": "download-notebook-button"})
+
+
+def _render_notebook_downloads(app: Sphinx, exception: Exception | None) -> None:
+    """The ".ipynb" downloads in Markdown that Jupyter renders: the book's macros defined, MyST
+    roles, directives and glue references resolved (``tools/notebook_markdown.py``, loaded from
+    the repository of :mod:`fdi_lib`: the student edition builds a copy of the sources without
+    ``tools``)."""
+    if exception is not None or app.builder.format != "html" or not (Path(app.outdir) / "_sources").is_dir():
+        return
+    import fdi_lib
+
+    path = Path(fdi_lib.__file__).resolve().parents[1] / "tools" / "notebook_markdown.py"
+    spec = importlib.util.spec_from_file_location("notebook_markdown", path)
+    module = sys.modules.setdefault("notebook_markdown", importlib.util.module_from_spec(spec))
+    spec.loader.exec_module(module)
+    done = module.convert_downloads(Path(app.outdir), Path(app.confdir),
+                                    Path(app.outdir).parent / "jupyter_execute", _book_macros(app.config))
+    logger.info("fdi_book: %d notebook downloads in plain Markdown", len(done))
 
 
 def _drop_thebe_scripts(app: Sphinx, env, docnames) -> None:
@@ -756,6 +777,7 @@ def setup(app: Sphinx) -> dict[str, Any]:
     app.connect("build-finished", _lighter_previews, priority=400)
     app.connect("build-finished", subset_icon_font)
     app.add_css_file(ICON_CSS)
+    app.connect("build-finished", _render_notebook_downloads)
     app.connect("doctree-resolved", _plain_status_words)
     app.connect("doctree-resolved", _alt_from_captions)
     app.connect("doctree-read", _readable_section_labels)
