@@ -27,6 +27,11 @@ $(STAMP): requirements.lock pyproject.toml
 CHROMIUM := /usr/bin/chromium
 $(CHROMIUM):
 	apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium
+# Node.js (Debian's package, installed if absent) runs the book's MathJax to check that every
+# notebook's maths typesets (tools/notebook_markdown.py check, tests/test_notebook_markdown.py).
+NODE := /usr/bin/node
+$(NODE):
+	apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq nodejs
 
 ## Build the whole book, every notebook executed; fails on any cell error or Sphinx warning.
 ## The build log drops two lines the kernels print that are not problems of the book: ipykernel's
@@ -68,7 +73,7 @@ book-fast: $(STAMP)
 ## fdi_lib without reference answers or reference code (_build/student/dist/fdi_lib-*.whl,
 ## tools/student_package.py); `make student STUDENTS=roster.txt` adds the digests of each listed
 ## student's own data (one id a line).
-student: $(STAMP)
+student: $(STAMP) $(NODE)
 	mkdir -p _build/student
 	set -o pipefail; $(BIN)/python tools/student_edition.py build --warningiserror --nitpick --keep-going 2>&1 | tee _build/student/build.log
 	$(BIN)/python tools/student_package.py --out _build/student $(if $(STUDENTS),--students $(STUDENTS))
@@ -90,7 +95,7 @@ grade: $(STAMP)
 ## Markdown that Jupyter renders: the book's macros defined, roles and directives resolved, glued
 ## values from the last book build (_build/jupyter_execute) or, without one, a placeholder naming
 ## the value (tools/notebook_markdown.py).
-notebooks: $(STAMP)
+notebooks: $(STAMP) $(NODE)
 	rm -rf _build/notebooks
 	$(BIN)/python tools/notebook_markdown.py notebooks --out _build/notebooks
 	$(BIN)/python tools/notebook_markdown.py check $$(find _build/notebooks -name '*.ipynb')
@@ -110,14 +115,16 @@ browser-test: $(STAMP) $(CHROMIUM)
 ## cache): every figure caption's verb ("reproduces" / "compare with") agrees with the claims ledger
 ## (tests/browser/check_captions.py), and every command printed by the catalogue, run afresh without
 ## the cache, gives the result the chapter showed (tools/check_catalogue.py; it recomputes every
-## reproduction at the book's trial counts, about as long as the book's execution).
-check-book: $(STAMP)
+## reproduction at the book's trial counts, about as long as the book's execution), and every
+## .ipynb download renders in Jupyter (tools/notebook_markdown.py check: no raw role, macros defined).
+check-book: $(STAMP) $(NODE)
 	@test -f _build/html/index.html || { echo "No built book: run make book first"; exit 2; }
 	$(BIN)/python tests/browser/check_captions.py --html _build/html --cache _build/results-cache
 	$(BIN)/python tools/check_catalogue.py --html _build/html --cache _build/results-cache --jobs 2
+	$(BIN)/python tools/notebook_markdown.py check $$(find _build/html/_sources -name '*.ipynb')
 
 ## Run the whole test suite.
-test: $(STAMP)
+test: $(STAMP) $(NODE)
 	$(BIN)/python -m pytest -q
 
 ## Performance targets (issues 10 and 16): each prints its figure, target and ratio; the figures are

@@ -12,7 +12,6 @@ from __future__ import annotations
 import importlib.util
 import pickle
 import re
-import shutil
 import sys
 from pathlib import Path
 
@@ -20,7 +19,6 @@ import nbformat
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-pytestmark = pytest.mark.skipif(shutil.which("node") is None, reason="the maths check runs MathJax in node")
 
 
 def _load(name: str, path: Path):
