@@ -218,7 +218,8 @@ class Explorable:
         (default) value: ``panels`` values of a single slider, two values (the default and the
         value farthest from it) of each of the first two sliders otherwise, the other sliders at
         their defaults. The frames are pasted unscaled (no resampling); the PNG carries the
-        caption (``fdi:caption``, HTML) and the house-style metadata of the frames.
+        caption (``fdi:caption``, HTML) and the house-style metadata of the frames. Its palette
+        has 256 colours, room for those of the frames (:data:`PALETTE_COLOURS` each).
 
         Parameters
         ----------
@@ -247,7 +248,7 @@ class Explorable:
         info.add_text("fdi:min_font_pt", f"{min(fonts):g}" if fonts else "")
         info.add_text("fdi:dpi", f"{dpi:g}")
         out = io.BytesIO()
-        sheet.quantize(colors=PALETTE_COLOURS, method=Image.Quantize.FASTOCTREE).save(
+        sheet.quantize(colors=256, method=Image.Quantize.FASTOCTREE).save(
             out, format="PNG", pnginfo=info, dpi=(dpi, dpi))
         return out.getvalue()
 

@@ -260,8 +260,9 @@ _MD_SPECIAL = re.compile(r"([\\`*_{}\[\]<>|$~#&!])")
 
 
 def _md_cell(text: str) -> str:
-    """A cell's text as literal Markdown: special characters escaped, line breaks as spaces."""
-    return _MD_SPECIAL.sub(r"\\\1", " ".join(str(text).split())) or " "
+    """A cell's text as literal Markdown: special characters escaped, line breaks as spaces (no-break
+    spaces kept)."""
+    return _MD_SPECIAL.sub(r"\\\1", re.sub(r"[ \t\r\n]+", " ", str(text)).strip()) or " "
 
 
 def table(rows: Mapping[str, Sequence[Any]], columns: Sequence[str], *, notes: Sequence[str] = (),
