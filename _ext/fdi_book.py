@@ -749,11 +749,12 @@ class _ProtectCaptionCitations(SphinxPostTransform):
     builders = ("latex",)
 
     def run(self, **kwargs: Any) -> None:
+        from sphinxcontrib.bibtex.nodes import raw_latex  # written as its rawsource
+
         for caption in self.document.findall(nodes.caption):
-            for raw in list(caption.findall(nodes.raw)):
-                text = raw.astext()
-                if "latex" in raw.get("format", "").split() and text.startswith("\\hyperlink{"):
-                    raw.parent.replace(raw, nodes.raw("", "\\protect" + text, format="latex"))
+            for raw in caption.findall(raw_latex):
+                if raw.rawsource.startswith("\\hyperlink{"):
+                    raw.rawsource = "\\protect" + raw.rawsource
 
 
 class _NumberedParts(SphinxPostTransform):
