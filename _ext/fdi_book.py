@@ -650,7 +650,7 @@ def latex_macros(config) -> str:
 
 
 #: ``bbm.sty`` for the LaTeX build (see 9. in the module docstring).
-_BBM_STY = r"""\ProvidesPackage{bbm}[2026/01/01 fdi-book: \mathbbm as \mathbb, no bbm fonts needed]
+_BBM_STY = r"""\ProvidesPackage{bbm}[2026/01/01 fdi-book stand-in: mathbbm as amssymb mathbb, no bbm fonts]
 \providecommand{\mathbbm}[1]{\mathbb{#1}}
 """
 

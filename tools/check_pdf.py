@@ -6,7 +6,9 @@ Fails (exit status 1, one line per problem) when:
 
 - the page count is outside :data:`PAGES` (an empty or runaway document);
 - the text of the PDF (``pdftotext``) shows a Python repr (``Table(``, ``<Explorable``) or a
-  raw TeX macro (``\\name`` with two letters or more, outside :data:`ALLOWED_MACROS`);
+  raw TeX macro (``\\name`` with two letters or more) more often than the code listings of the
+  LaTeX source print it (a cell's source may hold TeX in a string: ``r"$\\Psi_k$"``), outside
+  :data:`ALLOWED_MACROS`;
 - the LaTeX log has an undefined reference or citation (printed as "??" in the PDF);
 - the chapters numbered in the PDF's table of contents are not 1, 2, ... for the chapters of the
   parts ``numbered: true`` of ``_toc.yml``, in order and with their titles, or another chapter
@@ -20,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import re
+from collections import Counter
 import subprocess
 import sys
 from pathlib import Path
@@ -53,16 +56,31 @@ def page_count(pdf: Path) -> int:
     return int(m.group(1))
 
 
-def text_problems(pdf: Path) -> list[str]:
-    """Reprs and raw macros in the text of the PDF, with their page."""
+def code_macros(tex: str) -> Counter:
+    """How often each backslash name is printed by the code listings of a LaTeX source
+    (``sphinxVerbatim``, where Pygments writes a backslash as ``\\PYGZbs{}``)."""
+    code = "\n".join(re.findall(r"\\begin\{sphinxVerbatim\}.*?\\end\{sphinxVerbatim\}", tex, re.S))
+    code = code.replace(r"\PYGZbs{}", "\x00")
+    code = re.sub(r"\\PYG\{[^}]*\}\{", "", code)      # the opening of a highlighted token
+    code = re.sub(r"\\PYGZ\w+\{\}", " ", code).replace("}", "")
+    return Counter(re.findall("\x00([a-zA-Z]{2,})", code))
+
+
+def text_problems(pdf: Path, tex: Path) -> list[str]:
+    """Reprs and raw macros in the text of the PDF, with their page; a macro is raw where the
+    PDF shows it more often than its code listings do (every occurrence is then listed)."""
     problems = []
-    for page, text in enumerate(run("pdftotext", "-enc", "UTF-8", str(pdf), "-").split("\f"), start=1):
+    pages = run("pdftotext", "-enc", "UTF-8", str(pdf), "-").split("\f")
+    shown = Counter(m.group(1) for text in pages for m in _MACRO.finditer(text))
+    in_code = code_macros(tex.read_text(errors="replace"))
+    raw = {name for name, n in shown.items() if n > in_code[name] and name not in ALLOWED_MACROS}
+    for page, text in enumerate(pages, start=1):
         for r in _REPRS:
             if r in text:
                 i = text.index(r)
                 problems.append(f"page {page}: a Python repr {text[i:i + 60]!r}")
         for m in _MACRO.finditer(text):
-            if m.group(1) not in ALLOWED_MACROS:
+            if m.group(1) in raw:
                 problems.append(f"page {page}: raw macro {m.group(0)!r} in "
                                 f"{text[max(m.start() - 30, 0):m.end() + 30]!r}")
     return problems
@@ -167,7 +185,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     pages = page_count(args.pdf)
     problems = [] if PAGES[0] <= pages <= PAGES[1] else [f"{pages} pages, expected {PAGES[0]} to {PAGES[1]}"]
-    problems += text_problems(args.pdf)
+    problems += text_problems(args.pdf, args.tex)
     problems += log_problems(args.tex.with_suffix(".log"))
     problems += toc_problems(args.tex.with_suffix(".toc"), args.src)
     if args.html is not None:
