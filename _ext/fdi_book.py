@@ -737,8 +737,9 @@ def _latex_cover(app: Sphinx, env) -> None:
     """The cover, once every page (the ledger's included) has been read and executed."""
     if app.builder.name != "latex":
         return
-    app.builder.context["maketitle"] = cover_latex(app.config.project, _version(Path(app.confdir)),
-                                                   ledger_counts(app))
+    # the title of the book's LaTeX document (Jupyter Book puts _config.yml's title there)
+    title = app.config.latex_documents[0][2] if app.config.latex_documents else app.config.project
+    app.builder.context["maketitle"] = cover_latex(title, _version(Path(app.confdir)), ledger_counts(app))
 
 
 class _ProtectCaptionCitations(SphinxPostTransform):

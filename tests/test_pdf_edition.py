@@ -127,7 +127,10 @@ def test_the_cache_gives_back_glued_values(tmp_path):
     (executed / "ch.glue.json").write_text(json.dumps({"x": {
         "output_type": "display_data", "data": {"text/plain": "1"},
         "metadata": {"scrapbook": {"name": "x", "mime_prefix": prefix}}}}))
-    assert TOOL.prime_cache(tmp_path / "jupyter_execute", tmp_path / "cache") == 1
+    # a notebook executed before the library's last change is not taken
+    newest = (executed / "ch.ipynb").stat().st_mtime
+    assert TOOL.prime_cache(tmp_path / "jupyter_execute", tmp_path / "cache", newer_than=newest) == 0
+    assert TOOL.prime_cache(tmp_path / "jupyter_execute", tmp_path / "cache", newer_than=newest - 1) == 1
     _, merged = get_cache(str(tmp_path / "cache")).merge_match_into_notebook(source)
     assert merged.cells[1].outputs[0]["data"] == {prefix + "text/plain": "1"}
     assert merged.cells[1].outputs[0]["metadata"]["scrapbook"]["name"] == "x"

@@ -4,13 +4,15 @@
 
 ``build``
 
-1. fills a jupyter-cache (``OUT/.jupyter_cache``) with the notebooks that the HTML build executed
-   (``--executed``, its ``jupyter_execute`` folder: each chapter's executed notebook and its glued
-   values, which myst-nb keeps apart in ``<chapter>.glue.json``), so that the LaTeX build takes
-   their outputs instead of executing every chapter a second time. A chapter is taken from the
-   cache only if its code cells are those of the sources (jupyter-cache compares a hash of them);
-   any other chapter, or every chapter without an HTML build, is executed by the LaTeX build and
-   cached for the next one;
+1. fills a jupyter-cache (``OUT/.jupyter_cache-<hash of fdi_lib's sources>``, as ``make
+   book-fast``) with the notebooks that the HTML build executed (``--executed``, its
+   ``jupyter_execute`` folder: each chapter's executed notebook and its glued values, which
+   myst-nb keeps apart in ``<chapter>.glue.json``), so that the LaTeX build takes their outputs
+   instead of executing every chapter a second time. A notebook older than the newest source
+   file of ``fdi_lib`` is not taken (it may show what an older library computed), and a chapter
+   is taken from the cache only if its code cells are those of the sources (jupyter-cache
+   compares a hash of them); any other chapter, or every chapter without an HTML build, is
+   executed by the LaTeX build and cached for the next one;
 2. runs Jupyter Book's ``pdflatex`` builder with the book's ``_config.yml`` (its ``latex:``
    section: xelatex, the parts of ``_toc.yml``; execution mode ``cache`` on the cache above),
    strict as ``make book`` is (``--warningiserror --nitpick``), and xelatex in batch mode with
@@ -24,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import copy
+import hashlib
 import json
 import os
 import shutil
@@ -35,9 +38,22 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 
 
-def prime_cache(executed: Path, cache_dir: Path) -> int:
-    """Add every executed notebook under ``executed`` to the jupyter-cache at ``cache_dir``,
-    its glued values put back as the display outputs myst-nb reads them from; returns how many.
+def library_files() -> list[Path]:
+    """The source files of the ``fdi_lib`` that the chapters' kernels import."""
+    import importlib.util
+
+    spec = importlib.util.find_spec("fdi_lib")
+    return sorted(Path(next(iter(spec.submodule_search_locations))).rglob("*.py"))
+
+
+def library_hash() -> str:
+    return hashlib.sha1(b"".join(p.read_bytes() for p in library_files())).hexdigest()[:12]
+
+
+def prime_cache(executed: Path, cache_dir: Path, newer_than: float = 0.0) -> int:
+    """Add every executed notebook under ``executed`` modified after ``newer_than`` (a time
+    stamp) to the jupyter-cache at ``cache_dir``, its glued values put back as the display
+    outputs myst-nb reads them from; returns how many.
 
     myst-nb writes ``<doc>.ipynb`` after taking out the outputs of ``glue(..., display=False)``
     (kept in ``<doc>.glue.json``, with their metadata): without them the LaTeX build would find
@@ -50,6 +66,8 @@ def prime_cache(executed: Path, cache_dir: Path) -> int:
     cache = get_cache(str(cache_dir))
     n = 0
     for path in sorted(executed.rglob("*.ipynb")):
+        if path.stat().st_mtime <= newer_than:
+            continue
         nb = nbformat.read(path, as_version=4)
         code = [c for c in nb.cells if c.cell_type == "code"]
         glue_file = path.with_name(path.stem + ".glue.json")
@@ -97,10 +115,14 @@ def build(src: Path, out: Path, executed: Path | None, html: Path | None, extra:
 
     start = time.perf_counter()
     out.mkdir(parents=True, exist_ok=True)
-    cache_dir = out / ".jupyter_cache"
+    cache_dir = out / f".jupyter_cache-{library_hash()}"
+    for stale in out.glob(".jupyter_cache-*"):
+        if stale != cache_dir:
+            shutil.rmtree(stale)
     if executed is not None and executed.is_dir():
-        print(f"pdf: {prime_cache(executed, cache_dir)} executed notebooks of {executed} in the cache",
-              flush=True)
+        library = max(p.stat().st_mtime for p in library_files())
+        n = prime_cache(executed, cache_dir, newer_than=library)
+        print(f"pdf: {n} notebooks executed by the HTML build ({executed}) in the cache", flush=True)
     else:
         print("pdf: no executed notebooks given: the LaTeX build executes every chapter", flush=True)
     config = pdf_config(src, cache_dir.resolve(), out / "_config_pdf.yml")
