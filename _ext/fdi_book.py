@@ -762,8 +762,9 @@ class _NumberedParts(SphinxPostTransform):
     """Chapters numbered as in the HTML: in LaTeX every ``\\chapter`` of the book would be
     numbered (1-17); here only those of the parts ``numbered: true`` in ``_toc.yml`` are (1-6,
     continuously: an unnumbered chapter does not step LaTeX's counter), with their sections as
-    in the HTML (2.1, 2.1.1), and no part is numbered. Runs after sphinx-jupyterbook-latex has
-    made the parts (priority 700) in the root document."""
+    in the HTML (2.1, 2.1.1), and no part is numbered; a chapter left empty (the bibliography's)
+    is dropped. Runs after sphinx-jupyterbook-latex has made the parts (priority 700) in the root
+    document."""
 
     default_priority = 750
     builders = ("latex",)
@@ -778,6 +779,11 @@ class _NumberedParts(SphinxPostTransform):
             return nodes.raw("", f"\\setcounter{{secnumdepth}}{{{n}}}\n", format="latex")
 
         self.document.insert(0, depth(-2))
+        # the bibliography page: sphinx-jupyterbook-latex moved its list to the end of the book
+        # (an unnumbered "Bibliography" there), which leaves its chapter empty
+        for section in list(self.document.findall(nodes.section)):
+            if all(isinstance(c, (nodes.title, nodes.target)) for c in section.children):
+                section.parent.remove(section)
         for section in list(self.document.findall(nodes.section)):
             if section.get("docname") in numbered and section.children and isinstance(section[0], nodes.title):
                 section.parent.insert(section.parent.index(section), depth(-2))

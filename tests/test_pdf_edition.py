@@ -119,9 +119,13 @@ def test_the_cache_gives_back_glued_values(tmp_path):
     nb.cells = [nbformat.v4.new_markdown_cell("# T"), nbformat.v4.new_code_cell("glue('x', 1, display=False)"),
                 nbformat.v4.new_code_cell("1 + 1")]
     source = nbformat.from_dict(json.loads(json.dumps(nb)))   # as read from the chapter
-    nb.cells[2].outputs = [nbformat.v4.new_output("execute_result", {"text/plain": "2"}, execution_count=2)]
     executed = tmp_path / "jupyter_execute" / "book"
     executed.mkdir(parents=True)
+    nbformat.write(nb, executed / "ch.ipynb")   # as myst-nb's cache mode writes it: not executed
+    assert TOOL.prime_cache(tmp_path / "jupyter_execute", tmp_path / "cache") == 0
+    nb.cells[1].execution_count = 1
+    nb.cells[2].execution_count = 2
+    nb.cells[2].outputs = [nbformat.v4.new_output("execute_result", {"text/plain": "2"}, execution_count=2)]
     nbformat.write(nb, executed / "ch.ipynb")
     prefix = "application/papermill.record/"
     (executed / "ch.glue.json").write_text(json.dumps({"x": {

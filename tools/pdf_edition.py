@@ -53,7 +53,9 @@ def library_hash() -> str:
 def prime_cache(executed: Path, cache_dir: Path, newer_than: float = 0.0) -> int:
     """Add every executed notebook under ``executed`` modified after ``newer_than`` (a time
     stamp) to the jupyter-cache at ``cache_dir``, its glued values put back as the display
-    outputs myst-nb reads them from; returns how many.
+    outputs myst-nb reads them from; returns how many. A notebook without any executed cell is
+    left out: an HTML build in execution mode ``force`` (``make book``) writes the executed
+    notebooks, one in mode ``cache`` (``make book-fast``) the notebooks as read.
 
     myst-nb writes ``<doc>.ipynb`` after taking out the outputs of ``glue(..., display=False)``
     (kept in ``<doc>.glue.json``, with their metadata): without them the LaTeX build would find
@@ -70,6 +72,8 @@ def prime_cache(executed: Path, cache_dir: Path, newer_than: float = 0.0) -> int
             continue
         nb = nbformat.read(path, as_version=4)
         code = [c for c in nb.cells if c.cell_type == "code"]
+        if not any(c.get("execution_count") for c in code):
+            continue  # not executed: myst-nb's cache mode (book-fast) writes the unexecuted notebook
         glue_file = path.with_name(path.stem + ".glue.json")
         if code and glue_file.is_file():
             shown = {o.get("metadata", {}).get("scrapbook", {}).get("name")
