@@ -623,7 +623,7 @@ _PDF_JS = """// The PDF edition in the header's download menu, when `make pdf` h
 def publish_pdf(html_dir: Path, pdf: Path | None) -> None:
     """Put ``pdf`` beside the HTML pages in ``html_dir`` (as :data:`PDF_NAME`) and let every
     page's download menu link it; with ``pdf`` None, the pages link no PDF."""
-    if pdf is not None:
+    if pdf is not None and pdf.resolve() != (html_dir / PDF_NAME).resolve():
         shutil.copy2(pdf, html_dir / PDF_NAME)
     script = html_dir / "_static" / PDF_SCRIPT
     script.parent.mkdir(parents=True, exist_ok=True)
@@ -633,10 +633,8 @@ def publish_pdf(html_dir: Path, pdf: Path | None) -> None:
 def _pdf_script(app: Sphinx, exception: Exception | None) -> None:
     if exception is not None or app.builder.format != "html":
         return
-    present = Path(app.outdir) / PDF_NAME  # published by an earlier `make pdf` (book-fast)
-    publish_pdf(Path(app.outdir), None)
-    if present.is_file():
-        publish_pdf(Path(app.outdir), present)
+    present = Path(app.outdir) / PDF_NAME  # put there by an earlier `make pdf` (book-fast)
+    publish_pdf(Path(app.outdir), present if present.is_file() else None)
 
 
 def latex_macros(config) -> str:

@@ -152,3 +152,5 @@ def test_publish_pdf_links_the_pdf_only_when_it_is_there(tmp_path):
     EXT.publish_pdf(html, pdf)
     assert f'const pdf = "{EXT.PDF_NAME}";' in (html / "_static" / EXT.PDF_SCRIPT).read_text()
     assert (html / EXT.PDF_NAME).read_bytes() == b"%PDF-1.5\n"
+    EXT.publish_pdf(html, html / EXT.PDF_NAME)   # an HTML build over a published PDF keeps it
+    assert f'const pdf = "{EXT.PDF_NAME}";' in (html / "_static" / EXT.PDF_SCRIPT).read_text()
