@@ -132,8 +132,8 @@ def build(src: Path, out: Path, executed: Path | None, html: Path | None, extra:
     config = pdf_config(src, cache_dir.resolve(), out / "_config_pdf.yml")
     work = out / "build"
     latex = work / "_build" / "latex"
-    if latex.exists():
-        shutil.rmtree(latex)
+    if work.exists():  # a fresh Sphinx environment: the outputs may have changed, not the sources
+        shutil.rmtree(work)
     env = dict(os.environ, LATEXOPTS="-interaction=nonstopmode -halt-on-error -file-line-error",
                PYTHONPATH=os.pathsep.join(filter(None, [str(src), os.environ.get("PYTHONPATH")])))
     cmd = [str(Path(sys.executable).with_name("jupyter-book")), "build", str(src), "--config", str(config),
