@@ -637,6 +637,21 @@ def _pdf_script(app: Sphinx, exception: Exception | None) -> None:
     publish_pdf(Path(app.outdir), present if present.is_file() else None)
 
 
+def _record_run_times(app: Sphinx, env) -> None:
+    """Each chapter's execution time beside its executed notebook (``jupyter_execute/<doc>.
+    exec.json``) when this build executed it: the PDF edition, which takes the notebooks of the
+    HTML build (``tools/pdf_edition.py``), shows them on its status page."""
+    from myst_nb.sphinx_ import NbMetadataCollector
+
+    folder = Path(app.outdir).parent / "jupyter_execute"
+    for docname in sorted(env.found_docs):
+        data = NbMetadataCollector.get_exec_data(env, docname) or {}
+        if data.get("method") == "force" and data.get("succeeded") and data.get("runtime") is not None:
+            path = folder / f"{docname}.exec.json"
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(json.dumps({"runtime": data["runtime"]}))
+
+
 def latex_macros(config) -> str:
     """The book's maths macros as LaTeX definitions (``\\providecommand`` then
     ``\\renewcommand``: a macro of the book wins over a command of the same name)."""
@@ -867,6 +882,7 @@ def setup(app: Sphinx) -> dict[str, Any]:
     app.add_post_transform(_ExplorableFigures)
     app.add_js_file(PDF_SCRIPT)
     app.connect("build-finished", _pdf_script)
+    app.connect("env-updated", _record_run_times)
     from sphinx_proof.domain import ProofIndex
 
     if not getattr(ProofIndex.generate, "_fdi_titled", False):

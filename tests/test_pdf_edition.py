@@ -134,8 +134,11 @@ def test_the_cache_gives_back_glued_values(tmp_path):
     # a notebook executed before the library's last change is not taken
     newest = (executed / "ch.ipynb").stat().st_mtime
     assert TOOL.prime_cache(tmp_path / "jupyter_execute", tmp_path / "cache", newer_than=newest) == 0
+    (executed / "ch.exec.json").write_text(json.dumps({"runtime": 12.5}))   # the HTML build's run time
     assert TOOL.prime_cache(tmp_path / "jupyter_execute", tmp_path / "cache", newer_than=newest - 1) == 1
-    _, merged = get_cache(str(tmp_path / "cache")).merge_match_into_notebook(source)
+    cache = get_cache(str(tmp_path / "cache"))
+    assert cache.match_cache_notebook(source).data == {"execution_seconds": 12.5}
+    _, merged = cache.merge_match_into_notebook(source)
     assert merged.cells[1].outputs[0]["data"] == {prefix + "text/plain": "1"}
     assert merged.cells[1].outputs[0]["metadata"]["scrapbook"]["name"] == "x"
     assert merged.cells[2].outputs[0]["data"] == {"text/plain": "2"}
@@ -154,3 +157,15 @@ def test_publish_pdf_links_the_pdf_only_when_it_is_there(tmp_path):
     assert (html / EXT.PDF_NAME).read_bytes() == b"%PDF-1.5\n"
     EXT.publish_pdf(html, html / EXT.PDF_NAME)   # an HTML build over a published PDF keeps it
     assert f'const pdf = "{EXT.PDF_NAME}";' in (html / "_static" / EXT.PDF_SCRIPT).read_text()
+
+
+def test_run_times_of_executed_chapters_are_written_beside_their_notebooks(tmp_path):
+    from collections import defaultdict
+
+    run = {"method": "force", "succeeded": True, "runtime": 3.25}
+    env = SimpleNamespace(found_docs={"book/a", "book/b", "book/c"}, nb_metadata=defaultdict(dict, {
+        "book/a": {"exec_data": run}, "book/b": {"exec_data": dict(run, method="cache")}}))
+    EXT._record_run_times(SimpleNamespace(outdir=str(tmp_path / "_build" / "html")), env)
+    written = sorted(p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*.exec.json"))
+    assert written == ["_build/jupyter_execute/book/a.exec.json"]   # cached or unexecuted: none
+    assert json.loads((tmp_path / written[0]).read_text()) == {"runtime": 3.25}

@@ -85,7 +85,11 @@ def prime_cache(executed: Path, cache_dir: Path, newer_than: float = 0.0) -> int
                 prefix = output.get("metadata", {}).get("scrapbook", {}).get("mime_prefix", "")
                 output["data"] = {prefix + k: v for k, v in output["data"].items()}
                 code[0].outputs.append(nbformat.from_dict(output))
-        cache.cache_notebook_bundle(CacheBundleIn(nb, str(path)), check_validity=False, overwrite=True)
+        # its run time in the HTML build, for the status page (_ext/fdi_book.py writes it)
+        timing = path.with_name(path.stem + ".exec.json")
+        data = {"execution_seconds": json.loads(timing.read_text())["runtime"]} if timing.is_file() else {}
+        cache.cache_notebook_bundle(CacheBundleIn(nb, str(path), data=data), check_validity=False,
+                                    overwrite=True)
         n += 1
     return n
 
