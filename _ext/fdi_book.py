@@ -794,8 +794,12 @@ class _NumberedParts(SphinxPostTransform):
         self.document.insert(0, depth(-2))
         # the bibliography page: sphinx-jupyterbook-latex moved its list to the end of the book
         # (an unnumbered "Bibliography" there), which leaves its chapter empty
+        # (a placeholder without text in its place)
         for section in list(self.document.findall(nodes.section)):
-            if all(isinstance(c, (nodes.title, nodes.target)) for c in section.children):
+            rest = section.children[1:]
+            if (section.children and isinstance(section[0], nodes.title)
+                    and not "".join(c.astext() for c in rest).strip()
+                    and not any(c.next_node(nodes.image) for c in rest if isinstance(c, nodes.Element))):
                 section.parent.remove(section)
         for section in list(self.document.findall(nodes.section)):
             if section.get("docname") in numbered and section.children and isinstance(section[0], nodes.title):
