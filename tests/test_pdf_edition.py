@@ -169,3 +169,23 @@ def test_run_times_of_executed_chapters_are_written_beside_their_notebooks(tmp_p
     written = sorted(p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*.exec.json"))
     assert written == ["_build/jupyter_execute/book/a.exec.json"]   # cached or unexecuted: none
     assert json.loads((tmp_path / written[0]).read_text()) == {"runtime": 3.25}
+
+
+def test_check_pdf_reads_code_listings_and_the_numbered_chapters(tmp_path):
+    """tools/check_pdf.py: TeX in a code listing is counted as code; the table of contents must
+    number exactly the chapters of the numbered parts of _toc.yml, in order."""
+    check = _load("fdi_check_pdf", ROOT / "tools" / "check_pdf.py")
+    tex = (r"\begin{sphinxVerbatim}[commandchars=\\\{\}]" "\n"
+           r"\PYG{l+s+s2}{\PYGZdq{}}\PYG{l+s+s2}{\PYGZbs{}}\PYG{l+s+s2}{Psi = I\PYGZdl{}}" "\n"
+           r"\end{sphinxVerbatim}" "\n" r"\(\Psi\) outside code")
+    assert check.code_macros(tex) == {"Psi": 1}
+    chapters = check.numbered_chapters(ROOT)
+    assert [doc for doc, _ in chapters][:1] == ["book/zb2014/signature"] and len(chapters) == 6
+    lines = [r"\contentsline {chapter}{Notation}{7}{chapter*.3}%"] + [
+        rf"\contentsline {{chapter}}{{\numberline {{{i}}}{title}}}{{{40 + i}}}{{chapter.{i}}}%"
+        for i, (_, title) in enumerate(chapters, start=1)]
+    toc = tmp_path / "b.toc"
+    toc.write_text("\n".join(lines) + "\n")
+    assert check.toc_problems(toc, ROOT) == []
+    toc.write_text("\n".join(lines[:-1]) + "\n")
+    assert check.toc_problems(toc, ROOT) == ["numbered chapters [1, 2, 3, 4, 5], expected 1 to 6"]
