@@ -57,6 +57,7 @@ def test_latex_build_of_a_small_book(tmp_path):
     """Macros in the preamble, a cited caption protected, an explorable's small multiples as a
     figure with its caption, the cover with the ledger counts; compiled when xelatex exists."""
     from sphinx.application import Sphinx
+    from sphinx.util.docutils import docutils_namespace
 
     src = tmp_path / "src"
     src.mkdir()
@@ -85,10 +86,13 @@ def test_latex_build_of_a_small_book(tmp_path):
     glue.write_text(json.dumps({EXT.LEDGER_GLUE: {"data": {"text/plain": repr(counts)}}}))
     out = tmp_path / "build" / "latex"
     warnings = io.StringIO()
-    app = Sphinx(str(src), str(src), str(out), str(tmp_path / "doctrees"), "latex",
-                 status=None, warning=warnings, freshenv=True)
-    app.build()
-    assert not warnings.getvalue()
+    with docutils_namespace():   # no node or directive left registered for the next Sphinx app
+        app = Sphinx(str(src), str(src), str(out), str(tmp_path / "doctrees"), "latex",
+                     status=None, warning=warnings, freshenv=True)
+        app.build()
+    # a Sphinx app built earlier in the same process (tests/test_book_text.py) leaves its nodes
+    # registered: the notices that they are registered again are not problems of this build
+    assert [w for w in warnings.getvalue().splitlines() if "is already registered" not in w] == []
     tex = (out / "fdi-book.tex").read_text()
     assert r"\renewcommand{\T}{\mathsf{T}}" in tex and r"\renewcommand{\norm}[1]{\lVert #1 \rVert}" in tex
     assert (out / "bbm.sty").read_text().startswith(r"\ProvidesPackage{bbm}")
