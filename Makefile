@@ -91,6 +91,7 @@ student-pdf: $(STAMP)
 	set -o pipefail; $(BIN)/python tools/pdf_edition.py build --src _build/student/src --out _build/student/pdf \
 	  --executed _build/student/build/_build/jupyter_execute --html _build/student/html 2>&1 \
 	  | sed -u -e '/Kernel is running over TCP without encryption/d' | tee _build/student/pdf.log
+	$(BIN)/python tools/student_edition.py verify
 
 ## Plain .ipynb copies of the chapters (outputs not executed) under _build/notebooks/, which the book
 ## ignores (a .ipynb beside a chapter is excluded too, see exclude_patterns in _config.yml).

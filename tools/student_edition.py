@@ -11,9 +11,9 @@ sources before building instead:
 (:func:`fdi_lib.exercises.strip_solutions`), builds that tree with the same Jupyter Book
 configuration into ``OUT/html``, writes one unexecuted notebook per chapter (starter cells kept)
 into ``OUT/notebooks``, then runs ``verify``. ``verify`` fails (exit status 1) if a page or a
-notebook of the student edition contains a solution: a solution directive, or any run of eight
-words that occurs in a solution and nowhere else in the chapter
-(:func:`fdi_lib.exercises.solution_fingerprints`).
+notebook of the student edition, or its PDF (``make student-pdf``), contains a solution: a
+solution directive, or any run of eight words that occurs in a solution and nowhere else in the
+chapter (:func:`fdi_lib.exercises.solution_fingerprints`).
 """
 
 from __future__ import annotations
@@ -112,8 +112,15 @@ def _notebook_text(path: Path) -> tuple[str, bool]:
     return text, ("solution-start" in text or "{solution}" in text)
 
 
+def _pdf_text(path: Path) -> tuple[str, bool]:
+    """Text of a PDF (``pdftotext``, poppler-utils); a solution shows as its text only."""
+    return subprocess.run(["pdftotext", "-enc", "UTF-8", str(path), "-"], capture_output=True, text=True,
+                          check=True).stdout, False
+
+
 def verify(out: Path) -> list[str]:
-    """Problems found in the student edition under ``out`` (empty when it has no solution text)."""
+    """Problems found in the student edition under ``out`` (empty when it has no solution text),
+    its PDF (``out/pdf``, ``make student-pdf``) included when built."""
     problems = []
     fingerprints, n_exercises, pages = set(), 0, {}
     for path in chapters(REPO / "book"):
@@ -128,7 +135,9 @@ def verify(out: Path) -> list[str]:
     if len(notebooks) != len(pages):
         problems.append(f"expected {len(pages)} notebooks under {out / 'notebooks'}, found {len(notebooks)}")
     seen_exercises = 0
-    for path, reader in [(p, _page_text) for p in html_files] + [(p, _notebook_text) for p in notebooks]:
+    pdfs = sorted((out / "pdf").glob("*.pdf"))
+    for path, reader in ([(p, _page_text) for p in html_files] + [(p, _notebook_text) for p in notebooks]
+                         + [(p, _pdf_text) for p in pdfs]):
         text, has_solution = reader(path)
         if has_solution:
             problems.append(f"{path}: contains a solution directive")
@@ -155,7 +164,8 @@ def main(argv: list[str] | None = None) -> int:
     for p in problems:
         print("student edition:", p, file=sys.stderr)
     if not problems:
-        print(f"student edition verified: no solution text in {out / 'html'} and {out / 'notebooks'}")
+        pdf = f", {out / 'pdf'}" if any((out / "pdf").glob("*.pdf")) else ""
+        print(f"student edition verified: no solution text in {out / 'html'}{pdf} and {out / 'notebooks'}")
     return 1 if problems else 0
 
 
