@@ -11,7 +11,7 @@ export OPENBLAS_NUM_THREADS := 1
 export OMP_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 
-.PHONY: book book-fast test venv lock clean benchmarks student notebooks browser-test check-book grade
+.PHONY: book book-fast test venv lock clean benchmarks student student-pdf notebooks browser-test check-book grade pdf
 
 venv: $(STAMP)
 
@@ -79,6 +79,7 @@ student: $(STAMP) $(NODE)
 	$(BIN)/python tools/student_package.py --out _build/student $(if $(STUDENTS),--students $(STUDENTS))
 	@echo "Student book built: $(abspath _build/student/html/index.html)"
 	@echo "Student package: $$(ls _build/student/dist/fdi_lib-*.whl) (pip install it; no repository needed)"
+	$(MAKE) student-pdf
 
 ## Grade a class: SUBMISSIONS holds one folder per student id with the submitted notebooks; OUT
 ## gets the gradebook (one row per student, the points of each checkable exercise, the total) and
@@ -89,6 +90,31 @@ GRADE_JOBS ?= 2
 grade: $(STAMP)
 	@test -n "$(SUBMISSIONS)" -a -n "$(OUT)" || { echo "usage: make grade SUBMISSIONS=<dir> OUT=<csv>"; exit 2; }
 	$(BIN)/python tools/grader.py "$(SUBMISSIONS)" "$(OUT)" --jobs $(GRADE_JOBS)
+
+## PDF edition: _build/pdf/fdi-book.pdf, by xelatex from Debian's TeX Live (the packages below,
+## installed if absent, as browser-test installs chromium; no network otherwise). It reuses the
+## notebooks executed by the last `make book` (_build/jupyter_execute) through a jupyter-cache,
+## executing only the chapters that changed since (all of them without an HTML build), checks
+## the PDF (tools/check_pdf.py) and, after `make book`, puts it beside the pages, whose header
+## menu then links it (tools/pdf_edition.py).
+TEX_PACKAGES := texlive-xetex texlive-latex-extra texlive-fonts-recommended fonts-freefont-otf lmodern \
+                latexmk poppler-utils
+TEX_INSTALL = dpkg -s $(TEX_PACKAGES) >/dev/null 2>&1 || { apt-get update -qq && \
+              DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $(TEX_PACKAGES); }
+pdf: $(STAMP)
+	$(TEX_INSTALL)
+	mkdir -p _build
+	set -o pipefail; $(BIN)/python tools/pdf_edition.py build --out _build/pdf --executed _build/jupyter_execute \
+	  --html _build/html 2>&1 | sed -u -e '/Kernel is running over TCP without encryption/d' | tee _build/pdf.log
+
+## The student edition's PDF (_build/student/pdf/fdi-book.pdf), from the sources and executed
+## notebooks of `make student`.
+student-pdf: $(STAMP)
+	$(TEX_INSTALL)
+	set -o pipefail; $(BIN)/python tools/pdf_edition.py build --src _build/student/src --out _build/student/pdf \
+	  --executed _build/student/build/_build/jupyter_execute --html _build/student/html 2>&1 \
+	  | sed -u -e '/Kernel is running over TCP without encryption/d' | tee _build/student/pdf.log
+	$(BIN)/python tools/student_edition.py verify
 
 ## Plain .ipynb copies of the chapters (outputs not executed) under _build/notebooks/, which the book
 ## ignores (a .ipynb beside a chapter is excluded too, see exclude_patterns in _config.yml), in

@@ -45,16 +45,31 @@
    page without maths: :func:`_mathjax_where_needed` gives it the address and configuration)
    and styled by ``static/fdi-previews.css``; a preview holds no script or slider
    (:func:`preview_html`).
+11. The PDF edition (LaTeX builder, ``make pdf``, ``tools/pdf_edition.py``): the book's maths
+   macros (``mathjax3_config``, one source for MathJax and LaTeX) as ``\\newcommand`` in the
+   preamble (:func:`latex_macros`); a ``bbm.sty`` stand-in (``\\mathbbm`` as ``\\mathbb``: the
+   class of sphinx-jupyterbook-latex loads ``bbm``, whose fonts Debian ships only in the 500 MB
+   texlive-fonts-extra); citations in captions protected (sphinxcontrib-bibtex writes a fragile
+   ``\\hyperlink`` into the moving argument of ``\\caption``); the chapters numbered as in the
+   HTML (1-6 in the parts ``numbered: true`` of ``_toc.yml``, the other pages and every part
+   unnumbered); each explorable as a figure of its small multiples with its caption
+   (:meth:`fdi_lib.explorables.Explorable.small_multiples`); a cover page with the version and
+   the claims ledger per status and paper, as the ledger page of the same build computed it.
+   In the HTML, the header's download menu links the PDF when ``make pdf`` has put it beside the
+   pages (:func:`publish_pdf`), and only then.
 """
 
 from __future__ import annotations
 
+import ast
+import html.parser
 import importlib.util
 import inspect
 import json
 import re
 import shutil
 import sys
+import subprocess
 import unicodedata
 from pathlib import Path
 from typing import Any
@@ -68,6 +83,7 @@ from pybtex.style.formatting.plain import Style as PlainStyle
 from pybtex.style.labels import BaseLabelStyle
 from sphinx.application import Sphinx
 from sphinx.errors import ExtensionError
+from sphinx.transforms.post_transforms import SphinxPostTransform
 from sphinx.util import logging
 from sphinx.util.nodes import clean_astext
 
@@ -554,9 +570,16 @@ def tex_to_text(tex: str, macros: dict[str, str] | None = None) -> str:
     return re.sub(r"\\s+", " ", _TexText(tex, macros or {}).read()).strip()
 
 
-def _book_macros(config) -> dict[str, str]:
+def _macro_definitions(config) -> dict[str, tuple[str, int]]:
+    """The book's maths macros, ``name -> (body, number of arguments)``, from MathJax's
+    configuration (a macro is ``"body"`` or ``["body", n]`` there)."""
     macros = ((getattr(config, "mathjax3_config", None) or {}).get("tex") or {}).get("macros") or {}
-    return {k: v if isinstance(v, str) else v[0] for k, v in macros.items()}
+    return {k: (v, 0) if isinstance(v, str) else (v[0], int(v[1]) if len(v) > 1 else 0)
+            for k, v in macros.items()}
+
+
+def _book_macros(config) -> dict[str, str]:
+    return {k: body for k, (body, _) in _macro_definitions(config).items()}
 
 
 def readable_text(node: nodes.Node, macros: dict[str, str]) -> str:
@@ -759,6 +782,276 @@ def _lighter_previews(app: Sphinx, exception: Exception | None) -> None:
         return
     for page in getattr(app.env, "tippy_data", {}).get("pages", {}).values():
         page["id_to_html"] = {key: preview_html(html) for key, html in page["id_to_html"].items()}
+# --- 11. The PDF edition -------------------------------------------------------------------
+#: File name of the PDF edition, in ``_build/pdf/`` and beside the HTML pages.
+PDF_NAME = "fdi-book.pdf"
+#: Script of the HTML pages that adds the PDF to the header's download menu when it is there.
+PDF_SCRIPT = "fdi-pdf.js"
+_PDF_JS = """// The PDF edition in the header's download menu, when `make pdf` has put it beside the pages
+// (written by _ext/fdi_book.py: the HTML build cannot know whether a PDF will follow).
+(function () {
+  const pdf = %s;
+  if (!pdf) return;
+  document.addEventListener("DOMContentLoaded", function () {
+    const menu = document.querySelector(".dropdown-download-buttons .dropdown-menu");
+    if (!menu) return;
+    const root = document.documentElement.dataset.content_root || "";
+    const li = document.createElement("li"), a = document.createElement("a");
+    a.href = root + pdf;
+    a.className = "btn btn-sm btn-download-book-pdf-button dropdown-item";
+    a.title = "Download the whole book (PDF edition)";
+    a.innerHTML = '<span class="btn__icon-container"><i class="fas fa-book"></i></span>' +
+      '<span class="btn__text-container">book (PDF)</span>';
+    li.appendChild(a);
+    menu.insertBefore(li, menu.firstChild);
+  });
+})();
+"""
+
+
+def publish_pdf(html_dir: Path, pdf: Path | None) -> None:
+    """Put ``pdf`` beside the HTML pages in ``html_dir`` (as :data:`PDF_NAME`) and let every
+    page's download menu link it; with ``pdf`` None, the pages link no PDF."""
+    if pdf is not None and pdf.resolve() != (html_dir / PDF_NAME).resolve():
+        shutil.copy2(pdf, html_dir / PDF_NAME)
+    script = html_dir / "_static" / PDF_SCRIPT
+    script.parent.mkdir(parents=True, exist_ok=True)
+    script.write_text(_PDF_JS % json.dumps(PDF_NAME if pdf is not None else None))
+
+
+def _pdf_script(app: Sphinx, exception: Exception | None) -> None:
+    if exception is not None or app.builder.format != "html":
+        return
+    present = Path(app.outdir) / PDF_NAME  # put there by an earlier `make pdf` (book-fast)
+    publish_pdf(Path(app.outdir), present if present.is_file() else None)
+
+
+def _record_run_times(app: Sphinx, env) -> None:
+    """Each chapter's execution time beside its executed notebook (``jupyter_execute/<doc>.
+    exec.json``) when this build executed it: the PDF edition, which takes the notebooks of the
+    HTML build (``tools/pdf_edition.py``), shows them on its status page."""
+    from myst_nb.sphinx_ import NbMetadataCollector
+
+    folder = Path(app.outdir).parent / "jupyter_execute"
+    for docname in sorted(env.found_docs):
+        data = NbMetadataCollector.get_exec_data(env, docname) or {}
+        if data.get("method") == "force" and data.get("succeeded") and data.get("runtime") is not None:
+            path = folder / f"{docname}.exec.json"
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(json.dumps({"runtime": data["runtime"]}))
+
+
+def latex_macros(config) -> str:
+    """The book's maths macros as LaTeX definitions (``\\providecommand`` then
+    ``\\renewcommand``: a macro of the book wins over a command of the same name)."""
+    out = []
+    for name, (body, nargs) in _macro_definitions(config).items():
+        args = f"[{nargs}]" if nargs else ""
+        out.append(f"\\providecommand{{\\{name}}}{{}}\\renewcommand{{\\{name}}}{args}{{{body}}}")
+    return "\n".join(out)
+
+
+#: ``bbm.sty`` for the LaTeX build (see 9. in the module docstring).
+_BBM_STY = r"""\ProvidesPackage{bbm}[2026/01/01 fdi-book stand-in: mathbbm as amssymb mathbb, no bbm fonts]
+\providecommand{\mathbbm}[1]{\mathbb{#1}}
+"""
+
+
+def _latex_preamble(app: Sphinx, config) -> None:
+    elements = config.latex_elements
+    elements["preamble"] = (elements.get("preamble", "") + "\n% fdi-book: the maths macros of the book "
+                            "(mathjax3_config in _config.yml)\n" + latex_macros(config) + "\n")
+
+
+def _latex_files(app: Sphinx) -> None:
+    if app.builder.name != "latex":
+        return
+    out = Path(app.outdir)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "bbm.sty").write_text(_BBM_STY)
+
+
+def _version(confdir: Path) -> str:
+    """The library's version and, in a git checkout, ``git describe`` of the sources."""
+    import fdi_lib
+
+    try:
+        described = subprocess.run(["git", "describe", "--tags", "--always", "--dirty"], cwd=confdir,
+                                   capture_output=True, text=True, timeout=30, check=True).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        described = ""
+    return f"{fdi_lib.__version__} (git {described})" if described else fdi_lib.__version__
+
+
+def _latex_escape(text: str) -> str:
+    return re.sub(r"([&%$#_{}])", r"\\\1", text).replace("~", r"\textasciitilde{}")
+
+
+#: The glued value of the ledger page that the cover shows (``book/zz-ledger.md``).
+LEDGER_DOC, LEDGER_GLUE = "book/zz-ledger", "ledger-counts-by-paper"
+
+
+def ledger_counts(app: Sphinx) -> dict[str, dict[str, int]]:
+    """``{paper: {status: claims}}`` as the ledger page of this build computed it
+    (:meth:`fdi_lib.reproduce.ledger.Ledger.counts_by_paper`, glued by the page)."""
+    path = Path(app.outdir).parent / "jupyter_execute" / f"{LEDGER_DOC}.glue.json"
+    if not path.is_file():
+        raise FileNotFoundError(f"the cover needs the ledger page's glue data: no {path}")
+    glued = json.loads(path.read_text())
+    if LEDGER_GLUE not in glued:
+        raise KeyError(f"the cover needs {LEDGER_GLUE!r} glued by {LEDGER_DOC}: not in {path}")
+    return ast.literal_eval(glued[LEDGER_GLUE]["data"]["text/plain"])
+
+
+def cover_latex(title: str, version: str, counts: dict[str, dict[str, int]]) -> str:
+    """The cover page: title, version, and the claims ledger (statuses as rows, papers as
+    columns, totals), for ``latex_elements["maketitle"]``."""
+    from fdi_lib.reproduce.ledger import PAPERS, STATUSES
+
+    papers = [p for p in PAPERS if p in counts]
+    head = " & ".join(["status", *(_latex_escape(PAPERS[p]) for p in papers), "all"])
+    rows = []
+    for status in STATUSES:
+        n = [counts[p].get(status, 0) for p in papers]
+        rows.append(" & ".join([_latex_escape(status), *map(str, n), str(sum(n))]) + r" \\")
+    totals = [sum(counts[p].values()) for p in papers]
+    rows.append(r"\midrule " + " & ".join(["all claims", *map(str, totals), str(sum(totals))]) + r" \\")
+    main, _, sub = title.partition(": ")
+    return "\n".join([
+        r"\begin{titlepage}\centering",
+        r"\vspace*{3cm}{\Huge\bfseries " + _latex_escape(main) + r"\par}",
+        r"\vspace{1em}{\Large " + _latex_escape(sub) + r"\par}" if sub else "",
+        r"\vspace{2em}{\large PDF edition, version " + _latex_escape(version) + r"\par}",
+        r"\vspace{0.5em}{\large \today\par}",
+        r"\vfill",
+        r"{\large Claims of the papers checked by this edition, by status (see the claims ledger)\par}",
+        r"\vspace{1em}\small",
+        r"\begin{tabular}{l" + "r" * (len(papers) + 1) + "}",
+        r"\toprule " + head + r" \\ \midrule",
+        *rows,
+        r"\bottomrule\end{tabular}",
+        r"\vspace*{2cm}",
+        r"\end{titlepage}",
+    ])
+
+
+def _latex_cover(app: Sphinx, env) -> None:
+    """The cover, once every page (the ledger's included) has been read and executed."""
+    if app.builder.name != "latex":
+        return
+    # the title of the book's LaTeX document (Jupyter Book puts _config.yml's title there)
+    title = app.config.latex_documents[0][2] if app.config.latex_documents else app.config.project
+    app.builder.context["maketitle"] = cover_latex(title, _version(Path(app.confdir)), ledger_counts(app))
+
+
+class _ProtectCaptionCitations(SphinxPostTransform):
+    """``\\protect`` before the ``\\hyperlink`` of a citation in a caption (LaTeX errors
+    "Paragraph ended before \\Hy@tempa was complete" otherwise)."""
+
+    default_priority = 800
+    builders = ("latex",)
+
+    def run(self, **kwargs: Any) -> None:
+        from sphinxcontrib.bibtex.nodes import raw_latex  # written as its rawsource
+
+        for caption in self.document.findall(nodes.caption):
+            for raw in caption.findall(raw_latex):
+                if raw.rawsource.startswith("\\hyperlink{"):
+                    raw.rawsource = "\\protect" + raw.rawsource
+
+
+class _NumberedParts(SphinxPostTransform):
+    """Chapters numbered as in the HTML: in LaTeX every ``\\chapter`` of the book would be
+    numbered (1-17); here only those of the parts ``numbered: true`` in ``_toc.yml`` are (1-6,
+    continuously: an unnumbered chapter does not step LaTeX's counter), with their sections as
+    in the HTML (2.1, 2.1.1), and no part is numbered; a chapter left empty (the bibliography's)
+    is dropped. Runs after sphinx-jupyterbook-latex has made the parts (priority 700) in the root
+    document."""
+
+    default_priority = 750
+    builders = ("latex",)
+
+    def run(self, **kwargs: Any) -> None:
+        site_map = getattr(self.config, "external_site_map", None)
+        if site_map is None or self.app.project.path2doc(self.document["source"]) != self.config.root_doc:
+            return
+        numbered = {tree.caption: bool(tree.numbered) for tree in site_map.root.subtrees if tree.caption}
+
+        def depth(n: int) -> nodes.raw:
+            return nodes.raw("", f"\\setcounter{{secnumdepth}}{{{n}}}\n", format="latex")
+
+        self.document.insert(0, depth(-2))
+        # the bibliography page: sphinx-jupyterbook-latex moved its list to the end of the book
+        # (an unnumbered "Bibliography" there), which leaves its chapter empty
+        # (a placeholder without text in its place)
+        for section in list(self.document.findall(nodes.section)):
+            rest = section.children[1:]
+            if (section.children and isinstance(section[0], nodes.title)
+                    and not "".join(c.astext() for c in rest).strip()
+                    and not any(c.next_node(nodes.image) for c in rest if isinstance(c, nodes.Element))):
+                section.parent.remove(section)
+        for section in list(self.document.findall(nodes.section)):
+            if section.get("docname") in numbered and section.children and isinstance(section[0], nodes.title):
+                section.parent.insert(section.parent.index(section), depth(-2))
+                section.insert(1, depth(2 if numbered[section["docname"]] else -2))
+
+
+class _CaptionHTML(html.parser.HTMLParser):
+    """An explorable's caption (HTML: text, ``<sub>``, ``<sup>``, ``<i>``, ``<b>``) as docutils
+    inline nodes."""
+
+    KINDS = {"sub": nodes.subscript, "sup": nodes.superscript, "i": nodes.emphasis,
+             "em": nodes.emphasis, "b": nodes.strong, "strong": nodes.strong}
+
+    def __init__(self):
+        super().__init__(convert_charrefs=True)
+        self.stack: list[nodes.Element] = [nodes.caption()]
+
+    def handle_starttag(self, tag, attrs):
+        node = self.KINDS.get(tag, nodes.inline)()
+        self.stack[-1] += node
+        self.stack.append(node)
+
+    def handle_endtag(self, tag):
+        if len(self.stack) > 1:
+            self.stack.pop()
+
+    def handle_data(self, data):
+        self.stack[-1] += nodes.Text(data)
+
+
+def _image_caption(app: Sphinx, image: nodes.image) -> str | None:
+    """The ``fdi:caption`` of an image file (an explorable's small multiples), else None."""
+    from PIL import Image
+
+    candidate = image.get("candidates", {}).get("*") or image.get("uri", "")
+    path = Path(candidate) if Path(candidate).is_absolute() else Path(app.srcdir) / candidate
+    if path.suffix.lower() != ".png" or not path.is_file():
+        return None
+    with Image.open(path) as img:
+        return img.info.get("fdi:caption")
+
+
+class _ExplorableFigures(SphinxPostTransform):
+    """Each explorable's small multiples (its ``image/png`` output, chosen by myst-nb for
+    LaTeX) as a figure with the explorable's caption (unless the cell already makes a figure)."""
+
+    default_priority = 810
+    builders = ("latex",)
+
+    def run(self, **kwargs: Any) -> None:
+        for image in list(self.document.findall(nodes.image)):
+            if any(isinstance(a, nodes.figure) for a in _ancestors(image, self.document)):
+                continue
+            caption = _image_caption(self.app, image)
+            if caption is None:
+                continue
+            parser = _CaptionHTML()
+            parser.feed(caption)
+            parser.close()
+            image["alt"] = readable_text(parser.stack[0], {})
+            figure = nodes.figure("", image.deepcopy(), parser.stack[0], align="center")
+            image.parent.replace(image, figure)
 
 
 def setup(app: Sphinx) -> dict[str, Any]:
@@ -783,6 +1076,15 @@ def setup(app: Sphinx) -> dict[str, Any]:
     app.connect("doctree-read", _readable_section_labels)
     app.connect("doctree-read", _record_proof_titles)
     app.connect("env-purge-doc", _purge_proof_titles)
+    app.connect("config-inited", _latex_preamble)
+    app.connect("builder-inited", _latex_files)
+    app.connect("env-updated", _latex_cover)
+    app.add_post_transform(_ProtectCaptionCitations)
+    app.add_post_transform(_NumberedParts)
+    app.add_post_transform(_ExplorableFigures)
+    app.add_js_file(PDF_SCRIPT)
+    app.connect("build-finished", _pdf_script)
+    app.connect("env-updated", _record_run_times)
     from sphinx_proof.domain import ProofIndex
 
     if not getattr(ProofIndex.generate, "_fdi_titled", False):

@@ -16,6 +16,11 @@ figure pixel (``DISPLAY_DPI``, 605 px wide) and a 64-colour palette a frame weig
 is an image swap on already decoded images (a few ms in Chromium, far under 50 ms).
 The frames keep the ``fdi:min_font_pt``/``fdi:dpi`` PNG metadata that the browser test reads.
 
+On paper (the PDF edition of the book) an explorable is a small-multiples figure: a few of the
+same frames side by side, each titled with its slider values (:meth:`Explorable.small_multiples`,
+the ``image/png`` output that myst-nb's LaTeX builder prefers to HTML); the PNG carries the
+caption (``fdi:caption``) for the book's extension to typeset under it.
+
 :func:`figure_data` reduces a figure to its data arrays and texts; the tests compare the frames
 of the grid with the callback's output at the same slider values through it.
 """
@@ -39,7 +44,7 @@ from fdi_lib.errors import ModelError, NonFiniteError, ResourceError, ShapeError
 from fdi_lib.plotting import DISPLAY_DPI, smallest_font_pt
 from fdi_lib.widgets import render
 
-__all__ = ["Explorable", "explorable", "figure_data", "caption_text", "script_text", "PALETTE_COLOURS", "MAX_FRAMES", "MAX_BYTES"]
+__all__ = ["Explorable", "explorable", "PANELS", "figure_data", "caption_text", "script_text", "PALETTE_COLOURS", "MAX_FRAMES", "MAX_BYTES"]
 
 #: Colours of the palette PNG of a frame (the house style uses a handful; 64 keeps antialiasing).
 PALETTE_COLOURS = 64
@@ -47,6 +52,9 @@ PALETTE_COLOURS = 64
 #: Most frames of one explorable: each is a callback call and a PNG encoding at build time and
 #: 20-70 kB of page (the chapters' grids have 10 to 42 points).
 MAX_FRAMES = 100
+
+#: Frames of the small-multiples figure of an explorable on paper (:meth:`Explorable.small_multiples`).
+PANELS = 4
 
 #: Most bytes of one explorable's HTML, its page weight (the chapters' measure 0.15 to 1.6 MB).
 MAX_BYTES = 3_000_000
@@ -201,6 +209,95 @@ class Explorable:
                 f'alt="{html.escape(caption_text(self.caption), quote=True)}" '
                 f'style="max-width:100%;height:auto">'
                 f"<figcaption>{self.caption}</figcaption></figure><script>{script}</script>")
+
+    def small_multiples(self, panels: int = PANELS) -> bytes:
+        """A few frames side by side as one PNG, for paper: two per row, each titled with its
+        slider values.
+
+        The frames are spread evenly over each slider's values and always include the shown
+        (default) value: ``panels`` values of a single slider, two values (the default and the
+        value farthest from it) of each of the first two sliders otherwise, the other sliders at
+        their defaults. The frames are pasted unscaled (no resampling); the PNG carries the
+        caption (``fdi:caption``, HTML) and the house-style metadata of the frames. Its palette
+        has 256 colours, room for those of the frames (:data:`PALETTE_COLOURS` each).
+
+        Parameters
+        ----------
+        panels : int
+            Frames to show when there is a single slider (at least 2).
+        """
+        from PIL import Image
+        from PIL.PngImagePlugin import PngInfo
+
+        if isinstance(panels, bool) or not isinstance(panels, int) or panels < 2:
+            raise ModelError(f"panels: expected an integer of at least 2, got {panels!r}")
+        per = [min(panels, len(self.grid[0]))] if len(self.grid) == 1 else [2, 2] + [1] * (len(self.grid) - 2)
+        picks = [_spread(len(g), d, m) for g, d, m in zip(self.grid, self.default, per)]
+        shown = [[_fmt(v) for v in g] for g in self.grid]
+        tiles = []
+        for point in itertools.product(*picks):
+            frame = Image.open(io.BytesIO(base64.b64decode(self.frames[sum(s * i for s, i in zip(self.strides, point))])))
+            title = ", ".join(f"{label} = {shown[j][i]}" for j, (label, i) in enumerate(zip(self.labels, point))
+                              if len(picks[j]) > 1)
+            tiles.append((frame.convert("RGB"), title, frame.info.get("fdi:min_font_pt")))
+            dpi = float(frame.info.get("fdi:dpi", DISPLAY_DPI))
+        sheet, title_pt = _tiled(tiles, columns=2, dpi=dpi)
+        fonts = [float(t[2]) for t in tiles if t[2]] + ([title_pt] if title_pt else [])
+        info = PngInfo()
+        info.add_text("fdi:caption", self.caption)
+        info.add_text("fdi:min_font_pt", f"{min(fonts):g}" if fonts else "")
+        info.add_text("fdi:dpi", f"{dpi:g}")
+        out = io.BytesIO()
+        sheet.quantize(colors=256, method=Image.Quantize.FASTOCTREE).save(
+            out, format="PNG", pnginfo=info, dpi=(dpi, dpi))
+        return out.getvalue()
+
+    def _repr_png_(self) -> bytes:
+        return self.small_multiples()
+
+
+def _spread(n: int, default: int, m: int) -> list[int]:
+    """``m`` indices of ``range(n)`` spread evenly, ``default`` among them (replacing the
+    nearest): ``_spread(10, 2, 4) == [0, 2, 6, 9]``; with ``m == 2``, the default and the end
+    farthest from it."""
+    if m == 1:
+        return [default]
+    picks = sorted({int(round(x)) for x in np.linspace(0, n - 1, m)})
+    nearest = min(picks, key=lambda i: (abs(i - default), i))
+    return sorted({default, *(i for i in picks if i != nearest)})
+
+
+def _tiled(tiles: Sequence[tuple[Any, str, Any]], columns: int, dpi: float) -> tuple[Any, float | None]:
+    """One RGB image of the ``(image, title, _)`` tiles, ``columns`` per row, each image pasted
+    unscaled (no resampling) under its title, and the size of the titles (points at ``dpi``,
+    the house style's title size; ``None`` without titles). The titles alone are drawn by
+    matplotlib, on a white sheet; Pillow pastes the images (an Agg ``figimage`` of the frames
+    took ten times longer)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from PIL import Image
+
+    from fdi_lib.plotting import STYLE
+
+    w = max(t[0].width for t in tiles)
+    h = max(t[0].height for t in tiles)
+    size = STYLE["axes.titlesize"] if any(t[1] for t in tiles) else None
+    title_h = int(2.2 * size / 72 * dpi) if size else 0
+    rows, cols = -(-len(tiles) // columns), min(columns, len(tiles))
+    width, height = cols * w, rows * (h + title_h)
+    fig = Figure(figsize=(width / dpi, height / dpi), dpi=dpi, facecolor="white")
+    canvas = FigureCanvasAgg(fig)
+    for k, (_, title, _) in enumerate(tiles):
+        r, c = divmod(k, columns)
+        if title:
+            fig.text((c * w + w / 2) / width, 1 - (r * (h + title_h) + title_h / 2) / height, title,
+                     ha="center", va="center", fontsize=size)
+    canvas.draw()
+    sheet = Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba(), "raw", "RGBA", 0, 1)
+    sheet = sheet.convert("RGB")
+    for k, (image, _, _) in enumerate(tiles):
+        r, c = divmod(k, columns)
+        sheet.paste(image, (c * w, r * (h + title_h) + title_h))
+    return sheet, size
 
 
 #: Characters with a Unicode subscript ("_") or superscript ("^") form, and those forms.

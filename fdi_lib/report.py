@@ -4,7 +4,8 @@ The chapters never format numbers themselves: they call these functions, so that
 count or a time looks the same on every page, and the formats are tested once
 (``tests/test_report.py``). Each ``fmt_*`` function returns a string; :func:`table` returns a
 :class:`Table`, which Jupyter (and the built book) displays as an HTML table with human row
-labels, a units column if given, and notes under it.
+labels, a units column if given, and notes under it; the PDF edition of the book shows it as a
+Markdown table (``_repr_markdown_``), which myst-nb's LaTeX output renders as a real table.
 
 Conventions
 -----------
@@ -36,6 +37,7 @@ from __future__ import annotations
 import html
 import math
 import numbers
+import re
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Sequence
 
@@ -202,8 +204,10 @@ def fmt_value(v: Any, digits: int = 3) -> str:
 class Table:
     """A small table for readers: row labels, column headers, formatted cells and notes.
 
-    Displayed as HTML in Jupyter and in the built book (``_repr_html_``); ``str()`` gives a
-    plain-text version; :meth:`to_frame` a pandas DataFrame of the formatted cells.
+    Displayed as HTML in Jupyter and in the built book (``_repr_html_``), as a Markdown pipe table
+    in the PDF edition (``_repr_markdown_``: the LaTeX builder of myst-nb takes ``text/markdown``
+    before ``text/plain`` and has no use for HTML); ``str()`` gives a plain-text version;
+    :meth:`to_frame` a pandas DataFrame of the formatted cells.
     """
 
     columns: tuple[str, ...]
@@ -223,6 +227,15 @@ class Table:
         return (f'<div class="fdi-table-wrap"><table class="fdi-table"><thead><tr>{head}</tr></thead>'
                 f"<tbody>{body}</tbody></table>{foot}</div>")
 
+    def _repr_markdown_(self) -> str:
+        head = (self.index_header, *self.columns)
+        lines = ["| " + " | ".join(_md_cell(c) for c in head) + " |",
+                 "|" + "---|" * len(head)]
+        lines += ["| " + " | ".join(_md_cell(c) for c in (label, *cells)) + " |" for label, cells in self.rows]
+        if self.notes:
+            lines += [""] + [f"- {_md_cell(n)}" for n in self.notes]
+        return "\n".join(lines) + "\n"
+
     def __str__(self) -> str:
         widths = [max(len(self.index_header), *(len(r[0]) for r in self.rows))] + [
             max(len(c), *(len(r[1][j]) for r in self.rows)) for j, c in enumerate(self.columns)
@@ -239,6 +252,17 @@ class Table:
 
         return pd.DataFrame([list(c) for _, c in self.rows], index=[r for r, _ in self.rows],
                             columns=list(self.columns))
+
+
+#: Characters with a meaning in MyST Markdown (emphasis, links, maths, roles, HTML, cell borders),
+#: escaped in a table cell; CommonMark removes the backslash before any ASCII punctuation.
+_MD_SPECIAL = re.compile(r"([\\`*_{}\[\]<>|$~#&!])")
+
+
+def _md_cell(text: str) -> str:
+    """A cell's text as literal Markdown: special characters escaped, line breaks as spaces (no-break
+    spaces kept)."""
+    return _MD_SPECIAL.sub(r"\\\1", re.sub(r"[ \t\r\n]+", " ", str(text)).strip()) or " "
 
 
 def table(rows: Mapping[str, Sequence[Any]], columns: Sequence[str], *, notes: Sequence[str] = (),

@@ -105,3 +105,22 @@ def test_glue_same_message_as_myst_nb(value, display):
     assert ours.outputs[0].metadata == theirs.outputs[0].metadata
     assert ours.outputs[0].metadata["scrapbook"]["name"] == "key"
     assert any(k.startswith("application/papermill.record/") for k in ours.outputs[0].data) != display
+
+
+def test_table_markdown_is_a_pipe_table_with_the_same_cells_literally():
+    """The PDF's form of a table: a Markdown table whose cells, read back by a Markdown parser
+    (markdown-it, the parser of MyST), are the table's cells, special characters included."""
+    from markdown_it import MarkdownIt
+
+    t = table({"false alarms *of* [2000] runs": [0, fmt_rate(0.017, (0.0098, 0.027))],
+               "type I error | $x_1$ `code`": [None, "a_b <c> {d}"]},
+              ["ours", "paper"], notes=["no *type I* error_given"], index_header="")
+    tokens = MarkdownIt("commonmark").enable("table").parse(t._repr_markdown_())
+    assert sum(tok.type in ("th_open", "td_open") for tok in tokens) == 9
+    texts = ["".join(c.content for c in tok.children) for tok in tokens if tok.type == "inline"]
+    # the text the parser reads is the cell's, with no emphasis, code, link or HTML made of it
+    assert texts == ["", "ours", "paper", "false alarms *of* [2000] runs", "0",
+                     fmt_rate(0.017, (0.0098, 0.027)), "type I error | $x_1$ `code`", "n/a",
+                     "a_b <c> {d}", "no *type I* error_given"]
+    assert not [tok for tok in tokens if tok.type == "inline"
+                for c in tok.children if c.type not in ("text", "softbreak")]

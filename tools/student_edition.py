@@ -28,7 +28,9 @@ holds solution material of the full book's chapters (:func:`solution_material`):
 * the output of a solution: :func:`fdi_lib.exercises.check`'s "correct" message, or any output
   in a student notebook (they are not executed);
 * cell or notebook metadata that names a solution;
-* in the wheel, the functions that compute the reference answers.
+* in the wheel, the functions that compute the reference answers;
+* in the student PDF (``OUT/pdf``, ``make student-pdf``, when built), its text (``pdftotext``)
+  scanned as a page.
 """
 
 from __future__ import annotations
@@ -339,6 +341,12 @@ def _notebook_text(path: Path) -> tuple[str, list[str]]:
     return text, found
 
 
+def _pdf_text(path: Path) -> str:
+    """Text of a PDF (``pdftotext``, poppler-utils); a solution shows as its text only."""
+    return subprocess.run(["pdftotext", "-enc", "UTF-8", str(path), "-"], capture_output=True, text=True,
+                          check=True).stdout
+
+
 def _wheel_problems(wheel: Path, material: SolutionMaterial) -> list[str]:
     """Reference code and answers in the student package (every text file of the wheel)."""
     import zipfile
@@ -362,8 +370,9 @@ def verify(out: Path, book: Path = REPO / "book", material: SolutionMaterial | N
     material of the chapters under ``book``): solution blocks, runs of solution text, lines of
     solution code, solution-only formulas, distinctive reference answers, the output of a
     solution, outputs or solution metadata in the notebooks, reference code or answers in the
-    student wheel (``out/dist/*.whl``, when built). ``material`` defaults to
-    :func:`solution_material` of ``book``, the student build's glued values being printed."""
+    student wheel (``out/dist/*.whl``, when built) and the student PDF (``out/pdf``, when built).
+    ``material`` defaults to :func:`solution_material` of ``book``, the student build's glued
+    values being printed."""
     if material is None:
         executed = out / "build" / "_build" / "jupyter_execute"
         material = solution_material(book, printed=printed_by_the_book(executed))
@@ -388,6 +397,8 @@ def verify(out: Path, book: Path = REPO / "book", material: SolutionMaterial | N
         problems += [f"{path}: {f}" for f in found + scan_text(text, material)]
         if path in notebooks:
             seen_exercises += text.count("**Exercise ")
+    for path in sorted((out / "pdf").glob("*.pdf")):
+        problems += [f"{path}: {f}" for f in scan_text(_pdf_text(path), material)]
     if seen_exercises != n_exercises:
         problems.append(f"the notebooks hold {seen_exercises} exercises, the chapters {n_exercises}")
     for wheel in sorted((out / "dist").glob("*.whl")):
@@ -408,7 +419,8 @@ def main(argv: list[str] | None = None) -> int:
         print("student edition:", p, file=sys.stderr)
     if not problems:
         print(f"student edition verified: no solution material in {out / 'html'}, {out / 'notebooks'}"
-              f"{' or ' + str(out / 'dist') if list((out / 'dist').glob('*.whl')) else ''}")
+              f"{', ' + str(out / 'dist') if list((out / 'dist').glob('*.whl')) else ''}"
+              f"{' or ' + str(out / 'pdf') if list((out / 'pdf').glob('*.pdf')) else ''}")
     return 1 if problems else 0
 
 

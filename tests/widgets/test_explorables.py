@@ -174,3 +174,30 @@ def test_size_guards_refuse_too_many_frames_before_drawing_and_too_heavy_pages(m
         explorable(counted, {"a": (1.0, 2.0, 3.0), "b": (1, 2, 3)}, caption="x")
     assert len(calls) < 9                                       # stopped as soon as the budget is exceeded
     assert plt.get_fignums() == []                              # and the figure closed
+
+
+def test_small_multiples_paste_the_frames_unscaled_with_the_default_among_them():
+    """The paper form of an explorable: the chosen frames, pixel for pixel, under their titles."""
+    from fdi_lib.explorables import _spread
+
+    assert _spread(10, 2, 4) == [0, 2, 6, 9] and _spread(6, 3, 2) == [0, 3] and _spread(6, 0, 2) == [0, 5]
+    one = explorable(_line, {"a": (1.0, 2.0, 3.0, 4.0, 5.0)}, caption="toy Γ<sub>k</sub>",
+                     labels={"a": "slope a"}, default={"a": 2.0}, b=1)
+    sheet = Image.open(io.BytesIO(one._repr_png_()))
+    assert sheet.text["fdi:caption"] == "toy Γ<sub>k</sub>" and float(sheet.text["fdi:min_font_pt"]) >= 11
+    frames = [Image.open(io.BytesIO(base64.b64decode(f))).convert("RGB") for f in one.frames]
+    w, h = frames[0].size
+    title_h = (sheet.height - 2 * h) // 2
+    assert sheet.width == 2 * w and title_h > 0
+    tiles = [sheet.convert("RGB").crop((c * w, r * (h + title_h) + title_h, (c + 1) * w, (r + 1) * (h + title_h)))
+             for r in range(2) for c in range(2)]
+    # 4 of the 5 values, evenly spread (0, 1.33, 2.67, 4 rounded), the default 2.0 (index 1) among them
+    for tile, i in zip(tiles, [0, 1, 3, 4]):
+        diff = np.abs(np.asarray(tile, int) - np.asarray(frames[i], int))
+        assert diff.max() <= 24 and diff.mean() < 0.1   # the sheet's palette of 256 colours
+    assert not np.array_equal(np.asarray(tiles[0]), np.asarray(tiles[1]))
+    # two sliders: the default and the farthest value of each, 2 x 2
+    two = explorable(_line, {"a": (1.0, 2.0, 3.0), "b": (10, 20)}, caption="toy", default={"a": 3.0})
+    assert Image.open(io.BytesIO(two.small_multiples())).size == (2 * w, sheet.height)
+    with pytest.raises(ModelError, match="panels: expected an integer of at least 2, got 1"):
+        one.small_multiples(panels=1)

@@ -1,0 +1,195 @@
+"""The PDF edition's LaTeX side (``_ext/fdi_book.py``, item 9) and the tools of ``make pdf``: a
+small project built with Sphinx's LaTeX builder (and compiled by xelatex when TeX Live is
+installed) has the book's macros, citations in captions that compile, an explorable as a figure
+with its caption, and the cover with the ledger counts; the cache of ``tools/pdf_edition.py``
+gives back the glued values of an executed notebook. The whole book's PDF is checked by
+``tools/check_pdf.py`` (``make pdf``)."""
+
+from __future__ import annotations
+
+import importlib.util
+import io
+import json
+import os
+import re
+import shutil
+import subprocess
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+
+from fdi_lib.explorables import explorable
+from fdi_lib.plotting import figure
+from fdi_lib.reproduce.ledger import PAPERS, STATUSES
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _load(name: str, path: Path):
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+EXT = _load("fdi_book_pdf_ext", ROOT / "_ext" / "fdi_book.py")
+TOOL = _load("fdi_pdf_edition", ROOT / "tools" / "pdf_edition.py")
+MACROS = {"R": r"\mathbb{R}", "T": r"\mathsf{T}", "E": r"\mathbb{E}", "norm": [r"\lVert #1 \rVert", 1]}
+
+
+def test_latex_macros_are_the_mathjax_macros():
+    config = SimpleNamespace(mathjax3_config={"tex": {"macros": MACROS}})
+    lines = EXT.latex_macros(config).splitlines()
+    assert lines == [r"\providecommand{\R}{}\renewcommand{\R}{\mathbb{R}}",
+                     r"\providecommand{\T}{}\renewcommand{\T}{\mathsf{T}}",
+                     r"\providecommand{\E}{}\renewcommand{\E}{\mathbb{E}}",
+                     r"\providecommand{\norm}{}\renewcommand{\norm}[1]{\lVert #1 \rVert}"]
+
+
+def _line(a, fig=None):
+    fig, ax = figure(fig=fig)
+    ax[0, 0].plot([0.0, 1.0], [0.0, a])
+    return fig
+
+
+def test_latex_build_of_a_small_book(tmp_path):
+    """Macros in the preamble, a cited caption protected, an explorable's small multiples as a
+    figure with its caption, the cover with the ledger counts; compiled when xelatex exists."""
+    from sphinx.application import Sphinx
+    from sphinx.util.docutils import docutils_namespace
+
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "conf.py").write_text(
+        "import sys\n"
+        f"sys.path.insert(0, {str(ROOT / '_ext')!r})\n"
+        "project = 'fdi-book: a test'\n"
+        "extensions = ['myst_parser', 'sphinxcontrib.bibtex', 'fdi_book']\n"
+        "myst_enable_extensions = ['dollarmath']\n"
+        "bibtex_bibfiles = ['refs.bib']\nbibtex_reference_style = 'author_year'\n"
+        "latex_engine = 'xelatex'\nlatex_use_xindy = False\n"
+        "latex_documents = [('index', 'fdi-book.tex', 'T', 'A', 'manual')]\n"
+        f"mathjax3_config = {{'tex': {{'macros': {MACROS!r}}}}}\n")
+    (src / "refs.bib").write_text("@article{zb2014, author = {Zhang, Q. and Basseville, M.}, title = {T},"
+                                  " journal = {J}, year = {2014}}\n")
+    ex = explorable(_line, {"a": (1.0, 2.0, 3.0)}, caption="toy Γ<sub>k</sub> &amp; more",
+                    labels={"a": "slope a"})
+    (src / "sm.png").write_bytes(ex.small_multiples())
+    (src / "index.md").write_text(
+        "# Index\n\nMaths $x \\in \\R^n$, $A^\\T$, $\\norm{x}$.\n\n"
+        "```{figure} sm.png\n:name: fig-a\n\nAs paper Fig. 1 of {cite:t}`zb2014`.\n```\n\n"
+        "```{image} sm.png\n```\n\n```{bibliography}\n```\n")
+    counts = {p: {s: i + j for j, s in enumerate(STATUSES)} for i, p in enumerate(PAPERS)}
+    glue = tmp_path / "build" / "jupyter_execute" / "book" / "zz-ledger.glue.json"
+    glue.parent.mkdir(parents=True)
+    glue.write_text(json.dumps({EXT.LEDGER_GLUE: {"data": {"text/plain": repr(counts)}}}))
+    out = tmp_path / "build" / "latex"
+    warnings = io.StringIO()
+    with docutils_namespace():   # no node or directive left registered for the next Sphinx app
+        app = Sphinx(str(src), str(src), str(out), str(tmp_path / "doctrees"), "latex",
+                     status=None, warning=warnings, freshenv=True)
+        app.build()
+    # a Sphinx app built earlier in the same process (tests/test_book_text.py) leaves its nodes
+    # registered: the notices that they are registered again are not problems of this build
+    assert [w for w in warnings.getvalue().splitlines() if "is already registered" not in w] == []
+    tex = (out / "fdi-book.tex").read_text()
+    assert r"\renewcommand{\T}{\mathsf{T}}" in tex and r"\renewcommand{\norm}[1]{\lVert #1 \rVert}" in tex
+    assert (out / "bbm.sty").read_text().startswith(r"\ProvidesPackage{bbm}")
+    caption = re.search(r"\\caption\{As paper Fig\. 1 of (.*)\}\\label", tex).group(1)
+    assert r"\protect\hyperlink{cite." in caption
+    # the plain image of the small multiples became a figure with the explorable's caption
+    figures = re.findall(r"\\begin\{figure\}.*?\\end\{figure\}", tex, re.S)
+    assert len(figures) == 2 and r"\caption{toy Γ$_{\text{k}}$ \& more}" in figures[1]
+    # the cover: every status with its counts per paper and in all
+    for status in STATUSES:
+        n = [counts[p][status] for p in PAPERS]
+        assert " & ".join([status.replace("&", r"\&"), *map(str, n), str(sum(n))]) + r" \\" in tex
+    assert "PDF edition, version" in tex
+    if shutil.which("xelatex") and shutil.which("latexmk"):
+        env = dict(os.environ, LATEXOPTS="-interaction=nonstopmode -halt-on-error")
+        done = subprocess.run(["make", "all-pdf"], cwd=out, env=env, capture_output=True, text=True)
+        assert done.returncode == 0, "\n".join(re.findall(r"^!.*$", (out / "fdi-book.log").read_text(), re.M))
+
+
+def test_the_cache_gives_back_glued_values(tmp_path):
+    """An executed notebook as myst-nb writes it (glue outputs taken out, kept in .glue.json)
+    goes into the cache with them put back, under the hash of its code cells."""
+    import nbformat
+    from jupyter_cache import get_cache
+
+    nb = nbformat.v4.new_notebook(metadata={"kernelspec": {"name": "python3", "display_name": "Python 3",
+                                                           "language": "python"}})
+    nb.cells = [nbformat.v4.new_markdown_cell("# T"), nbformat.v4.new_code_cell("glue('x', 1, display=False)"),
+                nbformat.v4.new_code_cell("1 + 1")]
+    source = nbformat.from_dict(json.loads(json.dumps(nb)))   # as read from the chapter
+    executed = tmp_path / "jupyter_execute" / "book"
+    executed.mkdir(parents=True)
+    nbformat.write(nb, executed / "ch.ipynb")   # as myst-nb's cache mode writes it: not executed
+    assert TOOL.prime_cache(tmp_path / "jupyter_execute", tmp_path / "cache") == 0
+    nb.cells[1].execution_count = 1
+    nb.cells[2].execution_count = 2
+    nb.cells[2].outputs = [nbformat.v4.new_output("execute_result", {"text/plain": "2"}, execution_count=2)]
+    nbformat.write(nb, executed / "ch.ipynb")
+    prefix = "application/papermill.record/"
+    (executed / "ch.glue.json").write_text(json.dumps({"x": {
+        "output_type": "display_data", "data": {"text/plain": "1"},
+        "metadata": {"scrapbook": {"name": "x", "mime_prefix": prefix}}}}))
+    # a notebook executed before the library's last change is not taken
+    newest = (executed / "ch.ipynb").stat().st_mtime
+    assert TOOL.prime_cache(tmp_path / "jupyter_execute", tmp_path / "cache", newer_than=newest) == 0
+    (executed / "ch.exec.json").write_text(json.dumps({"runtime": 12.5}))   # the HTML build's run time
+    assert TOOL.prime_cache(tmp_path / "jupyter_execute", tmp_path / "cache", newer_than=newest - 1) == 1
+    cache = get_cache(str(tmp_path / "cache"))
+    assert cache.match_cache_notebook(source).data == {"execution_seconds": 12.5}
+    _, merged = cache.merge_match_into_notebook(source)
+    assert merged.cells[1].outputs[0]["data"] == {prefix + "text/plain": "1"}
+    assert merged.cells[1].outputs[0]["metadata"]["scrapbook"]["name"] == "x"
+    assert merged.cells[2].outputs[0]["data"] == {"text/plain": "2"}
+
+
+def test_publish_pdf_links_the_pdf_only_when_it_is_there(tmp_path):
+    html = tmp_path / "html"
+    (html / "_static").mkdir(parents=True)
+    EXT.publish_pdf(html, None)
+    assert "const pdf = null;" in (html / "_static" / EXT.PDF_SCRIPT).read_text()
+    assert not (html / EXT.PDF_NAME).exists()
+    pdf = tmp_path / "x.pdf"
+    pdf.write_bytes(b"%PDF-1.5\n")
+    EXT.publish_pdf(html, pdf)
+    assert f'const pdf = "{EXT.PDF_NAME}";' in (html / "_static" / EXT.PDF_SCRIPT).read_text()
+    assert (html / EXT.PDF_NAME).read_bytes() == b"%PDF-1.5\n"
+    EXT.publish_pdf(html, html / EXT.PDF_NAME)   # an HTML build over a published PDF keeps it
+    assert f'const pdf = "{EXT.PDF_NAME}";' in (html / "_static" / EXT.PDF_SCRIPT).read_text()
+
+
+def test_run_times_of_executed_chapters_are_written_beside_their_notebooks(tmp_path):
+    from collections import defaultdict
+
+    run = {"method": "force", "succeeded": True, "runtime": 3.25}
+    env = SimpleNamespace(found_docs={"book/a", "book/b", "book/c"}, nb_metadata=defaultdict(dict, {
+        "book/a": {"exec_data": run}, "book/b": {"exec_data": dict(run, method="cache")}}))
+    EXT._record_run_times(SimpleNamespace(outdir=str(tmp_path / "_build" / "html")), env)
+    written = sorted(p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*.exec.json"))
+    assert written == ["_build/jupyter_execute/book/a.exec.json"]   # cached or unexecuted: none
+    assert json.loads((tmp_path / written[0]).read_text()) == {"runtime": 3.25}
+
+
+def test_check_pdf_reads_code_listings_and_the_numbered_chapters(tmp_path):
+    """tools/check_pdf.py: TeX in a code listing is counted as code; the table of contents must
+    number exactly the chapters of the numbered parts of _toc.yml, in order."""
+    check = _load("fdi_check_pdf", ROOT / "tools" / "check_pdf.py")
+    tex = (r"\begin{sphinxVerbatim}[commandchars=\\\{\}]" "\n"
+           r"\PYG{l+s+s2}{\PYGZdq{}}\PYG{l+s+s2}{\PYGZbs{}}\PYG{l+s+s2}{Psi = I\PYGZdl{}}" "\n"
+           r"\end{sphinxVerbatim}" "\n" r"\(\Psi\) outside code")
+    assert check.code_macros(tex) == {"Psi": 1}
+    chapters = check.numbered_chapters(ROOT)
+    assert [doc for doc, _ in chapters][:1] == ["book/zb2014/signature"] and len(chapters) == 6
+    lines = [r"\contentsline {chapter}{Notation}{7}{chapter*.3}%"] + [
+        rf"\contentsline {{chapter}}{{\numberline {{{i}}}{title}}}{{{40 + i}}}{{chapter.{i}}}%"
+        for i, (_, title) in enumerate(chapters, start=1)]
+    toc = tmp_path / "b.toc"
+    toc.write_text("\n".join(lines) + "\n")
+    assert check.toc_problems(toc, ROOT) == []
+    toc.write_text("\n".join(lines[:-1]) + "\n")
+    assert check.toc_problems(toc, ROOT) == ["numbered chapters [1, 2, 3, 4, 5], expected 1 to 6"]

@@ -1,0 +1,202 @@
+"""Checks of the PDF edition (run by ``tools/pdf_edition.py build``, hence by ``make pdf``).
+
+    python tools/check_pdf.py --pdf _build/pdf/fdi-book.pdf --tex .../fdi-book.tex [--html _build/html]
+
+Fails (exit status 1, one line per problem) when:
+
+- the page count is outside :data:`PAGES` (an empty or runaway document);
+- the text of the PDF (``pdftotext``) shows a Python repr (``Table(``, ``<Explorable``) or a
+  raw TeX macro (``\\name`` with two letters or more) more often than the code listings of the
+  LaTeX source print it (a cell's source may hold TeX in a string: ``r"$\\Psi_k$"``), outside
+  :data:`ALLOWED_MACROS`;
+- the LaTeX log has an undefined reference or citation (printed as "??" in the PDF);
+- the chapters numbered in the PDF's table of contents are not 1, 2, ... for the chapters of the
+  parts ``numbered: true`` of ``_toc.yml``, in order and with their titles, or another chapter
+  is numbered;
+- with ``--html``: a page of the HTML book has more images in its article than its part of the
+  LaTeX source includes (every figure, explorables included, must be in the PDF), or the PDF
+  embeds fewer images than the LaTeX source includes files (``pdfimages -list``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+from collections import Counter
+import subprocess
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+
+#: A sane page count for the book (about 180 pages in 2026): fewer means pages went missing,
+#: more that something runs away (a table or listing breaking one line per page).
+PAGES = (60, 600)
+
+#: Backslash names that the PDF may show as text: none so far (a code listing that prints TeX
+#: would need its macro here, with the listing named).
+ALLOWED_MACROS: frozenset[str] = frozenset()
+
+_MACRO = re.compile(r"\\([a-zA-Z]{2,})")
+_REPRS = ("Table(", "<Explorable")
+_DOC_LABEL = re.compile(r"\\label\{\\detokenize\{([^}]*)::doc\}\}")
+_GRAPHICS = re.compile(r"\\(?:sphinx)?includegraphics(?:\[[^\]]*\])?\{(?:\{)?([^}]+)")
+_TOC_CHAPTER = re.compile(r"\\contentsline \{chapter\}\{(.*)\}\{[^{}]*\}\{[^{}]*\}%?\s*$")
+_NUMBERLINE = re.compile(r"^\\numberline \{(\d+)\}(.*)$")
+
+
+def run(*cmd: str) -> str:
+    return subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
+
+
+def page_count(pdf: Path) -> int:
+    m = re.search(r"^Pages:\s+(\d+)", run("pdfinfo", str(pdf)), re.M)
+    if not m:
+        raise RuntimeError(f"pdfinfo gives no page count for {pdf}")
+    return int(m.group(1))
+
+
+def code_macros(tex: str) -> Counter:
+    """How often each backslash name is printed by the code listings of a LaTeX source
+    (``sphinxVerbatim``, where Pygments writes a backslash as ``\\PYGZbs{}``)."""
+    code = "\n".join(re.findall(r"\\begin\{sphinxVerbatim\}.*?\\end\{sphinxVerbatim\}", tex, re.S))
+    code = code.replace(r"\PYGZbs{}", "\x00")
+    code = re.sub(r"\\PYG\{[^}]*\}\{", "", code)      # the opening of a highlighted token
+    code = re.sub(r"\\PYGZ\w+\{\}", " ", code).replace("}", "")
+    return Counter(re.findall("\x00([a-zA-Z]{2,})", code))
+
+
+def text_problems(pdf: Path, tex: Path) -> list[str]:
+    """Reprs and raw macros in the text of the PDF, with their page; a macro is raw where the
+    PDF shows it more often than its code listings do (every occurrence is then listed)."""
+    problems = []
+    pages = run("pdftotext", "-enc", "UTF-8", str(pdf), "-").split("\f")
+    shown = Counter(m.group(1) for text in pages for m in _MACRO.finditer(text))
+    in_code = code_macros(tex.read_text(errors="replace"))
+    raw = {name for name, n in shown.items() if n > in_code[name] and name not in ALLOWED_MACROS}
+    for page, text in enumerate(pages, start=1):
+        for r in _REPRS:
+            if r in text:
+                i = text.index(r)
+                problems.append(f"page {page}: a Python repr {text[i:i + 60]!r}")
+        for m in _MACRO.finditer(text):
+            if m.group(1) in raw:
+                problems.append(f"page {page}: raw macro {m.group(0)!r} in "
+                                f"{text[max(m.start() - 30, 0):m.end() + 30]!r}")
+    return problems
+
+
+def log_problems(log: Path) -> list[str]:
+    if not log.is_file():
+        return [f"no LaTeX log {log}"]
+    text = log.read_text(errors="replace")
+    return [f"LaTeX: {m.group(0)}" for m in re.finditer(r"LaTeX Warning: (?:Reference|Citation) .* undefined[^\n]*", text)]
+
+
+def _plain(tex: str) -> str:
+    """A TeX title reduced to its lowercase letters and digits (for comparing titles)."""
+    tex = tex.replace(r"\sphinxhyphen {}", "-").replace(r"\sphinxhyphen{}", "-")
+    tex = re.sub(r"\\[a-zA-Z]+\s*", "", tex)
+    return re.sub(r"[^a-z0-9]", "", tex.lower())
+
+
+def numbered_chapters(src: Path) -> list[tuple[str, str]]:
+    """``(doc, title)`` of the chapters of the numbered parts of ``_toc.yml``, in order."""
+    import yaml
+
+    toc = yaml.safe_load((src / "_toc.yml").read_text())
+    out = []
+    for part in toc.get("parts", []):
+        if part.get("numbered"):
+            for chapter in part.get("chapters", []):
+                text = (src / f"{chapter['file']}.md").read_text()
+                title = re.search(r"^#\s+(.+?)\s*$", text, re.M).group(1)
+                out.append((chapter["file"], title))
+    return out
+
+
+def toc_problems(toc: Path, src: Path) -> list[str]:
+    if not toc.is_file():
+        return [f"no table of contents {toc}"]
+    found = []
+    for line in toc.read_text(errors="replace").splitlines():
+        m = _TOC_CHAPTER.match(line.strip())
+        if m:
+            n = _NUMBERLINE.match(m.group(1))
+            if n:
+                found.append((int(n.group(1)), n.group(2)))
+    expected = numbered_chapters(src)
+    problems = []
+    if [n for n, _ in found] != list(range(1, len(expected) + 1)):
+        problems.append(f"numbered chapters {[n for n, _ in found]}, expected 1 to {len(expected)}")
+    for (n, title), (doc, want) in zip(found, expected):
+        if _plain(title) != _plain(re.sub(r"[$\\]", "", want)):
+            problems.append(f"chapter {n} is {title!r}, expected {want!r} ({doc})")
+    return problems
+
+
+def html_images(html: Path) -> dict[str, int]:
+    """Images in the article of each page of the HTML book, by document name."""
+    from bs4 import BeautifulSoup
+
+    counts = {}
+    for page in sorted(html.rglob("*.html")):
+        doc = page.relative_to(html).with_suffix("").as_posix()
+        if not doc.startswith("book/"):
+            continue
+        article = BeautifulSoup(page.read_text(errors="replace"), "html.parser").select_one("article")
+        counts[doc] = len(article.find_all("img")) if article else 0
+    return counts
+
+
+def tex_images(tex: Path) -> dict[str, list[str]]:
+    """The image files included by the LaTeX source, by document (the part after the
+    document's ``\\label{...::doc}``)."""
+    out: dict[str, list[str]] = {}
+    doc = None
+    for line in tex.read_text(errors="replace").splitlines():
+        for m in _DOC_LABEL.finditer(line):
+            doc = m.group(1)
+        for m in _GRAPHICS.finditer(line):
+            out.setdefault(doc, []).append(m.group(1))
+    return out
+
+
+def image_problems(html: Path, tex: Path, pdf: Path) -> list[str]:
+    problems = []
+    included = tex_images(tex)
+    for doc, n in html_images(html).items():
+        if n > len(included.get(doc, [])):
+            problems.append(f"{doc}: {n} images in the HTML page, {len(included.get(doc, []))} in the PDF")
+    files = {f for fs in included.values() for f in fs}
+    rows = [line.split() for line in run("pdfimages", "-list", str(pdf)).splitlines()[2:]]
+    embedded = sum(1 for r in rows if len(r) > 2 and r[2] == "image")
+    if embedded < len(files):
+        problems.append(f"the PDF embeds {embedded} images, the LaTeX source includes {len(files)} files")
+    return problems
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--pdf", type=Path, required=True)
+    parser.add_argument("--tex", type=Path, required=True, help="the LaTeX source of the PDF")
+    parser.add_argument("--html", type=Path, help="the HTML build of the same sources")
+    parser.add_argument("--src", type=Path, default=REPO, help="the book's sources (_toc.yml)")
+    args = parser.parse_args(argv)
+    pages = page_count(args.pdf)
+    problems = [] if PAGES[0] <= pages <= PAGES[1] else [f"{pages} pages, expected {PAGES[0]} to {PAGES[1]}"]
+    problems += text_problems(args.pdf, args.tex)
+    problems += log_problems(args.tex.with_suffix(".log"))
+    problems += toc_problems(args.tex.with_suffix(".toc"), args.src)
+    if args.html is not None:
+        problems += image_problems(args.html, args.tex, args.pdf)
+    for p in problems:
+        print("check_pdf:", p, file=sys.stderr)
+    figures = sum(len(v) for v in tex_images(args.tex).values())
+    print(f"check_pdf: {args.pdf}: {pages} pages, {figures} images, "
+          f"{'ok' if not problems else f'{len(problems)} problems'}")
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
