@@ -400,6 +400,9 @@ def _render_notebook_downloads(app: Sphinx, exception: Exception | None) -> None
     ``tools``)."""
     if exception is not None or app.builder.format != "html" or not (Path(app.outdir) / "_sources").is_dir():
         return
+    if not (Path(app.confdir) / "_toc.yml").is_file():   # a Sphinx project, not a Jupyter Book: no numbering
+        logger.info("fdi_book: no _toc.yml, the notebook downloads are left as built")
+        return
     import fdi_lib
 
     path = Path(fdi_lib.__file__).resolve().parents[1] / "tools" / "notebook_markdown.py"

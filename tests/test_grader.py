@@ -51,7 +51,8 @@ def test_gradebook_of_the_synthetic_class(graded):
         assert all(by[student][i] == "0" for i in IDS), by[student]
         assert by[student]["total"] == "0"
     log = (root / "grades.log").read_text()
-    assert "== reference: 60 / 60" in log and "== starter: 0 / 60" in log and "== cheater: 0 / 60" in log
+    n = full * len(IDS)
+    assert f"== reference: {n} / {n}" in log and f"== starter: 0 / {n}" in log and f"== cheater: 0 / {n}" in log
     assert "missing (no `answer`" in log and "outside the tolerance" in log
 
 

@@ -203,6 +203,9 @@ class BookReferences:
             return self.glue_text(doc, content, formatted=name == "glue:text")
         if name == "math":
             return f"${content}$"
+        if name in ("mod", "func", "class", "meth", "attr", "data", "exc"):   # the library's API
+            shown = title or (target[1:].rsplit(".", 1)[-1] if target.startswith("~") else target)
+            return f"`{shown}`"
         raise ValueError(f"{doc}: no Markdown rendering for the role {{{name}}}")
 
     def glue_value(self, doc: str, key: str) -> dict | None:

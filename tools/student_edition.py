@@ -53,6 +53,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from fdi_lib.exercises import code_cells, parse_chapter, strip_solutions, words  # noqa: E402
+from fdi_lib.exercises._reference import REFERENCES  # noqa: E402
 
 sys.path.insert(0, str(REPO / "tools"))
 import notebook_markdown  # noqa: E402
@@ -247,7 +248,7 @@ def solution_material(book: Path = REPO / "book", printed: str = "",
         for v in ref:
             if _distinctive(v, scale) and not _matches(shown, np.array([v])):
                 material.answers[float(v)] = e.id
-        name = getattr(e.reference, "__name__", "<lambda>")
+        name = getattr(REFERENCES[e.id].answer, "__name__", "<lambda>")
         if name.isidentifier():
             material.references.add(name)
     return material
