@@ -76,7 +76,8 @@ notebooks: $(STAMP)
 	@echo "Notebooks in $(abspath _build/notebooks)"
 
 ## Every page of the built book in headless Chromium (Debian's package, installed if absent),
-## at 1280 and 390 px, no network; screenshots in _build/screenshots/ (tests/browser/check_book.py).
+## at 1280 px and as a phone (mobile emulation: 390x844, scale 2, touch), no network; screenshots
+## of both in _build/screenshots/ (tests/browser/check_book.py).
 CHROMIUM := /usr/bin/chromium
 browser-test: $(STAMP)
 	@test -f _build/html/index.html || { echo "No built book: run make book first"; exit 2; }

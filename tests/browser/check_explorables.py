@@ -140,8 +140,7 @@ def main(argv: list[str] | None = None) -> int:
         with sync_playwright() as pw:
             browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True)
             for name in pages:
-                context = browser.new_context(viewport=VIEWPORTS["1280"], device_scale_factor=1,
-                                              service_workers="block")
+                context = browser.new_context(**VIEWPORTS["1280"], service_workers="block")
                 context.route("**/*", lambda r, *_, n=name: route(r, n))
                 try:
                     found, notes = check_page(context, base + name)
