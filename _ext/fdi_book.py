@@ -30,6 +30,10 @@
    its caption (Sphinx would otherwise write the image's file path). :func:`tex_to_text` does
    the conversion; the catalogue's headings (from the registry's ASCII titles, "Gamma_k") are
    written in real maths by :func:`title_markdown`.
+9. Tables that can be read on a phone: every body cell of a table carries its column's header as
+   a ``data-label`` attribute (its readable text, :func:`readable_text`), which the book's CSS
+   and ``_static/fdi-tables.js`` use to show a table too wide for the column as one card per row
+   (``fdi_lib.report.Table`` writes the same attribute for its tables).
 """
 
 from __future__ import annotations
@@ -569,7 +573,45 @@ def _alt_from_captions(app: Sphinx, doctree, docname: str) -> None:
                 image["alt"] = text
 
 
+def _column_labels(tgroup: nodes.tgroup, macros: dict[str, str]) -> list[str]:
+    """The readable text of the last header row of ``tgroup``, one entry per column (a header
+    cell spanning columns labels each of them); empty strings if the table has no header."""
+    labels = [""] * int(tgroup.get("cols", 0))
+    for thead in tgroup.findall(nodes.thead):
+        rows = list(thead.findall(nodes.row))
+        column = 0
+        for entry in rows[-1].children if rows else []:
+            text = readable_text(entry, macros)
+            for _ in range(1 + entry.get("morecols", 0)):
+                if column < len(labels):
+                    labels[column] = text
+                column += 1
+    return labels
+
+
+def _visit_entry(self, node: nodes.entry) -> None:
+    """The HTML translator's cell, with ``data-label`` (its column's header) in a body cell."""
+    type(self).visit_entry(self, node)
+    row = node.parent
+    if isinstance(row.parent, nodes.thead):
+        return
+    tgroup = row.parent.parent
+    cache = self.__dict__.setdefault("_fdi_column_labels", {})
+    if id(tgroup) not in cache:
+        cache[id(tgroup)] = _column_labels(tgroup, _book_macros(self.config))
+    labels = cache[id(tgroup)]
+    column = row.column - 1 - node.get("morecols", 0)  # visit_entry has counted this cell
+    if 0 <= column < len(labels) and labels[column]:
+        tag = self.body[-1]
+        self.body[-1] = tag[:-1] + f' data-label="{self.attval(labels[column])}">'
+
+
+def _depart_entry(self, node: nodes.entry) -> None:
+    type(self).depart_entry(self, node)
+
+
 def setup(app: Sphinx) -> dict[str, Any]:
+    app.add_node(nodes.entry, override=True, html=(_visit_entry, _depart_entry))
     app.connect("env-before-read-docs", _drop_thebe_scripts, priority=900)
     app.connect("source-read", _generate_catalogue)
     # after sphinx-book-theme's header buttons (priority 501)
