@@ -36,7 +36,8 @@ also opened from ``file://``. Fails on:
 
 Every failure is reported as ``page | viewport | check | element | detail``, followed by counts
 per check and page; the report is also written to ``_build/browser-report.txt`` and
-``_build/browser-report.json``. Full-page screenshots go to ``_build/screenshots/``.
+``_build/browser-report.json``. Full-page screenshots (the top 15 000 CSS px of a longer page) go to
+``_build/screenshots/``, ``<page>-1280.png`` and ``<page>-phone.png``.
 
 Usage: ``python tests/browser/check_book.py [--html _build/html] [--pages glob ...]``.
 """
@@ -61,15 +62,16 @@ CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                  "--disable-background-networking", "--disable-component-update",
                  "--disable-sync", "--disable-dev-shm-usage"]
-#: The two modes: playwright context options (``device_scale_factor``, ``is_mobile`` and
+VIEWPORTS = {"1280": {"width": 1280, "height": 900}, "phone": {"width": 390, "height": 844}}
+#: The two modes, as playwright context options (``device_scale_factor``, ``is_mobile`` and
 #: ``has_touch`` are DevTools' device emulation: Emulation.setDeviceMetricsOverride with
 #: ``mobile: true`` and Emulation.setTouchEmulationEnabled).
-VIEWPORTS = {
-    "1280": {"viewport": {"width": 1280, "height": 900}, "device_scale_factor": 1},
-    "phone": {"viewport": {"width": 390, "height": 844}, "device_scale_factor": 2,
-              "is_mobile": True, "has_touch": True},
+MODES = {
+    "1280": {"viewport": VIEWPORTS["1280"], "device_scale_factor": 1},
+    "phone": {"viewport": VIEWPORTS["phone"], "device_scale_factor": 2, "is_mobile": True, "has_touch": True},
 }
 MIN_TEXT_CSS_PX = 9.0
+MAX_SHOT_PX = 15000
 SKIP_DIRS = {"_static", "_sources", "_images", "mathjax", "_sphinx_design_static"}
 
 # Runs in the page: collects the failures visible in the DOM. Returns a list of
@@ -318,8 +320,12 @@ def check_page(context, url: str, page_name: str, viewport: str, html_root: Path
     if viewport == "phone":
         failures += font_failures(page.evaluate(IMAGES_JS), html_root, base)
     if shots is not None:
+        # the whole page, or its top MAX_SHOT_PX (the ledger is some 50 000 px tall on a phone:
+        # a full screenshot at scale 2 would be a 100 000 px high image)
+        height = page.evaluate("() => document.documentElement.scrollHeight")
+        width = page.viewport_size["width"]
         page.screenshot(path=str(shots / f"{page_name.removesuffix('.html').replace('/', '__')}-{viewport}.png"),
-                        full_page=True)
+                        full_page=True, clip={"x": 0, "y": 0, "width": width, "height": min(height, MAX_SHOT_PX)})
     page.close()
     return failures
 
@@ -369,7 +375,7 @@ def main(argv: list[str] | None = None) -> int:
             # would (classic ones at 1280 px, a phone's overlay ones under mobile emulation).
             browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS,
                                          headless=True, ignore_default_args=["--hide-scrollbars"])
-            for viewport, options in VIEWPORTS.items():
+            for viewport, options in MODES.items():
                 for name in pages:
                     context = browser.new_context(**options, service_workers="block")
                     context.route("**/*", lambda r, *_, n=name, v=viewport: route(r, n, v, base))
@@ -385,7 +391,7 @@ def main(argv: list[str] | None = None) -> int:
                     context.close()
             # the same book opened from file:// (no server): math and assets must still load
             for name in [p for p in ("book/intro.html", "book/zb2014/glr.html") if p in pages]:
-                context = browser.new_context(**VIEWPORTS["1280"])
+                context = browser.new_context(**MODES["1280"])
                 file_base = root.as_uri() + "/"
                 context.route("**/*", lambda r, *_, n=name: route(r, "file://" + n, "1280", file_base))
                 for check, element, detail in check_page(
@@ -406,7 +412,7 @@ def main(argv: list[str] | None = None) -> int:
         table.append(f"{name} | " + " | ".join(str(counts.get((name, c), 0)) for c in checks))
     table.append("total | " + " | ".join(str(sum(v for (p, c), v in counts.items() if c == ck))
                                          for ck in checks))
-    summary = (f"{len(pages)} pages x {len(VIEWPORTS)} viewports (+ file://): "
+    summary = (f"{len(pages)} pages x {len(MODES)} modes (+ file://): "
                f"{len(results)} failures")
     report = "\n".join(lines + (table if results else []) + ["", summary])
     print(report)
