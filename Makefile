@@ -127,9 +127,9 @@ notebooks: $(STAMP) $(NODE)
 	$(BIN)/python tools/notebook_markdown.py check $$(find _build/notebooks -name '*.ipynb')
 
 ## Every page of the built book in headless Chromium (Debian's package, installed if absent),
-## at 1280 and 390 px, no network; screenshots in _build/screenshots/ (tests/browser/check_book.py);
-## hover previews (check_previews.py); what each page loads against the page budget
-## (page_weights.py).
+## at 1280 px and as a phone (mobile emulation: 390x844, scale 2, touch), no network; screenshots
+## of both in _build/screenshots/ (tests/browser/check_book.py); hover previews (check_previews.py);
+## what each page loads against the page budget (page_weights.py).
 browser-test: $(STAMP) $(CHROMIUM)
 	@test -f _build/html/index.html || { echo "No built book: run make book first"; exit 2; }
 	$(BIN)/python tests/browser/check_book.py --html _build/html --screenshots _build/screenshots

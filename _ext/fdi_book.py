@@ -57,6 +57,15 @@
    the claims ledger per status and paper, as the ledger page of the same build computed it.
    In the HTML, the header's download menu links the PDF when ``make pdf`` has put it beside the
    pages (:func:`publish_pdf`), and only then.
+12. Tables that can be read on a phone: every body cell of a table carries its column's header as
+   a ``data-label`` attribute (its readable text, :func:`readable_text`), which the book's CSS
+   and ``_static/fdi-tables.js`` use to show a table too wide for the column as one card per row
+   (``fdi_lib.report.Table`` writes the same attribute for its tables).
+13. Numbered explorables: the output of a cell that shows an explorable
+    (:mod:`fdi_lib.explorables`, whose HTML carries its own caption) becomes a figure of the book
+    with that caption as plain text, numbered like the others ("Figure 2.5") and labelled
+    ``fig-<page>-explore`` (``fig-glr-explore``; ``-2``, ``-3`` for further ones on a page), so
+    that the text can cite it with ``{numref}``.
 """
 
 from __future__ import annotations
@@ -85,9 +94,10 @@ from sphinx.application import Sphinx
 from sphinx.errors import ExtensionError
 from sphinx.transforms.post_transforms import SphinxPostTransform
 from sphinx.util import logging
+from sphinx.transforms import SphinxTransform
 from sphinx.util.nodes import clean_astext
 
-from fdi_lib.explorables import script_text
+from fdi_lib.explorables import caption_text, script_text
 
 logger = logging.getLogger(__name__)
 
@@ -1057,7 +1067,88 @@ class _ExplorableFigures(SphinxPostTransform):
             image.parent.replace(image, figure)
 
 
+# --- 12. Tables on a phone; 13. numbered explorables ----------------------------------------
+def _column_labels(tgroup: nodes.tgroup, macros: dict[str, str]) -> list[str]:
+    """The readable text of the last header row of ``tgroup``, one entry per column (a header
+    cell spanning columns labels each of them); empty strings if the table has no header."""
+    labels = [""] * int(tgroup.get("cols", 0))
+    for thead in tgroup.findall(nodes.thead):
+        rows = list(thead.findall(nodes.row))
+        column = 0
+        for entry in rows[-1].children if rows else []:
+            text = readable_text(entry, macros)
+            for _ in range(1 + entry.get("morecols", 0)):
+                if column < len(labels):
+                    labels[column] = text
+                column += 1
+    return labels
+
+
+def _visit_entry(self, node: nodes.entry) -> None:
+    """The HTML translator's cell, with ``data-label`` (its column's header) in a body cell."""
+    type(self).visit_entry(self, node)
+    row = node.parent
+    if isinstance(row.parent, nodes.thead):
+        return
+    tgroup = row.parent.parent
+    cache = self.__dict__.setdefault("_fdi_column_labels", {})
+    if id(tgroup) not in cache:
+        cache[id(tgroup)] = _column_labels(tgroup, _book_macros(self.config))
+    labels = cache[id(tgroup)]
+    column = row.column - 1 - node.get("morecols", 0)  # visit_entry has counted this cell
+    if 0 <= column < len(labels) and labels[column]:
+        tag = self.body[-1]
+        self.body[-1] = tag[:-1] + f' data-label="{self.attval(labels[column])}">'
+
+
+def _depart_entry(self, node: nodes.entry) -> None:
+    type(self).depart_entry(self, node)
+
+
+_EXPLORABLE_CAPTION = re.compile(r"<figcaption>(.*?)</figcaption>", re.S)
+
+
+class NumberedExplorables(SphinxTransform):
+    """Each cell output showing an explorable becomes a numbered, labelled figure (item 10).
+
+    Runs on the doctree as read (before the standard domain collects labels and Sphinx numbers
+    figures): the output's MIME bundle (myst-nb keeps every format until the builder picks one)
+    is wrapped in a ``figure`` whose caption is the explorable's own, as text
+    (:func:`fdi_lib.explorables.caption_text`); the HTML loses its ``<figcaption>`` (shown once,
+    under the number) and its ``<figure>`` becomes a ``<div>`` (one figure, not two nested)."""
+
+    default_priority = 500
+
+    def apply(self, **kwargs: Any) -> None:
+        stem = self.env.docname.rsplit("/", 1)[-1]
+        count = 0
+        for bundle in list(self.document.findall(
+                lambda n: isinstance(n, nodes.container) and n.get("nb_element") == "mime_bundle")):
+            raws = [r for r in bundle.findall(nodes.raw) if 'class="fdi-explorable"' in r.astext()]
+            if not raws or isinstance(bundle.parent, nodes.figure):
+                continue
+            html_text = raws[0].astext()
+            found = _EXPLORABLE_CAPTION.search(html_text)
+            if found is None:
+                continue
+            text = caption_text(found.group(1))
+            html_text = (html_text[:found.start()] + html_text[found.end():]).replace(
+                '<figure class="fdi-explorable"', '<div class="fdi-explorable"', 1).replace(
+                "</figure><script>", "</div><script>", 1)
+            raws[0].replace_self(nodes.raw(html_text, html_text, format="html",
+                                           classes=raws[0].get("classes", [])))
+            count += 1
+            figure = nodes.figure(classes=["fdi-explorable-figure"])
+            figure["names"].append(f"fig-{stem}-explore" + (f"-{count}" if count > 1 else ""))
+            bundle.replace_self(figure)
+            figure += bundle
+            figure += nodes.caption(text, text)
+            self.document.note_explicit_target(figure, figure)
+
+
 def setup(app: Sphinx) -> dict[str, Any]:
+    app.add_transform(NumberedExplorables)
+    app.add_node(nodes.entry, override=True, html=(_visit_entry, _depart_entry))
     app.connect("env-before-read-docs", _drop_thebe_scripts, priority=900)
     app.connect("source-read", _generate_catalogue)
     # after sphinx-book-theme's header buttons (priority 501)

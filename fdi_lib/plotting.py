@@ -27,7 +27,7 @@ from matplotlib.text import Text
 
 __all__ = ["STYLE", "use_style", "figure", "PAPER_COLOR", "OURS_COLOR", "THRESHOLD_COLOR",
            "FIG_WIDTH_IN", "STACKED_HEIGHT", "MIN_FONT_PT", "DISPLAY_DPI", "RASTER_SCALE", "PHONE_COLUMN_PX",
-           "smallest_font_pt", "png_for_display"]
+           "smallest_font_pt", "png_for_display", "axes3d"]
 
 OURS_COLOR = "#1f77b4"
 PAPER_COLOR = "#d62728"
@@ -154,3 +154,38 @@ def figure(nrows: int = 1, ncols: int = 1, *, fig: Any = None, sharex: bool = Fa
     else:
         axes = fig.subplots(nrows, ncols, sharex=sharex, squeeze=False, **kwargs)
     return fig, axes
+
+
+def axes3d(fig: Figure, spec: Any, *, nbins: int = 3, labelpad: float = 10, zoom: float = 0.8):
+    """A 3-D axes of the book's style in the subplot ``spec`` of ``fig`` (``mpl_toolkits.mplot3d``).
+
+    At the book's figure width a 3-D axes is a few centimetres wide, and matplotlib's defaults
+    (as many ticks as a 2-D axis, labels parallel to the axes, close to the tick labels) put tick
+    labels on top of each other and of the axis labels, and the labels outside the axes' box,
+    where the layout engine does not see them (over the next panel's title: Fig. 6.1 did). Here each axis has at most ``nbins + 1`` ticks, its
+    label sits ``labelpad`` points away from the tick labels, and the box is drawn at ``zoom``
+    of the axes so that the labels stay inside it (``tests/test_plotting.py`` checks that no
+    two texts of a figure with a 3-D panel overlap).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure (from :func:`figure`).
+    spec : matplotlib.gridspec.SubplotSpec
+        Where the 3-D axes goes (the subplot spec of a panel of :func:`figure`).
+    nbins : int
+        Most intervals between ticks on each axis.
+    labelpad : float
+        Distance of each axis label from its tick labels, in points.
+    zoom : float
+        Size of the drawn box relative to the axes (below 1 leaves room for the labels).
+    """
+    from matplotlib.ticker import MaxNLocator
+
+    ax = fig.add_subplot(spec, projection="3d")
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+        axis.set_major_locator(MaxNLocator(nbins))
+        axis.labelpad = labelpad
+        axis.set_rotate_label(False)  # horizontal: a rotated label's box overlaps its neighbours
+    ax.set_box_aspect(None, zoom=zoom)
+    return ax

@@ -218,8 +218,12 @@ class Table:
     def _repr_html_(self) -> str:
         esc = html.escape
         head = "".join(f"<th>{esc(c)}</th>" for c in (self.index_header, *self.columns))
+        # each cell names its column (data-label): on a phone, a table too wide for the column
+        # shows each row as a card, every cell after its column's header (the book's CSS)
+        labels = [f' data-label="{esc(c, quote=True)}"' for c in self.columns]
         body = "".join(
-            "<tr><th>" + esc(label) + "</th>" + "".join(f"<td>{esc(c)}</td>" for c in cells) + "</tr>"
+            "<tr><th>" + esc(label) + "</th>"
+            + "".join(f"<td{lab}>{esc(c)}</td>" for lab, c in zip(labels, cells)) + "</tr>"
             for label, cells in self.rows
         )
         notes = "".join(f"<li>{esc(n)}</li>" for n in self.notes)

@@ -107,3 +107,57 @@ def test_references_and_alt_texts_in_a_sphinx_build(tmp_path):
     assert "The rule for λ" in other and "\\lambda" not in other
     alts = re.findall(r'<image alt="([^"]*)"', (tmp_path / "out" / "index.xml").read_text())
     assert alts == ["Innovation εₖ and GLR lₖ for θ = [4, 0].", "own words"]
+
+
+def test_table_cells_carry_their_column_header_in_html(tmp_path):
+    """Docutils tables of the book (Markdown tables, list-tables) written to HTML: every body
+    cell has its column's header as ``data-label``, maths as readable text (item 9)."""
+    from sphinx.application import Sphinx
+    from sphinx.util.docutils import docutils_namespace
+
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "conf.py").write_text(
+        "import sys\n"
+        f"sys.path.insert(0, {str(ROOT / '_ext')!r})\n"
+        "extensions = ['myst_parser', 'fdi_book']\n"
+        "myst_enable_extensions = ['dollarmath']\n")
+    (src / "index.md").write_text(
+        "# Index\n\n| Symbol | Size of $\\theta_k$ |\n|---|---|\n| $X_k$ | $n$ |\n| $U_k$ | |\n")
+    warnings = io.StringIO()
+    with docutils_namespace():
+        app = Sphinx(str(src), str(src), str(tmp_path / "out"), str(tmp_path / "doctrees"), "html",
+                     status=None, warning=warnings, freshenv=True)
+        app.build()
+    assert not warnings.getvalue()
+    page = (tmp_path / "out" / "index.html").read_text()
+    assert re.findall(r'<td data-label="([^"]*)"', page) == ["Symbol", "Size of θₖ"] * 2
+    assert "<th" in page and not re.search(r"<th[^>]*data-label", page)
+
+
+def test_explorable_output_becomes_a_numbered_figure():
+    """The cell output of an explorable (a myst-nb MIME bundle with its HTML) is wrapped in a
+    figure labelled fig-<page>-explore, with the explorable's caption as text; the HTML keeps
+    no caption of its own and no nested figure (item 10)."""
+    from types import SimpleNamespace
+
+    from docutils import nodes
+    from docutils.frontend import get_default_settings
+    from docutils.parsers.rst import Parser
+    from docutils.utils import new_document
+
+    doc = new_document("glr", get_default_settings(Parser))
+    doc.settings.env = SimpleNamespace(docname="book/zb2014/glr")
+    pages = [explorable(_frame, {"a": (1.0, 2.0)}, caption=f"GLR l<sub>k</sub>, case {i}")._repr_html_()
+             for i in (1, 2)]
+    for html in pages:
+        bundle = nodes.container(nb_element="mime_bundle")
+        bundle += nodes.container("", nodes.raw(html, html, format="html"), mime_type="text/html")
+        doc += bundle
+    EXT.NumberedExplorables(doc).apply()
+    figures = list(doc.findall(nodes.figure))
+    assert [f["names"] for f in figures] == [["fig-glr-explore"], ["fig-glr-explore-2"]]
+    assert [f["ids"] for f in figures] == [["fig-glr-explore"], ["fig-glr-explore-2"]]
+    assert [f[-1].astext() for f in figures] == ["GLR lₖ, case 1", "GLR lₖ, case 2"]
+    html = next(figures[0].findall(nodes.raw)).astext()
+    assert "<figcaption>" not in html and "<figure" not in html and '<div class="fdi-explorable"' in html

@@ -107,3 +107,34 @@ def test_stacked_panels_keep_the_requested_width_ratios_as_heights():
     h = [ax.get_position().height for ax in axes[0]]
     assert axes.shape == (1, 2)
     assert h[0] / h[1] == pytest.approx(2.0, rel=0.05)
+
+
+def _shown_texts(fig):
+    """Every non-empty text a reader sees in ``fig``: titles, axis labels and the tick labels
+    inside each axis's view (matplotlib keeps labels of ticks outside it, not drawn)."""
+    out = []
+    for ax in fig.axes:
+        axes = (ax.xaxis, ax.yaxis, ax.zaxis) if ax.name == "3d" else (ax.xaxis, ax.yaxis)
+        out += [ax.title] + [a.label for a in axes]
+        for axis in axes:
+            lo, hi = sorted(axis.get_view_interval())
+            out += [t.label1 for t in axis.get_major_ticks()
+                    if lo - 1e-9 <= t.get_loc() <= hi + 1e-9 and t.label1.get_visible()]
+    return [t for t in out if t.get_visible() and t.get_text().strip()]
+
+
+def test_no_two_texts_of_the_3d_figure_overlap():
+    """Fig. 6.1 (the lifted polytope, the book's one 3-D panel): tick labels, axis labels and
+    titles are pairwise apart (matplotlib's defaults put them on top of each other)."""
+    from itertools import combinations
+
+    from fdi_lib.reproduce import get, reproduce
+
+    fig = get("rosa2013-fig1").plot(reproduce("rosa2013-fig1"))
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    boxes = [(t.get_text(), t.get_window_extent(renderer)) for t in _shown_texts(fig)]
+    assert any(name == "3d" for name in (a.name for a in fig.axes))
+    overlaps = [(a, b) for (a, ba), (b, bb) in combinations(boxes, 2) if ba.overlaps(bb)]
+    plt.close(fig)
+    assert overlaps == []

@@ -76,6 +76,16 @@ def test_table_html_and_text():
     assert str(t).splitlines()[1].split() == ["false", "alarms", "(of", "2000", "runs)", "0", "7"]
 
 
+def test_table_cells_name_their_column():
+    """On a phone a wide table becomes one card per row: every body cell carries its column's
+    header (escaped) as data-label, in the order of the columns."""
+    import re
+
+    t = table({"delay": [1, 2, 3]}, ["ours", 'paper "A" & B', "q < 5"])
+    assert re.findall(r'<td data-label="([^"]*)">', t._repr_html_()) == \
+        ["ours", "paper &quot;A&quot; &amp; B", "q &lt; 5"]
+
+
 def test_table_rejects():
     with pytest.raises(ModelError, match="expected 2"):
         table({"a": [1]}, ["ours", "paper"])

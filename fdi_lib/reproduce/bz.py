@@ -332,15 +332,20 @@ def _solution1_chunk(seeds: Sequence[np.random.SeedSequence]) -> dict[str, np.nd
 
 
 def plot_solution1(result: ReproductionResult, fig: Any = None):
-    """Histograms of the GLR alarm times (theta, with and without f) and of the energy alarms (f only)."""
+    """Histograms of the GLR alarm times (theta, with and without f) and of the energy alarms (f only),
+    in two stacked panels; in each, the first series is drawn wide and pale under the others."""
     fig, axes = figure(1, 2, fig=fig, figsize=(8.0, 3.4))
     d = result.data
     s = result.settings
     ax = axes[0, 0]
     bins = np.arange(0, s["n_steps"] + 1, 5)
-    for key, label in (("theta_glr_alarm", r"$\theta$ jump"), ("both_glr_alarm", r"$\theta$ jump + $f$")):
+    # a pair of histograms that may coincide: the first wide and pale under the second, so that
+    # neither hides the other (the legend lists both)
+    under, over = dict(lw=5.0, alpha=0.4), dict(lw=1.4)
+    for (key, label), style in zip((("theta_glr_alarm", r"$\theta$ jump"),
+                                    ("both_glr_alarm", r"$\theta$ jump + $f$")), (under, over)):
         a = d[key]
-        ax.hist(a[a >= 0], bins=bins, histtype="step", label=label)
+        ax.hist(a[a >= 0], bins=bins, histtype="step", label=label, **style)
     ax.hist(d["f_kalman_glr_alarm"][d["f_kalman_glr_alarm"] >= 0], bins=bins, histtype="step", ls="--",
             label=r"$f$ only, GLR on Kalman")
     ax.axvline(s["theta_onset"], color=THRESHOLD_COLOR, lw=0.8, ls=":")
@@ -348,10 +353,11 @@ def plot_solution1(result: ReproductionResult, fig: Any = None):
     ax.set(xlabel=r"alarm time $k$", ylabel="number of runs", title=r"GLR alarms on $T_k\varepsilon_k$")
     ax.legend(loc="upper left")
     ax = axes[0, 1]
-    for key, label in (("f_nonpar_alarm", r"$f$ only"), ("both_nonpar_alarm", r"$\theta$ + $f$"),
-                       ("theta_energy_alarm", r"$\theta$ only (any energy alarm)")):
+    for (key, label), style in zip((("f_nonpar_alarm", r"$f$ only"), ("both_nonpar_alarm", r"$\theta$ + $f$"),
+                                    ("theta_energy_alarm", r"$\theta$ only (any energy alarm)")),
+                                   (under, over, over)):
         a = d[key]
-        ax.hist(a[a >= 0], bins=bins, histtype="step", label=label)
+        ax.hist(a[a >= 0], bins=bins, histtype="step", label=label, **style)
     ax.axvline(s["f_onset"], color="0.5", lw=0.8, ls=":")
     ax.set(xlabel=r"alarm time $k$", ylabel="number of runs", title="Energy alarms (parallel Kalman filter)")
     ax.legend(loc="upper left")

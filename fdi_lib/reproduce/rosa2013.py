@@ -17,7 +17,7 @@ import numpy as np
 
 from fdi_lib.errors import EnvelopeWarning, UnsoundOptionWarning
 from fdi_lib.montecarlo import trial_seeds
-from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
+from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, axes3d, figure
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.sets.polytope import Polytope, convex_hull, plot_polytope
 from fdi_lib.sets.svo import SVOModel, run_architecture_i_many, run_svo, run_svo_many
@@ -92,10 +92,11 @@ def plot_fig1(result: ReproductionResult, fig: Any = None):
     """3-D lifted polytope (vertices and edges of its hull) and its shadow on the x1-x2 plane."""
     from scipy.spatial import ConvexHull
 
-    fig, axes = figure(1, 2, fig=fig)   # the book's style: two panels stacked on a phone
+    # the book's style: two panels stacked on a phone, the 3-D one taller (room for its labels)
+    fig, axes = figure(1, 2, fig=fig, width_ratios=[1.4, 1])
     spec = axes[0, 0].get_subplotspec()
     axes[0, 0].remove()
-    ax = fig.add_subplot(spec, projection="3d")
+    ax = axes3d(fig, spec)
     V = result.data["lifted_vertices"]
     hull = ConvexHull(V)
     for s in hull.simplices:
@@ -107,10 +108,11 @@ def plot_fig1(result: ReproductionResult, fig: Any = None):
     W = W[np.argsort(np.arctan2(W[:, 1] - c[1], W[:, 0] - c[0]))]
     zmin = V[:, 2].min() - 0.3
     ax.plot(np.r_[W[:, 0], W[0, 0]], np.r_[W[:, 1], W[0, 1]], zmin, color=PAPER_COLOR)
-    ax.set_xlabel("$x_1(k+1)$")
-    ax.set_ylabel("$x_2(k+1)$")
-    ax.set_zlabel("$d(k)$")
-    ax.set_title("Set(P, p) and its shadow")
+    # short labels: the panel is small; the title says which time each coordinate is at
+    ax.set_xlabel("$x_1$")
+    ax.set_ylabel("$x_2$")
+    ax.set_zlabel("$d$")
+    ax.set_title("Set(P, p) in $(x(k+1), d(k))$ and its shadow")
     ax2 = axes[0, 1]
     plot_polytope(P, ax2, color=PAPER_COLOR)
     ax2.set_xlabel("$x_1(k+1)$")

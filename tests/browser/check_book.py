@@ -2,8 +2,11 @@
 
 Opens every page of ``_build/html`` in headless Chromium (Debian's ``/usr/bin/chromium``, driven
 by the ``playwright`` Python package, which downloads no browser), served by a local
-``http.server``, at 1280 px and 390 px wide, with every request to a non-local host blocked and
-recorded. One page is also opened from ``file://``. Fails on:
+``http.server``, with every request to a non-local host blocked and recorded, in two modes:
+``1280`` (a desktop window, 1280x900, scale 1) and ``phone`` (Chrome DevTools mobile emulation as
+playwright sets it: 390x844 CSS px, device scale factor 2, ``isMobile``, touch; Chromium then
+uses a phone's overlay scrollbars, which are not visible until the reader scrolls). One page is
+also opened from ``file://``. Fails on:
 
 - ``math``: unrendered TeX (``\\(``, ``\\[``, ``$$``) left in the visible text, or no MathJax;
 - ``macro``: a raw TeX macro (``\\lambda``: a backslash and two letters or more) in the visible
@@ -14,15 +17,27 @@ recorded. One page is also opened from ``file://``. Fails on:
 - ``image``: an image that fails to load;
 - ``console``: any console error or uncaught page error;
 - ``caption``: a figure (an image in a notebook output) without a caption;
-- ``overflow``: an equation, table or figure wider than the text column at 1280 px, or, at
-  390 px, one that is clipped instead of scrolling in a box with a visible scrollbar;
-- ``font``: figure text smaller than 9 CSS px at 390 px, computed from the rendered vs intrinsic
-  image width and the smallest font size and resolution that ``fdi_lib.plotting`` stores in the
-  PNG (``fdi:min_font_pt``, ``fdi:dpi``); a figure without them fails too (size unknown).
+- ``number``: a figure without a number ("Figure 3.2", so that it can be cited), explorables
+  (``.fdi-explorable``) included;
+- ``overflow``: a display equation, table or figure cut by the text column or by its scroll box
+  (wider than what shows of it). At 1280 px nothing may be cut. On the phone, a cut object must
+  sit in a horizontal scroll box that fits the column and shows the book's scroll cue: the
+  scroll shadow of ``_static/fdi.css`` (a background with ``background-attachment`` ``local``
+  and ``scroll`` layers: a shadow at each edge beyond which there is more, which scrolls away
+  with the content);
+- ``font``: figure text smaller than 9 CSS px on the phone. Measured, not guessed from the
+  screen: ``fdi_lib.plotting`` stores in each PNG (figures and explorable frames) the smallest
+  font size of the figure in points and the resolution it was drawn at (``fdi:min_font_pt``,
+  ``fdi:dpi``), so that text is ``pt / 72 * dpi`` image pixels high (font size, the em, as
+  CSS's ``font-size``), and the page shows the image at ``rendered width / natural width`` CSS px
+  per image pixel. The product does not depend on the device scale factor (a 2x PNG has twice
+  the pixels and is shown at half as many CSS px per pixel); a figure without the metadata
+  fails (size unknown).
 
 Every failure is reported as ``page | viewport | check | element | detail``, followed by counts
 per check and page; the report is also written to ``_build/browser-report.txt`` and
-``_build/browser-report.json``. Full-page screenshots go to ``_build/screenshots/``.
+``_build/browser-report.json``. Full-page screenshots (the top 15 000 CSS px of a longer page) go to
+``_build/screenshots/``, ``<page>-1280.png`` and ``<page>-phone.png``.
 
 Usage: ``python tests/browser/check_book.py [--html _build/html] [--pages glob ...]``.
 """
@@ -47,8 +62,16 @@ CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                  "--disable-background-networking", "--disable-component-update",
                  "--disable-sync", "--disable-dev-shm-usage"]
-VIEWPORTS = {"1280": {"width": 1280, "height": 900}, "390": {"width": 390, "height": 844}}
+VIEWPORTS = {"1280": {"width": 1280, "height": 900}, "phone": {"width": 390, "height": 844}}
+#: The two modes, as playwright context options (``device_scale_factor``, ``is_mobile`` and
+#: ``has_touch`` are DevTools' device emulation: Emulation.setDeviceMetricsOverride with
+#: ``mobile: true`` and Emulation.setTouchEmulationEnabled).
+MODES = {
+    "1280": {"viewport": VIEWPORTS["1280"], "device_scale_factor": 1},
+    "phone": {"viewport": VIEWPORTS["phone"], "device_scale_factor": 2, "is_mobile": True, "has_touch": True},
+}
 MIN_TEXT_CSS_PX = 9.0
+MAX_SHOT_PX = 15000
 SKIP_DIRS = {"_static", "_sources", "_images", "mathjax", "_sphinx_design_static"}
 
 # Runs in the page: collects the failures visible in the DOM. Returns a list of
@@ -119,43 +142,63 @@ PAGE_CHECKS_JS = r"""
     else if (macro.test(alt)) out.push(['alt', describe(img), `raw TeX in alt text: ${alt.slice(0, 60)}`]);
   }
 
-  // 3. figures without a caption: every <figure>, and every image in a notebook output
+  // 3. figures without a caption or without a number (an explorable sits in a numbered figure)
   for (const fig of article.querySelectorAll('figure')) {
-    const cap = fig.querySelector('figcaption');
+    const cap = fig.querySelector(':scope > figcaption');
     if (!cap || !cap.innerText.trim()) out.push(['caption', describe(fig), 'figure without caption']);
+    else if (!cap.querySelector('.caption-number') && !fig.classList.contains('fdi-explorable')
+             && !(fig.parentElement && fig.parentElement.closest('figure')))
+      out.push(['number', describe(fig), 'figure without a number (cannot be cited)']);
+  }
+  for (const el of article.querySelectorAll('.fdi-explorable')) {
+    const fig = el.closest('figure');
+    const cap = fig && Array.from(fig.querySelectorAll('figcaption')).find(c => c.querySelector('.caption-number'));
+    if (!cap) out.push(['number', describe(el), 'explorable not in a numbered figure (cannot be cited)']);
   }
   for (const img of article.querySelectorAll('.cell_output img, .output img')) {
     if (!img.closest('figure')) out.push(['caption', describe(img), 'notebook image not in a captioned figure']);
   }
 
-  // 4. overflow of equations, tables, figures
+  // 4. equations, tables and figures cut by the column or by their scroll box
+  const scrollsX = (b) => ['auto', 'scroll'].includes(getComputedStyle(b).overflowX);
+  // the book's scroll cue (_static/fdi.css): shadows drawn by a background with 'local' and
+  // 'scroll' layers, gradients
+  const hasCue = (b) => {
+    const st = getComputedStyle(b);
+    const att = st.backgroundAttachment.split(',').map(x => x.trim());
+    return att.includes('local') && att.includes('scroll') && /gradient/.test(st.backgroundImage);
+  };
   const items = [];
   for (const el of article.querySelectorAll('mjx-container[display="true"]')) {
-    const m = el.querySelector('mjx-math');
-    items.push(['equation', el, m ? m.getBoundingClientRect().width : el.scrollWidth]);
+    items.push(['equation', el, el.querySelector('mjx-math') || el]);
   }
-  for (const el of article.querySelectorAll('table')) items.push(['table', el, el.getBoundingClientRect().width]);
-  for (const el of article.querySelectorAll('figure, img')) items.push(['figure', el, el.getBoundingClientRect().width]);
-  for (const [kind, el, width] of items) {
+  for (const el of article.querySelectorAll('table')) items.push(['table', el, el]);
+  for (const el of article.querySelectorAll('figure, img')) items.push(['figure', el, el]);
+  for (const [kind, el, inner] of items) {
     if (el.offsetParent === null) continue;  // hidden (folded) content
-    if (width <= colWidth + 1) continue;
-    const what = `${kind} ${Math.round(width)} px wide, column ${Math.round(colWidth)} px`;
-    if (viewport === '1280') { out.push(['overflow', describe(el), what]); continue; }
-    // at phone width: must scroll in a box that fits the column, with a visible scrollbar
-    let box = el, ok = false, why = 'no horizontal scroll box (clipped)';
-    while (box && box !== article.parentElement) {
-      const ox = getComputedStyle(box).overflowX;
-      if (ox === 'auto' || ox === 'scroll') {
-        const r = box.getBoundingClientRect();
-        if (r.right > colRight + 1 || r.left < colLeft - 1) { why = 'scroll box wider than the column'; break; }
-        if (box.offsetHeight - box.clientHeight - parseFloat(getComputedStyle(box).borderTopWidth)
-            - parseFloat(getComputedStyle(box).borderBottomWidth) <= 0) { why = 'scrollbar not visible'; break; }
-        ok = true; break;
-      }
-      if (ox === 'hidden' || ox === 'clip') { why = `clipped by ${box.tagName.toLowerCase()}.${box.className}`; break; }
-      box = box.parentElement;
+    const r = inner.getBoundingClientRect();
+    // what shows of it: the column, narrowed by every clipping or scrolling ancestor
+    let left = colLeft, right = colRight, box = null;
+    for (let b = kind === 'equation' ? el : el.parentElement; b && b !== article.parentElement; b = b.parentElement) {
+      const ox = getComputedStyle(b).overflowX;
+      if (ox === 'visible') continue;
+      const br = b.getBoundingClientRect();
+      left = Math.max(left, br.left + b.clientLeft);
+      right = Math.min(right, br.left + b.clientLeft + b.clientWidth);
+      if (!box) box = b;  // the innermost box that clips or scrolls it
     }
-    if (!ok) out.push(['overflow', describe(el), `${what}: ${why}`]);
+    if (r.left >= left - 1 && r.right <= right + 1) continue;
+    const hidden = Math.round(100 * (r.width - Math.max(0, Math.min(r.right, right) - Math.max(r.left, left))) / r.width);
+    const what = `${kind} ${Math.round(r.width)} px wide, ${hidden} % not shown (column ${Math.round(colWidth)} px)`;
+    if (viewport === '1280') { out.push(['overflow', describe(el), what]); continue; }
+    let why = null;
+    if (!box || !scrollsX(box)) why = box ? `clipped by ${box.tagName.toLowerCase()}.${box.className}` : 'no horizontal scroll box';
+    else {
+      const br = box.getBoundingClientRect();
+      if (br.right > colRight + 1 || br.left < colLeft - 1) why = 'scroll box wider than the column';
+      else if (!hasCue(box)) why = 'scrolls with no visible cue (no scroll shadow)';
+    }
+    if (why) out.push(['overflow', describe(el), `${what}: ${why}`]);
   }
   // whole page wider than the viewport (horizontal page scroll)
   if (document.documentElement.scrollWidth > window.innerWidth + 1) {
@@ -171,14 +214,6 @@ IMAGES_JS = r"""
   caption: ((i.closest('figure') || {}).innerText || i.getAttribute('alt') || '').trim().replace(/\s+/g, ' ').slice(0, 70),
   inOutput: !!i.closest('.cell_output, .output')
 }))
-"""
-
-PHONE_PAGE_SCROLLBAR_JS = """
-document.addEventListener('DOMContentLoaded', () => {
-  const style = document.createElement('style');
-  style.textContent = 'html { scrollbar-width: none; }';
-  document.head.appendChild(style);
-});
 """
 
 WAIT_MATHJAX_JS = r"""
@@ -282,11 +317,15 @@ def check_page(context, url: str, page_name: str, viewport: str, html_root: Path
     page.evaluate("() => Promise.all(Array.from(document.images).map(i => { i.loading = 'eager';"
                   " return i.decode().catch(() => null); }))")
     failures += [tuple(f) for f in page.evaluate(PAGE_CHECKS_JS, [viewport])]
-    if viewport == "390":
+    if viewport == "phone":
         failures += font_failures(page.evaluate(IMAGES_JS), html_root, base)
     if shots is not None:
+        # the whole page, or its top MAX_SHOT_PX (the ledger is some 50 000 px tall on a phone:
+        # a full screenshot at scale 2 would be a 100 000 px high image)
+        height = page.evaluate("() => document.documentElement.scrollHeight")
+        width = page.viewport_size["width"]
         page.screenshot(path=str(shots / f"{page_name.removesuffix('.html').replace('/', '__')}-{viewport}.png"),
-                        full_page=True)
+                        full_page=True, clip={"x": 0, "y": 0, "width": width, "height": min(height, MAX_SHOT_PX)})
     page.close()
     return failures
 
@@ -337,18 +376,13 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         with sync_playwright() as pw:
-            # Playwright hides scrollbars in headless mode by default: show them, the test
-            # checks that scrolling boxes have a visible scrollbar.
+            # Playwright hides scrollbars in headless mode by default: show them as a browser
+            # would (classic ones at 1280 px, a phone's overlay ones under mobile emulation).
             browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS,
                                          headless=True, ignore_default_args=["--hide-scrollbars"])
-            for viewport, size in VIEWPORTS.items():
+            for viewport, options in MODES.items():
                 for name in pages:
-                    context = browser.new_context(viewport=size, device_scale_factor=1,
-                                                  service_workers="block")
-                    if viewport == "390":
-                        # a phone's page scrollbar overlays the page instead of taking 15 px
-                        # of its width (boxes keep theirs: the test checks them)
-                        context.add_init_script(PHONE_PAGE_SCROLLBAR_JS)
+                    context = browser.new_context(**options, service_workers="block")
                     context.route("**/*", lambda r, *_, n=name, v=viewport: route(r, n, v, base))
                     t0 = time.monotonic()
                     try:
@@ -357,12 +391,12 @@ def main(argv: list[str] | None = None) -> int:
                     except Exception as exc:  # a page that breaks the driver is a failure too
                         found = [("driver", "page", f"{type(exc).__name__}: {exc}"[:200])]
                     results.extend((name, viewport, *f) for f in found)
-                    print(f"  {viewport:>4} px {name}: {len(found)} failures "
+                    print(f"  {viewport:>5} {name}: {len(found)} failures "
                           f"({time.monotonic() - t0:.1f} s)", file=sys.stderr, flush=True)
                     context.close()
             # the same book opened from file:// (no server): math and assets must still load
             for name in [p for p in ("book/intro.html", "book/zb2014/glr.html") if p in pages]:
-                context = browser.new_context(viewport=VIEWPORTS["1280"], device_scale_factor=1)
+                context = browser.new_context(**MODES["1280"])
                 file_base = root.as_uri() + "/"
                 context.route("**/*", lambda r, *_, n=name: route(r, "file://" + n, "1280", file_base))
                 for check, element, detail in check_page(
@@ -383,7 +417,7 @@ def main(argv: list[str] | None = None) -> int:
         table.append(f"{name} | " + " | ".join(str(counts.get((name, c), 0)) for c in checks))
     table.append("total | " + " | ".join(str(sum(v for (p, c), v in counts.items() if c == ck))
                                          for ck in checks))
-    summary = (f"{len(pages)} pages x {len(VIEWPORTS)} viewports (+ file://): "
+    summary = (f"{len(pages)} pages x {len(MODES)} modes (+ file://): "
                f"{len(results)} failures")
     report = "\n".join(lines + (table if results else []) + ["", summary])
     print(report)

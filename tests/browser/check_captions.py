@@ -13,7 +13,8 @@ claims ledger page shows). It fails when
 - ``result``: no cached result for the caption's identifier (the ledger could not show it);
 - ``caption``: a caption names a paper figure without a verb or an identifier.
 
-The explorables (``<figure class="fdi-explorable">``, sliders over a widget callback) are not
+The explorables (figures of class ``fdi-explorable-figure`` around sliders over a widget
+callback, written by the book's extension; ``fdi-explorable`` outside the book) are not
 results: their captions say "as paper Fig. N" for the setting they redraw and carry no ledger
 claim, so they are not checked.
 
@@ -42,7 +43,7 @@ def captions(page: Path) -> list[str]:
     removed, entities and typographic quotes undone, white space collapsed)."""
     out = []
     figures = re.findall(r"<figure\b([^>]*)>(.*?)</figure>", page.read_text(), flags=re.S)
-    for raw in (c for attrs, body in figures if "fdi-explorable" not in attrs
+    for raw in (c for attrs, body in figures if "fdi-explorable" not in attrs  # -figure too
                 for c in re.findall(r"<figcaption>(.*?)</figcaption>", body, flags=re.S)):
         text = html.unescape(re.sub(r"<[^>]+>", "", raw))
         text = text.replace("\u2019", "'").replace("\u00b6", "")

@@ -1,6 +1,6 @@
 """Real-browser test of the book's kernel-free explorables (``make browser-test``; not pytest).
 
-On every page of ``_build/html`` that has an explorable (``figure.fdi-explorable``, written by
+On every page of ``_build/html`` that has an explorable (``.fdi-explorable``, written by
 :mod:`fdi_lib.explorables`), in headless Chromium with every request to a non-local host
 blocked (the launch and the blocking are those of ``check_book.py``), moves each slider of each
 explorable to each of its values in turn and fails when:
@@ -35,7 +35,7 @@ EXPECTED = ["book/zb2014/signature.html", "book/zb2014/glr.html", "book/zb2014/p
 # response time, whether the pixels changed, and whether the shown frame is the indexed one.
 MOVE_JS = r"""
 async ([e, j]) => {
-  const root = document.querySelectorAll('figure.fdi-explorable')[e];
+  const root = document.querySelectorAll('.fdi-explorable')[e];
   const img = root.querySelector('img');
   const ins = Array.from(root.querySelectorAll('input[type=range]'));
   const input = ins[j];
@@ -74,11 +74,11 @@ async ([e, j]) => {
 """
 
 COUNT_JS = r"""
-() => Array.from(document.querySelectorAll('figure.fdi-explorable')).map(r => ({
+() => Array.from(document.querySelectorAll('.fdi-explorable')).map(r => ({
   sliders: r.querySelectorAll('input[type=range]').length,
   sizes: Array.from(r.querySelectorAll('input[type=range]')).map(x => Number(x.max) + 1),
   bytes: r.outerHTML.length + (r.nextElementSibling ? r.nextElementSibling.outerHTML.length : 0),
-  caption: (r.querySelector('figcaption') || {innerText: ''}).innerText.slice(0, 60)}))
+  caption: ((r.closest('figure') || r).querySelector('figcaption') || {innerText: ''}).innerText.slice(0, 60)}))
 """
 
 

@@ -153,3 +153,4 @@ def test_post_build_check_fails_on_a_caption_that_disagrees(tmp_path, monkeypatc
     sliders = "SVO hull against the bound (as paper Fig. 2)."
     assert [f[1] for f in page(sliders)] == ["caption"]
     assert page(sliders, attrs=' class="fdi-explorable" id="x"') == []
+    assert page(sliders, attrs=' class="align-default fdi-explorable-figure" id="fig-svo-explore"') == []
