@@ -51,7 +51,7 @@
    class of sphinx-jupyterbook-latex loads ``bbm``, whose fonts Debian ships only in the 500 MB
    texlive-fonts-extra); citations in captions protected (sphinxcontrib-bibtex writes a fragile
    ``\\hyperlink`` into the moving argument of ``\\caption``); the chapters numbered as in the
-   HTML (1-6 in the parts ``numbered: true`` of ``_toc.yml``, the other pages and every part
+   HTML (1-7 in the parts ``numbered: true`` of ``_toc.yml``, the other pages and every part
    unnumbered); each explorable as a figure of its small multiples with its caption
    (:meth:`fdi_lib.explorables.Explorable.small_multiples`); a cover page with the version and
    the claims ledger per status and paper, as the ledger page of the same build computed it.
@@ -653,7 +653,8 @@ def _add_ext_paths(app: Sphinx, config) -> None:
     """This extension's templates (the layout without the Font Awesome script) and static files
     (tippy.js, Popper, the previews script), which the build copies to ``_static``. They live
     here, not in the book's ``_static``, where Jupyter Book adds every script to every page."""
-    config.templates_path = [*config.templates_path, str(EXT_DIR / "templates")]
+    if config.html_theme in ("sphinx_book_theme", "pydata_sphinx_theme"):   # themes with the script
+        config.templates_path = [*config.templates_path, str(EXT_DIR / "templates")]
     config.html_static_path = [*config.html_static_path, str(EXT_DIR / "static")]
 
 
@@ -743,7 +744,8 @@ def subset_icon_font(app: Sphinx, exception: Exception | None) -> None:
     """``_static/fdi-icons.woff``: the theme's solid Font Awesome font (its TrueType copy: the
     WOFF2 one needs brotli to read) with only those of :func:`icon_codepoints` it has, for
     ``fdi-icons.css``. fontTools (a matplotlib dependency) does the cutting."""
-    if exception is not None or app.builder.format != "html":
+    if (exception is not None or app.builder.format != "html"
+            or app.config.html_theme not in ("sphinx_book_theme", "pydata_sphinx_theme")):
         return
     from fontTools import subset
     from fontTools.ttLib import TTFont
@@ -975,7 +977,7 @@ class _ProtectCaptionCitations(SphinxPostTransform):
 
 class _NumberedParts(SphinxPostTransform):
     """Chapters numbered as in the HTML: in LaTeX every ``\\chapter`` of the book would be
-    numbered (1-17); here only those of the parts ``numbered: true`` in ``_toc.yml`` are (1-6,
+    numbered (1-17); here only those of the parts ``numbered: true`` in ``_toc.yml`` are (1-7,
     continuously: an unnumbered chapter does not step LaTeX's counter), with their sections as
     in the HTML (2.1, 2.1.1), and no part is numbered; a chapter left empty (the bibliography's)
     is dropped. Runs after sphinx-jupyterbook-latex has made the parts (priority 700) in the root

@@ -136,6 +136,7 @@ class BookReferences:
             self.notebooks.add(doc)
         counters: dict[str, int] = {}
         pending_label = None
+        explorables = 0
         lines = text.splitlines()
         for line_no, line in enumerate(lines):
             following = lines[line_no + 1] if line_no + 1 < len(lines) else ""
@@ -155,6 +156,10 @@ class BookReferences:
                 kind, label = "figure", m.group(1)
             elif m := re.match(r"^:name:\s*([\w.-]+)\s*$", line):        # a {figure} directive
                 kind, label = "figure", m.group(1)
+            elif line.startswith("explorable("):   # a numbered figure (the book's NumberedExplorables)
+                explorables += 1
+                kind = "figure"
+                label = f"fig-{doc.rsplit('/', 1)[-1]}-explore" + (f"-{explorables}" if explorables > 1 else "")
             elif m := _EQUATION_LABEL.match(line):                         # $$ ... $$ (label)
                 kind, label = "equation", m.group(1)
             elif m := re.match(r"^```\{exercise-start\} (.+)$", line):
