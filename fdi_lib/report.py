@@ -329,13 +329,18 @@ def glue(name: str, variable: Any, display: bool = True) -> None:
     name : str
         Key used in the text.
     variable : object
-        The value; what is stored is its display data (``text/plain`` etc.).
+        The value; what is stored is its display data (``text/plain`` etc.). A NumPy scalar is
+        glued as the Python number it holds: NumPy 2 writes ``np.float64(0.44)`` as its text,
+        which ``{glue:text}`` cannot format (the one difference from ``myst_nb.glue``).
     display : bool
         Also show the value in the cell's output.
     """
+    import numpy as np
     from IPython.core.formatters import format_display_data
     from IPython.display import display as ipy_display
 
+    if isinstance(variable, np.generic):
+        variable = variable.item()
     bundle, metadata = format_display_data(variable)
     prefix = "" if display else GLUE_PREFIX
     metadata["scrapbook"] = dict(name=name, mime_prefix=prefix)

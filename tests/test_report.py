@@ -98,7 +98,8 @@ def test_table_rejects():
 @pytest.mark.parametrize("value, display", [(1.2345, False), (7, True), ("text", False),
                                             (np.float64(-2.5e-5), False)])
 def test_glue_same_message_as_myst_nb(value, display):
-    """fdi_lib.report.glue sends the display message of myst_nb.glue (data and metadata)."""
+    """fdi_lib.report.glue sends the display message of myst_nb.glue (data and metadata); a NumPy
+    scalar as the Python number it holds (NumPy 2's repr "np.float64(...)" cannot be formatted)."""
     from IPython.core.interactiveshell import InteractiveShell
     from IPython.utils.capture import capture_output
     from myst_nb import glue as myst_glue
@@ -109,8 +110,9 @@ def test_glue_same_message_as_myst_nb(value, display):
     with capture_output() as ours:
         glue("key", value, display=display)
     with capture_output() as theirs:
-        myst_glue("key", value, display=display)
+        myst_glue("key", value.item() if isinstance(value, np.generic) else value, display=display)
     assert len(ours.outputs) == len(theirs.outputs) == 1
+    assert "np." not in str(ours.outputs[0].data)
     assert ours.outputs[0].data == theirs.outputs[0].data
     assert ours.outputs[0].metadata == theirs.outputs[0].metadata
     assert ours.outputs[0].metadata["scrapbook"]["name"] == "key"
