@@ -6,7 +6,6 @@ a lazy MathJax, previews without scripts; and the post-build report of ``make bo
 
 from __future__ import annotations
 
-import importlib.util
 import io
 import json
 import re
@@ -15,14 +14,9 @@ from pathlib import Path
 
 import pytest
 
+from source_module import load as _load  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def _load(name: str, path: Path):
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 EXT = _load("fdi_book_assets_ext", ROOT / "_ext" / "fdi_book.py")

@@ -10,7 +10,6 @@ command is run for real.
 from __future__ import annotations
 
 import contextlib
-import importlib.util
 import io
 import json
 import re
@@ -23,14 +22,9 @@ from fdi_lib.reproduce import cli
 from fdi_lib.reproduce.book import BOOK_RUNS, CHAPTER_SEEDS, book_argv, book_run, book_settings
 from fdi_lib.reproduce.registry import CACHE_ENV, Reproduction, ReproductionResult, get, list_reproductions
 
+from source_module import load as _load  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def _load(name: str, path: Path):
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 EXT = _load("fdi_book_ext", ROOT / "_ext" / "fdi_book.py")

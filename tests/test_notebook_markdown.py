@@ -9,7 +9,6 @@ checked too when they exist, as in CI after the build.
 
 from __future__ import annotations
 
-import importlib.util
 import pickle
 import re
 import sys
@@ -18,14 +17,9 @@ from pathlib import Path
 import nbformat
 import pytest
 
+from source_module import load as _load  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def _load(name: str, path: Path):
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 sys.path.insert(0, str(ROOT / "tools"))

@@ -7,7 +7,6 @@ gives back the glued values of an executed notebook. The whole book's PDF is che
 
 from __future__ import annotations
 
-import importlib.util
 import io
 import json
 import os
@@ -23,14 +22,9 @@ from fdi_lib.explorables import explorable
 from fdi_lib.plotting import figure
 from fdi_lib.reproduce.ledger import PAPERS, STATUSES
 
+from source_module import load as _load  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def _load(name: str, path: Path):
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 EXT = _load("fdi_book_pdf_ext", ROOT / "_ext" / "fdi_book.py")
