@@ -90,7 +90,12 @@ def log_problems(log: Path) -> list[str]:
     if not log.is_file():
         return [f"no LaTeX log {log}"]
     text = log.read_text(errors="replace")
-    return [f"LaTeX: {m.group(0)}" for m in re.finditer(r"LaTeX Warning: (?:Reference|Citation) .* undefined[^\n]*", text)]
+    problems = [f"LaTeX: {m.group(0)}"
+                for m in re.finditer(r"LaTeX Warning: (?:Reference|Citation) .* undefined[^\n]*", text)]
+    # a character the font lacks is dropped from the page without an error
+    missing = Counter(re.findall(r"Missing character: There is no (\S+)", text))
+    problems += [f"LaTeX: {n} times no {c!r} in the font (dropped from the page)" for c, n in sorted(missing.items())]
+    return problems
 
 
 def _plain(tex: str) -> str:
