@@ -208,7 +208,7 @@ def plot_scoreboard(result: ReproductionResult, fig: Any = None):
     ax.set_yticks(np.arange(len(ids)), ids)
     ax.invert_yaxis()
     ax.set_xlabel("detection time (s)")
-    ax.legend(fontsize="small", loc="lower right")
+    ax.legend(loc="lower right")
     return fig
 
 

@@ -124,7 +124,7 @@ def explore_windturbine(size: float = 1.0, noise: float = 1.0, *, fig: Any = Non
         ax.set_ylim(0.005, 1.0)
         ax.set_xlabel("offset on a pitch sensor (deg)")
         ax.set_ylabel("mean-signal detection time (s)")
-        ax.legend(fontsize="small", loc="upper right")
+        ax.legend(loc="upper right")
         art["title"] = ax.set_title(title)
         keep_artists(fig, "explore_windturbine", art)
     else:
