@@ -10,6 +10,7 @@ from this machine (see the chapter): the ledger lists them as not reproducible, 
 
 from __future__ import annotations
 
+import collections
 import functools
 from typing import Any
 
@@ -121,7 +122,9 @@ def _summary(x: dict[str, np.ndarray], d: W.Design, trials: int) -> dict[str, An
             correct = [hit[i] and s == exp for i, s in enumerate(sets)]
             contains = [hit[i] and exp <= s for i, s in enumerate(sets)]
             labels = [", ".join(sorted(s)) or "none" for i, s in enumerate(sets) if hit[i]]
-            mode = max(set(labels), key=labels.count) if labels else None
+            # the most frequent set; a tie goes to the one seen first (in realisation order), never to
+            # the iteration order of a set of strings, which changes with the process's hash seed
+            mode = collections.Counter(labels).most_common(1)[0][0] if labels else None
             entry: dict[str, Any] = {
                 "detected": k, "detection_rate": k / trials, "detection_rate_ci": list(binomial_ci(k, trials)),
                 "detection_time_mean_s": float(t.mean()) if k else None,
