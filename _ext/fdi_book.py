@@ -872,26 +872,10 @@ _BBM_STY = r"""\ProvidesPackage{bbm}[2026/01/01 fdi-book stand-in: mathbbm as am
 """
 
 
-def latex_script_characters() -> str:
-    """``\\newunicodechar`` definitions of the Unicode sub- and superscripts that plain-text
-    captions use (:data:`fdi_lib.explorables._SCRIPTS`: "Γₖ" in an explorable's caption), which
-    the PDF's text font lacks: each is typeset as ``\\textsubscript``/``\\textsuperscript`` of
-    its plain character."""
-    from fdi_lib.explorables import _SCRIPTS
-
-    lines = ["\\usepackage{newunicodechar}"]
-    for mark, command in (("_", "textsubscript"), ("^", "textsuperscript")):
-        plain, scripted = _SCRIPTS[mark]
-        lines += [f"\\newunicodechar{{{u}}}{{\\{command}{{{_latex_escape(c)}}}}}" for c, u in zip(plain, scripted)]
-    return "\n".join(lines)
-
-
 def _latex_preamble(app: Sphinx, config) -> None:
     elements = config.latex_elements
     elements["preamble"] = (elements.get("preamble", "") + "\n% fdi-book: the maths macros of the book "
-                            "(mathjax3_config in _config.yml)\n" + latex_macros(config) + "\n"
-                            "% sub- and superscript characters of plain-text captions\n"
-                            + latex_script_characters() + "\n")
+                            "(mathjax3_config in _config.yml)\n" + latex_macros(config) + "\n")
 
 
 def _latex_files(app: Sphinx) -> None:
