@@ -40,11 +40,15 @@ PUBLISHED = {
 }
 
 
-@functools.lru_cache(maxsize=4)
 def calibrated_design(seed: int, settings: W.Settings = W.Settings()) -> W.Design:
     """The methods' design (:func:`fdi_lib.windturbine.design`) calibrated on :data:`CALIBRATION_RUNS`
     fault-free realisations of every fault's segment, seeded by ``SeedSequence([seed, 1])`` (never
-    the scored realisations). Cached per process."""
+    the scored realisations). Cached per process, whether ``settings`` is passed or defaulted."""
+    return _calibrated_design(int(seed), settings)
+
+
+@functools.lru_cache(maxsize=4)
+def _calibrated_design(seed: int, settings: W.Settings) -> W.Design:
     from fdi_lib.systems import wind_turbine as wt
 
     c = W.plant_constants()
