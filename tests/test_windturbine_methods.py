@@ -138,3 +138,26 @@ def test_scoreboard_json_has_every_fault_and_method():
                 assert name == "rosa2013" or reason["peak_over_threshold"] is not None, (fid, name)
     assert set(h["false_alarms"]) == set(W.METHODS)
     assert doc["paper"]["required_detection_s"]["F1"] == "<= 0.1"
+    # the fastest method: among those detecting in every realisation, the smallest mean (brute force)
+    for fid, e in h["faults"].items():
+        full = {m: v["detection_time_mean_s"] for m, v in e["methods"].items() if v["detected"] == 2}
+        fast = h["fastest_method"][fid]
+        if not full:
+            assert fast is None, fid
+        else:
+            assert fast["detection_time_mean_s"] == min(full.values()), fid
+            assert full[fast["method"]] == fast["detection_time_mean_s"], fid
+    # the published delays of another method: in the paper block, and in the ledger beside ours
+    from fdi_lib.reproduce.ledger import NOT_REPRODUCIBLE, build_ledger
+    from fdi_lib.reproduce.windturbine import PUBLISHED_DELAYS
+
+    pub = doc["paper"]["published_detection_s"]
+    assert pub == PUBLISHED_DELAYS and pub["cohal_mirea_2017"]["certain"]["F1"] == 3.21
+    rows = [row for row in build_ledger({r.id: r}, strict=True).rows if row.path[0] == "published_detection_s"]
+    assert len(rows) == sum(len(v) for v in PUBLISHED_DELAYS["cohal_mirea_2017"].values())
+    for row in rows:
+        assert row.status == NOT_REPRODUCIBLE and row.paper == pub["cohal_mirea_2017"][row.path[2]][row.path[3]]
+        fast = h["fastest_method"][row.path[3]]
+        assert row.ours == ("no method detects it in every realisation" if fast is None
+                            else fast["detection_time_mean_s"])
+        assert f"fault {row.path[3]}" in row.label and "{" not in row.label
