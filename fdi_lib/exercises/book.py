@@ -179,7 +179,8 @@ def homework_minutes(week: PlanWeek) -> int:
     exs = [get_exercise(i) for i in week.exercises]
     own = _own_challenge(week)
     return (week.reading + sum(e.minutes for e in exs) + sum(m for _, m in week.other)
-            + WRITE_UP_MINUTES * sum(e.difficulty == "challenge" for e in exs) + (own[1] if own else 0))
+            + WRITE_UP_MINUTES * sum(e.difficulty == "challenge" for e in exs)
+            + (own[1] if own else 0))
 
 
 def plan_table(plan):
@@ -187,7 +188,8 @@ def plan_table(plan):
     reading, the exercises graded by their answer and those graded by hand, the other work and
     the hours of homework (:func:`homework_minutes`).
 
-    Raises :class:`ModelError` on an exercise set in several weeks, and :class:`~fdi_lib.exercises.UnknownExerciseError` on an unknown exercise.
+    Raises :class:`ModelError` on an exercise set in several weeks, and
+    :class:`~fdi_lib.exercises.UnknownExerciseError` on an unknown exercise.
 
     Examples
     --------
