@@ -27,7 +27,7 @@ Without a student id the data are the book's, identical on every call.
 (:mod:`~fdi_lib.exercises.signature`, ``glr``, ``pipeline``, ``sparse``, ``bz``, ``svo``,
 ``windturbine``);
 :mod:`~fdi_lib.exercises.checker` holds :func:`check`; :mod:`~fdi_lib.exercises.book` the
-instructor's tables and the chapter parsing. The reference answers, the known mistakes and the
+instructor's tables, the course plans (:data:`COURSE_PLANS`) and the chapter parsing. The reference answers, the known mistakes and the
 list of library calls the grader forbids live in ``fdi_lib.exercises._reference``, which the
 student package (``make student``) leaves out: there :func:`reference_answer` raises
 :class:`ReferenceNotShippedError` and :func:`check` compares with digests.
@@ -44,8 +44,9 @@ from fdi_lib.exercises import bz, glr, pipeline, signature, sparse, svo, windtur
 from fdi_lib.exercises._core import (CHAPTERS, DIFFICULTIES, STUDENT_ENV, AnswerError, CheckResult,
                                      Exercise, ExerciseData, ReferenceNotShippedError,
                                      UnknownExerciseError, student_id, student_rng, student_seed)
-from fdi_lib.exercises.book import (COURSE_PLAN, ChapterExercise, code_cells, counts_table,
-                                    exercise_table, exercises_section, parse_chapter, plan_table,
+from fdi_lib.exercises.book import (COURSE_PLANS, HAND_GRADED, WRITE_UP_MINUTES, ChapterExercise,
+                                    PlanWeek, code_cells, counts_table, exercise_table,
+                                    exercises_section, homework_minutes, parse_chapter, plan_table,
                                     solution_fingerprints, strip_solutions, words)
 from fdi_lib.exercises.checker import attempts, check
 
@@ -53,7 +54,8 @@ __all__ = ["Exercise", "CheckResult", "ExerciseData", "EXERCISES", "CHAPTERS", "
            "STUDENT_ENV", "UnknownExerciseError", "AnswerError", "ReferenceNotShippedError",
            "get_exercise", "exercises", "exercise_ids", "exercise_data", "check", "attempts",
            "reference_answer", "student_id", "student_seed", "student_rng", "exercise_table",
-           "counts_table", "COURSE_PLAN", "plan_table", "strip_solutions", "ChapterExercise",
+           "counts_table", "COURSE_PLANS", "PlanWeek", "HAND_GRADED", "WRITE_UP_MINUTES",
+           "homework_minutes", "plan_table", "strip_solutions", "ChapterExercise",
            "parse_chapter", "exercises_section", "code_cells", "words", "solution_fingerprints"]
 
 _LIST = [e for module in (signature, glr, pipeline, sparse, bz, svo, windturbine)

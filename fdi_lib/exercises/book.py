@@ -1,4 +1,4 @@
-"""The exercises in the book: the instructor's tables, the course plan, reading the gated
+"""The exercises in the book: the instructor's tables, the course plans, reading the gated
 exercise blocks of a chapter, and the student edition's solution filter (``make student``).
 """
 
@@ -10,7 +10,8 @@ from dataclasses import dataclass
 from fdi_lib.errors import ModelError
 from fdi_lib.exercises._core import CHAPTERS, DIFFICULTIES
 
-__all__ = ["exercise_table", "counts_table", "COURSE_PLAN", "plan_table", "strip_solutions",
+__all__ = ["exercise_table", "counts_table", "COURSE_PLANS", "PlanWeek", "HAND_GRADED",
+           "WRITE_UP_MINUTES", "homework_minutes", "plan_table", "strip_solutions",
            "ChapterExercise", "parse_chapter", "exercises_section", "code_cells", "words",
            "solution_fingerprints"]
 
@@ -43,40 +44,178 @@ def counts_table():
     return table(rows, [*DIFFICULTIES, "checkable", "total", "time"], index_header="chapter")
 
 
-#: A suggested course of nine weeks: (topic, chapters read, exercises set), each exercise once.
-COURSE_PLAN: tuple[tuple[str, tuple[str, ...], tuple[str, ...]], ...] = (
-    ("Kalman innovation and fault signatures", ("zb2014/signature",), ("sig-1", "sig-2", "sig-3")),
-    ("Boundedness and identifiability", ("zb2014/signature",), ("sig-4", "sig-5", "sig-6")),
-    ("GLR test with a known profile", ("zb2014/glr",), ("glr-1", "glr-2", "glr-3")),
-    ("Unknown onset and minmax isolation", ("zb2014/glr",), ("glr-5", "glr-4", "glr-6")),
-    ("Case study: leaks on a gas pipeline", ("zb2014/pipeline",),
-     ("pipe-1", "pipe-2", "pipe-3", "pipe-4", "pipe-5", "pipe-6")),
-    ("Sparse isolation with the Lasso", ("zhang2021/sparse",),
-     ("sparse-1", "sparse-2", "sparse-3", "sparse-4", "sparse-5", "sparse-6")),
-    ("Unknown inputs: parametric and non-parametric faults", ("bz/parametric-nonparametric",),
-     ("bz-1", "bz-5", "bz-2", "bz-3", "bz-4", "bz-6")),
-    ("Set membership: set-valued observers", ("rosa2013/svo",),
-     ("svo-1", "svo-2", "svo-5", "svo-3", "svo-4", "svo-6")),
-    ("Case study: four methods on the wind-turbine benchmark", ("windturbine/benchmark",),
-     ("wt-1", "wt-2", "wt-3", "wt-4")),
-)
+#: Checkable exercises that also ask for an explanation, graded by hand with the rubric at the end
+#: of their solution (the exercises that are not checkable are all graded by hand).
+HAND_GRADED: tuple[str, ...] = ("sig-3", "sig-4", "sig-5", "glr-3", "pipe-1", "pipe-3", "pipe-4",
+                                "pipe-5", "sparse-1", "sparse-5", "bz-3", "bz-4", "svo-2", "svo-4")
+
+#: Minutes a student takes to write up a challenge, on top of the challenge's own estimate.
+WRITE_UP_MINUTES = 45
+
+#: What :attr:`PlanWeek.own_challenge` may say.
+OWN_CHALLENGE = ("", "experiment", "write-up")
 
 
-def plan_table():
-    """:data:`COURSE_PLAN` as a report table, with the estimated time of each week's exercises."""
+@dataclass(frozen=True)
+class PlanWeek:
+    """One week of a course plan: what a student reads and does at home.
+
+    Attributes
+    ----------
+    topic : str
+        The week's topic.
+    chapter : str
+        The chapter read (a key of :data:`CHAPTERS`).
+    sections : str
+        The sections read, by their titles in the chapter, or ``"the whole chapter"``.
+    reading : int
+        Minutes to read them with the notebook open (an estimate for a graduate student who runs
+        the cells).
+    exercises : tuple of str
+        The exercises set (identifiers of :func:`~fdi_lib.exercises.exercise_ids`); their
+        minutes are the registry's estimates.
+    other : tuple of (str, int)
+        Other work of the week and its minutes.
+    own_challenge : str
+        One challenge of the student's choice (any chapter): ``"experiment"`` does it this week
+        (counted at the longest challenge's estimate), ``"write-up"`` writes it up
+        (:data:`WRITE_UP_MINUTES`), ``""`` neither.
+    """
+
+    topic: str
+    chapter: str
+    sections: str
+    reading: int
+    exercises: tuple[str, ...]
+    other: tuple[tuple[str, int], ...] = ()
+    own_challenge: str = ""
+
+    def __post_init__(self):
+        if self.chapter not in CHAPTERS:
+            raise ModelError(f"chapter: expected one of {list(CHAPTERS)}, got {self.chapter!r}")
+        if self.own_challenge not in OWN_CHALLENGE:
+            raise ModelError(f"own_challenge: expected one of {OWN_CHALLENGE}, got {self.own_challenge!r}")
+
+
+_INSTALL = (("install the student notebooks and run one from top to bottom", 30),)
+
+#: The suggested courses of the instructor's page, by name: each week one chapter (or part of one)
+#: and its exercises, each exercise set at most once. ``"10 weeks"`` sets every exercise of the
+#: book; ``"6 weeks"`` covers the papers' six chapters with their warm-up and core exercises and
+#: one challenge of the student's choice. :func:`plan_table` renders them.
+COURSE_PLANS: dict[str, tuple[PlanWeek, ...]] = {
+    "10 weeks": (
+        PlanWeek("Kalman innovation and fault signatures", "zb2014/signature",
+                 "Setting; The two propositions; Numerical check to machine precision", 90,
+                 ("sig-1", "sig-2", "sig-3"), _INSTALL),
+        PlanWeek("Boundedness and identifiability", "zb2014/signature",
+                 "Boundedness; Reproduction of paper Figs. 1 and 2; Persistent excitation; Explore",
+                 75, ("sig-4", "sig-5", "sig-6")),
+        PlanWeek("GLR test with a known profile", "zb2014/glr",
+                 "From the state-space model to a regression; GLR test with a known profile; GLR "
+                 "test with unknown onset", 105, ("glr-1", "glr-2", "glr-3")),
+        PlanWeek("Unknown onset and minmax isolation", "zb2014/glr",
+                 "Reproduction of paper Figs. 3 and 4; Isolation: the minmax test; Explore", 60,
+                 ("glr-5", "glr-4", "glr-6")),
+        PlanWeek("Leaks on a gas pipeline: model and detection", "zb2014/pipeline",
+                 "Setting and notation; Two propositions; Numerical checks; Table 1; Figs. 5 and 6; "
+                 "Fig. 7", 120, ("pipe-1", "pipe-2", "pipe-5")),
+        PlanWeek("Leaks on a gas pipeline: isolation", "zb2014/pipeline",
+                 "Fig. 8; Fig. 9; What was calibrated, what was predicted; the sensitivity to the "
+                 "third constant; Interactive exploration", 90, ("pipe-3", "pipe-4", "pipe-6")),
+        PlanWeek("Sparse isolation with the Lasso", "zhang2021/sparse", "the whole chapter", 120,
+                 ("sparse-1", "sparse-2", "sparse-3", "sparse-4", "sparse-5")),
+        PlanWeek("Unknown inputs: parametric and non-parametric faults",
+                 "bz/parametric-nonparametric", "the whole chapter", 100,
+                 ("bz-1", "bz-2", "bz-3", "bz-4", "bz-5", "sparse-6")),
+        PlanWeek("Set membership: set-valued observers", "rosa2013/svo",
+                 "the whole chapter, the subsections of The Eclipse UAV skimmed", 100,
+                 ("svo-1", "svo-2", "svo-3", "svo-4", "svo-5", "bz-6")),
+        PlanWeek("Case study: four methods on the wind-turbine benchmark", "windturbine/benchmark",
+                 "The plant and its faults; Four designs; The scoreboard; What each kind of method "
+                 "buys", 45, ("wt-1", "wt-2", "wt-3", "wt-4", "svo-6")),
+    ),
+    "6 weeks": (
+        PlanWeek("Kalman innovation and fault signatures", "zb2014/signature", "the whole chapter",
+                 120, ("sig-1", "sig-2", "sig-3", "sig-4", "sig-5"), _INSTALL),
+        PlanWeek("GLR and minmax tests", "zb2014/glr", "the whole chapter", 120,
+                 ("glr-1", "glr-2", "glr-3", "glr-4", "glr-5")),
+        PlanWeek("Leaks on a gas pipeline", "zb2014/pipeline",
+                 "the whole chapter, the calibration subsections skimmed", 120,
+                 ("pipe-1", "pipe-2", "pipe-3", "pipe-4", "pipe-5")),
+        PlanWeek("Sparse isolation with the Lasso", "zhang2021/sparse", "the whole chapter", 120,
+                 ("sparse-1", "sparse-2", "sparse-3", "sparse-4", "sparse-5")),
+        PlanWeek("Unknown inputs: parametric and non-parametric faults",
+                 "bz/parametric-nonparametric", "the whole chapter", 100,
+                 ("bz-1", "bz-2", "bz-3", "bz-4", "bz-5"), own_challenge="experiment"),
+        PlanWeek("Set membership: set-valued observers", "rosa2013/svo",
+                 "the whole chapter, the subsections of The Eclipse UAV skimmed", 100,
+                 ("svo-1", "svo-2", "svo-3", "svo-4", "svo-5"), own_challenge="write-up"),
+    ),
+}
+
+
+def _own_challenge(week: PlanWeek) -> tuple[str, int] | None:
+    """The student's own challenge in ``week`` as (what, minutes), or ``None``."""
+    from fdi_lib.exercises import exercises
+
+    if week.own_challenge == "experiment":
+        return ("the experiment of one challenge of the student's choice (any chapter)",
+                max(e.minutes for e in exercises() if e.difficulty == "challenge"))
+    if week.own_challenge == "write-up":
+        return "the write-up of the chosen challenge (hand-graded with its rubric)", WRITE_UP_MINUTES
+    return None
+
+
+def homework_minutes(week: PlanWeek) -> int:
+    """Minutes of homework of one week: the reading, the exercises (the registry's estimates), a
+    write-up (:data:`WRITE_UP_MINUTES`) for each challenge, and the other work.
+
+    Raises :class:`~fdi_lib.exercises.UnknownExerciseError` on an exercise that is not in the
+    registry.
+    """
+    from fdi_lib.exercises import get_exercise
+
+    exs = [get_exercise(i) for i in week.exercises]
+    own = _own_challenge(week)
+    return (week.reading + sum(e.minutes for e in exs) + sum(m for _, m in week.other)
+            + WRITE_UP_MINUTES * sum(e.difficulty == "challenge" for e in exs)
+            + (own[1] if own else 0))
+
+
+def plan_table(plan):
+    """A course plan (a value of :data:`COURSE_PLANS`) as a report table, one row per week: the
+    reading, the exercises graded by their answer and those graded by hand, the other work and
+    the hours of homework (:func:`homework_minutes`).
+
+    Raises :class:`ModelError` on an exercise set in several weeks, and
+    :class:`~fdi_lib.exercises.UnknownExerciseError` on an unknown exercise.
+
+    Examples
+    --------
+    >>> t = plan_table(COURSE_PLANS["6 weeks"])
+    >>> t.columns[-1], t.rows[0][0], t.rows[0][1][2]
+    ('homework (h)', 'week 1', 'sig-1, sig-2, sig-3, sig-4, sig-5')
+    """
     from fdi_lib.exercises import get_exercise
     from fdi_lib.report import table
 
+    ids = [i for week in plan for i in week.exercises]
+    twice = sorted({i for i in ids if ids.count(i) > 1})
+    if twice:
+        raise ModelError(f"plan: each exercise is set at most once, got {twice} in several weeks")
     rows = {}
-    for week, (topic, chapters, ids) in enumerate(COURSE_PLAN, start=1):
-        exs = [get_exercise(i) for i in ids]
-        core = sum(e.minutes for e in exs if e.difficulty != "challenge")
-        extra = sum(e.minutes for e in exs if e.difficulty == "challenge")
-        rows[f"week {week}"] = [topic, "; ".join(CHAPTERS[c] for c in chapters),
-                                ", ".join(f"{e.id} ({e.minutes} min)" for e in exs),
-                                f"{core} min", f"{extra} min"]
-    return table(rows, ["topic", "chapter", "exercises (estimated time)", "warm-up and core",
-                        "challenge"], index_header="week")
+    for n, week in enumerate(plan, start=1):
+        exs = [get_exercise(i) for i in week.exercises]
+        hand = [e.id for e in exs if e.id in HAND_GRADED or not e.checkable]
+        own = _own_challenge(week)
+        other = [what for what, _ in week.other] + ([own[0]] if own else [])
+        rows[f"week {n}"] = [
+            week.topic, f"{CHAPTERS[week.chapter]}: {week.sections}",
+            ", ".join(e.id for e in exs if e.checkable) or "none", ", ".join(hand) or "none",
+            "; ".join(other) or "none", f"{homework_minutes(week) / 60:.1f}"]
+    return table(rows, ["topic", "reading", "checked", "hand-graded (rubric)", "other work",
+                        "homework (h)"], index_header="week")
 
 
 _FENCE = re.compile(r"^(?P<fence>`{3,}|:{3,})\{(?P<name>[a-z-]+)\}")
