@@ -289,6 +289,16 @@ def scoreboard(*, seed: int, trials: int | None, jobs: int) -> ReproductionResul
     bound_violations, svo_false_alarms_with_violation, svo_false_alarms_without_violation : int
         Fault-free stretches where the noise or the aerodynamic torque left the SVO's bounds, and
         the SVO's false alarms with and without such a violation.
+
+    Paper keys
+    ----------
+    required_detection_s : dict
+        ``F<id>`` -> the benchmark's requirement as ``"<= seconds"`` (``"not stated"`` for F9).
+    published : dict
+        Published results looked for and not reachable here (:data:`PUBLISHED`), as text.
+    published_detection_s : dict
+        Source -> ``first`` / ``certain`` -> ``F<id>`` -> another method's published detection
+        delay in seconds (:data:`PUBLISHED_DELAYS`).
     """
     from fdi_lib.systems import wind_turbine as wt
 
