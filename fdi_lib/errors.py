@@ -22,6 +22,9 @@ __all__ = [
     "NumericalError",
     "ResourceError",
     "ClusterError",
+    "UnknownExerciseError",
+    "AnswerError",
+    "ReferenceNotShippedError",
     "FDIWarning",
     "UnsoundOptionWarning",
     "EnvelopeWarning",
@@ -89,6 +92,25 @@ class ResourceError(FDIError, ValueError):
 class ClusterError(FDIError, ConnectionError):
     """A compute cluster (e.g. the Dask scheduler of ``--cluster tcp://HOST:PORT``) cannot be reached or
     started; the message names the address and the time waited."""
+
+
+class UnknownExerciseError(FDIError, KeyError):
+    """No exercise is registered under the requested identifier (:mod:`fdi_lib.exercises`)."""
+
+    def __str__(self) -> str:  # KeyError quotes its message otherwise
+        return str(self.args[0]) if self.args else ""
+
+
+class AnswerError(FDIError, ValueError):
+    """An answer cannot be compared with anything: not a real number or array, or not finite."""
+
+
+class ReferenceNotShippedError(FDIError, LookupError):
+    """The reference answers (and the code computing them) are not part of this package.
+
+    Raised by :func:`~fdi_lib.exercises.reference_answer` in the student package, and by
+    :func:`~fdi_lib.exercises.check` there for a student whose reference digests it does not hold.
+    """
 
 
 class FDIWarning(UserWarning):

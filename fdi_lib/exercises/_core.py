@@ -1,4 +1,5 @@
-"""Types of the exercise registry, its errors, and the per-student seed.
+"""Types of the exercise registry, its errors (defined in :mod:`fdi_lib.errors`), the per-student
+seed.
 
 Shipped in the student package: nothing here knows a reference answer.
 """
@@ -12,7 +13,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from fdi_lib.errors import FDIError
+from fdi_lib.errors import AnswerError, ReferenceNotShippedError, UnknownExerciseError
 
 __all__ = ["DIFFICULTIES", "CHAPTERS", "STUDENT_ENV", "UnknownExerciseError", "AnswerError",
            "ReferenceNotShippedError", "Exercise", "ExerciseData", "CheckResult", "student_id",
@@ -36,25 +37,6 @@ CHAPTERS = {
 #: given), :func:`~fdi_lib.exercises.exercise_data` and :func:`~fdi_lib.exercises.check` work on
 #: that student's data. The grader sets it in the kernel that runs a submission.
 STUDENT_ENV = "FDI_STUDENT_ID"
-
-
-class UnknownExerciseError(FDIError, KeyError):
-    """No exercise is registered under the requested identifier."""
-
-    def __str__(self) -> str:  # KeyError quotes its message otherwise
-        return str(self.args[0]) if self.args else ""
-
-
-class AnswerError(FDIError, ValueError):
-    """An answer cannot be compared with anything: not a real number or array, or not finite."""
-
-
-class ReferenceNotShippedError(FDIError, LookupError):
-    """The reference answers (and the code computing them) are not part of this package.
-
-    Raised by :func:`~fdi_lib.exercises.reference_answer` in the student package, and by
-    :func:`~fdi_lib.exercises.check` there for a student whose reference digests it does not hold.
-    """
 
 
 @dataclass(frozen=True)
