@@ -895,7 +895,10 @@ def latex_script_fallback() -> str:
     characters stay ordinary characters: nothing is active or maths (``newunicodechar`` with
     ``\\textsubscript`` broke table cells), and bookmarks and labels see plain Unicode.
     fontspec has no fallback font for XeTeX (only LuaTeX's), and ucharclasses switches whole
-    Unicode blocks (Latin-1 Supplement, where ``¹`` is, with them), hence these lines."""
+    Unicode blocks (Latin-1 Supplement, where ``¹`` is, with them), hence these lines. The
+    classes are set at ``\\begin{document}``: sphinx-jupyterbook-latex loads ucharclasses
+    after this preamble, which gives Latin and Greek letters classes of their own, so the
+    tokens are set from every class (and from a non-character, 4095) to this one."""
     from fdi_lib.explorables import _SCRIPTS
 
     codes = sorted({ord(c) for _, scripted in _SCRIPTS.values() for c in scripted})
@@ -907,11 +910,13 @@ def latex_script_fallback() -> str:
         # the interchar tokens are off in the group, where the character comes again
         r"\def\fdi@script#1{{\XeTeXinterchartokenstate=\z@\iffontchar\font`#1 \else\fdi@scriptfont\fi#1}}",
         r"\newXeTeXintercharclass\fdi@scriptclass",
-        *(f'\\XeTeXcharclass"{code:04X}=\\fdi@scriptclass' for code in codes),
-        # from a character of another class, from a non-character (4095) and from another script character
-        *(f"\\XeTeXinterchartoks{before}\\fdi@scriptclass={{\\fdi@script}}"
-          for before in (r"\z@", r"\e@alloc@intercharclass@top", r"\fdi@scriptclass")),
-        r"\XeTeXinterchartokenstate=\@ne",
+        r"\AtBeginDocument{%",
+        *(f'  \\XeTeXcharclass"{code:04X}=\\fdi@scriptclass' for code in codes),
+        r"  \count@=\z@",
+        r"  \loop\XeTeXinterchartoks\count@\fdi@scriptclass={\fdi@script}%",
+        r"  \ifnum\count@<\xe@alloc@intercharclass\advance\count@\@ne\repeat",
+        r"  \XeTeXinterchartoks\e@alloc@intercharclass@top\fdi@scriptclass={\fdi@script}%",
+        r"  \XeTeXinterchartokenstate=\@ne}",
         "\\makeatother"])
 
 
