@@ -54,7 +54,7 @@ def _line(a, fig=None):
 def test_latex_build_of_a_small_book(tmp_path):
     """Macros in the preamble, a cited caption protected, an explorable's small multiples as a
     figure with its caption, the cover with the ledger counts; compiled when xelatex exists,
-    with the script characters that FreeFont lacks ("ₖ"; "ᵀ" but in upright serif) typeset
+    with the script characters that FreeFont lacks ("ₖ"; "ᵀ" outside upright serif) typeset
     in a caption, a heading, a table cell, bold and italic text and a code listing, with the
     book's LaTeX extension (sphinx-jupyterbook-latex, which loads ucharclasses after the
     preamble)."""
