@@ -98,7 +98,7 @@ grade: $(STAMP)
 ## the PDF (tools/check_pdf.py) and, after `make book`, puts it beside the pages, whose header
 ## menu then links it (tools/pdf_edition.py).
 TEX_PACKAGES := texlive-xetex texlive-latex-extra texlive-fonts-recommended fonts-freefont-otf lmodern \
-                latexmk poppler-utils
+                fonts-dejavu-core fonts-dejavu-extra latexmk poppler-utils
 TEX_INSTALL = dpkg -s $(TEX_PACKAGES) >/dev/null 2>&1 || { apt-get update -qq && \
               DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $(TEX_PACKAGES); }
 pdf: $(STAMP)

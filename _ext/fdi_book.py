@@ -49,8 +49,10 @@
    macros (``mathjax3_config``, one source for MathJax and LaTeX) as ``\\newcommand`` in the
    preamble (:func:`latex_macros`); a ``bbm.sty`` stand-in (``\\mathbbm`` as ``\\mathbb``: the
    class of sphinx-jupyterbook-latex loads ``bbm``, whose fonts Debian ships only in the 500 MB
-   texlive-fonts-extra); citations in captions protected (sphinxcontrib-bibtex writes a fragile
-   ``\\hyperlink`` into the moving argument of ``\\caption``); the chapters numbered as in the
+   texlive-fonts-extra); the sub- and superscript characters of plain-text captions ("Γₖ")
+   that the text font lacks set in DejaVu (:func:`latex_script_fallback`); citations in
+   captions protected (sphinxcontrib-bibtex writes a fragile ``\\hyperlink`` into the moving
+   argument of ``\\caption``); the chapters numbered as in the
    HTML (1-7 in the parts ``numbered: true`` of ``_toc.yml``, the other pages and every part
    unnumbered); each explorable as a figure of its small multiples with its caption
    (:meth:`fdi_lib.explorables.Explorable.small_multiples`); a cover page with the version and
@@ -872,10 +874,58 @@ _BBM_STY = r"""\ProvidesPackage{bbm}[2026/01/01 fdi-book stand-in: mathbbm as am
 """
 
 
+#: Fonts, by family, for a script character that the font in use lacks: GNU FreeFont (Sphinx's
+#: fonts for xelatex) has ``ₖ`` in no face and ``ᵀ`` only in FreeSerif upright and bold. DejaVu
+#: (Debian's fonts-dejavu-core and -extra) has every character of
+#: :data:`fdi_lib.explorables._SCRIPTS` in every face, unscaled: its monospaced face has
+#: FreeMono's advance width (0.6 em), so that a code listing keeps its columns. (DejaVu Serif
+#: Bold draws ``ᵀ`` as an ``S``; FreeSerif Bold has the character, so it is never asked for it.)
+SCRIPT_FALLBACK_FONTS = {"rm": "DejaVu Serif", "sf": "DejaVu Sans", "tt": "DejaVu Sans Mono"}
+
+
+def latex_script_fallback() -> str:
+    """Preamble lines that set each sub- and superscript character which plain-text captions
+    and tables use (:data:`fdi_lib.explorables._SCRIPTS`: "Γₖ", "Hᵀ") in
+    :data:`SCRIPT_FALLBACK_FONTS` where the current font lacks it, in any context (text, table
+    cell, caption, heading, code listing).
+
+    XeTeX inserts the tokens of ``\\XeTeXinterchartoks`` before each such character (its
+    class), and they typeset the character in a group, in the fallback font of the current
+    family (series and shape kept) unless ``\\iffontchar`` finds it in the current font. The
+    characters stay ordinary characters: nothing is active or maths (``newunicodechar`` with
+    ``\\textsubscript`` broke table cells), and bookmarks and labels see plain Unicode.
+    fontspec has no fallback font for XeTeX (only LuaTeX's), and ucharclasses switches whole
+    Unicode blocks (Latin-1 Supplement, where ``¹`` is, with them), hence these lines. The
+    classes are set at ``\\begin{document}``: sphinx-jupyterbook-latex loads ucharclasses
+    after this preamble, which gives Latin and Greek letters classes of their own, so the
+    tokens are set from every class (and from a non-character, 4095) to this one."""
+    from fdi_lib.explorables import _SCRIPTS
+
+    codes = sorted({ord(c) for _, scripted in _SCRIPTS.values() for c in scripted})
+    fonts = [f"\\newfontfamily\\fdi@script{family}{{{font}}}" for family, font in SCRIPT_FALLBACK_FONTS.items()]
+    return "\n".join([
+        "\\makeatletter", *fonts,
+        r"\def\fdi@scriptfont{\edef\fdi@f{\f@family}\edef\fdi@tt{\ttdefault}\edef\fdi@sf{\sfdefault}%",
+        r"  \ifx\fdi@f\fdi@tt\fdi@scripttt\else\ifx\fdi@f\fdi@sf\fdi@scriptsf\else\fdi@scriptrm\fi\fi}",
+        # the interchar tokens are off in the group, where the character comes again
+        r"\def\fdi@script#1{{\XeTeXinterchartokenstate=\z@\iffontchar\font`#1 \else\fdi@scriptfont\fi#1}}",
+        r"\newXeTeXintercharclass\fdi@scriptclass",
+        r"\AtBeginDocument{%",
+        *(f'  \\XeTeXcharclass"{code:04X}=\\fdi@scriptclass' for code in codes),
+        r"  \count@=\z@",
+        r"  \loop\XeTeXinterchartoks\count@\fdi@scriptclass={\fdi@script}%",
+        r"  \ifnum\count@<\xe@alloc@intercharclass\advance\count@\@ne\repeat",
+        r"  \XeTeXinterchartoks\e@alloc@intercharclass@top\fdi@scriptclass={\fdi@script}%",
+        r"  \XeTeXinterchartokenstate=\@ne}",
+        "\\makeatother"])
+
+
 def _latex_preamble(app: Sphinx, config) -> None:
     elements = config.latex_elements
     elements["preamble"] = (elements.get("preamble", "") + "\n% fdi-book: the maths macros of the book "
-                            "(mathjax3_config in _config.yml)\n" + latex_macros(config) + "\n")
+                            "(mathjax3_config in _config.yml)\n" + latex_macros(config) + "\n"
+                            "% sub- and superscript characters the text font lacks, from DejaVu\n"
+                            + latex_script_fallback() + "\n")
 
 
 def _latex_files(app: Sphinx) -> None:

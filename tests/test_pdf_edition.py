@@ -29,6 +29,9 @@ ROOT = Path(__file__).resolve().parents[1]
 
 EXT = _load("fdi_book_pdf_ext", ROOT / "_ext" / "fdi_book.py")
 TOOL = _load("fdi_pdf_edition", ROOT / "tools" / "pdf_edition.py")
+#: Script characters in one line: "ₖ" is in no face of FreeFont, "ᵀ" only in FreeSerif and
+#: FreeSerif Bold; "₂" and "⁻" are in all of them.
+SCRIPTED = "Kₖ, Hᵀ, e₂, Hₖᵀ"
 MACROS = {"R": r"\mathbb{R}", "T": r"\mathsf{T}", "E": r"\mathbb{E}", "norm": [r"\lVert #1 \rVert", 1]}
 
 
@@ -47,9 +50,14 @@ def _line(a, fig=None):
     return fig
 
 
+@pytest.mark.filterwarnings("ignore:nodes.Node.traverse:PendingDeprecationWarning")  # sphinx-jupyterbook-latex's
 def test_latex_build_of_a_small_book(tmp_path):
     """Macros in the preamble, a cited caption protected, an explorable's small multiples as a
-    figure with its caption, the cover with the ledger counts; compiled when xelatex exists."""
+    figure with its caption, the cover with the ledger counts; compiled when xelatex exists,
+    with the script characters that FreeFont lacks ("ₖ"; "ᵀ" outside upright serif) typeset
+    in a caption, a heading, a table cell, bold and italic text and a code listing, with the
+    book's LaTeX extension (sphinx-jupyterbook-latex, which loads ucharclasses after the
+    preamble)."""
     from sphinx.application import Sphinx
     from sphinx.util.docutils import docutils_namespace
 
@@ -59,7 +67,7 @@ def test_latex_build_of_a_small_book(tmp_path):
         "import sys\n"
         f"sys.path.insert(0, {str(ROOT / '_ext')!r})\n"
         "project = 'fdi-book: a test'\n"
-        "extensions = ['myst_parser', 'sphinxcontrib.bibtex', 'fdi_book']\n"
+        "extensions = ['myst_parser', 'sphinxcontrib.bibtex', 'sphinx_jupyterbook_latex', 'fdi_book']\n"
         "myst_enable_extensions = ['dollarmath']\n"
         "bibtex_bibfiles = ['refs.bib']\nbibtex_reference_style = 'author_year'\n"
         "latex_engine = 'xelatex'\nlatex_use_xindy = False\n"
@@ -72,8 +80,11 @@ def test_latex_build_of_a_small_book(tmp_path):
     (src / "sm.png").write_bytes(ex.small_multiples())
     (src / "index.md").write_text(
         "# Index\n\nMaths $x \\in \\R^n$, $A^\\T$, $\\norm{x}$.\n\n"
-        "```{figure} sm.png\n:name: fig-a\n\nAs paper Fig. 1 of {cite:t}`zb2014`.\n```\n\n"
-        "```{image} sm.png\n```\n\n```{bibliography}\n```\n")
+        "```{figure} sm.png\n:name: fig-a\n\nAs paper Fig. 1 of {cite:t}`zb2014`, Γₖ(r).\n```\n\n"
+        "```{image} sm.png\n```\n\n"
+        f"## Gains {SCRIPTED}\n\n| gain | value |\n|---|---|\n| {SCRIPTED} | 10⁻⁴ |\n\n"
+        f"**{SCRIPTED}** *{SCRIPTED}* ***{SCRIPTED}***\n\n```\n{SCRIPTED}\n```\n\n"
+        "```{bibliography}\n```\n")
     counts = {p: {s: i + j for j, s in enumerate(STATUSES)} for i, p in enumerate(PAPERS)}
     glue = tmp_path / "build" / "jupyter_execute" / "book" / "zz-ledger.glue.json"
     glue.parent.mkdir(parents=True)
@@ -103,7 +114,13 @@ def test_latex_build_of_a_small_book(tmp_path):
     if shutil.which("xelatex") and shutil.which("latexmk"):
         env = dict(os.environ, LATEXOPTS="-interaction=nonstopmode -halt-on-error")
         done = subprocess.run(["make", "all-pdf"], cwd=out, env=env, capture_output=True, text=True)
-        assert done.returncode == 0, "\n".join(re.findall(r"^!.*$", (out / "fdi-book.log").read_text(), re.M))
+        log = (out / "fdi-book.log").read_text(errors="replace")
+        assert done.returncode == 0, "\n".join(re.findall(r"^!.*$", log, re.M))
+        check = _load("fdi_check_pdf_small", ROOT / "tools" / "check_pdf.py")
+        assert check.missing_characters(log) == {}
+        if shutil.which("pdftotext"):
+            text = check.run("pdftotext", "-enc", "UTF-8", str(out / "fdi-book.pdf"), "-")
+            assert text.count("Kₖ") >= 6 and text.count("Hᵀ") >= 6 and "Γₖ(r)" in text
 
 
 def test_the_cache_gives_back_glued_values(tmp_path):
@@ -189,12 +206,15 @@ def test_check_pdf_reads_code_listings_and_the_numbered_chapters(tmp_path):
     assert check.toc_problems(toc, ROOT) == ["numbered chapters [1, 2, 3, 4, 5, 6], expected 1 to 7"]
 
 
-def test_characters_the_font_lacks_are_reported(tmp_path):
+def test_characters_the_font_lacks_fail_the_check(tmp_path):
     """xelatex drops a character its font lacks with only a log line (an explorable's "Γₖ" became
-    "Γ"): check_pdf counts them (a warning until they are typeset)."""
+    "Γ"): check_pdf fails, naming the character and how often."""
     check = _load("fdi_check_pdf_log", ROOT / "tools" / "check_pdf.py")
     log = tmp_path / "b.log"
-    log.write_text("Missing character: There is no \u2096 (U+2096) in font [FreeSerif.otf]!\n" * 3)
-    assert check.missing_characters(log) == {"\u2096": 3}
+    log.write_text("Missing character: There is no \u2096 (U+2096) in font [FreeSerif.otf]/OT:script=latn;!\n" * 3
+                   + "Missing character: There is no \u1d40 (U+1D40) in font [FreeMono.otf]/OT:script=latn;!\n")
+    assert check.missing_characters(log.read_text()) == {"\u2096": 3, "\u1d40": 1}
+    assert check.log_problems(log) == ["LaTeX: 1 times no '\u1d40' in the font (dropped from the page)",
+                                       "LaTeX: 3 times no '\u2096' in the font (dropped from the page)"]
     log.write_text("Output written on b.pdf (3 pages).\n")
-    assert check.missing_characters(log) == {} and check.log_problems(log) == []
+    assert check.log_problems(log) == []

@@ -9,7 +9,8 @@ Fails (exit status 1, one line per problem) when:
   raw TeX macro (``\\name`` with two letters or more) more often than the code listings of the
   LaTeX source print it (a cell's source may hold TeX in a string: ``r"$\\Psi_k$"``), outside
   :data:`ALLOWED_MACROS`;
-- the LaTeX log has an undefined reference or citation (printed as "??" in the PDF);
+- the LaTeX log has an undefined reference or citation (printed as "??" in the PDF), or a
+  character that the font lacks (xelatex drops it from the page: "Missing character");
 - the chapters numbered in the PDF's table of contents are not 1, 2, ... for the chapters of the
   parts ``numbered: true`` of ``_toc.yml``, in order and with their titles, or another chapter
   is numbered;
@@ -92,15 +93,17 @@ def log_problems(log: Path) -> list[str]:
     text = log.read_text(errors="replace")
     problems = [f"LaTeX: {m.group(0)}"
                 for m in re.finditer(r"LaTeX Warning: (?:Reference|Citation) .* undefined[^\n]*", text)]
+    problems += [f"LaTeX: {n} times no {c!r} in the font (dropped from the page)"
+                 for c, n in sorted(missing_characters(text).items())]
     return problems
 
 
-def missing_characters(log: Path) -> Counter:
-    """Characters the PDF's font lacks, which xelatex drops from the page with only a log line
-    (the explorables' plain-text captions write "Γₖ"; a table of the catalogue "Hᵀ"). Reported,
-    not yet a failure: mapping them with ``newunicodechar`` broke the build in table cells."""
-    text = log.read_text(errors="replace") if log.is_file() else ""
-    return Counter(re.findall(r"Missing character: There is no (\S+)", text))
+def missing_characters(log_text: str) -> Counter:
+    """Characters that a font of the PDF lacks, which xelatex drops from the page with only a
+    log line ("Missing character: There is no ₖ (U+2096) in font ..."), and how often. The
+    script characters of plain-text captions ("Γₖ", "Hᵀ") have a fallback font
+    (``_ext/fdi_book.py``, :func:`latex_script_fallback`)."""
+    return Counter(re.findall(r"Missing character: There is no (\S+)", log_text))
 
 
 def _plain(tex: str) -> str:
@@ -202,8 +205,6 @@ def main(argv: list[str] | None = None) -> int:
         problems += image_problems(args.html, args.tex, args.pdf)
     for p in problems:
         print("check_pdf:", p, file=sys.stderr)
-    for c, n in sorted(missing_characters(args.tex.with_suffix(".log")).items()):
-        print(f"check_pdf: warning: {n} times no {c!r} in the font (dropped from the page)", file=sys.stderr)
     figures = sum(len(v) for v in tex_images(args.tex).values())
     print(f"check_pdf: {args.pdf}: {pages} pages, {figures} images, "
           f"{'ok' if not problems else f'{len(problems)} problems'}")
