@@ -73,10 +73,12 @@ def _small_eigh(C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     Cyclic Jacobi rotations, each applied to the whole stack at once (a few array operations
     instead of one LAPACK call per matrix, which dominates for thousands of 2 x 2 matrices).
-    For ``m = 2`` one rotation is exact; larger ``m`` sweep until the off-diagonal part is
+    ``m = 1`` is diagonal already; for ``m = 2`` one rotation is exact; larger ``m`` sweep until the off-diagonal part is
     below rounding (quadratic convergence: a handful of sweeps). Eigenvalues are not sorted.
     """
     m = C.shape[-1]
+    if m == 1:  # already diagonal
+        return C[..., 0].copy(), np.ones_like(C)
     if m == 2:  # one rotation, on contiguous component arrays
         a, b, c = C[..., 0, 0], C[..., 0, 1], C[..., 1, 1]
         nz = b != 0
@@ -391,12 +393,12 @@ class WindowedGLR:
         (its realisation axis after the slot): the chosen onset's entry for every realisation."""
         return arr[(*index, cols)] if self._per_realisation else arr[index]
 
-    def _score_term(self, k: int, e_w: np.ndarray) -> np.ndarray:
-        """Term of sample ``k`` in every ``d_k(r)``, ``(w, m, B)``, from whitened innovations ``e_w``
-        ``(p, B)`` (eq. (28))."""
+    def _score_terms(self, ks: np.ndarray, e_w: np.ndarray) -> np.ndarray:
+        """Terms of samples ``ks`` ``(K,)`` in every ``d_k(r)``, ``(K, w, m, B)``, from their whitened
+        innovations ``e_w`` ``(K, p, B)`` (eq. (28))."""
         if self._per_realisation:
-            return np.einsum("wbmp,pb->wmb", self._sig_wT[k], e_w)
-        return self._sig_wT[k] @ e_w
+            return np.einsum("kwbmp,kpb->kwmb", self._sig_wT[ks], e_w)
+        return self._sig_wT[ks] @ e_w[:, None]
 
     def fresh(self, batch_shape: tuple[int, ...] = ()) -> "WindowedGLR":
         """A new detector at ``k = 0`` for innovations of leading shape ``batch_shape``.
@@ -451,7 +453,7 @@ class WindowedGLR:
             self._C_missing += self._sig_wT[k] @ np.swapaxes(self._sig_wT[k], -1, -2)
         elif not skip:
             e_w = self._Linv[k] @ eps_k.reshape(self._B, model.p).T     # (p, B)
-            self._d += self._score_term(k, e_w)
+            self._d += self._score_terms(np.array([k]), e_w[None])[0]
         self.k = k + 1
         shape = self.batch_shape
         slots = self._admissible[k]
@@ -502,9 +504,10 @@ class WindowedGLR:
         for k0 in range(0, N, block):
             ks = np.arange(k0, min(N, k0 + block))
             D = np.empty((ks.size, w, m, B))
+            terms = self._score_terms(ks, e_w[ks])
             for i, k in enumerate(ks):
                 self._d[k % w] = 0.0
-                self._d += self._score_term(k, e_w[k])
+                self._d += terms[i]
                 D[i] = self._d
             root = self._root[ks]                        # (K, w, m, m), or (K, w, B, m, m)
             q = self._project(root, D)                                   # (K, w, m, B)
