@@ -13,7 +13,9 @@ either online (:class:`WindowedGLR`, sample by sample) or over a record (:func:`
 Everything noise-independent (``Gamma_k(r)``, ``C_k(r)`` and the factors of its
 pseudo-inverse) is computed once, for all samples at once, when the detector is built, and
 shared by all realisations of a batch of innovations ``(*batch, N, p)``; a record of few
-realisations is then evaluated by blocks of samples.
+realisations is then evaluated by blocks of samples. A family whose profiles differ per
+realisation (e.g. made of each realisation's own input: :func:`fdi_lib.models.step_family` with
+a leading batch axis) keeps these arrays per realisation, still built for all of them at once.
 
 Missing samples: the gains know them (:func:`fdi_lib.filters.kalman_gains` with ``missing=``),
 hence so do ``Sigma_k`` and the signatures; the innovations are NaN there and the sample adds
@@ -73,8 +75,9 @@ def _small_eigh(C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     Cyclic Jacobi rotations, each applied to the whole stack at once (a few array operations
     instead of one LAPACK call per matrix, which dominates for thousands of 2 x 2 matrices).
-    ``m = 1`` is diagonal already; for ``m = 2`` one rotation is exact; larger ``m`` sweep until the off-diagonal part is
-    below rounding (quadratic convergence: a handful of sweeps). Eigenvalues are not sorted.
+    ``m = 1`` is diagonal already; for ``m = 2`` one rotation is exact; larger ``m`` sweep until
+    the off-diagonal part is below rounding (quadratic convergence: a handful of sweeps).
+    Eigenvalues are not sorted.
     """
     m = C.shape[-1]
     if m == 1:  # already diagonal
@@ -663,8 +666,8 @@ def _grouped_glr_window(eps: np.ndarray, group: np.ndarray, model: LTVModel, gai
         rows = np.nonzero(group == i)[0]
         fam, sh = family, shared
         if family.batch_shape:   # this group's profiles: a new family (a detector's arrays do not fit it)
-            fam = FaultFamily(kind=family.kind, Psi_tilde=family.Psi_tilde.reshape(B, *family.Psi_tilde.shape[-3:])[rows],
-                              Phi_tilde=family.Phi_tilde.reshape(B, *family.Phi_tilde.shape[-3:])[rows])
+            Psi, Phi = (P.reshape(B, *P.shape[-3:])[rows] for P in (family.Psi_tilde, family.Phi_tilde))
+            fam = FaultFamily(kind=family.kind, Psi_tilde=Psi, Phi_tilde=Phi)
             sh = None
         res = glr_window(flat[rows], model, gains, fam, window, min_samples, shared=sh, start=start)
         for key, arr in out.items():

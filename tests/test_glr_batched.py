@@ -6,7 +6,7 @@ import pytest
 
 import fdi_lib.glr as glr
 from conftest import make_random_ltv
-from fdi_lib.errors import ModelError, ShapeError
+from fdi_lib.errors import ModelError, NonFiniteError, ShapeError
 from fdi_lib.filters import kalman_filter, kalman_gains
 from fdi_lib.glr import WindowedGLR, glr_window
 from fdi_lib.models import step_family
@@ -153,8 +153,8 @@ def test_shape_errors_of_per_realisation_profiles():
     for bad in (eps[:2], eps[0], np.stack([eps, eps])):
         with pytest.raises(ShapeError, match=r"family: expected per-realisation profiles of batch shape"):
             glr_window(bad, model, gains, fam, W, S)
-    with pytest.raises(ShapeError, match=r"batch shape \(2,\) \(that of the innovations\) or a shared family, "
-                                         r"got batch shape \(3,\)"):
+    with pytest.raises(ShapeError, match=r"batch shape \(2,\) \(that of the innovations\) or a shared "
+                                         r"family, got batch shape \(3,\)"):
         WindowedGLR(model, gains, fam, W, S, batch_shape=(2,))
     det = WindowedGLR(model, gains, fam, W, S, batch_shape=(3,))
     with pytest.raises(ShapeError, match=r"family: expected per-realisation profiles of batch shape \(4,\)"):
@@ -163,5 +163,5 @@ def test_shape_errors_of_per_realisation_profiles():
         fam.profile(3)
     bad = Psi.copy()
     bad[1, 5, 0, 0] = np.inf
-    with pytest.raises(Exception, match=r"Psi: expected finite values, got inf at index \(1, 5, 0, 0\)"):
+    with pytest.raises(NonFiniteError, match=r"Psi: expected finite values, got inf at index \(1, 5, 0, 0\)"):
         step_family(model, Psi=bad)
