@@ -346,16 +346,19 @@ class WindowedGLR:
         # Gamma_k(r) as (n, w F m): slots (and realisations) side by side, so that (31) is one
         # matrix product per sample
         Gamma = np.zeros((N, n, w, F, m))
-        G = np.zeros((n, w, F, m))
+        flat = Gamma.reshape(N, n, w * F * m)
         drive_c = np.ascontiguousarray(np.transpose(drive, (2, 1, 0, 3)))  # (n, N, F, m)
-        for k in range(N):
-            if k > 0:  # Gamma_k(r) = A_{k-1} Gamma_{k-1}(r) + drive_{k-1}(r), eq. (31)
-                G = (g.A[k - 1] @ G.reshape(n, w * F * m)).reshape(n, w, F, m)
-                if fam.kind == "step":
-                    G += (onset[k - 1] >= 0)[None, :, None, None] * drive_c[:, k - 1, None, :, :]
-                # impulse: Psi_{k-1}(r) != 0 only for r = k
-            G[:, k % w] = drive_c[:, k - 1] if (fam.kind == "impulse" and k > 0) else 0.0   # r = k enters
-            Gamma[k] = G
+        started = onset >= 0
+        for k in range(1, N):   # Gamma_0 = 0
+            # Gamma_k(r) = A_{k-1} Gamma_{k-1}(r) + drive_{k-1}(r), eq. (31)
+            np.matmul(g.A[k - 1], flat[k - 1], out=flat[k])
+            if fam.kind == "step":
+                if started[k - 1].all():   # every slot holds an onset: no mask needed
+                    Gamma[k] += drive_c[:, k - 1, None, :, :]
+                else:
+                    Gamma[k] += started[k - 1][None, :, None, None] * drive_c[:, k - 1, None, :, :]
+            # impulse: Psi_{k-1}(r) != 0 only for r = k
+            Gamma[k][:, k % w] = drive_c[:, k - 1] if fam.kind == "impulse" else 0.0   # r = k enters
         sig = (model.H @ Gamma.reshape(N, n, w * F * m)).reshape(N, p, w, F, m)
         del Gamma
         if fam.kind == "step":
