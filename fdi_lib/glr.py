@@ -13,7 +13,9 @@ either online (:class:`WindowedGLR`, sample by sample) or over a record (:func:`
 Everything noise-independent (``Gamma_k(r)``, ``C_k(r)`` and the factors of its
 pseudo-inverse) is computed once, for all samples at once, when the detector is built, and
 shared by all realisations of a batch of innovations ``(*batch, N, p)``; a record of few
-realisations is then evaluated by blocks of samples.
+realisations is then evaluated by blocks of samples. A family whose profiles differ per
+realisation (e.g. made of each realisation's own input: :func:`fdi_lib.models.step_family` with
+a leading batch axis) keeps these arrays per realisation, still built for all of them at once.
 
 Missing samples: the gains know them (:func:`fdi_lib.filters.kalman_gains` with ``missing=``),
 hence so do ``Sigma_k`` and the signatures; the innovations are NaN there and the sample adds
@@ -73,10 +75,13 @@ def _small_eigh(C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     Cyclic Jacobi rotations, each applied to the whole stack at once (a few array operations
     instead of one LAPACK call per matrix, which dominates for thousands of 2 x 2 matrices).
-    For ``m = 2`` one rotation is exact; larger ``m`` sweep until the off-diagonal part is
-    below rounding (quadratic convergence: a handful of sweeps). Eigenvalues are not sorted.
+    ``m = 1`` is diagonal already; for ``m = 2`` one rotation is exact; larger ``m`` sweep until
+    the off-diagonal part is below rounding (quadratic convergence: a handful of sweeps).
+    Eigenvalues are not sorted.
     """
     m = C.shape[-1]
+    if m == 1:  # already diagonal
+        return C[..., 0].copy(), np.ones_like(C)
     if m == 2:  # one rotation, on contiguous component arrays
         a, b, c = C[..., 0, 0], C[..., 0, 1], C[..., 1, 1]
         nz = b != 0
@@ -254,7 +259,11 @@ class WindowedGLR:
     gains : KalmanGains
     family : FaultFamily
         Jump profiles ``Psi_k(r)``, ``Phi_k(r)`` (:func:`fdi_lib.models.step_family`
-        or :func:`~fdi_lib.models.impulse_family`).
+        or :func:`~fdi_lib.models.impulse_family`), shared by all realisations, or one per
+        realisation (``family.batch_shape == batch_shape``, :func:`~fdi_lib.models.step_family`
+        with a leading batch axis): then ``Gamma_k(r)``, ``C_k(r)`` and the factors of its
+        pseudo-inverse are per realisation, still computed for all realisations at once (one
+        matrix product per sample in the recursion (31)).
     window : int
         ``w``: onsets ``r`` in ``{k-w+1, ..., k-s}`` are candidates at time ``k``.
     min_samples : int, optional
@@ -267,7 +276,14 @@ class WindowedGLR:
     -----
     Time indices are ``k = 0 .. N-1``. Cost per sample: ``O(w (n^2 m + p m^2))`` for
     the shared quantities (all computed at construction, kept in ``O(N w m (m + p))``
-    memory) plus ``O(batch w p m)`` for the scores.
+    memory; both times the number of realisations for per-realisation profiles) plus
+    ``O(batch w p m)`` for the scores.
+
+    Raises
+    ------
+    ShapeError
+        Profiles not ``(N, n, m)``/``(N, p, m)`` (after the family's batch axes), or
+        per-realisation profiles whose batch shape is not ``batch_shape``.
     """
 
     def __init__(self, model: LTVModel, gains: KalmanGains, family: FaultFamily, window: int,
@@ -277,9 +293,12 @@ class WindowedGLR:
                              f"{type(model).__name__} and {type(family).__name__}")
         check_gains(model, gains)
         N, n, p, m = model.n_steps, model.n, model.p, family.m
-        if family.Psi_tilde.shape[:2] != (N, n) or family.Phi_tilde.shape[:2] != (N, p):
-            raise ShapeError(f"family: expected Psi~ ({N}, {n}, m) and Phi~ ({N}, {p}, m), "
-                             f"got {family.Psi_tilde.shape} and {family.Phi_tilde.shape}")
+        Psi, Phi = family.Psi_tilde, family.Phi_tilde
+        if (Psi.ndim < 3 or Psi.shape[-3:-1] != (N, n) or Phi.shape[-3:-1] != (N, p)
+                or Phi.shape[:-3] != Psi.shape[:-3] or Phi.shape[-1] != m):
+            raise ShapeError(f"family: expected Psi~ (*batch, {N}, {n}, m) and Phi~ (*batch, {N}, {p}, m), "
+                             f"got {Psi.shape} and {Phi.shape}")
+        _check_family_batch(family, tuple(batch_shape))
         window = integer(window, "window", low=1, high=N)
         s = -(-m // p) if min_samples is None else min_samples
         s = integer(s, "min_samples", low=0, high=window - 1)
@@ -290,12 +309,20 @@ class WindowedGLR:
         self.window, self.min_samples = int(window), int(s)
         self.batch_shape = tuple(batch_shape)
         self._B = int(np.prod(self.batch_shape, dtype=int))
+        # Per-realisation profiles: the arrays of _shared carry a realisation axis after the slot,
+        # (N, w, B, ...) instead of (N, w, ...); _project and _pick hide the difference.
+        self._per_realisation = bool(family.batch_shape)
         self._shared()
+        self._reset()
+
+    def _reset(self) -> None:
+        """Start at ``k = 0``: zero scores and missing-sample information."""
+        w, m = self.window, self.family.m
         # Scores d_k(r) stored as (w, m, B), slot = r mod w, realisations last: every per-onset
         # product below is then a BLAS matrix product with B columns.
-        self._d = np.zeros((self.window, m, self._B))
+        self._d = np.zeros((w, m, self._B))
         # Information of the missing samples still in the window, per slot (subtracted from C_k(r)).
-        self._C_missing = np.zeros((self.window, m, m))
+        self._C_missing = np.zeros((w, self._B, m, m) if self._per_realisation else (w, m, m))
         self.k = 0
 
     def _shared(self) -> None:
@@ -307,45 +334,77 @@ class WindowedGLR:
         recursively (27)), and the factors of their pseudo-inverses ``C^+ = R R^T``.
         """
         model, g, fam, w = self.model, self.gains, self.family, self.window
-        N, n, m = model.n_steps, model.n, fam.m
-        drive = fam.Psi_tilde - g.FK @ fam.Phi_tilde   # Psi~_k - F_k K_k Phi~_k
+        N, n, p, m = model.n_steps, model.n, model.p, fam.m
+        F = self._B if self._per_realisation else 1     # profiles: one per realisation, or shared
+        Psi = fam.Psi_tilde.reshape(F, N, n, m)
+        Phi = fam.Phi_tilde.reshape(F, N, p, m)
+        drive = Psi - g.FK @ Phi                        # Psi~_k - F_k K_k Phi~_k, (F, N, n, m)
         k_all = np.arange(N)
         # onset held by slot j at time k: the r = j mod w in (k - w, k] (-1 before the record)
         onset = k_all[:, None] - (k_all[:, None] - np.arange(w)[None, :]) % w      # (N, w)
         onset[onset < 0] = -1
-        # Gamma_k(r) as (n, w m): slots side by side, so that (31) is one matrix product per sample
-        Gamma = np.zeros((N, n, w, m))
-        G = np.zeros((n, w, m))
-        drive_c = np.ascontiguousarray(np.swapaxes(drive, 0, 1))  # (n, N, m)
-        for k in range(N):
-            if k > 0:  # Gamma_k(r) = A_{k-1} Gamma_{k-1}(r) + drive_{k-1}(r), eq. (31)
-                G = (g.A[k - 1] @ G.reshape(n, w * m)).reshape(n, w, m)
-                if fam.kind == "step":
-                    G += (onset[k - 1] >= 0)[None, :, None] * drive_c[:, k - 1, None, :]
-                # impulse: Psi_{k-1}(r) != 0 only for r = k
-            G[:, k % w] = drive_c[:, k - 1] if (fam.kind == "impulse" and k > 0) else 0.0   # r = k enters
-            Gamma[k] = G
-        sig = (model.H @ Gamma.reshape(N, n, w * m)).reshape(N, -1, w, m)      # (N, p, w, m)
+        # Gamma_k(r) as (n, w F m): slots (and realisations) side by side, so that (31) is one
+        # matrix product per sample
+        Gamma = np.zeros((N, n, w, F, m))
+        flat = Gamma.reshape(N, n, w * F * m)
+        drive_c = np.ascontiguousarray(np.transpose(drive, (2, 1, 0, 3)))  # (n, N, F, m)
+        started = onset >= 0
+        for k in range(1, N):   # Gamma_0 = 0
+            # Gamma_k(r) = A_{k-1} Gamma_{k-1}(r) + drive_{k-1}(r), eq. (31)
+            np.matmul(g.A[k - 1], flat[k - 1], out=flat[k])
+            if fam.kind == "step":
+                if started[k - 1].all():   # every slot holds an onset: no mask needed
+                    Gamma[k] += drive_c[:, k - 1, None, :, :]
+                else:
+                    Gamma[k] += started[k - 1][None, :, None, None] * drive_c[:, k - 1, None, :, :]
+            # impulse: Psi_{k-1}(r) != 0 only for r = k
+            Gamma[k][:, k % w] = drive_c[:, k - 1] if fam.kind == "impulse" else 0.0   # r = k enters
+        sig = (model.H @ Gamma.reshape(N, n, w * F * m)).reshape(N, p, w, F, m)
+        del Gamma
         if fam.kind == "step":
-            sig = sig + (onset >= 0)[:, None, :, None] * fam.Phi_tilde[:, :, None, :]
+            sig = sig + (onset >= 0)[:, None, :, None, None] * np.moveaxis(Phi, 0, 2)[:, :, None, :, :]
         self._Linv = np.linalg.inv(g.Sigma_chol)                         # Sigma_k^{-1/2}, (N, p, p)
-        sig_w = (self._Linv @ sig.reshape(N, -1, w * m)).reshape(sig.shape)
+        sig_w = (self._Linv @ sig.reshape(N, p, w * F * m)).reshape(sig.shape)
+        del sig
         if self._skipped.any():  # a sample the filter skipped adds nothing to C_k(r) and d_k(r)
             sig_w[self._skipped] = 0.0
-        self._sig_wT = np.ascontiguousarray(np.transpose(sig_w, (0, 2, 3, 1)))  # (N, w, m, p)
-        inc = np.einsum("kpwi,kpwj->kwij", sig_w, sig_w)                 # (N, w, m, m)
+        self._sig_wT = np.ascontiguousarray(np.transpose(sig_w, (0, 2, 3, 4, 1)))  # (N, w, F, m, p)
+        inc = np.einsum("kpwfi,kpwfj->kwfij", sig_w, sig_w)              # (N, w, F, m, m)
+        del sig_w
         C = np.empty_like(inc)
-        acc = np.zeros((w, m, m))
+        acc = np.zeros((w, F, m, m))
         for k in range(N):
             acc[k % w] = 0.0
             acc += inc[k]
             C[k] = acc
-        self._Cs = C
+        del inc
         self._onsets = onset
         self._allowed = (onset >= 0) & (onset <= k_all[:, None] - self.min_samples)   # (N, w)
         self._admissible = [np.nonzero(a)[0] for a in self._allowed]
         V, inv = _pinv_factors(C)
-        self._root = V * np.sqrt(inv)[..., None, :]                      # C^+ = root root^T
+        root = V * np.sqrt(inv)[..., None, :]                            # C^+ = root root^T
+        if not self._per_realisation:  # drop the realisation axis of a shared family
+            self._sig_wT, C, root = self._sig_wT[:, :, 0], C[:, :, 0], root[:, :, 0]
+        self._Cs, self._root = C, root
+
+    def _project(self, root: np.ndarray, d: np.ndarray) -> np.ndarray:
+        """``R^T d`` per onset (and realisation): ``root`` ``(..., m, m)`` (or ``(..., B, m, m)`` for
+        per-realisation profiles), scores ``d`` ``(..., m, B)``; returns ``(..., m, B)``."""
+        if self._per_realisation:
+            return np.einsum("...bji,...jb->...ib", root, d)
+        return np.swapaxes(root, -1, -2) @ d
+
+    def _pick(self, arr: np.ndarray, index: tuple, cols: np.ndarray) -> np.ndarray:
+        """``arr[index]`` of a shared array, ``arr[index + (cols,)]`` of a per-realisation one
+        (its realisation axis after the slot): the chosen onset's entry for every realisation."""
+        return arr[(*index, cols)] if self._per_realisation else arr[index]
+
+    def _score_terms(self, ks: np.ndarray, e_w: np.ndarray) -> np.ndarray:
+        """Terms of samples ``ks`` ``(K,)`` in every ``d_k(r)``, ``(K, w, m, B)``, from their whitened
+        innovations ``e_w`` ``(K, p, B)`` (eq. (28))."""
+        if self._per_realisation:
+            return np.einsum("kwbmp,kpb->kwmb", self._sig_wT[ks], e_w)
+        return self._sig_wT[ks] @ e_w[:, None]
 
     def fresh(self, batch_shape: tuple[int, ...] = ()) -> "WindowedGLR":
         """A new detector at ``k = 0`` for innovations of leading shape ``batch_shape``.
@@ -354,13 +413,12 @@ class WindowedGLR:
         factors of their pseudo-inverses, which :meth:`update` only reads), so that many batches
         of realisations (Monte Carlo chunks) pay their construction once.
         """
+        _check_family_batch(self.family, tuple(batch_shape))
         new = object.__new__(WindowedGLR)
         new.__dict__.update(self.__dict__)
         new.batch_shape = tuple(batch_shape)
         new._B = int(np.prod(new.batch_shape, dtype=int))
-        new._d = np.zeros((self.window, self.family.m, new._B))
-        new._C_missing = np.zeros((self.window, self.family.m, self.family.m))
-        new.k = 0
+        new._reset()
         return new
 
     def update(self, eps_k: np.ndarray, *, statistics: bool = True
@@ -401,30 +459,30 @@ class WindowedGLR:
             self._C_missing += self._sig_wT[k] @ np.swapaxes(self._sig_wT[k], -1, -2)
         elif not skip:
             e_w = self._Linv[k] @ eps_k.reshape(self._B, model.p).T     # (p, B)
-            self._d += self._sig_wT[k] @ e_w
+            self._d += self._score_terms(np.array([k]), e_w[None])[0]
         self.k = k + 1
         shape = self.batch_shape
         slots = self._admissible[k]
         if not slots.size or not statistics:
             return (np.full(shape, np.nan), np.full(shape, -1), np.full((*shape, m), np.nan),
                     np.full((*shape, m, m), np.nan), np.full((*shape, m), np.nan))
-        C = self._Cs[k, slots]
-        root = self._root[k, slots]                  # shared by all realisations
+        C = self._Cs[k, slots]                       # (S, m, m), or (S, B, m, m) per realisation
+        root = self._root[k, slots]                  # shared by all realisations, or per realisation
         if np.any(self._C_missing[slots]):           # missing samples in the window
             C = C - self._C_missing[slots]
             V, inv = _pinv_factors(C)
             root = V * np.sqrt(inv)[..., None, :]
         d = self._d[slots]                           # (S, m, B)
-        q = np.swapaxes(root, -1, -2) @ d            # (S, m, B)
+        q = self._project(root, d)                   # (S, m, B)
         stat = np.einsum("smb,smb->sb", q, q)        # (35) for every admissible onset, (S, B)
         best = np.argmax(stat, axis=0)               # (36), (B,)
         cols = np.arange(self._B)
         l_k = stat[best, cols]
-        th = (root[best] @ q[best, :, cols][..., None])[..., 0]             # (34): C^+ d
+        th = (self._pick(root, (best,), cols) @ q[best, :, cols][..., None])[..., 0]   # (34): C^+ d
         d_hat = d[best, :, cols]
         l_k, th, d_hat = l_k.reshape(shape), th.reshape(*shape, m), d_hat.reshape(*shape, m)
         best_onset = self._onsets[k, slots][best].reshape(shape)
-        C_hat = C[best].reshape(*shape, m, m)
+        C_hat = self._pick(C, (best,), cols).reshape(*shape, m, m)
         return l_k, best_onset, th, C_hat, d_hat
 
 
@@ -447,16 +505,18 @@ class WindowedGLR:
         theta = np.full((N, B, m), np.nan)
         C_hat = np.full((N, B, m, m), np.nan)
         d_hat = np.full((N, B, m), np.nan)
-        block = max(1, min(N, 2_000_000 // (w * m * B)))
+        block = max(1, min(N, 2_000_000 // (w * m * B * (m if self._per_realisation else 1))))
+        cols = np.arange(B)
         for k0 in range(0, N, block):
             ks = np.arange(k0, min(N, k0 + block))
             D = np.empty((ks.size, w, m, B))
+            terms = self._score_terms(ks, e_w[ks])
             for i, k in enumerate(ks):
                 self._d[k % w] = 0.0
-                self._d += self._sig_wT[k] @ e_w[k]
+                self._d += terms[i]
                 D[i] = self._d
-            root = self._root[ks]                                        # (K, w, m, m)
-            q = np.swapaxes(root, -1, -2) @ D                            # (K, w, m, B)
+            root = self._root[ks]                        # (K, w, m, m), or (K, w, B, m, m)
+            q = self._project(root, D)                                   # (K, w, m, B)
             st = np.einsum("kwmb,kwmb->kwb", q, q)                       # (35)
             st = np.where(self._allowed[ks][:, :, None], st, -np.inf)
             best = np.argmax(st, axis=1)                                 # (36), (K, B)
@@ -466,9 +526,9 @@ class WindowedGLR:
             onset[ks[ok]] = self._onsets[ks[:, None], best][ok]
             at = best[:, None, None, :]
             qb = np.take_along_axis(q, at, axis=1)[:, 0]                 # (K, m, B)
-            th = np.einsum("kbij,kjb->kbi", root[kk, best], qb)          # (34): C^+ d
+            th = np.einsum("kbij,kjb->kbi", self._pick(root, (kk, best), cols), qb)   # (34): C^+ d
             theta[ks[ok]] = th[ok]
-            C_hat[ks[ok]] = self._Cs[ks[:, None], best][ok]
+            C_hat[ks[ok]] = self._pick(self._Cs, (ks[:, None], best), cols)[ok]
             d_hat[ks[ok]] = np.swapaxes(np.take_along_axis(D, at, axis=1)[:, 0], 1, 2)[ok]
         self.k = N
         shape = self.batch_shape
@@ -494,7 +554,11 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
         NaN at the samples the gains skip (``gains.missing``): the samples the filter did not
         update at, which the signatures ``Gamma_k(r)`` computed from the gains know.
     model, gains, family, window, min_samples
-        As in :class:`WindowedGLR`.
+        As in :class:`WindowedGLR`. A ``family`` of per-realisation profiles
+        (``family.batch_shape == batch``, :func:`fdi_lib.models.step_family` with a leading batch
+        axis) gives each realisation the test of its own profile, the same as one call per
+        realisation with its own family, in one pass over the samples; realisations are taken by
+        blocks whose per-realisation arrays stay within about ``_PER_REALISATION_BYTES``.
     shared : WindowedGLR, optional
         A detector built with these same ``model``, ``gains`` and ``family`` objects, ``window``
         and ``min_samples``, whose noise-independent quantities are reused
@@ -508,6 +572,12 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
     Returns
     -------
     WindowGLRResult
+
+    Raises
+    ------
+    ShapeError
+        Innovations not ``(*batch, N, p)``, or per-realisation profiles whose batch shape is not
+        ``batch``.
     """
     if not isinstance(model, LTVModel):
         raise ModelError(f"model: expected an LTVModel, got {type(model).__name__}")
@@ -516,12 +586,23 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
     batch = eps.shape[:-2]
     check_gains(model, gains)
     check_skipped(missing, gains, "innovations")
+    if not isinstance(family, FaultFamily):
+        raise ModelError(f"family: expected a FaultFamily, got {type(family).__name__}")
+    _check_family_batch(family, batch)
     missing = missing & ~gains_missing(gains)   # dropped innovations the gains do not know
     if missing.any() and batch:
         flat_missing = missing.reshape(-1, model.n_steps)
         patterns, group = np.unique(flat_missing, axis=0, return_inverse=True)
         if len(patterns) > 1:
             return _grouped_glr_window(eps, group.reshape(-1), model, gains, family, window, min_samples,
+                                       shared, start)
+    if family.batch_shape:   # per-realisation arrays: blocks of realisations within the memory budget
+        B = int(np.prod(batch, dtype=int))
+        window = integer(window, "window", low=1, high=model.n_steps)
+        per = 8 * model.n_steps * window * family.m * (model.n + 3 * model.p + 4 * family.m)
+        size = max(1, _PER_REALISATION_BYTES // per)
+        if B > size:
+            return _grouped_glr_window(eps, np.arange(B) // size, model, gains, family, window, min_samples,
                                        shared, start)
     if shared is None:
         det = WindowedGLR(model, gains, family, window, min_samples, batch_shape=batch)
@@ -534,7 +615,7 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
                              f"{type(shared).__name__} with window {getattr(shared, 'window', None)} "
                              f"and min_samples {getattr(shared, 'min_samples', None)}")
         det = shared.fresh(batch)
-    if det._B <= _RECORD_MAX_BATCH and not missing.any():
+    if (det._B <= _RECORD_MAX_BATCH or det._per_realisation) and not missing.any():
         res = det._record(eps)
         if start:  # the same outputs as sample by sample: none before start
             for arr, undefined in ((res.statistic, np.nan), (res.onset, -1), (res.theta_hat, np.nan),
@@ -557,13 +638,27 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
 
 #: Up to this many realisations, :func:`glr_window` evaluates the statistics by blocks of
 #: samples (:meth:`WindowedGLR._record`: few, wide array operations); beyond, sample by sample.
+#: Per-realisation profiles always take the blocks (their projections are not shared products).
 _RECORD_MAX_BATCH = 4
+
+#: Budget (bytes) of the arrays :func:`glr_window` holds for a block of realisations with their
+#: own profiles (signatures, informations, pseudo-inverse factors: ``N w m (n + 3 p + 4 m)``
+#: floats per realisation).
+_PER_REALISATION_BYTES = 64 * 2 ** 20
+
+
+def _check_family_batch(family: FaultFamily, batch: tuple[int, ...]) -> None:
+    """Raise :class:`ShapeError` if ``family`` has per-realisation profiles not of batch shape ``batch``."""
+    if family.batch_shape and family.batch_shape != tuple(batch):
+        raise ShapeError(f"family: expected per-realisation profiles of batch shape {tuple(batch)} (that of "
+                         f"the innovations) or a shared family, got batch shape {family.batch_shape}")
 
 
 def _grouped_glr_window(eps: np.ndarray, group: np.ndarray, model: LTVModel, gains: KalmanGains,
                         family: FaultFamily, window: int, min_samples: int | None,
                         shared: WindowedGLR | None, start: int) -> WindowGLRResult:
-    """:func:`glr_window` run once per group of realisations sharing the same missing samples."""
+    """:func:`glr_window` run once per group of realisations (those sharing the same missing samples,
+    or a block of realisations with their own profiles, which take their rows of the family)."""
     batch, N, m = eps.shape[:-2], model.n_steps, family.m
     flat = eps.reshape(-1, N, model.p)
     B = flat.shape[0]
@@ -572,7 +667,12 @@ def _grouped_glr_window(eps: np.ndarray, group: np.ndarray, model: LTVModel, gai
     res = None
     for i in np.unique(group):
         rows = np.nonzero(group == i)[0]
-        res = glr_window(flat[rows], model, gains, family, window, min_samples, shared=shared, start=start)
+        fam, sh = family, shared
+        if family.batch_shape:   # this group's profiles: a new family (a detector's arrays do not fit it)
+            Psi, Phi = (P.reshape(B, *P.shape[-3:])[rows] for P in (family.Psi_tilde, family.Phi_tilde))
+            fam = FaultFamily(kind=family.kind, Psi_tilde=Psi, Phi_tilde=Phi)
+            sh = None
+        res = glr_window(flat[rows], model, gains, fam, window, min_samples, shared=sh, start=start)
         for key, arr in out.items():
             arr[rows] = getattr(res, key)
     return WindowGLRResult(**{key: arr.reshape(*batch, *arr.shape[1:]) for key, arr in out.items()},

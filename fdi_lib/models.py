@@ -322,6 +322,12 @@ class FaultFamily:
     the first innovation affected is ``eps_{r+1}`` (``eps_r`` for an output fault).
     ``kind == "impulse"``: ``Psi_k(r) = Psi~_k delta_{r,k+1}`` (Willsky-Jones, eq. (A.1));
     the state jumps at time ``r`` and the first innovation affected is ``eps_r``.
+
+    ``Psi_tilde`` is ``(N, n, m)`` and ``Phi_tilde`` ``(N, p, m)``, shared by all realisations;
+    or, for a profile that differs per realisation (a step family whose ``Psi~_k`` is a
+    realisation's own input, :func:`step_family` with a leading batch axis), ``(*batch, N, n, m)``
+    and ``(*batch, N, p, m)``, with ``batch`` that of the innovations the GLR tests it on
+    (:func:`fdi_lib.glr.glr_window`).
     """
 
     kind: Literal["step", "impulse"]
@@ -330,10 +336,18 @@ class FaultFamily:
 
     @property
     def m(self) -> int:
-        return self.Psi_tilde.shape[2]
+        return self.Psi_tilde.shape[-1]
+
+    @property
+    def batch_shape(self) -> tuple[int, ...]:
+        """Leading shape of per-realisation profiles; ``()`` for a family shared by all realisations."""
+        return tuple(self.Psi_tilde.shape[:-3])
 
     def profile(self, onset: int) -> FaultProfile:
-        """The profile for onset ``r = onset`` (time indices ``0 .. N-1``)."""
+        """The profile for onset ``r = onset`` (time indices ``0 .. N-1``) of a shared family."""
+        if self.batch_shape:
+            raise ModelError(f"profile: expected a family shared by all realisations, got per-realisation "
+                             f"profiles of batch shape {self.batch_shape} (build one family per realisation)")
         N = self.Psi_tilde.shape[0]
         if not isinstance(onset, (int, np.integer)) or not 0 <= onset <= N:
             raise ModelError(f"onset: expected an integer in [0, {N}], got {onset!r}")
@@ -347,10 +361,41 @@ def step_family(model: LTVModel, *, Psi: MatrixLike | None = None,
                 Phi: MatrixLike | None = None) -> FaultFamily:
     """Step (jump) faults of eq. (4) with known profiles ``Psi`` = ``Psi~_k`` and/or ``Phi`` = ``Phi~_k``.
 
-    Both are validated against ``model`` as in :func:`fault_profile`.
+    Both are validated against ``model`` as in :func:`fault_profile`. Either may instead be an
+    array of per-realisation profiles, ``(*batch, N, n, m)`` for ``Psi`` or ``(*batch, N, p, m)``
+    for ``Phi`` (4-d or more; e.g. a profile made of each realisation's input): the family then
+    has ``batch_shape == batch`` (two such arrays must agree on it; the other profile, if shared,
+    applies to every realisation) and is tested on innovations ``(*batch, N, p)`` of that same
+    batch shape, all realisations in one pass (:func:`fdi_lib.glr.glr_window`).
     """
-    prof = fault_profile(model, Psi=Psi, Phi=Phi)
-    return FaultFamily(kind="step", Psi_tilde=prof.Psi, Phi_tilde=prof.Phi)
+    batched = {name: array(value, name) for name, value in (("Psi", Psi), ("Phi", Phi))
+               if value is not None and not callable(value) and np.ndim(value) > 3}
+    if not batched:
+        prof = fault_profile(model, Psi=Psi, Phi=Phi)
+        return FaultFamily(kind="step", Psi_tilde=prof.Psi, Phi_tilde=prof.Phi)
+    N, rows = model.n_steps, {"Psi": model.n, "Phi": model.p}
+    for name, arr in batched.items():
+        if arr.shape[-3:-1] != (N, rows[name]):
+            raise ShapeError(f"{name}: expected per-realisation profiles (*batch, {N}, {rows[name]}, m), "
+                             f"got shape {arr.shape}")
+    (first, a), *rest = batched.items()
+    batch, m = a.shape[:-3], a.shape[-1]
+    for name, arr in rest:
+        if arr.shape[:-3] != batch or arr.shape[-1] != m:
+            raise ShapeError(f"{name}: expected shape {(*batch, N, rows[name], m)} (the batch and m of "
+                             f"{first}), got {arr.shape}")
+    out = {}
+    for name, value in (("Psi", Psi), ("Phi", Phi)):
+        shape = (rows[name], m)
+        if name in batched:
+            arr = batched[name].view()
+            arr.setflags(write=False)
+        elif value is None:
+            arr = np.broadcast_to(np.zeros(shape), (*batch, N, *shape))
+        else:  # shared by every realisation
+            arr = np.broadcast_to(as_sequence(value, n_steps=N, shape=shape, name=name), (*batch, N, *shape))
+        out[name] = arr
+    return FaultFamily(kind="step", Psi_tilde=out["Psi"], Phi_tilde=out["Phi"])
 
 
 def impulse_family(model: LTVModel, *, Psi: MatrixLike | None = None) -> FaultFamily:

@@ -1062,11 +1062,11 @@ class TemplateBatch:
     def _step(self, g: dict, a: np.ndarray, k: int) -> None:
         D, obs = g["D"], g["idx"][a]
         V, F = g["V"][a], g["F"][a]
-        # the live vertex candidates of each set first (padded with its first vertex)
-        count = F.sum(axis=1)
-        order = np.argsort(~F, axis=1, kind="stable")[:, :count.max()]
-        order = np.where(np.arange(order.shape[1])[None] < count[:, None], order, order[:, :1])
-        V = np.take_along_axis(V, order[:, :, None], axis=1)                      # (a, v, n)
+        if not F.all():  # the live vertex candidates of each set first (padded with its first vertex)
+            count = F.sum(axis=1)
+            order = np.argsort(~F, axis=1, kind="stable")[:, :count.max()]
+            order = np.where(np.arange(order.shape[1])[None] < count[:, None], order, order[:, :1])
+            V = np.take_along_axis(V, order[:, :, None], axis=1)                  # (a, v, n)
         DPhi = np.matmul(D, g["vA"][a, k - 1])                                    # (a, 2^n_A, p, n): D A_v
         W = _dot(DPhi[:, :, None], V[:, None])                                   # (a, 2^n_A, v, p)
         uk = self.u[obs, k - 1]
@@ -1075,7 +1075,7 @@ class TemplateBatch:
         Gu = _dot(g["B_unc"][a, k - 1], uk[:, None, :])                           # (a, n_B, n): B_b u
         for j in range(Gu.shape[1]):
             s = s + np.abs(_dot(D, Gu[:, j]))
-        h = W.max(axis=(1, 2)) + c + s
+        h = W.reshape(len(a), -1, W.shape[-1]).max(axis=1) + c + s
         h = h + self.margin * (1.0 + np.abs(h))
         nb = g["noise"][a] * (1.0 + self.margin) + self.margin
         yk = self.y[obs, k]

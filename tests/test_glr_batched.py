@@ -1,0 +1,167 @@
+"""Windowed GLR with a fault profile per realisation (a batched ``step_family``), against the
+same test run once per realisation with that realisation's own family."""
+
+import numpy as np
+import pytest
+
+import fdi_lib.glr as glr
+from conftest import make_random_ltv
+from fdi_lib.errors import ModelError, NonFiniteError, ShapeError
+from fdi_lib.filters import kalman_filter, kalman_gains
+from fdi_lib.glr import WindowedGLR, glr_window
+from fdi_lib.models import step_family
+from fdi_lib.simulate import simulate
+
+N, n, p, W, S = 40, 3, 2, 9, 1
+KEYS = ("statistic", "onset", "theta_hat", "C_hat", "d_hat")
+
+
+def _setup(batch, m, seed=0, missing=None):
+    """A random LTV model, its gains, innovations ``(*batch, N, p)`` and random per-realisation
+    profiles ``Psi`` ``(*batch, N, n, m)``, ``Phi`` ``(*batch, N, p, m)``; the first realisation's
+    profiles are zero (no information: its statistic must be 0, never NaN)."""
+    rng = np.random.default_rng(seed)
+    model = make_random_ltv(rng, n=n, p=p, n_steps=N)
+    gains = kalman_gains(model, missing=missing)
+    y = simulate(model, rng=rng, size=int(np.prod(batch))).y.reshape(*batch, N, p)
+    if missing is not None:
+        y[..., missing, :] = np.nan
+    eps = kalman_filter(model, y, gains=gains).innovations
+    Psi = rng.standard_normal((*batch, N, n, m))
+    Phi = rng.standard_normal((*batch, N, p, m))
+    Psi.reshape(-1, N, n, m)[0] = 0.0
+    Phi.reshape(-1, N, p, m)[0] = 0.0
+    return model, gains, eps, Psi, Phi
+
+
+def _loop(eps, model, gains, Psi, Phi, **kw):
+    """Reference: one glr_window per realisation, each with its own (shared-profile) family."""
+    batch = eps.shape[:-2]
+    flat = [glr_window(eps.reshape(-1, N, p)[b], model, gains,
+                       step_family(model, Psi=Psi.reshape(-1, N, n, Psi.shape[-1])[b],
+                                   Phi=Phi.reshape(-1, N, p, Phi.shape[-1])[b]), W, S, **kw)
+            for b in range(int(np.prod(batch)))]
+    return {key: np.stack([getattr(r, key) for r in flat]).reshape(*batch, *getattr(flat[0], key).shape)
+            for key in KEYS}
+
+
+def _assert_same(res, ref):
+    for key in KEYS:
+        got = getattr(res, key)
+        assert got.shape == ref[key].shape, key
+        if key == "onset":
+            np.testing.assert_array_equal(got, ref[key])
+        else:  # 1e-10 relative; the absolute floor is rounding of entries O(1e2) that cancel to ~0
+            np.testing.assert_allclose(got, ref[key], rtol=1e-10, atol=1e-12, equal_nan=True, err_msg=key)
+
+
+@pytest.mark.parametrize("batch, m", [((5,), 1), ((2, 3), 2)])
+def test_per_realisation_family_equals_one_call_per_realisation(batch, m):
+    model, gains, eps, Psi, Phi = _setup(batch, m)
+    fam = step_family(model, Psi=Psi, Phi=Phi)
+    assert fam.batch_shape == batch and fam.m == m
+    res = glr_window(eps, model, gains, fam, W, S)
+    _assert_same(res, _loop(eps, model, gains, Psi, Phi))
+    # the zero profile carries no information: statistic 0 and theta_hat 0 (C^+ = 0), not NaN
+    zero = res.statistic.reshape(-1, N)[0]
+    assert np.all(zero[S:] == 0.0) and np.all(np.isnan(zero[:S]))
+    assert np.all(res.theta_hat.reshape(-1, N, m)[0, S:] == 0.0)
+    assert np.all(np.isfinite(res.statistic[..., S:]))
+    # the other realisations do see their profiles
+    assert np.all(res.statistic.reshape(-1, N)[1:, S:].max(axis=-1) > 0)
+    # start=: the same outputs from start on
+    part = glr_window(eps, model, gains, fam, W, S, start=20)
+    np.testing.assert_array_equal(part.statistic[..., 20:], res.statistic[..., 20:])
+    assert np.all(np.isnan(part.statistic[..., :20]))
+
+
+def test_a_shared_profile_broadcasts_against_per_realisation_ones():
+    """Psi per realisation, Phi shared (per step): Phi applies to every realisation."""
+    model, gains, eps, Psi, Phi = _setup((4,), 1, seed=1)
+    fam = step_family(model, Psi=Psi, Phi=Phi[0])
+    assert fam.Phi_tilde.shape == (4, N, p, 1)
+    _assert_same(glr_window(eps, model, gains, fam, W, S),
+                 _loop(eps, model, gains, Psi, np.broadcast_to(Phi[0], Phi.shape)))
+    fam = step_family(model, Psi=Psi)          # no output fault at all
+    _assert_same(glr_window(eps, model, gains, fam, W, S), _loop(eps, model, gains, Psi, np.zeros_like(Phi)))
+
+
+def test_online_updates_and_shared_detector_with_per_realisation_profiles():
+    model, gains, eps, Psi, Phi = _setup((3,), 2, seed=2)
+    fam = step_family(model, Psi=Psi, Phi=Phi)
+    ref = _loop(eps, model, gains, Psi, Phi)
+    det = WindowedGLR(model, gains, fam, W, S, batch_shape=(3,))
+    for k in range(N):
+        l_k, r_k, th, C_hat, d_hat = det.update(eps[:, k])
+        np.testing.assert_allclose(l_k, ref["statistic"][:, k], rtol=1e-10, atol=1e-12, equal_nan=True)
+        np.testing.assert_array_equal(r_k, ref["onset"][:, k])
+        np.testing.assert_allclose(th, ref["theta_hat"][:, k], rtol=1e-10, atol=1e-12, equal_nan=True)
+        np.testing.assert_allclose(C_hat, ref["C_hat"][:, k], rtol=1e-10, atol=1e-12, equal_nan=True)
+    template = WindowedGLR(model, gains, fam, W, S, batch_shape=(3,))
+    _assert_same(glr_window(eps, model, gains, fam, W, S, shared=template), ref)
+
+
+def test_missing_samples_with_per_realisation_profiles():
+    """NaN innovations: dropped in every realisation (sample by sample), dropped in some (groups of
+    realisations, each with its rows of the family), skipped by the gains (block evaluation)."""
+    model, gains, eps, Psi, Phi = _setup((4,), 2, seed=3)
+    fam = step_family(model, Psi=Psi, Phi=Phi)
+    same = eps.copy()
+    same[:, [13, 15]] = np.nan
+    differ = same.copy()
+    differ[2, 22] = np.nan
+    for e in (same, differ):
+        _assert_same(glr_window(e, model, gains, fam, W, S), _loop(e, model, gains, Psi, Phi))
+    skipped = np.zeros(N, dtype=bool)
+    skipped[[10, 11, 30]] = True
+    model, gains, eps, Psi, Phi = _setup((4,), 2, seed=4, missing=skipped)
+    assert np.all(np.isnan(eps[:, skipped]))
+    fam = step_family(model, Psi=Psi, Phi=Phi)
+    _assert_same(glr_window(eps, model, gains, fam, W, S), _loop(eps, model, gains, Psi, Phi))
+
+
+def test_blocks_of_realisations_within_the_memory_budget(monkeypatch):
+    """A budget smaller than the batch's arrays: blocks of realisations, the same results."""
+    model, gains, eps, Psi, Phi = _setup((7,), 1, seed=5)
+    fam = step_family(model, Psi=Psi, Phi=Phi)
+    whole = glr_window(eps, model, gains, fam, W, S)
+    per = 8 * N * W * (n + 3 * p + 4)
+    monkeypatch.setattr(glr, "_PER_REALISATION_BYTES", 3 * per)       # blocks of 3, 3 and 1
+    calls = []
+    real = glr.WindowedGLR.__init__
+
+    def spy(self, *args, **kwargs):
+        calls.append(kwargs.get("batch_shape"))
+        real(self, *args, **kwargs)
+    monkeypatch.setattr(glr.WindowedGLR, "__init__", spy)
+    blocked = glr_window(eps, model, gains, fam, W, S)
+    assert calls == [(3,), (3,), (1,)]
+    _assert_same(blocked, {key: getattr(whole, key) for key in KEYS})   # rounding differs with the block
+
+
+def test_shape_errors_of_per_realisation_profiles():
+    model, gains, eps, Psi, Phi = _setup((3,), 1, seed=6)
+    with pytest.raises(ShapeError, match=rf"Psi: expected per-realisation profiles \(\*batch, {N}, {n}, m\)"):
+        step_family(model, Psi=Psi[:, :, :2])
+    with pytest.raises(ShapeError, match=rf"Phi: expected per-realisation profiles \(\*batch, {N}, {p}, m\)"):
+        step_family(model, Phi=Phi[:, :-1])
+    with pytest.raises(ShapeError, match=r"Phi: expected shape \(3, 40, 2, 1\) \(the batch and m of Psi\)"):
+        step_family(model, Psi=Psi, Phi=Phi[:2])
+    with pytest.raises(ShapeError, match=r"Phi: expected shape \(3, 40, 2, 1\)"):
+        step_family(model, Psi=Psi, Phi=np.concatenate([Phi, Phi], axis=-1))
+    fam = step_family(model, Psi=Psi, Phi=Phi)
+    for bad in (eps[:2], eps[0], np.stack([eps, eps])):
+        with pytest.raises(ShapeError, match=r"family: expected per-realisation profiles of batch shape"):
+            glr_window(bad, model, gains, fam, W, S)
+    with pytest.raises(ShapeError, match=r"batch shape \(2,\) \(that of the innovations\) or a shared "
+                                         r"family, got batch shape \(3,\)"):
+        WindowedGLR(model, gains, fam, W, S, batch_shape=(2,))
+    det = WindowedGLR(model, gains, fam, W, S, batch_shape=(3,))
+    with pytest.raises(ShapeError, match=r"family: expected per-realisation profiles of batch shape \(4,\)"):
+        det.fresh((4,))
+    with pytest.raises(ModelError, match=r"profile: expected a family shared by all realisations"):
+        fam.profile(3)
+    bad = Psi.copy()
+    bad[1, 5, 0, 0] = np.inf
+    with pytest.raises(NonFiniteError, match=r"Psi: expected finite values, got inf at index \(1, 5, 0, 0\)"):
+        step_family(model, Psi=bad)
