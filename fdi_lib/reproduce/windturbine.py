@@ -219,7 +219,7 @@ def plot_scoreboard(result: ReproductionResult, fig: Any = None):
     from fdi_lib.plotting import figure
 
     h = result.headline
-    fig, axes = figure(1, 1, fig=fig, figsize=(6.4, 4.0))
+    fig, axes = figure(1, 1, fig=fig, figsize=(6.4, 4.6))
     ax = axes[0][0]
     ids = list(h["faults"])
     for j, (m, label) in enumerate(METHOD_LABELS.items()):
@@ -237,7 +237,8 @@ def plot_scoreboard(result: ReproductionResult, fig: Any = None):
     ax.set_yticks(np.arange(len(ids)), ids)
     ax.invert_yaxis()
     ax.set_xlabel("detection time (s)")
-    ax.legend(loc="lower right")
+    # below the axes: inside, the legend hid the slow faults' points (F6, F7)
+    fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", ncol=3)
     return fig
 
 
