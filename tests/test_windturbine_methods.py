@@ -137,6 +137,11 @@ def test_scoreboard_json_has_every_fault_and_method():
                 assert reason is not None and reason["effect_sigma_max"] >= 0, (fid, name)
                 assert name == "rosa2013" or reason["peak_over_threshold"] is not None, (fid, name)
     assert set(h["false_alarms"]) == set(W.METHODS)
+    for fid, e in h["faults"].items():   # up to the deadline the effect is at most the whole record's
+        if e["required_detection_s"] is None:
+            assert e["effect_sigma_at_requirement_median"] is None, fid
+        else:
+            assert 0 <= e["effect_sigma_at_requirement_median"] <= e["effect_sigma_median"], fid
     assert doc["paper"]["required_detection_s"]["F1"] == "<= 0.1"
     # the fastest method: among those detecting in every realisation, the smallest mean (brute force)
     for fid, e in h["faults"].items():
