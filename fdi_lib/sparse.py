@@ -445,14 +445,12 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
     # Exact rescaling X = sx X', y = sy y' per problem: theta = (sy / sx) theta', lambda = sx sy lambda'
     # (keeps the homotopy's tolerances meaningful whatever the units, e.g. gas flows ~1e5). sx and sy
     # are the powers of 2 nearest to the RMS of X and y: exact, so an exact tie stays one.
-    Gram = np.matmul(X.transpose(0, 2, 1), X)
-    with np.errstate(divide="ignore"):
-        sx = np.exp2(np.round(np.log2(np.einsum("bii->b", Gram) / (rows * X.shape[2])) / 2))  # ~sqrt(mean(X^2))
-        sy = np.exp2(np.round(np.log2(np.einsum("br,br->b", y, y) / rows) / 2))
-    sx[sx == 0] = 1.0
-    sy[sy == 0] = 1.0
-    Gram /= (sx * sx)[:, None, None]
-    Xy = np.einsum("bri,br->bi", X, y) / (sx * sy)[:, None]
+    # Computed from the scaled X and y: the raw squares would overflow beyond 1e154 and underflow
+    # below 1e-154 (a design of 1e-160 had a zero Gram matrix).
+    sx, sy = _pow2_rms(X.reshape(X.shape[0], -1)), _pow2_rms(y)
+    Xs, ys = X / sx[:, None, None], y / sy[:, None]
+    Gram = np.matmul(Xs.transpose(0, 2, 1), Xs)
+    Xy = np.einsum("bri,br->bi", Xs, ys)
     B = X.shape[0]
     c_min = lambda_min * np.abs(Xy).max(axis=1)
     with np.errstate(all="ignore"):  # a singular step (a degenerate design) gives NaN: the KKT check rejects it
@@ -463,11 +461,11 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
     # paths it does not pass, the exact check from X and y, and a recomputation if that fails too.
     with np.errstate(all="ignore"):
         kkt = _kkt(Xy[:, None, :] - np.matmul(coefs, Gram), levels, coefs, n_points,
-                   np.sqrt(np.einsum("bii->bi", Gram)), np.sqrt(np.einsum("br,br->b", y, y)) / sy, rows)
+                   np.sqrt(np.einsum("bii->bi", Gram)), np.sqrt(np.einsum("br,br->b", ys, ys)), rows)
     solver = np.full(B, "homotopy", dtype=object)
     fixed = []
     for b in np.flatnonzero(kkt > KKT_TOL):  # rare: degenerate or ill-conditioned designs
-        Xb, yb = X[b] / sx[b], y[b] / sy[b]
+        Xb, yb = Xs[b], ys[b]
         kkt[b] = _kkt_direct(Xb, yb, levels[b, :n_points[b]], coefs[b, :n_points[b]])
         if kkt[b] > KKT_TOL:
             fixed.append((b, *_lars_fallback(Xb, yb, float(c_min[b]), max_size, b, float(kkt[b]))))
@@ -480,9 +478,17 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
             levels[b, :lev.size], coefs[b, :lev.size] = lev, co
             n_points[b], kkt[b], solver[b] = lev.size, res, "sklearn-fallback"
     # the correlation level c is rows * alpha (scikit-learn's 1/(2 rows)); (39) has 1/(2N): lambda = c / N
-    lam = levels * (sx * sy / N)[:, None]
-    lam[np.arange(S) >= n_points[:, None]] = -np.inf  # padding
-    th = coefs * (sy / sx)[:, None, None]  # zeros in the padding
+    with np.errstate(over="ignore", invalid="ignore"):   # checked just below
+        lam = levels * (sx * sy / N)[:, None]
+        th = coefs * (sy / sx)[:, None, None]  # zeros in the padding
+    on_path = np.arange(S) < n_points[:, None]
+    bad = ~(np.isfinite(lam) | ~on_path).all(axis=1) | ~np.isfinite(th).all(axis=(1, 2))
+    if bad.any():
+        b = int(np.flatnonzero(bad)[0])
+        raise NumericalError(f"X, y (problem {b}): the Lasso path is not representable in float64 (lambda_max "
+                             f"or a coefficient overflows: RMS of X {sx[b]:.3g}, of y {sy[b]:.3g}); expected a "
+                             f"design and data scaled towards 1")
+    lam[~on_path] = -np.inf  # padding
     return PathBatch(lambdas=lam, coefs=th, n_points=n_points, n_samples=N, solver=solver, kkt_residual=kkt)
 
 
@@ -563,6 +569,21 @@ def _kkt(g: np.ndarray, levels: np.ndarray, coefs: np.ndarray, n_points: np.ndar
     return np.where(np.isnan(res), np.inf, np.maximum(res, 0.0))  # NaN, anywhere in a path, fails
 
 
+def _pow2_rms(a: np.ndarray) -> np.ndarray:
+    """Per row of ``a`` ``(B, k)``, the power of 2 nearest its RMS (1 for a zero row), computed
+    without squaring the raw entries (scaling by a power of 2 is exact)."""
+    top = np.abs(a).max(axis=1)
+    _, e = np.frexp(top)                           # top = f 2^e, f in [0.5, 1)
+    u = np.ldexp(1.0, np.maximum(e - 1, -1074))    # 2^(e-1) <= top: representable even near the limits
+    ok = top > 0
+    u[~ok] = 1.0
+    ms = np.einsum("bk,bk->b", a / u[:, None], a / u[:, None]) / a.shape[1]
+    with np.errstate(divide="ignore"):
+        s = np.exp2(np.round(np.log2(ms) / 2 + (e - 1)))
+    s[~ok] = 1.0
+    return s
+
+
 def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | None, b: int,
                    kkt: float) -> tuple[np.ndarray, np.ndarray, float]:
     """The path of one problem whose homotopy path failed the KKT check, by scikit-learn's ``lars_path``.
@@ -606,7 +627,15 @@ def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | N
     designs = [np.arange(m)] + ([keep[longest]] if longest.sum() < m else [])
     # lars_path stops once alpha <= alpha_min + float32 eps (an absolute tolerance): y is scaled by a
     # power of 2 (exact) so that alpha_max is about 1e8, which puts that stop 15 decades down.
-    t = 2.0 ** np.round(np.log2(1e8 * rows / max(float(np.abs(X.T @ y).max()), np.finfo(float).tiny)))
+    with np.errstate(over="ignore"):
+        top = float(np.abs(X.T @ y).max())
+    e = np.log2(1e8 * rows / max(top, np.finfo(float).tiny)) if np.isfinite(top) else -np.inf
+    if not abs(e) <= 1000:  # t (or t * y) would leave float64: the design's scale is the problem
+        raise NumericalError(f"X, y (problem {b}): the Lasso path violates the optimality (KKT) conditions "
+                             f"by {kkt:.3g} lambda with the homotopy, and max |X^T y| = {top:.3g} is too far "
+                             f"from 1 to scale the problem for scikit-learn's lars_path in float64 (products "
+                             f"of X's entries under- or overflow); expected a design scaled towards 1")
+    t = 2.0 ** np.round(e)
     tried = []
     for cols in designs:
         with warnings.catch_warnings():  # degenerate-regressor warnings: the KKT check below decides

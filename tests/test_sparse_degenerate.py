@@ -316,3 +316,35 @@ def test_failure_of_every_solver_is_a_typed_error(monkeypatch):
     monkeypatch.setattr(sklearn.linear_model, "lars_path", broken)
     with pytest.raises(NumericalError, match=r"X, y \(problem 1\): the Lasso path violates the optimality"):
         lasso_path_batch(np.stack([_base(9, 50, 15)[1], X]), np.stack([_base(9, 50, 15)[1] @ _base(9, 50, 15)[2], y]))
+
+
+@pytest.mark.parametrize("scale", [5.56388252e-306, 1e-200, 1e-160, 1e160])
+def test_designs_far_from_unit_scale_are_solved_exactly(scale):
+    """Designs whose squares under- or overflow (found by the fuzz test: X = 5.6e-306 had a zero
+    Gram matrix and scikit-learn was called with alpha_min = inf): the closed form of one column,
+    theta(lambda) = (X^T y - N lambda) / X^T X, at lambda_min = 0.5 and at the path's end."""
+    X = scale * np.array([[1.0], [2.0]])
+    y = np.array([1.0, 1.0])
+    for frac in (0.0, 0.5):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")          # no overflow or invalid value on the way
+            path = lasso_path(X, y, lambda_min=frac)
+        theta_end = (1 - frac) * 3.0 / (5.0 * scale)   # (X^T y - N lambda_min) / X^T X, N = 2
+        assert path.lambdas[0] == pytest.approx(3.0 * scale / 2, rel=1e-12)   # lambda_max = X^T y / N
+        assert path.coefs[0, -1] == pytest.approx(theta_end, rel=1e-12)
+
+
+def test_power_of_two_rescaling_is_exact():
+    """Scaling X by 2^-600 (squares underflow) scales theta by 2^600 and lambda by 2^-600, bit for bit."""
+    rng = np.random.default_rng(11)
+    X, y = rng.normal(size=(12, 4)), rng.normal(size=12)
+    s = 2.0 ** -600
+    a, b = lasso_path(X, y), lasso_path(s * X, y)
+    np.testing.assert_array_equal(b.lambdas, a.lambdas * s)
+    np.testing.assert_array_equal(b.coefs, a.coefs / s)
+
+
+def test_unrepresentable_path_is_a_typed_error():
+    """lambda_max = X^T y / N = 1e400 is not a float64: a NumericalError naming the scales, never inf."""
+    with pytest.raises(NumericalError, match="not representable in float64"):
+        lasso_path(np.array([[1e200]]), np.array([1e200]))
