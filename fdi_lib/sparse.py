@@ -629,12 +629,12 @@ def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | N
     # power of 2 (exact) so that alpha_max is about 1e8, which puts that stop 15 decades down.
     with np.errstate(over="ignore"):
         top = float(np.abs(X.T @ y).max())
-    e = np.log2(1e8 * rows / max(top, np.finfo(float).tiny)) if np.isfinite(top) else -np.inf
+    e = np.log2(1e8 * rows) - np.log2(top) if 0 < top < np.inf else np.inf   # in logs: no overflow
     if not abs(e) <= 1000:  # t (or t * y) would leave float64: the design's scale is the problem
         raise NumericalError(f"X, y (problem {b}): the Lasso path violates the optimality (KKT) conditions "
-                             f"by {kkt:.3g} lambda with the homotopy, and max |X^T y| = {top:.3g} is too far "
-                             f"from 1 to scale the problem for scikit-learn's lars_path in float64 (products "
-                             f"of X's entries under- or overflow); expected a design scaled towards 1")
+                             f"by {kkt:.3g} lambda with the homotopy, and max |X^T y| = {top:.3g} (X and y at "
+                             f"unit RMS) is too far from 1 for scikit-learn's lars_path to be scaled in float64; "
+                             f"expected X^T y not (nearly) zero or infinite")
     t = 2.0 ** np.round(e)
     tried = []
     for cols in designs:

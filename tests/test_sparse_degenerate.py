@@ -348,3 +348,12 @@ def test_unrepresentable_path_is_a_typed_error():
     """lambda_max = X^T y / N = 1e400 is not a float64: a NumericalError naming the scales, never inf."""
     with pytest.raises(NumericalError, match="not representable in float64"):
         lasso_path(np.array([[1e200]]), np.array([1e200]))
+
+
+def test_fallback_refuses_a_problem_it_cannot_scale():
+    """The scikit-learn fallback scales y so that lambda_max is about 1e8; where X^T y is too close to
+    zero for that scale to be a float64 (1e-310 here), a NumericalError, never lars_path(alpha_min=inf)."""
+    from fdi_lib.sparse import _lars_fallback
+
+    with pytest.raises(NumericalError, match="too far from 1 for scikit-learn's lars_path"):
+        _lars_fallback(np.array([[1.0]]), np.array([1e-310]), 0.0, None, 0, 1.0)
