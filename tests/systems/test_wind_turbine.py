@@ -657,3 +657,16 @@ def test_duplicate_faults_are_refused():
         wt.simulate(seed=0, duration_s=1.0, wind=10.0, faults=(fault(2), other))
     later = dataclasses.replace(fault(2), id=12, start_s=2400.0, stop_s=2500.0)   # back to back: allowed
     wt.simulate(seed=0, duration_s=1.0, wind=10.0, faults=(fault(2), later))
+
+
+def test_method_settings_are_validated():
+    from fdi_lib import windturbine as W
+
+    for bad, match in ((dict(pre_s=-1.0), "pre_s"), (dict(post_s=0.0), "post_s"), (dict(window=0), "window"),
+                       (dict(window=2.5), "window"), (dict(isolation_alpha=1.0), "isolation_alpha"),
+                       (dict(warmup_s=7.0), "warmup_s: expected less than pre_s"),
+                       (dict(svo_sigmas=float("nan")), "svo_sigmas"), (dict(isolation_extra=-1), "isolation_extra"),
+                       (dict(false_alarms_per_hour=0.0), "false_alarms_per_hour")):
+        with pytest.raises(FDIError, match=match):
+            W.Settings(**bad)
+    assert W.Settings() == W.Settings(pre_s=7.0)
