@@ -142,7 +142,7 @@ BOOK_ORDER = (
     "bz-whiteness", "bz-solution1", "bz-solution2",
     "rosa2013-fig1", "rosa2013-fig2", "rosa2013-fig8", "rosa2013-fig9", "rosa2013-fig10",
     "rosa2013-fig11", "rosa2013-fig12", "rosa2013-fig11-rad", "rosa2013-fig12-rad",
-    "rosa2013-timing", "windturbine-scoreboard",
+    "rosa2013-timing", "windturbine-scoreboard", "windturbine-accommodation",
 )
 
 #: Chapter of each reproduction (by identifier prefix): where the claim is shown.

@@ -1762,3 +1762,36 @@ def fault_regions(run: WindTurbineRun, *, before_s: float = 10.0) -> dict[str, d
             entry["matches"] = bool(ok)
         out[f"F{f.id}"] = entry
     return out
+
+
+def plot_scenario(run: WindTurbineRun, *, realisation: int = 0, step_s: float = 1.0, fig: Any = None):
+    """The scenario over its duration: wind, true pitch (blade mean), rotor and generator speeds and the
+    controller's region, one sample every ``step_s`` seconds of one realisation, the faults shaded."""
+    from fdi_lib.plotting import figure
+
+    if not isinstance(run, WindTurbineRun):
+        raise ModelError(f"run: expected a WindTurbineRun, got {type(run).__name__}")
+    batched = run.v.ndim == 2
+    n_real = run.v.shape[0] if batched else 1
+    r = integer(realisation, "realisation", low=0, high=n_real - 1)
+    every = max(1, int(round(real(step_s, "step_s", low=0.0, low_open=True) / run.params.ts)))
+    pick = (lambda a: a[r, ::every]) if batched else (lambda a: a[::every])   # noqa: E731
+    t = run.t[::every]
+    panels = (("wind (m/s)", pick(run.v)), ("pitch (deg)", pick(run.beta.mean(axis=-1))),
+              ("$\\omega_g$ (rad/s)", pick(run.omega_g)), ("region", pick(run.region)))
+    fig, axes = figure(4, 1, fig=fig, sharex=True, figsize=(6.4, 6.4))
+    on = run.fault_active > 0
+    for ax, (label, y) in zip(axes[:, 0], panels):
+        ax.plot(t, y, lw=0.7, color="C0", drawstyle="steps-post" if label == "region" else "default")
+        ax.set_ylabel(label)
+        for j, f in enumerate(run.faults):
+            if on[:, j].any():
+                k = np.flatnonzero(on[:, j])
+                ax.axvspan(run.t[k[0]], run.t[k[-1]], color="C3", alpha=0.15, lw=0)
+    for j, f in enumerate(run.faults):
+        if on[:, j].any():
+            axes[0, 0].annotate(f"F{f.id}", (run.t[np.flatnonzero(on[:, j])[0]], 1.0),
+                                xycoords=("data", "axes fraction"), fontsize="x-small", va="bottom")
+    axes[3, 0].set_yticks([1, 2])
+    axes[3, 0].set_xlabel("time (s)")
+    return fig
