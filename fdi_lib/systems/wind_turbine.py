@@ -842,7 +842,7 @@ def _run(k0, n, wind, noise, state, xint, zone, pcache, wprev, acc_chan, acc_k, 
          sf_chan, sf_kind, sf_mag, sf_start, sf_stop, sf_ramp,
          af_blade, af_wn2, af_2zw, af_start, af_stop, af_ramp,
          cf_mag, cf_start, cf_stop, cf_ramp, df_start, df_stop, phi_dt, gam_dt,
-         o_state, o_y, o_u, o_tau_a, o_tau_g, o_p_g, o_zone):
+         o0, o_state, o_y, o_u, o_tau_a, o_tau_g, o_p_g, o_zone):
     """Closed loop over samples ``k0 .. k0 + n - 1`` for every realisation (first axis of the arrays).
 
     Per sample: sensors (noise ``noise[r, :, k - k0]``, sensor faults), controller (zone switch, PI,
@@ -858,7 +858,7 @@ def _run(k0, n, wind, noise, state, xint, zone, pcache, wprev, acc_chan, acc_k, 
         al = np.empty(12)
         cst = np.empty(12)
         act = np.empty((3, 2))
-        use = np.empty(12)
+        use = np.ones(12)
         y = np.empty(12)
         for kk in range(n):
             k = k0 + kk
@@ -911,8 +911,8 @@ def _run(k0, n, wind, noise, state, xint, zone, pcache, wprev, acc_chan, acc_k, 
             for ch in range(12):
                 y[ch] = al[ch] * (y[ch] + noise[r, ch, kk]) + cst[ch]
             # accommodation: a sensor isolated as faulty (acc_chan) is no longer read from sample acc_k on
-            for ch in range(12):
-                use[ch] = 1.0
+            for j in range(acc_chan.shape[0]):
+                use[acc_chan[j]] = 1.0
             for j in range(acc_chan.shape[0]):
                 if k >= acc_k[r, j]:
                     use[acc_chan[j]] = 0.0
@@ -936,15 +936,15 @@ def _run(k0, n, wind, noise, state, xint, zone, pcache, wprev, acc_chan, acc_k, 
                 tgr = c[_C_KOPT] * wgm * wgm
             tau_a = _aero(v, x[6], x[0], x[2], x[4], c, lam_grid, beta_grid, table)
             for i in range(10):
-                o_state[r, kk, i] = x[i]
+                o_state[r, o0 + kk, i] = x[i]
             for ch in range(12):
-                o_y[r, kk, ch] = y[ch]
-            o_u[r, kk, 0] = beta_r
-            o_u[r, kk, 1] = tgr
-            o_tau_a[r, kk] = tau_a
-            o_tau_g[r, kk] = tau_g
-            o_p_g[r, kk] = p_g
-            o_zone[r, kk] = z
+                o_y[r, o0 + kk, ch] = y[ch]
+            o_u[r, o0 + kk, 0] = beta_r
+            o_u[r, o0 + kk, 1] = tgr
+            o_tau_a[r, o0 + kk] = tau_a
+            o_tau_g[r, o0 + kk] = tau_g
+            o_p_g[r, o0 + kk] = p_g
+            o_zone[r, o0 + kk] = z
             # pitch actuators with the measured-pitch feedback u_i = beta_r + beta_i - mean(beta_i,m)
             for b in range(3):
                 w1 = use[2 * b] / (use[2 * b] + use[2 * b + 1])   # both switched off is refused upstream
@@ -1641,22 +1641,29 @@ def simulate(*, seed: Any, faults: Sequence[Fault] = FAULTS, duration_s: float =
     c = _constants(p)
     width = min(_CHUNK, n)
     noise = np.empty((n_real, 12, width))
-    # the loop writes double-precision chunk buffers (one compiled version whatever ``dtype``)
-    buffers = (np.empty((n_real, width, 10)), np.empty((n_real, width, 12)), np.empty((n_real, width, 2)),
-               np.empty((n_real, width)), np.empty((n_real, width)), np.empty((n_real, width)),
-               np.empty((n_real, width), dtype=np.int8))
+    draw = np.empty((12, width))
     outputs = (o_state, o_y, o_u, o_tau_a, o_tau_g, o_p_g, o_zone)
+    # the loop writes double precision: into the result at its offset, or (float32) into chunk
+    # buffers copied after each chunk (one compiled version of the loop either way)
+    direct = dtype == np.dtype(np.float64)
+    buffers = outputs if direct else (
+        np.empty((n_real, width, 10)), np.empty((n_real, width, 12)), np.empty((n_real, width, 2)),
+        np.empty((n_real, width)), np.empty((n_real, width)), np.empty((n_real, width)), np.empty((n_real, width),
+                                                                                             dtype=np.int8))
     for k0 in range(0, n, _CHUNK):
         m = min(_CHUNK, n - k0)
         for r in range(n_real):
-            noise[r, :, :m] = rngs[r].standard_normal((12, m)) * std
-        _run(k0, m, v, noise, state, xint, zone, pcache, wprev, acc_chan, acc_k, c, LAMBDA_GRID, BETA_GRID_DEG, CQ_TABLE,
-             fz["sf_chan"], fz["sf_kind"], fz["sf_mag"], fz["sf_start"], fz["sf_stop"], fz["sf_ramp"],
+            d = draw[:, :m] if m == width else np.empty((12, m))
+            rngs[r].standard_normal(out=d)           # the same stream as standard_normal((12, m))
+            np.multiply(d, std, out=noise[r, :, :m])
+        _run(k0, m, v, noise, state, xint, zone, pcache, wprev, acc_chan, acc_k, c, LAMBDA_GRID, BETA_GRID_DEG,
+             CQ_TABLE, fz["sf_chan"], fz["sf_kind"], fz["sf_mag"], fz["sf_start"], fz["sf_stop"], fz["sf_ramp"],
              fz["af_blade"], fz["af_wn2"], fz["af_2zw"], fz["af_start"], fz["af_stop"], fz["af_ramp"],
              fz["cf_mag"], fz["cf_start"], fz["cf_stop"], fz["cf_ramp"], fz["df_start"], fz["df_stop"],
-             fz["phi_dt"], fz["gam_dt"], *buffers)
-        for out, buf in zip(outputs, buffers):
-            out[:, k0:k0 + m] = buf[:, :m]
+             fz["phi_dt"], fz["gam_dt"], k0 if direct else 0, *buffers)
+        if not direct:
+            for out, buf in zip(outputs, buffers):
+                out[:, k0:k0 + m] = buf[:, :m]
         if not np.all(np.isfinite(state)):
             raise NumericalError(f"simulate: the state became non-finite before t = {(k0 + m) * p.ts:.2f} s")
     if np.any(o_state[:, :, 6] <= 0):
