@@ -377,12 +377,13 @@ class Settings:
                      "torque_bound"):
             real(getattr(self, name), name, low=0.0, low_open=True)
         real(self.warmup_s, "warmup_s", low=0.0)
-        real(self.isolation_alpha, "isolation_alpha", low=0.0, high=1.0, low_open=True, high_open=True)
+        real(self.isolation_alpha, "isolation_alpha", low=0.0, high=1.0, low_open=True,
+             high_open=True)
         integer(self.window, "window", low=1)
         integer(self.isolation_extra, "isolation_extra", low=0)
         if not self.warmup_s < self.pre_s:
-            raise ModelError(f"warmup_s: expected less than pre_s = {self.pre_s} s (a fault-free stretch must "
-                             f"remain after the warm-up), got {self.warmup_s}")
+            raise ModelError(f"warmup_s: expected less than pre_s = {self.pre_s} s (a fault-free "
+                             f"stretch must remain after the warm-up), got {self.warmup_s}")
 
 
 def _aug(s: Subsystem) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -73,7 +73,7 @@ BOOK_RUNS: dict[str, BookRun] = {
     "rosa2013-fig12-rad": BookRun(seed=_SVO),
     "rosa2013-timing": BookRun(seed=_SVO),
     "windturbine-scoreboard": BookRun(seed=CHAPTER_SEEDS["windturbine/benchmark"]),   # 10 realisations (the default)
-    # 5 realisations of each sensor fault (about 2 s of CPU each with the four methods, once calibrated)
+    # 5 realisations of each sensor fault (about 2 s of CPU each with the four methods)
     "windturbine-accommodation": BookRun(seed=CHAPTER_SEEDS["windturbine/benchmark"], trials=5),
 }
 

@@ -179,9 +179,10 @@ class WindTurbineParams:
     omega_delta: float = 15.0    #: hysteresis of the zone switch 2 -> 1 (rad/s) ``Omega_delta``
     beta_min: float = -2.0       #: pitch reference and integrator lower limit (deg) [model] saturations
     beta_max: float = 90.0       #: pitch reference and integrator upper limit (deg) [model] saturations
-    # --- the reading of the faulty pitch actuators (module docstring, disagreement 3) -----------------
-    #: "simulink": the benchmark's Simulink realisation (the pitch jumps by (omega_n,f / omega_n)^2 when
-    #: the parameters change); "jump_free": the physical parameters change, the pitch is continuous
+    # --- the reading of the faulty pitch actuators (module docstring, disagreement 3) ------------
+    #: "simulink": the benchmark's Simulink realisation (the pitch jumps by (omega_n,f / omega_n)^2
+    #: when the parameters change); "jump_free": the physical parameters change, the pitch is
+    #: continuous
     actuator_faults: str = "simulink"
 
     @property
@@ -222,12 +223,14 @@ NOISE_SCRIPT_VALUES = {"std_beta": 0.2, "std_omega_r": 0.004 * 2 * math.pi, "std
 NOISE_READINGS = ("variance", "std")
 
 
-def benchmark_params(*, noise_reading: str = "variance", actuator_faults: str = "simulink") -> WindTurbineParams:
-    """The benchmark's parameters under a reading of the noise values (:data:`NOISE_READINGS`) and of the
-    actuator faults (:data:`ACTUATOR_FAULT_MODELS`); the defaults give :data:`PARAMS`."""
+def benchmark_params(*, noise_reading: str = "variance",
+                     actuator_faults: str = "simulink") -> WindTurbineParams:
+    """The benchmark's parameters under a reading of the noise values (:data:`NOISE_READINGS`) and
+    of the actuator faults (:data:`ACTUATOR_FAULT_MODELS`); the defaults give :data:`PARAMS`."""
     if noise_reading not in NOISE_READINGS:
         raise ModelError(f"noise_reading: expected one of {NOISE_READINGS}, got {noise_reading!r}")
-    std = {k: (math.sqrt(v) if noise_reading == "variance" else v) for k, v in NOISE_SCRIPT_VALUES.items()}
+    std = {k: (math.sqrt(v) if noise_reading == "variance" else v)
+           for k, v in NOISE_SCRIPT_VALUES.items()}
     return WindTurbineParams(**std, actuator_faults=actuator_faults)
 
 
@@ -576,18 +579,18 @@ def fault_profiles(faults: Sequence[Fault], n_steps: int, ts: float = TS) -> np.
 # Wind (substitute of the benchmark's measured sequence; module docstring)
 # ---------------------------------------------------------------------------------------------------
 #: Mean wind profile of the benchmark's scenario, knots ``(t s, v m/s)`` interpolated linearly (a
-#: substitute of the benchmark's measured sequence, which is not public). Criterion: every fault falls
-#: in the operating region the benchmark's own simulations (its measured wind) show, read from the
-#: figures of Cohal & Mirea (2017) and of the same thesis's presentation (repository of the module
-#: docstring, ``documentation/``): the generator speed over the 4400 s (presentation, slide 14:
-#: 50-65 rad/s until 1300 s, 75-95 rad/s over 1500-1600 s, 90-140 rad/s over 1700-2200 s, at
+#: substitute of the benchmark's measured sequence, which is not public). Criterion: every fault
+#: falls in the operating region the benchmark's own simulations (its measured wind) show, read from
+#: the figures of Cohal & Mirea (2017) and of the same thesis's presentation (repository of the
+#: module docstring, ``documentation/``): the generator speed over the 4400 s (presentation, slide
+#: 14: 50-65 rad/s until 1300 s, 75-95 rad/s over 1500-1600 s, 90-140 rad/s over 1700-2200 s, at
 #: ``Omega_nom`` with dips from 2300 s on), the measured pitch of blade 1 over the 4400 s ([CEAI]
 #: Fig. 4: zero until about 2450 s, pitch control in bursts afterwards, near zero over 2800-2955 s),
 #: the generator speed around fault 5 ([CEAI] Fig. 9) and the generator torque at its rated value
 #: around fault 8 ([CEAI] Fig. 13). In partial load the speed follows the wind (``omega_g = N_g
 #: lambda_opt v / R``), which gives the mean wind there; in full load the knots are set so that the
-#: pitch is active (F7, F8, F9) or about zero (F6's onset). The resulting regions are checked against
-#: :data:`BENCHMARK_REGIONS` by :func:`fault_regions` (tests and the book).
+#: pitch is active (F7, F8, F9) or about zero (F6's onset). The resulting regions are checked
+#: against :data:`BENCHMARK_REGIONS` by :func:`fault_regions` (tests and the book).
 WIND_PROFILE = np.array([
     [0.0, 6.2], [100.0, 5.8], [250.0, 5.0], [600.0, 5.3], [780.0, 4.7], [900.0, 5.2],  # low wind
     [1000.0, 5.3], [1100.0, 5.6],        # fault 5 (speed-sensor gains), partial load
@@ -606,10 +609,10 @@ WIND_PROFILE = np.array([
     [4400.0, 16.0]])
 WIND_PROFILE.setflags(write=False)
 #: The book's former designed profile, kept as the second schedule (:data:`WIND_SCHEDULES`
-#: ``"designed"``): the faults in other operating conditions than the benchmark's, as the benchmark's
-#: comparison of methods also ran them. Criterion: partial load (9 m/s) for faults 5, 4 and 9, full load
-#: (17-18.5 m/s, pitch active) for faults 1, 2, 3, 6, 7 and 8, away from the rated wind by more than
-#: two turbulence standard deviations.
+#: ``"designed"``): the faults in other operating conditions than the benchmark's, as the
+#: benchmark's comparison of methods also ran them. Criterion: partial load (9 m/s) for faults 5, 4
+#: and 9, full load (17-18.5 m/s, pitch active) for faults 1, 2, 3, 6, 7 and 8, away from the rated
+#: wind by more than two turbulence standard deviations.
 DESIGNED_PROFILE = np.array([
     [0.0, 8.0], [900.0, 9.0], [1000.0, 9.0], [1100.0, 9.0], [1500.0, 9.0], [1600.0, 9.0],
     [2000.0, 17.0], [2100.0, 17.0], [2300.0, 17.5], [2400.0, 17.5], [2600.0, 18.0], [2700.0, 18.0],
@@ -647,8 +650,8 @@ def wind_speed(t: Any, *, seed: int | np.random.SeedSequence, turbulence_intensi
                schedule: str = "benchmark") -> np.ndarray:
     """Hub wind speed (m/s) at the times ``t`` (s): a mean profile plus Kaimal turbulence.
 
-    ``schedule`` names the mean profile (:data:`WIND_SCHEDULES`: ``"benchmark"``, :data:`WIND_PROFILE`,
-    or ``"designed"``, :data:`DESIGNED_PROFILE`).
+    ``schedule`` names the mean profile (:data:`WIND_SCHEDULES`: ``"benchmark"``,
+    :data:`WIND_PROFILE`, or ``"designed"``, :data:`DESIGNED_PROFILE`).
 
     A **substitute** of the benchmark's measured wind (module docstring). ``model="kaimal"``:
     ``v(t) = vbar(t) (1 + I u(t))`` with ``vbar`` the mean profile, ``I = turbulence_intensity`` and
@@ -838,7 +841,8 @@ def _dt_update(x: np.ndarray, phi: np.ndarray, gam: np.ndarray, tau_a: float, tg
 
 
 @numba.njit(cache=True)
-def _run(k0, n, wind, noise, state, xint, zone, pcache, wprev, acc_chan, acc_k, c, lam_grid, beta_grid, table,
+def _run(k0, n, wind, noise, state, xint, zone, pcache, wprev, acc_chan, acc_k, c, lam_grid,
+         beta_grid, table,
          sf_chan, sf_kind, sf_mag, sf_start, sf_stop, sf_ramp,
          af_blade, af_wn2, af_2zw, af_start, af_stop, af_ramp,
          cf_mag, cf_start, cf_stop, cf_ramp, df_start, df_stop, phi_dt, gam_dt,
@@ -869,7 +873,8 @@ def _run(k0, n, wind, noise, state, xint, zone, pcache, wprev, acc_chan, acc_k, 
             tau_g = x[9] + off
             p_g = c[_C_ETAGC] * x[7] * tau_g
             # actuator parameters of this sample; the benchmark's Simulink realisation (controllable
-            # canonical state, output omega_n^2 x_2) makes the pitch jump by wn2_new / wn2_old when they change
+            # canonical state, output omega_n^2 x_2) makes the pitch jump by wn2_new / wn2_old when
+            # they change
             for b in range(3):
                 wn2 = c[_C_WN2]
                 tzw = c[_C_2ZW]
@@ -910,13 +915,15 @@ def _run(k0, n, wind, noise, state, xint, zone, pcache, wprev, acc_chan, acc_k, 
             y[11] = p_g
             for ch in range(12):
                 y[ch] = al[ch] * (y[ch] + noise[r, ch, kk]) + cst[ch]
-            # accommodation: a sensor isolated as faulty (acc_chan) is no longer read from sample acc_k on
+            # accommodation: a sensor isolated as faulty (acc_chan) is no longer read from sample
+            # acc_k on
             for j in range(acc_chan.shape[0]):
                 use[acc_chan[j]] = 1.0
             for j in range(acc_chan.shape[0]):
                 if k >= acc_k[r, j]:
                     use[acc_chan[j]] = 0.0
-            # controller [model] "Controller": reads omega_g,m1 (omega_g,m2 once m1 is switched off) and P_g,m
+            # controller [model] "Controller": reads omega_g,m1 (omega_g,m2 once m1 is switched off)
+            # and P_g,m
             wgm = y[8] if use[8] > 0.0 else y[9]
             z = zone[r]
             if z == 1:
@@ -947,12 +954,14 @@ def _run(k0, n, wind, noise, state, xint, zone, pcache, wprev, acc_chan, acc_k, 
             o_zone[r, o0 + kk] = z
             # pitch actuators with the measured-pitch feedback u_i = beta_r + beta_i - mean(beta_i,m)
             for b in range(3):
-                w1 = use[2 * b] / (use[2 * b] + use[2 * b + 1])   # both switched off is refused upstream
+                # (both sensors of a blade switched off is refused upstream)
+                w1 = use[2 * b] / (use[2 * b] + use[2 * b + 1])
                 w2 = 1.0 - w1
                 a = w1 * al[2 * b] + w2 * al[2 * b + 1]
                 bbar = (w1 * (al[2 * b] * noise[r, 2 * b, kk] + cst[2 * b])
                         + w2 * (al[2 * b + 1] * noise[r, 2 * b + 1, kk] + cst[2 * b + 1]))
-                _pitch_update(x, b, act[b, 0] * a, act[b, 1], act[b, 0], beta_r - bbar, T, pcache[r])
+                _pitch_update(x, b, act[b, 0] * a, act[b, 1], act[b, 0], beta_r - bbar, T,
+                              pcache[r])
             mode = 0
             for j in range(df_start.shape[0]):
                 if df_start[j] <= k < df_stop[j]:
@@ -1357,19 +1366,21 @@ class WindTurbineRun:
 
 
 def _check_no_duplicates(faults: Sequence[Fault]) -> None:
-    """Refuse a fault id listed twice and two faults on one component at overlapping times (two gains or
-    offsets on one sensor would silently compound; a second fixed value or dynamics would be ambiguous)."""
+    """Refuse a fault id listed twice and two faults on one component at overlapping times (two
+    gains or offsets on one sensor would silently compound; a second fixed value or dynamics would
+    be ambiguous)."""
     ids = [f.id for f in faults]
     twice = sorted({i for i in ids if ids.count(i) > 1})
     if twice:
-        raise ModelError(f"faults: expected each fault once, got fault id(s) {twice} more than once")
+        raise ModelError(f"faults: expected each fault once, got fault id(s) {twice} more than "
+                         "once")
     for i, f in enumerate(faults):
         for g in faults[i + 1:]:
             shared = sorted(set(f.component) & set(g.component))
             if shared and f.start_s < g.stop_s and g.start_s < f.stop_s:
-                raise ModelError(f"faults: faults {f.id} and {g.id} both act on {shared[0]} over overlapping "
-                                 f"times ([{f.start_s}, {f.stop_s}) and [{g.start_s}, {g.stop_s}) s); one fault "
-                                 "per component at a time")
+                raise ModelError(f"faults: faults {f.id} and {g.id} both act on {shared[0]} over "
+                                 f"overlapping times ([{f.start_s}, {f.stop_s}) and [{g.start_s}, "
+                                 f"{g.stop_s}) s); one fault per component at a time")
 
 
 def _compile_faults(faults: Sequence[Fault], p: WindTurbineParams) -> dict[str, np.ndarray]:
@@ -1446,18 +1457,20 @@ def _child(s: np.random.SeedSequence, i: int) -> np.random.SeedSequence:
 
 
 def check_wind(v: Any, name: str = "wind") -> np.ndarray:
-    """``v`` as a float array, refused with a :class:`~fdi_lib.errors.ModelError` naming ``name`` unless
-    every value lies in :data:`WIND_RANGE_MS` (NaN and infinities are refused by the array check)."""
+    """``v`` as a float array, refused with a :class:`~fdi_lib.errors.ModelError` naming ``name``
+    unless every value lies in :data:`WIND_RANGE_MS` (NaN and infinities: refused by the array
+    check)."""
     w = array(v, name)
     lo, hi = WIND_RANGE_MS
     if w.size and (w.min() < lo or w.max() > hi):
-        raise ModelError(f"{name}: expected wind speeds in [{lo:g}, {hi:g}] m/s (WIND_RANGE_MS, where the "
-                         f"aerodynamic table and the controller have an equilibrium), got "
-                         f"[{w.min():.4g}, {w.max():.4g}] m/s")
+        raise ModelError(f"{name}: expected wind speeds in [{lo:g}, {hi:g}] m/s (WIND_RANGE_MS, "
+                         "where the aerodynamic table and the controller have an equilibrium), "
+                         f"got [{w.min():.4g}, {w.max():.4g}] m/s")
     return w
 
 
-def _wind_array(wind: Any, t: np.ndarray, seeds: list[np.random.SeedSequence], schedule: str) -> np.ndarray:
+def _wind_array(wind: Any, t: np.ndarray, seeds: list[np.random.SeedSequence],
+                schedule: str) -> np.ndarray:
     n_real, n = len(seeds), t.size
     if wind is None:
         w = np.array([wind_speed(t, seed=_child(s, 0), schedule=schedule) for s in seeds])
@@ -1474,8 +1487,8 @@ def _wind_array(wind: Any, t: np.ndarray, seeds: list[np.random.SeedSequence], s
 
 
 #: Wind speeds (m/s) :func:`simulate` and :func:`operating_point` accept. From 2 m/s the region-1
-#: equilibrium's tip-speed ratio lies inside the aerodynamic table (lambda >= 1; 1.14 at 2 m/s); up to
-#: 35 m/s a region-2 equilibrium exists with the pitch below 45 deg. Outside, the table would be
+#: equilibrium's tip-speed ratio lies inside the aerodynamic table (lambda >= 1; 1.14 at 2 m/s); up
+#: to 35 m/s a region-2 equilibrium exists with the pitch below 45 deg. Outside, the table would be
 #: extrapolated far beyond its data and no equilibrium may exist.
 WIND_RANGE_MS = (2.0, 35.0)
 #: Largest memory (bytes) :func:`simulate` may allocate for its result and buffers (about 2 GB: the
@@ -1487,9 +1500,10 @@ def simulation_bytes(n_samples: int, n_realisations: int, dtype: Any = np.float6
     """Estimated memory (bytes) of a :func:`simulate` call: the recorded signals (27 values and the
     zone per sample), the wind, the noise and the chunk buffers, per realisation."""
     item = np.dtype(dtype).itemsize
-    per_sample = 27 * item + 1 + 8            # records (state, y, u, tau_aero, tau_g, p_g), zone, wind
+    per_sample = 27 * item + 1 + 8     # records (state, y, u, tau_aero, tau_g, p_g), zone, wind
     chunk = min(_CHUNK, n_samples) * (12 + 27) * 8
-    return float(n_realisations) * (n_samples * per_sample + chunk + 2 * 8 * n_samples)  # + wind synthesis
+    synthesis = 2 * 8 * n_samples      # the wind's spectral synthesis
+    return float(n_realisations) * (n_samples * per_sample + chunk + synthesis)
 
 
 #: The redundant twin of each duplicated sensor (accommodation switches to it).
@@ -1500,25 +1514,30 @@ _TWIN.update({b: a for a, b in list(_TWIN.items())})
 
 def _accommodation(acc: Mapping[int, Any] | None, faults: tuple[Fault, ...], n_real: int, n: int,
                    ts: float) -> tuple[np.ndarray, np.ndarray]:
-    """The kernel's accommodation arrays: switched-off channels and, per realisation, their first sample."""
+    """The kernel's accommodation arrays: switched-off channels and, per realisation, their first
+    sample."""
     chans: list[int] = []
     ks: list[np.ndarray] = []
     if acc is None:
         return np.zeros(0, dtype=np.int64), np.zeros((n_real, 0), dtype=np.int64)
     if not isinstance(acc, Mapping):
-        raise ModelError(f"accommodation: expected a mapping fault id -> isolation time, got {type(acc).__name__}")
+        raise ModelError("accommodation: expected a mapping fault id -> isolation time, got "
+                         f"{type(acc).__name__}")
     by_id = {f.id: f for f in faults}
     for fid, when in acc.items():
         if fid not in by_id:
-            raise ModelError(f"accommodation: fault {fid!r} is not in the run's faults {sorted(by_id)}")
+            raise ModelError(f"accommodation: fault {fid!r} is not in the run's faults "
+                             f"{sorted(by_id)}")
         f = by_id[fid]
-        if f.kind not in ("sensor_fixed", "sensor_gain") or any(c not in _TWIN for c in f.component):
-            raise ModelError(f"accommodation: fault {fid} ({f.kind} on {f.component}) has no healthy redundant "
-                             "sensor to switch to (only faults on duplicated sensors can be accommodated)")
+        sensors = f.kind in ("sensor_fixed", "sensor_gain")
+        if not sensors or any(c not in _TWIN for c in f.component):
+            raise ModelError(f"accommodation: fault {fid} ({f.kind} on {f.component}) has no "
+                             "healthy redundant sensor to switch to (only faults on duplicated "
+                             "sensors can be accommodated)")
         tw = np.broadcast_to(np.asarray(when, dtype=float), (n_real,))
         if np.any(np.isinf(tw)) or np.any(tw[~np.isnan(tw)] < 0):
-            raise ModelError(f"accommodation: fault {fid}: expected isolation times >= 0 s or NaN (not isolated), "
-                             f"got {when!r}")
+            raise ModelError(f"accommodation: fault {fid}: expected isolation times >= 0 s or NaN "
+                             f"(not isolated), got {when!r}")
         k = np.where(np.isnan(tw), n + 1, np.ceil(np.nan_to_num(tw) / ts - 1e-9)).astype(np.int64)
         for comp in f.component:
             chans.append(OUTPUT_NAMES.index(comp))
@@ -1527,7 +1546,8 @@ def _accommodation(acc: Mapping[int, Any] | None, faults: tuple[Fault, ...], n_r
         a, b = OUTPUT_NAMES.index(comp), OUTPUT_NAMES.index(_TWIN[comp])
         if a in chans and b in chans:
             raise ModelError(f"accommodation: both {comp} and {_TWIN[comp]} would be switched off")
-    return np.array(chans, dtype=np.int64), np.ascontiguousarray(np.array(ks, dtype=np.int64).reshape(-1, n_real).T)
+    first = np.ascontiguousarray(np.array(ks, dtype=np.int64).reshape(-1, n_real).T)
+    return np.array(chans, dtype=np.int64), first
 
 
 #: Samples per chunk of the compiled loop (noise drawn per chunk: 12 x 20 000 doubles per realisation).
@@ -1566,10 +1586,10 @@ def simulate(*, seed: Any, faults: Sequence[Fault] = FAULTS, duration_s: float =
         Fault id -> isolation time (s, on the run's time axis; a number, or an array ``(R,)`` per
         realisation with NaN for "not isolated"): from the first sample at or after that time, the
         controller stops reading the fault's sensors and reads their healthy redundant twin instead
-        (the pitch servo of a blade closes its loop on the other pitch sensor only; the speed law reads
-        ``omega_g,m2`` if ``omega_g,m1`` is switched off; the rotor-speed sensors are not read by the
-        benchmark's controller). Only sensor faults on a duplicated sensor can be accommodated so; the
-        switch lasts to the end of the run.
+        (the pitch servo of a blade closes its loop on the other pitch sensor only; the speed law
+        reads ``omega_g,m2`` if ``omega_g,m1`` is switched off; the rotor-speed sensors are not
+        read by the benchmark's controller). Only sensor faults on a duplicated sensor can be
+        accommodated so; the switch lasts to the end of the run.
 
     Returns
     -------
@@ -1603,9 +1623,10 @@ def simulate(*, seed: Any, faults: Sequence[Fault] = FAULTS, duration_s: float =
         1 if n_realisations is None else integer(n_realisations, "n_realisations", low=1))
     needed = simulation_bytes(n, n_req, dtype)
     if needed > MEMORY_BUDGET_BYTES:
-        raise ResourceError(f"duration_s, n_realisations: {n_req} realisation(s) of {n} samples would need "
-                            f"about {needed / 1e9:.3g} GB, over the budget of {MEMORY_BUDGET_BYTES / 1e9:g} GB "
-                            "(MEMORY_BUDGET_BYTES): simulate in batches or shorter")
+        raise ResourceError(f"duration_s, n_realisations: {n_req} realisation(s) of {n} samples "
+                            f"would need about {needed / 1e9:.3g} GB, over the budget of "
+                            f"{MEMORY_BUDGET_BYTES / 1e9:g} GB (MEMORY_BUDGET_BYTES): simulate in "
+                            "batches or shorter")
     check_memory(needed, "n_realisations", f"{n_req} realisation(s) of {n} samples")
     _schedule(schedule)
     seeds, batched = _seeds(seed, n_realisations)
@@ -1648,16 +1669,17 @@ def simulate(*, seed: Any, faults: Sequence[Fault] = FAULTS, duration_s: float =
     direct = dtype == np.dtype(np.float64)
     buffers = outputs if direct else (
         np.empty((n_real, width, 10)), np.empty((n_real, width, 12)), np.empty((n_real, width, 2)),
-        np.empty((n_real, width)), np.empty((n_real, width)), np.empty((n_real, width)), np.empty((n_real, width),
-                                                                                             dtype=np.int8))
+        np.empty((n_real, width)), np.empty((n_real, width)), np.empty((n_real, width)),
+        np.empty((n_real, width), dtype=np.int8))
     for k0 in range(0, n, _CHUNK):
         m = min(_CHUNK, n - k0)
         for r in range(n_real):
             d = draw[:, :m] if m == width else np.empty((12, m))
             rngs[r].standard_normal(out=d)           # the same stream as standard_normal((12, m))
             np.multiply(d, std, out=noise[r, :, :m])
-        _run(k0, m, v, noise, state, xint, zone, pcache, wprev, acc_chan, acc_k, c, LAMBDA_GRID, BETA_GRID_DEG,
-             CQ_TABLE, fz["sf_chan"], fz["sf_kind"], fz["sf_mag"], fz["sf_start"], fz["sf_stop"], fz["sf_ramp"],
+        _run(k0, m, v, noise, state, xint, zone, pcache, wprev, acc_chan, acc_k, c, LAMBDA_GRID,
+             BETA_GRID_DEG, CQ_TABLE, fz["sf_chan"], fz["sf_kind"], fz["sf_mag"], fz["sf_start"],
+             fz["sf_stop"], fz["sf_ramp"],
              fz["af_blade"], fz["af_wn2"], fz["af_2zw"], fz["af_start"], fz["af_stop"], fz["af_ramp"],
              fz["cf_mag"], fz["cf_start"], fz["cf_stop"], fz["cf_ramp"], fz["df_start"], fz["df_stop"],
              fz["phi_dt"], fz["gam_dt"], k0 if direct else 0, *buffers)
@@ -1675,9 +1697,9 @@ def simulate(*, seed: Any, faults: Sequence[Fault] = FAULTS, duration_s: float =
                           params=p)
 
 
-# ---------------------------------------------------------------------------------------------------
+# --------------------------------------------------------------------------------------------------
 # Operating regions of the faults
-# ---------------------------------------------------------------------------------------------------
+# --------------------------------------------------------------------------------------------------
 _FIG = "Cohal & Mirea (2017)"
 _SLIDE = "thesis presentation (2015), slide 14: generator speed over the 4400 s"
 #: Where each fault happens in the benchmark's own simulations (its measured wind), read from the
@@ -1688,30 +1710,37 @@ _SLIDE = "thesis presentation (2015), slide 14: generator speed over the 4400 s"
 #: deviations), and the ``source``. :func:`fault_regions` measures the same quantities on a run.
 BENCHMARK_REGIONS: dict[int, dict[str, Any]] = {
     1: {"region": 1, "pitch_before_max_deg": 1.0, "offset_sigma_min": None,
-        "source": f"{_FIG} Fig. 4: beta_1,m1 at zero (noise only) until about 2450 s; {_SLIDE}: 110-135 rad/s"},
+        "source": f"{_FIG} Fig. 4: beta_1,m1 at zero (noise only) until about 2450 s; "
+                  f"{_SLIDE}: 110-135 rad/s"},
     2: {"region": 2, "pitch_before_max_deg": None, "offset_sigma_min": None,
         "source": f"{_SLIDE}: at Omega_nom from about 2300 s"},
     3: {"region": 2, "pitch_before_max_deg": None, "offset_sigma_min": None,
-        "source": f"{_SLIDE}: 150-162 rad/s; {_FIG} Fig. 4: pitch control in bursts from about 2450 s"},
+        "source": f"{_SLIDE}: 150-162 rad/s; {_FIG} Fig. 4: pitch control in bursts from about "
+                  "2450 s"},
     4: {"region": 1, "pitch_before_max_deg": 1.0, "offset_sigma_min": 3.0,
-        "source": f"{_SLIDE}: 75-95 rad/s over 1500-1600 s (omega_r 0.8-1.0 rad/s against the stuck 1.4)"},
+        "source": f"{_SLIDE}: 75-95 rad/s over 1500-1600 s (omega_r 0.8-1.0 rad/s against the "
+                  "stuck 1.4)"},
     5: {"region": 1, "pitch_before_max_deg": 1.0, "offset_sigma_min": None,
         "source": f"{_FIG} Fig. 9 and {_SLIDE}: 50-65 rad/s over 1000-1100 s"},
     6: {"region": None, "pitch_before_max_deg": 2.0, "offset_sigma_min": None,
-        "source": f"{_FIG} Fig. 4: pitch about zero over about 2800-2955 s; {_SLIDE}: near Omega_nom"},
+        "source": f"{_FIG} Fig. 4: pitch about zero over about 2800-2955 s; "
+                  f"{_SLIDE}: near Omega_nom"},
     7: {"region": 2, "pitch_before_max_deg": None, "offset_sigma_min": None,
-        "source": f"{_FIG} Fig. 4: pitch control over 3400-3500 s; {_SLIDE}: at Omega_nom with dips"},
+        "source": f"{_FIG} Fig. 4: pitch control over 3400-3500 s; "
+                  f"{_SLIDE}: at Omega_nom with dips"},
     8: {"region": 2, "pitch_before_max_deg": None, "offset_sigma_min": None,
-        "source": f"{_FIG} Fig. 13: generator torque at its rated value (30 kN m) over 3800-3900 s"},
+        "source": f"{_FIG} Fig. 13: generator torque at its rated value (30 kN m) over "
+                  "3800-3900 s"},
     9: {"region": 2, "pitch_before_max_deg": None, "offset_sigma_min": None,
-        "source": f"{_FIG} Fig. 4: pitch control over 4000-4200 s; {_SLIDE}: at Omega_nom with dips"},
+        "source": f"{_FIG} Fig. 4: pitch control over 4000-4200 s; "
+                  f"{_SLIDE}: at Omega_nom with dips"},
 }
 
 
 def _offset_sigma(run: WindTurbineRun, f: Fault, sel: np.ndarray) -> float | None:
-    """A sensor or converter fault's mean offset on its measurement over the samples ``sel``, in noise
-    standard deviations of that measurement (the largest over the fault's components); ``None`` for the
-    actuator and drive-train faults."""
+    """A sensor or converter fault's mean offset on its measurement over the samples ``sel``, in
+    noise standard deviations of that measurement (the largest over the fault's components);
+    ``None`` for the actuator and drive-train faults."""
     p = run.params
     std = p.noise_std
     if f.kind == "converter_offset":
@@ -1719,8 +1748,8 @@ def _offset_sigma(run: WindTurbineRun, f: Fault, sel: np.ndarray) -> float | Non
     if f.kind not in ("sensor_fixed", "sensor_gain"):
         return None
     clean = {0: run.beta[..., 0], 1: run.beta[..., 0], 2: run.beta[..., 1], 3: run.beta[..., 1],
-             4: run.beta[..., 2], 5: run.beta[..., 2], 6: run.omega_r, 7: run.omega_r, 8: run.omega_g,
-             9: run.omega_g, 10: run.tau_g, 11: run.p_g}
+             4: run.beta[..., 2], 5: run.beta[..., 2], 6: run.omega_r, 7: run.omega_r,
+             8: run.omega_g, 9: run.omega_g, 10: run.tau_g, 11: run.p_g}
     out = 0.0
     for comp, mag in zip(f.component, f.magnitude):
         ch = OUTPUT_NAMES.index(comp)
@@ -1731,14 +1760,14 @@ def _offset_sigma(run: WindTurbineRun, f: Fault, sel: np.ndarray) -> float | Non
 
 
 def fault_regions(run: WindTurbineRun, *, before_s: float = 10.0) -> dict[str, dict[str, Any]]:
-    """Where each fault of ``run`` happens, over all its realisations, against :data:`BENCHMARK_REGIONS`.
+    """Where each fault of ``run`` happens (all realisations), against :data:`BENCHMARK_REGIONS`.
 
-    ``F<id>`` -> ``mean_wind_ms`` and ``mean_pitch_deg`` (true pitch, mean of the blades) over the fault's
-    samples, ``pitch_before_deg`` (the same over the ``before_s`` seconds before its onset),
+    ``F<id>`` -> ``mean_wind_ms`` and ``mean_pitch_deg`` (true pitch, mean of the blades) over the
+    fault's samples, ``pitch_before_deg`` (the same over the ``before_s`` seconds before its onset),
     ``full_load_share`` (share of its samples in region 2), ``region`` (2 if that share is at least
-    one half, else 1), ``offset_sigma`` (:func:`_offset_sigma`; ``None`` for actuator and drive-train
-    faults), ``benchmark`` (its :data:`BENCHMARK_REGIONS` entry without the source) and ``matches``
-    (every stated criterion of the benchmark holds; a fault without an entry: ``None``).
+    one half, else 1), ``offset_sigma`` (:func:`_offset_sigma`; ``None`` for actuator and
+    drive-train faults), ``benchmark`` (its :data:`BENCHMARK_REGIONS` entry without the source) and
+    ``matches`` (every stated criterion of the benchmark holds; a fault without an entry: ``None``).
     """
     if not isinstance(run, WindTurbineRun):
         raise ModelError(f"run: expected a WindTurbineRun, got {type(run).__name__}")
@@ -1749,11 +1778,13 @@ def fault_regions(run: WindTurbineRun, *, before_s: float = 10.0) -> dict[str, d
     for j, f in enumerate(run.faults):
         sel = run.fault_active[:, j] > 0
         if not sel.any():
-            raise ModelError(f"run: fault {f.id} is not active within the run's {run.t.size} samples")
+            raise ModelError(f"run: fault {f.id} is not active within the run's {run.t.size} "
+                             "samples")
         k0 = int(np.argmax(sel))
         pre = slice(max(0, k0 - n_before), k0) if k0 > 0 else slice(0, 1)
         share = float((run.region[..., sel] == 2).mean())
-        entry = {"mean_wind_ms": float(run.v[..., sel].mean()), "mean_pitch_deg": float(pitch[..., sel].mean()),
+        entry = {"mean_wind_ms": float(run.v[..., sel].mean()),
+                 "mean_pitch_deg": float(pitch[..., sel].mean()),
                  "pitch_before_deg": float(pitch[..., pre].mean()), "full_load_share": share,
                  "region": 2 if share >= 0.5 else 1, "offset_sigma": _offset_sigma(run, f, sel)}
         ref = BENCHMARK_REGIONS.get(f.id)
@@ -1771,9 +1802,10 @@ def fault_regions(run: WindTurbineRun, *, before_s: float = 10.0) -> dict[str, d
     return out
 
 
-def plot_scenario(run: WindTurbineRun, *, realisation: int = 0, step_s: float = 1.0, fig: Any = None):
-    """The scenario over its duration: wind, true pitch (blade mean), rotor and generator speeds and the
-    controller's region, one sample every ``step_s`` seconds of one realisation, the faults shaded."""
+def plot_scenario(run: WindTurbineRun, *, realisation: int = 0, step_s: float = 1.0,
+                  fig: Any = None):
+    """The scenario over its duration: wind, true pitch (blade mean), generator speed and the
+    controller's region, one sample every ``step_s`` seconds of one realisation, faults shaded."""
     from fdi_lib.plotting import figure
 
     if not isinstance(run, WindTurbineRun):
@@ -1789,7 +1821,8 @@ def plot_scenario(run: WindTurbineRun, *, realisation: int = 0, step_s: float = 
     fig, axes = figure(4, 1, fig=fig, sharex=True, figsize=(6.4, 6.4))
     on = run.fault_active > 0
     for ax, (label, y) in zip(axes[:, 0], panels):
-        ax.plot(t, y, lw=0.7, color="C0", drawstyle="steps-post" if label == "region" else "default")
+        style = "steps-post" if label == "region" else "default"
+        ax.plot(t, y, lw=0.7, color="C0", drawstyle=style)
         ax.set_ylabel(label)
         for j, f in enumerate(run.faults):
             if on[:, j].any():
