@@ -5,9 +5,10 @@ after detection and isolation, the controller should keep the turbine producing 
 failed. For a fault on a duplicated sensor the natural accommodation is to stop reading the faulty
 sensor and to read its healthy redundant twin (:func:`fdi_lib.systems.wind_turbine.simulate`,
 argument ``accommodation``). :func:`accommodation` measures, per sensor fault F1-F5 and
-realisation, the effect of the fault on the generator power, the pitch and the generator speed against a fault-free
-twin (same wind, same noise), without and with the switch made at the time one of the book's methods
-isolates the fault (:func:`fdi_lib.windturbine.run_methods`'s method functions, on the same record).
+realisation, the effect of the fault on the generator power, the pitch and the generator speed
+against a fault-free twin (same wind, same noise), without and with the switch made at the time one
+of the book's methods isolates the fault (:func:`fdi_lib.windturbine.run_methods`'s method
+functions, on the same record).
 """
 
 from __future__ import annotations
