@@ -60,7 +60,8 @@ def test_every_reproduction_has_a_command_with_the_book_settings(commands):
     # a reproduction registered with chapter_seed=True runs at its chapter's seed, the others at
     # the registry's default
     for r in list_reproductions():
-        assert book_settings(r.id).seed == (CHAPTER_SEEDS[r.chapter] if r.chapter_seed else r.default_seed)
+        chapter_seed = CHAPTER_SEEDS[r.chapter] if r.chapter_seed else r.default_seed
+        assert book_settings(r.id).seed == chapter_seed
     assert commands["zb2014-fig3"] == ["reproduce", "zb2014-fig3", "--seed", "2015", "--json"]
     assert commands["rosa2013-fig11-rad"][-3:] == ["--trials", "10", "--json"]   # the paper's count
 

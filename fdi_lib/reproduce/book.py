@@ -13,7 +13,8 @@ here, and the catalogue's command carries that seed.
 too); a reproduction registered with ``chapter_seed=True`` runs in the book at its chapter's seed
 (:func:`fdi_lib.reproduce.registry.register`: the book's settings travel with the registration).
 :func:`book_settings` resolves them against the registry. :func:`book_order` is the book's order of
-the reproductions (the chapters of ``_toc.yml``, then the first ``book_run`` of each in its chapter).
+the reproductions (the chapters of ``_toc.yml``, then the first ``book_run`` of each in its
+chapter).
 """
 
 from __future__ import annotations

@@ -31,7 +31,8 @@ from fdi_lib.kitanidis import KitanidisGains, kitanidis_filter, kitanidis_gains
 from fdi_lib.models import LTVModel, fault_profile, step_family
 from fdi_lib.montecarlo import binomial_ci, draw_noise_batch, run_monte_carlo
 from fdi_lib.nonparametric import (kitanidis_lag_covariance, kitanidis_predictor_gains,
-                                   nonparametric_signature, rejection_projection, solution1, solution2)
+                                   nonparametric_signature, rejection_projection, solution1,
+                                   solution2)
 from fdi_lib.plotting import OURS_COLOR, THRESHOLD_COLOR, figure
 from fdi_lib.reproduce.ledger import BY_CHECK, BY_INTERVAL, Claim, in_ci
 from fdi_lib.reproduce.registry import ReproductionResult, register
@@ -199,18 +200,21 @@ _WHITENESS_CAUSE = dict(
 
 
 @register("bz-whiteness", paper=PAPER, title="Prop. 2: whiteness of the Kitanidis innovation (portmanteau tests)",
-          default_trials=None, plot=plot_whiteness, chapter="bz/parametric-nonparametric", chapter_seed=True,
+          default_trials=None, plot=plot_whiteness, chapter="bz/parametric-nonparametric",
+          chapter_seed=True,
           claims={
               "lb_reject_rate_kitanidis": Claim(
                   location="Prop. 2, whiteness", units="%", test=BY_INTERVAL, value=lambda p: 0.05,
                   label="the Kitanidis innovation is white (Ljung-Box rejects 5 % at level 5 %)",
-                  cause_glue=("bz_lb_reject_rate_kitanidis", "bz_lag1_corr_theory"), **_WHITENESS_CAUSE),
+                  cause_glue=("bz_lb_reject_rate_kitanidis", "bz_lag1_corr_theory"),
+                  **_WHITENESS_CAUSE),
               "lag1_corr_empirical": Claim(
                   location="Prop. 2, lag-one correlation", units="", test=BY_INTERVAL,
                   value=lambda p: 0.0, label="lag-1 correlation of the Kitanidis innovation is 0",
                   cause_glue=("bz_lag1_corr_theory", "bz_lag1_corr_empirical"), **_WHITENESS_CAUSE),
               "cov_rel_error_kitanidis": Claim(
-                  location="eq. (45)", label="the Kitanidis innovation has covariance H P_k Hᵀ + R_k",
+                  location="eq. (45)",
+                  label="the Kitanidis innovation has covariance H P_k Hᵀ + R_k",
                   units="", test=BY_CHECK, check=lambda p, o, h: o < 0.05,
                   criterion="relative error of the empirical covariance < 5 %"),
               "h_zeta_max": Claim(
@@ -219,8 +223,8 @@ _WHITENESS_CAUSE = dict(
                   test=BY_CHECK, check=lambda p, o, h: o <= 1e-9, criterion="max |H_k ζ_k| ≤ 1e-9",
                   cause="sec-bz-zeta", cause_glue=("bz_h_zeta_max", "bz_zeta_minus_ef_max"),
                   cause_text="the book proves ζ_k = E f_(k-1) with the Kitanidis gain (Proposition "
-                             "bz-prop-zeta) and measures it: the innovation carries the fault of the "
-                             "previous step")})
+                             "bz-prop-zeta) and measures it: the innovation carries the fault of "
+                             "the previous step")})
 def whiteness(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Prop. 2 put to the test: is the Kitanidis innovation white with covariance ``H P H^T + R``?
 
@@ -414,7 +418,8 @@ def plot_solution1(result: ReproductionResult, fig: Any = None):
 
 @register("bz-solution1", paper=PAPER,
           title="Solution 1: GLR/minmax on the projected Kitanidis residual + energy test",
-          default_trials=None, plot=plot_solution1, chapter="bz/parametric-nonparametric", chapter_seed=True,
+          default_trials=None, plot=plot_solution1, chapter="bz/parametric-nonparametric",
+          chapter_seed=True,
           claims={
               "glr_detection_rate_theta_with_f": Claim(
                   location="§3.2, detection of θ",
@@ -425,7 +430,8 @@ def plot_solution1(result: ReproductionResult, fig: Any = None):
                   location="§3.2, rejection of f",
                   label="f alone does not raise the GLR on the projected Kitanidis residual",
                   units="%", test=BY_CHECK, check=in_ci("glr_false_alarm_rate"),
-                  criterion="alarm rate under f alone inside the 95 % interval of the false-alarm rate"),
+                  criterion="alarm rate under f alone inside the 95 % interval of the false-alarm "
+                            "rate"),
               "nonparametric_detection_rate_f": Claim(
                   location="§3.3", label="the energy test on a parallel Kalman filter detects f",
                   units="%", test=BY_CHECK, check=lambda p, o, h: o >= 0.95,
@@ -544,14 +550,17 @@ def plot_solution2(result: ReproductionResult, fig: Any = None):
 
 
 @register("bz-solution2", paper=PAPER, title="Solution 2: RLS tracking with forgetting factor + error energy",
-          default_trials=None, plot=plot_solution2, chapter="bz/parametric-nonparametric", chapter_seed=True,
+          default_trials=None, plot=plot_solution2, chapter="bz/parametric-nonparametric",
+          chapter_seed=True,
           claims={
               "tracking_rmse": Claim(
-                  location="§4, tracking", label="RLS with forgetting tracks a slowly varying θ_k", units="",
+                  location="§4, tracking", label="RLS with forgetting tracks a slowly varying θ_k",
+                  units="",
                   test=BY_CHECK, check=lambda p, o, h: max(o) < 0.05,
                   criterion="tracking RMSE below 0.05 for every forgetting factor"),
               "detection_rate": Claim(
-                  location="§4, detection", label="the energy of the tracking error detects f", units="%",
+                  location="§4, detection", label="the energy of the tracking error detects f",
+                  units="%",
                   test=BY_CHECK, check=lambda p, o, h: min(o) >= 0.95,
                   criterion="detection rate of f at least 95 % for every forgetting factor")})
 def solution2_mc(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:

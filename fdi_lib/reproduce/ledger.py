@@ -132,10 +132,12 @@ __all__ = ["STATUSES", "ROLE_KEYS", "CALIBRATION", "PREDICTION", "INPUT", "surro
            "REPRODUCED", "WITHIN", "WITHIN_SPREAD", "DIFFERS", "DIFFERS_MEASURED", "DIFFERS_UNKNOWN",
            "INPUT_VALUE", "CALIBRATION_TARGET", "NOT_COMPUTED", "NOT_REPRODUCIBLE", "AGREES", "DIFFERING",
            "DIFFERS_BRACKETED", "DIFFERS_HYPOTHESIS", "INPUT_RECOVERED", "TESTS", "BY_TOLERANCE",
-           "BY_INTERVAL", "BY_STANDARD_ERROR", "BY_SPREAD", "BY_CHECK", "IS_INPUT", "ESTIMATES_INPUT",
+           "BY_INTERVAL", "BY_STANDARD_ERROR", "BY_SPREAD", "BY_CHECK", "IS_INPUT",
+           "ESTIMATES_INPUT",
            "IS_CALIBRATION", "NOT_CHECKABLE", "shown_under", "claim_for", "chapter_of", "ours_at",
            "ci_at", "in_ci", "SET_BY_BOOK",
-           "DEFAULT_RTOL", "PAPERS", "Claim", "LedgerRow", "Ledger", "NO_VALUE", "claim_paths", "claim_status", "build_ledger", "collect_results", "ledger", "FigureClaim",
+           "DEFAULT_RTOL", "PAPERS", "Claim", "LedgerRow", "Ledger", "NO_VALUE", "claim_paths",
+           "claim_status", "build_ledger", "collect_results", "ledger", "FigureClaim",
            "figure_claim", "glue_caption", "REPRODUCES", "COMPARE", "REDRAWS", "CAPTION_ITEMS"]
 
 REPRODUCED, WITHIN, WITHIN_SPREAD = "reproduced", "within interval", "within spread"
@@ -509,7 +511,8 @@ def claim_status(paper: Any, ours: Any, ci: tuple[float, float] | None = None,
         ok = bool(spec.check(paper, ours, headline or {}))
         return (REPRODUCED if ok else DIFFERS), spec.criterion
     if spec.value is not None:
-        return claim_status(spec.value(paper), ours, ci, replace(spec, value=None), headline, spread, se)
+        return claim_status(spec.value(paper), ours, ci, replace(spec, value=None), headline,
+                            spread, se)
     if isinstance(paper, str):
         m, a = _INEQ.match(paper), _ABOUT.match(paper)
         if m:
@@ -564,11 +567,13 @@ def claim_status(paper: Any, ours: Any, ci: tuple[float, float] | None = None,
 
 # ----------------------------------------------------------------------------- declaring claims
 _UNSCALED = "not computed at paper scale"
+_RECOVERED = "our estimate of a value the book sets: shown, not a reproduction"
 
 
 def ours_at(*keys: str) -> Callable[[Mapping[str, Any], tuple[str, ...]], Any]:
     """For :attr:`Claim.ours`: our value at ``keys`` followed by the claim path after its first
-    key (``ours_at("success_rate", "log")`` reads ``success_rate/log/q15`` for ``success_rate/q15``)."""
+    key (``ours_at("success_rate", "log")`` reads ``success_rate/log/q15`` for
+    ``success_rate/q15``)."""
     return lambda h, path: _at(h, (*keys, *path[1:]))
 
 
@@ -807,7 +812,7 @@ def _row_status(outcome: str, how: str, *, spec: Claim, role: str | None, paper:
     agrees = outcome in AGREES
     if agrees and (role == INPUT or spec.test == IS_INPUT):
         if spec.test == ESTIMATES_INPUT:
-            return INPUT_RECOVERED, "our estimate of a value the book sets: shown, not a reproduction", None
+            return INPUT_RECOVERED, _RECOVERED, None
         return INPUT_VALUE, "a value the book sets, equal by construction", None
     if outcome == NOT_REPRODUCIBLE:
         return NOT_REPRODUCIBLE, how, None
@@ -818,7 +823,7 @@ def _row_status(outcome: str, how: str, *, spec: Claim, role: str | None, paper:
     if outcome == NOT_COMPUTED:
         return NOT_COMPUTED, how, None
     if agrees and spec.test == ESTIMATES_INPUT:
-        return INPUT_RECOVERED, "our estimate of a value the book sets: shown, not a reproduction", None
+        return INPUT_RECOVERED, _RECOVERED, None
     if agrees and (role == CALIBRATION or spec.test == IS_CALIBRATION):
         return CALIBRATION_TARGET, "the surrogate was calibrated to this value", None
     if outcome == WITHIN_SPREAD:

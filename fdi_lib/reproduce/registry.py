@@ -300,7 +300,8 @@ def register(id: str, *, paper: str, title: str, chapter: str, default_trials: i
         _REGISTRY[id] = Reproduction(id=id, paper=paper, title=title, func=func, plot=plot,
                                      default_trials=default_trials, default_seed=default_seed,
                                      min_trials=min_trials, timed_keys=tuple(timed_keys),
-                                     chapter=chapter, chapter_seed=chapter_seed, surrogate=surrogate,
+                                     chapter=chapter, chapter_seed=chapter_seed,
+                                     surrogate=surrogate,
                                      claims=tuple((claims or {}).items()))
         return func
 

@@ -262,7 +262,8 @@ def plot_alpha(result: ReproductionResult, fig: Any = None):
 
 def _alpha_claims(fig: str, scenario: str) -> dict[str, Claim]:
     """Figs 8-10: the fault the book sets, and the §6.4 detection time (listed under Fig. 11)."""
-    return {"fault_amplitude_deg": Claim(location=f"Fig. {fig}, fault amplitude", units="deg", test=IS_INPUT),
+    return {"fault_amplitude_deg": Claim(location=f"Fig. {fig}, fault amplitude", units="deg",
+                                         test=IS_INPUT),
             "onset_s": Claim(location=f"Fig. {fig}, fault onset", units="s", test=IS_INPUT),
             "ramp_s": Claim(location=f"Fig. {fig}, ramp duration", units="s", test=IS_INPUT),
             # the §6.4 sentence of Fig. 11, not a claim of this figure: a note in Fig. 11's row
@@ -271,8 +272,10 @@ def _alpha_claims(fig: str, scenario: str) -> dict[str, Claim]:
                                              figure_reading=False)}
 
 
-@register("rosa2013-fig8", paper=PAPER, title="AOA measurement with a step sensor fault (Fig. 8)", plot=plot_alpha,
-          chapter="rosa2013/svo", chapter_seed=True, surrogate=True, claims=_alpha_claims("8", "step"))
+@register("rosa2013-fig8", paper=PAPER, title="AOA measurement with a step sensor fault (Fig. 8)",
+          plot=plot_alpha,
+          chapter="rosa2013/svo", chapter_seed=True, surrogate=True, claims=_alpha_claims("8",
+                                                                                          "step"))
 def fig8(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Fig. 8: alpha measurement with a +3 deg step fault at t = 0.5 s (one seeded run).
 
@@ -469,9 +472,10 @@ def plot_fig12(result: ReproductionResult, fig: Any = None):
 
 _NOT_DETECTED = "not detected in any run of the 6 s record"
 _NOT_ISOLATED = "not isolated in any run of the 6 s record"
-_MU_TOTAL = dict(hypothesis="sec-svo-fault-modes", hypothesis_glue=("svo_mu_total_det", "svo_mu_total_iso"),
-                 hypothesis_text="acting on the total speed, the M_u fault is detected at the paper's time, "
-                                 "and then isolated in no run (measured side effect)")
+_MU_TOTAL = dict(hypothesis="sec-svo-fault-modes", hypothesis_glue=("svo_mu_total_det",
+                                                                    "svo_mu_total_iso"),
+                 hypothesis_text="acting on the total speed, the M_u fault is detected at the "
+                                 "paper's time, and then isolated in no run (measured side effect)")
 
 
 def _times(kind: str, fig: str) -> dict[str, Claim]:
@@ -484,12 +488,14 @@ def _times(kind: str, fig: str) -> dict[str, Claim]:
     if kind == "detection":
         claims = {"detection_time_ms/dynamics/step": Claim(
             location="Fig. 11 (§6.4 text), dynamics fault, step scenario", label=label, units="ms",
-            test=BY_TOLERANCE, explain="fig-rosa2013-11", missing=_NOT_DETECTED, **_MU_TOTAL), **claims}
+            test=BY_TOLERANCE, explain="fig-rosa2013-11", missing=_NOT_DETECTED, **_MU_TOTAL),
+            **claims}
     return claims
 
 
 def _other_figure(kind: str, fig: str) -> dict[str, Claim]:
-    """Fig. 11's runs carry the isolation times of Fig. 12 and the reverse: one row, under the other."""
+    """Fig. 11's runs carry the isolation times of Fig. 12 and the reverse: one row, under the
+    other."""
     return {f"{kind}_time_ms/*/*": shown_under(f"rosa2013-fig{fig}")}
 
 
@@ -536,7 +542,8 @@ def fig12(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
 
 
 @register("rosa2013-fig11-rad", paper=PAPER, title="Mean fault detection times, elevator read per radian (Fig. 11)",
-          default_trials=10, plot=plot_fig11, min_trials=1, chapter="rosa2013/svo", chapter_seed=True,
+          default_trials=10, plot=plot_fig11, min_trials=1, chapter="rosa2013/svo",
+          chapter_seed=True,
           surrogate=True, claims={**_rad("detection", "11"), **_other_figure("isolation", "12")})
 def fig11_rad(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Fig. 11 with the elevator coefficients of (16) read per radian (keys as :func:`fig11`)."""
@@ -544,7 +551,8 @@ def fig11_rad(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult
 
 
 @register("rosa2013-fig12-rad", paper=PAPER, title="Mean fault isolation times, elevator read per radian (Fig. 12)",
-          default_trials=10, plot=plot_fig12, min_trials=1, chapter="rosa2013/svo", chapter_seed=True,
+          default_trials=10, plot=plot_fig12, min_trials=1, chapter="rosa2013/svo",
+          chapter_seed=True,
           surrogate=True, claims={**_rad("isolation", "12"), **_other_figure("detection", "11")})
 def fig12_rad(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Fig. 12 with the elevator coefficients of (16) read per radian (keys as :func:`fig11`)."""
@@ -643,10 +651,11 @@ def plot_timing(result: ReproductionResult, fig: Any = None):
 
 @register("rosa2013-timing", paper=PAPER, title="Wall time per SVO step against the horizon N (Remark 4)",
           chapter="rosa2013/svo", chapter_seed=True, claims={"step_ms": Claim(
-              location="Remark 4", label="5 to 200 ms per SVO step (exact rule) depending on N", units="ms",
+              location="Remark 4", label="5 to 200 ms per SVO step (exact rule) depending on N",
+              units="ms",
               test=NOT_CHECKABLE, ours=lambda h, p: h.get("step_ms_exact"),
-              reason="wall time of the authors' MATLAB code on their machine; ours (the exact rule, median "
-                     "per N) is shown for scale")},
+              reason="wall time of the authors' MATLAB code on their machine; ours (the exact "
+                     "rule, median per N) is shown for scale")},
           plot=plot_timing, timed_keys=("step_ms", "step_ms_p90", "step_ms_exact", "step_ms_exact_each",
                                         "exact_within_ts"))
 def timing(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:

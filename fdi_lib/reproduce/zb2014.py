@@ -193,8 +193,9 @@ _FIG1_CAUSE = dict(explain="sec-zb-fig1-bound", cause="sec-zb-fig1-bound")
               "unstable_eigenvalue": Claim(
                   location="§6.1, text", label="the unstable eigenvalue of F", units="",
                   test=BY_TOLERANCE, **_FIG1_CAUSE, cause_glue=("sig-quoted", "sig-typo-count"),
-                  cause_text="the printed F is triangular, with eigenvalues 0.5 and 1.2, and we use it; "
-                             "the section checks every one-entry misprint that gives the quoted value"),
+                  cause_text="the printed F is triangular, with eigenvalues 0.5 and 1.2, and we "
+                             "use it; the section checks every one-entry misprint that gives the "
+                             "quoted value"),
               "gamma_norm_max/*": Claim(
                   location="Fig. 1, impulse at r = {0}", label="‖Γ_k‖ stays under 1", units="",
                   test=BY_TOLERANCE, **_FIG1_CAUSE, cause_glue=("sig-bound", "sig-gamma-max"),
@@ -600,7 +601,8 @@ def _glr_claims(fig: str, visibility: Claim) -> dict[str, Claim]:
             label="our onset estimate r̂ at the peak of l_k (sums from j = r̂, see the convention)",
             units="sample", test=ESTIMATES_INPUT, explain="sec-zb-glr-onset"),
         "glr_argmax_time": Claim(
-            location=f"Fig. {fig}, bottom panel", label="l_k is largest while the onset is in the window",
+            location=f"Fig. {fig}, bottom panel",
+            label="l_k is largest while the onset is in the window",
             units="sample", test=BY_CHECK,
             check=lambda p, o, h: FAULT_ONSET <= o <= FAULT_ONSET + GLR_WINDOW,
             criterion=f"{FAULT_ONSET} ≤ argmax l_k ≤ {FAULT_ONSET + GLR_WINDOW}"),
@@ -608,8 +610,10 @@ def _glr_claims(fig: str, visibility: Claim) -> dict[str, Claim]:
             location=f"Fig. {fig}, the fault θ set in the caption",
             label="our estimate θ̂ at the peak of l_k", units="", test=ESTIMATES_INPUT,
             explain="sec-zb-glr-figs", ci=lambda h, p: None, rtol=0.0,
-            check=lambda p, o, h: all(lo <= t <= hi for t, (lo, hi) in zip(p, h["theta_estimate_ci"])),
-            criterion="each component of the paper's θ in our 95 % interval (θ̂ ± 1.96 σ from C_k(r̂))"),
+            check=lambda p, o, h: all(lo <= t <= hi for t, (lo, hi) in zip(p,
+                                                                           h["theta_estimate_ci"])),
+            criterion="each component of the paper's θ in our 95 % interval (θ̂ ± 1.96 σ from "
+                      "C_k(r̂))"),
         "fault_visibility": visibility}
 
 
@@ -619,7 +623,8 @@ def _glr_claims(fig: str, visibility: Claim) -> dict[str, Claim]:
               label="the fault shows on the innovation only briefly after 201 (ours: samples above "
                     "the pre-fault maximum)", units="sample", test=BY_CHECK,
               ours=lambda h, p: h["innovation_samples_above_premax"],
-              check=lambda p, o, h: o <= 10, criterion="at most 10 samples above the pre-fault max |ε_k|")))
+              check=lambda p, o, h: o <= 10,
+              criterion="at most 10 samples above the pre-fault max |ε_k|")))
 def fig3(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Paper Fig. 3: impulsive fault ``theta = [4, 0]`` at ``k = 201``, windowed GLR with ``w = 100``.
 
@@ -656,7 +661,8 @@ def plot_fig4(result: ReproductionResult, fig: Any = None):
 @register("zb2014-fig4", paper=PAPER, title="Innovation and GLR l_k, theta = [1.5, 0], onset 201, w = 100",
           plot=plot_fig4, chapter="zb2014/glr", chapter_seed=True, claims=_glr_claims("4", Claim(
               location="Fig. 4, top panel",
-              label="the fault is hardly visible on the innovation (ours: largest |ε_k|/σ_k from 201)",
+              label="the fault is hardly visible on the innovation (ours: largest |ε_k|/σ_k from "
+                    "201)",
               units="σ", test=BY_CHECK, explain="sec-zb-glr-figs",
               ours=lambda h, p: h["innovation_max_sigma_after_fault"],
               check=lambda p, o, h: o <= h["innovation_max_sigma_before_fault"],

@@ -46,7 +46,8 @@ __all__ = ["VARIANT_Q", "VARIANT_R", "VARIANT_GRIDS", "RULE_READINGS", "INIT_VAR
            "example1_regression", "snr_db", "snr_variants", "snr_comparison", "closest_snr_reading",
            "example1_chunk", "lambda_rule_chunk", "initial_state_chunk", "initial_state_models",
            "unknown_input_effect", "lambda_rule_table", "initial_state_table", "paper_between_readings",
-           "rate_table", "snr_table", "paper_snr_off_curve", "grid_rule_difference", "paper_outside_ci", "example1_rates",
+           "rate_table", "snr_table", "paper_snr_off_curve", "grid_rule_difference",
+           "paper_outside_ci", "example1_rates",
            "example2_setup", "example2_input", "example2_intervention_chunk", "EX2_INTERVENTIONS",
            "ORACLE_PATHS", "scaled_regressors", "oracle_table", "intervention_table", "plot_fig2",
            "plot_fig3", "plot_table1", "plot_table2", "plot_fig6", "plot_fig7"]
@@ -259,7 +260,8 @@ def _plot_support(result: ReproductionResult, fig: Any, title: str):
 
 @register("zhang2021-fig2", paper=PAPER, title="Example 1: support size of the Lasso estimate against lambda",
           plot=plot_fig2, chapter="zhang2021/sparse", claims={
-              "flat_size": Claim(location="Fig. 2", label="support size on the flat range of λ", units="",
+              "flat_size": Claim(location="Fig. 2", label="support size on the flat range of λ",
+                                 units="",
                                  test=BY_TOLERANCE)})
 def fig2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Paper Fig. 2: one trial of Example 1 (q = 5), support size along the exact Lasso path.
@@ -318,10 +320,12 @@ def _plot_diamonds(result: ReproductionResult, fig: Any, title: str):
 
 @register("zhang2021-fig3", paper=PAPER, title="Example 1: Lasso diamonds, least-squares circles, true asterisks",
           plot=plot_fig3, chapter="zhang2021/sparse", claims={
-              "same_support_in_range": Claim(location="Fig. 3 (§IV text), every λ of the flat range",
-                                             label="the same support", units="", test=BY_TOLERANCE),
+              "same_support_in_range": Claim(
+                  location="Fig. 3 (§IV text), every λ of the flat range", label="the same support",
+                  units="", test=BY_TOLERANCE),
               "support_equals_true": Claim(
-                  location="Fig. 3, diamonds against asterisks", label="the selected support is the true one",
+                  location="Fig. 3, diamonds against asterisks",
+                  label="the selected support is the true one",
                   units="", test=BY_TOLERANCE,
                   ours=lambda h, p: sorted(h["support"]) == sorted(h["true_support"]))})
 def fig3(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
@@ -396,10 +400,11 @@ def _rate_claim(table: str, column: str) -> Claim:
     return Claim(location=f"Table {table}, success rate at {column} = {{0}}", units="%",
                  test=BY_INTERVAL, ci=ci_at("ci95"), explain="zhang2021-lambda-rule",
                  bracket=_between_readings,
-                 bracket_text="the paper's rate lies between our log-width and linear-width readings "
-                              "of the rule for λ on the same trials, inside the interval of neither",
-                 ruled_out="our readings of the rule for λ (the paper's rate lies outside them), the "
-                           "unknown input d_k, and at q = 15 the initial state")
+                 bracket_text="the paper's rate lies between our log-width and linear-width "
+                              "readings of the rule for λ on the same trials, inside the interval "
+                              "of neither",
+                 ruled_out="our readings of the rule for λ (the paper's rate lies outside them), "
+                           "the unknown input d_k, and at q = 15 the initial state")
 
 
 @register("zhang2021-table1", paper=PAPER, title="Example 1: success rate against the number of faults q",
@@ -477,9 +482,9 @@ def _rate_table_axes(ax: Any, values: Sequence[float], rates: dict[str, Any], pa
                   location="Table II, SNR of outputs 1 and 2 at r = 150", units="dB",
                   test=BY_STANDARD_ERROR, explain="fig-zhang2021-5", cause="sec-zhang2021-snr-150",
                   cause_glue=("zhang2021_snr150_rise_*", "zhang2021_snr150_off_*"),
-                  cause_text="a paper-side inconsistency: the paper's SNR rises from r = 140 to r = 150, "
-                             "while 10 log10(1 + S/r) decreases in r, and lies many of our standard "
-                             "errors off the curve through its neighbours"),
+                  cause_text="a paper-side inconsistency: the paper's SNR rises from r = 140 to r "
+                             "= 150, while 10 log10(1 + S/r) decreases in r, and lies many of our "
+                             "standard errors off the curve through its neighbours"),
               "snr_db/*": Claim(location="Table II, SNR of outputs 1 and 2 at r = {0}", units="dB",
                                 test=BY_STANDARD_ERROR, explain="fig-zhang2021-5")})
 def table2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
@@ -509,7 +514,8 @@ def table2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
                 "success_rate_linear": _rate_dict(keys, rates["success_linear"], n),
                 "ci95": {k: list(c) for k, c in zip(keys, rates["ci_log"])},
                 "snr_db": {k: [float(s[0]), float(s[1])] for k, s in zip(keys, rates["snr_db"])},
-                "snr_db_se": {k: [float(s[0]), float(s[1])] for k, s in zip(keys, rates["snr_db_se"])}}
+                "snr_db_se": {k: [float(s[0]), float(s[1])] for k, s in zip(keys,
+                                                                            rates["snr_db_se"])}}
     headline.update({f"success_rate_grid{g}": _rate_dict(keys, rates[f"success_grid{g}"], n) for g in GRID_SIZES})
     paper = {"success_rate": {f"{r:g}": v for r, v in PAPER_TABLE2["success_rate"].items()},
              "snr_db": {f"{r:g}": list(v) for r, v in PAPER_TABLE2["snr_db"].items()}}
@@ -700,10 +706,11 @@ def _variant_columns() -> list[tuple[str, int, float]]:
 
 
 @register("zhang2021-lambda-rule", paper=PAPER,
-          title="Example 1: readings of the lambda rule, the oracle and the initial state (Tables I-II)",
+          title="Example 1: readings of the lambda rule, the oracle and the initial state "
+                "(Tables I-II)",
           chapter="zhang2021/sparse", claims={
-              # the values of Tables I-II that this study checks again on fewer trials: one row, under
-              # the table (the paper's trial count)
+              # the values of Tables I-II that this study checks again on fewer trials: one row,
+              # under the table (the paper's trial count)
               f"success_rate/{c}*": shown_under(f"zhang2021-table{t}", lambda p: (p[0], p[1][1:]),
                                                 ours=ours_at("success_rate", "log"),
                                                 ci=ci_at("ci95", "log"))
@@ -1099,7 +1106,8 @@ EX2_RECORDS = 10
 
 
 @register("zhang2021-example2-interventions", paper=PAPER,
-          title="Example 2 (surrogate pipeline): isolation under changes of the input and of the noise",
+          title="Example 2 (surrogate pipeline): isolation under changes of the input and of the "
+                "noise",
           chapter="zhang2021/sparse", surrogate=True)
 def example2_interventions(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Why the surrogate cannot separate the leaks of Example 2: the input, or the noise?
@@ -1156,14 +1164,16 @@ def plot_fig6(result: ReproductionResult, fig: Any = None):
 
 
 _EX2_CAUSE = dict(cause="sec-zhang2021-example2-causes",
-                  cause_glue=("zhang2021_iv_white", "zhang2021_iv_state_noise", "zhang2021_iv_output_noise"),
-                  cause_text="the input of the surrogate: interventions on the input, not on the noise, "
-                             "change the selected support")
+                  cause_glue=("zhang2021_iv_white", "zhang2021_iv_state_noise",
+                              "zhang2021_iv_output_noise"),
+                  cause_text="the input of the surrogate: interventions on the input, not on the "
+                             "noise, change the selected support")
 
 
 @register("zhang2021-fig6", paper=PAPER, title="Example 2 (surrogate pipeline): support size against lambda",
           plot=plot_fig6, chapter="zhang2021/sparse", surrogate=True, claims={
-              "flat_size": Claim(location="Fig. 6", label="support size on the flat range of λ", units="",
+              "flat_size": Claim(location="Fig. 6", label="support size on the flat range of λ",
+                                 units="",
                                  test=BY_TOLERANCE, explain="fig-zhang2021-6", **_EX2_CAUSE)})
 def fig6(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Paper Fig. 6: one record of Example 2 on the surrogate pipeline, exact Lasso path.

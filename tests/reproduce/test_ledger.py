@@ -73,7 +73,8 @@ def test_status_of_text_claims():
     assert L.claim_status("0 (Prop. 2)", -0.08, (-0.09, -0.07), zero)[0] == L.DIFFERS
     assert L.claim_status("0 (Prop. 2)", -0.01, (-0.03, 0.01), zero)[0] == L.WITHIN
     why = "timing on another machine"
-    assert L.claim_status(5.0, 5.0, spec=_claim(L.NOT_CHECKABLE, reason=why)) == (L.NOT_REPRODUCIBLE, why)
+    assert L.claim_status(5.0, 5.0, spec=_claim(L.NOT_CHECKABLE,
+                                                reason=why)) == (L.NOT_REPRODUCIBLE, why)
 
 
 def test_a_declaration_states_its_location_and_a_known_test():
@@ -239,7 +240,8 @@ def test_the_other_reading_of_a_figure_is_a_note_and_its_caption_has_its_own_sta
 
 def _declarations():
     """``(id, pattern, Claim)`` of every registration."""
-    return [(rep.id, pattern, claim) for rep in list_reproductions() for pattern, claim in rep.claims]
+    return [(rep.id, pattern, claim) for rep in list_reproductions() for pattern,
+            claim in rep.claims]
 
 
 def test_every_difference_links_to_where_it_is_shown(cheap_results):
@@ -307,8 +309,8 @@ def _missing_glue(results=None):
                 missing.append((id, pattern, label, "no glued measurement declared or no section"))
                 continue
             shown = _glued(sections[label])
-            paths = [p for p in (L.claim_paths(results[id].paper) if results and id in results else [])
-                     if L.fnmatch.fnmatchcase("/".join(p), pattern)]
+            leaves = L.claim_paths(results[id].paper) if results and id in results else []
+            paths = [p for p in leaves if L.fnmatch.fnmatchcase("/".join(p), pattern)]
             for parts in [p[1:] for p in paths] or [("*",) * 5]:
                 for key in keys:
                     want = key.format(*parts).lower()
@@ -391,7 +393,8 @@ def test_json_and_summary(cheap_results):
     assert "<thead><tr><th>status</th>" in html                         # status first
     inputs = [r for r in led.rows if r.id == "zb2014-table1"]      # declared: neither list
     assert inputs and all(r.role == L.INPUT for r in inputs)
-    assert {r.role for r in led.rows if r.id == "rosa2013-fig8"} == {L.INPUT}   # §6.4: under Fig. 11
+    # its detection time is the §6.4 sentence, listed under Fig. 11
+    assert {r.role for r in led.rows if r.id == "rosa2013-fig8"} == {L.INPUT}
     assert all(r.role is None for r in led.rows if r.id.startswith("zb2014-fig1"))
 
 
