@@ -297,9 +297,14 @@ def _glued(text):
 def _missing_glue(results=None):
     """``(id, pattern, label, key)`` of every declared measurement that its section does not glue.
 
-    Each key is formatted with the path parts of each claim the declaration matches (in
-    ``results``), or with ``*`` for every part (any glue key of that form) without results."""
+    Each key is formatted with the path parts of each claim the declaration matches whose row
+    links the section (in the ledger of ``results``), or with ``*`` for every part (any glue key of
+    that form) without results."""
     sections = _sections()
+    linked = set()
+    if results:
+        linked = {(r.id, r.path) for r in L.build_ledger(results).rows
+                  if r.status in (L.DIFFERS_MEASURED, L.DIFFERS_HYPOTHESIS)}
     missing = []
     for id, pattern, c in _declarations():
         for label, keys in ((c.cause, c.cause_glue), (c.hypothesis, c.hypothesis_glue)):
@@ -310,8 +315,9 @@ def _missing_glue(results=None):
                 continue
             shown = _glued(sections[label])
             leaves = L.claim_paths(results[id].paper) if results and id in results else []
-            paths = [p for p in leaves if L.fnmatch.fnmatchcase("/".join(p), pattern)]
-            for parts in [p[1:] for p in paths] or [("*",) * 5]:
+            paths = [p for p in leaves if L.fnmatch.fnmatchcase("/".join(p), pattern)
+                     and (id, p) in linked]
+            for parts in [p[1:] for p in paths] if results else [("*",) * 5]:
                 for key in keys:
                     want = key.format(*parts).lower()
                     if not any(L.fnmatch.fnmatchcase(k, want) for k in shown):
