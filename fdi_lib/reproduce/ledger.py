@@ -804,7 +804,8 @@ class Ledger:
             rate = _is_rate_claim(r)
             why = [_md(r.status_detail)] if r.status_detail else []
             if r.cause:
-                why.append(f"cause measured in {_link(r.cause)}")
+                why.append(("hypothesis tested in " if r.status == DIFFERS_HYPOTHESIS
+                            else "cause measured in ") + _link(r.cause))
             if (r.explain or r.where) != r.cause:
                 why.append(f"shown in {_link(r.explain or r.where)}")
             if r.note:
