@@ -18,6 +18,7 @@ to the class.
 from __future__ import annotations
 
 import re
+import warnings
 from typing import Any
 
 
@@ -82,13 +83,77 @@ def escape_bars(app: Any, what: str, name: str, obj: Any, options: Any, lines: l
         lines[i] = "".join(p if j % 2 else p.replace("|", "\\|") for j, p in enumerate(parts))
 
 
+#: The sections numpydoc knows (it renders them in its own order and drops any other).
+_NUMPYDOC_SECTIONS = {"Parameters", "Attributes", "Methods", "Returns", "Yields", "Receives",
+                      "Other Parameters", "Raises", "Warns", "Warnings", "See Also", "Notes",
+                      "References", "Examples"}
+#: The library's own sections (``Headline keys`` of a reproduction: its public JSON keys), cut
+#: out before numpydoc reads a docstring and set back after it, keyed by the object's name.
+_OWN_SECTIONS: dict[str, list[str]] = {}
+
+
+def _is_header(lines: list[str], i: int) -> bool:
+    title, rule = lines[i].strip(), lines[i + 1].strip() if i + 1 < len(lines) else ""
+    return bool(title) and set(rule) == {"-"} and len(rule) >= len(title)
+
+
+def cut_own_sections(app: Any, what: str, name: str, obj: Any, options: Any, lines: list[str]) -> None:
+    """Before numpydoc: take out the sections it does not know (it would drop them).
+
+    A reproduction documents its JSON contract in ``Headline keys`` and ``Paper keys`` sections,
+    written as parameter lists; :func:`restore_own_sections` sets them back in numpydoc's own
+    layout for a parameter list, under their own titles.
+    """
+    kept: list[str] = []
+    own: dict[str, list[str]] = {}
+    body = kept
+    i = 0
+    while i < len(lines):
+        if _is_header(lines, i):
+            title = lines[i].strip()
+            if title not in _NUMPYDOC_SECTIONS:
+                body = own.setdefault(title, [])
+                i += 2
+                continue
+            body = kept
+        body.append(lines[i])
+        i += 1
+    if own:
+        _OWN_SECTIONS[name] = [line for title, section in own.items()
+                               for line in _param_list(title, section)]
+        lines[:] = kept
+
+
+def _param_list(title: str, section: list[str]) -> list[str]:
+    """A section written as a numpydoc parameter list, rendered as numpydoc renders Parameters."""
+    from numpydoc.docscrape_sphinx import SphinxDocString
+
+    # A description line that starts like a list item continues the sentence above it.
+    text = "\n".join(re.sub(r"^(\s+)([*+-] )", r"\1\\\2", line) for line in section)
+    doc = SphinxDocString("Parameters\n----------\n" + text, config={"xref_param_type": False})
+    rendered = doc._str_param_list("Parameters")
+    return [""] + [line.replace(":Parameters:", f":{title}:", 1) for line in rendered]
+
+
+def restore_own_sections(app: Any, what: str, name: str, obj: Any, options: Any,
+                         lines: list[str]) -> None:
+    """After numpydoc: the sections :func:`cut_own_sections` took out, at the end."""
+    lines.extend(_OWN_SECTIONS.pop(name, []))
+
+
 def drop_object_base(app: Any, name: str, obj: Any, options: Any, bases: list[type]) -> None:
     """``autodoc-process-bases`` handler: "Bases: object" says nothing; other bases stay shown."""
     bases[:] = [b for b in bases if b is not object]
 
 
 def setup(app: Any) -> dict[str, Any]:
+    # numpydoc also reads the raw docstring for a signature and warns about the sections above.
+    warnings.filterwarnings("ignore", r"Unknown section (Headline|Paper) Keys", UserWarning)
     app.connect("autodoc-process-bases", drop_object_base)
     app.connect("missing-reference", resolve_unqualified)
-    app.connect("autodoc-process-docstring", escape_bars)
+    # numpydoc's own handler has the default priority (500): the library's sections are cut
+    # before it reads a docstring and set back after it has rendered one.
+    app.connect("autodoc-process-docstring", cut_own_sections, priority=400)
+    app.connect("autodoc-process-docstring", restore_own_sections, priority=600)
+    app.connect("autodoc-process-docstring", escape_bars, priority=700)
     return {"parallel_read_safe": True, "parallel_write_safe": True}
