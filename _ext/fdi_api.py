@@ -97,12 +97,17 @@ def _is_header(lines: list[str], i: int) -> bool:
     return bool(title) and set(rule) == {"-"} and len(rule) >= len(title)
 
 
+#: A parameter-list entry's first line: ``name`` or ``name, other : type``.
+_PARAM = re.compile(r"^(\s*$|\s+|[A-Za-z_]\w*(, [A-Za-z_]\w*)*( : .+)?$)")
+
+
 def cut_own_sections(app: Any, what: str, name: str, obj: Any, options: Any, lines: list[str]) -> None:
     """Before numpydoc: take out the sections it does not know (it would drop them).
 
     A reproduction documents its JSON contract in ``Headline keys`` and ``Paper keys`` sections,
     written as parameter lists; :func:`restore_own_sections` sets them back in numpydoc's own
-    layout for a parameter list, under their own titles.
+    layout for a parameter list, under their own titles. A paragraph after such a list (after a
+    blank line, not an entry) is prose of the docstring, as numpydoc reads one after Parameters.
     """
     kept: list[str] = []
     own: dict[str, list[str]] = {}
@@ -116,6 +121,8 @@ def cut_own_sections(app: Any, what: str, name: str, obj: Any, options: Any, lin
                 i += 2
                 continue
             body = kept
+        elif body is not kept and i and not lines[i - 1].strip() and not _PARAM.match(lines[i]):
+            body = kept  # a paragraph after the list, at its indentation: prose again
         body.append(lines[i])
         i += 1
     if own:
