@@ -12,7 +12,8 @@ current module and class, so :func:`resolve_unqualified` completes the lookup: a
 that Sphinx could not resolve is retried by suffix among the documented ``fdi_lib`` objects and
 resolved when exactly one matches (two or more stay unresolved and fail the build); a field of a
 dataclass (``LassoPath.solver``), which numpydoc lists in its class's Attributes section, links
-to the class.
+to the class; an object that exists in the library without an entry of its own (a helper outside
+its module's ``__all__``) stays text. A name that exists nowhere fails the build.
 """
 
 from __future__ import annotations
@@ -31,6 +32,28 @@ def _unique(domain: Any, target: str) -> str | None:
     return matches[0] if len(matches) == 1 else None
 
 
+def _exists(target: str, module: str | None) -> bool:
+    """Whether ``target`` (absolute, or relative to ``module``) names an object of ``fdi_lib``."""
+    import importlib
+
+    for full in (target, f"{module}.{target}" if module else None):
+        if not full or not full.startswith("fdi_lib"):
+            continue
+        parts = full.split(".")
+        for i in range(len(parts), 0, -1):
+            try:
+                obj: Any = importlib.import_module(".".join(parts[:i]))
+            except ImportError:
+                continue
+            try:
+                for attr in parts[i:]:
+                    obj = getattr(obj, attr)
+            except AttributeError:
+                break
+            return True
+    return False
+
+
 def resolve_unqualified(app: Any, env: Any, node: Any, contnode: Any) -> Any:
     """``missing-reference`` handler: a unique ``fdi_lib`` object whose name ends with the target."""
     if node.get("refdomain") != "py":
@@ -47,7 +70,9 @@ def resolve_unqualified(app: Any, env: Any, node: Any, contnode: Any) -> Any:
         head, last = target.rsplit(".", 1)
         name = _unique(domain, last) if head.islower() else _unique(domain, head)
     if name is None:
-        return None
+        # An object of the library that exists but has no entry (a helper outside its module's
+        # ``__all__``): the reference stays text. A name that does not exist still fails.
+        return contnode if _exists(target, node.get("py:module")) else None
     obj = domain.objects[name]
     from sphinx.util.nodes import make_refnode
     return make_refnode(app.builder, node["refdoc"], obj.docname, obj.node_id, contnode, name)
