@@ -134,6 +134,8 @@ def cut_own_sections(app: Any, what: str, name: str, obj: Any, options: Any, lin
     layout for a parameter list, under their own titles. A paragraph after such a list (after a
     blank line, not an entry) is prose of the docstring, as numpydoc reads one after Parameters.
     """
+    if what == "module":
+        return  # a module's sections are prose, set as rubrics by escape_bars
     kept: list[str] = []
     own: dict[str, list[str]] = {}
     body = kept
