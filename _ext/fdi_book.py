@@ -57,8 +57,8 @@
    unnumbered); each explorable as a figure of its small multiples with its caption
    (:meth:`fdi_lib.explorables.Explorable.small_multiples`); a cover page with the version and
    the claims ledger per status and paper, as the ledger page of the same build computed it.
-   In the HTML, the header's download menu links the PDF when ``make pdf`` has put it beside the
-   pages (:func:`publish_pdf`), and only then.
+   In the HTML, the header's download menu links the PDF when there is one: ``make pdf`` puts it
+   beside the pages (:func:`publish_pdf`), and ``make book`` after ``make pdf`` copies it there.
 12. Tables that can be read on a phone: every body cell of a table carries its column's header as
    a ``data-label`` attribute (its readable text, :func:`readable_text`), which the book's CSS
    and ``_static/fdi-tables.js`` use to show a table too wide for the column as one card per row
@@ -68,11 +68,18 @@
     with that caption as plain text, numbered like the others ("Figure 2.5") and labelled
     ``fig-<page>-explore`` (``fig-glr-explore``; ``-2``, ``-3`` for further ones on a page), so
     that the text can cite it with ``{numref}``.
+14. The intro's map of the book and reading path, made from ``_toc.yml`` (every page in it) and
+    one line per page in the intro's ``{fdi-book-map}`` block (:func:`book_map_markdown`).
+15. Accessible names and roles (issue 33; checked by axe-core in ``tests/browser/check_book.py``):
+    the folds of hidden code cells and the search button are named by the text they show
+    (``templates/components/search-button-field.html``), the bibliography's entries are the
+    items of its list, and the site has an icon (``_static/favicon.svg``).
 """
 
 from __future__ import annotations
 
 import ast
+import html
 import html.parser
 import importlib.util
 import inspect
@@ -386,6 +393,58 @@ def _generate_catalogue(app: Sphinx, docname: str, source: list[str]) -> None:
     for dep in deps:
         app.env.note_dependency(str(dep))
     source[0] = source[0].rstrip() + "\n\n" + text
+
+
+# --- 14. The intro's map of the book, from _toc.yml -----------------------------------------
+#: The page whose ``{fdi-book-map}`` block becomes the map of the book and its reading path.
+MAP_DOC = "book/intro"
+_MAP_BLOCK = re.compile(r"^```\{fdi-book-map\}[ \t]*\n(.*?)^```[ \t]*$", re.M | re.S)
+
+
+def _toc_parts(confdir: Path) -> list[tuple[str, bool, list[str]]]:
+    """``(caption, numbered, files)`` of each part of ``_toc.yml``, in book order."""
+    import yaml
+
+    toc = yaml.safe_load((confdir / "_toc.yml").read_text())
+    return [(part.get("caption", ""), bool(part.get("numbered")),
+             [c["file"] for c in part.get("chapters", []) if "file" in c])
+            for part in toc.get("parts", [])]
+
+
+def book_map_markdown(confdir: Path, block: str) -> str:
+    """The map of the book (a table: part, page, what it holds) and the reading path (the
+    numbered chapters in order), every page of ``_toc.yml`` in it. ``block`` holds one line
+    ``FILE: what the page holds`` per page but the root; a page of the table of contents
+    without a line, or a line for no page of it, is a build error."""
+    what: dict[str, str] = {}
+    for line in block.splitlines():
+        if line.strip():
+            file, sep, text = line.partition(":")
+            if not sep or not text.strip():
+                raise ExtensionError(f"fdi_book: book map line {line!r}: expected 'FILE: what it holds'")
+            what[file.strip()] = text.strip()
+    parts = _toc_parts(confdir)
+    files = [f for _, _, chapters in parts for f in chapters]
+    missing, unknown = [f for f in files if f not in what], sorted(set(what) - set(files))
+    if missing or unknown:
+        raise ExtensionError(f"fdi_book: the map of the book in {MAP_DOC}.md needs one line per page of "
+                             f"_toc.yml: missing {missing}, not in _toc.yml {unknown}")
+    rows = ["| Part | Page | What it holds |", "|---|---|---|"]
+    for caption, _, chapters in parts:
+        for k, f in enumerate(chapters):
+            rows.append(f"| {caption if k == 0 else ''} | {{doc}}`/{f}` | {what[f]} |")
+    numbered = [f for _, num, chapters in parts if num for f in chapters]
+    path = "\n".join(f"{i}. {{doc}}`/{f}`" for i, f in enumerate(numbered, 1))
+    return "\n".join(rows) + "\n\nThe numbered chapters, in reading order:\n\n" + path + "\n"
+
+
+def _generate_book_map(app: Sphinx, docname: str, source: list[str]) -> None:
+    if docname != MAP_DOC:
+        return
+    app.env.note_dependency(str(Path(app.confdir) / "_toc.yml"))
+    source[0], count = _MAP_BLOCK.subn(lambda m: book_map_markdown(Path(app.confdir), m.group(1)), source[0])
+    if count != 1:
+        raise ExtensionError(f"fdi_book: {MAP_DOC}.md needs one ```{{fdi-book-map}} block, found {count}")
 
 
 def _add_notebook_download(app: Sphinx, pagename: str, templatename: str, context: dict,
@@ -839,8 +898,11 @@ def publish_pdf(html_dir: Path, pdf: Path | None) -> None:
 def _pdf_script(app: Sphinx, exception: Exception | None) -> None:
     if exception is not None or app.builder.format != "html":
         return
-    present = Path(app.outdir) / PDF_NAME  # put there by an earlier `make pdf` (book-fast)
-    publish_pdf(Path(app.outdir), present if present.is_file() else None)
+    # the PDF of an earlier `make pdf` (``_build/pdf``, beside ``_build/html``), or one it put
+    # beside the pages (book-fast keeps them): the pages link it whichever ran last
+    found = [p for p in (Path(app.outdir).parent / "pdf" / PDF_NAME, Path(app.outdir) / PDF_NAME)
+             if p.is_file()]
+    publish_pdf(Path(app.outdir), found[0] if found else None)
 
 
 def _record_run_times(app: Sphinx, env) -> None:
@@ -1198,11 +1260,36 @@ class NumberedExplorables(SphinxTransform):
             self.document.note_explicit_target(figure, figure)
 
 
+# --- 15. Accessible names and roles ---------------------------------------------------------
+def _visit_hidden_cell(self, node) -> None:
+    """myst-nb's fold of a hidden cell without its ``aria-label`` ("Toggle hidden content"), which
+    hid the visible "Show code cell source" from screen readers: the toggle's name is now the text
+    it shows (the other prompt is ``display: none``)."""
+    self.body.append(f'<details class="admonition hide {" ".join(node["classes"])}">\n<summary>\n')
+    for kind, prompt in (("collapsed", node["prompt_show"]), ("expanded", node["prompt_hide"])):
+        self.body.append(f'<p class="{kind} admonition-title">{html.escape(prompt)}</p>\n')
+    self.body.append("</summary>\n")
+
+
+def _visit_citation(self, node: nodes.citation) -> None:
+    """A bibliography entry as an item of its list (docutils writes ``role="doc-biblioentry"``,
+    deprecated, in a ``role="list"`` that then has no list item)."""
+    if not isinstance(node.previous_sibling(), type(node)):
+        self.body.append('<div role="list" class="citation-list">\n')
+    self.body.append(self.starttag(node, "div", classes=[node.tagname], role="listitem"))
+
+
 def setup(app: Sphinx) -> dict[str, Any]:
     app.add_transform(NumberedExplorables)
     app.add_node(nodes.entry, override=True, html=(_visit_entry, _depart_entry))
+    from docutils.writers._html_base import HTMLTranslator
+    from myst_nb.sphinx_ import HideCodeCellNode, depart_HideCellInput
+
+    app.add_node(nodes.citation, override=True, html=(_visit_citation, HTMLTranslator.depart_citation))
+    app.add_node(HideCodeCellNode, override=True, html=(_visit_hidden_cell, depart_HideCellInput))
     app.connect("env-before-read-docs", _drop_thebe_scripts, priority=900)
     app.connect("source-read", _generate_catalogue)
+    app.connect("source-read", _generate_book_map)
     # after sphinx-book-theme's header buttons (priority 501)
     app.connect("html-page-context", _add_notebook_download, priority=502)
     pybtex.plugin.register_plugin("pybtex.style.labels", "fdi_author_year", AuthorYearLabelStyle)
