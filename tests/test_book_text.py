@@ -58,9 +58,10 @@ def _frame(a, fig=None):
     return fig
 
 
-def test_explorable_image_has_its_caption_as_alt_text():
+def test_explorable_image_without_alt_text_has_its_caption_and_the_values_shown():
     page = explorable(_frame, {"a": (1.0, 2.0)}, caption='GLR l<sub>k</sub> for "w" &lt; 3')._repr_html_()
-    assert re.search(r'<img [^>]*alt="([^"]*)"', page).group(1) == "GLR lₖ for &quot;w&quot; &lt; 3"
+    assert re.search(r'<img [^>]*alt="([^"]*)"', page).group(1) == \
+        "GLR lₖ for &quot;w&quot; &lt; 3. Shown at a = 1."
 
 
 def test_catalogue_titles_are_written_in_maths():
@@ -161,3 +162,90 @@ def test_explorable_output_becomes_a_numbered_figure():
     assert [f[-1].astext() for f in figures] == ["GLR lₖ, case 1", "GLR lₖ, case 2"]
     html = next(figures[0].findall(nodes.raw)).astext()
     assert "<figcaption>" not in html and "<figure" not in html and '<div class="fdi-explorable"' in html
+
+
+def _toc(tmp_path, parts: str) -> Path:
+    (tmp_path / "_toc.yml").write_text("format: jb-book\nroot: book/intro\nparts:\n" + parts)
+    return tmp_path
+
+
+_PARTS = ("  - caption: Start\n    chapters:\n      - file: book/running\n"
+          "  - caption: A paper\n    numbered: true\n    chapters:\n      - file: book/p/one\n"
+          "      - file: book/p/two\n")
+
+
+def test_book_map_lists_every_page_of_the_toc_and_the_numbered_ones_in_order(tmp_path):
+    block = "book/running: how to run\nbook/p/one: the first chapter {cite:p}`key`\nbook/p/two: the second\n"
+    text = EXT.book_map_markdown(_toc(tmp_path, _PARTS), block)
+    rows = [r for r in text.splitlines() if r.startswith("| ") and "doc" in r]
+    assert rows == ["| Start | {doc}`/book/running` | how to run |",
+                    "| A paper | {doc}`/book/p/one` | the first chapter {cite:p}`key` |",
+                    "|  | {doc}`/book/p/two` | the second |"]
+    assert text.endswith("1. {doc}`/book/p/one`\n2. {doc}`/book/p/two`\n")
+
+
+@pytest.mark.parametrize("block, message", [
+    ("book/running: x\nbook/p/one: y\n", r"missing \['book/p/two'\]"),          # a chapter left out
+    ("book/running: x\nbook/p/one: y\nbook/p/two: z\nbook/p/old: w\n", r"not in _toc.yml \['book/p/old'\]"),
+    ("book/running x\n", "expected 'FILE: what it holds'"),
+])
+def test_book_map_fails_when_it_and_the_toc_disagree(tmp_path, block, message):
+    from sphinx.errors import ExtensionError
+
+    with pytest.raises(ExtensionError, match=message):
+        EXT.book_map_markdown(_toc(tmp_path, _PARTS), block)
+
+
+def test_the_intro_has_a_book_map_line_for_every_page_of_the_toc():
+    intro = (ROOT / "book" / "intro.md").read_text()
+    blocks = EXT._MAP_BLOCK.findall(intro)
+    assert len(blocks) == 1
+    text = EXT.book_map_markdown(ROOT, blocks[0])
+    assert "{doc}`/book/windturbine/benchmark`" in text
+    assert "static figure at default values" not in intro
+
+
+def test_hidden_cell_toggle_is_named_by_its_text_and_citations_are_list_items(tmp_path):
+    """The fold of a hidden cell has no aria-label hiding its visible prompt; a bibliography's
+    entries are the list items of its role="list" (not the deprecated doc-biblioentry)."""
+    from types import SimpleNamespace
+
+    fake = SimpleNamespace(body=[])
+    EXT._visit_hidden_cell(fake, {"classes": ["above-input"], "prompt_show": "Show code cell source",
+                                  "prompt_hide": "Hide code cell <source>"})
+    html = "".join(fake.body)
+    assert "aria-label" not in html and html.startswith('<details class="admonition hide above-input">')
+    assert '<p class="collapsed admonition-title">Show code cell source</p>' in html
+    assert "Hide code cell &lt;source&gt;" in html
+
+    from sphinx.application import Sphinx
+    from sphinx.util.docutils import docutils_namespace
+
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "conf.py").write_text(f"import sys\nsys.path.insert(0, {str(ROOT / '_ext')!r})\n"
+                                 "extensions = ['myst_nb', 'fdi_book']\n")
+    (src / "index.rst").write_text("Index\n=====\n\nSee [A]_ and [B]_.\n\n.. [A] One.\n.. [B] Two.\n")
+    warnings = io.StringIO()
+    with docutils_namespace():
+        app = Sphinx(str(src), str(src), str(tmp_path / "out"), str(tmp_path / "doctrees"), "html",
+                     status=None, warning=warnings, freshenv=True)
+        app.build()
+    page = (tmp_path / "out" / "index.html").read_text()
+    assert page.count('role="list"') == 1 and page.count('role="listitem"') == 2
+    assert "doc-biblioentry" not in page
+
+
+def test_pages_link_the_pdf_of_an_earlier_make_pdf(tmp_path):
+    from types import SimpleNamespace
+
+    html = tmp_path / "_build" / "html"
+    html.mkdir(parents=True)
+    app = SimpleNamespace(outdir=str(html), builder=SimpleNamespace(format="html"))
+    EXT._pdf_script(app, None)
+    assert "const pdf = null;" in (html / "_static" / EXT.PDF_SCRIPT).read_text()
+    (tmp_path / "_build" / "pdf").mkdir()
+    (tmp_path / "_build" / "pdf" / EXT.PDF_NAME).write_bytes(b"%PDF-1.5 edition")
+    EXT._pdf_script(app, None)
+    assert f'const pdf = "{EXT.PDF_NAME}";' in (html / "_static" / EXT.PDF_SCRIPT).read_text()
+    assert (html / EXT.PDF_NAME).read_bytes() == b"%PDF-1.5 edition"
