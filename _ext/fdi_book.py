@@ -72,7 +72,7 @@
     one line per page in the intro's ``{fdi-book-map}`` block (:func:`book_map_markdown`).
 15. Accessible names and roles (issue 33; checked by axe-core in ``tests/browser/check_book.py``):
     the folds of hidden code cells and the search button are named by the text they show
-    (``templates/components/search-button-field.html``), the bibliography's entries are the
+    (``templates/search-button-field.html``), the bibliography's entries are the
     items of its list, and the site has an icon (``_static/favicon.svg``).
 """
 
