@@ -984,6 +984,7 @@ def latex_script_fallback() -> str:
 
 def _latex_preamble(app: Sphinx, config) -> None:
     elements = config.latex_elements
+    elements.setdefault("tableofcontents", "\\sphinxtableofcontents\n\\listoffigures\n")
     elements["preamble"] = (elements.get("preamble", "") + "\n% fdi-book: the maths macros of the book "
                             "(mathjax3_config in _config.yml)\n" + latex_macros(config) + "\n"
                             "% sub- and superscript characters the text font lacks, from DejaVu\n"
@@ -1085,6 +1086,37 @@ class _ProtectCaptionCitations(SphinxPostTransform):
             for raw in caption.findall(raw_latex):
                 if raw.rawsource.startswith("\\hyperlink{"):
                     raw.rawsource = "\\protect" + raw.rawsource
+
+
+#: Terms of the PDF's index: what a student looks up, indexed where each chapter first uses them.
+INDEX_TERMS = ("GLR", "innovation", "Kalman filter", "Kitanidis filter", "set-valued observer",
+               "fault signature", "minmax", "Lasso", "RLS", "forgetting factor", "Willsky-Jones",
+               "chi-square", "false alarm", "detection delay", "isolation", "polytope", "convex hull",
+               "LPV", "LTV", "Monte Carlo", "Ljung-Box", "unknown input", "claims ledger",
+               "wind turbine", "threshold")
+
+
+class _IndexTerms(SphinxPostTransform):
+    """The PDF's index (issue 33): each of :data:`INDEX_TERMS` indexed at the first paragraph of
+    each chapter (source file) that uses it, by an ``\\index`` entry at that paragraph."""
+
+    default_priority = 760
+    builders = ("latex",)
+
+    def run(self, **kwargs: Any) -> None:
+        from sphinx import addnodes
+
+        patterns = [(t, re.compile(r"(?<![\w-])" + re.escape(t) + r"(?![\w-])", re.I)) for t in INDEX_TERMS]
+        done: set[tuple[str, str]] = set()
+        for par in list(self.document.findall(nodes.paragraph)):
+            if par.source is None or any(isinstance(a, (nodes.caption, nodes.title, nodes.table))
+                                         for a in _ancestors(par, self.document)):
+                continue
+            text = par.astext()
+            terms = [t for t, pat in patterns if (t, par.source) not in done and pat.search(text)]
+            for term in terms:
+                done.add((term, par.source))
+                par.insert(0, addnodes.index(entries=[("single", term, "", "", None)]))
 
 
 class _NumberedParts(SphinxPostTransform):
@@ -1314,6 +1346,7 @@ def setup(app: Sphinx) -> dict[str, Any]:
     app.connect("env-updated", _latex_cover)
     app.add_post_transform(_ProtectCaptionCitations)
     app.add_post_transform(_NumberedParts)
+    app.add_post_transform(_IndexTerms)
     app.add_post_transform(_ExplorableFigures)
     app.add_js_file(PDF_SCRIPT)
     app.connect("build-finished", _pdf_script)
