@@ -218,3 +218,15 @@ def test_characters_the_font_lacks_fail_the_check(tmp_path):
                                        "LaTeX: 3 times no '\u2096' in the font (dropped from the page)"]
     log.write_text("Output written on b.pdf (3 pages).\n")
     assert check.log_problems(log) == []
+
+
+def test_log_counts_overfull_boxes_over_the_allowance_and_rerun_requests():
+    check = _load("fdi_check_pdf_counts", ROOT / "tools" / "check_pdf.py")
+    log = ("Overfull \\hbox (12.5pt too wide) in paragraph at lines 3--4\n"
+           "Overfull \\hbox (1.0pt too wide) detected at line 9\n"
+           "Overfull \\vbox (6.0pt too high) has occurred while \\output is active\n"
+           "Underfull \\vbox (badness 10000) has occurred\n"
+           "LaTeX Warning: Label(s) may have changed. Rerun to get cross-references right.\n")
+    assert check.log_counts(log) == {"overfull": 3, "overfull_over_allowance": 2, "overfull_max_pt": 12.5,
+                                     "underfull": 1, "rerun": 1}
+    assert check.log_counts("")["overfull_max_pt"] == 0.0
