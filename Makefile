@@ -138,14 +138,16 @@ NPM := /usr/bin/npm
 $(NPM):
 	apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq npm
 $(AXE_JS): | $(NODE) $(NPM)
-	npm install --silent --no-save --no-package-lock --no-audit --no-fund --prefix _build/axe axe-core@$(AXE_VERSION)
+	npm install --silent --no-save --no-package-lock --no-audit --no-fund --prefix _build/axe \
+	  axe-core@$(AXE_VERSION)
 
 ## The live notebooks as the README opens them: `make notebooks`, then JupyterLab (headless, on
 ## 127.0.0.1) shows each in Chromium with no raw MyST role, directive or undefined macro
 ## (tests/browser/check_jupyterlab.py).
 browser-test: $(STAMP) $(CHROMIUM) $(AXE_JS) notebooks
 	@test -f _build/html/index.html || { echo "No built book: run make book first"; exit 2; }
-	$(BIN)/python tests/browser/check_book.py --html _build/html --screenshots _build/screenshots --axe $(AXE_JS)
+	$(BIN)/python tests/browser/check_book.py --html _build/html --screenshots _build/screenshots \
+	  --axe $(AXE_JS)
 	$(BIN)/python tests/browser/check_jupyterlab.py --notebooks _build/notebooks
 	$(BIN)/python tests/browser/check_explorables.py --html _build/html
 	$(BIN)/python tests/browser/check_previews.py --html _build/html

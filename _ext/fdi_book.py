@@ -414,21 +414,23 @@ def _toc_parts(confdir: Path) -> list[tuple[str, bool, list[str]]]:
 def book_map_markdown(confdir: Path, block: str) -> str:
     """The map of the book (a table: part, page, what it holds) and the reading path (the
     numbered chapters in order), every page of ``_toc.yml`` in it. ``block`` holds one line
-    ``FILE: what the page holds`` per page but the root; a page of the table of contents
+    ``FILE: what the page holds`` per page but the root (indented lines continue it); a page of
+    the table of contents
     without a line, or a line for no page of it, is a build error."""
     what: dict[str, str] = {}
-    for line in block.splitlines():
+    for line in re.sub(r"\n[ \t]+", " ", block).splitlines():   # indented: continues the last
         if line.strip():
             file, sep, text = line.partition(":")
             if not sep or not text.strip():
-                raise ExtensionError(f"fdi_book: book map line {line!r}: expected 'FILE: what it holds'")
+                raise ExtensionError(f"fdi_book: book map line {line!r}: expected "
+                                     "'FILE: what it holds'")
             what[file.strip()] = text.strip()
     parts = _toc_parts(confdir)
     files = [f for _, _, chapters in parts for f in chapters]
     missing, unknown = [f for f in files if f not in what], sorted(set(what) - set(files))
     if missing or unknown:
-        raise ExtensionError(f"fdi_book: the map of the book in {MAP_DOC}.md needs one line per page of "
-                             f"_toc.yml: missing {missing}, not in _toc.yml {unknown}")
+        raise ExtensionError(f"fdi_book: the map of the book in {MAP_DOC}.md needs one line per "
+                             f"page of _toc.yml: missing {missing}, not in _toc.yml {unknown}")
     rows = ["| Part | Page | What it holds |", "|---|---|---|"]
     for caption, _, chapters in parts:
         for k, f in enumerate(chapters):
@@ -442,9 +444,11 @@ def _generate_book_map(app: Sphinx, docname: str, source: list[str]) -> None:
     if docname != MAP_DOC:
         return
     app.env.note_dependency(str(Path(app.confdir) / "_toc.yml"))
-    source[0], count = _MAP_BLOCK.subn(lambda m: book_map_markdown(Path(app.confdir), m.group(1)), source[0])
+    confdir = Path(app.confdir)
+    source[0], count = _MAP_BLOCK.subn(lambda m: book_map_markdown(confdir, m.group(1)), source[0])
     if count != 1:
-        raise ExtensionError(f"fdi_book: {MAP_DOC}.md needs one ```{{fdi-book-map}} block, found {count}")
+        raise ExtensionError(f"fdi_book: {MAP_DOC}.md needs one ```{{fdi-book-map}} block, "
+                             f"found {count}")
 
 
 def _add_notebook_download(app: Sphinx, pagename: str, templatename: str, context: dict,
@@ -1091,9 +1095,9 @@ class _ProtectCaptionCitations(SphinxPostTransform):
 #: Terms of the PDF's index: what a student looks up, indexed where each chapter first uses them.
 INDEX_TERMS = ("GLR", "innovation", "Kalman filter", "Kitanidis filter", "set-valued observer",
                "fault signature", "minmax", "Lasso", "RLS", "forgetting factor", "Willsky-Jones",
-               "chi-square", "false alarm", "detection delay", "isolation", "polytope", "convex hull",
-               "LPV", "LTV", "Monte Carlo", "Ljung-Box", "unknown input", "claims ledger",
-               "wind turbine", "threshold")
+               "chi-square", "false alarm", "detection delay", "isolation", "polytope",
+               "convex hull", "LPV", "LTV", "Monte Carlo", "Ljung-Box", "unknown input",
+               "claims ledger", "wind turbine", "threshold")
 
 
 class _IndexTerms(SphinxPostTransform):
@@ -1106,7 +1110,8 @@ class _IndexTerms(SphinxPostTransform):
     def run(self, **kwargs: Any) -> None:
         from sphinx import addnodes
 
-        patterns = [(t, re.compile(r"(?<![\w-])" + re.escape(t) + r"(?![\w-])", re.I)) for t in INDEX_TERMS]
+        patterns = [(t, re.compile(r"(?<![\w-])" + re.escape(t) + r"(?![\w-])", re.I))
+                    for t in INDEX_TERMS]
         done: set[tuple[str, str]] = set()
         for par in list(self.document.findall(nodes.paragraph)):
             if par.source is None or any(isinstance(a, (nodes.caption, nodes.title, nodes.table))
@@ -1317,7 +1322,8 @@ def setup(app: Sphinx) -> dict[str, Any]:
     from docutils.writers._html_base import HTMLTranslator
     from myst_nb.sphinx_ import HideCodeCellNode, depart_HideCellInput
 
-    app.add_node(nodes.citation, override=True, html=(_visit_citation, HTMLTranslator.depart_citation))
+    app.add_node(nodes.citation, override=True,
+                 html=(_visit_citation, HTMLTranslator.depart_citation))
     app.add_node(HideCodeCellNode, override=True, html=(_visit_hidden_cell, depart_HideCellInput))
     app.connect("env-before-read-docs", _drop_thebe_scripts, priority=900)
     app.connect("source-read", _generate_catalogue)

@@ -197,7 +197,8 @@ class Explorable:
 
     def frame_alt(self, point: Sequence[int]) -> str:
         """Alt text of the frame at grid indices ``point``: :attr:`alt` and the values shown."""
-        said = ", ".join(f"{label} = {_fmt(g[i])}" for label, g, i in zip(self.labels, self.grid, point))
+        said = ", ".join(f"{label} = {_fmt(g[i])}"
+                         for label, g, i in zip(self.labels, self.grid, point))
         return f"{self.alt} Shown at {said}."
 
     def __repr__(self) -> str:
@@ -218,8 +219,9 @@ class Explorable:
             # wraps on a phone: label, slider and value each on their own line if need be; the
             # value is read out by the slider itself (aria-valuetext), not again by its <output>
             f'<label style="display:flex;flex-wrap:wrap;align-items:center;gap:0.2em 0.6em;margin:0.2em 0">'
-            f'<span>{html.escape(label)}</span><input type="range" min="0" max="{len(g) - 1}" step="1" '
-            f'value="{d}" aria-valuetext="{html.escape(s[d], quote=True)}" style="width:12em;max-width:100%">'
+            f'<span>{html.escape(label)}</span><input type="range" min="0" max="{len(g) - 1}" '
+            f'step="1" value="{d}" aria-valuetext="{html.escape(s[d], quote=True)}" '
+            f'style="width:12em;max-width:100%">'
             f'<output aria-hidden="true">{html.escape(s[d])}</output></label>'
             for label, g, d, s in zip(self.labels, self.grid, self.default, shown))
         script = _SCRIPT % {"id": json.dumps(uid), "frames": json.dumps(list(self.frames)),
@@ -417,7 +419,8 @@ def _check_grid(grid: Any, fixed: Mapping[str, Any]) -> tuple[tuple[str, ...], t
 
 
 def explorable(callback: Callable[..., Figure], grid: Mapping[str, Sequence[Any]], *, caption: str,
-               alt: str | None = None, labels: Mapping[str, str] | None = None, default: Mapping[str, Any] | None = None,
+               alt: str | None = None, labels: Mapping[str, str] | None = None,
+               default: Mapping[str, Any] | None = None,
                **fixed: Any) -> Explorable:
     """Evaluate ``callback(**values, **fixed, fig=fig)`` over the grid; one frame per point.
 

@@ -175,7 +175,8 @@ _PARTS = ("  - caption: Start\n    chapters:\n      - file: book/running\n"
 
 
 def test_book_map_lists_every_page_of_the_toc_and_the_numbered_ones_in_order(tmp_path):
-    block = "book/running: how to run\nbook/p/one: the first chapter {cite:p}`key`\nbook/p/two: the second\n"
+    block = ("book/running: how to run\nbook/p/one: the first chapter\n  {cite:p}`key`\n"
+             "book/p/two: the second\n")
     text = EXT.book_map_markdown(_toc(tmp_path, _PARTS), block)
     rows = [r for r in text.splitlines() if r.startswith("| ") and "doc" in r]
     assert rows == ["| Start | {doc}`/book/running` | how to run |",
@@ -186,7 +187,8 @@ def test_book_map_lists_every_page_of_the_toc_and_the_numbered_ones_in_order(tmp
 
 @pytest.mark.parametrize("block, message", [
     ("book/running: x\nbook/p/one: y\n", r"missing \['book/p/two'\]"),          # a chapter left out
-    ("book/running: x\nbook/p/one: y\nbook/p/two: z\nbook/p/old: w\n", r"not in _toc.yml \['book/p/old'\]"),
+    ("book/running: x\nbook/p/one: y\nbook/p/two: z\nbook/p/old: w\n",
+     r"not in _toc.yml \['book/p/old'\]"),
     ("book/running x\n", "expected 'FILE: what it holds'"),
 ])
 def test_book_map_fails_when_it_and_the_toc_disagree(tmp_path, block, message):
@@ -211,10 +213,12 @@ def test_hidden_cell_toggle_is_named_by_its_text_and_citations_are_list_items(tm
     from types import SimpleNamespace
 
     fake = SimpleNamespace(body=[])
-    EXT._visit_hidden_cell(fake, {"classes": ["above-input"], "prompt_show": "Show code cell source",
-                                  "prompt_hide": "Hide code cell <source>"})
+    node = {"classes": ["above-input"], "prompt_show": "Show code cell source",
+            "prompt_hide": "Hide code cell <source>"}
+    EXT._visit_hidden_cell(fake, node)
     html = "".join(fake.body)
-    assert "aria-label" not in html and html.startswith('<details class="admonition hide above-input">')
+    assert "aria-label" not in html
+    assert html.startswith('<details class="admonition hide above-input">')
     assert '<p class="collapsed admonition-title">Show code cell source</p>' in html
     assert "Hide code cell &lt;source&gt;" in html
 
@@ -225,7 +229,8 @@ def test_hidden_cell_toggle_is_named_by_its_text_and_citations_are_list_items(tm
     src.mkdir()
     (src / "conf.py").write_text(f"import sys\nsys.path.insert(0, {str(ROOT / '_ext')!r})\n"
                                  "extensions = ['myst_nb', 'fdi_book']\n")
-    (src / "index.rst").write_text("Index\n=====\n\nSee [A]_ and [B]_.\n\n.. [A] One.\n.. [B] Two.\n")
+    (src / "index.rst").write_text("Index\n=====\n\nSee [A]_ and [B]_.\n\n"
+                                   ".. [A] One.\n.. [B] Two.\n")
     warnings = io.StringIO()
     with docutils_namespace():
         app = Sphinx(str(src), str(src), str(tmp_path / "out"), str(tmp_path / "doctrees"), "html",

@@ -227,6 +227,6 @@ def test_log_counts_overfull_boxes_over_the_allowance_and_rerun_requests():
            "Overfull \\vbox (6.0pt too high) has occurred while \\output is active\n"
            "Underfull \\vbox (badness 10000) has occurred\n"
            "LaTeX Warning: Label(s) may have changed. Rerun to get cross-references right.\n")
-    assert check.log_counts(log) == {"overfull": 3, "overfull_over_allowance": 2, "overfull_max_pt": 12.5,
-                                     "underfull": 1, "rerun": 1}
+    assert check.log_counts(log) == {"overfull": 3, "overfull_over_allowance": 2,
+                                     "overfull_max_pt": 12.5, "underfull": 1, "rerun": 1}
     assert check.log_counts("")["overfull_max_pt"] == 0.0

@@ -107,7 +107,8 @@ def log_counts(log_text: str) -> dict[str, float]:
     :data:`OVERFULL_ALLOWANCE_PT`, the widest in points), underfull boxes and rerun requests
     ("Rerun to get ...", "Label(s) may have changed"). Printed by :func:`main`, not failed."""
     over = [float(x) for x in re.findall(r"^Overfull \\[hv]box \(([\d.]+)pt too", log_text, re.M)]
-    return {"overfull": len(over), "overfull_over_allowance": sum(x > OVERFULL_ALLOWANCE_PT for x in over),
+    return {"overfull": len(over),
+            "overfull_over_allowance": sum(x > OVERFULL_ALLOWANCE_PT for x in over),
             "overfull_max_pt": max(over, default=0.0),
             "underfull": len(re.findall(r"^Underfull \\[hv]box", log_text, re.M)),
             "rerun": len(re.findall(r"^.*(?:Rerun to get|Label\(s\) may have changed).*$", log_text,
@@ -224,8 +225,8 @@ def main(argv: list[str] | None = None) -> int:
     figures = sum(len(v) for v in tex_images(args.tex).values())
     log = args.tex.with_suffix(".log")
     counts = log_counts(log.read_text(errors="replace")) if log.is_file() else {}
-    present = {kind: args.tex.with_suffix(ext).is_file() and args.tex.with_suffix(ext).stat().st_size > 0
-               for kind, ext in (("list of figures", ".lof"), ("index", ".ind"))}
+    files = {"list of figures": args.tex.with_suffix(".lof"), "index": args.tex.with_suffix(".ind")}
+    present = {kind: f.is_file() and f.stat().st_size > 0 for kind, f in files.items()}
     extras = [f"{kind}: {'yes' if there else 'no'}" for kind, there in present.items()]
     print("check_pdf: layout: " + ", ".join([f"{k} {v:g}" for k, v in counts.items()] + extras))
     print(f"check_pdf: {args.pdf}: {pages} pages, {figures} images, "

@@ -139,18 +139,22 @@ PAGE_CHECKS_JS = r"""
   // 1c. TeX-like text outside the maths: x_k, x_{k}, x^T, ||x||
   const texLike = /\b[A-Za-z][A-Za-z0-9]*(?:_(?:\{|[A-Za-z0-9])|\^(?:\{|[A-Za-z0-9(]))|\|\|/g;
   const walker3 = document.createTreeWalker(article, NodeFilter.SHOW_TEXT, {
-    acceptNode: (n) => (n.parentElement.closest('pre, code, kbd, .literal, script, style, mjx-container, textarea, .highlight, .math, .fdi-docstring dt')
+    acceptNode: (n) => (n.parentElement.closest('pre, code, kbd, .literal, script, style, '
+                                                 + 'mjx-container, textarea, .highlight, .math, '
+                                                 + '.fdi-docstring dt')
       ? NodeFilter.FILTER_REJECT : NodeFilter.FILTER_ACCEPT)});
   for (let n = walker3.nextNode(); n; n = walker3.nextNode()) {
     if (n.parentElement.offsetParent === null && !n.parentElement.closest('details')) continue;
     for (const m of n.nodeValue.matchAll(texLike)) {
       const t = n.nodeValue;
-      out.push(['tex', describe(n.parentElement), t.slice(Math.max(0, m.index - 25), m.index + 35).replace(/\s+/g, ' ')]);
+      const around = t.slice(Math.max(0, m.index - 25), m.index + 35).replace(/\s+/g, ' ');
+      out.push(['tex', describe(n.parentElement), around]);
     }
   }
   // 1d. the PDF edition, when it is beside the pages, in the download menu
-  if (pdfBeside && !document.querySelector('a.btn-download-book-pdf-button[href$="fdi-book.pdf"]')) {
-    out.push(['pdf', 'header', 'a PDF edition is beside the pages but the download menu does not link it']);
+  const pdfLink = 'a.btn-download-book-pdf-button[href$="fdi-book.pdf"]';
+  if (pdfBeside && !document.querySelector(pdfLink)) {
+    out.push(['pdf', 'header', 'a PDF edition is beside the pages; the menu does not link it']);
   }
   const mathNodes = document.querySelectorAll('.math, span.math, div.math').length;
   if (mathNodes > 0 && document.querySelectorAll('mjx-container').length === 0) {
@@ -342,7 +346,8 @@ AXE_FAILING = ("critical", "serious")
 AXE_RUN_JS = r"""
 async () => {
   const res = await axe.run(document, {
-    runOnly: {type: 'tag', values: ['wcag2a', 'wcag2aa', 'wcag21a', 'wcag21aa', 'wcag22aa', 'best-practice']},
+    runOnly: {type: 'tag',
+              values: ['wcag2a', 'wcag2aa', 'wcag21a', 'wcag21aa', 'wcag22aa', 'best-practice']},
     rules: {'label-content-name-mismatch': {enabled: true}},
     resultTypes: ['violations']});
   const out = [];
@@ -421,7 +426,8 @@ def axe_summary(found: list[list[str]], n_pages: int) -> str:
         counts = collections.Counter(v[3] for v in found if v[1] == viewport)
         lines.append(f"  {viewport}: " + ", ".join(f"{counts.get(i, 0)} {i}" for i in AXE_IMPACTS))
     rules = collections.Counter((v[1], v[3], v[2]) for v in found)
-    lines += [f"  {vp} {impact} {rule}: {n} nodes" for (vp, impact, rule), n in sorted(rules.items())]
+    lines += [f"  {vp} {impact} {rule}: {n} nodes"
+              for (vp, impact, rule), n in sorted(rules.items())]
     return "\n".join(lines)
 
 
@@ -502,7 +508,8 @@ def main(argv: list[str] | None = None) -> int:
                                          for ck in checks))
     reported = sum(r[2] in REPORTED for r in results)
     summary = (f"{len(pages)} pages x {len(MODES)} modes (+ file://): "
-               f"{len(results) - reported} failures, {reported} reported ({', '.join(sorted(REPORTED))})")
+               f"{len(results) - reported} failures, "
+               f"{reported} reported ({', '.join(sorted(REPORTED))})")
     report = "\n".join(lines + (table if results else []) + ["", summary])
     print(report)
     args.report.parent.mkdir(parents=True, exist_ok=True)
@@ -513,7 +520,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.axe is not None:
         print(axe_summary(axe_found, len(pages)))
         args.report.with_name("axe-report.json").write_text(json.dumps(
-            [dict(zip(("page", "viewport", "rule", "impact", "element", "summary"), v)) for v in axe_found],
+            [dict(zip(("page", "viewport", "rule", "impact", "element", "summary"), v))
+             for v in axe_found],
             indent=1))
     print(f"screenshots in {args.screenshots}/, report in {args.report}.txt")
     return 1 if any(r[2] not in REPORTED for r in results) else 0

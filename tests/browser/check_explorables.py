@@ -73,7 +73,8 @@ async ([e, j]) => {
               positions: ins.map(x => Number(x.value)),
               shown: ins.map(x => x.nextElementSibling.textContent),
               valuetext: ins.map(x => x.getAttribute('aria-valuetext')),
-              alt: img.alt, live: live ? live.getAttribute('aria-live') + ': ' + live.textContent : ''});
+              alt: img.alt,
+              live: live ? live.getAttribute('aria-live') + ': ' + live.textContent : ''});
     before = after; prev = v;
   }
   return out;

@@ -57,7 +57,8 @@ RENDERED_JS = r"""
       for (const [kind, re] of [['role', /\{[a-z][\w:-]*\}/], ['directive', /(```|:::)\{[\w:-]+\}/],
                                 ['macro', /\\[a-zA-Z]{2,}|\\[TRE]\b/]]) {
         const m = t.match(re);
-        if (m) out.push([kind, 'text', t.slice(Math.max(0, m.index - 30), m.index + 40).replace(/\s+/g, ' ')]);
+        if (m) out.push([kind, 'text',
+                         t.slice(Math.max(0, m.index - 30), m.index + 40).replace(/\s+/g, ' ')]);
       }
     }
   }
@@ -89,8 +90,9 @@ def start_lab(root: Path, settings: Path) -> tuple[subprocess.Popen, str, str]:
     env = dict(os.environ, JUPYTERLAB_SETTINGS_DIR=str(settings))
     log = (settings / "lab.log").open("w")
     proc = subprocess.Popen(   # as root in CI; no extension manager (it asks PyPI)
-        [str(lab), "--no-browser", "--allow-root", "--ServerApp.ip=127.0.0.1", f"--ServerApp.port={port}",
-         "--ServerApp.port_retries=0", f"--IdentityProvider.token={token}", f"--ServerApp.root_dir={root}",
+        [str(lab), "--no-browser", "--allow-root", "--ServerApp.ip=127.0.0.1",
+         f"--ServerApp.port={port}", "--ServerApp.port_retries=0",
+         f"--IdentityProvider.token={token}", f"--ServerApp.root_dir={root}",
          "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate",
          "--LabApp.extension_manager=readonly"],
         env=env, stdout=subprocess.DEVNULL, stderr=log)
@@ -98,7 +100,8 @@ def start_lab(root: Path, settings: Path) -> tuple[subprocess.Popen, str, str]:
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline:
         if proc.poll() is not None:
-            raise SystemExit(f"JupyterLab exited: {(settings / 'lab.log').read_text(errors='replace')[-2000:]}")
+            log_text = (settings / "lab.log").read_text(errors="replace")
+            raise SystemExit(f"JupyterLab exited: {log_text[-2000:]}")
         try:
             urllib.request.urlopen(f"{base}/api/status?token={token}", timeout=2)
             return proc, base, token
@@ -115,14 +118,16 @@ def check_notebook(context, base: str, token: str, name: str) -> list[tuple[str,
     # every cell drawn and its maths typeset: the count of MathJax's containers stops growing
     seen, still = -1, 0
     for _ in range(120):
-        n = page.evaluate("() => document.querySelectorAll('.jp-MarkdownCell mjx-container').length")
+        n = page.evaluate("() => document.querySelectorAll('.jp-MarkdownCell mjx-container')"
+                          ".length")
         still = still + 1 if n == seen else 0
         seen = n
         if still >= 4:
             break
         page.wait_for_timeout(500)
     found = [tuple(f) for f in page.evaluate(RENDERED_JS)]
-    tex = page.evaluate("() => Array.from(document.querySelectorAll('.jp-MarkdownCell .jp-RenderedMarkdown'))"
+    tex = page.evaluate("() => Array.from(document.querySelectorAll("
+                        "'.jp-MarkdownCell .jp-RenderedMarkdown'))"
                         ".some(c => /\\$[^$]+\\$/.test(c.innerText))")
     if seen == 0 and tex:
         found.append(("render", "maths", "the notebook's maths never typeset"))
@@ -148,12 +153,19 @@ def main(argv: list[str] | None = None) -> int:
         proc, base, token = start_lab(root, Path(settings))
         try:
             with sync_playwright() as pw:
-                browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True)
+                browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS,
+                                             headless=True)
                 context = browser.new_context(viewport=VIEWPORTS["1280"], service_workers="block")
                 blocked = []
-                context.route("**/*", lambda r: r.continue_() if r.request.url.startswith(base)
-                              or r.request.url.startswith("data:") else (blocked.append(r.request.url),
-                                                                          r.abort("blockedbyclient")))
+
+                def route(r):
+                    if r.request.url.startswith((base, "data:")):
+                        r.continue_()
+                    else:
+                        blocked.append(r.request.url)
+                        r.abort("blockedbyclient")
+
+                context.route("**/*", route)
                 for name in names:
                     t0 = time.monotonic()
                     try:
@@ -163,7 +175,8 @@ def main(argv: list[str] | None = None) -> int:
                     results += [(name, *f) for f in found]
                     print(f"  {name}: {len(found)} failures ({time.monotonic() - t0:.1f} s)",
                           file=sys.stderr, flush=True)
-                results += [("jupyterlab", "network", "request", f"blocked {u[:150]}") for u in blocked]
+                results += [("jupyterlab", "network", "request", f"blocked {u[:150]}")
+                            for u in blocked]
                 browser.close()
         finally:
             proc.terminate()
