@@ -855,38 +855,49 @@ def _lighter_previews(app: Sphinx, exception: Exception | None) -> None:
 # --- 11. The PDF edition -------------------------------------------------------------------
 #: File name of the PDF edition, in ``_build/pdf/`` and beside the HTML pages.
 PDF_NAME = "fdi-book.pdf"
+#: The A4 edition, beside :data:`PDF_NAME` (US letter, Sphinx's default paper).
+A4_NAME = "fdi-book-a4.pdf"
 #: Script of the HTML pages that adds the PDF to the header's download menu when it is there.
 PDF_SCRIPT = "fdi-pdf.js"
 _PDF_JS = """// The PDF edition in the header's download menu, when `make pdf` has put it beside the pages
 // (written by _ext/fdi_book.py: the HTML build cannot know whether a PDF will follow).
 (function () {
-  const pdf = %s;
+  const pdf = %s, a4 = %s;
   if (!pdf) return;
   document.addEventListener("DOMContentLoaded", function () {
     const menu = document.querySelector(".dropdown-download-buttons .dropdown-menu");
     if (!menu) return;
     const root = document.documentElement.dataset.content_root || "";
-    const li = document.createElement("li"), a = document.createElement("a");
-    a.href = root + pdf;
-    a.className = "btn btn-sm btn-download-book-pdf-button dropdown-item";
-    a.title = "Download the whole book (PDF edition)";
-    a.innerHTML = '<span class="btn__icon-container"><i class="fas fa-book"></i></span>' +
-      '<span class="btn__text-container">book (PDF)</span>';
-    li.appendChild(a);
-    menu.insertBefore(li, menu.firstChild);
+    [[a4, "A4", "book (PDF, A4)"], [pdf, "US letter", "book (PDF)"]].forEach(function (e) {
+      if (!e[0]) return;
+      const li = document.createElement("li"), a = document.createElement("a");
+      a.href = root + e[0];
+      a.className = "btn btn-sm btn-download-book-pdf-button dropdown-item";
+      a.title = "Download the whole book (PDF edition, " + e[1] + " paper)";
+      a.innerHTML = '<span class="btn__icon-container"><i class="fas fa-book"></i></span>' +
+        '<span class="btn__text-container">' + e[2] + '</span>';
+      li.appendChild(a);
+      menu.insertBefore(li, menu.firstChild);
+    });
   });
 })();
 """
 
 
 def publish_pdf(html_dir: Path, pdf: Path | None) -> None:
-    """Put ``pdf`` beside the HTML pages in ``html_dir`` (as :data:`PDF_NAME`) and let every
-    page's download menu link it; with ``pdf`` None, the pages link no PDF."""
-    if pdf is not None and pdf.resolve() != (html_dir / PDF_NAME).resolve():
-        shutil.copy2(pdf, html_dir / PDF_NAME)
+    """Put ``pdf`` beside the HTML pages in ``html_dir`` (as :data:`PDF_NAME`), with its A4
+    edition when there is one beside it (:data:`A4_NAME`), and let every page's download menu
+    link them; with ``pdf`` None, the pages link no PDF."""
+    a4 = None if pdf is None else pdf.with_name(A4_NAME)
+    for source, name in ((pdf, PDF_NAME), (a4, A4_NAME)):
+        target = html_dir / name
+        if source is not None and source.is_file() and source.resolve() != target.resolve():
+            shutil.copy2(source, target)
+    a4_there = a4 is not None and (html_dir / A4_NAME).is_file()
     script = html_dir / "_static" / PDF_SCRIPT
     script.parent.mkdir(parents=True, exist_ok=True)
-    script.write_text(_PDF_JS % json.dumps(PDF_NAME if pdf is not None else None))
+    script.write_text(_PDF_JS % (json.dumps(PDF_NAME if pdf is not None else None),
+                                 json.dumps(A4_NAME if a4_there else None)))
 
 
 def _pdf_script(app: Sphinx, exception: Exception | None) -> None:

@@ -248,9 +248,10 @@ def test_pages_link_the_pdf_of_an_earlier_make_pdf(tmp_path):
     html.mkdir(parents=True)
     app = SimpleNamespace(outdir=str(html), builder=SimpleNamespace(format="html"))
     EXT._pdf_script(app, None)
-    assert "const pdf = null;" in (html / "_static" / EXT.PDF_SCRIPT).read_text()
+    assert "const pdf = null, a4 = null;" in (html / "_static" / EXT.PDF_SCRIPT).read_text()
     (tmp_path / "_build" / "pdf").mkdir()
     (tmp_path / "_build" / "pdf" / EXT.PDF_NAME).write_bytes(b"%PDF-1.5 edition")
     EXT._pdf_script(app, None)
-    assert f'const pdf = "{EXT.PDF_NAME}";' in (html / "_static" / EXT.PDF_SCRIPT).read_text()
+    script = (html / "_static" / EXT.PDF_SCRIPT).read_text()
+    assert f'const pdf = "{EXT.PDF_NAME}", a4 = null;' in script
     assert (html / EXT.PDF_NAME).read_bytes() == b"%PDF-1.5 edition"
