@@ -74,6 +74,27 @@ def test_catalogue_titles_are_written_in_maths():
         assert not re.search(r"[A-Za-z]_\w", text) and not greek.search(text), (r.id, text)
 
 
+def _sphinx_build(tmp_path, builder: str, extensions: list[str], pages: dict[str, str],
+                  conf: str = "") -> tuple[Path, str]:
+    """A small Sphinx project with the book's extension, built with ``builder``: the output
+    folder and the warnings."""
+    from sphinx.application import Sphinx
+    from sphinx.util.docutils import docutils_namespace
+
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "conf.py").write_text(f"import sys\nsys.path.insert(0, {str(ROOT / '_ext')!r})\n"
+                                 f"extensions = {extensions!r}\n" + conf)
+    for name, text in pages.items():
+        (src / name).write_text(text)
+    warnings = io.StringIO()
+    with docutils_namespace():  # the directives and nodes it registers go with it
+        app = Sphinx(str(src), str(src), str(tmp_path / "out"), str(tmp_path / "doctrees"), builder,
+                     status=None, warning=warnings, freshenv=True)
+        app.build()
+    return tmp_path / "out", warnings.getvalue()
+
+
 # a 1x1 PNG
 _PNG = base64.b64decode("iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAAAAAA6fptVAAAACklEQVR4nGP4DwABAQEAG1o0oAAAAABJRU5ErkJggg==")
 
@@ -113,25 +134,13 @@ def test_references_and_alt_texts_in_a_sphinx_build(tmp_path):
 def test_table_cells_carry_their_column_header_in_html(tmp_path):
     """Docutils tables of the book (Markdown tables, list-tables) written to HTML: every body
     cell has its column's header as ``data-label``, maths as readable text (item 9)."""
-    from sphinx.application import Sphinx
-    from sphinx.util.docutils import docutils_namespace
-
-    src = tmp_path / "src"
-    src.mkdir()
-    (src / "conf.py").write_text(
-        "import sys\n"
-        f"sys.path.insert(0, {str(ROOT / '_ext')!r})\n"
-        "extensions = ['myst_parser', 'fdi_book']\n"
+    out, warnings = _sphinx_build(
+        tmp_path, "html", ["myst_parser", "fdi_book"],
+        {"index.md": "# Index\n\n| Symbol | Size of $\\theta_k$ |\n|---|---|\n"
+                     "| $X_k$ | $n$ |\n| $U_k$ | |\n"},
         "myst_enable_extensions = ['dollarmath']\n")
-    (src / "index.md").write_text(
-        "# Index\n\n| Symbol | Size of $\\theta_k$ |\n|---|---|\n| $X_k$ | $n$ |\n| $U_k$ | |\n")
-    warnings = io.StringIO()
-    with docutils_namespace():
-        app = Sphinx(str(src), str(src), str(tmp_path / "out"), str(tmp_path / "doctrees"), "html",
-                     status=None, warning=warnings, freshenv=True)
-        app.build()
-    assert not warnings.getvalue()
-    page = (tmp_path / "out" / "index.html").read_text()
+    assert not warnings
+    page = (out / "index.html").read_text()
     assert re.findall(r'<td data-label="([^"]*)"', page) == ["Symbol", "Size of θₖ"] * 2
     assert "<th" in page and not re.search(r"<th[^>]*data-label", page)
 
@@ -222,21 +231,9 @@ def test_hidden_cell_toggle_is_named_by_its_text_and_citations_are_list_items(tm
     assert '<p class="collapsed admonition-title">Show code cell source</p>' in html
     assert "Hide code cell &lt;source&gt;" in html
 
-    from sphinx.application import Sphinx
-    from sphinx.util.docutils import docutils_namespace
-
-    src = tmp_path / "src"
-    src.mkdir()
-    (src / "conf.py").write_text(f"import sys\nsys.path.insert(0, {str(ROOT / '_ext')!r})\n"
-                                 "extensions = ['myst_nb', 'fdi_book']\n")
-    (src / "index.rst").write_text("Index\n=====\n\nSee [A]_ and [B]_.\n\n"
-                                   ".. [A] One.\n.. [B] Two.\n")
-    warnings = io.StringIO()
-    with docutils_namespace():
-        app = Sphinx(str(src), str(src), str(tmp_path / "out"), str(tmp_path / "doctrees"), "html",
-                     status=None, warning=warnings, freshenv=True)
-        app.build()
-    page = (tmp_path / "out" / "index.html").read_text()
+    out, _ = _sphinx_build(tmp_path, "html", ["myst_nb", "fdi_book"], {
+        "index.rst": "Index\n=====\n\nSee [A]_ and [B]_.\n\n.. [A] One.\n.. [B] Two.\n"})
+    page = (out / "index.html").read_text()
     assert page.count('role="list"') == 1 and page.count('role="listitem"') == 2
     assert "doc-biblioentry" not in page
 
