@@ -401,12 +401,18 @@ def _toc_parts(confdir: Path) -> list[tuple[str, bool, list[str]]]:
             for part in toc.get("parts", [])]
 
 
-def book_map_markdown(confdir: Path, block: str) -> str:
+#: Pages the PDF has no chapter for (its bibliography is the list at the end of the book, see
+#: :class:`_NumberedParts`): the PDF's map names them without a link.
+NO_PDF_CHAPTER = ("book/bibliography",)
+
+
+def book_map_markdown(confdir: Path, block: str, unlinked: tuple[str, ...] = ()) -> str:
     """The map of the book (a table: part, page, what it holds) and the reading path (the
     numbered chapters in order), every page of ``_toc.yml`` in it. ``block`` holds one line
     ``FILE: what the page holds`` per page but the root (indented lines continue it); a page of
     the table of contents
-    without a line, or a line for no page of it, is a build error."""
+    without a line, or a line for no page of it, is a build error. The pages in ``unlinked``
+    are named by their title, without a link."""
     what: dict[str, str] = {}
     for line in re.sub(r"\n[ \t]+", " ", block).splitlines():   # indented: continues the last
         if line.strip():
@@ -424,7 +430,9 @@ def book_map_markdown(confdir: Path, block: str) -> str:
     rows = ["| Part | Page | What it holds |", "|---|---|---|"]
     for caption, _, chapters in parts:
         for k, f in enumerate(chapters):
-            rows.append(f"| {caption if k == 0 else ''} | {{doc}}`/{f}` | {what[f]} |")
+            page = (_HEADING.search((confdir / f"{f}.md").read_text()).group(2) if f in unlinked
+                    else f"{{doc}}`/{f}`")
+            rows.append(f"| {caption if k == 0 else ''} | {page} | {what[f]} |")
     numbered = [f for _, num, chapters in parts if num for f in chapters]
     path = "\n".join(f"{i}. {{doc}}`/{f}`" for i, f in enumerate(numbered, 1))
     return "\n".join(rows) + "\n\nThe numbered chapters, in reading order:\n\n" + path + "\n"
@@ -435,7 +443,9 @@ def _generate_book_map(app: Sphinx, docname: str, source: list[str]) -> None:
         return
     app.env.note_dependency(str(Path(app.confdir) / "_toc.yml"))
     confdir = Path(app.confdir)
-    source[0], count = _MAP_BLOCK.subn(lambda m: book_map_markdown(confdir, m.group(1)), source[0])
+    unlinked = NO_PDF_CHAPTER if app.builder.format == "latex" else ()
+    source[0], count = _MAP_BLOCK.subn(lambda m: book_map_markdown(confdir, m.group(1), unlinked),
+                                       source[0])
     if count != 1:
         raise ExtensionError(f"fdi_book: {MAP_DOC}.md needs one ```{{fdi-book-map}} block, "
                              f"found {count}")

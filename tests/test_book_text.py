@@ -192,6 +192,10 @@ def test_book_map_lists_every_page_of_the_toc_and_the_numbered_ones_in_order(tmp
                     "| A paper | {doc}`/book/p/one` | the first chapter {cite:p}`key` |",
                     "|  | {doc}`/book/p/two` | the second |"]
     assert text.endswith("1. {doc}`/book/p/one`\n2. {doc}`/book/p/two`\n")
+    (tmp_path / "book").mkdir()
+    (tmp_path / "book" / "running.md").write_text("---\nx: 1\n---\n# Running it\n")
+    unlinked = EXT.book_map_markdown(tmp_path, block, unlinked=("book/running",))
+    assert "| Start | Running it | how to run |" in unlinked   # no chapter of its own in the PDF
 
 
 @pytest.mark.parametrize("block, message", [
