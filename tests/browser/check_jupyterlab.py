@@ -114,7 +114,8 @@ def start_lab(root: Path, settings: Path) -> tuple[subprocess.Popen, str, str]:
 def check_notebook(context, base: str, token: str, name: str) -> list[tuple[str, str, str]]:
     page = context.new_page()
     page.goto(f"{base}/lab/tree/{name}?token={token}", wait_until="load")
-    page.wait_for_selector(".jp-MarkdownCell .jp-RenderedMarkdown", timeout=90_000)
+    page.wait_for_selector(".jp-MarkdownCell .jp-RenderedMarkdown", state="attached",
+                           timeout=120_000)
     # every cell drawn and its maths typeset: the count of MathJax's containers stops growing
     seen, still = -1, 0
     for _ in range(120):
