@@ -128,8 +128,8 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
         batch-invariant; give it explicitly to reproduce a run bit for bit.
     progress : bool, optional
         Show a tqdm progress bar over chunks on standard error (once the run has lasted a
-        second); ``None`` (default): as set by :func:`progress_bars` (off unless the command
-        line turned it on).
+        second), with the time elapsed and the time left (``ETA``); ``None`` (default): as set by
+        :func:`progress_bars` (off unless the command line turned it on).
     description : str
         Label of the progress bar.
     executor : concurrent.futures.Executor, optional
@@ -212,8 +212,11 @@ def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: i
     if progress if progress is not None else _PROGRESS.get():
         from tqdm.auto import tqdm
 
-        # on standard error, and only once a run has lasted a second (no flicker on short ones)
-        bar = tqdm(total=n_tasks, desc=description, unit="chunk", file=sys.stderr, delay=1.0)
+        # on standard error, and only once a run has lasted a second (no flicker on short ones); the
+        # time left is named (tqdm's own "elapsed<remaining" is easily misread)
+        bar = tqdm(total=n_tasks, desc=description, unit="chunk", file=sys.stderr, delay=1.0,
+                   bar_format="{desc}: {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} chunks "
+                              "[{elapsed} elapsed, ETA {remaining}, {rate_fmt}]")
     try:
         first = _call(*task(0))  # the calling process's first chunk, also the memory probe
         _check_memory(first, part(0), n_trials, len(chunk_fns))
