@@ -27,10 +27,19 @@ def calls(monkeypatch, tmp_path):
 
     def func(*, seed, trials, jobs, x=None):
         made.append((seed, trials, x))
-        return ReproductionResult(FAKE, {"trials": trials, "x": repr(x)}, settings={"trials": trials})
+        return ReproductionResult(
+            FAKE, {"trials": trials, "x": repr(x)}, settings={"trials": trials}
+        )
 
-    rep = Reproduction(FAKE, paper="none", title="cache probe", func=func, plot=None,
-                       default_trials=10, default_seed=0)
+    rep = Reproduction(
+        FAKE,
+        paper="none",
+        title="cache probe",
+        func=func,
+        plot=None,
+        default_trials=10,
+        default_seed=0,
+    )
     monkeypatch.setitem(registry._REGISTRY, FAKE, rep)
     monkeypatch.setenv(CACHE_ENV, str(tmp_path / "cache"))
     return made
@@ -41,19 +50,22 @@ def _entries(tmp_path):
 
 
 def test_an_entry_under_another_key_is_a_miss_with_a_warning(calls, tmp_path):
-    """An entry of 10 trials found under the key of 20 trials was returned as the 20-trial result."""
+    """An entry of 10 trials found under the key of 20 trials was returned as the 20-trial
+    result."""
     reproduce(FAKE, trials=10)
     (ten,) = _entries(tmp_path)
     reproduce(FAKE, trials=20)
     (twenty,) = set(_entries(tmp_path)) - {ten}
-    shutil.copyfile(ten, twenty)       # a copied or renamed file
-    with pytest.warns(CacheWarning, match=r"stored for other settings \(trials differ\); computing"):
+    shutil.copyfile(ten, twenty)  # a copied or renamed file
+    with pytest.warns(
+        CacheWarning, match=r"stored for other settings \(trials differ\); computing"
+    ):
         got = reproduce(FAKE, trials=20)
     assert got.headline["trials"] == 20 and calls[-1] == (0, 20, None)
     assert len(calls) == 3
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        assert reproduce(FAKE, trials=20).headline["trials"] == 20     # rewritten: a clean hit
+        assert reproduce(FAKE, trials=20).headline["trials"] == 20  # rewritten: a clean hit
     assert len(calls) == 3
 
 
@@ -62,7 +74,7 @@ def test_the_key_tells_apart_values_that_repr_confuses(calls):
     entry. Types are kept apart (1, 1.0, True, "1"); equal values still hit."""
     a = np.arange(5000.0)
     b = a.copy()
-    b[2500] = -1.0       # differs only where repr prints "..."
+    b[2500] = -1.0  # differs only where repr prints "..."
     assert repr(a) == repr(b)
     for x in (a, b, 1, 1.0, True, "1", [1], (1,), {"k": 1}, {"k": 1.0}):
         reproduce(FAKE, x=x)
@@ -72,8 +84,8 @@ def test_the_key_tells_apart_values_that_repr_confuses(calls):
         for x in (a.copy(), b.copy(), 1, 1.0, True, "1", [1], (1,), {"k": 1}, {"k": 1.0}):
             reproduce(FAKE, x=x)
     assert len(calls) == 10
-    reproduce(FAKE, x=a.astype(np.float32))    # same values, another dtype: another result
-    reproduce(FAKE, x=a.reshape(50, 100))      # another shape
+    reproduce(FAKE, x=a.astype(np.float32))  # same values, another dtype: another result
+    reproduce(FAKE, x=a.reshape(50, 100))  # another shape
     assert len(calls) == 12
 
 
@@ -104,7 +116,9 @@ def test_a_folder_at_an_entrys_path_is_a_miss_with_a_warning(calls, tmp_path):
     with pytest.warns(CacheWarning) as record:
         got = reproduce(FAKE)
     messages = [str(w.message) for w in record]
-    assert any("cannot read the cached result" in m and "got a folder" in m for m in messages), messages
+    assert any("cannot read the cached result" in m and "got a folder" in m for m in messages), (
+        messages
+    )
     assert any("cannot store the result in" in m for m in messages), messages
     assert got.headline["trials"] == 10 and len(calls) == 2 and entry.is_dir()
     with pytest.warns(CacheWarning, match="got a folder"):
@@ -153,7 +167,7 @@ def test_processes_writing_one_entry_never_collide_and_readers_see_whole_entries
     for p in procs:
         p.start()
     with warnings.catch_warnings():
-        warnings.simplefilter("error")       # a half-written entry would be a CacheWarning
+        warnings.simplefilter("error")  # a half-written entry would be a CacheWarning
         reads = 0
         while any(p.is_alive() for p in procs) or reads < 50:
             assert registry._cache_read(entry, key).headline == {"trials": 10}

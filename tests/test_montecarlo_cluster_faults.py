@@ -66,10 +66,24 @@ class _Cluster:
 
     def __init__(self, tmp_path: Path, workers: int = 1) -> None:
         file = tmp_path / "scheduler.json"
-        common = dict(env=_env(), cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        common = dict(
+            env=_env(), cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+        )
         self.scheduler = subprocess.Popen(
-            [sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0",
-             "--no-dashboard", "--scheduler-file", str(file)], **common)
+            [
+                sys.executable,
+                "-m",
+                "distributed.cli.dask_scheduler",
+                "--host",
+                "127.0.0.1",
+                "--port",
+                "0",
+                "--no-dashboard",
+                "--scheduler-file",
+                str(file),
+            ],
+            **common,
+        )
         self.workers: list[subprocess.Popen] = []
         try:
             deadline = time.monotonic() + 60
@@ -77,9 +91,23 @@ class _Cluster:
                 assert time.monotonic() < deadline and self.scheduler.poll() is None, "no scheduler"
                 time.sleep(0.1)
             self.address = json.loads(file.read_text())["address"]
-            self.workers = [subprocess.Popen(
-                [sys.executable, "-m", "distributed.cli.dask_worker", "--scheduler-file", str(file),
-                 "--no-nanny", "--nthreads", "1", "--no-dashboard"], **common) for _ in range(workers)]
+            self.workers = [
+                subprocess.Popen(
+                    [
+                        sys.executable,
+                        "-m",
+                        "distributed.cli.dask_worker",
+                        "--scheduler-file",
+                        str(file),
+                        "--no-nanny",
+                        "--nthreads",
+                        "1",
+                        "--no-dashboard",
+                    ],
+                    **common,
+                )
+                for _ in range(workers)
+            ]
             import distributed
 
             with distributed.Client(self.address, set_as_default=False, timeout=30) as client:
@@ -104,9 +132,15 @@ def cluster(tmp_path):
 
 def _probe(address: str, watchdog: float, tmp_path: Path) -> tuple[subprocess.Popen, str]:
     mark = str(tmp_path / "chunk-in-")
-    proc = subprocess.Popen([sys.executable, "-c", PROBE, address, str(watchdog), mark], env=_env(),
-                            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-c", PROBE, address, str(watchdog), mark],
+        env=_env(),
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
     return proc, mark
 
 
@@ -140,8 +174,10 @@ def test_a_cluster_that_loses_its_workers_fails_within_the_watchdog_time(cluster
     out, err, took = _finish(proc, timeout=60)
     assert proc.returncode == 2, err
     assert out == ""
-    assert err == (f"error: cluster: the Dask scheduler at {cluster.address} has had no worker for 3 s; "
-                   f"the run is cancelled\n")
+    assert err == (
+        f"error: cluster: the Dask scheduler at {cluster.address} has had no worker for 3 s; "
+        f"the run is cancelled\n"
+    )
     assert 3.0 <= took < 30
 
 
@@ -154,7 +190,9 @@ def test_a_scheduler_lost_mid_run_is_one_line(cluster, tmp_path):
     out, err, took = _finish(proc, timeout=90)
     assert proc.returncode == 2, err
     assert out == ""
-    assert err.startswith(f"error: cluster: lost the Dask scheduler at {cluster.address} during the run (")
+    assert err.startswith(
+        f"error: cluster: lost the Dask scheduler at {cluster.address} during the run ("
+    )
     assert err.count("\n") == 1, err
 
 
@@ -175,8 +213,10 @@ def test_ctrl_c_ends_a_run_whose_workers_are_gone_at_once(cluster, tmp_path):
     assert proc.returncode == 130, err
     assert out == "" and err == "interrupted\n"
     assert took < 15
-    assert not any(psutil.pid_exists(p) and psutil.Process(p).status() != psutil.STATUS_ZOMBIE
-                   for p in children)
+    assert not any(
+        psutil.pid_exists(p) and psutil.Process(p).status() != psutil.STATUS_ZOMBIE
+        for p in children
+    )
 
 
 class _NotDask:
@@ -197,7 +237,9 @@ class _NotDask:
             except OSError:
                 return
             with conn:
-                conn.sendall(b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n" + b"\xff" * 64)
+                conn.sendall(
+                    b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n" + b"\xff" * 64
+                )
                 time.sleep(0.2)
 
 
@@ -206,13 +248,28 @@ def test_an_address_that_is_not_a_dask_scheduler_is_one_line(capsys, monkeypatch
     monkeypatch.setattr(mc, "CONNECT_TIMEOUT", 2.0)
     server = _NotDask()
     try:
-        with pytest.raises(ClusterError, match=rf"cluster: (cannot reach the Dask scheduler at|"
-                                               rf"{server.address} is not a Dask scheduler)"):
+        with pytest.raises(
+            ClusterError,
+            match=rf"cluster: (cannot reach the Dask scheduler at|"
+            rf"{server.address} is not a Dask scheduler)",
+        ):
             with mc.dask_executor(server.address):
                 pass
         t0 = time.monotonic()
-        assert main(["reproduce", "zhang2021-table1", "--trials", "4", "--cluster", server.address,
-                     "--json"]) == 2
+        assert (
+            main(
+                [
+                    "reproduce",
+                    "zhang2021-table1",
+                    "--trials",
+                    "4",
+                    "--cluster",
+                    server.address,
+                    "--json",
+                ]
+            )
+            == 2
+        )
         assert time.monotonic() - t0 < 30
     finally:
         server.sock.close()
@@ -234,14 +291,22 @@ def test_a_local_cluster_above_the_cores_is_capped_with_the_warning_of_jobs(monk
         raise OSError("not started by this test")
 
     monkeypatch.setattr(distributed, "LocalCluster", no_cluster)
-    with pytest.warns(JobsCappedWarning, match=r"^cluster: workers of local:N: 8 requested, 2 used \(2 CPU "
-                                               r"cores\); the results do not depend on it$"):
+    with pytest.warns(
+        JobsCappedWarning,
+        match=r"^cluster: workers of local:N: 8 requested, 2 used \(2 CPU "
+        r"cores\); the results do not depend on it$",
+    ):
         with pytest.raises(ClusterError, match="cannot start a local cluster of 2 workers"):
             with mc.dask_executor("local:8"):
                 pass
     assert started == [2]
     assert main(["reproduce", "zhang2021-table1", "--cluster", "local:8"]) == 2
     err = capsys.readouterr().err.splitlines()
-    assert err[0] == ("warning: cluster: workers of local:N: 8 requested, 2 used (2 CPU cores); the results "
-                      "do not depend on it")
-    assert err[1].startswith("error: cluster: cannot start a local cluster of 2 workers") and len(err) == 2
+    assert err[0] == (
+        "warning: cluster: workers of local:N: 8 requested, 2 used (2 CPU cores); the results "
+        "do not depend on it"
+    )
+    assert (
+        err[1].startswith("error: cluster: cannot start a local cluster of 2 workers")
+        and len(err) == 2
+    )

@@ -1,7 +1,7 @@
-"""Clusters beyond this machine (issue 34.4): the SLURM/PBS recipe (deploy/jobqueue.py, dask-jobqueue)
-run end to end against dask-jobqueue's local stand-in (its "batch jobs" are processes of this
-machine: no SLURM or PBS queue is available here), the batch scripts a real queue would get, and
-the Kubernetes recipe's files (not built here: no container runtime)."""
+"""Clusters beyond this machine (issue 34.4): the SLURM/PBS recipe (deploy/jobqueue.py,
+dask-jobqueue) run end to end against dask-jobqueue's local stand-in (its "batch jobs" are
+processes of this machine: no SLURM or PBS queue is available here), the batch scripts a real
+queue would get, and the Kubernetes recipe's files (not built here: no container runtime)."""
 
 from __future__ import annotations
 
@@ -38,8 +38,24 @@ def test_the_jobqueue_recipe_gives_the_bytes_of_one_job(tmp_path, capsys, monkey
     ref = capsys.readouterr().out
     env = {k: v for k, v in os.environ.items() if k != CACHE_ENV}
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), env.get("PYTHONPATH")]))
-    proc = subprocess.run([sys.executable, str(RECIPE), "local", "--workers", "2", "--queue-wait", "120",
-                           "--", *argv], capture_output=True, text=True, env=env, cwd=tmp_path, timeout=600)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            str(RECIPE),
+            "local",
+            "--workers",
+            "2",
+            "--queue-wait",
+            "120",
+            "--",
+            *argv,
+        ],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=tmp_path,
+        timeout=600,
+    )
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout == ref
 
@@ -64,12 +80,18 @@ def test_the_kubernetes_image_installs_the_library_at_the_locks_versions():
     docker = (ROOT / "deploy" / "kubernetes" / "Dockerfile").read_text()
     assert 'pip install --no-cache-dir --constraint requirements.lock ".[cluster]"' in docker
     assert "COPY requirements.lock" in docker and "COPY fdi_lib ./fdi_lib" in docker
-    docs = list(yaml.safe_load_all((ROOT / "deploy" / "kubernetes" / "dask-cluster.yaml").read_text()))
+    docs = list(
+        yaml.safe_load_all((ROOT / "deploy" / "kubernetes" / "dask-cluster.yaml").read_text())
+    )
     service = next(d for d in docs if d["kind"] == "Service")
     workers = next(d for d in docs if d["metadata"]["name"] == "fdi-worker")
     (container,) = workers["spec"]["template"]["spec"]["containers"]
     port = service["spec"]["ports"][0]["port"]
-    assert container["command"][:3] == ["dask", "worker", f"tcp://{service['metadata']['name']}:{port}"]
+    assert container["command"][:3] == [
+        "dask",
+        "worker",
+        f"tcp://{service['metadata']['name']}:{port}",
+    ]
     assert container["command"][3:5] == ["--nthreads", "1"]
     lock = (ROOT / "requirements.lock").read_text()
     for name in ("dask", "distributed", "dask-jobqueue"):

@@ -140,14 +140,15 @@ def _parsers(prog: str) -> tuple[argparse.ArgumentParser, argparse.ArgumentParse
     console = prog != "python -m fdi_lib"
     name = prog if console else f"{prog} reproduce"
     description = __doc__.replace("python -m fdi_lib reproduce", name)
-    parser = _Parser(prog=prog, description=description, formatter_class=argparse.RawDescriptionHelpFormatter)
+    raw = argparse.RawDescriptionHelpFormatter
+    parser = _Parser(prog=prog, description=description, formatter_class=raw)
     if console:
         rep = parser
     else:
         sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
         rep = sub.add_parser("reproduce", help="reproduce a figure or table of the papers",
                              description=description,
-                             formatter_class=argparse.RawDescriptionHelpFormatter)
+                             formatter_class=raw)
     rep.add_argument("id", nargs="?", help="reproduction identifier, e.g. zb2014-fig3")
     rep.add_argument("--list", action="store_true", help="list the identifiers and exit")
     rep.add_argument("--ledger", action="store_true",
@@ -161,8 +162,9 @@ def _parsers(prog: str) -> tuple[argparse.ArgumentParser, argparse.ArgumentParse
     where.add_argument("--jobs", type=_integer_type(_jobs), default=None,
                        help="parallel jobs, -1 for all cores (default 1)")
     where.add_argument("--cluster", metavar="local:N|tcp://HOST:PORT", default=None,
-                       help="run the Monte Carlo chunks on a Dask cluster: N local worker processes "
-                            "started for the run, or an existing scheduler (same results as --jobs 1)")
+                       help="run the Monte Carlo chunks on a Dask cluster: N local worker "
+                            "processes started for the run, or an existing scheduler (same "
+                            "results as --jobs 1)")
     rep.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                      help="progress bar over the Monte Carlo chunks on standard error (default: when "
                           "standard error is a terminal)")

@@ -218,7 +218,8 @@ def _canonical(value: Any) -> Any:
         return {"dict": [[k, _canonical(value[k])] for k in sorted(value)]}
     if isinstance(value, np.ndarray) and value.dtype.kind in "biufc":
         data = np.ascontiguousarray(value)
-        return {"array": [data.dtype.str, list(data.shape), hashlib.sha256(data.tobytes()).hexdigest()]}
+        digest = hashlib.sha256(data.tobytes()).hexdigest()
+        return {"array": [data.dtype.str, list(data.shape), digest]}
     raise _Uncacheable
 
 
@@ -266,7 +267,8 @@ def _cache_read(path: Path, key: dict[str, Any]) -> ReproductionResult | None:
     if stored != key:
         differ = sorted(k for k in key if stored.get(k) != key[k])
         warnings.warn(CacheWarning(f"{CACHE_ENV}: the entry {path} was stored for other settings "
-                                   f"({', '.join(differ)} differ); computing it again"), stacklevel=3)
+                                   f"({', '.join(differ)} differ); computing it again"),
+                      stacklevel=3)
         return None
     return result
 
@@ -288,21 +290,25 @@ def _load(path: Path, id: str) -> tuple[dict[str, Any], ReproductionResult] | No
     except Exception as exc:  # unpickling damaged bytes can raise almost any type (EOFError,
         # UnpicklingError, ValueError, KeyError, a stale class's AttributeError, ...): all are a miss
         warnings.warn(CacheWarning(f"{CACHE_ENV}: cannot read the cached result {path} "
-                                   f"({type(exc).__name__}: {exc}); computing it again"), stacklevel=4)
+                                   f"({type(exc).__name__}: {exc}); computing it again"),
+                      stacklevel=4)
         return None
     stored = entry.get("key") if isinstance(entry, dict) else None
     result = entry.get("result") if isinstance(entry, dict) else entry
-    if not isinstance(result, ReproductionResult) or result.id != id or not isinstance(stored, dict):
+    whole = isinstance(stored, dict) and isinstance(result, ReproductionResult)
+    if not whole or result.id != id:
         got = (f"{type(result).__name__} {getattr(result, 'id', '')!r}"
                + ("" if isinstance(stored, dict) else " without its key"))
-        warnings.warn(CacheWarning(f"{CACHE_ENV}: expected a result of {id!r} in {path}, got {got}; "
-                                   f"computing it again"), stacklevel=4)
+        warnings.warn(CacheWarning(f"{CACHE_ENV}: expected a result of {id!r} in {path}, got "
+                                   f"{got}; computing it again"), stacklevel=4)
         return None
     return stored, result
 
 
 def _kind(path: Path) -> str:
-    return "folder" if path.is_dir() else "broken link" if path.is_symlink() and not path.exists() else "special file"
+    if path.is_dir():
+        return "folder"
+    return "broken link" if path.is_symlink() and not path.exists() else "special file"
 
 
 def _cache_write(path: Path, key: dict[str, Any], result: ReproductionResult) -> None:
