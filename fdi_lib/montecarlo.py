@@ -40,7 +40,9 @@ from __future__ import annotations
 import concurrent.futures
 import contextlib
 import contextvars
+import math
 import sys
+import time
 import warnings
 from typing import Any, Callable, Iterator, Sequence
 
@@ -218,7 +220,9 @@ def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: i
                    bar_format="{desc}: {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} chunks "
                               "[{elapsed} elapsed, ETA {remaining}, {rate_fmt}]")
     try:
+        started = time.perf_counter()
         first = _call(*task(0))  # the calling process's first chunk, also the memory probe
+        first_seconds = time.perf_counter() - started
         _check_memory(first, part(0), n_trials, len(chunk_fns))
         if bar is not None:
             bar.update()
@@ -226,7 +230,8 @@ def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: i
         if executor is None:
             results = _run_chunks(task, n_tasks, first, n_workers, done)
         else:
-            results = _run_on_executor(executor, task, n_tasks, first, done)
+            results = _run_on_executor(executor, task, n_tasks, first, done,
+                                       first_seconds=first_seconds)
     finally:
         if bar is not None:
             bar.close()
@@ -363,7 +368,8 @@ def _dask_logs_quiet() -> Iterator[None]:
     before it, and a chunk's error reaches the caller as its exception anyway."""
     import logging
 
-    names = ["distributed"] + [n for n in logging.root.manager.loggerDict if n.startswith("distributed.")]
+    known = logging.root.manager.loggerDict
+    names = ["distributed"] + [n for n in known if n.startswith("distributed.")]
     loggers = [logging.getLogger(n) for n in names]
     levels = [lg.level for lg in loggers]
     for lg in loggers:
@@ -427,11 +433,16 @@ class _WatchedExecutor(concurrent.futures.Executor):
         self._clock = time.monotonic
         self._workerless_since: float | None = None
 
-    def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> concurrent.futures.Future:
+    def submit(self, fn: Callable[..., Any], /, *args: Any,
+               **kwargs: Any) -> concurrent.futures.Future:
         return self._executor.submit(fn, *args, **kwargs)
 
     def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
         self._executor.shutdown(wait=wait)
+
+    def workers(self) -> int:
+        """The number of workers of the cluster now."""
+        return int(self._client.scheduler_info(n_workers=0).get("n_workers", 0))
 
     def check(self, failure: BaseException | None = None) -> None:
         """Raise a one-line :class:`~fdi_lib.errors.ClusterError` if the scheduler is lost, or has
@@ -439,20 +450,20 @@ class _WatchedExecutor(concurrent.futures.Executor):
         when it is a cancellation or a lost connection, not the chunk's own error."""
         status = self._client.status
         if status not in ("running", "newly-created"):
-            raise ClusterError(f"cluster: lost the Dask scheduler at {self._address} during the run "
-                               f"(its client is {status})") from None
+            raise ClusterError(f"cluster: lost the Dask scheduler at {self._address} during the "
+                               f"run (its client is {status})") from None
         if failure is not None and _is_lost_connection(failure):
-            raise ClusterError(f"cluster: lost the Dask scheduler at {self._address} during the run "
-                               f"({_one_line(failure)[:200]})") from None
-        workers = self._client.scheduler_info(n_workers=0).get("n_workers", 0)  # totals only
+            raise ClusterError(f"cluster: lost the Dask scheduler at {self._address} during the "
+                               f"run ({_one_line(failure)[:200]})") from None
+        workers = self.workers()
         now = self._clock()
         if workers:
             self._workerless_since = None
         elif self._workerless_since is None:
             self._workerless_since = now
         elif now - self._workerless_since >= self._worker_timeout:
-            raise ClusterError(f"cluster: the Dask scheduler at {self._address} has had no worker for "
-                               f"{self._worker_timeout:g} s; the run is cancelled")
+            raise ClusterError(f"cluster: the Dask scheduler at {self._address} has had no worker "
+                               f"for {self._worker_timeout:g} s; the run is cancelled")
 
 
 def _is_lost_connection(exc: BaseException) -> bool:
@@ -491,49 +502,84 @@ def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {' '.join(str(exc).split())}"
 
 
-#: At most this many chunks are handed to an executor at a time (:func:`run_monte_carlo`'s
-#: ``executor``): enough to keep a cluster of hundreds of workers busy, few enough that a run of
+#: At most this many tasks (of one chunk or more) are handed to an executor at a time
+#: (:func:`run_monte_carlo`'s ``executor``): enough to keep a cluster of hundreds of workers busy, few enough that a run of
 #: millions of chunks does not hold millions of pending tasks.
 IN_FLIGHT = 1024
 
 
+#: A task handed to a cluster lasts about this long at least: chunks that take less (timed on the
+#: first chunk, which the calling process runs) go to a worker together, as one task, since each
+#: task costs the scheduler milliseconds (``benchmarks/bench_cluster.py`` measures it).
+TASK_SECONDS = 0.5
+
+
+def _batch_size(first_seconds: float | None, n_left: int, workers: int | None) -> int:
+    """Chunks per task on an executor of ``workers`` workers (``None``: unknown, one chunk per
+    task), for ``n_left`` chunks of about ``first_seconds`` each: enough to last
+    :data:`TASK_SECONDS`, few enough that every worker gets at least four tasks (no worker idles
+    long at the end of the run)."""
+    if not workers or not first_seconds or first_seconds <= 0:
+        return 1
+    return max(1, min(math.ceil(TASK_SECONDS / first_seconds), n_left // (4 * workers)))
+
+
+def _call_many(calls: Sequence[tuple[ChunkFn, np.random.SeedSequence, int, int]]
+               ) -> list[dict[str, np.ndarray]]:
+    """:func:`_call` of each chunk of ``calls`` in turn (one task of several chunks)."""
+    return [_call(*c) for c in calls]
+
+
 def _run_on_executor(executor: concurrent.futures.Executor, task: Task, n_tasks: int,
-                     first: dict[str, np.ndarray], done: Callable[[], Any] | None) -> list[dict[str, np.ndarray]]:
+                     first: dict[str, np.ndarray], done: Callable[[], Any] | None, *,
+                     first_seconds: float | None = None) -> list[dict[str, np.ndarray]]:
     """Results of every task ``_call(*task(i))`` (a chunk), in order, ``first`` (task 0) computed
-    already: the others submitted to ``executor``, :data:`IN_FLIGHT` at a time, collected as they
-    finish. On an error (a chunk's, re-raised here) or an interruption, the chunks not yet
+    already (in ``first_seconds``): the others submitted to ``executor``, at most :data:`IN_FLIGHT`
+    at a time, collected as they finish. On an executor that tells its number of workers (a
+    ``workers()`` method, :func:`dask_executor`'s) chunks shorter than :data:`TASK_SECONDS` go
+    several to a task (:func:`_batch_size`); each chunk is the same call either way, so are the
+    results. On an error (a chunk's, re-raised here) or an interruption, the chunks not yet
     finished are cancelled (Dask stops them; a process pool, those not started) before it
-    propagates. A worker lost mid-chunk is the executor's to handle (Dask reruns its chunks elsewhere);
-    an executor with a ``check`` method (:func:`dask_executor`'s) is watched every
+    propagates. A worker lost mid-chunk is the executor's to handle (Dask reruns its chunks
+    elsewhere); an executor with a ``check`` method (:func:`dask_executor`'s) is watched every
     :data:`WATCH_INTERVAL` seconds while no chunk finishes, and asked whether a chunk's exception
     is the cluster's (a lost scheduler): it raises a :class:`~fdi_lib.errors.ClusterError` then.
     """
     results: dict[int, dict[str, np.ndarray]] = {0: first}
-    pending: dict[concurrent.futures.Future, int] = {}
+    pending: dict[concurrent.futures.Future, range] = {}
     given = 1  # tasks handed out: range(1, given)
     check = getattr(executor, "check", None)  # a cluster's watchdog (see dask_executor)
+    workers = getattr(executor, "workers", None)
+    batch = _batch_size(first_seconds, n_tasks - 1, workers() if workers is not None else None)
     try:
         while given < n_tasks or pending:
             while given < n_tasks and len(pending) < IN_FLIGHT:
-                pending[executor.submit(_call, *task(given))] = given
-                given += 1
-            finished, _ = concurrent.futures.wait(pending, timeout=None if check is None else WATCH_INTERVAL,
-                                                  return_when=concurrent.futures.FIRST_COMPLETED)
+                chunks = range(given, min(given + batch, n_tasks))
+                calls = [task(i) for i in chunks]
+                future = (executor.submit(_call, *calls[0]) if len(calls) == 1
+                          else executor.submit(_call_many, calls))
+                pending[future] = chunks
+                given = chunks.stop
+            finished, _ = concurrent.futures.wait(
+                pending, timeout=None if check is None else WATCH_INTERVAL,
+                return_when=concurrent.futures.FIRST_COMPLETED)
             if not finished and check is not None:
                 check()
             for future in finished:
                 try:
-                    results[pending[future]] = future.result()
+                    out = future.result()
                 except Exception as exc:
                     if check is not None:
                         check(exc)  # the cluster's failure (one line) rather than the chunk's
                     raise
-                del pending[future]
-                if done is not None:
-                    done()
+                chunks = pending.pop(future)
+                for i, res in zip(chunks, [out] if len(chunks) == 1 else out):
+                    results[i] = res
+                    if done is not None:
+                        done()
     except BaseException:
         for future in pending:
-            with contextlib.suppress(Exception):  # a lost scheduler cannot cancel: nothing runs then
+            with contextlib.suppress(Exception):  # a lost scheduler cannot cancel: none runs
                 future.cancel()
         raise
     return [results[i] for i in range(n_tasks)]
@@ -609,8 +655,8 @@ def effective_jobs(jobs: int, n_tasks: int | None = None, *, name: str = "jobs:"
         why = f"{cores} CPU core{'s' * (cores > 1)}"
         if n_tasks is not None and n_tasks < cores:
             why = f"{n_tasks} chunk{'s' * (n_tasks > 1)} of work"
-        warnings.warn(JobsCappedWarning(f"{name} {jobs} requested, {used} used ({why}); the results "
-                                        f"do not depend on it"), stacklevel=3)
+        warnings.warn(JobsCappedWarning(f"{name} {jobs} requested, {used} used ({why}); the "
+                                        f"results do not depend on it"), stacklevel=3)
     return used
 
 
