@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import hashlib
 import dis
+import functools
 import json
 import os
 import pickle
@@ -187,9 +188,11 @@ _RESULT_LIBRARIES = ("numpy", "scipy", "scikit-learn", "cvxpy", "control", "stat
                      "numba", "pycddlib-standalone", "clarabel", "osqp", "scs")
 
 
+@functools.lru_cache(maxsize=1)
 def _environment() -> dict[str, Any]:
     """What besides the settings and :func:`code_version` changes a result: the Python version,
-    the machine type and the versions of :data:`_RESULT_LIBRARIES` (``None`` when absent)."""
+    the machine type and the versions of :data:`_RESULT_LIBRARIES` (``None`` when absent). Read
+    once per process (about 50 ms: a scan of the installed distributions); treat as read-only."""
     import importlib.metadata
     import platform
 
