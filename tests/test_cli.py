@@ -121,7 +121,7 @@ def test_monte_carlo_flag_follows_the_use_of_trials():
     (["zb2014-fig1", "--ledger"], r"an ID and --ledger do not go together"),
     (["--ledger", "--plot", "fig.png"], r"--plot does not apply to --ledger"),
     (["--ledger", "--seed", "3"], r"--seed does not apply to --ledger"),
-    (["--ledger", "--jobs", "2"], r"--jobs does not apply to --ledger"),
+    (["--ledger", "--option", "a=1"], r"--option does not apply to --ledger"),
     (["--ledger", "--jobs", "0"],
      r"argument --jobs: expected a non-zero integer \(-1 = all cores\), got 0"),
     (["--ledger", "--seed", "-1"], r"argument --seed: expected a non-negative integer, got -1"),

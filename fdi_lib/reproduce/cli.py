@@ -94,10 +94,10 @@ def _jobs(value: int) -> None:
         raise ModelError(f"jobs: expected a non-zero integer (-1 = all cores), got {value}")
 
 
-#: The options each use of the command reads (beyond ``--json``); any other given is a usage
-#: error, rather than an option silently ignored while a long run goes on.
+#: The options each use of the command reads; any other one given is a usage error, rather than
+#: an option silently ignored while a long run goes on.
 _READS = {"--list": (), "--describe": (),
-          "--ledger": ("--json", "--trials", "--cluster", "--progress"),
+          "--ledger": ("--json", "--trials", "--jobs", "--cluster", "--progress"),
           "ID": ("--json", "--seed", "--trials", "--jobs", "--cluster", "--progress", "--option",
                  "--plot")}
 
