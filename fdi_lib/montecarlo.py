@@ -220,9 +220,9 @@ def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: i
                    bar_format="{desc}: {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} chunks "
                               "[{elapsed} elapsed, ETA {remaining}, {rate_fmt}]")
     try:
-        started = time.perf_counter()
+        started = time.thread_time()  # CPU time: what a chunk costs a core, whatever the load
         first = _call(*task(0))  # the calling process's first chunk, also the memory probe
-        first_seconds = time.perf_counter() - started
+        first_seconds = time.thread_time() - started
         _check_memory(first, part(0), n_trials, len(chunk_fns))
         if bar is not None:
             bar.update()
@@ -508,8 +508,8 @@ def _one_line(exc: BaseException) -> str:
 IN_FLIGHT = 1024
 
 
-#: A task handed to a cluster lasts about this long at least: chunks that take less (timed on the
-#: first chunk, which the calling process runs) go to a worker together, as one task, since each
+#: A task handed to a cluster lasts about this long at least: chunks that take less (the CPU time
+#: of the first chunk, which the calling process runs) go to a worker together, as one task, since each
 #: task costs the scheduler milliseconds (``benchmarks/bench_cluster.py`` measures it).
 TASK_SECONDS = 0.5
 
@@ -534,7 +534,7 @@ def _run_on_executor(executor: concurrent.futures.Executor, task: Task, n_tasks:
                      first: dict[str, np.ndarray], done: Callable[[], Any] | None, *,
                      first_seconds: float | None = None) -> list[dict[str, np.ndarray]]:
     """Results of every task ``_call(*task(i))`` (a chunk), in order, ``first`` (task 0) computed
-    already (in ``first_seconds``): the others submitted to ``executor``, at most :data:`IN_FLIGHT`
+    already (in ``first_seconds`` of CPU time): the others submitted to ``executor``, at most :data:`IN_FLIGHT`
     at a time, collected as they finish. On an executor that tells its number of workers (a
     ``workers()`` method, :func:`dask_executor`'s) chunks shorter than :data:`TASK_SECONDS` go
     several to a task (:func:`_batch_size`); each chunk is the same call either way, so are the
