@@ -402,6 +402,8 @@ def _start_dask(stack: contextlib.ExitStack, distributed: Any, cluster: str, n_w
             raise ClusterError(f"cluster: cannot start a local cluster of {n_workers} workers "
                                f"({_one_line(exc)})") from None
     try:
+        if not n_workers:  # an address: Dask's handshake first, on a connection of its own
+            _handshake(address, timeout)
         client = stack.enter_context(distributed.Client(address, timeout=timeout, set_as_default=False))
     except OSError as exc:  # including TimeoutError: "Timed out trying to connect to ... after 5 s"
         raise ClusterError(f"cluster: cannot reach the Dask scheduler at {cluster} within {timeout:g} s "
@@ -416,6 +418,27 @@ def _start_dask(stack: contextlib.ExitStack, distributed: Any, cluster: str, n_w
         raise ClusterError(f"cluster: the Dask scheduler at {cluster} has no worker (none joined within "
                            f"{timeout:g} s)") from None
     return client
+
+
+def _handshake(address: str, timeout: float) -> None:
+    """Open a Dask connection to ``address`` (with Dask's configured TLS, if any) and close it: an
+    :class:`OSError` if nothing answers, another exception if the answer is not Dask's.
+
+    Done before the :class:`distributed.Client` is made: a client whose construction fails on a
+    server of another protocol is left half made, and at the interpreter's exit it waits 10 s and
+    prints a traceback ("Exception ignored in Client.__del__"). This connection has an event loop
+    of its own, in a thread of its own (a notebook's thread already runs one)."""
+    import asyncio
+
+    from distributed.comm import connect
+    from distributed.security import Security
+
+    async def probe() -> None:
+        comm = await connect(address, timeout=timeout, **Security().get_connection_args("client"))
+        await comm.close()
+
+    with concurrent.futures.ThreadPoolExecutor(1) as pool:
+        pool.submit(asyncio.run, probe()).result()
 
 
 class _WatchedExecutor(concurrent.futures.Executor):
