@@ -526,14 +526,14 @@ def _one_line(exc: BaseException) -> str:
 
 
 #: At most this many tasks (of one chunk or more) are handed to an executor at a time
-#: (:func:`run_monte_carlo`'s ``executor``): enough to keep a cluster of hundreds of workers busy, few enough that a run of
-#: millions of chunks does not hold millions of pending tasks.
+#: (:func:`run_monte_carlo`'s ``executor``): enough to keep a cluster of hundreds of workers busy,
+#: few enough that a run of millions of chunks does not hold millions of pending tasks.
 IN_FLIGHT = 1024
 
 
-#: A task handed to a cluster lasts about this long at least: chunks that take less (the CPU time
-#: of the first chunk, which the calling process runs) go to a worker together, as one task, since each
-#: task costs the scheduler milliseconds (``benchmarks/bench_cluster.py`` measures it).
+#: A task handed to a cluster lasts about this long at least: chunks that take less (the CPU
+#: time of the first chunk, which the calling process runs) go to a worker together, as one task,
+#: since each task costs the scheduler milliseconds (``benchmarks/bench_cluster.py`` measures it).
 TASK_SECONDS = 0.5
 
 
@@ -557,8 +557,8 @@ def _run_on_executor(executor: concurrent.futures.Executor, task: Task, n_tasks:
                      first: dict[str, np.ndarray], done: Callable[[], Any] | None, *,
                      first_seconds: float | None = None) -> list[dict[str, np.ndarray]]:
     """Results of every task ``_call(*task(i))`` (a chunk), in order, ``first`` (task 0) computed
-    already (in ``first_seconds`` of CPU time): the others submitted to ``executor``, at most :data:`IN_FLIGHT`
-    at a time, collected as they finish. On an executor that tells its number of workers (a
+    already (in ``first_seconds`` of CPU time): the others submitted to ``executor``, at most
+    :data:`IN_FLIGHT` at a time, collected as they finish. On an executor that tells its number of workers (a
     ``workers()`` method, :func:`dask_executor`'s) chunks shorter than :data:`TASK_SECONDS` go
     several to a task (:func:`_batch_size`); each chunk is the same call either way, so are the
     results. On an error (a chunk's, re-raised here) or an interruption, the chunks not yet

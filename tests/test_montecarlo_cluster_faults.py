@@ -250,7 +250,8 @@ def test_an_address_that_is_not_a_dask_scheduler_is_one_line(monkeypatch):
     monkeypatch.setattr(mc, "CONNECT_TIMEOUT", 2.0)
     server = _NotDask()
     try:
-        with pytest.raises(ClusterError, match=rf"cluster: {server.address} is not a Dask scheduler"):
+        expected = rf"cluster: {server.address} is not a Dask scheduler"
+        with pytest.raises(ClusterError, match=expected):
             with mc.dask_executor(server.address):
                 pass
         argv = ["reproduce", "zhang2021-table1", "--trials", "4", "--cluster", server.address]
