@@ -11,7 +11,7 @@ export OPENBLAS_NUM_THREADS := 1
 export OMP_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 
-.PHONY: book book-fast test venv lock clean benchmarks student student-pdf notebooks browser-test check-book grade pdf
+.PHONY: book book-fast test venv lock clean benchmarks student student-pdf notebooks browser-test check-book grade pdf install-check
 
 venv: $(STAMP)
 
@@ -172,3 +172,9 @@ lock:
 
 clean:
 	rm -rf _build _build.log
+
+## The library alone (issue 34): its wheel installed into a new, clean virtual environment (deps
+## held to requirements.lock), then `fdi-reproduce --list` and one reproduction's --json there
+## (tools/check_install.py; _build/install-check/).
+install-check: $(STAMP)
+	$(BIN)/python tools/check_install.py --out _build/install-check

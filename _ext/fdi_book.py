@@ -318,6 +318,17 @@ def title_markdown(title: str) -> str:
     return _ASCII_MATH.sub(maths, title)
 
 
+def claims_markdown(rep) -> str:
+    """The claims a reproduction declares (:mod:`fdi_lib.reproduce.ledger`): each location in the
+    paper with its comparison ("Fig. 8, type I error of fault … (95 % interval)"), or why none."""
+    own = [c for _, c in rep.claims if not c.shown_under]
+    if not own:
+        under = sorted({c.shown_under for _, c in rep.claims})
+        return (f"listed under {', '.join(f'`{u}`' for u in under)}" if under
+                else "none (an illustration, or a study of ours)")
+    return "; ".join(f"{re.sub(r'{[^}]*}', '…', c.location)} ({c.test})" for c in own)
+
+
 def catalogue_markdown(confdir: Path) -> tuple[str, list[Path]]:
     """The generated part of the catalogue page (MyST) and the files it was made from."""
     from fdi_lib.reproduce import list_reproductions
@@ -359,7 +370,9 @@ def catalogue_markdown(confdir: Path) -> tuple[str, list[Path]]:
                   + ("the paper's count" if s.trials == r.default_trials
                      else f"the paper's {r.default_trials} with `--trials {r.default_trials}`"
                      if r.default_trials else "the book's count"))
-        out.append(f"**Command (the book's settings):** `{book_command(rid)}`{plot}{trials}.\n")
+        out.append(f"**Command (the book's settings):** `{book_command(rid)}`{plot}{trials}.  ")
+        out.append(f"**Claims** (declared at its registration; statuses in the "
+                   f"{{ref}}`claims ledger <sec-ledger>`): {claims_markdown(r)}.\n")
         out.append(f":::{{dropdown}} What `{rid}` computes and its headline keys\n"
                    f"```{{raw}} html\n<div class=\"fdi-docstring\">\n{_docstring_html(r.func, rid + '-')}"
                    f"</div>\n```\n:::\n")

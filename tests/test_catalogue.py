@@ -81,6 +81,16 @@ def test_registrations_name_their_chapter_and_valid_book_settings():
     assert set(CHAPTER_SEEDS) <= {doc.removeprefix("book/") for doc in chapters}
 
 
+def test_catalogue_lists_each_reproductions_declared_claims():
+    """Each entry names the claims its registration declares, with their comparison, or where they
+    are listed; the statuses are the ledger's."""
+    text, _ = EXT.catalogue_markdown(ROOT)
+    assert text.count("**Claims** (declared at its registration") == len(list_reproductions())
+    assert "Fig. 8, type II error of fault … (95 % interval)" in text
+    assert "SNR of outputs 1 and 2 at r = … (standard error)" in text
+    assert "listed under `zhang2021-table1`, `zhang2021-table2`" in text
+
+
 def test_book_order_follows_the_table_of_contents():
     """Chapters in the order of _toc.yml, then the first book_run of each reproduction in it;
     the catalogue page lists them in the same order."""
