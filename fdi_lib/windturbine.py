@@ -64,7 +64,7 @@ from fdi_lib.validation import integer, real
 __all__ = ["SENSORS", "CANDIDATES", "SUBSYSTEMS", "METHODS", "PlantConstants", "plant_constants",
            "Records", "records", "Calibration", "calibrate", "Design", "design", "Segments", "segments",
            "MethodOutcome", "min_detectable", "run_zb", "run_zhang2021", "run_bz", "run_svo_bank", "run_methods",
-           "expected_candidates"]
+           "expected_candidates", "alarm_onsets", "score_alarms", "delays"]
 
 #: Measured outputs, in the order of :attr:`Records.y` (pitch in deg, speeds in rad/s, torque in kNm).
 SENSORS = ("beta1_m1", "beta1_m2", "beta2_m1", "beta2_m2", "beta3_m1", "beta3_m2",
@@ -532,18 +532,84 @@ def _split(d: Design, y: np.ndarray, u: np.ndarray, s: Subsystem) -> tuple[np.nd
     return y[..., list(s.outputs)], u[..., list(s.inputs)]
 
 
+def alarm_onsets(over: np.ndarray, start: int) -> np.ndarray:
+    """Where a detector raises an alarm: the samples ``k >= start`` at which ``over`` (statistic above
+    its threshold, ``(..., N)`` bool) turns true (a value already true at ``start`` is an alarm there).
+
+    The detector re-arms when ``over`` turns false again: a statistic that stays above its threshold
+    is one alarm, never an alarm at every sample, and never a new alarm when a fault begins under it.
+
+    Examples
+    --------
+    >>> alarm_onsets(np.array([1, 1, 0, 1, 1, 0, 0, 1], dtype=bool), 1).nonzero()[0]
+    array([1, 3, 7])
+    """
+    over = np.asarray(over, dtype=bool)
+    start = integer(start, "start", low=0, high=over.shape[-1])
+    edge = over.copy()
+    edge[..., 1:] &= ~over[..., :-1]
+    if start < over.shape[-1]:
+        edge[..., start] = over[..., start]
+    edge[..., :start] = False
+    return edge
+
+
+def score_alarms(alarms: np.ndarray, onset: int, start: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The benchmark's reading of an alarm sequence ``(..., N)`` (bool, :func:`alarm_onsets`) around a
+    fault that begins at sample ``onset``.
+
+    Returns ``(count, false_alarm, detect)``: the number of alarms in the fault-free stretch
+    ``[start, onset)`` (each one a false alarm, never a detection), whether there is any, and the
+    first alarm at or after ``onset`` (``-1``: none), the detection. An alarm raised before the onset
+    whose statistic stays above its threshold past the onset is not a detection (:func:`alarm_onsets`).
+
+    Examples
+    --------
+    >>> a = np.zeros(10, dtype=bool); a[[2, 7]] = True
+    >>> score_alarms(a, onset=5, start=1)
+    (array(1), array(True), array(7))
+    """
+    alarms = np.asarray(alarms, dtype=bool)
+    onset = integer(onset, "onset", low=0, high=alarms.shape[-1])
+    start = integer(start, "start", low=0, high=onset)
+    count = alarms[..., start:onset].sum(axis=-1)
+    after = np.concatenate([alarms[..., onset:], np.ones((*alarms.shape[:-1], 1), dtype=bool)], axis=-1)
+    first = onset + after.argmax(axis=-1)                   # the appended sample: no alarm
+    detect = np.where(first < alarms.shape[-1], first, -1)
+    return count, count > 0, detect
+
+
+def delays(steps: np.ndarray, onset: int, ts: float) -> np.ndarray:
+    """Time from a fault's start to the decision taken at sample ``steps`` (s; ``-1``: none, ``nan``):
+    ``(step - onset + 1) Ts``, so a decision at the fault's first sample takes one sample.
+
+    Examples
+    --------
+    >>> delays(np.array([500, 509, -1]), onset=500, ts=0.01)
+    array([0.01, 0.1 ,  nan])
+    """
+    steps = np.asarray(steps)
+    return np.where(steps >= 0, (steps - onset + 1) * float(ts), np.nan)
+
+
 def _combine(d: Design, stats: Sequence[np.ndarray], thresholds: Sequence[float]
-             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """False alarms, first alarm at/after the onset and the subsystem that raised it, from one
-    statistic per subsystem."""
-    pre = np.stack([first_alarm(st[..., :d.onset], h, start=d.warmup) >= 0 for st, h in zip(stats, thresholds)])
-    post = np.stack([first_alarm(st, h, start=d.onset) for st, h in zip(stats, thresholds)])
-    big = np.where(post < 0, np.iinfo(np.int64).max, post)
-    which = np.argmin(big, axis=0)
-    first = big.min(axis=0)
-    detect = np.where(first == np.iinfo(np.int64).max, -1, first)
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """False alarms, detection (:func:`score_alarms` of each subsystem's :func:`alarm_onsets`), the
+    subsystem that raised the detection and the largest statistic over its threshold after the onset,
+    from one statistic per subsystem."""
+    edges = []
+    for st, h in zip(stats, thresholds):
+        first_alarm(st, h, start=d.warmup)             # NaN after the warm-up is an error, never "no alarm"
+        edges.append(alarm_onsets(np.nan_to_num(st, nan=-np.inf) > h, d.warmup))
+    scored = [score_alarms(e, d.onset, d.warmup) for e in edges]
+    pre = np.stack([s[1] for s in scored]).any(axis=0)
+    big = np.iinfo(np.int64).max
+    post = np.stack([np.where(s[2] < 0, big, s[2]) for s in scored])
+    which = np.argmin(post, axis=0)
+    first = post.min(axis=0)
+    detect = np.where(first == big, -1, first)
     peak = np.max([np.nanmax(st[..., d.onset:], axis=-1) / h for st, h in zip(stats, thresholds)], axis=0)
-    return pre.any(axis=0), detect, np.where(detect < 0, -1, which), peak
+    return pre, detect, np.where(detect < 0, -1, which), peak
 
 
 def _innovations(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, np.ndarray]:

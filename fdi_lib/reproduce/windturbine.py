@@ -22,7 +22,7 @@ from fdi_lib.montecarlo import binomial_ci, run_monte_carlo
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib import windturbine as W
 
-__all__ = ["scoreboard", "chunk", "calibrated_design", "plot_scoreboard", "CALIBRATION_RUNS", "PUBLISHED",
+__all__ = ["scoreboard", "chunk", "score_method", "calibrated_design", "plot_scoreboard", "CALIBRATION_RUNS", "PUBLISHED",
            "PUBLISHED_DELAYS", "METHOD_LABELS"]
 
 #: Short labels of the methods (figure legends, table columns).
@@ -137,29 +137,10 @@ def _summary(x: dict[str, np.ndarray], d: W.Design, trials: int) -> dict[str, An
         best_upper = None
         best_mean: tuple[str, float] | None = None
         for m, name in enumerate(W.METHODS):
-            det = x["detect"][:, f, m]
-            hit = det >= 0
-            k = int(hit.sum())
-            t = (det[hit] - d.onset + 1) * Ts
-            iso = x["isolated"][:, f, m]
-            sets = [frozenset(W.CANDIDATES[j] for j in np.flatnonzero(row)) for row in iso]
-            correct = [hit[i] and s == exp for i, s in enumerate(sets)]
-            contains = [hit[i] and exp <= s for i, s in enumerate(sets)]
-            labels = [", ".join(sorted(s)) or "none" for i, s in enumerate(sets) if hit[i]]
-            # the most frequent set; a tie goes to the one seen first (in realisation order), never to
-            # the iteration order of a set of strings, which changes with the process's hash seed
-            mode = collections.Counter(labels).most_common(1)[0][0] if labels else None
-            entry: dict[str, Any] = {
-                "detected": k, "detection_rate": k / trials, "detection_rate_ci": list(binomial_ci(k, trials)),
-                "detection_time_mean_s": float(t.mean()) if k else None,
-                "detection_time_ci": _mean_ci(t),
-                "detection_time_spread95": [float(np.percentile(t, 2.5)), float(np.percentile(t, 97.5))] if k else None,
-                "within_requirement": (float(np.mean(hit & ((det - d.onset + 1) * Ts <= req + 1e-12)))
-                                       if req is not None else None),
-                "isolation_correct": float(np.mean(correct)), "isolation_contains": float(np.mean(contains)),
-                "isolated_mode": mode,
-                "reason": None,
-            }
+            entry = score_method(x["detect"][:, f, m], x["isolated"][:, f, m], x["isolate_step"][:, f, m],
+                                 exp, req, d.onset, Ts)
+            k = entry["detected"]
+            hit = x["detect"][:, f, m] >= 0
             if k < trials:   # a miss: measured, never assumed
                 entry["reason"] = {
                     "peak_over_threshold": (float(np.nanmax(x["peak"][~hit, f, m]))
@@ -200,6 +181,53 @@ def _summary(x: dict[str, np.ndarray], d: W.Design, trials: int) -> dict[str, An
             "fastest_method": fastest,
             "bound_violations": int(viol.sum()), "svo_false_alarms_with_violation": int((svo_fa & viol).sum()),
             "svo_false_alarms_without_violation": int((svo_fa & ~viol).sum())}
+
+
+def score_method(detect: np.ndarray, isolated: np.ndarray, isolate_step: np.ndarray, expected: set[str],
+                 required_s: float | None, onset: int, ts: float) -> dict[str, Any]:
+    """One method's score on one fault over ``R`` realisations.
+
+    ``detect`` ``(R,)``: the detection sample (first alarm at or after ``onset``, ``-1``: none,
+    :func:`fdi_lib.windturbine.score_alarms`); ``isolated`` ``(R, len(CANDIDATES))`` bool: the
+    candidates named; ``isolate_step`` ``(R,)``: the sample of that decision; ``expected``: the
+    faulty candidates; ``required_s``: the benchmark's required detection time (``None``: not
+    stated). Times are :func:`fdi_lib.windturbine.delays` from the fault's start; the isolation time
+    is that of the realisations isolating exactly ``expected``.
+    """
+    detect = np.asarray(detect)
+    trials = detect.shape[0]
+    hit = detect >= 0
+    k = int(hit.sum())
+    t = W.delays(detect[hit], onset, ts)
+    sets = [frozenset(W.CANDIDATES[j] for j in np.flatnonzero(row)) for row in np.asarray(isolated)]
+    correct = np.array([hit[i] and s == expected for i, s in enumerate(sets)], dtype=bool)
+    contains = [hit[i] and expected <= s for i, s in enumerate(sets)]
+    wrong = int(sum(hit[i] and bool(s) and s != expected for i, s in enumerate(sets)))
+    t_iso = W.delays(np.asarray(isolate_step)[correct], onset, ts)
+    labels = [", ".join(sorted(s)) or "none" for i, s in enumerate(sets) if hit[i]]
+    # the most frequent set; a tie goes to the one seen first (in realisation order), never to
+    # the iteration order of a set of strings, which changes with the process's hash seed
+    mode = collections.Counter(labels).most_common(1)[0][0] if labels else None
+    within = int(np.sum(hit & (W.delays(detect, onset, ts) <= required_s + 1e-12))) if required_s is not None else None
+    n_iso = int(correct.sum())
+    return {
+        "detected": k, "detection_rate": k / trials, "detection_rate_ci": list(binomial_ci(k, trials)),
+        "missed": trials - k,
+        "detection_time_mean_s": float(t.mean()) if k else None,
+        "detection_time_ci": _mean_ci(t),
+        "detection_time_spread95": [float(np.percentile(t, 2.5)), float(np.percentile(t, 97.5))] if k else None,
+        "within_requirement": within / trials if within is not None else None,
+        "within_requirement_ci": list(binomial_ci(within, trials)) if within is not None else None,
+        "isolation_correct": float(np.mean(correct)), "isolation_correct_ci": list(binomial_ci(n_iso, trials)),
+        "isolation_contains": float(np.mean(contains)),
+        "wrong_isolations": wrong, "not_isolated": int(sum(hit[i] and not s for i, s in enumerate(sets))),
+        "isolation_time_mean_s": float(t_iso.mean()) if n_iso else None,
+        "isolation_time_ci": _mean_ci(t_iso),
+        "isolation_time_spread95": ([float(np.percentile(t_iso, 2.5)), float(np.percentile(t_iso, 97.5))]
+                                    if n_iso else None),
+        "isolated_mode": mode,
+        "reason": None,
+    }
 
 
 def _mean_ci(t: np.ndarray) -> list[float] | None:

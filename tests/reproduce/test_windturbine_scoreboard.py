@@ -1,0 +1,134 @@
+"""The wind-turbine scoreboard's logic on hand-built alarm sequences (issue 36, point 3).
+
+Every expectation here is written out by hand from the benchmark's reading of an alarm sequence:
+an alarm before the fault's start is a false alarm and never a detection, every alarm in a
+fault-free stretch is counted, a detection or isolation at the fault's first sample takes one
+sample.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+import pytest
+
+from fdi_lib import windturbine as W
+from fdi_lib.montecarlo import run_monte_carlo
+from fdi_lib.reproduce import windturbine as RW
+
+TS = 0.01
+
+
+def _alarms(n: int, at: list[int]) -> np.ndarray:
+    a = np.zeros(n, dtype=bool)
+    a[at] = True
+    return a
+
+
+def test_alarm_onsets_are_upcrossings_and_the_detector_rearms():
+    over = np.array([0, 1, 1, 1, 0, 0, 1, 0, 1, 1], dtype=bool)
+    assert W.alarm_onsets(over, 0).nonzero()[0].tolist() == [1, 6, 8]
+    # a statistic already above its threshold when scoring starts is an alarm there, once
+    assert W.alarm_onsets(over, 2).nonzero()[0].tolist() == [2, 6, 8]
+    assert W.alarm_onsets(over, 10).sum() == 0
+    # per record, on a batch
+    both = W.alarm_onsets(np.stack([over, ~over]), 0)
+    assert both[1].nonzero()[0].tolist() == [0, 4, 7]
+
+
+def test_a_false_alarm_before_the_onset_is_never_a_detection():
+    """An alarm at 3 whose statistic stays above its threshold past the onset (5): one false alarm,
+    no detection (the detector has not re-armed); a fresh alarm after re-arming is the detection."""
+    stat = np.array([0, 0, 0, 9, 9, 9, 9, 0, 0, 0], dtype=float)
+    edges = W.alarm_onsets(stat > 1.0, 1)
+    count, fa, det = W.score_alarms(edges, onset=5, start=1)
+    assert (int(count), bool(fa), int(det)) == (1, True, -1)
+    stat[8] = 9.0
+    count, fa, det = W.score_alarms(W.alarm_onsets(stat > 1.0, 1), onset=5, start=1)
+    assert (int(count), bool(fa), int(det)) == (1, True, 8)
+
+
+def test_every_alarm_in_a_fault_free_stretch_is_counted():
+    n, onset, start = 40, 30, 5
+    for at in ([5], [29], [5, 10, 29], list(range(5, 30, 2))):
+        count, fa, det = W.score_alarms(_alarms(n, at), onset=onset, start=start)
+        assert int(count) == len(at) and bool(fa) and int(det) == -1, at
+    # alarms before the scored stretch (the warm-up) are not counted; at the onset it is a detection
+    count, fa, det = W.score_alarms(_alarms(n, [0, 4, 30]), onset=onset, start=start)
+    assert (int(count), bool(fa), int(det)) == (0, False, 30)
+    # a whole fault-free record (onset at its end): every alarm is a false alarm
+    count, fa, det = W.score_alarms(_alarms(n, [6, 7, 39]), onset=n, start=start)
+    assert (int(count), bool(fa), int(det)) == (3, True, -1)
+
+
+def test_combine_reads_each_subsystem_and_names_the_first(monkeypatch):
+    """The methods' combination of subsystem statistics: a pre-onset alarm on one subsystem is a false
+    alarm; the detection is the earliest fresh alarm after the onset on any subsystem."""
+    class D:
+        warmup, onset = 2, 6
+    a = np.array([[0, 0, 0, 5, 5, 5, 5, 5, 5, 5.0]])     # false alarm at 3, still over after the onset
+    b = np.array([[0, 0, 0, 0, 0, 0, 0, 0, 5, 5.0]])     # a fresh alarm at 8
+    fa, det, which, peak = W._combine(D, [a, b], [1.0, 1.0])
+    assert fa.tolist() == [True] and det.tolist() == [8] and which.tolist() == [1]
+    assert peak.tolist() == [5.0]
+    fa, det, which, _ = W._combine(D, [b, b], [1.0, 1.0])
+    assert fa.tolist() == [False] and det.tolist() == [8] and which.tolist() == [0]
+    fa, det, which, _ = W._combine(D, [np.zeros((1, 10)), np.zeros((1, 10))], [1.0, 1.0])
+    assert fa.tolist() == [False] and det.tolist() == [-1] and which.tolist() == [-1]
+
+
+def test_delays_count_the_first_faulty_sample():
+    np.testing.assert_allclose(W.delays(np.array([100, 109, 100 + 4999]), 100, TS), [0.01, 0.10, 50.0])
+    assert np.isnan(W.delays(np.array([-1]), 100, TS)).all()
+
+
+def test_score_method_on_hand_built_outcomes():
+    """Four realisations, onset 100, requirement 0.1 s (10 samples): detected at 100, 109, 150, never;
+    isolations: exactly right at 120, right at 200, a wrong one, none."""
+    onset = 100
+    exp = {"beta1_m1"}
+    j, k = W.CANDIDATES.index("beta1_m1"), W.CANDIDATES.index("beta2_m1")
+    iso = np.zeros((4, len(W.CANDIDATES)), dtype=bool)
+    iso[0, j] = iso[1, j] = iso[2, k] = True
+    iso[3, j] = True                                      # named by a record that never detected
+    e = RW.score_method(np.array([100, 109, 150, -1]), iso, np.array([120, 200, 160, 130]), exp, 0.1, onset, TS)
+    assert e["detected"] == 3 and e["missed"] == 1
+    assert e["within_requirement"] == 0.5                   # 0.01 s and 0.10 s; 0.51 s is late
+    np.testing.assert_allclose(e["detection_time_mean_s"], (0.01 + 0.10 + 0.51) / 3)
+    assert e["isolation_correct"] == 0.5 and e["wrong_isolations"] == 1 and e["not_isolated"] == 0
+    np.testing.assert_allclose(e["isolation_time_mean_s"], (0.21 + 1.01) / 2)
+    lo, hi = e["within_requirement_ci"]
+    assert lo < 0.5 < hi
+    assert e["isolated_mode"] == "beta1_m1"
+    none = RW.score_method(np.full(4, -1), np.zeros_like(iso), np.full(4, -1), exp, None, onset, TS)
+    assert none["detected"] == 0 and none["within_requirement"] is None and none["isolation_time_mean_s"] is None
+    assert none["isolation_correct"] == 0.0 and none["isolated_mode"] is None
+
+
+def _slow_chunks(seeds):
+    """Chunks slow enough (0.3 s) for a pool of two to deliver them out of order (this process takes
+    them from the front, the worker from the back); each trial carries its index, the process that
+    ran it and when its chunk finished."""
+    time.sleep(0.3)
+    idx = np.array([s.spawn_key[-1] for s in seeds])
+    return {"detect": np.where(idx % 3 == 0, -1, 100 + idx), "idx": idx,
+            "pid": np.full(len(seeds), os.getpid()), "done": np.full(len(seeds), time.monotonic_ns())}
+
+
+def test_trial_order_does_not_depend_on_which_worker_finishes_first():
+    one = run_monte_carlo(_slow_chunks, 16, seed=5, jobs=1, chunk_size=2)
+    for _ in range(3):      # the pool is reused: its start-up (seconds on a loaded machine) is paid once
+        two = run_monte_carlo(_slow_chunks, 16, seed=5, jobs=2, chunk_size=2)
+        if (two["pid"] != os.getpid()).any():
+            break
+    assert (two["pid"] != os.getpid()).any()                 # a worker ran some chunks
+    assert (np.diff(two["done"][::2]) < 0).any()             # ... delivered out of trial order
+    assert two["idx"].tolist() == list(range(16)) == one["idx"].tolist()
+    np.testing.assert_array_equal(one["detect"], two["detect"])
+    # the scoreboard's summary reads the same realisations whichever run it is given
+    iso = np.zeros((16, len(W.CANDIDATES)), dtype=bool)
+    a = RW.score_method(one["detect"], iso, one["detect"], {"converter"}, 0.1, 100, TS)
+    b = RW.score_method(two["detect"], iso, two["detect"], {"converter"}, 0.1, 100, TS)
+    assert a == b
