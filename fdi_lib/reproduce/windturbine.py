@@ -18,12 +18,14 @@ from typing import Any
 import numpy as np
 import scipy.stats
 
+from fdi_lib.errors import ResourceError
 from fdi_lib.montecarlo import binomial_ci, run_monte_carlo
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib import windturbine as W
 
-__all__ = ["scoreboard", "chunk", "score_method", "calibrated_design", "plot_scoreboard", "CALIBRATION_RUNS", "PUBLISHED",
-           "PUBLISHED_DELAYS", "METHOD_LABELS"]
+__all__ = ["scoreboard", "chunk", "score_method", "check_trials", "SECONDS_PER_REALISATION", "MAX_RUN_S",
+           "calibrated_design", "plot_scoreboard", "CALIBRATION_RUNS", "PUBLISHED", "PUBLISHED_DELAYS",
+           "METHOD_LABELS"]
 
 #: Short labels of the methods (figure legends, table columns).
 METHOD_LABELS = {"zb2014": "GLR + minmax", "zhang2021": "Kitanidis + Lasso", "bz": "parametric + energy",
@@ -73,6 +75,55 @@ def _calibrated_design(seed: int, settings: W.Settings) -> W.Design:
     return W.design(c, cal, rec.x.reshape(-1, rec.x.shape[-1]).mean(axis=0), settings)
 
 
+def _empty_chunk(n: int) -> dict[str, np.ndarray]:
+    """The arrays of :func:`chunk` for ``n`` realisations, before they are filled."""
+    from fdi_lib.systems import wind_turbine as wt
+
+    F, M = len(wt.FAULTS), len(W.METHODS)
+    return {"detect": np.full((n, F, M), -1), "false_alarm": np.zeros((n, F, M), dtype=bool),
+            "isolated": np.zeros((n, F, M, len(W.CANDIDATES)), dtype=bool), "isolate_step": np.full((n, F, M), -1),
+            "peak": np.full((n, F, M), np.nan), "effect_sigma": np.zeros((n, F)),
+            "effect_sigma_req": np.full((n, F), np.nan), "bound_violation": np.zeros((n, F), dtype=bool),
+            "torque_effect_kNm": np.full((n, F), np.nan)}
+
+
+#: Seconds of one core that one realisation of the scoreboard (every fault's segment and its
+#: fault-free twin, the four methods) takes with the default :class:`~fdi_lib.windturbine.Settings`:
+#: the process time of 6 realisations less that of 2, over 4 (1.09 s on the book's 2-core machine,
+#: the design cached): the estimate with which a too large ``trials`` is refused.
+SECONDS_PER_REALISATION = 1.1
+#: The longest scoreboard run accepted (s, estimated with :data:`SECONDS_PER_REALISATION` over the jobs).
+MAX_RUN_S = 24 * 3600.0
+
+
+def check_trials(trials: int, jobs: int = 1) -> int:
+    """``trials`` of the scoreboard, refused with a :class:`~fdi_lib.errors.ResourceError` that gives
+    the estimated time and memory when the run would take longer than :data:`MAX_RUN_S` on ``jobs``
+    processes (capped at the cores) or its results would not fit in the available memory; nothing is
+    simulated before the check."""
+    import warnings
+
+    from fdi_lib.errors import JobsCappedWarning
+    from fdi_lib.montecarlo import _bytes_text, check_memory, effective_jobs
+    from fdi_lib.validation import integer
+
+    trials = integer(trials, "trials", low=1)
+    with warnings.catch_warnings():             # the run itself warns about a capped request
+        warnings.simplefilter("ignore", JobsCappedWarning)
+        workers = effective_jobs(jobs)
+    per = sum(a.nbytes for a in _empty_chunk(1).values())
+    memory = 2.0 * per * trials                # the chunks' arrays and their concatenation
+    seconds = trials * SECONDS_PER_REALISATION / workers
+    what = (f"{trials} realisations (about {SECONDS_PER_REALISATION:g} s of a core and "
+            f"{_bytes_text(per)} of results each)")
+    check_memory(memory, "trials", what)
+    if seconds > MAX_RUN_S:
+        raise ResourceError(f"trials: {what} would take about {seconds / 3600:.3g} h on {workers} "
+                            f"process{'es' * (workers > 1)} and need about {_bytes_text(memory)} of memory; "
+                            f"the limit is {MAX_RUN_S / 3600:g} h (MAX_RUN_S): use fewer")
+    return trials
+
+
 def chunk(seeds: list, *, seed: int, settings: W.Settings = W.Settings()) -> dict[str, np.ndarray]:
     """Monte Carlo chunk: every fault's segment for each seed, the four methods, and what explains
     a miss (the fault's largest effect on the measurements in noise standard deviations, from a
@@ -80,12 +131,8 @@ def chunk(seeds: list, *, seed: int, settings: W.Settings = W.Settings()) -> dic
     from fdi_lib.systems import wind_turbine as wt
 
     d = calibrated_design(seed, settings)
-    n, F, M = len(seeds), len(wt.FAULTS), len(W.METHODS)
-    out = {"detect": np.full((n, F, M), -1), "false_alarm": np.zeros((n, F, M), dtype=bool),
-           "isolated": np.zeros((n, F, M, len(W.CANDIDATES)), dtype=bool), "isolate_step": np.full((n, F, M), -1),
-           "peak": np.full((n, F, M), np.nan), "effect_sigma": np.zeros((n, F)),
-           "effect_sigma_req": np.full((n, F), np.nan), "bound_violation": np.zeros((n, F), dtype=bool),
-           "torque_effect_kNm": np.full((n, F), np.nan)}
+    n, F = len(seeds), len(wt.FAULTS)
+    out = _empty_chunk(n)
     ys, us = [], []
     for f, fault in enumerate(wt.FAULTS):
         rec = W.fault_records(fault, seeds, settings=settings)
@@ -341,6 +388,7 @@ def scoreboard(*, seed: int, trials: int | None, jobs: int) -> ReproductionResul
     from fdi_lib.systems import wind_turbine as wt
 
     settings = W.Settings()
+    trials = check_trials(trials, jobs)
     d = calibrated_design(seed, settings)
     x = run_monte_carlo(functools.partial(chunk, seed=seed, settings=settings), trials, seed=seed, jobs=jobs,
                         description="wind-turbine scoreboard")

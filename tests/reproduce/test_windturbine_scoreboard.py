@@ -108,23 +108,18 @@ def test_score_method_on_hand_built_outcomes():
 
 
 def _slow_chunks(seeds):
-    """Chunks slow enough (0.3 s) for a pool of two to deliver them out of order (this process takes
-    them from the front, the worker from the back); each trial carries its index, the process that
-    ran it and when its chunk finished."""
-    time.sleep(0.3)
+    """Chunks slow enough for a pool to deliver them out of order: the earlier a chunk, the slower
+    (0.1 to 0.8 s). Each trial carries its index, the process that ran it and when its chunk
+    finished."""
     idx = np.array([s.spawn_key[-1] for s in seeds])
+    time.sleep(0.1 * max(1, 8 - int(idx[0]) // 2))
     return {"detect": np.where(idx % 3 == 0, -1, 100 + idx), "idx": idx,
             "pid": np.full(len(seeds), os.getpid()), "done": np.full(len(seeds), time.monotonic_ns())}
 
 
-def test_trial_order_does_not_depend_on_which_worker_finishes_first():
-    one = run_monte_carlo(_slow_chunks, 16, seed=5, jobs=1, chunk_size=2)
-    for _ in range(3):      # the pool is reused: its start-up (seconds on a loaded machine) is paid once
-        two = run_monte_carlo(_slow_chunks, 16, seed=5, jobs=2, chunk_size=2)
-        if (two["pid"] != os.getpid()).any():
-            break
-    assert (two["pid"] != os.getpid()).any()                 # a worker ran some chunks
-    assert (np.diff(two["done"][::2]) < 0).any()             # ... delivered out of trial order
+def _check_order(one: dict, two: dict) -> None:
+    assert (two["pid"] != os.getpid()).any()                 # another process ran some chunks
+    assert (np.diff(two["done"][::2]) < 0).any()             # ... and delivered them out of trial order
     assert two["idx"].tolist() == list(range(16)) == one["idx"].tolist()
     np.testing.assert_array_equal(one["detect"], two["detect"])
     # the scoreboard's summary reads the same realisations whichever run it is given
@@ -132,3 +127,42 @@ def test_trial_order_does_not_depend_on_which_worker_finishes_first():
     a = RW.score_method(one["detect"], iso, one["detect"], {"converter"}, 0.1, 100, TS)
     b = RW.score_method(two["detect"], iso, two["detect"], {"converter"}, 0.1, 100, TS)
     assert a == b
+
+
+def test_trial_order_does_not_depend_on_which_worker_finishes_first():
+    """Two jobs (this process from the front, a worker from the back) and an executor of two
+    processes (chunks 1, 2, ... submitted in order, the earlier slower: they finish in reverse)."""
+    import concurrent.futures
+
+    from joblib.externals.loky import get_reusable_executor
+
+    one = run_monte_carlo(_slow_chunks, 16, seed=5, jobs=1, chunk_size=2)
+    # the pool that jobs=2 reuses, started and its imports done first: its start-up (seconds on a
+    # loaded machine) would let this process compute every chunk itself
+    warm = [np.random.SeedSequence(0, spawn_key=(15,))]
+    get_reusable_executor(max_workers=1, timeout=600).submit(_slow_chunks, warm).result()
+    _check_order(one, run_monte_carlo(_slow_chunks, 16, seed=5, jobs=2, chunk_size=2))
+    with concurrent.futures.ProcessPoolExecutor(2) as pool:
+        _check_order(one, run_monte_carlo(_slow_chunks, 16, seed=5, chunk_size=2, executor=pool))
+
+
+@pytest.mark.parametrize("trials, why", [(10**12, r"would need about .* of memory"),
+                                         (10**6, r"would take about 153 h on 2 processes")])
+def test_scoreboard_refuses_a_budget_breaking_trials_count_before_simulating(trials, why, monkeypatch):
+    """``--trials`` beyond the time or memory budget: a ResourceError with the estimate, before any
+    simulation (a simulation here would fail the test)."""
+    import fdi_lib.montecarlo as mc
+    from fdi_lib.errors import ResourceError
+    from fdi_lib.reproduce import reproduce
+
+    monkeypatch.setattr(mc, "available_memory", lambda: 16 * 10**9)
+    monkeypatch.setattr(mc, "effective_jobs", lambda jobs, n_tasks=None: 2)
+    monkeypatch.setattr(RW, "calibrated_design", lambda *a, **k: pytest.fail("simulated before the check"))
+    with pytest.raises(ResourceError, match=rf"trials: {trials} realisations \(about 1.1 s of a core .*{why}"):
+        reproduce("windturbine-scoreboard", trials=trials, jobs=2)
+    assert RW.check_trials(100, 1) == 100
+    # the limit itself: the largest count accepted on two processes, and one more refused
+    n = int(2 * RW.MAX_RUN_S // RW.SECONDS_PER_REALISATION)
+    assert RW.check_trials(n, 2) == n
+    with pytest.raises(ResourceError, match=r"limit is 24 h \(MAX_RUN_S\)"):
+        RW.check_trials(n + 1, 2)
