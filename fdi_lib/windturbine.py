@@ -64,7 +64,7 @@ from fdi_lib.validation import integer, real
 __all__ = ["SENSORS", "CANDIDATES", "SUBSYSTEMS", "METHODS", "PlantConstants", "plant_constants",
            "Records", "records", "Calibration", "calibrate", "Design", "design", "Segments", "segments",
            "MethodOutcome", "min_detectable", "run_zb", "run_zhang2021", "run_bz", "run_svo_bank", "run_methods",
-           "expected_candidates", "alarm_onsets", "score_alarms", "delays"]
+           "expected_candidates", "alarm_onsets", "score_alarms", "delays", "stream_alarms", "stream_counts"]
 
 #: Measured outputs, in the order of :attr:`Records.y` (pitch in deg, speeds in rad/s, torque in kNm).
 SENSORS = ("beta1_m1", "beta1_m2", "beta2_m1", "beta2_m2", "beta3_m1", "beta3_m2",
@@ -627,8 +627,7 @@ def run_zb(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray
     samples after the alarm, from the onset the window estimates then."""
     eps = _innovations(d, y, u) if eps is None else eps
     B = y.shape[0]
-    res = {name: glr_window(eps[name], sd.kf, sd.kf_gains, sd.family, sd.glr.window, shared=sd.glr,
-                            start=d.warmup) for name, sd in d.subs.items()}
+    res = _zb_glr(d, eps)
     names = list(d.subs)
     fa, detect, which, peak = _combine(d, [res[n].statistic for n in names], [d.subs[n].glr_threshold for n in names])
     isolated = np.zeros((B, len(CANDIDATES)), dtype=bool)
@@ -642,6 +641,12 @@ def run_zb(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray
             sd = d.subs[name]
             isolated[np.ix_(rows, sd.sub.candidates)] = _minmax(C, dd, d.settings.isolation_alpha)
     return MethodOutcome(fa, detect, which, isolated, step, peak)
+
+
+def _zb_glr(d: Design, eps: Mapping[str, np.ndarray]) -> dict[str, Any]:
+    """The windowed GLR of every subsystem's innovations (Zhang & Basseville)."""
+    return {name: glr_window(eps[name], sd.kf, sd.kf_gains, sd.family, sd.glr.window, shared=sd.glr,
+                             start=d.warmup) for name, sd in d.subs.items()}
 
 
 def _minmax(C: np.ndarray, dd: np.ndarray, alpha: float) -> np.ndarray:
@@ -692,6 +697,23 @@ def _residuals(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, tuple[np.nd
     return out
 
 
+def _lasso_test(d: Design, res: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> list[np.ndarray]:
+    """Per subsystem, ``max_j |X_j^T y| / ||X_j||`` over the last ``w`` whitened residuals (Zhang 2021's
+    detection: the Lasso of the window is not identically zero), ``nan`` before ``w`` samples."""
+    w = d.settings.window
+    stats = []
+    for name, sd in d.subs.items():
+        r, S = res[name]
+        kern = S[d.warmup:d.warmup + w]                            # (w, p, m): onset at window start
+        norm = np.sqrt(np.einsum("wpm,wpm->m", kern, kern))
+        win = np.lib.stride_tricks.sliding_window_view(r, w, axis=1)    # (B, N-w+1, p, w)
+        t = np.einsum("bkpw,wpm->bkm", win, kern) / norm
+        st = np.full(r.shape[:2], np.nan)
+        st[:, w - 1:] = np.abs(t).max(axis=-1)
+        stats.append(st)
+    return stats
+
+
 def run_zhang2021(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
     """Zhang (2021): Kitanidis residuals (``tau_a`` the unknown input), detection when the Lasso
     of the last ``w`` samples is not identically zero (``max_j |X_j^T y| / ||X_j||`` above the
@@ -701,16 +723,7 @@ def run_zhang2021(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
     w = d.settings.window
     B = y.shape[0]
     res = _residuals(d, y, u)
-    stats = []
-    for name, sd in d.subs.items():
-        r, S = res[name]
-        kern = S[d.warmup:d.warmup + w]                            # (w, p, m): onset at window start
-        norm = np.sqrt(np.einsum("wpm,wpm->m", kern, kern))
-        win = np.lib.stride_tricks.sliding_window_view(r, w, axis=1)    # (B, N-w+1, p, w)
-        t = np.einsum("bkpw,wpm->bkm", win, kern) / norm
-        st = np.full((B, d.N), np.nan)
-        st[:, w - 1:] = np.abs(t).max(axis=-1)
-        stats.append(st)
+    stats = _lasso_test(d, res)
     names = list(d.subs)
     fa, detect, which, peak = _combine(d, stats, [d.subs[n].lasso_threshold for n in names])
     isolated = np.zeros((B, len(CANDIDATES)), dtype=bool)
@@ -735,20 +748,13 @@ def run_zhang2021(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
     return MethodOutcome(fa, detect, which, isolated, step, peak)
 
 
-def run_bz(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray] | None = None) -> MethodOutcome:
-    """Basseville & Zhang: parametric tests (the stiffness ``wn^2`` of each pitch actuator, a
-    data-dependent profile ``Psi_k``; the converter offset and the drive-train torque on the
-    Kitanidis residual projected away from ``tau_a``) by windowed GLR, and the non-parametric
-    energy test on the Kalman innovation of each subsystem. An energy alarm before any
-    parametric one is the decision "non-parametric fault" (Section 3.3): isolated to its
-    subsystem only."""
-    eps = _innovations(d, y, u) if eps is None else eps
-    B = y.shape[0]
+def _bz_stats(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray]
+              ) -> tuple[list[np.ndarray], list[float], list[np.ndarray], list[float]]:
+    """Basseville & Zhang's statistics and thresholds per subsystem: the parametric windowed GLRs,
+    then the energy tests."""
     w = d.settings.window
-    names = list(d.subs)
-    par_stats, par_thr, par_onset = [], [], {}
-    isolated = np.zeros((B, len(CANDIDATES)), dtype=bool)
-    glr_res = {}
+    par_stats: list[np.ndarray] = []
+    par_thr: list[float] = []
     for name, sd in d.subs.items():
         ys, us = _split(d, y, u, sd.sub)
         if sd.sub.E is None:
@@ -761,18 +767,33 @@ def run_bz(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray
             par_stats.append(st)
             par_thr.append(float(scipy.stats.chi2.ppf(1.0 - d.alpha_sample / w, 1)))
         else:
-            kpred, T = sd.bz_red
             from fdi_lib.nonparametric import reduce_residual
+
+            kpred, T = sd.bz_red
             e_kit = kalman_filter(sd.kit, ys, us, gains=kpred).innovations
             red = reduce_residual(sd.kit, sd.kit_gains, e_kit, T)
             g = glr_window(red.residuals, sd.bz_glr.model, sd.bz_glr.gains, sd.bz_glr.family, w,
                            shared=sd.bz_glr, start=d.warmup)
-            glr_res[name] = g
             par_stats.append(g.statistic)
             par_thr.append(float(scipy.stats.chi2.ppf(1.0 - d.alpha_sample / w, 1)))
+    en = [energy_statistic(eps[n], sd.kf_gains.Sigma_chol, w) for n, sd in d.subs.items()]
+    return par_stats, par_thr, en, [sd.energy_threshold for sd in d.subs.values()]
+
+
+def run_bz(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray] | None = None) -> MethodOutcome:
+    """Basseville & Zhang: parametric tests (the stiffness ``wn^2`` of each pitch actuator, a
+    data-dependent profile ``Psi_k``; the converter offset and the drive-train torque on the
+    Kitanidis residual projected away from ``tau_a``) by windowed GLR, and the non-parametric
+    energy test on the Kalman innovation of each subsystem. An energy alarm before any
+    parametric one is the decision "non-parametric fault" (Section 3.3): isolated to its
+    subsystem only."""
+    eps = _innovations(d, y, u) if eps is None else eps
+    B = y.shape[0]
+    names = list(d.subs)
+    par_stats, par_thr, en, en_thr = _bz_stats(d, y, u, eps)
+    isolated = np.zeros((B, len(CANDIDATES)), dtype=bool)
     pfa, pdet, pwhich, ppeak = _combine(d, par_stats, par_thr)
-    en = [energy_statistic(eps[n], d.subs[n].kf_gains.Sigma_chol, w) for n in names]
-    efa, edet, ewhich, epeak = _combine(d, en, [d.subs[n].energy_threshold for n in names])
+    efa, edet, ewhich, epeak = _combine(d, en, en_thr)
     big = np.iinfo(np.int64).max
     p_ = np.where(pdet < 0, big, pdet)
     e_ = np.where(edet < 0, big, edet)
@@ -787,6 +808,96 @@ def run_bz(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray
         else:
             isolated[b, list(sub.candidates)] = True            # non-parametric: the subsystem only
     return MethodOutcome(pfa | efa, detect, which, isolated, detect.copy(), np.maximum(ppeak, epeak))
+
+
+def stream_alarms(d: Design, y: np.ndarray, u: np.ndarray, start: int,
+                  methods: Sequence[str] = tuple(METHODS)) -> dict[str, Any]:
+    """Alarms of the four methods on records ``y`` ``(B, N, 11)``, ``u`` ``(B, N, 4)`` from sample ``start``
+    on: one window of a long stream, whose first ``start`` samples overlap the previous window.
+
+    The statistical tests (one per subsystem; Basseville & Zhang: a parametric and an energy test per
+    subsystem) count their alarms (:func:`alarm_onsets`) at samples ``[start, N)``; their statistics
+    restart with the window (``start`` must leave the filters their warm-up and a full window before
+    it), and whether a test was already over its threshold at ``start - 1`` is read on this window, so
+    an alarm raised in the previous window is not counted again. The SVO bank runs from ``start`` on,
+    from its prior set: it re-arms at every window and counts at most one alarm (an emptied set) in it.
+
+    Returns
+    -------
+    dict
+        Method key (of ``methods``) -> ``(B,)`` alarm counts, and ``"tests"`` -> method key -> the
+        number of tests summed.
+    """
+    import dataclasses
+
+    start = integer(start, "start", low=d.warmup + d.settings.window, high=d.N - 1)
+    methods = _method_keys(methods)
+    y = np.asarray(y, dtype=float)
+    u = np.asarray(u, dtype=float)
+    eps = _innovations(d, y, u) if {"zb2014", "bz"} & set(methods) else {}
+    out: dict[str, Any] = {"tests": {}}
+    for name in methods:
+        if name == "rosa2013":
+            svo = run_svo_bank(dataclasses.replace(d, warmup=start, onset=d.N), y, u)
+            out[name], out["tests"][name] = svo.false_alarm.astype(np.int64), 1
+            continue
+        if name == "zb2014":
+            zb = _zb_glr(d, eps)
+            stats, thr = [zb[n].statistic for n in d.subs], [sd.glr_threshold for sd in d.subs.values()]
+        elif name == "zhang2021":
+            stats, thr = _lasso_test(d, _residuals(d, y, u)), [sd.lasso_threshold for sd in d.subs.values()]
+        else:
+            par, par_thr, en, en_thr = _bz_stats(d, y, u, eps)
+            stats, thr = par + en, par_thr + en_thr
+        count = np.zeros(y.shape[0], dtype=np.int64)
+        for st, h in zip(stats, thr):
+            first_alarm(st, h, start=d.warmup)       # NaN after the warm-up is an error, never "no alarm"
+            edges = alarm_onsets(np.nan_to_num(st, nan=-np.inf) > h, start - 1)
+            count += edges[:, start:].sum(axis=-1)
+        out[name], out["tests"][name] = count, len(stats)
+    return out
+
+
+def _method_keys(methods: Sequence[str]) -> tuple[str, ...]:
+    methods = tuple(methods)
+    bad = [m for m in methods if m not in METHODS]
+    if bad or not methods or len(set(methods)) != len(methods):
+        raise ModelError(f"methods: expected distinct keys of {tuple(METHODS)}, got {methods}")
+    return methods
+
+
+def stream_counts(d: Design, y: np.ndarray, u: np.ndarray, start: int, *, batch: int = 8,
+                  methods: Sequence[str] = tuple(METHODS)) -> dict[str, Any]:
+    """Alarm counts of the four methods over one long stream ``y`` ``(n, 11)``, ``u`` ``(n, 4)``, in
+    constant memory: overlapping windows of ``d.N`` samples, each scored from its sample ``start``
+    (:func:`stream_alarms`), so that the scored parts tile ``[start, start + K (N - start))``; ``batch``
+    windows at a time are one batch of records (the memory of one batch, whatever ``n``).
+
+    Returns
+    -------
+    dict
+        Method key -> alarm count, ``"tests"`` (see :func:`stream_alarms`), ``"samples"``: the
+        samples scored.
+    """
+    y = np.asarray(y, dtype=float)
+    u = np.asarray(u, dtype=float)
+    if y.ndim != 2 or y.shape[1] != len(SENSORS) or u.shape != (y.shape[0], len(INPUTS)):
+        raise ShapeError(f"y, u: expected (n, {len(SENSORS)}) and (n, {len(INPUTS)}), got {y.shape} and {u.shape}")
+    batch = integer(batch, "batch", low=1)
+    step = d.N - start
+    n_windows = (y.shape[0] - d.N) // step + 1 if y.shape[0] >= d.N else 0
+    if n_windows < 1:
+        raise ShapeError(f"y: expected at least one window of {d.N} samples, got {y.shape[0]}")
+    methods = _method_keys(methods)
+    total: dict[str, Any] = {name: 0 for name in methods}
+    tests: dict[str, int] = {}
+    for b0 in range(0, n_windows, batch):
+        idx = (np.arange(b0, min(b0 + batch, n_windows)) * step)[:, None] + np.arange(d.N)
+        counts = stream_alarms(d, y[idx], u[idx], start, methods)
+        tests = counts.pop("tests")
+        for name, c in counts.items():
+            total[name] += int(c.sum())
+    return {**total, "tests": tests, "samples": n_windows * step}
 
 
 def _const(M: np.ndarray, T: int) -> np.ndarray:

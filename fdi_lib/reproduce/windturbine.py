@@ -24,6 +24,7 @@ from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib import windturbine as W
 
 __all__ = ["scoreboard", "chunk", "score_method", "check_trials", "SECONDS_PER_REALISATION", "MAX_RUN_S",
+           "false_alarms", "stream_chunk", "stream_design", "STREAM_WINDOW_S", "STREAM_OVERLAP_S",
            "calibrated_design", "plot_scoreboard", "CALIBRATION_RUNS", "PUBLISHED", "PUBLISHED_DELAYS",
            "METHOD_LABELS"]
 
@@ -64,15 +65,61 @@ def calibrated_design(seed: int, settings: W.Settings = W.Settings()) -> W.Desig
 
 
 @functools.lru_cache(maxsize=4)
-def _calibrated_design(seed: int, settings: W.Settings) -> W.Design:
+def _calibration(seed: int, settings: W.Settings) -> tuple[W.PlantConstants, W.Calibration, np.ndarray]:
+    """The plant's constants, the calibration and the filters' prior mean of :func:`calibrated_design`."""
     from fdi_lib.systems import wind_turbine as wt
 
     c = W.plant_constants()
     seeds = np.random.SeedSequence([seed, 1]).spawn(CALIBRATION_RUNS)
     recs = [W.fault_records(f, seeds, settings=settings, faulty=False) for f in wt.FAULTS]
     rec = W.Records(recs[0].t, *(np.concatenate([getattr(r, k) for r in recs]) for k in ("y", "u", "x", "tau_a", "v")))
-    cal = W.calibrate(c, rec)
-    return W.design(c, cal, rec.x.reshape(-1, rec.x.shape[-1]).mean(axis=0), settings)
+    return c, W.calibrate(c, rec), rec.x.reshape(-1, rec.x.shape[-1]).mean(axis=0)
+
+
+@functools.lru_cache(maxsize=4)
+def _calibrated_design(seed: int, settings: W.Settings) -> W.Design:
+    return W.design(*_calibration(seed, settings), settings)
+
+
+#: The false-alarm study's windows (:func:`fdi_lib.windturbine.stream_counts`): each window scores
+#: ``STREAM_WINDOW_S`` seconds after an overlap of ``STREAM_OVERLAP_S`` with the previous one (the
+#: filters' warm-up and one test window, :class:`~fdi_lib.windturbine.Settings`, plus 0.5 s).
+STREAM_WINDOW_S = 20.0
+STREAM_OVERLAP_S = 4.0
+
+
+def stream_design(seed: int) -> tuple[W.Design, int]:
+    """The methods' design for the false-alarm study's windows and the sample at which each window's
+    scoring starts: the calibration of :func:`calibrated_design` (shared), windows of
+    ``STREAM_OVERLAP_S + STREAM_WINDOW_S`` seconds."""
+    c, cal, x0 = _calibration(int(seed), W.Settings())
+    n = int(round((STREAM_OVERLAP_S + STREAM_WINDOW_S) / c.Ts))
+    settings = W.Settings(pre_s=(n - 1) * c.Ts, post_s=c.Ts)
+    return _stream_design(int(seed), settings), int(round(STREAM_OVERLAP_S / c.Ts))
+
+
+@functools.lru_cache(maxsize=2)
+def _stream_design(seed: int, settings: W.Settings) -> W.Design:
+    return W.design(*_calibration(seed, W.Settings()), settings)
+
+
+def stream_chunk(seeds: list, *, seed: int) -> dict[str, np.ndarray]:
+    """Monte Carlo chunk of the false-alarm study: per seed, the benchmark's whole fault-free scenario
+    (:data:`~fdi_lib.systems.wind_turbine.SCENARIO_S` seconds, its wind and noise from the seed) run as
+    one continuous stream, and the alarms of each method over it (:func:`fdi_lib.windturbine.stream_counts`)."""
+    from fdi_lib.systems import wind_turbine as wt
+
+    d, start = stream_design(seed)
+    n, M = len(seeds), len(W.METHODS)
+    out = {"alarms": np.zeros((n, M), dtype=np.int64), "tests": np.zeros((n, M), dtype=np.int64),
+           "samples": np.zeros(n, dtype=np.int64)}
+    for i, s in enumerate(seeds):
+        rec = W.records(wt.simulate(seed=[s], faults=(), duration_s=wt.SCENARIO_S))
+        counts = W.stream_counts(d, rec.y[0], rec.u[0], start)
+        out["alarms"][i] = [counts[m] for m in W.METHODS]
+        out["tests"][i] = [counts["tests"][m] for m in W.METHODS]
+        out["samples"][i] = counts["samples"]
+    return out
 
 
 def _empty_chunk(n: int) -> dict[str, np.ndarray]:
@@ -218,10 +265,8 @@ def _summary(x: dict[str, np.ndarray], d: W.Design, trials: int) -> dict[str, An
     for m, name in enumerate(W.METHODS):
         a = int(x["false_alarm"][:, :, m].sum())
         hours = n_stretch * stretch_h
-        lo = scipy.stats.chi2.ppf(0.025, 2 * a) / 2 if a else 0.0
-        hi = scipy.stats.chi2.ppf(0.975, 2 * a + 2) / 2
         fa[name] = {"alarms": a, "stretches": n_stretch, "hours": hours, "rate_per_hour": a / hours,
-                    "rate_per_hour_ci": [lo / hours, hi / hours]}
+                    "rate_per_hour_ci": _poisson_ci(a, hours)}
     svo_fa = x["false_alarm"][:, :, list(W.METHODS).index("rosa2013")]
     viol = x["bound_violation"]
     return {"faults": faults, "false_alarms": fa, "requirement_met": met, "best_detection_upper_s": best,
@@ -400,3 +445,63 @@ def scoreboard(*, seed: int, trials: int | None, jobs: int) -> ReproductionResul
                     "calibration_runs": CALIBRATION_RUNS, "faults": [f.id for f in wt.FAULTS]}
     return ReproductionResult(id="windturbine-scoreboard", headline=headline, paper=_paper(),
                               settings=settings_out, data={"raw": x, "onset": d.onset, "Ts": d.constants.Ts})
+
+
+def _poisson_ci(alarms: int, exposure: float) -> list[float]:
+    """Exact (Garwood) 95 % interval of a Poisson rate: ``alarms`` events over ``exposure``."""
+    lo = scipy.stats.chi2.ppf(0.025, 2 * alarms) / 2 if alarms else 0.0
+    hi = scipy.stats.chi2.ppf(0.975, 2 * alarms + 2) / 2
+    return [float(lo / exposure), float(hi / exposure)]
+
+
+@register("windturbine-false-alarms", paper=PAPER, default_trials=9, default_seed=2009, min_trials=1,
+          title="Wind-turbine FDI benchmark: false alarms of the four methods over hours of fault-free operation")
+def false_alarms(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
+    """False alarms of the four methods over ``trials`` continuous fault-free runs of the benchmark's
+    whole scenario (:data:`~fdi_lib.systems.wind_turbine.SCENARIO_S` = 4400 s each, seeded wind and
+    noise; 9 runs: 10.95 scored hours), each run as one stream scored in overlapping windows in
+    constant memory (:func:`fdi_lib.windturbine.stream_counts`, :data:`STREAM_WINDOW_S`,
+    :data:`STREAM_OVERLAP_S`): the statistical tests re-arm when their statistic falls below its
+    threshold, the SVO bank at every window.
+
+    Headline keys
+    -------------
+    streams : int
+        ``trials``.
+    hours : float
+        Scored hours over all streams (the first window's overlap of each stream is its warm-up).
+    methods : dict
+        Method key -> ``alarms`` (count over all streams), ``tests`` (statistical tests it runs at
+        once: one per subsystem; Basseville & Zhang two; the SVO bank one, at most one alarm per
+        window), ``rate_per_hour`` and ``rate_per_hour_ci`` (the method's alarms per hour, exact
+        Poisson 95 %), ``rate_per_test_hour`` and ``rate_per_test_hour_ci`` (per test), ``nominal_per_test_hour``
+        (the design's budget, :class:`~fdi_lib.windturbine.Settings` ``false_alarms_per_hour``),
+        ``p_value_nominal`` (the probability of this many alarms or more if each test raised the
+        nominal rate: exact Poisson) and ``below_nominal`` (the interval's upper end under the budget).
+    """
+    settings = W.Settings()
+    trials = int(trials)
+    x = run_monte_carlo(functools.partial(stream_chunk, seed=seed), trials, seed=seed, jobs=jobs,
+                        chunk_size=1, description="wind-turbine false alarms")
+    d, start = stream_design(seed)
+    hours = float(x["samples"].sum() * d.constants.Ts / 3600.0)
+    nominal = settings.false_alarms_per_hour
+    methods = {}
+    for m, name in enumerate(W.METHODS):
+        a = int(x["alarms"][:, m].sum())
+        k = int(x["tests"][0, m])
+        ci = _poisson_ci(a, hours * k)
+        methods[name] = {"alarms": a, "tests": k, "rate_per_hour": a / hours, "rate_per_hour_ci": _poisson_ci(a, hours),
+                         "rate_per_test_hour": a / (hours * k), "rate_per_test_hour_ci": ci,
+                         "nominal_per_test_hour": nominal,
+                         "p_value_nominal": float(scipy.stats.poisson.sf(a - 1, nominal * hours * k)),
+                         "below_nominal": bool(ci[1] < nominal)}
+    from fdi_lib.systems import wind_turbine as wt
+
+    headline = {"streams": trials, "hours": hours, "methods": methods}
+    settings_out = {"seed": seed, "trials": trials, "scenario_s": wt.SCENARIO_S, "window_s": STREAM_WINDOW_S,
+                    "overlap_s": STREAM_OVERLAP_S, "false_alarms_per_hour": nominal,
+                    "calibration_runs": CALIBRATION_RUNS}
+    return ReproductionResult(id="windturbine-false-alarms", headline=headline,
+                              paper={},
+                              settings=settings_out, data={"raw": x})

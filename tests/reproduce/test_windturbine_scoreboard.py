@@ -166,3 +166,73 @@ def test_scoreboard_refuses_a_budget_breaking_trials_count_before_simulating(tri
     assert RW.check_trials(n, 2) == n
     with pytest.raises(ResourceError, match=r"limit is 24 h \(MAX_RUN_S\)"):
         RW.check_trials(n + 1, 2)
+
+
+# ----------------------------------------------------------------------------- long streams
+@pytest.fixture(scope="module")
+def stream():
+    pytest.importorskip("numba")
+    from fdi_lib.systems import wind_turbine as wt
+
+    d, start = RW.stream_design(2009)
+    healthy = W.records(wt.simulate(seed=np.random.SeedSequence(77).spawn(1), faults=(), duration_s=100.0))
+    f8 = next(f for f in wt.FAULTS if f.id == 8)
+    import dataclasses
+
+    fault = dataclasses.replace(f8, start_s=50.0, stop_s=70.0)
+    faulty = W.records(wt.simulate(seed=np.random.SeedSequence(77).spawn(1), faults=(fault,), duration_s=100.0))
+    return d, start, healthy, faulty
+
+
+def test_stream_windows_tile_the_stream_and_batches_do_not_change_the_counts(stream):
+    d, start, healthy, faulty = stream
+    n = healthy.y.shape[1]
+    step = d.N - start
+    one = W.stream_counts(d, faulty.y[0], faulty.u[0], start, batch=1)
+    many = W.stream_counts(d, faulty.y[0], faulty.u[0], start, batch=3)
+    assert one == many
+    assert one["samples"] == ((n - d.N) // step + 1) * step and one["samples"] > n - d.N
+    assert one["tests"] == {"zb2014": 4, "zhang2021": 4, "bz": 8, "rosa2013": 1}
+
+
+def test_stream_detectors_alarm_on_a_fault_and_count_it_once_per_test(stream):
+    """A converter offset for 20 s in the middle of a 100 s stream: every method alarms; a
+    statistical test whose statistic stays over its threshold across a window boundary counts one
+    alarm (so at most a few per test, not one per window); the fault-free twin raises fewer."""
+    d, start, healthy, faulty = stream
+    on = W.stream_counts(d, faulty.y[0], faulty.u[0], start)
+    off = W.stream_counts(d, healthy.y[0], healthy.u[0], start)
+    for m in W.METHODS:
+        assert on[m] >= 1, m
+        assert off[m] < on[m], m
+    for m in ("zb2014", "zhang2021", "bz"):
+        assert on[m] <= 2 * on["tests"][m], (m, on[m])
+
+
+def test_false_alarm_study_json_and_its_exact_poisson_bounds(monkeypatch):
+    """The study on two short streams (the scenario cut to 60 s here): keys, hours, and the exact
+    Poisson interval checked against its definition (P(X >= a) = 2.5 % at the lower end, P(X <= a)
+    = 2.5 % at the upper)."""
+    pytest.importorskip("numba")
+    import scipy.stats
+
+    from fdi_lib.reproduce import reproduce
+    from fdi_lib.systems import wind_turbine as wt
+
+    monkeypatch.setattr(wt, "SCENARIO_S", 60.0)
+    r = reproduce("windturbine-false-alarms", trials=2)
+    h = r.headline
+    d, start = RW.stream_design(2009)
+    per_stream = ((6000 - d.N) // (d.N - start) + 1) * (d.N - start)
+    assert h["streams"] == 2 and h["hours"] == pytest.approx(2 * per_stream * 0.01 / 3600)
+    assert set(h["methods"]) == set(W.METHODS)
+    for m, v in h["methods"].items():
+        exposure = h["hours"] * v["tests"]
+        assert v["rate_per_test_hour"] == pytest.approx(v["alarms"] / exposure)
+        lo, hi = v["rate_per_test_hour_ci"]
+        assert scipy.stats.poisson.cdf(v["alarms"], hi * exposure) == pytest.approx(0.025, abs=1e-9)
+        if v["alarms"]:
+            assert scipy.stats.poisson.sf(v["alarms"] - 1, lo * exposure) == pytest.approx(0.025, abs=1e-9)
+        assert v["below_nominal"] == (hi < v["nominal_per_test_hour"])
+    # 0 alarms over 1 h gives an upper bound of 3.69 per hour: what "can test 1 per hour" needs
+    assert RW._poisson_ci(0, 1.0)[1] == pytest.approx(-np.log(0.025))
