@@ -216,11 +216,10 @@ def test_false_alarm_study_json_and_its_exact_poisson_bounds(monkeypatch):
     pytest.importorskip("numba")
     import scipy.stats
 
-    from fdi_lib.reproduce import reproduce
     from fdi_lib.systems import wind_turbine as wt
 
     monkeypatch.setattr(wt, "SCENARIO_S", 60.0)
-    r = reproduce("windturbine-false-alarms", trials=2)
+    r = RW.false_alarms(seed=2009, trials=2)
     h = r.headline
     d, start = RW.stream_design(2009)
     per_stream = ((6000 - d.N) // (d.N - start) + 1) * (d.N - start)
