@@ -9,7 +9,8 @@ benchmark's scenario:
 * peak memory (tracemalloc: what the detector allocates, the stream's input excluded) on a stream
   ``LONG_S`` long and on one ``SHORT_S`` long, both longer than one batch of windows (the memory
   unit, ``stream_counts``'s ``batch``): the ratio long / short must stay near 1 (constant memory),
-  where a detector that held the whole record would grow with the length (ratio ``LONG_S / SHORT_S``).
+  where a detector that held the whole record would grow with the length (ratio
+  ``LONG_S / SHORT_S``).
 
 Run: .venv/bin/python benchmarks/bench_windturbine_stream.py
 """
@@ -33,7 +34,8 @@ LONG_S = 800.0
 MEMORY_RATIO_GOAL = 1.2
 
 
-def _peak_and_rate(d: W.Design, start: int, rec: W.Records, n: int, method: str) -> tuple[float, float]:
+def _peak_and_rate(d: W.Design, start: int, rec: W.Records, n: int,
+                   method: str) -> tuple[float, float]:
     y, u = rec.y[0, :n].copy(), rec.u[0, :n].copy()
     tracemalloc.start()
     t0 = time.process_time()
@@ -46,17 +48,19 @@ def _peak_and_rate(d: W.Design, start: int, rec: W.Records, n: int, method: str)
 
 def main() -> None:
     d, start = stream_design(2009)
-    rec = W.records(wt.simulate(seed=np.random.SeedSequence(2009).spawn(1), faults=(), duration_s=LONG_S))
+    seeds = np.random.SeedSequence(2009).spawn(1)
+    rec = W.records(wt.simulate(seed=seeds, faults=(), duration_s=LONG_S))
     n_short, n_long = (int(round(s / d.constants.Ts)) for s in (SHORT_S, LONG_S))
     with blas_single_thread():
         for method in W.METHODS:
-            W.stream_counts(d, rec.y[0, :d.N], rec.u[0, :d.N], start, methods=(method,))   # warm caches
+            # warm the caches
+            W.stream_counts(d, rec.y[0, :d.N], rec.u[0, :d.N], start, methods=(method,))
             short, _ = _peak_and_rate(d, start, rec, n_short, method)
             long_, rate = _peak_and_rate(d, start, rec, n_long, method)
-            record(f"wind-turbine stream {method}: samples per second (one core)", rate, "samples/s", 100.0,
-                   higher_is_better=True, note=f"{LONG_S:g} s stream")
-            record(f"wind-turbine stream {method}: peak memory {LONG_S:g} s / {SHORT_S:g} s", long_ / short,
-                   "ratio", MEMORY_RATIO_GOAL,
+            record(f"wind-turbine stream {method}: samples per second (one core)", rate,
+                   "samples/s", 100.0, higher_is_better=True, note=f"{LONG_S:g} s stream")
+            record(f"wind-turbine stream {method}: peak memory {LONG_S:g} s / {SHORT_S:g} s",
+                   long_ / short, "ratio", MEMORY_RATIO_GOAL,
                    note=f"{long_ / 1e6:.1f} MB and {short / 1e6:.1f} MB; a whole-record detector: "
                         f"{LONG_S / SHORT_S:g}")
 

@@ -64,7 +64,8 @@ from fdi_lib.validation import integer, real
 __all__ = ["SENSORS", "CANDIDATES", "SUBSYSTEMS", "METHODS", "PlantConstants", "plant_constants",
            "Records", "records", "Calibration", "calibrate", "Design", "design", "Segments", "segments",
            "MethodOutcome", "min_detectable", "run_zb", "run_zhang2021", "run_bz", "run_svo_bank", "run_methods",
-           "expected_candidates", "alarm_onsets", "score_alarms", "delays", "stream_alarms", "stream_counts"]
+           "expected_candidates", "alarm_onsets", "score_alarms", "delays", "stream_alarms",
+           "stream_counts"]
 
 #: Measured outputs, in the order of :attr:`Records.y` (pitch in deg, speeds in rad/s, torque in kNm).
 SENSORS = ("beta1_m1", "beta1_m2", "beta2_m1", "beta2_m2", "beta3_m1", "beta3_m2",
@@ -546,11 +547,12 @@ def _split(d: Design, y: np.ndarray, u: np.ndarray, s: Subsystem) -> tuple[np.nd
 
 
 def alarm_onsets(over: np.ndarray, start: int) -> np.ndarray:
-    """Where a detector raises an alarm: the samples ``k >= start`` at which ``over`` (statistic above
-    its threshold, ``(..., N)`` bool) turns true (a value already true at ``start`` is an alarm there).
+    """Where a detector raises an alarm: the samples ``k >= start`` at which ``over`` (statistic
+    above its threshold, ``(..., N)`` bool) turns true (a value already true at ``start`` is an
+    alarm there).
 
     The detector re-arms when ``over`` turns false again: a statistic that stays above its threshold
-    is one alarm, never an alarm at every sample, and never a new alarm when a fault begins under it.
+    is one alarm, never an alarm at every sample, nor a new alarm when a fault begins under it.
 
     Examples
     --------
@@ -567,14 +569,16 @@ def alarm_onsets(over: np.ndarray, start: int) -> np.ndarray:
     return edge
 
 
-def score_alarms(alarms: np.ndarray, onset: int, start: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The benchmark's reading of an alarm sequence ``(..., N)`` (bool, :func:`alarm_onsets`) around a
-    fault that begins at sample ``onset``.
+def score_alarms(alarms: np.ndarray, onset: int, start: int
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The benchmark's reading of an alarm sequence ``(..., N)`` (bool, :func:`alarm_onsets`)
+    around a fault that begins at sample ``onset``.
 
     Returns ``(count, false_alarm, detect)``: the number of alarms in the fault-free stretch
     ``[start, onset)`` (each one a false alarm, never a detection), whether there is any, and the
-    first alarm at or after ``onset`` (``-1``: none), the detection. An alarm raised before the onset
-    whose statistic stays above its threshold past the onset is not a detection (:func:`alarm_onsets`).
+    first alarm at or after ``onset`` (``-1``: none), the detection. An alarm raised before the
+    onset whose statistic stays above its threshold past the onset is not a detection
+    (:func:`alarm_onsets`).
 
     Examples
     --------
@@ -586,15 +590,16 @@ def score_alarms(alarms: np.ndarray, onset: int, start: int) -> tuple[np.ndarray
     onset = integer(onset, "onset", low=0, high=alarms.shape[-1])
     start = integer(start, "start", low=0, high=onset)
     count = alarms[..., start:onset].sum(axis=-1)
-    after = np.concatenate([alarms[..., onset:], np.ones((*alarms.shape[:-1], 1), dtype=bool)], axis=-1)
+    after = np.concatenate([alarms[..., onset:], np.ones((*alarms.shape[:-1], 1), dtype=bool)],
+                           axis=-1)
     first = onset + after.argmax(axis=-1)                   # the appended sample: no alarm
     detect = np.where(first < alarms.shape[-1], first, -1)
     return count, count > 0, detect
 
 
 def delays(steps: np.ndarray, onset: int, ts: float) -> np.ndarray:
-    """Time from a fault's start to the decision taken at sample ``steps`` (s; ``-1``: none, ``nan``):
-    ``(step - onset + 1) Ts``, so a decision at the fault's first sample takes one sample.
+    """Time from a fault's start to the decision taken at sample ``steps`` (s; ``-1``: none,
+    ``nan``): ``(step - onset + 1) Ts``, so a decision at the fault's first sample takes one sample.
 
     Examples
     --------
@@ -608,11 +613,11 @@ def delays(steps: np.ndarray, onset: int, ts: float) -> np.ndarray:
 def _combine(d: Design, stats: Sequence[np.ndarray], thresholds: Sequence[float]
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """False alarms, detection (:func:`score_alarms` of each subsystem's :func:`alarm_onsets`), the
-    subsystem that raised the detection and the largest statistic over its threshold after the onset,
-    from one statistic per subsystem."""
+    subsystem that raised the detection and the largest statistic over its threshold after the
+    onset, from one statistic per subsystem."""
     edges = []
     for st, h in zip(stats, thresholds):
-        first_alarm(st, h, start=d.warmup)             # NaN after the warm-up is an error, never "no alarm"
+        first_alarm(st, h, start=d.warmup)     # NaN after the warm-up: an error, never "no alarm"
         edges.append(alarm_onsets(np.nan_to_num(st, nan=-np.inf) > h, d.warmup))
     scored = [score_alarms(e, d.onset, d.warmup) for e in edges]
     pre = np.stack([s[1] for s in scored]).any(axis=0)
@@ -711,8 +716,9 @@ def _residuals(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, tuple[np.nd
 
 
 def _lasso_test(d: Design, res: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> list[np.ndarray]:
-    """Per subsystem, ``max_j |X_j^T y| / ||X_j||`` over the last ``w`` whitened residuals (Zhang 2021's
-    detection: the Lasso of the window is not identically zero), ``nan`` before ``w`` samples."""
+    """Per subsystem, ``max_j |X_j^T y| / ||X_j||`` over the last ``w`` whitened residuals
+    (Zhang 2021's detection: the Lasso of the window is not identically zero), ``nan`` before
+    ``w`` samples."""
     w = d.settings.window
     stats = []
     for name, sd in d.subs.items():
@@ -825,15 +831,17 @@ def run_bz(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray
 
 def stream_alarms(d: Design, y: np.ndarray, u: np.ndarray, start: int,
                   methods: Sequence[str] = tuple(METHODS)) -> dict[str, Any]:
-    """Alarms of the four methods on records ``y`` ``(B, N, 11)``, ``u`` ``(B, N, 4)`` from sample ``start``
-    on: one window of a long stream, whose first ``start`` samples overlap the previous window.
+    """Alarms of the four methods on records ``y`` ``(B, N, 11)``, ``u`` ``(B, N, 4)`` from
+    sample ``start`` on: one window of a long stream, whose first ``start`` samples overlap the
+    previous window.
 
-    The statistical tests (one per subsystem; Basseville & Zhang: a parametric and an energy test per
-    subsystem) count their alarms (:func:`alarm_onsets`) at samples ``[start, N)``; their statistics
-    restart with the window (``start`` must leave the filters their warm-up and a full window before
-    it), and whether a test was already over its threshold at ``start - 1`` is read on this window, so
-    an alarm raised in the previous window is not counted again. The SVO bank runs from ``start`` on,
-    from its prior set: it re-arms at every window and counts at most one alarm (an emptied set) in it.
+    The statistical tests (one per subsystem; Basseville & Zhang: a parametric and an energy
+    test per subsystem) count their alarms (:func:`alarm_onsets`) at samples ``[start, N)``;
+    their statistics restart with the window (``start`` must leave the filters their warm-up and
+    a full window before it), and whether a test was already over its threshold at ``start - 1``
+    is read on this window, so an alarm raised in the previous window is not counted again. The
+    SVO bank runs from ``start`` on, from its prior set: it re-arms at every window and counts at
+    most one alarm (an emptied set) in it.
 
     Returns
     -------
@@ -856,15 +864,17 @@ def stream_alarms(d: Design, y: np.ndarray, u: np.ndarray, start: int,
             continue
         if name == "zb2014":
             zb = _zb_glr(d, eps)
-            stats, thr = [zb[n].statistic for n in d.subs], [sd.glr_threshold for sd in d.subs.values()]
+            stats = [zb[n].statistic for n in d.subs]
+            thr = [sd.glr_threshold for sd in d.subs.values()]
         elif name == "zhang2021":
-            stats, thr = _lasso_test(d, _residuals(d, y, u)), [sd.lasso_threshold for sd in d.subs.values()]
+            stats = _lasso_test(d, _residuals(d, y, u))
+            thr = [sd.lasso_threshold for sd in d.subs.values()]
         else:
             par, par_thr, en, en_thr = _bz_stats(d, y, u, eps)
             stats, thr = par + en, par_thr + en_thr
         count = np.zeros(y.shape[0], dtype=np.int64)
         for st, h in zip(stats, thr):
-            first_alarm(st, h, start=d.warmup)       # NaN after the warm-up is an error, never "no alarm"
+            first_alarm(st, h, start=d.warmup)     # NaN after the warm-up: an error
             edges = alarm_onsets(np.nan_to_num(st, nan=-np.inf) > h, start - 1)
             count += edges[:, start:].sum(axis=-1)
         out[name], out["tests"][name] = count, len(stats)
@@ -883,8 +893,9 @@ def stream_counts(d: Design, y: np.ndarray, u: np.ndarray, start: int, *, batch:
                   methods: Sequence[str] = tuple(METHODS)) -> dict[str, Any]:
     """Alarm counts of the four methods over one long stream ``y`` ``(n, 11)``, ``u`` ``(n, 4)``, in
     constant memory: overlapping windows of ``d.N`` samples, each scored from its sample ``start``
-    (:func:`stream_alarms`), so that the scored parts tile ``[start, start + K (N - start))``; ``batch``
-    windows at a time are one batch of records (the memory of one batch, whatever ``n``).
+    (:func:`stream_alarms` of ``methods``), so that the scored parts tile
+    ``[start, start + K (N - start))``; ``batch`` windows at a time are one batch of records (the
+    memory of one batch, whatever ``n``).
 
     Returns
     -------
@@ -895,7 +906,8 @@ def stream_counts(d: Design, y: np.ndarray, u: np.ndarray, start: int, *, batch:
     y = np.asarray(y, dtype=float)
     u = np.asarray(u, dtype=float)
     if y.ndim != 2 or y.shape[1] != len(SENSORS) or u.shape != (y.shape[0], len(INPUTS)):
-        raise ShapeError(f"y, u: expected (n, {len(SENSORS)}) and (n, {len(INPUTS)}), got {y.shape} and {u.shape}")
+        raise ShapeError(f"y, u: expected (n, {len(SENSORS)}) and (n, {len(INPUTS)}), "
+                         f"got {y.shape} and {u.shape}")
     batch = integer(batch, "batch", low=1)
     step = d.N - start
     n_windows = (y.shape[0] - d.N) // step + 1 if y.shape[0] >= d.N else 0

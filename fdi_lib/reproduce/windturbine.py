@@ -24,10 +24,10 @@ from fdi_lib.reproduce.ledger import BY_TOLERANCE, NOT_CHECKABLE, Claim
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib import windturbine as W
 
-__all__ = ["scoreboard", "chunk", "score_method", "check_trials", "SECONDS_PER_REALISATION", "MAX_RUN_S",
-           "false_alarms", "FALSE_ALARM_STREAMS", "stream_chunk", "stream_design", "STREAM_WINDOW_S", "STREAM_OVERLAP_S",
-           "calibrated_design", "plot_scoreboard", "CALIBRATION_RUNS", "PUBLISHED", "PUBLISHED_DELAYS",
-           "METHOD_LABELS"]
+__all__ = ["scoreboard", "chunk", "score_method", "check_trials", "SECONDS_PER_REALISATION",
+           "MAX_RUN_S", "false_alarms", "FALSE_ALARM_STREAMS", "stream_chunk", "stream_design",
+           "STREAM_WINDOW_S", "STREAM_OVERLAP_S", "calibrated_design", "plot_scoreboard",
+           "CALIBRATION_RUNS", "PUBLISHED", "PUBLISHED_DELAYS", "METHOD_LABELS"]
 
 #: Short labels of the methods (figure legends, table columns).
 METHOD_LABELS = {"zb2014": "GLR + minmax", "zhang2021": "Kitanidis + Lasso", "bz": "parametric + energy",
@@ -66,8 +66,10 @@ def calibrated_design(seed: int, settings: W.Settings = W.Settings()) -> W.Desig
 
 
 @functools.lru_cache(maxsize=4)
-def _calibration(seed: int, settings: W.Settings) -> tuple[W.PlantConstants, W.Calibration, np.ndarray]:
-    """The plant's constants, the calibration and the filters' prior mean of :func:`calibrated_design`."""
+def _calibration(seed: int, settings: W.Settings
+                 ) -> tuple[W.PlantConstants, W.Calibration, np.ndarray]:
+    """The plant's constants, the calibration and the filters' prior mean of
+    :func:`calibrated_design`."""
     from fdi_lib.systems import wind_turbine as wt
 
     c = W.plant_constants()
@@ -105,9 +107,10 @@ def _stream_design(seed: int, settings: W.Settings) -> W.Design:
 
 
 def stream_chunk(seeds: list, *, seed: int) -> dict[str, np.ndarray]:
-    """Monte Carlo chunk of the false-alarm study: per seed, the benchmark's whole fault-free scenario
-    (:data:`~fdi_lib.systems.wind_turbine.SCENARIO_S` seconds, its wind and noise from the seed) run as
-    one continuous stream, and the alarms of each method over it (:func:`fdi_lib.windturbine.stream_counts`)."""
+    """Monte Carlo chunk of the false-alarm study: per seed, the benchmark's whole fault-free
+    scenario (:data:`~fdi_lib.systems.wind_turbine.SCENARIO_S` seconds, its wind and noise from the
+    seed) run as one continuous stream, and the alarms of each method over it
+    (:func:`fdi_lib.windturbine.stream_counts`)."""
     from fdi_lib.systems import wind_turbine as wt
 
     d, start = stream_design(seed)
@@ -129,9 +132,11 @@ def _empty_chunk(n: int) -> dict[str, np.ndarray]:
 
     F, M = len(wt.FAULTS), len(W.METHODS)
     return {"detect": np.full((n, F, M), -1), "false_alarm": np.zeros((n, F, M), dtype=bool),
-            "isolated": np.zeros((n, F, M, len(W.CANDIDATES)), dtype=bool), "isolate_step": np.full((n, F, M), -1),
+            "isolated": np.zeros((n, F, M, len(W.CANDIDATES)), dtype=bool),
+            "isolate_step": np.full((n, F, M), -1),
             "peak": np.full((n, F, M), np.nan), "effect_sigma": np.zeros((n, F)),
-            "effect_sigma_req": np.full((n, F), np.nan), "bound_violation": np.zeros((n, F), dtype=bool),
+            "effect_sigma_req": np.full((n, F), np.nan),
+            "bound_violation": np.zeros((n, F), dtype=bool),
             "torque_effect_kNm": np.full((n, F), np.nan)}
 
 
@@ -140,15 +145,16 @@ def _empty_chunk(n: int) -> dict[str, np.ndarray]:
 #: the process time of 6 realisations less that of 2, over 4 (1.09 s on the book's 2-core machine,
 #: the design cached): the estimate with which a too large ``trials`` is refused.
 SECONDS_PER_REALISATION = 1.1
-#: The longest scoreboard run accepted (s, estimated with :data:`SECONDS_PER_REALISATION` over the jobs).
+#: The longest scoreboard run accepted (s, estimated with :data:`SECONDS_PER_REALISATION` over the
+#: jobs).
 MAX_RUN_S = 24 * 3600.0
 
 
 def check_trials(trials: int, jobs: int = 1) -> int:
-    """``trials`` of the scoreboard, refused with a :class:`~fdi_lib.errors.ResourceError` that gives
-    the estimated time and memory when the run would take longer than :data:`MAX_RUN_S` on ``jobs``
-    processes (capped at the cores) or its results would not fit in the available memory; nothing is
-    simulated before the check."""
+    """``trials`` of the scoreboard, refused with a :class:`~fdi_lib.errors.ResourceError` that
+    gives the estimated time and memory when the run would take longer than :data:`MAX_RUN_S` on
+    ``jobs`` processes (capped at the cores) or its results would not fit in the available memory;
+    nothing is simulated before the check."""
     import warnings
 
     from fdi_lib.errors import JobsCappedWarning
@@ -167,7 +173,8 @@ def check_trials(trials: int, jobs: int = 1) -> int:
     check_memory(memory, "trials", what)
     if seconds > MAX_RUN_S:
         raise ResourceError(f"trials: {what} would take about {seconds / 3600:.3g} h on {workers} "
-                            f"process{'es' * (workers > 1)} and need about {_bytes_text(memory)} of memory; "
+                            f"process{'es' * (workers > 1)} and need about {_bytes_text(memory)} "
+                            f"of memory; "
                             f"the limit is {MAX_RUN_S / 3600:g} h (MAX_RUN_S): use fewer")
     return trials
 
@@ -232,8 +239,8 @@ def _summary(x: dict[str, np.ndarray], d: W.Design, trials: int) -> dict[str, An
         best_upper = None
         best_mean: tuple[str, float] | None = None
         for m, name in enumerate(W.METHODS):
-            entry = score_method(x["detect"][:, f, m], x["isolated"][:, f, m], x["isolate_step"][:, f, m],
-                                 exp, req, d.onset, Ts)
+            entry = score_method(x["detect"][:, f, m], x["isolated"][:, f, m],
+                                 x["isolate_step"][:, f, m], exp, req, d.onset, Ts)
             k = entry["detected"]
             hit = x["detect"][:, f, m] >= 0
             if k < trials:   # a miss: measured, never assumed
@@ -276,8 +283,9 @@ def _summary(x: dict[str, np.ndarray], d: W.Design, trials: int) -> dict[str, An
             "svo_false_alarms_without_violation": int((svo_fa & ~viol).sum())}
 
 
-def score_method(detect: np.ndarray, isolated: np.ndarray, isolate_step: np.ndarray, expected: set[str],
-                 required_s: float | None, onset: int, ts: float) -> dict[str, Any]:
+def score_method(detect: np.ndarray, isolated: np.ndarray, isolate_step: np.ndarray,
+                 expected: set[str], required_s: float | None, onset: int,
+                 ts: float) -> dict[str, Any]:
     """One method's score on one fault over ``R`` realisations.
 
     ``detect`` ``(R,)``: the detection sample (first alarm at or after ``onset``, ``-1``: none,
@@ -301,26 +309,34 @@ def score_method(detect: np.ndarray, isolated: np.ndarray, isolate_step: np.ndar
     # the most frequent set; a tie goes to the one seen first (in realisation order), never to
     # the iteration order of a set of strings, which changes with the process's hash seed
     mode = collections.Counter(labels).most_common(1)[0][0] if labels else None
-    within = int(np.sum(hit & (W.delays(detect, onset, ts) <= required_s + 1e-12))) if required_s is not None else None
+    within = (int(np.sum(hit & (W.delays(detect, onset, ts) <= required_s + 1e-12)))
+              if required_s is not None else None)
     n_iso = int(correct.sum())
     return {
-        "detected": k, "detection_rate": k / trials, "detection_rate_ci": list(binomial_ci(k, trials)),
+        "detected": k, "detection_rate": k / trials,
+        "detection_rate_ci": list(binomial_ci(k, trials)),
         "missed": trials - k,
         "detection_time_mean_s": float(t.mean()) if k else None,
         "detection_time_ci": _mean_ci(t),
-        "detection_time_spread95": [float(np.percentile(t, 2.5)), float(np.percentile(t, 97.5))] if k else None,
+        "detection_time_spread95": _spread(t),
         "within_requirement": within / trials if within is not None else None,
         "within_requirement_ci": list(binomial_ci(within, trials)) if within is not None else None,
-        "isolation_correct": float(np.mean(correct)), "isolation_correct_ci": list(binomial_ci(n_iso, trials)),
+        "isolation_correct": float(np.mean(correct)),
+        "isolation_correct_ci": list(binomial_ci(n_iso, trials)),
         "isolation_contains": float(np.mean(contains)),
-        "wrong_isolations": wrong, "not_isolated": int(sum(hit[i] and not s for i, s in enumerate(sets))),
+        "wrong_isolations": wrong,
+        "not_isolated": int(sum(hit[i] and not s for i, s in enumerate(sets))),
         "isolation_time_mean_s": float(t_iso.mean()) if n_iso else None,
         "isolation_time_ci": _mean_ci(t_iso),
-        "isolation_time_spread95": ([float(np.percentile(t_iso, 2.5)), float(np.percentile(t_iso, 97.5))]
-                                    if n_iso else None),
+        "isolation_time_spread95": _spread(t_iso),
         "isolated_mode": mode,
         "reason": None,
     }
+
+
+def _spread(t: np.ndarray) -> list[float] | None:
+    """2.5 and 97.5 percentiles of ``t`` (``None`` if empty)."""
+    return [float(np.percentile(t, 2.5)), float(np.percentile(t, 97.5))] if t.size else None
 
 
 def _mean_ci(t: np.ndarray) -> list[float] | None:
@@ -482,12 +498,15 @@ def _poisson_ci(alarms: int, exposure: float) -> list[float]:
     return [float(lo / exposure), float(hi / exposure)]
 
 
-#: Continuous fault-free scenarios of :func:`false_alarms` by default: 9 x 4400 s, 10.95 scored hours.
+#: Continuous fault-free scenarios of :func:`false_alarms` by default: 9 x 4400 s, 10.95 scored
+#: hours.
 FALSE_ALARM_STREAMS = 9
 
 
-def false_alarms(*, seed: int = 2009, trials: int = FALSE_ALARM_STREAMS, jobs: int = 1) -> ReproductionResult:
-    """False alarms of the four methods over ``trials`` continuous fault-free runs of the benchmark's
+def false_alarms(*, seed: int = 2009, trials: int = FALSE_ALARM_STREAMS,
+                 jobs: int = 1) -> ReproductionResult:
+    """False alarms of the four methods over ``trials`` continuous fault-free runs of the
+    benchmark's
     whole scenario (:data:`~fdi_lib.systems.wind_turbine.SCENARIO_S` = 4400 s each, seeded wind and
     noise; 9 runs: 10.95 scored hours), each run as one stream scored in overlapping windows in
     constant memory (:func:`fdi_lib.windturbine.stream_counts`, :data:`STREAM_WINDOW_S`,
@@ -495,7 +514,7 @@ def false_alarms(*, seed: int = 2009, trials: int = FALSE_ALARM_STREAMS, jobs: i
     threshold, the SVO bank at every window.
 
     Not yet in the registry of the command line: at about 340 s of a core per stream (the four
-    methods, ``benchmarks/bench_windturbine_stream.py``), the default 9 streams take about 50 minutes
+    methods, ``benchmarks/bench_windturbine_stream.py``), the default 9 streams take about 50 min
     of a core, which the ledger and ``make check-book`` would pay on every CI run.
 
     Headline keys
@@ -508,10 +527,12 @@ def false_alarms(*, seed: int = 2009, trials: int = FALSE_ALARM_STREAMS, jobs: i
         Method key -> ``alarms`` (count over all streams), ``tests`` (statistical tests it runs at
         once: one per subsystem; Basseville & Zhang two; the SVO bank one, at most one alarm per
         window), ``rate_per_hour`` and ``rate_per_hour_ci`` (the method's alarms per hour, exact
-        Poisson 95 %), ``rate_per_test_hour`` and ``rate_per_test_hour_ci`` (per test), ``nominal_per_test_hour``
-        (the design's budget, :class:`~fdi_lib.windturbine.Settings` ``false_alarms_per_hour``),
+        Poisson 95 %), ``rate_per_test_hour`` and ``rate_per_test_hour_ci`` (per test),
+        ``nominal_per_test_hour`` (the design's budget, :class:`~fdi_lib.windturbine.Settings`
+        ``false_alarms_per_hour``),
         ``p_value_nominal`` (the probability of this many alarms or more if each test raised the
-        nominal rate: exact Poisson) and ``below_nominal`` (the interval's upper end under the budget).
+        nominal rate: exact Poisson) and ``below_nominal`` (the interval's upper end under the
+        budget).
     """
     settings = W.Settings()
     trials = int(trials)
@@ -525,15 +546,18 @@ def false_alarms(*, seed: int = 2009, trials: int = FALSE_ALARM_STREAMS, jobs: i
         a = int(x["alarms"][:, m].sum())
         k = int(x["tests"][0, m])
         ci = _poisson_ci(a, hours * k)
-        methods[name] = {"alarms": a, "tests": k, "rate_per_hour": a / hours, "rate_per_hour_ci": _poisson_ci(a, hours),
+        methods[name] = {"alarms": a, "tests": k, "rate_per_hour": a / hours,
+                         "rate_per_hour_ci": _poisson_ci(a, hours),
                          "rate_per_test_hour": a / (hours * k), "rate_per_test_hour_ci": ci,
                          "nominal_per_test_hour": nominal,
-                         "p_value_nominal": float(scipy.stats.poisson.sf(a - 1, nominal * hours * k)),
+                         "p_value_nominal": float(scipy.stats.poisson.sf(a - 1,
+                                                                         nominal * hours * k)),
                          "below_nominal": bool(ci[1] < nominal)}
     from fdi_lib.systems import wind_turbine as wt
 
     headline = {"streams": trials, "hours": hours, "methods": methods}
-    settings_out = {"seed": seed, "trials": trials, "scenario_s": wt.SCENARIO_S, "window_s": STREAM_WINDOW_S,
+    settings_out = {"seed": seed, "trials": trials, "scenario_s": wt.SCENARIO_S,
+                    "window_s": STREAM_WINDOW_S,
                     "overlap_s": STREAM_OVERLAP_S, "false_alarms_per_hour": nominal,
                     "calibration_runs": CALIBRATION_RUNS}
     return ReproductionResult(id="windturbine-false-alarms", headline=headline,
