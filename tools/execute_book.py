@@ -50,11 +50,11 @@ import sys
 import tempfile
 import threading
 import time
-from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, NamedTuple
 
 REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO))
+sys.path[:0] = [str(REPO), str(REPO / "tools")]
 
 from fdi_lib.montecarlo import CORES_ENV  # noqa: E402
 
@@ -64,11 +64,10 @@ AFTER_ALL = ("book/zz-ledger",)
 
 
 
-@dataclass
-class Chapter:
+class Chapter(NamedTuple):
     doc: str           # document name, as in _toc.yml ("book/zb2014/glr")
     path: Path         # its source file
-    notebook: object   # as myst-nb reads it (nbformat.NotebookNode)
+    notebook: Any      # as myst-nb reads it (nbformat.NotebookNode)
     weight: float      # expected run time (any unit): the longest are started first
 
 
@@ -155,7 +154,10 @@ class Scheduler:
                  root: Path) -> None:
         from jupyter_cache import get_cache
 
+        from pdf_edition import library_hash
+
         self.cache = get_cache(str(cache_dir))
+        self.library = library_hash()
         self.root, self.jobs, self.cores, self.settings = root, jobs, cores, settings
         self.lock = threading.Lock()
         self.unfinished = len(chapters)
@@ -166,6 +168,33 @@ class Scheduler:
         """The cores of one more chapter: all of them divided among the chapters not finished."""
         with self.lock:
             return max(1, self.cores // max(1, min(self.jobs, self.unfinished)))
+
+    def reuse(self, chapters: list[Chapter], other: Path) -> list[Chapter]:
+        """Copy from the jupyter-cache ``other`` every chapter whose code cells it holds executed
+        (jupyter-cache's hash of the code and the kernel) with the library of now (the hash of
+        ``fdi_lib``'s sources recorded with it), with its run time there; the chapters left to
+        execute."""
+        from jupyter_cache import get_cache
+        from jupyter_cache.base import CacheBundleIn
+
+        if not other.is_dir():
+            return chapters
+        source, left = get_cache(str(other)), []
+        for chapter in chapters:
+            try:
+                record = source.match_cache_notebook(chapter.notebook)
+            except KeyError:
+                record = None
+            if record is None or record.data.get("library") != self.library:
+                left.append(chapter)
+                continue
+            nb = source.get_cache_bundle(record.pk).nb
+            self.cache.cache_notebook_bundle(CacheBundleIn(nb, str(chapter.path), data=dict(record.data)),
+                                             check_validity=False, overwrite=True)
+            self.unfinished -= 1
+            print(f"{chapter.path.relative_to(self.root).as_posix()}: the same code cells as in {other}: "
+                  "its outputs reused", flush=True)
+        return left
 
     def run(self, chapter: Chapter, tmp: Path) -> None:
         import nbformat
@@ -191,7 +220,8 @@ class Scheduler:
             result = json.loads(out.read_text())
             nb = nbformat.reads(result["notebook"], as_version=4)
             self.cache.cache_notebook_bundle(CacheBundleIn(nb, str(chapter.path), data={
-                "execution_seconds": result["seconds"]}), check_validity=False, overwrite=True)
+                "execution_seconds": result["seconds"], "library": self.library}),
+                check_validity=False, overwrite=True)
             self.times[rel] = result["seconds"]
             print(f"{rel}: Executed notebook in {result['seconds']:.2f} seconds (on {cores} "
                   f"core{'s' * (cores > 1)})", flush=True)
@@ -208,7 +238,6 @@ class Scheduler:
 def write_config(config: Path, cache_dir: Path, target: Path) -> None:
     """The book's ``_config.yml`` in execution mode ``cache`` on ``cache_dir`` (the PDF edition's
     :func:`pdf_edition.pdf_config`: local extensions made absolute) at ``target``."""
-    sys.path.insert(0, str(REPO / "tools"))
     from pdf_edition import pdf_config
 
     pdf_config(config.parent, cache_dir.resolve(), target)
@@ -230,6 +259,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--config-out", type=Path, help="write the build's _config.yml (mode cache) here")
     parser.add_argument("--jobs", type=int, default=0, help="chapters at a time (default: the cores)")
     parser.add_argument("--only", nargs="*", help="only these documents (e.g. book/zb2014/glr)")
+    parser.add_argument("--reuse", type=Path, help="a jupyter-cache of the same library (make book's): "
+                        "a chapter whose code cells it holds executed is taken from it, not executed")
     parser.add_argument("--report", type=Path, default=REPO / "_build" / "build-report.json",
                         help="the last build's report, whose run times order the chapters")
     args = parser.parse_args(argv)
@@ -257,6 +288,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"Executing {len(todo)} notebooks, {jobs} at a time on {cores} cores", flush=True)
     start = time.perf_counter()
     scheduler = Scheduler(todo, args.cache, jobs, cores, settings, root)
+    if args.reuse is not None:
+        first, last = scheduler.reuse(first, args.reuse.resolve()), scheduler.reuse(last, args.reuse.resolve())
     scheduler.run_all([b for b in (first, last) if b])
     wall = time.perf_counter() - start
     if scheduler.failed:

@@ -97,12 +97,24 @@ def write_notebooks(src: Path, out: Path, glue_dir: Path | None = None) -> list[
     return notebook_markdown.write_notebooks(src, target, glue_dir)
 
 
+#: The jupyter-cache of the last ``make book`` (``tools/execute_book.py``): a student chapter whose
+#: code cells are those of the full book takes its outputs from there instead of executing again.
+BOOK_CACHE = REPO / "_build" / ".jupyter_cache-book"
+
+
 def build(out: Path, extra: list[str]) -> None:
     src = copy_sources(out)
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])))
     work = out / "build"
-    cmd = [str(Path(sys.executable).with_name("jupyter-book")), "build", str(src), "--path-output", str(work),
-           "--builder", "html", *extra]
+    config = out / "_config_student.yml"
+    # the chapters executed side by side, those unchanged by the stripping taken from make book's
+    # run, then the pages built from that cache (as make book does)
+    execute = [sys.executable, str(REPO / "tools" / "execute_book.py"), "--root", str(src),
+               "--cache", str(out / ".jupyter_cache"), "--reuse", str(BOOK_CACHE), "--config-out", str(config)]
+    print("+", " ".join(execute), flush=True)
+    subprocess.run(execute, check=True, env=env)
+    cmd = [str(Path(sys.executable).with_name("jupyter-book")), "build", str(src), "--config", str(config),
+           "--path-output", str(work), "--builder", "html", *extra]
     print("+", " ".join(cmd), flush=True)
     subprocess.run(cmd, check=True, env=env)
     html = out / "html"
