@@ -155,9 +155,11 @@ check-book: $(STAMP) $(NODE)
 	$(BIN)/python tools/check_catalogue.py --html _build/html --cache _build/results-cache --jobs 2
 	$(BIN)/python tools/notebook_markdown.py check $$(find _build/html/_sources -name '*.ipynb')
 
-## Run the whole test suite.
+## Run the whole test suite, TEST_JOBS processes at a time (pytest-xdist; default: one per core,
+## TEST_JOBS=0 runs it in this process). Each test's temporary files are its own (tmp_path).
+TEST_JOBS ?= auto
 test: $(STAMP) $(NODE)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n $(TEST_JOBS)
 
 ## Performance targets (issues 10 and 16): each prints its figure, target and ratio; the figures are
 ## also collected in _build/benchmarks.json, which the book's status page shows when present.
