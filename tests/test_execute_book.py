@@ -6,6 +6,7 @@ the jupyter-cache gives every chapter's outputs back to myst-nb, and a cell erro
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import textwrap
@@ -83,13 +84,13 @@ def _book(root: Path, *, failing: bool = False) -> Path:
     return root
 
 
-def _run(root: Path, cache: Path, jobs: int, results: Path, monkeypatch=None) -> subprocess.CompletedProcess:
+def _run(root: Path, cache: Path, jobs: int, results: Path, *extra: str) -> subprocess.CompletedProcess:
     results.mkdir(parents=True, exist_ok=True)
-    env = {**__import__("os").environ, "FDI_TEST_RESULTS": str(results)}
+    env = {**os.environ, "FDI_TEST_RESULTS": str(results)}
     env.pop("FDI_CORES", None)
     return subprocess.run([sys.executable, str(ROOT / "tools" / "execute_book.py"), "--root", str(root),
                            "--cache", str(cache), "--jobs", str(jobs), "--report", str(root / "none.json"),
-                           "--config-out", str(root / "_build" / "_config_book.yml")],
+                           "--config-out", str(root / "_build" / "_config_book.yml"), *extra],
                           env=env, capture_output=True, text=True)
 
 
@@ -128,6 +129,15 @@ def test_parallel_execution_glues_what_a_serial_one_does(tmp_path, monkeypatch):
     # the build's configuration reads that cache
     config = (book / "_build" / "_config_book.yml").read_text()
     assert "execute_notebooks: cache" in config and str((tmp_path / "cache-2").resolve()) in config
+    # another edition whose chapter b changed (the student edition): a and the ledger are reused
+    (book / "book" / "b.md").write_text((book / "book" / "b.md").read_text().replace("seed=2", "seed=3"))
+    done = _run(book, tmp_path / "cache-3", 2, tmp_path / "results-3", "--reuse", str(tmp_path / "cache-2"))
+    assert done.returncode == 0, done.stderr
+    executed = [line.split(":")[0] for line in done.stdout.splitlines() if "Executed notebook in" in line]
+    reused = [line.split(":")[0] for line in done.stdout.splitlines() if "outputs reused" in line]
+    assert executed == ["book/b.md"] and sorted(reused) == ["book/a.md", "book/zz-ledger.md"]
+    assert _glued(tmp_path / "cache-3", book / "book" / "a.md") == parallel["a"]
+    assert _glued(tmp_path / "cache-3", book / "book" / "b.md")["b_sum"] != parallel["b"]["b_sum"]
 
 
 @pytest.mark.slow
