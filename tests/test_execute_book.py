@@ -1,7 +1,8 @@
 """``tools/execute_book.py`` (``make book``'s parallel execution of the chapters): on a small book
 of three notebooks, the glued values are those of a serial execution, each chapter's Monte Carlo
 ran on its share of the cores, the claims ledger ran after the chapters whose results it reads,
-the jupyter-cache gives every chapter's outputs back to myst-nb, and a cell error fails the run."""
+the jupyter-cache gives every chapter's outputs back to myst-nb, another edition reuses the
+chapters whose code is unchanged (``--reuse``), and a cell error fails the run."""
 
 from __future__ import annotations
 
