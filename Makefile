@@ -46,16 +46,18 @@ $(NODE):
 ## loads (headless Chromium, installed if absent as for the browser test) and writes both into the
 ## built status page, which is executed before any page is written and cannot measure them itself.
 ## BOOK_JOBS chapters at a time (default: the cores).
-KERNEL_NOISE := sed -u -e '/Kernel is running over TCP without encryption/d' -e '/KeyboardInterrupt caught in kernel/d'
+KERNEL_NOISE := sed -u -e '/Kernel is running over TCP without encryption/d' \
+                       -e '/KeyboardInterrupt caught in kernel/d'
 book: export FDI_RESULTS_CACHE := $(CURDIR)/_build/results-cache
 book: BOOK_STARTED := $(shell date +%s)
 book: $(STAMP) $(CHROMIUM)
 	rm -rf _build/html _build/.doctrees _build/results-cache
 	mkdir -p _build
 	set -o pipefail; $(BIN)/python tools/execute_book.py --cache _build/.jupyter_cache-book \
-	  --config-out _build/_config_book.yml $(if $(BOOK_JOBS),--jobs $(BOOK_JOBS)) 2>&1 | $(KERNEL_NOISE) | tee _build.log
-	set -o pipefail; $(BIN)/jupyter-book build . --config _build/_config_book.yml --warningiserror --nitpick \
-	  --keep-going --builder html 2>&1 | $(KERNEL_NOISE) | tee -a _build.log
+	  --config-out _build/_config_book.yml $(if $(BOOK_JOBS),--jobs $(BOOK_JOBS)) 2>&1 \
+	  | $(KERNEL_NOISE) | tee _build.log
+	set -o pipefail; $(BIN)/jupyter-book build . --config _build/_config_book.yml \
+	  --warningiserror --nitpick --keep-going --builder html 2>&1 | $(KERNEL_NOISE) | tee -a _build.log
 	$(BIN)/python tools/build_report.py --html _build/html --log _build.log --started $(BOOK_STARTED)
 	@echo "Book built: $(abspath _build/html/index.html)"
 

@@ -859,8 +859,10 @@ def _record_run_times(app: Sphinx, env) -> None:
     for docname in sorted(env.found_docs):
         data = NbMetadataCollector.get_exec_data(env, docname) or {}
         if data.get("method") == "cache" and data.get("succeeded"):
-            _write_cached_notebook(folder / f"{docname}.ipynb", env.mystnb_config.execution_cache_path)
-        if data.get("method") in ("force", "cache") and data.get("succeeded") and data.get("runtime") is not None:
+            _write_cached_notebook(folder / f"{docname}.ipynb",
+                                   env.mystnb_config.execution_cache_path)
+        if (data.get("method") in ("force", "cache") and data.get("succeeded")
+                and data.get("runtime") is not None):
             path = folder / f"{docname}.exec.json"
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_text(json.dumps({"runtime": data["runtime"]}))

@@ -498,8 +498,8 @@ def _cores_share(cores: int) -> int:
     if not value:
         return cores
     if not value.isdigit() or int(value) < 1:
-        raise ModelError(f"${CORES_ENV}: expected a positive integer (the cores this process may use), "
-                         f"got {value!r}")
+        raise ModelError(f"${CORES_ENV}: expected a positive integer (the cores this process may "
+                         f"use), got {value!r}")
     return int(value)
 
 

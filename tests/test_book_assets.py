@@ -157,7 +157,8 @@ def test_execution_times_from_the_build_log():
            "book/zb2014/glr.md: Executed notebook in 7.25 seconds (on 1 core)\n"
            "book/zz-ledger.md: Executed notebook in 2.00 seconds (on 2 cores)\n"
            "Executed 2 notebooks in 9.5 s of wall time (9.2 s summed over the chapters)\n")
-    assert REPORT.execution_times(log, ROOT) == {"book/zb2014/glr.md": 7.25, "book/zz-ledger.md": 2.0}
+    assert REPORT.execution_times(log, ROOT) == {"book/zb2014/glr.md": 7.25,
+                                                 "book/zz-ledger.md": 2.0}
     assert REPORT.execution_wall(log) == 9.5
 
 

@@ -73,8 +73,8 @@ def _book(root: Path, *, failing: bool = False) -> Path:
     (root / "book").mkdir(parents=True)
     (root / "_config.yml").write_text("execute:\n  execute_notebooks: force\n  timeout: 120\n"
                                       "  allow_errors: false\n  run_in_temp: false\n")
-    (root / "_toc.yml").write_text("format: jb-book\nroot: book/intro\nchapters:\n  - file: book/a\n"
-                                   "  - file: book/zz-ledger\n  - file: book/b\n")
+    (root / "_toc.yml").write_text("format: jb-book\nroot: book/intro\nchapters:\n"
+                                   "  - file: book/a\n  - file: book/zz-ledger\n  - file: book/b\n")
     (root / "book" / "intro.md").write_text("# A book\n\nNo code here.\n")
     for name, seed in (("a", 1), ("b", 2)):
         body = CHAPTER.format(name=name, seed=seed)
@@ -85,14 +85,15 @@ def _book(root: Path, *, failing: bool = False) -> Path:
     return root
 
 
-def _run(root: Path, cache: Path, jobs: int, results: Path, *extra: str) -> subprocess.CompletedProcess:
+def _run(root: Path, cache: Path, jobs: int, results: Path,
+         *extra: str) -> subprocess.CompletedProcess:
     results.mkdir(parents=True, exist_ok=True)
     env = {**os.environ, "FDI_TEST_RESULTS": str(results)}
     env.pop("FDI_CORES", None)
-    return subprocess.run([sys.executable, str(ROOT / "tools" / "execute_book.py"), "--root", str(root),
-                           "--cache", str(cache), "--jobs", str(jobs), "--report", str(root / "none.json"),
-                           "--config-out", str(root / "_build" / "_config_book.yml"), *extra],
-                          env=env, capture_output=True, text=True)
+    cmd = [sys.executable, str(ROOT / "tools" / "execute_book.py"), "--root", str(root),
+           "--cache", str(cache), "--jobs", str(jobs), "--report", str(root / "none.json"),
+           "--config-out", str(root / "_build" / "_config_book.yml"), *extra]
+    return subprocess.run(cmd, env=env, capture_output=True, text=True)
 
 
 def _glued(cache: Path, source: Path) -> dict:
@@ -117,12 +118,14 @@ def test_parallel_execution_glues_what_a_serial_one_does(tmp_path, monkeypatch):
         cache = tmp_path / f"cache-{jobs}"
         done = _run(book, cache, jobs, tmp_path / f"results-{jobs}")
         assert done.returncode == 0, done.stderr
-        assert "book/a.md: Executed notebook in" in done.stdout and "book/zz-ledger.md" in done.stdout
-        glued[jobs] = {doc: _glued(cache, book / "book" / f"{doc}.md") for doc in ("a", "b", "zz-ledger")}
+        assert "book/a.md: Executed notebook in" in done.stdout
+        assert "book/zz-ledger.md: Executed notebook in" in done.stdout
+        glued[jobs] = {doc: _glued(cache, book / "book" / f"{doc}.md")
+                       for doc in ("a", "b", "zz-ledger")}
     serial, parallel = glued[1], glued[2]
     cores = min(2, joblib.cpu_count())
     for doc in ("a", "b"):
-        assert serial[doc][f"{doc}_sum"] == parallel[doc][f"{doc}_sum"]   # the same bytes of the number
+        assert serial[doc][f"{doc}_sum"] == parallel[doc][f"{doc}_sum"]   # the same repr
         assert serial[doc][f"{doc}_jobs"] == str(cores)    # alone: every core
         assert parallel[doc][f"{doc}_jobs"] == "1"         # beside another chapter: its share
     # the ledger ran after both chapters in both runs (it is listed between them in the TOC)
@@ -131,11 +134,14 @@ def test_parallel_execution_glues_what_a_serial_one_does(tmp_path, monkeypatch):
     config = (book / "_build" / "_config_book.yml").read_text()
     assert "execute_notebooks: cache" in config and str((tmp_path / "cache-2").resolve()) in config
     # another edition whose chapter b changed (the student edition): a and the ledger are reused
-    (book / "book" / "b.md").write_text((book / "book" / "b.md").read_text().replace("seed=2", "seed=3"))
-    done = _run(book, tmp_path / "cache-3", 2, tmp_path / "results-3", "--reuse", str(tmp_path / "cache-2"))
+    b = book / "book" / "b.md"
+    b.write_text(b.read_text().replace("seed=2", "seed=3"))
+    done = _run(book, tmp_path / "cache-3", 2, tmp_path / "results-3",
+                "--reuse", str(tmp_path / "cache-2"))
     assert done.returncode == 0, done.stderr
-    executed = [line.split(":")[0] for line in done.stdout.splitlines() if "Executed notebook in" in line]
-    reused = [line.split(":")[0] for line in done.stdout.splitlines() if "outputs reused" in line]
+    lines = done.stdout.splitlines()
+    executed = [line.split(":")[0] for line in lines if "Executed notebook in" in line]
+    reused = [line.split(":")[0] for line in lines if "outputs reused" in line]
     assert executed == ["book/b.md"] and sorted(reused) == ["book/a.md", "book/zz-ledger.md"]
     assert _glued(tmp_path / "cache-3", book / "book" / "a.md") == parallel["a"]
     assert _glued(tmp_path / "cache-3", book / "book" / "b.md")["b_sum"] != parallel["b"]["b_sum"]
@@ -152,7 +158,8 @@ def test_a_cell_error_fails_the_run_with_its_traceback(tmp_path):
 
 def test_chapters_are_the_toc_notebooks_with_code_longest_first(tmp_path):
     book = _book(tmp_path / "src")
-    assert TOOL.toc_documents(book / "_toc.yml") == ["book/intro", "book/a", "book/zz-ledger", "book/b"]
+    assert TOOL.toc_documents(book / "_toc.yml") == ["book/intro", "book/a", "book/zz-ledger",
+                                                     "book/b"]
     found = TOOL.chapters(book, book / "_toc.yml", {"book/b.md": 9.0, "book/a.md": 1.0})
     assert [c.doc for c in found] == ["book/a", "book/zz-ledger", "book/b"]   # intro has no code
     assert {c.doc: c.weight for c in found}["book/b"] == 9.0

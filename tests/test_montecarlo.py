@@ -219,7 +219,8 @@ def test_a_share_of_the_cores_cuts_jobs_silently_and_bad_shares_are_refused(monk
     monkeypatch.setenv(mc.CORES_ENV, "1")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        assert mc.effective_jobs(2) == 1 and mc.effective_jobs(4, 8) == 1 and mc.effective_jobs(-1) == 1
+        assert mc.effective_jobs(2) == 1 and mc.effective_jobs(4, 8) == 1
+        assert mc.effective_jobs(-1) == 1
     monkeypatch.setenv(mc.CORES_ENV, "3")
     with pytest.warns(JobsCappedWarning, match=r"jobs: 6 requested, 3 used \(4 CPU cores\)"):
         assert mc.effective_jobs(6) == 3
@@ -229,7 +230,8 @@ def test_a_share_of_the_cores_cuts_jobs_silently_and_bad_shares_are_refused(monk
     assert mc.effective_jobs(-1) == 4   # empty: unset
     for bad in ("0", "-2", "two", "1.5"):
         monkeypatch.setenv(mc.CORES_ENV, bad)
-        with pytest.raises(ModelError, match=rf"\$FDI_CORES: expected a positive integer .*got '{re.escape(bad)}'"):
+        with pytest.raises(ModelError, match=rf"\$FDI_CORES: expected a positive integer "
+                                             rf".*got '{re.escape(bad)}'"):
             mc.effective_jobs(2)
 
 

@@ -73,10 +73,10 @@ def times_html(times: dict[str, float], wall: float, execution: float | None = N
         slow = max(times, key=times.get)
         rows[f"execution of the {len(times)} chapters, sum"] = [fmt_time(sum(times.values()))]
         rows["slowest chapter"] = [f"{fmt_time(times[slow])} ({slow})"]
-    notes = [f"Execution budget of the book: {fmt_time(EXECUTION_BUDGET_S)} of wall time on 2 cores, the "
-             "chapters executed side by side (tools/execute_book.py), each chapter's time being its "
-             "own wall time on its share of the cores; the rest of the build is Sphinx reading and "
-             "writing the pages.",
+    notes = [f"Execution budget of the book: {fmt_time(EXECUTION_BUDGET_S)} of wall time on 2 "
+             "cores, the chapters executed side by side (tools/execute_book.py), each chapter's "
+             "time being its own wall time on its share of the cores; the rest of the build is "
+             "Sphinx reading and writing the pages.",
              "Measured on " + datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
              + " by tools/build_report.py."]
     if not times:
@@ -147,7 +147,8 @@ def main(argv: list[str] | None = None) -> int:
     print("  " + "-" * 57)
     print(f"  {'sum over the chapters':45s} {sum(times.values()):8.1f} s")
     if execution is not None:
-        print(f"  {'execution, wall time':45s} {execution:8.1f} s (budget {EXECUTION_BUDGET_S:g} s)")
+        print(f"  {'execution, wall time':45s} {execution:8.1f} s "
+              f"(budget {EXECUTION_BUDGET_S:g} s)")
     print(f"  {'make book, wall time':45s} {wall:8.1f} s")
     status = args.html / STATUS_PAGE
     inject(status, "fdi-build-time", times_html(times, wall, execution))

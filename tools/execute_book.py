@@ -1,7 +1,8 @@
 """Execute the book's chapters side by side on the machine's cores, into the jupyter-cache that
 ``make book`` then builds from (issue 35).
 
-    python tools/execute_book.py --cache _build/.jupyter_cache-book --config-out _build/_config_book.yml
+    python tools/execute_book.py --cache _build/.jupyter_cache-book \
+                                 --config-out _build/_config_book.yml [--jobs N] [--reuse CACHE]
 
 Why this mechanism. Jupyter Book 1.x executes the notebooks one after another while Sphinx reads
 them. Two ways to run them concurrently exist in its stack, and neither fits:
@@ -133,7 +134,8 @@ def execution_settings(config: Path) -> dict:
     execute = yaml.safe_load(config.read_text()).get("execute", {})
     if execute.get("run_in_temp"):
         raise SystemExit(f"{config}: execute.run_in_temp is not supported by {Path(__file__).name}")
-    return {"timeout": execute.get("timeout", 30), "allow_errors": bool(execute.get("allow_errors", False))}
+    return {"timeout": execute.get("timeout", 30),
+            "allow_errors": bool(execute.get("allow_errors", False))}
 
 
 def run_one(path: Path, out: Path, timeout: int, allow_errors: bool) -> int:
@@ -144,11 +146,11 @@ def run_one(path: Path, out: Path, timeout: int, allow_errors: bool) -> int:
     from jupyter_cache.executors.utils import single_nb_execution
 
     nb = nbformat.reads(out.read_text(), as_version=4)
-    result = single_nb_execution(nb, cwd=str(path.parent), timeout=timeout, allow_errors=allow_errors,
-                                 meta_override=True)
+    result = single_nb_execution(nb, cwd=str(path.parent), timeout=timeout,
+                                 allow_errors=allow_errors, meta_override=True)
     if result.err is not None:
-        print(f"{path}: executing the notebook failed: {type(result.err).__name__}\n{result.exc_string}",
-              file=sys.stderr, flush=True)
+        print(f"{path}: executing the notebook failed: {type(result.err).__name__}\n"
+              f"{result.exc_string}", file=sys.stderr, flush=True)
         return 1
     out.write_text(json.dumps({"seconds": result.time, "notebook": nbformat.writes(result.nb)}))
     return 0
@@ -157,8 +159,8 @@ def run_one(path: Path, out: Path, timeout: int, allow_errors: bool) -> int:
 class Scheduler:
     """Runs the chapters, ``jobs`` at a time, and caches each executed notebook."""
 
-    def __init__(self, chapters: list[Chapter], cache_dir: Path, jobs: int, cores: int, settings: dict,
-                 root: Path) -> None:
+    def __init__(self, chapters: list[Chapter], cache_dir: Path, jobs: int, cores: int,
+                 settings: dict, root: Path) -> None:
         from jupyter_cache import get_cache
 
         from pdf_edition import library_hash
@@ -196,11 +198,11 @@ class Scheduler:
                 left.append(chapter)
                 continue
             nb = source.get_cache_bundle(record.pk).nb
-            self.cache.cache_notebook_bundle(CacheBundleIn(nb, str(chapter.path), data=dict(record.data)),
-                                             check_validity=False, overwrite=True)
+            bundle = CacheBundleIn(nb, str(chapter.path), data=dict(record.data))
+            self.cache.cache_notebook_bundle(bundle, check_validity=False, overwrite=True)
             self.unfinished -= 1
-            print(f"{chapter.path.relative_to(self.root).as_posix()}: the same code cells as in {other}: "
-                  "its outputs reused", flush=True)
+            print(f"{chapter.path.relative_to(self.root).as_posix()}: the same code cells as in "
+                  f"{other}: its outputs reused", flush=True)
         return left
 
     def run(self, chapter: Chapter, tmp: Path) -> None:
@@ -261,13 +263,18 @@ def main(argv: list[str] | None = None) -> int:
         a = p.parse_args(argv[1:])
         return run_one(a.path, a.out, a.timeout, a.allow_errors)
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--root", type=Path, default=REPO, help="the book's folder (_config.yml, _toc.yml)")
-    parser.add_argument("--cache", type=Path, required=True, help="the jupyter-cache to fill (emptied first)")
-    parser.add_argument("--config-out", type=Path, help="write the build's _config.yml (mode cache) here")
-    parser.add_argument("--jobs", type=int, default=0, help="chapters at a time (default: the cores)")
+    parser.add_argument("--root", type=Path, default=REPO,
+                        help="the book's folder (_config.yml, _toc.yml)")
+    parser.add_argument("--cache", type=Path, required=True,
+                        help="the jupyter-cache to fill (emptied first)")
+    parser.add_argument("--config-out", type=Path,
+                        help="write the build's _config.yml (mode cache) here")
+    parser.add_argument("--jobs", type=int, default=0,
+                        help="chapters at a time (default: the cores)")
     parser.add_argument("--only", nargs="*", help="only these documents (e.g. book/zb2014/glr)")
-    parser.add_argument("--reuse", type=Path, help="a jupyter-cache of the same library (make book's): "
-                        "a chapter whose code cells it holds executed is taken from it, not executed")
+    parser.add_argument("--reuse", type=Path,
+                        help="a jupyter-cache of the same library (make book's): a chapter whose "
+                        "code cells it holds executed is taken from it, not executed")
     parser.add_argument("--report", type=Path, default=REPO / "_build" / "build-report.json",
                         help="the last build's report, whose run times order the chapters")
     args = parser.parse_args(argv)
@@ -296,12 +303,13 @@ def main(argv: list[str] | None = None) -> int:
     start = time.perf_counter()
     scheduler = Scheduler(todo, args.cache, jobs, cores, settings, root)
     if args.reuse is not None:
-        first, last = scheduler.reuse(first, args.reuse.resolve()), scheduler.reuse(last, args.reuse.resolve())
+        reuse = args.reuse.resolve()
+        first, last = scheduler.reuse(first, reuse), scheduler.reuse(last, reuse)
     scheduler.run_all([b for b in (first, last) if b])
     wall = time.perf_counter() - start
     if scheduler.failed:
-        print(f"Execution failed: {', '.join(scheduler.failed)} (traceback above); the book is not built",
-              file=sys.stderr)
+        print(f"Execution failed: {', '.join(scheduler.failed)} (traceback above); the book is "
+              "not built", file=sys.stderr)
         return 1
     print(f"Executed {len(todo)} notebooks in {wall:.1f} s of wall time "
           f"({sum(scheduler.times.values()):.1f} s summed over the chapters)", flush=True)

@@ -110,11 +110,12 @@ def build(out: Path, extra: list[str]) -> None:
     # the chapters executed side by side, those unchanged by the stripping taken from make book's
     # run, then the pages built from that cache (as make book does)
     execute = [sys.executable, str(REPO / "tools" / "execute_book.py"), "--root", str(src),
-               "--cache", str(out / ".jupyter_cache"), "--reuse", str(BOOK_CACHE), "--config-out", str(config)]
+               "--cache", str(out / ".jupyter_cache"), "--reuse", str(BOOK_CACHE),
+               "--config-out", str(config)]
     print("+", " ".join(execute), flush=True)
     subprocess.run(execute, check=True, env=env)
-    cmd = [str(Path(sys.executable).with_name("jupyter-book")), "build", str(src), "--config", str(config),
-           "--path-output", str(work), "--builder", "html", *extra]
+    cmd = [str(Path(sys.executable).with_name("jupyter-book")), "build", str(src),
+           "--config", str(config), "--path-output", str(work), "--builder", "html", *extra]
     print("+", " ".join(cmd), flush=True)
     subprocess.run(cmd, check=True, env=env)
     html = out / "html"
