@@ -876,6 +876,8 @@ def _write_cached_notebook(path: Path, cache_path: str) -> None:
     from jupyter_cache import get_cache
     from myst_nb.ext.glue import extract_glue_data
 
+    if not path.is_file():  # an incremental build that did not read the page: nothing written
+        return
     nb = nbformat.read(path, as_version=4)
     try:
         _, executed = get_cache(cache_path or ".jupyter_cache").merge_match_into_notebook(nb)
