@@ -216,19 +216,9 @@ _LABEL = re.compile(r"^\(([\w.-]+)\)=\s*$")
 
 
 def _toc_files(confdir: Path) -> list[str]:
-    import yaml
+    from fdi_lib.reproduce.book import toc_documents
 
-    toc = yaml.safe_load((confdir / "_toc.yml").read_text())
-    files: list[str] = []
-
-    def walk(items):
-        for item in items or []:
-            if "file" in item:
-                files.append(item["file"])
-            walk(item.get("chapters")), walk(item.get("sections"))
-
-    walk(toc.get("parts")), walk(toc.get("chapters"))
-    return files
+    return toc_documents(confdir)
 
 
 def _occurrences(text: str):

@@ -12,9 +12,11 @@ their own pool, then run in this process. A scheduler that cannot be reached is 
 
 ``--ledger`` prints the claims ledger (:mod:`fdi_lib.reproduce.ledger`): every value the
 papers state, ours, and the computed status; with ``--json``, one object
-``{"counts", "rows", "sources"}``; ``--trials N`` caps the Monte Carlo trials of the runs it
-makes (results cached by a book build, ``$FDI_RESULTS_CACHE``, are read instead); ``--cluster``
-runs them on a cluster.
+``{"counts", "counts_by_paper", "mission", "rows", "sources"}``, the same bytes on every run, at any
+``--jobs`` and with ``--cluster`` (the wall times of the runs it makes are printed only without
+``--json``); ``--trials N`` caps the Monte Carlo trials of the runs it makes (results cached by a
+book build, ``$FDI_RESULTS_CACHE``, are read instead); ``--jobs``/``--cluster`` run them in parallel
+or on a cluster.
 
 ``--json`` prints exactly one JSON object ``{"id", "headline", "paper", "settings"}``
 on standard output; the ``headline`` keys of each identifier are documented in
@@ -212,7 +214,7 @@ def _print_ledger(args: argparse.Namespace) -> int:
 
     try:
         with _where(args):
-            led = ledger(max_trials=args.trials)
+            led = ledger(max_trials=args.trials, jobs=effective_jobs(args.jobs))
     except FDIError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -220,6 +222,8 @@ def _print_ledger(args: argparse.Namespace) -> int:
         print(json.dumps(led.to_json_dict()))
         return 0
     print("  ".join(f"{status}: {n}" for status, n in led.counts().items()))
+    for id, seconds in led.timings.items():
+        print(f"{'computed':<24} {id} in {seconds:.1f} s")
     for r in led.rows:
         print(f"{r.status:<24} {r.claim}\n{'':<24} paper: {r.paper}  ours: {r.ours}"
               + (f"  95 % interval: [{r.ci[0]:.4g}, {r.ci[1]:.4g}]" if r.ci else "")

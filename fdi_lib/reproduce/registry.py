@@ -30,7 +30,7 @@ import pickle
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
@@ -93,6 +93,16 @@ class Reproduction:
     #: Headline keys that measure this machine's wall time (they change from run to run and are
     #: never compared between runs, e.g. by the catalogue's post-build check).
     timed_keys: tuple[str, ...] = ()
+    #: The chapter that shows it (``"zb2014/glr"`` for ``book/zb2014/glr.md``).
+    chapter: str = ""
+    #: Whether the book runs it at its chapter's seed (:data:`fdi_lib.reproduce.book.CHAPTER_SEEDS`)
+    #: rather than at ``default_seed``.
+    chapter_seed: bool = False
+    #: Whether it runs on a surrogate or reconstructed model (the paper's model is not public).
+    surrogate: bool = False
+    #: Its paper claims: ``(pattern, Claim)`` pairs, the pattern an ``fnmatch`` pattern of a path
+    #: of its ``paper`` dictionary (``"success_rate/*"``); see :mod:`fdi_lib.reproduce.ledger`.
+    claims: tuple[tuple[str, Any], ...] = ()
 
     @property
     def monte_carlo(self) -> bool:
@@ -261,9 +271,10 @@ def cached_results() -> dict[str, ReproductionResult]:
 _REGISTRY: dict[str, Reproduction] = {}
 
 
-def register(id: str, *, paper: str, title: str, default_trials: int | None = None,
+def register(id: str, *, paper: str, title: str, chapter: str, default_trials: int | None = None,
              default_seed: int = 0, plot: Callable[..., Any] | None = None, min_trials: int = 2,
-             timed_keys: tuple[str, ...] = ()
+             timed_keys: tuple[str, ...] = (), chapter_seed: bool = False, surrogate: bool = False,
+             claims: Mapping[str, Any] | None = None
              ) -> Callable[[Callable[..., ReproductionResult]], Callable[..., ReproductionResult]]:
     """Decorator registering a reproduction function under ``id``.
 
@@ -273,6 +284,14 @@ def register(id: str, *, paper: str, title: str, default_trials: int | None = No
     intervals (they need two trials), 1 for a reproduction whose JSON has none.
     ``timed_keys`` are the headline keys that measure wall time on this machine (not
     reproducible from run to run).
+
+    Everything the book and the claims ledger need travels with the registration: ``chapter``
+    (``"zb2014/glr"``: the book document ``book/zb2014/glr.md`` that runs and shows it; the
+    book's order of reproductions is that of ``_toc.yml``), ``chapter_seed`` (the book runs it at
+    its chapter's seed), ``surrogate`` (it runs on a surrogate model) and ``claims``: for each
+    path pattern of its ``paper`` dictionary, the :class:`~fdi_lib.reproduce.ledger.Claim` that
+    says where in the paper the value is, its units and how it is compared (see
+    :mod:`fdi_lib.reproduce.ledger`; a paper value without a declaration fails the tests).
     """
 
     def decorator(func: Callable[..., ReproductionResult]) -> Callable[..., ReproductionResult]:
@@ -280,7 +299,10 @@ def register(id: str, *, paper: str, title: str, default_trials: int | None = No
             raise ModelError(f"reproduction id {id!r} registered twice")
         _REGISTRY[id] = Reproduction(id=id, paper=paper, title=title, func=func, plot=plot,
                                      default_trials=default_trials, default_seed=default_seed,
-                                     min_trials=min_trials, timed_keys=tuple(timed_keys))
+                                     min_trials=min_trials, timed_keys=tuple(timed_keys),
+                                     chapter=chapter, chapter_seed=chapter_seed,
+                                     surrogate=surrogate,
+                                     claims=tuple((claims or {}).items()))
         return func
 
     return decorator
