@@ -100,11 +100,17 @@ def write_notebooks(src: Path, out: Path, glue_dir: Path | None = None) -> list[
 #: The jupyter-cache of the last ``make book`` (``tools/execute_book.py``): a student chapter whose
 #: code cells are those of the full book takes its outputs from there instead of executing again.
 BOOK_CACHE = REPO / "_build" / ".jupyter_cache-book"
+#: The results cache of the last ``make book`` (``$FDI_RESULTS_CACHE``): a reproduction that a
+#: student chapter runs at the settings and with the code of a full-book chapter reads its result
+#: (keyed by the settings and the library's sources, :mod:`fdi_lib.reproduce.registry`).
+BOOK_RESULTS = REPO / "_build" / "results-cache"
 
 
 def build(out: Path, extra: list[str]) -> None:
     src = copy_sources(out)
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])))
+    if BOOK_RESULTS.is_dir() and "FDI_RESULTS_CACHE" not in env:
+        env["FDI_RESULTS_CACHE"] = str(BOOK_RESULTS)
     work = out / "build"
     config = out / "_config_student.yml"
     # the chapters executed side by side, those unchanged by the stripping taken from make book's
