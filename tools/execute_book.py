@@ -19,9 +19,10 @@ So this script does the scheduling and leaves the rest to myst-nb's own executio
 1. every document of ``_toc.yml`` that is a notebook is read as myst-nb reads it
    (``myst_nb.core.read``) and executed as myst-nb executes it (``jupyter_cache``'s
    ``single_nb_execution``, in the chapter's folder, the ``execute:`` settings of ``_config.yml``),
-   each in a process of its own (its kernel inherits that process's environment), ``--jobs`` of
-   them at a time (default: the cores), the longest first (the times of the last build's report,
-   ``_build/build-report.json``, else :data:`LONGEST` then the size of the code), the claims ledger
+   on ``--jobs`` worker processes (default: the cores; each runs one chapter at a time, whose
+   kernel inherits the worker's environment), the longest first (the times of the last build's
+   report, ``_build/build-report.json``, else :data:`LONGEST` then the size of the code), the
+   claims ledger
    (:data:`AFTER_ALL`) after every other chapter, as in a serial build (it reads the results the
    chapters cached, ``$FDI_RESULTS_CACHE``);
 2. each chapter's Monte Carlo shares the cores without oversubscription: its kernel gets
@@ -46,9 +47,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
-import tempfile
 import threading
 import time
 from pathlib import Path
@@ -138,22 +137,22 @@ def execution_settings(config: Path) -> dict:
             "allow_errors": bool(execute.get("allow_errors", False))}
 
 
-def run_one(path: Path, out: Path, timeout: int, allow_errors: bool) -> int:
-    """Child process: execute the notebook ``out`` (written by the parent, as read from the chapter
-    ``path``) in the chapter's folder, as myst-nb does, and write it back executed with its run
-    time (JSON: ``{"seconds", "notebook"}``); exit status 1 and the traceback on an error."""
+def execute(path: str, notebook: str, cores: int, timeout: int,
+            allow_errors: bool) -> tuple[float | None, str]:
+    """In a worker process: execute ``notebook`` (JSON, as read from the chapter ``path``) in the
+    chapter's folder as myst-nb does, its kernel on ``cores`` cores (``$FDI_CORES``, which the
+    kernel inherits: a worker runs one chapter at a time); returns the run time and the executed
+    notebook, or ``None`` and the traceback."""
     import nbformat
     from jupyter_cache.executors.utils import single_nb_execution
 
-    nb = nbformat.reads(out.read_text(), as_version=4)
-    result = single_nb_execution(nb, cwd=str(path.parent), timeout=timeout,
+    os.environ[CORES_ENV] = str(cores)
+    nb = nbformat.reads(notebook, as_version=4)
+    result = single_nb_execution(nb, cwd=str(Path(path).parent), timeout=timeout,
                                  allow_errors=allow_errors, meta_override=True)
     if result.err is not None:
-        print(f"{path}: executing the notebook failed: {type(result.err).__name__}\n"
-              f"{result.exc_string}", file=sys.stderr, flush=True)
-        return 1
-    out.write_text(json.dumps({"seconds": result.time, "notebook": nbformat.writes(result.nb)}))
-    return 0
+        return None, f"{type(result.err).__name__}\n{result.exc_string}"
+    return result.time, nbformat.writes(result.nb)
 
 
 class Scheduler:
@@ -205,43 +204,47 @@ class Scheduler:
                   f"{other}: its outputs reused", flush=True)
         return left
 
-    def run(self, chapter: Chapter, tmp: Path) -> None:
+    def run(self, chapter: Chapter, workers) -> None:
         import nbformat
         from jupyter_cache.base import CacheBundleIn
 
         if self.failed:
             return  # a chapter failed: start no other one
         cores = self.share()
-        out = tmp / (chapter.doc.replace("/", "__") + ".json")
-        out.write_text(nbformat.writes(chapter.notebook))
-        env = dict(os.environ, **{CORES_ENV: str(cores)})
-        cmd = [sys.executable, str(Path(__file__).resolve()), "one", str(chapter.path), str(out),
-               "--timeout", str(self.settings["timeout"])]
-        if self.settings["allow_errors"]:
-            cmd.append("--allow-errors")
-        done = subprocess.run(cmd, env=env)
+        try:
+            seconds, out = workers.submit(execute, str(chapter.path),
+                                          nbformat.writes(chapter.notebook), cores,
+                                          self.settings["timeout"],
+                                          self.settings["allow_errors"]).result()
+        except Exception as exc:  # the worker process died (killed, out of memory)
+            seconds, out = None, f"{type(exc).__name__}: {exc}"
         rel = chapter.path.relative_to(self.root).as_posix()
         with self.lock:
             self.unfinished -= 1
-            if done.returncode != 0:
+            if seconds is None:
+                print(f"{rel}: executing the notebook failed: {out}", file=sys.stderr, flush=True)
                 self.failed.append(rel)
                 return
-            result = json.loads(out.read_text())
-            nb = nbformat.reads(result["notebook"], as_version=4)
+            nb = nbformat.reads(out, as_version=4)
             self.cache.cache_notebook_bundle(CacheBundleIn(nb, str(chapter.path), data={
-                "execution_seconds": result["seconds"], "library": self.library}),
+                "execution_seconds": seconds, "library": self.library}),
                 check_validity=False, overwrite=True)
-            self.times[rel] = result["seconds"]
-            print(f"{rel}: Executed notebook in {result['seconds']:.2f} seconds (on {cores} "
+            self.times[rel] = seconds
+            print(f"{rel}: Executed notebook in {seconds:.2f} seconds (on {cores} "
                   f"core{'s' * (cores > 1)})", flush=True)
 
     def run_all(self, batches: list[list[Chapter]]) -> None:
-        from concurrent.futures import ThreadPoolExecutor
+        """Each batch after the previous one, its chapters on ``jobs`` worker processes (started
+        once: the imports of nbclient and nbformat, seconds of CPU, are paid per worker, not per
+        chapter), driven by as many threads of this process."""
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 
-        with tempfile.TemporaryDirectory(prefix="fdi-execute-") as tmp:
+        context = multiprocessing.get_context("spawn")   # this process has threads: no fork
+        with ProcessPoolExecutor(max_workers=self.jobs, mp_context=context) as workers:
             for batch in batches:
                 with ThreadPoolExecutor(max_workers=self.jobs) as pool:
-                    list(pool.map(lambda c: self.run(c, Path(tmp)), batch))
+                    list(pool.map(lambda c: self.run(c, workers), batch))
 
 
 def write_config(config: Path, cache_dir: Path, target: Path) -> None:
@@ -253,15 +256,6 @@ def write_config(config: Path, cache_dir: Path, target: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
-    if argv[:1] == ["one"]:
-        p = argparse.ArgumentParser(prog="execute_book.py one")
-        p.add_argument("path", type=Path)
-        p.add_argument("out", type=Path)
-        p.add_argument("--timeout", type=int, required=True)
-        p.add_argument("--allow-errors", action="store_true")
-        a = p.parse_args(argv[1:])
-        return run_one(a.path, a.out, a.timeout, a.allow_errors)
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--root", type=Path, default=REPO,
                         help="the book's folder (_config.yml, _toc.yml)")
@@ -277,7 +271,7 @@ def main(argv: list[str] | None = None) -> int:
                         "code cells it holds executed is taken from it, not executed")
     parser.add_argument("--report", type=Path, default=REPO / "_build" / "build-report.json",
                         help="the last build's report, whose run times order the chapters")
-    args = parser.parse_args(argv)
+    args = parser.parse_args(sys.argv[1:] if argv is None else argv)
     import shutil
 
     import joblib
