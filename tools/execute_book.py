@@ -22,9 +22,8 @@ So this script does the scheduling and leaves the rest to myst-nb's own executio
    on ``--jobs`` worker processes (default: the cores; each runs one chapter at a time, whose
    kernel inherits the worker's environment), the longest first (the times of the last build's
    report, ``_build/build-report.json``, else :data:`LONGEST` then the size of the code), the
-   claims ledger
-   (:data:`AFTER_ALL`) after every other chapter, as in a serial build (it reads the results the
-   chapters cached, ``$FDI_RESULTS_CACHE``);
+   claims ledger (:data:`AFTER_ALL`) after every other chapter, as in a serial build (it reads
+   the results the chapters cached, ``$FDI_RESULTS_CACHE``);
 2. each chapter's Monte Carlo shares the cores without oversubscription: its kernel gets
    ``FDI_CORES`` = the cores divided among the chapters not yet finished (at least one), which
    :func:`fdi_lib.montecarlo.effective_jobs` reads as the machine's size; results do not depend
