@@ -282,8 +282,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.report.is_file():
         try:
             times = json.loads(args.report.read_text()).get("execution_s") or {}
-        except (ValueError, AttributeError):
-            times = {}  # an unreadable report orders by code size
+            times = {str(k): float(v) for k, v in times.items()}
+        except (ValueError, TypeError, AttributeError):
+            times = {}  # an unreadable report orders as a fresh clone does
     todo = chapters(root, root / "_toc.yml", times)
     if args.only is not None:
         todo = [c for c in todo if c.doc in args.only]
