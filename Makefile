@@ -38,18 +38,26 @@ $(NODE):
 ## notice that a kernel talks to the build over local TCP without encryption, and the
 ## "KeyboardInterrupt caught in kernel" that jupyter_client's interrupt-before-shutdown causes
 ## when a kernel is still finishing a message. Reproductions run by the chapters are cached for
-## this build only, for the claims ledger. Then tools/build_report.py prints the execution time
-## of every chapter and the wall time of the build, measures what each page loads (headless
-## Chromium, installed if absent as for the browser test) and writes both into the built status
-## page, which is executed before any page is written and cannot measure them itself.
+## this build only, for the claims ledger. The chapters are executed first, side by side on the
+## machine's cores (tools/execute_book.py: every chapter afresh, into a jupyter-cache emptied
+## first; a cell error stops there), and Jupyter Book builds the pages from that cache (execution
+## mode cache in _build/_config_book.yml, written by the script). Then tools/build_report.py prints
+## the execution time of every chapter and the wall time of the build, measures what each page
+## loads (headless Chromium, installed if absent as for the browser test) and writes both into the
+## built status page, which is executed before any page is written and cannot measure them itself.
+## BOOK_JOBS chapters at a time (default: the cores).
+KERNEL_NOISE := sed -u -e '/Kernel is running over TCP without encryption/d' \
+                       -e '/KeyboardInterrupt caught in kernel/d'
 book: export FDI_RESULTS_CACHE := $(CURDIR)/_build/results-cache
 book: BOOK_STARTED := $(shell date +%s)
 book: $(STAMP) $(CHROMIUM)
 	rm -rf _build/html _build/.doctrees _build/results-cache
 	mkdir -p _build
-	set -o pipefail; $(BIN)/jupyter-book build . --warningiserror --nitpick --keep-going --builder html 2>&1 \
-	  | sed -u -e '/Kernel is running over TCP without encryption/d' \
-	           -e '/KeyboardInterrupt caught in kernel/d' | tee _build.log
+	set -o pipefail; $(BIN)/python tools/execute_book.py --cache _build/.jupyter_cache-book \
+	  --config-out _build/_config_book.yml $(if $(BOOK_JOBS),--jobs $(BOOK_JOBS)) 2>&1 \
+	  | $(KERNEL_NOISE) | tee _build.log
+	set -o pipefail; $(BIN)/jupyter-book build . --config _build/_config_book.yml \
+	  --warningiserror --nitpick --keep-going --builder html 2>&1 | $(KERNEL_NOISE) | tee -a _build.log
 	$(BIN)/python tools/build_report.py --html _build/html --log _build.log --started $(BOOK_STARTED)
 	@echo "Book built: $(abspath _build/html/index.html)"
 
@@ -165,9 +173,11 @@ check-book: $(STAMP) $(NODE)
 	$(BIN)/python tools/check_catalogue.py --html _build/html --cache _build/results-cache --jobs 2
 	$(BIN)/python tools/notebook_markdown.py check $$(find _build/html/_sources -name '*.ipynb')
 
-## Run the whole test suite.
+## Run the whole test suite, TEST_JOBS processes at a time (pytest-xdist; default: one per core,
+## TEST_JOBS=0 runs it in this process). Each test's temporary files are its own (tmp_path).
+TEST_JOBS ?= auto
 test: $(STAMP) $(NODE)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n $(TEST_JOBS)
 
 ## Performance targets (issues 10 and 16): each prints its figure, target and ratio; the figures are
 ## also collected in _build/benchmarks.json, which the book's status page shows when present.

@@ -938,16 +938,45 @@ def _pdf_script(app: Sphinx, exception: Exception | None) -> None:
 def _record_run_times(app: Sphinx, env) -> None:
     """Each chapter's execution time beside its executed notebook (``jupyter_execute/<doc>.
     exec.json``) when this build executed it: the PDF edition, which takes the notebooks of the
-    HTML build (``tools/pdf_edition.py``), shows them on its status page."""
+    HTML build (``tools/pdf_edition.py``), shows them on its status page.
+
+    In execution mode ``cache`` (``make book``, whose chapters ``tools/execute_book.py`` executed
+    side by side just before, and ``make book-fast``) myst-nb takes the outputs from the
+    jupyter-cache but writes the notebook as read, without them: the executed one is written
+    instead (:func:`_write_cached_notebook`), as in mode ``force``, for the ".ipynb" downloads and
+    the PDF edition."""
     from myst_nb.sphinx_ import NbMetadataCollector
 
     folder = Path(app.outdir).parent / "jupyter_execute"
     for docname in sorted(env.found_docs):
         data = NbMetadataCollector.get_exec_data(env, docname) or {}
-        if data.get("method") == "force" and data.get("succeeded") and data.get("runtime") is not None:
+        if data.get("method") == "cache" and data.get("succeeded"):
+            _write_cached_notebook(folder / f"{docname}.ipynb",
+                                   env.mystnb_config.execution_cache_path)
+        if (data.get("method") in ("force", "cache") and data.get("succeeded")
+                and data.get("runtime") is not None):
             path = folder / f"{docname}.exec.json"
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_text(json.dumps({"runtime": data["runtime"]}))
+
+
+def _write_cached_notebook(path: Path, cache_path: str) -> None:
+    """Replace the notebook myst-nb wrote at ``path`` by its executed version from the jupyter-cache
+    at ``cache_path``, its glued values taken out as myst-nb does in mode ``force``
+    (``extract_glue_data``: they are in ``<doc>.glue.json``)."""
+    import nbformat
+    from jupyter_cache import get_cache
+    from myst_nb.ext.glue import extract_glue_data
+
+    if not path.is_file():  # an incremental build that did not read the page: nothing written
+        return
+    nb = nbformat.read(path, as_version=4)
+    try:
+        _, executed = get_cache(cache_path or ".jupyter_cache").merge_match_into_notebook(nb)
+    except KeyError:  # not in the cache: myst-nb executed it, and wrote it so
+        return
+    extract_glue_data(executed, [0] * len(executed.cells), logger)
+    nbformat.write(executed, path)
 
 
 def latex_macros(config) -> str:

@@ -41,6 +41,7 @@ import concurrent.futures
 import contextlib
 import contextvars
 import math
+import os
 import sys
 import time
 import warnings
@@ -659,22 +660,43 @@ def _check_memory(first: dict[str, np.ndarray], sl: slice, n_trials: int, n_fns:
                                       f"{_bytes_text(per_trial)} each (measured on the first chunk)")
 
 
+#: Environment variable: the number of cores this process may use when it shares the machine with
+#: others (set by ``tools/execute_book.py`` for each chapter's kernel, the chapters being executed
+#: side by side). :func:`effective_jobs` reads it as the machine's size, without a warning: the
+#: cut is the build's choice, and results do not depend on the number of processes.
+CORES_ENV = "FDI_CORES"
+
+
+def _cores_share(cores: int) -> int:
+    """``$FDI_CORES``, or ``cores`` when it is unset or empty; any other value than a positive
+    integer is a :class:`~fdi_lib.errors.ModelError` naming the variable."""
+    value = os.environ.get(CORES_ENV, "").strip()
+    if not value:
+        return cores
+    if not value.isdigit() or int(value) < 1:
+        raise ModelError(f"${CORES_ENV}: expected a positive integer (the cores this process may "
+                         f"use), got {value!r}")
+    return int(value)
+
+
 def effective_jobs(jobs: int, n_tasks: int | None = None, *, name: str = "jobs:") -> int:
     """The number of processes that ``jobs`` asks for and that can run: ``min(jobs, cores, n_tasks)``.
 
     ``jobs = -1`` (any negative value) means every core; ``n_tasks`` (optional) is the number of
     chunks of work. A positive request above that issues a :class:`~fdi_lib.errors.JobsCappedWarning`
     (results do not depend on the number of processes, only the time does), its message starting
-    with ``name``.
+    with ``name``. When ``$FDI_CORES`` (:data:`CORES_ENV`) is set, at most that many processes are
+    used, without a warning.
     """
     if isinstance(jobs, (bool, np.bool_)) or not isinstance(jobs, (int, np.integer)) or jobs == 0:
         raise ModelError(f"jobs: expected a non-zero integer (-1 = all cores), got {jobs!r}")
     import joblib
 
     cores = max(1, int(joblib.cpu_count()))  # loky's count: CPU affinity and cgroup quotas included
-    limit = cores if n_tasks is None else min(cores, max(1, int(n_tasks)))
+    unshared = cores if n_tasks is None else min(cores, max(1, int(n_tasks)))
+    limit = min(unshared, _cores_share(cores))
     used = limit if jobs < 0 else min(int(jobs), limit)
-    if jobs > used:
+    if jobs > unshared:  # cut by the machine or the work; a cut to the share ($FDI_CORES) is silent
         why = f"{cores} CPU core{'s' * (cores > 1)}"
         if n_tasks is not None and n_tasks < cores:
             why = f"{n_tasks} chunk{'s' * (n_tasks > 1)} of work"

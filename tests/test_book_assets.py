@@ -151,6 +151,15 @@ def test_execution_times_from_the_build_log():
            f"{ROOT}/book/status.md: Using cached notebook: ID=3 [mystnb]\n"
            f"{ROOT}/book/intro.md: Executed notebook in 0.75 seconds [mystnb]\n")
     assert REPORT.execution_times(log, ROOT) == {"book/zb2014/glr.md": 12.5, "book/intro.md": 0.75}
+    assert REPORT.execution_wall(log) is None
+    # tools/execute_book.py's lines (the chapters side by side, before Jupyter Book)
+    log = ("Executing 2 notebooks, 2 at a time on 2 cores\n"
+           "book/zb2014/glr.md: Executed notebook in 7.25 seconds (on 1 core)\n"
+           "book/zz-ledger.md: Executed notebook in 2.00 seconds (on 2 cores)\n"
+           "Executed 2 notebooks in 9.5 s of wall time (9.2 s summed over the chapters)\n")
+    assert REPORT.execution_times(log, ROOT) == {"book/zb2014/glr.md": 7.25,
+                                                 "book/zz-ledger.md": 2.0}
+    assert REPORT.execution_wall(log) == 9.5
 
 
 def test_inject_replaces_the_placeholder_only(tmp_path):

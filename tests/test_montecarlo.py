@@ -204,6 +204,37 @@ def test_jobs_are_capped_at_cores_and_chunks_with_a_warning(monkeypatch):
     np.testing.assert_array_equal(out["x"], run_monte_carlo(fn, 8, seed=2, jobs=1)["x"])
 
 
+def test_a_share_of_the_cores_cuts_jobs_silently_and_bad_shares_are_refused(monkeypatch):
+    """$FDI_CORES (the share of a chapter executed beside others, tools/execute_book.py) is the
+    machine's size for effective_jobs, without a warning; a request above the machine still warns;
+    a share that is not a positive integer is a typed error naming the variable."""
+    import warnings
+
+    import joblib
+
+    import fdi_lib.montecarlo as mc
+    from fdi_lib.errors import JobsCappedWarning
+
+    monkeypatch.setattr(joblib, "cpu_count", lambda *a, **k: 4)
+    monkeypatch.setenv(mc.CORES_ENV, "1")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert mc.effective_jobs(2) == 1 and mc.effective_jobs(4, 8) == 1
+        assert mc.effective_jobs(-1) == 1
+    monkeypatch.setenv(mc.CORES_ENV, "3")
+    with pytest.warns(JobsCappedWarning, match=r"jobs: 6 requested, 3 used \(4 CPU cores\)"):
+        assert mc.effective_jobs(6) == 3
+    with pytest.warns(JobsCappedWarning, match=r"jobs: 3 requested, 2 used \(2 chunks of work\)"):
+        assert mc.effective_jobs(3, 2) == 2
+    monkeypatch.setenv(mc.CORES_ENV, "")
+    assert mc.effective_jobs(-1) == 4   # empty: unset
+    for bad in ("0", "-2", "two", "1.5"):
+        monkeypatch.setenv(mc.CORES_ENV, bad)
+        with pytest.raises(ModelError, match=rf"\$FDI_CORES: expected a positive integer "
+                                             rf".*got '{re.escape(bad)}'"):
+            mc.effective_jobs(2)
+
+
 def test_a_run_too_large_for_memory_is_refused_after_one_chunk(monkeypatch):
     import fdi_lib.montecarlo as mc
     from fdi_lib.errors import ResourceError

@@ -181,15 +181,45 @@ def test_publish_pdf_links_the_pdf_only_when_it_is_there(tmp_path):
 
 
 def test_run_times_of_executed_chapters_are_written_beside_their_notebooks(tmp_path):
+    """Executed in the build (mode force) or taken from the jupyter-cache (mode cache: make book,
+    whose chapters tools/execute_book.py executed): the run time is written, and a cached
+    chapter's notebook as myst-nb wrote it (without outputs) is replaced by the executed one,
+    its glued values taken out as myst-nb does; an unexecuted chapter gets nothing."""
     from collections import defaultdict
 
+    import nbformat
+    from jupyter_cache import get_cache
+    from jupyter_cache.base import CacheBundleIn
+
+    folder = tmp_path / "_build" / "jupyter_execute" / "book"
+    folder.mkdir(parents=True)
+    cell = nbformat.v4.new_code_cell("glue('x', 1, display=False)\nprint(2)")
+    kernel = {"name": "python3", "display_name": "Python 3"}
+    read = nbformat.v4.new_notebook(cells=[cell], metadata={"kernelspec": kernel})
+    nbformat.write(read, folder / "b.ipynb")
+    executed = nbformat.from_dict(json.loads(nbformat.writes(read)))
+    executed.cells[0].execution_count = 1
+    prefix = "application/papermill.record/"
+    executed.cells[0].outputs = [
+        nbformat.v4.new_output("display_data", data={f"{prefix}text/plain": "1"},
+                               metadata={"scrapbook": {"name": "x", "mime_prefix": prefix}}),
+        nbformat.v4.new_output("stream", name="stdout", text="2\n")]
+    cache = tmp_path / "cache"
+    bundle = CacheBundleIn(executed, "book/b.md")
+    get_cache(str(cache)).cache_notebook_bundle(bundle, check_validity=False)
     run = {"method": "force", "succeeded": True, "runtime": 3.25}
     env = SimpleNamespace(found_docs={"book/a", "book/b", "book/c"}, nb_metadata=defaultdict(dict, {
-        "book/a": {"exec_data": run}, "book/b": {"exec_data": dict(run, method="cache")}}))
+        "book/a": {"exec_data": run},
+        "book/b": {"exec_data": dict(run, method="cache", runtime=1.5)}}),
+        mystnb_config=SimpleNamespace(execution_cache_path=str(cache)))
     EXT._record_run_times(SimpleNamespace(outdir=str(tmp_path / "_build" / "html")), env)
     written = sorted(p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*.exec.json"))
-    assert written == ["_build/jupyter_execute/book/a.exec.json"]   # cached or unexecuted: none
+    assert written == ["_build/jupyter_execute/book/a.exec.json",
+                       "_build/jupyter_execute/book/b.exec.json"]
     assert json.loads((tmp_path / written[0]).read_text()) == {"runtime": 3.25}
+    assert json.loads((tmp_path / written[1]).read_text()) == {"runtime": 1.5}
+    cell = nbformat.read(folder / "b.ipynb", as_version=4).cells[0]
+    assert cell.execution_count == 1 and [o.output_type for o in cell.outputs] == ["stream"]
 
 
 def test_check_pdf_reads_code_listings_and_the_numbered_chapters(tmp_path):

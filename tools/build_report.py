@@ -6,8 +6,10 @@ runs this script right after Jupyter Book:
 
     python tools/build_report.py --html _build/html --log _build.log --started EPOCH
 
-1. The execution time of each chapter, from myst-nb's "Executed notebook in N seconds" lines of
-   the build log, printed with their total against the book's 180 s budget.
+1. The execution time of each chapter, from the "Executed notebook in N seconds" lines of the
+   build log (``tools/execute_book.py``, which executes the chapters side by side before Jupyter
+   Book builds the pages, writes them as myst-nb does), printed with their sum and the wall time
+   of the whole execution, against the book's budget of 60 s for the latter (issue 35).
 2. The wall time of the build: from ``EPOCH`` (when ``make book`` started) to now, the end of
    Jupyter Book.
 3. The weight of every page: what a first visit loads, measured in headless Chromium by
@@ -34,10 +36,18 @@ sys.path.insert(0, str(ROOT / "tests" / "browser"))
 
 from fdi_lib.report import NBSP, fmt_number, fmt_time, table  # noqa: E402
 
-#: Execution budget of the whole book (README, status page).
-EXECUTION_BUDGET_S = 180.0
+#: Execution budget of the whole book: the wall time from the first chapter started to the last
+#: finished, the chapters side by side on 2 cores (issue 35; README, status page).
+EXECUTION_BUDGET_S = 60.0
 STATUS_PAGE = "book/status.html"
 _EXECUTED = re.compile(r"^(\S+\.(?:md|ipynb)): Executed notebook in ([0-9.]+) seconds")
+_EXECUTION_WALL = re.compile(r"^Executed \d+ notebooks in ([0-9.]+) s of wall time")
+
+
+def execution_wall(log: str) -> float | None:
+    """The wall time of the whole execution (``tools/execute_book.py``'s last line), if logged."""
+    found = [float(m.group(1)) for m in map(_EXECUTION_WALL.match, log.splitlines()) if m]
+    return found[-1] if found else None
 
 
 def execution_times(log: str, root: Path) -> dict[str, float]:
@@ -55,14 +65,18 @@ def _mb(n: int) -> str:
     return f"{fmt_number(n / 1e6, 3)}{NBSP}MB"
 
 
-def times_html(times: dict[str, float], wall: float) -> str:
+def times_html(times: dict[str, float], wall: float, execution: float | None = None) -> str:
     rows = {"make book, wall time up to the end of Jupyter Book": [fmt_time(wall)]}
+    if execution is not None:
+        rows["execution of the chapters, side by side, wall time"] = [fmt_time(execution)]
     if times:
         slow = max(times, key=times.get)
         rows[f"execution of the {len(times)} chapters, sum"] = [fmt_time(sum(times.values()))]
         rows["slowest chapter"] = [f"{fmt_time(times[slow])} ({slow})"]
-    notes = [f"Execution budget of the book: {fmt_time(EXECUTION_BUDGET_S)} on 2 cores; the rest of "
-             "the build is Sphinx reading and writing the pages.",
+    notes = [f"Execution budget of the book: {fmt_time(EXECUTION_BUDGET_S)} of wall time on 2 "
+             "cores, the chapters executed side by side (tools/execute_book.py), each chapter's "
+             "time being its own wall time on its share of the cores; the rest of the build is "
+             "Sphinx reading and writing the pages.",
              "Measured on " + datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
              + " by tools/build_report.py."]
     if not times:
@@ -125,20 +139,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", default=ROOT / "_build" / "build-report.json", type=Path)
     args = parser.parse_args(argv)
     wall = time.time() - args.started
-    times = execution_times(args.log.read_text(errors="replace"), ROOT)
+    log = args.log.read_text(errors="replace")
+    times, execution = execution_times(log, ROOT), execution_wall(log)
     print("Execution time per chapter:")
     for chapter, t in times.items():
         print(f"  {chapter:45s} {t:8.1f} s")
     print("  " + "-" * 57)
-    print(f"  {'total execution time':45s} {sum(times.values()):8.1f} s (budget {EXECUTION_BUDGET_S:g} s)")
+    print(f"  {'sum over the chapters':45s} {sum(times.values()):8.1f} s")
+    if execution is not None:
+        print(f"  {'execution, wall time':45s} {execution:8.1f} s "
+              f"(budget {EXECUTION_BUDGET_S:g} s)")
     print(f"  {'make book, wall time':45s} {wall:8.1f} s")
     status = args.html / STATUS_PAGE
-    inject(status, "fdi-build-time", times_html(times, wall))
+    inject(status, "fdi-build-time", times_html(times, wall, execution))
 
     from check_book import CHROMIUM, book_pages, built_book
     from page_weights import PAGE_BUDGET_MB, failures, measure
 
-    report = {"wall_s": wall, "execution_s": times, "pages": None}
+    report = {"wall_s": wall, "execution_s": times, "execution_wall_s": execution, "pages": None}
     if Path(CHROMIUM).exists():
         root = built_book(args.html)
         report["pages"] = measure(root, book_pages(root))

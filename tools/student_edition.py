@@ -97,12 +97,31 @@ def write_notebooks(src: Path, out: Path, glue_dir: Path | None = None) -> list[
     return notebook_markdown.write_notebooks(src, target, glue_dir)
 
 
+#: The jupyter-cache of the last ``make book`` (``tools/execute_book.py``): a student chapter whose
+#: code cells are those of the full book takes its outputs from there instead of executing again.
+BOOK_CACHE = REPO / "_build" / ".jupyter_cache-book"
+#: The results cache of the last ``make book`` (``$FDI_RESULTS_CACHE``): a reproduction that a
+#: student chapter runs at the settings and with the code of a full-book chapter reads its result
+#: (keyed by the settings and the library's sources, :mod:`fdi_lib.reproduce.registry`).
+BOOK_RESULTS = REPO / "_build" / "results-cache"
+
+
 def build(out: Path, extra: list[str]) -> None:
     src = copy_sources(out)
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])))
+    if BOOK_RESULTS.is_dir() and "FDI_RESULTS_CACHE" not in env:
+        env["FDI_RESULTS_CACHE"] = str(BOOK_RESULTS)
     work = out / "build"
-    cmd = [str(Path(sys.executable).with_name("jupyter-book")), "build", str(src), "--path-output", str(work),
-           "--builder", "html", *extra]
+    config = out / "_config_student.yml"
+    # the chapters executed side by side, those unchanged by the stripping taken from make book's
+    # run, then the pages built from that cache (as make book does)
+    execute = [sys.executable, str(REPO / "tools" / "execute_book.py"), "--root", str(src),
+               "--cache", str(out / ".jupyter_cache"), "--reuse", str(BOOK_CACHE),
+               "--config-out", str(config)]
+    print("+", " ".join(execute), flush=True)
+    subprocess.run(execute, check=True, env=env)
+    cmd = [str(Path(sys.executable).with_name("jupyter-book")), "build", str(src),
+           "--config", str(config), "--path-output", str(work), "--builder", "html", *extra]
     print("+", " ".join(cmd), flush=True)
     subprocess.run(cmd, check=True, env=env)
     html = out / "html"

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from fdi_lib.errors import EnvelopeWarning, UnsoundOptionWarning
-from fdi_lib.montecarlo import trial_seeds
+from fdi_lib.montecarlo import effective_jobs, trial_seeds
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, axes3d, figure
 from fdi_lib.reproduce.ledger import BY_TOLERANCE, IS_INPUT, NOT_CHECKABLE, Claim, shown_under
 from fdi_lib.reproduce.registry import ReproductionResult, register
@@ -377,6 +377,7 @@ def uav_study(seed: int, trials: int, jobs: int = 1, duration: float = DURATION,
     # the closed loops are simulated together (vectorised, each run independent of the batch)
     sims = uav.simulate_many([(f, s) for f, s, _ in cases], [np.random.default_rng(ss) for _, _, ss in cases],
                              duration=duration, eta_unit=eta_unit, fault_mode=fault_mode)
+    jobs = effective_jobs(jobs, len(sims))
     if jobs == 1:
         return tuple(_bank_outcomes(sims))
     # one chunk per job, every jobs-th run (the cases are listed in blocks, so each job gets some of
