@@ -81,6 +81,16 @@ def test_registrations_name_their_chapter_and_valid_book_settings():
     assert set(CHAPTER_SEEDS) <= {doc.removeprefix("book/") for doc in chapters}
 
 
+def test_catalogue_lists_each_reproductions_declared_claims():
+    """Each entry names the claims its registration declares, with their comparison, or where they
+    are listed; the statuses are the ledger's."""
+    text, _ = EXT.catalogue_markdown(ROOT)
+    assert text.count("**Claims** (declared at its registration") == len(list_reproductions())
+    assert "Fig. 8, type II error of fault … (95 % interval)" in text
+    assert "SNR of outputs 1 and 2 at r = … (standard error)" in text
+    assert "listed under `zhang2021-table1`, `zhang2021-table2`" in text
+
+
 def test_book_order_follows_the_table_of_contents():
     """Chapters in the order of _toc.yml, then the first book_run of each reproduction in it;
     the catalogue page lists them in the same order."""
@@ -198,14 +208,13 @@ def test_post_build_check_compares_the_command_with_the_cached_chapter_result(tm
     assert CHECK.check_command(argv, tmp_path)[1:] == ("ok", "")
     assert CHECK.check_command(["reproduce", "zb2014-fig3", "--seed", "1", "--json"], tmp_path)[1] == "not run"
     # tamper with the cached chapter result: the fresh command no longer matches it
-    from fdi_lib.reproduce.registry import _cache_path, cached_run
+    from fdi_lib.reproduce.registry import _cache_entry, _cache_write, cached_run
     import dataclasses
-    import pickle
 
     cached = cached_run("zb2014-fig1")
     key = next(iter(cached.headline))
     tampered = dataclasses.replace(cached, headline={**cached.headline, key: "tampered"})
-    _cache_path("zb2014-fig1", get("zb2014-fig1").default_seed, None, {}).write_bytes(pickle.dumps(tampered))
+    _cache_write(*_cache_entry("zb2014-fig1", get("zb2014-fig1").default_seed, None, {}), tampered)
     rid, status, detail = CHECK.check_command(argv, tmp_path)
     assert status == "differs" and key in detail
     # a key the reproduction declares a wall time of this machine is not compared

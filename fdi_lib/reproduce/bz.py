@@ -213,12 +213,12 @@ _WHITENESS_CAUSE = dict(
                   value=lambda p: 0.0, label="lag-1 correlation of the Kitanidis innovation is 0",
                   cause_glue=("bz_lag1_corr_theory", "bz_lag1_corr_empirical"), **_WHITENESS_CAUSE),
               "cov_rel_error_kitanidis": Claim(
-                  location="eq. (45)",
+                  location="Prop. 2, eq. (45)",
                   label="the Kitanidis innovation has covariance H P_k Hᵀ + R_k",
                   units="", test=BY_CHECK, check=lambda p, o, h: o < 0.05,
                   criterion="relative error of the empirical covariance < 5 %"),
               "h_zeta_max": Claim(
-                  location="§3.1, the fault term of the innovation", units="",
+                  location="Prop. 1 (§3.1), the fault term of the innovation", units="",
                   label="H_k ζ_k = 0 with the Kitanidis gain (ours: max |H_k ζ_k|, f of size 0.2)",
                   test=BY_CHECK, check=lambda p, o, h: o <= 1e-9, criterion="max |H_k ζ_k| ≤ 1e-9",
                   cause="sec-bz-zeta", cause_glue=("bz_h_zeta_max", "bz_zeta_minus_ef_max"),
@@ -422,18 +422,19 @@ def plot_solution1(result: ReproductionResult, fig: Any = None):
           chapter_seed=True,
           claims={
               "glr_detection_rate_theta_with_f": Claim(
-                  location="§3.2, detection of θ",
+                  location="Solution 1 (§3.2), detection of θ",
                   label="the GLR on the projected Kitanidis residual T_k ε_k detects θ whatever f",
                   units="%", test=BY_CHECK, check=in_ci("glr_detection_rate_theta"),
                   criterion="detection rate with f inside the 95 % interval of the rate without f"),
               "glr_alarm_rate_f_only": Claim(
-                  location="§3.2, rejection of f",
+                  location="Solution 1 (§3.2), rejection of f",
                   label="f alone does not raise the GLR on the projected Kitanidis residual",
                   units="%", test=BY_CHECK, check=in_ci("glr_false_alarm_rate"),
                   criterion="alarm rate under f alone inside the 95 % interval of the false-alarm "
                             "rate"),
               "nonparametric_detection_rate_f": Claim(
-                  location="§3.3", label="the energy test on a parallel Kalman filter detects f",
+                  location="Solution 1 (§3.3)",
+                  label="the energy test on a parallel Kalman filter detects f",
                   units="%", test=BY_CHECK, check=lambda p, o, h: o >= 0.95,
                   criterion="detection rate of f at least 95 %")})
 def solution1_mc(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
@@ -554,12 +555,14 @@ def plot_solution2(result: ReproductionResult, fig: Any = None):
           chapter_seed=True,
           claims={
               "tracking_rmse": Claim(
-                  location="§4, tracking", label="RLS with forgetting tracks a slowly varying θ_k",
+                  location="Solution 2 (§4), tracking",
+                  label="RLS with forgetting tracks a slowly varying θ_k",
                   units="",
                   test=BY_CHECK, check=lambda p, o, h: max(o) < 0.05,
                   criterion="tracking RMSE below 0.05 for every forgetting factor"),
               "detection_rate": Claim(
-                  location="§4, detection", label="the energy of the tracking error detects f",
+                  location="Solution 2 (§4), detection",
+                  label="the energy of the tracking error detects f",
                   units="%",
                   test=BY_CHECK, check=lambda p, o, h: min(o) >= 0.95,
                   criterion="detection rate of f at least 95 % for every forgetting factor")})

@@ -135,7 +135,7 @@ __all__ = ["STATUSES", "ROLE_KEYS", "CALIBRATION", "PREDICTION", "INPUT", "surro
            "BY_INTERVAL", "BY_STANDARD_ERROR", "BY_SPREAD", "BY_CHECK", "IS_INPUT",
            "ESTIMATES_INPUT",
            "IS_CALIBRATION", "NOT_CHECKABLE", "shown_under", "claim_for", "chapter_of", "ours_at",
-           "ci_at", "in_ci", "SET_BY_BOOK",
+           "ci_at", "in_ci", "SET_BY_BOOK", "MISSION", "MISSION_STATES", "item_state",
            "DEFAULT_RTOL", "PAPERS", "Claim", "LedgerRow", "Ledger", "NO_VALUE", "claim_paths",
            "claim_status", "build_ledger", "collect_results", "ledger", "FigureClaim",
            "figure_claim", "glue_caption", "REPRODUCES", "COMPARE", "REDRAWS", "CAPTION_ITEMS"]
@@ -666,6 +666,60 @@ def _order(id: str) -> tuple[int, str]:
     return (order.index(id), id) if id in order else (len(order), id)
 
 
+# ----------------------------------------------------------------------------- mission
+def _items(paper: str, *names: str) -> tuple[tuple[str, str, tuple[str, ...]], ...]:
+    return tuple((paper, name, (name,)) for name in names)
+
+
+#: The paper items the book sets out to reproduce (the propositions, figures, tables and remarks
+#: listed in ``/work/shared/papers/README.md``): ``(paper_id, item, location prefixes)``; an
+#: item's rows are those whose location starts with one of its prefixes (a figure drawn from a
+#: table's numbers shares the table's rows).
+MISSION: tuple[tuple[str, str, tuple[str, ...]], ...] = (
+    *_items("zb2014", "Prop. 1", "Prop. 2", "Fig. 1", "Fig. 2", "Fig. 3", "Fig. 4", "Table 1",
+            "Fig. 5", "Fig. 6", "Fig. 7", "Fig. 8", "Fig. 9"),
+    *_items("zhang2021", "Prop. 1", "Prop. 2", "Fig. 2", "Fig. 3"),
+    ("zhang2021", "Fig. 4", ("Fig. 4", "Table I,")), ("zhang2021", "Table I", ("Table I,",)),
+    ("zhang2021", "Fig. 5", ("Fig. 5", "Table II,")), ("zhang2021", "Table II", ("Table II,",)),
+    *_items("zhang2021", "Fig. 6", "Fig. 7"),
+    *_items("bz", "Prop. 1", "Prop. 2", "Solution 1", "Solution 2"),
+    *_items("rosa2013", "Fig. 1", "Fig. 2", "Prop. 1", "Prop. 2", "Prop. 3", "Table 1", "Table 2",
+            "Table 3", "Fig. 8", "Fig. 9", "Fig. 10", "Fig. 11", "Fig. 12", "Remark 4"),
+)
+#: States of a paper item (:meth:`Ledger.mission`), from its rows: every compared row agrees; the
+#: least explained difference among them; nothing compared.
+MISSION_STATES = ("reproduced", "differs, measured cause", "hypothesis tested", "bracketed",
+                  "unknown", "values the book sets", "not computed", "not reproducible", "no row")
+_ITEM_STATE = {DIFFERS_UNKNOWN: "unknown", DIFFERS_BRACKETED: "bracketed",
+               DIFFERS_HYPOTHESIS: "hypothesis tested", DIFFERS_MEASURED: "differs, measured cause"}
+
+
+def _in_item(location: str, prefixes: tuple[str, ...]) -> bool:
+    """Whether a row's location belongs to an item: it starts with a prefix ending in a comma, or
+    with another prefix followed by nothing, a space, a comma or a colon (not "Fig. 10" for
+    "Fig. 1")."""
+    return any(location.startswith(p) if p.endswith(",") else
+               location.startswith(p) and location[len(p):len(p) + 1] in ("", " ", ",", ":")
+               for p in prefixes)
+
+
+def item_state(rows: Sequence[LedgerRow]) -> str:
+    """The state of a paper item from its rows (one of :data:`MISSION_STATES`): "reproduced" when
+    every compared row agrees, else the least explained difference (unknown, then bracketed, then
+    hypothesis tested, then measured cause); without a compared row, what the rows are."""
+    if not rows:
+        return "no row"
+    compared = [r for r in rows if r.status not in (*SET_BY_BOOK, NOT_COMPUTED, NOT_REPRODUCIBLE)]
+    if not compared:
+        statuses = {r.status for r in rows}
+        return ("not computed" if NOT_COMPUTED in statuses else
+                "not reproducible" if NOT_REPRODUCIBLE in statuses else "values the book sets")
+    for status, state in _ITEM_STATE.items():
+        if any(r.status == status for r in compared):
+            return state
+    return "reproduced"
+
+
 # ----------------------------------------------------------------------------- building
 @dataclass(frozen=True)
 class Ledger:
@@ -686,10 +740,46 @@ class Ledger:
         return {p: {s: sum(r.status == s and r.paper_id == p for r in self.rows) for s in STATUSES}
                 for p in PAPERS}
 
+    def mission(self) -> list[dict[str, Any]]:
+        """Each paper item of :data:`MISSION`: ``{"paper_id", "item", "state", "rows",
+        "statuses"}`` (its state from :func:`item_state`, its rows' identifiers and locations,
+        the number of rows per status)."""
+        out = []
+        for paper, item, prefixes in MISSION:
+            rows = [r for r in self.rows if r.paper_id == paper and _in_item(r.location, prefixes)]
+            out.append({"paper_id": paper, "item": item, "state": item_state(rows),
+                        "rows": [f"{r.id}:{'/'.join(r.path)}" for r in rows],
+                        "statuses": {st: n for st in STATUSES
+                                     if (n := sum(r.status == st for r in rows))}})
+        return out
+
+    def mission_counts(self) -> dict[str, dict[str, int]]:
+        """``{paper_id: {state: items}}`` over :data:`MISSION` (every state, possibly 0)."""
+        items = self.mission()
+        return {p: {st: sum(i["state"] == st and i["paper_id"] == p for i in items)
+                    for st in MISSION_STATES} for p in dict.fromkeys(p for p, _, _ in MISSION)}
+
     def to_json_dict(self) -> dict[str, Any]:
-        """``{"counts", "counts_by_paper", "rows", "sources"}``: ``reproduce --ledger --json``."""
+        """``{"counts", "counts_by_paper", "mission", "rows", "sources"}``: ``reproduce --ledger
+        --json`` (no wall time: the same bytes on every run)."""
         return {"counts": self.counts(), "counts_by_paper": self.counts_by_paper(),
+                "mission": {"items": self.mission(), "counts_by_paper": self.mission_counts()},
                 "rows": [r.to_json_dict() for r in self.rows], "sources": dict(self.sources)}
+
+    def mission_table(self):
+        """A :func:`fdi_lib.report.table`: each paper item, its state and its rows per status."""
+        rows = {f"{PAPERS[i['paper_id']]}, {i['item']}": [
+            i["state"], "; ".join(f"{n} {st}" for st, n in i["statuses"].items()) or "none"]
+            for i in self.mission()}
+        return table(rows, ["state", "ledger rows"], index_header="paper item")
+
+    def mission_summary(self):
+        """A :func:`fdi_lib.report.table`: paper items per state (rows) and paper (columns)."""
+        by = self.mission_counts()
+        rows = {st: [*(fmt_count(by[p][st]) for p in by), fmt_count(sum(by[p][st] for p in by))]
+                for st in MISSION_STATES}
+        rows["all items"] = [*(fmt_count(sum(by[p].values())) for p in by), fmt_count(len(MISSION))]
+        return table(rows, [*(PAPERS[p] for p in by), "all"], index_header="state")
 
     def summary(self):
         """A :func:`fdi_lib.report.table`: claims per status (rows, the first column) and paper."""
@@ -714,7 +804,8 @@ class Ledger:
             rate = _is_rate_claim(r)
             why = [_md(r.status_detail)] if r.status_detail else []
             if r.cause:
-                why.append(f"cause measured in {_link(r.cause)}")
+                why.append(("hypothesis tested in " if r.status == DIFFERS_HYPOTHESIS
+                            else "cause measured in ") + _link(r.cause))
             if (r.explain or r.where) != r.cause:
                 why.append(f"shown in {_link(r.explain or r.where)}")
             if r.note:
@@ -991,8 +1082,9 @@ class FigureClaim:
     ----------
     verb : str
         :data:`REPRODUCES` when every compared ledger row of the reproduction is in
-        :data:`AGREES` (input and calibration rows are not compared), :data:`REDRAWS` when no
-        row is compared, :data:`COMPARE` otherwise.
+        :data:`AGREES` (the rows of :data:`SET_BY_BOOK`, inputs, our estimates of them and
+        calibration targets, are not compared), :data:`REDRAWS` when no row is compared,
+        :data:`COMPARE` otherwise.
     differs : str
         Empty, or ``"; differs: ..."`` naming briefly what does not agree (the first
         :data:`CAPTION_ITEMS` differences, then counts), to close the caption's parenthesis
@@ -1007,8 +1099,9 @@ class FigureClaim:
 
 
 def _short(r: LedgerRow) -> str:
-    """The row's label without its "Fig. N: " or "Table I: " prefix (the caption names it)."""
-    return re.sub(r"^(Fig\.|Table) [^:]*: ", "", r.label)
+    """The row's label without its figure or table ("Fig. N, ", "Table I (text): "): the caption
+    names it."""
+    return re.sub(r"^(Fig\.|Table) [^,:( ]+( \([^)]*\))?[,:] ?", "", r.label)
 
 
 def _difference(r: LedgerRow) -> str:
@@ -1027,7 +1120,7 @@ def figure_claim(result: ReproductionResult) -> FigureClaim:
     (``same_path``: the per-radian UAV figures), which its figure shows.
     """
     rows = build_ledger({result.id: result}, own_readings=True).rows
-    compared = [r for r in rows if r.status not in (INPUT_VALUE, CALIBRATION_TARGET)]
+    compared = [r for r in rows if r.status not in SET_BY_BOOK]
     if not compared:
         return FigureClaim(REDRAWS, "", rows)
     bad = [r for r in compared if r.status not in AGREES]

@@ -191,7 +191,7 @@ _FIG1_CAUSE = dict(explain="sec-zb-fig1-bound", cause="sec-zb-fig1-bound")
 @register("zb2014-fig1", paper=PAPER, title="Spectral norm of Gamma_k, impulses at r = 1, 101, 201, 301",
           plot=plot_fig1, chapter="zb2014/signature", claims={
               "unstable_eigenvalue": Claim(
-                  location="§6.1, text", label="the unstable eigenvalue of F", units="",
+                  location="Fig. 1 (§6.1 text)", label="the unstable eigenvalue of F", units="",
                   test=BY_TOLERANCE, **_FIG1_CAUSE, cause_glue=("sig-quoted", "sig-typo-count"),
                   cause_text="the printed F is triangular, with eigenvalues 0.5 and 1.2, and we "
                              "use it; the section checks every one-entry misprint that gives the "

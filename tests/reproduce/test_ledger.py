@@ -297,9 +297,14 @@ def _glued(text):
 def _missing_glue(results=None):
     """``(id, pattern, label, key)`` of every declared measurement that its section does not glue.
 
-    Each key is formatted with the path parts of each claim the declaration matches (in
-    ``results``), or with ``*`` for every part (any glue key of that form) without results."""
+    Each key is formatted with the path parts of each claim the declaration matches whose row
+    links the section (in the ledger of ``results``), or with ``*`` for every part (any glue key of
+    that form) without results."""
     sections = _sections()
+    linked = set()
+    if results:
+        linked = {(r.id, r.path) for r in L.build_ledger(results).rows
+                  if r.status in (L.DIFFERS_MEASURED, L.DIFFERS_HYPOTHESIS)}
     missing = []
     for id, pattern, c in _declarations():
         for label, keys in ((c.cause, c.cause_glue), (c.hypothesis, c.hypothesis_glue)):
@@ -310,8 +315,9 @@ def _missing_glue(results=None):
                 continue
             shown = _glued(sections[label])
             leaves = L.claim_paths(results[id].paper) if results and id in results else []
-            paths = [p for p in leaves if L.fnmatch.fnmatchcase("/".join(p), pattern)]
-            for parts in [p[1:] for p in paths] or [("*",) * 5]:
+            paths = [p for p in leaves if L.fnmatch.fnmatchcase("/".join(p), pattern)
+                     and (id, p) in linked]
+            for parts in [p[1:] for p in paths] if results else [("*",) * 5]:
                 for key in keys:
                     want = key.format(*parts).lower()
                     if not any(L.fnmatch.fnmatchcase(k, want) for k in shown):
@@ -398,6 +404,52 @@ def test_json_and_summary(cheap_results):
     assert all(r.role is None for r in led.rows if r.id.startswith("zb2014-fig1"))
 
 
+def _row(status, location="Fig. 1, x", paper_id="zb2014"):
+    return L.LedgerRow(id=f"{paper_id}-fig1", path=("x",), label=location, paper=1, ours=1, ci=None,
+                       status=status, where="book/x", explain=None, note="", role=None, trials=None,
+                       source="", location=location)
+
+
+def test_mission_items_take_their_state_from_their_rows(cheap_results):
+    assert len(L.MISSION) == 40
+    assert len({(p, item) for p, item, _ in L.MISSION}) == 40
+    assert L.item_state([]) == "no row"
+    assert L.item_state([_row(L.REPRODUCED), _row(L.INPUT_RECOVERED)]) == "reproduced"
+    assert L.item_state([_row(L.INPUT_VALUE)]) == "values the book sets"
+    assert L.item_state([_row(L.REPRODUCED), _row(L.DIFFERS_MEASURED)]) == "differs, measured cause"
+    # the least explained difference decides
+    assert L.item_state([_row(L.DIFFERS_MEASURED), _row(L.DIFFERS_BRACKETED)]) == "bracketed"
+    assert L.item_state([_row(L.DIFFERS_HYPOTHESIS), _row(L.DIFFERS_UNKNOWN)]) == "unknown"
+    assert L.item_state([_row(L.NOT_REPRODUCIBLE)]) == "not reproducible"
+    led = L.build_ledger(cheap_results)
+    items = {(i["paper_id"], i["item"]): i for i in led.mission()}
+    assert items[("zb2014", "Fig. 1")]["state"] == "differs, measured cause"
+    assert items[("zb2014", "Fig. 2")]["state"] == "reproduced"
+    assert items[("zb2014", "Table 1")]["state"] == "values the book sets"
+    assert items[("zb2014", "Fig. 9")]["state"] == "no row"      # not among the cheap results
+    # "Fig. 1" is not "Fig. 10"
+    assert not any("fig10" in r for r in items[("rosa2013", "Fig. 1")]["rows"])
+    assert items[("rosa2013", "Fig. 10")]["rows"]
+    counts = led.mission_counts()
+    assert sum(sum(c.values()) for c in counts.values()) == 40
+    assert "40" in led.mission_summary()._repr_html_()
+
+
+def test_ledger_json_is_the_same_bytes_on_every_run_and_any_jobs(monkeypatch):
+    """The wall times of the runs are kept apart: two runs, and a run on two cores, print the
+    same JSON."""
+    monkeypatch.delenv("FDI_RESULTS_CACHE", raising=False)
+    ids = ["zb2014-fig1", "zb2014-table1", "zhang2021-table1"]
+    texts = []
+    for jobs in (1, 1, 2):
+        results, sources, timings = L.collect_results(ids=ids, max_trials=4, use_cache=False,
+                                                      jobs=jobs)
+        assert set(timings) == set(ids) and all(t >= 0 for t in timings.values())
+        texts.append(json.dumps(L.build_ledger(results, sources=sources).to_json_dict()))
+    assert texts[0] == texts[1] == texts[2]
+    assert "4 trials" in texts[0] and " s)" not in texts[0]
+
+
 # ----------------------------------------------------------------------------- cache and CLI
 def test_results_cache_round_trip(tmp_path, monkeypatch):
     monkeypatch.setenv("FDI_RESULTS_CACHE", str(tmp_path))
@@ -431,8 +483,11 @@ def test_cli_ledger_json(monkeypatch, capsys, cheap_results):
     assert cli.main(["reproduce", "--ledger", "--json"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert sum(d["counts"].values()) == len(d["rows"]) > 20
+    assert set(d) == {"counts", "counts_by_paper", "mission", "rows", "sources"}   # no timings
+    assert len(d["mission"]["items"]) == 40
     assert cli.main(["reproduce", "--ledger"]) == 0
-    assert "differs, measured cause" in capsys.readouterr().out
+    text = capsys.readouterr().out
+    assert "differs, measured cause" in text and "zb2014-fig1 in 1.0 s" in text
 
 
 @pytest.mark.slow
