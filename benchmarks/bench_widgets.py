@@ -7,7 +7,7 @@ the callbacks. Reported per widget, after a first call at the defaults (caches w
 median process CPU time (what one free core takes; the wall time on a shared, loaded machine is
 larger) of ``REPEATS`` moves of one slider between two values:
 
-* ``move``: callback + :func:`fdi_lib.widgets.render` at the widget's resolution (2x), the
+* ``move``: callback + :func:`fdi_lib.redraw.render` at the widget's resolution (2x), the
   issue's definition of a redraw (compute and Agg draw, one core, default settings); the
   verdict uses it (target 100 ms, aim 60 ms);
 * ``all axes``: the same move with every axes drawn again (what a move costs when it changes
@@ -44,7 +44,9 @@ from _record import record  # noqa: E402
 
 from fdi_lib.explorables import explorable  # noqa: E402
 from fdi_lib.plotting import DISPLAY_DPI, RASTER_SCALE  # noqa: E402
-from fdi_lib.widgets import _encode_png, bz, render, rosa2013, zb2014, zb2014_pipeline, zhang2021  # noqa: E402
+from fdi_lib.redraw import render  # noqa: E402
+from fdi_lib.widgets import (_encode_png, bz, rosa2013, zb2014, zb2014_pipeline,  # noqa: E402
+                             zhang2021)
 from fdi_lib.widgets.explorables import EXPLORABLES  # noqa: E402
 
 TARGET_MS = 100.0

@@ -42,7 +42,7 @@ from matplotlib.figure import Figure
 
 from fdi_lib.errors import ModelError, NonFiniteError, ResourceError, ShapeError
 from fdi_lib.plotting import DISPLAY_DPI, smallest_font_pt
-from fdi_lib.widgets import render
+from fdi_lib.redraw import render
 
 __all__ = ["Explorable", "explorable", "PANELS", "figure_data", "caption_text", "script_text", "PALETTE_COLOURS", "MAX_FRAMES", "MAX_BYTES"]
 
@@ -94,7 +94,7 @@ def figure_data(fig: Figure) -> list[Any]:
 def _png_frame(fig: Figure) -> str:
     """``fig`` as a base64 palette PNG at one pixel per CSS pixel, with the house-style metadata.
 
-    One Agg render at the display resolution (``DISPLAY_DPI``) by :func:`fdi_lib.widgets.render`
+    One Agg render at the display resolution (``DISPLAY_DPI``) by :func:`fdi_lib.redraw.render`
     (the callbacks move their artists between grid points: only what changed is drawn again),
     its pixels quantised to :data:`PALETTE_COLOURS` colours (fast octree) and written by Pillow
     at its default compression. Measured on the chapters' grids (issue 10): the encoding takes

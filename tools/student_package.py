@@ -62,7 +62,7 @@ def _project() -> dict:
 def digests(students: list[str | None], salt: str | None = None) -> dict:
     """The digest table of the student package for the book's data (``None``) and ``students``."""
     from fdi_lib.exercises import exercise_ids, get_exercise
-    from fdi_lib.exercises._reference import feedback_candidates
+    from fdi_lib.exercises.checker import feedback_candidates
     from fdi_lib.exercises.checker import DIGEST_ROUNDS, entry_digest, entry_keys
 
     salt = salt or secrets.token_hex(16)

@@ -478,13 +478,13 @@ def plot_detection(run: UnstableRun, fig: Any = None, title: str | None = None, 
 
     With a threshold, the legend has an alarm entry ("no alarm" when there is none). Given
     the figure it drew before for a run of the same length, it moves its artists to ``run``
-    (a widget's slider move, :func:`fdi_lib.widgets.reusable_artists`). ``widget``: round y
-    limits (:func:`fdi_lib.widgets.stepped_range`) instead of the data's, which stay put while
+    (a widget's slider move, :func:`fdi_lib.redraw.reusable_artists`). ``widget``: round y
+    limits (:func:`fdi_lib.redraw.stepped_range`) instead of the data's, which stay put while
     the slider moves within a step, and a fixed legend (the values are in the sliders and the
-    title) drawn under the curves, which :func:`fdi_lib.widgets.render` keeps in its saved
+    title) drawn under the curves, which :func:`fdi_lib.redraw.render` keeps in its saved
     background.
     """
-    from fdi_lib.widgets import keep_artists, reusable_artists, set_limits, stepped_range
+    from fdi_lib.redraw import keep_artists, reusable_artists, set_limits, stepped_range
 
     k = np.arange(run.innovations.size)
     stat = run.glr.statistic

@@ -356,13 +356,13 @@ def plot_single_run(result: ReproductionResult, fig: Any = None, *, widget: bool
 
     The legend gives the threshold, the alarm time and the onset estimate ("no alarm" when
     there is none). Given the figure it drew before for a run of the same length, it moves its
-    artists to the new run (a widget's slider move, :func:`fdi_lib.widgets.reusable_artists`).
-    ``widget``: round y limits (:func:`fdi_lib.widgets.stepped_range`) instead of the data's,
+    artists to the new run (a widget's slider move, :func:`fdi_lib.redraw.reusable_artists`).
+    ``widget``: round y limits (:func:`fdi_lib.redraw.stepped_range`) instead of the data's,
     which stay put while the slider moves within a step, and fixed legends (the values are in
-    the slider and the title) drawn under the curves, which :func:`fdi_lib.widgets.render`
+    the slider and the title) drawn under the curves, which :func:`fdi_lib.redraw.render`
     keeps in its saved background.
     """
-    from fdi_lib.widgets import keep_artists, reusable_artists, set_limits, stepped_range
+    from fdi_lib.redraw import keep_artists, reusable_artists, set_limits, stepped_range
 
     run: SingleRun = result.data["run"]
     stat = np.where(run.statistic > 0, run.statistic, np.nan)

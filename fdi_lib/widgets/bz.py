@@ -28,7 +28,7 @@ from fdi_lib.rls import RLSGains, rls_gains
 from fdi_lib.signatures import fault_signature
 from fdi_lib.simulate import draw_noise
 from fdi_lib.systems import bz_example as ex
-from fdi_lib.widgets import keep_artists, reusable_artists, set_limits, stepped_range
+from fdi_lib.redraw import keep_artists, reusable_artists, set_limits, stepped_range
 
 __all__ = ["BZRun", "bz_run", "explore_bz", "GRID"]
 

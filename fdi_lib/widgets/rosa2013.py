@@ -15,7 +15,7 @@ from fdi_lib.errors import EmptySetError, ModelError
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.sets.polytope import plot_polytope, polygon_outline
 from fdi_lib.sets.svo import run_svo
-from fdi_lib.widgets import keep_artists, reusable_artists
+from fdi_lib.redraw import keep_artists, reusable_artists
 
 __all__ = ["explore_svo", "horizon_study", "GRID", "MAX_HORIZON"]
 

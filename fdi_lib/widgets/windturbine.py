@@ -17,7 +17,7 @@ import scipy.stats
 
 from fdi_lib.errors import ModelError
 from fdi_lib.plotting import figure
-from fdi_lib.widgets import keep_artists, reusable_artists
+from fdi_lib.redraw import keep_artists, reusable_artists
 
 __all__ = ["explore_windturbine", "mean_signal_delays", "GRID", "SIZES"]
 

@@ -21,7 +21,8 @@ from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.reproduce.zb2014 import UnstableRun, plot_detection
 from fdi_lib.simulate import simulate
 from fdi_lib.signatures import fault_signature, willsky_jones
-from fdi_lib.widgets import batched_glr, keep_artists, reusable_artists, set_limits, stepped_limit
+from fdi_lib.redraw import keep_artists, reusable_artists, set_limits, stepped_limit
+from fdi_lib.widgets import batched_glr
 from fdi_lib.systems import zb2014_unstable as ex
 
 __all__ = ["explore_glr", "explore_signature", "glr_run", "glr_grid_alarms", "DEFAULTS", "GLR_GRID",

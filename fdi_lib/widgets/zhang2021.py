@@ -19,7 +19,7 @@ from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.reproduce.zhang2021 import example1_regression
 from fdi_lib.sparse import flat_range, lasso_path, least_squares_on_support
 from fdi_lib.systems import zhang2021_example1 as ex
-from fdi_lib.widgets import keep_artists, reusable_artists, set_limits, stepped_range
+from fdi_lib.redraw import keep_artists, reusable_artists, set_limits, stepped_range
 
 __all__ = ["explore_sparse", "sparse_grid_facts", "GRID"]
 

@@ -1,6 +1,6 @@
 """Fast redraws of the widgets: the pixels equal a full draw, and the fast paths are taken.
 
-:func:`fdi_lib.widgets.render` redraws only what a slider move changed (a saved background, the
+:func:`fdi_lib.redraw.render` redraws only what a slider move changed (a saved background, the
 dynamic artists over it, the stale axes alone). Every picture it makes is compared, pixel for
 pixel, with ``savefig`` of the same figure (a full draw of every artist); the draws themselves
 are counted, so that a test fails if a move that changes no limit draws the whole figure.
@@ -20,21 +20,23 @@ import pytest  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from PIL import Image  # noqa: E402
 
-import fdi_lib.widgets as fw  # noqa: E402
+import fdi_lib.redraw as fr  # noqa: E402
 from fdi_lib.errors import ModelError  # noqa: E402
 from fdi_lib.plotting import DISPLAY_DPI, RASTER_SCALE, figure  # noqa: E402
 from fdi_lib.reproduce.zb2014 import unstable_run  # noqa: E402
 from fdi_lib.reproduce.zb2014_pipeline import single_run  # noqa: E402
 from fdi_lib.glr import glr_window  # noqa: E402
-from fdi_lib.widgets import (batched_glr, bz, keep_artists, render, reusable_artists, stepped_limit,  # noqa: E402
-                             stepped_range, widget_png, zb2014, zb2014_pipeline, zhang2021)
+from fdi_lib.redraw import (keep_artists, render, reusable_artists, stepped_limit,  # noqa: E402
+                            stepped_range)
+from fdi_lib.widgets import (batched_glr, bz, widget_png, zb2014, zb2014_pipeline,  # noqa: E402
+                             zhang2021)
 
 
 @pytest.fixture
 def draws(monkeypatch):
     """Counts of full draws and of axes drawn alone by render()."""
     count = {"full": 0, "axes": 0}
-    full, alone = FigureCanvasAgg.draw, fw._redraw_axes
+    full, alone = FigureCanvasAgg.draw, fr._redraw_axes
 
     def counted_full(self):
         count["full"] += 1
@@ -45,7 +47,7 @@ def draws(monkeypatch):
         return alone(fig, renderer, axes, regions)
 
     monkeypatch.setattr(FigureCanvasAgg, "draw", counted_full)
-    monkeypatch.setattr(fw, "_redraw_axes", counted_alone)
+    monkeypatch.setattr(fr, "_redraw_axes", counted_alone)
     return count
 
 

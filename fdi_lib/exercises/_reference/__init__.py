@@ -16,9 +16,9 @@ from typing import Any, Callable
 
 import numpy as np
 
-from fdi_lib.errors import FDIError, ModelError
+from fdi_lib.errors import ModelError
 
-__all__ = ["Mistake", "Reference", "REFERENCES", "reference_answer", "feedback_candidates"]
+__all__ = ["Mistake", "Reference", "REFERENCES", "reference_answer"]
 
 
 @dataclass(frozen=True)
@@ -95,44 +95,3 @@ def _frozen(value: Any) -> np.ndarray:
     arr = np.array(value, dtype=float)
     arr.setflags(write=False)
     return arr
-
-
-def feedback_candidates(exercise_id: str, student: str | None = None
-                        ) -> tuple[np.ndarray, tuple[tuple[str, np.ndarray], ...]]:
-    """The reference and the wrong answers :func:`~fdi_lib.exercises.check` recognises, in the
-    order it tries them: the exercise's own mistakes, the generic transformations of the
-    reference (:func:`fdi_lib.exercises.checker.generic_candidates`) and the index shifts (the
-    reference recomputed with a time index of the data moved by one sample).
-
-    Candidates that equal the reference within the tolerance, or have another shape, or are not
-    finite, are left out.
-    """
-    from fdi_lib.exercises._core import student_id
-
-    return _feedback_candidates(exercise_id, student_id(student))
-
-
-@functools.lru_cache(maxsize=256)
-def _feedback_candidates(exercise_id: str, student: str | None
-                         ) -> tuple[np.ndarray, tuple[tuple[str, np.ndarray], ...]]:
-    from fdi_lib.exercises import exercise_data, get_exercise
-    from fdi_lib.exercises.checker import close, generic_candidates
-
-    ex = get_exercise(exercise_id)
-    ref = _answers(exercise_id, student)
-    out = [(m.hint, np.array(m.answer(exercise_data(exercise_id, student=student)), dtype=float))
-           for m in REFERENCES[exercise_id].mistakes]
-    out += generic_candidates(ex, ref)
-    for key in ex.time_keys:
-        for step, word in ((1, "one larger"), (-1, "one smaller")):
-            data = exercise_data(exercise_id, student=student)
-            data[key] = data[key] + step
-            try:
-                shifted = np.array(REFERENCES[exercise_id].answer(data), dtype=float)
-            except (FDIError, ValueError, IndexError):   # the shifted index leaves the horizon
-                continue
-            out.append((f"This is the answer with `{key}` {word}: an index shift (off by one in "
-                        "time); count the samples as the exercise does.", shifted))
-    return ref, tuple((hint, _frozen(value)) for hint, value in out
-                      if value.shape == ref.shape and np.all(np.isfinite(value))
-                      and not np.all(close(value, ref, ex)))
