@@ -32,11 +32,14 @@ def _unique(domain: Any, target: str) -> str | None:
     return matches[0] if len(matches) == 1 else None
 
 
-def _exists(target: str, module: str | None) -> bool:
-    """Whether ``target`` (absolute, or relative to ``module``) names an object of ``fdi_lib``."""
+def _exists(target: str, module: str | None, cls: str | None = None) -> bool:
+    """Whether ``target`` (absolute, or relative to ``module`` or to its class ``cls``) names an
+    object of ``fdi_lib``: a module, a module's attribute, or a class's attribute or dataclass
+    field."""
     import importlib
 
-    for full in (target, f"{module}.{target}" if module else None):
+    scopes = [module] + ([f"{module}.{cls}"] if module and cls else [])
+    for full in (target, *(f"{scope}.{target}" for scope in scopes if scope)):
         if not full or not full.startswith("fdi_lib"):
             continue
         parts = full.split(".")
@@ -46,7 +49,10 @@ def _exists(target: str, module: str | None) -> bool:
             except ImportError:
                 continue
             try:
-                for attr in parts[i:]:
+                for j, attr in enumerate(parts[i:], i):
+                    fields = getattr(obj, "__dataclass_fields__", {})
+                    if attr in fields and j == len(parts) - 1:
+                        return True
                     obj = getattr(obj, attr)
             except AttributeError:
                 break
@@ -72,7 +78,8 @@ def resolve_unqualified(app: Any, env: Any, node: Any, contnode: Any) -> Any:
     if name is None:
         # An object of the library that exists but has no entry (a helper outside its module's
         # ``__all__``): the reference stays text. A name that does not exist still fails.
-        return contnode if _exists(target, node.get("py:module")) else None
+        found = _exists(target, node.get("py:module"), node.get("py:class"))
+        return contnode if found else None
     obj = domain.objects[name]
     from sphinx.util.nodes import make_refnode
     return make_refnode(app.builder, node["refdoc"], obj.docname, obj.node_id, contnode, name)
