@@ -199,6 +199,12 @@ class LassoPath:
     kkt_residual : float
         Largest violation of the optimality conditions along the path, relative to ``lambda``
         (:func:`kkt_residual`; at most :data:`KKT_TOL` for a computed path); NaN when not checked.
+    kkt_floor : float
+        The float floor of the check (:func:`kkt_residual`): below this ``lambda`` the path's float64
+        coefficients cannot satisfy the conditions to ``KKT_TOL lambda`` (rounding the exact solution
+        moves the gradient by more), and they are checked to that representation limit instead;
+        0 for a path whose floor is below ``KKT_FLOOR lambda_max`` everywhere... see :func:`kkt_residual`.
+        NaN when not checked.
     """
 
     lambdas: np.ndarray
@@ -206,6 +212,7 @@ class LassoPath:
     n_samples: int
     solver: str = "given"
     kkt_residual: float = float("nan")
+    kkt_floor: float = float("nan")
 
     def coef(self, lam: float) -> np.ndarray:
         """``theta_hat(lambda)``, shape ``(m,)``, by linear interpolation between breakpoints (exact)."""
@@ -270,6 +277,8 @@ class PathBatch:
         ``(B,)`` strings: :attr:`LassoPath.solver` of each path.
     kkt_residual : numpy.ndarray
         ``(B,)``: :attr:`LassoPath.kkt_residual` of each path.
+    kkt_floor : numpy.ndarray
+        ``(B,)``: :attr:`LassoPath.kkt_floor` of each path.
     """
 
     lambdas: np.ndarray
@@ -278,6 +287,7 @@ class PathBatch:
     n_samples: int
     solver: np.ndarray
     kkt_residual: np.ndarray
+    kkt_floor: np.ndarray
 
     def __len__(self) -> int:
         return int(self.n_points.size)
@@ -291,7 +301,7 @@ class PathBatch:
         k = int(self.n_points[b])
         return LassoPath(lambdas=self.lambdas[b, :k].copy(), coefs=self.coefs[b, :k].T.copy(),
                          n_samples=self.n_samples, solver=str(self.solver[b]),
-                         kkt_residual=float(self.kkt_residual[b]))
+                         kkt_residual=float(self.kkt_residual[b]), kkt_floor=float(self.kkt_floor[b]))
 
     def paths(self) -> list[LassoPath]:
         """All the paths, as :class:`LassoPath` objects."""
@@ -328,7 +338,8 @@ class PathBatch:
             coefs[b, : p.lambdas.size] = p.coefs.T
         return cls(lambdas=lambdas, coefs=coefs, n_points=n_points, n_samples=paths[0].n_samples,
                    solver=np.array([p.solver for p in paths], dtype=object),
-                   kkt_residual=np.array([p.kkt_residual for p in paths]))
+                   kkt_residual=np.array([p.kkt_residual for p in paths]),
+                   kkt_floor=np.array([p.kkt_floor for p in paths]))
 
 
 def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: float = 0.0,
@@ -436,7 +447,7 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
     y = array(y, "y")
     if y.shape != X.shape[:2]:
         raise ShapeError(f"y: expected shape {X.shape[:2]}, got {y.shape}")
-    rows = X.shape[1]
+    rows, m = X.shape[1:]
     N = _norm(n_samples, rows)
     lambda_min = real(lambda_min, "lambda_min", low=0.0, high=1.0, high_open=True,
                       what="a fraction of lambda_max")
@@ -457,26 +468,47 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
         levels, coefs, n_points = _homotopy(Gram, Xy, c_min, max_size)
     S = int(n_points.max())
     levels, coefs = levels[:, :S], coefs[:, :S]
-    # KKT check of every path: a batched screen with the Gram matrix (one product), then, for the
-    # paths it does not pass, the exact check from X and y, and a recomputation if that fails too.
+    # KKT check of every path: a batched screen with the Gram matrix (one product; the bound of its
+    # rounding is added to the violation, so it can fail a good path but never pass a bad one), then,
+    # for the paths it does not pass, the check in double-double from X and y (nothing subtracted),
+    # then the coefficients refined on the path's own supports, then scikit-learn's lars_path.
     with np.errstate(all="ignore"):
-        kkt = _kkt(Xy[:, None, :] - np.matmul(coefs, Gram), levels, coefs, n_points,
-                   np.sqrt(np.einsum("bii->bi", Gram)), np.sqrt(np.einsum("br,br->b", ys, ys)), rows)
+        norms = np.sqrt(np.einsum("bii->bi", Gram))
+        ynorm = np.sqrt(np.einsum("br,br->b", ys, ys))
+        # |fl(g_j) - g_j| <= gamma_(rows + m) ||X_j|| (||y|| + sum_k ||X_k|| |theta_k|) (Cauchy-Schwarz on
+        # X^T y, X^T X and G theta), doubled
+        slack = (2 * np.finfo(float).eps * (rows + m + 2)) * norms.max(axis=1, keepdims=True) * (
+            ynorm[:, None] + np.einsum("bsi,bi->bs", np.abs(coefs), norms))
+        kkt, floor = _kkt(Xy[:, None, :] - np.matmul(coefs, Gram), slack, levels, coefs, n_points, np.abs(Gram))
     solver = np.full(B, "homotopy", dtype=object)
     fixed = []
-    for b in np.flatnonzero(kkt > KKT_TOL):  # rare: degenerate or ill-conditioned designs
-        Xb, yb = Xs[b], ys[b]
-        kkt[b] = _kkt_direct(Xb, yb, levels[b, :n_points[b]], coefs[b, :n_points[b]])
-        if kkt[b] > KKT_TOL:
-            fixed.append((b, *_lars_fallback(Xb, yb, float(c_min[b]), max_size, b, float(kkt[b]))))
+    for b in np.flatnonzero(kkt > KKT_TOL):  # degenerate, ill-conditioned or long paths
+        Xb, yb, k = Xs[b], ys[b], n_points[b]
+        kkt[b], floor[b] = _kkt_direct(Xb, yb, levels[b, :k], coefs[b, :k])
+        if kkt[b] <= KKT_TOL:
+            continue
+        # recomputed: by lars_path (stable Cholesky updates), and the homotopy's path with its coefficients
+        # refined on its own supports; the one with the smaller residual, refused when both fail
+        refined = _refine(Xb, yb, levels[b, :k], coefs[b, :k])
+        res, fl = _kkt_direct(Xb, yb, levels[b, :k], refined)
+        try:
+            lars = _lars_fallback(Xb, yb, float(c_min[b]), max_size, b, float(kkt[b]))
+        except NumericalError as error:
+            if res > KKT_TOL:
+                raise NumericalError(f"{error} (and by {res:.3g} lambda with the homotopy's path refined)") from None
+            lars = None
+        if lars is None or res < lars[2]:
+            coefs[b, :k], kkt[b], floor[b], solver[b] = refined, res, fl, "homotopy-refined"
+        else:
+            fixed.append((b, *lars))
     if fixed:
-        S = max(S, *(lev.size for _, lev, _, _ in fixed))
+        S = max(S, *(lev.size for _, lev, _, _, _ in fixed))
         levels = np.pad(levels, ((0, 0), (0, S - levels.shape[1])))
         coefs = np.pad(coefs, ((0, 0), (0, S - coefs.shape[1]), (0, 0)))
-        for b, lev, co, res in fixed:
+        for b, lev, co, res, fl in fixed:
             levels[b], coefs[b] = 0.0, 0.0
             levels[b, :lev.size], coefs[b, :lev.size] = lev, co
-            n_points[b], kkt[b], solver[b] = lev.size, res, "sklearn-fallback"
+            n_points[b], kkt[b], floor[b], solver[b] = lev.size, res, fl, "sklearn-fallback"
     # the correlation level c is rows * alpha (scikit-learn's 1/(2 rows)); (39) has 1/(2N): lambda = c / N
     with np.errstate(over="ignore", invalid="ignore"):   # checked just below
         lam = levels * (sx * sy / N)[:, None]
@@ -489,7 +521,8 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
                              f"or a coefficient overflows: RMS of X {sx[b]:.3g}, of y {sy[b]:.3g}); expected a "
                              f"design and data scaled towards 1")
     lam[~on_path] = -np.inf  # padding
-    return PathBatch(lambdas=lam, coefs=th, n_points=n_points, n_samples=N, solver=solver, kkt_residual=kkt)
+    return PathBatch(lambdas=lam, coefs=th, n_points=n_points, n_samples=N, solver=solver, kkt_residual=kkt,
+                     kkt_floor=floor * (sx * sy / N))
 
 
 def kkt_residual(X: Any, y: Any, path: "LassoPath") -> float:
@@ -502,14 +535,20 @@ def kkt_residual(X: Any, y: Any, path: "LassoPath") -> float:
     ``|g_j| - lambda_i``, or ``|g_j - sigma lambda_i|`` when ``theta_j`` has the sign ``sigma`` at
     ``lambda_i`` or on one of the two intervals next to it (supports and signs as
     :meth:`LassoPath.interval_supports` reads them; a sign change across an interval thus counts
-    as ``|g_j| + lambda_i``). The residual is the largest violation in excess of a rounding allowance
-    for ``g_j`` (``8 eps (rows + m) max_k ||X_k|| (||y|| + sum_k ||X_k|| |theta_k|) / N``, which matters only
-    near ``lambda = 0`` on ill-conditioned designs), divided by ``max(lambda_i, KKT_FLOOR lambda_0)``.
-    It is 0 for a path exact to rounding, ``inf`` for a path with a NaN.
+    as ``|g_j| + lambda_i``).
 
-    :func:`lasso_path_batch` checks every path it returns (a batched screen with the Gram matrix,
-    then this exact form, from ``X`` and ``y``, for the paths the screen does not pass) and stores
-    the residual in :attr:`LassoPath.kkt_residual`; it is at most :data:`KKT_TOL`.
+    The gradient is computed as an independent check in exact rational arithmetic would: in
+    double-double arithmetic (error-free products and sums), with an error below ``1e-25`` of
+    ``max |X^T y|`` on the tests' designs, and no rounding allowance is subtracted. The violation is
+    divided by ``max(lambda_i, KKT_FLOOR lambda_0, floor_i)``, where ``floor_i = eps/2 max_j sum_k
+    |(X^T X)_jk theta_k| / (N KKT_TOL)`` is the *float floor* at breakpoint ``i``: rounding the exact
+    solution to float64 moves the gradient by up to ``KKT_TOL floor_i``, so below ``floor_i`` no
+    float64 path can satisfy the conditions to ``KKT_TOL lambda``, and the check there is to that
+    representation limit (:attr:`LassoPath.kkt_floor` states the largest ``floor_i`` of a path). It is
+    0 for a path exact to rounding, ``inf`` for a path with a NaN.
+
+    :func:`lasso_path_batch` checks every path it returns and stores the residual in
+    :attr:`LassoPath.kkt_residual`; it is at most :data:`KKT_TOL`.
 
     Parameters
     ----------
@@ -525,23 +564,89 @@ def kkt_residual(X: Any, y: Any, path: "LassoPath") -> float:
     X, y = _check_xy(X, y)
     if not isinstance(path, LassoPath) or path.coefs.shape[0] != X.shape[1]:
         raise ModelError(f"path: expected a LassoPath of {X.shape[1]} components, got {path!r:.80}")
-    return _kkt_direct(X, y, path.lambdas * path.n_samples, path.coefs.T)
+    # exact power-of-2 rescaling (the error-free products need |entries| well below 1e300)
+    sx, sy = _pow2_rms(X.reshape(1, -1))[0], _pow2_rms(y[None])[0]
+    with np.errstate(over="ignore", invalid="ignore"):
+        levels = path.lambdas * (path.n_samples / (sx * sy))
+        coefs = path.coefs.T * (sx / sy)
+    return _kkt_direct(X / sx, y / sy, levels, coefs)[0]
 
 
-def _kkt_direct(X: np.ndarray, y: np.ndarray, levels: np.ndarray, coefs: np.ndarray) -> float:
-    """:func:`kkt_residual` of one path, levels ``(S,)`` (``N lambda``) and coefficients ``(S, m)``."""
+def _split(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Dekker's split ``a = hi + lo`` into halves of 26 bits (so that ``hi * hi`` is exact)."""
+    c = 134217729.0 * a  # 2^27 + 1
+    hi = c - (c - a)
+    return hi, a - hi
+
+
+def _product_error(a: np.ndarray, b: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """``a b - p`` exactly, for ``p = fl(a b)`` (Dekker's TwoProduct)."""
+    ah, al = _split(a)
+    bh, bl = _split(b)
+    return ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+def _two_sum(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``s = fl(a + b)`` and ``a + b - s`` exactly (Knuth's TwoSum)."""
+    s = a + b
+    z = s - a
+    return s, (a - (s - z)) + (b - z)
+
+
+def _gradient_dd(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> np.ndarray:
+    """``X^T (y - X theta)`` for every ``theta`` of ``coefs`` ``(S, m)``, in double-double arithmetic.
+
+    The residual ``y - X theta`` is accumulated with error-free products and sums (Ogita, Rump and
+    Oishi's Dot2), kept as an unevaluated sum ``s + e``, then ``X^T (s + e)`` is summed over the rows
+    with error-free products and a pairwise tree of error-free sums. The result is as accurate as
+    if computed in about twice the float64 precision, then rounded: its error is of the order of
+    ``eps^2`` times the sums of absolute values, not ``eps`` (no cancellation between large
+    coefficients of nearly collinear columns survives). Processed in blocks of breakpoints.
+    """
+    rows, m = X.shape
+    out = np.empty(coefs.shape)
+    block = max(1, 2_000_000 // (rows * m))
+    XT = X.T[None]
+    for b0 in range(0, coefs.shape[0], block):
+        c = coefs[b0:b0 + block]
+        s = np.repeat(y[None], c.shape[0], axis=0)
+        e = np.zeros_like(s)
+        for k in range(m):
+            a, t = X[None, :, k], c[:, k, None]
+            p = a * t
+            s, err = _two_sum(s, -p)
+            e += err - _product_error(a, t, p)
+        P = XT * s[:, None, :]  # (S, m, rows)
+        E = _product_error(XT, s[:, None, :], P) + XT * e[:, None, :]
+        while P.shape[2] > 1:
+            if P.shape[2] % 2:
+                P = np.concatenate([P, np.zeros(P.shape[:2] + (1,))], axis=2)
+                E = np.concatenate([E, np.zeros(E.shape[:2] + (1,))], axis=2)
+            P, err = _two_sum(P[:, :, 0::2], P[:, :, 1::2])
+            E = E[:, :, 0::2] + E[:, :, 1::2] + err
+        out[b0:b0 + block] = P[:, :, 0] + E[:, :, 0]
+    return out
+
+
+def _kkt_direct(X: np.ndarray, y: np.ndarray, levels: np.ndarray, coefs: np.ndarray) -> tuple[float, float]:
+    """:func:`kkt_residual` of one path, levels ``(S,)`` (``N lambda``) and coefficients ``(S, m)``, and
+    its float floor (levels); the gradient in double-double (:func:`_gradient_dd`), nothing subtracted."""
     with np.errstate(all="ignore"):
-        g = (y[None, :] - coefs @ X.T) @ X
-    return float(_kkt(g[None], levels[None], coefs[None], np.array([levels.size]),
-                      np.sqrt(np.einsum("ri,ri->i", X, X))[None], np.sqrt(y @ y)[None], X.shape[0])[0])
+        g = _gradient_dd(X, y, coefs)
+        res, floor = _kkt(g[None], np.zeros((1, levels.size)), levels[None], coefs[None], np.array([levels.size]),
+                          np.abs(X.T @ X)[None])
+    return float(res[0]), float(floor[0])
 
 
-def _kkt(g: np.ndarray, levels: np.ndarray, coefs: np.ndarray, n_points: np.ndarray, norms: np.ndarray,
-         ynorm: np.ndarray, rows: int) -> np.ndarray:
-    """The residuals of :func:`kkt_residual` ``(B,)`` from the gradients ``g`` ``(B, S, m)`` (without the
-    ``1/N``) at the levels ``levels`` ``(B, S)`` (``N lambda``) of paths ``coefs`` ``(B, S, m)`` padded
-    after ``n_points``; ``norms`` ``(B, m)`` are the column norms of ``X`` and ``ynorm`` ``(B,)`` the norm
-    of ``y`` (for the rounding bound). Vectorised over the batch: a few passes over ``(B, S, m)``."""
+def _kkt(g: np.ndarray, slack: np.ndarray, levels: np.ndarray, coefs: np.ndarray, n_points: np.ndarray,
+         abs_gram: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The residuals of :func:`kkt_residual` ``(B,)`` and the float floors ``(B,)`` (levels, the
+    largest ``KKT_TOL floor_i``... divided by ``KKT_TOL``) of paths ``coefs`` ``(B, S, m)`` padded after
+    ``n_points``, from the gradients ``g`` ``(B, S, m)`` (without the ``1/N``) at the levels ``levels``
+    ``(B, S)`` (``N lambda``). ``slack`` ``(B, S)`` bounds the error of ``g`` at each breakpoint and is
+    *added* to the violation (a screen with a rounded ``g`` can then fail a good path, never pass a
+    bad one); ``abs_gram`` ``(B, m, m)`` is ``|X^T X|`` (for the float floor). Vectorised over the
+    batch: a few passes over ``(B, S, m)``."""
     B, S, m = coefs.shape
     valid = np.arange(S) < n_points[:, None]  # (B, S)
     with np.errstate(all="ignore"):
@@ -560,13 +665,36 @@ def _kkt(g: np.ndarray, levels: np.ndarray, coefs: np.ndarray, n_points: np.ndar
         worst = np.maximum(g.max(axis=2), -g.min(axis=2)) - levels
         np.maximum(worst, levels - np.where(pos, g, np.inf).min(axis=2), out=worst)
         np.maximum(worst, levels + np.where(neg, g, -np.inf).max(axis=2), out=worst)
-        # rounding allowance of g_j = X_j^T (y - X beta), every j: the n eps bound of a dot product of
-        # length n = rows + m (Cauchy-Schwarz on each), times 8 for the backward error of the solve
-        rounding = (8 * np.finfo(float).eps * (rows + m)) * norms.max(axis=1, keepdims=True) * (
-            ynorm[:, None] + np.einsum("bsi,bi->bs", np.abs(coefs), norms))
-        scale = np.maximum(np.maximum(levels, KKT_FLOOR * levels[:, :1]), np.finfo(float).tiny)
-        res = np.where(valid, (worst - rounding) / scale, -np.inf).max(axis=1)
-    return np.where(np.isnan(res), np.inf, np.maximum(res, 0.0))  # NaN, anywhere in a path, fails
+        # float floor: rounding theta to float64 (|delta_k| <= eps/2 |theta_k|) moves g_j by up to
+        # eps/2 sum_k |G_jk theta_k|; below floor_i = that / KKT_TOL, KKT_TOL lambda cannot be met
+        floor = (0.5 * np.finfo(float).eps / KKT_TOL) * np.matmul(np.abs(coefs), abs_gram).max(axis=2)
+        scale = np.maximum(np.maximum(levels, KKT_FLOOR * levels[:, :1]), floor)
+        scale = np.maximum(scale, np.finfo(float).tiny)
+        res = np.where(valid, (worst + slack) / scale, -np.inf).max(axis=1)
+        floor = np.where(valid, floor, 0.0).max(axis=1)
+    return np.where(np.isnan(res), np.inf, np.maximum(res, 0.0)), floor  # NaN, anywhere in a path, fails
+
+
+def _refine(X: np.ndarray, y: np.ndarray, levels: np.ndarray, coefs: np.ndarray, steps: int = 3) -> np.ndarray:
+    """The coefficients ``(S, m)`` of a path refined at each breakpoint on the path's own supports.
+
+    At breakpoint ``i`` the Lasso solution solves ``(X^T X)_AA theta_A = X_A^T y - c_i sign_A`` on the
+    components ``A`` non-zero at ``c_i`` (with their signs), ``theta = 0`` elsewhere. An up/down-dated solver
+    (the homotopy's inverse, ``lars_path``'s Cholesky factor) loses accuracy on nearly collinear
+    active columns; iterative refinement with residuals in double-double (:func:`_gradient_dd`)
+    restores it while ``eps cond(X_A^T X_A) < 1``. The levels and supports are unchanged.
+    """
+    zero = 1e-12 * max(1.0, float(np.abs(coefs).max(initial=0.0)))
+    sign = np.where(np.abs(coefs) > zero, np.sign(coefs), 0.0)
+    gram = X.T @ X
+    theta = np.where(sign != 0, coefs, 0.0)
+    for _ in range(steps):
+        r = _gradient_dd(X, y, theta) - levels[:, None] * sign  # zero on A at the solution
+        for i in range(theta.shape[0]):
+            a = np.flatnonzero(sign[i])
+            if a.size:
+                theta[i, a] += np.linalg.lstsq(gram[np.ix_(a, a)], r[i, a], rcond=None)[0]
+    return theta
 
 
 def _pow2_rms(a: np.ndarray) -> np.ndarray:
@@ -585,7 +713,7 @@ def _pow2_rms(a: np.ndarray) -> np.ndarray:
 
 
 def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | None, b: int,
-                   kkt: float) -> tuple[np.ndarray, np.ndarray, float]:
+                   kkt: float) -> tuple[np.ndarray, np.ndarray, float, float]:
     """The path of one problem whose homotopy path failed the KKT check, by scikit-learn's ``lars_path``.
 
     Why not only the homotopy: its inverse of ``Gram_AA`` is up/down-dated (fast, batched) and loses
@@ -648,10 +776,15 @@ def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | N
         over = np.flatnonzero(_activity(coefs[None])[1][0].sum(axis=1) > (m if max_size is None else max_size))
         if over.size:  # stop after the first interval with more than max_size components
             levels, coefs = levels[: over[0] + 2], coefs[: over[0] + 2]
-        res = _kkt_direct(X, y, levels, coefs)
+        res, fl = _kkt_direct(X, y, levels, coefs)
+        if res > KKT_TOL:  # its Cholesky up/down-dates lose accuracy too: refined on its own supports
+            refined = _refine(X, y, levels, coefs)
+            r2, f2 = _kkt_direct(X, y, levels, refined)
+            if r2 < res:
+                res, fl, coefs = r2, f2, refined
         done = over.size or levels[-1] <= max(c_min, 1e-9 * levels[0])  # lars_path's own tail ends
         if res <= KKT_TOL and done:
-            return levels, coefs, res
+            return levels, coefs, res, fl
         tried.append(f"{res:.3g} lambda" + ("" if done else f" (stopped at {levels[-1] / levels[0]:.3g} lambda_max)"))
     raise NumericalError(f"X, y (problem {b}): the Lasso path violates the optimality (KKT) conditions by "
                          f"{kkt:.3g} lambda with the homotopy and by {', '.join(tried)} with scikit-learn's "
