@@ -479,13 +479,25 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
         # X^T y, X^T X and G theta), doubled
         slack = (2 * np.finfo(float).eps * (rows + m + 2)) * norms.max(axis=1, keepdims=True) * (
             ynorm[:, None] + np.einsum("bsi,bi->bs", np.abs(coefs), norms))
-        kkt, floor = _kkt(Xy[:, None, :] - np.matmul(coefs, Gram), slack, levels, coefs, n_points, np.abs(Gram))
+        g = Xy[:, None, :] - np.matmul(coefs, Gram)
+        abs_gram = np.abs(Gram)
+        point_res, point_floor = _kkt(g, slack, levels, coefs, n_points, abs_gram, points=True)
+    # the exact check where the screen does not pass (its bound holds elsewhere): all such
+    # breakpoints of the batch at once
+    broken = ~np.isfinite(point_res).all(axis=1)  # a NaN (a singular step or a cycle): recomputed
+    pb, pi = np.nonzero((point_res > KKT_TOL) & ~broken[:, None])
+    if pb.size:
+        with np.errstate(all="ignore"):
+            g[pb, pi] = _gradient_dd(Xs[pb], ys[pb], coefs[pb, pi])
+            slack[pb, pi] = 0.0
+            point_res, point_floor = _kkt(g, slack, levels, coefs, n_points, abs_gram, points=True)
+    kkt, floor = np.maximum(point_res.max(axis=1), 0.0), point_floor.max(axis=1)
     solver = np.full(B, "homotopy", dtype=object)
     fixed = []
-    for b in np.flatnonzero(kkt > KKT_TOL):  # degenerate, ill-conditioned or long paths
+    for b in np.flatnonzero(kkt > KKT_TOL):  # degenerate or ill-conditioned designs
         Xb, yb, k = Xs[b], ys[b], n_points[b]
-        kkt[b], floor[b] = _kkt_direct(Xb, yb, levels[b, :k], coefs[b, :k])
-        if kkt[b] <= KKT_TOL:
+        if broken[b]:
+            fixed.append((b, *_lars_fallback(Xb, yb, float(c_min[b]), max_size, b, float(kkt[b]))))
             continue
         # recomputed: by lars_path (stable Cholesky updates), and the homotopy's path with its coefficients
         # refined on its own supports; the one with the smaller residual, refused when both fail
@@ -579,9 +591,9 @@ def _split(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return hi, a - hi
 
 
-def _product_error(a: np.ndarray, b: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """``a b - p`` exactly, for ``p = fl(a b)`` (Dekker's TwoProduct)."""
-    ah, al = _split(a)
+def _product_error(a: tuple[np.ndarray, np.ndarray], b: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """``a b - p`` exactly, for ``p = fl(a b)`` and ``a`` given by its split (Dekker's TwoProduct)."""
+    ah, al = a
     bh, bl = _split(b)
     return ((ah * bh - p) + ah * bl + al * bh) + al * bl
 
@@ -594,30 +606,36 @@ def _two_sum(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _gradient_dd(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> np.ndarray:
-    """``X^T (y - X theta)`` for every ``theta`` of ``coefs`` ``(S, m)``, in double-double arithmetic.
+    """``X_b^T (y_b - X_b theta_b)`` for the rows ``theta_b`` of ``coefs`` ``(P, m)``, in double-double arithmetic.
 
-    The residual ``y - X theta`` is accumulated with error-free products and sums (Ogita, Rump and
-    Oishi's Dot2), kept as an unevaluated sum ``s + e``, then ``X^T (s + e)`` is summed over the rows
-    with error-free products and a pairwise tree of error-free sums. The result is as accurate as
-    if computed in about twice the float64 precision, then rounded: its error is of the order of
-    ``eps^2`` times the sums of absolute values, not ``eps`` (no cancellation between large
-    coefficients of nearly collinear columns survives). Processed in blocks of breakpoints.
+    ``X`` is ``(P, rows, m)`` and ``y`` ``(P, rows)`` (one problem per row of ``coefs``), or ``(rows, m)``
+    and ``(rows,)`` (one problem for all). The residual ``y - X theta`` is accumulated with error-free
+    products and sums (Ogita, Rump and Oishi's Dot2) and kept as an unevaluated sum ``s + e``, then
+    ``X^T (s + e)`` is summed over the rows with error-free products and a pairwise tree of
+    error-free sums. The result is as accurate as if computed in about twice the float64 precision,
+    then rounded: its error is of the order of ``eps^2`` times the sums of absolute values, not
+    ``eps`` (no cancellation between large coefficients of nearly collinear columns survives).
+    Processed in blocks of ``coefs`` rows.
     """
-    rows, m = X.shape
+    X = X[None] if X.ndim == 2 else X
+    y = y[None] if y.ndim == 1 else y
+    rows, m = X.shape[1:]
     out = np.empty(coefs.shape)
-    block = max(1, 2_000_000 // (rows * m))
-    XT = X.T[None]
+    block = max(1, 1_000_000 // (rows * m))
     for b0 in range(0, coefs.shape[0], block):
         c = coefs[b0:b0 + block]
-        s = np.repeat(y[None], c.shape[0], axis=0)
+        Xb = X if X.shape[0] == 1 else X[b0:b0 + block]
+        Xh, Xl = _split(Xb)
+        s = np.array(np.broadcast_to(y if y.shape[0] == 1 else y[b0:b0 + block], (c.shape[0], rows)))
         e = np.zeros_like(s)
         for k in range(m):
-            a, t = X[None, :, k], c[:, k, None]
+            a, t = Xb[:, :, k], c[:, k, None]
             p = a * t
             s, err = _two_sum(s, -p)
-            e += err - _product_error(a, t, p)
-        P = XT * s[:, None, :]  # (S, m, rows)
-        E = _product_error(XT, s[:, None, :], P) + XT * e[:, None, :]
+            e += err - _product_error((Xh[:, :, k], Xl[:, :, k]), t, p)
+        XT = Xb.transpose(0, 2, 1)
+        P = XT * s[:, None, :]  # (P, m, rows)
+        E = _product_error((Xh.transpose(0, 2, 1), Xl.transpose(0, 2, 1)), s[:, None, :], P) + XT * e[:, None, :]
         while P.shape[2] > 1:
             if P.shape[2] % 2:
                 P = np.concatenate([P, np.zeros(P.shape[:2] + (1,))], axis=2)
@@ -639,7 +657,7 @@ def _kkt_direct(X: np.ndarray, y: np.ndarray, levels: np.ndarray, coefs: np.ndar
 
 
 def _kkt(g: np.ndarray, slack: np.ndarray, levels: np.ndarray, coefs: np.ndarray, n_points: np.ndarray,
-         abs_gram: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+         abs_gram: np.ndarray, *, points: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """The residuals of :func:`kkt_residual` ``(B,)`` and the float floors ``(B,)`` (levels, the
     largest ``KKT_TOL floor_i``... divided by ``KKT_TOL``) of paths ``coefs`` ``(B, S, m)`` padded after
     ``n_points``, from the gradients ``g`` ``(B, S, m)`` (without the ``1/N``) at the levels ``levels``
@@ -670,8 +688,11 @@ def _kkt(g: np.ndarray, slack: np.ndarray, levels: np.ndarray, coefs: np.ndarray
         floor = (0.5 * np.finfo(float).eps / KKT_TOL) * np.matmul(np.abs(coefs), abs_gram).max(axis=2)
         scale = np.maximum(np.maximum(levels, KKT_FLOOR * levels[:, :1]), floor)
         scale = np.maximum(scale, np.finfo(float).tiny)
-        res = np.where(valid, (worst + slack) / scale, -np.inf).max(axis=1)
-        floor = np.where(valid, floor, 0.0).max(axis=1)
+        res = np.where(valid, (worst + slack) / scale, -np.inf)
+        floor = np.where(valid, floor, 0.0)
+        if points:  # per breakpoint, (B, S)
+            return np.where(np.isnan(res), np.inf, res), floor
+        res, floor = res.max(axis=1), floor.max(axis=1)
     return np.where(np.isnan(res), np.inf, np.maximum(res, 0.0)), floor  # NaN, anywhere in a path, fails
 
 
