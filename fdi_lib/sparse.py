@@ -484,7 +484,7 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
         point_res, point_floor = _kkt(g, slack, levels, coefs, n_points, abs_gram, points=True)
     # the exact check where the screen does not pass (its bound holds elsewhere): all such
     # breakpoints of the batch at once
-    broken = ~np.isfinite(point_res).all(axis=1)  # a NaN (a singular step or a cycle): recomputed
+    broken = (point_res == np.inf).any(axis=1)  # a NaN (a singular step or a cycle): recomputed
     pb, pi = np.nonzero((point_res > KKT_TOL) & ~broken[:, None])
     if pb.size:
         with np.errstate(all="ignore"):
