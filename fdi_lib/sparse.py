@@ -20,11 +20,13 @@ Two solvers, which must agree:
 * :func:`lasso_path` - the exact, piecewise-linear Lasso path by the LARS-Lasso homotopy of
   Efron et al. (2004), the algorithm of scikit-learn's ``lars_path(method="lasso")``, here in
   Gram form and batched over problems (:func:`lasso_path_batch`, for Monte Carlo chunks): every
-  breakpoint (every change of support) comes out, with no ``lambda`` grid. Every path returned
-  satisfies the optimality (KKT) conditions to :data:`KKT_TOL` relative to ``lambda``
-  (:func:`kkt_residual`); on a degenerate design (duplicated, scaled, zero or nearly collinear
-  columns) where the homotopy's path does not, scikit-learn's ``lars_path`` recomputes it, and
-  :attr:`LassoPath.solver` says so.
+breakpoint (every change of support) comes out, with no ``lambda`` grid. Every path returned
+  satisfies the optimality (KKT) conditions to :data:`KKT_TOL` relative to ``lambda``, checked as
+  exact arithmetic would (:func:`kkt_residual`), down to its stated float floor
+  (:attr:`LassoPath.kkt_floor`); on a degenerate design (duplicated, scaled, zero or nearly
+  collinear columns) where the homotopy's path does not, it is refined or recomputed by
+  scikit-learn's ``lars_path``, :attr:`LassoPath.solver` says so, and a path nothing certifies is
+  refused.
 
 The rules for ``lambda`` below have batched forms too (:func:`flat_ranges`,
 :func:`grid_flat_ranges` on a :class:`PathBatch`): a Monte Carlo chunk applies them to all its
@@ -193,18 +195,19 @@ class LassoPath:
     n_samples : int
         The ``N`` of (39).
     solver : str
-        What computed the path: ``"homotopy"`` (this module's batched homotopy), ``"sklearn-fallback"``
-        (scikit-learn's ``lars_path``, after the homotopy's path failed the KKT check; see
-        :func:`lasso_path_batch`), or ``"given"`` (a path built by hand).
+        What computed the path: ``"homotopy"`` (this module's batched homotopy),
+        ``"homotopy-refined"`` (its coefficients refined on its own supports after the KKT check
+        failed), ``"sklearn-fallback"`` (scikit-learn's ``lars_path``, after the homotopy's path
+        failed the KKT check; see :func:`lasso_path_batch`), or ``"given"`` (a path built by hand).
     kkt_residual : float
         Largest violation of the optimality conditions along the path, relative to ``lambda``
-        (:func:`kkt_residual`; at most :data:`KKT_TOL` for a computed path); NaN when not checked.
+        (:func:`kkt_residual`, or an upper bound of it: the batched screen's rounding bound
+        included); at most :data:`KKT_TOL` for a computed path; NaN when not checked.
     kkt_floor : float
-        The float floor of the check (:func:`kkt_residual`): below this ``lambda`` the path's float64
-        coefficients cannot satisfy the conditions to ``KKT_TOL lambda`` (rounding the exact solution
-        moves the gradient by more), and they are checked to that representation limit instead;
-        0 for a path whose floor is below ``KKT_FLOOR lambda_max`` everywhere... see :func:`kkt_residual`.
-        NaN when not checked.
+        The float floor of the check (the largest ``floor_i`` of :func:`kkt_residual`): below this
+        ``lambda`` float64 coefficients cannot satisfy the conditions to ``KKT_TOL lambda``
+        (rounding the exact solution moves the gradient by more), and the path is checked to that
+        representation limit instead. NaN when not checked.
     """
 
     lambdas: np.ndarray
@@ -301,7 +304,8 @@ class PathBatch:
         k = int(self.n_points[b])
         return LassoPath(lambdas=self.lambdas[b, :k].copy(), coefs=self.coefs[b, :k].T.copy(),
                          n_samples=self.n_samples, solver=str(self.solver[b]),
-                         kkt_residual=float(self.kkt_residual[b]), kkt_floor=float(self.kkt_floor[b]))
+                         kkt_residual=float(self.kkt_residual[b]),
+                         kkt_floor=float(self.kkt_floor[b]))
 
     def paths(self) -> list[LassoPath]:
         """All the paths, as :class:`LassoPath` objects."""
@@ -438,16 +442,20 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
     -----
     Every path is checked against the optimality conditions (:func:`kkt_residual`): the whole
     batch at once in the Gram form of the homotopy (one batched product and a few passes over
-    the breakpoints), then, for the paths above :data:`KKT_TOL`, from ``X`` and ``y`` (no Gram
-    rounding). A path that fails both is recomputed alone by scikit-learn's
-    ``lars_path(method="lasso")`` (``solver="sklearn-fallback"``), on the whole design, then, if
-    that path fails too, with its duplicated or scaled columns merged and its zero columns removed.
+    the breakpoints), with a bound of that form's rounding *added* to each violation (the screen
+    can fail a good path, never pass a bad one), then, at the breakpoints the screen does not
+    pass, exactly from ``X`` and ``y`` (the gradient in double-double, nothing subtracted). A path
+    that fails is recomputed alone: its coefficients refined on its own supports
+    (``solver="homotopy-refined"``) and by scikit-learn's ``lars_path(method="lasso")``
+    (``solver="sklearn-fallback"``: on the whole design, then, if that path fails too, with its
+    duplicated or scaled columns merged and its zero columns removed); the one with the smaller
+    residual is kept, and a path that no route brings to :data:`KKT_TOL` is a NumericalError.
     """
     X = array(X, "X", ndim=3)
     y = array(y, "y")
     if y.shape != X.shape[:2]:
         raise ShapeError(f"y: expected shape {X.shape[:2]}, got {y.shape}")
-    rows, m = X.shape[1:]
+    rows = X.shape[1]
     N = _norm(n_samples, rows)
     lambda_min = real(lambda_min, "lambda_min", low=0.0, high=1.0, high_open=True,
                       what="a fraction of lambda_max")
@@ -469,19 +477,13 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
     S = int(n_points.max())
     levels, coefs = levels[:, :S], coefs[:, :S]
     # KKT check of every path: a batched screen with the Gram matrix (one product; the bound of its
-    # rounding is added to the violation, so it can fail a good path but never pass a bad one), then,
+    # rounding is added to the violation, so it can fail a good path but never pass a bad
+    # one), then,
     # for the paths it does not pass, the check in double-double from X and y (nothing subtracted),
     # then the coefficients refined on the path's own supports, then scikit-learn's lars_path.
-    with np.errstate(all="ignore"):
-        norms = np.sqrt(np.einsum("bii->bi", Gram))
-        ynorm = np.sqrt(np.einsum("br,br->b", ys, ys))
-        # |fl(g_j) - g_j| <= gamma_(rows + m) ||X_j|| (||y|| + sum_k ||X_k|| |theta_k|) (Cauchy-Schwarz on
-        # X^T y, X^T X and G theta), doubled
-        slack = (2 * np.finfo(float).eps * (rows + m + 2)) * norms.max(axis=1, keepdims=True) * (
-            ynorm[:, None] + np.einsum("bsi,bi->bs", np.abs(coefs), norms))
-        g = Xy[:, None, :] - np.matmul(coefs, Gram)
-        abs_gram = np.abs(Gram)
-        point_res, point_floor = _kkt(g, slack, levels, coefs, n_points, abs_gram, points=True)
+    ynorm = np.sqrt(np.einsum("br,br->b", ys, ys))
+    g, slack, abs_gram, point_res, point_floor = _kkt_screen(Gram, Xy, ynorm, levels, coefs,
+                                                             n_points, rows)
     # the exact check where the screen does not pass (its bound holds elsewhere): all such
     # breakpoints of the batch at once
     broken = (point_res == np.inf).any(axis=1)  # a NaN (a singular step or a cycle): recomputed
@@ -499,7 +501,8 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
         if broken[b]:
             fixed.append((b, *_lars_fallback(Xb, yb, float(c_min[b]), max_size, b, float(kkt[b]))))
             continue
-        # recomputed: by lars_path (stable Cholesky updates), and the homotopy's path with its coefficients
+        # recomputed: by lars_path (stable Cholesky updates), and the homotopy's path with
+        # its coefficients
         # refined on its own supports; the one with the smaller residual, refused when both fail
         refined = _refine(Xb, yb, levels[b, :k], coefs[b, :k])
         res, fl = _kkt_direct(Xb, yb, levels[b, :k], refined)
@@ -507,7 +510,8 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
             lars = _lars_fallback(Xb, yb, float(c_min[b]), max_size, b, float(kkt[b]))
         except NumericalError as error:
             if res > KKT_TOL:
-                raise NumericalError(f"{error} (and by {res:.3g} lambda with the homotopy's path refined)") from None
+                raise NumericalError(f"{error} (and by {res:.3g} lambda with the homotopy's path "
+                                     "refined)") from None
             lars = None
         if lars is None or res < lars[2]:
             coefs[b, :k], kkt[b], floor[b], solver[b] = refined, res, fl, "homotopy-refined"
@@ -533,7 +537,8 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
                              f"or a coefficient overflows: RMS of X {sx[b]:.3g}, of y {sy[b]:.3g}); expected a "
                              f"design and data scaled towards 1")
     lam[~on_path] = -np.inf  # padding
-    return PathBatch(lambdas=lam, coefs=th, n_points=n_points, n_samples=N, solver=solver, kkt_residual=kkt,
+    return PathBatch(lambdas=lam, coefs=th, n_points=n_points, n_samples=N, solver=solver,
+                     kkt_residual=kkt,
                      kkt_floor=floor * (sx * sy / N))
 
 
@@ -550,14 +555,14 @@ def kkt_residual(X: Any, y: Any, path: "LassoPath") -> float:
     as ``|g_j| + lambda_i``).
 
     The gradient is computed as an independent check in exact rational arithmetic would: in
-    double-double arithmetic (error-free products and sums), with an error below ``1e-25`` of
-    ``max |X^T y|`` on the tests' designs, and no rounding allowance is subtracted. The violation is
+    double-double arithmetic (error-free products and sums), with an error below ``1e-25`` of ``max
+    |X^T y|`` on the tests' designs, and no rounding allowance is subtracted. The violation is
     divided by ``max(lambda_i, KKT_FLOOR lambda_0, floor_i)``, where ``floor_i = eps/2 max_j sum_k
-    |(X^T X)_jk theta_k| / (N KKT_TOL)`` is the *float floor* at breakpoint ``i``: rounding the exact
-    solution to float64 moves the gradient by up to ``KKT_TOL floor_i``, so below ``floor_i`` no
-    float64 path can satisfy the conditions to ``KKT_TOL lambda``, and the check there is to that
-    representation limit (:attr:`LassoPath.kkt_floor` states the largest ``floor_i`` of a path). It is
-    0 for a path exact to rounding, ``inf`` for a path with a NaN.
+    |(X^T X)_jk theta_k| / (N KKT_TOL)`` is the *float floor* at breakpoint ``i``: rounding the
+    exact solution to float64 moves the gradient by up to ``KKT_TOL floor_i``, so below ``floor_i``
+    no float64 path can satisfy the conditions to ``KKT_TOL lambda``, and the check there is to that
+    representation limit (:attr:`LassoPath.kkt_floor` states the largest ``floor_i`` of a path). It
+    is 0 for a path exact to rounding, ``inf`` for a path with a NaN.
 
     :func:`lasso_path_batch` checks every path it returns and stores the residual in
     :attr:`LassoPath.kkt_residual`; it is at most :data:`KKT_TOL`.
@@ -592,7 +597,7 @@ def _split(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _product_error(a: tuple[np.ndarray, np.ndarray], b: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """``a b - p`` exactly, for ``p = fl(a b)`` and ``a`` given by its split (Dekker's TwoProduct)."""
+    """``a b - p`` exactly, for ``p = fl(a b)``, ``a`` given by its split (Dekker's TwoProduct)."""
     ah, al = a
     bh, bl = _split(b)
     return ((ah * bh - p) + ah * bl + al * bh) + al * bl
@@ -606,16 +611,16 @@ def _two_sum(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _gradient_dd(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> np.ndarray:
-    """``X_b^T (y_b - X_b theta_b)`` for the rows ``theta_b`` of ``coefs`` ``(P, m)``, in double-double arithmetic.
+    """``X_b^T (y_b - X_b theta_b)`` for each row ``theta_b`` of ``coefs`` (double-double).
 
-    ``X`` is ``(P, rows, m)`` and ``y`` ``(P, rows)`` (one problem per row of ``coefs``), or ``(rows, m)``
-    and ``(rows,)`` (one problem for all). The residual ``y - X theta`` is accumulated with error-free
-    products and sums (Ogita, Rump and Oishi's Dot2) and kept as an unevaluated sum ``s + e``, then
-    ``X^T (s + e)`` is summed over the rows with error-free products and a pairwise tree of
-    error-free sums. The result is as accurate as if computed in about twice the float64 precision,
-    then rounded: its error is of the order of ``eps^2`` times the sums of absolute values, not
-    ``eps`` (no cancellation between large coefficients of nearly collinear columns survives).
-    Processed in blocks of ``coefs`` rows.
+    ``X`` is ``(P, rows, m)`` and ``y`` ``(P, rows)`` (one problem per row of ``coefs``), or
+    ``(rows, m)`` and ``(rows,)`` (one problem for all). The residual ``y - X theta`` is accumulated
+    with error-free products and sums (Ogita, Rump and Oishi's Dot2) and kept as an unevaluated sum
+    ``s + e``, then ``X^T (s + e)`` is summed over the rows with error-free products and a pairwise
+    tree of error-free sums. The result is as accurate as if computed in about twice the float64
+    precision, then rounded: its error is of the order of ``eps^2`` times the sums of absolute
+    values, not ``eps`` (no cancellation between large coefficients of nearly collinear columns
+    survives). Processed in blocks of ``coefs`` rows.
     """
     X = X[None] if X.ndim == 2 else X
     y = y[None] if y.ndim == 1 else y
@@ -626,7 +631,8 @@ def _gradient_dd(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> np.ndarray:
         c = coefs[b0:b0 + block]
         Xb = X if X.shape[0] == 1 else X[b0:b0 + block]
         Xh, Xl = _split(Xb)
-        s = np.array(np.broadcast_to(y if y.shape[0] == 1 else y[b0:b0 + block], (c.shape[0], rows)))
+        yb = y if y.shape[0] == 1 else y[b0:b0 + block]
+        s = np.array(np.broadcast_to(yb, (c.shape[0], rows)))
         e = np.zeros_like(s)
         for k in range(m):
             a, t = Xb[:, :, k], c[:, k, None]
@@ -635,7 +641,8 @@ def _gradient_dd(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> np.ndarray:
             e += err - _product_error((Xh[:, :, k], Xl[:, :, k]), t, p)
         XT = Xb.transpose(0, 2, 1)
         P = XT * s[:, None, :]  # (P, m, rows)
-        E = _product_error((Xh.transpose(0, 2, 1), Xl.transpose(0, 2, 1)), s[:, None, :], P) + XT * e[:, None, :]
+        E = (_product_error((Xh.transpose(0, 2, 1), Xl.transpose(0, 2, 1)), s[:, None, :], P)
+             + XT * e[:, None, :])
         while P.shape[2] > 1:
             if P.shape[2] % 2:
                 P = np.concatenate([P, np.zeros(P.shape[:2] + (1,))], axis=2)
@@ -646,25 +653,50 @@ def _gradient_dd(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> np.ndarray:
     return out
 
 
-def _kkt_direct(X: np.ndarray, y: np.ndarray, levels: np.ndarray, coefs: np.ndarray) -> tuple[float, float]:
-    """:func:`kkt_residual` of one path, levels ``(S,)`` (``N lambda``) and coefficients ``(S, m)``, and
-    its float floor (levels); the gradient in double-double (:func:`_gradient_dd`), nothing subtracted."""
+def _kkt_direct(X: np.ndarray, y: np.ndarray, levels: np.ndarray,
+                coefs: np.ndarray) -> tuple[float, float]:
+    """:func:`kkt_residual` of one path, levels ``(S,)`` (``N lambda``) and coefficients ``(S, m)``,
+    and its float floor (levels); the gradient in double-double (:func:`_gradient_dd`), nothing
+    subtracted."""
     with np.errstate(all="ignore"):
         g = _gradient_dd(X, y, coefs)
-        res, floor = _kkt(g[None], np.zeros((1, levels.size)), levels[None], coefs[None], np.array([levels.size]),
+        res, floor = _kkt(g[None], np.zeros((1, levels.size)), levels[None], coefs[None],
+                          np.array([levels.size]),
                           np.abs(X.T @ X)[None])
     return float(res[0]), float(floor[0])
 
 
-def _kkt(g: np.ndarray, slack: np.ndarray, levels: np.ndarray, coefs: np.ndarray, n_points: np.ndarray,
-         abs_gram: np.ndarray, *, points: bool = False) -> tuple[np.ndarray, np.ndarray]:
-    """The residuals of :func:`kkt_residual` ``(B,)`` and the float floors ``(B,)`` (levels, the
-    largest ``KKT_TOL floor_i``... divided by ``KKT_TOL``) of paths ``coefs`` ``(B, S, m)`` padded after
-    ``n_points``, from the gradients ``g`` ``(B, S, m)`` (without the ``1/N``) at the levels ``levels``
-    ``(B, S)`` (``N lambda``). ``slack`` ``(B, S)`` bounds the error of ``g`` at each breakpoint and is
-    *added* to the violation (a screen with a rounded ``g`` can then fail a good path, never pass a
-    bad one); ``abs_gram`` ``(B, m, m)`` is ``|X^T X|`` (for the float floor). Vectorised over the
-    batch: a few passes over ``(B, S, m)``."""
+def _kkt_screen(Gram: np.ndarray, Xy: np.ndarray, ynorm: np.ndarray, levels: np.ndarray,
+                coefs: np.ndarray, n_points: np.ndarray, rows: int) -> tuple[np.ndarray, ...]:
+    """The batched screen of :func:`lasso_path_batch`'s KKT check, from ``Gram`` ``(B, m, m)``,
+    ``Xy`` ``(B, m)`` and ``||y||`` ``(B,)``: the gradients ``g`` ``(B, S, m)`` (Gram form), the
+    bound of their rounding ``slack`` ``(B, S)``, ``|Gram|``, and the per-breakpoint residuals and
+    floors of :func:`_kkt` (the slack added)."""
+    m = Gram.shape[1]
+    with np.errstate(all="ignore"):
+        norms = np.sqrt(np.einsum("bii->bi", Gram))
+        # |fl(g_j) - g_j| <= gamma_(rows + m) ||X_j|| (||y|| + sum_k ||X_k|| |theta_k|)
+        # (Cauchy-Schwarz on
+        # X^T y, X^T X and G theta), doubled
+        slack = (2 * np.finfo(float).eps * (rows + m + 2)) * norms.max(axis=1, keepdims=True) * (
+            ynorm[:, None] + np.einsum("bsi,bi->bs", np.abs(coefs), norms))
+        g = Xy[:, None, :] - np.matmul(coefs, Gram)
+        abs_gram = np.abs(Gram)
+        point_res, point_floor = _kkt(g, slack, levels, coefs, n_points, abs_gram, points=True)
+    return g, slack, abs_gram, point_res, point_floor
+
+
+def _kkt(g: np.ndarray, slack: np.ndarray, levels: np.ndarray, coefs: np.ndarray,
+         n_points: np.ndarray, abs_gram: np.ndarray, *,
+         points: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """The residuals of :func:`kkt_residual` ``(B,)`` and the float floors ``(B,)`` (the largest
+    ``floor_i``, in levels) of paths ``coefs`` ``(B, S, m)`` padded after ``n_points`` (with
+    ``points=True``, per breakpoint ``(B, S)``: residual, ``-inf`` in the padding, and floor), from
+    the gradients ``g`` ``(B, S, m)`` (without the ``1/N``) at the levels ``levels`` ``(B, S)`` (``N
+    lambda``). ``slack`` ``(B, S)`` bounds the error of ``g`` at each breakpoint and is *added* to
+    the violation (a screen with a rounded ``g`` can then fail a good path, never pass a bad one);
+    ``abs_gram`` ``(B, m, m)`` is ``|X^T X|`` (for the float floor). Vectorised over the batch: a
+    few passes over ``(B, S, m)``."""
     B, S, m = coefs.shape
     valid = np.arange(S) < n_points[:, None]  # (B, S)
     with np.errstate(all="ignore"):
@@ -685,7 +717,8 @@ def _kkt(g: np.ndarray, slack: np.ndarray, levels: np.ndarray, coefs: np.ndarray
         np.maximum(worst, levels + np.where(neg, g, -np.inf).max(axis=2), out=worst)
         # float floor: rounding theta to float64 (|delta_k| <= eps/2 |theta_k|) moves g_j by up to
         # eps/2 sum_k |G_jk theta_k|; below floor_i = that / KKT_TOL, KKT_TOL lambda cannot be met
-        floor = (0.5 * np.finfo(float).eps / KKT_TOL) * np.matmul(np.abs(coefs), abs_gram).max(axis=2)
+        floor = np.matmul(np.abs(coefs), abs_gram).max(axis=2) * (0.5 * np.finfo(float).eps
+                                                                  / KKT_TOL)
         scale = np.maximum(np.maximum(levels, KKT_FLOOR * levels[:, :1]), floor)
         scale = np.maximum(scale, np.finfo(float).tiny)
         res = np.where(valid, (worst + slack) / scale, -np.inf)
@@ -693,17 +726,20 @@ def _kkt(g: np.ndarray, slack: np.ndarray, levels: np.ndarray, coefs: np.ndarray
         if points:  # per breakpoint, (B, S)
             return np.where(np.isnan(res), np.inf, res), floor
         res, floor = res.max(axis=1), floor.max(axis=1)
-    return np.where(np.isnan(res), np.inf, np.maximum(res, 0.0)), floor  # NaN, anywhere in a path, fails
+    # NaN, anywhere in a path, fails
+    return np.where(np.isnan(res), np.inf, np.maximum(res, 0.0)), floor
 
 
-def _refine(X: np.ndarray, y: np.ndarray, levels: np.ndarray, coefs: np.ndarray, steps: int = 3) -> np.ndarray:
+def _refine(X: np.ndarray, y: np.ndarray, levels: np.ndarray, coefs: np.ndarray,
+            steps: int = 3) -> np.ndarray:
     """The coefficients ``(S, m)`` of a path refined at each breakpoint on the path's own supports.
 
-    At breakpoint ``i`` the Lasso solution solves ``(X^T X)_AA theta_A = X_A^T y - c_i sign_A`` on the
-    components ``A`` non-zero at ``c_i`` (with their signs), ``theta = 0`` elsewhere. An up/down-dated solver
-    (the homotopy's inverse, ``lars_path``'s Cholesky factor) loses accuracy on nearly collinear
-    active columns; iterative refinement with residuals in double-double (:func:`_gradient_dd`)
-    restores it while ``eps cond(X_A^T X_A) < 1``. The levels and supports are unchanged.
+    At breakpoint ``i`` the Lasso solution solves ``(X^T X)_AA theta_A = X_A^T y - c_i sign_A`` on
+    the components ``A`` non-zero at ``c_i`` (with their signs), ``theta = 0`` elsewhere. An
+    up/down-dated solver (the homotopy's inverse, ``lars_path``'s Cholesky factor) loses accuracy on
+    nearly collinear active columns; iterative refinement with residuals in double-double
+    (:func:`_gradient_dd`) restores it while ``eps cond(X_A^T X_A) < 1``. The levels and supports
+    are unchanged.
     """
     zero = 1e-12 * max(1.0, float(np.abs(coefs).max(initial=0.0)))
     sign = np.where(np.abs(coefs) > zero, np.sign(coefs), 0.0)
@@ -750,9 +786,10 @@ def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | N
     ``kkt`` the problem's index and homotopy residual (for the error message).
 
     Returns the levels ``(S,)``, the coefficients ``(S, m)`` (the path stopped as the homotopy's
-    would be, at ``c_min`` or after the first interval with more than ``max_size`` components) and
-    the KKT residual. A path that stops above ``c_min`` is accepted only below ``1e-9`` times its
-    first level (where only rounding is left on the degenerate designs that come here).
+    would be, at ``c_min`` or after the first interval with more than ``max_size`` components;
+    refined on its supports, :func:`_refine`, when that lowers its residual), the KKT residual and
+    float floor. A path that stops above ``c_min`` is accepted only below ``1e-9`` times its first
+    level (where only rounding is left on the degenerate designs that come here).
 
     Raises
     ------
@@ -798,7 +835,7 @@ def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | N
         if over.size:  # stop after the first interval with more than max_size components
             levels, coefs = levels[: over[0] + 2], coefs[: over[0] + 2]
         res, fl = _kkt_direct(X, y, levels, coefs)
-        if res > KKT_TOL:  # its Cholesky up/down-dates lose accuracy too: refined on its own supports
+        if res > KKT_TOL:  # its Cholesky updates lose accuracy too: refined on its own supports
             refined = _refine(X, y, levels, coefs)
             r2, f2 = _kkt_direct(X, y, levels, refined)
             if r2 < res:

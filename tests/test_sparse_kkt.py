@@ -1,11 +1,15 @@
 """The Lasso optimality (KKT) check against exact rational arithmetic (issue 36, point 4).
 
-The check used to subtract a rounding allowance that grew with ``sum_k ||X_k|| |theta_k|``: on nearly
-collinear designs (coefficients ~1e5 near ``lambda = 0``) it reported ``kkt_residual = 0`` for paths
-violating the conditions by 0.085-3.0 ``lambda`` at ``lambda ~ 1e-9 lambda_max``. Here every
-gradient is computed exactly (floats are dyadic rationals: Python integers scaled by powers of 2),
-independently of the library, and the library's :func:`fdi_lib.sparse.kkt_residual` must agree with
-it; every path :func:`fdi_lib.sparse.lasso_path` returns must pass the exact check, or be refused.
+The check used to subtract a rounding allowance that grew with ``sum_k ||X_k|| |theta_k|``: on
+nearly collinear designs (coefficients ~1e5 near ``lambda = 0``) it reported ``kkt_residual = 0``
+for paths violating the conditions by 0.085-3.0 ``lambda`` at ``lambda ~ 1e-9 lambda_max``, and for
+a coefficient moved by 1000 ulps. Now the gradient is computed as exact arithmetic would, nothing
+is subtracted, and where ``lambda`` is below the float floor (rounding the exact solution to
+float64 moves the gradient by more than ``KKT_TOL lambda``: the case of those violations) the
+tolerance is that representation limit, stated as ``LassoPath.kkt_floor``. Here every gradient is
+computed exactly (floats are dyadic rationals: Python integers scaled by powers of 2),
+independently of the library: :func:`fdi_lib.sparse.kkt_residual` must agree with it, and every
+path :func:`fdi_lib.sparse.lasso_path` returns must pass the exact check, or be refused.
 """
 
 from fractions import Fraction
@@ -22,11 +26,12 @@ def _ints(a):
     """``a`` (floats) as Python integers ``n`` with ``a = n / 2^e`` for one common ``e``."""
     ratios = [float(v).as_integer_ratio() for v in np.ravel(a)]
     e = max(d.bit_length() - 1 for _, d in ratios)
-    return np.array([n << (e - (d.bit_length() - 1)) for n, d in ratios], dtype=object).reshape(np.shape(a)), e
+    ints = [n << (e - (d.bit_length() - 1)) for n, d in ratios]
+    return np.array(ints, dtype=object).reshape(np.shape(a)), e
 
 
 def exact_gradient(X, y, coefs):
-    """``X^T (y - X theta)`` exactly for each row ``theta`` of ``coefs`` ``(S, m)``, as Fractions ``(S, m)``."""
+    """``X^T (y - X theta)`` exactly for each row ``theta`` of ``coefs`` ``(S, m)`` (Fractions)."""
     Xi, ex = _ints(X)
     yi, ey = _ints(y)
     ci, ec = _ints(coefs)
@@ -56,7 +61,8 @@ def exact_violations(X, y, path):
                         signs[j].add(np.sign(th[a, j] + th[a + 1, j]))
         v = max(max((abs(g[i, j] - int(s) * c) for s in signs[j]), default=abs(g[i, j]) - c)
                 for j in range(th.shape[1]))
-        out.append((float(v), float(c), 0.5 * np.finfo(float).eps * (np.abs(th[i]) @ gram).max() / KKT_TOL))
+        floor = 0.5 * np.finfo(float).eps * (np.abs(th[i]) @ gram).max() / KKT_TOL
+        out.append((float(v), float(c), floor))
     return out
 
 
@@ -95,7 +101,8 @@ def test_check_agrees_with_exact_arithmetic_on_nearly_collinear_designs(seed):
 def test_returned_full_paths_on_nearly_collinear_designs_pass_the_exact_check_or_are_refused(seed):
     """Down to lambda = 0 on a nearly collinear design, a returned path satisfies the conditions in
     exact arithmetic (to KKT_TOL lambda above its float floor, stated in kkt_floor), and its stored
-    residual bounds the exact one; a path no solver can certify is a NumericalError, never a result."""
+    residual bounds the exact one; a path no solver can certify is a NumericalError, never a
+    result."""
     X, y = collinear(seed)
     try:
         path = lasso_path(X, y)
