@@ -505,7 +505,7 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
         # its coefficients
         # refined on its own supports; the one with the smaller residual, refused when both fail
         refined = _refine(Xb, yb, levels[b, :k], coefs[b, :k])
-        res, fl = _kkt_direct(Xb, yb, levels[b, :k], refined)
+        res, fl = _kkt_path(Xb, yb, levels[b, :k], refined)
         try:
             lars = _lars_fallback(Xb, yb, float(c_min[b]), max_size, b, float(kkt[b]))
         except NumericalError as error:
@@ -663,6 +663,22 @@ def _kkt_direct(X: np.ndarray, y: np.ndarray, levels: np.ndarray,
         res, floor = _kkt(g[None], np.zeros((1, levels.size)), levels[None], coefs[None],
                           np.array([levels.size]),
                           np.abs(X.T @ X)[None])
+    return float(res[0]), float(floor[0])
+
+
+def _kkt_path(X: np.ndarray, y: np.ndarray, levels: np.ndarray,
+              coefs: np.ndarray) -> tuple[float, float]:
+    """:func:`_kkt_direct`'s residual (or an upper bound of it) and float floor, computed as
+    :func:`lasso_path_batch` does: the batched screen, then double-double where it does not pass."""
+    k = np.array([levels.size])
+    gram = X.T @ X
+    with np.errstate(all="ignore"):
+        g, slack, abs_gram, res, _ = _kkt_screen(gram[None], (X.T @ y)[None], np.sqrt(y @ y)[None],
+                                                 levels[None], coefs[None], k, X.shape[0])
+        at = np.flatnonzero((res[0] > KKT_TOL) & (res[0] < np.inf))
+        if at.size:
+            g[0, at], slack[0, at] = _gradient_dd(X, y, coefs[at]), 0.0
+        res, floor = _kkt(g, slack, levels[None], coefs[None], k, abs_gram)
     return float(res[0]), float(floor[0])
 
 
@@ -834,10 +850,10 @@ def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | N
         over = np.flatnonzero(_activity(coefs[None])[1][0].sum(axis=1) > (m if max_size is None else max_size))
         if over.size:  # stop after the first interval with more than max_size components
             levels, coefs = levels[: over[0] + 2], coefs[: over[0] + 2]
-        res, fl = _kkt_direct(X, y, levels, coefs)
+        res, fl = _kkt_path(X, y, levels, coefs)
         if res > KKT_TOL:  # its Cholesky updates lose accuracy too: refined on its own supports
             refined = _refine(X, y, levels, coefs)
-            r2, f2 = _kkt_direct(X, y, levels, refined)
+            r2, f2 = _kkt_path(X, y, levels, refined)
             if r2 < res:
                 res, fl, coefs = r2, f2, refined
         done = over.size or levels[-1] <= max(c_min, 1e-9 * levels[0])  # lars_path's own tail ends
