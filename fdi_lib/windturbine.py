@@ -372,6 +372,19 @@ class Settings:
     sensor_bias_bound: float = 150.0
     torque_bound: float = 1e3
 
+    def __post_init__(self) -> None:
+        for name in ("pre_s", "post_s", "false_alarms_per_hour", "svo_sigmas", "sensor_bias_bound",
+                     "torque_bound"):
+            real(getattr(self, name), name, low=0.0, low_open=True)
+        real(self.warmup_s, "warmup_s", low=0.0)
+        real(self.isolation_alpha, "isolation_alpha", low=0.0, high=1.0, low_open=True,
+             high_open=True)
+        integer(self.window, "window", low=1)
+        integer(self.isolation_extra, "isolation_extra", low=0)
+        if not self.warmup_s < self.pre_s:
+            raise ModelError(f"warmup_s: expected less than pre_s = {self.pre_s} s (a fault-free "
+                             f"stretch must remain after the warm-up), got {self.warmup_s}")
+
 
 def _aug(s: Subsystem) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``F, G, H, Psi`` with ``tau_a`` as a last random-walk state (drive train), else unchanged."""

@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 
 from fdi_lib.reproduce import cli
-from fdi_lib.reproduce.book import BOOK_RUNS, CHAPTER_SEEDS, book_argv, book_run, book_settings
+from fdi_lib.reproduce.book import CHAPTER_SEEDS, book_argv, book_order, book_run, book_settings
 from fdi_lib.reproduce.registry import CACHE_ENV, Reproduction, ReproductionResult, get, list_reproductions
 
 from source_module import load as _load  # noqa: E402
@@ -57,17 +57,50 @@ def test_every_reproduction_has_a_command_with_the_book_settings(commands):
         assert args.json and args.id == rid
         assert args.seed == (s.seed if rep.seeded else None), rid
         assert args.trials == s.trials, rid
-    # the 13 reproductions that the book runs at a seed other than the registry's default
-    assert sum(book_settings(r.id).seed != r.default_seed for r in list_reproductions()) == 13
+    # a reproduction registered with chapter_seed=True runs at its chapter's seed, the others at
+    # the registry's default
+    for r in list_reproductions():
+        chapter_seed = CHAPTER_SEEDS[r.chapter] if r.chapter_seed else r.default_seed
+        assert book_settings(r.id).seed == chapter_seed
     assert commands["zb2014-fig3"] == ["reproduce", "zb2014-fig3", "--seed", "2015", "--json"]
     assert commands["rosa2013-fig11-rad"][-3:] == ["--trials", "10", "--json"]   # the paper's count
 
 
-def test_book_runs_name_registered_reproductions_with_valid_settings():
-    for rid in BOOK_RUNS:
-        s = book_settings(rid)
-        get(rid).check_arguments(seed=s.seed, trials=s.trials)
-    assert set(CHAPTER_SEEDS) <= {doc.removeprefix("book/") for doc in _chapters()}
+def test_registrations_name_their_chapter_and_valid_book_settings():
+    """The chapter and the book's seed travel with each registration: the chapter exists in the
+    table of contents and runs the reproduction; the settings pass the argument checks."""
+    chapters = _chapters()
+    for rep in list_reproductions():
+        assert f"book/{rep.chapter}" in chapters, (rep.id, rep.chapter)
+        assert re.search(rf"""\bbook_run\(\s*["']{re.escape(rep.id)}["']""",
+                         chapters[f"book/{rep.chapter}"]), rep.id
+        s = book_settings(rep.id)
+        rep.check_arguments(seed=s.seed, trials=s.trials)
+        if rep.chapter_seed:   # a chapter's seed only for a reproduction that reads its seed
+            assert rep.seeded, rep.id
+    assert set(CHAPTER_SEEDS) <= {doc.removeprefix("book/") for doc in chapters}
+
+
+def test_catalogue_lists_each_reproductions_declared_claims():
+    """Each entry names the claims its registration declares, with their comparison, or where they
+    are listed; the statuses are the ledger's."""
+    text, _ = EXT.catalogue_markdown(ROOT)
+    assert text.count("**Claims** (declared at its registration") == len(list_reproductions())
+    assert "Fig. 8, type II error of fault … (95 % interval)" in text
+    assert "SNR of outputs 1 and 2 at r = … (standard error)" in text
+    assert "listed under `zhang2021-table1`, `zhang2021-table2`" in text
+
+
+def test_book_order_follows_the_table_of_contents():
+    """Chapters in the order of _toc.yml, then the first book_run of each reproduction in it;
+    the catalogue page lists them in the same order."""
+    order = book_order()
+    assert sorted(order) == sorted(r.id for r in list_reproductions())
+    docs = [d for d in EXT._toc_files(ROOT) if d in _chapters()]
+    ranks = [docs.index(f"book/{get(rid).chapter}") for rid in order]
+    assert ranks == sorted(ranks)
+    assert list(EXT.shown_in(ROOT)) == list(order)
+    assert order.index("zb2014-fig1") < order.index("zb2014-fig3") < order.index("zhang2021-fig2")
 
 
 def test_chapters_run_every_reproduction_through_the_book_settings():
@@ -175,14 +208,13 @@ def test_post_build_check_compares_the_command_with_the_cached_chapter_result(tm
     assert CHECK.check_command(argv, tmp_path)[1:] == ("ok", "")
     assert CHECK.check_command(["reproduce", "zb2014-fig3", "--seed", "1", "--json"], tmp_path)[1] == "not run"
     # tamper with the cached chapter result: the fresh command no longer matches it
-    from fdi_lib.reproduce.registry import _cache_path, cached_run
+    from fdi_lib.reproduce.registry import _cache_entry, _cache_write, cached_run
     import dataclasses
-    import pickle
 
     cached = cached_run("zb2014-fig1")
     key = next(iter(cached.headline))
     tampered = dataclasses.replace(cached, headline={**cached.headline, key: "tampered"})
-    _cache_path("zb2014-fig1", get("zb2014-fig1").default_seed, None, {}).write_bytes(pickle.dumps(tampered))
+    _cache_write(*_cache_entry("zb2014-fig1", get("zb2014-fig1").default_seed, None, {}), tampered)
     rid, status, detail = CHECK.check_command(argv, tmp_path)
     assert status == "differs" and key in detail
     # a key the reproduction declares a wall time of this machine is not compared

@@ -10,22 +10,31 @@ are not changed by this module: a chapter that runs a reproduction at another se
 here, and the catalogue's command carries that seed.
 
 :data:`CHAPTER_SEEDS` is the one seed of each chapter (its other seeded computations use it
-too); :data:`BOOK_RUNS` lists the reproductions the book runs at settings other than the
-registry's defaults. :func:`book_settings` resolves both against the registry.
+too); a reproduction registered with ``chapter_seed=True`` runs in the book at its chapter's seed
+(:func:`fdi_lib.reproduce.registry.register`: the book's settings travel with the registration).
+:func:`book_settings` resolves them against the registry. :func:`book_order` is the book's order of
+the reproductions (the chapters of ``_toc.yml``, then the first ``book_run`` of each in its
+chapter).
 """
 
 from __future__ import annotations
 
 import json
+import re
 import shlex
 from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
 from typing import Any
 
 from fdi_lib.errors import ModelError
-from fdi_lib.reproduce.registry import ReproductionResult, get
+from fdi_lib.reproduce.registry import ReproductionResult, get, list_reproductions
 
-__all__ = ["CHAPTER_SEEDS", "BOOK_RUNS", "BookRun", "book_settings", "book_run", "book_argv",
-           "book_command"]
+__all__ = ["CHAPTER_SEEDS", "BookRun", "book_settings", "book_run", "book_argv", "book_command",
+           "toc_documents", "book_order", "BOOK_ROOT"]
+
+#: The repository holding ``_toc.yml`` and ``book/`` (absent from an installed package).
+BOOK_ROOT = Path(__file__).resolve().parents[2]
 
 #: The one seed of each chapter (``book/<paper>/<chapter>.md``), for its reproductions and for
 #: its own seeded computations.
@@ -55,27 +64,6 @@ class BookRun:
     trials: int | None = None
 
 
-_GLR, _BZ, _SVO = (CHAPTER_SEEDS[c] for c in ("zb2014/glr", "bz/parametric-nonparametric", "rosa2013/svo"))
-
-#: Reproductions that the book runs at other settings than the registry's defaults.
-BOOK_RUNS: dict[str, BookRun] = {
-    "zb2014-fig3": BookRun(seed=_GLR),
-    "zb2014-fig4": BookRun(seed=_GLR),
-    "bz-whiteness": BookRun(seed=_BZ),
-    "bz-solution1": BookRun(seed=_BZ),
-    "bz-solution2": BookRun(seed=_BZ),
-    "rosa2013-fig8": BookRun(seed=_SVO),
-    "rosa2013-fig9": BookRun(seed=_SVO),
-    "rosa2013-fig10": BookRun(seed=_SVO),
-    "rosa2013-fig11": BookRun(seed=_SVO),   # the paper's 10 runs per case (the default)
-    "rosa2013-fig12": BookRun(seed=_SVO),
-    "rosa2013-fig11-rad": BookRun(seed=_SVO),   # the paper's 10 too (2 s at 2 jobs)
-    "rosa2013-fig12-rad": BookRun(seed=_SVO),
-    "rosa2013-timing": BookRun(seed=_SVO),
-    "windturbine-scoreboard": BookRun(seed=CHAPTER_SEEDS["windturbine/benchmark"]),   # 10 realisations (the default)
-}
-
-
 def book_settings(id: str) -> BookRun:
     """The seed and trial count at which the book runs ``id``, resolved against the registry.
 
@@ -87,9 +75,11 @@ def book_settings(id: str) -> BookRun:
         trial count of its own).
     """
     rep = get(id)
-    run = BOOK_RUNS.get(id, BookRun())
-    return BookRun(seed=rep.default_seed if run.seed is None else run.seed,
-                   trials=rep.default_trials if run.trials is None else run.trials)
+    if rep.chapter_seed and rep.chapter not in CHAPTER_SEEDS:
+        raise ModelError(f"chapter_seed: {id} runs at its chapter's seed; expected its chapter in "
+                         f"CHAPTER_SEEDS ({sorted(CHAPTER_SEEDS)}), got {rep.chapter!r}")
+    return BookRun(seed=CHAPTER_SEEDS[rep.chapter] if rep.chapter_seed else rep.default_seed,
+                   trials=rep.default_trials)
 
 
 def book_run(id: str, *, jobs: int = 1, **options: Any) -> ReproductionResult:
@@ -116,7 +106,8 @@ def book_argv(id: str, **options: Any) -> list[str]:
     if rep.seeded:
         argv += ["--seed", str(s.seed)]
     elif s.seed != rep.default_seed:
-        raise ModelError(f"BOOK_RUNS[{id!r}].seed: {id} reads no seed; expected none, got {s.seed!r}")
+        raise ModelError(f"chapter_seed: {id} reads no seed; expected chapter_seed=False, got the "
+                         f"chapter's seed {s.seed!r}")
     if s.trials is not None:
         argv += ["--trials", str(s.trials)]
     for name, value in options.items():
@@ -128,3 +119,45 @@ def book_command(id: str, **options: Any) -> str:
     """The shell command that recomputes ``id`` as the book does (:func:`book_argv`)."""
     return shlex.join(["python", "-m", "fdi_lib", *book_argv(id, **options)])
 
+
+
+def toc_documents(root: Path | None = None) -> list[str]:
+    """The documents of the book's ``_toc.yml`` under ``root`` (default :data:`BOOK_ROOT`), in
+    order (``"book/zb2014/glr"``); empty when there is no ``_toc.yml`` (an installed package)."""
+    import yaml
+
+    toc_file = (BOOK_ROOT if root is None else Path(root)) / "_toc.yml"
+    if not toc_file.is_file():
+        return []
+    files: list[str] = []
+
+    def walk(items: Any) -> None:
+        for item in items or []:
+            if "file" in item:
+                files.append(item["file"])
+            walk(item.get("chapters")), walk(item.get("sections"))
+
+    toc = yaml.safe_load(toc_file.read_text())
+    walk(toc.get("parts")), walk(toc.get("chapters"))
+    return files
+
+
+@lru_cache(maxsize=None)
+def book_order() -> tuple[str, ...]:
+    """Every registered reproduction in book order: its chapter's place in ``_toc.yml`` (the
+    registration's ``chapter``), then the place of its first ``book_run("ID"`` in that chapter,
+    then the identifier (without the book's sources: the order of registration)."""
+    docs = toc_documents()
+    reps = list_reproductions()
+    if not docs:
+        return tuple(r.id for r in reps)
+    texts = {doc: (BOOK_ROOT / f"{doc}.md").read_text() for doc in docs
+             if (BOOK_ROOT / f"{doc}.md").is_file()}
+
+    def key(rep: Any) -> tuple[int, int, str]:
+        doc = f"book/{rep.chapter}"
+        chapter = docs.index(doc) if doc in docs else len(docs)
+        m = re.search(rf"""\bbook_run\(\s*["']{re.escape(rep.id)}["']""", texts.get(doc, ""))
+        return chapter, m.start() if m else len(texts.get(doc, "")), rep.id
+
+    return tuple(r.id for r in sorted(reps, key=key))

@@ -31,8 +31,10 @@ from fdi_lib.kitanidis import KitanidisGains, kitanidis_filter, kitanidis_gains
 from fdi_lib.models import LTVModel, fault_profile, step_family
 from fdi_lib.montecarlo import binomial_ci, draw_noise_batch, run_monte_carlo
 from fdi_lib.nonparametric import (kitanidis_lag_covariance, kitanidis_predictor_gains,
-                                   rejection_projection, solution1, solution2)
+                                   nonparametric_signature, rejection_projection, solution1,
+                                   solution2)
 from fdi_lib.plotting import OURS_COLOR, THRESHOLD_COLOR, figure
+from fdi_lib.reproduce.ledger import BY_CHECK, BY_INTERVAL, Claim, in_ci
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.simulate import Noise, simulate
 from fdi_lib.systems import bz_example as ex
@@ -64,6 +66,21 @@ def setup(n_steps: int) -> tuple[LTVModel, KalmanGains, KitanidisGains, KalmanGa
     model = ex.bz_model(n_steps)
     kg = kitanidis_gains(model, ex.E)
     return model, kalman_gains(model), kg, kitanidis_predictor_gains(model, ex.E, kg), rejection_projection(model, kg)
+
+
+def zeta_check(n_steps: int = WHITE["n_steps"]) -> dict[str, float]:
+    """Section 3.1's "H_k zeta_k = 0 with the gain L_k", on the fault of the whiteness study.
+
+    ``zeta_k`` of the Kitanidis predictor (:func:`fdi_lib.nonparametric.nonparametric_signature`)
+    for ``f`` of size ``WHITE["f_size"]`` from ``WHITE["f_onset"]``; deterministic. Returns
+    ``h_zeta_max`` (``max_k |H_k zeta_k|``: the paper says 0) and ``zeta_minus_Ef_max``
+    (``max_k |zeta_k - E f_{k-1}|``: 0 up to rounding, the book's proposition ``bz-prop-zeta``).
+    """
+    model, _, _, kpred, _ = setup(n_steps)
+    f = ex.nonparametric_profile(n_steps, size=WHITE["f_size"], onset=WHITE["f_onset"])
+    zeta = nonparametric_signature(model, kpred, ex.E, f)
+    return {"h_zeta_max": float(np.abs(model.H @ zeta[:n_steps, :, None]).max()),
+            "zeta_minus_Ef_max": float(np.abs(zeta[1:] - f @ ex.E.T).max())}
 
 
 def _simulate(model: LTVModel, noise: Noise, f: np.ndarray, theta_path: np.ndarray):
@@ -176,8 +193,38 @@ def plot_whiteness(result: ReproductionResult, fig: Any = None):
     return fig
 
 
+_WHITENESS_CAUSE = dict(
+    explain="fig-bz-whiteness", cause="sec-bz-whiteness",
+    cause_text="the closed-form lag-one correlation of the Kitanidis innovation is not 0, and the "
+               "Monte Carlo estimate brackets it")
+
+
 @register("bz-whiteness", paper=PAPER, title="Prop. 2: whiteness of the Kitanidis innovation (portmanteau tests)",
-          default_trials=None, plot=plot_whiteness)
+          default_trials=None, plot=plot_whiteness, chapter="bz/parametric-nonparametric",
+          chapter_seed=True,
+          claims={
+              "lb_reject_rate_kitanidis": Claim(
+                  location="Prop. 2, whiteness", units="%", test=BY_INTERVAL, value=lambda p: 0.05,
+                  label="the Kitanidis innovation is white (Ljung-Box rejects 5 % at level 5 %)",
+                  cause_glue=("bz_lb_reject_rate_kitanidis", "bz_lag1_corr_theory"),
+                  **_WHITENESS_CAUSE),
+              "lag1_corr_empirical": Claim(
+                  location="Prop. 2, lag-one correlation", units="", test=BY_INTERVAL,
+                  value=lambda p: 0.0, label="lag-1 correlation of the Kitanidis innovation is 0",
+                  cause_glue=("bz_lag1_corr_theory", "bz_lag1_corr_empirical"), **_WHITENESS_CAUSE),
+              "cov_rel_error_kitanidis": Claim(
+                  location="Prop. 2, eq. (45)",
+                  label="the Kitanidis innovation has covariance H P_k Hᵀ + R_k",
+                  units="", test=BY_CHECK, check=lambda p, o, h: o < 0.05,
+                  criterion="relative error of the empirical covariance < 5 %"),
+              "h_zeta_max": Claim(
+                  location="Prop. 1 (§3.1), the fault term of the innovation", units="",
+                  label="H_k ζ_k = 0 with the Kitanidis gain (ours: max |H_k ζ_k|, f of size 0.2)",
+                  test=BY_CHECK, check=lambda p, o, h: o <= 1e-9, criterion="max |H_k ζ_k| ≤ 1e-9",
+                  cause="sec-bz-zeta", cause_glue=("bz_h_zeta_max", "bz_zeta_minus_ef_max"),
+                  cause_text="the book proves ζ_k = E f_(k-1) with the Kitanidis gain (Proposition "
+                             "bz-prop-zeta) and measures it: the innovation carries the fault of "
+                             "the previous step")})
 def whiteness(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Prop. 2 put to the test: is the Kitanidis innovation white with covariance ``H P H^T + R``?
 
@@ -228,6 +275,9 @@ def whiteness(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult
     lag1_corr_updated_bonferroni_z : float
         The normal quantile ``z`` with ``P(|Z| > z) = 0.05 / entries``: whiteness of all the
         entries at once is rejected at 5 % (Bonferroni) when ``zmax`` exceeds it.
+    h_zeta_max, zeta_minus_Ef_max : float
+        :func:`zeta_check`: the fault term ``H_k zeta_k`` of the Kitanidis innovation (the paper:
+        0) and the book's closed form ``zeta_k = E f_{k-1}`` (0 up to rounding).
     """
     n = WHITE["n_steps"]
     trials = 300 if trials is None else trials
@@ -282,9 +332,11 @@ def whiteness(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult
     headline["lag1_corr_updated_entries"] = int(keep.sum())
     headline["lag1_corr_updated_zmax"] = float((1.96 * np.abs(m_u) / half_u)[keep].max())
     headline["lag1_corr_updated_bonferroni_z"] = float(scipy.stats.norm.isf(0.025 / keep.sum()))
+    headline.update(zeta_check(n))
     paper = {"lb_reject_rate_kitanidis": "white (Prop. 2): about 5 %",
              "lag1_corr_empirical": "0 (Prop. 2)",
-             "cov_rel_error_kitanidis": "Σₖ = HₖPₖHₖᵀ + Rₖ (eq. 45)"}
+             "cov_rel_error_kitanidis": "Σₖ = HₖPₖHₖᵀ + Rₖ (eq. 45)",
+             "h_zeta_max": "Hₖζₖ = 0 with the gain Lₖ (Section 3.1)"}
     return ReproductionResult(
         id="bz-whiteness", headline=headline, paper=paper,
         settings={**WHITE, "seed": seed, "trials": trials},
@@ -364,8 +416,27 @@ def plot_solution1(result: ReproductionResult, fig: Any = None):
     return fig
 
 
-@register("bz-solution1", paper=PAPER, title="Solution 1: GLR/minmax on the Kitanidis residual + energy test",
-          default_trials=None, plot=plot_solution1)
+@register("bz-solution1", paper=PAPER,
+          title="Solution 1: GLR/minmax on the projected Kitanidis residual + energy test",
+          default_trials=None, plot=plot_solution1, chapter="bz/parametric-nonparametric",
+          chapter_seed=True,
+          claims={
+              "glr_detection_rate_theta_with_f": Claim(
+                  location="Solution 1 (§3.2), detection of θ",
+                  label="the GLR on the projected Kitanidis residual T_k ε_k detects θ whatever f",
+                  units="%", test=BY_CHECK, check=in_ci("glr_detection_rate_theta"),
+                  criterion="detection rate with f inside the 95 % interval of the rate without f"),
+              "glr_alarm_rate_f_only": Claim(
+                  location="Solution 1 (§3.2), rejection of f",
+                  label="f alone does not raise the GLR on the projected Kitanidis residual",
+                  units="%", test=BY_CHECK, check=in_ci("glr_false_alarm_rate"),
+                  criterion="alarm rate under f alone inside the 95 % interval of the false-alarm "
+                            "rate"),
+              "nonparametric_detection_rate_f": Claim(
+                  location="Solution 1 (§3.3)",
+                  label="the energy test on a parallel Kalman filter detects f",
+                  units="%", test=BY_CHECK, check=lambda p, o, h: o >= 0.95,
+                  criterion="detection rate of f at least 95 %")})
 def solution1_mc(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Solution 1 (Section 3) in Monte Carlo on the designed example, settings :data:`SOL1`.
 
@@ -480,7 +551,21 @@ def plot_solution2(result: ReproductionResult, fig: Any = None):
 
 
 @register("bz-solution2", paper=PAPER, title="Solution 2: RLS tracking with forgetting factor + error energy",
-          default_trials=None, plot=plot_solution2)
+          default_trials=None, plot=plot_solution2, chapter="bz/parametric-nonparametric",
+          chapter_seed=True,
+          claims={
+              "tracking_rmse": Claim(
+                  location="Solution 2 (§4), tracking",
+                  label="RLS with forgetting tracks a slowly varying θ_k",
+                  units="",
+                  test=BY_CHECK, check=lambda p, o, h: max(o) < 0.05,
+                  criterion="tracking RMSE below 0.05 for every forgetting factor"),
+              "detection_rate": Claim(
+                  location="Solution 2 (§4), detection",
+                  label="the energy of the tracking error detects f",
+                  units="%",
+                  test=BY_CHECK, check=lambda p, o, h: min(o) >= 0.95,
+                  criterion="detection rate of f at least 95 % for every forgetting factor")})
 def solution2_mc(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Solution 2 (Section 4) in Monte Carlo on the designed example, settings :data:`SOL2`.
 

@@ -1,78 +1,112 @@
 """The claims ledger: every value the four papers state, ours next to it, and a computed status.
 
-The paper's values are read from the registry (the ``paper`` dictionary of each
-reproduction's result); our values from its ``headline``. A *claim* is one leaf of a
-``paper`` dictionary that states something (``None``, ``"not stated"`` and
-``"illustration, no numbers"`` state nothing); a claim listed by two reproductions (a value
-of Table I also checked by ``zhang2021-lambda-rule``) is one row, under the reproduction that
-runs the paper's setting (:attr:`ClaimSpec.shown_under`). Its status is **computed**, never
-typed, and is one of the fixed vocabulary :data:`STATUSES`:
+Declaring a claim
+-----------------
+Each claim is declared **where it is computed**: at the registration of the reproduction that
+tests it (:func:`fdi_lib.reproduce.registry.register`), in its paper module. A declaration
+(:class:`Claim`) says where in the paper the value is (``location``, unique among the rows),
+its units, and how it is compared (``test``, one of :data:`TESTS`): by tolerance, by our 95 %
+interval at the paper's trial count, by the standard error of our estimate, by the spread of
+single runs, by a stated check, or not at all (an input the book sets, our estimate of such an
+input, a calibration target, a value that cannot be reproduced here). The registration also
+carries the chapter, the book's seed and the surrogate role; the book's order is that of
+``_toc.yml`` (:func:`fdi_lib.reproduce.book.book_order`). Adding a figure touches its paper
+module and its chapter only::
+
+    from fdi_lib.reproduce.ledger import BY_INTERVAL, IS_INPUT, Claim
+    from fdi_lib.reproduce.registry import register
+
+    @register("zb2014-fig8", paper=PAPER, title="...", default_trials=1000,
+              chapter="zb2014/pipeline", surrogate=True, claims={
+                  # a pattern over the paths of the result's ``paper`` dictionary
+                  "type2_rate/*/rate": Claim(
+                      location="Fig. 8, type II error of fault {0}", units="%", test=BY_INTERVAL,
+                      cause="sec-pipeline-isolation-window", cause_glue=("pl_we_t2c{0}",),
+                      cause_text="isolating up to the end of the record gives the paper's rate"),
+                  "threshold_dof": Claim(location="Fig. 8, caption", units="", test=IS_INPUT)})
+    def fig8(*, seed, trials, jobs): ...
+
+A leaf of a result's ``paper`` dictionary without a matching declaration is refused
+(:func:`build_ledger` with ``strict=True``, and the tests); so are two rows with the same
+location, a "measured cause" whose section (``cause``) does not glue the declared
+``cause_glue`` keys, and a declaration that matches no claim.
+
+Claims and statuses
+-------------------
+The paper's values are read from the ``paper`` dictionary of each reproduction's result; ours
+from its ``headline``. A *claim* is one leaf of a ``paper`` dictionary that states something
+(``None``, ``"not stated"`` and ``"illustration, no numbers"`` state nothing); a claim listed by
+two reproductions (a value of Table I also checked by ``zhang2021-lambda-rule``) is one row,
+under the reproduction that runs the paper's setting (:attr:`Claim.shown_under`). Its status is
+**computed** by the declared test only, never typed, and is one of the fixed vocabulary
+:data:`STATUSES`:
 
 ``reproduced``
-    our value equals the paper's within the claim's tolerance (default: relative
-    :data:`DEFAULT_RTOL`, the precision of a value printed with three or four significant
-    digits), or satisfies the paper's inequality (``"< 1"``), or passes the claim's
-    stated check (for qualitative statements such as "grows linearly in k");
+    our value equals the paper's within the claim's tolerance, satisfies the paper's inequality
+    (``"< 1"``), or passes the claim's stated check (a statement such as "grows linearly in k");
 ``within interval``
-    not equal, but the paper's value lies in our 95 % interval (stochastic claims);
+    the paper's value lies in our 95 % interval (:data:`BY_INTERVAL`), or within ``z`` standard
+    errors of our estimate (:data:`BY_STANDARD_ERROR`, the interval shown is ours ± z se);
 ``within spread``
-    a claim about one run of the paper (a single alarm time), not equal to our run, but inside
-    the 95 % range of our run-to-run distribution (headline key ``<key>_spread95``); the
-    detail gives the percentile of the paper's value in it (``<key>_paper_percentile``) and
-    the number of runs (``spread_runs``);
+    a claim about one run of the paper (a single alarm time) inside the 95 % range of our
+    run-to-run distribution (headline key ``<key>_spread95``); the detail gives the percentile
+    of the paper's value in it and the number of runs;
 ``differs, measured cause``
-    neither, and the claim's rule names a section of the book that *measures* the cause
-    (:attr:`ClaimSpec.cause`, a label; ``cause`` in the JSON);
+    the claim's declaration names a section of the book (``cause``) that *measures* why, with
+    glued numbers (``cause_glue``; ``cause`` in the JSON);
+``differs, hypothesis tested``
+    a named alternative setting reproduces the paper's value, with its side effects measured
+    and stated in the section ``hypothesis`` (``cause`` in the JSON);
+``differs, bracketed``
+    two of our readings bracket the paper's value but neither agrees (:attr:`Claim.bracket`):
+    not a cause;
 ``differs, cause unknown``
-    neither, and no measurement of the cause exists (the row still links to where the
-    difference is shown, ``explanation``);
+    no measurement of the cause exists (the row still links to where the difference is shown,
+    ``explanation``; the detail names the candidate causes measured and ruled out);
 ``input``
-    a value the book sets (a Table 1 value, a fault amplitude, an onset, a true leak
-    position): equal by construction, never counted as reproduced;
+    a value the book sets (a Table 1 value, a fault amplitude, an onset): equal by construction,
+    never counted as reproduced;
+``input recovered``
+    our estimate of a value the book sets (the onset and the fault of Figs 3-4), agreeing with
+    it: shown, not counted as a reproduction;
 ``calibration target``
-    a value the surrogate model was fitted to (close by construction);
+    a value a surrogate model was fitted to (close by construction);
 ``not computed``
-    we have no value to compare (the detail says why), or the result comes from fewer
-    Monte Carlo trials than the paper's count (:attr:`Reproduction.default_trials`): a
-    stochastic status is only read from a run at the paper's scale ("not computed at paper
-    scale", e.g. the ledger page executed on its own with :data:`FALLBACK_TRIALS`);
+    we have no value to compare (the detail says why), or the result comes from fewer Monte
+    Carlo trials than the paper's count (:attr:`Reproduction.default_trials`): a stochastic
+    status is only read at the paper's scale ("not computed at paper scale", e.g. the ledger
+    page executed on its own with :data:`FALLBACK_TRIALS`);
 ``not reproducible``
     the claim cannot be checked here (the detail says why, e.g. a timing on the authors'
     MATLAB machine).
 
 The first three are :data:`AGREES`: a figure caption says "reproduces paper Fig. N" only when
-every compared row of its reproduction is one of them (:func:`figure_claim`).
+every compared row of its reproduction is one of them (:func:`figure_claim`; the rows of
+:data:`SET_BY_BOOK` are not compared). The paper items of :data:`MISSION` (propositions,
+figures, tables, remarks) get a state derived from their rows (:meth:`Ledger.mission`).
 
-**Renamed status.** Until this schema the ledger had a single ``differs``; it is now split
-into ``differs, measured cause`` and ``differs, cause unknown`` (:data:`DIFFERING`); the rows
-that were ``reproduced`` because the book sets the value are now ``input`` or ``calibration
-target``. ``claim_status`` still returns the plain comparison (:data:`DIFFERS`), which
-:func:`build_ledger` refines.
+Surrogate models: for a reproduction registered with ``surrogate=True`` each row also says
+what the paper's number is to the model (:func:`surrogate_role`): a value the surrogate was
+*calibrated* to, a *prediction* of it, or an *input* set into it. A ``paper`` dictionary that
+declares the lists ``paper["calibrated_to"]`` and ``paper["predictions"]`` (:data:`ROLE_KEYS`,
+never claims) is the only source; the declared test (:data:`IS_INPUT`, :data:`IS_CALIBRATION`)
+or ``role`` applies otherwise.
 
-Rows (``python -m fdi_lib reproduce --ledger --json``: ``{"counts", "counts_by_paper",
-"rows", "sources"}``) have the keys ``id``, ``paper_id`` (``zb2014``, ``zhang2021``, ``bz``,
-``rosa2013``), ``key`` (the claim's path in the ``paper`` dictionary), ``claim`` (a label
-naming the paper: "Zhang & Basseville 2014, Fig. 8: ..."), ``paper`` (the paper's value, in
-its own units and indexing), ``ours`` (same units), ``ci95``, ``status``, ``status_detail``
-(why, for every status but ``reproduced``/``within interval``), ``cause`` (the label of the
-measurement, ``differs, measured cause`` only), ``where`` (the chapter), ``explanation``
-(label or document showing the claim), ``note`` (how the status was decided: tolerance,
-inequality, check), ``surrogate`` (``calibration``/``prediction``/``input`` on a surrogate
-model, see below), ``trials`` (of our result), ``paper_trials`` (the paper's count, ``None``
-for a single run) and ``source``.
-
-The ledger's own data (:data:`SPECS`) give each claim a human label, its tolerance or check,
-where it is shown and what measures a difference. For reproductions on a surrogate model
-each row also says what the paper's number is to the model (:func:`surrogate_role`): a value
-the surrogate was *calibrated* to (``calibration``), a *prediction* of it, or an *input* set
-into it (a fault size, an onset). A reproduction that declares this itself, with the lists
-``paper["calibrated_to"]`` and ``paper["predictions"]`` (:data:`ROLE_KEYS`, never claims),
-is the only source; :data:`SPECS` roles apply to the others. The status of a row whose
-paper value is an input (by either source) is ``input``, of a calibration value that we meet
-``calibration target``.
-A leaf without a rule in :data:`SPECS` still appears (numbers and inequalities need no rule);
-a text claim without a check appears as ``not reproducible`` with the reason "no check
-defined", and the tests fail until one is written.
+JSON
+----
+``python -m fdi_lib reproduce --ledger --json`` prints ``{"counts", "counts_by_paper",
+"mission", "rows", "sources"}``, the same bytes on every run, at any ``--jobs`` and on a cluster
+(the wall times of the runs are kept apart, :attr:`Ledger.timings`). Rows have the keys ``id``,
+``paper_id`` (``zb2014``, ``zhang2021``, ``bz``, ``rosa2013``, ``windturbine``), ``key`` (the
+claim's path in the ``paper`` dictionary), ``claim`` (a label naming the paper and the location:
+"Zhang & Basseville 2014, Fig. 8, type I error of fault 1: ..."), ``location``, ``units``,
+``test`` (the declared comparison), ``paper`` (the paper's value, in its own units and
+indexing), ``ours`` (same units), ``ci95``, ``status``, ``status_detail`` (why, for every status
+but ``reproduced``/``within interval``), ``cause`` (the label of the section measuring the cause
+or testing the hypothesis), ``where`` (the chapter), ``explanation`` (label or document showing
+the claim), ``note`` (how the status was decided: tolerance, interval, inequality, check),
+``surrogate`` (``calibration``/``prediction``/``input``), ``trials`` (of our result),
+``paper_trials`` (the paper's count, ``None`` for a single run) and ``source``.
 
 Results are those of the book's settings (:func:`fdi_lib.reproduce.book.book_settings`: the seed
 and trials the chapters use, without options): read from the book build's results cache
@@ -97,21 +131,30 @@ from fdi_lib.reproduce.registry import ReproductionResult, cached_run, get, list
 __all__ = ["STATUSES", "ROLE_KEYS", "CALIBRATION", "PREDICTION", "INPUT", "surrogate_role", "FALLBACK_TRIALS",
            "REPRODUCED", "WITHIN", "WITHIN_SPREAD", "DIFFERS", "DIFFERS_MEASURED", "DIFFERS_UNKNOWN",
            "INPUT_VALUE", "CALIBRATION_TARGET", "NOT_COMPUTED", "NOT_REPRODUCIBLE", "AGREES", "DIFFERING",
-           "DEFAULT_RTOL", "PAPERS", "ClaimSpec", "LedgerRow", "Ledger", "SPECS", "BOOK_ORDER", "NO_VALUE",
-           "claim_paths", "claim_status", "build_ledger", "collect_results", "ledger", "FigureClaim",
+           "DIFFERS_BRACKETED", "DIFFERS_HYPOTHESIS", "INPUT_RECOVERED", "TESTS", "BY_TOLERANCE",
+           "BY_INTERVAL", "BY_STANDARD_ERROR", "BY_SPREAD", "BY_CHECK", "IS_INPUT",
+           "ESTIMATES_INPUT",
+           "IS_CALIBRATION", "NOT_CHECKABLE", "shown_under", "claim_for", "chapter_of", "ours_at",
+           "ci_at", "in_ci", "SET_BY_BOOK", "MISSION", "MISSION_STATES", "item_state",
+           "DEFAULT_RTOL", "PAPERS", "Claim", "LedgerRow", "Ledger", "NO_VALUE", "claim_paths",
+           "claim_status", "build_ledger", "collect_results", "ledger", "FigureClaim",
            "figure_claim", "glue_caption", "REPRODUCES", "COMPARE", "REDRAWS", "CAPTION_ITEMS"]
 
 REPRODUCED, WITHIN, WITHIN_SPREAD = "reproduced", "within interval", "within spread"
 DIFFERS_MEASURED, DIFFERS_UNKNOWN = "differs, measured cause", "differs, cause unknown"
-INPUT_VALUE, CALIBRATION_TARGET = "input", "calibration target"
+DIFFERS_BRACKETED, DIFFERS_HYPOTHESIS = "differs, bracketed", "differs, hypothesis tested"
+INPUT_VALUE, INPUT_RECOVERED, CALIBRATION_TARGET = "input", "input recovered", "calibration target"
 NOT_COMPUTED, NOT_REPRODUCIBLE = "not computed", "not reproducible"
 #: The statuses of a row, in the order of the summaries.
-STATUSES = (REPRODUCED, WITHIN, WITHIN_SPREAD, DIFFERS_MEASURED, DIFFERS_UNKNOWN, INPUT_VALUE,
-            CALIBRATION_TARGET, NOT_COMPUTED, NOT_REPRODUCIBLE)
+STATUSES = (REPRODUCED, WITHIN, WITHIN_SPREAD, DIFFERS_MEASURED, DIFFERS_HYPOTHESIS,
+            DIFFERS_BRACKETED, DIFFERS_UNKNOWN, INPUT_VALUE, INPUT_RECOVERED, CALIBRATION_TARGET,
+            NOT_COMPUTED, NOT_REPRODUCIBLE)
 #: Statuses under which our result agrees with the paper's claim.
 AGREES = (REPRODUCED, WITHIN, WITHIN_SPREAD)
 #: Statuses of a difference.
-DIFFERING = (DIFFERS_MEASURED, DIFFERS_UNKNOWN)
+DIFFERING = (DIFFERS_MEASURED, DIFFERS_HYPOTHESIS, DIFFERS_BRACKETED, DIFFERS_UNKNOWN)
+#: Statuses of a value the book sets (never a reproduction, never compared in a caption).
+SET_BY_BOOK = (INPUT_VALUE, INPUT_RECOVERED, CALIBRATION_TARGET)
 #: Outcome of :func:`claim_status` when the numbers disagree (refined by :func:`build_ledger`
 #: into :data:`DIFFERING`; never a row's status).
 DIFFERS = "differs"
@@ -131,52 +174,51 @@ PAPERS = {"zb2014": "Zhang & Basseville 2014", "zhang2021": "Zhang 2021",
           "bz": "Basseville & Zhang 2015", "rosa2013": "Rosa & Silvestre 2013",
           "windturbine": "Wind-turbine benchmark (Odgaard et al.)"}
 
-#: Reproductions in the order of the book (chapters in the order of the table of contents);
-#: an identifier missing here comes last, in alphabetical order.
-BOOK_ORDER = (
-    "zb2014-fig1", "zb2014-fig2", "zb2014-fig3", "zb2014-fig4", "zb2014-table1", "zb2014-fig5",
-    "zb2014-fig6", "zb2014-fig7", "zb2014-fig8", "zb2014-fig9",
-    "zhang2021-fig2", "zhang2021-fig3", "zhang2021-table1", "zhang2021-table2",
-    "zhang2021-lambda-rule", "zhang2021-fig6",
-    "zhang2021-fig7", "zhang2021-example2-interventions",
-    "bz-whiteness", "bz-solution1", "bz-solution2",
-    "rosa2013-fig1", "rosa2013-fig2", "rosa2013-fig8", "rosa2013-fig9", "rosa2013-fig10",
-    "rosa2013-fig11", "rosa2013-fig12", "rosa2013-fig11-rad", "rosa2013-fig12-rad",
-    "rosa2013-timing", "windturbine-scoreboard",
-)
-
-#: Chapter of each reproduction (by identifier prefix): where the claim is shown.
-CHAPTERS = (
-    ("zb2014-fig1", "book/zb2014/signature"), ("zb2014-fig2", "book/zb2014/signature"),
-    ("zb2014-fig3", "book/zb2014/glr"), ("zb2014-fig4", "book/zb2014/glr"),
-    ("zb2014-", "book/zb2014/pipeline"), ("zhang2021-", "book/zhang2021/sparse"),
-    ("bz-", "book/bz/parametric-nonparametric"), ("rosa2013-", "book/rosa2013/svo"),
-    ("windturbine-", "book/windturbine/benchmark"),
-)
-
-#: Reproductions run on a surrogate or reconstructed model (the papers' models are not public).
-SURROGATE_IDS = ("zb2014-table1", "zb2014-fig5", "zb2014-fig6", "zb2014-fig7", "zb2014-fig8",
-                 "zb2014-fig9", "zhang2021-fig6", "zhang2021-fig7", "rosa2013-fig8",
-                 "rosa2013-fig9", "rosa2013-fig10", "rosa2013-fig11", "rosa2013-fig12",
-                 "rosa2013-fig11-rad", "rosa2013-fig12-rad")
 #: Surrogate roles of a paper value: the model was fitted to it, computes it, or takes it as given.
 CALIBRATION, PREDICTION, INPUT = "calibration", "prediction", "input"
 
+#: How a claim is compared (:attr:`Claim.test`): by tolerance (``rtol``/``atol``, an inequality
+#: "< 1", an equality); by our 95 % interval (the paper's value inside it, at the paper's trial
+#: count); by the standard error of our estimate (the paper's value within :attr:`Claim.z`
+#: standard errors, headline key ``<key>_se``); by the spread of single runs (the paper's one run
+#: inside the 95 % range of ours, ``<key>_spread95``); by a stated check (:attr:`Claim.check`, a
+#: qualitative statement); a value the book sets (an input: never compared); our estimate of a
+#: value the book sets (``input recovered`` when it agrees by tolerance or interval, never a
+#: reproduction); a value a surrogate was fitted to (calibration target); or not at all (a
+#: :attr:`Claim.reason` says why).
+BY_TOLERANCE, BY_INTERVAL, BY_STANDARD_ERROR, BY_SPREAD, BY_CHECK = (
+    "tolerance", "95 % interval", "standard error", "spread of single runs", "check")
+IS_INPUT, ESTIMATES_INPUT, IS_CALIBRATION, NOT_CHECKABLE = (
+    "input", "estimate of an input", "calibration target", "not reproducible")
+TESTS = (BY_TOLERANCE, BY_INTERVAL, BY_STANDARD_ERROR, BY_SPREAD, BY_CHECK, IS_INPUT,
+         ESTIMATES_INPUT, IS_CALIBRATION, NOT_CHECKABLE)
 
-@dataclass(frozen=True)
-class ClaimSpec:
-    """The ledger's rule for the claims matching a pattern (see :data:`SPECS`).
+
+@dataclass(frozen=True, kw_only=True)
+class Claim:
+    """The declaration of one paper claim (or of a family, by a path pattern), at its
+    reproduction's registration (``register(..., claims={pattern: Claim(...)})``).
 
     Attributes
     ----------
+    location : str
+        Where the paper states it, precise enough to be unique among the rows ("Table II, success
+        rate at r = {0}"); ``{0}``, ``{1}`` ... are the parts of the claim's path after the first
+        key, ``{fig}`` the figure of the identifier, ``{num}`` the number in the last part. Two rows
+        with the same location fail the tests.
+    units : str
+        The paper's units of the value ("ms", "%", "dB"; ``""`` for a pure number or a statement).
+    test : str
+        How it is compared, one of :data:`TESTS`.
     label : str
-        What the claim is, for a reader; ``{0}``, ``{1}`` ... are the parts of the path
-        after the first key (e.g. the onset ``r``).
+        What is claimed, after the location ("type I error of the minmax test").
     rtol, atol : float
-        Tolerance of "reproduced" for numbers.
+        Tolerance of :data:`BY_TOLERANCE` (and of inputs and calibration targets).
+    z : float
+        Standard errors of :data:`BY_STANDARD_ERROR` (1.96: a 95 % interval).
     check : callable, optional
-        ``check(paper_value, ours, headline) -> bool`` for a qualitative claim; ``criterion``
-        says in words what it tests.
+        ``check(paper_value, ours, headline) -> bool`` of :data:`BY_CHECK`; ``criterion`` says
+        in words what it tests.
     value : callable, optional
         ``value(paper_text) -> number``: the number a text claim states (``"0 (Prop. 2)"``).
     ours : callable, optional
@@ -184,52 +226,88 @@ class ClaimSpec:
     ci : callable, optional
         ``ci(headline, path) -> (low, high) or None``; default: ``<key>_ci`` next to the key,
         or ``ci95`` next to a ``rate``.
+    se : callable, optional
+        ``se(headline, path) -> float or list``; default: ``<key>_se`` at the same path.
     explain : str, optional
         Label (``sec-...``, ``fig-...``) or document (``book/...``) where the claim is shown
         and discussed; default: the chapter of the reproduction. Not a cause.
     cause : str, optional
-        Label of the section that *measures* the cause of a difference; a differing row with
-        a cause is "differs, measured cause", without one "differs, cause unknown".
-    cause_if : callable, optional
-        ``cause_if(paper_value, ours, headline, path) -> bool``: the cause applies to this row
-        only when it holds (e.g. the paper's rate lies between two readings of a rule that the
-        section measures); ``cause_text`` says in words what was measured. ``ruled_out``
-        names the candidate causes measured and excluded, for a difference whose cause is
-        unknown.
+        Label of the section that *measures* the cause of a difference ("differs, measured
+        cause"); ``cause_glue`` are the glue keys of that section's measurement (a test reads the
+        section and fails when one is not glued there); ``cause_text`` says what was measured.
+    bracket : callable, optional
+        ``bracket(paper_value, ours, headline, path) -> bool``: two of our readings bracket the
+        paper's value ("differs, bracketed", not a cause); ``bracket_text`` names the readings.
+    hypothesis : str, optional
+        Label of the section where a named alternative setting reproduces the paper's value with
+        its side effects measured ("differs, hypothesis tested"); ``hypothesis_glue`` and
+        ``hypothesis_text`` as for the cause.
+    ruled_out : str
+        Candidate causes measured and excluded, for a difference whose cause is unknown.
     missing : str, optional
         What our value ``None`` means (e.g. "not detected in the 6 s record"): a result that
         differs from a number. Without it, ``None`` means we have no value ("not computed").
     reason : str, optional
-        Why the claim is not reproducible (the status is then "not reproducible").
+        Why the claim is not reproducible (test :data:`NOT_CHECKABLE`).
     role : str, optional
-        ``"input"`` if the paper's value is set into the model, ``"calibration"`` if the model
-        was fitted to it, ``"prediction"`` (default) otherwise; read for surrogate reproductions
-        that do not declare :data:`ROLE_KEYS`, and ``"input"`` (status "input") for any.
+        :data:`INPUT`, :data:`CALIBRATION` or :data:`PREDICTION` (default) for a surrogate
+        reproduction whose ``paper`` dictionary does not declare :data:`ROLE_KEYS`.
     shown_under : str, optional
         Identifier under which the same claim is listed (results sharing one ``paper`` dict,
         or the same paper value checked twice); ``same_path(path)`` gives its path there when
-        it differs. The claim is then one row, at that place.
+        it differs. The claim is then one row, at that place, and needs no location here;
+        ``figure_reading`` says whether this reproduction's figure still judges its own reading
+        (the per-radian UAV figures) or leaves the claim to the other figure (the §6.4 detection
+        time that Figs 8-10 repeat).
     """
 
+    location: str
+    units: str
+    test: str
     label: str = ""
     rtol: float = DEFAULT_RTOL
     atol: float = 0.0
+    z: float = 1.96
     check: Callable[[Any, Any, Mapping[str, Any]], bool] | None = None
     criterion: str = ""
     value: Callable[[Any], Any] | None = None
     ours: Callable[[Mapping[str, Any], tuple[str, ...]], Any] | None = None
     ci: Callable[[Mapping[str, Any], tuple[str, ...]], Any] | None = None
+    se: Callable[[Mapping[str, Any], tuple[str, ...]], Any] | None = None
     explain: str | None = None
     cause: str | None = None
-    cause_if: Callable[[Any, Any, Mapping[str, Any], tuple[str, ...]], bool] | None = None
+    cause_glue: tuple[str, ...] = ()
     cause_text: str = ""
+    bracket: Callable[[Any, Any, Mapping[str, Any], tuple[str, ...]], bool] | None = None
+    bracket_text: str = ""
+    hypothesis: str | None = None
+    hypothesis_glue: tuple[str, ...] = ()
+    hypothesis_text: str = ""
     ruled_out: str = ""
     missing: str | None = None
     reason: str | None = None
     role: str | None = None
     shown_under: str | None = None
     same_path: Callable[[tuple[str, ...]], tuple[str, ...]] | None = None
+    figure_reading: bool = True
 
+    def __post_init__(self) -> None:
+        if self.test not in TESTS:
+            raise ModelError(f"Claim.test: expected one of {list(TESTS)}, got {self.test!r}")
+        if (self.test == NOT_CHECKABLE) != bool(self.reason):
+            raise ModelError(f"Claim.reason: expected a reason exactly for test {NOT_CHECKABLE!r}, "
+                             f"got test {self.test!r} with reason {self.reason!r}")
+        if self.test == BY_CHECK and self.check is None:
+            raise ModelError(f"Claim.check: test {BY_CHECK!r} needs a check function, got None")
+        if not self.shown_under and not self.location.strip():
+            raise ModelError("Claim.location: expected where the paper states it, got ''")
+
+
+def shown_under(id: str, same_path: Callable[[tuple[str, ...]], tuple[str, ...]] | None = None,
+                **kwargs: Any) -> Claim:
+    """The declaration of a claim listed under reproduction ``id`` (its row is there)."""
+    return Claim(location="", units="", test=kwargs.pop("test", BY_TOLERANCE), shown_under=id,
+                 same_path=same_path, **kwargs)
 
 @dataclass(frozen=True)
 class LedgerRow:
@@ -251,6 +329,9 @@ class LedgerRow:
     status_detail: str = ""
     cause: str | None = None
     paper_trials: int | None = None
+    location: str = ""
+    units: str = ""
+    test: str = ""
 
     @property
     def paper_id(self) -> str:
@@ -272,7 +353,8 @@ class LedgerRow:
                           "status_detail": self.status_detail, "cause": self.cause,
                           "where": self.where, "explanation": self.explain, "note": self.note,
                           "surrogate": self.role, "trials": self.trials,
-                          "paper_trials": self.paper_trials, "source": self.source})
+                          "paper_trials": self.paper_trials, "source": self.source,
+                          "location": self.location, "units": self.units, "test": self.test})
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -332,6 +414,28 @@ def _default_spread(headline: Mapping[str, Any], path: tuple[str, ...]
     return None
 
 
+def _default_se(headline: Mapping[str, Any], path: tuple[str, ...]) -> Any:
+    """``<key>_se`` at the claim's path (the standard error of our value), else ``None``."""
+    spath = (path[0] + "_se", *path[1:])
+    return _at(headline, spath) if _has(headline, spath) else None
+
+
+def _se_interval(ours: Any, se: Any, z: float) -> tuple[float, float] | None:
+    """``ours ± z se`` of a scalar (the interval of :data:`BY_STANDARD_ERROR`), else ``None``."""
+    o, e = _numbers(ours), _numbers(se)
+    if o is None or e is None or len(o) != 1 or len(e) != 1:
+        return None
+    return o[0] - z * e[0], o[0] + z * e[0]
+
+
+def _label(id: str, path: tuple[str, ...], spec: Claim) -> str:
+    """The row's label: the claim's location in the paper, then what it says."""
+    text = f"{spec.location}: {spec.label}" if spec.label else spec.location
+    if not text.strip():
+        text = f"{_fig(id)}: {' '.join(path)}"
+    return text.format(*path[1:], fig=_fig(id), num=re.sub(r"^\D+", "", path[-1]))
+
+
 def _spread_detail(headline: Mapping[str, Any], path: tuple[str, ...]) -> str:
     """"the paper's run is at the 71st percentile of our 1000 runs" (keys ``<key>_paper_percentile``
     and ``spread_runs`` of the headline; what is known of them)."""
@@ -360,15 +464,22 @@ _INEQ = re.compile(r"^\s*(<=|>=|<|>)\s*([-+0-9.eE]+)\s*$")
 _ABOUT = re.compile(r"^\s*about\s+([-+0-9.eE]+)\s*$")
 
 
+#: The declaration :func:`claim_status` uses when given none: compared by tolerance.
+_PLAIN = Claim(location="(undeclared)", units="", test=BY_TOLERANCE)
+
+
 def claim_status(paper: Any, ours: Any, ci: tuple[float, float] | None = None,
-                 spec: ClaimSpec = ClaimSpec(), headline: Mapping[str, Any] | None = None,
-                 spread: tuple[float, float] | None = None) -> tuple[str, str]:
-    """The outcome of comparing one claim with our value, and a note saying how it was decided.
+                 spec: Claim = _PLAIN, headline: Mapping[str, Any] | None = None,
+                 spread: tuple[float, float] | None = None,
+                 se: Sequence[float] | float | None = None) -> tuple[str, str]:
+    """The outcome of comparing one claim with our value by its declared test, and a note saying
+    how it was decided.
 
     The outcome is :data:`REPRODUCED`, :data:`WITHIN`, :data:`WITHIN_SPREAD`, :data:`DIFFERS`,
-    :data:`NOT_COMPUTED` (we have no value) or :data:`NOT_REPRODUCIBLE`; :func:`build_ledger`
-    turns it into a row status (input, calibration target, a difference's cause, the paper's
-    trial count).
+    :data:`NOT_COMPUTED` (we have no value, or not the statistic the test needs) or
+    :data:`NOT_REPRODUCIBLE`; :func:`build_ledger` turns it into a row status (input, input
+    recovered, calibration target, a difference's cause, the paper's trial count). Only the
+    declared test can agree: a value close to the paper's but outside our interval differs.
 
     Parameters
     ----------
@@ -379,13 +490,16 @@ def claim_status(paper: Any, ours: Any, ci: tuple[float, float] | None = None,
         Our value (``None`` when we have none; with ``spec.missing``, ``None`` is a result,
         e.g. never detected, that differs from any number).
     ci : (float, float), optional
-        Our 95 % interval of a scalar value.
-    spec : ClaimSpec
-        Tolerances, check, or the reason the claim is not reproducible.
+        Our 95 % interval of a scalar value (:data:`BY_INTERVAL`, :data:`ESTIMATES_INPUT`,
+        :data:`IS_CALIBRATION`).
+    spec : Claim
+        The declaration: test, tolerances, check, or the reason the claim is not reproducible.
     headline : dict, optional
         The reproduction's headline, passed to ``spec.check``.
     spread : (float, float), optional
-        95 % range of our run-to-run distribution of a single-run value.
+        95 % range of our run-to-run distribution of a single-run value (:data:`BY_SPREAD`).
+    se : float or list of float, optional
+        Standard error of our value, per component (:data:`BY_STANDARD_ERROR`).
     """
     if spec.reason:
         return NOT_REPRODUCIBLE, spec.reason
@@ -397,7 +511,8 @@ def claim_status(paper: Any, ours: Any, ci: tuple[float, float] | None = None,
         ok = bool(spec.check(paper, ours, headline or {}))
         return (REPRODUCED if ok else DIFFERS), spec.criterion
     if spec.value is not None:
-        return claim_status(spec.value(paper), ours, ci, replace(spec, value=None), headline, spread)
+        return claim_status(spec.value(paper), ours, ci, replace(spec, value=None), headline,
+                            spread, se)
     if isinstance(paper, str):
         m, a = _INEQ.match(paper), _ABOUT.match(paper)
         if m:
@@ -409,7 +524,7 @@ def claim_status(paper: Any, ours: Any, ci: tuple[float, float] | None = None,
                      ">": lambda v: v > bound, ">=": lambda v: v >= bound}[op]
             return (REPRODUCED if all(holds(v) for v in vals) else DIFFERS), f"inequality {paper}"
         if a:
-            return claim_status(float(a.group(1)), ours, ci, spec, headline, spread)
+            return claim_status(float(a.group(1)), ours, ci, spec, headline, spread, se)
         if ours == paper:
             return REPRODUCED, "same text"
         return NOT_REPRODUCIBLE, "no check defined for this statement"
@@ -422,25 +537,49 @@ def claim_status(paper: Any, ours: Any, ci: tuple[float, float] | None = None,
         return DIFFERS, "not comparable"
     tol_note = f"tolerance {fmt_number(spec.rtol)} relative" + (
         f", {fmt_number(spec.atol)} absolute" if spec.atol else "")
-    if all(math.isclose(a, b, rel_tol=spec.rtol, abs_tol=spec.atol) for a, b in zip(o, p)):
+    close = all(math.isclose(a, b, rel_tol=spec.rtol, abs_tol=spec.atol) for a, b in zip(o, p))
+    inside = ci is not None and len(p) == 1 and ci[0] <= p[0] <= ci[1]
+    if spec.test == BY_INTERVAL:
+        if ci is None:
+            return NOT_COMPUTED, "no 95 % interval of ours to compare with"
+        return (WITHIN, "paper value inside our 95 % interval") if inside else (
+            DIFFERS, "paper value outside our 95 % interval")
+    if spec.test == BY_STANDARD_ERROR:
+        ses = _numbers(se)
+        if ses is None or len(ses) != len(p):
+            return NOT_COMPUTED, "no standard error of ours to compare with"
+        note = f"within {fmt_number(spec.z)} standard errors of ours"
+        if all(abs(a - b) <= spec.z * e for a, b, e in zip(o, p, ses)):
+            return WITHIN, "paper value " + note
+        return DIFFERS, "paper value not " + note
+    if spec.test == BY_SPREAD:
+        if spread is None:
+            return NOT_COMPUTED, "no spread of our runs to compare with"
+        if len(p) == 1 and spread[0] <= p[0] <= spread[1]:
+            return WITHIN_SPREAD, "paper's single run inside the 95 % range of our runs"
+        return DIFFERS, "paper's single run outside the 95 % range of our runs"
+    if close:
         return REPRODUCED, tol_note
-    if ci is not None and len(p) == 1 and ci[0] <= p[0] <= ci[1]:
+    if inside and spec.test in (ESTIMATES_INPUT, IS_CALIBRATION):
         return WITHIN, "paper value inside our 95 % interval"
-    if spread is not None and len(p) == 1 and spread[0] <= p[0] <= spread[1]:
-        return WITHIN_SPREAD, "paper's single run inside the 95 % range of our runs"
-    return DIFFERS, tol_note + ("; outside our 95 % interval" if ci is not None else "") + (
-        "; outside the 95 % range of our runs" if spread is not None else "")
+    return DIFFERS, tol_note + ("; outside our 95 % interval" if ci is not None else "")
 
 
-# ----------------------------------------------------------------------------- the ledger's data
-def _ours_at(*keys: str) -> Callable[[Mapping[str, Any], tuple[str, ...]], Any]:
-    """Our value at ``keys`` followed by the claim path after its first key."""
+# ----------------------------------------------------------------------------- declaring claims
+_UNSCALED = "not computed at paper scale"
+_RECOVERED = "our estimate of a value the book sets: shown, not a reproduction"
+
+
+def ours_at(*keys: str) -> Callable[[Mapping[str, Any], tuple[str, ...]], Any]:
+    """For :attr:`Claim.ours`: our value at ``keys`` followed by the claim path after its first
+    key (``ours_at("success_rate", "log")`` reads ``success_rate/log/q15`` for
+    ``success_rate/q15``)."""
     return lambda h, path: _at(h, (*keys, *path[1:]))
 
 
-def _ci_of(*keys: str) -> Callable[[Mapping[str, Any], tuple[str, ...]], Any]:
-    """Interval at ``keys`` followed by the claim path after its first key (tables with one
-    ``ci95`` dictionary per column, possibly per reading of a rule)."""
+def ci_at(*keys: str) -> Callable[[Mapping[str, Any], tuple[str, ...]], Any]:
+    """For :attr:`Claim.ci`: the interval at ``keys`` followed by the claim path after its first
+    key (tables with one ``ci95`` dictionary per column, possibly per reading of a rule)."""
     def ci(h: Mapping[str, Any], path: tuple[str, ...]) -> tuple[float, float] | None:
         at = (*keys, *path[1:])
         v = _at(h, at) if _has(h, at) else None
@@ -448,268 +587,35 @@ def _ci_of(*keys: str) -> Callable[[Mapping[str, Any], tuple[str, ...]], Any]:
     return ci
 
 
-def _count_ci(h: Mapping[str, Any], path: tuple[str, ...]) -> tuple[float, float] | None:
-    """95 % interval of the false-alarm *count*: the rate's interval times the number of runs."""
-    r = h.get("false_alarm_rate", {})
-    ci, n = r.get("ci95"), r.get("n")
-    if ci is None or n is None or None in ci:
-        return None
-    return ci[0] * n, ci[1] * n
-
-
-def _in_ci(key: str) -> Callable[[Any, Any, Mapping[str, Any]], bool]:
-    """Check: our value lies in the 95 % interval of ``headline[key]`` (no effect of f)."""
+def in_ci(key: str) -> Callable[[Any, Any, Mapping[str, Any]], bool]:
+    """For :attr:`Claim.check`: our value lies in the 95 % interval ``headline[key + "_ci"]``."""
     def check(paper: Any, ours: Any, h: Mapping[str, Any]) -> bool:
         lo, hi = h[key + "_ci"]
         return lo <= float(ours) <= hi
     return check
 
 
-def _between_readings(paper: Any, ours: Any, h: Mapping[str, Any], path: tuple[str, ...]) -> bool:
-    """The paper's rate lies between our log-width and linear-width readings of the λ rule,
-    on the same trials (a difference of reading measured by the chapter)."""
-    lin = h.get("success_rate_linear", {}).get(path[-1])
-    return lin is not None and min(ours, lin) <= paper <= max(ours, lin)
-
-
-_READINGS_TEXT = ("the paper's rate lies between our log-width and linear-width readings of the "
-                  "rule for λ on the same trials")
-_RULED_OUT = ("our readings of the rule for λ (the paper's rate lies outside them), the unknown "
-              "input d_k, and at q = 15 the initial state")
-_UNSCALED = "not computed at paper scale"
-_NOT_DETECTED = "not detected in any run of the 6 s record"
-_NOT_ISOLATED = "not isolated in any run of the 6 s record"
-_LOG12 = math.log10(1.2)
-_WINDOW_END = 201 + 100
-
-#: The ledger's rules, keyed by ``"id:path"`` patterns (``fnmatch``; the first match wins).
-#: Labels: ``{0}``, ``{1}`` are the path parts after the first key, ``{fig}`` the figure,
-#: ``{num}`` the number in the last path part (``"q15"`` -> ``15``).
-SPECS: dict[str, ClaimSpec] = {
-    # -- Zhang & Basseville 2014, Section 6.1
-    "zb2014-fig1:unstable_eigenvalue": ClaimSpec(
-        "§6.1: the unstable eigenvalue of F", explain="sec-zb-fig1-bound",
-        cause="sec-zb-fig1-bound",
-        cause_text="the printed F is triangular, with eigenvalues 0.5 and 1.2, and we use it; "
-                   "the section checks every one-entry misprint that gives the quoted value"),
-    "zb2014-fig1:gamma_norm_max/*": ClaimSpec(
-        "Fig. 1: ‖Γ_k‖ stays under 1, impulse at r = {0}", explain="sec-zb-fig1-bound",
-        cause="sec-zb-fig1-bound",
-        cause_text="‖Γ_(r+1)‖ ≥ ‖F e₂‖ > 1 for the printed matrices, whatever P₀, Q, R"),
-    "zb2014-fig2:alpha_log10_norm_final/*": ClaimSpec(
-        "Fig. 2: log ‖α_k(r)‖ grows linearly in k, r = {0}", ours=_ours_at("alpha_log10_slope"),
-        check=lambda p, o, h: abs(o - _LOG12) <= 0.01 * _LOG12,
-        criterion="fitted slope of log₁₀‖α_k(r)‖ is log₁₀ 1.2 within 1 %"),
-    "zb2014-fig*:onset_estimate": ClaimSpec(
-        "{fig}: onset estimate r̂ at the peak of l_k (sums from j = r̂, see the convention)",
-        explain="sec-zb-glr-onset"),
-    "zb2014-fig*:glr_argmax_time": ClaimSpec(
-        "{fig}: l_k is largest while the onset is in the window",
-        check=lambda p, o, h: 201 <= o <= _WINDOW_END, criterion="201 ≤ argmax l_k ≤ 301"),
-    "zb2014-fig*:theta_estimate": ClaimSpec(
-        "{fig}: fault estimate θ̂ at the peak of l_k", explain="sec-zb-glr-figs",
-        ci=lambda h, p: None, rtol=0.0, atol=0.0,
-        check=lambda p, o, h: all(lo <= t <= hi for t, (lo, hi) in zip(p, h["theta_estimate_ci"])),
-        criterion="each component of the paper's θ in our 95 % interval (θ̂ ± 1.96 σ from C_k(r̂))"),
-    "zb2014-fig3:fault_visibility": ClaimSpec(
-        "Fig. 3: the fault shows on the innovation only briefly after 201 (ours: samples "
-        "above the pre-fault maximum)",
-        ours=lambda h, p: h["innovation_samples_above_premax"],
-        check=lambda p, o, h: o <= 10, criterion="at most 10 samples above the pre-fault max |ε_k|"),
-    "zb2014-fig4:fault_visibility": ClaimSpec(
-        "Fig. 4: the fault is hardly visible on the innovation (ours: largest |ε_k|/σ_k "
-        "from 201)", explain="sec-zb-glr-figs",
-        ours=lambda h, p: h["innovation_max_sigma_after_fault"],
-        check=lambda p, o, h: o <= h["innovation_max_sigma_before_fault"],
-        criterion="largest |ε_k|/σ after 201 within the pre-fault range"),
-    # -- Zhang & Basseville 2014, Section 6.2 (surrogate pipeline; roles declared by the
-    #    reproductions' ``calibrated_to`` / ``predictions``)
-    "zb2014-table1:G0_1_nominal": ClaimSpec("Table 1: nominal G₀(1)"),
-    "zb2014-table1:G0_1_fault1": ClaimSpec("Table 1: G₀(1) under fault 1"),
-    "zb2014-table1:Gp_1_nominal": ClaimSpec("Table 1: nominal G_p(1)"),
-    "zb2014-table1:Gp_1_fault2": ClaimSpec("Table 1: G_p(1) under fault 2"),
-    "zb2014-table1:theta_fault1": ClaimSpec("Table 1: θ of fault 1"),
-    "zb2014-table1:theta_fault2": ClaimSpec("Table 1: θ of fault 2"),
-    "zb2014-fig5:alarm_time_min": ClaimSpec("Fig. 5: alarm time (min), one run of fault 1",
-                                            explain="fig-pipeline-fig5"),
-    "zb2014-fig5:onset_estimate_min": ClaimSpec("Fig. 5: onset estimate (min), one run",
-                                                explain="fig-pipeline-fig5"),
-    "zb2014-fig5:detection_delay_min": ClaimSpec("Fig. 5: detection delay (min), one run",
-                                                 explain="fig-pipeline-fig5"),
-    "zb2014-fig6:alarm_time_min": ClaimSpec(
-        "Fig. 6: alarm time (min), fault 1 doubled", explain="fig-pipeline-fig6",
-        cause="sec-pipeline-calibration-sensitivity",
-        cause_text="the alarm time and the delay depend on the calibrated state2_scale of the "
-                   "surrogate"),
-    "zb2014-fig6:detection_delay_min": ClaimSpec(
-        "Fig. 6: detection delay (min), fault 1 doubled", explain="fig-pipeline-fig6",
-        cause="sec-pipeline-calibration-sensitivity",
-        cause_text="the alarm time and the delay depend on the calibrated state2_scale of the "
-                   "surrogate"),
-    "zb2014-fig7:false_alarms": ClaimSpec("Fig. 7: false alarms in 2 × 1000 runs", ci=_count_ci,
-                                          explain="fig-pipeline-fig7"),
-    # the same claim as the count (7 of 2000 runs): one row
-    "zb2014-fig7:false_alarm_rate/*": ClaimSpec(shown_under="zb2014-fig7",
-                                                same_path=lambda p: ("false_alarms",)),
-    "zb2014-fig7:missed/*": ClaimSpec("Fig. 7: runs in which fault {0} is never detected",
-                                      explain="fig-pipeline-fig7"),
-    "zb2014-fig8:type1_rate/*/rate": ClaimSpec(
-        "Fig. 8: type I error of the minmax test, fault {0}", explain="fig-pipeline-fig8",
-        cause="sec-pipeline-isolation-window",
-        cause_text="isolating with the samples up to the alarm (the paper's §4.3) or up to the "
-                   "end of the record changes the error rates"),
-    "zb2014-fig8:type2_rate/*/rate": ClaimSpec(
-        "Fig. 8: type II error of the minmax test, fault {0}", explain="fig-pipeline-fig8",
-        cause="sec-pipeline-isolation-window",
-        cause_text="isolating with the samples up to the alarm (the paper's §4.3) or up to the "
-                   "end of the record changes the error rates"),
-    "zb2014-fig8:threshold_dof": ClaimSpec(
-        "Fig. 8: 6.6349 is a 99 % χ² quantile, 1 degree of freedom (caption) or 2 (text)",
-        check=lambda p, o, h: o == 1, criterion="6.6349 is the 99 % quantile of χ²(1): the caption",
-        explain="fig-pipeline-fig8", role=INPUT),
-    "zb2014-fig9:glr_level_over_threshold": ClaimSpec(
-        "Fig. 9: l_k after the leak, in thresholds (paper: about 50)", rtol=0.5,
-        explain="fig-pipeline-fig9"),
-    # -- Zhang 2021
-    "zhang2021-fig2:flat_size": ClaimSpec("Fig. 2: support size on the flat range of λ"),
-    "zhang2021-fig3:same_support_in_range": ClaimSpec(
-        "Fig. 3: same support for every λ of the flat range"),
-    "zhang2021-fig3:support_equals_true": ClaimSpec(
-        "Fig. 3: the selected support is the true one",
-        ours=lambda h, p: sorted(h["support"]) == sorted(h["true_support"])),
-    "zhang2021-table1:success_rate/*": ClaimSpec(
-        "Table I: success rate, q = {0}", ci=_ci_of("ci95"), explain="zhang2021-lambda-rule",
-        cause="sec-zhang2021-oracles", cause_if=_between_readings, cause_text=_READINGS_TEXT,
-        ruled_out=_RULED_OUT),
-    "zhang2021-table2:success_rate/*": ClaimSpec(
-        "Table II: success rate, r = {0}", ci=_ci_of("ci95"), explain="zhang2021-lambda-rule",
-        cause="sec-zhang2021-oracles", cause_if=_between_readings, cause_text=_READINGS_TEXT,
-        ruled_out=_RULED_OUT),
-    "zhang2021-table2:snr_db/*": ClaimSpec("Table II: SNR of outputs 1 and 2 (dB), r = {0}",
-                                           rtol=0.0, atol=0.5, explain="fig-zhang2021-5"),
-    # the values of Tables I-II that the λ-rule study checks again on fewer trials: one row,
-    # under the table (the paper's trial count)
-    "zhang2021-lambda-rule:success_rate/q*": ClaimSpec(
-        shown_under="zhang2021-table1", same_path=lambda p: (p[0], p[1][1:]),
-        ours=_ours_at("success_rate", "log"), ci=_ci_of("ci95", "log")),
-    "zhang2021-lambda-rule:success_rate/r*": ClaimSpec(
-        shown_under="zhang2021-table2", same_path=lambda p: (p[0], p[1][1:]),
-        ours=_ours_at("success_rate", "log"), ci=_ci_of("ci95", "log")),
-    "zhang2021-fig6:flat_size": ClaimSpec(
-        "Fig. 6: support size on the flat range of λ", explain="fig-zhang2021-6",
-        cause="sec-zhang2021-example2-causes",
-        cause_text="the input of the surrogate: interventions on the input, not on the noise, "
-                   "change the selected support"),
-    # in the paper's own indexing (its 10th and 15th components)
-    "zhang2021-fig7:support_1based": ClaimSpec(
-        "Fig. 7: selected leak parameters (1-based)", explain="fig-zhang2021-7",
-        cause="sec-zhang2021-example2-causes",
-        cause_text="the input of the surrogate: interventions on the input, not on the noise, "
-                   "change the selected support"),
-    "zhang2021-fig7:true_support_1based": ClaimSpec("Fig. 7: true leak parameters (1-based)"),
-    # -- Basseville & Zhang (no numerical example in the paper: our designed one)
-    "bz-whiteness:lb_reject_rate_kitanidis": ClaimSpec(
-        "Prop. 2: the Kitanidis innovation is white (Ljung-Box rejects 5 % at level 5 %)",
-        value=lambda p: 0.05, explain="fig-bz-whiteness", cause="fig-bz-whiteness",
-        cause_text="the closed-form lag-one correlation of the Kitanidis innovation is not 0, "
-                   "and the Monte Carlo estimate brackets it"),
-    "bz-whiteness:lag1_corr_empirical": ClaimSpec(
-        "Prop. 2: lag-1 correlation of the Kitanidis innovation is 0", value=lambda p: 0.0,
-        explain="fig-bz-whiteness", cause="fig-bz-whiteness",
-        cause_text="the closed-form lag-one correlation of the Kitanidis innovation is not 0, "
-                   "and the Monte Carlo estimate brackets it"),
-    "bz-whiteness:cov_rel_error_kitanidis": ClaimSpec(
-        "eq. (45): the Kitanidis innovation has covariance H P_k Hᵀ + R_k",
-        check=lambda p, o, h: o < 0.05, criterion="relative error of the empirical covariance < 5 %"),
-    "bz-solution1:glr_detection_rate_theta_with_f": ClaimSpec(
-        "§3.2: the GLR on the Kitanidis innovation detects θ whatever f",
-        check=_in_ci("glr_detection_rate_theta"),
-        criterion="detection rate with f inside the 95 % interval of the rate without f"),
-    "bz-solution1:glr_alarm_rate_f_only": ClaimSpec(
-        "§3.2: f alone does not raise the GLR", check=_in_ci("glr_false_alarm_rate"),
-        criterion="alarm rate under f alone inside the 95 % interval of the false-alarm rate"),
-    "bz-solution1:nonparametric_detection_rate_f": ClaimSpec(
-        "§3.3: the energy test detects f", check=lambda p, o, h: o >= 0.95,
-        criterion="detection rate of f at least 95 %"),
-    "bz-solution2:tracking_rmse": ClaimSpec(
-        "§4: RLS with forgetting tracks a slowly varying θ_k",
-        check=lambda p, o, h: max(o) < 0.05,
-        criterion="tracking RMSE below 0.05 for every forgetting factor"),
-    "bz-solution2:detection_rate": ClaimSpec(
-        "§4: the energy of the tracking error detects f",
-        check=lambda p, o, h: min(o) >= 0.95,
-        criterion="detection rate of f at least 95 % for every forgetting factor"),
-    # -- Rosa & Silvestre 2013 (reconstructed UAV model; "-rad": elevator read per radian)
-    "rosa2013-fig*:fault_amplitude_deg": ClaimSpec("{fig}: fault amplitude (deg)", role=INPUT),
-    "rosa2013-fig*:onset_s": ClaimSpec("{fig}: fault onset (s)", role=INPUT),
-    "rosa2013-fig*:ramp_s": ClaimSpec("{fig}: ramp duration (s)", role=INPUT),
-    "rosa2013-fig8:detection_time_ms": ClaimSpec("{fig}: detection time (ms)",
-                                                 explain="fig-rosa2013-8"),
-    "rosa2013-fig9:detection_time_ms": ClaimSpec("{fig}: detection time (ms)",
-                                                 explain="fig-rosa2013-9"),
-    "rosa2013-fig10:detection_time_ms": ClaimSpec("{fig}: detection time (ms)",
-                                                  explain="fig-rosa2013-10"),
-    "rosa2013-fig11:detection_time_ms/*/*": ClaimSpec(
-        "{fig}: mean detection time (ms), {0}, {1}", explain="fig-rosa2013-11",
-        missing=_NOT_DETECTED),
-    # the other reading of the elevator (per radian) checks the same paper claims: a note in the
-    # row of the reading per degree (one row per claim), its own statuses in its caption
-    "rosa2013-fig11-rad:detection_time_ms/*/*": ClaimSpec(
-        "{fig}: mean detection time (ms), {0}, {1}", explain="fig-rosa2013-11-rad",
-        missing=_NOT_DETECTED, shown_under="rosa2013-fig11", same_path=lambda p: p),
-    "rosa2013-fig12:detection_time_ms/*/*": ClaimSpec(shown_under="rosa2013-fig11"),
-    "rosa2013-fig12-rad:detection_time_ms/*/*": ClaimSpec(shown_under="rosa2013-fig11"),
-    "rosa2013-fig11:isolation_time_ms/*/*": ClaimSpec(shown_under="rosa2013-fig12"),
-    "rosa2013-fig11-rad:isolation_time_ms/*/*": ClaimSpec(shown_under="rosa2013-fig12"),
-    "rosa2013-fig12:isolation_time_ms/*/*": ClaimSpec(
-        "{fig}: mean isolation time (ms), {0}, {1}", explain="fig-rosa2013-12",
-        missing=_NOT_ISOLATED),
-    "rosa2013-fig12-rad:isolation_time_ms/*/*": ClaimSpec(
-        "{fig}: mean isolation time (ms), {0}, {1}", explain="fig-rosa2013-12-rad",
-        missing=_NOT_ISOLATED, shown_under="rosa2013-fig12", same_path=lambda p: p),
-    "rosa2013-timing:step_ms": ClaimSpec(
-        "Remark 4: 5 to 200 ms per SVO step (exact rule) depending on N",
-        ours=lambda h, p: h.get("step_ms_exact"),
-        reason="wall time of the authors' MATLAB code on their machine; ours (the exact rule, "
-               "median per N) is shown for scale"),
-    # -- the wind-turbine benchmark (Odgaard, Stoustrup & Kinnaert 2009/2013)
-    "windturbine-scoreboard:required_detection_s/*": ClaimSpec(
-        "required detection time of fault {0} (s; ours: the fastest method's 97.5th percentile)",
-        ours=lambda h, p: h["best_detection_upper_s"].get(p[-1]), explain="sec-wt-scoreboard",
-        missing="no method detects it in every realisation within the 10 s after its start",
-        cause="sec-wt-reasons",
-        cause_text="each miss and each late detection is measured against the fault's effect on the "
-                   "measurements and the smallest step each detector sees"),
-    "windturbine-scoreboard:published/*": ClaimSpec(
-        "published results on this benchmark: {0}", ours=lambda h, p: None,
-        reason="their tables are not reachable from this machine (at most an abstract in the search "
-               "corpora); no number is guessed"),
-    "windturbine-scoreboard:published_detection_s/cohal_mirea_2017/*/*": ClaimSpec(
-        "Cohal & Mirea 2017, Table 1: delay to the {1} alarm on fault {2} (s; ours: the fastest "
-        "method detecting in every realisation, its mean)",
-        ours=lambda h, p: (h["fastest_method"][p[-1]] or {}).get("detection_time_mean_s"),
-        explain="sec-wt-published", missing="no method detects it in every realisation",
-        reason="another method's result (window statistics, on the benchmark's measured wind, which is "
-               "not public): not ours to reproduce; our four methods' delays on the substitute wind are "
-               "set beside it"),
-}
-
-
-def spec_for(id: str, path: tuple[str, ...]) -> ClaimSpec | None:
-    """The first rule of :data:`SPECS` matching ``id:path`` (``None`` if none)."""
-    key = f"{id}:{'/'.join(path)}"
-    for pattern, spec in SPECS.items():
+def claim_for(id: str, path: tuple[str, ...]) -> Claim | None:
+    """The first claim declared at the registration of ``id`` whose pattern matches ``path``
+    (``None``: an undeclared claim, which the tests refuse)."""
+    try:
+        claims = get(id).claims
+    except UnknownReproductionError:
+        return None
+    key = "/".join(path)
+    for pattern, claim in claims:
         if fnmatch.fnmatchcase(key, pattern):
-            return spec
+            return claim
     return None
 
 
 def chapter_of(id: str) -> str:
-    """The book document that shows reproduction ``id``."""
-    for prefix, doc in CHAPTERS:
-        if id.startswith(prefix):
-            return doc
-    return "book/reproductions"
+    """The book document that shows reproduction ``id`` (its registration's ``chapter``)."""
+    try:
+        chapter = get(id).chapter
+    except UnknownReproductionError:
+        chapter = ""
+    return f"book/{chapter}" if chapter else "book/reproductions"
 
 
 #: Variants of a figure (identifier suffix), for labels.
@@ -727,25 +633,91 @@ def _fig(id: str) -> str:
 
 
 def surrogate_role(id: str, paper: Mapping[str, Any], path: tuple[str, ...],
-                   spec: ClaimSpec = ClaimSpec()) -> str | None:
+                   spec: Claim | None = None) -> str | None:
     """What the paper value at ``path`` is to a surrogate model (``None`` if ``id`` has none).
 
     A ``paper`` dictionary that declares :data:`ROLE_KEYS` decides alone: its key
     ``path[0]`` listed in ``calibrated_to`` is a :data:`CALIBRATION`, in ``predictions`` a
-    :data:`PREDICTION`, in neither an :data:`INPUT` (set into the model). Otherwise
-    ``spec.role`` (default :data:`PREDICTION`) for the ids of :data:`SURROGATE_IDS`.
+    :data:`PREDICTION`, in neither an :data:`INPUT` (set into the model). Otherwise, for a
+    reproduction registered with ``surrogate=True``, the claim's ``role``, else its test's
+    (an input for :data:`IS_INPUT` and :data:`ESTIMATES_INPUT`, a calibration for
+    :data:`IS_CALIBRATION`), else :data:`PREDICTION`.
     """
     if any(k in paper for k in ROLE_KEYS):
         if path[0] in paper.get("calibrated_to", ()):
             return CALIBRATION
         return PREDICTION if path[0] in paper.get("predictions", ()) else INPUT
-    if id not in SURROGATE_IDS:
+    try:
+        surrogate = get(id).surrogate
+    except UnknownReproductionError:
+        surrogate = False
+    if not surrogate:
         return None
-    return spec.role or PREDICTION
+    if spec is None:
+        return PREDICTION
+    return spec.role or {IS_INPUT: INPUT, ESTIMATES_INPUT: INPUT,
+                         IS_CALIBRATION: CALIBRATION}.get(spec.test, PREDICTION)
 
 
 def _order(id: str) -> tuple[int, str]:
-    return (BOOK_ORDER.index(id), id) if id in BOOK_ORDER else (len(BOOK_ORDER), id)
+    from fdi_lib.reproduce.book import book_order  # book imports the registry, as this module
+
+    order = book_order()
+    return (order.index(id), id) if id in order else (len(order), id)
+
+
+# ----------------------------------------------------------------------------- mission
+def _items(paper: str, *names: str) -> tuple[tuple[str, str, tuple[str, ...]], ...]:
+    return tuple((paper, name, (name,)) for name in names)
+
+
+#: The paper items the book sets out to reproduce (the propositions, figures, tables and remarks
+#: listed in ``/work/shared/papers/README.md``): ``(paper_id, item, location prefixes)``; an
+#: item's rows are those whose location starts with one of its prefixes (a figure drawn from a
+#: table's numbers shares the table's rows).
+MISSION: tuple[tuple[str, str, tuple[str, ...]], ...] = (
+    *_items("zb2014", "Prop. 1", "Prop. 2", "Fig. 1", "Fig. 2", "Fig. 3", "Fig. 4", "Table 1",
+            "Fig. 5", "Fig. 6", "Fig. 7", "Fig. 8", "Fig. 9"),
+    *_items("zhang2021", "Prop. 1", "Prop. 2", "Fig. 2", "Fig. 3"),
+    ("zhang2021", "Fig. 4", ("Fig. 4", "Table I,")), ("zhang2021", "Table I", ("Table I,",)),
+    ("zhang2021", "Fig. 5", ("Fig. 5", "Table II,")), ("zhang2021", "Table II", ("Table II,",)),
+    *_items("zhang2021", "Fig. 6", "Fig. 7"),
+    *_items("bz", "Prop. 1", "Prop. 2", "Solution 1", "Solution 2"),
+    *_items("rosa2013", "Fig. 1", "Fig. 2", "Prop. 1", "Prop. 2", "Prop. 3", "Table 1", "Table 2",
+            "Table 3", "Fig. 8", "Fig. 9", "Fig. 10", "Fig. 11", "Fig. 12", "Remark 4"),
+)
+#: States of a paper item (:meth:`Ledger.mission`), from its rows: every compared row agrees; the
+#: least explained difference among them; nothing compared.
+MISSION_STATES = ("reproduced", "differs, measured cause", "hypothesis tested", "bracketed",
+                  "unknown", "values the book sets", "not computed", "not reproducible", "no row")
+_ITEM_STATE = {DIFFERS_UNKNOWN: "unknown", DIFFERS_BRACKETED: "bracketed",
+               DIFFERS_HYPOTHESIS: "hypothesis tested", DIFFERS_MEASURED: "differs, measured cause"}
+
+
+def _in_item(location: str, prefixes: tuple[str, ...]) -> bool:
+    """Whether a row's location belongs to an item: it starts with a prefix ending in a comma, or
+    with another prefix followed by nothing, a space, a comma or a colon (not "Fig. 10" for
+    "Fig. 1")."""
+    return any(location.startswith(p) if p.endswith(",") else
+               location.startswith(p) and location[len(p):len(p) + 1] in ("", " ", ",", ":")
+               for p in prefixes)
+
+
+def item_state(rows: Sequence[LedgerRow]) -> str:
+    """The state of a paper item from its rows (one of :data:`MISSION_STATES`): "reproduced" when
+    every compared row agrees, else the least explained difference (unknown, then bracketed, then
+    hypothesis tested, then measured cause); without a compared row, what the rows are."""
+    if not rows:
+        return "no row"
+    compared = [r for r in rows if r.status not in (*SET_BY_BOOK, NOT_COMPUTED, NOT_REPRODUCIBLE)]
+    if not compared:
+        statuses = {r.status for r in rows}
+        return ("not computed" if NOT_COMPUTED in statuses else
+                "not reproducible" if NOT_REPRODUCIBLE in statuses else "values the book sets")
+    for status, state in _ITEM_STATE.items():
+        if any(r.status == status for r in compared):
+            return state
+    return "reproduced"
 
 
 # ----------------------------------------------------------------------------- building
@@ -755,6 +727,9 @@ class Ledger:
 
     rows: tuple[LedgerRow, ...]
     sources: dict[str, str] = field(default_factory=dict)
+    #: Wall time (s) of each result computed for this ledger: not part of :meth:`to_json_dict`,
+    #: whose bytes are the same on every run, at any ``--jobs`` and on any cluster.
+    timings: dict[str, float] = field(default_factory=dict)
 
     def counts(self) -> dict[str, int]:
         """Number of rows per status (every status present, possibly 0)."""
@@ -765,10 +740,46 @@ class Ledger:
         return {p: {s: sum(r.status == s and r.paper_id == p for r in self.rows) for s in STATUSES}
                 for p in PAPERS}
 
+    def mission(self) -> list[dict[str, Any]]:
+        """Each paper item of :data:`MISSION`: ``{"paper_id", "item", "state", "rows",
+        "statuses"}`` (its state from :func:`item_state`, its rows' identifiers and locations,
+        the number of rows per status)."""
+        out = []
+        for paper, item, prefixes in MISSION:
+            rows = [r for r in self.rows if r.paper_id == paper and _in_item(r.location, prefixes)]
+            out.append({"paper_id": paper, "item": item, "state": item_state(rows),
+                        "rows": [f"{r.id}:{'/'.join(r.path)}" for r in rows],
+                        "statuses": {st: n for st in STATUSES
+                                     if (n := sum(r.status == st for r in rows))}})
+        return out
+
+    def mission_counts(self) -> dict[str, dict[str, int]]:
+        """``{paper_id: {state: items}}`` over :data:`MISSION` (every state, possibly 0)."""
+        items = self.mission()
+        return {p: {st: sum(i["state"] == st and i["paper_id"] == p for i in items)
+                    for st in MISSION_STATES} for p in dict.fromkeys(p for p, _, _ in MISSION)}
+
     def to_json_dict(self) -> dict[str, Any]:
-        """``{"counts", "counts_by_paper", "rows", "sources"}``: ``reproduce --ledger --json``."""
+        """``{"counts", "counts_by_paper", "mission", "rows", "sources"}``: ``reproduce --ledger
+        --json`` (no wall time: the same bytes on every run)."""
         return {"counts": self.counts(), "counts_by_paper": self.counts_by_paper(),
+                "mission": {"items": self.mission(), "counts_by_paper": self.mission_counts()},
                 "rows": [r.to_json_dict() for r in self.rows], "sources": dict(self.sources)}
+
+    def mission_table(self):
+        """A :func:`fdi_lib.report.table`: each paper item, its state and its rows per status."""
+        rows = {f"{PAPERS[i['paper_id']]}, {i['item']}": [
+            i["state"], "; ".join(f"{n} {st}" for st, n in i["statuses"].items()) or "none"]
+            for i in self.mission()}
+        return table(rows, ["state", "ledger rows"], index_header="paper item")
+
+    def mission_summary(self):
+        """A :func:`fdi_lib.report.table`: paper items per state (rows) and paper (columns)."""
+        by = self.mission_counts()
+        rows = {st: [*(fmt_count(by[p][st]) for p in by), fmt_count(sum(by[p][st] for p in by))]
+                for st in MISSION_STATES}
+        rows["all items"] = [*(fmt_count(sum(by[p].values())) for p in by), fmt_count(len(MISSION))]
+        return table(rows, [*(PAPERS[p] for p in by), "all"], index_header="state")
 
     def summary(self):
         """A :func:`fdi_lib.report.table`: claims per status (rows, the first column) and paper."""
@@ -793,7 +804,8 @@ class Ledger:
             rate = _is_rate_claim(r)
             why = [_md(r.status_detail)] if r.status_detail else []
             if r.cause:
-                why.append(f"cause measured in {_link(r.cause)}")
+                why.append(("hypothesis tested in " if r.status == DIFFERS_HYPOTHESIS
+                            else "cause measured in ") + _link(r.cause))
             if (r.explain or r.where) != r.cause:
                 why.append(f"shown in {_link(r.explain or r.where)}")
             if r.note:
@@ -863,14 +875,14 @@ def _paper_trials(id: str) -> int | None:
         return None
 
 
-def _owner(id: str, path: tuple[str, ...], spec: ClaimSpec) -> tuple[str, tuple[str, ...]]:
+def _owner(id: str, path: tuple[str, ...], spec: Claim) -> tuple[str, tuple[str, ...]]:
     """Where the claim ``id:path`` is listed (itself unless ``spec.shown_under``)."""
     if not spec.shown_under:
         return id, path
     return spec.shown_under, spec.same_path(path) if spec.same_path else path
 
 
-def _also_note(res: ReproductionResult, path: tuple[str, ...], spec: ClaimSpec) -> str:
+def _also_note(res: ReproductionResult, path: tuple[str, ...], spec: Claim) -> str:
     """What a second reproduction checking the same claim finds (shown in the owner's row)."""
     try:
         ours = spec.ours(res.headline, path) if spec.ours else _at(res.headline, path)
@@ -884,11 +896,14 @@ def _also_note(res: ReproductionResult, path: tuple[str, ...], spec: ClaimSpec) 
                                            if trials else "") + f": {value}")
 
 
-def _row_status(outcome: str, how: str, *, spec: ClaimSpec, role: str | None, paper: Any,
+def _row_status(outcome: str, how: str, *, spec: Claim, role: str | None, paper: Any,
                 ours: Any, headline: Mapping[str, Any], path: tuple[str, ...],
                 trials: int | None, paper_trials: int | None) -> tuple[str, str, str | None]:
-    """The row status, its detail and its cause label, from the comparison ``outcome``."""
-    if outcome == REPRODUCED and (role == INPUT or spec.role == INPUT):
+    """The row status, its detail and its link (a cause or a hypothesis), from ``outcome``."""
+    agrees = outcome in AGREES
+    if agrees and (role == INPUT or spec.test == IS_INPUT):
+        if spec.test == ESTIMATES_INPUT:
+            return INPUT_RECOVERED, _RECOVERED, None
         return INPUT_VALUE, "a value the book sets, equal by construction", None
     if outcome == NOT_REPRODUCIBLE:
         return NOT_REPRODUCIBLE, how, None
@@ -898,14 +913,20 @@ def _row_status(outcome: str, how: str, *, spec: ClaimSpec, role: str | None, pa
                 f"{fmt_count(paper_trials)} trials", None)
     if outcome == NOT_COMPUTED:
         return NOT_COMPUTED, how, None
-    if role == CALIBRATION and outcome in AGREES:
+    if agrees and spec.test == ESTIMATES_INPUT:
+        return INPUT_RECOVERED, _RECOVERED, None
+    if agrees and (role == CALIBRATION or spec.test == IS_CALIBRATION):
         return CALIBRATION_TARGET, "the surrogate was calibrated to this value", None
     if outcome == WITHIN_SPREAD:
         return WITHIN_SPREAD, _spread_detail(headline, path), None
     if outcome != DIFFERS:
         return outcome, "", None
-    if spec.cause and (spec.cause_if is None or spec.cause_if(paper, ours, headline, path)):
+    if spec.cause:
         return DIFFERS_MEASURED, spec.cause_text, spec.cause
+    if spec.hypothesis:
+        return DIFFERS_HYPOTHESIS, spec.hypothesis_text, spec.hypothesis
+    if spec.bracket is not None and spec.bracket(paper, ours, headline, path):
+        return DIFFERS_BRACKETED, spec.bracket_text, None
     return DIFFERS_UNKNOWN, (f"ruled out by measurement: {spec.ruled_out}" if spec.ruled_out
                              else "no measurement of the cause yet"), None
 
@@ -932,7 +953,7 @@ def build_ledger(results: Mapping[str, ReproductionResult], *, strict: bool = Fa
     also: dict[tuple[str, tuple[str, ...]], list[str]] = {}
     for id, res in results.items():
         for path in claim_paths(res.paper):
-            spec = spec_for(id, path) or ClaimSpec()
+            spec = claim_for(id, path) or _PLAIN
             owner = _owner(id, path, spec)
             if spec.same_path and owner[0] != id and (note := _also_note(res, path, spec)):
                 also.setdefault(owner, []).append(note)
@@ -943,12 +964,16 @@ def build_ledger(results: Mapping[str, ReproductionResult], *, strict: bool = Fa
         trials = res.settings.get("trials", res.settings.get("trials_per_fault"))
         trials = None if trials is None else int(trials)
         for path in claim_paths(res.paper):
-            spec = spec_for(id, path) or ClaimSpec()
-            if spec.shown_under and not (own_readings and spec.same_path):
+            spec = claim_for(id, path)
+            if spec is None:
+                if strict:
+                    raise ModelError(f"ledger: {id}:{'/'.join(path)} has no claim declared at its "
+                                     f"registration (register(..., claims=...))")
+                spec = _PLAIN
+            if spec.shown_under and not (own_readings and spec.same_path and spec.figure_reading):
                 continue
             paper = _at(res.paper, path)
-            label = (spec.label or f"{_fig(id)}: {' '.join(path)}").format(
-                *path[1:], fig=_fig(id), num=re.sub(r"^\D+", "", path[-1]))
+            label = _label(id, path, spec)
             ours, missing = None, ""
             try:
                 ours = spec.ours(res.headline, path) if spec.ours else _at(res.headline, path)
@@ -957,8 +982,11 @@ def build_ledger(results: Mapping[str, ReproductionResult], *, strict: bool = Fa
                     raise ModelError(f"ledger: {id} has no value of ours for {exc}") from None
                 missing = f"our value ({exc}) is missing"
             ci = spec.ci(res.headline, path) if spec.ci else _default_ci(res.headline, path)
+            se = spec.se(res.headline, path) if spec.se else _default_se(res.headline, path)
             outcome, how = claim_status(paper, ours, ci, spec, res.headline,
-                                        _default_spread(res.headline, path))
+                                        _default_spread(res.headline, path), se)
+            if ci is None and spec.test == BY_STANDARD_ERROR and _numbers(ours) and _numbers(se):
+                ci = _se_interval(ours, se, spec.z)
             if missing and outcome not in (NOT_REPRODUCIBLE,):
                 outcome, how = NOT_COMPUTED, missing
             if strict and outcome == NOT_REPRODUCIBLE and not spec.reason:
@@ -976,12 +1004,15 @@ def build_ledger(results: Mapping[str, ReproductionResult], *, strict: bool = Fa
                 explain=spec.explain or (chapter_of(id) if status not in AGREES else None),
                 note=note, role=role, trials=trials,
                 source=(sources or {}).get(id, "computed"), status_detail=detail, cause=cause,
-                paper_trials=paper_trials))
+                paper_trials=paper_trials, units=spec.units, test=spec.test,
+                location=spec.location.format(*path[1:], fig=_fig(id),
+                                              num=re.sub(r"^\D+", "", path[-1]))))
     return Ledger(rows=tuple(rows), sources=dict(sources or {}))
 
 
 def collect_results(*, max_trials: int | None = None, ids: Sequence[str] | None = None,
-                    use_cache: bool = True) -> tuple[dict[str, ReproductionResult], dict[str, str]]:
+                    use_cache: bool = True, jobs: int = 1
+                    ) -> tuple[dict[str, ReproductionResult], dict[str, str], dict[str, float]]:
     """A result per reproduction at the book's settings (:func:`fdi_lib.reproduce.book.book_settings`,
     the seed and trials the chapters use, without options): the run the build cached, else a
     fresh one.
@@ -995,17 +1026,20 @@ def collect_results(*, max_trials: int | None = None, ids: Sequence[str] | None 
         Restrict to these identifiers (default: all registered).
     use_cache : bool
         Read the build's run first (:func:`~fdi_lib.reproduce.registry.cached_run`).
+    jobs : int
+        Cores of a fresh run (no result depends on it).
 
     Returns
     -------
-    results, sources : dict, dict
-        The results and, per id, ``"cached"`` or ``"computed"`` (with the trial count used
-        and the run time).
+    results, sources, timings : dict, dict, dict
+        The results; per id, ``"cached ..."`` or ``"computed ..."`` with the seed and trial
+        count used (the same text on every run); per id computed here, its wall time in seconds
+        (kept apart: it changes from run to run).
     """
     from fdi_lib.reproduce.book import book_settings  # book imports this module's registry
 
     wanted = [r.id for r in list_reproductions()] if ids is None else list(ids)
-    results, sources = {}, {}
+    results, sources, timings = {}, {}, {}
     for id in wanted:
         book = book_settings(id)
         hit = cached_run(id, seed=book.seed, trials=book.trials) if use_cache else None
@@ -1019,17 +1053,17 @@ def collect_results(*, max_trials: int | None = None, ids: Sequence[str] | None 
         if max_trials is not None and trials is not None and trials > max_trials:
             trials = max_trials
         t0 = time.perf_counter()
-        results[id] = get(id)(seed=book.seed, trials=trials)
-        sources[id] = (f"computed here (seed {book.seed}, "
-                       f"{'' if trials is None else f'{trials} trials, '}"
-                       f"{time.perf_counter() - t0:.1f} s)")
-    return results, sources
+        results[id] = get(id)(seed=book.seed, trials=trials, jobs=jobs)
+        timings[id] = time.perf_counter() - t0
+        sources[id] = f"computed here (seed {book.seed}" + (
+            "" if trials is None else f", {fmt_count(trials)} trial" + "s" * (trials != 1)) + ")"
+    return results, sources, timings
 
 
-def ledger(*, max_trials: int | None = None, strict: bool = False) -> Ledger:
+def ledger(*, max_trials: int | None = None, strict: bool = False, jobs: int = 1) -> Ledger:
     """The ledger of every registered reproduction (see :func:`collect_results`)."""
-    results, sources = collect_results(max_trials=max_trials)
-    return build_ledger(results, strict=strict, sources=sources)
+    results, sources, timings = collect_results(max_trials=max_trials, jobs=jobs)
+    return replace(build_ledger(results, strict=strict, sources=sources), timings=timings)
 
 
 # ----------------------------------------------------------------------------- captions
@@ -1048,8 +1082,9 @@ class FigureClaim:
     ----------
     verb : str
         :data:`REPRODUCES` when every compared ledger row of the reproduction is in
-        :data:`AGREES` (input and calibration rows are not compared), :data:`REDRAWS` when no
-        row is compared, :data:`COMPARE` otherwise.
+        :data:`AGREES` (the rows of :data:`SET_BY_BOOK`, inputs, our estimates of them and
+        calibration targets, are not compared), :data:`REDRAWS` when no row is compared,
+        :data:`COMPARE` otherwise.
     differs : str
         Empty, or ``"; differs: ..."`` naming briefly what does not agree (the first
         :data:`CAPTION_ITEMS` differences, then counts), to close the caption's parenthesis
@@ -1064,8 +1099,9 @@ class FigureClaim:
 
 
 def _short(r: LedgerRow) -> str:
-    """The row's label without its "Fig. N: " or "Table I: " prefix (the caption names it)."""
-    return re.sub(r"^(Fig\.|Table) [^:]*: ", "", r.label)
+    """The row's label without its figure or table ("Fig. N, ", "Table I (text): "): the caption
+    names it."""
+    return re.sub(r"^(Fig\.|Table) [^,:( ]+( \([^)]*\))?[,:] ?", "", r.label)
 
 
 def _difference(r: LedgerRow) -> str:
@@ -1084,7 +1120,7 @@ def figure_claim(result: ReproductionResult) -> FigureClaim:
     (``same_path``: the per-radian UAV figures), which its figure shows.
     """
     rows = build_ledger({result.id: result}, own_readings=True).rows
-    compared = [r for r in rows if r.status not in (INPUT_VALUE, CALIBRATION_TARGET)]
+    compared = [r for r in rows if r.status not in SET_BY_BOOK]
     if not compared:
         return FigureClaim(REDRAWS, "", rows)
     bad = [r for r in compared if r.status not in AGREES]

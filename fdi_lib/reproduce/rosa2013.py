@@ -18,6 +18,7 @@ import numpy as np
 from fdi_lib.errors import EnvelopeWarning, UnsoundOptionWarning
 from fdi_lib.montecarlo import trial_seeds
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, axes3d, figure
+from fdi_lib.reproduce.ledger import BY_TOLERANCE, IS_INPUT, NOT_CHECKABLE, Claim, shown_under
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.sets.polytope import Polytope, convex_hull, plot_polytope
 from fdi_lib.sets.svo import SVOModel, run_architecture_i_many, run_svo, run_svo_many
@@ -122,7 +123,7 @@ def plot_fig1(result: ReproductionResult, fig: Any = None):
 
 
 @register("rosa2013-fig1", paper=PAPER, title="Projection of Set(P, p) of eq. (3) onto the state (Fig. 1)",
-          plot=plot_fig1)
+          plot=plot_fig1, chapter="rosa2013/svo")
 def fig1(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Fig. 1: the lifted polytope of eq. (3) in (x(k+1), d(k)) and its projection onto x(k+1).
 
@@ -184,7 +185,7 @@ def plot_fig2(result: ReproductionResult, fig: Any = None):
 
 
 @register("rosa2013-fig2", paper=PAPER, title="SVO hulls: sets for Delta = +1 and -1 and their convex hull (Fig. 2)",
-          plot=plot_fig2)
+          plot=plot_fig2, chapter="rosa2013/svo")
 def fig2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Fig. 2: the sets for Delta = +1 and Delta = -1 (n_A = 1, N = 1) and their convex hull.
 
@@ -259,7 +260,22 @@ def plot_alpha(result: ReproductionResult, fig: Any = None):
     return fig
 
 
-@register("rosa2013-fig8", paper=PAPER, title="AOA measurement with a step sensor fault (Fig. 8)", plot=plot_alpha)
+def _alpha_claims(fig: str, scenario: str) -> dict[str, Claim]:
+    """Figs 8-10: the fault the book sets, and the §6.4 detection time (listed under Fig. 11)."""
+    return {"fault_amplitude_deg": Claim(location=f"Fig. {fig}, fault amplitude", units="deg",
+                                         test=IS_INPUT),
+            "onset_s": Claim(location=f"Fig. {fig}, fault onset", units="s", test=IS_INPUT),
+            "ramp_s": Claim(location=f"Fig. {fig}, ramp duration", units="s", test=IS_INPUT),
+            # the §6.4 sentence of Fig. 11, not a claim of this figure: a note in Fig. 11's row
+            "detection_time_ms": shown_under("rosa2013-fig11",
+                                             lambda p: ("detection_time_ms", "alpha", scenario),
+                                             figure_reading=False)}
+
+
+@register("rosa2013-fig8", paper=PAPER, title="AOA measurement with a step sensor fault (Fig. 8)",
+          plot=plot_alpha,
+          chapter="rosa2013/svo", chapter_seed=True, surrogate=True, claims=_alpha_claims("8",
+                                                                                          "step"))
 def fig8(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Fig. 8: alpha measurement with a +3 deg step fault at t = 0.5 s (one seeded run).
 
@@ -275,14 +291,16 @@ def fig8(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
 
 
 @register("rosa2013-fig9", paper=PAPER, title="AOA measurement with a hard (1 s ramp) sensor fault (Fig. 9)",
-          plot=plot_alpha)
+          plot=plot_alpha, chapter="rosa2013/svo", chapter_seed=True, surrogate=True,
+          claims=_alpha_claims("9", "hard"))
 def fig9(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Fig. 9: alpha measurement with a 5 deg fault ramped over 1 s from t = 0.5 s. Keys as :func:`fig8`."""
     return _alpha_figure("hard", "rosa2013-fig9", seed)
 
 
 @register("rosa2013-fig10", paper=PAPER, title="AOA measurement with a soft (4 s ramp) sensor fault (Fig. 10)",
-          plot=plot_alpha)
+          plot=plot_alpha, chapter="rosa2013/svo", chapter_seed=True, surrogate=True,
+          claims=_alpha_claims("10", "soft"))
 def fig10(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Fig. 10: alpha measurement with a 5 deg fault ramped over 4 s from t = 0.5 s. Keys as :func:`fig8`."""
     return _alpha_figure("soft", "rosa2013-fig10", seed)
@@ -452,8 +470,45 @@ def plot_fig12(result: ReproductionResult, fig: Any = None):
 
 
 
+_NOT_DETECTED = "not detected in any run of the 6 s record"
+_NOT_ISOLATED = "not isolated in any run of the 6 s record"
+_MU_TOTAL = dict(hypothesis="sec-svo-fault-modes", hypothesis_glue=("svo_mu_total_det",
+                                                                    "svo_mu_total_iso"),
+                 hypothesis_text="acting on the total speed, the M_u fault is detected at the "
+                                 "paper's time, and then isolated in no run (measured side effect)")
+
+
+def _times(kind: str, fig: str) -> dict[str, Claim]:
+    """The claims of Fig. 11 (detection) or 12 (isolation): mean time per fault and scenario."""
+    label = f"mean {kind} time"
+    claims = {f"{kind}_time_ms/*/*": Claim(
+        location=f"Fig. {fig} (§6.4 text), {{0}} fault, {{1}} scenario", label=label, units="ms",
+        test=BY_TOLERANCE, explain=f"fig-rosa2013-{fig}",
+        missing=_NOT_DETECTED if kind == "detection" else _NOT_ISOLATED)}
+    if kind == "detection":
+        claims = {"detection_time_ms/dynamics/step": Claim(
+            location="Fig. 11 (§6.4 text), dynamics fault, step scenario", label=label, units="ms",
+            test=BY_TOLERANCE, explain="fig-rosa2013-11", missing=_NOT_DETECTED, **_MU_TOTAL),
+            **claims}
+    return claims
+
+
+def _other_figure(kind: str, fig: str) -> dict[str, Claim]:
+    """Fig. 11's runs carry the isolation times of Fig. 12 and the reverse: one row, under the
+    other."""
+    return {f"{kind}_time_ms/*/*": shown_under(f"rosa2013-fig{fig}")}
+
+
+def _rad(kind: str, fig: str) -> dict[str, Claim]:
+    """The per-radian reading checks the paper's claims again: a note in the per-degree row."""
+    return {f"{kind}_time_ms/*/*": shown_under(
+        f"rosa2013-fig{fig}", lambda p: p, explain=f"fig-rosa2013-{fig}-rad",
+        missing=_NOT_DETECTED if kind == "detection" else _NOT_ISOLATED)}
+
+
 @register("rosa2013-fig11", paper=PAPER, title="Mean fault detection times (Fig. 11)", default_trials=10,
-          plot=plot_fig11, min_trials=1)
+          plot=plot_fig11, min_trials=1, chapter="rosa2013/svo", chapter_seed=True, surrogate=True,
+          claims={**_times("detection", "11"), **_other_figure("isolation", "12")})
 def fig11(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Fig. 11: mean detection time per fault and scenario over ``trials`` runs (paper: 10).
 
@@ -479,21 +534,26 @@ def fig11(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
 
 
 @register("rosa2013-fig12", paper=PAPER, title="Mean fault isolation times (Fig. 12)", default_trials=10,
-          plot=plot_fig12, min_trials=1)
+          plot=plot_fig12, min_trials=1, chapter="rosa2013/svo", chapter_seed=True, surrogate=True,
+          claims={**_times("isolation", "12"), **_other_figure("detection", "11")})
 def fig12(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Fig. 12: mean isolation time per fault and scenario (same runs and keys as :func:`fig11`)."""
     return _study_result("rosa2013-fig12", seed, trials or 10, jobs)
 
 
 @register("rosa2013-fig11-rad", paper=PAPER, title="Mean fault detection times, elevator read per radian (Fig. 11)",
-          default_trials=10, plot=plot_fig11, min_trials=1)
+          default_trials=10, plot=plot_fig11, min_trials=1, chapter="rosa2013/svo",
+          chapter_seed=True,
+          surrogate=True, claims={**_rad("detection", "11"), **_other_figure("isolation", "12")})
 def fig11_rad(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Fig. 11 with the elevator coefficients of (16) read per radian (keys as :func:`fig11`)."""
     return _study_result("rosa2013-fig11-rad", seed, trials or 10, jobs, eta_unit="rad")
 
 
 @register("rosa2013-fig12-rad", paper=PAPER, title="Mean fault isolation times, elevator read per radian (Fig. 12)",
-          default_trials=10, plot=plot_fig12, min_trials=1)
+          default_trials=10, plot=plot_fig12, min_trials=1, chapter="rosa2013/svo",
+          chapter_seed=True,
+          surrogate=True, claims={**_rad("isolation", "12"), **_other_figure("detection", "11")})
 def fig12_rad(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Fig. 12 with the elevator coefficients of (16) read per radian (keys as :func:`fig11`)."""
     return _study_result("rosa2013-fig12-rad", seed, trials or 10, jobs, eta_unit="rad")
@@ -590,6 +650,12 @@ def plot_timing(result: ReproductionResult, fig: Any = None):
 
 
 @register("rosa2013-timing", paper=PAPER, title="Wall time per SVO step against the horizon N (Remark 4)",
+          chapter="rosa2013/svo", chapter_seed=True, claims={"step_ms": Claim(
+              location="Remark 4", label="5 to 200 ms per SVO step (exact rule) depending on N",
+              units="ms",
+              test=NOT_CHECKABLE, ours=lambda h, p: h.get("step_ms_exact"),
+              reason="wall time of the authors' MATLAB code on their machine; ours (the exact "
+                     "rule, median per N) is shown for scale")},
           plot=plot_timing, timed_keys=("step_ms", "step_ms_p90", "step_ms_exact", "step_ms_exact_each",
                                         "exact_within_ts"))
 def timing(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:

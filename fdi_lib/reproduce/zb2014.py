@@ -19,6 +19,7 @@ from fdi_lib.filters import KalmanGains, kalman_filter, kalman_gains
 from fdi_lib.glr import WindowGLRResult, first_alarm, glr_window
 from fdi_lib.models import FaultFamily, LTVModel, fault_profile, impulse_family, ltv_model
 from fdi_lib.plotting import OURS_COLOR, THRESHOLD_COLOR, figure
+from fdi_lib.reproduce.ledger import BY_CHECK, BY_TOLERANCE, ESTIMATES_INPUT, Claim, ours_at
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.signatures import fault_signature, willsky_jones
 from fdi_lib.simulate import simulate
@@ -32,6 +33,9 @@ __all__ = ["ONSETS", "UnstableRun", "unstable_run", "plot_detection", "plot_fig1
 PAPER = "Zhang & Basseville 2014"
 #: Impulse onsets of Figures 1 and 2.
 ONSETS = (1, 101, 201, 301)
+#: Onset ``r`` and GLR window ``w`` of Figures 3 and 4.
+FAULT_ONSET, GLR_WINDOW = 201, 100
+_LOG12 = float(np.log10(1.2))   # the growth rate of Fig. 2: log10 of the unstable eigenvalue
 
 
 def _spectral_norms(mats: np.ndarray) -> np.ndarray:
@@ -181,8 +185,21 @@ def plot_fig1(result: ReproductionResult, fig: Any = None):
     return fig
 
 
+_FIG1_CAUSE = dict(explain="sec-zb-fig1-bound", cause="sec-zb-fig1-bound")
+
+
 @register("zb2014-fig1", paper=PAPER, title="Spectral norm of Gamma_k, impulses at r = 1, 101, 201, 301",
-          plot=plot_fig1)
+          plot=plot_fig1, chapter="zb2014/signature", claims={
+              "unstable_eigenvalue": Claim(
+                  location="Fig. 1 (§6.1 text)", label="the unstable eigenvalue of F", units="",
+                  test=BY_TOLERANCE, **_FIG1_CAUSE, cause_glue=("sig-quoted", "sig-typo-count"),
+                  cause_text="the printed F is triangular, with eigenvalues 0.5 and 1.2, and we "
+                             "use it; the section checks every one-entry misprint that gives the "
+                             "quoted value"),
+              "gamma_norm_max/*": Claim(
+                  location="Fig. 1, impulse at r = {0}", label="‖Γ_k‖ stays under 1", units="",
+                  test=BY_TOLERANCE, **_FIG1_CAUSE, cause_glue=("sig-bound", "sig-gamma-max"),
+                  cause_text="‖Γ_(r+1)‖ ≥ ‖F e₂‖ > 1 for the printed matrices, whatever P₀, Q, R")})
 def fig1(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Paper Fig. 1: boundedness of the fault-signature filter (12) on the unstable example.
 
@@ -354,7 +371,12 @@ def plot_fig2(result: ReproductionResult, fig: Any = None):
 
 
 @register("zb2014-fig2", paper=PAPER, title="Spectral norm of Willsky-Jones alpha_k(r) (log scale)",
-          plot=plot_fig2)
+          plot=plot_fig2, chapter="zb2014/signature", claims={
+              "alpha_log10_norm_final/*": Claim(
+                  location="Fig. 2, impulse at r = {0}", label="log ‖α_k(r)‖ grows linearly in k",
+                  units="", test=BY_CHECK, ours=ours_at("alpha_log10_slope"),
+                  check=lambda p, o, h: abs(o - _LOG12) <= 0.01 * _LOG12,
+                  criterion="fitted slope of log₁₀‖α_k(r)‖ is log₁₀ 1.2 within 1 %")})
 def fig2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Paper Fig. 2: the Willsky-Jones ``alpha_k(r)`` of eq. (A.6) diverges on the unstable example.
 
@@ -420,7 +442,8 @@ class UnstableRun:
     alarm: int
 
 
-def unstable_run(theta: tuple[float, float] = (4.0, 0.0), onset: int = 201, window: int = 100,
+def unstable_run(theta: tuple[float, float] = (4.0, 0.0), onset: int = FAULT_ONSET,
+                 window: int = GLR_WINDOW,
                  threshold: float | None = None, seed: int = 0, n_steps: int = ex.N_STEPS) -> UnstableRun:
     """Simulate Section 6.1 with ``delta_{r,k+1} theta``, run the Kalman filter and the windowed GLR.
 
@@ -570,8 +593,38 @@ def plot_fig3(result: ReproductionResult, fig: Any = None):
     return plot_detection(result.data["run"], fig=fig)
 
 
+def _glr_claims(fig: str, visibility: Claim) -> dict[str, Claim]:
+    """The claims of Figs 3 and 4 (one run of the windowed GLR)."""
+    return {
+        "onset_estimate": Claim(
+            location=f"Fig. {fig}, the onset set at r = {FAULT_ONSET}",
+            label="our onset estimate r̂ at the peak of l_k (sums from j = r̂, see the convention)",
+            units="sample", test=ESTIMATES_INPUT, explain="sec-zb-glr-onset"),
+        "glr_argmax_time": Claim(
+            location=f"Fig. {fig}, bottom panel",
+            label="l_k is largest while the onset is in the window",
+            units="sample", test=BY_CHECK,
+            check=lambda p, o, h: FAULT_ONSET <= o <= FAULT_ONSET + GLR_WINDOW,
+            criterion=f"{FAULT_ONSET} ≤ argmax l_k ≤ {FAULT_ONSET + GLR_WINDOW}"),
+        "theta_estimate": Claim(
+            location=f"Fig. {fig}, the fault θ set in the caption",
+            label="our estimate θ̂ at the peak of l_k", units="", test=ESTIMATES_INPUT,
+            explain="sec-zb-glr-figs", ci=lambda h, p: None, rtol=0.0,
+            check=lambda p, o, h: all(lo <= t <= hi for t, (lo, hi) in zip(p,
+                                                                           h["theta_estimate_ci"])),
+            criterion="each component of the paper's θ in our 95 % interval (θ̂ ± 1.96 σ from "
+                      "C_k(r̂))"),
+        "fault_visibility": visibility}
+
+
 @register("zb2014-fig3", paper=PAPER, title="Innovation and GLR l_k, theta = [4, 0], onset 201, w = 100",
-          plot=plot_fig3)
+          plot=plot_fig3, chapter="zb2014/glr", chapter_seed=True, claims=_glr_claims("3", Claim(
+              location="Fig. 3, top panel",
+              label="the fault shows on the innovation only briefly after 201 (ours: samples above "
+                    "the pre-fault maximum)", units="sample", test=BY_CHECK,
+              ours=lambda h, p: h["innovation_samples_above_premax"],
+              check=lambda p, o, h: o <= 10,
+              criterion="at most 10 samples above the pre-fault max |ε_k|")))
 def fig3(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Paper Fig. 3: impulsive fault ``theta = [4, 0]`` at ``k = 201``, windowed GLR with ``w = 100``.
 
@@ -606,7 +659,14 @@ def plot_fig4(result: ReproductionResult, fig: Any = None):
 
 
 @register("zb2014-fig4", paper=PAPER, title="Innovation and GLR l_k, theta = [1.5, 0], onset 201, w = 100",
-          plot=plot_fig4)
+          plot=plot_fig4, chapter="zb2014/glr", chapter_seed=True, claims=_glr_claims("4", Claim(
+              location="Fig. 4, top panel",
+              label="the fault is hardly visible on the innovation (ours: largest |ε_k|/σ_k from "
+                    "201)",
+              units="σ", test=BY_CHECK, explain="sec-zb-glr-figs",
+              ours=lambda h, p: h["innovation_max_sigma_after_fault"],
+              check=lambda p, o, h: o <= h["innovation_max_sigma_before_fault"],
+              criterion="largest |ε_k|/σ after 201 within the pre-fault range")))
 def fig4(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Paper Fig. 4: the smaller impulsive fault ``theta = [1.5, 0]``; same keys as ``zb2014-fig3``."""
     return _detection_result("zb2014-fig4", (1.5, 0.0), seed)

@@ -33,6 +33,8 @@ from fdi_lib.kitanidis import kitanidis_filter, kitanidis_gains, residual_signat
 from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.montecarlo import binomial_ci, run_monte_carlo_many, trial_rngs, trial_seeds
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
+from fdi_lib.reproduce.ledger import (BY_INTERVAL, BY_STANDARD_ERROR, BY_TOLERANCE, IS_INPUT, Claim,
+                                      ci_at, ours_at, shown_under)
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.sparse import (RegressionData, flat_range, flat_ranges, grid_flat_ranges,
                             lasso_path, lasso_path_batch, least_squares_on_support, regression_data)
@@ -44,7 +46,8 @@ __all__ = ["VARIANT_Q", "VARIANT_R", "VARIANT_GRIDS", "RULE_READINGS", "INIT_VAR
            "example1_regression", "snr_db", "snr_variants", "snr_comparison", "closest_snr_reading",
            "example1_chunk", "lambda_rule_chunk", "initial_state_chunk", "initial_state_models",
            "unknown_input_effect", "lambda_rule_table", "initial_state_table", "paper_between_readings",
-           "rate_table", "snr_table", "grid_rule_difference", "paper_outside_ci", "example1_rates",
+           "rate_table", "snr_table", "paper_snr_off_curve", "grid_rule_difference",
+           "paper_outside_ci", "example1_rates",
            "example2_setup", "example2_input", "example2_intervention_chunk", "EX2_INTERVENTIONS",
            "ORACLE_PATHS", "scaled_regressors", "oracle_table", "intervention_table", "plot_fig2",
            "plot_fig3", "plot_table1", "plot_table2", "plot_fig6", "plot_fig7"]
@@ -192,10 +195,11 @@ def example1_rates(*, q_values: Sequence[int], r_values: Sequence[float], trials
 
     Returns a dict of per-column arrays: ``success_log``, ``success_linear``, ``success_grid50``,
     ``success_grid200`` (counts), ``ci_log`` (95 % Clopper-Pearson), ``snr_db`` (mean over trials,
-    per output), ``mean_size_log`` (mean selected size).
+    per output) and ``snr_db_se`` (its standard error, NaN for one trial), ``mean_size_log`` (mean
+    selected size).
     """
     cols: dict[str, list[Any]] = {"success_log": [], "success_linear": [], "ci_log": [], "snr_db": [],
-                                  "mean_size_log": []}
+                                  "snr_db_se": [], "mean_size_log": []}
     cols.update({f"success_grid{n}": [] for n in GRID_SIZES})
     columns = run_monte_carlo_many([partial(example1_chunk, q=int(q), r=float(r))
                                     for q, r in zip(q_values, r_values)], trials, seed=seed, jobs=jobs)
@@ -205,6 +209,9 @@ def example1_rates(*, q_values: Sequence[int], r_values: Sequence[float], trials
         cols["success_linear"].append(int(res["success_linear"].sum()))
         cols["ci_log"].append(binomial_ci(k_log, trials))
         cols["snr_db"].append(res["snr_db"].mean(axis=0))
+        n_snr = res["snr_db"].shape[0]
+        cols["snr_db_se"].append(res["snr_db"].std(axis=0, ddof=1) / np.sqrt(n_snr) if n_snr > 1
+                                 else np.full(res["snr_db"].shape[1], np.nan))
         cols["mean_size_log"].append(float(res["size_log"].mean()))
         for n in GRID_SIZES:
             cols[f"success_grid{n}"].append(int(res[f"success_grid{n}"].sum()))
@@ -252,7 +259,10 @@ def _plot_support(result: ReproductionResult, fig: Any, title: str):
 
 
 @register("zhang2021-fig2", paper=PAPER, title="Example 1: support size of the Lasso estimate against lambda",
-          plot=plot_fig2)
+          plot=plot_fig2, chapter="zhang2021/sparse", claims={
+              "flat_size": Claim(location="Fig. 2", label="support size on the flat range of λ",
+                                 units="",
+                                 test=BY_TOLERANCE)})
 def fig2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Paper Fig. 2: one trial of Example 1 (q = 5), support size along the exact Lasso path.
 
@@ -309,7 +319,15 @@ def _plot_diamonds(result: ReproductionResult, fig: Any, title: str):
 
 
 @register("zhang2021-fig3", paper=PAPER, title="Example 1: Lasso diamonds, least-squares circles, true asterisks",
-          plot=plot_fig3)
+          plot=plot_fig3, chapter="zhang2021/sparse", claims={
+              "same_support_in_range": Claim(
+                  location="Fig. 3 (§IV text), every λ of the flat range", label="the same support",
+                  units="", test=BY_TOLERANCE),
+              "support_equals_true": Claim(
+                  location="Fig. 3, diamonds against asterisks",
+                  label="the selected support is the true one",
+                  units="", test=BY_TOLERANCE,
+                  ours=lambda h, p: sorted(h["support"]) == sorted(h["true_support"]))})
 def fig3(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Paper Fig. 3: the same trial as ``zhang2021-fig2``.
 
@@ -370,8 +388,28 @@ def _rate_dict(keys: Sequence[Any], counts: np.ndarray, trials: int) -> dict[str
     return {str(k): float(c) / trials for k, c in zip(keys, counts)}
 
 
+def _between_readings(paper: Any, ours: Any, h: dict[str, Any], path: tuple[str, ...]) -> bool:
+    """The paper's rate lies between our log-width and linear-width readings of the λ rule,
+    on the same trials (a bracket, not a cause)."""
+    lin = h.get("success_rate_linear", {}).get(path[-1])
+    return lin is not None and min(ours, lin) <= paper <= max(ours, lin)
+
+
+def _rate_claim(table: str, column: str) -> Claim:
+    """A success rate of Table I or II: the paper's rate in our 95 % interval at its 1000 trials."""
+    return Claim(location=f"Table {table}, success rate at {column} = {{0}}", units="%",
+                 test=BY_INTERVAL, ci=ci_at("ci95"), explain="zhang2021-lambda-rule",
+                 bracket=_between_readings,
+                 bracket_text="the paper's rate lies between our log-width and linear-width "
+                              "readings of the rule for λ on the same trials, inside the interval "
+                              "of neither",
+                 ruled_out="our readings of the rule for λ (the paper's rate lies outside them), "
+                           "the unknown input d_k, and at q = 15 the initial state")
+
+
 @register("zhang2021-table1", paper=PAPER, title="Example 1: success rate against the number of faults q",
-          default_trials=1000, plot=plot_table1)
+          default_trials=1000, plot=plot_table1, chapter="zhang2021/sparse",
+          claims={"success_rate/*": _rate_claim("I", "q")})
 def table1(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Paper Table I / Fig. 4: isolation success rate for q = 5 .. 25 (r = 0.5, N = 100).
 
@@ -438,7 +476,17 @@ def _rate_table_axes(ax: Any, values: Sequence[float], rates: dict[str, Any], pa
 
 
 @register("zhang2021-table2", paper=PAPER, title="Example 1: success rate and SNR against the noise factor r",
-          default_trials=1000, plot=plot_table2)
+          default_trials=1000, plot=plot_table2, chapter="zhang2021/sparse", claims={
+              "success_rate/*": _rate_claim("II", "r"),
+              "snr_db/150": Claim(
+                  location="Table II, SNR of outputs 1 and 2 at r = 150", units="dB",
+                  test=BY_STANDARD_ERROR, explain="fig-zhang2021-5", cause="sec-zhang2021-snr-150",
+                  cause_glue=("zhang2021_snr150_rise_*", "zhang2021_snr150_off_*"),
+                  cause_text="a paper-side inconsistency: the paper's SNR rises from r = 140 to r "
+                             "= 150, while 10 log10(1 + S/r) decreases in r, and lies many of our "
+                             "standard errors off the curve through its neighbours"),
+              "snr_db/*": Claim(location="Table II, SNR of outputs 1 and 2 at r = {0}", units="dB",
+                                test=BY_STANDARD_ERROR, explain="fig-zhang2021-5")})
 def table2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Paper Table II / Fig. 5: isolation rate and mean output SNR for R = r I_2 (q = 5, N = 100).
 
@@ -452,6 +500,9 @@ def table2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
         Per r, Clopper-Pearson 95 % interval of ``success_rate``.
     snr_db : dict
         Per r, ``[output 1, output 2]``: mean over trials of the SNR of :func:`snr_db`.
+    snr_db_se : dict
+        Per r, ``[output 1, output 2]``: standard error of that mean (the SNR rows of the claims
+        ledger are compared by it; ``null`` for one trial).
     success_rate_grid50, success_rate_grid200 : dict
         Per r, success fraction of the rule on a geometric grid of 50 / 200 ``lambda`` values
         (:func:`fdi_lib.sparse.grid_flat_range`), on the same trials.
@@ -462,7 +513,9 @@ def table2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     headline = {"success_rate": _rate_dict(keys, rates["success_log"], n),
                 "success_rate_linear": _rate_dict(keys, rates["success_linear"], n),
                 "ci95": {k: list(c) for k, c in zip(keys, rates["ci_log"])},
-                "snr_db": {k: [float(s[0]), float(s[1])] for k, s in zip(keys, rates["snr_db"])}}
+                "snr_db": {k: [float(s[0]), float(s[1])] for k, s in zip(keys, rates["snr_db"])},
+                "snr_db_se": {k: [float(s[0]), float(s[1])] for k, s in zip(keys,
+                                                                            rates["snr_db_se"])}}
     headline.update({f"success_rate_grid{g}": _rate_dict(keys, rates[f"success_grid{g}"], n) for g in GRID_SIZES})
     paper = {"success_rate": {f"{r:g}": v for r, v in PAPER_TABLE2["success_rate"].items()},
              "snr_db": {f"{r:g}": list(v) for r, v in PAPER_TABLE2["snr_db"].items()}}
@@ -471,6 +524,26 @@ def table2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
                                         "snr": "10 log10(var_k y / var_k v), k = 1..N, mean over trials",
                                         "grid_sizes": list(GRID_SIZES)},
                               data=rates)
+
+
+def paper_snr_off_curve(result: ReproductionResult, r: str = "150") -> dict[str, list[float]]:
+    """How Table II's SNR at ``r`` sits among the paper's own neighbours (a paper-side check).
+
+    ``SNR = 10 log10(1 + S / r)`` decreases in ``r`` for a fixed signal power ``S``, so each
+    column of Table II must fall from one ``r`` to the next. Returns, per output, ``rise_db``:
+    the paper's value at ``r`` minus its value at the previous ``r`` (positive: an increase the
+    formula forbids), and ``off_curve_se``: the paper's value at ``r`` minus the mean of its two
+    neighbours, in standard errors of our estimate at ``r`` (``result``: a ``zhang2021-table2``
+    result with ``snr_db_se``).
+    """
+    keys = list(result.paper["snr_db"])
+    i = keys.index(r)
+    if not 0 < i < len(keys) - 1:
+        raise ModelError(f"r: expected a value of Table II with two neighbours, got {r!r}")
+    paper = {k: np.asarray(result.paper["snr_db"][k], dtype=float) for k in keys[i - 1:i + 2]}
+    lo, mid, hi = (paper[k] for k in keys[i - 1:i + 2])
+    se = np.asarray(result.headline["snr_db_se"][r], dtype=float)
+    return {"rise_db": (mid - lo).tolist(), "off_curve_se": ((mid - (lo + hi) / 2) / se).tolist()}
 
 
 # --------------------------------------------------------------------------- the lambda rule: variants
@@ -633,7 +706,15 @@ def _variant_columns() -> list[tuple[str, int, float]]:
 
 
 @register("zhang2021-lambda-rule", paper=PAPER,
-          title="Example 1: readings of the lambda rule, the oracle and the initial state (Tables I-II)")
+          title="Example 1: readings of the lambda rule, the oracle and the initial state "
+                "(Tables I-II)",
+          chapter="zhang2021/sparse", claims={
+              # the values of Tables I-II that this study checks again on fewer trials: one row,
+              # under the table (the paper's trial count)
+              f"success_rate/{c}*": shown_under(f"zhang2021-table{t}", lambda p: (p[0], p[1][1:]),
+                                                ours=ours_at("success_rate", "log"),
+                                                ci=ci_at("ci95", "log"))
+              for c, t in (("q", "1"), ("r", "2"))})
 def lambda_rule(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Which reading of the paper's rule for ``lambda`` could give the rates of Tables I-II?
 
@@ -1025,7 +1106,9 @@ EX2_RECORDS = 10
 
 
 @register("zhang2021-example2-interventions", paper=PAPER,
-          title="Example 2 (surrogate pipeline): isolation under changes of the input and of the noise")
+          title="Example 2 (surrogate pipeline): isolation under changes of the input and of the "
+                "noise",
+          chapter="zhang2021/sparse", surrogate=True)
 def example2_interventions(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Why the surrogate cannot separate the leaks of Example 2: the input, or the noise?
 
@@ -1080,8 +1163,18 @@ def plot_fig6(result: ReproductionResult, fig: Any = None):
     return _plot_support(result, fig, "Example 2 (surrogate pipeline): support size")
 
 
+_EX2_CAUSE = dict(cause="sec-zhang2021-example2-causes",
+                  cause_glue=("zhang2021_iv_white", "zhang2021_iv_state_noise",
+                              "zhang2021_iv_output_noise"),
+                  cause_text="the input of the surrogate: interventions on the input, not on the "
+                             "noise, change the selected support")
+
+
 @register("zhang2021-fig6", paper=PAPER, title="Example 2 (surrogate pipeline): support size against lambda",
-          plot=plot_fig6)
+          plot=plot_fig6, chapter="zhang2021/sparse", surrogate=True, claims={
+              "flat_size": Claim(location="Fig. 6", label="support size on the flat range of λ",
+                                 units="",
+                                 test=BY_TOLERANCE, explain="fig-zhang2021-6", **_EX2_CAUSE)})
 def fig6(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Paper Fig. 6: one record of Example 2 on the surrogate pipeline, exact Lasso path.
 
@@ -1125,7 +1218,13 @@ def plot_fig7(result: ReproductionResult, fig: Any = None):
 
 
 @register("zhang2021-fig7", paper=PAPER, title="Example 2 (surrogate pipeline): Lasso diamonds, LS circles, truth",
-          plot=plot_fig7)
+          plot=plot_fig7, chapter="zhang2021/sparse", surrogate=True, claims={
+              # in the paper's own indexing (its 10th and 15th components)
+              "support_1based": Claim(location="Fig. 7 (§IV text), the selected leak parameters",
+                                      units="component (1-based)", test=BY_TOLERANCE,
+                                      explain="fig-zhang2021-7", **_EX2_CAUSE),
+              "true_support_1based": Claim(location="Fig. 7 (§IV text), the true leak parameters",
+                                           units="component (1-based)", test=IS_INPUT)})
 def fig7(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Paper Fig. 7: the same record as ``zhang2021-fig6``.
 

@@ -9,7 +9,7 @@ import pytest
 
 from fdi_lib.reproduce import list_reproductions, reproduce
 from fdi_lib.reproduce import ledger as L
-from fdi_lib.reproduce.book import book_settings
+from fdi_lib.reproduce.book import book_order, book_settings
 from fdi_lib.reproduce.registry import ReproductionResult, cached_results
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -24,22 +24,37 @@ def cheap_results():
 
 
 # ----------------------------------------------------------------------------- statuses
+def _claim(test=L.BY_TOLERANCE, **kw):
+    return L.Claim(location="Fig. 0", units="", test=test, **kw)
+
+
 def test_status_of_numbers_lists_and_intervals():
     assert L.claim_status(786.0, 786.0)[0] == L.REPRODUCED
     assert L.claim_status(786.0, 786.5)[0] == L.REPRODUCED          # within 1e-3 relative
     assert L.claim_status(786.0, 790.0)[0] == L.DIFFERS
-    assert L.claim_status(0.295, 0.465, (0.43, 0.50))[0] == L.DIFFERS
-    assert L.claim_status(0.295, 0.31, (0.28, 0.34))[0] == L.WITHIN
+    interval = _claim(L.BY_INTERVAL)
+    assert L.claim_status(0.295, 0.465, (0.43, 0.50), interval)[0] == L.DIFFERS
+    assert L.claim_status(0.295, 0.31, (0.28, 0.34), interval)[0] == L.WITHIN
+    # only the declared test agrees: inside the interval is no agreement by tolerance, and an
+    # equal value without an interval is not computed by the interval test
+    assert L.claim_status(0.295, 0.31, (0.28, 0.34))[0] == L.DIFFERS
+    assert L.claim_status(0.295, 0.295, None, interval)[0] == L.NOT_COMPUTED
+    # by standard error: within z = 1.96 standard errors of ours, per component
+    se = _claim(L.BY_STANDARD_ERROR)
+    assert L.claim_status([10.0, 9.0], [10.1, 9.1], se=[0.1, 0.1], spec=se)[0] == L.WITHIN
+    assert L.claim_status([10.78, 9.0], [10.1, 9.1], se=[0.1, 0.1], spec=se)[0] == L.DIFFERS
+    assert L.claim_status([10.0, 9.0], [10.0, 9.0], spec=se)[0] == L.NOT_COMPUTED   # no se
     assert L.claim_status([4.0, 0.0], [4.0, 0.0])[0] == L.REPRODUCED
     assert L.claim_status([4.0, 0.0], [4.0, 0.1])[0] == L.DIFFERS
     assert L.claim_status([4.0, 0.0], [4.0])[0] == L.DIFFERS
     assert L.claim_status(20, None)[0] == L.NOT_COMPUTED             # we have no value
-    never = L.ClaimSpec(missing="not detected")                      # None is a result
+    never = _claim(missing="not detected")                           # None is a result
     assert L.claim_status(20, None, spec=never) == (L.DIFFERS, "ours: not detected")
     # a single run: inside the 95 % range of our runs, or not
-    assert L.claim_status(786.0, 778.0, spread=(700.0, 800.0))[0] == L.WITHIN_SPREAD
-    assert L.claim_status(88.0, 36.0, spread=(20.0, 60.0))[0] == L.DIFFERS
-    assert L.claim_status(786.0, 786.0, spread=(700.0, 800.0))[0] == L.REPRODUCED
+    spread = _claim(L.BY_SPREAD)
+    assert L.claim_status(786.0, 778.0, spread=(700.0, 800.0), spec=spread)[0] == L.WITHIN_SPREAD
+    assert L.claim_status(88.0, 36.0, spread=(20.0, 60.0), spec=spread)[0] == L.DIFFERS
+    assert L.claim_status(786.0, 786.0, spread=(700.0, 800.0), spec=spread)[0] == L.WITHIN_SPREAD
     assert L.claim_status(True, True)[0] == L.REPRODUCED
     assert L.claim_status(True, False)[0] == L.DIFFERS
 
@@ -51,15 +66,28 @@ def test_status_of_text_claims():
     assert L.claim_status("about 3500", 3500.0)[0] == L.REPRODUCED
     assert L.claim_status("about 3500", 280.0)[0] == L.DIFFERS
     assert L.claim_status("grows", 1.0)[0] == L.NOT_REPRODUCIBLE    # no check: flagged
-    spec = L.ClaimSpec(check=lambda p, o, h: o > 2, criterion="o > 2")
+    spec = _claim(L.BY_CHECK, check=lambda p, o, h: o > 2, criterion="o > 2")
     assert L.claim_status("grows", 3.0, spec=spec) == (L.REPRODUCED, "o > 2")
     assert L.claim_status("grows", 1.0, spec=spec)[0] == L.DIFFERS
-    assert L.claim_status("0 (Prop. 2)", -0.08, (-0.09, -0.07),
-                          L.ClaimSpec(value=lambda p: 0.0))[0] == L.DIFFERS
-    assert L.claim_status("0 (Prop. 2)", -0.01, (-0.03, 0.01),
-                          L.ClaimSpec(value=lambda p: 0.0))[0] == L.WITHIN
+    zero = _claim(L.BY_INTERVAL, value=lambda p: 0.0)
+    assert L.claim_status("0 (Prop. 2)", -0.08, (-0.09, -0.07), zero)[0] == L.DIFFERS
+    assert L.claim_status("0 (Prop. 2)", -0.01, (-0.03, 0.01), zero)[0] == L.WITHIN
     why = "timing on another machine"
-    assert L.claim_status(5.0, 5.0, spec=L.ClaimSpec(reason=why)) == (L.NOT_REPRODUCIBLE, why)
+    assert L.claim_status(5.0, 5.0, spec=_claim(L.NOT_CHECKABLE,
+                                                reason=why)) == (L.NOT_REPRODUCIBLE, why)
+
+
+def test_a_declaration_states_its_location_and_a_known_test():
+    with pytest.raises(L.ModelError, match="Claim.test"):
+        L.Claim(location="Fig. 1", units="", test="close enough")
+    with pytest.raises(L.ModelError, match="Claim.location"):
+        L.Claim(location=" ", units="", test=L.BY_TOLERANCE)
+    with pytest.raises(L.ModelError, match="Claim.reason"):
+        L.Claim(location="Fig. 1", units="", test=L.NOT_CHECKABLE)
+    with pytest.raises(L.ModelError, match="Claim.check"):
+        L.Claim(location="Fig. 1", units="", test=L.BY_CHECK)
+    with pytest.raises(TypeError):
+        L.Claim(location="Fig. 1", test=L.BY_TOLERANCE)     # units must be stated
 
 
 def test_claim_paths_skip_values_that_state_nothing():
@@ -72,7 +100,7 @@ def test_claim_paths_skip_values_that_state_nothing():
 
 def test_surrogate_role_is_the_reproductions_declaration():
     paper = {"x": 1, "y": 2, "z": 3, "calibrated_to": ["x"], "predictions": ["y"]}
-    typed = L.ClaimSpec(role=L.CALIBRATION)
+    typed = _claim(role=L.CALIBRATION)
     assert [L.surrogate_role("zb2014-fig9", paper, (k,), typed) for k in "xyz"] == [
         L.CALIBRATION, L.PREDICTION, L.INPUT]                 # the typed role is ignored
     assert L.surrogate_role("rosa2013-fig8", {"x": 1}, ("x",), typed) == L.CALIBRATION
@@ -99,11 +127,11 @@ def test_every_paper_value_appears(cheap_results):
     listed = _listed(led)
     for id, res in cheap_results.items():
         for path in L.claim_paths(res.paper):
-            owner = L._owner(id, path, L.spec_for(id, path) or L.ClaimSpec())
+            owner = L._owner(id, path, L.claim_for(id, path))
             assert owner in listed or owner[0] not in cheap_results, (id, path)
     assert sum(led.counts().values()) == len(led.rows)
-    # rows in book order
-    order = [L.BOOK_ORDER.index(r.id) for r in led.rows]
+    # rows in book order (the table of contents)
+    order = [book_order().index(r.id) for r in led.rows]
     assert order == sorted(order)
 
 
@@ -135,12 +163,13 @@ def test_within_interval_from_a_stochastic_result():
     assert [r.status for r in rows] == [L.WITHIN, L.DIFFERS_UNKNOWN]
     assert rows[0].ci == (0.28, 0.34) and rows[1].explain and rows[0].trials == 1000
     assert rows[1].cause is None and rows[0].paper_trials == 1000
-    # the paper's rate between our two readings of the rule, measured on the same trials
+    # the paper's rate between our two readings of the rule, on the same trials: a bracket, not
+    # a cause (neither reading's interval holds it)
     between = dataclasses.replace(res, headline={**res.headline,
                                                  "success_rate_linear": {"15": 0.30, "16": 0.20}})
     rows = L.build_ledger({"zhang2021-table1": between}, strict=True).rows
-    assert [r.status for r in rows] == [L.WITHIN, L.DIFFERS_MEASURED]
-    assert rows[1].cause == "sec-zhang2021-oracles" and rows[1].status_detail
+    assert [r.status for r in rows] == [L.WITHIN, L.DIFFERS_BRACKETED]
+    assert rows[1].cause is None and "between" in rows[1].status_detail
     # both cells of a rate in %: no paper fraction beside a percentage of ours
     text = L.build_ledger({"zhang2021-table1": res}).to_myst().replace("\u00a0", " ")
     assert "25.1 %" in text and "46 %" in text and "0.251" not in text
@@ -168,7 +197,8 @@ def test_within_spread_of_a_single_run():
              "calibrated_to": [], "predictions": ["alarm_time_min", "detection_delay_min"]}
     head = {"alarm_time_min": 778.0, "detection_delay_min": 178.0}
     plain = ReproductionResult(id="zb2014-fig5", headline=head, paper=paper, settings={})
-    assert {r.status for r in L.build_ledger({"zb2014-fig5": plain}).rows} == {L.DIFFERS_UNKNOWN}
+    # declared by the spread of single runs: without our spread there is nothing to compare
+    assert {r.status for r in L.build_ledger({"zb2014-fig5": plain}).rows} == {L.NOT_COMPUTED}
     spread = dataclasses.replace(plain, headline={
         **head, "alarm_time_min_spread95": [700.0, 800.0], "alarm_time_min_paper_percentile": 71.0,
         "detection_delay_min_spread95": [100.0, 180.0], "spread_runs": 1000})
@@ -208,16 +238,105 @@ def test_the_other_reading_of_a_figure_is_a_note_and_its_caption_has_its_own_sta
     assert L.figure_claim(deg).verb == L.REPRODUCES
 
 
+def _declarations():
+    """``(id, pattern, Claim)`` of every registration."""
+    return [(rep.id, pattern, claim) for rep in list_reproductions() for pattern,
+            claim in rep.claims]
+
+
 def test_every_difference_links_to_where_it_is_shown(cheap_results):
-    for _, doc in L.CHAPTERS:
-        assert (ROOT / f"{doc}.md").exists(), doc
-    for s in L.SPECS.values():
-        if s.explain and "/" in s.explain:
-            assert (ROOT / f"{s.explain}.md").exists(), s.explain
+    for rep in list_reproductions():
+        assert (ROOT / f"{L.chapter_of(rep.id)}.md").exists(), rep.id
+    for _, _, c in _declarations():
+        if c.explain and "/" in c.explain:
+            assert (ROOT / f"{c.explain}.md").exists(), c.explain
     for r in L.build_ledger(cheap_results).rows:
         if r.status in (*L.DIFFERING, L.NOT_REPRODUCIBLE, L.NOT_COMPUTED):
             assert r.explain, (r.id, r.path)
-        assert (r.cause is not None) == (r.status == L.DIFFERS_MEASURED), (r.id, r.path)
+        assert (r.cause is not None) == (r.status in (L.DIFFERS_MEASURED, L.DIFFERS_HYPOTHESIS)), (
+            r.id, r.path)
+
+
+_FENCE = re.compile(r"^(`{3,}|:{3,})")
+_HEADING = re.compile(r"^(#{1,6}) ")
+
+
+def _sections():
+    """label -> the text of the section it names (a ``(label)=`` before a heading, or the section
+    holding a figure ``name:``), from its heading to the next heading of the same or a higher
+    level, code cells included (glue calls) but their ``#`` comments not read as headings."""
+    out = {}
+    for md in (ROOT / "book").rglob("*.md"):
+        lines = md.read_text().splitlines()
+        heads, fenced = [], False           # (line, level) of each heading outside code
+        for i, line in enumerate(lines):
+            if line.startswith("```"):
+                fenced = not fenced
+            elif not fenced and (m := _HEADING.match(line)):
+                heads.append((i, len(m.group(1))))
+
+        def section(start):
+            level = next((lv for i, lv in heads if i == start), 7)
+            end = next((i for i, lv in heads if i > start and lv <= level), len(lines))
+            return "\n".join(lines[start:end])
+
+        for i, line in enumerate(lines):
+            if (m := re.match(r"^\(([\w-]+)\)=\s*$", line)) and any(h == i + 1 for h, _ in heads):
+                out[m.group(1)] = section(i + 1)
+            elif m := re.match(r"^ +name: (fig-[\w-]+)\s*$", line):
+                start = max((h for h, _ in heads if h < i), default=0)
+                out[m.group(1)] = section(start)
+    return out
+
+
+def _glued(text):
+    """Glue keys shown in ``text`` (``{glue}`key```, ``{glue:text}`key:.2f```...), lower case."""
+    return {k.lower() for k in re.findall(r"\{glue(?::\w+)?\}`([^`:]+)", text)}
+
+
+def _missing_glue(results=None):
+    """``(id, pattern, label, key)`` of every declared measurement that its section does not glue.
+
+    Each key is formatted with the path parts of each claim the declaration matches whose row
+    links the section (in the ledger of ``results``), or with ``*`` for every part (any glue key of
+    that form) without results."""
+    sections = _sections()
+    linked = set()
+    if results:
+        linked = {(r.id, r.path) for r in L.build_ledger(results).rows
+                  if r.status in (L.DIFFERS_MEASURED, L.DIFFERS_HYPOTHESIS)}
+    missing = []
+    for id, pattern, c in _declarations():
+        for label, keys in ((c.cause, c.cause_glue), (c.hypothesis, c.hypothesis_glue)):
+            if not label:
+                continue
+            if not keys or label not in sections:
+                missing.append((id, pattern, label, "no glued measurement declared or no section"))
+                continue
+            shown = _glued(sections[label])
+            leaves = L.claim_paths(results[id].paper) if results and id in results else []
+            paths = [p for p in leaves if L.fnmatch.fnmatchcase("/".join(p), pattern)
+                     and (id, p) in linked]
+            for parts in [p[1:] for p in paths] if results else [("*",) * 5]:
+                for key in keys:
+                    want = key.format(*parts).lower()
+                    if not any(L.fnmatch.fnmatchcase(k, want) for k in shown):
+                        missing.append((id, pattern, label, want))
+    return missing
+
+
+def test_every_measured_cause_links_a_section_that_glues_its_measurement():
+    """A "differs, measured cause" or "hypothesis tested" declaration names a section of the book
+    that shows (glues) the declared numbers of that claim."""
+    assert not _missing_glue()
+    assert sum(bool(c.cause or c.hypothesis) for _, _, c in _declarations()) >= 10
+
+
+def test_the_glue_check_fails_on_a_section_without_the_measurement():
+    sections = _sections()
+    assert "pl_union" in _glued(sections["sec-pipeline-fig7"])
+    assert "pl_union" not in _glued(sections["sec-pipeline-isolation-window"])
+    assert "sig-quoted" in _glued(sections["sec-zb-fig1-bound"])
 
 
 def _book_labels():
@@ -233,17 +352,29 @@ def _book_labels():
 def test_every_cause_and_explanation_names_an_existing_book_label():
     """A "differs, measured cause" row links a section of the book that exists (read from the
     book's sources: ``(label)=``, ``:label:``, figure ``name:``)."""
-    targets = {t for s in L.SPECS.values() for t in (s.cause, s.explain) if t and "/" not in t}
+    targets = {t for _, _, c in _declarations() for t in (c.cause, c.hypothesis, c.explain)
+               if t and "/" not in t}
     missing = sorted(targets - _book_labels())
     assert not missing, missing
 
 
-def test_every_rule_names_a_registered_reproduction():
-    ids = [r.id for r in list_reproductions()]
-    for pattern in L.SPECS:
-        id_pattern = pattern.split(":", 1)[0]
-        assert any(L.fnmatch.fnmatchcase(i, id_pattern) for i in ids), pattern
-    assert set(L.BOOK_ORDER) == set(ids)
+def test_claims_are_declared_at_registration_and_the_central_lists_are_gone():
+    for name in ("SPECS", "BOOK_ORDER", "SURROGATE_IDS", "CHAPTERS", "ClaimSpec"):
+        assert not hasattr(L, name), name
+    from fdi_lib.reproduce import book
+
+    assert not hasattr(book, "BOOK_RUNS")
+    for id, pattern, c in _declarations():
+        assert isinstance(c, L.Claim), (id, pattern)
+        if c.shown_under:
+            L.get(c.shown_under)                       # names a registered reproduction
+
+
+def test_a_claim_without_a_declaration_fails():
+    res = ReproductionResult(id="zb2014-fig1", headline={"unstable_eigenvalue": 1.2, "new": 1.0},
+                             paper={"unstable_eigenvalue": 1.2808, "new_claim": 3.0}, settings={})
+    with pytest.raises(L.ModelError, match="no claim declared"):
+        L.build_ledger({"zb2014-fig1": res}, strict=True)
 
 
 def test_json_and_summary(cheap_results):
@@ -255,7 +386,8 @@ def test_json_and_summary(cheap_results):
     assert len(d["rows"]) == len(led.rows)
     old_keys = {"id", "key", "claim", "paper", "ours", "ci95", "status", "where", "explanation",
                 "note", "surrogate", "trials", "source"}                # backward compatible
-    assert old_keys | {"paper_id", "status_detail", "cause", "paper_trials"} == set(d["rows"][0])
+    assert old_keys | {"paper_id", "status_detail", "cause", "paper_trials", "location", "units",
+                       "test"} == set(d["rows"][0])
     for row in d["rows"]:
         assert row["status"] in L.STATUSES
         assert row["claim"].startswith(L.PAPERS[row["paper_id"]] + ", ")
@@ -267,8 +399,55 @@ def test_json_and_summary(cheap_results):
     assert "<thead><tr><th>status</th>" in html                         # status first
     inputs = [r for r in led.rows if r.id == "zb2014-table1"]      # declared: neither list
     assert inputs and all(r.role == L.INPUT for r in inputs)
-    assert {r.role for r in led.rows if r.id == "rosa2013-fig8"} == {L.INPUT, L.PREDICTION}
+    # its detection time is the §6.4 sentence, listed under Fig. 11
+    assert {r.role for r in led.rows if r.id == "rosa2013-fig8"} == {L.INPUT}
     assert all(r.role is None for r in led.rows if r.id.startswith("zb2014-fig1"))
+
+
+def _row(status, location="Fig. 1, x", paper_id="zb2014"):
+    return L.LedgerRow(id=f"{paper_id}-fig1", path=("x",), label=location, paper=1, ours=1, ci=None,
+                       status=status, where="book/x", explain=None, note="", role=None, trials=None,
+                       source="", location=location)
+
+
+def test_mission_items_take_their_state_from_their_rows(cheap_results):
+    assert len(L.MISSION) == 40
+    assert len({(p, item) for p, item, _ in L.MISSION}) == 40
+    assert L.item_state([]) == "no row"
+    assert L.item_state([_row(L.REPRODUCED), _row(L.INPUT_RECOVERED)]) == "reproduced"
+    assert L.item_state([_row(L.INPUT_VALUE)]) == "values the book sets"
+    assert L.item_state([_row(L.REPRODUCED), _row(L.DIFFERS_MEASURED)]) == "differs, measured cause"
+    # the least explained difference decides
+    assert L.item_state([_row(L.DIFFERS_MEASURED), _row(L.DIFFERS_BRACKETED)]) == "bracketed"
+    assert L.item_state([_row(L.DIFFERS_HYPOTHESIS), _row(L.DIFFERS_UNKNOWN)]) == "unknown"
+    assert L.item_state([_row(L.NOT_REPRODUCIBLE)]) == "not reproducible"
+    led = L.build_ledger(cheap_results)
+    items = {(i["paper_id"], i["item"]): i for i in led.mission()}
+    assert items[("zb2014", "Fig. 1")]["state"] == "differs, measured cause"
+    assert items[("zb2014", "Fig. 2")]["state"] == "reproduced"
+    assert items[("zb2014", "Table 1")]["state"] == "values the book sets"
+    assert items[("zb2014", "Fig. 9")]["state"] == "no row"      # not among the cheap results
+    # "Fig. 1" is not "Fig. 10"
+    assert not any("fig10" in r for r in items[("rosa2013", "Fig. 1")]["rows"])
+    assert items[("rosa2013", "Fig. 10")]["rows"]
+    counts = led.mission_counts()
+    assert sum(sum(c.values()) for c in counts.values()) == 40
+    assert "40" in led.mission_summary()._repr_html_()
+
+
+def test_ledger_json_is_the_same_bytes_on_every_run_and_any_jobs(monkeypatch):
+    """The wall times of the runs are kept apart: two runs, and a run on two cores, print the
+    same JSON."""
+    monkeypatch.delenv("FDI_RESULTS_CACHE", raising=False)
+    ids = ["zb2014-fig1", "zb2014-table1", "zhang2021-table1"]
+    texts = []
+    for jobs in (1, 1, 2):
+        results, sources, timings = L.collect_results(ids=ids, max_trials=4, use_cache=False,
+                                                      jobs=jobs)
+        assert set(timings) == set(ids) and all(t >= 0 for t in timings.values())
+        texts.append(json.dumps(L.build_ledger(results, sources=sources).to_json_dict()))
+    assert texts[0] == texts[1] == texts[2]
+    assert "4 trials" in texts[0] and " s)" not in texts[0]
 
 
 # ----------------------------------------------------------------------------- cache and CLI
@@ -287,7 +466,8 @@ def test_results_cache_round_trip(tmp_path, monkeypatch):
     assert set(got) == {"zb2014-table1", "zb2014-fig3"}
     assert got["zb2014-fig3"].settings["seed"] == 2
     # the ledger reads the run at the book's settings, not the one used last
-    results, sources = L.collect_results(ids=["zb2014-fig3"])
+    results, sources, timings = L.collect_results(ids=["zb2014-fig3"])
+    assert timings == {}                              # read, not computed
     assert results["zb2014-fig3"].settings["seed"] == book_seed != 2
     assert sources["zb2014-fig3"].startswith("cached")
     monkeypatch.delenv("FDI_RESULTS_CACHE")
@@ -298,36 +478,49 @@ def test_cli_ledger_json(monkeypatch, capsys, cheap_results):
     from fdi_lib.reproduce import cli
 
     monkeypatch.setattr(L, "collect_results",
-                        lambda **kw: (cheap_results, {id: "computed" for id in cheap_results}))
+                        lambda **kw: (cheap_results, {id: "computed" for id in cheap_results},
+                                      {id: 1.0 for id in cheap_results}))
     assert cli.main(["reproduce", "--ledger", "--json"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert sum(d["counts"].values()) == len(d["rows"]) > 20
+    assert set(d) == {"counts", "counts_by_paper", "mission", "rows", "sources"}   # no timings
+    assert len(d["mission"]["items"]) == 40
     assert cli.main(["reproduce", "--ledger"]) == 0
-    assert "differs, measured cause" in capsys.readouterr().out
+    text = capsys.readouterr().out
+    assert "differs, measured cause" in text and "zb2014-fig1 in 1.0 s" in text
 
 
 @pytest.mark.slow
 def test_every_registered_paper_value_appears_in_the_ledger():
-    """All reproductions (Monte Carlo ones with 2 trials): strict build, nothing left out."""
+    """All reproductions (Monte Carlo ones with 2 trials): strict build, nothing left out, one row
+    per paper location, every declaration used."""
     results = {r.id: r(trials=None if r.default_trials is None else 2)
                for r in list_reproductions()}
-    led = L.build_ledger(results, strict=True)      # raises on a claim without a rule
+    led = L.build_ledger(results, strict=True)      # raises on a claim without a declaration
     listed = _listed(led)
     n_claims = 0
     for id, res in results.items():
         for path in L.claim_paths(res.paper):
             n_claims += 1
-            assert L._owner(id, path, L.spec_for(id, path) or L.ClaimSpec()) in listed, (id, path)
+            assert L._owner(id, path, L.claim_for(id, path)) in listed, (id, path)
     shown_twice = sum(1 for id, res in results.items() for p in L.claim_paths(res.paper)
-                      if (s := L.spec_for(id, p)) and s.shown_under)
+                      if L.claim_for(id, p).shown_under)
     assert len(led.rows) == n_claims - shown_twice
     assert all(r.status in L.STATUSES for r in led.rows)
+    # one claim, one row: no two rows share a paper location
+    where = [(r.paper_id, r.location) for r in led.rows]
+    assert len(where) == len(set(where)), sorted(w for w in where if where.count(w) > 1)
+    assert all(r.location and r.test in L.TESTS for r in led.rows)
     # 2 trials: no Monte Carlo claim gets a comparison status
     for r in led.rows:
         if r.paper_trials is not None and r.status not in (L.INPUT_VALUE, L.NOT_REPRODUCIBLE):
             assert r.status == L.NOT_COMPUTED, (r.id, r.path, r.status)
+    # no estimate of a value the book sets counts as a reproduction
     for r in led.rows:
-        if r.id in L.SURROGATE_IDS:
+        if r.test in (L.IS_INPUT, L.ESTIMATES_INPUT, L.IS_CALIBRATION) or r.role == L.INPUT:
+            assert r.status not in L.AGREES, (r.id, r.path, r.status)
+    for r in led.rows:
+        if L.get(r.id).surrogate:
             assert r.role in (L.CALIBRATION, L.PREDICTION, L.INPUT)
         else:
             assert r.role is None
@@ -335,14 +528,20 @@ def test_every_registered_paper_value_appears_in_the_ledger():
     # ledger's roles follow them (fig 7: "missed" calibrated, fig 9: the level calibrated)
     for id, res in results.items():
         if any(k in res.paper for k in L.ROLE_KEYS):
-            assert id in L.SURROGATE_IDS, id
+            assert L.get(id).surrogate, id
             for k in res.paper.get("calibrated_to", []) + res.paper.get("predictions", []):
                 assert k in res.paper or k in res.headline, (id, k)
     roles = {(r.id, r.path): r.role for r in led.rows}
     assert roles[("zb2014-fig7", ("missed", "2"))] == L.CALIBRATION
     assert roles[("zb2014-fig9", ("glr_level_over_threshold",))] == L.CALIBRATION
     assert roles[("zb2014-fig5", ("alarm_time_min",))] == L.PREDICTION
-    # every rule is used by some claim (no dead rule)
-    keys = [f"{id}:{'/'.join(p)}" for id, res in results.items() for p in L.claim_paths(res.paper)]
-    for pattern in L.SPECS:
-        assert any(L.fnmatch.fnmatchcase(k, pattern) for k in keys), pattern
+    # every declaration is used by some claim (no dead declaration)
+    keys = {id: ["/".join(p) for p in L.claim_paths(res.paper)] for id, res in results.items()}
+    for id, pattern, _ in _declarations():
+        assert any(L.fnmatch.fnmatchcase(k, pattern) for k in keys[id]), (id, pattern)
+    # each measured cause's section glues the measurement of each of its claims
+    assert not _missing_glue(results)
+    # the rows the issue named exist
+    for id, key in (("zb2014-fig9", "innovation_recovery"), ("bz-whiteness", "h_zeta_max"),
+                    ("zhang2021-table2", "snr_db/150")):
+        assert (id, tuple(key.split("/"))) in listed, (id, key)

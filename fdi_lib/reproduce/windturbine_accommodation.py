@@ -1,0 +1,235 @@
+"""The wind-turbine benchmark's second half: accommodating the sensor faults once isolated.
+
+The benchmark (Odgaard, Stoustrup & Kinnaert 2009; 2013) is a fault-tolerant control benchmark:
+after detection and isolation, the controller should keep the turbine producing as if nothing had
+failed. For a fault on a duplicated sensor the natural accommodation is to stop reading the faulty
+sensor and to read its healthy redundant twin (:func:`fdi_lib.systems.wind_turbine.simulate`,
+argument ``accommodation``). :func:`accommodation` measures, per sensor fault F1-F5 and
+realisation, the effect of the fault on the generator power, the pitch and the generator speed
+against a fault-free twin (same wind, same noise), without and with the switch made at the time one
+of the book's methods isolates the fault (:func:`fdi_lib.windturbine.run_methods`'s method
+functions, on the same record).
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any
+
+import numpy as np
+
+from fdi_lib import windturbine as W
+from fdi_lib.errors import ModelError
+from fdi_lib.montecarlo import run_monte_carlo
+from fdi_lib.reproduce.registry import ReproductionResult, register
+from fdi_lib.reproduce.windturbine import PAPER, calibrated_design
+
+__all__ = ["ACCOMMODATED", "RUNNERS", "accommodation", "accommodation_chunk", "plot_accommodation"]
+
+#: The sensor faults accommodated by switching to the redundant sensor.
+ACCOMMODATED = (1, 2, 3, 4, 5)
+#: The method functions whose isolation triggers the switch (keys of
+#: :data:`fdi_lib.windturbine.METHODS`).
+RUNNERS = {
+    "zb2014": W.run_zb,
+    "zhang2021": W.run_zhang2021,
+    "bz": W.run_bz,
+    "rosa2013": W.run_svo_bank,
+}
+#: Seconds simulated after the fault's end (the plant's recovery is part of the effect).
+AFTER_S = 20.0
+#: Settling time dropped at the start of each run (as :func:`fdi_lib.windturbine.fault_records`).
+SETTLE_S = 20.0
+_METRICS = ("power_kw", "pitch_deg", "speed_rad_s")
+
+
+def _effects(run: Any, free: Any, sl: slice) -> np.ndarray:
+    """``(R, 3)``: RMS over the samples ``sl`` of the generator power (kW), the true pitch (deg,
+    largest over the blades) and the generator speed (rad/s) minus the fault-free twin's."""
+    dp = (run.p_g[:, sl] - free.p_g[:, sl]) / 1e3
+    db = run.beta[:, sl] - free.beta[:, sl]
+    dw = run.omega_g[:, sl] - free.omega_g[:, sl]
+    rms = lambda a, axis: np.sqrt(np.mean(a**2, axis=axis))  # noqa: E731
+    return np.stack([rms(dp, 1), rms(db, 1).max(axis=-1), rms(dw, 1)], axis=-1)
+
+
+def _switchable(isolated: np.ndarray, fault: Any) -> np.ndarray:
+    """``(B,)``: the isolated set names every faulty sensor and none of their redundant twins (the
+    controller can then read the twins; other candidates it names cannot be switched and are
+    ignored).
+    """
+    faulty = [W.CANDIDATES.index(c) for c in W.expected_candidates(fault)]
+    twins = [
+        W.CANDIDATES.index(c[:-1] + ("2" if c.endswith("1") else "1"))
+        for c in W.expected_candidates(fault)
+    ]
+    return isolated[:, faulty].all(axis=1) & ~isolated[:, twins].any(axis=1)
+
+
+def accommodation_chunk(
+    seeds: list, *, seed: int, method: str, settings: W.Settings = W.Settings()
+) -> dict[str, np.ndarray]:
+    """Monte Carlo chunk: for each fault of :data:`ACCOMMODATED` and each seed, the fault-free,
+    faulty and accommodated runs of the fault's stretch, the isolation time and the effects."""
+    from fdi_lib.systems import wind_turbine as wt
+
+    d = calibrated_design(seed, settings)
+    p = d.constants.params
+    n, F = len(seeds), len(ACCOMMODATED)
+    out = {
+        "isolation_s": np.full((n, F), np.nan),
+        "faulty": np.zeros((n, F, 3)),
+        "accommodated": np.zeros((n, F, 3)),
+        "energy_faulty_kwh": np.zeros((n, F)),
+        "energy_accommodated_kwh": np.zeros((n, F)),
+    }
+    for j, fid in enumerate(ACCOMMODATED):
+        fault = next(f for f in wt.FAULTS if f.id == fid)
+        t0 = SETTLE_S + settings.pre_s
+        duration = t0 + (fault.stop_s - fault.start_s) + AFTER_S
+        t_abs = fault.start_s - t0 + np.arange(int(round(duration / p.ts))) * p.ts
+        wind = np.stack([wt.wind_speed(t_abs, seed=wt._child(s, 0)) for s in seeds])
+        moved = W._shifted(fault, t0)
+        kw = dict(seed=list(seeds), duration_s=duration, params=p, wind=wind)
+        free = wt.simulate(faults=(), **kw)
+        faulty = wt.simulate(faults=(moved,), **kw)
+        i0 = int(round(SETTLE_S / p.ts))
+        rec = W.records(faulty).window(i0, i0 + d.N)
+        outcomes = (
+            list(W.run_methods(d, rec.y, rec.u).values())
+            if method == "first"
+            else [RUNNERS[method](d, rec.y, rec.u)]
+        )
+        steps = [
+            np.where((o.isolate_step >= 0) & _switchable(o.isolated, fault), o.isolate_step, np.inf)
+            for o in outcomes
+        ]
+        first = np.min(steps, axis=0)  # the earliest switchable isolation
+        t_iso = np.where(np.isfinite(first), (i0 + first) * p.ts, np.nan)
+        out["isolation_s"][:, j] = t_iso - t0
+        acc = wt.simulate(faults=(moved,), accommodation={fid: t_iso}, **kw)
+        sl = slice(int(round(t0 / p.ts)), None)
+        out["faulty"][:, j] = _effects(faulty, free, sl)
+        out["accommodated"][:, j] = _effects(acc, free, sl)
+        out["energy_faulty_kwh"][:, j] = (
+            (faulty.p_g[:, sl] - free.p_g[:, sl]).sum(axis=1) * p.ts / 3.6e6
+        )
+        out["energy_accommodated_kwh"][:, j] = (
+            (acc.p_g[:, sl] - free.p_g[:, sl]).sum(axis=1) * p.ts / 3.6e6
+        )
+    return out
+
+
+def plot_accommodation(result: ReproductionResult, fig: Any = None):
+    """RMS effect on power, pitch and generator speed per sensor fault: faulty (left bar) and
+    accommodated (right bar), means over the realisations."""
+    from fdi_lib.plotting import figure
+
+    h = result.headline
+    ids = list(h["faults"])
+    fig, axes = figure(1, 3, fig=fig, figsize=(7.2, 3.0))
+    labels = {
+        "power_kw": "power (kW)",
+        "pitch_deg": "pitch (deg)",
+        "speed_rad_s": "gen. speed (rad/s)",
+    }
+    x = np.arange(len(ids))
+    for ax, m in zip(axes[0], _METRICS):
+        ax.bar(x - 0.2, [h["faults"][f]["faulty"][m] for f in ids], 0.4, label="faulty", color="C3")
+        ax.bar(
+            x + 0.2,
+            [h["faults"][f]["accommodated"][m] for f in ids],
+            0.4,
+            label="accommodated",
+            color="C0",
+        )
+        ax.set_xticks(x, ids)
+        ax.set_title(f"RMS change, {labels[m]}", fontsize="small")
+    fig.legend(*axes[0][0].get_legend_handles_labels(), loc="outside lower center", ncol=2)
+    return fig
+
+
+@register(
+    "windturbine-accommodation",
+    plot=plot_accommodation,
+    paper=PAPER,
+    default_trials=5,   # the book's count: about 2 s of CPU per realisation with the four methods
+    default_seed=2009,
+    title="Wind-turbine benchmark: sensor faults accommodated after isolation",
+    chapter="windturbine/benchmark",
+    chapter_seed=True,
+)
+def accommodation(
+    *, seed: int, trials: int | None, jobs: int, method: str = "first"
+) -> ReproductionResult:
+    """Accommodation of the sensor faults F1-F5: switch to the redundant sensor once isolated.
+
+    For each fault of :data:`ACCOMMODATED` and each of ``trials`` seeded realisations (wind and
+    noise, the benchmark schedule), three runs of the fault's stretch (from 27 s before its start to
+    :data:`AFTER_S` after its end; the first 20 s dropped): fault-free, faulty, and faulty with the
+    controller switched to the healthy redundant sensor from the time ``method`` (a key of
+    :data:`RUNNERS`, or ``"first"``: the earliest of the four; ``--option method=...``) isolates the
+    faulty sensors on the run's record (the scoreboard's 10 s segment): its isolated set names them
+    and not their twins (other candidates it names cannot be switched and are ignored; otherwise no
+    switch).
+
+    Headline keys
+    -------------
+    realisations : int
+        ``trials``.
+    method : str
+        The method whose isolation triggers the switch (``"first"``: the earliest of the four).
+    faults : dict
+        ``F<id>`` -> ``name``, ``isolated`` (realisations switched), ``isolation_time_mean_s`` (from
+        the fault's start, over the switched realisations; ``None`` if none), ``faulty`` and
+        ``accommodated`` -> ``power_kw``, ``pitch_deg``, ``speed_rad_s``: the mean over realisations
+        of the RMS change from the fault's start to :data:`AFTER_S` after its end against the
+        fault-free twin (power; true pitch, the largest over the blades; generator speed), and
+        ``energy_kwh`` (mean energy change over that stretch, kWh; negative: lost).
+    """
+    if method not in (*RUNNERS, "first"):
+        raise ModelError(f"method: expected 'first' or one of {tuple(RUNNERS)}, got {method!r}")
+    settings = W.Settings()
+    x = run_monte_carlo(
+        functools.partial(accommodation_chunk, seed=seed, method=method, settings=settings),
+        trials,
+        seed=seed,
+        jobs=jobs,
+        description="wind-turbine accommodation",
+    )
+    from fdi_lib.systems import wind_turbine as wt
+
+    faults = {}
+    for j, fid in enumerate(ACCOMMODATED):
+        fault = next(f for f in wt.FAULTS if f.id == fid)
+        iso = x["isolation_s"][:, j]
+        hit = ~np.isnan(iso)
+        faults[f"F{fid}"] = {
+            "name": fault.name,
+            "isolated": int(hit.sum()),
+            "isolation_time_mean_s": float(iso[hit].mean()) if hit.any() else None,
+            "faulty": {
+                **{m: float(x["faulty"][:, j, i].mean()) for i, m in enumerate(_METRICS)},
+                "energy_kwh": float(x["energy_faulty_kwh"][:, j].mean()),
+            },
+            "accommodated": {
+                **{m: float(x["accommodated"][:, j, i].mean()) for i, m in enumerate(_METRICS)},
+                "energy_kwh": float(x["energy_accommodated_kwh"][:, j].mean()),
+            },
+        }
+    headline = {"realisations": trials, "method": method, "faults": faults}
+    settings_out = {
+        "seed": seed,
+        "trials": trials,
+        "method": method,
+        "after_s": AFTER_S,
+        "faults": list(ACCOMMODATED),
+        "schedule": "benchmark",
+    }
+    return ReproductionResult(
+        id="windturbine-accommodation",
+        headline=headline,
+        paper={},
+        settings=settings_out,
+        data={"raw": x},
+    )
