@@ -20,11 +20,13 @@ Two solvers, which must agree:
 * :func:`lasso_path` - the exact, piecewise-linear Lasso path by the LARS-Lasso homotopy of
   Efron et al. (2004), the algorithm of scikit-learn's ``lars_path(method="lasso")``, here in
   Gram form and batched over problems (:func:`lasso_path_batch`, for Monte Carlo chunks): every
-  breakpoint (every change of support) comes out, with no ``lambda`` grid. Every path returned
-  satisfies the optimality (KKT) conditions to :data:`KKT_TOL` relative to ``lambda``
-  (:func:`kkt_residual`); on a degenerate design (duplicated, scaled, zero or nearly collinear
-  columns) where the homotopy's path does not, scikit-learn's ``lars_path`` recomputes it, and
-  :attr:`LassoPath.solver` says so.
+breakpoint (every change of support) comes out, with no ``lambda`` grid. Every path returned
+  satisfies the optimality (KKT) conditions to :data:`KKT_TOL` relative to ``lambda``, checked as
+  exact arithmetic would (:func:`kkt_residual`), down to its stated float floor
+  (:attr:`LassoPath.kkt_floor`); on a degenerate design (duplicated, scaled, zero or nearly
+  collinear columns) where the homotopy's path does not, it is refined or recomputed by
+  scikit-learn's ``lars_path``, :attr:`LassoPath.solver` says so, and a path nothing certifies is
+  refused.
 
 The rules for ``lambda`` below have batched forms too (:func:`flat_ranges`,
 :func:`grid_flat_ranges` on a :class:`PathBatch`): a Monte Carlo chunk applies them to all its
@@ -193,12 +195,19 @@ class LassoPath:
     n_samples : int
         The ``N`` of (39).
     solver : str
-        What computed the path: ``"homotopy"`` (this module's batched homotopy), ``"sklearn-fallback"``
-        (scikit-learn's ``lars_path``, after the homotopy's path failed the KKT check; see
-        :func:`lasso_path_batch`), or ``"given"`` (a path built by hand).
+        What computed the path: ``"homotopy"`` (this module's batched homotopy),
+        ``"homotopy-refined"`` (its coefficients refined on its own supports after the KKT check
+        failed), ``"sklearn-fallback"`` (scikit-learn's ``lars_path``, after the homotopy's path
+        failed the KKT check; see :func:`lasso_path_batch`), or ``"given"`` (a path built by hand).
     kkt_residual : float
         Largest violation of the optimality conditions along the path, relative to ``lambda``
-        (:func:`kkt_residual`; at most :data:`KKT_TOL` for a computed path); NaN when not checked.
+        (:func:`kkt_residual`, or an upper bound of it: the batched screen's rounding bound
+        included); at most :data:`KKT_TOL` for a computed path; NaN when not checked.
+    kkt_floor : float
+        The float floor of the check (the largest ``floor_i`` of :func:`kkt_residual`): below this
+        ``lambda`` float64 coefficients cannot satisfy the conditions to ``KKT_TOL lambda``
+        (rounding the exact solution moves the gradient by more), and the path is checked to that
+        representation limit instead. NaN when not checked.
     """
 
     lambdas: np.ndarray
@@ -206,6 +215,7 @@ class LassoPath:
     n_samples: int
     solver: str = "given"
     kkt_residual: float = float("nan")
+    kkt_floor: float = float("nan")
 
     def coef(self, lam: float) -> np.ndarray:
         """``theta_hat(lambda)``, shape ``(m,)``, by linear interpolation between breakpoints (exact)."""
@@ -270,6 +280,8 @@ class PathBatch:
         ``(B,)`` strings: :attr:`LassoPath.solver` of each path.
     kkt_residual : numpy.ndarray
         ``(B,)``: :attr:`LassoPath.kkt_residual` of each path.
+    kkt_floor : numpy.ndarray
+        ``(B,)``: :attr:`LassoPath.kkt_floor` of each path.
     """
 
     lambdas: np.ndarray
@@ -278,6 +290,7 @@ class PathBatch:
     n_samples: int
     solver: np.ndarray
     kkt_residual: np.ndarray
+    kkt_floor: np.ndarray
 
     def __len__(self) -> int:
         return int(self.n_points.size)
@@ -291,7 +304,8 @@ class PathBatch:
         k = int(self.n_points[b])
         return LassoPath(lambdas=self.lambdas[b, :k].copy(), coefs=self.coefs[b, :k].T.copy(),
                          n_samples=self.n_samples, solver=str(self.solver[b]),
-                         kkt_residual=float(self.kkt_residual[b]))
+                         kkt_residual=float(self.kkt_residual[b]),
+                         kkt_floor=float(self.kkt_floor[b]))
 
     def paths(self) -> list[LassoPath]:
         """All the paths, as :class:`LassoPath` objects."""
@@ -328,7 +342,8 @@ class PathBatch:
             coefs[b, : p.lambdas.size] = p.coefs.T
         return cls(lambdas=lambdas, coefs=coefs, n_points=n_points, n_samples=paths[0].n_samples,
                    solver=np.array([p.solver for p in paths], dtype=object),
-                   kkt_residual=np.array([p.kkt_residual for p in paths]))
+                   kkt_residual=np.array([p.kkt_residual for p in paths]),
+                   kkt_floor=np.array([p.kkt_floor for p in paths]))
 
 
 def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: float = 0.0,
@@ -427,10 +442,14 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
     -----
     Every path is checked against the optimality conditions (:func:`kkt_residual`): the whole
     batch at once in the Gram form of the homotopy (one batched product and a few passes over
-    the breakpoints), then, for the paths above :data:`KKT_TOL`, from ``X`` and ``y`` (no Gram
-    rounding). A path that fails both is recomputed alone by scikit-learn's
-    ``lars_path(method="lasso")`` (``solver="sklearn-fallback"``), on the whole design, then, if
-    that path fails too, with its duplicated or scaled columns merged and its zero columns removed.
+    the breakpoints), with a bound of that form's rounding *added* to each violation (the screen
+    can fail a good path, never pass a bad one), then, at the breakpoints the screen does not
+    pass, exactly from ``X`` and ``y`` (the gradient in double-double, nothing subtracted). A path
+    that fails is recomputed alone: its coefficients refined on its own supports
+    (``solver="homotopy-refined"``) and by scikit-learn's ``lars_path(method="lasso")``
+    (``solver="sklearn-fallback"``: on the whole design, then, if that path fails too, with its
+    duplicated or scaled columns merged and its zero columns removed); the one with the smaller
+    residual is kept, and a path that no route brings to :data:`KKT_TOL` is a NumericalError.
     """
     X = array(X, "X", ndim=3)
     y = array(y, "y")
@@ -457,26 +476,55 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
         levels, coefs, n_points = _homotopy(Gram, Xy, c_min, max_size)
     S = int(n_points.max())
     levels, coefs = levels[:, :S], coefs[:, :S]
-    # KKT check of every path: a batched screen with the Gram matrix (one product), then, for the
-    # paths it does not pass, the exact check from X and y, and a recomputation if that fails too.
-    with np.errstate(all="ignore"):
-        kkt = _kkt(Xy[:, None, :] - np.matmul(coefs, Gram), levels, coefs, n_points,
-                   np.sqrt(np.einsum("bii->bi", Gram)), np.sqrt(np.einsum("br,br->b", ys, ys)), rows)
+    # KKT check of every path: a batched screen with the Gram matrix (one product; the bound of its
+    # rounding is added to the violation, so it can fail a good path but never pass a bad
+    # one), then,
+    # for the paths it does not pass, the check in double-double from X and y (nothing subtracted),
+    # then the coefficients refined on the path's own supports, then scikit-learn's lars_path.
+    ynorm = np.sqrt(np.einsum("br,br->b", ys, ys))
+    g, slack, abs_gram, point_res, point_floor = _kkt_screen(Gram, Xy, ynorm, levels, coefs,
+                                                             n_points, rows)
+    # the exact check where the screen does not pass (its bound holds elsewhere): all such
+    # breakpoints of the batch at once
+    broken = (point_res == np.inf).any(axis=1)  # a NaN (a singular step or a cycle): recomputed
+    pb, pi = np.nonzero((point_res > KKT_TOL) & ~broken[:, None])
+    if pb.size:
+        with np.errstate(all="ignore"):
+            g[pb, pi] = _gradient_dd(Xs[pb], ys[pb], coefs[pb, pi])
+            slack[pb, pi] = 0.0
+            point_res, point_floor = _kkt(g, slack, levels, coefs, n_points, abs_gram, points=True)
+    kkt, floor = np.maximum(point_res.max(axis=1), 0.0), point_floor.max(axis=1)
     solver = np.full(B, "homotopy", dtype=object)
     fixed = []
-    for b in np.flatnonzero(kkt > KKT_TOL):  # rare: degenerate or ill-conditioned designs
-        Xb, yb = Xs[b], ys[b]
-        kkt[b] = _kkt_direct(Xb, yb, levels[b, :n_points[b]], coefs[b, :n_points[b]])
-        if kkt[b] > KKT_TOL:
+    for b in np.flatnonzero(kkt > KKT_TOL):  # degenerate or ill-conditioned designs
+        Xb, yb, k = Xs[b], ys[b], n_points[b]
+        if broken[b]:
             fixed.append((b, *_lars_fallback(Xb, yb, float(c_min[b]), max_size, b, float(kkt[b]))))
+            continue
+        # recomputed: by lars_path (stable Cholesky updates), and the homotopy's path with
+        # its coefficients
+        # refined on its own supports; the one with the smaller residual, refused when both fail
+        refined = _refine(Xb, yb, levels[b, :k], coefs[b, :k])
+        res, fl = _kkt_path(Xb, yb, levels[b, :k], refined)
+        try:
+            lars = _lars_fallback(Xb, yb, float(c_min[b]), max_size, b, float(kkt[b]))
+        except NumericalError as error:
+            if res > KKT_TOL:
+                raise NumericalError(f"{error} (and by {res:.3g} lambda with the homotopy's path "
+                                     "refined)") from None
+            lars = None
+        if lars is None or res < lars[2]:
+            coefs[b, :k], kkt[b], floor[b], solver[b] = refined, res, fl, "homotopy-refined"
+        else:
+            fixed.append((b, *lars))
     if fixed:
-        S = max(S, *(lev.size for _, lev, _, _ in fixed))
+        S = max(S, *(lev.size for _, lev, _, _, _ in fixed))
         levels = np.pad(levels, ((0, 0), (0, S - levels.shape[1])))
         coefs = np.pad(coefs, ((0, 0), (0, S - coefs.shape[1]), (0, 0)))
-        for b, lev, co, res in fixed:
+        for b, lev, co, res, fl in fixed:
             levels[b], coefs[b] = 0.0, 0.0
             levels[b, :lev.size], coefs[b, :lev.size] = lev, co
-            n_points[b], kkt[b], solver[b] = lev.size, res, "sklearn-fallback"
+            n_points[b], kkt[b], floor[b], solver[b] = lev.size, res, fl, "sklearn-fallback"
     # the correlation level c is rows * alpha (scikit-learn's 1/(2 rows)); (39) has 1/(2N): lambda = c / N
     with np.errstate(over="ignore", invalid="ignore"):   # checked just below
         lam = levels * (sx * sy / N)[:, None]
@@ -489,7 +537,9 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
                              f"or a coefficient overflows: RMS of X {sx[b]:.3g}, of y {sy[b]:.3g}); expected a "
                              f"design and data scaled towards 1")
     lam[~on_path] = -np.inf  # padding
-    return PathBatch(lambdas=lam, coefs=th, n_points=n_points, n_samples=N, solver=solver, kkt_residual=kkt)
+    return PathBatch(lambdas=lam, coefs=th, n_points=n_points, n_samples=N, solver=solver,
+                     kkt_residual=kkt,
+                     kkt_floor=floor * (sx * sy / N))
 
 
 def kkt_residual(X: Any, y: Any, path: "LassoPath") -> float:
@@ -502,14 +552,20 @@ def kkt_residual(X: Any, y: Any, path: "LassoPath") -> float:
     ``|g_j| - lambda_i``, or ``|g_j - sigma lambda_i|`` when ``theta_j`` has the sign ``sigma`` at
     ``lambda_i`` or on one of the two intervals next to it (supports and signs as
     :meth:`LassoPath.interval_supports` reads them; a sign change across an interval thus counts
-    as ``|g_j| + lambda_i``). The residual is the largest violation in excess of a rounding allowance
-    for ``g_j`` (``8 eps (rows + m) max_k ||X_k|| (||y|| + sum_k ||X_k|| |theta_k|) / N``, which matters only
-    near ``lambda = 0`` on ill-conditioned designs), divided by ``max(lambda_i, KKT_FLOOR lambda_0)``.
-    It is 0 for a path exact to rounding, ``inf`` for a path with a NaN.
+    as ``|g_j| + lambda_i``).
 
-    :func:`lasso_path_batch` checks every path it returns (a batched screen with the Gram matrix,
-    then this exact form, from ``X`` and ``y``, for the paths the screen does not pass) and stores
-    the residual in :attr:`LassoPath.kkt_residual`; it is at most :data:`KKT_TOL`.
+    The gradient is computed as an independent check in exact rational arithmetic would: in
+    double-double arithmetic (error-free products and sums), with an error below ``1e-25`` of ``max
+    |X^T y|`` on the tests' designs, and no rounding allowance is subtracted. The violation is
+    divided by ``max(lambda_i, KKT_FLOOR lambda_0, floor_i)``, where ``floor_i = eps/2 max_j sum_k
+    |(X^T X)_jk theta_k| / (N KKT_TOL)`` is the *float floor* at breakpoint ``i``: rounding the
+    exact solution to float64 moves the gradient by up to ``KKT_TOL floor_i``, so below ``floor_i``
+    no float64 path can satisfy the conditions to ``KKT_TOL lambda``, and the check there is to that
+    representation limit (:attr:`LassoPath.kkt_floor` states the largest ``floor_i`` of a path). It
+    is 0 for a path exact to rounding, ``inf`` for a path with a NaN.
+
+    :func:`lasso_path_batch` checks every path it returns and stores the residual in
+    :attr:`LassoPath.kkt_residual`; it is at most :data:`KKT_TOL`.
 
     Parameters
     ----------
@@ -525,23 +581,138 @@ def kkt_residual(X: Any, y: Any, path: "LassoPath") -> float:
     X, y = _check_xy(X, y)
     if not isinstance(path, LassoPath) or path.coefs.shape[0] != X.shape[1]:
         raise ModelError(f"path: expected a LassoPath of {X.shape[1]} components, got {path!r:.80}")
-    return _kkt_direct(X, y, path.lambdas * path.n_samples, path.coefs.T)
+    # exact power-of-2 rescaling (the error-free products need |entries| well below 1e300)
+    sx, sy = _pow2_rms(X.reshape(1, -1))[0], _pow2_rms(y[None])[0]
+    with np.errstate(over="ignore", invalid="ignore"):
+        levels = path.lambdas * (path.n_samples / (sx * sy))
+        coefs = path.coefs.T * (sx / sy)
+    return _kkt_direct(X / sx, y / sy, levels, coefs)[0]
 
 
-def _kkt_direct(X: np.ndarray, y: np.ndarray, levels: np.ndarray, coefs: np.ndarray) -> float:
-    """:func:`kkt_residual` of one path, levels ``(S,)`` (``N lambda``) and coefficients ``(S, m)``."""
+def _split(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Dekker's split ``a = hi + lo`` into halves of 26 bits (so that ``hi * hi`` is exact)."""
+    c = 134217729.0 * a  # 2^27 + 1
+    hi = c - (c - a)
+    return hi, a - hi
+
+
+def _product_error(a: tuple[np.ndarray, np.ndarray], b: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """``a b - p`` exactly, for ``p = fl(a b)``, ``a`` given by its split (Dekker's TwoProduct)."""
+    ah, al = a
+    bh, bl = _split(b)
+    return ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+def _two_sum(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``s = fl(a + b)`` and ``a + b - s`` exactly (Knuth's TwoSum)."""
+    s = a + b
+    z = s - a
+    return s, (a - (s - z)) + (b - z)
+
+
+def _gradient_dd(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> np.ndarray:
+    """``X_b^T (y_b - X_b theta_b)`` for each row ``theta_b`` of ``coefs`` (double-double).
+
+    ``X`` is ``(P, rows, m)`` and ``y`` ``(P, rows)`` (one problem per row of ``coefs``), or
+    ``(rows, m)`` and ``(rows,)`` (one problem for all). The residual ``y - X theta`` is accumulated
+    with error-free products and sums (Ogita, Rump and Oishi's Dot2) and kept as an unevaluated sum
+    ``s + e``, then ``X^T (s + e)`` is summed over the rows with error-free products and a pairwise
+    tree of error-free sums. The result is as accurate as if computed in about twice the float64
+    precision, then rounded: its error is of the order of ``eps^2`` times the sums of absolute
+    values, not ``eps`` (no cancellation between large coefficients of nearly collinear columns
+    survives). Processed in blocks of ``coefs`` rows.
+    """
+    X = X[None] if X.ndim == 2 else X
+    y = y[None] if y.ndim == 1 else y
+    rows, m = X.shape[1:]
+    out = np.empty(coefs.shape)
+    block = max(1, 1_000_000 // (rows * m))
+    for b0 in range(0, coefs.shape[0], block):
+        c = coefs[b0:b0 + block]
+        Xb = X if X.shape[0] == 1 else X[b0:b0 + block]
+        Xh, Xl = _split(Xb)
+        yb = y if y.shape[0] == 1 else y[b0:b0 + block]
+        s = np.array(np.broadcast_to(yb, (c.shape[0], rows)))
+        e = np.zeros_like(s)
+        for k in range(m):
+            a, t = Xb[:, :, k], c[:, k, None]
+            p = a * t
+            s, err = _two_sum(s, -p)
+            e += err - _product_error((Xh[:, :, k], Xl[:, :, k]), t, p)
+        XT = Xb.transpose(0, 2, 1)
+        P = XT * s[:, None, :]  # (P, m, rows)
+        E = (_product_error((Xh.transpose(0, 2, 1), Xl.transpose(0, 2, 1)), s[:, None, :], P)
+             + XT * e[:, None, :])
+        while P.shape[2] > 1:
+            if P.shape[2] % 2:
+                P = np.concatenate([P, np.zeros(P.shape[:2] + (1,))], axis=2)
+                E = np.concatenate([E, np.zeros(E.shape[:2] + (1,))], axis=2)
+            P, err = _two_sum(P[:, :, 0::2], P[:, :, 1::2])
+            E = E[:, :, 0::2] + E[:, :, 1::2] + err
+        out[b0:b0 + block] = P[:, :, 0] + E[:, :, 0]
+    return out
+
+
+def _kkt_direct(X: np.ndarray, y: np.ndarray, levels: np.ndarray,
+                coefs: np.ndarray) -> tuple[float, float]:
+    """:func:`kkt_residual` of one path, levels ``(S,)`` (``N lambda``) and coefficients ``(S, m)``,
+    and its float floor (levels); the gradient in double-double (:func:`_gradient_dd`), nothing
+    subtracted."""
     with np.errstate(all="ignore"):
-        g = (y[None, :] - coefs @ X.T) @ X
-    return float(_kkt(g[None], levels[None], coefs[None], np.array([levels.size]),
-                      np.sqrt(np.einsum("ri,ri->i", X, X))[None], np.sqrt(y @ y)[None], X.shape[0])[0])
+        g = _gradient_dd(X, y, coefs)
+        res, floor = _kkt(g[None], np.zeros((1, levels.size)), levels[None], coefs[None],
+                          np.array([levels.size]),
+                          np.abs(X.T @ X)[None])
+    return float(res[0]), float(floor[0])
 
 
-def _kkt(g: np.ndarray, levels: np.ndarray, coefs: np.ndarray, n_points: np.ndarray, norms: np.ndarray,
-         ynorm: np.ndarray, rows: int) -> np.ndarray:
-    """The residuals of :func:`kkt_residual` ``(B,)`` from the gradients ``g`` ``(B, S, m)`` (without the
-    ``1/N``) at the levels ``levels`` ``(B, S)`` (``N lambda``) of paths ``coefs`` ``(B, S, m)`` padded
-    after ``n_points``; ``norms`` ``(B, m)`` are the column norms of ``X`` and ``ynorm`` ``(B,)`` the norm
-    of ``y`` (for the rounding bound). Vectorised over the batch: a few passes over ``(B, S, m)``."""
+def _kkt_path(X: np.ndarray, y: np.ndarray, levels: np.ndarray,
+              coefs: np.ndarray) -> tuple[float, float]:
+    """:func:`_kkt_direct`'s residual (or an upper bound of it) and float floor, computed as
+    :func:`lasso_path_batch` does: the batched screen, then double-double where it does not pass."""
+    k = np.array([levels.size])
+    gram = X.T @ X
+    with np.errstate(all="ignore"):
+        g, slack, abs_gram, res, _ = _kkt_screen(gram[None], (X.T @ y)[None], np.sqrt(y @ y)[None],
+                                                 levels[None], coefs[None], k, X.shape[0])
+        at = np.flatnonzero((res[0] > KKT_TOL) & (res[0] < np.inf))
+        if at.size:
+            g[0, at], slack[0, at] = _gradient_dd(X, y, coefs[at]), 0.0
+        res, floor = _kkt(g, slack, levels[None], coefs[None], k, abs_gram)
+    return float(res[0]), float(floor[0])
+
+
+def _kkt_screen(Gram: np.ndarray, Xy: np.ndarray, ynorm: np.ndarray, levels: np.ndarray,
+                coefs: np.ndarray, n_points: np.ndarray, rows: int) -> tuple[np.ndarray, ...]:
+    """The batched screen of :func:`lasso_path_batch`'s KKT check, from ``Gram`` ``(B, m, m)``,
+    ``Xy`` ``(B, m)`` and ``||y||`` ``(B,)``: the gradients ``g`` ``(B, S, m)`` (Gram form), the
+    bound of their rounding ``slack`` ``(B, S)``, ``|Gram|``, and the per-breakpoint residuals and
+    floors of :func:`_kkt` (the slack added)."""
+    m = Gram.shape[1]
+    with np.errstate(all="ignore"):
+        norms = np.sqrt(np.einsum("bii->bi", Gram))
+        # |fl(g_j) - g_j| <= gamma_(rows + m) ||X_j|| (||y|| + sum_k ||X_k|| |theta_k|)
+        # (Cauchy-Schwarz on
+        # X^T y, X^T X and G theta), doubled
+        slack = (2 * np.finfo(float).eps * (rows + m + 2)) * norms.max(axis=1, keepdims=True) * (
+            ynorm[:, None] + np.einsum("bsi,bi->bs", np.abs(coefs), norms))
+        g = Xy[:, None, :] - np.matmul(coefs, Gram)
+        abs_gram = np.abs(Gram)
+        point_res, point_floor = _kkt(g, slack, levels, coefs, n_points, abs_gram, points=True)
+    return g, slack, abs_gram, point_res, point_floor
+
+
+def _kkt(g: np.ndarray, slack: np.ndarray, levels: np.ndarray, coefs: np.ndarray,
+         n_points: np.ndarray, abs_gram: np.ndarray, *,
+         points: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """The residuals of :func:`kkt_residual` ``(B,)`` and the float floors ``(B,)`` (the largest
+    ``floor_i``, in levels) of paths ``coefs`` ``(B, S, m)`` padded after ``n_points`` (with
+    ``points=True``, per breakpoint ``(B, S)``: residual, ``-inf`` in the padding, and floor), from
+    the gradients ``g`` ``(B, S, m)`` (without the ``1/N``) at the levels ``levels`` ``(B, S)`` (``N
+    lambda``). ``slack`` ``(B, S)`` bounds the error of ``g`` at each breakpoint and is *added* to
+    the violation (a screen with a rounded ``g`` can then fail a good path, never pass a bad one);
+    ``abs_gram`` ``(B, m, m)`` is ``|X^T X|`` (for the float floor). Vectorised over the batch: a
+    few passes over ``(B, S, m)``."""
     B, S, m = coefs.shape
     valid = np.arange(S) < n_points[:, None]  # (B, S)
     with np.errstate(all="ignore"):
@@ -560,13 +731,43 @@ def _kkt(g: np.ndarray, levels: np.ndarray, coefs: np.ndarray, n_points: np.ndar
         worst = np.maximum(g.max(axis=2), -g.min(axis=2)) - levels
         np.maximum(worst, levels - np.where(pos, g, np.inf).min(axis=2), out=worst)
         np.maximum(worst, levels + np.where(neg, g, -np.inf).max(axis=2), out=worst)
-        # rounding allowance of g_j = X_j^T (y - X beta), every j: the n eps bound of a dot product of
-        # length n = rows + m (Cauchy-Schwarz on each), times 8 for the backward error of the solve
-        rounding = (8 * np.finfo(float).eps * (rows + m)) * norms.max(axis=1, keepdims=True) * (
-            ynorm[:, None] + np.einsum("bsi,bi->bs", np.abs(coefs), norms))
-        scale = np.maximum(np.maximum(levels, KKT_FLOOR * levels[:, :1]), np.finfo(float).tiny)
-        res = np.where(valid, (worst - rounding) / scale, -np.inf).max(axis=1)
-    return np.where(np.isnan(res), np.inf, np.maximum(res, 0.0))  # NaN, anywhere in a path, fails
+        # float floor: rounding theta to float64 (|delta_k| <= eps/2 |theta_k|) moves g_j by up to
+        # eps/2 sum_k |G_jk theta_k|; below floor_i = that / KKT_TOL, KKT_TOL lambda cannot be met
+        floor = np.matmul(np.abs(coefs), abs_gram).max(axis=2) * (0.5 * np.finfo(float).eps
+                                                                  / KKT_TOL)
+        scale = np.maximum(np.maximum(levels, KKT_FLOOR * levels[:, :1]), floor)
+        scale = np.maximum(scale, np.finfo(float).tiny)
+        res = np.where(valid, (worst + slack) / scale, -np.inf)
+        floor = np.where(valid, floor, 0.0)
+        if points:  # per breakpoint, (B, S)
+            return np.where(np.isnan(res), np.inf, res), floor
+        res, floor = res.max(axis=1), floor.max(axis=1)
+    # NaN, anywhere in a path, fails
+    return np.where(np.isnan(res), np.inf, np.maximum(res, 0.0)), floor
+
+
+def _refine(X: np.ndarray, y: np.ndarray, levels: np.ndarray, coefs: np.ndarray,
+            steps: int = 3) -> np.ndarray:
+    """The coefficients ``(S, m)`` of a path refined at each breakpoint on the path's own supports.
+
+    At breakpoint ``i`` the Lasso solution solves ``(X^T X)_AA theta_A = X_A^T y - c_i sign_A`` on
+    the components ``A`` non-zero at ``c_i`` (with their signs), ``theta = 0`` elsewhere. An
+    up/down-dated solver (the homotopy's inverse, ``lars_path``'s Cholesky factor) loses accuracy on
+    nearly collinear active columns; iterative refinement with residuals in double-double
+    (:func:`_gradient_dd`) restores it while ``eps cond(X_A^T X_A) < 1``. The levels and supports
+    are unchanged.
+    """
+    zero = 1e-12 * max(1.0, float(np.abs(coefs).max(initial=0.0)))
+    sign = np.where(np.abs(coefs) > zero, np.sign(coefs), 0.0)
+    gram = X.T @ X
+    theta = np.where(sign != 0, coefs, 0.0)
+    for _ in range(steps):
+        r = _gradient_dd(X, y, theta) - levels[:, None] * sign  # zero on A at the solution
+        for i in range(theta.shape[0]):
+            a = np.flatnonzero(sign[i])
+            if a.size:
+                theta[i, a] += np.linalg.lstsq(gram[np.ix_(a, a)], r[i, a], rcond=None)[0]
+    return theta
 
 
 def _pow2_rms(a: np.ndarray) -> np.ndarray:
@@ -585,7 +786,7 @@ def _pow2_rms(a: np.ndarray) -> np.ndarray:
 
 
 def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | None, b: int,
-                   kkt: float) -> tuple[np.ndarray, np.ndarray, float]:
+                   kkt: float) -> tuple[np.ndarray, np.ndarray, float, float]:
     """The path of one problem whose homotopy path failed the KKT check, by scikit-learn's ``lars_path``.
 
     Why not only the homotopy: its inverse of ``Gram_AA`` is up/down-dated (fast, batched) and loses
@@ -601,9 +802,10 @@ def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | N
     ``kkt`` the problem's index and homotopy residual (for the error message).
 
     Returns the levels ``(S,)``, the coefficients ``(S, m)`` (the path stopped as the homotopy's
-    would be, at ``c_min`` or after the first interval with more than ``max_size`` components) and
-    the KKT residual. A path that stops above ``c_min`` is accepted only below ``1e-9`` times its
-    first level (where only rounding is left on the degenerate designs that come here).
+    would be, at ``c_min`` or after the first interval with more than ``max_size`` components;
+    refined on its supports, :func:`_refine`, when that lowers its residual), the KKT residual and
+    float floor. A path that stops above ``c_min`` is accepted only below ``1e-9`` times its first
+    level (where only rounding is left on the degenerate designs that come here).
 
     Raises
     ------
@@ -648,10 +850,15 @@ def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | N
         over = np.flatnonzero(_activity(coefs[None])[1][0].sum(axis=1) > (m if max_size is None else max_size))
         if over.size:  # stop after the first interval with more than max_size components
             levels, coefs = levels[: over[0] + 2], coefs[: over[0] + 2]
-        res = _kkt_direct(X, y, levels, coefs)
+        res, fl = _kkt_path(X, y, levels, coefs)
+        if res > KKT_TOL:  # its Cholesky updates lose accuracy too: refined on its own supports
+            refined = _refine(X, y, levels, coefs)
+            r2, f2 = _kkt_path(X, y, levels, refined)
+            if r2 < res:
+                res, fl, coefs = r2, f2, refined
         done = over.size or levels[-1] <= max(c_min, 1e-9 * levels[0])  # lars_path's own tail ends
         if res <= KKT_TOL and done:
-            return levels, coefs, res
+            return levels, coefs, res, fl
         tried.append(f"{res:.3g} lambda" + ("" if done else f" (stopped at {levels[-1] / levels[0]:.3g} lambda_max)"))
     raise NumericalError(f"X, y (problem {b}): the Lasso path violates the optimality (KKT) conditions by "
                          f"{kkt:.3g} lambda with the homotopy and by {', '.join(tried)} with scikit-learn's "

@@ -201,7 +201,7 @@ def test_batched_and_single_paths_agree_on_a_mixed_batch():
     """Nearly collinear (recomputed by lars_path), duplicated-column and generic problems in one
     batch: each path is bit for bit its single-problem path and satisfies the KKT conditions; the
     homotopy's paths are the same as in a batch without the recomputed ones."""
-    probs = [collinear(0), collinear(1)]
+    probs = [collinear(0), collinear(2)]
     rng, X, theta = _base(30, rows=50, m=15)
     X[:, 1] = X[:, int(np.flatnonzero(theta)[0])]  # a duplicated column of the support
     probs.append((X, X @ theta + 0.3 * rng.standard_normal(50)))
