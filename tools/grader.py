@@ -18,9 +18,9 @@ notebooks (``*.ipynb``, any names). Beside ``OUT.csv`` the grader writes:
 * ``OUT.log``: the class log (what failed for whom; never the grading secret);
 * ``OUT.feedback/<student>.md``: one file per student to hand back (points per exercise, what
   failed, the attempts the grader stopped);
-* ``OUT.similarity.csv``: pairs of students whose code for an exercise is a verbatim copy
-  (identical once comments and blank lines are dropped) or nearly so once names and numbers are
-  normalised (:func:`similarity`);
+* ``OUT.similarity.csv``: the students whose code for an exercise is a verbatim copy of each
+  other's (identical once comments and blank lines are dropped; one row per group) or nearly so
+  once names and numbers are normalised (:func:`similarity`), for the instructor to look at;
 * ``OUT.secret`` (mode 0600): the grading secret the hidden data derive from, kept so that a
   re-run grades the remaining students on the same hidden data (``FDI_GRADER_SECRET`` overrides).
 
@@ -198,7 +198,7 @@ def suspicious(sources: list[str]) -> list[str]:
         for node in ast.walk(tree):
             targets = node.targets if isinstance(node, ast.Assign) else []
             if any(getattr(t, "id", getattr(t, "attr", None)) == "check" for t in targets):
-                found.append("replaces check")
+                found.append("an assignment to check")
     return sorted(set(found))
 
 
@@ -399,9 +399,10 @@ _KEYWORDS = set(__import__("keyword").kwlist)
 
 def similarity(codes: dict[str, dict[str, list[str]]], starters: dict[str, set[str]],
                threshold: float = 0.9, min_tokens: int = 20) -> list[dict]:
-    """Pairs of students whose own code for an exercise (the starter cells left out) is a verbatim
-    copy (``"verbatim"``: identical once comments and layout are dropped) or shares at least
-    ``threshold`` of its 5-token shingles once names and numbers are normalised (``"similar"``).
+    """Groups of students whose own code for an exercise (the starter cells left out) is a verbatim
+    copy (``"verbatim"``: identical once comments and layout are dropped), and pairs outside such
+    a group that share at least ``threshold`` of their 5-token shingles once names and numbers are
+    normalised (``"similar"``, with the Jaccard index).
 
     Hand-written rather than copydetect (on PyPI): the submissions are short Python cells, the
     tokenizer of the standard library normalises them, and the pairwise Jaccard of shingles is a
@@ -415,12 +416,16 @@ def similarity(codes: dict[str, dict[str, list[str]]], starters: dict[str, set[s
             text, tokens = _normalised("\n".join(own))
             if len(tokens) >= min_tokens:
                 mine[student] = (text, {tuple(tokens[i:i + 5]) for i in range(len(tokens) - 4)})
+        groups: dict[str, list[str]] = {}
+        for student in sorted(mine):
+            groups.setdefault(mine[student][0], []).append(student)
+        out += [{"exercise": ex, "students": " ".join(g), "kind": "verbatim", "jaccard": "1.000"}
+                for g in groups.values() if len(g) > 1]
         for a, b in itertools.combinations(sorted(mine), 2):
             (ta, sa), (tb, sb) = mine[a], mine[b]
             jac = len(sa & sb) / len(sa | sb)
-            if ta == tb or jac >= threshold:
-                out.append({"exercise": ex, "student_a": a, "student_b": b,
-                            "kind": "verbatim" if ta == tb else "similar", "jaccard": f"{jac:.3f}"})
+            if ta != tb and jac >= threshold:
+                out.append({"exercise": ex, "students": f"{a} {b}", "kind": "similar", "jaccard": f"{jac:.3f}"})
     return out
 
 
@@ -463,10 +468,12 @@ def score_student(student: str, secret: str, runs: dict, code: dict, ids: list[s
             if r.stopped:
                 notes.append(f"{run} data: stopped, {r.stopped}")
             elif r.violations:
-                notes += [f"{run} data: attempt stopped: {v}" for v in dict.fromkeys(r.violations)]
+                seen = list(dict.fromkeys(r.violations))
+                notes += [f"{run} data: attempt stopped: {v}" for v in seen[:3]]
+                notes += [f"{run} data: and {len(seen) - 3} more attempts"] if len(seen) > 3 else []
             elif flags:
-                notes.append(f"{run} data: the code uses {', '.join(flags)} (not allowed in a graded "
-                             "exercise)")
+                notes.append(f"{run} data: not graded, the code holds {', '.join(flags)} (not "
+                             "allowed in a graded exercise)")
             else:
                 verdict = ("answer unreadable (" + r.unreadable + ")" if r.unreadable
                            else accepted(r.answer, reference_answer(ex, key), ex))
@@ -594,7 +601,7 @@ def grade(submissions: Path, out: Path, log_path: Path | None = None, limits: Li
     canvas_export(out, names, out.with_suffix(".canvas.csv"))
     pairs = similarity(codes, starter_cells())
     with out.with_suffix(".similarity.csv").open("w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=["exercise", "student_a", "student_b", "kind", "jaccard"])
+        w = csv.DictWriter(f, fieldnames=["exercise", "students", "kind", "jaccard"])
         w.writeheader()
         w.writerows(pairs)
     with out.open(newline="") as f:

@@ -4,8 +4,7 @@ The grader copies this file beside the student package in the kernel's scratch f
 kernel's import path holds the student package, this file and the pinned environment, nothing of
 the repository) and runs, around the submission's cells:
 
-* ``install(config)`` once per kernel, before any submission cell: imports the whole student
-  package, then installs a Python audit hook (:func:`sys.addaudithook`: it cannot be removed)
+* ``install(config)`` once per kernel, before any submission cell: installs a Python audit hook (:func:`sys.addaudithook`: it cannot be removed)
   and a profile function (:func:`sys.setprofile`, which the hook then forbids to change).
 * ``begin(exercise_id, run, one_call)`` before an exercise's cells, ``end(exercise_id, run)``
   after them: ``end`` reports the notebook's ``answer``.
@@ -16,8 +15,9 @@ grader scores the exercise 0 on that run and names the attempt in the log. Viola
 
 * a call, from the submission's code, of a library function that answers the exercise in one
   call (``one_call``). The profiler compares code objects, by identity and by bytecode, so the
-  function's ``__wrapped__``, an alias, a copy made with ``types.FunctionType`` and a re-import
-  are the same function; calls made by the library itself (building the exercise data, or
+  function's ``__wrapped__``, an alias, a copy made with ``types.FunctionType`` and a copy of its
+  source are the same function (and a module of the library runs once: a reload or re-import
+  is itself a violation); calls made by the library itself (building the exercise data, or
   inside another library function) are allowed;
 * reading the grader's files, the repository (which holds the reference answers), another
   process's ``/proc`` entries (the grader's environment and arguments), writing outside the
@@ -101,7 +101,9 @@ def _audit(event: str, args: tuple) -> None:
     elif event == "exec":   # (compiling is allowed: tracebacks parse the library's source)
         filename = getattr(args[0], "co_filename", None)
         if filename and _under(os.path.realpath(filename), (_S["package"],)):
-            _violate(f"re-executing the library's code ({filename})")
+            if os.path.realpath(filename) in _S["executed"]:   # a module runs once: its import
+                _violate(f"re-executing the library's code ({filename})")
+            _S["executed"].add(os.path.realpath(filename))
 
 
 def _profile(frame, event, arg):
@@ -118,22 +120,14 @@ def _profile(frame, event, arg):
 
 
 def install(config: dict) -> None:
-    """Import the student package, then install the hooks (once per kernel)."""
-    import importlib
-    import pkgutil
-
+    """Install the hooks (once per kernel, before any submission cell)."""
     import fdi_lib
+    import IPython.display  # noqa: F401 -- the reports need it, imported before the hooks
 
     package = os.path.realpath(os.path.dirname(fdi_lib.__file__))
-    for info in pkgutil.walk_packages(fdi_lib.__path__, "fdi_lib."):
-        if info.name.endswith("__main__"):
-            continue
-        try:
-            importlib.import_module(info.name)
-        except ImportError:  # an optional extra not installed (e.g. the cluster's dask)
-            pass
-    import IPython.display  # noqa: F401 -- the reports need it, imported before the hooks
-    _S.update(scratch=os.path.realpath(config["scratch"]), package=package,
+    loaded = {os.path.realpath(m.__file__) for m in list(sys.modules.values())
+              if getattr(m, "__file__", None) and _under(os.path.realpath(m.__file__), (package,))}
+    _S.update(scratch=os.path.realpath(config["scratch"]), package=package, executed=loaded,
               denied_read=tuple(os.path.realpath(p) for p in config["denied_read"]),
               allowed_read=(os.path.realpath(sys.prefix), package, os.path.realpath(config["scratch"])))
     sys.addaudithook(_audit)

@@ -44,8 +44,8 @@ from fdi_lib.errors import ModelError
 from fdi_lib.exercises._core import (AnswerError, CheckResult, Exercise, ReferenceNotShippedError,
                                      student_id)
 
-__all__ = ["check", "generic_candidates", "close", "attempts", "entry_keys", "entry_digest",
-           "DIGEST_ROUNDS", "DIGESTS_FILE"]
+__all__ = ["check", "generic_candidates", "close", "zero_floor", "attempts", "entry_keys",
+           "entry_digest", "DIGEST_ROUNDS", "DIGESTS_FILE"]
 
 #: The student package's reference digests (a file of the package, absent from the repository).
 DIGESTS_FILE = "_digests.json"
@@ -121,41 +121,71 @@ def _permutations(shape: tuple[int, ...]) -> list[tuple[str, np.ndarray]]:
     return out
 
 
-def close(a: np.ndarray, ref: np.ndarray, ex: Exercise) -> np.ndarray:
-    """Entrywise ``|a - ref| <= atol + rtol |ref|`` (the exercise's tolerance)."""
+def zero_floor(ref: np.ndarray, ex: Exercise) -> float:
+    """How far from an exact zero of ``ref`` an answer may be: ``rtol`` times the array's scale
+    (its largest ``|entry|`` rounded up to a power of 10), so that a zero computed as 1e-17 is
+    zero; 0 for an all-zero reference. Rounded to a decade: the student package stores it."""
+    top = float(np.max(np.abs(ref))) if np.size(ref) else 0.0
+    return 0.0 if top == 0 or not np.isfinite(top) else ex.rtol * 10.0 ** math.ceil(math.log10(top))
+
+
+def close(a: np.ndarray, ref: np.ndarray, ex: Exercise, floor: float | None = None) -> np.ndarray:
+    """Entrywise ``|a - ref| <= atol + rtol |ref|``, and ``|a| <= floor`` where ``ref`` is exactly
+    0 (``floor``: :func:`zero_floor` of the whole reference). The one tolerance of the exercises:
+    the checker, its digests (:func:`entry_keys`) and the grader all use it."""
+    ref = np.asarray(ref, dtype=float)
+    floor = zero_floor(ref, ex) if floor is None else floor
     with np.errstate(over="ignore", invalid="ignore"):  # |a - ref| beyond the float range: not close
-        return np.abs(a - ref) <= ex.atol + ex.rtol * np.abs(ref)
+        tol = np.where(ref == 0, np.maximum(ex.atol, floor), ex.atol + ex.rtol * np.abs(ref))
+        return np.abs(a - ref) <= tol
 
 
 # ----------------------------------------------------------------------------- digests
-def entry_keys(value: float, ex: Exercise, *, around: bool = False) -> set[str]:
-    """Tolerance buckets of one entry: the bucket of ``value`` or, with ``around``, every bucket
-    meeting ``[value - tol, value + tol]`` (``tol`` the exercise's tolerance at ``value``).
+#: Buckets per tolerance width: a bucket is an eighth of the tolerance.
+FINE = 8
 
-    Integers are their own bucket. Where the absolute tolerance dominates (``|v| <= atol /
-    rtol``) buckets are intervals of width ``atol`` (``"l<k>"``); beyond, logarithmic buckets of
-    width ``log(1 + rtol)`` (``"+<k>"`` / ``"-<k>"``): an interval of the tolerance's width meets
-    at most five buckets either way, and a bucket says nothing of the magnitude until it is
-    hashed with its exercise and entry.
+
+def _bucket(value: float, ex: Exercise, floor: float) -> tuple[str, float, float]:
+    """The bucket of ``value``: its key and its edges."""
+    if abs(value) <= floor:
+        return "z", -floor, floor
+    if ex.atol > 0 and abs(value) <= ex.atol / ex.rtol:
+        a = ex.atol / FINE
+        k = math.floor(value / a)
+        return f"l{k}", k * a, (k + 1) * a
+    w = math.log1p(ex.rtol) / FINE
+    k = math.floor(math.log(max(abs(value), 5e-324)) / w)
+    lo, hi = math.exp(k * w), math.exp((k + 1) * w)
+    return (f"+{k}", lo, hi) if value > 0 else (f"-{k}", -hi, -lo)
+
+
+def entry_keys(value: float, ex: Exercise, *, around: bool = False, floor: float = 0.0) -> set[str]:
+    """Tolerance buckets of one entry: the bucket of ``value`` or, with ``around``, every bucket
+    that lies wholly within the tolerance of ``value`` (:func:`close`, with the reference's
+    :func:`zero_floor` ``floor``).
+
+    Integers are their own bucket, an exact exercise its ``repr``. A bucket is an eighth of the
+    tolerance: intervals of width ``atol / 8`` where the absolute tolerance dominates (``|v| <=
+    atol / rtol``), logarithmic buckets of width ``log(1 + rtol) / 8`` beyond, ``"z"`` within
+    ``floor`` of zero. As only buckets wholly within the tolerance are stored, the student
+    package never accepts an answer the grader rejects; it rejects an answer within an eighth of
+    the tolerance's edge that the grader accepts.
     """
     if ex.integer:
         return {f"i{round(value)}"}
     if ex.rtol == 0:
         return {repr(float(value))}
-    width = math.log1p(ex.rtol)
-    split = ex.atol / ex.rtol          # |v| <= split: absolute buckets
-    tol = ex.atol + ex.rtol * abs(value) if around else 0.0
-    lo, hi = value - tol, value + tol
-    keys = set()
-    if ex.atol > 0 and lo <= split and hi >= -split:
-        a, b = max(lo, -split), min(hi, split)
-        keys.update(f"l{k}" for k in range(math.floor(a / ex.atol), math.floor(b / ex.atol) + 1))
-    for sign, a, b in (("+", max(lo, split), hi), ("-", max(-hi, split), -lo)):
-        if b > split and b >= a:
-            first = math.floor(math.log(max(a, 5e-324)) / width)
-            keys.update(f"{sign}{k}" for k in range(first, math.floor(math.log(b) / width) + 1))
-    if not keys:                       # value 0 with atol 0
-        keys.add("z")
+    if not around:
+        return {_bucket(value, ex, floor)[0]}
+    ref = np.array([value])
+    ok = lambda x: bool(close(np.array([x]), ref, ex, floor)[0])  # noqa: E731
+    tol = max(ex.atol + ex.rtol * abs(value), floor if value == 0 else 0.0)
+    keys, x = set(), value - tol
+    while x <= value + tol:
+        key, lo, hi = _bucket(x, ex, floor)
+        if ok(lo) and ok(np.nextafter(hi, lo)):
+            keys.add(key)
+        x = np.nextafter(hi, np.inf) if hi > x else np.nextafter(x, np.inf)
     return keys
 
 
@@ -172,6 +202,7 @@ class _Digests:
     salt: str
     student: str
     shape: tuple[int, ...]
+    floor: float
     reference: list[set[str]]
     candidates: list[tuple[str, list[set[str]]]]
 
@@ -217,7 +248,7 @@ class _Hashes:
 
     def _digest(self, index: int, value: float) -> str:
         if (index, value) not in self._memo:
-            (key,) = entry_keys(value, self.ex)
+            (key,) = entry_keys(value, self.ex, floor=self.d.floor)
             self._memo[index, value] = entry_digest(self.d.salt, self.ex.id, self.d.student, index, key)
         return self._memo[index, value]
 
@@ -245,6 +276,7 @@ def _oracle(ex: Exercise, student: str | None):
         return None
     as_sets = lambda entries: [set(e) for e in entries]  # noqa: E731
     return _Hashes(ex, _Digests(salt=table["salt"], student=student or "", shape=tuple(rec["shape"]),
+                                floor=float(rec.get("floor", 0.0)),
                                 reference=as_sets(rec["reference"]),
                                 candidates=[(c["hint"], as_sets(c["entries"])) for c in rec["candidates"]]))
 
