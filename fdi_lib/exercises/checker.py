@@ -130,14 +130,15 @@ def zero_floor(ref: np.ndarray, ex: Exercise) -> float:
 
 
 def close(a: np.ndarray, ref: np.ndarray, ex: Exercise, floor: float | None = None) -> np.ndarray:
-    """Entrywise ``|a - ref| <= atol + rtol |ref|``, and ``|a| <= floor`` where ``ref`` is exactly
-    0 (``floor``: :func:`zero_floor` of the whole reference). The one tolerance of the exercises:
-    the checker, its digests (:func:`entry_keys`) and the grader all use it."""
+    """Entrywise ``|a - ref| <= atol + rtol |ref|``, or both ``|a|`` and ``|ref|`` at most
+    ``floor`` (:func:`zero_floor` of the whole reference: both numerically zero, such as an exact
+    zero computed as 1e-17). The one tolerance of the exercises: the checker, its digests
+    (:func:`entry_keys`) and the grader all use it."""
     ref = np.asarray(ref, dtype=float)
     floor = zero_floor(ref, ex) if floor is None else floor
     with np.errstate(over="ignore", invalid="ignore"):  # |a - ref| beyond the float range: not close
-        tol = np.where(ref == 0, np.maximum(ex.atol, floor), ex.atol + ex.rtol * np.abs(ref))
-        return np.abs(a - ref) <= tol
+        return (np.abs(a - ref) <= ex.atol + ex.rtol * np.abs(ref)) | (
+            (np.abs(ref) <= floor) & (np.abs(a) <= floor))
 
 
 # ----------------------------------------------------------------------------- digests
@@ -145,18 +146,29 @@ def close(a: np.ndarray, ref: np.ndarray, ex: Exercise, floor: float | None = No
 FINE = 8
 
 
-def _bucket(value: float, ex: Exercise, floor: float) -> tuple[str, float, float]:
-    """The bucket of ``value``: its key and its edges."""
+def _bucket(value: float, ex: Exercise, floor: float) -> str:
+    """The key of the bucket of ``value``."""
     if abs(value) <= floor:
-        return "z", -floor, floor
+        return "z"
     if ex.atol > 0 and abs(value) <= ex.atol / ex.rtol:
-        a = ex.atol / FINE
-        k = math.floor(value / a)
-        return f"l{k}", k * a, (k + 1) * a
+        return f"l{math.floor(value / (ex.atol / FINE))}"
+    k = math.floor(math.log(max(abs(value), 5e-324)) / (math.log1p(ex.rtol) / FINE))
+    return f"+{k}" if value > 0 else f"-{k}"
+
+
+def _buckets_meeting(lo: float, hi: float, ex: Exercise):
+    """``(key, low edge, high edge)`` of the linear and logarithmic buckets meeting ``[lo, hi]``."""
+    split = ex.atol / ex.rtol if ex.atol > 0 else 0.0
+    if split > 0 and lo <= split and hi >= -split:
+        h = ex.atol / FINE
+        for k in range(math.floor(max(lo, -split) / h), math.floor(min(hi, split) / h) + 1):
+            yield f"l{k}", k * h, (k + 1) * h
     w = math.log1p(ex.rtol) / FINE
-    k = math.floor(math.log(max(abs(value), 5e-324)) / w)
-    lo, hi = math.exp(k * w), math.exp((k + 1) * w)
-    return (f"+{k}", lo, hi) if value > 0 else (f"-{k}", -hi, -lo)
+    for sign, a, b in ((1, max(lo, split), hi), (-1, max(-hi, split), -lo)):
+        if b > split and b >= a and b > 0:
+            for k in range(math.floor(math.log(max(a, 5e-324)) / w), math.floor(math.log(b) / w) + 1):
+                e0, e1 = math.exp(k * w), math.exp((k + 1) * w)
+                yield (f"+{k}", e0, e1) if sign > 0 else (f"-{k}", -e1, -e0)
 
 
 def entry_keys(value: float, ex: Exercise, *, around: bool = False, floor: float = 0.0) -> set[str]:
@@ -176,16 +188,16 @@ def entry_keys(value: float, ex: Exercise, *, around: bool = False, floor: float
     if ex.rtol == 0:
         return {repr(float(value))}
     if not around:
-        return {_bucket(value, ex, floor)[0]}
+        return {_bucket(value, ex, floor)}
+    if abs(value) <= floor:            # numerically zero: so is every answer within the floor
+        return {"z"}
+    tol = ex.atol + ex.rtol * abs(value)
     ref = np.array([value])
-    ok = lambda x: bool(close(np.array([x]), ref, ex, floor)[0])  # noqa: E731
-    tol = max(ex.atol + ex.rtol * abs(value), floor if value == 0 else 0.0)
-    keys, x = set(), value - tol
-    while x <= value + tol:
-        key, lo, hi = _bucket(x, ex, floor)
-        if ok(lo) and ok(np.nextafter(hi, lo)):
+    keys = set()
+    for key, lo, hi in _buckets_meeting(value - tol, value + tol, ex):
+        edges = np.array([lo, np.nextafter(hi, lo)])
+        if (abs(lo) > floor or abs(hi) > floor) and np.all(close(edges, ref, ex, floor)):
             keys.add(key)
-        x = np.nextafter(hi, np.inf) if hi > x else np.nextafter(x, np.inf)
     return keys
 
 
@@ -268,6 +280,8 @@ def _oracle(ex: Exercise, student: str | None):
     else:
         return _Values(ex, reference_answer(ex.id, student), student)
     table = _load_digests()
+    if table is None and student is not None:
+        return None                  # a student's data: the grader's, never the package's
     if table is None:
         raise ReferenceNotShippedError("check: this package has neither the reference answers nor "
                                        f"their digests ({DIGESTS_FILE}); reinstall the student package")
