@@ -91,7 +91,8 @@ student: $(STAMP) $(NODE)
 GRADE_JOBS ?= 2
 grade: $(STAMP)
 	@if [ -z "$(SUBMISSIONS)" ]; then rm -rf _build/synthetic-class _build/synthetic-class.*; \
-	  $(BIN)/python tools/make_synthetic_class.py _build/synthetic-class $(if $(CHAPTERS),--chapters $(CHAPTERS)); fi
+	  $(BIN)/python tools/make_synthetic_class.py _build/synthetic-class \
+	    $(if $(CHAPTERS),--chapters $(CHAPTERS)); fi
 	$(BIN)/python tools/grader.py "$(or $(SUBMISSIONS),_build/synthetic-class)" \
 	  "$(or $(OUT),_build/synthetic-class.csv)" --jobs $(GRADE_JOBS) $(GRADE_ARGS)
 

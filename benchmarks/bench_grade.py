@@ -59,7 +59,8 @@ def main() -> None:
                note="measured: 28 full submissions and 2 interrupt-swallowing hangs")
     else:
         estimate = (28 * per["reference"] + 2 * per["hang"]) / JOBS
-        record("grade 30 students on the whole book (2 cores, extrapolated)", estimate, "s", TARGET_S,
+        record("grade 30 students on the whole book (2 cores, extrapolated)", estimate, "s",
+               TARGET_S,
                note=f"from a class of {len(per)} graded in {wall:.0f} s: (28 x reference "
                     f"{per['reference']:.0f} s + 2 x hang {per['hang']:.0f} s) / {JOBS} kernels; "
                     "FDI_BENCH_GRADE_FULL=1 measures the 30")

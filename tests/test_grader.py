@@ -115,7 +115,8 @@ def test_the_gradebook_was_not_written_by_the_attack(graded):
 def test_the_similarity_report_flags_the_verbatim_copy(graded):
     _, book, _ = graded
     with book.with_suffix(".similarity.csv").open() as f:
-        groups = [r for r in csv.DictReader(f) if r["exercise"] == synth.ATTACKED and r["kind"] == "verbatim"]
+        groups = [r for r in csv.DictReader(f)
+                  if r["exercise"] == synth.ATTACKED and r["kind"] == "verbatim"]
     assert any({"copier", "reference"} <= set(r["students"].split()) for r in groups)
 
 
@@ -173,7 +174,8 @@ def test_plan_attributes_cells_by_metadata():
             cell.metadata[CELL_KEY] = {"exercise": ex}
     plan = grader.plan_notebook(new.new_notebook(cells=cells))
     assert plan.setup == ["import numpy as np", "def helper(x):\n    return 2 * x"]
-    assert plan.exercises == {"glr-1": ['data = exercise_data("glr-1")\nanswer = None', "answer = helper(1)"]}
+    assert plan.exercises == {"glr-1": ['data = exercise_data("glr-1")\nanswer = None',
+                                        "answer = helper(1)"]}
 
 
 def test_student_notebook_tags_follow_the_chapter():
@@ -206,7 +208,8 @@ def test_the_attacks_would_get_the_answer_if_not_stopped():
     data = exercise_data(synth.ATTACKED, "wrapped")
     namespace = {"data": data}
     exec(synth.ATTACKS["wrapped"], namespace)
-    np.testing.assert_allclose(namespace["answer"], reference_answer(synth.ATTACKED, "wrapped"), rtol=1e-9)
+    np.testing.assert_allclose(namespace["answer"], reference_answer(synth.ATTACKED, "wrapped"),
+                               rtol=1e-9)
 
 
 def test_hidden_data_need_the_secret():
@@ -216,9 +219,11 @@ def test_hidden_data_need_the_secret():
 
 
 def test_similarity_flags_verbatim_and_renamed_copies():
-    code = "def f(a, b):\n    s = 0\n    for x in a:\n        s += x * b\n    return s / len(a)\nanswer = f(data, 3)"
+    code = ("def f(a, b):\n    s = 0\n    for x in a:\n        s += x * b\n    return s / len(a)\n"
+            "answer = f(data, 3)")
     renamed = code.replace("s", "total").replace("f(", "g(")
-    other = "import numpy as np\nanswer = float(np.mean(np.asarray(data) * 3) + 0 * np.pi ** 2 - 1 + 1)"
+    other = ("import numpy as np\n"
+             "answer = float(np.mean(np.asarray(data) * 3) + 0 * np.pi ** 2 - 1 + 1)")
     codes = {"a": {"glr-1": [code]}, "b": {"glr-1": ["# mine\n" + code]}, "c": {"glr-1": [renamed]},
              "d": {"glr-1": [other]}}
     rows = grader.similarity(codes, {})

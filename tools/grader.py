@@ -45,7 +45,8 @@ How a submission is graded
    swallows interrupts included); the grader then starts a fresh kernel and goes on with the
    next exercise. A student over the budget gets 0 on what did not run.
 3. **Exercise boundaries** come from the cells' metadata ``fdi_book.exercise`` (written by
-   ``tools/student_edition.py`` into every student notebook, :func:`fdi_lib.exercises.tag_exercise_cells`);
+   ``tools/student_edition.py`` into every student notebook:
+   :func:`fdi_lib.exercises.tag_exercise_cells`);
    a cell without it (added by the student) belongs to the exercise of the cell before it. Cells
    outside the exercises run as set-up only when they hold nothing but imports, definitions and
    literal assignments (a helper defined before the exercises), or carry ``fdi_book.setup``.
@@ -99,7 +100,8 @@ RUNS = tuple(POINTS)
 #: Names whose presence in an exercise's code scores it 0 (scanned in the grader's process): the
 #: means of the attacks on the kernel's hooks, the reference package, the grader's own module.
 SUSPICIOUS = ("_reference", "reference_answer", "grader_kernel", "__wrapped__", "__code__",
-              "__closure__", "cell_contents", "getprofile", "setprofile", "settrace", "addaudithook",
+              "__closure__", "cell_contents", "getprofile", "setprofile", "settrace",
+              "addaudithook",
               "ctypes", "get_objects", "get_referrers", "dup2", "FDI_GRADER_SECRET", "/proc/",
               "_fdi_grader")
 
@@ -151,7 +153,8 @@ def _is_setup(source: str) -> bool:
         return False
 
     def ok(node) -> bool:
-        if isinstance(node, (ast.Import, ast.ImportFrom, ast.FunctionDef, ast.ClassDef, ast.AsyncFunctionDef)):
+        if isinstance(node, (ast.Import, ast.ImportFrom, ast.FunctionDef, ast.ClassDef,
+                             ast.AsyncFunctionDef)):
             return True
         if isinstance(node, (ast.Assign, ast.AnnAssign)) and node.value is not None:
             try:
@@ -215,7 +218,8 @@ class Limits:
 def _kernel_env(scratch: Path) -> dict:
     env = {k: os.environ[k] for k in ENV_KEEP if k in os.environ}
     env.update(PYTHONPATH=str(scratch / "lib"), HOME=str(scratch), TMPDIR=str(scratch),
-               IPYTHONDIR=str(scratch / "ipython"), MPLCONFIGDIR=str(scratch / "mpl"), MPLBACKEND="Agg",
+               IPYTHONDIR=str(scratch / "ipython"), MPLCONFIGDIR=str(scratch / "mpl"),
+               MPLBACKEND="Agg",
                OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1",
                PYTHONDONTWRITEBYTECODE="1", PYDEVD_DISABLE_FILE_VALIDATION="1")
     return env
@@ -258,7 +262,8 @@ class Run:
 def _outputs(cell) -> tuple[list[dict], list[str]]:
     reports, errors = [], []
     for out in cell.get("outputs", []):
-        data = out.get("data", {}) if out.get("output_type") in ("display_data", "execute_result") else {}
+        shown = out.get("output_type") in ("display_data", "execute_result")
+        data = out.get("data", {}) if shown else {}
         if KERNEL_MIME in data and isinstance(data[KERNEL_MIME], dict):
             reports.append(data[KERNEL_MIME])
         if out.get("output_type") == "error":
@@ -267,7 +272,8 @@ def _outputs(cell) -> tuple[list[dict], list[str]]:
 
 
 def run_student(folder: Path, package: Path, secret: str, limits: Limits,
-                denied: list[Path]) -> tuple[dict[tuple[str, str], Run], dict[str, list[str]], list[str]]:
+                denied: list[Path]
+                ) -> tuple[dict[tuple[str, str], Run], dict[str, list[str]], list[str]]:
     """Execute one student's notebooks; returns ({(exercise, run): Run}, {exercise: code}, log)."""
     import nbformat
 
@@ -296,7 +302,8 @@ def run_student(folder: Path, package: Path, secret: str, limits: Limits,
             while todo:
                 if time.monotonic() >= deadline:
                     for ex, run in todo:
-                        runs.setdefault((ex, run), Run()).stopped = "the student's time budget was used up"
+                        runs.setdefault((ex, run), Run()).stopped = \
+                            "the student's time budget was used up"
                     log.append(f"student time limit ({limits.student:g} s) reached")
                     break
                 todo = _run_kernel(plan, todo, keys, config, scratch, limits, deadline, runs, log)
@@ -313,8 +320,9 @@ def _run_kernel(plan: Plan, todo: list, keys: dict, config: dict, scratch: Path,
 
     new = nbformat.v4.new_code_cell
     nb = nbformat.v4.new_notebook()
-    client = nbclient.NotebookClient(nb, timeout=limits.cell, kernel_name="python3", allow_errors=True,
-                                     interrupt_on_timeout=False, startup_timeout=120,
+    client = nbclient.NotebookClient(nb, timeout=limits.cell, kernel_name="python3",
+                                     allow_errors=True, interrupt_on_timeout=False,
+                                     startup_timeout=120,
                                      resources={"metadata": {"path": str(scratch)}})
     cpu = int(max(1.0, deadline - time.monotonic())) + 1
     started = False
@@ -327,9 +335,11 @@ def _run_kernel(plan: Plan, todo: list, keys: dict, config: dict, scratch: Path,
         return cell
 
     try:
-        with client.setup_kernel(env=_kernel_env(scratch), cwd=str(scratch), stderr=subprocess.DEVNULL,
+        with client.setup_kernel(env=_kernel_env(scratch), cwd=str(scratch),
+                                 stderr=subprocess.DEVNULL,
                                  preexec_fn=_rlimits(limits.memory_mb, cpu)):
-            install = execute(f"import grader_kernel as _fdi_grader\n_fdi_grader.install({config!r})")
+            install = execute("import grader_kernel as _fdi_grader\n"
+                              f"_fdi_grader.install({config!r})")
             if _outputs(install)[1]:
                 raise RuntimeError(f"grader hooks failed: {_outputs(install)[1]}")
             for src in plan.setup:
@@ -357,8 +367,8 @@ def _run_kernel(plan: Plan, todo: list, keys: dict, config: dict, scratch: Path,
         lost = [(e, r) for e, r in todo if e == ex or not started]
         for e, r in lost:
             runs.setdefault((e, r), Run()).stopped = what
-        log.append(f"{ex if started else 'set-up'} ({run} data): {what}; the kernel's process group "
-                   "was killed")
+        log.append(f"{ex if started else 'set-up'} ({run} data): {what}; the kernel's process "
+                   "group was killed")
         return [t for t in todo if t not in lost]
     finally:
         _kill_group(client)
@@ -372,7 +382,8 @@ def _collect(cells: list, ex: str, run: str, result: Run) -> None:
         for rep in reports:
             if rep.get("kind") == "violation":
                 result.violations.append(str(rep.get("what")))
-            elif rep.get("kind") == "answer" and rep.get("run") == f"{ex}/{run}" and rep.get("exercise") == ex:
+            elif (rep.get("kind"), rep.get("run"), rep.get("exercise")) == (
+                    "answer", f"{ex}/{run}", ex):
                 result.answer, result.reported = rep.get("answer"), True
                 result.unreadable = str(rep.get("unreadable") or "")
 
@@ -425,7 +436,8 @@ def similarity(codes: dict[str, dict[str, list[str]]], starters: dict[str, set[s
             (ta, sa), (tb, sb) = mine[a], mine[b]
             jac = len(sa & sb) / len(sa | sb)
             if ta != tb and jac >= threshold:
-                out.append({"exercise": ex, "students": f"{a} {b}", "kind": "similar", "jaccard": f"{jac:.3f}"})
+                out.append({"exercise": ex, "students": f"{a} {b}", "kind": "similar",
+                            "jaccard": f"{jac:.3f}"})
     return out
 
 
@@ -531,9 +543,11 @@ def canvas_export(gradebook: Path, names: dict[str, str], out: Path) -> None:
     with out.open("w", newline="") as f:
         w = csv.writer(f)
         w.writerow(head)
-        w.writerow(["Points Possible", "", "", "", "", *[n.rsplit("/", 1)[1].rstrip(")") for n in names.values()]])
+        possible = [n.rsplit("/", 1)[1].rstrip(")") for n in names.values()]
+        w.writerow(["Points Possible", "", "", "", "", *possible])
         for r in rows:
-            w.writerow([r["student"], "", r["student"], r["student"], "", *[r[n] for n in names.values()]])
+            points = [r[n] for n in names.values()]
+            w.writerow([r["student"], "", r["student"], r["student"], "", *points])
 
 
 def _secret(out: Path, given: str | None) -> str:
@@ -550,7 +564,8 @@ def _secret(out: Path, given: str | None) -> str:
 
 
 def grade(submissions: Path, out: Path, log_path: Path | None = None, limits: Limits | None = None,
-          secret: str | None = None, jobs: int = 1, chapters: list[str] | None = None) -> list[dict]:
+          secret: str | None = None, jobs: int = 1, chapters: list[str] | None = None
+          ) -> list[dict]:
     """Grade every student folder of ``submissions`` not yet in ``out``; returns all rows.
 
     ``jobs`` kernels run at once (one per student); the gradebook is the same for any ``jobs``
@@ -614,16 +629,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("out", type=Path)
     parser.add_argument("--log", type=Path)
     parser.add_argument("--cell-timeout", type=float, default=60.0, help="wall seconds per cell")
-    parser.add_argument("--student-timeout", type=float, default=600.0, help="wall seconds per student")
+    parser.add_argument("--student-timeout", type=float, default=600.0,
+                        help="wall seconds per student")
     parser.add_argument("--memory-mb", type=int, default=3072, help="address space of a kernel")
     parser.add_argument("--jobs", type=int, default=1, help="kernels at once (one per student)")
     parser.add_argument("--chapters", nargs="*", choices=list(CHAPTERS), help="the graded chapters")
     args = parser.parse_args(argv)
     if not args.submissions.is_dir():
         parser.error(f"SUBMISSIONS: expected a folder of student folders, got {args.submissions}")
-    rows = grade(args.submissions, args.out, args.log, Limits(args.cell_timeout, args.student_timeout,
-                                                             args.memory_mb),
-                 jobs=args.jobs, chapters=args.chapters)
+    limits = Limits(args.cell_timeout, args.student_timeout, args.memory_mb)
+    rows = grade(args.submissions, args.out, args.log, limits, jobs=args.jobs,
+                 chapters=args.chapters)
     print(f"{len(rows)} students in {args.out} (log: {args.out.with_suffix('.log')}, feedback: "
           f"{args.out.with_suffix('.feedback')}/, Canvas: {args.out.with_suffix('.canvas.csv')}, "
           f"similarity: {args.out.with_suffix('.similarity.csv')})")

@@ -4,7 +4,8 @@ The grader copies this file beside the student package in the kernel's scratch f
 kernel's import path holds the student package, this file and the pinned environment, nothing of
 the repository) and runs, around the submission's cells:
 
-* ``install(config)`` once per kernel, before any submission cell: installs a Python audit hook (:func:`sys.addaudithook`: it cannot be removed)
+* ``install(config)`` once per kernel, before any submission cell: installs a Python audit hook
+  (:func:`sys.addaudithook`: it cannot be removed)
   and a profile function (:func:`sys.setprofile`, which the hook then forbids to change).
 * ``begin(exercise_id, run, one_call)`` before an exercise's cells, ``end(exercise_id, run)``
   after them: ``end`` reports the notebook's ``answer``.
@@ -71,7 +72,8 @@ _BLOCKED_EVENTS = {
     "os.exec": "replacing the kernel (os.exec)", "os.system": "running a shell command (os.system)",
     "subprocess.Popen": "starting a process (subprocess)", "os.kill": "sending a signal (os.kill)",
     "os.killpg": "sending a signal (os.killpg)", "_thread.start_new_thread": "starting a thread",
-    "sys.setprofile": "changing the profile function", "sys.settrace": "changing the trace function",
+    "sys.setprofile": "changing the profile function",
+    "sys.settrace": "changing the trace function",
     "ctypes.dlopen": "loading a library with ctypes", "ctypes.dlsym": "ctypes",
     "ctypes.cdata": "reading memory with ctypes", "ctypes.call_function": "ctypes",
     "gc.get_objects": "walking the garbage collector's objects",
@@ -91,10 +93,12 @@ def _audit(event: str, args: tuple) -> None:
         if isinstance(path, int) or path is None:
             return
         path = os.path.realpath(os.fsdecode(path))
-        writing = (mode is not None and any(c in str(mode) for c in "wax+")) or bool(flags & _WRITE_FLAGS)
+        writing = bool(flags & _WRITE_FLAGS) or (mode is not None
+                                                 and any(c in str(mode) for c in "wax+"))
         if writing and not _under(path, (_S["scratch"], os.devnull)):
             _violate(f"writing {path} (outside the kernel's scratch folder)")
-        if path.startswith("/proc/") and not path.startswith(("/proc/self/", f"/proc/{os.getpid()}/")):
+        own = ("/proc/self/", f"/proc/{os.getpid()}/")
+        if path.startswith("/proc/") and not path.startswith(own):
             _violate(f"reading {path} (another process)")
         if _under(path, _S["denied_read"]) and not _under(path, _S["allowed_read"]):
             _violate(f"reading {path} (the grader's or the repository's files)")
@@ -129,7 +133,8 @@ def install(config: dict) -> None:
               if getattr(m, "__file__", None) and _under(os.path.realpath(m.__file__), (package,))}
     _S.update(scratch=os.path.realpath(config["scratch"]), package=package, executed=loaded,
               denied_read=tuple(os.path.realpath(p) for p in config["denied_read"]),
-              allowed_read=(os.path.realpath(sys.prefix), package, os.path.realpath(config["scratch"])))
+              allowed_read=(os.path.realpath(sys.prefix), package,
+                            os.path.realpath(config["scratch"])))
     sys.addaudithook(_audit)
     sys.setprofile(_profile)
     _S["installed"] = True

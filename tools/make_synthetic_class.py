@@ -100,7 +100,8 @@ ATTACKS = {
         "    except KeyboardInterrupt:\n        pass"),
 }
 
-HELPER = "def quadratic(C, d):\n    import numpy as np\n    th = np.linalg.solve(C, d)\n    return d @ th, th\n"
+HELPER = ("def quadratic(C, d):\n    import numpy as np\n    th = np.linalg.solve(C, d)\n"
+          "    return d @ th, th\n")
 
 
 def _cell(source: str) -> str:
@@ -174,7 +175,8 @@ def write_class(out: Path, chapters: list[str] | None = None) -> list[Path]:
                 path.write_text('{"cells": [ this is not JSON')
                 continue
             text = (REPO / "book" / f"{chapter}.md").read_text()
-            nb = jupytext.reads(submission(text, "reference" if kind == "copier" else kind, out), fmt="md:myst")
+            as_ = "reference" if kind == "copier" else kind
+            nb = jupytext.reads(submission(text, as_, out), fmt="md:myst")
             tag_exercise_cells(nb)
             jupytext.write(nb, path)
         folders.append(folder)

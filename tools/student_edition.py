@@ -110,11 +110,13 @@ def tag_notebook(path: Path, chapter: Path) -> None:
 
     source = jupytext.read(chapter)
     tag_exercise_cells(source)
-    cells = [c for c in source.cells if notebook_markdown.MACRO_TAG not in c.metadata.get("tags", [])]
+    tag = notebook_markdown.MACRO_TAG
+    cells = [c for c in source.cells if tag not in c.metadata.get("tags", [])]
     nb = nbformat.read(path, as_version=4)
-    body = [c for c in nb.cells if notebook_markdown.MACRO_TAG not in c.metadata.get("tags", [])]
+    body = [c for c in nb.cells if tag not in c.metadata.get("tags", [])]
     if [c.cell_type for c in body] != [c.cell_type for c in cells]:
-        raise RuntimeError(f"{path}: its cells are not those of {chapter}: cannot tag the exercises")
+        raise RuntimeError(f"{path}: its cells are not those of {chapter}: cannot tag the "
+                           "exercises")
     for cell, src in zip(body, cells):
         cell.metadata[CELL_KEY] = src.metadata[CELL_KEY]
     nbformat.write(nb, path)

@@ -44,7 +44,8 @@ from fdi_lib.exercises import bz, glr, pipeline, signature, sparse, svo, windtur
 from fdi_lib.exercises._core import (CHAPTERS, DIFFICULTIES, STUDENT_ENV, AnswerError, CheckResult,
                                      Exercise, ExerciseData, ReferenceNotShippedError,
                                      UnknownExerciseError, student_id, student_rng, student_seed)
-from fdi_lib.exercises.book import (CELL_KEY, COURSE_PLANS, HAND_GRADED, WRITE_UP_MINUTES, ChapterExercise,
+from fdi_lib.exercises.book import (CELL_KEY, COURSE_PLANS, HAND_GRADED, WRITE_UP_MINUTES,
+                                    ChapterExercise,
                                     PlanWeek, code_cells, counts_table, exercise_table,
                                     exercises_section, homework_minutes, parse_chapter, plan_table,
                                     solution_fingerprints, strip_solutions,

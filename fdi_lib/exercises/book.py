@@ -368,7 +368,8 @@ def solution_fingerprints(full_text: str, student_text: str, n: int = 8) -> set[
 #: None}`` outside (as nbgrader's and otter's cell metadata tag a notebook's graded parts).
 CELL_KEY = "fdi_book"
 
-_START_END = re.compile(r"^(?:`{3,}|:{3,})\{exercise-(?P<what>start|end)\}(?: (?P<id>[a-z]+-\d+))?", re.M)
+_START_END = re.compile(r"^(?:`{3,}|:{3,})\{exercise-(?P<what>start|end)\}"
+                        r"(?: (?P<id>[a-z]+-\d+))?", re.M)
 
 
 def tag_exercise_cells(nb) -> None:

@@ -166,7 +166,8 @@ def _buckets_meeting(lo: float, hi: float, ex: Exercise):
     w = math.log1p(ex.rtol) / FINE
     for sign, a, b in ((1, max(lo, split), hi), (-1, max(-hi, split), -lo)):
         if b > split and b >= a and b > 0:
-            for k in range(math.floor(math.log(max(a, 5e-324)) / w), math.floor(math.log(b) / w) + 1):
+            first, last = math.floor(math.log(max(a, 5e-324)) / w), math.floor(math.log(b) / w)
+            for k in range(first, last + 1):
                 e0, e1 = math.exp(k * w), math.exp((k + 1) * w)
                 yield (f"+{k}", e0, e1) if sign > 0 else (f"-{k}", -e1, -e0)
 
