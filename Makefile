@@ -79,25 +79,30 @@ book-fast: $(STAMP)
 ## notebook per chapter with the starter cells (_build/student/notebooks); fails if either still
 ## contains solution text (tools/student_edition.py verify). Then the student package, a wheel of
 ## fdi_lib without reference answers or reference code (_build/student/dist/fdi_lib-*.whl,
-## tools/student_package.py); `make student STUDENTS=roster.txt` adds the digests of each listed
-## student's own data (one id a line).
+## tools/student_package.py; digests of the book's data only: graded answers stay out of it).
 student: $(STAMP) $(NODE)
 	mkdir -p _build/student
 	set -o pipefail; $(BIN)/python tools/student_edition.py build --warningiserror --nitpick --keep-going 2>&1 | tee _build/student/build.log
-	$(BIN)/python tools/student_package.py --out _build/student $(if $(STUDENTS),--students $(STUDENTS))
+	$(BIN)/python tools/student_package.py --out _build/student
 	@echo "Student book built: $(abspath _build/student/html/index.html)"
 	@echo "Student package: $$(ls _build/student/dist/fdi_lib-*.whl) (pip install it; no repository needed)"
 	$(MAKE) student-pdf
 
 ## Grade a class: SUBMISSIONS holds one folder per student id with the submitted notebooks; OUT
-## gets the gradebook (one row per student, the points of each checkable exercise, the total) and
-## OUT's .log what failed. The notebooks run against the student package, on each student's own
-## data and on hidden data, with the one-call library answers blocked (tools/grader.py);
-## GRADE_JOBS kernels at once (default 2).
+## gets the gradebook (one row per student, written as each finishes; a re-run resumes), beside it
+## OUT's .log, .feedback/ (one file per student), .canvas.csv, .similarity.csv. The notebooks run
+## in isolated kernels against the student package, on each student's own data and on hidden data
+## (tools/grader.py); GRADE_JOBS kernels at once (default 2), GRADE_ARGS for the limits
+## (e.g. --cell-timeout 60 --student-timeout 600 --memory-mb 3072). Without SUBMISSIONS, a
+## synthetic class with hostile submissions (tools/make_synthetic_class.py) is written to
+## _build/synthetic-class and graded into _build/synthetic-class.csv.
 GRADE_JOBS ?= 2
 grade: $(STAMP)
-	@test -n "$(SUBMISSIONS)" -a -n "$(OUT)" || { echo "usage: make grade SUBMISSIONS=<dir> OUT=<csv>"; exit 2; }
-	$(BIN)/python tools/grader.py "$(SUBMISSIONS)" "$(OUT)" --jobs $(GRADE_JOBS)
+	@if [ -z "$(SUBMISSIONS)" ]; then rm -rf _build/synthetic-class _build/synthetic-class.*; \
+	  $(BIN)/python tools/make_synthetic_class.py _build/synthetic-class \
+	    $(if $(CHAPTERS),--chapters $(CHAPTERS)); fi
+	$(BIN)/python tools/grader.py "$(or $(SUBMISSIONS),_build/synthetic-class)" \
+	  "$(or $(OUT),_build/synthetic-class.csv)" --jobs $(GRADE_JOBS) $(GRADE_ARGS)
 
 ## PDF edition: _build/pdf/fdi-book.pdf, by xelatex from Debian's TeX Live (the packages below,
 ## installed if absent, as browser-test installs chromium; no network otherwise). It reuses the

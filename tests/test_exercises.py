@@ -383,3 +383,39 @@ def test_docstring_examples():
 
     results = [doctest.testmod(module, optionflags=doctest.ELLIPSIS) for module in (E, E.checker, E.book)]
     assert sum(r.attempted for r in results) >= 5 and not any(r.failed for r in results)
+
+
+def test_sparse5_zeros_computed_as_1e17_are_zeros():
+    """Issue 36, point 6: an exact zero of the reference accepts a numerically zero answer."""
+    from fdi_lib.exercises.checker import close
+
+    ref = E.reference_answer("sparse-5")
+    answer = np.where(ref == 0, 1e-17, ref)
+    assert np.any(ref == 0)
+    assert check("sparse-5", answer).passed
+    assert not np.all(close(answer, ref, EXERCISES["sparse-5"], floor=0.0))   # without the floor
+
+
+@pytest.mark.parametrize("exercise_id", [e.id for e in EXERCISES.values()
+                                         if e.checkable and not e.integer and e.rtol > 0])
+def test_digest_buckets_never_accept_what_the_grader_rejects(exercise_id):
+    """The student package stores only buckets wholly within the tolerance (one tolerance
+    function, :func:`close`): an answer its digests accept is within the grader's tolerance, at
+    every distance from the reference, on both sides, for every entry of the book's answer."""
+    from fdi_lib.exercises.checker import close, entry_keys, zero_floor
+
+    ex = EXERCISES[exercise_id]
+    ref = E.reference_answer(exercise_id).ravel()
+    floor = zero_floor(ref, ex)
+    for value in ref:
+        stored = entry_keys(float(value), ex, around=True, floor=floor)
+        tol = ex.atol + ex.rtol * abs(value)
+        assert stored, (exercise_id, value)
+        for f in (-1.5, -1.01, -1.0, -0.99, -0.5, 0.0, 0.5, 0.99, 1.0, 1.01, 1.5):
+            a = float(value + f * tol)
+            (key,) = entry_keys(a, ex, floor=floor)
+            if key in stored:
+                ok = close(np.array([a]), np.array([value]), ex, floor)[0]
+                assert ok, (exercise_id, value, f)
+        (own,) = entry_keys(float(value), ex, floor=floor)
+        assert own in stored, (exercise_id, value)

@@ -1,56 +1,82 @@
 """Grade a class: run every submitted notebook on the student's own data and on hidden data.
 
-    python tools/grader.py SUBMISSIONS OUT.csv [--log OUT.log] [--timeout 120] [--jobs 1]
+    python tools/grader.py SUBMISSIONS OUT.csv [--jobs 2] [--cell-timeout 60]
+                           [--student-timeout 600] [--memory-mb 3072] [--chapters ...]
     make grade SUBMISSIONS=<dir> OUT=<csv>
 
 ``SUBMISSIONS`` holds one folder per student, named by the student id, with that student's
-notebooks (``*.ipynb``, any names: the exercises are found by their identifiers). ``OUT.csv``
-gets one row per student: the points of every checkable exercise, the total and the maximum;
-``OUT.log`` (default: beside the CSV) says what failed and why.
+notebooks (``*.ipynb``, any names). Beside ``OUT.csv`` the grader writes:
+
+* ``OUT.csv``, the gradebook: one row per student, written (and fsynced) as soon as the student
+  is graded; a re-run with the same ``OUT`` resumes and skips the students already in it. Columns:
+  the points of every checkable exercise, each chapter's points with its points possible in the
+  header (``zb2014/glr (/10)``), the total and the points possible of the graded chapters, then
+  one empty ``rubric <id>`` column per hand-graded item for the instructor;
+* ``OUT.canvas.csv``: the same totals in Canvas's gradebook-import layout (columns ``Student``,
+  ``ID``, ``SIS User ID``, ``SIS Login ID``, ``Section``, then one assignment column per chapter;
+  a second row ``Points Possible``);
+* ``OUT.log``: the class log (what failed for whom; never the grading secret);
+* ``OUT.feedback/<student>.md``: one file per student to hand back (points per exercise, what
+  failed, the attempts the grader stopped);
+* ``OUT.similarity.csv``: the students whose code for an exercise is a verbatim copy of each
+  other's (identical once comments and blank lines are dropped; one row per group) or nearly so
+  once names and numbers are normalised (:func:`similarity`), for the instructor to look at;
+* ``OUT.secret`` (mode 0600): the grading secret the hidden data derive from, kept so that a
+  re-run grades the remaining students on the same hidden data (``FDI_GRADER_SECRET`` overrides).
 
 How a submission is graded
 --------------------------
-1. The student package is staged (``tools/student_package.py``: ``fdi_lib`` without
-   ``exercises._reference``) and the submission runs against it, in one Jupyter kernel per
-   student, in a scratch directory: no reference answer or reference code is importable there.
-2. Of each notebook only the import cells before the first exercise and the cells of the
-   checkable exercises run (the cells from an exercise's ``exercise_data("<id>")`` to the next
-   exercise). They run twice: once with the student's own data (``FDI_STUDENT_ID`` = the
-   folder's name) and once with hidden data (a student id derived from a grading secret the
-   student does not know), so the cells must compute the answer, not hold it.
-3. During both runs ``tools/grader_kernel.py`` makes the library functions that answer the
-   exercise in one call raise (``Reference.one_call`` in ``fdi_lib.exercises._reference``) and
-   turns ``check`` into a stub without feedback; ``answer`` is recorded after each run.
-   The submissions' code runs as the user who runs the grader, without a container: grade on
-   an account or machine meant for it.
-4. Hidden tests compare each recorded ``answer`` with the reference recomputed here for the same
-   data, with the exercise's tolerance: one point for the student's own data, one for the
-   hidden data.
+1. **Isolation.** Each student's notebooks run in a fresh Jupyter kernel started in a scratch
+   folder that holds the student package (``tools/student_package.py``: ``fdi_lib`` without
+   ``exercises._reference``) and ``grader_kernel.py``; its import path is that folder and the
+   pinned environment, its environment a short allow-list (no secret, no repository path), its
+   arguments the kernel's own. The kernel never sees an expected answer: it reports the
+   notebook's ``answer`` values and the grader compares them here with the reference it
+   recomputes from the student's seed (:func:`accepted`, the same tolerance function as the
+   checker's, :func:`fdi_lib.exercises.checker.close`). ``grader_kernel.py`` says what the
+   kernel's hooks stop and report (one-call library answers, reading the repository or the
+   grader's files or environment, writing outside the scratch folder, processes, ...); a
+   violation, or a name of :data:`SUSPICIOUS` in the exercise's code (scanned here, not in the
+   kernel), scores the exercise 0 and is named in the log and the feedback.
+2. **Limits.** The kernel runs in its own session (process group) under rlimits (address space
+   ``--memory-mb``, CPU seconds = the student's time budget, hard), every cell under
+   ``--cell-timeout`` and the student under ``--student-timeout`` of wall time. A cell over its
+   limit, or a dead kernel, gets the kernel's whole process group killed (SIGKILL: a loop that
+   swallows interrupts included); the grader then starts a fresh kernel and goes on with the
+   next exercise. A student over the budget gets 0 on what did not run.
+3. **Exercise boundaries** come from the cells' metadata ``fdi_book.exercise`` (written by
+   ``tools/student_edition.py`` into every student notebook:
+   :func:`fdi_lib.exercises.tag_exercise_cells`);
+   a cell without it (added by the student) belongs to the exercise of the cell before it. Cells
+   outside the exercises run as set-up only when they hold nothing but imports, definitions and
+   literal assignments (a helper defined before the exercises), or carry ``fdi_book.setup``.
+4. **Two runs** of each checkable exercise's cells: on the student's own data and on hidden data
+   (a student id derived from the grading secret); one point each.
 
-Why otter-grader's test format and our own execution: the hidden tests are otter-grader
-exception-based test files (:class:`otter.test_files.ExceptionTestFile`, plain Python test
-functions with points and a ``hidden`` flag, whose results otter scores). otter is a maintained
-autograder, needs no course database or release/collect workflow (nbgrader does: a SQL
-gradebook, a course directory layout, and hidden tests written into the source notebook, which
-the student edition would then have to strip again). Its own ``otter grade`` runs submissions in
-Docker containers and ``otter run`` needs an autograder zip that installs requirements, which this
-machine (no container, no network) cannot do; and neither can run the same cells twice on two
-data sets with library functions blocked in between, which is the point of the hidden tests. So
-the notebooks are executed here with nbclient (the executor Jupyter Book also uses) and only the
-scoring is otter's.
+Why no otter-grader: the grader used only otter's test-file format (``ExceptionTestFile``) for a
+two-line comparison; ``otter grade`` needs Docker and ``otter run`` an autograder zip, neither of
+which runs the same cells twice on two data sets. The dependency is dropped (issue 30).
 """
 
 from __future__ import annotations
 
 import argparse
+import ast
 import csv
 import hashlib
+import io
+import itertools
 import json
 import os
 import re
 import secrets
+import shutil
+import signal
+import subprocess
 import sys
 import tempfile
+import time
+import tokenize
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -58,87 +84,50 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
 TOOLS = Path(__file__).resolve().parent
-for path in (REPO, TOOLS):
-    if str(path) not in sys.path:
-        sys.path.insert(0, str(path))
+if str(REPO) not in sys.path:
+    sys.path.insert(0, str(REPO))
 
-from fdi_lib.exercises import exercise_ids, get_exercise, reference_answer  # noqa: E402
+from fdi_lib.exercises import (CHAPTERS, EXERCISES, HAND_GRADED, exercise_ids,  # noqa: E402
+                               get_exercise, reference_answer)
 from fdi_lib.exercises._reference import REFERENCES  # noqa: E402
+from fdi_lib.exercises.book import CELL_KEY  # noqa: E402
 from fdi_lib.exercises.checker import close  # noqa: E402
 
 #: Points of a checkable exercise: the student's own data, then the hidden data.
 POINTS = {"own": 1, "hidden": 1}
+RUNS = tuple(POINTS)
 
-_TEST_TEMPLATE = '''
-from otter.test_files import test_case
+#: Names whose presence in an exercise's code scores it 0 (scanned in the grader's process): the
+#: means of the attacks on the kernel's hooks, the reference package, the grader's own module.
+SUSPICIOUS = ("_reference", "reference_answer", "grader_kernel", "__wrapped__", "__code__",
+              "__closure__", "cell_contents", "getprofile", "setprofile", "settrace",
+              "addaudithook",
+              "ctypes", "get_objects", "get_referrers", "dup2", "FDI_GRADER_SECRET", "/proc/",
+              "_fdi_grader")
 
-name = {id!r}
+#: Environment variables a kernel inherits (everything else is dropped: no secret, no path).
+ENV_KEEP = ("PATH", "LANG", "LC_ALL", "TZ")
 
-@test_case(name={id!r} + ": answer on the student's own data", points={own}, hidden=True)
-def own_data(accepted, own, ref_own):
-    assert accepted(own, ref_own), "the answer on the student's own data is " + accepted.why(own, ref_own)
+KERNEL_MIME = "application/vnd.fdi-grader+json"
 
-@test_case(name={id!r} + ": the same cells on hidden data", points={hidden}, hidden=True)
-def hidden_data(accepted, hidden, ref_hidden):
-    assert accepted(hidden, ref_hidden), "the answer on hidden data is " + accepted.why(hidden, ref_hidden)
-'''
-
-_START = re.compile(r"\{exercise-start\}\s+([a-z]+-\d+)")
 _DATA = re.compile(r"""exercise_data\(\s*["']([a-z]+-\d+)["']""")
 
 
-class _Accepted:
-    """``answer`` within the exercise's tolerance of ``ref`` (the test files' ``accepted``)."""
-
-    def __init__(self, exercise_id: str):
-        self.ex = get_exercise(exercise_id)
-
-    def why(self, answer, ref) -> str:
-        if answer is None:
-            return "missing (no `answer`, or the cells failed before setting it)"
-        a = np.asarray(answer, dtype=float)
-        if a.size == 1 and ref.size == 1:
-            a = a.reshape(ref.shape)
-        if a.shape != ref.shape:
-            return f"of shape {a.shape}, expected {ref.shape}"
-        if self.ex.integer and not np.all(a == np.round(a)):
-            return "not a whole number"
-        return "outside the tolerance" if not np.all(close(a, ref, self.ex)) else "accepted"
-
-    def __call__(self, answer, ref) -> bool:
-        return self.why(answer, ref) == "accepted"
-
-
-@dataclass
-class Plan:
-    """Which cells of a notebook run: the import cells, then each checkable exercise's cells."""
-
-    imports: list[str] = field(default_factory=list)
-    exercises: dict[str, list[str]] = field(default_factory=dict)
-
-
-def plan_notebook(nb) -> Plan:
-    """Split a submitted notebook into its import cells and the cells of each exercise."""
-    import ast
-
-    plan, current = Plan(), None
-    for cell in nb.cells:
-        source = cell.source if isinstance(cell.source, str) else "".join(cell.source)
-        marker = _START.search(source) if cell.cell_type == "markdown" else _DATA.search(source)
-        if marker and marker.group(1) != current:
-            current = marker.group(1)
-        if cell.cell_type != "code":
-            continue
-        if current is None:
-            try:
-                body = ast.parse(source).body
-            except SyntaxError:
-                continue
-            if body and all(isinstance(node, (ast.Import, ast.ImportFrom)) for node in body):
-                plan.imports.append(source)
-        elif current in REFERENCES:
-            plan.exercises.setdefault(current, []).append(source)
-    return plan
+# ----------------------------------------------------------------------------- scoring
+def accepted(answer, ref: np.ndarray, exercise_id: str) -> str:
+    """``"accepted"``, or why ``answer`` is not within the exercise's tolerance of ``ref`` (the
+    checker's :func:`~fdi_lib.exercises.checker.close`: one tolerance for wheel and grader)."""
+    ex = get_exercise(exercise_id)
+    if answer is None:
+        return "missing (no `answer`, or the cells failed before setting it)"
+    a = np.asarray(answer, dtype=float)
+    if a.size == 1 and ref.size == 1:
+        a = a.reshape(ref.shape)
+    if a.shape != ref.shape:
+        return f"of shape {a.shape}, expected {ref.shape}"
+    if ex.integer and not np.all(a == np.round(a)):
+        return "not a whole number"
+    return "accepted" if np.all(close(a, ref, ex)) else "outside the tolerance"
 
 
 def hidden_student(student: str, secret: str) -> str:
@@ -146,31 +135,146 @@ def hidden_student(student: str, secret: str) -> str:
     return f"hidden-{hashlib.sha256(f'{secret}/{student}'.encode()).hexdigest()[:16]}"
 
 
-def _grading_notebook(plans: list[Plan], student: str, hidden: str, record: Path):
-    import nbformat
+# ----------------------------------------------------------------------------- planning
+@dataclass
+class Plan:
+    """Which cells of a notebook run: set-up cells, then each checkable exercise's cells."""
 
-    cells = [nbformat.v4.new_code_cell("import grader_kernel as _fdi_grader")]
-    for plan in plans:
-        cells.append(nbformat.v4.new_code_cell("%reset -f\nimport grader_kernel as _fdi_grader"))
-        cells += [nbformat.v4.new_code_cell(src) for src in plan.imports]
-        for exercise_id, sources in plan.exercises.items():
-            one_call = list(REFERENCES[exercise_id].one_call)
-            for run, key in (("own", student), ("hidden", hidden)):
-                cells.append(nbformat.v4.new_code_cell(
-                    f"_fdi_grader.begin({exercise_id!r}, {key!r}, {one_call!r}, {str(record)!r})",
-                    metadata={"grader": {"exercise": exercise_id, "run": run, "hook": True}}))
-                cells += [nbformat.v4.new_code_cell(src, metadata={"grader": {"exercise": exercise_id,
-                                                                               "run": run}})
-                          for src in sources]
-                cells.append(nbformat.v4.new_code_cell(
-                    f"_fdi_grader.end({exercise_id!r}, {run!r})",
-                    metadata={"grader": {"exercise": exercise_id, "run": run, "hook": True}}))
-    return nbformat.v4.new_notebook(cells=cells)
+    setup: list[str] = field(default_factory=list)
+    exercises: dict[str, list[str]] = field(default_factory=dict)
 
 
-def run_student(folder: Path, package: Path, secret: str, timeout: int) -> tuple[dict, list[str]]:
-    """Execute one student's notebooks; returns ({(exercise, run): answer}, log lines)."""
-    import nbclient
+def _is_setup(source: str) -> bool:
+    """A cell outside the exercises that runs as set-up: imports, definitions, literal
+    assignments only (never the chapter's computations)."""
+    try:
+        body = ast.parse(source).body
+    except SyntaxError:
+        return False
+
+    def ok(node) -> bool:
+        if isinstance(node, (ast.Import, ast.ImportFrom, ast.FunctionDef, ast.ClassDef,
+                             ast.AsyncFunctionDef)):
+            return True
+        if isinstance(node, (ast.Assign, ast.AnnAssign)) and node.value is not None:
+            try:
+                ast.literal_eval(node.value)
+            except ValueError:
+                return False
+            return True
+        return False
+    return bool(body) and all(ok(n) for n in body)
+
+
+def plan_notebook(nb) -> Plan:
+    """Split a submitted notebook into set-up cells and the cells of each exercise, by the cells'
+    ``fdi_book`` metadata; a notebook without any (not from the student edition) by its
+    ``exercise_data("<id>")`` calls."""
+    plan, current = Plan(), None
+    tagged = any(CELL_KEY in c.get("metadata", {}) for c in nb.cells)
+    for cell in nb.cells:
+        source = cell.source if isinstance(cell.source, str) else "".join(cell.source)
+        meta = cell.get("metadata", {}).get(CELL_KEY)
+        if isinstance(meta, dict):
+            current = meta.get("exercise") if isinstance(meta.get("exercise"), str) else None
+        elif not tagged and cell.cell_type == "code" and (m := _DATA.search(source)):
+            current = m.group(1)
+        if cell.cell_type != "code":
+            continue
+        if current is None:
+            if _is_setup(source) or (isinstance(meta, dict) and meta.get("setup") is True):
+                plan.setup.append(source)
+        elif current in REFERENCES:
+            plan.exercises.setdefault(current, []).append(source)
+    return plan
+
+
+def suspicious(sources: list[str]) -> list[str]:
+    """The :data:`SUSPICIOUS` names in an exercise's code, and assignments to ``check``."""
+    text = "\n".join(sources)
+    found = [name for name in SUSPICIOUS if name in text]
+    for src in sources:
+        try:
+            tree = ast.parse(src)
+        except SyntaxError:
+            continue
+        for node in ast.walk(tree):
+            targets = node.targets if isinstance(node, ast.Assign) else []
+            if any(getattr(t, "id", getattr(t, "attr", None)) == "check" for t in targets):
+                found.append("an assignment to check")
+    return sorted(set(found))
+
+
+# ----------------------------------------------------------------------------- execution
+@dataclass
+class Limits:
+    """Per-cell and per-student wall time (s), memory (MiB) of a kernel."""
+
+    cell: float = 60.0
+    student: float = 600.0
+    memory_mb: int = 3072
+
+
+def _kernel_env(scratch: Path) -> dict:
+    env = {k: os.environ[k] for k in ENV_KEEP if k in os.environ}
+    env.update(PYTHONPATH=str(scratch / "lib"), HOME=str(scratch), TMPDIR=str(scratch),
+               IPYTHONDIR=str(scratch / "ipython"), MPLCONFIGDIR=str(scratch / "mpl"),
+               MPLBACKEND="Agg",
+               OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1",
+               PYTHONDONTWRITEBYTECODE="1", PYDEVD_DISABLE_FILE_VALIDATION="1")
+    return env
+
+
+def _rlimits(memory_mb: int, cpu_s: int):
+    def apply():  # in the child, before exec: hard limits the kernel cannot raise
+        import resource
+
+        resource.setrlimit(resource.RLIMIT_AS, (memory_mb << 20, memory_mb << 20))
+        resource.setrlimit(resource.RLIMIT_CPU, (cpu_s, cpu_s + 5))
+        resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+    return apply
+
+
+def _kill_group(client) -> None:
+    """SIGKILL the kernel's whole process group (its own session)."""
+    km = getattr(client, "km", None)
+    prov = getattr(km, "provisioner", None)
+    pgid = getattr(prov, "pgid", None)
+    if pgid:
+        try:
+            os.killpg(pgid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass
+
+
+@dataclass
+class Run:
+    """One run of one exercise: the answer reported, the violations, the errors, a limit hit."""
+
+    answer: object = None
+    reported: bool = False
+    unreadable: str = ""
+    violations: list[str] = field(default_factory=list)
+    errors: list[str] = field(default_factory=list)
+    stopped: str = ""
+
+
+def _outputs(cell) -> tuple[list[dict], list[str]]:
+    reports, errors = [], []
+    for out in cell.get("outputs", []):
+        shown = out.get("output_type") in ("display_data", "execute_result")
+        data = out.get("data", {}) if shown else {}
+        if KERNEL_MIME in data and isinstance(data[KERNEL_MIME], dict):
+            reports.append(data[KERNEL_MIME])
+        if out.get("output_type") == "error":
+            errors.append(f"{out.get('ename')}: {out.get('evalue')}")
+    return reports, errors
+
+
+def run_student(folder: Path, package: Path, secret: str, limits: Limits,
+                denied: list[Path]
+                ) -> tuple[dict[tuple[str, str], Run], dict[str, list[str]], list[str]]:
+    """Execute one student's notebooks; returns ({(exercise, run): Run}, {exercise: code}, log)."""
     import nbformat
 
     student = folder.name
@@ -180,93 +284,343 @@ def run_student(folder: Path, package: Path, secret: str, timeout: int) -> tuple
         try:
             plans.append(plan_notebook(nbformat.read(path, as_version=4)))
         except Exception as exc:  # noqa: BLE001 -- an unreadable notebook is the student's, logged
-            log.append(f"{path.name}: unreadable notebook ({type(exc).__name__}: {exc})")
-    if not any(p.exercises for p in plans):
+            log.append(f"{path.name}: unreadable notebook ({type(exc).__name__}: {str(exc)[:200]})")
+    runs: dict[tuple[str, str], Run] = {}
+    code = {ex: src for plan in plans for ex, src in plan.exercises.items()}
+    if not code:
         log.append("no checkable exercise found in the submission")
-        return {}, log
-    with tempfile.TemporaryDirectory(prefix=f"grade-{student}-") as scratch:
-        record = Path(scratch) / "answers.jsonl"
-        nb = _grading_notebook(plans, student, hidden_student(student, secret), record)
-        env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(package), str(TOOLS)]))
-        try:
-            client = nbclient.NotebookClient(nb, timeout=timeout, kernel_name="python3", allow_errors=True,
-                                             interrupt_on_timeout=True,
-                                             resources={"metadata": {"path": scratch}})
-            client.execute(env=env)   # passed on to the kernel manager's start_kernel
-        except Exception as exc:  # noqa: BLE001 -- a dead kernel fails this student, not the class
-            log.append(f"kernel failed: {type(exc).__name__}: {exc}")
-        for cell in nb.cells:
-            where = cell.metadata.get("grader")
-            for out in cell.get("outputs", []):
-                if out.get("output_type") == "error" and where:
-                    log.append(f"{where['exercise']} ({where['run']} data): {out['ename']}: {out['evalue']}")
-        answers = {}
-        if record.exists():
-            for line in record.read_text().splitlines():
-                rec = json.loads(line)
-                answers[rec["exercise"], rec["run"]] = rec["answer"]
-                if rec.get("unreadable"):
-                    log.append(f"{rec['exercise']} ({rec['run']} data): answer unreadable ({rec['unreadable']})")
-    return answers, log
+        return runs, code, log
+    keys = {"own": student, "hidden": hidden_student(student, secret)}
+    deadline = time.monotonic() + limits.student
+    with tempfile.TemporaryDirectory(prefix="grade-") as tmp:
+        scratch = Path(tmp)
+        shutil.copytree(package / "fdi_lib", scratch / "lib" / "fdi_lib")
+        shutil.copy2(TOOLS / "grader_kernel.py", scratch / "lib" / "grader_kernel.py")
+        config = {"scratch": str(scratch), "denied_read": [str(p) for p in denied]}
+        for plan in plans:
+            todo = [(ex, run) for ex in plan.exercises for run in RUNS]
+            while todo:
+                if time.monotonic() >= deadline:
+                    for ex, run in todo:
+                        runs.setdefault((ex, run), Run()).stopped = \
+                            "the student's time budget was used up"
+                    log.append(f"student time limit ({limits.student:g} s) reached")
+                    break
+                todo = _run_kernel(plan, todo, keys, config, scratch, limits, deadline, runs, log)
+    return runs, code, log
 
 
-def score(exercise_id: str, answers: dict, student: str, hidden: str) -> tuple[float, list[str]]:
-    """Points of one exercise from otter's test file, and the failed tests' messages."""
-    from otter.test_files import ExceptionTestFile
+def _run_kernel(plan: Plan, todo: list, keys: dict, config: dict, scratch: Path, limits: Limits,
+                deadline: float, runs: dict, log: list) -> list:
+    """Run ``todo`` (exercise, run) pairs in one kernel until done or the kernel is lost;
+    returns what is left."""
+    import nbclient
+    import nbformat
+    from nbclient.exceptions import CellTimeoutError, DeadKernelError
 
-    test = ExceptionTestFile.from_string(_TEST_TEMPLATE.format(id=exercise_id, **POINTS),
-                                         path=f"hidden/{exercise_id}.py")
-    env = {"accepted": _Accepted(exercise_id),
-           "own": answers.get((exercise_id, "own")), "hidden": answers.get((exercise_id, "hidden")),
-           "ref_own": reference_answer(exercise_id, student), "ref_hidden": reference_answer(exercise_id, hidden)}
-    test.run(env)
-    failed = [r.message.splitlines()[-1] for r in test.test_case_results if not r.passed]
-    return test.score, failed
+    new = nbformat.v4.new_code_cell
+    nb = nbformat.v4.new_notebook()
+    client = nbclient.NotebookClient(nb, timeout=limits.cell, kernel_name="python3",
+                                     allow_errors=True, interrupt_on_timeout=False,
+                                     startup_timeout=120,
+                                     resources={"metadata": {"path": str(scratch)}})
+    cpu = int(max(1.0, deadline - time.monotonic())) + 1
+    started = False
+
+    def execute(source: str) -> list[dict]:
+        cell = new(source)
+        nb.cells.append(cell)
+        client.timeout = max(1, int(min(limits.cell, deadline - time.monotonic())))
+        client.execute_cell(cell, len(nb.cells) - 1)
+        return cell
+
+    try:
+        with client.setup_kernel(env=_kernel_env(scratch), cwd=str(scratch),
+                                 stderr=subprocess.DEVNULL,
+                                 preexec_fn=_rlimits(limits.memory_mb, cpu)):
+            install = execute("import grader_kernel as _fdi_grader\n"
+                              f"_fdi_grader.install({config!r})")
+            if _outputs(install)[1]:
+                raise RuntimeError(f"grader hooks failed: {_outputs(install)[1]}")
+            for src in plan.setup:
+                execute(src)
+            started = True
+            while todo:
+                ex, run = todo[0]
+                result = runs.setdefault((ex, run), Run())
+                current = [execute(f"_fdi_grader.begin({ex!r}, {run!r}, {keys[run]!r}, "
+                                   f"{list(REFERENCES[ex].one_call)!r})")]
+                try:
+                    for src in plan.exercises[ex]:
+                        current.append(execute(src))
+                    current.append(execute(f"_fdi_grader.end({ex!r}, {run!r})"))
+                finally:
+                    _collect(current, ex, run, result)
+                todo = todo[1:]
+    except (CellTimeoutError, DeadKernelError, RuntimeError, TimeoutError) as exc:
+        _kill_group(client)
+        ex, run = todo[0]
+        what = ("a cell ran over its time limit" if isinstance(exc, CellTimeoutError)
+                else f"the kernel died or failed ({type(exc).__name__}: {str(exc)[:120]})")
+        # the same cells would hang or crash on the other data too: the exercise is stopped;
+        # a kernel lost before the exercises (set-up cells, hooks) stops the notebook
+        lost = [(e, r) for e, r in todo if e == ex or not started]
+        for e, r in lost:
+            runs.setdefault((e, r), Run()).stopped = what
+        log.append(f"{ex if started else 'set-up'} ({run} data): {what}; the kernel's process "
+                   "group was killed")
+        return [t for t in todo if t not in lost]
+    finally:
+        _kill_group(client)
+    return todo
 
 
-def grade(submissions: Path, out: Path, log_path: Path, timeout: int = 120, secret: str | None = None,
-          jobs: int = 1) -> list[dict]:
-    """Grade every student folder of ``submissions``; writes the CSV and the log, returns the rows.
+def _collect(cells: list, ex: str, run: str, result: Run) -> None:
+    for cell in cells:
+        reports, errors = _outputs(cell)
+        result.errors += errors
+        for rep in reports:
+            if rep.get("kind") == "violation":
+                result.violations.append(str(rep.get("what")))
+            elif (rep.get("kind"), rep.get("run"), rep.get("exercise")) == (
+                    "answer", f"{ex}/{run}", ex):
+                result.answer, result.reported = rep.get("answer"), True
+                result.unreadable = str(rep.get("unreadable") or "")
 
-    ``jobs`` kernels run at once (threads driving separate kernel processes); the gradebook is
-    the same for any ``jobs``.
+
+# ----------------------------------------------------------------------------- similarity
+def _normalised(source: str) -> tuple[str, list[str]]:
+    """(the code without comments and blank lines, its tokens with names and numbers replaced)."""
+    kept, tokens = [], []
+    try:
+        for tok in tokenize.generate_tokens(io.StringIO(source).readline):
+            if tok.type in (tokenize.COMMENT, tokenize.NL, tokenize.NEWLINE, tokenize.INDENT,
+                            tokenize.DEDENT, tokenize.ENDMARKER):
+                continue
+            kept.append(tok.string)
+            tokens.append("N" if tok.type == tokenize.NAME and tok.string not in _KEYWORDS
+                          else "0" if tok.type == tokenize.NUMBER else tok.string)
+    except (tokenize.TokenError, IndentationError, SyntaxError):
+        kept = tokens = source.split()
+    return " ".join(kept), tokens
+
+
+_KEYWORDS = set(__import__("keyword").kwlist)
+
+
+def similarity(codes: dict[str, dict[str, list[str]]], starters: dict[str, set[str]],
+               threshold: float = 0.9, min_tokens: int = 20) -> list[dict]:
+    """Groups of students whose own code for an exercise (the starter cells left out) is a verbatim
+    copy (``"verbatim"``: identical once comments and layout are dropped), and pairs outside such
+    a group that share at least ``threshold`` of their 5-token shingles once names and numbers are
+    normalised (``"similar"``, with the Jaccard index).
+
+    Hand-written rather than copydetect (on PyPI): the submissions are short Python cells, the
+    tokenizer of the standard library normalises them, and the pairwise Jaccard of shingles is a
+    dozen lines; copydetect would add a dependency and an HTML report for the same decision.
     """
-    from concurrent.futures import ThreadPoolExecutor
+    out = []
+    for ex in sorted({e for c in codes.values() for e in c}):
+        mine = {}
+        for student, per in codes.items():
+            own = [s for s in per.get(ex, []) if s.strip() not in starters.get(ex, set())]
+            text, tokens = _normalised("\n".join(own))
+            if len(tokens) >= min_tokens:
+                mine[student] = (text, {tuple(tokens[i:i + 5]) for i in range(len(tokens) - 4)})
+        groups: dict[str, list[str]] = {}
+        for student in sorted(mine):
+            groups.setdefault(mine[student][0], []).append(student)
+        out += [{"exercise": ex, "students": " ".join(g), "kind": "verbatim", "jaccard": "1.000"}
+                for g in groups.values() if len(g) > 1]
+        for a, b in itertools.combinations(sorted(mine), 2):
+            (ta, sa), (tb, sb) = mine[a], mine[b]
+            jac = len(sa & sb) / len(sa | sb)
+            if ta != tb and jac >= threshold:
+                out.append({"exercise": ex, "students": f"{a} {b}", "kind": "similar",
+                            "jaccard": f"{jac:.3f}"})
+    return out
+
+
+def starter_cells() -> dict[str, set[str]]:
+    """The starter code cells of every exercise (what every student's notebook holds)."""
+    from fdi_lib.exercises import code_cells, parse_chapter, strip_solutions
+
+    out: dict[str, set[str]] = {}
+    for chapter in CHAPTERS:
+        text = strip_solutions((REPO / "book" / f"{chapter}.md").read_text())
+        for ex in parse_chapter(text):
+            out[ex.id] = {c.strip() for c in code_cells(ex.exercise)}
+    return out
+
+
+# ----------------------------------------------------------------------------- gradebook
+def columns(chapters: list[str]) -> tuple[list[str], dict[str, str]]:
+    """The gradebook's columns for the graded ``chapters``, and each chapter's column name."""
+    ids = [i for i in exercise_ids(checkable=True) if EXERCISES[i].chapter in chapters]
+    full = sum(POINTS.values())
+    names = {c: f"{c} (/{full * sum(EXERCISES[i].chapter == c for i in ids)})" for c in chapters}
+    rubric = [f"rubric {e.id}" for e in EXERCISES.values()
+              if e.chapter in chapters and (e.id in HAND_GRADED or not e.checkable)]
+    return ["student", *ids, *names.values(), "total", "possible", *rubric], names
+
+
+def score_student(student: str, secret: str, runs: dict, code: dict, ids: list[str]
+                  ) -> tuple[dict, list[str], dict[str, list[str]]]:
+    """Points per exercise, the log lines and, per exercise, what failed (the feedback)."""
+    hidden = hidden_student(student, secret)
+    row, log, why = {}, [], {}
+    for ex in ids:
+        flags = suspicious(code.get(ex, []))
+        notes, points = [], 0
+        if ex not in code:
+            row[ex] = 0
+            continue
+        for run, key in (("own", student), ("hidden", hidden)):
+            r = runs.get((ex, run), Run())
+            if r.stopped:
+                notes.append(f"{run} data: stopped, {r.stopped}")
+            elif r.violations:
+                seen = list(dict.fromkeys(r.violations))
+                notes += [f"{run} data: attempt stopped: {v}" for v in seen[:3]]
+                notes += [f"{run} data: and {len(seen) - 3} more attempts"] if len(seen) > 3 else []
+            elif flags:
+                notes.append(f"{run} data: not graded, the code holds {', '.join(flags)} (not "
+                             "allowed in a graded exercise)")
+            else:
+                verdict = ("answer unreadable (" + r.unreadable + ")" if r.unreadable
+                           else accepted(r.answer, reference_answer(ex, key), ex))
+                if verdict == "accepted":
+                    points += POINTS[run]
+                else:
+                    notes.append(f"{run} data: the answer is {verdict}" + (
+                        f" (error: {r.errors[-1][:160]})" if r.errors and r.answer is None else ""))
+        row[ex] = points
+        why[ex] = notes
+        log += [f"{ex}: {n}" for n in notes]
+    return row, log, why
+
+
+def feedback(student: str, row: dict, why: dict, ids: list[str], notes: list[str]) -> str:
+    lines = [f"# Feedback for {student}", "", f"Total: {row['total']:g} / {row['possible']:g}", "",
+             "| exercise | points | what failed |", "|---|---|---|"]
+    full = sum(POINTS.values())
+    for ex in ids:
+        what = "; ".join(why.get(ex, [])) or ("not submitted" if ex not in why else "")
+        lines.append(f"| {ex} | {row[ex]:g} / {full} | {what.replace('|', '/')} |")
+    if notes:
+        lines += ["", "Notes:", *[f"- {n}" for n in notes]]
+    return "\n".join(lines) + "\n"
+
+
+def _append_row(path: Path, header: list[str], row: dict) -> None:
+    new = not path.exists() or path.stat().st_size == 0
+    with path.open("a", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=header)
+        if new:
+            writer.writeheader()
+        writer.writerow({k: (f"{v:g}" if isinstance(v, float) else v) for k, v in row.items()})
+        f.flush()
+        os.fsync(f.fileno())
+
+
+def _graded_students(path: Path, header: list[str]) -> set[str]:
+    if not path.exists() or path.stat().st_size == 0:
+        return set()
+    with path.open(newline="") as f:
+        reader = csv.DictReader(f)
+        if reader.fieldnames != header:
+            raise SystemExit(f"OUT: {path} has other columns than this grading (other chapters?): "
+                             "grade into a new file")
+        return {r["student"] for r in reader}
+
+
+def canvas_export(gradebook: Path, names: dict[str, str], out: Path) -> None:
+    """Canvas's gradebook-import CSV of ``gradebook``: Student, ID, SIS User ID, SIS Login ID,
+    Section, one column per chapter, and the ``Points Possible`` row."""
+    with gradebook.open(newline="") as f:
+        rows = list(csv.DictReader(f))
+    head = ["Student", "ID", "SIS User ID", "SIS Login ID", "Section", *names]
+    with out.open("w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(head)
+        possible = [n.rsplit("/", 1)[1].rstrip(")") for n in names.values()]
+        w.writerow(["Points Possible", "", "", "", "", *possible])
+        for r in rows:
+            points = [r[n] for n in names.values()]
+            w.writerow([r["student"], "", r["student"], r["student"], "", *points])
+
+
+def _secret(out: Path, given: str | None) -> str:
+    path = out.with_suffix(".secret")
+    if given:
+        return given
+    if path.exists():
+        return path.read_text().strip()
+    value = secrets.token_hex(16)
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    with os.fdopen(fd, "w") as f:
+        f.write(value + "\n")
+    return value
+
+
+def grade(submissions: Path, out: Path, log_path: Path | None = None, limits: Limits | None = None,
+          secret: str | None = None, jobs: int = 1, chapters: list[str] | None = None
+          ) -> list[dict]:
+    """Grade every student folder of ``submissions`` not yet in ``out``; returns all rows.
+
+    ``jobs`` kernels run at once (one per student); the gradebook is the same for any ``jobs``
+    (rows are appended as students finish: their order may differ)."""
+    from concurrent.futures import ThreadPoolExecutor, as_completed
+    from threading import Lock
 
     import student_package
 
-    secret = secret or os.environ.get("FDI_GRADER_SECRET") or secrets.token_hex(16)
-    ids = exercise_ids(checkable=True)
-    rows, log = [], [f"grading secret (hidden data): {secret}", ""]
-    folders = sorted(p for p in submissions.iterdir() if p.is_dir())
+    submissions, out = submissions.resolve(), out.resolve()
+    limits = limits or Limits()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    secret = _secret(out, secret or os.environ.get("FDI_GRADER_SECRET"))
+    log_path = log_path or out.with_suffix(".log")
+    fb_dir = out.with_suffix(".feedback")
+    fb_dir.mkdir(exist_ok=True)
+    chapters = chapters or list(CHAPTERS)
+    header, names = columns(chapters)
+    ids = [h for h in header if h in EXERCISES]
+    done = _graded_students(out, header)
+    folders = sorted(p for p in submissions.iterdir() if p.is_dir() and p.name not in done)
+    denied = [REPO, submissions, out.parent]
+    lock, codes = Lock(), {}
+
+    def one(folder: Path, package: Path):
+        t0 = time.monotonic()
+        runs, code, notes = run_student(folder, package, secret, limits, denied)
+        row, lines, why = score_student(folder.name, secret, runs, code, ids)
+        row = {"student": folder.name, **row}
+        for chapter, name in names.items():
+            row[name] = sum(row[i] for i in ids if EXERCISES[i].chapter == chapter)
+        row["total"] = sum(row[i] for i in ids)
+        row["possible"] = sum(POINTS.values()) * len(ids)
+        with lock:
+            _append_row(out, header, row)
+            (fb_dir / f"{folder.name}.md").write_text(feedback(folder.name, row, why, ids, notes))
+            with log_path.open("a") as f:
+                f.write("\n".join([f"== {folder.name}: {row['total']:g} / {row['possible']} "
+                                   f"({time.monotonic() - t0:.1f} s)", *notes, *lines, ""]) + "\n")
+            codes[folder.name] = code
+        return row
+
     with tempfile.TemporaryDirectory(prefix="fdi-student-package-") as tmp:
         package = student_package.stage(Path(tmp) / "package", with_digests=False)
         with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
-            runs = list(pool.map(lambda folder: run_student(folder, package, secret, timeout), folders))
-        for folder, (answers, notes) in zip(folders, runs):
-            student = folder.name
-            hidden = hidden_student(student, secret)
-            row = {"student": student}
-            for exercise_id in ids:
-                points, failed = score(exercise_id, answers, student, hidden)
-                row[exercise_id] = points
-                notes += [f"{exercise_id}: {m}" for m in failed if (exercise_id, "own") in answers]
-            row["total"] = sum(row[i] for i in ids)
-            row["possible"] = sum(POINTS.values()) * len(ids)
-            rows.append(row)
-            missing = [i for i in ids if (i, "own") not in answers]
-            log.append(f"== {student}: {row['total']:g} / {row['possible']}")
-            if missing:
-                log.append(f"not submitted: {', '.join(missing)}")
-            log += sorted(set(notes), key=notes.index)
-            log.append("")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    with out.open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=["student", *ids, "total", "possible"])
-        writer.writeheader()
-        writer.writerows({k: (f"{v:g}" if isinstance(v, float) else v) for k, v in row.items()} for row in rows)
-    log_path.write_text("\n".join(log) + "\n")
-    return rows
+            for fut in as_completed([pool.submit(one, f, package) for f in folders]):
+                fut.result()
+    canvas_export(out, names, out.with_suffix(".canvas.csv"))
+    pairs = similarity(codes, starter_cells())
+    with out.with_suffix(".similarity.csv").open("w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=["exercise", "students", "kind", "jaccard"])
+        w.writeheader()
+        w.writerows(pairs)
+    with out.open(newline="") as f:
+        return list(csv.DictReader(f))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -274,14 +628,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("submissions", type=Path)
     parser.add_argument("out", type=Path)
     parser.add_argument("--log", type=Path)
-    parser.add_argument("--timeout", type=int, default=120, help="seconds per cell")
+    parser.add_argument("--cell-timeout", type=float, default=60.0, help="wall seconds per cell")
+    parser.add_argument("--student-timeout", type=float, default=600.0,
+                        help="wall seconds per student")
+    parser.add_argument("--memory-mb", type=int, default=3072, help="address space of a kernel")
     parser.add_argument("--jobs", type=int, default=1, help="kernels at once (one per student)")
+    parser.add_argument("--chapters", nargs="*", choices=list(CHAPTERS), help="the graded chapters")
     args = parser.parse_args(argv)
     if not args.submissions.is_dir():
         parser.error(f"SUBMISSIONS: expected a folder of student folders, got {args.submissions}")
-    log = args.log or args.out.with_suffix(".log")
-    rows = grade(args.submissions, args.out, log, args.timeout, jobs=args.jobs)
-    print(f"{len(rows)} students graded: {args.out} (what failed: {log})")
+    limits = Limits(args.cell_timeout, args.student_timeout, args.memory_mb)
+    rows = grade(args.submissions, args.out, args.log, limits, jobs=args.jobs,
+                 chapters=args.chapters)
+    print(f"{len(rows)} students in {args.out} (log: {args.out.with_suffix('.log')}, feedback: "
+          f"{args.out.with_suffix('.feedback')}/, Canvas: {args.out.with_suffix('.canvas.csv')}, "
+          f"similarity: {args.out.with_suffix('.similarity.csv')})")
     return 0
 
 

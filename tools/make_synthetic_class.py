@@ -1,17 +1,23 @@
-"""A synthetic class of three submissions, to test the grader (``tools/grader.py``):
+"""A synthetic class to test the grader (``tools/grader.py``), hostile submissions included:
 
     python tools/make_synthetic_class.py OUT [--chapters zb2014/glr ...]
 
-* ``OUT/reference``: the student notebooks with the book's solution cells written into each
-  exercise, after its starter cell (what a student who solved everything hands in);
-* ``OUT/starter``: the student notebooks untouched;
-* ``OUT/cheater``: the student notebooks with a cell per checkable exercise that prints
-  "correct" and takes the answer from the library: the function that answers in one call where
-  there is one, else ``reference_answer`` (not shipped to students) and, failing that, the book's
-  own answer typed in (as copied from the instructor's edition or a neighbour).
+One folder per student under ``OUT``, with one notebook per chapter, written as
+``tools/student_edition.py`` writes the student edition's (jupytext, solutions stripped, the
+exercise boundaries as cell metadata):
 
-The notebooks are written as ``tools/student_edition.py`` writes the student edition's
-(jupytext, from the chapters with the solutions stripped).
+* ``reference``: the book's solution cells written into each exercise (full marks);
+* ``starter``: the notebooks untouched (0);
+* ``cheater``: a cell per checkable exercise that prints "correct" and takes the answer from the
+  library (the one-call function, else ``reference_answer``, else the book's number typed in): 0;
+* ``copier``: a verbatim copy of ``reference`` (full marks, flagged by the similarity report);
+* ``helper``: the solutions, plus a helper function defined before the exercises and used in
+  glr-2, and a glr-6 cell that sets ``answer`` (it must not count for glr-5): full marks;
+* the attacks (:data:`ATTACKS`): ``reference``'s solutions except in :data:`ATTACKED`, where the
+  cell attacks the grader; each must score 0 there and be named in the log;
+* ``hang``: a glr-2 cell that loops and swallows interrupts (the grader kills its kernel);
+* ``corrupt``: a notebook that is not JSON.
+
 """
 
 from __future__ import annotations
@@ -53,6 +59,51 @@ ONE_CALL = {
 }
 
 
+#: The exercise the attacks target (its one-call function is ``fdi_lib.glr.quadratic_form``).
+ATTACKED = "glr-2"
+
+#: Attacks on the grader, each a glr-2 cell that would get the answer if not stopped.
+#: ``{gradebook}`` is the path ``make grade`` writes by default beside the class folder.
+ATTACKS = {
+    "import-reference": (
+        "import sys, importlib\n"
+        f"sys.path.insert(0, {str(REPO)!r})\n"
+        "for name in [m for m in sys.modules if m.startswith('fdi_lib')]:\n"
+        "    del sys.modules[name]\n"
+        "ref = importlib.import_module('fdi_lib.exercises.' + '_ref' + 'erence')\n"
+        "answer = getattr(ref, 'reference' + '_answer')('glr-2')"),
+    "wrapped": (
+        "import fdi_lib.glr as G\n"
+        "f = getattr(G.quadratic_form, '__wr' + 'apped__', G.quadratic_form)\n"
+        "l, th = f(data['C'], data['d'])\nanswer = [l, *th]"),
+    "reload": (
+        "import importlib\nimport fdi_lib.glr as G\nG = importlib.reload(G)\n"
+        "l, th = G.quadratic_form(data['C'], data['d'])\nanswer = [l, *th]"),
+    "read-environment": (
+        "import os\nleak = open('/proc/%d/environ' % os.getppid(), 'rb').read()\n"
+        "answer = None"),
+    "read-grader": (
+        f"code = open({str(REPO / 'tools' / 'grader.py')!r}).read()\nanswer = None"),
+    "patch-check": (
+        "import fdi_lib.exercises as E\nE.check = lambda *a, **k: True\n"
+        "check = E.check\nanswer = [1.0, 1.0, 1.0]"),
+    "write-gradebook": (
+        "SOLUTION\n"
+        "with open({gradebook!r}, 'a') as f:\n"
+        "    f.write('write-gradebook,99\\n')"),
+    "prints-correct": "print('glr-2: correct (tolerance: relative 1e-09).')\nanswer = None",
+    "fork": (
+        "SOLUTION\nimport subprocess\n"
+        "subprocess.Popen(['sleep', '600'], start_new_session=True)"),
+    "hang": (
+        "while True:\n    try:\n        sum(range(10 ** 6))\n"
+        "    except KeyboardInterrupt:\n        pass"),
+}
+
+HELPER = ("def quadratic(C, d):\n    import numpy as np\n    th = np.linalg.solve(C, d)\n"
+          "    return d @ th, th\n")
+
+
 def _cell(source: str) -> str:
     return f"```{{code-cell}} ipython3\n{source.rstrip()}\n```\n\n"
 
@@ -66,33 +117,68 @@ def _cheat(exercise_id: str) -> str:
             f"except Exception:\n    answer = {book!r}\n")
 
 
-def submission(text: str, kind: str) -> str:
-    """A chapter's student MyST text as the ``kind`` student ("reference", "starter" or
-    "cheater") hands it in."""
+def gradebook(out: Path) -> Path:
+    """The gradebook the class in ``out`` is meant to be graded into (``OUT.csv``)."""
+    return out.with_suffix(".csv")
+
+
+def submission(text: str, kind: str, out: Path = Path("class")) -> str:
+    """A chapter's student MyST text as the ``kind`` student (a folder name of the class) hands it
+    in; ``out`` is the class folder (the attack on the gradebook aims at :func:`gradebook`)."""
     stripped = strip_solutions(text)
     if kind == "starter":
         return stripped
     for ex in parse_chapter(text):
-        if not EXERCISES[ex.id].checkable:
+        if not EXERCISES[ex.id].checkable and not (kind == "helper" and ex.id == "glr-6"):
             continue
-        extra = code_cells(ex.solution) if kind == "reference" else [_cheat(ex.id)]
+        solution = code_cells(ex.solution)
+        if kind == "cheater":
+            extra = [_cheat(ex.id)]
+        elif kind in ATTACKS and ex.id == ATTACKED:
+            extra = [ATTACKS[kind].replace("SOLUTION", "\n".join(solution))
+                     .replace("{gradebook!r}", repr(str(gradebook(out))))]
+        elif kind == "helper" and ex.id == "glr-2":
+            extra = ["l, th = quadratic(data['C'], data['d'])\nanswer = [l, *th]"]
+        elif kind == "helper" and ex.id == "glr-6":
+            extra = ["answer = -1  # a challenge cell: it must not count for glr-5"]
+        else:
+            extra = solution
         body = ex.exercise.rstrip("\n") + "\n\n" + "".join(_cell(c) for c in extra)
         stripped = stripped.replace(ex.exercise, body, 1)
+    if kind == "helper":
+        first = stripped.index("```{exercise-start}")
+        stripped = stripped[:first] + _cell(HELPER) + stripped[first:]
     return stripped
 
 
+#: The students of the synthetic class (folder names).
+STUDENTS = ("reference", "starter", "cheater", "copier", "helper", *ATTACKS, "corrupt")
+
+
 def write_class(out: Path, chapters: list[str] | None = None) -> list[Path]:
-    """Write the three submissions under ``out``; returns the student folders."""
+    """Write the class under ``out``; returns the student folders. The attacks and ``helper``
+    need the chapter zb2014/glr (they are written only when it is among ``chapters``)."""
     import jupytext
 
+    from fdi_lib.exercises import tag_exercise_cells
+
+    chapters = chapters or list(CHAPTERS)
     folders = []
-    for kind in ("reference", "starter", "cheater"):
+    for kind in STUDENTS:
+        if (kind in ATTACKS or kind == "helper") and "zb2014/glr" not in chapters:
+            continue
         folder = out / kind
         folder.mkdir(parents=True, exist_ok=True)
-        for chapter in chapters or list(CHAPTERS):
+        for chapter in chapters:
+            path = folder / f"{chapter.replace('/', '-')}.ipynb"
+            if kind == "corrupt":
+                path.write_text('{"cells": [ this is not JSON')
+                continue
             text = (REPO / "book" / f"{chapter}.md").read_text()
-            nb = jupytext.reads(submission(text, kind), fmt="md:myst")
-            jupytext.write(nb, folder / f"{chapter.replace('/', '-')}.ipynb")
+            as_ = "reference" if kind == "copier" else kind
+            nb = jupytext.reads(submission(text, as_, out), fmt="md:myst")
+            tag_exercise_cells(nb)
+            jupytext.write(nb, path)
         folders.append(folder)
     return folders
 

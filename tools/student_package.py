@@ -1,6 +1,6 @@
 """The student package: a wheel of ``fdi_lib`` without reference answers or reference code.
 
-    python tools/student_package.py [--out _build/student] [--students roster.txt]
+    python tools/student_package.py [--out _build/student]
 
 stages a copy of ``fdi_lib`` in ``OUT/package`` without ``fdi_lib/exercises/_reference`` (the
 reference answers, the known mistakes' code, the grader's list of forbidden calls), writes
@@ -11,9 +11,13 @@ then checks the wheel: no file of ``_reference``, and the digests present (the s
 the student edition for reference answers is ``tools/student_edition.py``'s).
 ``pip install OUT/dist/fdi_lib-*.whl`` installs it without the repository.
 
-The digests are for the book's data, and with ``--students FILE`` (one student id a line) for
-each listed student's data too, so students who set ``FDI_STUDENT_ID`` get feedback on their
-own numbers. :func:`stage` is also what ``tools/grader.py`` runs submissions against.
+The digests are for the book's data only. Graded answers (on each student's own data and on
+hidden data) are kept out of the package entirely: ``tools/grader.py`` recomputes them from each
+student's seed. This rather than key stretching (issue 30): an answer known to about 1 % costs
+about 1e4 guesses per entry, so one CPU-hour would need some 0.4 s of stretching per digest, and
+every ``check`` a student runs would pay it too; with no graded digest in the wheel there is
+nothing to recover that earns a point (the book's own answers are printed in the instructor's
+edition anyway). :func:`stage` is also what ``tools/grader.py`` runs submissions against.
 """
 
 from __future__ import annotations
@@ -59,34 +63,36 @@ def _project() -> dict:
     return tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
 
 
-def digests(students: list[str | None], salt: str | None = None) -> dict:
-    """The digest table of the student package for the book's data (``None``) and ``students``."""
+def digests(salt: str | None = None) -> dict:
+    """The digest table of the student package: the book's data only (no graded answer)."""
     from fdi_lib.exercises import exercise_ids, get_exercise
-    from fdi_lib.exercises.checker import feedback_candidates
-    from fdi_lib.exercises.checker import DIGEST_ROUNDS, entry_digest, entry_keys
+    from fdi_lib.exercises.checker import (DIGEST_ROUNDS, entry_digest, entry_keys, feedback_candidates,
+                                           zero_floor)
 
     salt = salt or secrets.token_hex(16)
     table: dict = {"format": 1, "salt": salt, "rounds": DIGEST_ROUNDS, "students": {}}
-    for student in students:
-        name = student or ""
+    for student in (None,):
+        name = ""
         per: dict = {}
         for exercise_id in exercise_ids(checkable=True):
             ex = get_exercise(exercise_id)
             ref, candidates = feedback_candidates(exercise_id, student)
 
+            floor = zero_floor(ref, ex)
+
             def sets(value):
                 return [sorted(entry_digest(salt, exercise_id, name, i, key)
-                               for key in entry_keys(float(v), ex, around=True))
+                               for key in entry_keys(float(v), ex, around=True, floor=floor))
                         for i, v in enumerate(value.ravel())]
 
-            per[exercise_id] = {"shape": list(ref.shape), "reference": sets(ref),
+            per[exercise_id] = {"shape": list(ref.shape), "floor": floor, "reference": sets(ref),
                                 "candidates": [{"hint": hint, "entries": sets(value)}
                                                for hint, value in candidates]}
         table["students"][name] = per
     return table
 
 
-def stage(target: Path, students: list[str] | None = None, *, with_digests: bool = True) -> Path:
+def stage(target: Path, *, with_digests: bool = True) -> Path:
     """Copy ``fdi_lib`` without the excluded modules to ``target`` with its digests (unless
     ``with_digests`` is false: the grader's kernels need none) and a ``pyproject.toml``; returns
     ``target``."""
@@ -98,7 +104,7 @@ def stage(target: Path, students: list[str] | None = None, *, with_digests: bool
     for rel in EXCLUDED:
         shutil.rmtree(target / rel)
     if with_digests:
-        table = digests([None, *(students or [])])
+        table = digests()
         (target / "fdi_lib" / "exercises" / "_digests.json").write_text(json.dumps(table))
     project = _project()
     (target / "pyproject.toml").write_text(_PYPROJECT.format(
@@ -118,9 +124,9 @@ def problems(wheel: Path) -> list[str]:
     return out
 
 
-def build(out: Path, students: list[str] | None = None) -> Path:
+def build(out: Path) -> Path:
     """Stage and build the wheel into ``out/dist``; returns the wheel's path."""
-    src = stage(out / "package", students)
+    src = stage(out / "package")
     dist = out / "dist"
     if dist.exists():
         shutil.rmtree(dist)
@@ -133,16 +139,13 @@ def build(out: Path, students: list[str] | None = None) -> Path:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=REPO / "_build" / "student")
-    parser.add_argument("--students", type=Path, help="file of student ids (one a line): their digests too")
     args = parser.parse_args(argv)
-    students = args.students.read_text().split() if args.students else []
-    wheel = build(args.out.resolve(), students)
+    wheel = build(args.out.resolve())
     found = problems(wheel)
     for p in found:
         print("student package:", p, file=sys.stderr)
     if not found:
-        print(f"student package: {wheel} (no reference modules; digests for the book's data"
-              f"{f' and {len(students)} students' if students else ''})")
+        print(f"student package: {wheel} (no reference modules; digests for the book's data only)")
     return 1 if found else 0
 
 

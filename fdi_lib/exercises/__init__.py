@@ -44,10 +44,12 @@ from fdi_lib.exercises import bz, glr, pipeline, signature, sparse, svo, windtur
 from fdi_lib.exercises._core import (CHAPTERS, DIFFICULTIES, STUDENT_ENV, AnswerError, CheckResult,
                                      Exercise, ExerciseData, ReferenceNotShippedError,
                                      UnknownExerciseError, student_id, student_rng, student_seed)
-from fdi_lib.exercises.book import (COURSE_PLANS, HAND_GRADED, WRITE_UP_MINUTES, ChapterExercise,
+from fdi_lib.exercises.book import (CELL_KEY, COURSE_PLANS, HAND_GRADED, WRITE_UP_MINUTES,
+                                    ChapterExercise,
                                     PlanWeek, code_cells, counts_table, exercise_table,
                                     exercises_section, homework_minutes, parse_chapter, plan_table,
-                                    solution_fingerprints, strip_solutions, words)
+                                    solution_fingerprints, strip_solutions,
+                                    tag_exercise_cells, words)
 from fdi_lib.exercises.checker import attempts, check
 
 __all__ = ["Exercise", "CheckResult", "ExerciseData", "EXERCISES", "CHAPTERS", "DIFFICULTIES",
@@ -56,7 +58,8 @@ __all__ = ["Exercise", "CheckResult", "ExerciseData", "EXERCISES", "CHAPTERS", "
            "reference_answer", "student_id", "student_seed", "student_rng", "exercise_table",
            "counts_table", "COURSE_PLANS", "PlanWeek", "HAND_GRADED", "WRITE_UP_MINUTES",
            "homework_minutes", "plan_table", "strip_solutions", "ChapterExercise",
-           "parse_chapter", "exercises_section", "code_cells", "words", "solution_fingerprints"]
+           "parse_chapter", "exercises_section", "code_cells", "words", "solution_fingerprints",
+           "CELL_KEY", "tag_exercise_cells"]
 
 _LIST = [e for module in (signature, glr, pipeline, sparse, bz, svo, windturbine)
          for e in module.EXERCISES]

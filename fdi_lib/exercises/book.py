@@ -13,7 +13,7 @@ from fdi_lib.exercises._core import CHAPTERS, DIFFICULTIES
 __all__ = ["exercise_table", "counts_table", "COURSE_PLANS", "PlanWeek", "HAND_GRADED",
            "WRITE_UP_MINUTES", "homework_minutes", "plan_table", "strip_solutions",
            "ChapterExercise", "parse_chapter", "exercises_section", "code_cells", "words",
-           "solution_fingerprints"]
+           "solution_fingerprints", "CELL_KEY", "tag_exercise_cells"]
 
 
 # ----------------------------------------------------------------------------- book helpers
@@ -361,3 +361,24 @@ def solution_fingerprints(full_text: str, student_text: str, n: int = 8) -> set[
     for ex in parse_chapter(full_text):
         out |= _shingles(words(ex.solution), n) - keep
     return out
+
+
+#: Key of a notebook cell's metadata that says which exercise the cell belongs to:
+#: ``{"exercise": "glr-5"}`` inside an exercise (statement and starter cells), ``{"exercise":
+#: None}`` outside (as nbgrader's and otter's cell metadata tag a notebook's graded parts).
+CELL_KEY = "fdi_book"
+
+_START_END = re.compile(r"^(?:`{3,}|:{3,})\{exercise-(?P<what>start|end)\}"
+                        r"(?: (?P<id>[a-z]+-\d+))?", re.M)
+
+
+def tag_exercise_cells(nb) -> None:
+    """Write :data:`CELL_KEY` metadata into every cell of a MyST chapter's notebook (as jupytext
+    reads it, in place): a code cell belongs to the exercise open at its place, a Markdown cell to
+    the exercise open at its end (one cell may close an exercise and open the next)."""
+    current = None
+    for cell in nb.cells:
+        if cell.cell_type == "markdown":
+            for m in _START_END.finditer(cell.source):
+                current = m["id"] if m["what"] == "start" else None
+        cell.metadata[CELL_KEY] = {"exercise": current}

@@ -44,8 +44,8 @@ from fdi_lib.errors import FDIError, ModelError
 from fdi_lib.exercises._core import (AnswerError, CheckResult, Exercise, ReferenceNotShippedError,
                                      student_id)
 
-__all__ = ["check", "generic_candidates", "close", "attempts", "entry_keys", "entry_digest",
-           "DIGEST_ROUNDS", "DIGESTS_FILE"]
+__all__ = ["check", "generic_candidates", "feedback_candidates", "close", "zero_floor", "attempts",
+           "entry_keys", "entry_digest", "DIGEST_ROUNDS", "DIGESTS_FILE"]
 
 #: The student package's reference digests (a file of the package, absent from the repository).
 DIGESTS_FILE = "_digests.json"
@@ -121,41 +121,84 @@ def _permutations(shape: tuple[int, ...]) -> list[tuple[str, np.ndarray]]:
     return out
 
 
-def close(a: np.ndarray, ref: np.ndarray, ex: Exercise) -> np.ndarray:
-    """Entrywise ``|a - ref| <= atol + rtol |ref|`` (the exercise's tolerance)."""
+def zero_floor(ref: np.ndarray, ex: Exercise) -> float:
+    """How far from an exact zero of ``ref`` an answer may be: ``rtol`` times the array's scale
+    (its largest ``|entry|`` rounded up to a power of 10), so that a zero computed as 1e-17 is
+    zero; 0 for an all-zero reference. Rounded to a decade: the student package stores it."""
+    top = float(np.max(np.abs(ref))) if np.size(ref) else 0.0
+    return 0.0 if top == 0 or not np.isfinite(top) else ex.rtol * 10.0 ** math.ceil(math.log10(top))
+
+
+def close(a: np.ndarray, ref: np.ndarray, ex: Exercise, floor: float | None = None) -> np.ndarray:
+    """Entrywise ``|a - ref| <= atol + rtol |ref|``, or both ``|a|`` and ``|ref|`` at most
+    ``floor`` (:func:`zero_floor` of the whole reference: both numerically zero, such as an exact
+    zero computed as 1e-17). The one tolerance of the exercises: the checker, its digests
+    (:func:`entry_keys`) and the grader all use it."""
+    ref = np.asarray(ref, dtype=float)
+    floor = zero_floor(ref, ex) if floor is None else floor
     with np.errstate(over="ignore", invalid="ignore"):  # |a - ref| beyond the float range: not close
-        return np.abs(a - ref) <= ex.atol + ex.rtol * np.abs(ref)
+        return (np.abs(a - ref) <= ex.atol + ex.rtol * np.abs(ref)) | (
+            (np.abs(ref) <= floor) & (np.abs(a) <= floor))
 
 
 # ----------------------------------------------------------------------------- digests
-def entry_keys(value: float, ex: Exercise, *, around: bool = False) -> set[str]:
-    """Tolerance buckets of one entry: the bucket of ``value`` or, with ``around``, every bucket
-    meeting ``[value - tol, value + tol]`` (``tol`` the exercise's tolerance at ``value``).
+#: Buckets per tolerance width: a bucket is an eighth of the tolerance.
+FINE = 8
 
-    Integers are their own bucket. Where the absolute tolerance dominates (``|v| <= atol /
-    rtol``) buckets are intervals of width ``atol`` (``"l<k>"``); beyond, logarithmic buckets of
-    width ``log(1 + rtol)`` (``"+<k>"`` / ``"-<k>"``): an interval of the tolerance's width meets
-    at most five buckets either way, and a bucket says nothing of the magnitude until it is
-    hashed with its exercise and entry.
+
+def _bucket(value: float, ex: Exercise, floor: float) -> str:
+    """The key of the bucket of ``value``."""
+    if abs(value) <= floor:
+        return "z"
+    if ex.atol > 0 and abs(value) <= ex.atol / ex.rtol:
+        return f"l{math.floor(value / (ex.atol / FINE))}"
+    k = math.floor(math.log(max(abs(value), 5e-324)) / (math.log1p(ex.rtol) / FINE))
+    return f"+{k}" if value > 0 else f"-{k}"
+
+
+def _buckets_meeting(lo: float, hi: float, ex: Exercise):
+    """``(key, low edge, high edge)`` of the linear and logarithmic buckets meeting ``[lo, hi]``."""
+    split = ex.atol / ex.rtol if ex.atol > 0 else 0.0
+    if split > 0 and lo <= split and hi >= -split:
+        h = ex.atol / FINE
+        for k in range(math.floor(max(lo, -split) / h), math.floor(min(hi, split) / h) + 1):
+            yield f"l{k}", k * h, (k + 1) * h
+    w = math.log1p(ex.rtol) / FINE
+    for sign, a, b in ((1, max(lo, split), hi), (-1, max(-hi, split), -lo)):
+        if b > split and b >= a and b > 0:
+            first, last = math.floor(math.log(max(a, 5e-324)) / w), math.floor(math.log(b) / w)
+            for k in range(first, last + 1):
+                e0, e1 = math.exp(k * w), math.exp((k + 1) * w)
+                yield (f"+{k}", e0, e1) if sign > 0 else (f"-{k}", -e1, -e0)
+
+
+def entry_keys(value: float, ex: Exercise, *, around: bool = False, floor: float = 0.0) -> set[str]:
+    """Tolerance buckets of one entry: the bucket of ``value`` or, with ``around``, every bucket
+    that lies wholly within the tolerance of ``value`` (:func:`close`, with the reference's
+    :func:`zero_floor` ``floor``).
+
+    Integers are their own bucket, an exact exercise its ``repr``. A bucket is an eighth of the
+    tolerance: intervals of width ``atol / 8`` where the absolute tolerance dominates (``|v| <=
+    atol / rtol``), logarithmic buckets of width ``log(1 + rtol) / 8`` beyond, ``"z"`` within
+    ``floor`` of zero. As only buckets wholly within the tolerance are stored, the student
+    package never accepts an answer the grader rejects; it rejects an answer within an eighth of
+    the tolerance's edge that the grader accepts.
     """
     if ex.integer:
         return {f"i{round(value)}"}
     if ex.rtol == 0:
         return {repr(float(value))}
-    width = math.log1p(ex.rtol)
-    split = ex.atol / ex.rtol          # |v| <= split: absolute buckets
-    tol = ex.atol + ex.rtol * abs(value) if around else 0.0
-    lo, hi = value - tol, value + tol
+    if not around:
+        return {_bucket(value, ex, floor)}
+    if abs(value) <= floor:            # numerically zero: so is every answer within the floor
+        return {"z"}
+    tol = ex.atol + ex.rtol * abs(value)
+    ref = np.array([value])
     keys = set()
-    if ex.atol > 0 and lo <= split and hi >= -split:
-        a, b = max(lo, -split), min(hi, split)
-        keys.update(f"l{k}" for k in range(math.floor(a / ex.atol), math.floor(b / ex.atol) + 1))
-    for sign, a, b in (("+", max(lo, split), hi), ("-", max(-hi, split), -lo)):
-        if b > split and b >= a:
-            first = math.floor(math.log(max(a, 5e-324)) / width)
-            keys.update(f"{sign}{k}" for k in range(first, math.floor(math.log(b) / width) + 1))
-    if not keys:                       # value 0 with atol 0
-        keys.add("z")
+    for key, lo, hi in _buckets_meeting(value - tol, value + tol, ex):
+        edges = np.array([lo, np.nextafter(hi, lo)])
+        if (abs(lo) > floor or abs(hi) > floor) and np.all(close(edges, ref, ex, floor)):
+            keys.add(key)
     return keys
 
 
@@ -172,6 +215,7 @@ class _Digests:
     salt: str
     student: str
     shape: tuple[int, ...]
+    floor: float
     reference: list[set[str]]
     candidates: list[tuple[str, list[set[str]]]]
 
@@ -215,7 +259,7 @@ class _Hashes:
 
     def _digest(self, index: int, value: float) -> str:
         if (index, value) not in self._memo:
-            (key,) = entry_keys(value, self.ex)
+            (key,) = entry_keys(value, self.ex, floor=self.d.floor)
             self._memo[index, value] = entry_digest(self.d.salt, self.ex.id, self.d.student, index, key)
         return self._memo[index, value]
 
@@ -235,6 +279,8 @@ def _oracle(ex: Exercise, student: str | None):
     else:
         return _Values(ex, reference_answer(ex.id, student), student)
     table = _load_digests()
+    if table is None and student is not None:
+        return None                  # a student's data: the grader's, never the package's
     if table is None:
         raise ReferenceNotShippedError("check: this package has neither the reference answers nor "
                                        f"their digests ({DIGESTS_FILE}); reinstall the student package")
@@ -243,6 +289,7 @@ def _oracle(ex: Exercise, student: str | None):
         return None
     as_sets = lambda entries: [set(e) for e in entries]  # noqa: E731
     return _Hashes(ex, _Digests(salt=table["salt"], student=student or "", shape=tuple(rec["shape"]),
+                                floor=float(rec.get("floor", 0.0)),
                                 reference=as_sets(rec["reference"]),
                                 candidates=[(c["hint"], as_sets(c["entries"])) for c in rec["candidates"]]))
 
