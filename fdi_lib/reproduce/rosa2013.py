@@ -26,7 +26,8 @@ from fdi_lib.threads import single_threaded_blas
 from fdi_lib.systems import eclipse_uav as uav
 
 __all__ = ["toy_model", "toy_prior", "simulate_toy", "fig1", "fig2", "fig8", "fig9", "fig10", "fig11", "fig11_rad", "fig12_rad",
-           "fault_mode_study", "explanation_scale", "hidden_fault_study", "isolation_lags",
+           "study_headline", "LOOSENED_OBSERVERS", "explanation_scale", "hidden_fault_study",
+           "isolation_lags",
            "containment_check", "envelope_study", "exact_vs_template", "horizon_comparison", "random_system",
            "healthy_record",
            "fig12", "timing", "uav_study", "UAV_X0", "plot_fig1", "plot_fig2", "plot_alpha",
@@ -616,35 +617,6 @@ def fig11_rad(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult
 def fig12_rad(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Fig. 12 with the elevator coefficients of (16) read per radian (keys as :func:`fig11`)."""
     return _study_result("rosa2013-fig12-rad", seed, trials or 10, jobs, eta_unit="rad")
-
-
-def fault_mode_study(seed: int, trials: int, eta_unit: str = uav.ETA_UNIT, duration: float = 3.0) -> dict:
-    """Where the faults act: step elevator and M_u faults under both fault modes.
-
-    Returns fault -> mode -> {"detected": count, "detection_ms": mean or None, "isolated": count of
-    correct isolations, "isolation_ms": mean or None, "runs": trials}, on the streams of
-    :func:`uav_study` (same seed) and records of ``duration`` s.
-    """
-    streams = trial_seeds(seed, int(trials))  # refuses a count that would not fit in memory
-    faults = ("elevator", "dynamics")
-    sims = {mode: uav.simulate_many([(f, "step") for f in faults for _ in streams],
-                                    [np.random.default_rng(ss) for _ in faults for ss in streams],
-                                    duration=duration, eta_unit=eta_unit, fault_mode=mode)
-            for mode in uav.FAULT_MODES}
-    # every run's bank at once (each run's outcome does not depend on the batch)
-    outcomes = _bank_outcomes([r for mode in uav.FAULT_MODES for r in sims[mode]])
-    out: dict = {}
-    for i, f in enumerate(faults):
-        out[f] = {}
-        for j, mode in enumerate(uav.FAULT_MODES):
-            first = (j * len(faults) + i) * len(streams)
-            rs = outcomes[first:first + len(streams)]
-            det = _summarise_one(rs, "detection", f)
-            iso = _summarise_one(rs, "isolation", f)
-            out[f][mode] = {"detected": sum(r["detection"] is not None for r in rs), "detection_ms": det,
-                            "isolated": sum(r["isolated"] == f for r in rs), "isolation_ms": iso,
-                            "runs": int(trials)}
-    return out
 
 
 @single_threaded_blas
