@@ -439,11 +439,13 @@ def study_headline(runs: tuple) -> dict:
     fa = sum(r["detection"] is not None for r in runs if r["fault"] == "none")
     return {"detection_time_ms": _summarise(runs, "detection"),
             "isolation_time_ms": _summarise(runs, "isolation"),
-            "false_alarms": fa, "healthy_runs": sum(r["fault"] == "none" for r in runs), **_counts(runs)}
+            "false_alarms": fa, "healthy_runs": sum(r["fault"] == "none" for r in runs),
+            **_counts(runs)}
 
 
 def _study_result(rid: str, seed: int, trials: int, jobs: int, eta_unit: str = uav.ETA_UNIT,
-                  fault_mode: str = "deviation", alpha_slack_deg: float = 0.0) -> ReproductionResult:
+                  fault_mode: str = "deviation",
+                  alpha_slack_deg: float = 0.0) -> ReproductionResult:
     if fault_mode not in uav.FAULT_MODES:
         raise ModelError(f"fault_mode: expected one of {uav.FAULT_MODES}, got {fault_mode!r}")
     if (isinstance(alpha_slack_deg, bool) or not isinstance(alpha_slack_deg, (int, float))
@@ -509,8 +511,9 @@ def _mu_total(scenario: str) -> dict:
     return dict(hypothesis="sec-svo-fault-modes",
                 hypothesis_glue=(f"svo_mu_total_det_{scenario}",) + _MU_TOTAL_GLUE,
                 hypothesis_text="acting on the total speed (fault_mode=total), the M_u fault is "
-                                "detected at the paper's time; side effects measured: it is then "
-                                "isolated in no run, and faulty runs are isolated as the wrong fault")
+                                "detected at the paper's time; side effects measured: it is "
+                                "then isolated in no run, and faulty runs are isolated as the "
+                                "wrong fault")
 
 
 #: the alpha noise bound of the elevator and M_u observers loosened (option alpha_slack_deg)

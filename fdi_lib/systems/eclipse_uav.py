@@ -590,8 +590,8 @@ def svo_scale() -> np.ndarray:
     return np.abs(np.linalg.inv(measurement_matrix())) @ (NOISE_BOUND + SVO_NOISE_MARGIN)
 
 
-def svo_models(run: UAVRun, kind: str = "nominal", *, dist_scale: float = 1.0, noise_scale: float = 1.0,
-               alpha_slack_deg: float = 0.0):
+def svo_models(run: UAVRun, kind: str = "nominal", *, dist_scale: float = 1.0,
+               noise_scale: float = 1.0, alpha_slack_deg: float = 0.0):
     """Per-step SVO models (a :class:`fdi_lib.sets.svo.ModelSequence`, callable k -> SVOModel) for the
     nominal plant or a fault hypothesis.
 
