@@ -516,6 +516,20 @@ def _mu_total(scenario: str) -> dict:
                                 "wrong fault")
 
 
+#: what the book tried on the elevator step and soft detection times, measured, not reaching
+#: the paper's
+_ELEVATOR_TRIED = ("the loss acting on the total deflection (fault_mode=total, "
+                   "sec-svo-fault-modes), and a looser alpha bound of the fault observers "
+                   "(alpha_slack_deg, which cannot change a detection)")
+#: the 1 s elevator ramp: the total deflection brings it within the paper's 0.5 s
+_ELEVATOR_TOTAL = dict(hypothesis="sec-svo-fault-modes",
+                       hypothesis_glue=("svo_total_elev_hard_det", "svo_total_elev_step_det",
+                                        "svo_total_wrong", "svo_total_faulty"),
+                       hypothesis_text="acting on the total deflection (fault_mode=total), the "
+                                       "1 s elevator ramp is detected within the paper's 0.5 s, "
+                                       "close to it; side effects measured: faulty runs "
+                                       "isolated as the wrong fault, a later step detection")
+
 #: the alpha noise bound of the elevator and M_u observers loosened (option alpha_slack_deg)
 _ALPHA_SLACK = dict(hypothesis="sec-svo-alpha-bound",
                     hypothesis_glue=("svo_slack_deg", "svo_slack_iso_soft", "svo_slack_iso_step",
@@ -537,6 +551,10 @@ def _times(kind: str, fig: str) -> dict[str, Claim]:
         claims = {**{f"detection_time_ms/dynamics/{s}": Claim(
             location=f"Fig. 11 (§6.4 text), dynamics fault, {s} scenario", label=label, units="ms",
             test=BY_TOLERANCE, explain="fig-rosa2013-11", missing=_NOT_DETECTED, **_mu_total(s))
+            for s in uav.SCENARIOS}, **{f"detection_time_ms/elevator/{s}": Claim(
+            location=f"Fig. 11 (§6.4 text), elevator fault, {s} scenario", label=label,
+            units="ms", test=BY_TOLERANCE, explain="fig-rosa2013-11", missing=_NOT_DETECTED,
+            **(_ELEVATOR_TOTAL if s == "hard" else {"ruled_out": _ELEVATOR_TRIED}))
             for s in uav.SCENARIOS}, **claims}
     else:
         claims = {"isolation_time_ms/alpha/soft": Claim(
