@@ -11,7 +11,7 @@ export OPENBLAS_NUM_THREADS := 1
 export OMP_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 
-.PHONY: book book-fast test venv lock clean benchmarks student student-pdf notebooks browser-test check-book grade pdf
+.PHONY: book book-fast test venv lock clean benchmarks student student-pdf notebooks browser-test check-book grade pdf install-check
 
 venv: $(STAMP)
 
@@ -130,9 +130,25 @@ notebooks: $(STAMP) $(NODE)
 ## at 1280 px and as a phone (mobile emulation: 390x844, scale 2, touch), no network; screenshots
 ## of both in _build/screenshots/ (tests/browser/check_book.py); hover previews (check_previews.py);
 ## what each page loads against the page budget (page_weights.py).
-browser-test: $(STAMP) $(CHROMIUM)
+## axe-core (the npm registry's package, this version) checks every page's accessibility in the
+## browser test; it is installed under _build/axe for the test only, never into the built pages.
+AXE_VERSION := 4.14.1
+AXE_JS := _build/axe/node_modules/axe-core/axe.min.js
+NPM := /usr/bin/npm
+$(NPM):
+	apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq npm
+$(AXE_JS): | $(NODE) $(NPM)
+	npm install --silent --no-save --no-package-lock --no-audit --no-fund --prefix _build/axe \
+	  axe-core@$(AXE_VERSION)
+
+## The live notebooks as the README opens them: `make notebooks`, then JupyterLab (headless, on
+## 127.0.0.1) shows each in Chromium with no raw MyST role, directive or undefined macro
+## (tests/browser/check_jupyterlab.py).
+browser-test: $(STAMP) $(CHROMIUM) $(AXE_JS) notebooks
 	@test -f _build/html/index.html || { echo "No built book: run make book first"; exit 2; }
-	$(BIN)/python tests/browser/check_book.py --html _build/html --screenshots _build/screenshots
+	$(BIN)/python tests/browser/check_book.py --html _build/html --screenshots _build/screenshots \
+	  --axe $(AXE_JS)
+	$(BIN)/python tests/browser/check_jupyterlab.py --notebooks _build/notebooks
 	$(BIN)/python tests/browser/check_explorables.py --html _build/html
 	$(BIN)/python tests/browser/check_previews.py --html _build/html
 	$(BIN)/python tests/browser/page_weights.py --html _build/html
@@ -172,3 +188,9 @@ lock:
 
 clean:
 	rm -rf _build _build.log
+
+## The library alone (issue 34): its wheel installed into a new, clean virtual environment (deps
+## held to requirements.lock), then `fdi-reproduce --list` and one reproduction's --json there
+## (tools/check_install.py; _build/install-check/).
+install-check: $(STAMP)
+	$(BIN)/python tools/check_install.py --out _build/install-check

@@ -56,9 +56,11 @@
    HTML (1-7 in the parts ``numbered: true`` of ``_toc.yml``, the other pages and every part
    unnumbered); each explorable as a figure of its small multiples with its caption
    (:meth:`fdi_lib.explorables.Explorable.small_multiples`); a cover page with the version and
-   the claims ledger per status and paper, as the ledger page of the same build computed it.
-   In the HTML, the header's download menu links the PDF when ``make pdf`` has put it beside the
-   pages (:func:`publish_pdf`), and only then.
+   the claims ledger per status and paper, as the ledger page of the same build computed it; a
+   list of figures after the contents and an index of the terms a student looks up
+   (:data:`INDEX_TERMS`, :class:`_IndexTerms`).
+   In the HTML, the header's download menu links the PDF when there is one: ``make pdf`` puts it
+   beside the pages (:func:`publish_pdf`), and ``make book`` after ``make pdf`` copies it there.
 12. Tables that can be read on a phone: every body cell of a table carries its column's header as
    a ``data-label`` attribute (its readable text, :func:`readable_text`), which the book's CSS
    and ``_static/fdi-tables.js`` use to show a table too wide for the column as one card per row
@@ -68,11 +70,18 @@
     with that caption as plain text, numbered like the others ("Figure 2.5") and labelled
     ``fig-<page>-explore`` (``fig-glr-explore``; ``-2``, ``-3`` for further ones on a page), so
     that the text can cite it with ``{numref}``.
+14. The intro's map of the book and reading path, made from ``_toc.yml`` (every page in it) and
+    one line per page in the intro's ``{fdi-book-map}`` block (:func:`book_map_markdown`).
+15. Accessible names and roles (issue 33; checked by axe-core in ``tests/browser/check_book.py``):
+    the folds of hidden code cells and the search button are named by the text they show
+    (``templates/search-button-field.html``), the bibliography's entries are the
+    items of its list, and the site has an icon (``_static/favicon.svg``).
 """
 
 from __future__ import annotations
 
 import ast
+import html
 import html.parser
 import importlib.util
 import inspect
@@ -389,6 +398,72 @@ def _generate_catalogue(app: Sphinx, docname: str, source: list[str]) -> None:
     for dep in deps:
         app.env.note_dependency(str(dep))
     source[0] = source[0].rstrip() + "\n\n" + text
+
+
+# --- 14. The intro's map of the book, from _toc.yml -----------------------------------------
+#: The page whose ``{fdi-book-map}`` block becomes the map of the book and its reading path.
+MAP_DOC = "book/intro"
+_MAP_BLOCK = re.compile(r"^```\{fdi-book-map\}[ \t]*\n(.*?)^```[ \t]*$", re.M | re.S)
+
+
+def _toc_parts(confdir: Path) -> list[tuple[str, bool, list[str]]]:
+    """``(caption, numbered, files)`` of each part of ``_toc.yml``, in book order."""
+    import yaml
+
+    toc = yaml.safe_load((confdir / "_toc.yml").read_text())
+    return [(part.get("caption", ""), bool(part.get("numbered")),
+             [c["file"] for c in part.get("chapters", []) if "file" in c])
+            for part in toc.get("parts", [])]
+
+
+#: Pages the PDF has no chapter for (its bibliography is the list at the end of the book, see
+#: :class:`_NumberedParts`): the PDF's map names them without a link.
+NO_PDF_CHAPTER = ("book/bibliography",)
+
+
+def book_map_markdown(confdir: Path, block: str, unlinked: tuple[str, ...] = ()) -> str:
+    """The map of the book (a table: part, page, what it holds) and the reading path (the
+    numbered chapters in order), every page of ``_toc.yml`` in it. ``block`` holds one line
+    ``FILE: what the page holds`` per page but the root (indented lines continue it); a page of
+    the table of contents
+    without a line, or a line for no page of it, is a build error. The pages in ``unlinked``
+    are named by their title, without a link."""
+    what: dict[str, str] = {}
+    for line in re.sub(r"\n[ \t]+", " ", block).splitlines():   # indented: continues the last
+        if line.strip():
+            file, sep, text = line.partition(":")
+            if not sep or not text.strip():
+                raise ExtensionError(f"fdi_book: book map line {line!r}: expected "
+                                     "'FILE: what it holds'")
+            what[file.strip()] = text.strip()
+    parts = _toc_parts(confdir)
+    files = [f for _, _, chapters in parts for f in chapters]
+    missing, unknown = [f for f in files if f not in what], sorted(set(what) - set(files))
+    if missing or unknown:
+        raise ExtensionError(f"fdi_book: the map of the book in {MAP_DOC}.md needs one line per "
+                             f"page of _toc.yml: missing {missing}, not in _toc.yml {unknown}")
+    rows = ["| Part | Page | What it holds |", "|---|---|---|"]
+    for caption, _, chapters in parts:
+        for k, f in enumerate(chapters):
+            page = (_HEADING.search((confdir / f"{f}.md").read_text()).group(2) if f in unlinked
+                    else f"{{doc}}`/{f}`")
+            rows.append(f"| {caption if k == 0 else ''} | {page} | {what[f]} |")
+    numbered = [f for _, num, chapters in parts if num for f in chapters]
+    path = "\n".join(f"{i}. {{doc}}`/{f}`" for i, f in enumerate(numbered, 1))
+    return "\n".join(rows) + "\n\nThe numbered chapters, in reading order:\n\n" + path + "\n"
+
+
+def _generate_book_map(app: Sphinx, docname: str, source: list[str]) -> None:
+    if docname != MAP_DOC:
+        return
+    app.env.note_dependency(str(Path(app.confdir) / "_toc.yml"))
+    confdir = Path(app.confdir)
+    unlinked = NO_PDF_CHAPTER if app.builder.format == "latex" else ()
+    source[0], count = _MAP_BLOCK.subn(lambda m: book_map_markdown(confdir, m.group(1), unlinked),
+                                       source[0])
+    if count != 1:
+        raise ExtensionError(f"fdi_book: {MAP_DOC}.md needs one ```{{fdi-book-map}} block, "
+                             f"found {count}")
 
 
 def _add_notebook_download(app: Sphinx, pagename: str, templatename: str, context: dict,
@@ -805,45 +880,59 @@ def _lighter_previews(app: Sphinx, exception: Exception | None) -> None:
 # --- 11. The PDF edition -------------------------------------------------------------------
 #: File name of the PDF edition, in ``_build/pdf/`` and beside the HTML pages.
 PDF_NAME = "fdi-book.pdf"
+#: The A4 edition, beside :data:`PDF_NAME` (US letter, Sphinx's default paper).
+A4_NAME = "fdi-book-a4.pdf"
 #: Script of the HTML pages that adds the PDF to the header's download menu when it is there.
 PDF_SCRIPT = "fdi-pdf.js"
 _PDF_JS = """// The PDF edition in the header's download menu, when `make pdf` has put it beside the pages
 // (written by _ext/fdi_book.py: the HTML build cannot know whether a PDF will follow).
 (function () {
-  const pdf = %s;
+  const pdf = %s, a4 = %s;
   if (!pdf) return;
   document.addEventListener("DOMContentLoaded", function () {
     const menu = document.querySelector(".dropdown-download-buttons .dropdown-menu");
     if (!menu) return;
     const root = document.documentElement.dataset.content_root || "";
-    const li = document.createElement("li"), a = document.createElement("a");
-    a.href = root + pdf;
-    a.className = "btn btn-sm btn-download-book-pdf-button dropdown-item";
-    a.title = "Download the whole book (PDF edition)";
-    a.innerHTML = '<span class="btn__icon-container"><i class="fas fa-book"></i></span>' +
-      '<span class="btn__text-container">book (PDF)</span>';
-    li.appendChild(a);
-    menu.insertBefore(li, menu.firstChild);
+    [[a4, "A4", "book (PDF, A4)"], [pdf, "US letter", "book (PDF)"]].forEach(function (e) {
+      if (!e[0]) return;
+      const li = document.createElement("li"), a = document.createElement("a");
+      a.href = root + e[0];
+      a.className = "btn btn-sm btn-download-book-pdf-button dropdown-item";
+      a.title = "Download the whole book (PDF edition, " + e[1] + " paper)";
+      a.innerHTML = '<span class="btn__icon-container"><i class="fas fa-book"></i></span>' +
+        '<span class="btn__text-container">' + e[2] + '</span>';
+      li.appendChild(a);
+      menu.insertBefore(li, menu.firstChild);
+    });
   });
 })();
 """
 
 
 def publish_pdf(html_dir: Path, pdf: Path | None) -> None:
-    """Put ``pdf`` beside the HTML pages in ``html_dir`` (as :data:`PDF_NAME`) and let every
-    page's download menu link it; with ``pdf`` None, the pages link no PDF."""
-    if pdf is not None and pdf.resolve() != (html_dir / PDF_NAME).resolve():
-        shutil.copy2(pdf, html_dir / PDF_NAME)
+    """Put ``pdf`` beside the HTML pages in ``html_dir`` (as :data:`PDF_NAME`), with its A4
+    edition when there is one beside it (:data:`A4_NAME`), and let every page's download menu
+    link them; with ``pdf`` None, the pages link no PDF."""
+    a4 = None if pdf is None else pdf.with_name(A4_NAME)
+    for source, name in ((pdf, PDF_NAME), (a4, A4_NAME)):
+        target = html_dir / name
+        if source is not None and source.is_file() and source.resolve() != target.resolve():
+            shutil.copy2(source, target)
+    a4_there = a4 is not None and (html_dir / A4_NAME).is_file()
     script = html_dir / "_static" / PDF_SCRIPT
     script.parent.mkdir(parents=True, exist_ok=True)
-    script.write_text(_PDF_JS % json.dumps(PDF_NAME if pdf is not None else None))
+    script.write_text(_PDF_JS % (json.dumps(PDF_NAME if pdf is not None else None),
+                                 json.dumps(A4_NAME if a4_there else None)))
 
 
 def _pdf_script(app: Sphinx, exception: Exception | None) -> None:
     if exception is not None or app.builder.format != "html":
         return
-    present = Path(app.outdir) / PDF_NAME  # put there by an earlier `make pdf` (book-fast)
-    publish_pdf(Path(app.outdir), present if present.is_file() else None)
+    # the PDF of an earlier `make pdf` (``_build/pdf``, beside ``_build/html``), or one it put
+    # beside the pages (book-fast keeps them): the pages link it whichever ran last
+    found = [p for p in (Path(app.outdir).parent / "pdf" / PDF_NAME, Path(app.outdir) / PDF_NAME)
+             if p.is_file()]
+    publish_pdf(Path(app.outdir), found[0] if found else None)
 
 
 def _record_run_times(app: Sphinx, env) -> None:
@@ -925,6 +1014,7 @@ def latex_script_fallback() -> str:
 
 def _latex_preamble(app: Sphinx, config) -> None:
     elements = config.latex_elements
+    elements.setdefault("tableofcontents", "\\sphinxtableofcontents\n\\listoffigures\n")
     elements["preamble"] = (elements.get("preamble", "") + "\n% fdi-book: the maths macros of the book "
                             "(mathjax3_config in _config.yml)\n" + latex_macros(config) + "\n"
                             "% sub- and superscript characters the text font lacks, from DejaVu\n"
@@ -1026,6 +1116,38 @@ class _ProtectCaptionCitations(SphinxPostTransform):
             for raw in caption.findall(raw_latex):
                 if raw.rawsource.startswith("\\hyperlink{"):
                     raw.rawsource = "\\protect" + raw.rawsource
+
+
+#: Terms of the PDF's index: what a student looks up, indexed where each chapter first uses them.
+INDEX_TERMS = ("GLR", "innovation", "Kalman filter", "Kitanidis filter", "set-valued observer",
+               "fault signature", "minmax", "Lasso", "RLS", "forgetting factor", "Willsky-Jones",
+               "chi-square", "false alarm", "detection delay", "isolation", "polytope",
+               "convex hull", "LPV", "LTV", "Monte Carlo", "Ljung-Box", "unknown input",
+               "claims ledger", "wind turbine", "threshold")
+
+
+class _IndexTerms(SphinxPostTransform):
+    """The PDF's index (issue 33): each of :data:`INDEX_TERMS` indexed at the first paragraph of
+    each chapter (source file) that uses it, by an ``\\index`` entry at that paragraph."""
+
+    default_priority = 760
+    builders = ("latex",)
+
+    def run(self, **kwargs: Any) -> None:
+        from sphinx import addnodes
+
+        patterns = [(t, re.compile(r"(?<![\w-])" + re.escape(t) + r"(?![\w-])", re.I))
+                    for t in INDEX_TERMS]
+        done: set[tuple[str, str]] = set()
+        for par in list(self.document.findall(nodes.paragraph)):
+            if par.source is None or any(isinstance(a, (nodes.caption, nodes.title, nodes.table))
+                                         for a in _ancestors(par, self.document)):
+                continue
+            text = par.astext()
+            terms = [t for t, pat in patterns if (t, par.source) not in done and pat.search(text)]
+            for term in terms:
+                done.add((term, par.source))
+                par.insert(0, addnodes.index(entries=[("single", term, "", "", None)]))
 
 
 class _NumberedParts(SphinxPostTransform):
@@ -1201,11 +1323,37 @@ class NumberedExplorables(SphinxTransform):
             self.document.note_explicit_target(figure, figure)
 
 
+# --- 15. Accessible names and roles ---------------------------------------------------------
+def _visit_hidden_cell(self, node) -> None:
+    """myst-nb's fold of a hidden cell without its ``aria-label`` ("Toggle hidden content"), which
+    hid the visible "Show code cell source" from screen readers: the toggle's name is now the text
+    it shows (the other prompt is ``display: none``)."""
+    self.body.append(f'<details class="admonition hide {" ".join(node["classes"])}">\n<summary>\n')
+    for kind, prompt in (("collapsed", node["prompt_show"]), ("expanded", node["prompt_hide"])):
+        self.body.append(f'<p class="{kind} admonition-title">{html.escape(prompt)}</p>\n')
+    self.body.append("</summary>\n")
+
+
+def _visit_citation(self, node: nodes.citation) -> None:
+    """A bibliography entry as an item of its list (docutils writes ``role="doc-biblioentry"``,
+    deprecated, in a ``role="list"`` that then has no list item)."""
+    if not isinstance(node.previous_sibling(), type(node)):
+        self.body.append('<div role="list" class="citation-list">\n')
+    self.body.append(self.starttag(node, "div", classes=[node.tagname], role="listitem"))
+
+
 def setup(app: Sphinx) -> dict[str, Any]:
     app.add_transform(NumberedExplorables)
     app.add_node(nodes.entry, override=True, html=(_visit_entry, _depart_entry))
+    from docutils.writers._html_base import HTMLTranslator
+    from myst_nb.sphinx_ import HideCodeCellNode, depart_HideCellInput
+
+    app.add_node(nodes.citation, override=True,
+                 html=(_visit_citation, HTMLTranslator.depart_citation))
+    app.add_node(HideCodeCellNode, override=True, html=(_visit_hidden_cell, depart_HideCellInput))
     app.connect("env-before-read-docs", _drop_thebe_scripts, priority=900)
     app.connect("source-read", _generate_catalogue)
+    app.connect("source-read", _generate_book_map)
     # after sphinx-book-theme's header buttons (priority 501)
     app.connect("html-page-context", _add_notebook_download, priority=502)
     pybtex.plugin.register_plugin("pybtex.style.labels", "fdi_author_year", AuthorYearLabelStyle)
@@ -1230,6 +1378,7 @@ def setup(app: Sphinx) -> dict[str, Any]:
     app.connect("env-updated", _latex_cover)
     app.add_post_transform(_ProtectCaptionCitations)
     app.add_post_transform(_NumberedParts)
+    app.add_post_transform(_IndexTerms)
     app.add_post_transform(_ExplorableFigures)
     app.add_js_file(PDF_SCRIPT)
     app.connect("build-finished", _pdf_script)

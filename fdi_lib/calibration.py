@@ -139,6 +139,8 @@ def minmax_null_calibration(model: LTVModel, fault: FaultProfile, a: Sequence[in
     The Fisher information and normalised residual are accumulated over the whole record
     (known profile): they are ``C_N`` and ``d_N`` of the GLR recursion (27)-(28).
 
+    Explained in the book: :doc:`/book/zb2014/glr`.
+
     Parameters
     ----------
     model, fault, n_runs, seed, alpha, jobs, u
@@ -147,6 +149,17 @@ def minmax_null_calibration(model: LTVModel, fault: FaultProfile, a: Sequence[in
         Indices of ``theta_a``; ``theta[a]`` must be zero.
     theta : sequence of float
         The true fault vector (non-zero nuisance components allowed).
+
+    Examples
+    --------
+    >>> from fdi_lib.models import fault_profile, ltv_model
+    >>> import numpy as np
+    >>> m = ltv_model(F=np.diag([0.9, 0.5]), H=np.eye(2), Q=0.01 * np.eye(2), R=0.01 * np.eye(2),
+    ...               n_steps=50)
+    >>> c = minmax_null_calibration(m, fault_profile(m, Psi=np.eye(2)), [0], [0.0, 0.5],
+    ...                             n_runs=200, seed=1)
+    >>> c.dof, bool(c.ks_pvalue > 0.01)                   # chi-square with 1 degree of freedom
+    (1, True)
     """
     _check(model, fault, n_runs, alpha)
     th = np.asarray(theta, dtype=float)

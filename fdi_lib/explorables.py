@@ -119,17 +119,28 @@ def _png_frame(fig: Figure) -> str:
     return base64.b64encode(out.getvalue()).decode("ascii")
 
 
-# The whole client side: one image, one range input per parameter, frames decoded up front.
+# The whole client side: one image, one range input per parameter, frames decoded up front. A
+# slider announces the value it shows (aria-valuetext, not its position on the grid), the image's
+# alt text names the values it is drawn at, and a polite live region says which frame is shown.
 _SCRIPT = """(function () {
   const root = document.getElementById(%(id)s), F = %(frames)s, L = %(labels)s, S = %(strides)s;
+  const N = %(names)s, A = %(alt)s;
   const img = root.querySelector("img"), ins = root.querySelectorAll("input[type=range]");
+  const live = root.querySelector(".fdi-explorable-live");
   const pics = F.map(function (b) {
     const p = new Image(); p.src = "data:image/png;base64," + b; p.decode().catch(function () {}); return p;
   });
   function show() {
     let i = 0;
-    ins.forEach(function (e, j) { i += S[j] * Number(e.value); e.nextElementSibling.textContent = L[j][e.value]; });
+    const said = [];
+    ins.forEach(function (e, j) {
+      const v = L[j][e.value];
+      i += S[j] * Number(e.value); e.nextElementSibling.textContent = v;
+      e.setAttribute("aria-valuetext", v); said.push(N[j] + " = " + v);
+    });
     img.src = pics[i].src; root.dataset.frame = i;
+    img.alt = A + " Shown at " + said.join(", ") + ".";
+    live.textContent = "Figure redrawn at " + said.join(", ") + ".";
   }
   ins.forEach(function (e) { e.addEventListener("input", show); });
 })();"""
@@ -155,6 +166,9 @@ class Explorable:
         Index of the shown value of each slider.
     caption : str
         Caption of the figure (HTML allowed).
+    alt : str
+        What the figure shows, in one or two sentences of plain text (the image's alt text,
+        followed by the slider values of the frame shown: :meth:`frame_alt`).
     """
 
     names: tuple[str, ...]
@@ -164,6 +178,7 @@ class Explorable:
     data: tuple[Any, ...]
     default: tuple[int, ...]
     caption: str
+    alt: str
 
     @property
     def strides(self) -> tuple[int, ...]:
@@ -180,6 +195,12 @@ class Explorable:
             i += s * g.index(values[name])
         return i
 
+    def frame_alt(self, point: Sequence[int]) -> str:
+        """Alt text of the frame at grid indices ``point``: :attr:`alt` and the values shown."""
+        said = ", ".join(f"{label} = {_fmt(g[i])}"
+                         for label, g, i in zip(self.labels, self.grid, point))
+        return f"{self.alt} Shown at {said}."
+
     def __repr__(self) -> str:
         # the notebook's text/plain beside the HTML: a summary, not megabytes of frames
         sizes = " x ".join(f"{n} ({len(g)})" for n, g in zip(self.names, self.grid))
@@ -195,19 +216,24 @@ class Explorable:
         start = sum(s * d for s, d in zip(self.strides, self.default))
         shown = [[_fmt(v) for v in g] for g in self.grid]
         sliders = "".join(
-            # wraps on a phone: label, slider and value each on their own line if need be
+            # wraps on a phone: label, slider and value each on their own line if need be; the
+            # value is read out by the slider itself (aria-valuetext), not again by its <output>
             f'<label style="display:flex;flex-wrap:wrap;align-items:center;gap:0.2em 0.6em;margin:0.2em 0">'
-            f'<span>{label}</span><input type="range" min="0" max="{len(g) - 1}" step="1" value="{d}" '
-            f'aria-label="{html.escape(label, quote=True)}" style="width:12em;max-width:100%">'
-            f"<output>{s[d]}</output></label>"
+            f'<span>{html.escape(label)}</span><input type="range" min="0" max="{len(g) - 1}" '
+            f'step="1" value="{d}" aria-valuetext="{html.escape(s[d], quote=True)}" '
+            f'style="width:12em;max-width:100%">'
+            f'<output aria-hidden="true">{html.escape(s[d])}</output></label>'
             for label, g, d, s in zip(self.labels, self.grid, self.default, shown))
         script = _SCRIPT % {"id": json.dumps(uid), "frames": json.dumps(list(self.frames)),
-                            "labels": json.dumps(shown), "strides": json.dumps(list(self.strides))}
+                            "labels": json.dumps(shown), "strides": json.dumps(list(self.strides)),
+                            "names": json.dumps(list(self.labels)), "alt": json.dumps(self.alt)}
+        hidden = "position:absolute;width:1px;height:1px;overflow:hidden;clip-path:inset(50%)"
         return (f'<figure class="fdi-explorable" id="{uid}" data-frame="{start}">'
                 f'<div class="fdi-explorable-sliders">{sliders}</div>'
                 f'<img src="data:image/png;base64,{self.frames[start]}" '
-                f'alt="{html.escape(caption_text(self.caption), quote=True)}" '
+                f'alt="{html.escape(self.frame_alt(self.default), quote=True)}" '
                 f'style="max-width:100%;height:auto">'
+                f'<p class="fdi-explorable-live" aria-live="polite" style="{hidden}"></p>'
                 f"<figcaption>{self.caption}</figcaption></figure><script>{script}</script>")
 
     def small_multiples(self, panels: int = PANELS) -> bytes:
@@ -348,6 +374,12 @@ def caption_text(caption: str) -> str:
     return " ".join("".join(parser.parts).split())
 
 
+def _sentence(text: str) -> str:
+    """``text`` on one line, ending with a full stop (an alt text that values follow)."""
+    text = " ".join(text.split())
+    return text if text.endswith((".", "!", "?")) else text + "."
+
+
 def _fmt(v: Any) -> str:
     return f"{v:g}" if isinstance(v, (float, np.floating)) else str(v)
 
@@ -387,7 +419,8 @@ def _check_grid(grid: Any, fixed: Mapping[str, Any]) -> tuple[tuple[str, ...], t
 
 
 def explorable(callback: Callable[..., Figure], grid: Mapping[str, Sequence[Any]], *, caption: str,
-               labels: Mapping[str, str] | None = None, default: Mapping[str, Any] | None = None,
+               alt: str | None = None, labels: Mapping[str, str] | None = None,
+               default: Mapping[str, Any] | None = None,
                **fixed: Any) -> Explorable:
     """Evaluate ``callback(**values, **fixed, fig=fig)`` over the grid; one frame per point.
 
@@ -399,6 +432,10 @@ def explorable(callback: Callable[..., Figure], grid: Mapping[str, Sequence[Any]
         Slider values per keyword argument (at least one name, each with at least two values).
     caption : str
         Caption shown under the figure.
+    alt : str, optional
+        What the figure shows, in one or two sentences of plain text, for a reader who cannot
+        see it (the image's alt text, followed by the slider values of the frame shown); by
+        default the caption's text.
     labels : mapping of str to str, optional
         Slider labels on the page (default: the names).
     default : mapping of str to value, optional
@@ -429,6 +466,8 @@ def explorable(callback: Callable[..., Figure], grid: Mapping[str, Sequence[Any]
                          f"{type(callback).__name__}")
     if not isinstance(caption, str):
         raise ModelError(f"caption: expected a string, got {type(caption).__name__}")
+    if alt is not None and (not isinstance(alt, str) or not alt.strip()):
+        raise ModelError(f"alt: expected a non-empty string of plain text, got {alt!r}")
     if labels is not None and (not isinstance(labels, Mapping) or set(labels) - set(names)):
         raise ModelError(f"labels: expected a mapping of grid names {list(names)} to labels, got {labels!r}")
     if default is not None and not isinstance(default, Mapping):
@@ -478,4 +517,5 @@ def explorable(callback: Callable[..., Figure], grid: Mapping[str, Sequence[Any]
             plt.close(fig)
     labels = dict(labels or {})
     return Explorable(names=names, labels=tuple(labels.get(n, n) for n in names), grid=values,
-                      frames=tuple(frames), data=tuple(data), default=tuple(start), caption=caption)
+                      frames=tuple(frames), data=tuple(data), default=tuple(start), caption=caption,
+                      alt=_sentence(alt or caption_text(caption)))

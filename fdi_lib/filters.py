@@ -170,6 +170,16 @@ def as_outputs(model: LTVModel, y: Any, name: str = "y") -> np.ndarray:
     """Validate an output record ``y`` ``(*batch, N, p)`` against ``model`` (see :func:`~fdi_lib.models.as_record`).
 
     ``name`` is the argument named in errors.
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> m = ltv_model(F=np.eye(2), H=np.eye(2), Q=np.eye(2), R=np.eye(2), n_steps=5)
+    >>> as_outputs(m, np.zeros((3, 5, 2))).shape          # three realisations
+    (3, 5, 2)
     """
     return as_record(y, n_steps=model.n_steps, width=model.p, name=name)
 
@@ -177,6 +187,8 @@ def as_outputs(model: LTVModel, y: Any, name: str = "y") -> np.ndarray:
 def kalman_filter(model: LTVModel, y: Any, u: Any = None, *, gains: KalmanGains | None = None,
                   x0: Any = None) -> KalmanResult:
     """Run the Kalman one-step predictor (6) on outputs ``y`` and inputs ``u``.
+
+    Explained in the book: :doc:`/book/zb2014/signature`.
 
     Parameters
     ----------
@@ -199,6 +211,18 @@ def kalman_filter(model: LTVModel, y: Any, u: Any = None, *, gains: KalmanGains 
     Returns
     -------
     KalmanResult
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> from fdi_lib.simulate import simulate
+    >>> m = ltv_model(F=[[0.9]], H=[[1.0]], Q=0.1, R=0.1, n_steps=2000)
+    >>> s = simulate(m, rng=np.random.default_rng(0))
+    >>> eps = kalman_filter(m, s.y).innovations       # white, of covariance Sigma_k
+    >>> g = kalman_gains(m)
+    >>> round(float(np.mean(eps[100:, 0] ** 2 / g.Sigma[100:, 0, 0])), 1)   # normalised: about 1
+    1.0
     """
     y_arr, missing = measurements(y, n_steps=model.n_steps, width=model.p, name="y")
     u_arr = as_record(u, n_steps=model.n_steps, width=model.l, name="u")
@@ -223,6 +247,8 @@ def predictor_recursion(model: LTVModel, y: np.ndarray, u: np.ndarray, K: np.nda
     ``skip`` (missing) there is no update (``K_k = 0``) and the innovation and updated residual are
     NaN.
 
+    Explained in the book: :doc:`/book/zb2014/signature`.
+
     Parameters
     ----------
     model : LTVModel
@@ -242,6 +268,17 @@ def predictor_recursion(model: LTVModel, y: np.ndarray, u: np.ndarray, K: np.nda
     -------
     innovations, x_pred, x_filt, updated_residuals : numpy.ndarray
         ``(*batch, N, p)``, ``(*batch, N + 1, n)``, ``(*batch, N, n)``, ``(*batch, N, p)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> m = ltv_model(F=[[0.5]], H=[[1.0]], Q=1.0, R=1.0, n_steps=3)
+    >>> K = np.zeros((3, 1, 1)); skip = np.zeros(3, dtype=bool)   # no gain: open-loop prediction
+    >>> eps, x_pred, x_filt, upd = predictor_recursion(m, np.ones((3, 1)), np.zeros((3, 0)), K, skip,
+    ...                                                x0=[4.0])
+    >>> x_pred[:, 0].tolist(), eps[:, 0].tolist()
+    ([4.0, 2.0, 1.0, 0.5], [-3.0, -1.0, 0.0])
     """
     N, n = model.n_steps, model.n
     batch = y.shape[:-2]

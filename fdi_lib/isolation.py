@@ -32,6 +32,8 @@ def information(innovations: np.ndarray, signature: np.ndarray, gains: KalmanGai
                 start: int, stop: int) -> tuple[np.ndarray, np.ndarray]:
     """Fisher information ``F`` and normalised residual ``zeta`` of eq. (39) over samples ``start .. stop-1``.
 
+    Explained in the book: :doc:`/book/zb2014/glr`.
+
     Parameters
     ----------
     innovations : array_like
@@ -48,6 +50,19 @@ def information(innovations: np.ndarray, signature: np.ndarray, gains: KalmanGai
     -------
     tuple of numpy.ndarray
         ``F`` ``(m, m)`` (``(*batch, m, m)`` when samples are missing) and ``zeta`` ``(*batch, m)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model, fault_profile
+    >>> from fdi_lib.filters import kalman_gains
+    >>> from fdi_lib.signatures import fault_signature
+    >>> m = ltv_model(F=[[0.5]], H=[[1.0]], Q=0.01, R=0.01, n_steps=100)
+    >>> g = kalman_gains(m)
+    >>> Gamma = fault_signature(m, g, fault_profile(m, Phi=[[1.0]])).on_innovation
+    >>> F, zeta = information(np.zeros((100, 1)), Gamma, g, start=50, stop=100)
+    >>> F.shape, float(zeta[0])                           # no innovation, no evidence
+    ((1, 1), 0.0)
     """
     if np.ndim(getattr(gains, "Sigma_chol", None)) != 3 or np.ndim(getattr(gains, "Sigma", None)) != 3:
         raise ModelError(f"gains: expected KalmanGains (Sigma, Sigma_chol of shape (N, p, p)), "
@@ -170,6 +185,8 @@ def minmax_isolation(F: np.ndarray, zeta: np.ndarray, partitions: Sequence[Seque
                      ) -> list[MinmaxDecision]:
     """Bank of parallel minmax tests (43), one per partition ``theta = (theta_a, theta_b)``.
 
+    Explained in the book: :doc:`/book/zb2014/glr`.
+
     Parameters
     ----------
     F, zeta
@@ -180,6 +197,13 @@ def minmax_isolation(F: np.ndarray, zeta: np.ndarray, partitions: Sequence[Seque
         Nominal type I error of each test; threshold ``chi2.ppf(1 - alpha, dim a)``.
     thresholds : sequence of float, optional
         Explicit thresholds instead (one per partition).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> F = np.eye(2) * 100.0; zeta = np.array([50.0, 0.0])   # evidence on theta_1 only
+    >>> [bool(d.faulty) for d in minmax_isolation(F, zeta, [[0], [1]], alpha=0.01)]
+    [True, False]
     """
     if thresholds is not None and len(thresholds) != len(partitions):
         raise ModelError(f"thresholds: expected {len(partitions)} values, got {len(thresholds)}")

@@ -86,6 +86,16 @@ def as_unknown_input_matrix(model: LTVModel, E: Any) -> np.ndarray:
 
     Returns a read-only array of shape ``(N, n, s)``; ``E_k`` multiplies ``d_k`` in the
     equation of ``X_{k+1}``.
+
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> m = ltv_model(F=np.eye(2), H=np.eye(2), Q=np.eye(2), R=np.eye(2), n_steps=4)
+    >>> as_unknown_input_matrix(m, [[1.0], [0.0]]).shape   # E_k on every step
+    (4, 2, 1)
     """
     first = array(E(0) if callable(E) else E, "E", finite=False)
     if first.ndim == 1 and first.shape[0] == model.n:
@@ -282,6 +292,8 @@ def kitanidis_filter(model: LTVModel, y: Any, u: Any = None, E: Any = None, *,
                      gains: KitanidisGains | None = None, x0: Any = None) -> KitanidisResult:
     """Run the Kitanidis filter (24h) and return its residuals (25).
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     model : LTVModel
@@ -303,6 +315,20 @@ def kitanidis_filter(model: LTVModel, y: Any, u: Any = None, E: Any = None, *,
     Returns
     -------
     KitanidisResult
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> from fdi_lib.simulate import simulate
+    >>> m = ltv_model(F=0.5 * np.eye(2), G=[[1.0], [0.0]], H=np.eye(2), Q=0.01 * np.eye(2),
+    ...               R=0.01 * np.eye(2), n_steps=400)
+    >>> u = np.where(np.arange(400) >= 200, 5.0, 0.0)[:, None]   # an unknown input from k = 200
+    >>> s = simulate(m, rng=np.random.default_rng(3), u=u)
+    >>> r = kitanidis_filter(m, s.y, E=[[1.0], [0.0]])   # the filter is not told u
+    >>> before, after = np.abs(r.residuals[:200, 1]).mean(), np.abs(r.residuals[250:, 1]).mean()
+    >>> round(float(before), 2), round(float(after), 2)     # the residual ignores the jump of u
+    (0.05, 0.06)
     """
     y_arr, missing = measurements(y, n_steps=model.n_steps, width=model.p, name="y")
     if gains is None:
@@ -346,6 +372,8 @@ def residual_signature(model: LTVModel, gains: Any, fault: FaultProfile | None =
 
     (for ``Phi = 0`` this is exactly (7b)/(27b) with ``Upsilon_0 = 0``).
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     model : LTVModel
@@ -362,6 +390,17 @@ def residual_signature(model: LTVModel, gains: Any, fault: FaultProfile | None =
     Returns
     -------
     ResidualSignature
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> m = ltv_model(F=0.5 * np.eye(2), H=np.eye(2), Q=np.eye(2), R=np.eye(2), n_steps=20)
+    >>> g = kitanidis_gains(m, [[1.0], [0.0]])
+    >>> from fdi_lib.models import fault_profile
+    >>> sig = residual_signature(m, g, fault_profile(m, Phi=np.eye(2)))   # both sensors
+    >>> sig.Upsilon.shape, sig.on_residual.shape
+    ((20, 2, 2), (20, 2, 2))
     """
     _check_gains(model, gains)
     N, n, p = model.n_steps, model.n, model.p

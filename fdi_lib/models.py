@@ -42,6 +42,8 @@ MatrixLike = Any  # array_like | Callable[[int], array_like]
 def as_sequence(value: MatrixLike, *, n_steps: int, shape: tuple[int, ...], name: str) -> np.ndarray:
     """Materialise a constant / per-step / callable matrix on ``k = 0 .. n_steps-1``.
 
+    Explained in the book: :doc:`/book/notation`.
+
     Parameters
     ----------
     value : array_like or callable
@@ -59,6 +61,14 @@ def as_sequence(value: MatrixLike, *, n_steps: int, shape: tuple[int, ...], name
     -------
     numpy.ndarray
         Read-only array of shape ``(n_steps, *shape)`` (a broadcast view for constants).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> as_sequence([[2.0]], n_steps=3, shape=(1, 1), name="F").ravel().tolist()   # a constant
+    [2.0, 2.0, 2.0]
+    >>> as_sequence(lambda k: [[k]], n_steps=3, shape=(1, 1), name="F").ravel().tolist()
+    [0.0, 1.0, 2.0]
     """
     if callable(value):
         steps = []
@@ -93,6 +103,15 @@ def as_record(value: Any, *, n_steps: int, width: int, name: str) -> np.ndarray:
 
     ``width`` is the number of columns, ``name`` the argument named in errors. ``None`` gives
     zeros ``(n_steps, width)``; a 1-D array of length ``n_steps`` is accepted when ``width == 1``. Raises :class:`ShapeError` or :class:`NonFiniteError` (with the index).
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> as_record([1.0, 2.0, 3.0], n_steps=3, width=1, name="y").shape   # 1-D accepted for width 1
+    (3, 1)
+    >>> as_record(None, n_steps=2, width=2, name="u").tolist()            # no input: zeros
+    [[0.0, 0.0], [0.0, 0.0]]
     """
     if value is None:
         return np.zeros((n_steps, width))
@@ -228,6 +247,8 @@ def lpv_model(*, scheduling: Any, F0: Any, H0: Any, Q: MatrixLike, R: MatrixLike
 
     Zhang & Basseville (2014), eq. (53), generalised to several scheduling parameters.
 
+    Explained in the book: :doc:`/book/zb2014/pipeline`.
+
     Parameters
     ----------
     scheduling : array_like
@@ -238,6 +259,14 @@ def lpv_model(*, scheduling: Any, F0: Any, H0: Any, Q: MatrixLike, R: MatrixLike
         Parameter-dependent parts: one matrix (``q = 1``) or a sequence of ``q`` matrices.
     Q, R, x0, P0
         As in :func:`ltv_model`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> p = np.linspace(0.0, 1.0, 4)                       # scheduling p_k, N = 4
+    >>> m = lpv_model(scheduling=p, F0=[[0.5]], Fp=[[0.2]], H0=[[1.0]], Q=1.0, R=1.0)
+    >>> m.F[:, 0, 0].round(3).tolist()                      # F_k = 0.5 + 0.2 p_k
+    [0.5, 0.567, 0.633, 0.7]
     """
     p_sched = array(scheduling, "scheduling", finite=False)
     if p_sched.ndim == 1:
@@ -296,6 +325,15 @@ def fault_profile(model: LTVModel, *, Psi: MatrixLike | None = None,
     """Validate fault profiles against ``model`` (either may be omitted, not both).
 
     ``m`` (the dimension of ``theta``) is inferred from ``Psi`` or ``Phi``.
+
+    Explained in the book: :doc:`/book/zb2014/signature`.
+
+    Examples
+    --------
+    >>> m = ltv_model(F=[[0.9]], H=[[1.0]], Q=1.0, R=1.0, n_steps=10)
+    >>> prof = fault_profile(m, Psi=[[1.0]])        # a state fault; Phi defaults to zero
+    >>> prof.Psi.shape, prof.Phi.shape, float(abs(prof.Phi).max())
+    ((10, 1, 1), (10, 1, 1), 0.0)
     """
     N, n, p = model.n_steps, model.n, model.p
     if Psi is None and Phi is None:
@@ -367,6 +405,15 @@ def step_family(model: LTVModel, *, Psi: MatrixLike | None = None,
     has ``batch_shape == batch`` (two such arrays must agree on it; the other profile, if shared,
     applies to every realisation) and is tested on innovations ``(*batch, N, p)`` of that same
     batch shape, all realisations in one pass (:func:`fdi_lib.glr.glr_window`).
+
+    Explained in the book: :doc:`/book/zb2014/glr`.
+
+    Examples
+    --------
+    >>> m = ltv_model(F=[[0.9]], H=[[1.0]], Q=1.0, R=1.0, n_steps=6)
+    >>> fam = step_family(m, Psi=[[1.0]])
+    >>> fam.profile(onset=4).Psi[:, 0, 0].tolist()  # Psi_k(r) = Psi~_k 1{k >= r}
+    [0.0, 0.0, 0.0, 0.0, 1.0, 1.0]
     """
     batched = {name: array(value, name) for name, value in (("Psi", Psi), ("Phi", Phi))
                if value is not None and not callable(value) and np.ndim(value) > 3}
@@ -400,7 +447,16 @@ def step_family(model: LTVModel, *, Psi: MatrixLike | None = None,
 
 def impulse_family(model: LTVModel, *, Psi: MatrixLike | None = None) -> FaultFamily:
     """Impulsive faults ``Psi_k = Psi~_k delta_{r,k+1}`` of ``model``; ``Psi`` is ``Psi~_k``, default
-    ``Psi~ = I`` (Willsky-Jones, ``m = n``)."""
+    ``Psi~ = I`` (Willsky-Jones, ``m = n``).
+
+    Explained in the book: :doc:`/book/zb2014/signature`.
+
+    Examples
+    --------
+    >>> m = ltv_model(F=[[0.9]], H=[[1.0]], Q=1.0, R=1.0, n_steps=6)
+    >>> impulse_family(m).profile(onset=4).Psi[:, 0, 0].tolist()   # delta_{r,k+1}: only k = 3
+    [0.0, 0.0, 0.0, 1.0, 0.0, 0.0]
+    """
     prof = fault_profile(model, Psi=np.eye(model.n) if Psi is None else Psi)
     return FaultFamily(kind="impulse", Psi_tilde=prof.Psi, Phi_tilde=prof.Phi)
 

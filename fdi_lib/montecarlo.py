@@ -40,7 +40,9 @@ from __future__ import annotations
 import concurrent.futures
 import contextlib
 import contextvars
+import math
 import sys
+import time
 import warnings
 from typing import Any, Callable, Iterator, Sequence
 
@@ -128,8 +130,8 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
         batch-invariant; give it explicitly to reproduce a run bit for bit.
     progress : bool, optional
         Show a tqdm progress bar over chunks on standard error (once the run has lasted a
-        second); ``None`` (default): as set by :func:`progress_bars` (off unless the command
-        line turned it on).
+        second), with the time elapsed and the time left (``ETA``); ``None`` (default): as set by
+        :func:`progress_bars` (off unless the command line turned it on).
     description : str
         Label of the progress bar.
     executor : concurrent.futures.Executor, optional
@@ -212,10 +214,15 @@ def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: i
     if progress if progress is not None else _PROGRESS.get():
         from tqdm.auto import tqdm
 
-        # on standard error, and only once a run has lasted a second (no flicker on short ones)
-        bar = tqdm(total=n_tasks, desc=description, unit="chunk", file=sys.stderr, delay=1.0)
+        # on standard error, and only once a run has lasted a second (no flicker on short ones); the
+        # time left is named (tqdm's own "elapsed<remaining" is easily misread)
+        bar = tqdm(total=n_tasks, desc=description, unit="chunk", file=sys.stderr, delay=1.0,
+                   bar_format="{desc}: {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} chunks "
+                              "[{elapsed} elapsed, ETA {remaining}, {rate_fmt}]")
     try:
+        started = time.thread_time()  # CPU time: what a chunk costs a core, whatever the load
         first = _call(*task(0))  # the calling process's first chunk, also the memory probe
+        first_seconds = time.thread_time() - started
         _check_memory(first, part(0), n_trials, len(chunk_fns))
         if bar is not None:
             bar.update()
@@ -223,7 +230,8 @@ def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: i
         if executor is None:
             results = _run_chunks(task, n_tasks, first, n_workers, done)
         else:
-            results = _run_on_executor(executor, task, n_tasks, first, done)
+            results = _run_on_executor(executor, task, n_tasks, first, done,
+                                       first_seconds=first_seconds)
     finally:
         if bar is not None:
             bar.close()
@@ -281,10 +289,15 @@ def use_executor(executor: concurrent.futures.Executor | None) -> Iterator[None]
 
 #: Seconds to wait for a Dask scheduler (``dask_executor("tcp://...")``) before giving up.
 CONNECT_TIMEOUT = 5.0
+#: Seconds a run on a Dask cluster may go on with no worker before it fails (:func:`dask_executor`).
+WORKER_TIMEOUT = 60.0
+#: Seconds between two looks at a cluster's health while a run waits for its chunks.
+WATCH_INTERVAL = 0.5
 
 
 @contextlib.contextmanager
-def dask_executor(cluster: str, *, timeout: float | None = None) -> Iterator[concurrent.futures.Executor]:
+def dask_executor(cluster: str, *, timeout: float | None = None,
+                  worker_timeout: float | None = None) -> Iterator[concurrent.futures.Executor]:
     """Context manager: the :class:`concurrent.futures.Executor` of a Dask cluster, closed on exit.
 
     Parameters
@@ -295,8 +308,13 @@ def dask_executor(cluster: str, *, timeout: float | None = None) -> Iterator[con
         ``127.0.0.1`` only, without dashboard. ``"tcp://HOST:PORT"`` (or another Dask protocol):
         an existing scheduler (``dask scheduler``, with workers started by ``dask worker``; they
         need this version of :mod:`fdi_lib` importable); it is left running.
+        ``local:N`` above the CPU cores starts as many workers as cores, with the
+        :class:`~fdi_lib.errors.JobsCappedWarning` of ``jobs`` (the results do not depend on it).
     timeout : float, optional
         Seconds to wait for the scheduler; default :data:`CONNECT_TIMEOUT`.
+    worker_timeout : float, optional
+        Seconds a run may go on without any worker on the cluster (all lost, none joined) before it
+        fails; default :data:`WORKER_TIMEOUT`. The run's chunks are then cancelled.
 
     Raises
     ------
@@ -304,8 +322,10 @@ def dask_executor(cluster: str, *, timeout: float | None = None) -> Iterator[con
         ``cluster`` is not of either form, or ``dask.distributed`` is not installed (the ``cluster``
         extra of the package).
     ClusterError
-        The scheduler cannot be reached, or has no worker, within ``timeout`` (or the local cluster
-        cannot start).
+        One line naming the address: the scheduler cannot be reached (connection refused, no
+        answer within ``timeout``), the address is not a Dask scheduler's, the scheduler has no
+        worker within ``timeout``, or the local cluster cannot start. During a run (raised by
+        :func:`run_monte_carlo`): no worker for ``worker_timeout`` seconds, or the scheduler lost.
     """
     kind, sep, rest = str(cluster).partition(":")
     n_workers = 0  # of a local cluster; 0 for a scheduler's address
@@ -314,6 +334,7 @@ def dask_executor(cluster: str, *, timeout: float | None = None) -> Iterator[con
             n_workers = int(rest)
         if n_workers < 1:
             raise ModelError(f"cluster: expected local:N with N a positive integer, got {cluster!r}")
+        n_workers = effective_jobs(n_workers, name="cluster: workers of local:N:")
     elif not (sep and rest.startswith("//") and len(rest) > 2):
         raise ModelError(f"cluster: expected local:N or a scheduler address such as tcp://HOST:PORT, "
                          f"got {cluster!r}")
@@ -324,23 +345,46 @@ def dask_executor(cluster: str, *, timeout: float | None = None) -> Iterator[con
                          "'fdi_lib[cluster]'), got none") from None
 
     timeout = CONNECT_TIMEOUT if timeout is None else float(timeout)
+    worker_timeout = WORKER_TIMEOUT if worker_timeout is None else float(worker_timeout)
     stack = contextlib.ExitStack()
+    stack.enter_context(_dask_logs_quiet())
     try:
         # Ctrl-C is held while the cluster starts and while it stops: Dask cannot stop a cluster
         # interrupted half-way through its start (its exit handler then fails on the workers still
         # starting), nor finish a stop interrupted by a second Ctrl-C
         with _sigint_held():
-            executor = _start_dask(stack, distributed, cluster, n_workers, timeout)
-        yield executor
+            client = _start_dask(stack, distributed, cluster, n_workers, timeout)
+        yield _WatchedExecutor(client, cluster, worker_timeout)
     finally:
         with _sigint_held():
             stack.close()
 
 
+@contextlib.contextmanager
+def _dask_logs_quiet() -> Iterator[None]:
+    """Context manager: Dask's loggers (``distributed.*``) print nothing below CRITICAL inside. A
+    cluster's faults reach the caller as one :class:`~fdi_lib.errors.ClusterError` line; Dask's
+    own log lines on standard error (a lost scheduler's "Failed to reconnect ...") would come
+    before it, and a chunk's error reaches the caller as its exception anyway."""
+    import logging
+
+    known = logging.root.manager.loggerDict
+    names = ["distributed"] + [n for n in known if n.startswith("distributed.")]
+    loggers = [logging.getLogger(n) for n in names]
+    levels = [lg.level for lg in loggers]
+    for lg in loggers:
+        lg.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        for lg, level in zip(loggers, levels):
+            lg.setLevel(level)
+
+
 def _start_dask(stack: contextlib.ExitStack, distributed: Any, cluster: str, n_workers: int,
-                timeout: float) -> concurrent.futures.Executor:
-    """The executor of :func:`dask_executor` (``n_workers > 0``: a local cluster of that many
-    workers), its client and cluster entered in ``stack``."""
+                timeout: float) -> Any:
+    """The client of :func:`dask_executor` (``n_workers > 0``: a local cluster of that many
+    workers), with a worker, entered in ``stack`` with its cluster."""
     import logging
 
     address: Any = cluster
@@ -358,17 +402,100 @@ def _start_dask(stack: contextlib.ExitStack, distributed: Any, cluster: str, n_w
             raise ClusterError(f"cluster: cannot start a local cluster of {n_workers} workers "
                                f"({_one_line(exc)})") from None
     try:
+        if not n_workers:  # an address: Dask's handshake first, on a connection of its own
+            _handshake(address, timeout)
         client = stack.enter_context(distributed.Client(address, timeout=timeout, set_as_default=False))
     except OSError as exc:  # including TimeoutError: "Timed out trying to connect to ... after 5 s"
         raise ClusterError(f"cluster: cannot reach the Dask scheduler at {cluster} within {timeout:g} s "
                            f"({_one_line(exc)})") from None
+    except Exception as exc:  # a server of another protocol: its bytes read as a Dask frame
+        # (a length of 3 EiB: MemoryError, ValueError, a msgpack error, ...)
+        raise ClusterError(f"cluster: {cluster} is not a Dask scheduler (its answer is not Dask's "
+                           f"protocol: {_one_line(exc)[:200]})") from None
     try:  # a scheduler without workers would leave the run waiting for ever
         client.wait_for_workers(1, timeout=timeout)
     except OSError:  # TimeoutError
         raise ClusterError(f"cluster: the Dask scheduler at {cluster} has no worker (none joined within "
                            f"{timeout:g} s)") from None
-    # random task keys (pure=False): no hashing of the arguments, and every chunk is a new task
-    return client.get_executor(pure=False)
+    return client
+
+
+def _handshake(address: str, timeout: float) -> None:
+    """Open a Dask connection to ``address`` (with Dask's configured TLS, if any) and close it: an
+    :class:`OSError` if nothing answers, another exception if the answer is not Dask's.
+
+    Done before the :class:`distributed.Client` is made: a client whose construction fails on a
+    server of another protocol is left half made, and at the interpreter's exit it waits 10 s and
+    prints a traceback ("Exception ignored in Client.__del__"). This connection has an event loop
+    of its own, in a thread of its own (a notebook's thread already runs one)."""
+    import asyncio
+
+    from distributed.comm import connect
+    from distributed.security import Security
+
+    async def probe() -> None:
+        comm = await connect(address, timeout=timeout, **Security().get_connection_args("client"))
+        await comm.close()
+
+    with concurrent.futures.ThreadPoolExecutor(1) as pool:
+        pool.submit(asyncio.run, probe()).result()
+
+
+class _WatchedExecutor(concurrent.futures.Executor):
+    """The executor of a Dask client (random task keys, ``pure=False``: no hashing of the
+    arguments, every chunk a new task), with :meth:`check`, the health of the cluster, which
+    :func:`_run_on_executor` calls while it waits for chunks."""
+
+    def __init__(self, client: Any, address: str, worker_timeout: float) -> None:
+        import time
+
+        self._client = client
+        self._executor = client.get_executor(pure=False)
+        self._address = address
+        self._worker_timeout = worker_timeout
+        self._clock = time.monotonic
+        self._workerless_since: float | None = None
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any,
+               **kwargs: Any) -> concurrent.futures.Future:
+        return self._executor.submit(fn, *args, **kwargs)
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        self._executor.shutdown(wait=wait)
+
+    def workers(self) -> int:
+        """The number of workers of the cluster now."""
+        return int(self._client.scheduler_info(n_workers=0).get("n_workers", 0))
+
+    def check(self, failure: BaseException | None = None) -> None:
+        """Raise a one-line :class:`~fdi_lib.errors.ClusterError` if the scheduler is lost, or has
+        had no worker for the watchdog's time; ``failure`` (a chunk's exception) is the cluster's
+        when it is a cancellation or a lost connection, not the chunk's own error."""
+        status = self._client.status
+        if status not in ("running", "newly-created"):
+            raise ClusterError(f"cluster: lost the Dask scheduler at {self._address} during the "
+                               f"run (its client is {status})") from None
+        if failure is not None and _is_lost_connection(failure):
+            raise ClusterError(f"cluster: lost the Dask scheduler at {self._address} during the "
+                               f"run ({_one_line(failure)[:200]})") from None
+        workers = self.workers()
+        now = self._clock()
+        if workers:
+            self._workerless_since = None
+        elif self._workerless_since is None:
+            self._workerless_since = now
+        elif now - self._workerless_since >= self._worker_timeout:
+            raise ClusterError(f"cluster: the Dask scheduler at {self._address} has had no worker "
+                               f"for {self._worker_timeout:g} s; the run is cancelled")
+
+
+def _is_lost_connection(exc: BaseException) -> bool:
+    """Whether a chunk's exception says that its cluster went away (its future cancelled, the
+    connection to the scheduler closed) rather than that the chunk failed."""
+    import asyncio
+
+    return isinstance(exc, (concurrent.futures.CancelledError, asyncio.CancelledError)) or \
+        type(exc).__name__ in ("CommClosedError", "FutureCancelledError")
 
 
 @contextlib.contextmanager
@@ -398,36 +525,85 @@ def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {' '.join(str(exc).split())}"
 
 
-#: At most this many chunks are handed to an executor at a time (:func:`run_monte_carlo`'s
-#: ``executor``): enough to keep a cluster of hundreds of workers busy, few enough that a run of
-#: millions of chunks does not hold millions of pending tasks.
+#: At most this many tasks (of one chunk or more) are handed to an executor at a time
+#: (:func:`run_monte_carlo`'s ``executor``): enough to keep a cluster of hundreds of workers busy,
+#: few enough that a run of millions of chunks does not hold millions of pending tasks.
 IN_FLIGHT = 1024
 
 
+#: A task handed to a cluster lasts about this long at least: chunks that take less (the CPU
+#: time of the first chunk, which the calling process runs) go to a worker together, as one task,
+#: since each task costs the scheduler milliseconds (``benchmarks/bench_cluster.py`` measures it).
+TASK_SECONDS = 0.5
+
+
+def _batch_size(first_seconds: float | None, n_left: int, workers: int | None) -> int:
+    """Chunks per task on an executor of ``workers`` workers (``None``: unknown, one chunk per
+    task), for ``n_left`` chunks of about ``first_seconds`` each: enough to last
+    :data:`TASK_SECONDS`, few enough that every worker gets at least four tasks (no worker idles
+    long at the end of the run)."""
+    if not workers or not first_seconds or first_seconds <= 0:
+        return 1
+    return max(1, min(math.ceil(TASK_SECONDS / first_seconds), n_left // (4 * workers)))
+
+
+def _call_many(calls: Sequence[tuple[ChunkFn, np.random.SeedSequence, int, int]]
+               ) -> list[dict[str, np.ndarray]]:
+    """:func:`_call` of each chunk of ``calls`` in turn (one task of several chunks)."""
+    return [_call(*c) for c in calls]
+
+
 def _run_on_executor(executor: concurrent.futures.Executor, task: Task, n_tasks: int,
-                     first: dict[str, np.ndarray], done: Callable[[], Any] | None) -> list[dict[str, np.ndarray]]:
+                     first: dict[str, np.ndarray], done: Callable[[], Any] | None, *,
+                     first_seconds: float | None = None) -> list[dict[str, np.ndarray]]:
     """Results of every task ``_call(*task(i))`` (a chunk), in order, ``first`` (task 0) computed
-    already: the others submitted to ``executor``, :data:`IN_FLIGHT` at a time, collected as they
-    finish. On an error (a chunk's, re-raised here) or an interruption, the chunks not yet
+    already (in ``first_seconds`` of CPU time): the others submitted to ``executor``, at most
+    :data:`IN_FLIGHT` at a time, collected as they finish. On an executor that tells its number of workers (a
+    ``workers()`` method, :func:`dask_executor`'s) chunks shorter than :data:`TASK_SECONDS` go
+    several to a task (:func:`_batch_size`); each chunk is the same call either way, so are the
+    results. On an error (a chunk's, re-raised here) or an interruption, the chunks not yet
     finished are cancelled (Dask stops them; a process pool, those not started) before it
-    propagates. A worker lost mid-chunk is the executor's to handle (Dask reruns its chunks elsewhere).
+    propagates. A worker lost mid-chunk is the executor's to handle (Dask reruns its chunks
+    elsewhere); an executor with a ``check`` method (:func:`dask_executor`'s) is watched every
+    :data:`WATCH_INTERVAL` seconds while no chunk finishes, and asked whether a chunk's exception
+    is the cluster's (a lost scheduler): it raises a :class:`~fdi_lib.errors.ClusterError` then.
     """
     results: dict[int, dict[str, np.ndarray]] = {0: first}
-    pending: dict[concurrent.futures.Future, int] = {}
+    pending: dict[concurrent.futures.Future, range] = {}
     given = 1  # tasks handed out: range(1, given)
+    check = getattr(executor, "check", None)  # a cluster's watchdog (see dask_executor)
+    workers = getattr(executor, "workers", None)
+    batch = _batch_size(first_seconds, n_tasks - 1, workers() if workers is not None else None)
     try:
         while given < n_tasks or pending:
             while given < n_tasks and len(pending) < IN_FLIGHT:
-                pending[executor.submit(_call, *task(given))] = given
-                given += 1
-            finished, _ = concurrent.futures.wait(pending, return_when=concurrent.futures.FIRST_COMPLETED)
+                chunks = range(given, min(given + batch, n_tasks))
+                calls = [task(i) for i in chunks]
+                future = (executor.submit(_call, *calls[0]) if len(calls) == 1
+                          else executor.submit(_call_many, calls))
+                pending[future] = chunks
+                given = chunks.stop
+            finished, _ = concurrent.futures.wait(
+                pending, timeout=None if check is None else WATCH_INTERVAL,
+                return_when=concurrent.futures.FIRST_COMPLETED)
+            if not finished and check is not None:
+                check()
             for future in finished:
-                results[pending.pop(future)] = future.result()
-                if done is not None:
-                    done()
+                try:
+                    out = future.result()
+                except Exception as exc:
+                    if check is not None:
+                        check(exc)  # the cluster's failure (one line) rather than the chunk's
+                    raise
+                chunks = pending.pop(future)
+                for i, res in zip(chunks, [out] if len(chunks) == 1 else out):
+                    results[i] = res
+                    if done is not None:
+                        done()
     except BaseException:
         for future in pending:
-            future.cancel()
+            with contextlib.suppress(Exception):  # a lost scheduler cannot cancel: none runs
+                future.cancel()
         raise
     return [results[i] for i in range(n_tasks)]
 
@@ -483,12 +659,13 @@ def _check_memory(first: dict[str, np.ndarray], sl: slice, n_trials: int, n_fns:
                                       f"{_bytes_text(per_trial)} each (measured on the first chunk)")
 
 
-def effective_jobs(jobs: int, n_tasks: int | None = None) -> int:
+def effective_jobs(jobs: int, n_tasks: int | None = None, *, name: str = "jobs:") -> int:
     """The number of processes that ``jobs`` asks for and that can run: ``min(jobs, cores, n_tasks)``.
 
     ``jobs = -1`` (any negative value) means every core; ``n_tasks`` (optional) is the number of
     chunks of work. A positive request above that issues a :class:`~fdi_lib.errors.JobsCappedWarning`
-    (results do not depend on the number of processes, only the time does).
+    (results do not depend on the number of processes, only the time does), its message starting
+    with ``name``.
     """
     if isinstance(jobs, (bool, np.bool_)) or not isinstance(jobs, (int, np.integer)) or jobs == 0:
         raise ModelError(f"jobs: expected a non-zero integer (-1 = all cores), got {jobs!r}")
@@ -501,8 +678,8 @@ def effective_jobs(jobs: int, n_tasks: int | None = None) -> int:
         why = f"{cores} CPU core{'s' * (cores > 1)}"
         if n_tasks is not None and n_tasks < cores:
             why = f"{n_tasks} chunk{'s' * (n_tasks > 1)} of work"
-        warnings.warn(JobsCappedWarning(f"jobs: {jobs} requested, {used} used ({why}); the results "
-                                        f"do not depend on it"), stacklevel=3)
+        warnings.warn(JobsCappedWarning(f"{name} {jobs} requested, {used} used ({why}); the "
+                                        f"results do not depend on it"), stacklevel=3)
     return used
 
 

@@ -126,6 +126,8 @@ def _series(arr: Any, N: int, width: int, name: str) -> np.ndarray:
 def nonparametric_signature(model: LTVModel, gains: KalmanGains, E: Any, f: Any) -> np.ndarray:
     """``zeta_k`` of eq. (15): ``zeta_{k+1} = F_k (I - K_k H_k) zeta_k + E_k f_k``, ``zeta_0 = 0``.
 
+    Explained in the book: :doc:`/book/bz/parametric-nonparametric`.
+
     Parameters
     ----------
     model : LTVModel
@@ -141,6 +143,16 @@ def nonparametric_signature(model: LTVModel, gains: KalmanGains, E: Any, f: Any)
     numpy.ndarray
         ``zeta_k`` for ``k = 0 .. N``, shape ``(*batch, N+1, n)``. It depends on the unknown
         ``f``: an FDI algorithm cannot compute it (only the book does, to check eq. 25).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> from fdi_lib.filters import kalman_gains
+    >>> m = ltv_model(F=[[0.5]], H=[[1.0]], Q=1.0, R=1.0, n_steps=6)
+    >>> zeta = nonparametric_signature(m, kalman_gains(m), [[1.0]], np.ones((6, 1)))  # f_k = 1
+    >>> zeta.shape, zeta[:4, 0].round(4).tolist()   # zeta_0 = 0, zeta_1 = E_0 f_0
+    ((7, 1), [0.0, 1.0, 1.2353, 1.2897])
     """
     _check_gains(model, gains)
     Es = as_unknown_input_matrix(model, E)
@@ -154,6 +166,8 @@ def nonparametric_signature(model: LTVModel, gains: KalmanGains, E: Any, f: Any)
 
 def drift_signature(model: LTVModel, gains: KalmanGains, Gamma: np.ndarray, theta_path: Any) -> np.ndarray:
     """``delta_k`` of eq. (23): ``delta_{k+1} = A_k delta_k - Gamma_{k+1} (theta_{k+1} - theta_k)``.
+
+    Explained in the book: :doc:`/book/bz/parametric-nonparametric`.
 
     Parameters
     ----------
@@ -171,6 +185,18 @@ def drift_signature(model: LTVModel, gains: KalmanGains, Gamma: np.ndarray, thet
     numpy.ndarray
         ``delta_k`` for ``k = 0 .. N-1``, shape ``(*batch, N, n)``; bounded by a multiple of
         ``max |e_k|`` (eq. 21).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model, fault_profile
+    >>> from fdi_lib.filters import kalman_gains
+    >>> from fdi_lib.signatures import fault_signature
+    >>> m = ltv_model(F=[[0.5]], H=[[1.0]], Q=1.0, R=1.0, n_steps=6)
+    >>> g = kalman_gains(m)
+    >>> Gamma = fault_signature(m, g, fault_profile(m, Psi=[[1.0]])).Gamma
+    >>> float(abs(drift_signature(m, g, Gamma, np.ones((6, 1)))).max())   # constant theta: no drift
+    0.0
     """
     _check_gains(model, gains)
     N, n = model.n_steps, model.n
@@ -242,6 +268,8 @@ def kitanidis_lag_covariance(model: LTVModel, kgains: KitanidisGains, lag: int =
     zero for the Kalman filter (``D = 0``) but not for the Kitanidis filter: the paper's
     Prop. 2 (whiteness) does not hold for the innovation (27).
 
+    Explained in the book: :doc:`/book/bz/parametric-nonparametric`.
+
     Parameters
     ----------
     model : LTVModel
@@ -255,6 +283,15 @@ def kitanidis_lag_covariance(model: LTVModel, kgains: KitanidisGains, lag: int =
     -------
     numpy.ndarray
         ``(N - lag, p, p)``, entry ``k`` is ``Cov(eps_{k+lag}, eps_k)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> from fdi_lib.kitanidis import kitanidis_gains
+    >>> m = ltv_model(F=0.5 * np.eye(2), H=np.eye(2), Q=np.eye(2), R=np.eye(2), n_steps=6)
+    >>> kitanidis_lag_covariance(m, kitanidis_gains(m, [[1.0], [0.0]]), lag=1).shape   # k = 0 .. N-2
+    (5, 2, 2)
     """
     if not isinstance(lag, (int, np.integer)) or not 1 <= lag < model.n_steps:
         raise ModelError(f"lag: expected an integer in [1, {model.n_steps - 1}], got {lag!r}")
@@ -282,6 +319,20 @@ def rejection_projection(model: LTVModel, kgains: KitanidisGains) -> np.ndarray:
     scipy's ``null_space`` (an SVD) gives the orthonormal complement of the whitened
     ``Sigma_k^{-1/2} H_k E_{k-1}``; ``model`` is the fault-free model and ``kgains`` its
     :func:`fdi_lib.kitanidis.kitanidis_gains`.
+
+    Explained in the book: :doc:`/book/bz/parametric-nonparametric`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> from fdi_lib.kitanidis import kitanidis_gains
+    >>> m = ltv_model(F=0.5 * np.eye(2), H=np.eye(2), Q=np.eye(2), R=np.eye(2), n_steps=6)
+    >>> E = np.array([[1.0], [0.0]])
+    >>> kg = kitanidis_gains(m, E)
+    >>> T = rejection_projection(m, kg)
+    >>> T.shape, float(abs(T[3] @ m.H[3] @ E).max()), (T[3] @ kg.Sigma[3] @ T[3].T).round(6).tolist()
+    ((6, 1, 2), 0.0, [[1.0]])
     """
     N, p = model.n_steps, model.p
     Es = kgains.E
@@ -351,6 +402,8 @@ def energy_statistic(residuals: Any, Sigma_chol: np.ndarray, window: int) -> np.
     ``w p`` degrees of freedom (:func:`energy_threshold`): the simple test of Section 3.3
     for an arbitrary signal ``f``.
 
+    Explained in the book: :doc:`/book/bz/parametric-nonparametric`.
+
     Parameters
     ----------
     residuals : array_like
@@ -368,6 +421,12 @@ def energy_statistic(residuals: Any, Sigma_chol: np.ndarray, window: int) -> np.
     -----
     Each window is summed directly (a sliding window view), not as a difference of running
     totals, so one huge residual (a glitch) only affects the ``w`` windows that contain it.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> energy_statistic(np.ones((5, 1)), np.ones((5, 1, 1)), 3).tolist()   # NaN until w samples
+    [nan, nan, 3.0, 3.0, 3.0]
     """
     L = array(Sigma_chol, "Sigma_chol", ndim=3)
     N, p = L.shape[:2]
@@ -392,6 +451,13 @@ def energy_threshold(window: int, p: int, alpha: float) -> float:
     """``chi2.ppf(1 - alpha, w p)``: per-sample false-alarm probability ``alpha`` of the energy test.
 
     ``window`` is ``w`` and ``p`` the residual dimension (both integers >= 1).
+
+    Explained in the book: :doc:`/book/bz/parametric-nonparametric`.
+
+    Examples
+    --------
+    >>> round(energy_threshold(10, 2, 0.01), 2)     # chi-square(20) quantile 0.99
+    37.57
     """
     window = integer(window, "window", low=1)
     p = integer(p, "p", low=1)
@@ -403,6 +469,14 @@ def first_alarm_after(statistic: np.ndarray, threshold: float, start: int = 0) -
     """:func:`fdi_lib.glr.first_alarm` of ``statistic`` above ``threshold`` from ``start`` (``-1`` if none).
 
     Re-exported for the reproductions.
+
+    Explained in the book: :doc:`/book/bz/parametric-nonparametric`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> int(first_alarm_after(np.array([0.0, 5.0, 1.0, 7.0]), 4.0, start=2))   # k = 1 is before start
+    3
     """
     return first_alarm(statistic, threshold, start)
 

@@ -46,6 +46,8 @@ class RLSGains:
 def rls_gains(regressor: Any, Sigma: Any, *, lam: float, P0: Any = None) -> RLSGains:
     """Gain and covariance recursions of the RLS with forgetting factor.
 
+    Explained in the book: :doc:`/book/bz/parametric-nonparametric`.
+
     Parameters
     ----------
     regressor : array_like
@@ -56,6 +58,13 @@ def rls_gains(regressor: Any, Sigma: Any, *, lam: float, P0: Any = None) -> RLSG
         Forgetting factor, ``0 < lam <= 1`` (``1``: ordinary RLS, no forgetting).
     P0 : array_like, optional
         ``(m, m)``, default identity (the paper's choice).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> g = rls_gains(np.ones((100, 1, 1)), np.ones((100, 1, 1)), lam=0.9)
+    >>> round(float(g.P[-1, 0, 0]), 4)                     # steady state 1 - lambda
+    0.1
     """
     M = array(regressor, "regressor")
     S_all = array(Sigma, "Sigma")

@@ -121,6 +121,21 @@ def willsky_jones(model: LTVModel, gains: KalmanGains, onset: int) -> WillskyJon
     all matrices vanish before ``r``. ``alpha`` obeys ``alpha_{k+1} = F_k alpha_k`` and
     therefore diverges when ``F_k`` is unstable, although ``rho_k(r) = H_k Gamma_k(r)``
     stays bounded in exact arithmetic (Appendix A.3).
+
+    Explained in the book: :doc:`/book/zb2014/signature`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> from fdi_lib.filters import kalman_gains
+    >>> m = ltv_model(F=[[1.1, 0.3], [0.0, 0.7]], H=[[1.0, 0.5]], Q=0.1 * np.eye(2), R=0.1, n_steps=30)
+    >>> g = kalman_gains(m)
+    >>> wj = willsky_jones(m, g, onset=10)
+    >>> bool(np.allclose(wj.rho, m.H @ revisited_gamma(m, g, onset=10)[:-1]))  # rho_k = H_k Gamma_k
+    True
+    >>> round(float(np.abs(wj.alpha).max()), 1)        # the state effect grows (F is unstable)
+    6.7
     """
     _check_gains(model, gains)
     N, n, p = model.n_steps, model.n, model.p
@@ -145,6 +160,18 @@ def revisited_gamma(model: LTVModel, gains: KalmanGains, onset: int) -> np.ndarr
     For ``model`` and its Kalman ``gains``, ``onset`` = ``r``.
     Returns ``gamma_k(r)`` for ``k = 0 .. N``, shape ``(N+1, n, n)`` (zero before ``r``);
     it equals ``Gamma_k`` of eq. (12) for ``Psi_k = delta_{r,k+1} I``.
+
+    Explained in the book: :doc:`/book/zb2014/signature`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> from fdi_lib.filters import kalman_gains
+    >>> m = ltv_model(F=[[0.9]], H=[[1.0]], Q=0.1, R=0.1, n_steps=30)
+    >>> G = revisited_gamma(m, kalman_gains(m), onset=10)
+    >>> G.shape, float(abs(G[:10]).max())            # zero before the jump
+    ((31, 1, 1), 0.0)
     """
     _check_gains(model, gains)
     N, n = model.n_steps, model.n

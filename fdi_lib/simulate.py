@@ -63,6 +63,15 @@ def covariance_sqrt(cov: np.ndarray) -> np.ndarray:
     """A square root ``S`` with ``S S^T = cov`` for symmetric PSD matrices ``cov`` (batched, via ``eigh``).
 
     ``eigh`` rather than Cholesky so that singular PSD covariances (e.g. rank-one ``Q``) work.
+
+    Explained in the book: :doc:`/book/zb2014/signature`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> S = covariance_sqrt(np.array([[4.0, 0.0], [0.0, 0.0]]))   # singular PSD: no Cholesky
+    >>> (S @ S.T).round(12).tolist()
+    [[4.0, 0.0], [0.0, 0.0]]
     """
     eig, vec = np.linalg.eigh(cov)
     return vec * np.sqrt(np.clip(eig, 0.0, None))[..., None, :]
@@ -87,7 +96,20 @@ class NoiseRoots:
 
 
 def noise_roots(model: LTVModel) -> NoiseRoots:
-    """The covariance roots :func:`draw_noise` uses, to compute once for many draws from ``model``."""
+    """The covariance roots :func:`draw_noise` uses, to compute once for many draws from ``model``.
+
+    Explained in the book: :doc:`/book/zb2014/signature`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> m = ltv_model(F=[[0.5]], H=[[1.0]], Q=4.0, R=1.0, n_steps=3)
+    >>> roots = noise_roots(m)                       # computed once, reused by every draw
+    >>> n = draw_noise(m, np.random.default_rng(0), size=2, roots=roots)
+    >>> float(roots.Q[0, 0, 0]), n.w.shape
+    (2.0, (2, 3, 1))
+    """
     N = model.n_steps
 
     def root(cov: np.ndarray, dim: int) -> np.ndarray:
@@ -101,6 +123,8 @@ def draw_noise(model: LTVModel, rng: np.random.Generator, size: int | None = Non
                roots: NoiseRoots | None = None) -> Noise:
     """Draw ``X_0 ~ N(x0, P0)``, ``W_k ~ N(0, Q_k)``, ``V_k ~ N(0, R_k)``.
 
+    Explained in the book: :doc:`/book/zb2014/signature`.
+
     Parameters
     ----------
     model : LTVModel
@@ -111,6 +135,15 @@ def draw_noise(model: LTVModel, rng: np.random.Generator, size: int | None = Non
     roots : NoiseRoots, optional
         ``noise_roots(model)``, when drawing many times from the same model (the three ``eigh``
         are then done once); the draws are the same.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> m = ltv_model(F=[[0.5]], H=[[1.0]], Q=4.0, R=1.0, n_steps=20000)
+    >>> n = draw_noise(m, np.random.default_rng(0))
+    >>> round(float(n.w.std()), 1), round(float(n.v.std()), 1)    # sqrt(Q), sqrt(R)
+    (2.0, 1.0)
     """
     if not isinstance(rng, np.random.Generator):
         raise ModelError(f"rng: expected a numpy.random.Generator, got {type(rng).__name__}")
@@ -130,6 +163,8 @@ def noise_from_standard(model: LTVModel, z0: np.ndarray, zw: np.ndarray, zv: np.
     :func:`noise_roots`): draws made elsewhere (e.g. one generator per realisation, each drawing
     ``z0``, ``zw``, ``zv`` in this order, as :func:`draw_noise` does) are mapped at once.
 
+    Explained in the book: :doc:`/book/zb2014/signature`.
+
     Parameters
     ----------
     model : LTVModel
@@ -145,6 +180,15 @@ def noise_from_standard(model: LTVModel, z0: np.ndarray, zw: np.ndarray, zv: np.
     Returns
     -------
     Noise
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> m = ltv_model(F=[[0.5]], H=[[1.0]], Q=4.0, R=1.0, n_steps=3)
+    >>> n = noise_from_standard(m, np.zeros(1), np.ones((3, 1)), np.ones((3, 1)))
+    >>> n.w[:, 0].tolist(), n.v[:, 0].tolist()       # W_k = S_Q zw_k with S_Q = 2
+    ([2.0, 2.0, 2.0], [1.0, 1.0, 1.0])
     """
     if roots is None:
         roots = noise_roots(model)
@@ -161,6 +205,15 @@ def pi_controller(kp: float, ki: float, setpoint: float = 0.0) -> Callable[[int,
     Returns a fresh stateful callback ``u_k = controller(k, y_k)`` for :func:`simulate`
     (single-output, single-input; works element-wise on a batch of realisations).
     Zhang & Basseville (2014), Section 6.1: ``kp = 0.209``, ``ki = 0.0011``, setpoint 1.
+
+    Explained in the book: :doc:`/book/zb2014/signature`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> c = pi_controller(kp=0.5, ki=0.1, setpoint=1.0)
+    >>> c(0, np.array([0.0])).tolist(), c(1, np.array([0.0])).tolist()   # the integral builds up
+    ([0.5], [0.6])
     """
     state: dict[str, Any] = {"integral": None}
 

@@ -73,7 +73,18 @@ COV_RTOL = 1e-9
 
 
 def check_finite(arr: np.ndarray, name: str) -> None:
-    """Raise :class:`NonFiniteError` naming ``name`` and the first non-finite index of ``arr``."""
+    """Raise :class:`NonFiniteError` naming ``name`` and the first non-finite index of ``arr``.
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> check_finite(np.array([1.0, np.inf]), "y")
+    Traceback (most recent call last):
+        ...
+    fdi_lib.errors.NonFiniteError: y: expected finite values, got inf at index (1,)
+    """
     arr = np.asarray(arr)
     if arr.dtype.kind not in "fc":
         return
@@ -87,7 +98,19 @@ def check_finite(arr: np.ndarray, name: str) -> None:
 
 
 def array(value: Any, name: str, *, ndim: int | None = None, finite: bool = True) -> np.ndarray:
-    """``value`` as a float array (typed errors for objects, strings, wrong ``ndim`` or non-finite)."""
+    """``value`` as a float array (typed errors for objects, strings, wrong ``ndim`` or non-finite).
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> array([1, 2], "u").dtype
+    dtype('float64')
+    >>> array([[1.0, 2.0]], "u", ndim=1)
+    Traceback (most recent call last):
+        ...
+    fdi_lib.errors.ShapeError: u: expected a 1-d array, got shape (1, 2)
+    """
     if value is None or np.iscomplexobj(value):
         raise ShapeError(f"{name}: expected a real numeric array, got {type(value).__name__}")
     try:
@@ -105,6 +128,14 @@ def missing_samples(arr: np.ndarray, name: str) -> np.ndarray:
     """Missing samples of a measurement-like array ``(..., N, p)``: rows with a NaN.
 
     Returns a boolean array ``(..., N)``; raises :class:`NonFiniteError` for an infinite value.
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> missing_samples(np.array([[1.0, 2.0], [np.nan, 0.0]]), "y").tolist()   # a NaN in a row
+    [False, True]
     """
     inf = np.isinf(arr)
     if inf.any():
@@ -118,6 +149,17 @@ def missing_pattern(value: Any, n_steps: int, name: str = "missing") -> np.ndarr
     """A missing-sample pattern: booleans ``(n_steps,)``, ``True`` where the sample is missing.
 
     ``None`` means fully observed. Returns a read-only boolean array.
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> missing_pattern(None, 3).tolist()
+    [False, False, False]
+    >>> missing_pattern([1, 3], 4)                     # indices are not a pattern
+    Traceback (most recent call last):
+        ...
+    fdi_lib.errors.ModelError: missing: expected booleans (True: missing), got dtype int64
     """
     if value is None:
         out = np.zeros(n_steps, dtype=bool)
@@ -137,6 +179,18 @@ def common_pattern(missing: np.ndarray, name: str) -> np.ndarray:
 
     Gains depend on the missing samples, so realisations that miss different samples cannot share
     them: :class:`NonFiniteError` naming the first realisation that differs.
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> common_pattern(np.array([[False, True], [False, True]]), "y").tolist()
+    [False, True]
+    >>> common_pattern(np.array([[False, True], [False, False]]), "y")
+    Traceback (most recent call last):
+        ...
+    fdi_lib.errors.NonFiniteError: y: expected the same missing samples in every realisation ...
     """
     flat = missing.reshape(-1, missing.shape[-1])
     if flat.shape[0] == 0:
@@ -153,7 +207,18 @@ def common_pattern(missing: np.ndarray, name: str) -> np.ndarray:
 
 
 def gains_missing(gains: Any) -> np.ndarray:
-    """The missing samples ``(N,)`` the filter ``gains`` were computed for (all ``False``: none)."""
+    """The missing samples ``(N,)`` the filter ``gains`` were computed for (all ``False``: none).
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> from fdi_lib.models import ltv_model
+    >>> from fdi_lib.filters import kalman_gains
+    >>> m = ltv_model(F=[[0.5]], H=[[1.0]], Q=1.0, R=1.0, n_steps=3)
+    >>> gains_missing(kalman_gains(m, missing=[False, True, False])).tolist()
+    [False, True, False]
+    """
     miss = getattr(gains, "missing", None)
     return np.zeros(np.shape(gains.Sigma)[0], dtype=bool) if miss is None else miss
 
@@ -164,6 +229,19 @@ def check_missing_known(missing: np.ndarray, gains: Any, name: str) -> None:
     A filter skips a sample only where its gains say so (``K_k = 0``, ``P_{k|k} = P_k``): a sample
     missing in the data but not in the gains would leave the gains, the innovation covariances and
     the fault signatures those of an update that did not happen (a biased fault estimate).
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> from fdi_lib.filters import kalman_gains
+    >>> m = ltv_model(F=[[0.5]], H=[[1.0]], Q=1.0, R=1.0, n_steps=3)
+    >>> check_missing_known(np.array([False, True, False]), kalman_gains(m), "y")
+    Traceback (most recent call last):
+        ...
+    fdi_lib.errors.NonFiniteError: y: a sample missing (NaN) at index (1,) is observed in the gains: ...
     """
     unknown = missing & ~gains_missing(gains)
     if unknown.any():
@@ -180,6 +258,20 @@ def check_skipped(missing: np.ndarray, gains: Any, name: str) -> None:
     ``missing`` ``(..., N)`` marks the NaN samples of ``name``. A filter run with these gains
     returns NaN there: a finite value comes from another filter, whose innovation covariances and
     fault signatures are not those of ``gains``.
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> from fdi_lib.filters import kalman_gains
+    >>> m = ltv_model(F=[[0.5]], H=[[1.0]], Q=1.0, R=1.0, n_steps=3)
+    >>> g = kalman_gains(m, missing=[False, True, False])
+    >>> check_skipped(np.array([False, False, False]), g, "innovations")
+    Traceback (most recent call last):
+        ...
+    fdi_lib.errors.ModelError: innovations: expected NaN at index (1,), a sample the gains skip ...
     """
     skipped = gains_missing(gains)
     if skipped.any():
@@ -195,6 +287,15 @@ def measurements(value: Any, *, n_steps: int, width: int, name: str) -> tuple[np
 
     A 1-D array of length ``n_steps`` is accepted when ``width == 1``. Returns the array and
     the boolean mask ``(*batch, n_steps)`` of missing samples.
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> y, missing = measurements([1.0, np.nan, 3.0], n_steps=3, width=1, name="y")
+    >>> y.shape, missing.tolist()                      # NaN: a missing sample, not an error
+    ((3, 1), [False, True, False])
     """
     arr = array(value, name, finite=False)
     if arr.ndim == 1 and width == 1:
@@ -233,7 +334,19 @@ def integer(value: Any, name: str, *, low: int | None = None, high: int | None =
 
 def real(value: Any, name: str, *, low: float | None = None, high: float | None = None,
          low_open: bool = False, high_open: bool = False, what: str = "a number") -> float:
-    """A finite real number in the given (closed or open) interval; ``what`` names it in errors."""
+    """A finite real number in the given (closed or open) interval; ``what`` names it in errors.
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> real(2.5, "threshold", low=0.0)
+    2.5
+    >>> real(-1, "threshold", low=0.0)
+    Traceback (most recent call last):
+        ...
+    fdi_lib.errors.ModelError: threshold: expected a number in [0, inf], got -1
+    """
     if isinstance(value, np.ndarray) and value.ndim == 0:   # a 0-d array counts as its scalar
         value = value[()]
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
@@ -252,12 +365,36 @@ def real(value: Any, name: str, *, low: float | None = None, high: float | None 
 
 
 def probability(value: Any, name: str) -> float:
-    """A probability in the open interval ``(0, 1)``."""
+    """A probability in the open interval ``(0, 1)``.
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> probability(0.05, "alpha")
+    0.05
+    >>> probability(1.0, "alpha")
+    Traceback (most recent call last):
+        ...
+    fdi_lib.errors.ModelError: alpha: expected a probability in (0, 1), got 1.0
+    """
     return real(value, name, low=0.0, high=1.0, low_open=True, high_open=True, what="a probability")
 
 
 def seed(value: Any, name: str = "seed") -> int:
-    """A root seed for :class:`numpy.random.SeedSequence`: a non-negative integer."""
+    """A root seed for :class:`numpy.random.SeedSequence`: a non-negative integer.
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> seed(2014)
+    2014
+    >>> seed(-3)
+    Traceback (most recent call last):
+        ...
+    fdi_lib.errors.ModelError: seed: expected a non-negative integer, got -3
+    """
     return integer(value, name, low=0)
 
 
@@ -265,6 +402,16 @@ def covariance(arr: np.ndarray, name: str, *, definite: bool) -> None:
     """Check symmetric positive (semi-)definite matrices ``(N, m, m)``; the error names the step.
 
     A broadcast constant (stride 0 on the first axis) is checked once.
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> covariance(np.array([[[1.0, 2.0], [0.0, 1.0]]]), "Q", definite=False)
+    Traceback (most recent call last):
+        ...
+    fdi_lib.errors.CovarianceError: Q: expected a symmetric matrix, got asymmetry 2 at step 0
     """
     arr = np.asarray(arr, dtype=float)
     check_finite(arr, name)
@@ -293,6 +440,19 @@ def check_gains(model: Any, gains: Any, name: str = "gains") -> None:
     """Check that filter ``gains`` (``K`` ``(N, n, p)``, ``Sigma_chol`` ``(N, p, p)``) belong to ``model``.
 
     Gains of a longer or differently shaped model are an error, never silently truncated.
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> from fdi_lib.models import ltv_model
+    >>> from fdi_lib.filters import kalman_gains
+    >>> short = ltv_model(F=[[0.5]], H=[[1.0]], Q=1.0, R=1.0, n_steps=3)
+    >>> long = ltv_model(F=[[0.5]], H=[[1.0]], Q=1.0, R=1.0, n_steps=5)
+    >>> check_gains(long, kalman_gains(short))
+    Traceback (most recent call last):
+        ...
+    fdi_lib.errors.ShapeError: gains: expected gains with K of shape (5, 1, 1) for this model, got ...
     """
     shape = (model.n_steps, model.n, model.p)
     if np.shape(getattr(gains, "K", None)) != shape or np.shape(
@@ -302,7 +462,21 @@ def check_gains(model: Any, gains: Any, name: str = "gains") -> None:
 
 
 def initial_state(model: Any, x0: Any, name: str = "x0") -> np.ndarray:
-    """``x0`` (default ``model.x0``) checked to be a finite vector of shape ``(n,)`` (no broadcasting)."""
+    """``x0`` (default ``model.x0``) checked to be a finite vector of shape ``(n,)`` (no broadcasting).
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> from fdi_lib.models import ltv_model
+    >>> m = ltv_model(F=[[0.5]], H=[[1.0]], Q=1.0, R=1.0, n_steps=3)
+    >>> initial_state(m, None).tolist()              # the model's x0
+    [0.0]
+    >>> initial_state(m, [1.0, 2.0])
+    Traceback (most recent call last):
+        ...
+    fdi_lib.errors.ShapeError: x0: expected shape (1,), got (2,)
+    """
     if x0 is None:
         return model.x0
     x = array(x0, name, finite=False)
@@ -317,6 +491,18 @@ def cholesky(S: np.ndarray, *, step: int, what: str, name: str = "model") -> tup
 
     A non-finite ``S`` means the recursion ``what`` diverged (:class:`NonFiniteError`); a matrix
     that is not positive definite raises :class:`CovarianceError`.
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> cholesky(np.array([[4.0]]), step=0, what="Riccati")[0].tolist()
+    [[2.0]]
+    >>> cholesky(np.array([[1.0, 0.0], [0.0, -1.0]]), step=7, what="Riccati")
+    Traceback (most recent call last):
+        ...
+    fdi_lib.errors.CovarianceError: model: Riccati lost positive definiteness at step 7 ...
     """
     if not np.all(np.isfinite(S)):
         raise NonFiniteError(f"{name}: {what} diverged (non-finite values at step {step})")

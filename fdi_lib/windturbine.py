@@ -64,7 +64,8 @@ from fdi_lib.validation import integer, real
 __all__ = ["SENSORS", "CANDIDATES", "SUBSYSTEMS", "METHODS", "PlantConstants", "plant_constants",
            "Records", "records", "Calibration", "calibrate", "Design", "design", "Segments", "segments",
            "MethodOutcome", "min_detectable", "run_zb", "run_zhang2021", "run_bz", "run_svo_bank", "run_methods",
-           "expected_candidates"]
+           "expected_candidates", "alarm_onsets", "score_alarms", "delays", "stream_alarms",
+           "stream_counts"]
 
 #: Measured outputs, in the order of :attr:`Records.y` (pitch in deg, speeds in rad/s, torque in kNm).
 SENSORS = ("beta1_m1", "beta1_m2", "beta2_m1", "beta2_m2", "beta3_m1", "beta3_m2",
@@ -545,18 +546,88 @@ def _split(d: Design, y: np.ndarray, u: np.ndarray, s: Subsystem) -> tuple[np.nd
     return y[..., list(s.outputs)], u[..., list(s.inputs)]
 
 
+def alarm_onsets(over: np.ndarray, start: int) -> np.ndarray:
+    """Where a detector raises an alarm: the samples ``k >= start`` at which ``over`` (statistic
+    above its threshold, ``(..., N)`` bool) turns true (a value already true at ``start`` is an
+    alarm there).
+
+    The detector re-arms when ``over`` turns false again: a statistic that stays above its threshold
+    is one alarm, never an alarm at every sample, nor a new alarm when a fault begins under it.
+
+    Examples
+    --------
+    >>> alarm_onsets(np.array([1, 1, 0, 1, 1, 0, 0, 1], dtype=bool), 1).nonzero()[0]
+    array([1, 3, 7])
+    """
+    over = np.asarray(over, dtype=bool)
+    start = integer(start, "start", low=0, high=over.shape[-1])
+    edge = over.copy()
+    edge[..., 1:] &= ~over[..., :-1]
+    if start < over.shape[-1]:
+        edge[..., start] = over[..., start]
+    edge[..., :start] = False
+    return edge
+
+
+def score_alarms(alarms: np.ndarray, onset: int, start: int
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The benchmark's reading of an alarm sequence ``(..., N)`` (bool, :func:`alarm_onsets`)
+    around a fault that begins at sample ``onset``.
+
+    Returns ``(count, false_alarm, detect)``: the number of alarms in the fault-free stretch
+    ``[start, onset)`` (each one a false alarm, never a detection), whether there is any, and the
+    first alarm at or after ``onset`` (``-1``: none), the detection. An alarm raised before the
+    onset whose statistic stays above its threshold past the onset is not a detection
+    (:func:`alarm_onsets`).
+
+    Examples
+    --------
+    >>> a = np.zeros(10, dtype=bool); a[[2, 7]] = True
+    >>> score_alarms(a, onset=5, start=1)
+    (array(1), array(True), array(7))
+    """
+    alarms = np.asarray(alarms, dtype=bool)
+    onset = integer(onset, "onset", low=0, high=alarms.shape[-1])
+    start = integer(start, "start", low=0, high=onset)
+    count = alarms[..., start:onset].sum(axis=-1)
+    after = np.concatenate([alarms[..., onset:], np.ones((*alarms.shape[:-1], 1), dtype=bool)],
+                           axis=-1)
+    first = onset + after.argmax(axis=-1)                   # the appended sample: no alarm
+    detect = np.where(first < alarms.shape[-1], first, -1)
+    return count, count > 0, detect
+
+
+def delays(steps: np.ndarray, onset: int, ts: float) -> np.ndarray:
+    """Time from a fault's start to the decision taken at sample ``steps`` (s; ``-1``: none,
+    ``nan``): ``(step - onset + 1) Ts``, so a decision at the fault's first sample takes one sample.
+
+    Examples
+    --------
+    >>> delays(np.array([500, 509, -1]), onset=500, ts=0.01)
+    array([0.01, 0.1 ,  nan])
+    """
+    steps = np.asarray(steps)
+    return np.where(steps >= 0, (steps - onset + 1) * float(ts), np.nan)
+
+
 def _combine(d: Design, stats: Sequence[np.ndarray], thresholds: Sequence[float]
-             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """False alarms, first alarm at/after the onset and the subsystem that raised it, from one
-    statistic per subsystem."""
-    pre = np.stack([first_alarm(st[..., :d.onset], h, start=d.warmup) >= 0 for st, h in zip(stats, thresholds)])
-    post = np.stack([first_alarm(st, h, start=d.onset) for st, h in zip(stats, thresholds)])
-    big = np.where(post < 0, np.iinfo(np.int64).max, post)
-    which = np.argmin(big, axis=0)
-    first = big.min(axis=0)
-    detect = np.where(first == np.iinfo(np.int64).max, -1, first)
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """False alarms, detection (:func:`score_alarms` of each subsystem's :func:`alarm_onsets`), the
+    subsystem that raised the detection and the largest statistic over its threshold after the
+    onset, from one statistic per subsystem."""
+    edges = []
+    for st, h in zip(stats, thresholds):
+        first_alarm(st, h, start=d.warmup)     # NaN after the warm-up: an error, never "no alarm"
+        edges.append(alarm_onsets(np.nan_to_num(st, nan=-np.inf) > h, d.warmup))
+    scored = [score_alarms(e, d.onset, d.warmup) for e in edges]
+    pre = np.stack([s[1] for s in scored]).any(axis=0)
+    big = np.iinfo(np.int64).max
+    post = np.stack([np.where(s[2] < 0, big, s[2]) for s in scored])
+    which = np.argmin(post, axis=0)
+    first = post.min(axis=0)
+    detect = np.where(first == big, -1, first)
     peak = np.max([np.nanmax(st[..., d.onset:], axis=-1) / h for st, h in zip(stats, thresholds)], axis=0)
-    return pre.any(axis=0), detect, np.where(detect < 0, -1, which), peak
+    return pre, detect, np.where(detect < 0, -1, which), peak
 
 
 def _innovations(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, np.ndarray]:
@@ -574,8 +645,7 @@ def run_zb(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray
     samples after the alarm, from the onset the window estimates then."""
     eps = _innovations(d, y, u) if eps is None else eps
     B = y.shape[0]
-    res = {name: glr_window(eps[name], sd.kf, sd.kf_gains, sd.family, sd.glr.window, shared=sd.glr,
-                            start=d.warmup) for name, sd in d.subs.items()}
+    res = _zb_glr(d, eps)
     names = list(d.subs)
     fa, detect, which, peak = _combine(d, [res[n].statistic for n in names], [d.subs[n].glr_threshold for n in names])
     isolated = np.zeros((B, len(CANDIDATES)), dtype=bool)
@@ -589,6 +659,12 @@ def run_zb(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray
             sd = d.subs[name]
             isolated[np.ix_(rows, sd.sub.candidates)] = _minmax(C, dd, d.settings.isolation_alpha)
     return MethodOutcome(fa, detect, which, isolated, step, peak)
+
+
+def _zb_glr(d: Design, eps: Mapping[str, np.ndarray]) -> dict[str, Any]:
+    """The windowed GLR of every subsystem's innovations (Zhang & Basseville)."""
+    return {name: glr_window(eps[name], sd.kf, sd.kf_gains, sd.family, sd.glr.window, shared=sd.glr,
+                             start=d.warmup) for name, sd in d.subs.items()}
 
 
 def _minmax(C: np.ndarray, dd: np.ndarray, alpha: float) -> np.ndarray:
@@ -639,6 +715,24 @@ def _residuals(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, tuple[np.nd
     return out
 
 
+def _lasso_test(d: Design, res: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> list[np.ndarray]:
+    """Per subsystem, ``max_j |X_j^T y| / ||X_j||`` over the last ``w`` whitened residuals
+    (Zhang 2021's detection: the Lasso of the window is not identically zero), ``nan`` before
+    ``w`` samples."""
+    w = d.settings.window
+    stats = []
+    for name, sd in d.subs.items():
+        r, S = res[name]
+        kern = S[d.warmup:d.warmup + w]                            # (w, p, m): onset at window start
+        norm = np.sqrt(np.einsum("wpm,wpm->m", kern, kern))
+        win = np.lib.stride_tricks.sliding_window_view(r, w, axis=1)    # (B, N-w+1, p, w)
+        t = np.einsum("bkpw,wpm->bkm", win, kern) / norm
+        st = np.full(r.shape[:2], np.nan)
+        st[:, w - 1:] = np.abs(t).max(axis=-1)
+        stats.append(st)
+    return stats
+
+
 def run_zhang2021(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
     """Zhang (2021): Kitanidis residuals (``tau_a`` the unknown input), detection when the Lasso
     of the last ``w`` samples is not identically zero (``max_j |X_j^T y| / ||X_j||`` above the
@@ -648,16 +742,7 @@ def run_zhang2021(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
     w = d.settings.window
     B = y.shape[0]
     res = _residuals(d, y, u)
-    stats = []
-    for name, sd in d.subs.items():
-        r, S = res[name]
-        kern = S[d.warmup:d.warmup + w]                            # (w, p, m): onset at window start
-        norm = np.sqrt(np.einsum("wpm,wpm->m", kern, kern))
-        win = np.lib.stride_tricks.sliding_window_view(r, w, axis=1)    # (B, N-w+1, p, w)
-        t = np.einsum("bkpw,wpm->bkm", win, kern) / norm
-        st = np.full((B, d.N), np.nan)
-        st[:, w - 1:] = np.abs(t).max(axis=-1)
-        stats.append(st)
+    stats = _lasso_test(d, res)
     names = list(d.subs)
     fa, detect, which, peak = _combine(d, stats, [d.subs[n].lasso_threshold for n in names])
     isolated = np.zeros((B, len(CANDIDATES)), dtype=bool)
@@ -682,20 +767,13 @@ def run_zhang2021(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
     return MethodOutcome(fa, detect, which, isolated, step, peak)
 
 
-def run_bz(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray] | None = None) -> MethodOutcome:
-    """Basseville & Zhang: parametric tests (the stiffness ``wn^2`` of each pitch actuator, a
-    data-dependent profile ``Psi_k``; the converter offset and the drive-train torque on the
-    Kitanidis residual projected away from ``tau_a``) by windowed GLR, and the non-parametric
-    energy test on the Kalman innovation of each subsystem. An energy alarm before any
-    parametric one is the decision "non-parametric fault" (Section 3.3): isolated to its
-    subsystem only."""
-    eps = _innovations(d, y, u) if eps is None else eps
-    B = y.shape[0]
+def _bz_stats(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray]
+              ) -> tuple[list[np.ndarray], list[float], list[np.ndarray], list[float]]:
+    """Basseville & Zhang's statistics and thresholds per subsystem: the parametric windowed GLRs,
+    then the energy tests."""
     w = d.settings.window
-    names = list(d.subs)
-    par_stats, par_thr, par_onset = [], [], {}
-    isolated = np.zeros((B, len(CANDIDATES)), dtype=bool)
-    glr_res = {}
+    par_stats: list[np.ndarray] = []
+    par_thr: list[float] = []
     for name, sd in d.subs.items():
         ys, us = _split(d, y, u, sd.sub)
         if sd.sub.E is None:
@@ -708,18 +786,33 @@ def run_bz(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray
             par_stats.append(st)
             par_thr.append(float(scipy.stats.chi2.ppf(1.0 - d.alpha_sample / w, 1)))
         else:
-            kpred, T = sd.bz_red
             from fdi_lib.nonparametric import reduce_residual
+
+            kpred, T = sd.bz_red
             e_kit = kalman_filter(sd.kit, ys, us, gains=kpred).innovations
             red = reduce_residual(sd.kit, sd.kit_gains, e_kit, T)
             g = glr_window(red.residuals, sd.bz_glr.model, sd.bz_glr.gains, sd.bz_glr.family, w,
                            shared=sd.bz_glr, start=d.warmup)
-            glr_res[name] = g
             par_stats.append(g.statistic)
             par_thr.append(float(scipy.stats.chi2.ppf(1.0 - d.alpha_sample / w, 1)))
+    en = [energy_statistic(eps[n], sd.kf_gains.Sigma_chol, w) for n, sd in d.subs.items()]
+    return par_stats, par_thr, en, [sd.energy_threshold for sd in d.subs.values()]
+
+
+def run_bz(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray] | None = None) -> MethodOutcome:
+    """Basseville & Zhang: parametric tests (the stiffness ``wn^2`` of each pitch actuator, a
+    data-dependent profile ``Psi_k``; the converter offset and the drive-train torque on the
+    Kitanidis residual projected away from ``tau_a``) by windowed GLR, and the non-parametric
+    energy test on the Kalman innovation of each subsystem. An energy alarm before any
+    parametric one is the decision "non-parametric fault" (Section 3.3): isolated to its
+    subsystem only."""
+    eps = _innovations(d, y, u) if eps is None else eps
+    B = y.shape[0]
+    names = list(d.subs)
+    par_stats, par_thr, en, en_thr = _bz_stats(d, y, u, eps)
+    isolated = np.zeros((B, len(CANDIDATES)), dtype=bool)
     pfa, pdet, pwhich, ppeak = _combine(d, par_stats, par_thr)
-    en = [energy_statistic(eps[n], d.subs[n].kf_gains.Sigma_chol, w) for n in names]
-    efa, edet, ewhich, epeak = _combine(d, en, [d.subs[n].energy_threshold for n in names])
+    efa, edet, ewhich, epeak = _combine(d, en, en_thr)
     big = np.iinfo(np.int64).max
     p_ = np.where(pdet < 0, big, pdet)
     e_ = np.where(edet < 0, big, edet)
@@ -734,6 +827,102 @@ def run_bz(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray
         else:
             isolated[b, list(sub.candidates)] = True            # non-parametric: the subsystem only
     return MethodOutcome(pfa | efa, detect, which, isolated, detect.copy(), np.maximum(ppeak, epeak))
+
+
+def stream_alarms(d: Design, y: np.ndarray, u: np.ndarray, start: int,
+                  methods: Sequence[str] = tuple(METHODS)) -> dict[str, Any]:
+    """Alarms of the four methods on records ``y`` ``(B, N, 11)``, ``u`` ``(B, N, 4)`` from
+    sample ``start`` on: one window of a long stream, whose first ``start`` samples overlap the
+    previous window.
+
+    The statistical tests (one per subsystem; Basseville & Zhang: a parametric and an energy
+    test per subsystem) count their alarms (:func:`alarm_onsets`) at samples ``[start, N)``;
+    their statistics restart with the window (``start`` must leave the filters their warm-up and
+    a full window before it), and whether a test was already over its threshold at ``start - 1``
+    is read on this window, so an alarm raised in the previous window is not counted again. The
+    SVO bank runs from ``start`` on, from its prior set: it re-arms at every window and counts at
+    most one alarm (an emptied set) in it.
+
+    Returns
+    -------
+    dict
+        Method key (of ``methods``) -> ``(B,)`` alarm counts, and ``"tests"`` -> method key -> the
+        number of tests summed.
+    """
+    import dataclasses
+
+    start = integer(start, "start", low=d.warmup + d.settings.window, high=d.N - 1)
+    methods = _method_keys(methods)
+    y = np.asarray(y, dtype=float)
+    u = np.asarray(u, dtype=float)
+    eps = _innovations(d, y, u) if {"zb2014", "bz"} & set(methods) else {}
+    out: dict[str, Any] = {"tests": {}}
+    for name in methods:
+        if name == "rosa2013":
+            svo = run_svo_bank(dataclasses.replace(d, warmup=start, onset=d.N), y, u)
+            out[name], out["tests"][name] = svo.false_alarm.astype(np.int64), 1
+            continue
+        if name == "zb2014":
+            zb = _zb_glr(d, eps)
+            stats = [zb[n].statistic for n in d.subs]
+            thr = [sd.glr_threshold for sd in d.subs.values()]
+        elif name == "zhang2021":
+            stats = _lasso_test(d, _residuals(d, y, u))
+            thr = [sd.lasso_threshold for sd in d.subs.values()]
+        else:
+            par, par_thr, en, en_thr = _bz_stats(d, y, u, eps)
+            stats, thr = par + en, par_thr + en_thr
+        count = np.zeros(y.shape[0], dtype=np.int64)
+        for st, h in zip(stats, thr):
+            first_alarm(st, h, start=d.warmup)     # NaN after the warm-up: an error
+            edges = alarm_onsets(np.nan_to_num(st, nan=-np.inf) > h, start - 1)
+            count += edges[:, start:].sum(axis=-1)
+        out[name], out["tests"][name] = count, len(stats)
+    return out
+
+
+def _method_keys(methods: Sequence[str]) -> tuple[str, ...]:
+    methods = tuple(methods)
+    bad = [m for m in methods if m not in METHODS]
+    if bad or not methods or len(set(methods)) != len(methods):
+        raise ModelError(f"methods: expected distinct keys of {tuple(METHODS)}, got {methods}")
+    return methods
+
+
+def stream_counts(d: Design, y: np.ndarray, u: np.ndarray, start: int, *, batch: int = 8,
+                  methods: Sequence[str] = tuple(METHODS)) -> dict[str, Any]:
+    """Alarm counts of the four methods over one long stream ``y`` ``(n, 11)``, ``u`` ``(n, 4)``, in
+    constant memory: overlapping windows of ``d.N`` samples, each scored from its sample ``start``
+    (:func:`stream_alarms` of ``methods``), so that the scored parts tile
+    ``[start, start + K (N - start))``; ``batch`` windows at a time are one batch of records (the
+    memory of one batch, whatever ``n``).
+
+    Returns
+    -------
+    dict
+        Method key -> alarm count, ``"tests"`` (see :func:`stream_alarms`), ``"samples"``: the
+        samples scored.
+    """
+    y = np.asarray(y, dtype=float)
+    u = np.asarray(u, dtype=float)
+    if y.ndim != 2 or y.shape[1] != len(SENSORS) or u.shape != (y.shape[0], len(INPUTS)):
+        raise ShapeError(f"y, u: expected (n, {len(SENSORS)}) and (n, {len(INPUTS)}), "
+                         f"got {y.shape} and {u.shape}")
+    batch = integer(batch, "batch", low=1)
+    step = d.N - start
+    n_windows = (y.shape[0] - d.N) // step + 1 if y.shape[0] >= d.N else 0
+    if n_windows < 1:
+        raise ShapeError(f"y: expected at least one window of {d.N} samples, got {y.shape[0]}")
+    methods = _method_keys(methods)
+    total: dict[str, Any] = {name: 0 for name in methods}
+    tests: dict[str, int] = {}
+    for b0 in range(0, n_windows, batch):
+        idx = (np.arange(b0, min(b0 + batch, n_windows)) * step)[:, None] + np.arange(d.N)
+        counts = stream_alarms(d, y[idx], u[idx], start, methods)
+        tests = counts.pop("tests")
+        for name, c in counts.items():
+            total[name] += int(c.sum())
+    return {**total, "tests": tests, "samples": n_windows * step}
 
 
 def _const(M: np.ndarray, T: int) -> np.ndarray:

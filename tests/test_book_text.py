@@ -58,9 +58,10 @@ def _frame(a, fig=None):
     return fig
 
 
-def test_explorable_image_has_its_caption_as_alt_text():
+def test_explorable_image_without_alt_text_has_its_caption_and_the_values_shown():
     page = explorable(_frame, {"a": (1.0, 2.0)}, caption='GLR l<sub>k</sub> for "w" &lt; 3')._repr_html_()
-    assert re.search(r'<img [^>]*alt="([^"]*)"', page).group(1) == "GLR lₖ for &quot;w&quot; &lt; 3"
+    assert re.search(r'<img [^>]*alt="([^"]*)"', page).group(1) == \
+        "GLR lₖ for &quot;w&quot; &lt; 3. Shown at a = 1."
 
 
 def test_catalogue_titles_are_written_in_maths():
@@ -71,6 +72,27 @@ def test_catalogue_titles_are_written_in_maths():
     for r in list_reproductions():
         text = re.sub(r"\$[^$]*\$", "", EXT.title_markdown(r.title))  # what is left outside maths
         assert not re.search(r"[A-Za-z]_\w", text) and not greek.search(text), (r.id, text)
+
+
+def _sphinx_build(tmp_path, builder: str, extensions: list[str], pages: dict[str, str],
+                  conf: str = "") -> tuple[Path, str]:
+    """A small Sphinx project with the book's extension, built with ``builder``: the output
+    folder and the warnings."""
+    from sphinx.application import Sphinx
+    from sphinx.util.docutils import docutils_namespace
+
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "conf.py").write_text(f"import sys\nsys.path.insert(0, {str(ROOT / '_ext')!r})\n"
+                                 f"extensions = {extensions!r}\n" + conf)
+    for name, text in pages.items():
+        (src / name).write_text(text)
+    warnings = io.StringIO()
+    with docutils_namespace():  # the directives and nodes it registers go with it
+        app = Sphinx(str(src), str(src), str(tmp_path / "out"), str(tmp_path / "doctrees"), builder,
+                     status=None, warning=warnings, freshenv=True)
+        app.build()
+    return tmp_path / "out", warnings.getvalue()
 
 
 # a 1x1 PNG
@@ -112,25 +134,13 @@ def test_references_and_alt_texts_in_a_sphinx_build(tmp_path):
 def test_table_cells_carry_their_column_header_in_html(tmp_path):
     """Docutils tables of the book (Markdown tables, list-tables) written to HTML: every body
     cell has its column's header as ``data-label``, maths as readable text (item 9)."""
-    from sphinx.application import Sphinx
-    from sphinx.util.docutils import docutils_namespace
-
-    src = tmp_path / "src"
-    src.mkdir()
-    (src / "conf.py").write_text(
-        "import sys\n"
-        f"sys.path.insert(0, {str(ROOT / '_ext')!r})\n"
-        "extensions = ['myst_parser', 'fdi_book']\n"
+    out, warnings = _sphinx_build(
+        tmp_path, "html", ["myst_parser", "fdi_book"],
+        {"index.md": "# Index\n\n| Symbol | Size of $\\theta_k$ |\n|---|---|\n"
+                     "| $X_k$ | $n$ |\n| $U_k$ | |\n"},
         "myst_enable_extensions = ['dollarmath']\n")
-    (src / "index.md").write_text(
-        "# Index\n\n| Symbol | Size of $\\theta_k$ |\n|---|---|\n| $X_k$ | $n$ |\n| $U_k$ | |\n")
-    warnings = io.StringIO()
-    with docutils_namespace():
-        app = Sphinx(str(src), str(src), str(tmp_path / "out"), str(tmp_path / "doctrees"), "html",
-                     status=None, warning=warnings, freshenv=True)
-        app.build()
-    assert not warnings.getvalue()
-    page = (tmp_path / "out" / "index.html").read_text()
+    assert not warnings
+    page = (out / "index.html").read_text()
     assert re.findall(r'<td data-label="([^"]*)"', page) == ["Symbol", "Size of θₖ"] * 2
     assert "<th" in page and not re.search(r"<th[^>]*data-label", page)
 
@@ -161,3 +171,88 @@ def test_explorable_output_becomes_a_numbered_figure():
     assert [f[-1].astext() for f in figures] == ["GLR lₖ, case 1", "GLR lₖ, case 2"]
     html = next(figures[0].findall(nodes.raw)).astext()
     assert "<figcaption>" not in html and "<figure" not in html and '<div class="fdi-explorable"' in html
+
+
+def _toc(tmp_path, parts: str) -> Path:
+    (tmp_path / "_toc.yml").write_text("format: jb-book\nroot: book/intro\nparts:\n" + parts)
+    return tmp_path
+
+
+_PARTS = ("  - caption: Start\n    chapters:\n      - file: book/running\n"
+          "  - caption: A paper\n    numbered: true\n    chapters:\n      - file: book/p/one\n"
+          "      - file: book/p/two\n")
+
+
+def test_book_map_lists_every_page_of_the_toc_and_the_numbered_ones_in_order(tmp_path):
+    block = ("book/running: how to run\nbook/p/one: the first chapter\n  {cite:p}`key`\n"
+             "book/p/two: the second\n")
+    text = EXT.book_map_markdown(_toc(tmp_path, _PARTS), block)
+    rows = [r for r in text.splitlines() if r.startswith("| ") and "doc" in r]
+    assert rows == ["| Start | {doc}`/book/running` | how to run |",
+                    "| A paper | {doc}`/book/p/one` | the first chapter {cite:p}`key` |",
+                    "|  | {doc}`/book/p/two` | the second |"]
+    assert text.endswith("1. {doc}`/book/p/one`\n2. {doc}`/book/p/two`\n")
+    (tmp_path / "book").mkdir()
+    (tmp_path / "book" / "running.md").write_text("---\nx: 1\n---\n# Running it\n")
+    unlinked = EXT.book_map_markdown(tmp_path, block, unlinked=("book/running",))
+    assert "| Start | Running it | how to run |" in unlinked   # no chapter of its own in the PDF
+
+
+@pytest.mark.parametrize("block, message", [
+    ("book/running: x\nbook/p/one: y\n", r"missing \['book/p/two'\]"),          # a chapter left out
+    ("book/running: x\nbook/p/one: y\nbook/p/two: z\nbook/p/old: w\n",
+     r"not in _toc.yml \['book/p/old'\]"),
+    ("book/running x\n", "expected 'FILE: what it holds'"),
+])
+def test_book_map_fails_when_it_and_the_toc_disagree(tmp_path, block, message):
+    from sphinx.errors import ExtensionError
+
+    with pytest.raises(ExtensionError, match=message):
+        EXT.book_map_markdown(_toc(tmp_path, _PARTS), block)
+
+
+def test_the_intro_has_a_book_map_line_for_every_page_of_the_toc():
+    intro = (ROOT / "book" / "intro.md").read_text()
+    blocks = EXT._MAP_BLOCK.findall(intro)
+    assert len(blocks) == 1
+    text = EXT.book_map_markdown(ROOT, blocks[0])
+    assert "{doc}`/book/windturbine/benchmark`" in text
+    assert "static figure at default values" not in intro
+
+
+def test_hidden_cell_toggle_is_named_by_its_text_and_citations_are_list_items(tmp_path):
+    """The fold of a hidden cell has no aria-label hiding its visible prompt; a bibliography's
+    entries are the list items of its role="list" (not the deprecated doc-biblioentry)."""
+    from types import SimpleNamespace
+
+    fake = SimpleNamespace(body=[])
+    node = {"classes": ["above-input"], "prompt_show": "Show code cell source",
+            "prompt_hide": "Hide code cell <source>"}
+    EXT._visit_hidden_cell(fake, node)
+    html = "".join(fake.body)
+    assert "aria-label" not in html
+    assert html.startswith('<details class="admonition hide above-input">')
+    assert '<p class="collapsed admonition-title">Show code cell source</p>' in html
+    assert "Hide code cell &lt;source&gt;" in html
+
+    out, _ = _sphinx_build(tmp_path, "html", ["myst_nb", "fdi_book"], {
+        "index.rst": "Index\n=====\n\nSee [A]_ and [B]_.\n\n.. [A] One.\n.. [B] Two.\n"})
+    page = (out / "index.html").read_text()
+    assert page.count('role="list"') == 1 and page.count('role="listitem"') == 2
+    assert "doc-biblioentry" not in page
+
+
+def test_pages_link_the_pdf_of_an_earlier_make_pdf(tmp_path):
+    from types import SimpleNamespace
+
+    html = tmp_path / "_build" / "html"
+    html.mkdir(parents=True)
+    app = SimpleNamespace(outdir=str(html), builder=SimpleNamespace(format="html"))
+    EXT._pdf_script(app, None)
+    assert "const pdf = null, a4 = null;" in (html / "_static" / EXT.PDF_SCRIPT).read_text()
+    (tmp_path / "_build" / "pdf").mkdir()
+    (tmp_path / "_build" / "pdf" / EXT.PDF_NAME).write_bytes(b"%PDF-1.5 edition")
+    EXT._pdf_script(app, None)
+    script = (html / "_static" / EXT.PDF_SCRIPT).read_text()
+    assert f'const pdf = "{EXT.PDF_NAME}", a4 = null;' in script
+    assert (html / EXT.PDF_NAME).read_bytes() == b"%PDF-1.5 edition"

@@ -208,14 +208,13 @@ def test_post_build_check_compares_the_command_with_the_cached_chapter_result(tm
     assert CHECK.check_command(argv, tmp_path)[1:] == ("ok", "")
     assert CHECK.check_command(["reproduce", "zb2014-fig3", "--seed", "1", "--json"], tmp_path)[1] == "not run"
     # tamper with the cached chapter result: the fresh command no longer matches it
-    from fdi_lib.reproduce.registry import _cache_path, cached_run
+    from fdi_lib.reproduce.registry import _cache_entry, _cache_write, cached_run
     import dataclasses
-    import pickle
 
     cached = cached_run("zb2014-fig1")
     key = next(iter(cached.headline))
     tampered = dataclasses.replace(cached, headline={**cached.headline, key: "tampered"})
-    _cache_path("zb2014-fig1", get("zb2014-fig1").default_seed, None, {}).write_bytes(pickle.dumps(tampered))
+    _cache_write(*_cache_entry("zb2014-fig1", get("zb2014-fig1").default_seed, None, {}), tampered)
     rid, status, detail = CHECK.check_command(argv, tmp_path)
     assert status == "differs" and key in detail
     # a key the reproduction declares a wall time of this machine is not compared

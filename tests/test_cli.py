@@ -114,3 +114,83 @@ def test_cli_checks_arguments_before_computing(argv, pattern, capsys, monkeypatc
 def test_monte_carlo_flag_follows_the_use_of_trials():
     assert get("zb2014-fig7").monte_carlo and get("bz-whiteness").monte_carlo
     assert not get("zb2014-fig3").monte_carlo and not get("rosa2013-fig8").monte_carlo
+
+
+@pytest.mark.parametrize("argv, pattern", [
+    (["--ledger", "zb2014-fig1"], r"an ID and --ledger do not go together"),
+    (["zb2014-fig1", "--ledger"], r"an ID and --ledger do not go together"),
+    (["--ledger", "--plot", "fig.png"], r"--plot does not apply to --ledger"),
+    (["--ledger", "--seed", "3"], r"--seed does not apply to --ledger"),
+    (["--ledger", "--option", "a=1"], r"--option does not apply to --ledger"),
+    (["--ledger", "--jobs", "0"],
+     r"argument --jobs: expected a non-zero integer \(-1 = all cores\), got 0"),
+    (["--ledger", "--seed", "-1"], r"argument --seed: expected a non-negative integer, got -1"),
+    (["--ledger", "--trials", "0"], r"argument --trials: expected a positive integer, got 0"),
+    (["--ledger", "--jobs", "two"], r"argument --jobs: invalid int value: 'two'"),
+    (["--list", "zb2014-fig1"], r"an ID and --list do not go together"),
+    (["--list", "--json"], r"--json does not apply to --list"),
+    (["--describe"], r"--describe needs a reproduction ID"),
+    (["zb2014-fig1", "--describe", "--seed", "2"], r"--seed does not apply to --describe"),
+    ([], r"give a reproduction ID, --list or --ledger"),
+])
+def test_options_that_do_not_apply_are_a_usage_error_at_once(argv, pattern, capsys, monkeypatch):
+    """``--ledger`` with an ID, --plot, a bad --jobs or --seed ran on for minutes: now argparse's
+    usage error (one line, exit 2) before anything is computed."""
+    import fdi_lib.reproduce.ledger as ledger_module
+    from fdi_lib.reproduce.registry import Reproduction
+
+    def no_compute(*args, **kwargs):
+        raise AssertionError("something ran before the usage error")
+
+    monkeypatch.setattr(Reproduction, "__call__", no_compute)
+    monkeypatch.setattr(ledger_module, "ledger", no_compute)
+    with pytest.raises(SystemExit) as exc:
+        main(["reproduce", *argv])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and err.startswith("error: "), err
+    assert re.search(pattern, err), err
+    assert err.rstrip().endswith("(see python -m fdi_lib reproduce --help)")
+
+
+def test_the_console_script_is_the_reproduce_command_under_its_own_name(capsys, monkeypatch):
+    """``fdi-reproduce --list`` failed ("the following arguments are required: command") and its
+    usage named python -m fdi_lib. The entry point is the one pyproject.toml declares."""
+    import importlib
+    import tomllib
+    from pathlib import Path
+
+    scripts = tomllib.loads((Path(__file__).resolve().parents[1] / "pyproject.toml").read_text())
+    module, _, name = scripts["project"]["scripts"]["fdi-reproduce"].partition(":")
+    entry = getattr(importlib.import_module(module), name)
+    monkeypatch.setattr(sys, "argv", ["fdi-reproduce", "--list"])
+    assert entry() == 0
+    listed = capsys.readouterr().out
+    assert listed == _run_main(capsys, ["reproduce", "--list"])
+    monkeypatch.setattr(sys, "argv", ["fdi-reproduce", "zb2014-fig1", "--json"])
+    assert entry() == 0
+    assert json.loads(capsys.readouterr().out)["id"] == "zb2014-fig1"
+    monkeypatch.setattr(sys, "argv", ["fdi-reproduce", "--help"])
+    with pytest.raises(SystemExit, match="0"):
+        entry()
+    text = capsys.readouterr().out
+    assert text.startswith("usage: fdi-reproduce [-h]") and "python -m fdi_lib" not in text
+    monkeypatch.setattr(sys, "argv", ["fdi-reproduce", "--list", "zb2014-fig1"])
+    with pytest.raises(SystemExit, match="2"):
+        entry()
+    assert capsys.readouterr().err.rstrip().endswith("(see fdi-reproduce --help)")
+
+
+def _run_main(capsys, argv):
+    assert main(argv) == 0
+    return capsys.readouterr().out
+
+
+def test_psutil_is_declared():
+    """psutil was imported (montecarlo.available_memory) but not declared in pyproject.toml."""
+    import tomllib
+    from pathlib import Path
+
+    meta = tomllib.loads((Path(__file__).resolve().parents[1] / "pyproject.toml").read_text())
+    declared = {re.split(r"[<>=!~ \[]", d)[0].lower() for d in meta["project"]["dependencies"]}
+    assert "psutil" in declared

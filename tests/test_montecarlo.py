@@ -1,6 +1,7 @@
 """Monte Carlo engine: seed streams, chunking, job-count independence, confidence intervals."""
 
 import functools
+import re
 
 import numpy as np
 import pytest
@@ -246,7 +247,8 @@ def test_progress_bar_on_standard_error(capsys):
 
     run_monte_carlo(slow, 5, seed=0, chunk_size=1, progress=True, description="toy run")
     out, err = capsys.readouterr()
-    assert out == "" and "toy run" in err and "5/5" in err
+    assert out == "" and "toy run" in err and "5/5 chunks" in err
+    assert re.search(r"\d\d:\d\d elapsed, ETA \d\d:\d\d, ", err), err     # the time left, named
     with progress_bars():
         run_monte_carlo(slow, 5, seed=0, chunk_size=1)
     assert "5/5" in capsys.readouterr().err

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import concurrent.futures
 import functools
 import multiprocessing
 import multiprocessing.resource_tracker
@@ -86,9 +87,9 @@ def executor_runs(monkeypatch):
     calls = []
     real = mc._run_on_executor
 
-    def spy(executor, task, n_tasks, first, done):
+    def spy(executor, task, n_tasks, first, done, **kwargs):
         calls.append(n_tasks)
-        return real(executor, task, n_tasks, first, done)
+        return real(executor, task, n_tasks, first, done, **kwargs)
 
     monkeypatch.setattr(mc, "_run_on_executor", spy)
     return calls
@@ -107,6 +108,46 @@ def test_a_process_pool_gives_the_runs_of_one_job(executor_runs):
     assert executor_runs == [10, 5]
     assert set(got[0]["pid"][3:]) - {os.getpid()}, "no chunk ran in the pool's workers"
     assert (got[0]["pid"][:3] == os.getpid()).all()     # the first chunk (memory probe) runs here
+
+
+class _CountingPool(concurrent.futures.ThreadPoolExecutor):
+    """A thread pool that tells its number of workers (as a Dask cluster's executor does) and
+    counts the tasks submitted to it."""
+
+    def __init__(self, workers):
+        super().__init__(workers)
+        self.n, self.submitted = workers, []
+
+    def workers(self):
+        return self.n
+
+    def submit(self, fn, /, *args):
+        self.submitted.append(fn.__name__)
+        return super().submit(fn, *args)
+
+
+@pytest.mark.parametrize("task_seconds, tasks", [(1e-12, ["_call"] * 19),
+                                                 (1e9, ["_call_many"] * 9 + ["_call"])])
+def test_short_chunks_go_to_workers_several_to_a_task_with_the_same_results(task_seconds, tasks,
+                                                                            monkeypatch):
+    """Chunks shorter than TASK_SECONDS (timed on the first) are batched, at least four tasks a
+    worker: 20 chunks on 2 workers, the 19 after the first as 19 tasks, or as 9 tasks of 2 and
+    the last alone; the arrays are those of jobs=1."""
+    monkeypatch.setattr(mc, "TASK_SECONDS", task_seconds)
+    fn = functools.partial(_draws_chunk, dim=3)
+    ref = mc.run_monte_carlo(fn, 40, seed=4, chunk_size=2)
+    with _CountingPool(2) as pool:
+        got = mc.run_monte_carlo(fn, 40, seed=4, chunk_size=2, executor=pool)
+    _assert_same([got], [ref])
+    assert pool.submitted == tasks
+
+
+def test_a_task_lasts_task_seconds_and_every_worker_gets_four(monkeypatch):
+    monkeypatch.setattr(mc, "TASK_SECONDS", 0.5)
+    assert mc._batch_size(0.1, 1000, None) == 1       # workers unknown: one chunk a task
+    assert mc._batch_size(0.1, 1000, 2) == 5          # 0.5 s / 0.1 s
+    assert mc._batch_size(0.01, 80, 2) == 10          # 50 by time, 10 for four tasks a worker
+    assert mc._batch_size(2.0, 1000, 16) == 1         # long chunks: one a task
 
 
 @pytest.mark.slow

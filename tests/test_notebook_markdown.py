@@ -149,7 +149,13 @@ def test_the_check_finds_undefined_macros_and_raw_markup(refs):
 
     raw = jupytext.read(ROOT / "book" / "zb2014" / "glr.md")
     nb = NM.convert_notebook(jupytext.read(ROOT / "book" / "zb2014" / "glr.md"), DOC, refs, NM.book_macros(ROOT))
-    no_macros = nbformat.v4.new_notebook(cells=nb.cells[1:])      # the converted one without its macro cell
+    defs = f"${NM.macro_definitions(NM.book_macros(ROOT))}$\n\n"
+    uses = [c for c in nb.cells[1:] if c.cell_type == "markdown" and "\\T" in c.source]
+    assert uses and all(c.source.startswith(defs) for c in uses)   # each cell defines what it uses
+    # the converted one without its macro cell and without its cells' own definitions
+    bare = [nbformat.v4.new_markdown_cell(c.source.removeprefix(defs)) if c.cell_type == "markdown"
+            else c for c in nb.cells[1:]]
+    no_macros = nbformat.v4.new_notebook(cells=bare)
     planted = nbformat.v4.new_notebook(cells=[*nb.cells, nbformat.v4.new_markdown_cell(
         "> :::{note}\nSee {numref}`fig-x` and $\\foo$.")])
     found_raw, found, found_no_macros, found_planted = NM.problems(raw, nb, no_macros, planted)

@@ -162,16 +162,22 @@ def test_the_cache_gives_back_glued_values(tmp_path):
 def test_publish_pdf_links_the_pdf_only_when_it_is_there(tmp_path):
     html = tmp_path / "html"
     (html / "_static").mkdir(parents=True)
+    script = html / "_static" / EXT.PDF_SCRIPT
     EXT.publish_pdf(html, None)
-    assert "const pdf = null;" in (html / "_static" / EXT.PDF_SCRIPT).read_text()
+    assert "const pdf = null, a4 = null;" in script.read_text()
     assert not (html / EXT.PDF_NAME).exists()
     pdf = tmp_path / "x.pdf"
     pdf.write_bytes(b"%PDF-1.5\n")
     EXT.publish_pdf(html, pdf)
-    assert f'const pdf = "{EXT.PDF_NAME}";' in (html / "_static" / EXT.PDF_SCRIPT).read_text()
+    assert f'const pdf = "{EXT.PDF_NAME}", a4 = null;' in script.read_text()
     assert (html / EXT.PDF_NAME).read_bytes() == b"%PDF-1.5\n"
     EXT.publish_pdf(html, html / EXT.PDF_NAME)   # an HTML build over a published PDF keeps it
-    assert f'const pdf = "{EXT.PDF_NAME}";' in (html / "_static" / EXT.PDF_SCRIPT).read_text()
+    assert f'const pdf = "{EXT.PDF_NAME}", a4 = null;' in script.read_text()
+    # the A4 edition beside the letter one is published and linked with it
+    (tmp_path / EXT.A4_NAME).write_bytes(b"%PDF-1.5 A4\n")
+    EXT.publish_pdf(html, pdf)
+    assert f'const pdf = "{EXT.PDF_NAME}", a4 = "{EXT.A4_NAME}";' in script.read_text()
+    assert (html / EXT.A4_NAME).read_bytes() == b"%PDF-1.5 A4\n"
 
 
 def test_run_times_of_executed_chapters_are_written_beside_their_notebooks(tmp_path):
@@ -218,3 +224,15 @@ def test_characters_the_font_lacks_fail_the_check(tmp_path):
                                        "LaTeX: 3 times no '\u2096' in the font (dropped from the page)"]
     log.write_text("Output written on b.pdf (3 pages).\n")
     assert check.log_problems(log) == []
+
+
+def test_log_counts_overfull_boxes_over_the_allowance_and_rerun_requests():
+    check = _load("fdi_check_pdf_counts", ROOT / "tools" / "check_pdf.py")
+    log = ("Overfull \\hbox (12.5pt too wide) in paragraph at lines 3--4\n"
+           "Overfull \\hbox (1.0pt too wide) detected at line 9\n"
+           "Overfull \\vbox (6.0pt too high) has occurred while \\output is active\n"
+           "Underfull \\vbox (badness 10000) has occurred\n"
+           "LaTeX Warning: Label(s) may have changed. Rerun to get cross-references right.\n")
+    assert check.log_counts(log) == {"overfull": 3, "overfull_over_allowance": 2,
+                                     "overfull_max_pt": 12.5, "underfull": 1, "rerun": 1}
+    assert check.log_counts("")["overfull_max_pt"] == 0.0

@@ -98,6 +98,23 @@ def log_problems(log: Path) -> list[str]:
     return problems
 
 
+#: Overfull boxes up to this many points are tolerated in the counts of :func:`log_counts`.
+OVERFULL_ALLOWANCE_PT = 5.0
+
+
+def log_counts(log_text: str) -> dict[str, float]:
+    """What the LaTeX log says of the layout: overfull boxes (all, those over
+    :data:`OVERFULL_ALLOWANCE_PT`, the widest in points), underfull boxes and rerun requests
+    ("Rerun to get ...", "Label(s) may have changed"). Printed by :func:`main`, not failed."""
+    over = [float(x) for x in re.findall(r"^Overfull \\[hv]box \(([\d.]+)pt too", log_text, re.M)]
+    return {"overfull": len(over),
+            "overfull_over_allowance": sum(x > OVERFULL_ALLOWANCE_PT for x in over),
+            "overfull_max_pt": max(over, default=0.0),
+            "underfull": len(re.findall(r"^Underfull \\[hv]box", log_text, re.M)),
+            "rerun": len(re.findall(r"^.*(?:Rerun to get|Label\(s\) may have changed).*$", log_text,
+                                    re.M))}
+
+
 def missing_characters(log_text: str) -> Counter:
     """Characters that a font of the PDF lacks, which xelatex drops from the page with only a
     log line ("Missing character: There is no ₖ (U+2096) in font ..."), and how often. The
@@ -206,6 +223,12 @@ def main(argv: list[str] | None = None) -> int:
     for p in problems:
         print("check_pdf:", p, file=sys.stderr)
     figures = sum(len(v) for v in tex_images(args.tex).values())
+    log = args.tex.with_suffix(".log")
+    counts = log_counts(log.read_text(errors="replace")) if log.is_file() else {}
+    files = {"list of figures": args.tex.with_suffix(".lof"), "index": args.tex.with_suffix(".ind")}
+    present = {kind: f.is_file() and f.stat().st_size > 0 for kind, f in files.items()}
+    extras = [f"{kind}: {'yes' if there else 'no'}" for kind, there in present.items()]
+    print("check_pdf: layout: " + ", ".join([f"{k} {v:g}" for k, v in counts.items()] + extras))
     print(f"check_pdf: {args.pdf}: {pages} pages, {figures} images, "
           f"{'ok' if not problems else f'{len(problems)} problems'}")
     return 1 if problems else 0

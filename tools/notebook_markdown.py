@@ -400,10 +400,17 @@ def _directive(name: str, arg: str, options: dict[str, str], body: str, doc: str
 
 def convert_notebook(nb, doc: str, refs: BookReferences, macros: dict[str, str | list]):
     """Rewrite the Markdown cells of the notebook ``nb`` of document ``doc`` (in place; returned)
-    and put the macro cell first (replacing one there already)."""
+    and put the macro cell first (replacing one there already). A cell that uses a macro also
+    starts with the definitions (typesetting nothing): JupyterLab renders the cells of a notebook
+    concurrently, and under load a cell's maths was typeset before the macro cell's, its macros
+    undefined (``tests/browser/check_jupyterlab.py``, 21 red ``\\T`` in one chapter)."""
+    uses = re.compile(r"\\(?:" + "|".join(map(re.escape, macros)) + r")(?![A-Za-z])")
+    defs = f"${macro_definitions(macros)}$\n\n"
     for cell in nb.cells:
         if cell.cell_type == "markdown" and MACRO_TAG not in cell.metadata.get("tags", []):
             cell.source = convert_markdown(cell.source, doc, refs)
+            if macros and uses.search(cell.source) and not cell.source.startswith(defs):
+                cell.source = defs + cell.source
     nb.cells = [c for c in nb.cells if MACRO_TAG not in c.metadata.get("tags", [])]
     nb.cells.insert(0, macro_cell(macros))
     return nb

@@ -19,7 +19,9 @@
    ``-halt-on-error``: a LaTeX error fails the build;
 3. copies the PDF to ``OUT/fdi-book.pdf``, checks it (``tools/check_pdf.py``) and, when
    ``--html`` holds a built book, puts it beside the pages, whose header menu then links it
-   (``publish_pdf`` of ``_ext/fdi_book.py``).
+   (``publish_pdf`` of ``_ext/fdi_book.py``);
+4. typesets the same LaTeX source again on A4 paper (:func:`a4_edition`): ``OUT/fdi-book-a4.pdf``,
+   beside the US letter one (Sphinx's default paper), and beside the pages too.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ import copy
 import hashlib
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -117,9 +120,29 @@ def latex_errors(log: Path, context: int = 3) -> list[str]:
     return ["\n".join(lines[i:i + context]) for i, line in enumerate(lines) if line.startswith("!")]
 
 
+def a4_edition(latex: Path, tex_name: str, env: dict[str, str]) -> Path:
+    """The LaTeX folder ``latex`` copied and typeset again on A4 paper (the document class's
+    ``letterpaper`` option replaced); returns the PDF."""
+    a4 = latex.with_name(latex.name + "-a4")
+    if a4.exists():
+        shutil.rmtree(a4)
+    shutil.copytree(latex, a4)
+    tex = a4 / tex_name
+    source, count = re.subn(r"(\\documentclass\[[^\]]*)\bletterpaper\b", r"\1a4paper",
+                            tex.read_text(), count=1)
+    if count != 1:
+        raise SystemExit(f"pdf: no letterpaper option in the document class of {tex}")
+    tex.write_text(source)
+    for stale in a4.glob(Path(tex_name).stem + ".*"):   # the letter edition's page numbers
+        if stale.suffix != ".tex":
+            stale.unlink()
+    subprocess.run(["make", "-C", str(a4)], env=env, check=True, stdout=subprocess.DEVNULL)
+    return a4 / Path(tex_name).with_suffix(".pdf").name
+
+
 def build(src: Path, out: Path, executed: Path | None, html: Path | None, extra: list[str]) -> Path:
     sys.path[:0] = [str(src), str(src / "_ext")]
-    from fdi_book import PDF_NAME, publish_pdf
+    from fdi_book import A4_NAME, PDF_NAME, publish_pdf
 
     start = time.perf_counter()
     out.mkdir(parents=True, exist_ok=True)
@@ -159,6 +182,9 @@ def build(src: Path, out: Path, executed: Path | None, html: Path | None, extra:
         check += ["--html", str(html)]
     print("+", " ".join(check), flush=True)
     subprocess.run(check, check=True)
+    a4 = out / A4_NAME
+    shutil.copy2(a4_edition(latex, tex_name, env), a4)
+    print(f"pdf: the A4 edition {a4}")
     if html is not None and (html / "index.html").is_file():
         publish_pdf(html, pdf)
         print(f"pdf: linked from the pages of {html}")

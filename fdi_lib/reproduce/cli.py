@@ -38,18 +38,19 @@ import inspect
 import sys
 import warnings
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 from fdi_lib.errors import FDIError, ModelError
 from fdi_lib.montecarlo import dask_executor, effective_jobs, progress_bars, use_executor
 from fdi_lib.reproduce.registry import get, list_reproductions
+from fdi_lib.validation import integer, seed as check_seed
 
 
 class _Parser(argparse.ArgumentParser):
     """Argument errors as one line on standard error and exit code 2 (no usage block)."""
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        print(f"error: {message} (see python -m fdi_lib reproduce --help)", file=sys.stderr)
+        print(f"error: {message} (see {self.prog} --help)", file=sys.stderr)
         raise SystemExit(2)
 
 
@@ -57,7 +58,8 @@ def _check_plot(path: str) -> None:
     """``--plot FILE``: an existing folder and an image format matplotlib writes."""
     folder = Path(path).expanduser().resolve().parent
     if not folder.is_dir():
-        raise ModelError(f"--plot: expected a file in an existing folder, got {path!r} ({folder} does not exist)")
+        raise ModelError(f"--plot: expected a file in an existing folder, got {path!r} "
+                         f"({folder} does not exist)")
     suffix = Path(path).suffix.lstrip(".").lower()
     if suffix:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -65,27 +67,106 @@ def _check_plot(path: str) -> None:
 
         formats = FigureCanvasAgg(Figure()).get_supported_filetypes()
         if suffix not in formats:
-            raise ModelError(f"--plot: expected an image file ({', '.join(sorted(formats))}), got {path!r}")
+            raise ModelError(f"--plot: expected an image file ({', '.join(sorted(formats))}), "
+                             f"got {path!r}")
 
 
-def _parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="python -m fdi_lib", description=__doc__,
-                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    rep = sub.add_parser("reproduce", help="reproduce a figure or table of the papers")
+def _integer_type(check: Callable[[int], Any]) -> Callable[[str], int]:
+    """An argparse ``type``: the text as an integer that passes ``check`` (a validation function
+    raising an :class:`~fdi_lib.errors.FDIError`), else argparse's usage error, at once."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"invalid int value: {text!r}") from None
+        try:
+            check(value)
+        except FDIError as exc:  # its message names the argument: argparse names the option
+            raise argparse.ArgumentTypeError(str(exc).partition(": ")[2]) from None
+        return value
+
+    return parse
+
+
+def _jobs(value: int) -> None:
+    if value == 0:
+        raise ModelError(f"jobs: expected a non-zero integer (-1 = all cores), got {value}")
+
+
+#: The options each use of the command reads; any other one given is a usage error, rather than
+#: an option silently ignored while a long run goes on.
+_READS = {"--list": (), "--describe": (),
+          "--ledger": ("--json", "--trials", "--jobs", "--cluster", "--progress"),
+          "ID": ("--json", "--seed", "--trials", "--jobs", "--cluster", "--progress", "--option",
+                 "--plot")}
+
+
+def _given(args: argparse.Namespace) -> list[str]:
+    """The options of ``args`` given on the command line (each default is ``None``, ``False`` or
+    empty)."""
+    names = ("json", "seed", "trials", "jobs", "cluster", "progress", "option", "plot")
+    return [f"--{n}" for n in names if getattr(args, n) not in (None, False, [])]
+
+
+def _check_applies(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """A usage error (exit 2) for a combination whose options would not all be read."""
+    modes = [m for m, on in (("--list", args.list), ("--ledger", args.ledger),
+                             ("--describe", args.describe)) if on]
+    if args.id and args.describe:
+        modes = ["--describe"] + [m for m in modes if m != "--describe"]
+    elif args.id:
+        modes.insert(0, "ID")
+    if not modes:
+        parser.error("give a reproduction ID, --list or --ledger")
+    if len(modes) > 1:
+        parser.error(f"{modes[0]} and {modes[1]} do not go together".replace("ID and", "an ID and"))
+    if modes == ["--describe"] and not args.id:
+        parser.error("--describe needs a reproduction ID")
+    extra = [o for o in _given(args) if o not in _READS[modes[0]]]
+    if extra:
+        what = {"ID": "a reproduction"}.get(modes[0], modes[0])
+        parser.error(f"{extra[0]} does not apply to {what} (it reads "
+                     f"{', '.join(_READS[modes[0]]) or 'no other option'})")
+
+
+def _parser(prog: str = "python -m fdi_lib") -> argparse.ArgumentParser:
+    """The command line's parser: ``python -m fdi_lib reproduce ...`` (default), or the
+    ``reproduce`` command alone under the name ``prog`` (``fdi-reproduce``, the console script)."""
+    return _parsers(prog)[0]
+
+
+def _parsers(prog: str) -> tuple[argparse.ArgumentParser, argparse.ArgumentParser]:
+    """:func:`_parser` and the parser of its ``reproduce`` command (the same one for a console
+    script), whose usage errors name the command."""
+    console = prog != "python -m fdi_lib"
+    name = prog if console else f"{prog} reproduce"
+    description = __doc__.replace("python -m fdi_lib reproduce", name)
+    raw = argparse.RawDescriptionHelpFormatter
+    parser = _Parser(prog=prog, description=description, formatter_class=raw)
+    if console:
+        rep = parser
+    else:
+        sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+        rep = sub.add_parser("reproduce", help="reproduce a figure or table of the papers",
+                             description=description,
+                             formatter_class=raw)
     rep.add_argument("id", nargs="?", help="reproduction identifier, e.g. zb2014-fig3")
     rep.add_argument("--list", action="store_true", help="list the identifiers and exit")
     rep.add_argument("--ledger", action="store_true",
                      help="print the claims ledger of the four papers (with --json: one object)")
     rep.add_argument("--describe", action="store_true", help="print the documentation of ID and exit")
-    rep.add_argument("--seed", type=int, default=None, help="random seed (default: the reproduction's)")
-    rep.add_argument("--trials", type=int, default=None,
-                     help="Monte Carlo trials (default: the paper's own count)")
+    rep.add_argument("--seed", type=_integer_type(check_seed), default=None,
+                     help="random seed, an integer >= 0 (default: the reproduction's)")
+    rep.add_argument("--trials", type=_integer_type(lambda n: integer(n, "trials", low=1)),
+                     default=None, help="Monte Carlo trials (default: the paper's own count)")
     where = rep.add_mutually_exclusive_group()
-    where.add_argument("--jobs", type=int, default=1, help="parallel jobs, -1 for all cores (default 1)")
+    where.add_argument("--jobs", type=_integer_type(_jobs), default=None,
+                       help="parallel jobs, -1 for all cores (default 1)")
     where.add_argument("--cluster", metavar="local:N|tcp://HOST:PORT", default=None,
-                       help="run the Monte Carlo chunks on a Dask cluster: N local worker processes started "
-                            "for the run, or an existing scheduler (same results as --jobs 1)")
+                       help="run the Monte Carlo chunks on a Dask cluster: N local worker "
+                            "processes started for the run, or an existing scheduler (same "
+                            "results as --jobs 1)")
     rep.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                      help="progress bar over the Monte Carlo chunks on standard error (default: when "
                           "standard error is a terminal)")
@@ -94,7 +175,7 @@ def _parser() -> argparse.ArgumentParser:
                           "in JSON or a plain string, e.g. isolation_window=record_end; repeatable")
     rep.add_argument("--json", action="store_true", help="print one JSON object of headline numbers")
     rep.add_argument("--plot", metavar="FILE", default=None, help="also save the figure to FILE")
-    return parser
+    return parser, rep
 
 
 #: Exit code of an interrupted run (SIGINT): 128 + 2, as a shell reports it.
@@ -106,20 +187,33 @@ def _warning_line(message: Any, category: type[Warning], *args: Any, **kwargs: A
     print(f"warning: {message}", file=sys.stderr)
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Run the command line; returns the exit code (0, 2 on an error, 130 when interrupted)."""
+def main(argv: list[str] | None = None, *, prog: str = "python -m fdi_lib") -> int:
+    """Run the command line; returns the exit code (0, 2 on an error, 130 when interrupted).
+
+    A usage error (an option that is malformed or does not apply) exits at once with code 2
+    (``SystemExit``), before anything is imported or computed."""
     with warnings.catch_warnings():  # restores the warning display on return
         warnings.showwarning = _warning_line
         try:
-            return _main(argv)
+            return _main(argv, prog)
         except KeyboardInterrupt:
             # the Monte Carlo engine has stopped its workers before the interruption reached here
             print("interrupted", file=sys.stderr)
             return EXIT_INTERRUPTED
 
 
-def _main(argv: list[str] | None) -> int:
-    args = _parser().parse_args(argv)
+def console_main() -> int:
+    """The console script ``fdi-reproduce [ID | --list | --ledger] ...``: the ``reproduce``
+    command of ``python -m fdi_lib``, under its own name."""
+    return main(sys.argv[1:], prog="fdi-reproduce")
+
+
+def _main(argv: list[str] | None, prog: str) -> int:
+    parser, rep_parser = _parsers(prog)
+    args = parser.parse_args(argv)
+    _check_applies(rep_parser, args)
+    if args.jobs is None:
+        args.jobs = 1
     if args.list:
         for r in list_reproductions():
             trials = "" if r.default_trials is None else f"  [{r.default_trials} trials]"
@@ -127,9 +221,6 @@ def _main(argv: list[str] | None) -> int:
         return 0
     if args.ledger:
         return _print_ledger(args)
-    if not args.id:
-        print("error: give a reproduction ID, --list or --ledger", file=sys.stderr)
-        return 2
     try:
         rep = get(args.id)
         if args.describe:

@@ -11,19 +11,29 @@ Results cache
 If the environment variable ``FDI_RESULTS_CACHE`` names a directory, every call of a
 registered reproduction first looks there for a result computed with the same
 ``(id, seed, trials, keyword arguments)`` by the same code (a hash of every source file of
-:mod:`fdi_lib`, :func:`code_version`), and stores what it computes. ``jobs`` is not part of
-the key: results are identical for any number of jobs. ``make book`` sets the variable so
-that a result computed by a chapter is reused by the claims ledger
+:mod:`fdi_lib`, :func:`code_version`) in the same environment (Python version, machine type and
+the versions of the numerical libraries), and stores what it computes. ``jobs`` and the executor
+are not part of the key: results are identical for any number of jobs and on any cluster. A
+keyword argument is described exactly, type included (arrays by a hash of their bytes); a run
+with an argument that cannot be (an arbitrary object) is not cached. ``make book`` sets the
+variable so that a result computed by a chapter is reused by the claims ledger
 (:mod:`fdi_lib.reproduce.ledger`) instead of being computed twice. Without the variable
-nothing is read or written. A cache entry that cannot be read (damaged, truncated) is a miss,
-and a cache that cannot be written (the variable names a file) is skipped, each with a
-:class:`~fdi_lib.errors.CacheWarning`: the result is computed as without a cache.
+nothing is read or written.
+
+The cache serves only what was asked: each entry stores its full key beside the result, and an
+entry whose key is not the request's (a file copied or renamed) is a miss. So is anything at an
+entry's path that cannot be read as an entry (damaged bytes, a folder, another format), and a
+cache that cannot be written (the variable names a file) is skipped, each with a
+:class:`~fdi_lib.errors.CacheWarning`: the result is computed as without a cache. Writers (threads
+or processes) each write a temporary file of their own and rename it into place, so a reader
+never sees half an entry. Entries are pickles: the cache directory is as trusted as the code.
 """
 
 from __future__ import annotations
 
 import hashlib
 import dis
+import functools
 import json
 import os
 import pickle
@@ -137,16 +147,16 @@ class Reproduction:
         seed = self.default_seed if seed is None else seed
         trials = self.default_trials if trials is None else trials
         trials = None if trials is None else int(trials)
-        path = _cache_path(self.id, int(seed), trials, kwargs)
-        cached = None if path is None else _cache_read(path, self.id)
+        entry = _cache_entry(self.id, int(seed), trials, kwargs)
+        cached = None if entry is None else _cache_read(*entry)
         if cached is not None:
             return cached
         result = self.func(seed=int(seed), trials=trials, jobs=int(jobs), **kwargs)
         if not isinstance(result, ReproductionResult) or result.id != self.id:
             raise TypeError(f"reproduction {self.id!r} returned {type(result).__name__} "
                             f"with id {getattr(result, 'id', None)!r}")
-        if path is not None:
-            _cache_write(path, result)
+        if entry is not None:
+            _cache_write(*entry, result)
         return result
 
 
@@ -172,13 +182,76 @@ def cache_dir() -> Path | None:
     return Path(value) if value else None
 
 
-def _cache_path(id: str, seed: int, trials: int | None, kwargs: dict[str, Any]) -> Path | None:
+#: Distributions whose version changes a result (the numbers of a run depend on their code); with
+#: the Python version and the machine type, part of every cache key.
+_RESULT_LIBRARIES = ("numpy", "scipy", "scikit-learn", "cvxpy", "control", "statsmodels", "highspy",
+                     "numba", "pycddlib-standalone", "clarabel", "osqp", "scs")
+
+
+@functools.lru_cache(maxsize=1)
+def _environment() -> dict[str, Any]:
+    """What besides the settings and :func:`code_version` changes a result: the Python version,
+    the machine type and the versions of :data:`_RESULT_LIBRARIES` (``None`` when absent). Read
+    once per process (about 50 ms: a scan of the installed distributions); treat as read-only."""
+    import importlib.metadata
+    import platform
+
+    def version(name: str) -> str | None:
+        try:
+            return importlib.metadata.version(name)
+        except importlib.metadata.PackageNotFoundError:
+            return None
+
+    return {"python": platform.python_version(), "machine": platform.machine(),
+            "libraries": {name: version(name) for name in _RESULT_LIBRARIES}}
+
+
+class _Uncacheable(Exception):
+    """A keyword argument whose value has no exact, stable description (not cached)."""
+
+
+def _canonical(value: Any) -> Any:
+    """``value`` as JSON that tells apart every two values a reproduction could tell apart: the
+    type is kept (``1``, ``1.0``, ``True`` and ``"1"`` differ), floats exactly (``float.hex``),
+    arrays by dtype, shape and a hash of their bytes (``repr`` elides the middle of a large one).
+    Anything else raises :class:`_Uncacheable`."""
+    if value is None or isinstance(value, (bool, str)):
+        return value
+    if isinstance(value, (int, np.integer)) and not isinstance(value, np.bool_):
+        return {"int": str(int(value))}
+    if isinstance(value, (float, np.floating)):
+        return {"float": float(value).hex(), "type": type(value).__name__}
+    if isinstance(value, np.bool_):
+        return {"bool_": bool(value)}
+    if isinstance(value, (list, tuple)):
+        return {type(value).__name__: [_canonical(v) for v in value]}
+    if isinstance(value, dict):
+        if not all(isinstance(k, str) for k in value):
+            raise _Uncacheable
+        return {"dict": [[k, _canonical(value[k])] for k in sorted(value)]}
+    if isinstance(value, np.ndarray) and value.dtype.kind in "biufc":
+        data = np.ascontiguousarray(value)
+        digest = hashlib.sha256(data.tobytes()).hexdigest()
+        return {"array": [data.dtype.str, list(data.shape), digest]}
+    raise _Uncacheable
+
+
+def _cache_entry(id: str, seed: int, trials: int | None,
+                 kwargs: dict[str, Any]) -> tuple[Path, dict[str, Any]] | None:
+    """Where the result of these settings is cached, and its full key (stored with the result and
+    compared on reading), or ``None`` when caching is off or a keyword argument cannot be
+    described exactly (then the run is not cached)."""
     root = cache_dir()
     if root is None:
         return None
-    key = json.dumps([id, seed, trials, sorted((k, repr(v)) for k, v in kwargs.items())])
-    digest = hashlib.sha256(key.encode()).hexdigest()[:24]
-    return root / id / f"{code_version()[:16]}-{digest}.pkl"
+    try:
+        options = {k: _canonical(v) for k, v in kwargs.items()}
+    except _Uncacheable:
+        return None
+    key = {"id": id, "seed": int(seed), "trials": trials, "options": options,
+           "code": code_version(), "environment": _environment()}
+    digest = hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:24]
+    return root / id / f"{code_version()[:16]}-{digest}.pkl", key
 
 
 def cached_run(id: str, *, seed: int | None = None, trials: int | None = None,
@@ -192,54 +265,95 @@ def cached_run(id: str, *, seed: int | None = None, trials: int | None = None,
     rep = get(id)
     seed = rep.default_seed if seed is None else seed
     trials = rep.default_trials if trials is None else trials
-    path = _cache_path(id, int(seed), None if trials is None else int(trials), kwargs)
-    return None if path is None else _cache_read(path, id)
+    entry = _cache_entry(id, int(seed), None if trials is None else int(trials), kwargs)
+    return None if entry is None else _cache_read(*entry)
 
 
-def _cache_read(path: Path, id: str) -> ReproductionResult | None:
-    """The result cached at ``path``, or ``None`` (a miss) when there is none or it cannot be read:
-    a damaged entry is a miss with a :class:`~fdi_lib.errors.CacheWarning` (and is overwritten by
-    the result computed instead), never a traceback."""
-    try:
-        if not path.is_file():
-            return None
-        path.touch()  # the newest entry of an id is the one last used (see cached_results)
-        with path.open("rb") as fh:
-            result = pickle.load(fh)
-    except Exception as exc:  # unpickling damaged bytes can raise almost any type (EOFError,
-        # UnpicklingError, ValueError, KeyError, a stale class's AttributeError, ...): all are a miss
-        warnings.warn(CacheWarning(f"{CACHE_ENV}: cannot read the cached result {path} "
-                                   f"({type(exc).__name__}: {exc}); computing it again"), stacklevel=3)
+def _cache_read(path: Path, key: dict[str, Any]) -> ReproductionResult | None:
+    """The result cached at ``path`` for exactly ``key``, or ``None`` (a miss): see :func:`_load`;
+    an entry stored for other settings (a file copied or renamed under another key) is a miss
+    with a :class:`~fdi_lib.errors.CacheWarning`."""
+    loaded = _load(path, key["id"])
+    if loaded is None:
         return None
-    if not isinstance(result, ReproductionResult) or result.id != id:
-        warnings.warn(CacheWarning(f"{CACHE_ENV}: expected a result of {id!r} in {path}, got "
-                                   f"{type(result).__name__} {getattr(result, 'id', '')!r}; computing it again"),
+    stored, result = loaded
+    if stored != key:
+        differ = sorted(k for k in key if stored.get(k) != key[k])
+        warnings.warn(CacheWarning(f"{CACHE_ENV}: the entry {path} was stored for other settings "
+                                   f"({', '.join(differ)} differ); computing it again"),
                       stacklevel=3)
         return None
     return result
 
 
-def _cache_write(path: Path, result: ReproductionResult) -> None:
-    """Store ``result`` at ``path`` atomically; a cache that cannot be written (``$FDI_RESULTS_CACHE``
-    a file, no permission, disk full) is skipped with a :class:`~fdi_lib.errors.CacheWarning`."""
-    tmp = path.with_suffix(f".{os.getpid()}.tmp")
+def _load(path: Path, id: str) -> tuple[dict[str, Any], ReproductionResult] | None:
+    """The key and the result of ``id`` stored at ``path``, or ``None`` (a miss). Nothing at
+    ``path`` is a silent miss; anything else that is not an entry of ``id`` is a miss with a
+    :class:`~fdi_lib.errors.CacheWarning` (and is replaced by the result computed instead), never
+    a traceback: another kind of file (a folder), damaged bytes, another id's entry, an entry of
+    the former format (a result without its key)."""
+    try:
+        if not path.exists() and not path.is_symlink():
+            return None
+        if not path.is_file():
+            raise IsADirectoryError(f"expected a regular file, got a {_kind(path)}")
+        path.touch()  # the newest entry of an id is the one last used (see cached_results)
+        with path.open("rb") as fh:
+            entry = pickle.load(fh)
+    except Exception as exc:  # unpickling damaged bytes can raise almost any type (EOFError,
+        # UnpicklingError, ValueError, KeyError, a stale class's AttributeError, ...): all are a miss
+        warnings.warn(CacheWarning(f"{CACHE_ENV}: cannot read the cached result {path} "
+                                   f"({type(exc).__name__}: {exc}); computing it again"),
+                      stacklevel=4)
+        return None
+    stored = entry.get("key") if isinstance(entry, dict) else None
+    result = entry.get("result") if isinstance(entry, dict) else entry
+    whole = isinstance(stored, dict) and isinstance(result, ReproductionResult)
+    if not whole or result.id != id:
+        got = (f"{type(result).__name__} {getattr(result, 'id', '')!r}"
+               + ("" if isinstance(stored, dict) else " without its key"))
+        warnings.warn(CacheWarning(f"{CACHE_ENV}: expected a result of {id!r} in {path}, got "
+                                   f"{got}; computing it again"), stacklevel=4)
+        return None
+    return stored, result
+
+
+def _kind(path: Path) -> str:
+    if path.is_dir():
+        return "folder"
+    return "broken link" if path.is_symlink() and not path.exists() else "special file"
+
+
+def _cache_write(path: Path, key: dict[str, Any], result: ReproductionResult) -> None:
+    """Store ``result`` with its ``key`` at ``path`` atomically, through a temporary file of a name
+    of its own (threads and processes writing the same entry never share one; the last rename
+    wins, and each renames a complete file). A cache that cannot be written (``$FDI_RESULTS_CACHE``
+    a file, no permission, disk full, a folder at ``path``) is skipped with a
+    :class:`~fdi_lib.errors.CacheWarning`."""
+    import tempfile
+
+    tmp: Path | None = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        with tmp.open("wb") as fh:
-            pickle.dump(result, fh)
+        fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        tmp = Path(name)
+        with os.fdopen(fd, "wb") as fh:
+            pickle.dump({"key": key, "result": result}, fh)
+        if path.is_dir() and not path.is_symlink():
+            raise IsADirectoryError(21, "a folder is at the entry's path", str(path))
+        tmp.replace(path)  # atomic: a concurrent reader never sees half a file
     except (pickle.PicklingError, TypeError, AttributeError):
-        tmp.unlink(missing_ok=True)  # not picklable: this result is simply not cached
+        _unlink_quietly(tmp)  # not picklable: this result is simply not cached
     except OSError as exc:
         _unlink_quietly(tmp)
-        warnings.warn(CacheWarning(f"{CACHE_ENV}: cannot store the result in {path.parent} "
+        warnings.warn(CacheWarning(f"{CACHE_ENV}: cannot store the result in {path} "
                                    f"({exc.strerror or exc}); not cached"), stacklevel=3)
-    else:
-        tmp.replace(path)  # atomic: a concurrent reader never sees half a file
 
 
-def _unlink_quietly(path: Path) -> None:
+def _unlink_quietly(path: Path | None) -> None:
     try:
-        path.unlink(missing_ok=True)
+        if path is not None:
+            path.unlink(missing_ok=True)
     except OSError:  # its folder is not a folder: there is nothing to remove
         pass
 
@@ -248,7 +362,8 @@ def cached_results() -> dict[str, ReproductionResult]:
     """For each id, the cached result of the current code that was used last, if any.
 
     Reads ``$FDI_RESULTS_CACHE`` (empty dictionary when caching is off): in a book build,
-    these are the results the chapters computed.
+    these are the results the chapters computed (entries of another environment, see
+    :func:`_environment`, are skipped).
     """
     root = cache_dir()
     out: dict[str, ReproductionResult] = {}
@@ -258,12 +373,14 @@ def cached_results() -> dict[str, ReproductionResult]:
     if root is None or not root.is_dir():
         return out
     prefix = code_version()[:16]
+    environment = _environment()
     for sub in sorted(p for p in root.iterdir() if p.is_dir()):
         entries = sorted(sub.glob(f"{prefix}-*.pkl"), key=lambda p: p.stat().st_mtime)
         for entry in reversed(entries):  # the newest readable one (a damaged one is warned about)
-            result = _cache_read(entry, sub.name)
-            if result is not None:
-                out[sub.name] = result
+            loaded = _load(entry, sub.name)
+            if loaded is not None and loaded[0].get("code") == code_version() \
+                    and loaded[0].get("environment") == environment:
+                out[sub.name] = loaded[1]
                 break
     return out
 

@@ -11,6 +11,12 @@ also opened from ``file://``. Fails on:
 - ``math``: unrendered TeX (``\\(``, ``\\[``, ``$$``) left in the visible text, or no MathJax;
 - ``macro``: a raw TeX macro (``\\lambda``: a backslash and two letters or more) in the visible
   text outside maths (a link to a heading with maths, a title written in TeX);
+- ``tex`` (counted in the report, not yet failed: :data:`REPORTED`): TeX-like text outside the
+  maths, an ASCII subscript or superscript (``Gamma_k``, ``x^T``) or a norm's double bar
+  (``||``) in the visible text, code and parameter names (``<code>``, literals, ``<pre>``, the
+  catalogue's docstring terms) excepted: to be written as maths or words;
+- ``pdf``: when a PDF edition sits beside the pages (``fdi-book.pdf``), a page whose download
+  menu does not link it;
 - ``alt``: an image in the text whose alt text is empty, a file name or path, or raw TeX (it
   must say what the figure shows: its caption);
 - ``network``: any attempted request to a non-local host;
@@ -25,6 +31,13 @@ also opened from ``file://``. Fails on:
   scroll shadow of ``_static/fdi.css`` (a background with ``background-attachment`` ``local``
   and ``scroll`` layers: a shadow at each edge beyond which there is more, which scrolls away
   with the content);
+- ``a11y``: an accessibility violation of impact "critical" or "serious" found by axe-core
+  (``--axe``: the npm registry's ``axe.min.js``, which ``make browser-test`` installs under
+  ``_build/axe`` and the test injects into the page it checks, never into the built pages), with
+  every WCAG 2.x A/AA and best-practice rule and the experimental
+  ``label-content-name-mismatch`` (a control whose name leaves out the text it shows). The
+  moderate and minor ones are counted per rule in the report (``_build/axe-report.json``), not
+  failed;
 - ``font``: figure text smaller than 9 CSS px on the phone. Measured, not guessed from the
   screen: ``fdi_lib.plotting`` stores in each PNG (figures and explorable frames) the smallest
   font size of the figure in points and the resolution it was drawn at (``fdi:min_font_pt``,
@@ -71,13 +84,17 @@ MODES = {
     "phone": {"viewport": VIEWPORTS["phone"], "device_scale_factor": 2, "is_mobile": True, "has_touch": True},
 }
 MIN_TEXT_CSS_PX = 9.0
+#: Checks whose findings are counted in the report but do not fail the test: the TeX-like text
+#: outside maths still comes from tables and descriptions that other modules write (the claims
+#: ledger, the chapters' tables, the registry's docstrings; issue 33).
+REPORTED = {"tex"}
 MAX_SHOT_PX = 15000
 SKIP_DIRS = {"_static", "_sources", "_images", "mathjax", "_sphinx_design_static"}
 
 # Runs in the page: collects the failures visible in the DOM. Returns a list of
 # [check, element, detail].
 PAGE_CHECKS_JS = r"""
-([viewport]) => {
+([viewport, pdfBeside]) => {
   const out = [];
   const describe = (el) => {
     const id = el.id || (el.closest('[id]') || {}).id || '';
@@ -118,6 +135,26 @@ PAGE_CHECKS_JS = r"""
       const i = t.indexOf(m[0]);
       out.push(['macro', describe(n.parentElement), t.slice(Math.max(0, i - 30), i + 40).replace(/\s+/g, ' ')]);
     }
+  }
+  // 1c. TeX-like text outside the maths: x_k, x_{k}, x^T, ||x||
+  const texLike = /\b[A-Za-z][A-Za-z0-9]*(?:_(?:\{|[A-Za-z0-9])|\^(?:\{|[A-Za-z0-9(]))|\|\|/g;
+  const walker3 = document.createTreeWalker(article, NodeFilter.SHOW_TEXT, {
+    acceptNode: (n) => (n.parentElement.closest('pre, code, kbd, .literal, script, style, '
+                                                 + 'mjx-container, textarea, .highlight, .math, '
+                                                 + '.fdi-docstring dt')
+      ? NodeFilter.FILTER_REJECT : NodeFilter.FILTER_ACCEPT)});
+  for (let n = walker3.nextNode(); n; n = walker3.nextNode()) {
+    if (n.parentElement.offsetParent === null && !n.parentElement.closest('details')) continue;
+    for (const m of n.nodeValue.matchAll(texLike)) {
+      const t = n.nodeValue;
+      const around = t.slice(Math.max(0, m.index - 25), m.index + 35).replace(/\s+/g, ' ');
+      out.push(['tex', describe(n.parentElement), around]);
+    }
+  }
+  // 1d. the PDF edition, when it is beside the pages, in the download menu
+  const pdfLink = 'a.btn-download-book-pdf-button[href$="fdi-book.pdf"]';
+  if (pdfBeside && !document.querySelector(pdfLink)) {
+    out.push(['pdf', 'header', 'a PDF edition is beside the pages; the menu does not link it']);
   }
   const mathNodes = document.querySelectorAll('.math, span.math, div.math').length;
   if (mathNodes > 0 && document.querySelectorAll('mjx-container').length === 0) {
@@ -301,8 +338,36 @@ def _font_failure(element: str, meta: dict[str, str], im: dict) -> list[tuple[st
     return []
 
 
+#: axe-core's impacts, most severe first, and those that fail the test.
+AXE_IMPACTS = ("critical", "serious", "moderate", "minor")
+AXE_FAILING = ("critical", "serious")
+
+# Runs in the page after axe.min.js: its violations, one entry per rule and node.
+AXE_RUN_JS = r"""
+async () => {
+  const res = await axe.run(document, {
+    runOnly: {type: 'tag',
+              values: ['wcag2a', 'wcag2aa', 'wcag21a', 'wcag21aa', 'wcag22aa', 'best-practice']},
+    rules: {'label-content-name-mismatch': {enabled: true}},
+    resultTypes: ['violations']});
+  const out = [];
+  for (const v of res.violations) for (const n of v.nodes)
+    out.push([v.id, n.impact || v.impact || 'minor', n.target.join(' '),
+              (n.failureSummary || '').replace(/\s+/g, ' ').slice(0, 160)]);
+  return out;
+}
+"""
+
+
+def axe_violations(page, axe_js: Path) -> list[list[str]]:
+    """axe-core's violations on ``page``: ``[rule, impact, element, summary]`` per node."""
+    page.add_script_tag(path=str(axe_js))
+    return page.evaluate(AXE_RUN_JS)
+
+
 def check_page(context, url: str, page_name: str, viewport: str, html_root: Path, base: str,
-               shots: Path | None) -> list[tuple[str, str, str]]:
+               shots: Path | None, axe_js: Path | None = None,
+               axe_found: list | None = None) -> list[tuple[str, str, str]]:
     failures: list[tuple[str, str, str]] = []
     page = context.new_page()
     page.on("console", lambda m: failures.append(("console", m.location.get("url", "").rsplit("/", 1)[-1] or "page", m.text[:200]))
@@ -316,9 +381,16 @@ def check_page(context, url: str, page_name: str, viewport: str, html_root: Path
     # load every image (some are lazy) before checking them
     page.evaluate("() => Promise.all(Array.from(document.images).map(i => { i.loading = 'eager';"
                   " return i.decode().catch(() => null); }))")
-    failures += [tuple(f) for f in page.evaluate(PAGE_CHECKS_JS, [viewport])]
+    pdf_beside = (html_root / "fdi-book.pdf").is_file() if base.startswith("http") else False
+    failures += [tuple(f) for f in page.evaluate(PAGE_CHECKS_JS, [viewport, pdf_beside])]
     if viewport == "phone":
         failures += font_failures(page.evaluate(IMAGES_JS), html_root, base)
+    if axe_js is not None:
+        found = axe_violations(page, axe_js)
+        if axe_found is not None:
+            axe_found.extend([page_name, viewport, *v] for v in found)
+        failures += [("a11y", element, f"{rule} ({impact}): {summary}")
+                     for rule, impact, element, summary in found if impact in AXE_FAILING]
     if shots is not None:
         # the whole page, or its top MAX_SHOT_PX (the ledger is some 50 000 px tall on a phone:
         # a full screenshot at scale 2 would be a 100 000 px high image)
@@ -347,13 +419,30 @@ def book_pages(root: Path) -> list[str]:
                   and 'http-equiv="Refresh"' not in p.read_text(errors="replace")[:2000])
 
 
+def axe_summary(found: list[list[str]], n_pages: int) -> str:
+    """axe-core's violations counted per viewport and impact, then per rule."""
+    lines = [f"axe-core over {n_pages} pages (critical and serious fail the test):"]
+    for viewport in MODES:
+        counts = collections.Counter(v[3] for v in found if v[1] == viewport)
+        lines.append(f"  {viewport}: " + ", ".join(f"{counts.get(i, 0)} {i}" for i in AXE_IMPACTS))
+    rules = collections.Counter((v[1], v[3], v[2]) for v in found)
+    lines += [f"  {vp} {impact} {rule}: {n} nodes"
+              for (vp, impact, rule), n in sorted(rules.items())]
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--html", default="_build/html", type=Path)
     parser.add_argument("--screenshots", default="_build/screenshots", type=Path)
     parser.add_argument("--report", default="_build/browser-report", type=Path)
     parser.add_argument("--pages", nargs="*", help="only these pages (paths relative to --html)")
+    parser.add_argument("--axe", type=Path, help="axe-core's axe.min.js: check accessibility")
     args = parser.parse_args(argv)
+    if args.axe is not None and not args.axe.is_file():
+        print(f"no axe-core at {args.axe}: `make browser-test` installs it", file=sys.stderr)
+        return 2
+    axe_found: list[list[str]] = []
     from playwright.sync_api import sync_playwright
 
     root = built_book(args.html)
@@ -387,7 +476,7 @@ def main(argv: list[str] | None = None) -> int:
                     t0 = time.monotonic()
                     try:
                         found = check_page(context, base + name, name, viewport, root, base,
-                                           args.screenshots)
+                                           args.screenshots, args.axe, axe_found)
                     except Exception as exc:  # a page that breaks the driver is a failure too
                         found = [("driver", "page", f"{type(exc).__name__}: {exc}"[:200])]
                     results.extend((name, viewport, *f) for f in found)
@@ -417,8 +506,10 @@ def main(argv: list[str] | None = None) -> int:
         table.append(f"{name} | " + " | ".join(str(counts.get((name, c), 0)) for c in checks))
     table.append("total | " + " | ".join(str(sum(v for (p, c), v in counts.items() if c == ck))
                                          for ck in checks))
+    reported = sum(r[2] in REPORTED for r in results)
     summary = (f"{len(pages)} pages x {len(MODES)} modes (+ file://): "
-               f"{len(results)} failures")
+               f"{len(results) - reported} failures, "
+               f"{reported} reported ({', '.join(sorted(REPORTED))})")
     report = "\n".join(lines + (table if results else []) + ["", summary])
     print(report)
     args.report.parent.mkdir(parents=True, exist_ok=True)
@@ -426,8 +517,14 @@ def main(argv: list[str] | None = None) -> int:
     args.report.with_suffix(".json").write_text(json.dumps(
         [dict(zip(("page", "viewport", "check", "element", "detail"), r)) for r in results],
         indent=1))
+    if args.axe is not None:
+        print(axe_summary(axe_found, len(pages)))
+        args.report.with_name("axe-report.json").write_text(json.dumps(
+            [dict(zip(("page", "viewport", "rule", "impact", "element", "summary"), v))
+             for v in axe_found],
+            indent=1))
     print(f"screenshots in {args.screenshots}/, report in {args.report}.txt")
-    return 1 if results else 0
+    return 1 if any(r[2] not in REPORTED for r in results) else 0
 
 
 if __name__ == "__main__":

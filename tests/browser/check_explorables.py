@@ -9,6 +9,9 @@ explorable to each of its values in turn and fails when:
   the frame shown is not the one the slider positions index;
 - ``response``: the image takes 50 ms or more from the ``input`` event to decoded pixels (best
   of three repetitions of the move);
+- ``aria``: after a move, a slider does not announce the value it shows (its ``aria-valuetext``
+  differs from its visible value), the image's alt text does not name every slider's value, or
+  the polite live region (``aria-live``) does not announce the new values;
 - ``network``: the page tried to reach another host; ``console``: any console or page error;
 - ``missing``: a page that should have one has no explorable (``--expect``).
 
@@ -65,8 +68,13 @@ async ([e, j]) => {
       ms = Math.min(ms, performance.now() - t0);
     }
     const after = pixels();
+    const live = root.querySelector('[aria-live]');
     out.push({from: prev, to: v, ms: ms, changed: after !== before, frame: Number(root.dataset.frame),
-              positions: ins.map(x => Number(x.value))});
+              positions: ins.map(x => Number(x.value)),
+              shown: ins.map(x => x.nextElementSibling.textContent),
+              valuetext: ins.map(x => x.getAttribute('aria-valuetext')),
+              alt: img.alt,
+              live: live ? live.getAttribute('aria-live') + ': ' + live.textContent : ''});
     before = after; prev = v;
   }
   return out;
@@ -80,6 +88,19 @@ COUNT_JS = r"""
   bytes: r.outerHTML.length + (r.nextElementSibling ? r.nextElementSibling.outerHTML.length : 0),
   caption: ((r.closest('figure') || r).querySelector('figcaption') || {innerText: ''}).innerText.slice(0, 60)}))
 """
+
+
+def aria_problems(move: dict) -> list[str]:
+    """What a screen reader would get wrong after a slider move (see ``aria`` above)."""
+    out = []
+    for shown, said in zip(move["shown"], move["valuetext"]):
+        if said != shown:
+            out.append(f"slider announces {said!r}, shows {shown!r}")
+        if f"= {shown}" not in move["alt"]:
+            out.append(f"alt text does not name the value {shown!r}: {move['alt'][-80:]!r}")
+        if not move["live"].startswith("polite: ") or f"= {shown}" not in move["live"]:
+            out.append(f"no polite announcement of the value {shown!r}: {move['live'][-80:]!r}")
+    return out
 
 
 def check_page(context, url: str) -> tuple[list[tuple[str, str, str]], list[str]]:
@@ -104,6 +125,7 @@ def check_page(context, url: str) -> tuple[list[tuple[str, str, str]], list[str]
                 expected = sum(s * p for s, p in zip(strides, move["positions"]))
                 if move["frame"] != expected:
                     failures.append(("pixels", where, f"frame {move['frame']} shown, {expected} indexed"))
+                failures += [("aria", where, problem) for problem in aria_problems(move)]
                 if move["ms"] >= MAX_RESPONSE_MS:
                     failures.append(("response", where, f"{move['ms']:.1f} ms >= {MAX_RESPONSE_MS:g} ms"))
         notes.append(f"{name}: {info['sliders']} sliders {info['sizes']}, {info['bytes'] / 1e6:.2f} MB, "

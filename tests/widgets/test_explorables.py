@@ -62,6 +62,30 @@ def test_frames_follow_the_product_order_and_the_page_indexes_them_the_same_way(
     assert repr(ex).startswith("<Explorable a (3) x b (2): 6 frames, 0.") and len(repr(ex)) < 80
 
 
+
+def test_a_screen_reader_hears_the_values_shown_and_the_alt_text_names_them():
+    ex = explorable(_line, {"a": (1.0, 2.5, 3.0), "b": (10, 20)}, caption="toy <i>caption</i>",
+                    alt="A line through three points", labels={"a": "slope a"}, default={"a": 2.5})
+    page = ex._repr_html_()
+    # each slider announces the value it shows (not its position on the grid: "1")
+    assert re.findall(r'value="(\d)" aria-valuetext="([^"]*)"', page) == [("1", "2.5"), ("0", "10")]
+    # the alt text describes the figure (not the caption) and names the frame's values
+    alt = re.search(r'<img [^>]*alt="([^"]*)"', page).group(1)
+    assert alt == "A line through three points. Shown at slope a = 2.5, b = 10."
+    assert alt == ex.frame_alt((1, 0)) and "caption" not in alt
+    assert ex.frame_alt((2, 1)).endswith("Shown at slope a = 3, b = 20.")
+    # a polite live region, empty until a move, and the script's text for both
+    assert re.search(r'<p class="fdi-explorable-live" aria-live="polite"[^>]*></p>', page)
+    alt_js = json.loads(re.search(r"A = (\"[^\n]*\");", page).group(1))
+    assert alt_js == "A line through three points."
+    assert json.loads(re.search(r"N = (\[[^\]]*\])", page).group(1)) == ["slope a", "b"]
+    # without an alt text, the caption's plain text stands in
+    fallback = explorable(_line, {"a": (1.0, 2.0), "b": (10, 20)}, caption="toy <i>x</i>")
+    assert fallback.alt == "toy x."
+    with pytest.raises(ModelError, match="alt: expected a non-empty string"):
+        explorable(_line, {"a": (1.0, 2.0), "b": (10, 20)}, caption="toy", alt="  ")
+
+
 def test_frames_are_house_style_pngs_with_font_metadata():
     ex = explorable(_line, {"a": (1.0, 2.0), "b": (1, 2)}, caption="toy")
     img = Image.open(io.BytesIO(base64.b64decode(ex.frames[0])))
