@@ -616,8 +616,8 @@ def fig11(*, seed: int, trials: int | None, jobs: int, fault_mode: str = "deviat
           claims={**_times("isolation", "12"), **_other_figure("detection", "11")})
 def fig12(*, seed: int, trials: int | None, jobs: int, fault_mode: str = "deviation",
           alpha_slack_deg: float = 0.0) -> ReproductionResult:
-    """Fig. 12: mean isolation time per fault and scenario (same runs, keys and options as
-    :func:`fig11`)."""
+    """Fig. 12: mean isolation time per fault and scenario (same runs and keys as :func:`fig11`,
+    and its options)."""
     return _study_result("rosa2013-fig12", seed, trials or 10, jobs, fault_mode=fault_mode,
                          alpha_slack_deg=alpha_slack_deg)
 
