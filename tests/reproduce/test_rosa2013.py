@@ -11,8 +11,10 @@ matplotlib.use("Agg")
 import numpy as np
 import pytest
 
+from fdi_lib.errors import ModelError
 from fdi_lib.reproduce import get, reproduce
 from fdi_lib.reproduce import rosa2013 as R
+from fdi_lib.systems import eclipse_uav as uav
 
 
 def test_fig1_two_projection_routes_agree():
@@ -149,9 +151,43 @@ def test_isolation_lags_on_synthetic_runs():
 def test_total_speed_mu_fault_is_seen_at_once_and_the_deviation_one_is_not():
     """0.3 M_u u* Ts on the pitch rate is about 74 noise bounds: the nominal set must empty at the
     first sample after the onset (20 ms); on the speed deviation the same fault stays hidden."""
-    out = R.fault_mode_study(2013, 1, duration=0.8)["dynamics"]
-    assert out["total"]["detected"] == 1 and out["total"]["detection_ms"] == pytest.approx(20.0)
-    assert out["deviation"]["detected"] == 0
+    total = R.study_headline(R.uav_study(2013, 1, duration=0.8, fault_mode="total"))
+    dev = R.study_headline(R.uav_study(2013, 1, duration=0.8))
+    assert total["detected_runs"]["dynamics"]["step"] == 1
+    assert total["detection_time_ms"]["dynamics"]["step"] == pytest.approx(20.0)
+    assert dev["detected_runs"]["dynamics"]["step"] == 0
+    # the alpha faults and the healthy runs do not depend on where the other faults act
+    assert total["detection_time_ms"]["alpha"] == dev["detection_time_ms"]["alpha"]
+    assert total["false_alarms"] == dev["false_alarms"]
+
+
+def test_alpha_slack_loosens_only_the_elevator_and_mu_observers():
+    """The option adds its degrees to the alpha bound of SVOs #3 and #4 only; 0 is the design."""
+    run = uav.simulate("none", "step", rng=np.random.default_rng(0), duration=0.1)
+    for kind in ("nominal", "alpha", "elevator", "dynamics"):
+        base = uav.svo_models(run, kind)
+        assert np.array_equal(uav.svo_models(run, kind, alpha_slack_deg=0.0).noise, base.noise)
+        loose = uav.svo_models(run, kind, alpha_slack_deg=4.0).noise
+        np.testing.assert_allclose(loose - base.noise, [0.0, np.deg2rad(4.0), 0.0, 0.0],
+                                   rtol=0, atol=1e-15)
+    with pytest.raises(ModelError, match="alpha_slack_deg"):
+        uav.svo_models(run, "elevator", alpha_slack_deg=-1.0)
+    with pytest.raises(ModelError, match="alpha_slack_deg"):
+        R.fig12(seed=0, trials=1, jobs=1, alpha_slack_deg="4")
+    with pytest.raises(ModelError, match="fault_mode"):
+        R.fig11(seed=0, trials=1, jobs=1, fault_mode="totl")
+
+
+def test_a_looser_alpha_bound_delays_isolation_and_never_detection():
+    """The nominal SVO is untouched, so detections are identical; a 3 deg alpha step that stays
+    inside a 4 deg slack keeps the elevator and M_u hypotheses alive, so it is not isolated, where
+    the design bound isolates it at the first faulty sample."""
+    base = R.study_headline(R.uav_study(5, 1, duration=1.0))
+    loose = R.study_headline(R.uav_study(5, 1, duration=1.0, alpha_slack_deg=4.0))
+    assert loose["detection_time_ms"] == base["detection_time_ms"]
+    assert loose["false_alarms"] == base["false_alarms"]
+    assert base["correctly_isolated_runs"]["alpha"]["step"] == 1
+    assert loose["correctly_isolated_runs"]["alpha"]["step"] == 0
 
 
 def test_uav_study_streams_are_independent_across_seeds():
