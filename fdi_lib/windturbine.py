@@ -61,6 +61,15 @@ from fdi_lib.signatures import fault_signature
 from fdi_lib.sparse import diagnose
 from fdi_lib.validation import integer, real
 
+
+def _instance(value: Any, kind: type, name: str) -> Any:
+    """``value`` itself if it is a ``kind``, else a :class:`~fdi_lib.errors.ModelError` naming
+    ``name``."""
+    if not isinstance(value, kind):
+        raise ModelError(f"{name}: expected {kind.__name__}, got {type(value).__name__}")
+    return value
+
+
 __all__ = ["SENSORS", "CANDIDATES", "SUBSYSTEMS", "METHODS", "PlantConstants", "plant_constants",
            "Records", "records", "Calibration", "calibrate", "Design", "design", "Segments", "segments",
            "MethodOutcome", "min_detectable", "run_zb", "run_zhang2021", "run_bz", "run_svo_bank", "run_methods",
@@ -178,6 +187,10 @@ def records(run: Any) -> Records:
     with healthy sensors (:func:`subsystems`; a faulty pitch sensor changes the loop's gain, which
     leaves a small discretisation error, measured in the tests).
     """
+    from fdi_lib.systems.wind_turbine import WindTurbineRun
+
+    _instance(run, WindTurbineRun, "run")
+
     def batch(a: Any, tail: int) -> np.ndarray:
         a = np.asarray(a, dtype=float)
         return a if a.ndim == tail + 2 else a[None]
@@ -309,6 +322,8 @@ def calibrate(c: PlantConstants, rec: Records, *, margin: float = 1.5) -> Calibr
     """Model-error statistics and bounds from the true states of a fault-free record (see
     :class:`Calibration`)."""
     margin = real(margin, "margin", low=1.0)
+    _instance(c, PlantConstants, "c")
+    _instance(rec, Records, "rec")
     Q, bound = {}, {}
     for s in subsystems(c):
         x = rec.x[..., list(s.states)]
@@ -334,6 +349,11 @@ def calibrate(c: PlantConstants, rec: Records, *, margin: float = 1.5) -> Calibr
 
 
 # ----------------------------------------------------------------------------- design
+#: The largest :attr:`Settings.window` (samples; 100 s at the benchmark's ``Ts``): the windowed
+#: tests keep ``window`` statistics per sample, and a window longer than any segment has no meaning.
+MAX_WINDOW = 10_000
+
+
 @dataclass(frozen=True)
 class Settings:
     """The design choices of the four methods (all stated in the book chapter).
@@ -380,7 +400,7 @@ class Settings:
         real(self.warmup_s, "warmup_s", low=0.0)
         real(self.isolation_alpha, "isolation_alpha", low=0.0, high=1.0, low_open=True,
              high_open=True)
-        integer(self.window, "window", low=1)
+        integer(self.window, "window", low=1, high=MAX_WINDOW)
         integer(self.isolation_extra, "isolation_extra", low=0)
         if not self.warmup_s < self.pre_s:
             raise ModelError(f"warmup_s: expected less than pre_s = {self.pre_s} s (a fault-free "
@@ -463,6 +483,9 @@ def design(c: PlantConstants, cal: Calibration, x0: np.ndarray, settings: Settin
     ``x0`` ``(10,)`` is the prior mean of the true states (the filters' ``model.x0``); the prior
     covariance is wide (the first ``warmup_s`` seconds are not scored).
     """
+    _instance(settings, Settings, "settings")
+    _instance(c, PlantConstants, "c")
+    _instance(cal, Calibration, "cal")
     from fdi_lib.nonparametric import kitanidis_predictor_gains, reduce_residual
 
     st = settings
@@ -849,6 +872,7 @@ def stream_alarms(d: Design, y: np.ndarray, u: np.ndarray, start: int,
         Method key (of ``methods``) -> ``(B,)`` alarm counts, and ``"tests"`` -> method key -> the
         number of tests summed.
     """
+    _instance(d, Design, "d")
     import dataclasses
 
     start = integer(start, "start", low=d.warmup + d.settings.window, high=d.N - 1)
@@ -903,6 +927,7 @@ def stream_counts(d: Design, y: np.ndarray, u: np.ndarray, start: int, *, batch:
         Method key -> alarm count, ``"tests"`` (see :func:`stream_alarms`), ``"samples"``: the
         samples scored.
     """
+    _instance(d, Design, "d")
     y = np.asarray(y, dtype=float)
     u = np.asarray(u, dtype=float)
     if y.ndim != 2 or y.shape[1] != len(SENSORS) or u.shape != (y.shape[0], len(INPUTS)):
@@ -1073,6 +1098,7 @@ def _prior_group(d: Design, group: Sequence[str]) -> Polytope:
 
 def run_methods(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, MethodOutcome]:
     """The four methods (keys of :data:`METHODS`) on records ``y`` ``(B, N, 11)``, ``u`` ``(B, N, 4)``."""
+    _instance(d, Design, "d")
     y = np.asarray(y, dtype=float)
     u = np.asarray(u, dtype=float)
     if y.ndim != 3 or y.shape[1:] != (d.N, len(SENSORS)) or u.shape != (y.shape[0], d.N, len(INPUTS)):
@@ -1092,6 +1118,9 @@ def _shifted(fault: Any, start_s: float) -> Any:
 
 def expected_candidates(fault: Any) -> tuple[str, ...]:
     """The candidates (:data:`CANDIDATES`) a correct isolation of a benchmark ``fault`` names."""
+    from fdi_lib.systems.wind_turbine import Fault
+
+    _instance(fault, Fault, "fault")
     out = []
     for comp in fault.component:
         if comp.startswith("beta_"):
@@ -1118,12 +1147,17 @@ def fault_records(fault: Any, seeds: Sequence[np.random.SeedSequence], *, settin
     """
     from fdi_lib.systems import wind_turbine as wt
 
-    params = wt.PARAMS if params is None else params
+    _instance(fault, wt.Fault, "fault")
+    _instance(settings, Settings, "settings")
+    params = wt.PARAMS if params is None else wt.check_params(params)
+    seeds = list(seeds)
+    if not seeds or not all(isinstance(s, np.random.SeedSequence) for s in seeds):
+        raise ModelError(f"seeds: expected a non-empty sequence of SeedSequence, got {seeds!r:.80}")
+    settle_s = real(settle_s, "settle_s", low=0.0)
     t0 = settle_s + settings.pre_s
     duration = t0 + settings.post_s
     n = int(round(duration / params.ts))
     t_abs = fault.start_s - t0 + np.arange(n) * params.ts
-    seeds = list(seeds)
     wind = np.stack([wt.wind_speed(t_abs, seed=np.random.SeedSequence(s.entropy, spawn_key=s.spawn_key + (0,),
                                                                       pool_size=s.pool_size)) for s in seeds])
     run = wt.simulate(seed=seeds, faults=(_shifted(fault, t0),) if faulty else (), duration_s=duration,

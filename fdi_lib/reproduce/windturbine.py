@@ -150,11 +150,14 @@ SECONDS_PER_REALISATION = 1.1
 MAX_RUN_S = 24 * 3600.0
 
 
-def check_trials(trials: int, jobs: int = 1) -> int:
+def check_trials(trials: int, jobs: int = 1, *,
+                 seconds_per_realisation: float = SECONDS_PER_REALISATION,
+                 bytes_per_realisation: float | None = None) -> int:
     """``trials`` of the scoreboard, refused with a :class:`~fdi_lib.errors.ResourceError` that
     gives the estimated time and memory when the run would take longer than :data:`MAX_RUN_S` on
     ``jobs`` processes (capped at the cores) or its results would not fit in the available memory;
-    nothing is simulated before the check."""
+    nothing is simulated before the check. Another study passes its own cost per realisation (core
+    seconds, bytes of results; default: the scoreboard's)."""
     import warnings
 
     from fdi_lib.errors import JobsCappedWarning
@@ -165,10 +168,11 @@ def check_trials(trials: int, jobs: int = 1) -> int:
     with warnings.catch_warnings():             # the run itself warns about a capped request
         warnings.simplefilter("ignore", JobsCappedWarning)
         workers = effective_jobs(jobs)
-    per = sum(a.nbytes for a in _empty_chunk(1).values())
+    per = (sum(a.nbytes for a in _empty_chunk(1).values()) if bytes_per_realisation is None
+           else bytes_per_realisation)
     memory = 2.0 * per * trials                # the chunks' arrays and their concatenation
-    seconds = trials * SECONDS_PER_REALISATION / workers
-    what = (f"{trials} realisations (about {SECONDS_PER_REALISATION:g} s of a core and "
+    seconds = trials * seconds_per_realisation / workers
+    what = (f"{trials} realisations (about {seconds_per_realisation:g} s of a core and "
             f"{_bytes_text(per)} of results each)")
     check_memory(memory, "trials", what)
     if seconds > MAX_RUN_S:

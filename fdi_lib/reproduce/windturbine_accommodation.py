@@ -22,7 +22,7 @@ from fdi_lib import windturbine as W
 from fdi_lib.errors import ModelError
 from fdi_lib.montecarlo import run_monte_carlo
 from fdi_lib.reproduce.registry import ReproductionResult, register
-from fdi_lib.reproduce.windturbine import PAPER, calibrated_design
+from fdi_lib.reproduce.windturbine import PAPER, calibrated_design, check_trials
 
 __all__ = ["ACCOMMODATED", "RUNNERS", "accommodation", "accommodation_chunk", "plot_accommodation"]
 
@@ -149,11 +149,17 @@ def plot_accommodation(result: ReproductionResult, fig: Any = None):
     return fig
 
 
+#: Seconds of one core per realisation (the book's count: about 2 s of CPU with the four methods),
+#: the estimate with which a too large ``trials`` is refused (:func:`~fdi_lib.reproduce.windturbine.
+#: check_trials`).
+SECONDS_PER_REALISATION = 2.0
+
+
 @register(
     "windturbine-accommodation",
     plot=plot_accommodation,
     paper=PAPER,
-    default_trials=5,   # the book's count: about 2 s of CPU per realisation with the four methods
+    default_trials=5,   # the book's count: SECONDS_PER_REALISATION
     default_seed=2009,
     title="Wind-turbine benchmark: sensor faults accommodated after isolation",
     chapter="windturbine/benchmark",
@@ -189,6 +195,9 @@ def accommodation(
     """
     if method not in (*RUNNERS, "first"):
         raise ModelError(f"method: expected 'first' or one of {tuple(RUNNERS)}, got {method!r}")
+    n_acc = len(ACCOMMODATED)   # the chunk's results: isolation time, two energies, 2 x metrics
+    trials = check_trials(trials, jobs, seconds_per_realisation=SECONDS_PER_REALISATION,
+                          bytes_per_realisation=8.0 * n_acc * (3 + 2 * len(_METRICS)))
     settings = W.Settings()
     x = run_monte_carlo(
         functools.partial(accommodation_chunk, seed=seed, method=method, settings=settings),

@@ -223,6 +223,14 @@ NOISE_SCRIPT_VALUES = {"std_beta": 0.2, "std_omega_r": 0.004 * 2 * math.pi, "std
 NOISE_READINGS = ("variance", "std")
 
 
+def check_params(params: Any, name: str = "params") -> "WindTurbineParams":
+    """``params`` itself if it is a :class:`WindTurbineParams`, else a
+    :class:`~fdi_lib.errors.ModelError` naming ``name``."""
+    if not isinstance(params, WindTurbineParams):
+        raise ModelError(f"{name}: expected WindTurbineParams, got {type(params).__name__}")
+    return params
+
+
 def benchmark_params(*, noise_reading: str = "variance",
                      actuator_faults: str = "simulink") -> WindTurbineParams:
     """The benchmark's parameters under a reading of the noise values (:data:`NOISE_READINGS`) and
@@ -414,6 +422,8 @@ def power_coefficient(lam: Any, beta_deg: Any) -> np.ndarray:
 
     Its maximum over the table grid is 0.4536 at ``lambda = 8``, ``beta = -1 .. 0`` deg (the script's
     ``Cp_max = 0.4554`` is that of the separate ``Cp`` table; module docstring, disagreement 4).
+    Outside the table, ``Cq`` is extrapolated as in :func:`torque_coefficient` (any finite ``lam``
+    and ``beta_deg`` are accepted; NaN and infinities are refused).
 
     Examples
     --------
@@ -475,6 +485,7 @@ class Fault:
     ramp_s: float = 0.0
 
     def __post_init__(self) -> None:
+        integer(self.id, "id")
         if self.kind not in FAULT_KINDS:
             raise ModelError(f"fault {self.id}: kind expected one of {FAULT_KINDS}, got {self.kind!r}")
         allowed = {"sensor_fixed": OUTPUT_NAMES, "sensor_gain": OUTPUT_NAMES,
@@ -569,6 +580,12 @@ def fault_profiles(faults: Sequence[Fault], n_steps: int, ts: float = TS) -> np.
     benchmark's ``D_Fault7`` [script].
     """
     n_steps = integer(n_steps, "n_steps", low=1)
+    ts = real(ts, "ts", low=0.0, low_open=True)
+    for f in faults:
+        if not isinstance(f, Fault):
+            raise ModelError(f"faults: expected Fault objects, got {type(f).__name__}")
+    check_memory(8.0 * n_steps * max(1, len(faults)), "n_steps",
+                 f"profiles of {len(faults)} fault(s) over {n_steps} samples")
     start = np.array([_samples(f.start_s, ts) for f in faults], dtype=np.int64)
     stop = np.array([_samples(f.stop_s, ts) for f in faults], dtype=np.int64)
     ramp = np.array([_samples(f.ramp_s, ts) for f in faults], dtype=np.int64)
@@ -784,6 +801,7 @@ def drive_train_discretisation(params: WindTurbineParams = PARAMS, *,
     """Exact ZOH ``(Phi, Gamma)`` (4x4, 4x3) of drive train + generator at ``Ts``: state ``(omega_r,
     omega_g, theta_delta, tau_gc)``, inputs ``(tau_aero, tau_g,r, converter offset)`` held over the
     sample. ``eta_dt`` defaults to ``params.eta_dt`` (a drive-train fault changes it)."""
+    check_params(params)
     eta = params.eta_dt if eta_dt is None else real(eta_dt, "eta_dt", low=0.0, low_open=True)
     return _zoh(*_drive_train_continuous(params, eta), params.ts)
 
@@ -1044,7 +1062,7 @@ def operating_point(v: float, *, params: WindTurbineParams = PARAMS, region: int
     >>> op.region, round(op.omega_g, 6), round(op.p_g)
     (2, 162.0, 4800000)
     """
-    p = params
+    p = check_params(params)
     v = float(check_wind(real(v, "v"), "v"))
     if region is not None and region not in (1, 2):
         raise ModelError(f"region: expected None, 1 or 2, got {region!r}")
@@ -1222,6 +1240,10 @@ class LPVSchedule:
         return self.A0 + self.E @ K, self.E * r[2]
 
 
+#: The largest ``n_grid`` of :func:`lpv_schedule` (each point is one root search: about 1 ms).
+MAX_LPV_GRID = 100_000
+
+
 def lpv_schedule(v_min: float | None = None, v_max: float | None = None, *, params: WindTurbineParams = PARAMS,
                  n_grid: int = 200) -> LPVSchedule:
     """The scheduling set of the LPV form over winds ``[v_min, v_max]`` (m/s), ``n_grid`` points.
@@ -1231,14 +1253,14 @@ def lpv_schedule(v_min: float | None = None, v_max: float | None = None, *, para
     picks; grid points without an equilibrium (the narrow band above the rated wind where the loop
     cycles, :func:`operating_point`) are left out of ``v_grid``.
     """
-    p = params
+    p = check_params(params)
     lo_default = float(WIND_PROFILE[:, 1].min()) * (1 - 3 * TURBULENCE_INTENSITY)
     hi_default = float(WIND_PROFILE[:, 1].max()) * (1 + 3 * TURBULENCE_INTENSITY)
-    v_lo = lo_default if v_min is None else real(v_min, "v_min", low=0.0, low_open=True)
-    v_hi = hi_default if v_max is None else real(v_max, "v_max", low=0.0, low_open=True)
+    v_lo = lo_default if v_min is None else float(check_wind(real(v_min, "v_min"), "v_min"))
+    v_hi = hi_default if v_max is None else float(check_wind(real(v_max, "v_max"), "v_max"))
     if not v_lo < v_hi:
         raise ModelError(f"v_min, v_max: expected v_min < v_max, got {v_lo}, {v_hi}")
-    n_grid = integer(n_grid, "n_grid", low=2)
+    n_grid = integer(n_grid, "n_grid", low=2, high=MAX_LPV_GRID)
     points = []
     for v in np.linspace(v_lo, v_hi, n_grid):
         try:
@@ -1268,11 +1290,11 @@ def plant_step(x: Any, *, beta_r: float, tau_g_r: float, v: float, params: WindT
     (N m), the wind ``v`` (m/s), a converter ``offset`` (N m) and the drive-train efficiency ``eta_dt``
     (default ``params.eta_dt``), all held over the sample.
     """
-    p = params
+    p = check_params(params)
     xs = array(x, "x", ndim=1).copy()
     if xs.shape != (10,):
         raise ShapeError(f"x: expected shape (10,), got {xs.shape}")
-    v = real(v, "v", low=0.0, low_open=True)
+    v = float(check_wind(real(v, "v"), "v"))
     c = _constants(p)
     phi, gam = drive_train_discretisation(p, eta_dt=eta_dt)
     tau_a = _aero(v, xs[6], xs[0], xs[2], xs[4], c, LAMBDA_GRID, BETA_GRID_DEG, CQ_TABLE)
@@ -1608,11 +1630,12 @@ def simulate(*, seed: Any, faults: Sequence[Fault] = FAULTS, duration_s: float =
     8 s of CPU; cached on disk afterwards). The loop is serial over realisations: run batches in
     parallel with :func:`fdi_lib.montecarlo.run_monte_carlo` and seed sequences.
     """
-    p = params
-    if not isinstance(p, WindTurbineParams):
-        raise ModelError(f"params: expected WindTurbineParams, got {type(p).__name__}")
+    p = check_params(params)
     duration = real(duration_s, "duration_s", low=0.0, low_open=True)
     n = max(1, int(round(duration / p.ts)))
+    if n < 2:
+        raise ModelError(f"duration_s: expected at least two samples ({2 * p.ts:g} s), "
+                         f"got {duration:g} s")
     try:
         dtype = np.dtype(dtype)
     except TypeError as exc:
