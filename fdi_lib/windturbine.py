@@ -367,7 +367,8 @@ class Settings:
         level ``alpha = Ts * rate / 3600``, split over the ``w`` onsets of a window (GLR) or the
         ``m`` candidates (Lasso test) by Bonferroni (conservative by construction).
     window : int
-        ``w`` of the windowed GLR, of the Lasso test and of the energy test (samples).
+        ``w`` of the windowed GLR, of the Lasso test and of the energy test (samples, at most
+        ``MAX_WINDOW``).
     isolation_alpha : float
         Level of each minmax test.
     isolation_extra : int

@@ -150,8 +150,7 @@ def plot_accommodation(result: ReproductionResult, fig: Any = None):
 
 
 #: Seconds of one core per realisation (the book's count: about 2 s of CPU with the four methods),
-#: the estimate with which a too large ``trials`` is refused (:func:`~fdi_lib.reproduce.windturbine.
-#: check_trials`).
+#: the estimate with which a too large ``trials`` is refused (the scoreboard's ``check_trials``).
 SECONDS_PER_REALISATION = 2.0
 
 

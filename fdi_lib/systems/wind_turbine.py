@@ -1249,7 +1249,8 @@ def lpv_schedule(v_min: float | None = None, v_max: float | None = None, *, para
     """The scheduling set of the LPV form over winds ``[v_min, v_max]`` (m/s), ``n_grid`` points.
 
     Defaults: the scenario's range, the extremes of :data:`WIND_PROFILE` widened by three turbulence
-    standard deviations (``vbar (1 -+ 3 I)``). Each grid point uses the region :func:`operating_point`
+    standard deviations (``vbar (1 -+ 3 I)``); given bounds must lie in ``WIND_RANGE_MS``,
+    ``n_grid`` at most ``MAX_LPV_GRID``. Each grid point uses the region :func:`operating_point`
     picks; grid points without an equilibrium (the narrow band above the rated wind where the loop
     cycles, :func:`operating_point`) are left out of ``v_grid``.
     """
