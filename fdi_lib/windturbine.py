@@ -62,8 +62,7 @@ from fdi_lib.sparse import diagnose
 from fdi_lib.validation import integer, real
 
 __all__ = ["SENSORS", "CANDIDATES", "SUBSYSTEMS", "METHODS", "PlantConstants", "plant_constants",
-           "Records", "records", "Calibration", "calibrate", "Design", "design", "Segments", "segments",
-           "MethodOutcome", "min_detectable", "run_zb", "run_zhang2021", "run_bz", "run_svo_bank", "run_methods",
+           "Records", "records", "Calibration", "calibrate", "Design", "design", "MethodOutcome", "min_detectable", "run_zb", "run_zhang2021", "run_bz", "run_svo_bank", "run_methods",
            "expected_candidates", "alarm_onsets", "score_alarms", "delays", "stream_alarms",
            "stream_counts"]
 
