@@ -11,7 +11,7 @@ export OPENBLAS_NUM_THREADS := 1
 export OMP_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 
-.PHONY: book book-fast test venv lock clean benchmarks student student-pdf notebooks browser-test check-book grade pdf install-check
+.PHONY: book book-fast test venv lock clean benchmarks student student-pdf notebooks browser-test check-book grade pdf install-check lint format
 
 venv: $(STAMP)
 
@@ -209,3 +209,12 @@ clean:
 ## (tools/check_install.py; _build/install-check/).
 install-check: $(STAMP)
 	$(BIN)/python tools/check_install.py --out _build/install-check
+
+## Lint and format check (ruff, configured in pyproject.toml at 100 columns; run by CI).
+## `make format` rewrites the tree in the house format.
+lint: $(STAMP)
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+
+format: $(STAMP)
+	$(BIN)/ruff format .

@@ -102,6 +102,8 @@ def glr_null_calibration(model: LTVModel, fault: FaultProfile, *, n_runs: int, s
                          alpha: float = 0.05, jobs: int = 1, u: np.ndarray | None = None) -> Calibration:
     """Law of the known-profile GLR ``l_N`` (eq. (30), last sample) over ``n_runs`` fault-free runs.
 
+    Explained in the book: :doc:`/book/zb2014/glr`.
+
     Parameters
     ----------
     model : LTVModel

@@ -82,6 +82,8 @@ class KalmanGains:
 def kalman_gains(model: LTVModel, missing: Any = None) -> KalmanGains:
     """Run the Riccati recursion (7)-(8) of the Kalman filter designed for the fault-free model.
 
+    Explained in the book: :doc:`/book/zb2014/signature`.
+
     Parameters
     ----------
     model : LTVModel

@@ -727,6 +727,8 @@ def _grouped_glr_window(eps: np.ndarray, group: np.ndarray, model: LTVModel, gai
 def first_alarm(statistic: np.ndarray, threshold: float, start: int = 0) -> np.ndarray:
     """Index of the first ``k >= start`` with ``statistic[..., k] > threshold`` (``-1`` if none).
 
+    Explained in the book: :doc:`/book/zb2014/glr`.
+
     Parameters
     ----------
     statistic : array_like

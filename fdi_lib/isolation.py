@@ -105,6 +105,8 @@ def _index(a: Sequence[int], m: int) -> tuple[np.ndarray, np.ndarray]:
 def minmax_statistic(F: np.ndarray, zeta: np.ndarray, a: Sequence[int]) -> np.ndarray:
     """Minmax statistic ``l_a`` of eq. (41) for the components ``a`` of ``theta``.
 
+    Explained in the book: :doc:`/book/zb2014/glr`.
+
     Parameters
     ----------
     F : array_like

@@ -162,6 +162,8 @@ class KitanidisGains:
 def kitanidis_gains(model: LTVModel, E: Any, missing: Any = None) -> KitanidisGains:
     """Run the covariance recursion (24a)-(24g) of the Kitanidis filter.
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     model : LTVModel

@@ -175,6 +175,8 @@ def ltv_model(*, F: MatrixLike, H: MatrixLike, Q: MatrixLike, R: MatrixLike, n_s
               x0: Any = None, P0: Any = None) -> LTVModel:
     """Build and validate an :class:`LTVModel`.
 
+    Explained in the book: :doc:`/book/zb2014/signature`.
+
     Parameters
     ----------
     F : array_like or callable

@@ -121,6 +121,8 @@ def rls_track(innovations: Any, regressor: Any, Sigma: Any, *, lam: float, P0: A
               theta0: Any = None, gains: RLSGains | None = None) -> RLSResult:
     """Track ``theta_k`` in ``eps_k = M_k theta_k + noise`` (eq. 47) by RLS with forgetting.
 
+    Explained in the book: :doc:`/book/bz/parametric-nonparametric`.
+
     Parameters
     ----------
     innovations : array_like

@@ -50,6 +50,8 @@ def _check_gains(model: LTVModel, gains: KalmanGains) -> None:
 def fault_signature(model: LTVModel, gains: KalmanGains, fault: FaultProfile) -> Signature:
     """Recursive fault-signature filter, eq. (12) (eq. (46) with an output profile ``Phi_k``).
 
+    Explained in the book: :doc:`/book/zb2014/signature`.
+
     Parameters
     ----------
     model : LTVModel

@@ -248,6 +248,8 @@ def simulate(model: LTVModel, *, rng: np.random.Generator | None = None, noise: 
              fault: FaultProfile | None = None, theta: Any = None, size: int | None = None) -> Simulation:
     """Simulate eq. (5) (eq. (3) when ``fault.Phi`` is zero).
 
+    Explained in the book: :doc:`/book/zb2014/signature`.
+
     Parameters
     ----------
     model : LTVModel

@@ -308,6 +308,8 @@ def measurements(value: Any, *, n_steps: int, width: int, name: str) -> tuple[np
 def integer(value: Any, name: str, *, low: int | None = None, high: int | None = None) -> int:
     """An integer in ``[low, high]`` (``bool`` and integral floats are rejected).
 
+    Explained in the book: :doc:`/book/notation`.
+
     Examples
     --------
     >>> integer(3, "window", low=1)

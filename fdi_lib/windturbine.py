@@ -71,8 +71,7 @@ def _instance(value: Any, kind: type, name: str) -> Any:
 
 
 __all__ = ["SENSORS", "CANDIDATES", "SUBSYSTEMS", "METHODS", "PlantConstants", "plant_constants",
-           "Records", "records", "Calibration", "calibrate", "Design", "design", "Segments", "segments",
-           "MethodOutcome", "min_detectable", "run_zb", "run_zhang2021", "run_bz", "run_svo_bank", "run_methods",
+           "Records", "records", "Calibration", "calibrate", "Design", "design", "MethodOutcome", "min_detectable", "run_zb", "run_zhang2021", "run_bz", "run_svo_bank", "run_methods",
            "expected_candidates", "alarm_onsets", "score_alarms", "delays", "stream_alarms",
            "stream_counts"]
 

@@ -29,7 +29,7 @@ def _simulate_ui(m, E, noise, u, d, Psi=None, theta=None):
 
 def _literal_kitanidis(m, E):
     """Eq. (24) transcribed literally with explicit inverses (independent second computation)."""
-    N, n = m.n_steps, m.n
+    N = m.n_steps
     Pf = m.P0 - m.P0 @ m.H[0].T @ np.linalg.inv(m.H[0] @ m.P0 @ m.H[0].T + m.R[0]) @ m.H[0] @ m.P0
     Ks = [m.P0 @ m.H[0].T @ np.linalg.inv(m.H[0] @ m.P0 @ m.H[0].T + m.R[0])]
     Pfs = [Pf]

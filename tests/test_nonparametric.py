@@ -39,7 +39,7 @@ def _bz_predictor_form(model, E):
     """Independent brute-force loop of Basseville & Zhang (27)-(28) as reconstructed in the book:
     L_k = K_k + (I - K_k H_k) E_{k-1} (E_{k-1}^T H_k^T S^-1 H_k E_{k-1})^-1 E_{k-1}^T H_k^T S^-1,
     P_{k+1} = F (I - L H) P (I - L H)^T F^T + F L R L^T F^T + Q (explicit inverses on purpose)."""
-    n, p = model.n, model.p
+    n = model.n
     P = model.P0.copy()
     Ls, Ps = [], [P]
     for k in range(model.n_steps):

@@ -130,7 +130,7 @@ def test_some_nearly_collinear_full_paths_are_refused():
     assert refused == [1, 5]
 
 
-def test_example2_path_passes_the_exact_check(example2):
+def test_example2_path_passes_the_exact_check(example2):  # noqa: F811 (the imported fixture)
     """Zhang (2021) Example 2 (condition number ~4e5), the full path of Fig. 6's record."""
     X, y, N = example2
     path = lasso_path(X, y, n_samples=N)

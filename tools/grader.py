@@ -66,7 +66,6 @@ import csv
 import hashlib
 import io
 import itertools
-import json
 import os
 import re
 import secrets

@@ -110,7 +110,7 @@ def test_caption_verbs_come_from_the_ledger(doc, caption, source):
     id = glued.group("id")
     assert id in ids, (doc, id)
     assert f"{{glue:text}}`caption-{id}-differs`" in caption, (doc, caption)
-    var = re.search(rf'^glue_caption\((\w+)\)$', source, flags=re.M)
+    var = re.search(r'^glue_caption\((\w+)\)$', source, flags=re.M)
     assert var, (doc, "the figure cell must call glue_caption(result)")
     assert re.search(rf'get\("{id}"\)\.plot\({var.group(1)}\b', source), (doc, id, source)
 

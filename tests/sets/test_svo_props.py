@@ -156,7 +156,8 @@ def test_fault_models_of_tables_1_2_contain_the_healthy_and_the_faulty_plant():
     with pytest.raises(ModelError, match="output_index"):
         sensor_bias_model(model, 3, bound=1.0)
     # a 50 % actuator fault: the nominal SVO may fire, the fault-model SVO must not
-    x = np.zeros((31, 2)); u = rng.uniform(-1, 1, (30, 1))
+    x = np.zeros((31, 2))
+    u = rng.uniform(-1, 1, (30, 1))
     for k in range(30):
         gain = 1.0 if k < 10 else 0.5
         x[k + 1] = ((model.A + rng.uniform(-1, 1) * model.A_unc[0]) @ x[k]
