@@ -49,6 +49,14 @@ def _cli(*argv: str) -> None:
     raise RuntimeError(f"exit {code}: {text[-300:]}")
 
 
+def _board(*argv: str) -> None:
+    _cli("reproduce", "windturbine-scoreboard", "--json", *argv)
+
+
+def _acc(*argv: str) -> None:
+    _cli("reproduce", "windturbine-accommodation", "--json", *argv)
+
+
 def _fault(**kw: Any) -> wt.Fault:
     return dataclasses.replace(F1, **kw)
 
@@ -393,34 +401,31 @@ CASES: dict[str, Case] = {
         "windturbine-scoreboard",
         "size",
         "trials",
-        lambda: _cli("reproduce", "windturbine-scoreboard", "--json", "--trials", "0"),
+        lambda: _board("--trials", "0"),
     ),
     "scoreboard-trials-negative": Case(
         "windturbine-scoreboard",
         "size",
         "trials",
-        lambda: _cli("reproduce", "windturbine-scoreboard", "--json", "--trials", "-3"),
+        lambda: _board("--trials", "-3"),
     ),
     "scoreboard-trials-huge": Case(
         "windturbine-scoreboard",
         "size",
         "trials",
-        lambda: _cli("reproduce", "windturbine-scoreboard", "--json", "--trials", str(10**12)),
+        lambda: _board("--trials", str(10**12)),
     ),
     "scoreboard-trials-str": Case(
         "windturbine-scoreboard",
         "type",
         "trials",
-        lambda: _cli("reproduce", "windturbine-scoreboard", "--json", "--trials", "ten"),
+        lambda: _board("--trials", "ten"),
     ),
     "scoreboard-option-unknown": Case(
         "windturbine-scoreboard",
         "unknown-name",
         "option",
-        lambda: _cli(
-            "reproduce",
-            "windturbine-scoreboard",
-            "--json",
+        lambda: _board(
             "--trials",
             "1",
             "--option",
@@ -431,22 +436,19 @@ CASES: dict[str, Case] = {
         "windturbine-accommodation",
         "size",
         "trials",
-        lambda: _cli("reproduce", "windturbine-accommodation", "--json", "--trials", "0"),
+        lambda: _acc("--trials", "0"),
     ),
     "accommodation-trials-huge": Case(
         "windturbine-accommodation",
         "size",
         "trials",
-        lambda: _cli("reproduce", "windturbine-accommodation", "--json", "--trials", str(10**12)),
+        lambda: _acc("--trials", str(10**12)),
     ),
     "accommodation-method-unknown": Case(
         "windturbine-accommodation",
         "unknown-name",
         "method",
-        lambda: _cli(
-            "reproduce",
-            "windturbine-accommodation",
-            "--json",
+        lambda: _acc(
             "--trials",
             "2",
             "--option",
@@ -457,10 +459,7 @@ CASES: dict[str, Case] = {
         "windturbine-accommodation",
         "unknown-name",
         "option",
-        lambda: _cli(
-            "reproduce",
-            "windturbine-accommodation",
-            "--json",
+        lambda: _acc(
             "--trials",
             "1",
             "--option",
@@ -471,10 +470,7 @@ CASES: dict[str, Case] = {
         "windturbine-accommodation",
         "type",
         "option",
-        lambda: _cli(
-            "reproduce",
-            "windturbine-accommodation",
-            "--json",
+        lambda: _acc(
             "--trials",
             "1",
             "--option",
