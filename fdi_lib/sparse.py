@@ -20,7 +20,7 @@ Two solvers, which must agree:
 * :func:`lasso_path` - the exact, piecewise-linear Lasso path by the LARS-Lasso homotopy of
   Efron et al. (2004), the algorithm of scikit-learn's ``lars_path(method="lasso")``, here in
   Gram form and batched over problems (:func:`lasso_path_batch`, for Monte Carlo chunks): every
-breakpoint (every change of support) comes out, with no ``lambda`` grid. Every path returned
+  breakpoint (every change of support) comes out, with no ``lambda`` grid. Every path returned
   satisfies the optimality (KKT) conditions to :data:`KKT_TOL` relative to ``lambda``, checked as
   exact arithmetic would (:func:`kkt_residual`), down to its stated float floor
   (:attr:`LassoPath.kkt_floor`); on a degenerate design (duplicated, scaled, zero or nearly
