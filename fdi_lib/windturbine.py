@@ -606,8 +606,9 @@ def score_alarms(alarms: np.ndarray, onset: int, start: int
     Examples
     --------
     >>> a = np.zeros(10, dtype=bool); a[[2, 7]] = True
-    >>> score_alarms(a, onset=5, start=1)
-    (array(1), array(True), array(7))
+    >>> count, false_alarm, detect = score_alarms(a, onset=5, start=1)
+    >>> int(count), bool(false_alarm), int(detect)   # the alarm at 2 is false, the one at 7 detects
+    (1, True, 7)
     """
     alarms = np.asarray(alarms, dtype=bool)
     onset = integer(onset, "onset", low=0, high=alarms.shape[-1])

@@ -7,7 +7,7 @@ import pytest
 
 CORE = ["fdi_lib.models", "fdi_lib.filters", "fdi_lib.signatures", "fdi_lib.glr", "fdi_lib.isolation",
         "fdi_lib.simulate", "fdi_lib.montecarlo", "fdi_lib.calibration", "fdi_lib.kitanidis", "fdi_lib.rls",
-        "fdi_lib.nonparametric", "fdi_lib.sparse", "fdi_lib.validation"]
+        "fdi_lib.nonparametric", "fdi_lib.sparse", "fdi_lib.validation", "fdi_lib.windturbine"]
 
 
 @pytest.mark.parametrize("name", CORE)
