@@ -417,8 +417,9 @@ def _toc_parts(confdir: Path) -> list[tuple[str, bool, list[str]]]:
 
 
 #: Pages the PDF has no chapter for (its bibliography is the list at the end of the book, see
-#: :class:`_NumberedParts`): the PDF's map names them without a link.
-NO_PDF_CHAPTER = ("book/bibliography",)
+#: :class:`_NumberedParts`; the library reference is online only, ``ONLINE_ONLY`` of
+#: ``tools/pdf_edition.py``): the PDF's map names them without a link.
+NO_PDF_CHAPTER = ("book/bibliography", "book/api/index")
 
 
 def book_map_markdown(confdir: Path, block: str, unlinked: tuple[str, ...] = ()) -> str:

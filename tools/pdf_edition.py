@@ -112,6 +112,28 @@ def pdf_config(src: Path, cache_dir: Path, target: Path) -> Path:
     return target
 
 
+#: The part of ``_toc.yml`` that the printed book leaves out: the library reference (book/api/),
+#: some 200 pages of signatures generated from the docstrings, is read online beside the code; the
+#: PDF's map of the book names it without a link (``NO_PDF_CHAPTER`` of ``_ext/fdi_book.py``).
+ONLINE_ONLY = "book/api/"
+
+
+def pdf_toc(src: Path, target: Path) -> Path:
+    """The book's ``_toc.yml`` without the parts whose every page is under :data:`ONLINE_ONLY`."""
+    import yaml
+
+    toc = yaml.safe_load((src / "_toc.yml").read_text())
+
+    def online_only(part: dict) -> bool:
+        files = [c.get("file", "") for c in part.get("chapters", [])]
+        return bool(files) and all(f.startswith(ONLINE_ONLY) for f in files)
+
+    toc["parts"] = [part for part in toc.get("parts", []) if not online_only(part)]
+    target.parent.mkdir(parents=True, exist_ok=True)
+    target.write_text(yaml.safe_dump(toc, sort_keys=False, allow_unicode=True))
+    return target
+
+
 def latex_errors(log: Path, context: int = 3) -> list[str]:
     """The error messages (``! ...`` and the lines after) of a LaTeX log."""
     if not log.is_file():
@@ -163,8 +185,9 @@ def build(src: Path, out: Path, executed: Path | None, html: Path | None, extra:
         shutil.rmtree(work)
     env = dict(os.environ, LATEXOPTS="-interaction=nonstopmode -halt-on-error -file-line-error",
                PYTHONPATH=os.pathsep.join(filter(None, [str(src), os.environ.get("PYTHONPATH")])))
+    toc = pdf_toc(src, out / "_toc_pdf.yml")
     cmd = [str(Path(sys.executable).with_name("jupyter-book")), "build", str(src), "--config", str(config),
-           "--path-output", str(work), "--builder", "pdflatex", "--warningiserror", "--nitpick",
+           "--toc", str(toc), "--path-output", str(work), "--builder", "pdflatex", "--warningiserror", "--nitpick",
            "--keep-going", *extra]
     print("+", " ".join(cmd), flush=True)
     done = subprocess.run(cmd, env=env)
