@@ -141,7 +141,10 @@ PAGE_CHECKS_JS = r"""
   const walker3 = document.createTreeWalker(article, NodeFilter.SHOW_TEXT, {
     acceptNode: (n) => (n.parentElement.closest('pre, code, kbd, .literal, script, style, '
                                                  + 'mjx-container, textarea, .highlight, .math, '
-                                                 + '.fdi-docstring dt')
+                                                 + '.fdi-docstring dt, '
+                                                 // the library reference: signatures, parameter
+                                                 // names and their types are code
+                                                 + '.sig, .classifier, dl.field-list dt')
       ? NodeFilter.FILTER_REJECT : NodeFilter.FILTER_ACCEPT)});
   for (let n = walker3.nextNode(); n; n = walker3.nextNode()) {
     if (n.parentElement.offsetParent === null && !n.parentElement.closest('details')) continue;
