@@ -419,7 +419,7 @@ def _toc_parts(confdir: Path) -> list[tuple[str, bool, list[str]]]:
 #: Pages the PDF has no chapter for (its bibliography is the list at the end of the book, see
 #: :class:`_NumberedParts`; the library reference is online only, ``ONLINE_ONLY`` of
 #: ``tools/pdf_edition.py``): the PDF's map names them without a link.
-NO_PDF_CHAPTER = ("book/bibliography", "book/api/index")
+NO_PDF_CHAPTER = ("book/bibliography", "book/api/")   # a trailing "/": every page below
 
 
 def book_map_markdown(confdir: Path, block: str, unlinked: tuple[str, ...] = ()) -> str:
@@ -427,7 +427,8 @@ def book_map_markdown(confdir: Path, block: str, unlinked: tuple[str, ...] = ())
     numbered chapters in order), every page of ``_toc.yml`` in it. ``block`` holds one line
     ``FILE: what the page holds`` per page but the root (indented lines continue it); a page of
     the table of contents
-    without a line, or a line for no page of it, is a build error. The pages in ``unlinked``
+    without a line, or a line for no page of it, is a build error. The pages in ``unlinked`` (an
+    entry ending in "/": every page below it)
     are named by their title, without a link."""
     what: dict[str, str] = {}
     for line in re.sub(r"\n[ \t]+", " ", block).splitlines():   # indented: continues the last
@@ -446,7 +447,8 @@ def book_map_markdown(confdir: Path, block: str, unlinked: tuple[str, ...] = ())
     rows = ["| Part | Page | What it holds |", "|---|---|---|"]
     for caption, _, chapters in parts:
         for k, f in enumerate(chapters):
-            page = (_HEADING.search((confdir / f"{f}.md").read_text()).group(2) if f in unlinked
+            plain = any(f == u or (u.endswith("/") and f.startswith(u)) for u in unlinked)
+            page = (_HEADING.search((confdir / f"{f}.md").read_text()).group(2) if plain
                     else f"{{doc}}`/{f}`")
             rows.append(f"| {caption if k == 0 else ''} | {page} | {what[f]} |")
     numbered = [f for _, num, chapters in parts if num for f in chapters]

@@ -51,6 +51,8 @@ NA = "n/a"
 
 #: No-break space: a number stays with its unit and an interval's bounds stay together, so that a
 #: narrow table cell wraps only between a rate and its interval.
+#:
+#: :meta hide-value:
 NBSP = "\u00a0"
 
 _SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")

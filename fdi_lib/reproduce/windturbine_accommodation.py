@@ -123,7 +123,7 @@ def accommodation_chunk(
 def plot_accommodation(result: ReproductionResult, fig: Any = None):
     """RMS effect on power, pitch and generator speed per sensor fault: faulty (left bar) and
     accommodated (right bar), means over the realisations."""
-    from fdi_lib.plotting import figure
+    from fdi_lib.plotting import MIN_FONT_PT, figure
 
     h = result.headline
     ids = list(h["faults"])
@@ -144,7 +144,7 @@ def plot_accommodation(result: ReproductionResult, fig: Any = None):
             color="C0",
         )
         ax.set_xticks(x, ids)
-        ax.set_title(f"RMS change, {labels[m]}", fontsize="small")
+        ax.set_title(f"RMS change, {labels[m]}", fontsize=MIN_FONT_PT)
     fig.legend(*axes[0][0].get_legend_handles_labels(), loc="outside lower center", ncol=2)
     return fig
 

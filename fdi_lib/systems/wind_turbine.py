@@ -1830,7 +1830,7 @@ def plot_scenario(run: WindTurbineRun, *, realisation: int = 0, step_s: float = 
                   fig: Any = None):
     """The scenario over its duration: wind, true pitch (blade mean), generator speed and the
     controller's region, one sample every ``step_s`` seconds of one realisation, faults shaded."""
-    from fdi_lib.plotting import figure
+    from fdi_lib.plotting import MIN_FONT_PT, figure
 
     if not isinstance(run, WindTurbineRun):
         raise ModelError(f"run: expected a WindTurbineRun, got {type(run).__name__}")
@@ -1855,7 +1855,8 @@ def plot_scenario(run: WindTurbineRun, *, realisation: int = 0, step_s: float = 
     for j, f in enumerate(run.faults):
         if on[:, j].any():
             axes[0, 0].annotate(f"F{f.id}", (run.t[np.flatnonzero(on[:, j])[0]], 1.0),
-                                xycoords=("data", "axes fraction"), fontsize="x-small", va="bottom")
+                                xycoords=("data", "axes fraction"), fontsize=MIN_FONT_PT,
+                                va="bottom")
     axes[3, 0].set_yticks([1, 2])
     axes[3, 0].set_xlabel("time (s)")
     return fig
