@@ -154,9 +154,11 @@ PAGE_CHECKS_JS = r"""
       out.push(['tex', describe(n.parentElement), around]);
     }
   }
-  // 1d. the PDF edition, when it is beside the pages, in the download menu
+  // 1d. the PDF edition, when it is beside the pages, in the download menu (a page without one,
+  // the search page, has nothing to link it from)
   const pdfLink = 'a.btn-download-book-pdf-button[href$="fdi-book.pdf"]';
-  if (pdfBeside && !document.querySelector(pdfLink)) {
+  const hasMenu = document.querySelector('.dropdown-download-buttons .dropdown-menu');
+  if (pdfBeside && hasMenu && !document.querySelector(pdfLink)) {
     out.push(['pdf', 'header', 'a PDF edition is beside the pages; the menu does not link it']);
   }
   const mathNodes = document.querySelectorAll('.math, span.math, div.math').length;
