@@ -215,6 +215,7 @@ install-check: $(STAMP)
 ## the whole tree once (issue 34), not before.
 lint: $(STAMP)
 	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
 
 format: $(STAMP)
 	$(BIN)/ruff format .

@@ -26,9 +26,13 @@ from typing import Any
 def _unique(domain: Any, target: str) -> str | None:
     """The one documented ``fdi_lib`` object whose full name ends with ``.target``, else None."""
     suffix = "." + target
-    matches = [name for name, obj in domain.objects.items()
-               if name.startswith("fdi_lib.") and (name == target or name.endswith(suffix))
-               and not obj.aliased]
+    matches = [
+        name
+        for name, obj in domain.objects.items()
+        if name.startswith("fdi_lib.")
+        and (name == target or name.endswith(suffix))
+        and not obj.aliased
+    ]
     return matches[0] if len(matches) == 1 else None
 
 
@@ -82,6 +86,7 @@ def resolve_unqualified(app: Any, env: Any, node: Any, contnode: Any) -> Any:
         return contnode if found else None
     obj = domain.objects[name]
     from sphinx.util.nodes import make_refnode
+
     return make_refnode(app.builder, node["refdoc"], obj.docname, obj.node_id, contnode, name)
 
 
@@ -116,9 +121,22 @@ def escape_bars(app: Any, what: str, name: str, obj: Any, options: Any, lines: l
 
 
 #: The sections numpydoc knows (it renders them in its own order and drops any other).
-_NUMPYDOC_SECTIONS = {"Parameters", "Attributes", "Methods", "Returns", "Yields", "Receives",
-                      "Other Parameters", "Raises", "Warns", "Warnings", "See Also", "Notes",
-                      "References", "Examples"}
+_NUMPYDOC_SECTIONS = {
+    "Parameters",
+    "Attributes",
+    "Methods",
+    "Returns",
+    "Yields",
+    "Receives",
+    "Other Parameters",
+    "Raises",
+    "Warns",
+    "Warnings",
+    "See Also",
+    "Notes",
+    "References",
+    "Examples",
+}
 #: The library's own sections (``Headline keys`` of a reproduction: its public JSON keys), cut
 #: out before numpydoc reads a docstring and set back after it, keyed by the object's name.
 _OWN_SECTIONS: dict[str, list[str]] = {}
@@ -133,7 +151,9 @@ def _is_header(lines: list[str], i: int) -> bool:
 _PARAM = re.compile(r"^(\s*$|\s+|[A-Za-z_]\w*(, [A-Za-z_]\w*)*( : .+)?$)")
 
 
-def cut_own_sections(app: Any, what: str, name: str, obj: Any, options: Any, lines: list[str]) -> None:
+def cut_own_sections(
+    app: Any, what: str, name: str, obj: Any, options: Any, lines: list[str]
+) -> None:
     """Before numpydoc: take out the sections it does not know (it would drop them).
 
     A reproduction documents its JSON contract in ``Headline keys`` and ``Paper keys`` sections,
@@ -160,8 +180,9 @@ def cut_own_sections(app: Any, what: str, name: str, obj: Any, options: Any, lin
         body.append(lines[i])
         i += 1
     if own:
-        _OWN_SECTIONS[name] = [line for title, section in own.items()
-                               for line in _param_list(title, section)]
+        _OWN_SECTIONS[name] = [
+            line for title, section in own.items() for line in _param_list(title, section)
+        ]
         lines[:] = kept
 
 
@@ -176,8 +197,9 @@ def _param_list(title: str, section: list[str]) -> list[str]:
     return [""] + [line.replace(":Parameters:", f":{title}:", 1) for line in rendered]
 
 
-def restore_own_sections(app: Any, what: str, name: str, obj: Any, options: Any,
-                         lines: list[str]) -> None:
+def restore_own_sections(
+    app: Any, what: str, name: str, obj: Any, options: Any, lines: list[str]
+) -> None:
     """After numpydoc: the sections :func:`cut_own_sections` took out, at the end."""
     lines.extend(_OWN_SECTIONS.pop(name, []))
 

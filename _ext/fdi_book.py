@@ -116,8 +116,16 @@ logger = logging.getLogger(__name__)
 # extensions it autoloads (\begin{aligned}, \boldsymbol, ...), the CommonHTML fonts, the
 # context menu and the accessibility components the menu can switch on.
 MATHJAX_ENTRY = "tex-chtml.js"
-MATHJAX_PARTS = ("tex-chtml.js", "input/tex", "output/chtml", "output/chtml.js", "ui", "a11y",
-                 "sre", "adaptors")
+MATHJAX_PARTS = (
+    "tex-chtml.js",
+    "input/tex",
+    "output/chtml",
+    "output/chtml.js",
+    "ui",
+    "a11y",
+    "sre",
+    "adaptors",
+)
 
 
 def mathjax_source() -> Path:
@@ -204,12 +212,13 @@ def _titled_proof_index(original):
         titles = self.domain.env.__dict__.get("fdi_proof_titles", {})
         renamed: dict[str, list] = {}
         for _letter, entries in content:
-            for (name, subtype, docname, anchor, extra, qualifier, descr) in entries:
+            for name, subtype, docname, anchor, extra, qualifier, descr in entries:
                 title, kind = titles.get(anchor, ("", descr))
                 title = re.sub(r"^\s*\((.*)\)\s*$", r"\1", title)  # proof_title_format " (%t)"
                 shown = f"{kind.title()}: {title}" if title else f"{kind.title()} ({name})"
                 renamed.setdefault(shown[0].upper(), []).append(
-                    (shown, subtype, docname, anchor, docname, qualifier, ""))
+                    (shown, subtype, docname, anchor, docname, qualifier, "")
+                )
         return sorted((k, sorted(v)) for k, v in renamed.items()), collapse
 
     return generate
@@ -255,8 +264,14 @@ def _occurrences(text: str):
         title, label = (head[-1][1], head[-1][2]) if head else ("", None)
         for kind, pattern in (("run", _RUN), ("plot", _PLOT)):
             for call in pattern.finditer(body):
-                yield (cell.start() + call.start(), call.group(1), kind, name.group(1) if name else None,
-                       title, label)
+                yield (
+                    cell.start() + call.start(),
+                    call.group(1),
+                    kind,
+                    name.group(1) if name else None,
+                    title,
+                    label,
+                )
 
 
 def shown_in(confdir: Path) -> dict[str, dict]:
@@ -276,7 +291,9 @@ def shown_in(confdir: Path) -> dict[str, dict]:
         if doc.count("/") < 2 or not path.is_file():  # chapters only: book/<paper>/<chapter>
             continue
         for _pos, rid, kind, name, title, label in sorted(_occurrences(path.read_text())):
-            entry = out.setdefault(rid, {"doc": doc, "figure": None, "section": title, "label": label})
+            entry = out.setdefault(
+                rid, {"doc": doc, "figure": None, "section": title, "label": label}
+            )
             if entry["doc"] == doc and kind == "plot" and name and entry["figure"] is None:
                 entry["figure"] = name
     return out
@@ -299,17 +316,32 @@ def _docstring_html(func, id_prefix: str) -> str:
     from docutils.core import publish_parts
 
     doc = re.sub(r":[\w:]+:`~?([^`]+)`", r"``\1``", inspect.getdoc(func) or "")
-    parts = publish_parts(doc, writer_name="html5", settings_overrides={
-        "report_level": 5, "halt_level": 5, "initial_header_level": 4, "doctitle_xform": False,
-        "embed_stylesheet": False, "warning_stream": False, "id_prefix": id_prefix})
+    parts = publish_parts(
+        doc,
+        writer_name="html5",
+        settings_overrides={
+            "report_level": 5,
+            "halt_level": 5,
+            "initial_header_level": 4,
+            "doctitle_xform": False,
+            "embed_stylesheet": False,
+            "warning_stream": False,
+            "id_prefix": id_prefix,
+        },
+    )
     return parts["body"]
 
 
-_GREEK = ("alpha beta gamma delta epsilon zeta eta theta iota kappa lambda mu nu xi pi rho sigma tau "
-          "upsilon phi chi psi omega").split()
+_GREEK = (
+    "alpha beta gamma delta epsilon zeta eta theta iota kappa lambda mu nu xi pi rho sigma tau "
+    "upsilon phi chi psi omega"
+).split()
 _ASCII_MATH = re.compile(
-    r"(?<![\w\\$])(?:(?P<greek>" + "|".join(_GREEK + [g.title() for g in _GREEK]) + r")|(?P<letter>[A-Za-z]))"
-    r"(?:_(?P<sub>[A-Za-z0-9]+))?(?P<arg>\([a-z]\))?(?!\w)")
+    r"(?<![\w\\$])(?:(?P<greek>"
+    + "|".join(_GREEK + [g.title() for g in _GREEK])
+    + r")|(?P<letter>[A-Za-z]))"
+    r"(?:_(?P<sub>[A-Za-z0-9]+))?(?P<arg>\([a-z]\))?(?!\w)"
+)
 
 
 def title_markdown(title: str) -> str:
@@ -333,8 +365,11 @@ def claims_markdown(rep) -> str:
     own = [c for _, c in rep.claims if not c.shown_under]
     if not own:
         under = sorted({c.shown_under for _, c in rep.claims})
-        return (f"listed under {', '.join(f'`{u}`' for u in under)}" if under
-                else "none (an illustration, or a study of ours)")
+        return (
+            f"listed under {', '.join(f'`{u}`' for u in under)}"
+            if under
+            else "none (an illustration, or a study of ours)"
+        )
     return "; ".join(f"{re.sub(r'{[^}]*}', '…', c.location)} ({c.test})" for c in own)
 
 
@@ -346,8 +381,11 @@ def catalogue_markdown(confdir: Path) -> tuple[str, list[Path]]:
     reps = {r.id: r for r in list_reproductions()}
     where = {rid: w for rid, w in shown_in(confdir).items() if rid in reps}
     order = list(where) + [rid for rid in reps if rid not in where]
-    sources = [confdir / f"{doc}.md" for doc in _toc_files(confdir)
-               if doc.count("/") >= 2 and (confdir / f"{doc}.md").is_file()]
+    sources = [
+        confdir / f"{doc}.md"
+        for doc in _toc_files(confdir)
+        if doc.count("/") >= 2 and (confdir / f"{doc}.md").is_file()
+    ]
     out = []
     current = None
     for rid in order:
@@ -366,25 +404,38 @@ def catalogue_markdown(confdir: Path) -> tuple[str, list[Path]]:
         if w is None:
             out.append("**Shown in:** no chapter yet.  ")
         elif w["figure"]:
-            out.append(f"**Shown in:** {{numref}}`{w['figure']}`, section \"{w['section']}\" of "
-                       f"{{doc}}`/{doc}`.  ")
+            out.append(
+                f'**Shown in:** {{numref}}`{w["figure"]}`, section "{w["section"]}" of '
+                f"{{doc}}`/{doc}`.  "
+            )
         elif w["label"]:
             out.append(f"**Shown in:** {{ref}}`{w['label']}` of {{doc}}`/{doc}`.  ")
         else:
-            out.append(f"**Shown in:** section \"{w['section']}\" of {{doc}}`/{doc}`.  ")
+            out.append(f'**Shown in:** section "{w["section"]}" of {{doc}}`/{doc}`.  ')
         plot = " (`--plot FILE.png` draws the figure)" if r.plot else ""
         s = book_settings(rid)
-        trials = ("" if s.trials is None else
-                  f"; {s.trials} Monte Carlo trial{'s' * (s.trials != 1)}, "
-                  + ("the paper's count" if s.trials == r.default_trials
-                     else f"the paper's {r.default_trials} with `--trials {r.default_trials}`"
-                     if r.default_trials else "the book's count"))
+        trials = (
+            ""
+            if s.trials is None
+            else f"; {s.trials} Monte Carlo trial{'s' * (s.trials != 1)}, "
+            + (
+                "the paper's count"
+                if s.trials == r.default_trials
+                else f"the paper's {r.default_trials} with `--trials {r.default_trials}`"
+                if r.default_trials
+                else "the book's count"
+            )
+        )
         out.append(f"**Command (the book's settings):** `{book_command(rid)}`{plot}{trials}.  ")
-        out.append(f"**Claims** (declared at its registration; statuses in the "
-                   f"{{ref}}`claims ledger <sec-ledger>`): {claims_markdown(r)}.\n")
-        out.append(f":::{{dropdown}} What `{rid}` computes and its headline keys\n"
-                   f"```{{raw}} html\n<div class=\"fdi-docstring\">\n{_docstring_html(r.func, rid + '-')}"
-                   f"</div>\n```\n:::\n")
+        out.append(
+            f"**Claims** (declared at its registration; statuses in the "
+            f"{{ref}}`claims ledger <sec-ledger>`): {claims_markdown(r)}.\n"
+        )
+        out.append(
+            f":::{{dropdown}} What `{rid}` computes and its headline keys\n"
+            f'```{{raw}} html\n<div class="fdi-docstring">\n{_docstring_html(r.func, rid + "-")}'
+            f"</div>\n```\n:::\n"
+        )
     modules = {Path(inspect.getsourcefile(r.func)) for r in reps.values()}
     import fdi_lib.reproduce.book as book
 
@@ -411,15 +462,20 @@ def _toc_parts(confdir: Path) -> list[tuple[str, bool, list[str]]]:
     import yaml
 
     toc = yaml.safe_load((confdir / "_toc.yml").read_text())
-    return [(part.get("caption", ""), bool(part.get("numbered")),
-             [c["file"] for c in part.get("chapters", []) if "file" in c])
-            for part in toc.get("parts", [])]
+    return [
+        (
+            part.get("caption", ""),
+            bool(part.get("numbered")),
+            [c["file"] for c in part.get("chapters", []) if "file" in c],
+        )
+        for part in toc.get("parts", [])
+    ]
 
 
 #: Pages the PDF has no chapter for (its bibliography is the list at the end of the book, see
 #: :class:`_NumberedParts`; the library reference is online only, ``ONLINE_ONLY`` of
 #: ``tools/pdf_edition.py``): the PDF's map names them without a link.
-NO_PDF_CHAPTER = ("book/bibliography", "book/api/")   # a trailing "/": every page below
+NO_PDF_CHAPTER = ("book/bibliography", "book/api/")  # a trailing "/": every page below
 
 
 def book_map_markdown(confdir: Path, block: str, unlinked: tuple[str, ...] = ()) -> str:
@@ -431,25 +487,31 @@ def book_map_markdown(confdir: Path, block: str, unlinked: tuple[str, ...] = ())
     entry ending in "/": every page below it)
     are named by their title, without a link."""
     what: dict[str, str] = {}
-    for line in re.sub(r"\n[ \t]+", " ", block).splitlines():   # indented: continues the last
+    for line in re.sub(r"\n[ \t]+", " ", block).splitlines():  # indented: continues the last
         if line.strip():
             file, sep, text = line.partition(":")
             if not sep or not text.strip():
-                raise ExtensionError(f"fdi_book: book map line {line!r}: expected "
-                                     "'FILE: what it holds'")
+                raise ExtensionError(
+                    f"fdi_book: book map line {line!r}: expected 'FILE: what it holds'"
+                )
             what[file.strip()] = text.strip()
     parts = _toc_parts(confdir)
     files = [f for _, _, chapters in parts for f in chapters]
     missing, unknown = [f for f in files if f not in what], sorted(set(what) - set(files))
     if missing or unknown:
-        raise ExtensionError(f"fdi_book: the map of the book in {MAP_DOC}.md needs one line per "
-                             f"page of _toc.yml: missing {missing}, not in _toc.yml {unknown}")
+        raise ExtensionError(
+            f"fdi_book: the map of the book in {MAP_DOC}.md needs one line per "
+            f"page of _toc.yml: missing {missing}, not in _toc.yml {unknown}"
+        )
     rows = ["| Part | Page | What it holds |", "|---|---|---|"]
     for caption, _, chapters in parts:
         for k, f in enumerate(chapters):
             plain = any(f == u or (u.endswith("/") and f.startswith(u)) for u in unlinked)
-            page = (_HEADING.search((confdir / f"{f}.md").read_text()).group(2) if plain
-                    else f"{{doc}}`/{f}`")
+            page = (
+                _HEADING.search((confdir / f"{f}.md").read_text()).group(2)
+                if plain
+                else f"{{doc}}`/{f}`"
+            )
             rows.append(f"| {caption if k == 0 else ''} | {page} | {what[f]} |")
     numbered = [f for _, num, chapters in parts if num for f in chapters]
     path = "\n".join(f"{i}. {{doc}}`/{f}`" for i, f in enumerate(numbered, 1))
@@ -462,15 +524,18 @@ def _generate_book_map(app: Sphinx, docname: str, source: list[str]) -> None:
     app.env.note_dependency(str(Path(app.confdir) / "_toc.yml"))
     confdir = Path(app.confdir)
     unlinked = NO_PDF_CHAPTER if app.builder.format == "latex" else ()
-    source[0], count = _MAP_BLOCK.subn(lambda m: book_map_markdown(confdir, m.group(1), unlinked),
-                                       source[0])
+    source[0], count = _MAP_BLOCK.subn(
+        lambda m: book_map_markdown(confdir, m.group(1), unlinked), source[0]
+    )
     if count != 1:
-        raise ExtensionError(f"fdi_book: {MAP_DOC}.md needs one ```{{fdi-book-map}} block, "
-                             f"found {count}")
+        raise ExtensionError(
+            f"fdi_book: {MAP_DOC}.md needs one ```{{fdi-book-map}} block, found {count}"
+        )
 
 
-def _add_notebook_download(app: Sphinx, pagename: str, templatename: str, context: dict,
-                           doctree) -> None:
+def _add_notebook_download(
+    app: Sphinx, pagename: str, templatename: str, context: dict, doctree
+) -> None:
     if app.builder.format != "html" or context.get("ipynb_source"):
         return
     executed = Path(app.outdir).parent / "jupyter_execute" / f"{pagename}.ipynb"
@@ -480,10 +545,17 @@ def _add_notebook_download(app: Sphinx, pagename: str, templatename: str, contex
     target = Path(app.outdir) / "_sources" / f"{pagename}.ipynb"
     target.parent.mkdir(parents=True, exist_ok=True)
     shutil.copy2(executed, target)
-    groups[0]["buttons"].insert(0, {
-        "type": "link", "url": f"{context['pathto']('_sources', 1)}/{pagename}.ipynb",
-        "text": ".ipynb", "icon": "fas fa-code", "tooltip": "Download the notebook (executed)",
-        "label": "download-notebook-button"})
+    groups[0]["buttons"].insert(
+        0,
+        {
+            "type": "link",
+            "url": f"{context['pathto']('_sources', 1)}/{pagename}.ipynb",
+            "text": ".ipynb",
+            "icon": "fas fa-code",
+            "tooltip": "Download the notebook (executed)",
+            "label": "download-notebook-button",
+        },
+    )
 
 
 def _render_notebook_downloads(app: Sphinx, exception: Exception | None) -> None:
@@ -491,9 +563,15 @@ def _render_notebook_downloads(app: Sphinx, exception: Exception | None) -> None
     roles, directives and glue references resolved (``tools/notebook_markdown.py``, loaded from
     the repository of :mod:`fdi_lib`: the student edition builds a copy of the sources without
     ``tools``)."""
-    if exception is not None or app.builder.format != "html" or not (Path(app.outdir) / "_sources").is_dir():
+    if (
+        exception is not None
+        or app.builder.format != "html"
+        or not (Path(app.outdir) / "_sources").is_dir()
+    ):
         return
-    if not (Path(app.confdir) / "_toc.yml").is_file():   # a Sphinx project, not a Jupyter Book: no numbering
+    if not (
+        Path(app.confdir) / "_toc.yml"
+    ).is_file():  # a Sphinx project, not a Jupyter Book: no numbering
         logger.info("fdi_book: no _toc.yml, the notebook downloads are left as built")
         return
     import fdi_lib
@@ -502,8 +580,12 @@ def _render_notebook_downloads(app: Sphinx, exception: Exception | None) -> None
     spec = importlib.util.spec_from_file_location("notebook_markdown", path)
     module = sys.modules.setdefault("notebook_markdown", importlib.util.module_from_spec(spec))
     spec.loader.exec_module(module)
-    done = module.convert_downloads(Path(app.outdir), Path(app.confdir),
-                                    Path(app.outdir).parent / "jupyter_execute", _book_macros(app.config))
+    done = module.convert_downloads(
+        Path(app.outdir),
+        Path(app.confdir),
+        Path(app.outdir).parent / "jupyter_execute",
+        _book_macros(app.config),
+    )
     logger.info("fdi_book: %d notebook downloads in plain Markdown", len(done))
 
 
@@ -542,6 +624,7 @@ def _plain_status_words(app: Sphinx, doctree, docname: str) -> None:
 # dependency for a few dozen symbols). It covers the maths the book writes in headings and
 # captions; an unknown command is shown by its name, never with its backslash.
 
+
 def _greek(name: str) -> str:
     base = name[3:] if name.startswith("var") else name
     case = "CAPITAL" if base[0].isupper() else "SMALL"
@@ -552,28 +635,143 @@ def _greek(name: str) -> str:
 
 
 _SYMBOLS = {
-    "le": "≤", "leq": "≤", "ge": "≥", "geq": "≥", "ne": "≠", "neq": "≠", "sim": "~",
-    "approx": "≈", "equiv": "≡", "propto": "∝", "ll": "≪", "gg": "≫", "in": "∈",
-    "notin": "∉", "subset": "⊂", "subseteq": "⊆", "cup": "∪", "cap": "∩", "emptyset": "∅",
-    "times": "×", "cdot": "·", "pm": "±", "mp": "∓", "infty": "∞", "to": "→",
-    "rightarrow": "→", "leftarrow": "←", "mapsto": "↦", "ldots": "…", "dots": "…", "cdots": "⋯",
-    "sum": "Σ", "prod": "Π", "int": "∫", "partial": "∂", "nabla": "∇", "top": "ᵀ",
-    "prime": "′", "forall": "∀", "exists": "∃", "ell": "ℓ", "circ": "∘", "otimes": "⊗",
-    "oplus": "⊕", "star": "⋆", "ast": "*", "mid": "|", "vert": "|", "lvert": "|", "rvert": "|",
-    "Vert": "‖", "lVert": "‖", "rVert": "‖", "langle": "⟨", "rangle": "⟩", "quad": " ",
-    "qquad": " ", "setminus": "∖", "perp": "⊥", "dagger": "†", "lfloor": "⌊", "rfloor": "⌋",
-    "lceil": "⌈", "rceil": "⌉", "neg": "¬", "land": "∧", "lor": "∨", "Rightarrow": "⇒",
-    "iff": "⇔", "implies": "⇒",
+    "le": "≤",
+    "leq": "≤",
+    "ge": "≥",
+    "geq": "≥",
+    "ne": "≠",
+    "neq": "≠",
+    "sim": "~",
+    "approx": "≈",
+    "equiv": "≡",
+    "propto": "∝",
+    "ll": "≪",
+    "gg": "≫",
+    "in": "∈",
+    "notin": "∉",
+    "subset": "⊂",
+    "subseteq": "⊆",
+    "cup": "∪",
+    "cap": "∩",
+    "emptyset": "∅",
+    "times": "×",
+    "cdot": "·",
+    "pm": "±",
+    "mp": "∓",
+    "infty": "∞",
+    "to": "→",
+    "rightarrow": "→",
+    "leftarrow": "←",
+    "mapsto": "↦",
+    "ldots": "…",
+    "dots": "…",
+    "cdots": "⋯",
+    "sum": "Σ",
+    "prod": "Π",
+    "int": "∫",
+    "partial": "∂",
+    "nabla": "∇",
+    "top": "ᵀ",
+    "prime": "′",
+    "forall": "∀",
+    "exists": "∃",
+    "ell": "ℓ",
+    "circ": "∘",
+    "otimes": "⊗",
+    "oplus": "⊕",
+    "star": "⋆",
+    "ast": "*",
+    "mid": "|",
+    "vert": "|",
+    "lvert": "|",
+    "rvert": "|",
+    "Vert": "‖",
+    "lVert": "‖",
+    "rVert": "‖",
+    "langle": "⟨",
+    "rangle": "⟩",
+    "quad": " ",
+    "qquad": " ",
+    "setminus": "∖",
+    "perp": "⊥",
+    "dagger": "†",
+    "lfloor": "⌊",
+    "rfloor": "⌋",
+    "lceil": "⌈",
+    "rceil": "⌉",
+    "neg": "¬",
+    "land": "∧",
+    "lor": "∨",
+    "Rightarrow": "⇒",
+    "iff": "⇔",
+    "implies": "⇒",
 }
-_ESCAPES = {",": " ", ";": " ", ":": " ", " ": " ", "!": "", "|": "‖", "{": "{", "}": "}",
-            "\\": "; ", "%": "%", "$": "$", "&": "&", "#": "#", "_": "_"}
-_FONTS = {"mathrm", "mathit", "mathbf", "mathsf", "mathcal", "mathscr", "mathfrak", "boldsymbol",
-          "bm", "text", "textrm", "textit", "textbf", "mbox", "operatorname", "mathbb"}
-_ACCENTS = {"hat": "\u0302", "widehat": "\u0302", "bar": "\u0304", "overline": "\u0305",
-            "tilde": "\u0303", "widetilde": "\u0303", "dot": "\u0307", "ddot": "\u0308",
-            "vec": "\u20d7", "check": "\u030c", "breve": "\u0306"}
-_SIZES = {"left", "right", "big", "Big", "bigg", "Bigg", "bigl", "bigr", "Bigl", "Bigr",
-          "biggl", "biggr", "displaystyle", "textstyle", "scriptstyle", "limits", "nolimits"}
+_ESCAPES = {
+    ",": " ",
+    ";": " ",
+    ":": " ",
+    " ": " ",
+    "!": "",
+    "|": "‖",
+    "{": "{",
+    "}": "}",
+    "\\": "; ",
+    "%": "%",
+    "$": "$",
+    "&": "&",
+    "#": "#",
+    "_": "_",
+}
+_FONTS = {
+    "mathrm",
+    "mathit",
+    "mathbf",
+    "mathsf",
+    "mathcal",
+    "mathscr",
+    "mathfrak",
+    "boldsymbol",
+    "bm",
+    "text",
+    "textrm",
+    "textit",
+    "textbf",
+    "mbox",
+    "operatorname",
+    "mathbb",
+}
+_ACCENTS = {
+    "hat": "\u0302",
+    "widehat": "\u0302",
+    "bar": "\u0304",
+    "overline": "\u0305",
+    "tilde": "\u0303",
+    "widetilde": "\u0303",
+    "dot": "\u0307",
+    "ddot": "\u0308",
+    "vec": "\u20d7",
+    "check": "\u030c",
+    "breve": "\u0306",
+}
+_SIZES = {
+    "left",
+    "right",
+    "big",
+    "Big",
+    "bigg",
+    "Bigg",
+    "bigl",
+    "bigr",
+    "Bigl",
+    "Bigr",
+    "biggl",
+    "biggr",
+    "displaystyle",
+    "textstyle",
+    "scriptstyle",
+    "limits",
+    "nolimits",
+}
 
 
 class _TexText:
@@ -614,10 +812,10 @@ class _TexText:
         if c != "\\":
             self.i += 1
             return "−" if c == "-" else c
-        m = re.match(r"\\([a-zA-Z]+)", self.s[self.i:])
+        m = re.match(r"\\([a-zA-Z]+)", self.s[self.i :])
         if not m:
             self.i += 2
-            return _ESCAPES.get(self.s[self.i - 1:self.i], self.s[self.i - 1:self.i])
+            return _ESCAPES.get(self.s[self.i - 1 : self.i], self.s[self.i - 1 : self.i])
         self.i += m.end()
         return self.command(m.group(1))
 
@@ -630,7 +828,9 @@ class _TexText:
             arg = self.atom()
             for prefix in ("", "MATHEMATICAL "):
                 try:
-                    return "".join(unicodedata.lookup(f"{prefix}DOUBLE-STRUCK CAPITAL {a}") for a in arg)
+                    return "".join(
+                        unicodedata.lookup(f"{prefix}DOUBLE-STRUCK CAPITAL {a}") for a in arg
+                    )
                 except KeyError:
                     continue
             return arg
@@ -670,8 +870,10 @@ def _macro_definitions(config) -> dict[str, tuple[str, int]]:
     """The book's maths macros, ``name -> (body, number of arguments)``, from MathJax's
     configuration (a macro is ``"body"`` or ``["body", n]`` there)."""
     macros = ((getattr(config, "mathjax3_config", None) or {}).get("tex") or {}).get("macros") or {}
-    return {k: (v, 0) if isinstance(v, str) else (v[0], int(v[1]) if len(v) > 1 else 0)
-            for k, v in macros.items()}
+    return {
+        k: (v, 0) if isinstance(v, str) else (v[0], int(v[1]) if len(v) > 1 else 0)
+        for k, v in macros.items()
+    }
 
 
 def _book_macros(config) -> dict[str, str]:
@@ -736,7 +938,7 @@ def _add_ext_paths(app: Sphinx, config) -> None:
     """This extension's templates (the layout without the Font Awesome script) and static files
     (tippy.js, Popper, the previews script), which the build copies to ``_static``. They live
     here, not in the book's ``_static``, where Jupyter Book adds every script to every page."""
-    if config.html_theme in ("sphinx_book_theme", "pydata_sphinx_theme"):   # themes with the script
+    if config.html_theme in ("sphinx_book_theme", "pydata_sphinx_theme"):  # themes with the script
         config.templates_path = [*config.templates_path, str(EXT_DIR / "templates")]
     config.html_static_path = [*config.html_static_path, str(EXT_DIR / "static")]
 
@@ -746,11 +948,15 @@ def without_script(html: str, name: str) -> Markup:
 
     Raises :class:`~sphinx.errors.ExtensionError` when there is no such tag: the theme has
     changed how it loads the script, and ``templates/layout.html`` must follow."""
-    tag = re.compile(r"\s*<script\b[^>]*\bsrc=\"[^\"]*" + re.escape(name) + r"[^\"]*\"[^>]*>\s*</script>")
+    tag = re.compile(
+        r"\s*<script\b[^>]*\bsrc=\"[^\"]*" + re.escape(name) + r"[^\"]*\"[^>]*>\s*</script>"
+    )
     out, count = tag.subn("", str(html))
     if count == 0:
-        raise ExtensionError(f"fdi_book: the theme's page head has no <script> for {name!r} to drop; "
-                             "update _ext/templates/layout.html")
+        raise ExtensionError(
+            f"fdi_book: the theme's page head has no <script> for {name!r} to drop; "
+            "update _ext/templates/layout.html"
+        )
     return Markup(out)
 
 
@@ -769,8 +975,9 @@ def _has_previews(scripts) -> bool:
     return any(_static_name(js).startswith(TIPPY_JS_PREFIX) for js in scripts)
 
 
-def _mathjax_where_needed(app: Sphinx, pagename: str, templatename: str, context: dict,
-                          doctree) -> None:
+def _mathjax_where_needed(
+    app: Sphinx, pagename: str, templatename: str, context: dict, doctree
+) -> None:
     """MathJax (1.2 MB with its fonts) only on a page with maths of its own.
 
     Sphinx's test also counts the maths of the pages a page's toctree includes (for the
@@ -785,13 +992,16 @@ def _mathjax_where_needed(app: Sphinx, pagename: str, templatename: str, context
     scripts = context["script_files"]
 
     def is_mathjax(js) -> bool:
-        return (_static_name(js) == app.config.mathjax_path
-                or str(js.attributes.get("body", "")).startswith("window.MathJax"))
+        return _static_name(js) == app.config.mathjax_path or str(
+            js.attributes.get("body", "")
+        ).startswith("window.MathJax")
 
     scripts[:] = [js for js in scripts if not is_mathjax(js)]
     if _has_previews(scripts):
-        lazy = {"src": context["pathto"](f"_static/{app.config.mathjax_path}", 1),
-                "config": app.config.mathjax3_config or {}}
+        lazy = {
+            "src": context["pathto"](f"_static/{app.config.mathjax_path}", 1),
+            "config": app.config.mathjax3_config or {},
+        }
         app.builder.add_js_file("", body=f"window.fdiMathJax = {json.dumps(lazy)}")
 
 
@@ -801,7 +1011,7 @@ THEME_CSS = "_static/styles/pydata-sphinx-theme.css"
 THEME_SOLID_FONT = "_static/vendor/fontawesome/webfonts/fa-solid-900.ttf"
 _ICON_RULE = re.compile(r'((?:\.fa-[\w-]+:before,?)+)\{content:"\\([0-9a-f]{4})"\}')
 # a private-use codepoint in a stylesheet, escaped ("\f107") or as the character itself
-_PUA_CONTENT = re.compile(r'\\([ef][0-9a-f]{3})\b|([\ue000-\uf8ff])')
+_PUA_CONTENT = re.compile(r"\\([ef][0-9a-f]{3})\b|([\ue000-\uf8ff])")
 
 
 def icon_codepoints(outdir: Path) -> set[int]:
@@ -810,10 +1020,16 @@ def icon_codepoints(outdir: Path) -> set[int]:
     names them all), and every icon the stylesheets draw themselves (admonitions, links: any
     private-use codepoint outside the icon classes' rules, ``--pst-icon-*`` included)."""
     theme_css = (outdir / THEME_CSS).read_text()
-    classes = {name: int(code, 16) for rule, code in _ICON_RULE.findall(theme_css)
-               for name in re.findall(r"\.(fa-[\w-]+):before", rule)}
+    classes = {
+        name: int(code, 16)
+        for rule, code in _ICON_RULE.findall(theme_css)
+        for name in re.findall(r"\.(fa-[\w-]+):before", rule)
+    }
     used: set[str] = set()
-    files = [*outdir.rglob("*.html"), *(p for p in (outdir / "_static").rglob("*.js") if p.name != "fontawesome.js")]
+    files = [
+        *outdir.rglob("*.html"),
+        *(p for p in (outdir / "_static").rglob("*.js") if p.name != "fontawesome.js"),
+    ]
     for path in files:
         used |= set(re.findall(r"\bfa-[a-z0-9-]+", path.read_text(errors="replace")))
     codes = {classes[name] for name in used if name in classes}
@@ -827,8 +1043,11 @@ def subset_icon_font(app: Sphinx, exception: Exception | None) -> None:
     """``_static/fdi-icons.woff``: the theme's solid Font Awesome font (its TrueType copy: the
     WOFF2 one needs brotli to read) with only those of :func:`icon_codepoints` it has, for
     ``fdi-icons.css``. fontTools (a matplotlib dependency) does the cutting."""
-    if (exception is not None or app.builder.format != "html"
-            or app.config.html_theme not in ("sphinx_book_theme", "pydata_sphinx_theme")):
+    if (
+        exception is not None
+        or app.builder.format != "html"
+        or app.config.html_theme not in ("sphinx_book_theme", "pydata_sphinx_theme")
+    ):
         return
     from fontTools import subset
     from fontTools.ttLib import TTFont
@@ -848,8 +1067,9 @@ def subset_icon_font(app: Sphinx, exception: Exception | None) -> None:
     logger.info("fdi_book: %d icons in %s", len(codes), ICON_FONT)
 
 
-def _add_previews_script(app: Sphinx, pagename: str, templatename: str, context: dict,
-                         doctree) -> None:
+def _add_previews_script(
+    app: Sphinx, pagename: str, templatename: str, context: dict, doctree
+) -> None:
     """``fdi-previews.js`` (after tippy.js) and ``fdi-previews.css`` on every page that
     sphinx-tippy gives previews."""
     if app.builder.format == "html" and _has_previews(context.get("script_files", [])):
@@ -880,6 +1100,8 @@ def _lighter_previews(app: Sphinx, exception: Exception | None) -> None:
         return
     for page in getattr(app.env, "tippy_data", {}).get("pages", {}).values():
         page["id_to_html"] = {key: preview_html(html) for key, html in page["id_to_html"].items()}
+
+
 # --- 11. The PDF edition -------------------------------------------------------------------
 #: File name of the PDF edition, in ``_build/pdf/`` and beside the HTML pages.
 PDF_NAME = "fdi-book.pdf"
@@ -924,8 +1146,13 @@ def publish_pdf(html_dir: Path, pdf: Path | None) -> None:
     a4_there = a4 is not None and (html_dir / A4_NAME).is_file()
     script = html_dir / "_static" / PDF_SCRIPT
     script.parent.mkdir(parents=True, exist_ok=True)
-    script.write_text(_PDF_JS % (json.dumps(PDF_NAME if pdf is not None else None),
-                                 json.dumps(A4_NAME if a4_there else None)))
+    script.write_text(
+        _PDF_JS
+        % (
+            json.dumps(PDF_NAME if pdf is not None else None),
+            json.dumps(A4_NAME if a4_there else None),
+        )
+    )
 
 
 def _pdf_script(app: Sphinx, exception: Exception | None) -> None:
@@ -933,8 +1160,11 @@ def _pdf_script(app: Sphinx, exception: Exception | None) -> None:
         return
     # the PDF of an earlier `make pdf` (``_build/pdf``, beside ``_build/html``), or one it put
     # beside the pages (book-fast keeps them): the pages link it whichever ran last
-    found = [p for p in (Path(app.outdir).parent / "pdf" / PDF_NAME, Path(app.outdir) / PDF_NAME)
-             if p.is_file()]
+    found = [
+        p
+        for p in (Path(app.outdir).parent / "pdf" / PDF_NAME, Path(app.outdir) / PDF_NAME)
+        if p.is_file()
+    ]
     publish_pdf(Path(app.outdir), found[0] if found else None)
 
 
@@ -954,10 +1184,14 @@ def _record_run_times(app: Sphinx, env) -> None:
     for docname in sorted(env.found_docs):
         data = NbMetadataCollector.get_exec_data(env, docname) or {}
         if data.get("method") == "cache" and data.get("succeeded"):
-            _write_cached_notebook(folder / f"{docname}.ipynb",
-                                   env.mystnb_config.execution_cache_path)
-        if (data.get("method") in ("force", "cache") and data.get("succeeded")
-                and data.get("runtime") is not None):
+            _write_cached_notebook(
+                folder / f"{docname}.ipynb", env.mystnb_config.execution_cache_path
+            )
+        if (
+            data.get("method") in ("force", "cache")
+            and data.get("succeeded")
+            and data.get("runtime") is not None
+        ):
             path = folder / f"{docname}.exec.json"
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_text(json.dumps({"runtime": data["runtime"]}))
@@ -1026,31 +1260,41 @@ def latex_script_fallback() -> str:
     from fdi_lib.explorables import _SCRIPTS
 
     codes = sorted({ord(c) for _, scripted in _SCRIPTS.values() for c in scripted})
-    fonts = [f"\\newfontfamily\\fdi@script{family}{{{font}}}" for family, font in SCRIPT_FALLBACK_FONTS.items()]
-    return "\n".join([
-        "\\makeatletter", *fonts,
-        r"\def\fdi@scriptfont{\edef\fdi@f{\f@family}\edef\fdi@tt{\ttdefault}\edef\fdi@sf{\sfdefault}%",
-        r"  \ifx\fdi@f\fdi@tt\fdi@scripttt\else\ifx\fdi@f\fdi@sf\fdi@scriptsf\else\fdi@scriptrm\fi\fi}",
-        # the interchar tokens are off in the group, where the character comes again
-        r"\def\fdi@script#1{{\XeTeXinterchartokenstate=\z@\iffontchar\font`#1 \else\fdi@scriptfont\fi#1}}",
-        r"\newXeTeXintercharclass\fdi@scriptclass",
-        r"\AtBeginDocument{%",
-        *(f'  \\XeTeXcharclass"{code:04X}=\\fdi@scriptclass' for code in codes),
-        r"  \count@=\z@",
-        r"  \loop\XeTeXinterchartoks\count@\fdi@scriptclass={\fdi@script}%",
-        r"  \ifnum\count@<\xe@alloc@intercharclass\advance\count@\@ne\repeat",
-        r"  \XeTeXinterchartoks\e@alloc@intercharclass@top\fdi@scriptclass={\fdi@script}%",
-        r"  \XeTeXinterchartokenstate=\@ne}",
-        "\\makeatother"])
+    fonts = [
+        f"\\newfontfamily\\fdi@script{family}{{{font}}}"
+        for family, font in SCRIPT_FALLBACK_FONTS.items()
+    ]
+    return "\n".join(
+        [
+            "\\makeatletter",
+            *fonts,
+            r"\def\fdi@scriptfont{\edef\fdi@f{\f@family}\edef\fdi@tt{\ttdefault}\edef\fdi@sf{\sfdefault}%",
+            r"  \ifx\fdi@f\fdi@tt\fdi@scripttt\else\ifx\fdi@f\fdi@sf\fdi@scriptsf\else\fdi@scriptrm\fi\fi}",
+            # the interchar tokens are off in the group, where the character comes again
+            r"\def\fdi@script#1{{\XeTeXinterchartokenstate=\z@\iffontchar\font`#1 \else\fdi@scriptfont\fi#1}}",
+            r"\newXeTeXintercharclass\fdi@scriptclass",
+            r"\AtBeginDocument{%",
+            *(f'  \\XeTeXcharclass"{code:04X}=\\fdi@scriptclass' for code in codes),
+            r"  \count@=\z@",
+            r"  \loop\XeTeXinterchartoks\count@\fdi@scriptclass={\fdi@script}%",
+            r"  \ifnum\count@<\xe@alloc@intercharclass\advance\count@\@ne\repeat",
+            r"  \XeTeXinterchartoks\e@alloc@intercharclass@top\fdi@scriptclass={\fdi@script}%",
+            r"  \XeTeXinterchartokenstate=\@ne}",
+            "\\makeatother",
+        ]
+    )
 
 
 def _latex_preamble(app: Sphinx, config) -> None:
     elements = config.latex_elements
     elements.setdefault("tableofcontents", "\\sphinxtableofcontents\n\\listoffigures\n")
-    elements["preamble"] = (elements.get("preamble", "") + "\n% fdi-book: the maths macros of the book "
-                            "(mathjax3_config in _config.yml)\n" + latex_macros(config) + "\n"
-                            "% sub- and superscript characters the text font lacks, from DejaVu\n"
-                            + latex_script_fallback() + "\n")
+    elements["preamble"] = (
+        elements.get("preamble", "") + "\n% fdi-book: the maths macros of the book "
+        "(mathjax3_config in _config.yml)\n" + latex_macros(config) + "\n"
+        "% sub- and superscript characters the text font lacks, from DejaVu\n"
+        + latex_script_fallback()
+        + "\n"
+    )
 
 
 def _latex_files(app: Sphinx) -> None:
@@ -1066,8 +1310,14 @@ def _version(confdir: Path) -> str:
     import fdi_lib
 
     try:
-        described = subprocess.run(["git", "describe", "--tags", "--always", "--dirty"], cwd=confdir,
-                                   capture_output=True, text=True, timeout=30, check=True).stdout.strip()
+        described = subprocess.run(
+            ["git", "describe", "--tags", "--always", "--dirty"],
+            cwd=confdir,
+            capture_output=True,
+            text=True,
+            timeout=30,
+            check=True,
+        ).stdout.strip()
     except (OSError, subprocess.SubprocessError):
         described = ""
     return f"{fdi_lib.__version__} (git {described})" if described else fdi_lib.__version__
@@ -1105,24 +1355,28 @@ def cover_latex(title: str, version: str, counts: dict[str, dict[str, int]]) -> 
         n = [counts[p].get(status, 0) for p in papers]
         rows.append(" & ".join([_latex_escape(status), *map(str, n), str(sum(n))]) + r" \\")
     totals = [sum(counts[p].values()) for p in papers]
-    rows.append(r"\midrule " + " & ".join(["all claims", *map(str, totals), str(sum(totals))]) + r" \\")
+    rows.append(
+        r"\midrule " + " & ".join(["all claims", *map(str, totals), str(sum(totals))]) + r" \\"
+    )
     main, _, sub = title.partition(": ")
-    return "\n".join([
-        r"\begin{titlepage}\centering",
-        r"\vspace*{3cm}{\Huge\bfseries " + _latex_escape(main) + r"\par}",
-        r"\vspace{1em}{\Large " + _latex_escape(sub) + r"\par}" if sub else "",
-        r"\vspace{2em}{\large PDF edition, version " + _latex_escape(version) + r"\par}",
-        r"\vspace{0.5em}{\large \today\par}",
-        r"\vfill",
-        r"{\large Claims of the papers checked by this edition, by status (see the claims ledger)\par}",
-        r"\vspace{1em}\small",
-        r"\begin{tabular}{l" + "r" * (len(papers) + 1) + "}",
-        r"\toprule " + head + r" \\ \midrule",
-        *rows,
-        r"\bottomrule\end{tabular}",
-        r"\vspace*{2cm}",
-        r"\end{titlepage}",
-    ])
+    return "\n".join(
+        [
+            r"\begin{titlepage}\centering",
+            r"\vspace*{3cm}{\Huge\bfseries " + _latex_escape(main) + r"\par}",
+            r"\vspace{1em}{\Large " + _latex_escape(sub) + r"\par}" if sub else "",
+            r"\vspace{2em}{\large PDF edition, version " + _latex_escape(version) + r"\par}",
+            r"\vspace{0.5em}{\large \today\par}",
+            r"\vfill",
+            r"{\large Claims of the papers checked by this edition, by status (see the claims ledger)\par}",
+            r"\vspace{1em}\small",
+            r"\begin{tabular}{l" + "r" * (len(papers) + 1) + "}",
+            r"\toprule " + head + r" \\ \midrule",
+            *rows,
+            r"\bottomrule\end{tabular}",
+            r"\vspace*{2cm}",
+            r"\end{titlepage}",
+        ]
+    )
 
 
 def _latex_cover(app: Sphinx, env) -> None:
@@ -1131,7 +1385,9 @@ def _latex_cover(app: Sphinx, env) -> None:
         return
     # the title of the book's LaTeX document (Jupyter Book puts _config.yml's title there)
     title = app.config.latex_documents[0][2] if app.config.latex_documents else app.config.project
-    app.builder.context["maketitle"] = cover_latex(title, _version(Path(app.confdir)), ledger_counts(app))
+    app.builder.context["maketitle"] = cover_latex(
+        title, _version(Path(app.confdir)), ledger_counts(app)
+    )
 
 
 class _ProtectCaptionCitations(SphinxPostTransform):
@@ -1151,11 +1407,33 @@ class _ProtectCaptionCitations(SphinxPostTransform):
 
 
 #: Terms of the PDF's index: what a student looks up, indexed where each chapter first uses them.
-INDEX_TERMS = ("GLR", "innovation", "Kalman filter", "Kitanidis filter", "set-valued observer",
-               "fault signature", "minmax", "Lasso", "RLS", "forgetting factor", "Willsky-Jones",
-               "chi-square", "false alarm", "detection delay", "isolation", "polytope",
-               "convex hull", "LPV", "LTV", "Monte Carlo", "Ljung-Box", "unknown input",
-               "claims ledger", "wind turbine", "threshold")
+INDEX_TERMS = (
+    "GLR",
+    "innovation",
+    "Kalman filter",
+    "Kitanidis filter",
+    "set-valued observer",
+    "fault signature",
+    "minmax",
+    "Lasso",
+    "RLS",
+    "forgetting factor",
+    "Willsky-Jones",
+    "chi-square",
+    "false alarm",
+    "detection delay",
+    "isolation",
+    "polytope",
+    "convex hull",
+    "LPV",
+    "LTV",
+    "Monte Carlo",
+    "Ljung-Box",
+    "unknown input",
+    "claims ledger",
+    "wind turbine",
+    "threshold",
+)
 
 
 class _IndexTerms(SphinxPostTransform):
@@ -1168,12 +1446,15 @@ class _IndexTerms(SphinxPostTransform):
     def run(self, **kwargs: Any) -> None:
         from sphinx import addnodes
 
-        patterns = [(t, re.compile(r"(?<![\w-])" + re.escape(t) + r"(?![\w-])", re.I))
-                    for t in INDEX_TERMS]
+        patterns = [
+            (t, re.compile(r"(?<![\w-])" + re.escape(t) + r"(?![\w-])", re.I)) for t in INDEX_TERMS
+        ]
         done: set[tuple[str, str]] = set()
         for par in list(self.document.findall(nodes.paragraph)):
-            if par.source is None or any(isinstance(a, (nodes.caption, nodes.title, nodes.table))
-                                         for a in _ancestors(par, self.document)):
+            if par.source is None or any(
+                isinstance(a, (nodes.caption, nodes.title, nodes.table))
+                for a in _ancestors(par, self.document)
+            ):
                 continue
             text = par.astext()
             terms = [t for t, pat in patterns if (t, par.source) not in done and pat.search(text)]
@@ -1195,9 +1476,14 @@ class _NumberedParts(SphinxPostTransform):
 
     def run(self, **kwargs: Any) -> None:
         site_map = getattr(self.config, "external_site_map", None)
-        if site_map is None or self.app.project.path2doc(self.document["source"]) != self.config.root_doc:
+        if (
+            site_map is None
+            or self.app.project.path2doc(self.document["source"]) != self.config.root_doc
+        ):
             return
-        numbered = {tree.caption: bool(tree.numbered) for tree in site_map.root.subtrees if tree.caption}
+        numbered = {
+            tree.caption: bool(tree.numbered) for tree in site_map.root.subtrees if tree.caption
+        }
 
         def depth(n: int) -> nodes.raw:
             return nodes.raw("", f"\\setcounter{{secnumdepth}}{{{n}}}\n", format="latex")
@@ -1208,12 +1494,19 @@ class _NumberedParts(SphinxPostTransform):
         # (a placeholder without text in its place)
         for section in list(self.document.findall(nodes.section)):
             rest = section.children[1:]
-            if (section.children and isinstance(section[0], nodes.title)
-                    and not "".join(c.astext() for c in rest).strip()
-                    and not any(c.next_node(nodes.image) for c in rest if isinstance(c, nodes.Element))):
+            if (
+                section.children
+                and isinstance(section[0], nodes.title)
+                and not "".join(c.astext() for c in rest).strip()
+                and not any(c.next_node(nodes.image) for c in rest if isinstance(c, nodes.Element))
+            ):
                 section.parent.remove(section)
         for section in list(self.document.findall(nodes.section)):
-            if section.get("docname") in numbered and section.children and isinstance(section[0], nodes.title):
+            if (
+                section.get("docname") in numbered
+                and section.children
+                and isinstance(section[0], nodes.title)
+            ):
                 section.parent.insert(section.parent.index(section), depth(-2))
                 section.insert(1, depth(2 if numbered[section["docname"]] else -2))
 
@@ -1222,8 +1515,14 @@ class _CaptionHTML(html.parser.HTMLParser):
     """An explorable's caption (HTML: text, ``<sub>``, ``<sup>``, ``<i>``, ``<b>``) as docutils
     inline nodes."""
 
-    KINDS = {"sub": nodes.subscript, "sup": nodes.superscript, "i": nodes.emphasis,
-             "em": nodes.emphasis, "b": nodes.strong, "strong": nodes.strong}
+    KINDS = {
+        "sub": nodes.subscript,
+        "sup": nodes.superscript,
+        "i": nodes.emphasis,
+        "em": nodes.emphasis,
+        "b": nodes.strong,
+        "strong": nodes.strong,
+    }
 
     def __init__(self):
         super().__init__(convert_charrefs=True)
@@ -1331,8 +1630,11 @@ class NumberedExplorables(SphinxTransform):
     def apply(self, **kwargs: Any) -> None:
         stem = self.env.docname.rsplit("/", 1)[-1]
         count = 0
-        for bundle in list(self.document.findall(
-                lambda n: isinstance(n, nodes.container) and n.get("nb_element") == "mime_bundle")):
+        for bundle in list(
+            self.document.findall(
+                lambda n: isinstance(n, nodes.container) and n.get("nb_element") == "mime_bundle"
+            )
+        ):
             raws = [r for r in bundle.findall(nodes.raw) if 'class="fdi-explorable"' in r.astext()]
             if not raws or isinstance(bundle.parent, nodes.figure):
                 continue
@@ -1341,11 +1643,14 @@ class NumberedExplorables(SphinxTransform):
             if found is None:
                 continue
             text = caption_text(found.group(1))
-            html_text = (html_text[:found.start()] + html_text[found.end():]).replace(
-                '<figure class="fdi-explorable"', '<div class="fdi-explorable"', 1).replace(
-                "</figure><script>", "</div><script>", 1)
-            raws[0].replace_self(nodes.raw(html_text, html_text, format="html",
-                                           classes=raws[0].get("classes", [])))
+            html_text = (
+                (html_text[: found.start()] + html_text[found.end() :])
+                .replace('<figure class="fdi-explorable"', '<div class="fdi-explorable"', 1)
+                .replace("</figure><script>", "</div><script>", 1)
+            )
+            raws[0].replace_self(
+                nodes.raw(html_text, html_text, format="html", classes=raws[0].get("classes", []))
+            )
             count += 1
             figure = nodes.figure(classes=["fdi-explorable-figure"])
             figure["names"].append(f"fig-{stem}-explore" + (f"-{count}" if count > 1 else ""))
@@ -1380,8 +1685,9 @@ def setup(app: Sphinx) -> dict[str, Any]:
     from docutils.writers._html_base import HTMLTranslator
     from myst_nb.sphinx_ import HideCodeCellNode, depart_HideCellInput
 
-    app.add_node(nodes.citation, override=True,
-                 html=(_visit_citation, HTMLTranslator.depart_citation))
+    app.add_node(
+        nodes.citation, override=True, html=(_visit_citation, HTMLTranslator.depart_citation)
+    )
     app.add_node(HideCodeCellNode, override=True, html=(_visit_hidden_cell, depart_HideCellInput))
     app.connect("env-before-read-docs", _drop_thebe_scripts, priority=900)
     app.connect("source-read", _generate_catalogue)

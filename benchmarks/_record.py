@@ -14,8 +14,17 @@ import os
 import platform
 
 
-def record(target: str, measured: float, unit: str, goal: float, *, higher_is_better: bool = False,
-           baseline: str = "", speedup: float | None = None, note: str = "") -> None:
+def record(
+    target: str,
+    measured: float,
+    unit: str,
+    goal: float,
+    *,
+    higher_is_better: bool = False,
+    baseline: str = "",
+    speedup: float | None = None,
+    note: str = "",
+) -> None:
     """Print one target line and append it to ``$FDI_BENCH_JSON`` if set.
 
     ``speedup`` is baseline time / our time (or our throughput / the baseline's), both measured in
@@ -23,8 +32,10 @@ def record(target: str, measured: float, unit: str, goal: float, *, higher_is_be
     """
     met = measured >= goal if higher_is_better else measured <= goal
     sign = ">=" if higher_is_better else "<="
-    line = (f"TARGET {target}: {measured:,.4g} {unit} (target {sign} {goal:,.4g} {unit}: "
-            f"{'met' if met else 'NOT met'}; measured / target = {measured / goal:.2f})")
+    line = (
+        f"TARGET {target}: {measured:,.4g} {unit} (target {sign} {goal:,.4g} {unit}: "
+        f"{'met' if met else 'NOT met'}; measured / target = {measured / goal:.2f})"
+    )
     if speedup is not None:
         line += f"; {speedup:,.1f}x against {baseline}"
     if note:
@@ -37,11 +48,22 @@ def record(target: str, measured: float, unit: str, goal: float, *, higher_is_be
     if os.path.exists(path):
         with open(path) as f:
             entries = json.load(f)
-    entries.append({"target": target, "measured": measured, "unit": unit, "goal": goal,
-                    "higher_is_better": higher_is_better, "met": bool(met), "baseline": baseline,
-                    "speedup": speedup, "note": note,
-                    "when": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
-                    "load_average": os.getloadavg()[0], "cores": os.cpu_count(),
-                    "machine": platform.machine()})
+    entries.append(
+        {
+            "target": target,
+            "measured": measured,
+            "unit": unit,
+            "goal": goal,
+            "higher_is_better": higher_is_better,
+            "met": bool(met),
+            "baseline": baseline,
+            "speedup": speedup,
+            "note": note,
+            "when": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+            "load_average": os.getloadavg()[0],
+            "cores": os.cpu_count(),
+            "machine": platform.machine(),
+        }
+    )
     with open(path, "w") as f:
         json.dump(entries, f, indent=1)

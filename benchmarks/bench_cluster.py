@@ -47,7 +47,12 @@ import numpy as np
 from _record import record
 
 from fdi_lib import montecarlo
-from fdi_lib.montecarlo import dask_executor, default_chunk_size, run_monte_carlo, run_monte_carlo_many
+from fdi_lib.montecarlo import (
+    dask_executor,
+    default_chunk_size,
+    run_monte_carlo,
+    run_monte_carlo_many,
+)
 from fdi_lib.reproduce.zhang2021 import Q_VALUES, example1_chunk
 
 STUDY_TRIALS = 10**5  # per column: the scale-up of issue 25
@@ -70,7 +75,9 @@ def _timed(trials: int, chunk: int, **where) -> tuple[float, float, list]:
 
 
 def _same(a: list, b: list) -> bool:
-    return all(x.keys() == y.keys() and all(np.array_equal(x[k], y[k]) for k in x) for x, y in zip(a, b))
+    return all(
+        x.keys() == y.keys() and all(np.array_equal(x[k], y[k]) for k in x) for x, y in zip(a, b)
+    )
 
 
 def _estimate(n_chunks: int, t_chunk: float, overhead: float, workers: int) -> float:
@@ -84,8 +91,12 @@ def _hours(seconds: float) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trials", type=int, default=200, help="trials per column (default 200)")
-    parser.add_argument("--chunk", type=int, default=100, help="realisations per chunk (default 100)")
-    parser.add_argument("--noop-chunks", type=int, default=300, help="empty chunks for the overhead (default 300)")
+    parser.add_argument(
+        "--chunk", type=int, default=100, help="realisations per chunk (default 100)"
+    )
+    parser.add_argument(
+        "--noop-chunks", type=int, default=300, help="empty chunks for the overhead (default 300)"
+    )
     args = parser.parse_args()
     cols, n_chunks = len(Q_VALUES), len(Q_VALUES) * -(-args.trials // args.chunk)
     warm = dict(trials=4, chunk=1)  # 20 one-realisation chunks: every worker imports and caches
@@ -99,7 +110,7 @@ def main() -> None:
         _timed(**warm, executor=ex)
         td, _, out_d = _timed(args.trials, args.chunk, executor=ex)
         t0, c0 = time.perf_counter(), time.process_time()
-        montecarlo.TASK_SECONDS, task_seconds = 0.0, montecarlo.TASK_SECONDS   # a task per chunk
+        montecarlo.TASK_SECONDS, task_seconds = 0.0, montecarlo.TASK_SECONDS  # a task per chunk
         try:
             run_monte_carlo(_noop_chunk, args.noop_chunks, seed=0, chunk_size=1, executor=ex)
         finally:
@@ -114,7 +125,9 @@ def main() -> None:
 
     if not (_same(out_d, ref) and _same(out_2, ref)):
         raise SystemExit("results differ between the configurations: the benchmark is void")
-    rate = {name: args.trials * cols / t for name, t in (("jobs=1", t1), ("dask2", td), ("jobs=2", t2))}
+    rate = {
+        name: args.trials * cols / t for name, t in (("jobs=1", t1), ("dask2", td), ("jobs=2", t2))
+    }
     per_trial = cpu1 / (args.trials * cols)  # CPU time: what a core of its own would take
     study_chunk = default_chunk_size(STUDY_TRIALS)
     t_chunk = per_trial * study_chunk
@@ -123,30 +136,60 @@ def main() -> None:
     est = {p: _estimate(n_study, t_chunk, overhead, p) for p in (2, 16)}
 
     load = os.getloadavg()[0]
-    print(f"Zhang 2021 Table I, {cols} columns x {args.trials} trials, chunks of {args.chunk} ({n_chunks} "
-          f"chunks); {os.cpu_count()} cores, load average {load:.1f} (others share the machine)")
+    print(
+        f"Zhang 2021 Table I, {cols} columns x {args.trials} trials, chunks of {args.chunk} ({n_chunks} "
+        f"chunks); {os.cpu_count()} cores, load average {load:.1f} (others share the machine)"
+    )
     print(f"  jobs=1                 : {t1:7.2f} s  {rate['jobs=1']:8.1f} trials/s")
-    print(f"  2 local Dask workers   : {td:7.2f} s  {rate['dask2']:8.1f} trials/s  "
-          f"({rate['dask2'] / rate['jobs=1']:.2f}x; cluster start {t_start:.1f} s, stop {t_stop:.1f} s)")
-    print(f"  jobs=2 (engine's pool) : {t2:7.2f} s  {rate['jobs=2']:8.1f} trials/s  "
-          f"({rate['jobs=2'] / rate['jobs=1']:.2f}x)")
-    print(f"  overhead per chunk     : {overhead * 1e3:7.2f} ms CPU of the client and scheduler, "
-          f"{overhead_wall * 1e3:.2f} ms wall ({args.noop_chunks} empty chunks)")
-    print(f"  cost per chunk         : {per_trial * 1e3:7.2f} ms per realisation, {t_chunk:.2f} s per chunk of "
-          f"{study_chunk} (CPU time at jobs=1; wall {t1 / (args.trials * cols) * 1e3:.2f} ms per realisation)")
-    print(f"  10^5 trials per column : {n_study} chunks of {study_chunk}; one process {_hours(one)}, "
-          f"2 workers {_hours(est[2])}, 16 workers {_hours(est[16])} (estimated)")
-    record("Table I of Zhang 2021 on 2 local Dask workers, throughput / jobs=1", rate["dask2"] / rate["jobs=1"],
-           "x", 1.6, higher_is_better=True, baseline="jobs=1", speedup=rate["dask2"] / rate["jobs=1"],
-           note=f"{rate['dask2']:.1f} against {rate['jobs=1']:.1f} trials/s; jobs=2 "
-                f"{rate['jobs=2'] / rate['jobs=1']:.2f}x; load average {load:.1f}")
-    record("Dask scheduler overhead per chunk", overhead * 1e3, "ms", 10.0,
-           note=f"CPU time of the client and the scheduler; {overhead_wall * 1e3:.2f} ms wall; "
-                f"{args.noop_chunks} empty chunks on 2 local workers")
-    record("10^5-trial Table I of Zhang 2021 on 16 Dask workers, estimated speed-up over one process",
-           one / est[16], "x", 12.0, higher_is_better=True,
-           note=f"one process {_hours(one)}, 16 workers {_hours(est[16])}: {n_study} chunks of {study_chunk} "
-                f"at {t_chunk:.2f} s (CPU time at jobs=1), overhead {overhead * 1e3:.2f} ms per chunk")
+    print(
+        f"  2 local Dask workers   : {td:7.2f} s  {rate['dask2']:8.1f} trials/s  "
+        f"({rate['dask2'] / rate['jobs=1']:.2f}x; cluster start {t_start:.1f} s, stop {t_stop:.1f} s)"
+    )
+    print(
+        f"  jobs=2 (engine's pool) : {t2:7.2f} s  {rate['jobs=2']:8.1f} trials/s  "
+        f"({rate['jobs=2'] / rate['jobs=1']:.2f}x)"
+    )
+    print(
+        f"  overhead per chunk     : {overhead * 1e3:7.2f} ms CPU of the client and scheduler, "
+        f"{overhead_wall * 1e3:.2f} ms wall ({args.noop_chunks} empty chunks)"
+    )
+    print(
+        f"  cost per chunk         : {per_trial * 1e3:7.2f} ms per realisation, {t_chunk:.2f} s per chunk of "
+        f"{study_chunk} (CPU time at jobs=1; wall {t1 / (args.trials * cols) * 1e3:.2f} ms per realisation)"
+    )
+    print(
+        f"  10^5 trials per column : {n_study} chunks of {study_chunk}; one process {_hours(one)}, "
+        f"2 workers {_hours(est[2])}, 16 workers {_hours(est[16])} (estimated)"
+    )
+    record(
+        "Table I of Zhang 2021 on 2 local Dask workers, throughput / jobs=1",
+        rate["dask2"] / rate["jobs=1"],
+        "x",
+        1.6,
+        higher_is_better=True,
+        baseline="jobs=1",
+        speedup=rate["dask2"] / rate["jobs=1"],
+        note=f"{rate['dask2']:.1f} against {rate['jobs=1']:.1f} trials/s; jobs=2 "
+        f"{rate['jobs=2'] / rate['jobs=1']:.2f}x; load average {load:.1f}",
+    )
+    record(
+        "Dask scheduler overhead per chunk",
+        overhead * 1e3,
+        "ms",
+        10.0,
+        note=f"CPU time of the client and the scheduler; {overhead_wall * 1e3:.2f} ms wall; "
+        f"{args.noop_chunks} empty chunks on 2 local workers",
+    )
+    record(
+        "10^5-trial Table I of Zhang 2021 on 16 Dask workers, estimated speed-up over one process",
+        one / est[16],
+        "x",
+        12.0,
+        higher_is_better=True,
+        note=f"one process {_hours(one)}, 16 workers {_hours(est[16])}: {n_study} chunks of {study_chunk} "
+        f"at {t_chunk:.2f} s (CPU time at jobs=1), overhead {overhead * 1e3:.2f} ms per chunk",
+    )
+
 
 if __name__ == "__main__":
     main()

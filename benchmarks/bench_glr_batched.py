@@ -39,33 +39,47 @@ def cpu(fn, repeat=3):
 
 
 def main() -> None:
-    F = np.array([[1.0, TS], [-WN ** 2 * TS, 1.0 - 2 * ZETA * WN * TS]])
+    F = np.array([[1.0, TS], [-(WN**2) * TS, 1.0 - 2 * ZETA * WN * TS]])
     model = ltv_model(F=F, H=np.eye(2), Q=1e-6 * np.eye(2), R=np.diag([0.2, 0.2]) ** 2, n_steps=N)
     gains = kalman_gains(model)
     rng = np.random.default_rng(0)
     eps = kalman_filter(model, simulate(model, rng=rng, size=B).y, gains=gains).innovations
-    drive = np.cumsum(rng.standard_normal((B, N)), axis=1) * 0.01     # a reference per realisation
-    col = np.array([0.0, WN ** 2 * TS])
-    Psi = col[None, None, :, None] * drive[:, :, None, None]           # (B, N, n, m)
+    drive = np.cumsum(rng.standard_normal((B, N)), axis=1) * 0.01  # a reference per realisation
+    col = np.array([0.0, WN**2 * TS])
+    Psi = col[None, None, :, None] * drive[:, :, None, None]  # (B, N, n, m)
 
     def loop():
-        return np.stack([glr_window(eps[b], model, gains, step_family(model, Psi=Psi[b]), W).statistic
-                         for b in range(B)])
+        return np.stack(
+            [
+                glr_window(eps[b], model, gains, step_family(model, Psi=Psi[b]), W).statistic
+                for b in range(B)
+            ]
+        )
 
     def batched():
         return glr_window(eps, model, gains, step_family(model, Psi=Psi), W).statistic
 
     ref, new = loop(), batched()
-    assert np.allclose(new, ref, rtol=1e-10, atol=0, equal_nan=True), "batched and per-realisation disagree"
+    assert np.allclose(new, ref, rtol=1e-10, atol=0, equal_nan=True), (
+        "batched and per-realisation disagree"
+    )
     c_loop, c_batch = cpu(loop), cpu(batched)
-    print(f"windowed GLR with per-realisation profiles, N = {N}, w = {W}, {B} realisations; "
-          f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} (CPU times are the figures)")
+    print(
+        f"windowed GLR with per-realisation profiles, N = {N}, w = {W}, {B} realisations; "
+        f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} (CPU times are the figures)"
+    )
     print(f"  one glr_window per realisation : {c_loop:6.2f} s CPU")
     print(f"  one batched glr_window         : {c_batch:6.2f} s CPU")
-    record("windowed GLR, per-realisation profiles in one pass (27 realisations, N = 1700, w = 50)",
-           c_loop / c_batch, "x", 1.5, higher_is_better=True,
-           baseline="one glr_window per realisation (CPU time)", speedup=c_loop / c_batch,
-           note="CPU time; issue 24, the wind-turbine chapter's budget")
+    record(
+        "windowed GLR, per-realisation profiles in one pass (27 realisations, N = 1700, w = 50)",
+        c_loop / c_batch,
+        "x",
+        1.5,
+        higher_is_better=True,
+        baseline="one glr_window per realisation (CPU time)",
+        speedup=c_loop / c_batch,
+        note="CPU time; issue 24, the wind-turbine chapter's budget",
+    )
 
 
 if __name__ == "__main__":

@@ -52,18 +52,29 @@ def main() -> None:
             if line.startswith("== "):
                 name, rest = line[3:].split(":", 1)
                 per[name] = float(rest.rsplit("(", 1)[1].split(" s)")[0])
-    print("seconds per student (wall, 2 kernels at once): "
-          + ", ".join(f"{k} {v:.1f}" for k, v in sorted(per.items())))
+    print(
+        "seconds per student (wall, 2 kernels at once): "
+        + ", ".join(f"{k} {v:.1f}" for k, v in sorted(per.items()))
+    )
     if full:
-        record("grade 30 students on the whole book (2 cores)", wall, "s", TARGET_S,
-               note="measured: 28 full submissions and 2 interrupt-swallowing hangs")
+        record(
+            "grade 30 students on the whole book (2 cores)",
+            wall,
+            "s",
+            TARGET_S,
+            note="measured: 28 full submissions and 2 interrupt-swallowing hangs",
+        )
     else:
         estimate = (28 * per["reference"] + 2 * per["hang"]) / JOBS
-        record("grade 30 students on the whole book (2 cores, extrapolated)", estimate, "s",
-               TARGET_S,
-               note=f"from a class of {len(per)} graded in {wall:.0f} s: (28 x reference "
-                    f"{per['reference']:.0f} s + 2 x hang {per['hang']:.0f} s) / {JOBS} kernels; "
-                    "FDI_BENCH_GRADE_FULL=1 measures the 30")
+        record(
+            "grade 30 students on the whole book (2 cores, extrapolated)",
+            estimate,
+            "s",
+            TARGET_S,
+            note=f"from a class of {len(per)} graded in {wall:.0f} s: (28 x reference "
+            f"{per['reference']:.0f} s + 2 x hang {per['hang']:.0f} s) / {JOBS} kernels; "
+            "FDI_BENCH_GRADE_FULL=1 measures the 30",
+        )
 
 
 if __name__ == "__main__":

@@ -56,8 +56,13 @@ def baseline_per_realisation(n: int) -> float:
     for i, s in enumerate(seeds):
         fault = 1 + i % 2
         noise = draw_noise(st.model, np.random.default_rng(s))
-        sim = simulate(st.model, noise=noise, u=st.u, fault=st.input_family.profile(zp.FAULT_ONSET),
-                       theta=zp.fault_theta(fault))
+        sim = simulate(
+            st.model,
+            noise=noise,
+            u=st.u,
+            fault=st.input_family.profile(zp.FAULT_ONSET),
+            theta=zp.fault_theta(fault),
+        )
         eps = kalman_filter(st.model, sim.y, st.u, gains=st.gains).innovations
         res = glr_window(eps, st.model, st.gains, st.input_family, gp.WINDOW)
         k = int(first_alarm(res.statistic, gp.THRESHOLD, start=zp.GLR_START))
@@ -87,20 +92,38 @@ def main() -> None:
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     per = baseline_per_realisation(args.baseline_runs)
     base = per * 2 * TRIALS
-    print(f"Figs 7+8, 2 x {TRIALS} runs, N = {gp.N_STEPS}, w = {gp.WINDOW}; "
-          f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} (others share the machine)")
+    print(
+        f"Figs 7+8, 2 x {TRIALS} runs, N = {gp.N_STEPS}, w = {gp.WINDOW}; "
+        f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} (others share the machine)"
+    )
     print(f"  engine, 2 jobs, cold    : {t2_cold:7.2f} s   (worker start-up included)")
     print(f"  engine, 2 jobs, warm    : {t2:7.2f} s")
     print(f"  engine, 1 job           : {t1:7.2f} s")
-    print(f"  per-realisation loop    : {per * 1e3:7.1f} ms/run x {2 * TRIALS} = {base:7.1f} s "
-          f"(timed on {args.baseline_runs} runs)")
+    print(
+        f"  per-realisation loop    : {per * 1e3:7.1f} ms/run x {2 * TRIALS} = {base:7.1f} s "
+        f"(timed on {args.baseline_runs} runs)"
+    )
     print(f"  speed-up vs loop        : {base / t2:7.1f}x (2 jobs), {base / t1:7.1f}x (1 job)")
-    print(f"  peak memory, one chunk  : {chunk_peak_mib():7.1f} MiB (tracemalloc, 250 realisations)")
+    print(
+        f"  peak memory, one chunk  : {chunk_peak_mib():7.1f} MiB (tracemalloc, 250 realisations)"
+    )
     print(f"  max RSS of this process : {rss:7.1f} MiB")
-    record(f"Figs 7+8 of Zhang & Basseville 2014, 2 x {TRIALS} runs, 2 jobs (start-up included)", t2_cold,
-           "s", 20.0, baseline="per-realisation loop, scaled", speedup=base / t2_cold)
-    record("Figs 7+8, one job / two jobs (warm workers)", t1 / t2, "x", 1.0, higher_is_better=True,
-           note=f"1 job {t1:.2f} s, 2 jobs {t2:.2f} s wall, load average {os.getloadavg()[0]:.1f}")
+    record(
+        f"Figs 7+8 of Zhang & Basseville 2014, 2 x {TRIALS} runs, 2 jobs (start-up included)",
+        t2_cold,
+        "s",
+        20.0,
+        baseline="per-realisation loop, scaled",
+        speedup=base / t2_cold,
+    )
+    record(
+        "Figs 7+8, one job / two jobs (warm workers)",
+        t1 / t2,
+        "x",
+        1.0,
+        higher_is_better=True,
+        note=f"1 job {t1:.2f} s, 2 jobs {t2:.2f} s wall, load average {os.getloadavg()[0]:.1f}",
+    )
 
 
 if __name__ == "__main__":

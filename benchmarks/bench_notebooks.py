@@ -37,8 +37,14 @@ from jupyter_client import KernelManager
 ROOT = Path(__file__).resolve().parents[1]
 TARGET_S = 30.0
 #: Chapters with a live widget (ipywidgets panel through ``fdi_lib.widgets.interactive_figure``).
-CHAPTERS = ("zb2014/signature", "zb2014/glr", "zb2014/pipeline", "zhang2021/sparse",
-            "bz/parametric-nonparametric", "rosa2013/svo")
+CHAPTERS = (
+    "zb2014/signature",
+    "zb2014/glr",
+    "zb2014/pipeline",
+    "zhang2021/sparse",
+    "bz/parametric-nonparametric",
+    "rosa2013/svo",
+)
 WIDGET_CALL = re.compile(r"^\s*interactive_figure\(", re.MULTILINE)
 #: A cell with no reply after this long fails the benchmark (no chapter cell takes a fifth of it on
 #: this machine).
@@ -111,7 +117,7 @@ def run_to_widget(chapter: str) -> dict[str, float | int | str]:
         kc.wait_for_ready(timeout=120)
         kernel = psutil.Process(km.provisioner.pid)
         started = time.perf_counter() - t0
-        for i in code[:code.index(widget) + 1]:
+        for i in code[: code.index(widget) + 1]:
             c0 = time.perf_counter()
             run_cell(kc, km, nb.cells[i].source, f"{chapter}, cell {i}")
             if time.perf_counter() - c0 > slowest:
@@ -122,22 +128,38 @@ def run_to_widget(chapter: str) -> dict[str, float | int | str]:
         kc.stop_channels()
         km.shutdown_kernel(now=True)
     first_line = nb.cells[slowest_cell].source.strip().splitlines()[0][:50]
-    return {"wall": wall, "cpu": cpu, "start": started, "cells": code.index(widget) + 1,
-            "slowest": slowest, "slowest_cell": f"cell {slowest_cell}: {first_line}"}
+    return {
+        "wall": wall,
+        "cpu": cpu,
+        "start": started,
+        "cells": code.index(widget) + 1,
+        "slowest": slowest,
+        "slowest_cell": f"cell {slowest_cell}: {first_line}",
+    }
 
 
 def main(chapters: list[str]) -> None:
-    print(f"load average {os.getloadavg()[0]:.1f}; target: widget reached in <= {TARGET_S:g} s "
-          f"(verdict on min(wall, CPU))")
+    print(
+        f"load average {os.getloadavg()[0]:.1f}; target: widget reached in <= {TARGET_S:g} s "
+        f"(verdict on min(wall, CPU))"
+    )
     print(f"{'chapter':30s} {'wall':>7s} {'CPU':>7s} {'start':>6s} {'cells':>5s}  slowest cell")
     for chapter in chapters:
         r = run_to_widget(chapter)
-        print(f"{chapter:30s} {r['wall']:6.1f}s {r['cpu']:6.1f}s {r['start']:5.1f}s {r['cells']:5d}  "
-              f"{r['slowest']:.1f} s, {r['slowest_cell']}", flush=True)
-        record(f"notebook {chapter} reaches its widget", min(r["wall"], r["cpu"]), "s", TARGET_S,
-               note=f"min of wall {r['wall']:.1f} s and CPU {r['cpu']:.1f} s (kernel and its "
-                    f"workers), load average {os.getloadavg()[0]:.1f}, fresh kernel, "
-                    f"{r['cells']} code cells")
+        print(
+            f"{chapter:30s} {r['wall']:6.1f}s {r['cpu']:6.1f}s {r['start']:5.1f}s {r['cells']:5d}  "
+            f"{r['slowest']:.1f} s, {r['slowest_cell']}",
+            flush=True,
+        )
+        record(
+            f"notebook {chapter} reaches its widget",
+            min(r["wall"], r["cpu"]),
+            "s",
+            TARGET_S,
+            note=f"min of wall {r['wall']:.1f} s and CPU {r['cpu']:.1f} s (kernel and its "
+            f"workers), load average {os.getloadavg()[0]:.1f}, fresh kernel, "
+            f"{r['cells']} code cells",
+        )
 
 
 if __name__ == "__main__":

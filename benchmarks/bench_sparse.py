@@ -72,8 +72,9 @@ def kkt_check_seconds(X: np.ndarray, y: np.ndarray, paths: Any) -> float:
     Xy = np.einsum("bri,br->bi", X, y)
     levels = np.where(np.isfinite(paths.lambdas), paths.lambdas * paths.n_samples, 0.0)
     ynorm = np.sqrt(np.einsum("br,br->b", y, y))
-    return best_cpu(lambda: _kkt_screen(Gram, Xy, ynorm, levels, paths.coefs, paths.n_points,
-                                        X.shape[1]), 5)
+    return best_cpu(
+        lambda: _kkt_screen(Gram, Xy, ynorm, levels, paths.coefs, paths.n_points, X.shape[1]), 5
+    )
 
 
 def cpu_seconds() -> float:
@@ -105,7 +106,9 @@ def main() -> None:
     ap.add_argument("--grid", type=int, default=50)
     ap.add_argument("--baseline-trials", type=int, default=1)
     args = ap.parse_args()
-    print(f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} (the machine may be shared)")
+    print(
+        f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} (the machine may be shared)"
+    )
 
     batched, single, theirs, share = [], [], [], []
     for q in (5, 20):
@@ -119,60 +122,124 @@ def main() -> None:
             steps = paths.n_points - 1
             batched.append(best_cpu(lambda: lasso_path_batch(X, y, **kw)) / 250)
             check = kkt_check_seconds(X, y, paths) / 250
-            single.append(best_cpu(lambda: [lasso_path(X[b], y[b], **kw) for b in range(100)]) / 100)
-            theirs.append(best_cpu(lambda: [sklearn_path(X[b], y[b], int(steps[b])) for b in range(100)]) / 100)
-            same = sum(np.allclose(sklearn_path(X[b], y[b], int(steps[b])) * X.shape[1] / reg.n_samples,
-                                   paths.lambdas[b, : paths.n_points[b]], rtol=1e-9) for b in range(100))
+            single.append(
+                best_cpu(lambda: [lasso_path(X[b], y[b], **kw) for b in range(100)]) / 100
+            )
+            theirs.append(
+                best_cpu(lambda: [sklearn_path(X[b], y[b], int(steps[b])) for b in range(100)])
+                / 100
+            )
+            same = sum(
+                np.allclose(
+                    sklearn_path(X[b], y[b], int(steps[b])) * X.shape[1] / reg.n_samples,
+                    paths.lambdas[b, : paths.n_points[b]],
+                    rtol=1e-9,
+                )
+                for b in range(100)
+            )
         share.append(check / batched[-1])
-        print(f"  exact paths, q = {q:2d}, to the same stopping point ({same}/100 paths with the same "
-              f"breakpoints): ours batched over 250 {1e3 * batched[-1]:.3f} ms/trial (KKT check "
-              f"{1e3 * check:.3f} ms, {100 * share[-1]:.0f} %), one at a time {1e3 * single[-1]:.3f} ms/trial; "
-              f"scikit-learn lars_path {1e3 * theirs[-1]:.3f} ms/trial: {theirs[-1] / batched[-1]:.1f}x batched, "
-              f"{theirs[-1] / single[-1]:.2f}x one at a time")
-    note = ("the slower of q = 5 and q = 20 against the faster lars_path, all to the same stopping point "
-            "(1e-4 lambda_max or the first support above 25); speed-up the smaller")
-    record("exact Lasso path per trial, batched homotopy (same stopping point as lars_path)", 1e3 * max(batched),
-           "ms", 1e3 * min(theirs), baseline="scikit-learn lars_path per trial (CPU time)",
-           speedup=min(t / b for t, b in zip(theirs, batched)), note=note)
-    record("exact Lasso path per trial, one problem at a time (same stopping point as lars_path)",
-           1e3 * max(single), "ms", 1e3 * min(theirs), baseline="scikit-learn lars_path per trial (CPU time)",
-           speedup=min(t / s for t, s in zip(theirs, single)), note=note)
-    record("KKT check of every exact Lasso path, share of the batched path time", 100 * max(share), "%", 25.0,
-           note="the larger of q = 5 and q = 20; budget: a quarter of the path time")
+        print(
+            f"  exact paths, q = {q:2d}, to the same stopping point ({same}/100 paths with the same "
+            f"breakpoints): ours batched over 250 {1e3 * batched[-1]:.3f} ms/trial (KKT check "
+            f"{1e3 * check:.3f} ms, {100 * share[-1]:.0f} %), one at a time {1e3 * single[-1]:.3f} ms/trial; "
+            f"scikit-learn lars_path {1e3 * theirs[-1]:.3f} ms/trial: {theirs[-1] / batched[-1]:.1f}x batched, "
+            f"{theirs[-1] / single[-1]:.2f}x one at a time"
+        )
+    note = (
+        "the slower of q = 5 and q = 20 against the faster lars_path, all to the same stopping point "
+        "(1e-4 lambda_max or the first support above 25); speed-up the smaller"
+    )
+    record(
+        "exact Lasso path per trial, batched homotopy (same stopping point as lars_path)",
+        1e3 * max(batched),
+        "ms",
+        1e3 * min(theirs),
+        baseline="scikit-learn lars_path per trial (CPU time)",
+        speedup=min(t / b for t, b in zip(theirs, batched)),
+        note=note,
+    )
+    record(
+        "exact Lasso path per trial, one problem at a time (same stopping point as lars_path)",
+        1e3 * max(single),
+        "ms",
+        1e3 * min(theirs),
+        baseline="scikit-learn lars_path per trial (CPU time)",
+        speedup=min(t / s for t, s in zip(theirs, single)),
+        note=note,
+    )
+    record(
+        "KKT check of every exact Lasso path, share of the batched path time",
+        100 * max(share),
+        "%",
+        25.0,
+        note="the larger of q = 5 and q = 20; budget: a quarter of the path time",
+    )
 
     fn = partial(example1_chunk, q=5, r=0.5)
     fn(trial_seeds(0, 4))  # warm-up (imports, shared gains)
     seeds = trial_seeds(0, 1000)
     t = time.process_time()
     for i in range(0, 1000, 250):
-        fn(seeds[i:i + 250])
+        fn(seeds[i : i + 250])
     per_trial = (time.process_time() - t) / 1000
-    print(f"  whole chunk: {1e3 * per_trial:.3f} ms per trial (CPU, one process, chunks of 250): "
-          f"{42_000 * per_trial:.1f} s of CPU for the two tables")
-    record("Zhang 2021 Tables I and II from CPU time: 42,000 trials x CPU per trial / 2 cores",
-           42_000 * per_trial / 2, "s", 20.0, note="what two idle cores would take, workers' start-up excluded")
+    print(
+        f"  whole chunk: {1e3 * per_trial:.3f} ms per trial (CPU, one process, chunks of 250): "
+        f"{42_000 * per_trial:.1f} s of CPU for the two tables"
+    )
+    record(
+        "Zhang 2021 Tables I and II from CPU time: 42,000 trials x CPU per trial / 2 cores",
+        42_000 * per_trial / 2,
+        "s",
+        20.0,
+        note="what two idle cores would take, workers' start-up excluded",
+    )
 
     run_monte_carlo(fn, 8, seed=0, jobs=args.jobs, chunk_size=2)  # start the workers
     many, many_cpu = tables(args.jobs)
     one, one_cpu = tables(1)
     load = os.getloadavg()[0]
-    print(f"  Tables I+II (2 x 21 x 1000 trials): {many:.2f} s on {args.jobs} jobs ({many_cpu:.1f} s of CPU in "
-          f"all processes), {one:.2f} s on 1 job ({one_cpu:.1f} s of CPU) (load average {load:.1f}): "
-          f"{one_cpu / args.jobs:.1f} s on {args.jobs} idle cores")
-    record(f"Zhang 2021 Tables I and II, 2 x 21 x 1000 trials, {args.jobs} jobs (warm workers)", many, "s", 20.0,
-           note=f"wall time, load average {load:.1f}")
-    record("Zhang 2021 Tables I and II, 2 x 21 x 1000 trials, 1 job", one, "s", 20.0,
-           note=f"wall time, load average {load:.1f}")
-    record(f"Zhang 2021 Tables I and II, one job / {args.jobs} jobs", one / many, "x", 1.0, higher_is_better=True,
-           note=f"1 job {one:.2f} s, {args.jobs} jobs {many:.2f} s wall, load average {load:.1f}; CPU of all "
-                f"processes {one_cpu:.1f} s (1 job), {many_cpu:.1f} s ({args.jobs} jobs)")
+    print(
+        f"  Tables I+II (2 x 21 x 1000 trials): {many:.2f} s on {args.jobs} jobs ({many_cpu:.1f} s of CPU in "
+        f"all processes), {one:.2f} s on 1 job ({one_cpu:.1f} s of CPU) (load average {load:.1f}): "
+        f"{one_cpu / args.jobs:.1f} s on {args.jobs} idle cores"
+    )
+    record(
+        f"Zhang 2021 Tables I and II, 2 x 21 x 1000 trials, {args.jobs} jobs (warm workers)",
+        many,
+        "s",
+        20.0,
+        note=f"wall time, load average {load:.1f}",
+    )
+    record(
+        "Zhang 2021 Tables I and II, 2 x 21 x 1000 trials, 1 job",
+        one,
+        "s",
+        20.0,
+        note=f"wall time, load average {load:.1f}",
+    )
+    record(
+        f"Zhang 2021 Tables I and II, one job / {args.jobs} jobs",
+        one / many,
+        "x",
+        1.0,
+        higher_is_better=True,
+        note=f"1 job {one:.2f} s, {args.jobs} jobs {many:.2f} s wall, load average {load:.1f}; CPU of all "
+        f"processes {one_cpu:.1f} s (1 job), {many_cpu:.1f} s ({args.jobs} jobs)",
+    )
 
     t = time.perf_counter()
     reproduce("zhang2021-lambda-rule", jobs=args.jobs)
     rule = time.perf_counter() - t
-    print(f"  lambda-rule variants (5 x 200 trials, full paths, + 2 x 200 initial-state runs): {rule:.2f} s")
-    record(f"Zhang 2021 lambda-rule variants (zhang2021-lambda-rule), {args.jobs} jobs", rule, "s", 2.0,
-           note=f"wall time, load average {os.getloadavg()[0]:.1f}")
+    print(
+        f"  lambda-rule variants (5 x 200 trials, full paths, + 2 x 200 initial-state runs): {rule:.2f} s"
+    )
+    record(
+        f"Zhang 2021 lambda-rule variants (zhang2021-lambda-rule), {args.jobs} jobs",
+        rule,
+        "s",
+        2.0,
+        note=f"wall time, load average {os.getloadavg()[0]:.1f}",
+    )
 
     model = ex.example1_model()
     trials = ex.draw_trials(model, trial_rngs(trial_seeds(0, args.baseline_trials)), q=5)
@@ -184,9 +251,11 @@ def main() -> None:
         for lam in np.geomspace(lam_max, LAMBDA_RATIO * lam_max, args.grid):
             lasso_cvxpy(reg.X[b], reg.y[b], lam, n_samples=reg.n_samples)
     base = (time.perf_counter() - t) / args.baseline_trials
-    print(f"  cvxpy on a {args.grid}-point lambda grid: {base:.2f} s per trial "
-          f"({args.baseline_trials} trial(s)): {42_000 * base / args.jobs:,.0f} s for the two tables "
-          f"on {args.jobs} jobs, {42_000 * base / args.jobs / many:,.0f}x the exact batched route")
+    print(
+        f"  cvxpy on a {args.grid}-point lambda grid: {base:.2f} s per trial "
+        f"({args.baseline_trials} trial(s)): {42_000 * base / args.jobs:,.0f} s for the two tables "
+        f"on {args.jobs} jobs, {42_000 * base / args.jobs / many:,.0f}x the exact batched route"
+    )
 
 
 if __name__ == "__main__":

@@ -40,8 +40,8 @@ from fdi_lib.threads import single_threaded_blas
 TEMPLATE_TARGET_MS = 0.5
 EXACT_TARGET_MS = 5.0
 EXACT_STEPS = 2
-BATCH = 100        # records stepped together (the Figs 11-12 study has 100 per reading)
-ONE_BY_ONE = 10    # of which run one at a time for the ratio
+BATCH = 100  # records stepped together (the Figs 11-12 study has 100 per reading)
+ONE_BY_ONE = 10  # of which run one at a time for the ratio
 
 
 def _models(run, kind):
@@ -64,13 +64,17 @@ def main() -> None:
         res = run_svo(models, run.u, run.y, UAV_X0, N=N)
         st = (res.step_time + build) * 1e3
         med = float(np.median(st))
-        print(f"N = {N}: median {med:.3f} ms  p90 {np.percentile(st, 90):.3f} ms  max {st.max():.2f} ms  "
-              f"(model share {build * 1e3:.3f} ms)  ratio to the {TEMPLATE_TARGET_MS} ms target "
-              f"{med / TEMPLATE_TARGET_MS:.2f}  alarm: {res.empty_at}")
+        print(
+            f"N = {N}: median {med:.3f} ms  p90 {np.percentile(st, 90):.3f} ms  max {st.max():.2f} ms  "
+            f"(model share {build * 1e3:.3f} ms)  ratio to the {TEMPLATE_TARGET_MS} ms target "
+            f"{med / TEMPLATE_TARGET_MS:.2f}  alarm: {res.empty_at}"
+        )
         counts = counts or res
 
-    print("\n== reference: the same N = 1 run with vertices by qhull (basis route off, as before issue 14's"
-          " speed-up)")
+    print(
+        "\n== reference: the same N = 1 run with vertices by qhull (basis route off, as before issue 14's"
+        " speed-up)"
+    )
     models, build = _models(run, "nominal")
     fast = run_svo(models, run.u, run.y, UAV_X0)
     polytope._MAX_BASES = 0
@@ -81,8 +85,10 @@ def main() -> None:
         polytope._MAX_BASES = max_bases
         polytope._bases.cache_clear()
     med_fast, med_ref = (float(np.median(r.step_time + build)) * 1e3 for r in (fast, ref))
-    print(f"qhull route: median {med_ref:.3f} ms, bases: {med_fast:.3f} ms per update "
-          f"(speed-up x{med_ref / med_fast:.1f}); same alarm: {fast.empty_at == ref.empty_at}")
+    print(
+        f"qhull route: median {med_ref:.3f} ms, bases: {med_fast:.3f} ms per update "
+        f"(speed-up x{med_ref / med_fast:.1f}); same alarm: {fast.empty_at == ref.empty_at}"
+    )
 
     print("\n== joint horizon form (eq. 3, shared disturbances), N = 2, first 1 s")
     models, build = _models(run, "nominal")
@@ -101,12 +107,16 @@ def main() -> None:
         res = run_svo(models, run.u, run.y, UAV_X0)
         total += res.step_time + build
         print(f"{kind:>9}: median {np.median(res.step_time + build) * 1e3:.3f} ms")
-    print(f"     bank: median {np.median(total) * 1e3:.3f} ms per sample, "
-          f"{np.mean(total * 1e3 > 10.0) * 100:.1f} % of samples above Ts = 10 ms")
+    print(
+        f"     bank: median {np.median(total) * 1e3:.3f} ms per sample, "
+        f"{np.mean(total * 1e3 > 10.0) * 100:.1f} % of samples above Ts = 10 ms"
+    )
 
     print(f"\n== many records at once (TemplateBatch), nominal SVOs of {BATCH} healthy 6 s records")
-    runs = uav.simulate_many([("none", "step")] * BATCH,
-                             [np.random.default_rng(s) for s in np.random.SeedSequence(1).spawn(BATCH)])
+    runs = uav.simulate_many(
+        [("none", "step")] * BATCH,
+        [np.random.default_rng(s) for s in np.random.SeedSequence(1).spawn(BATCH)],
+    )
     seqs = [uav.svo_models(r, "nominal") for r in runs]
     u, y = np.stack([r.u for r in runs]), np.stack([r.y for r in runs])
     c0 = time.process_time()
@@ -116,28 +126,43 @@ def main() -> None:
     one = [run_svo(m, r.u, r.y, UAV_X0) for m, r in zip(seqs[:ONE_BY_ONE], runs[:ONE_BY_ONE])]
     c_one = (time.process_time() - c0) / (ONE_BY_ONE * len(runs[0].u))
     same = [o.empty_at for o in one] == list(many.empty_at[:ONE_BY_ONE])
-    print(f"CPU per observer and sample: batch {c_many * 1e6:.1f} us, one at a time {c_one * 1e6:.1f} us "
-          f"(first {ONE_BY_ONE} records; x{c_one / c_many:.1f}); same alarms: {same}")
+    print(
+        f"CPU per observer and sample: batch {c_many * 1e6:.1f} us, one at a time {c_one * 1e6:.1f} us "
+        f"(first {ONE_BY_ONE} records; x{c_one / c_many:.1f}); same alarms: {same}"
+    )
 
-    print("\n== exact rule, 2-D example of the book, horizon N: one-step hulls per level (recursion)")
+    print(
+        "\n== exact rule, 2-D example of the book, horizon N: one-step hulls per level (recursion)"
+    )
     toy = toy_model()
     x, u1, y1 = simulate_toy(toy, rng=np.random.default_rng(0), steps=25)
     for N in range(1, 7):
         c0 = time.process_time()
         res = run_svo(toy, u1, y1, toy_prior(), N=N, method="exact")
         ms = (time.process_time() - c0) * 1e3 / len(u1)
-        print(f"N = {N}: {ms:.2f} ms CPU per update ({2 ** N} vertex sequences for the oldest set), "
-              f"max facets {res.n_facets.max()}, alarm: {res.empty_at}")
+        print(
+            f"N = {N}: {ms:.2f} ms CPU per update ({2**N} vertex sequences for the oldest set), "
+            f"max facets {res.n_facets.max()}, alarm: {res.empty_at}"
+        )
 
     print(f"\n== exact rule (vertex images + hulls, scaled), first {EXACT_STEPS} updates")
     short = slice(0, EXACT_STEPS)
     for N in (1, 2, 3):
         models, build = _models(run, "nominal")
-        res = run_svo(models, run.u[short], run.y[:EXACT_STEPS + 1], UAV_X0, N=N, method="exact",
-                      scale=uav.svo_scale())
+        res = run_svo(
+            models,
+            run.u[short],
+            run.y[: EXACT_STEPS + 1],
+            UAV_X0,
+            N=N,
+            method="exact",
+            scale=uav.svo_scale(),
+        )
         st = (res.step_time + build) * 1e3
-        print(f"N = {N}: per update {', '.join(f'{v:.1f}' for v in st)} ms "
-              f"(target {EXACT_TARGET_MS} ms), vertices {res.n_vertices.tolist()}")
+        print(
+            f"N = {N}: per update {', '.join(f'{v:.1f}' for v in st)} ms "
+            f"(target {EXACT_TARGET_MS} ms), vertices {res.n_vertices.tolist()}"
+        )
 
 
 if __name__ == "__main__":

@@ -45,8 +45,14 @@ from _record import record  # noqa: E402
 from fdi_lib.explorables import explorable  # noqa: E402
 from fdi_lib.plotting import DISPLAY_DPI, RASTER_SCALE  # noqa: E402
 from fdi_lib.redraw import render  # noqa: E402
-from fdi_lib.widgets import (_encode_png, bz, rosa2013, zb2014, zb2014_pipeline,  # noqa: E402
-                             zhang2021)
+from fdi_lib.widgets import (
+    _encode_png,
+    bz,
+    rosa2013,
+    zb2014,
+    zb2014_pipeline,  # noqa: E402
+    zhang2021,
+)
 from fdi_lib.widgets.explorables import EXPLORABLES  # noqa: E402
 
 TARGET_MS = 100.0
@@ -55,9 +61,15 @@ FRAMES_TARGET_S = 2.5
 PAGE_TARGET_MB = 3.0
 REPEATS = 5
 #: The widgets' caches of results per slider value (what does not depend on a slider stays)
-CACHE_CLEARS = (zb2014._GLR_CACHE.clear, zb2014._glr_record.cache_clear, zb2014_pipeline._GLR_CACHE.clear,
-                zb2014_pipeline._noise_innovations.cache_clear, zhang2021._trial_path.cache_clear,
-                bz._record.cache_clear, bz._rls_gains.cache_clear)
+CACHE_CLEARS = (
+    zb2014._GLR_CACHE.clear,
+    zb2014._glr_record.cache_clear,
+    zb2014_pipeline._GLR_CACHE.clear,
+    zb2014_pipeline._noise_innovations.cache_clear,
+    zhang2021._trial_path.cache_clear,
+    bz._record.cache_clear,
+    bz._rls_gains.cache_clear,
+)
 
 # widget: (callback, the slider moved, two values it alternates between; the second value of a
 # fault size is not on the explorable's grid, whose GLR records batched_glr computes together)
@@ -65,7 +77,11 @@ WIDGETS = {
     "explore_signature (onset)": (zb2014.explore_signature, "onset", (101, 201)),
     "explore_glr (fault size)": (zb2014.explore_glr, "fault_size", (1.5, 2.5)),
     "explore_glr (window)": (zb2014.explore_glr, "window", (100, 50)),
-    "explore_pipeline (fault size)": (zb2014_pipeline.explore_pipeline, "fault_size_e5", (-2.0, -3.0)),
+    "explore_pipeline (fault size)": (
+        zb2014_pipeline.explore_pipeline,
+        "fault_size_e5",
+        (-2.0, -3.0),
+    ),
     "explore_pipeline (window)": (zb2014_pipeline.explore_pipeline, "window", (160, 80)),
     "explore_sparse (lambda)": (zhang2021.explore_sparse, "lam_scale", (1.0, 0.3)),
     "explore_sparse (q)": (zhang2021.explore_sparse, "q", (5, 6)),
@@ -83,7 +99,6 @@ WIDGETS = {
 }
 
 
-
 def _cpu_ms(f) -> float:
     c0 = time.process_time()
     f()
@@ -99,7 +114,7 @@ def reset_caches() -> None:
 def bench_widget(name: str) -> None:
     callback, slider, values = WIDGETS[name]
     fig = callback(**{slider: values[0]})
-    fig.set_dpi(DISPLAY_DPI * RASTER_SCALE)   # the live widget's resolution
+    fig.set_dpi(DISPLAY_DPI * RASTER_SCALE)  # the live widget's resolution
     render(fig)
     moves, full, png = [], [], []
 
@@ -119,7 +134,7 @@ def bench_widget(name: str) -> None:
             render(fig)
 
         moves.append(_cpu_ms(move))
-        png.append(_cpu_ms(lambda: _encode_png(fig)))   # what widget_png adds to the render
+        png.append(_cpu_ms(lambda: _encode_png(fig)))  # what widget_png adds to the render
         at(values[1])
 
         def move_all():
@@ -133,9 +148,16 @@ def bench_widget(name: str) -> None:
     plt.close(fig)
     med = statistics.median(moves)
     verdict = "ok" if med <= AIM_MS else "ok (over the 60 ms aim)" if med <= TARGET_MS else "over"
-    print(f"{name:32s} {med:6.0f} ms {statistics.median(full):9.0f} ms {statistics.median(png):7.0f} ms  {verdict}")
-    record(f"live widget redraw, {name} (CPU, move)", med, "ms", TARGET_MS,
-           note=f"all axes redrawn {statistics.median(full):.0f} ms; PNG {statistics.median(png):.0f} ms")
+    print(
+        f"{name:32s} {med:6.0f} ms {statistics.median(full):9.0f} ms {statistics.median(png):7.0f} ms  {verdict}"
+    )
+    record(
+        f"live widget redraw, {name} (CPU, move)",
+        med,
+        "ms",
+        TARGET_MS,
+        note=f"all axes redrawn {statistics.median(full):.0f} ms; PNG {statistics.median(png):.0f} ms",
+    )
 
 
 def bench_explorable(name: str) -> None:
@@ -144,7 +166,9 @@ def bench_explorable(name: str) -> None:
     ex = explorable(callback, grid, caption=name)
     cpu = time.process_time() - t0
     n = len(ex.frames)
-    print(f"{name:28s} {n:4d} frames {cpu:6.2f} s ({1e3 * cpu / n:4.0f} ms/frame) page {ex.nbytes / 1e6:5.2f} MB")
+    print(
+        f"{name:28s} {n:4d} frames {cpu:6.2f} s ({1e3 * cpu / n:4.0f} ms/frame) page {ex.nbytes / 1e6:5.2f} MB"
+    )
     record(f"explorable {name}, {n} frames (CPU)", cpu, "s", FRAMES_TARGET_S)
     record(f"explorable {name}, page weight", ex.nbytes / 1e6, "MB", PAGE_TARGET_MB)
 
@@ -155,12 +179,16 @@ def main() -> None:
     args = parser.parse_args()
     if not args.no_explorables:
         # first, with the widgets' per-process caches cold, as in a chapter
-        print(f"load average {os.getloadavg()[0]:.1f}; explorables: target {FRAMES_TARGET_S:g} s "
-              f"of CPU per cell, {PAGE_TARGET_MB:g} MB per page")
+        print(
+            f"load average {os.getloadavg()[0]:.1f}; explorables: target {FRAMES_TARGET_S:g} s "
+            f"of CPU per cell, {PAGE_TARGET_MB:g} MB per page"
+        )
         for name in EXPLORABLES:
             bench_explorable(name)
-    print(f"load average {os.getloadavg()[0]:.1f}; live widgets: target {TARGET_MS:g} ms (aim {AIM_MS:g} ms) "
-          f"of CPU per redraw, median of {REPEATS} moves")
+    print(
+        f"load average {os.getloadavg()[0]:.1f}; live widgets: target {TARGET_MS:g} ms (aim {AIM_MS:g} ms) "
+        f"of CPU per redraw, median of {REPEATS} moves"
+    )
     print(f"{'widget':32s} {'move':>9s} {'all axes':>12s} {'+ PNG':>10s}  verdict")
     for name in WIDGETS:
         bench_widget(name)

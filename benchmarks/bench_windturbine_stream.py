@@ -34,8 +34,9 @@ LONG_S = 800.0
 MEMORY_RATIO_GOAL = 1.2
 
 
-def _peak_and_rate(d: W.Design, start: int, rec: W.Records, n: int,
-                   method: str) -> tuple[float, float]:
+def _peak_and_rate(
+    d: W.Design, start: int, rec: W.Records, n: int, method: str
+) -> tuple[float, float]:
     y, u = rec.y[0, :n].copy(), rec.u[0, :n].copy()
     tracemalloc.start()
     t0 = time.process_time()
@@ -54,15 +55,25 @@ def main() -> None:
     with blas_single_thread():
         for method in W.METHODS:
             # warm the caches
-            W.stream_counts(d, rec.y[0, :d.N], rec.u[0, :d.N], start, methods=(method,))
+            W.stream_counts(d, rec.y[0, : d.N], rec.u[0, : d.N], start, methods=(method,))
             short, _ = _peak_and_rate(d, start, rec, n_short, method)
             long_, rate = _peak_and_rate(d, start, rec, n_long, method)
-            record(f"wind-turbine stream {method}: samples per second (one core)", rate,
-                   "samples/s", 100.0, higher_is_better=True, note=f"{LONG_S:g} s stream")
-            record(f"wind-turbine stream {method}: peak memory {LONG_S:g} s / {SHORT_S:g} s",
-                   long_ / short, "ratio", MEMORY_RATIO_GOAL,
-                   note=f"{long_ / 1e6:.1f} MB and {short / 1e6:.1f} MB; a whole-record detector: "
-                        f"{LONG_S / SHORT_S:g}")
+            record(
+                f"wind-turbine stream {method}: samples per second (one core)",
+                rate,
+                "samples/s",
+                100.0,
+                higher_is_better=True,
+                note=f"{LONG_S:g} s stream",
+            )
+            record(
+                f"wind-turbine stream {method}: peak memory {LONG_S:g} s / {SHORT_S:g} s",
+                long_ / short,
+                "ratio",
+                MEMORY_RATIO_GOAL,
+                note=f"{long_ / 1e6:.1f} MB and {short / 1e6:.1f} MB; a whole-record detector: "
+                f"{LONG_S / SHORT_S:g}",
+            )
 
 
 if __name__ == "__main__":

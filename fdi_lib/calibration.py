@@ -62,44 +62,82 @@ class Calibration:
 def _summarise(stat: np.ndarray, dof: int, alpha: float) -> Calibration:
     threshold = scipy.stats.chi2.ppf(1.0 - alpha, dof)
     rejections = int(np.sum(stat > threshold))
-    return Calibration(statistics=stat, dof=dof,
-                       ks_pvalue=float(scipy.stats.kstest(stat, scipy.stats.chi2(dof).cdf).pvalue),
-                       alpha=alpha, rejection_rate=rejections / stat.size,
-                       rejection_ci=binomial_ci(rejections, stat.size))
+    return Calibration(
+        statistics=stat,
+        dof=dof,
+        ks_pvalue=float(scipy.stats.kstest(stat, scipy.stats.chi2(dof).cdf).pvalue),
+        alpha=alpha,
+        rejection_rate=rejections / stat.size,
+        rejection_ci=binomial_ci(rejections, stat.size),
+    )
 
 
-def _information_chunk(seeds, model: LTVModel, fault: FaultProfile, theta: np.ndarray, u: np.ndarray,
-                       gains: KalmanGains, signature: np.ndarray):
+def _information_chunk(
+    seeds,
+    model: LTVModel,
+    fault: FaultProfile,
+    theta: np.ndarray,
+    u: np.ndarray,
+    gains: KalmanGains,
+    signature: np.ndarray,
+):
     """Simulate a chunk, filter it, return the final information ``C_N`` and scores ``d_N``."""
     sim = simulate(model, noise=draw_noise_batch(model, seeds), u=u, fault=fault, theta=theta)
     eps = kalman_filter(model, sim.y, u, gains=gains).innovations
     res = glr_known_profile(eps, gains, signature)
-    return {"statistic": res.statistic[:, -1], "d": res.d[:, -1],
-            "C": np.broadcast_to(res.C[-1], (len(seeds), *res.C[-1].shape))}
+    return {
+        "statistic": res.statistic[:, -1],
+        "d": res.d[:, -1],
+        "C": np.broadcast_to(res.C[-1], (len(seeds), *res.C[-1].shape)),
+    }
 
 
-def _run(model: LTVModel, fault: FaultProfile, theta: np.ndarray, u: np.ndarray | None, n_runs: int,
-         seed: int, jobs: int) -> dict[str, np.ndarray]:
+def _run(
+    model: LTVModel,
+    fault: FaultProfile,
+    theta: np.ndarray,
+    u: np.ndarray | None,
+    n_runs: int,
+    seed: int,
+    jobs: int,
+) -> dict[str, np.ndarray]:
     # Noise-independent parts computed once and shared by every chunk.
     gains = kalman_gains(model)
     sig = fault_signature(model, gains, fault).on_innovation
     u_arr = np.zeros((model.n_steps, model.l)) if u is None else np.asarray(u, dtype=float)
-    fn = functools.partial(_information_chunk, model=model, fault=fault, theta=theta, u=u_arr,
-                           gains=gains, signature=sig)
+    fn = functools.partial(
+        _information_chunk,
+        model=model,
+        fault=fault,
+        theta=theta,
+        u=u_arr,
+        gains=gains,
+        signature=sig,
+    )
     return run_monte_carlo(fn, n_runs, seed=seed, jobs=jobs)
 
 
 def _check(model: LTVModel, fault: FaultProfile, n_runs: int, alpha: float) -> None:
     if fault.Psi.shape[:2] != (model.n_steps, model.n):
-        raise ShapeError(f"fault: expected Psi of shape ({model.n_steps}, {model.n}, m), got {fault.Psi.shape}")
+        raise ShapeError(
+            f"fault: expected Psi of shape ({model.n_steps}, {model.n}, m), got {fault.Psi.shape}"
+        )
     if not isinstance(n_runs, (int, np.integer)) or n_runs < 2:
         raise ModelError(f"n_runs: expected an integer >= 2, got {n_runs!r}")
     if not 0.0 < alpha < 1.0:
         raise ModelError(f"alpha: expected a probability in (0, 1), got {alpha!r}")
 
 
-def glr_null_calibration(model: LTVModel, fault: FaultProfile, *, n_runs: int, seed: int,
-                         alpha: float = 0.05, jobs: int = 1, u: np.ndarray | None = None) -> Calibration:
+def glr_null_calibration(
+    model: LTVModel,
+    fault: FaultProfile,
+    *,
+    n_runs: int,
+    seed: int,
+    alpha: float = 0.05,
+    jobs: int = 1,
+    u: np.ndarray | None = None,
+) -> Calibration:
     """Law of the known-profile GLR ``l_N`` (eq. (30), last sample) over ``n_runs`` fault-free runs.
 
     Explained in the book: :doc:`/book/zb2014/glr`.
@@ -133,9 +171,18 @@ def glr_null_calibration(model: LTVModel, fault: FaultProfile, *, n_runs: int, s
     return _summarise(out["statistic"], fault.m, alpha)
 
 
-def minmax_null_calibration(model: LTVModel, fault: FaultProfile, a: Sequence[int], theta: Sequence[float], *,
-                            n_runs: int, seed: int, alpha: float = 0.05, jobs: int = 1,
-                            u: np.ndarray | None = None) -> Calibration:
+def minmax_null_calibration(
+    model: LTVModel,
+    fault: FaultProfile,
+    a: Sequence[int],
+    theta: Sequence[float],
+    *,
+    n_runs: int,
+    seed: int,
+    alpha: float = 0.05,
+    jobs: int = 1,
+    u: np.ndarray | None = None,
+) -> Calibration:
     """Law of the minmax statistic ``l_a`` (41) when ``theta_a = 0`` and the nuisance ``theta_b`` is not.
 
     The Fisher information and normalised residual are accumulated over the whole record
@@ -168,7 +215,9 @@ def minmax_null_calibration(model: LTVModel, fault: FaultProfile, a: Sequence[in
     if th.shape != (fault.m,):
         raise ShapeError(f"theta: expected shape ({fault.m},), got {th.shape}")
     if np.any(th[list(a)] != 0):
-        raise ModelError(f"theta: the tested components a={list(a)} must be zero under the null, got {th[list(a)]}")
+        raise ModelError(
+            f"theta: the tested components a={list(a)} must be zero under the null, got {th[list(a)]}"
+        )
     out = _run(model, fault, th, u, n_runs, seed, jobs)
     stat = minmax_statistic(out["C"], out["d"], a)
     return _summarise(stat, len(a), alpha)

@@ -44,7 +44,17 @@ from fdi_lib.errors import ModelError, NonFiniteError, ResourceError, ShapeError
 from fdi_lib.plotting import DISPLAY_DPI, smallest_font_pt
 from fdi_lib.redraw import render
 
-__all__ = ["Explorable", "explorable", "PANELS", "figure_data", "caption_text", "script_text", "PALETTE_COLOURS", "MAX_FRAMES", "MAX_BYTES"]
+__all__ = [
+    "Explorable",
+    "explorable",
+    "PANELS",
+    "figure_data",
+    "caption_text",
+    "script_text",
+    "PALETTE_COLOURS",
+    "MAX_FRAMES",
+    "MAX_BYTES",
+]
 
 #: Colours of the palette PNG of a frame (the house style uses a handful; 64 keeps antialiasing).
 PALETTE_COLOURS = 64
@@ -81,13 +91,27 @@ def figure_data(fig: Figure) -> list[Any]:
         colls = []
         for c in ax.collections:
             paths = [p.vertices for p in c.get_paths()]
-            colls.append(np.concatenate(paths) if paths else np.asarray(c.get_offsets(), dtype=float))
+            colls.append(
+                np.concatenate(paths) if paths else np.asarray(c.get_offsets(), dtype=float)
+            )
         # in the patch's own coordinates (a Rectangle's path is the unit square; its position and
         # size are in its patch transform)
-        patches = [np.asarray(p.get_patch_transform().transform(p.get_path().vertices), dtype=float)
-                   for p in ax.patches]
-        out.append([ax.get_title(), ax.get_xlabel(), ax.get_ylabel(), np.asarray(ax.get_xlim()),
-                    np.asarray(ax.get_ylim()), lines, colls, patches])
+        patches = [
+            np.asarray(p.get_patch_transform().transform(p.get_path().vertices), dtype=float)
+            for p in ax.patches
+        ]
+        out.append(
+            [
+                ax.get_title(),
+                ax.get_xlabel(),
+                ax.get_ylabel(),
+                np.asarray(ax.get_xlim()),
+                np.asarray(ax.get_ylim()),
+                lines,
+                colls,
+                patches,
+            ]
+        )
     return out
 
 
@@ -109,7 +133,9 @@ def _png_frame(fig: Figure) -> str:
     if fig.dpi != DISPLAY_DPI:
         fig.set_dpi(DISPLAY_DPI)
     render(fig)
-    img = Image.frombuffer("RGBA", fig.canvas.get_width_height(), fig.canvas.buffer_rgba(), "raw", "RGBA", 0, 1)
+    img = Image.frombuffer(
+        "RGBA", fig.canvas.get_width_height(), fig.canvas.buffer_rgba(), "raw", "RGBA", 0, 1
+    )
     img = img.convert("RGB").quantize(colors=PALETTE_COLOURS, method=Image.Quantize.FASTOCTREE)
     info = PngInfo()
     info.add_text("fdi:min_font_pt", f"{smallest_font_pt(fig):g}")
@@ -184,21 +210,24 @@ class Explorable:
     def strides(self) -> tuple[int, ...]:
         """Frame-index step of each slider (product order, last name fastest)."""
         sizes = [len(g) for g in self.grid]
-        return tuple(int(np.prod(sizes[i + 1:], dtype=int)) for i in range(len(sizes)))
+        return tuple(int(np.prod(sizes[i + 1 :], dtype=int)) for i in range(len(sizes)))
 
     def index(self, **values: Any) -> int:
         """Index of the frame drawn at the given slider values (each must be a grid value)."""
         i = 0
         for name, g, s in zip(self.names, self.grid, self.strides):
             if values[name] not in g:
-                raise ModelError(f"{name}: expected one of the grid values {list(g)}, got {values[name]!r}")
+                raise ModelError(
+                    f"{name}: expected one of the grid values {list(g)}, got {values[name]!r}"
+                )
             i += s * g.index(values[name])
         return i
 
     def frame_alt(self, point: Sequence[int]) -> str:
         """Alt text of the frame at grid indices ``point``: :attr:`alt` and the values shown."""
-        said = ", ".join(f"{label} = {_fmt(g[i])}"
-                         for label, g, i in zip(self.labels, self.grid, point))
+        said = ", ".join(
+            f"{label} = {_fmt(g[i])}" for label, g, i in zip(self.labels, self.grid, point)
+        )
         return f"{self.alt} Shown at {said}."
 
     def __repr__(self) -> str:
@@ -223,18 +252,26 @@ class Explorable:
             f'step="1" value="{d}" aria-valuetext="{html.escape(s[d], quote=True)}" '
             f'style="width:12em;max-width:100%">'
             f'<output aria-hidden="true">{html.escape(s[d])}</output></label>'
-            for label, g, d, s in zip(self.labels, self.grid, self.default, shown))
-        script = _SCRIPT % {"id": json.dumps(uid), "frames": json.dumps(list(self.frames)),
-                            "labels": json.dumps(shown), "strides": json.dumps(list(self.strides)),
-                            "names": json.dumps(list(self.labels)), "alt": json.dumps(self.alt)}
+            for label, g, d, s in zip(self.labels, self.grid, self.default, shown)
+        )
+        script = _SCRIPT % {
+            "id": json.dumps(uid),
+            "frames": json.dumps(list(self.frames)),
+            "labels": json.dumps(shown),
+            "strides": json.dumps(list(self.strides)),
+            "names": json.dumps(list(self.labels)),
+            "alt": json.dumps(self.alt),
+        }
         hidden = "position:absolute;width:1px;height:1px;overflow:hidden;clip-path:inset(50%)"
-        return (f'<figure class="fdi-explorable" id="{uid}" data-frame="{start}">'
-                f'<div class="fdi-explorable-sliders">{sliders}</div>'
-                f'<img src="data:image/png;base64,{self.frames[start]}" '
-                f'alt="{html.escape(self.frame_alt(self.default), quote=True)}" '
-                f'style="max-width:100%;height:auto">'
-                f'<p class="fdi-explorable-live" aria-live="polite" style="{hidden}"></p>'
-                f"<figcaption>{self.caption}</figcaption></figure><script>{script}</script>")
+        return (
+            f'<figure class="fdi-explorable" id="{uid}" data-frame="{start}">'
+            f'<div class="fdi-explorable-sliders">{sliders}</div>'
+            f'<img src="data:image/png;base64,{self.frames[start]}" '
+            f'alt="{html.escape(self.frame_alt(self.default), quote=True)}" '
+            f'style="max-width:100%;height:auto">'
+            f'<p class="fdi-explorable-live" aria-live="polite" style="{hidden}"></p>'
+            f"<figcaption>{self.caption}</figcaption></figure><script>{script}</script>"
+        )
 
     def small_multiples(self, panels: int = PANELS) -> bytes:
         """A few frames side by side as one PNG, for paper: two per row, each titled with its
@@ -257,14 +294,25 @@ class Explorable:
 
         if isinstance(panels, bool) or not isinstance(panels, int) or panels < 2:
             raise ModelError(f"panels: expected an integer of at least 2, got {panels!r}")
-        per = [min(panels, len(self.grid[0]))] if len(self.grid) == 1 else [2, 2] + [1] * (len(self.grid) - 2)
+        per = (
+            [min(panels, len(self.grid[0]))]
+            if len(self.grid) == 1
+            else [2, 2] + [1] * (len(self.grid) - 2)
+        )
         picks = [_spread(len(g), d, m) for g, d, m in zip(self.grid, self.default, per)]
         shown = [[_fmt(v) for v in g] for g in self.grid]
         tiles = []
         for point in itertools.product(*picks):
-            frame = Image.open(io.BytesIO(base64.b64decode(self.frames[sum(s * i for s, i in zip(self.strides, point))])))
-            title = ", ".join(f"{label} = {shown[j][i]}" for j, (label, i) in enumerate(zip(self.labels, point))
-                              if len(picks[j]) > 1)
+            frame = Image.open(
+                io.BytesIO(
+                    base64.b64decode(self.frames[sum(s * i for s, i in zip(self.strides, point))])
+                )
+            )
+            title = ", ".join(
+                f"{label} = {shown[j][i]}"
+                for j, (label, i) in enumerate(zip(self.labels, point))
+                if len(picks[j]) > 1
+            )
             tiles.append((frame.convert("RGB"), title, frame.info.get("fdi:min_font_pt")))
             dpi = float(frame.info.get("fdi:dpi", DISPLAY_DPI))
         sheet, title_pt = _tiled(tiles, columns=2, dpi=dpi)
@@ -275,7 +323,8 @@ class Explorable:
         info.add_text("fdi:dpi", f"{dpi:g}")
         out = io.BytesIO()
         sheet.quantize(colors=256, method=Image.Quantize.FASTOCTREE).save(
-            out, format="PNG", pnginfo=info, dpi=(dpi, dpi))
+            out, format="PNG", pnginfo=info, dpi=(dpi, dpi)
+        )
         return out.getvalue()
 
     def _repr_png_(self) -> bytes:
@@ -293,7 +342,9 @@ def _spread(n: int, default: int, m: int) -> list[int]:
     return sorted({default, *(i for i in picks if i != nearest)})
 
 
-def _tiled(tiles: Sequence[tuple[Any, str, Any]], columns: int, dpi: float) -> tuple[Any, float | None]:
+def _tiled(
+    tiles: Sequence[tuple[Any, str, Any]], columns: int, dpi: float
+) -> tuple[Any, float | None]:
     """One RGB image of the ``(image, title, _)`` tiles, ``columns`` per row, each image pasted
     unscaled (no resampling) under its title, and the size of the titles (points at ``dpi``,
     the house style's title size; ``None`` without titles). The titles alone are drawn by
@@ -315,10 +366,18 @@ def _tiled(tiles: Sequence[tuple[Any, str, Any]], columns: int, dpi: float) -> t
     for k, (_, title, _) in enumerate(tiles):
         r, c = divmod(k, columns)
         if title:
-            fig.text((c * w + w / 2) / width, 1 - (r * (h + title_h) + title_h / 2) / height, title,
-                     ha="center", va="center", fontsize=size)
+            fig.text(
+                (c * w + w / 2) / width,
+                1 - (r * (h + title_h) + title_h / 2) / height,
+                title,
+                ha="center",
+                va="center",
+                fontsize=size,
+            )
     canvas.draw()
-    sheet = Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba(), "raw", "RGBA", 0, 1)
+    sheet = Image.frombuffer(
+        "RGBA", canvas.get_width_height(), canvas.buffer_rgba(), "raw", "RGBA", 0, 1
+    )
     sheet = sheet.convert("RGB")
     for k, (image, _, _) in enumerate(tiles):
         r, c = divmod(k, columns)
@@ -327,8 +386,10 @@ def _tiled(tiles: Sequence[tuple[Any, str, Any]], columns: int, dpi: float) -> t
 
 
 #: Characters with a Unicode subscript ("_") or superscript ("^") form, and those forms.
-_SCRIPTS = {"_": ("0123456789+-=()aehijklmnoprstuvx", "₀₁₂₃₄₅₆₇₈₉₊₋₌₍₎ₐₑₕᵢⱼₖₗₘₙₒₚᵣₛₜᵤᵥₓ"),
-            "^": ("0123456789+-=()niT", "⁰¹²³⁴⁵⁶⁷⁸⁹⁺⁻⁼⁽⁾ⁿⁱᵀ")}
+_SCRIPTS = {
+    "_": ("0123456789+-=()aehijklmnoprstuvx", "₀₁₂₃₄₅₆₇₈₉₊₋₌₍₎ₐₑₕᵢⱼₖₗₘₙₒₚᵣₛₜᵤᵥₓ"),
+    "^": ("0123456789+-=()niT", "⁰¹²³⁴⁵⁶⁷⁸⁹⁺⁻⁼⁽⁾ⁿⁱᵀ"),
+}
 
 
 def script_text(text: str, mark: str) -> str:
@@ -359,7 +420,9 @@ class _CaptionText(html.parser.HTMLParser):
 
     def handle_data(self, data):
         kind = next((t for t in reversed(self.open) if t in ("sub", "sup")), None)
-        self.parts.append(data if kind is None else script_text(data, "_" if kind == "sub" else "^"))
+        self.parts.append(
+            data if kind is None else script_text(data, "_" if kind == "sub" else "^")
+        )
 
 
 def caption_text(caption: str) -> str:
@@ -388,40 +451,61 @@ def _name(callback: Any) -> str:
     return getattr(callback, "__qualname__", None) or type(callback).__name__
 
 
-def _check_grid(grid: Any, fixed: Mapping[str, Any]) -> tuple[tuple[str, ...], tuple[tuple[Any, ...], ...]]:
+def _check_grid(
+    grid: Any, fixed: Mapping[str, Any]
+) -> tuple[tuple[str, ...], tuple[tuple[Any, ...], ...]]:
     """The names and values of a grid, each value list checked: a 1-D sequence of at least two
     distinct values, finite where they are numbers (a NaN would match no slider position)."""
     if not isinstance(grid, Mapping):
-        raise ModelError(f"grid: expected a mapping of keyword names to sequences of values, got "
-                         f"{type(grid).__name__}")
-    if not grid or any(not isinstance(v, (str, bytes)) and np.ndim(v) >= 1 and len(v) < 2
-                       for v in grid.values()):
-        raise ModelError(f"grid: expected at least one name with two or more values each, got {dict(grid)!r}")
+        raise ModelError(
+            f"grid: expected a mapping of keyword names to sequences of values, got "
+            f"{type(grid).__name__}"
+        )
+    if not grid or any(
+        not isinstance(v, (str, bytes)) and np.ndim(v) >= 1 and len(v) < 2 for v in grid.values()
+    ):
+        raise ModelError(
+            f"grid: expected at least one name with two or more values each, got {dict(grid)!r}"
+        )
     names, values = [], []
     for name, vals in grid.items():
         if not isinstance(name, str) or not name.isidentifier() or name == "fig":
-            raise ModelError(f"grid: expected keyword names of the callback (not 'fig'), got {name!r}")
+            raise ModelError(
+                f"grid: expected keyword names of the callback (not 'fig'), got {name!r}"
+            )
         if name in fixed:
-            raise ModelError(f"grid: {name!r} is also given as a fixed keyword argument; expected one or the other")
+            raise ModelError(
+                f"grid: {name!r} is also given as a fixed keyword argument; expected one or the other"
+            )
         if isinstance(vals, (str, bytes, Mapping)) or np.ndim(vals) != 1:
             what = f"shape {np.shape(vals)}" if np.ndim(vals) > 1 else type(vals).__name__
             raise ShapeError(f"grid[{name!r}]: expected a 1-D sequence of values, got {what}")
         vals = tuple(vals)
         for i, v in enumerate(vals):
             if isinstance(v, (float, np.floating)) and not np.isfinite(v):
-                raise NonFiniteError(f"grid[{name!r}]: expected finite values, got {v} at index {i}")
+                raise NonFiniteError(
+                    f"grid[{name!r}]: expected finite values, got {v} at index {i}"
+                )
             j = vals.index(v)
             if j != i:
-                raise ModelError(f"grid[{name!r}]: expected distinct values, got {v!r} at indices {j} and {i}")
+                raise ModelError(
+                    f"grid[{name!r}]: expected distinct values, got {v!r} at indices {j} and {i}"
+                )
         names.append(name)
         values.append(vals)
     return tuple(names), tuple(values)
 
 
-def explorable(callback: Callable[..., Figure], grid: Mapping[str, Sequence[Any]], *, caption: str,
-               alt: str | None = None, labels: Mapping[str, str] | None = None,
-               default: Mapping[str, Any] | None = None,
-               **fixed: Any) -> Explorable:
+def explorable(
+    callback: Callable[..., Figure],
+    grid: Mapping[str, Sequence[Any]],
+    *,
+    caption: str,
+    alt: str | None = None,
+    labels: Mapping[str, str] | None = None,
+    default: Mapping[str, Any] | None = None,
+    **fixed: Any,
+) -> Explorable:
     """Evaluate ``callback(**values, **fixed, fig=fig)`` over the grid; one frame per point.
 
     Parameters
@@ -462,30 +546,42 @@ def explorable(callback: Callable[..., Figure], grid: Mapping[str, Sequence[Any]
 
     names, values = _check_grid(grid, fixed)
     if not callable(callback):
-        raise ModelError(f"callback: expected a function drawing into fig and returning it, got "
-                         f"{type(callback).__name__}")
+        raise ModelError(
+            f"callback: expected a function drawing into fig and returning it, got "
+            f"{type(callback).__name__}"
+        )
     if not isinstance(caption, str):
         raise ModelError(f"caption: expected a string, got {type(caption).__name__}")
     if alt is not None and (not isinstance(alt, str) or not alt.strip()):
         raise ModelError(f"alt: expected a non-empty string of plain text, got {alt!r}")
     if labels is not None and (not isinstance(labels, Mapping) or set(labels) - set(names)):
-        raise ModelError(f"labels: expected a mapping of grid names {list(names)} to labels, got {labels!r}")
+        raise ModelError(
+            f"labels: expected a mapping of grid names {list(names)} to labels, got {labels!r}"
+        )
     if default is not None and not isinstance(default, Mapping):
-        raise ModelError(f"default: expected a mapping of grid names to values, got {type(default).__name__}")
+        raise ModelError(
+            f"default: expected a mapping of grid names to values, got {type(default).__name__}"
+        )
     default = dict(default or {})
     unknown = set(default) - set(names)
     if unknown:
-        raise ModelError(f"default: expected names of the grid {list(names)}, got {sorted(unknown)}")
+        raise ModelError(
+            f"default: expected names of the grid {list(names)}, got {sorted(unknown)}"
+        )
     start = []
     for n, g in zip(names, values):
         if n in default and default[n] not in g:
-            raise ModelError(f"default: expected {n} among the grid values {list(g)}, got {default[n]!r}")
+            raise ModelError(
+                f"default: expected {n} among the grid values {list(g)}, got {default[n]!r}"
+            )
         start.append(g.index(default[n]) if n in default else 0)
     n_frames = int(np.prod([len(g) for g in values]))
     if n_frames > MAX_FRAMES:
         sizes = " x ".join(f"{len(g)} ({n})" for n, g in zip(names, values))
-        raise ResourceError(f"grid: expected at most {MAX_FRAMES} frames (MAX_FRAMES), got {sizes} = "
-                            f"{n_frames}: use fewer values")
+        raise ResourceError(
+            f"grid: expected at most {MAX_FRAMES} frames (MAX_FRAMES), got {sizes} = "
+            f"{n_frames}: use fewer values"
+        )
     fig = None
     frames: list[str] = []
     data = []
@@ -499,8 +595,10 @@ def explorable(callback: Callable[..., Figure], grid: Mapping[str, Sequence[Any]
                 exc.add_note(f"explorable: while drawing the frame at {kwargs}")
                 raise
             if not isinstance(out, Figure):
-                raise ModelError(f"callback: expected a matplotlib Figure from {_name(callback)}({kwargs}), "
-                                 f"got {type(out).__name__}")
+                raise ModelError(
+                    f"callback: expected a matplotlib Figure from {_name(callback)}({kwargs}), "
+                    f"got {type(out).__name__}"
+                )
             if fig is not None and out is not fig:
                 plt.close(fig)  # the callback drew a new figure instead of reusing this one
             fig = out
@@ -508,14 +606,23 @@ def explorable(callback: Callable[..., Figure], grid: Mapping[str, Sequence[Any]
             data.append(figure_data(fig))
             weight += len(frames[-1])
             if weight > MAX_BYTES:
-                raise ResourceError(f"grid: expected at most {MAX_BYTES / 1e6:g} MB of frames (MAX_BYTES), got "
-                                    f"{weight / 1e6:.2f} MB after {len(frames)} of {n_frames} frames (about "
-                                    f"{weight / len(frames) * n_frames / 1e6:.1f} MB for all): use fewer "
-                                    f"values or a simpler figure")
+                raise ResourceError(
+                    f"grid: expected at most {MAX_BYTES / 1e6:g} MB of frames (MAX_BYTES), got "
+                    f"{weight / 1e6:.2f} MB after {len(frames)} of {n_frames} frames (about "
+                    f"{weight / len(frames) * n_frames / 1e6:.1f} MB for all): use fewer "
+                    f"values or a simpler figure"
+                )
     finally:
         if fig is not None:
             plt.close(fig)
     labels = dict(labels or {})
-    return Explorable(names=names, labels=tuple(labels.get(n, n) for n in names), grid=values,
-                      frames=tuple(frames), data=tuple(data), default=tuple(start), caption=caption,
-                      alt=_sentence(alt or caption_text(caption)))
+    return Explorable(
+        names=names,
+        labels=tuple(labels.get(n, n) for n in names),
+        grid=values,
+        frames=tuple(frames),
+        data=tuple(data),
+        default=tuple(start),
+        caption=caption,
+        alt=_sentence(alt or caption_text(caption)),
+    )

@@ -33,10 +33,25 @@ import scipy.linalg
 
 from fdi_lib.errors import ModelError, NonFiniteError
 from fdi_lib.models import LTVModel, as_record
-from fdi_lib.validation import (check_gains, check_missing_known, cholesky, common_pattern, gains_missing,
-                                initial_state, measurements, missing_pattern)
+from fdi_lib.validation import (
+    check_gains,
+    check_missing_known,
+    cholesky,
+    common_pattern,
+    gains_missing,
+    initial_state,
+    measurements,
+    missing_pattern,
+)
 
-__all__ = ["KalmanGains", "KalmanResult", "kalman_gains", "kalman_filter", "predictor_recursion", "as_outputs"]
+__all__ = [
+    "KalmanGains",
+    "KalmanResult",
+    "kalman_gains",
+    "kalman_filter",
+    "predictor_recursion",
+    "as_outputs",
+]
 
 
 @dataclass(frozen=True)
@@ -129,7 +144,9 @@ def kalman_gains(model: LTVModel, missing: Any = None) -> KalmanGains:
             if skip[k]:  # missing sample: no update
                 Kk, IKH, Pf = np.zeros((n, p)), eye, Pk
             else:
-                Kk = scipy.linalg.cho_solve((c, low), H @ Pk).T  # P H^T S^{-1} without forming S^{-1}
+                Kk = scipy.linalg.cho_solve(
+                    (c, low), H @ Pk
+                ).T  # P H^T S^{-1} without forming S^{-1}
                 IKH = eye - Kk @ H
                 Pf = IKH @ Pk @ IKH.T + Kk @ model.R[k] @ Kk.T  # Joseph form: stays PSD
                 Pf = 0.5 * (Pf + Pf.T)
@@ -140,8 +157,16 @@ def kalman_gains(model: LTVModel, missing: Any = None) -> KalmanGains:
     if not np.all(np.isfinite(P)):
         k = int(np.argwhere(~np.isfinite(P))[0, 0])
         raise NonFiniteError(f"model: the Riccati recursion diverged (non-finite P_k at step {k})")
-    return KalmanGains(K=K, P=P, P_filt=P_filt, Sigma=Sigma, Sigma_chol=L, A=A, FK=FK,
-                       missing=skip if skip.any() else None)
+    return KalmanGains(
+        K=K,
+        P=P,
+        P_filt=P_filt,
+        Sigma=Sigma,
+        Sigma_chol=L,
+        A=A,
+        FK=FK,
+        missing=skip if skip.any() else None,
+    )
 
 
 @dataclass(frozen=True)
@@ -186,8 +211,9 @@ def as_outputs(model: LTVModel, y: Any, name: str = "y") -> np.ndarray:
     return as_record(y, n_steps=model.n_steps, width=model.p, name=name)
 
 
-def kalman_filter(model: LTVModel, y: Any, u: Any = None, *, gains: KalmanGains | None = None,
-                  x0: Any = None) -> KalmanResult:
+def kalman_filter(
+    model: LTVModel, y: Any, u: Any = None, *, gains: KalmanGains | None = None, x0: Any = None
+) -> KalmanResult:
     """Run the Kalman one-step predictor (6) on outputs ``y`` and inputs ``u``.
 
     Explained in the book: :doc:`/book/zb2014/signature`.
@@ -238,9 +264,9 @@ def kalman_filter(model: LTVModel, y: Any, u: Any = None, *, gains: KalmanGains 
     return KalmanResult(innovations=eps, x_pred=xh, x_filt=xf, updated_residuals=upd, gains=g)
 
 
-def predictor_recursion(model: LTVModel, y: np.ndarray, u: np.ndarray, K: np.ndarray,
-                        skip: np.ndarray, x0: Any = None
-                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def predictor_recursion(
+    model: LTVModel, y: np.ndarray, u: np.ndarray, K: np.ndarray, skip: np.ndarray, x0: Any = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The state recursion of the Kalman filter and of the Kitanidis filter (same form, each with
     its own gains ``K``), over checked records.
 

@@ -39,11 +39,26 @@ import numpy as np
 from fdi_lib.errors import CovarianceError, ModelError, NonFiniteError, ShapeError
 from fdi_lib.filters import KalmanGains
 from fdi_lib.models import FaultFamily, LTVModel
-from fdi_lib.validation import (COV_RTOL, array, check_gains, check_skipped, gains_missing, integer,
-                                missing_samples, real)
+from fdi_lib.validation import (
+    COV_RTOL,
+    array,
+    check_gains,
+    check_skipped,
+    gains_missing,
+    integer,
+    missing_samples,
+    real,
+)
 
-__all__ = ["GLRResult", "glr_known_profile", "WindowGLRResult", "WindowedGLR", "glr_window",
-           "quadratic_form", "first_alarm"]
+__all__ = [
+    "GLRResult",
+    "glr_known_profile",
+    "WindowGLRResult",
+    "WindowedGLR",
+    "glr_window",
+    "quadratic_form",
+    "first_alarm",
+]
 
 #: Relative eigenvalue cut-off of the pseudo-inverse of information matrices.
 RANK_RTOL = 1e-10
@@ -116,7 +131,9 @@ def _small_eigh(C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
                 A[..., p, :] = c * mp - s * mq
                 A[..., q, :] = s * mp + c * mq
                 A[..., p, q] = A[..., q, p] = 0.0
-        off = np.sum(A * A, axis=(-2, -1)) - np.sum(np.diagonal(A, axis1=-2, axis2=-1) ** 2, axis=-1)
+        off = np.sum(A * A, axis=(-2, -1)) - np.sum(
+            np.diagonal(A, axis1=-2, axis2=-1) ** 2, axis=-1
+        )
         if m == 2 or np.all(off <= (1e-32 * scale * scale)):
             break
     return np.diagonal(A, axis1=-2, axis2=-1).copy(), V
@@ -150,22 +167,28 @@ def quadratic_form(C: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray
     C = array(C, "C")
     d = array(d, "d")
     if C.ndim < 2 or C.shape[-1] != C.shape[-2] or d.ndim < 1 or d.shape[-1] != C.shape[-1]:
-        raise ShapeError(f"C, d: expected shapes (..., m, m) and (..., m), got {C.shape} and {d.shape}")
+        raise ShapeError(
+            f"C, d: expected shapes (..., m, m) and (..., m), got {C.shape} and {d.shape}"
+        )
     scale = np.abs(C).max(axis=(-2, -1))
     asym = np.abs(C - np.swapaxes(C, -1, -2)).max(axis=(-2, -1))
     bad = asym > COV_RTOL * scale
     if bad.any():
         i = tuple(int(j) for j in np.argwhere(bad)[0])
-        raise CovarianceError(f"C: expected symmetric matrices, got asymmetry {asym[i]:.3g} "
-                              f"(largest entry {scale[i]:.3g}) at index {i}")
+        raise CovarianceError(
+            f"C: expected symmetric matrices, got asymmetry {asym[i]:.3g} "
+            f"(largest entry {scale[i]:.3g}) at index {i}"
+        )
     lam, V = _eigh(C)
     bad = lam.min(axis=-1) < -COV_RTOL * np.abs(lam).max(axis=-1)
     if bad.any():
         i = tuple(int(j) for j in np.argwhere(bad)[0])
-        raise CovarianceError(f"C: expected positive semi-definite matrices, got smallest eigenvalue "
-                              f"{lam[i].min():.6g} (largest magnitude {np.abs(lam[i]).max():.3g}) at index {i}")
+        raise CovarianceError(
+            f"C: expected positive semi-definite matrices, got smallest eigenvalue "
+            f"{lam[i].min():.6g} (largest magnitude {np.abs(lam[i]).max():.3g}) at index {i}"
+        )
     inv = _pinv_diagonal(lam)
-    q = np.sum(V * d[..., :, None], axis=-2)          # V^T d
+    q = np.sum(V * d[..., :, None], axis=-2)  # V^T d
     return np.sum(q * q * inv, axis=-1), np.sum(V * (q * inv)[..., None, :], axis=-1)
 
 
@@ -188,7 +211,9 @@ class GLRResult:
     d: np.ndarray
 
 
-def glr_known_profile(innovations: np.ndarray, gains: KalmanGains, signature: np.ndarray) -> GLRResult:
+def glr_known_profile(
+    innovations: np.ndarray, gains: KalmanGains, signature: np.ndarray
+) -> GLRResult:
     """GLR test with a fully known fault profile, eqs. (24)-(30).
 
     Explained in the book: :doc:`/book/zb2014/glr`.
@@ -229,24 +254,31 @@ def glr_known_profile(innovations: np.ndarray, gains: KalmanGains, signature: np
     >>> bool(abs(theta - 0.3) < 3 * se), bool(r.statistic[-1] > 100.0)        # estimate; detected
     (True, True)
     """
-    if np.ndim(getattr(gains, "Sigma_chol", None)) != 3 or np.ndim(getattr(gains, "Sigma", None)) != 3:
-        raise ModelError(f"gains: expected KalmanGains (Sigma, Sigma_chol of shape (N, p, p)), "
-                         f"got {type(gains).__name__}")
+    if (
+        np.ndim(getattr(gains, "Sigma_chol", None)) != 3
+        or np.ndim(getattr(gains, "Sigma", None)) != 3
+    ):
+        raise ModelError(
+            f"gains: expected KalmanGains (Sigma, Sigma_chol of shape (N, p, p)), "
+            f"got {type(gains).__name__}"
+        )
     S = array(signature, "signature")
     N, p = gains.Sigma.shape[:2]
     if S.ndim != 3 or S.shape[:2] != (N, p):
         raise ShapeError(f"signature: expected shape ({N}, {p}, m), got {S.shape}")
     eps, missing = _check_innovations(innovations, N, p)
     check_skipped(missing, gains, "innovations")
-    if missing.any():  # a missing sample contributes nothing: zero its innovation and signature rows
+    if (
+        missing.any()
+    ):  # a missing sample contributes nothing: zero its innovation and signature rows
         eps = np.where(missing[..., None], 0.0, eps)
         S = np.where(missing[..., None, None], 0.0, S)
     # Whitened regressors and innovations: Sigma^{-1/2} S and Sigma^{-1/2} eps (Cholesky solves).
     Sw = np.linalg.solve(gains.Sigma_chol, S)
     ew = gains.whiten(eps)
-    C = np.cumsum(np.einsum("...kpi,...kpj->...kij", Sw, Sw), axis=-3)   # (27)
-    d = np.cumsum(np.einsum("...kpi,...kp->...ki", Sw, ew), axis=-2)     # (28)
-    stat, theta = quadratic_form(C, d)                                # (30), (24)
+    C = np.cumsum(np.einsum("...kpi,...kpj->...kij", Sw, Sw), axis=-3)  # (27)
+    d = np.cumsum(np.einsum("...kpi,...kp->...ki", Sw, ew), axis=-2)  # (28)
+    stat, theta = quadratic_form(C, d)  # (30), (24)
     return GLRResult(statistic=stat, theta_hat=theta, C=C, d=d)
 
 
@@ -315,18 +347,34 @@ class WindowedGLR:
         per-realisation profiles whose batch shape is not ``batch_shape``.
     """
 
-    def __init__(self, model: LTVModel, gains: KalmanGains, family: FaultFamily, window: int,
-                 min_samples: int | None = None, batch_shape: tuple[int, ...] = ()) -> None:
+    def __init__(
+        self,
+        model: LTVModel,
+        gains: KalmanGains,
+        family: FaultFamily,
+        window: int,
+        min_samples: int | None = None,
+        batch_shape: tuple[int, ...] = (),
+    ) -> None:
         if not isinstance(model, LTVModel) or not isinstance(family, FaultFamily):
-            raise ModelError(f"model, family: expected an LTVModel and a FaultFamily, got "
-                             f"{type(model).__name__} and {type(family).__name__}")
+            raise ModelError(
+                f"model, family: expected an LTVModel and a FaultFamily, got "
+                f"{type(model).__name__} and {type(family).__name__}"
+            )
         check_gains(model, gains)
         N, n, p, m = model.n_steps, model.n, model.p, family.m
         Psi, Phi = family.Psi_tilde, family.Phi_tilde
-        if (Psi.ndim < 3 or Psi.shape[-3:-1] != (N, n) or Phi.shape[-3:-1] != (N, p)
-                or Phi.shape[:-3] != Psi.shape[:-3] or Phi.shape[-1] != m):
-            raise ShapeError(f"family: expected Psi~ (*batch, {N}, {n}, m) and Phi~ (*batch, {N}, {p}, m), "
-                             f"got {Psi.shape} and {Phi.shape}")
+        if (
+            Psi.ndim < 3
+            or Psi.shape[-3:-1] != (N, n)
+            or Phi.shape[-3:-1] != (N, p)
+            or Phi.shape[:-3] != Psi.shape[:-3]
+            or Phi.shape[-1] != m
+        ):
+            raise ShapeError(
+                f"family: expected Psi~ (*batch, {N}, {n}, m) and Phi~ (*batch, {N}, {p}, m), "
+                f"got {Psi.shape} and {Phi.shape}"
+            )
         _check_family_batch(family, tuple(batch_shape))
         window = integer(window, "window", low=1, high=N)
         s = -(-m // p) if min_samples is None else min_samples
@@ -334,7 +382,7 @@ class WindowedGLR:
         if family.kind == "impulse" and np.any(family.Phi_tilde):
             raise ModelError("family: impulsive profiles act on the state only (Phi~ must be zero)")
         self.model, self.gains, self.family = model, gains, family
-        self._skipped = gains_missing(gains)     # samples the filter skipped: no information, no score
+        self._skipped = gains_missing(gains)  # samples the filter skipped: no information, no score
         self.window, self.min_samples = int(window), int(s)
         self.batch_shape = tuple(batch_shape)
         self._B = int(np.prod(self.batch_shape, dtype=int))
@@ -364,13 +412,13 @@ class WindowedGLR:
         """
         model, g, fam, w = self.model, self.gains, self.family, self.window
         N, n, p, m = model.n_steps, model.n, model.p, fam.m
-        F = self._B if self._per_realisation else 1     # profiles: one per realisation, or shared
+        F = self._B if self._per_realisation else 1  # profiles: one per realisation, or shared
         Psi = fam.Psi_tilde.reshape(F, N, n, m)
         Phi = fam.Phi_tilde.reshape(F, N, p, m)
-        drive = Psi - g.FK @ Phi                        # Psi~_k - F_k K_k Phi~_k, (F, N, n, m)
+        drive = Psi - g.FK @ Phi  # Psi~_k - F_k K_k Phi~_k, (F, N, n, m)
         k_all = np.arange(N)
         # onset held by slot j at time k: the r = j mod w in (k - w, k] (-1 before the record)
-        onset = k_all[:, None] - (k_all[:, None] - np.arange(w)[None, :]) % w      # (N, w)
+        onset = k_all[:, None] - (k_all[:, None] - np.arange(w)[None, :]) % w  # (N, w)
         onset[onset < 0] = -1
         # Gamma_k(r) as (n, w F m): slots (and realisations) side by side, so that (31) is one
         # matrix product per sample
@@ -378,27 +426,30 @@ class WindowedGLR:
         flat = Gamma.reshape(N, n, w * F * m)
         drive_c = np.ascontiguousarray(np.transpose(drive, (2, 1, 0, 3)))  # (n, N, F, m)
         started = onset >= 0
-        for k in range(1, N):   # Gamma_0 = 0
+        for k in range(1, N):  # Gamma_0 = 0
             # Gamma_k(r) = A_{k-1} Gamma_{k-1}(r) + drive_{k-1}(r), eq. (31)
             np.matmul(g.A[k - 1], flat[k - 1], out=flat[k])
             if fam.kind == "step":
-                if started[k - 1].all():   # every slot holds an onset: no mask needed
+                if started[k - 1].all():  # every slot holds an onset: no mask needed
                     Gamma[k] += drive_c[:, k - 1, None, :, :]
                 else:
                     Gamma[k] += started[k - 1][None, :, None, None] * drive_c[:, k - 1, None, :, :]
             # impulse: Psi_{k-1}(r) != 0 only for r = k
-            Gamma[k][:, k % w] = drive_c[:, k - 1] if fam.kind == "impulse" else 0.0   # r = k enters
+            Gamma[k][:, k % w] = drive_c[:, k - 1] if fam.kind == "impulse" else 0.0  # r = k enters
         sig = (model.H @ Gamma.reshape(N, n, w * F * m)).reshape(N, p, w, F, m)
         del Gamma
         if fam.kind == "step":
-            sig = sig + (onset >= 0)[:, None, :, None, None] * np.moveaxis(Phi, 0, 2)[:, :, None, :, :]
-        self._Linv = np.linalg.inv(g.Sigma_chol)                         # Sigma_k^{-1/2}, (N, p, p)
+            sig = (
+                sig
+                + (onset >= 0)[:, None, :, None, None] * np.moveaxis(Phi, 0, 2)[:, :, None, :, :]
+            )
+        self._Linv = np.linalg.inv(g.Sigma_chol)  # Sigma_k^{-1/2}, (N, p, p)
         sig_w = (self._Linv @ sig.reshape(N, p, w * F * m)).reshape(sig.shape)
         del sig
         if self._skipped.any():  # a sample the filter skipped adds nothing to C_k(r) and d_k(r)
             sig_w[self._skipped] = 0.0
         self._sig_wT = np.ascontiguousarray(np.transpose(sig_w, (0, 2, 3, 4, 1)))  # (N, w, F, m, p)
-        inc = np.einsum("kpwfi,kpwfj->kwfij", sig_w, sig_w)              # (N, w, F, m, m)
+        inc = np.einsum("kpwfi,kpwfj->kwfij", sig_w, sig_w)  # (N, w, F, m, m)
         del sig_w
         C = np.empty_like(inc)
         acc = np.zeros((w, F, m, m))
@@ -408,10 +459,10 @@ class WindowedGLR:
             C[k] = acc
         del inc
         self._onsets = onset
-        self._allowed = (onset >= 0) & (onset <= k_all[:, None] - self.min_samples)   # (N, w)
+        self._allowed = (onset >= 0) & (onset <= k_all[:, None] - self.min_samples)  # (N, w)
         self._admissible = [np.nonzero(a)[0] for a in self._allowed]
         V, inv = _pinv_factors(C)
-        root = V * np.sqrt(inv)[..., None, :]                            # C^+ = root root^T
+        root = V * np.sqrt(inv)[..., None, :]  # C^+ = root root^T
         if not self._per_realisation:  # drop the realisation axis of a shared family
             self._sig_wT, C, root = self._sig_wT[:, :, 0], C[:, :, 0], root[:, :, 0]
         self._Cs, self._root = C, root
@@ -450,8 +501,9 @@ class WindowedGLR:
         new._reset()
         return new
 
-    def update(self, eps_k: np.ndarray, *, statistics: bool = True
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def update(
+        self, eps_k: np.ndarray, *, statistics: bool = True
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Process innovation ``eps_k`` ``(*batch, p)``.
 
         A NaN ``eps_k`` (missing sample) must be missing in every realisation of the batch; the
@@ -468,17 +520,25 @@ class WindowedGLR:
             raise ModelError(f"update: the model horizon N={model.n_steps} is exhausted")
         eps_k = array(eps_k, "eps_k", finite=False)
         if eps_k.shape != (*self.batch_shape, model.p):
-            raise ShapeError(f"eps_k: expected shape {(*self.batch_shape, model.p)}, got {eps_k.shape}")
+            raise ShapeError(
+                f"eps_k: expected shape {(*self.batch_shape, model.p)}, got {eps_k.shape}"
+            )
         missing = missing_samples(eps_k, "eps_k")
         skip = bool(np.all(missing))
         if np.any(missing) and not skip:
             i = tuple(int(j) for j in np.argwhere(missing)[0])
-            raise NonFiniteError(f"eps_k: expected a sample missing (NaN) in all realisations or in none, "
-                                 f"got NaN at batch index {i} only (step {k})")
-        known = bool(self._skipped[k])   # skipped by the filter: nothing in C_k(r), d_k(r) (see _shared)
+            raise NonFiniteError(
+                f"eps_k: expected a sample missing (NaN) in all realisations or in none, "
+                f"got NaN at batch index {i} only (step {k})"
+            )
+        known = bool(
+            self._skipped[k]
+        )  # skipped by the filter: nothing in C_k(r), d_k(r) (see _shared)
         if known and not skip:
-            raise ModelError(f"eps_k: expected NaN at step {k}, a sample the gains skip (missing), got a "
-                             f"finite value: innovations and gains of different filters")
+            raise ModelError(
+                f"eps_k: expected NaN at step {k}, a sample the gains skip (missing), got a "
+                f"finite value: innovations and gains of different filters"
+            )
         # New onset r = k enters the window (replacing r = k - w); scores (33), recursively (28).
         slot = k % w
         self._d[slot] = 0.0
@@ -487,33 +547,37 @@ class WindowedGLR:
             # its information term (precomputed in C_k(r)) is subtracted for every onset it belongs to
             self._C_missing += self._sig_wT[k] @ np.swapaxes(self._sig_wT[k], -1, -2)
         elif not skip:
-            e_w = self._Linv[k] @ eps_k.reshape(self._B, model.p).T     # (p, B)
+            e_w = self._Linv[k] @ eps_k.reshape(self._B, model.p).T  # (p, B)
             self._d += self._score_terms(np.array([k]), e_w[None])[0]
         self.k = k + 1
         shape = self.batch_shape
         slots = self._admissible[k]
         if not slots.size or not statistics:
-            return (np.full(shape, np.nan), np.full(shape, -1), np.full((*shape, m), np.nan),
-                    np.full((*shape, m, m), np.nan), np.full((*shape, m), np.nan))
-        C = self._Cs[k, slots]                       # (S, m, m), or (S, B, m, m) per realisation
-        root = self._root[k, slots]                  # shared by all realisations, or per realisation
-        if np.any(self._C_missing[slots]):           # missing samples in the window
+            return (
+                np.full(shape, np.nan),
+                np.full(shape, -1),
+                np.full((*shape, m), np.nan),
+                np.full((*shape, m, m), np.nan),
+                np.full((*shape, m), np.nan),
+            )
+        C = self._Cs[k, slots]  # (S, m, m), or (S, B, m, m) per realisation
+        root = self._root[k, slots]  # shared by all realisations, or per realisation
+        if np.any(self._C_missing[slots]):  # missing samples in the window
             C = C - self._C_missing[slots]
             V, inv = _pinv_factors(C)
             root = V * np.sqrt(inv)[..., None, :]
-        d = self._d[slots]                           # (S, m, B)
-        q = self._project(root, d)                   # (S, m, B)
-        stat = np.einsum("smb,smb->sb", q, q)        # (35) for every admissible onset, (S, B)
-        best = np.argmax(stat, axis=0)               # (36), (B,)
+        d = self._d[slots]  # (S, m, B)
+        q = self._project(root, d)  # (S, m, B)
+        stat = np.einsum("smb,smb->sb", q, q)  # (35) for every admissible onset, (S, B)
+        best = np.argmax(stat, axis=0)  # (36), (B,)
         cols = np.arange(self._B)
         l_k = stat[best, cols]
-        th = (self._pick(root, (best,), cols) @ q[best, :, cols][..., None])[..., 0]   # (34): C^+ d
+        th = (self._pick(root, (best,), cols) @ q[best, :, cols][..., None])[..., 0]  # (34): C^+ d
         d_hat = d[best, :, cols]
         l_k, th, d_hat = l_k.reshape(shape), th.reshape(*shape, m), d_hat.reshape(*shape, m)
         best_onset = self._onsets[k, slots][best].reshape(shape)
         C_hat = self._pick(C, (best,), cols).reshape(*shape, m, m)
         return l_k, best_onset, th, C_hat, d_hat
-
 
     def _record(self, eps: np.ndarray) -> WindowGLRResult:
         """:func:`glr_window`: all the samples of a fresh detector, statistics evaluated by blocks.
@@ -528,7 +592,7 @@ class WindowedGLR:
             raise ModelError("_record: expected a fresh detector")
         if self._skipped.any():  # NaN there; their signature rows are zero (_shared)
             eps = np.where(self._skipped[:, None], 0.0, eps)
-        e_w = self._Linv @ np.moveaxis(eps.reshape(B, N, p), 0, 2)        # (N, p, B)
+        e_w = self._Linv @ np.moveaxis(eps.reshape(B, N, p), 0, 2)  # (N, p, B)
         stat = np.full((N, B), np.nan)
         onset = np.full((N, B), -1)
         theta = np.full((N, B, m), np.nan)
@@ -544,34 +608,45 @@ class WindowedGLR:
                 self._d[k % w] = 0.0
                 self._d += terms[i]
                 D[i] = self._d
-            root = self._root[ks]                        # (K, w, m, m), or (K, w, B, m, m)
-            q = self._project(root, D)                                   # (K, w, m, B)
-            st = np.einsum("kwmb,kwmb->kwb", q, q)                       # (35)
+            root = self._root[ks]  # (K, w, m, m), or (K, w, B, m, m)
+            q = self._project(root, D)  # (K, w, m, B)
+            st = np.einsum("kwmb,kwmb->kwb", q, q)  # (35)
             st = np.where(self._allowed[ks][:, :, None], st, -np.inf)
-            best = np.argmax(st, axis=1)                                 # (36), (K, B)
-            ok = self._allowed[ks].any(axis=1)                           # some onset admissible
+            best = np.argmax(st, axis=1)  # (36), (K, B)
+            ok = self._allowed[ks].any(axis=1)  # some onset admissible
             kk = np.arange(ks.size)[:, None]
             stat[ks[ok]] = np.take_along_axis(st, best[:, None, :], axis=1)[:, 0][ok]
             onset[ks[ok]] = self._onsets[ks[:, None], best][ok]
             at = best[:, None, None, :]
-            qb = np.take_along_axis(q, at, axis=1)[:, 0]                 # (K, m, B)
-            th = np.einsum("kbij,kjb->kbi", self._pick(root, (kk, best), cols), qb)   # (34): C^+ d
+            qb = np.take_along_axis(q, at, axis=1)[:, 0]  # (K, m, B)
+            th = np.einsum("kbij,kjb->kbi", self._pick(root, (kk, best), cols), qb)  # (34): C^+ d
             theta[ks[ok]] = th[ok]
             C_hat[ks[ok]] = self._pick(self._Cs, (ks[:, None], best), cols)[ok]
             d_hat[ks[ok]] = np.swapaxes(np.take_along_axis(D, at, axis=1)[:, 0], 1, 2)[ok]
         self.k = N
         shape = self.batch_shape
-        return WindowGLRResult(statistic=np.moveaxis(stat, 0, -1).reshape(*shape, N),
-                               onset=np.moveaxis(onset, 0, -1).reshape(*shape, N),
-                               theta_hat=np.moveaxis(theta, 0, 1).reshape(*shape, N, m),
-                               C_hat=np.moveaxis(C_hat, 0, 1).reshape(*shape, N, m, m),
-                               d_hat=np.moveaxis(d_hat, 0, 1).reshape(*shape, N, m),
-                               window=w, min_samples=self.min_samples)
+        return WindowGLRResult(
+            statistic=np.moveaxis(stat, 0, -1).reshape(*shape, N),
+            onset=np.moveaxis(onset, 0, -1).reshape(*shape, N),
+            theta_hat=np.moveaxis(theta, 0, 1).reshape(*shape, N, m),
+            C_hat=np.moveaxis(C_hat, 0, 1).reshape(*shape, N, m, m),
+            d_hat=np.moveaxis(d_hat, 0, 1).reshape(*shape, N, m),
+            window=w,
+            min_samples=self.min_samples,
+        )
 
 
-def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, family: FaultFamily,
-               window: int, min_samples: int | None = None, *, shared: WindowedGLR | None = None,
-               start: int = 0) -> WindowGLRResult:
+def glr_window(
+    innovations: np.ndarray,
+    model: LTVModel,
+    gains: KalmanGains,
+    family: FaultFamily,
+    window: int,
+    min_samples: int | None = None,
+    *,
+    shared: WindowedGLR | None = None,
+    start: int = 0,
+) -> WindowGLRResult:
     """Windowed GLR with unknown onset (35)-(37) over a whole record.
 
     Explained in the book: :doc:`/book/zb2014/glr`.
@@ -634,37 +709,53 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
     if not isinstance(family, FaultFamily):
         raise ModelError(f"family: expected a FaultFamily, got {type(family).__name__}")
     _check_family_batch(family, batch)
-    missing = missing & ~gains_missing(gains)   # dropped innovations the gains do not know
+    missing = missing & ~gains_missing(gains)  # dropped innovations the gains do not know
     if missing.any() and batch:
         flat_missing = missing.reshape(-1, model.n_steps)
         patterns, group = np.unique(flat_missing, axis=0, return_inverse=True)
         if len(patterns) > 1:
-            return _grouped_glr_window(eps, group.reshape(-1), model, gains, family, window, min_samples,
-                                       shared, start)
-    if family.batch_shape:   # per-realisation arrays: blocks of realisations within the memory budget
+            return _grouped_glr_window(
+                eps, group.reshape(-1), model, gains, family, window, min_samples, shared, start
+            )
+    if (
+        family.batch_shape
+    ):  # per-realisation arrays: blocks of realisations within the memory budget
         B = int(np.prod(batch, dtype=int))
         window = integer(window, "window", low=1, high=model.n_steps)
         per = 8 * model.n_steps * window * family.m * (model.n + 3 * model.p + 4 * family.m)
         size = max(1, _PER_REALISATION_BYTES // per)
         if B > size:
-            return _grouped_glr_window(eps, np.arange(B) // size, model, gains, family, window, min_samples,
-                                       shared, start)
+            return _grouped_glr_window(
+                eps, np.arange(B) // size, model, gains, family, window, min_samples, shared, start
+            )
     if shared is None:
         det = WindowedGLR(model, gains, family, window, min_samples, batch_shape=batch)
     else:
         s = -(-family.m // model.p) if min_samples is None else min_samples
-        if (not isinstance(shared, WindowedGLR) or shared.model is not model or shared.gains is not gains
-                or shared.family is not family or (shared.window, shared.min_samples) != (window, s)):
-            raise ModelError("shared: expected a WindowedGLR built with the same model, gains and family "
-                             f"objects, window {window} and min_samples {s}, got "
-                             f"{type(shared).__name__} with window {getattr(shared, 'window', None)} "
-                             f"and min_samples {getattr(shared, 'min_samples', None)}")
+        if (
+            not isinstance(shared, WindowedGLR)
+            or shared.model is not model
+            or shared.gains is not gains
+            or shared.family is not family
+            or (shared.window, shared.min_samples) != (window, s)
+        ):
+            raise ModelError(
+                "shared: expected a WindowedGLR built with the same model, gains and family "
+                f"objects, window {window} and min_samples {s}, got "
+                f"{type(shared).__name__} with window {getattr(shared, 'window', None)} "
+                f"and min_samples {getattr(shared, 'min_samples', None)}"
+            )
         det = shared.fresh(batch)
     if (det._B <= _RECORD_MAX_BATCH or det._per_realisation) and not missing.any():
         res = det._record(eps)
         if start:  # the same outputs as sample by sample: none before start
-            for arr, undefined in ((res.statistic, np.nan), (res.onset, -1), (res.theta_hat, np.nan),
-                                   (res.C_hat, np.nan), (res.d_hat, np.nan)):
+            for arr, undefined in (
+                (res.statistic, np.nan),
+                (res.onset, -1),
+                (res.theta_hat, np.nan),
+                (res.C_hat, np.nan),
+                (res.d_hat, np.nan),
+            ):
                 arr[(slice(None),) * len(batch) + (slice(0, start),)] = undefined
         return res
     # many realisations: one update per sample already works on wide arrays
@@ -675,10 +766,18 @@ def glr_window(innovations: np.ndarray, model: LTVModel, gains: KalmanGains, fam
     C_hat = np.empty((*batch, N, m, m))
     d_hat = np.empty((*batch, N, m))
     for k in range(N):
-        (stat[..., k], onset[..., k], theta[..., k, :], C_hat[..., k, :, :],
-         d_hat[..., k, :]) = det.update(eps[..., k, :], statistics=k >= start)
-    return WindowGLRResult(statistic=stat, onset=onset, theta_hat=theta, C_hat=C_hat, d_hat=d_hat,
-                           window=det.window, min_samples=det.min_samples)
+        (stat[..., k], onset[..., k], theta[..., k, :], C_hat[..., k, :, :], d_hat[..., k, :]) = (
+            det.update(eps[..., k, :], statistics=k >= start)
+        )
+    return WindowGLRResult(
+        statistic=stat,
+        onset=onset,
+        theta_hat=theta,
+        C_hat=C_hat,
+        d_hat=d_hat,
+        window=det.window,
+        min_samples=det.min_samples,
+    )
 
 
 #: Up to this many realisations, :func:`glr_window` evaluates the statistics by blocks of
@@ -689,39 +788,61 @@ _RECORD_MAX_BATCH = 4
 #: Budget (bytes) of the arrays :func:`glr_window` holds for a block of realisations with their
 #: own profiles (signatures, informations, pseudo-inverse factors: ``N w m (n + 3 p + 4 m)``
 #: floats per realisation).
-_PER_REALISATION_BYTES = 64 * 2 ** 20
+_PER_REALISATION_BYTES = 64 * 2**20
 
 
 def _check_family_batch(family: FaultFamily, batch: tuple[int, ...]) -> None:
     """Raise :class:`ShapeError` if ``family`` has per-realisation profiles not of batch shape ``batch``."""
     if family.batch_shape and family.batch_shape != tuple(batch):
-        raise ShapeError(f"family: expected per-realisation profiles of batch shape {tuple(batch)} (that of "
-                         f"the innovations) or a shared family, got batch shape {family.batch_shape}")
+        raise ShapeError(
+            f"family: expected per-realisation profiles of batch shape {tuple(batch)} (that of "
+            f"the innovations) or a shared family, got batch shape {family.batch_shape}"
+        )
 
 
-def _grouped_glr_window(eps: np.ndarray, group: np.ndarray, model: LTVModel, gains: KalmanGains,
-                        family: FaultFamily, window: int, min_samples: int | None,
-                        shared: WindowedGLR | None, start: int) -> WindowGLRResult:
+def _grouped_glr_window(
+    eps: np.ndarray,
+    group: np.ndarray,
+    model: LTVModel,
+    gains: KalmanGains,
+    family: FaultFamily,
+    window: int,
+    min_samples: int | None,
+    shared: WindowedGLR | None,
+    start: int,
+) -> WindowGLRResult:
     """:func:`glr_window` run once per group of realisations (those sharing the same missing samples,
     or a block of realisations with their own profiles, which take their rows of the family)."""
     batch, N, m = eps.shape[:-2], model.n_steps, family.m
     flat = eps.reshape(-1, N, model.p)
     B = flat.shape[0]
-    out = {"statistic": np.empty((B, N)), "onset": np.empty((B, N), dtype=int),
-           "theta_hat": np.empty((B, N, m)), "C_hat": np.empty((B, N, m, m)), "d_hat": np.empty((B, N, m))}
+    out = {
+        "statistic": np.empty((B, N)),
+        "onset": np.empty((B, N), dtype=int),
+        "theta_hat": np.empty((B, N, m)),
+        "C_hat": np.empty((B, N, m, m)),
+        "d_hat": np.empty((B, N, m)),
+    }
     res = None
     for i in np.unique(group):
         rows = np.nonzero(group == i)[0]
         fam, sh = family, shared
-        if family.batch_shape:   # this group's profiles: a new family (a detector's arrays do not fit it)
-            Psi, Phi = (P.reshape(B, *P.shape[-3:])[rows] for P in (family.Psi_tilde, family.Phi_tilde))
+        if (
+            family.batch_shape
+        ):  # this group's profiles: a new family (a detector's arrays do not fit it)
+            Psi, Phi = (
+                P.reshape(B, *P.shape[-3:])[rows] for P in (family.Psi_tilde, family.Phi_tilde)
+            )
             fam = FaultFamily(kind=family.kind, Psi_tilde=Psi, Phi_tilde=Phi)
             sh = None
         res = glr_window(flat[rows], model, gains, fam, window, min_samples, shared=sh, start=start)
         for key, arr in out.items():
             arr[rows] = getattr(res, key)
-    return WindowGLRResult(**{key: arr.reshape(*batch, *arr.shape[1:]) for key, arr in out.items()},
-                           window=res.window, min_samples=res.min_samples)
+    return WindowGLRResult(
+        **{key: arr.reshape(*batch, *arr.shape[1:]) for key, arr in out.items()},
+        window=res.window,
+        min_samples=res.min_samples,
+    )
 
 
 def first_alarm(statistic: np.ndarray, threshold: float, start: int = 0) -> np.ndarray:
@@ -758,12 +879,14 @@ def first_alarm(statistic: np.ndarray, threshold: float, start: int = 0) -> np.n
     bad = np.isinf(stat) | (nan & np.logical_or.accumulate(~nan, axis=-1))
     if bad.any():
         i = tuple(int(j) for j in np.argwhere(bad)[0])
-        raise NonFiniteError(f"statistic: expected finite values after the warm-up, got {stat[i]} "
-                             f"at index {i}")
-    if stat.shape[-1] and nan[..., -1].any():   # NaN to the end: no value at all, never "no alarm"
+        raise NonFiniteError(
+            f"statistic: expected finite values after the warm-up, got {stat[i]} at index {i}"
+        )
+    if stat.shape[-1] and nan[..., -1].any():  # NaN to the end: no value at all, never "no alarm"
         i = tuple(int(j) for j in np.argwhere(nan[..., -1])[0])
-        raise NonFiniteError(f"statistic: expected finite values after the warm-up, got only NaN in "
-                             f"record {i}")
+        raise NonFiniteError(
+            f"statistic: expected finite values after the warm-up, got only NaN in record {i}"
+        )
     over = np.nan_to_num(stat, nan=-np.inf) > threshold
     over[..., :start] = False
     hit = over.any(axis=-1)

@@ -23,13 +23,22 @@ import scipy.stats
 
 from fdi_lib.errors import ModelError, PersistentExcitationError, ShapeError
 from fdi_lib.filters import KalmanGains
-from fdi_lib.validation import array, check_skipped, covariance, integer, missing_samples, probability, real
+from fdi_lib.validation import (
+    array,
+    check_skipped,
+    covariance,
+    integer,
+    missing_samples,
+    probability,
+    real,
+)
 
 __all__ = ["information", "minmax_statistic", "MinmaxDecision", "minmax_isolation"]
 
 
-def information(innovations: np.ndarray, signature: np.ndarray, gains: KalmanGains,
-                start: int, stop: int) -> tuple[np.ndarray, np.ndarray]:
+def information(
+    innovations: np.ndarray, signature: np.ndarray, gains: KalmanGains, start: int, stop: int
+) -> tuple[np.ndarray, np.ndarray]:
     """Fisher information ``F`` and normalised residual ``zeta`` of eq. (39) over samples ``start .. stop-1``.
 
     Explained in the book: :doc:`/book/zb2014/glr`.
@@ -64,24 +73,35 @@ def information(innovations: np.ndarray, signature: np.ndarray, gains: KalmanGai
     >>> F.shape, float(zeta[0])                           # no innovation, no evidence
     ((1, 1), 0.0)
     """
-    if np.ndim(getattr(gains, "Sigma_chol", None)) != 3 or np.ndim(getattr(gains, "Sigma", None)) != 3:
-        raise ModelError(f"gains: expected KalmanGains (Sigma, Sigma_chol of shape (N, p, p)), "
-                         f"got {type(gains).__name__}")
+    if (
+        np.ndim(getattr(gains, "Sigma_chol", None)) != 3
+        or np.ndim(getattr(gains, "Sigma", None)) != 3
+    ):
+        raise ModelError(
+            f"gains: expected KalmanGains (Sigma, Sigma_chol of shape (N, p, p)), "
+            f"got {type(gains).__name__}"
+        )
     eps = array(innovations, "innovations", finite=False)
     S = array(signature, "signature")
     N, p = gains.Sigma.shape[:2]
     if S.ndim != 3 or S.shape[:2] != (N, p) or eps.ndim < 2 or eps.shape[-2:] != (N, p):
-        raise ShapeError(f"signature/innovations: expected ({N}, {p}, m) and (..., {N}, {p}), "
-                         f"got {S.shape} and {eps.shape}")
+        raise ShapeError(
+            f"signature/innovations: expected ({N}, {p}, m) and (..., {N}, {p}), "
+            f"got {S.shape} and {eps.shape}"
+        )
     start = integer(start, "start", low=0, high=N - 1)
     stop = integer(stop, "stop")
     if not start < stop <= N:
-        raise ModelError(f"stop: expected an integer in (start, N] = ({start}, {N}] (start = {start}, the "
-                         f"first sample; stop excluded), got {stop}")
+        raise ModelError(
+            f"stop: expected an integer in (start, N] = ({start}, {N}] (start = {start}, the "
+            f"first sample; stop excluded), got {stop}"
+        )
     check_skipped(missing_samples(eps, "innovations"), gains, "innovations")
     S, eps = S[start:stop], eps[..., start:stop, :]
     missing = missing_samples(eps, "innovations")
-    if missing.any():  # a missing sample contributes nothing: zero its innovation and signature rows
+    if (
+        missing.any()
+    ):  # a missing sample contributes nothing: zero its innovation and signature rows
         eps = np.where(missing[..., None], 0.0, eps)
         S = np.where(missing[..., None, None], 0.0, S)
     L = gains.Sigma_chol[start:stop]
@@ -131,12 +151,16 @@ def minmax_statistic(F: np.ndarray, zeta: np.ndarray, a: Sequence[int]) -> np.nd
     F = array(F, "F")
     zeta = array(zeta, "zeta")
     if F.ndim < 2 or F.shape[-1] != F.shape[-2] or zeta.ndim < 1 or zeta.shape[-1] != F.shape[-1]:
-        raise ShapeError(f"F, zeta: expected (..., m, m) and (..., m), got {F.shape} and {zeta.shape}")
+        raise ShapeError(
+            f"F, zeta: expected (..., m, m) and (..., m), got {F.shape} and {zeta.shape}"
+        )
     try:
         np.broadcast_shapes(F.shape[:-2], zeta.shape[:-1])
     except ValueError:
-        raise ShapeError(f"F, zeta: leading axes {F.shape[:-2]} and {zeta.shape[:-1]} do not broadcast") from None
-    covariance(F.reshape(-1, *F.shape[-2:]), "F", definite=False)   # symmetric PSD (an information)
+        raise ShapeError(
+            f"F, zeta: leading axes {F.shape[:-2]} and {zeta.shape[:-1]} do not broadcast"
+        ) from None
+    covariance(F.reshape(-1, *F.shape[-2:]), "F", definite=False)  # symmetric PSD (an information)
     a_idx, b_idx = _index(a, F.shape[-1])
     Faa = F[..., a_idx[:, None], a_idx]
     Fab = F[..., a_idx[:, None], b_idx]
@@ -182,9 +206,14 @@ class MinmaxDecision:
     faulty: np.ndarray
 
 
-def minmax_isolation(F: np.ndarray, zeta: np.ndarray, partitions: Sequence[Sequence[int]], *,
-                     alpha: float = 0.01, thresholds: Sequence[float] | None = None
-                     ) -> list[MinmaxDecision]:
+def minmax_isolation(
+    F: np.ndarray,
+    zeta: np.ndarray,
+    partitions: Sequence[Sequence[int]],
+    *,
+    alpha: float = 0.01,
+    thresholds: Sequence[float] | None = None,
+) -> list[MinmaxDecision]:
     """Bank of parallel minmax tests (43), one per partition ``theta = (theta_a, theta_b)``.
 
     Explained in the book: :doc:`/book/zb2014/glr`.
@@ -216,8 +245,18 @@ def minmax_isolation(F: np.ndarray, zeta: np.ndarray, partitions: Sequence[Seque
     for i, a in enumerate(partitions):
         stat = minmax_statistic(F, zeta, a)
         dof = len(a)
-        thr = float(scipy.stats.chi2.ppf(1.0 - alpha, dof)) if thresholds is None else float(thresholds[i])
-        out.append(MinmaxDecision(a=tuple(int(j) for j in a), statistic=stat, threshold=thr, dof=dof,
-                                  faulty=stat > thr))
+        thr = (
+            float(scipy.stats.chi2.ppf(1.0 - alpha, dof))
+            if thresholds is None
+            else float(thresholds[i])
+        )
+        out.append(
+            MinmaxDecision(
+                a=tuple(int(j) for j in a),
+                statistic=stat,
+                threshold=thr,
+                dof=dof,
+                faulty=stat > thr,
+            )
+        )
     return out
-

@@ -64,8 +64,16 @@ import scipy.linalg
 from fdi_lib.errors import NonFiniteError, RankConditionError, ShapeError
 from fdi_lib.filters import predictor_recursion
 from fdi_lib.models import FaultProfile, LTVModel, as_record, as_sequence
-from fdi_lib.validation import (array, check_finite, check_missing_known, cholesky, common_pattern,
-                                gains_missing, measurements, missing_pattern)
+from fdi_lib.validation import (
+    array,
+    check_finite,
+    check_missing_known,
+    cholesky,
+    common_pattern,
+    gains_missing,
+    measurements,
+    missing_pattern,
+)
 
 __all__ = [
     "KitanidisGains",
@@ -103,8 +111,10 @@ def as_unknown_input_matrix(model: LTVModel, E: Any) -> np.ndarray:
         if not callable(E):
             E = first
     if first.ndim not in (2, 3) or first.shape[-2] != model.n:
-        raise ShapeError(f"E: expected shape ({model.n}, s) or ({model.n_steps}, {model.n}, s), "
-                         f"got {first.shape}")
+        raise ShapeError(
+            f"E: expected shape ({model.n}, s) or ({model.n_steps}, {model.n}, s), "
+            f"got {first.shape}"
+        )
     s = first.shape[-1]
     return as_sequence(E, n_steps=model.n_steps, shape=(model.n, s), name="E")
 
@@ -213,8 +223,14 @@ def kitanidis_gains(model: LTVModel, E: Any, missing: Any = None) -> KitanidisGa
             S = H @ Pk @ H.T + Rk
             S = 0.5 * (S + S.T)
             c, low = cholesky(S, step=k, what="the Kitanidis covariance recursion")
-            if k > 0:  # d_{k-1} joins the directions still to reject (after a gap, propagated ones too)
-                pending = _span(np.hstack([model.F[k - 1] @ pending, Es[k - 1]])) if skip[k - 1] else Es[k - 1]
+            if (
+                k > 0
+            ):  # d_{k-1} joins the directions still to reject (after a gap, propagated ones too)
+                pending = (
+                    _span(np.hstack([model.F[k - 1] @ pending, Es[k - 1]]))
+                    if skip[k - 1]
+                    else Es[k - 1]
+                )
             q = pending.shape[1]
             if skip[k]:  # missing sample: no update, the pending inputs wait for the next sample
                 Kk = Kbar = np.zeros((n, p))
@@ -228,10 +244,15 @@ def kitanidis_gains(model: LTVModel, E: Any, missing: Any = None) -> KitanidisGa
                 sv = np.linalg.svd(HE, compute_uv=False)
                 if sv.size < q or sv[-1] <= RANK_RTOL * max(1.0, sv[0]):
                     smin = float(sv[-1]) if sv.size == q else 0.0
-                    gap = " (with the unknown inputs pending since the missing samples)" if skip[k - 1] else ""
+                    gap = (
+                        " (with the unknown inputs pending since the missing samples)"
+                        if skip[k - 1]
+                        else ""
+                    )
                     raise RankConditionError(
                         f"E: assumption (iv) needs H_{{k+1}} E_k of full column rank {q}{gap}; at k = {k - 1}, "
-                        f"H_{k} E_{k - 1} has shape {HE.shape} and smallest singular value {smin:.3g}")
+                        f"H_{k} E_{k - 1} has shape {HE.shape} and smallest singular value {smin:.3g}"
+                    )
                 # Square-root form: with Sigma = L L^T and L^{-1} H E = Qw Rw (thin QR), Xi = Rw^T Rw and
                 # Xi^{-1} E^T H^T Sigma^{-1} = Rw^{-1} Qw^T L^{-1}, a left inverse of H E accurate to
                 # cond(Rw) = sqrt(cond(Xi)) rather than cond(Xi): identity (30) then holds to that precision.
@@ -255,9 +276,21 @@ def kitanidis_gains(model: LTVModel, E: Any, missing: Any = None) -> KitanidisGa
             P[k + 1] = 0.5 * (Pn + Pn.T)
     if not np.all(np.isfinite(P)):
         k = int(np.argwhere(~np.isfinite(P))[0, 0])
-        raise NonFiniteError(f"model: the Kitanidis covariance recursion diverged (non-finite P at step {k})")
-    return KitanidisGains(K=K, K_kalman=Kc, P=P, P_filt=P_filt, Sigma=Sigma, Sigma_chol=L, Xi=Xi,
-                          residual_cov=Rcov, E=Es, missing=skip if skip.any() else None)
+        raise NonFiniteError(
+            f"model: the Kitanidis covariance recursion diverged (non-finite P at step {k})"
+        )
+    return KitanidisGains(
+        K=K,
+        K_kalman=Kc,
+        P=P,
+        P_filt=P_filt,
+        Sigma=Sigma,
+        Sigma_chol=L,
+        Xi=Xi,
+        residual_cov=Rcov,
+        E=Es,
+        missing=skip if skip.any() else None,
+    )
 
 
 @dataclass(frozen=True)
@@ -286,12 +319,21 @@ class KitanidisResult:
 
 def _check_gains(model: LTVModel, gains: Any, name: str = "gains") -> None:
     if not hasattr(gains, "K") or np.shape(gains.K) != (model.n_steps, model.n, model.p):
-        raise ShapeError(f"{name}: expected gains with K of shape {(model.n_steps, model.n, model.p)} "
-                         f"for this model, got {np.shape(getattr(gains, 'K', None))}")
+        raise ShapeError(
+            f"{name}: expected gains with K of shape {(model.n_steps, model.n, model.p)} "
+            f"for this model, got {np.shape(getattr(gains, 'K', None))}"
+        )
 
 
-def kitanidis_filter(model: LTVModel, y: Any, u: Any = None, E: Any = None, *,
-                     gains: KitanidisGains | None = None, x0: Any = None) -> KitanidisResult:
+def kitanidis_filter(
+    model: LTVModel,
+    y: Any,
+    u: Any = None,
+    E: Any = None,
+    *,
+    gains: KitanidisGains | None = None,
+    x0: Any = None,
+) -> KitanidisResult:
     """Run the Kitanidis filter (24h) and return its residuals (25).
 
     Explained in the book: :doc:`/book/zhang2021/sparse`.
@@ -335,8 +377,12 @@ def kitanidis_filter(model: LTVModel, y: Any, u: Any = None, E: Any = None, *,
     y_arr, missing = measurements(y, n_steps=model.n_steps, width=model.p, name="y")
     if gains is None:
         if E is None:
-            raise ShapeError("E: expected the unknown-input matrices (or precomputed gains=), got None")
-        gains = kitanidis_gains(model, E, missing=common_pattern(missing, "y") if missing.any() else None)
+            raise ShapeError(
+                "E: expected the unknown-input matrices (or precomputed gains=), got None"
+            )
+        gains = kitanidis_gains(
+            model, E, missing=common_pattern(missing, "y") if missing.any() else None
+        )
     else:
         _check_gains(model, gains)
     check_missing_known(missing, gains, "y")
@@ -362,8 +408,14 @@ class ResidualSignature:
     on_residual: np.ndarray
 
 
-def residual_signature(model: LTVModel, gains: Any, fault: FaultProfile | None = None, *,
-                       Psi: Any = None, Phi: Any = None) -> ResidualSignature:
+def residual_signature(
+    model: LTVModel,
+    gains: Any,
+    fault: FaultProfile | None = None,
+    *,
+    Psi: Any = None,
+    Phi: Any = None,
+) -> ResidualSignature:
     """Signature of ``theta`` on the updated residual, Zhang (2021) eqs. (7) and (27).
 
     Generalised to an output profile ``Phi_k``::
@@ -423,7 +475,9 @@ def residual_signature(model: LTVModel, gains: Any, fault: FaultProfile | None =
     if Psi_a.ndim < 3 or Psi_a.shape[-3:-1] != (N, n):
         raise ShapeError(f"Psi: expected shape (..., {N}, {n}, m), got {Psi_a.shape}")
     if Phi_a.ndim < 3 or Phi_a.shape[-3:-1] != (N, p) or Phi_a.shape[-1] != Psi_a.shape[-1]:
-        raise ShapeError(f"Phi: expected shape (..., {N}, {p}, {Psi_a.shape[-1]}), got {Phi_a.shape}")
+        raise ShapeError(
+            f"Phi: expected shape (..., {N}, {p}, {Psi_a.shape[-1]}), got {Phi_a.shape}"
+        )
     for arr, name in ((Psi_a, "Psi"), (Phi_a, "Phi")):
         check_finite(arr, name)
     batch = np.broadcast_shapes(Psi_a.shape[:-3], Phi_a.shape[:-3])

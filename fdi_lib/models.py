@@ -39,7 +39,9 @@ __all__ = [
 MatrixLike = Any  # array_like | Callable[[int], array_like]
 
 
-def as_sequence(value: MatrixLike, *, n_steps: int, shape: tuple[int, ...], name: str) -> np.ndarray:
+def as_sequence(
+    value: MatrixLike, *, n_steps: int, shape: tuple[int, ...], name: str
+) -> np.ndarray:
     """Materialise a constant / per-step / callable matrix on ``k = 0 .. n_steps-1``.
 
     Explained in the book: :doc:`/book/notation`.
@@ -82,15 +84,19 @@ def as_sequence(value: MatrixLike, *, n_steps: int, shape: tuple[int, ...], name
         try:
             arr = np.asarray(value, dtype=float)
         except (TypeError, ValueError) as exc:
-            raise ModelError(f"{name}: expected an array, a per-step array or a callable of k, "
-                             f"got {type(value).__name__}") from exc
+            raise ModelError(
+                f"{name}: expected an array, a per-step array or a callable of k, "
+                f"got {type(value).__name__}"
+            ) from exc
         if arr.ndim == 0 and int(np.prod(shape)) == 1:
             arr = arr.reshape(shape)
         if arr.shape == shape:
             arr = np.broadcast_to(arr, (n_steps, *shape))
         elif arr.shape != (n_steps, *shape):
-            raise ShapeError(f"{name}: expected shape {shape} (constant) or {(n_steps, *shape)} "
-                             f"(per step), got {arr.shape}")
+            raise ShapeError(
+                f"{name}: expected shape {shape} (constant) or {(n_steps, *shape)} "
+                f"(per step), got {arr.shape}"
+            )
     check_finite(arr, name)
     arr = np.asarray(arr)
     if arr.flags.writeable and arr.base is None:
@@ -170,9 +176,18 @@ class LTVModel:
         return self.H.shape[1]
 
 
-def ltv_model(*, F: MatrixLike, H: MatrixLike, Q: MatrixLike, R: MatrixLike, n_steps: int,
-              G: MatrixLike | None = None, J: MatrixLike | None = None,
-              x0: Any = None, P0: Any = None) -> LTVModel:
+def ltv_model(
+    *,
+    F: MatrixLike,
+    H: MatrixLike,
+    Q: MatrixLike,
+    R: MatrixLike,
+    n_steps: int,
+    G: MatrixLike | None = None,
+    J: MatrixLike | None = None,
+    x0: Any = None,
+    P0: Any = None,
+) -> LTVModel:
     """Build and validate an :class:`LTVModel`.
 
     Explained in the book: :doc:`/book/zb2014/signature`.
@@ -207,7 +222,9 @@ def ltv_model(*, F: MatrixLike, H: MatrixLike, Q: MatrixLike, R: MatrixLike, n_s
     n_steps = integer(n_steps, "n_steps", low=1)
     F_first = array(F(0) if callable(F) else F, "F", finite=False)
     if F_first.ndim not in (2, 3) or F_first.shape[-1] != F_first.shape[-2]:
-        raise ShapeError(f"F: expected square matrices (n, n) or (N, n, n), got shape {F_first.shape}")
+        raise ShapeError(
+            f"F: expected square matrices (n, n) or (N, n, n), got shape {F_first.shape}"
+        )
     n = F_first.shape[-1]
     H_first = array(H(0) if callable(H) else H, "H", finite=False)
     if H_first.ndim not in (2, 3) or H_first.shape[-1] != n:
@@ -224,8 +241,11 @@ def ltv_model(*, F: MatrixLike, H: MatrixLike, Q: MatrixLike, R: MatrixLike, n_s
         Gs = as_sequence(G, n_steps=n_steps, shape=(n, l), name="G")
     Fs = as_sequence(F, n_steps=n_steps, shape=(n, n), name="F")
     Hs = as_sequence(H, n_steps=n_steps, shape=(p, n), name="H")
-    Js = (np.broadcast_to(np.zeros((p, l)), (n_steps, p, l)) if J is None
-          else as_sequence(J, n_steps=n_steps, shape=(p, l), name="J"))
+    Js = (
+        np.broadcast_to(np.zeros((p, l)), (n_steps, p, l))
+        if J is None
+        else as_sequence(J, n_steps=n_steps, shape=(p, l), name="J")
+    )
     Qs = as_sequence(Q, n_steps=n_steps, shape=(n, n), name="Q")
     Rs = as_sequence(R, n_steps=n_steps, shape=(p, p), name="R")
     covariance(Qs, "Q", definite=False)
@@ -242,9 +262,22 @@ def ltv_model(*, F: MatrixLike, H: MatrixLike, Q: MatrixLike, R: MatrixLike, n_s
     return LTVModel(F=Fs, G=Gs, H=Hs, J=Js, Q=Qs, R=Rs, x0=x0a, P0=P0a)
 
 
-def lpv_model(*, scheduling: Any, F0: Any, H0: Any, Q: MatrixLike, R: MatrixLike,
-              Fp: Any = None, G0: Any = None, Gp: Any = None, Hp: Any = None,
-              J0: Any = None, Jp: Any = None, x0: Any = None, P0: Any = None) -> LTVModel:
+def lpv_model(
+    *,
+    scheduling: Any,
+    F0: Any,
+    H0: Any,
+    Q: MatrixLike,
+    R: MatrixLike,
+    Fp: Any = None,
+    G0: Any = None,
+    Gp: Any = None,
+    Hp: Any = None,
+    J0: Any = None,
+    Jp: Any = None,
+    x0: Any = None,
+    P0: Any = None,
+) -> LTVModel:
     """Build an LTV model from affine LPV matrices, e.g. ``F_k = F0 + sum_i Fp[i] p_k[i]``.
 
     Zhang & Basseville (2014), eq. (53), generalised to several scheduling parameters.
@@ -284,17 +317,33 @@ def lpv_model(*, scheduling: Any, F0: Any, H0: Any, Q: MatrixLike, R: MatrixLike
         b = array(base, f"{name}0", finite=False)
         if parts is None:
             return b
-        plist = [np.asarray(parts, dtype=float)] if np.ndim(parts) == b.ndim else [
-            np.asarray(x, dtype=float) for x in parts]
+        plist = (
+            [np.asarray(parts, dtype=float)]
+            if np.ndim(parts) == b.ndim
+            else [np.asarray(x, dtype=float) for x in parts]
+        )
         if len(plist) != q:
-            raise ShapeError(f"{name}p: expected {q} matrices (one per scheduling parameter), got {len(plist)}")
+            raise ShapeError(
+                f"{name}p: expected {q} matrices (one per scheduling parameter), got {len(plist)}"
+            )
         for i, part in enumerate(plist):
             if part.shape != b.shape:
-                raise ShapeError(f"{name}p[{i}]: expected shape {b.shape} (as {name}0), got {part.shape}")
+                raise ShapeError(
+                    f"{name}p[{i}]: expected shape {b.shape} (as {name}0), got {part.shape}"
+                )
         return b + np.einsum("kq,qij->kij", p_sched, np.stack(plist))
 
-    return ltv_model(F=affine("F", F0, Fp), G=affine("G", G0, Gp), H=affine("H", H0, Hp),
-                     J=affine("J", J0, Jp), Q=Q, R=R, n_steps=n_steps, x0=x0, P0=P0)
+    return ltv_model(
+        F=affine("F", F0, Fp),
+        G=affine("G", G0, Gp),
+        H=affine("H", H0, Hp),
+        J=affine("J", J0, Jp),
+        Q=Q,
+        R=R,
+        n_steps=n_steps,
+        x0=x0,
+        P0=P0,
+    )
 
 
 @dataclass(frozen=True)
@@ -322,8 +371,13 @@ class FaultProfile:
         return bool(np.any(self.Phi))
 
 
-def fault_profile(model: LTVModel, *, Psi: MatrixLike | None = None,
-                  Phi: MatrixLike | None = None, m: int | None = None) -> FaultProfile:
+def fault_profile(
+    model: LTVModel,
+    *,
+    Psi: MatrixLike | None = None,
+    Phi: MatrixLike | None = None,
+    m: int | None = None,
+) -> FaultProfile:
     """Validate fault profiles against ``model`` (either may be omitted, not both).
 
     ``m`` (the dimension of ``theta``) is inferred from ``Psi`` or ``Phi``.
@@ -342,15 +396,27 @@ def fault_profile(model: LTVModel, *, Psi: MatrixLike | None = None,
         raise ModelError("fault_profile: give Psi, Phi or both")
     if m is None:
         first = Psi if Psi is not None else Phi
-        arr = array(first(0) if callable(first) else first, "Psi" if Psi is not None else "Phi", finite=False)
+        arr = array(
+            first(0) if callable(first) else first,
+            "Psi" if Psi is not None else "Phi",
+            finite=False,
+        )
         if arr.ndim not in (2, 3):
-            raise ShapeError(f"{'Psi' if Psi is not None else 'Phi'}: expected a matrix (rows, m) or "
-                             f"(N, rows, m), got shape {arr.shape}")
+            raise ShapeError(
+                f"{'Psi' if Psi is not None else 'Phi'}: expected a matrix (rows, m) or "
+                f"(N, rows, m), got shape {arr.shape}"
+            )
         m = arr.shape[-1]
-    Psis = (np.broadcast_to(np.zeros((n, m)), (N, n, m)) if Psi is None
-            else as_sequence(Psi, n_steps=N, shape=(n, m), name="Psi"))
-    Phis = (np.broadcast_to(np.zeros((p, m)), (N, p, m)) if Phi is None
-            else as_sequence(Phi, n_steps=N, shape=(p, m), name="Phi"))
+    Psis = (
+        np.broadcast_to(np.zeros((n, m)), (N, n, m))
+        if Psi is None
+        else as_sequence(Psi, n_steps=N, shape=(n, m), name="Psi")
+    )
+    Phis = (
+        np.broadcast_to(np.zeros((p, m)), (N, p, m))
+        if Phi is None
+        else as_sequence(Phi, n_steps=N, shape=(p, m), name="Phi")
+    )
     return FaultProfile(Psi=Psis, Phi=Phis)
 
 
@@ -386,19 +452,23 @@ class FaultFamily:
     def profile(self, onset: int) -> FaultProfile:
         """The profile for onset ``r = onset`` (time indices ``0 .. N-1``) of a shared family."""
         if self.batch_shape:
-            raise ModelError(f"profile: expected a family shared by all realisations, got per-realisation "
-                             f"profiles of batch shape {self.batch_shape} (build one family per realisation)")
+            raise ModelError(
+                f"profile: expected a family shared by all realisations, got per-realisation "
+                f"profiles of batch shape {self.batch_shape} (build one family per realisation)"
+            )
         N = self.Psi_tilde.shape[0]
         if not isinstance(onset, (int, np.integer)) or not 0 <= onset <= N:
             raise ModelError(f"onset: expected an integer in [0, {N}], got {onset!r}")
         k = np.arange(N)
         mask = (k >= onset) if self.kind == "step" else (k + 1 == onset)
-        return FaultProfile(Psi=self.Psi_tilde * mask[:, None, None],
-                            Phi=self.Phi_tilde * mask[:, None, None])
+        return FaultProfile(
+            Psi=self.Psi_tilde * mask[:, None, None], Phi=self.Phi_tilde * mask[:, None, None]
+        )
 
 
-def step_family(model: LTVModel, *, Psi: MatrixLike | None = None,
-                Phi: MatrixLike | None = None) -> FaultFamily:
+def step_family(
+    model: LTVModel, *, Psi: MatrixLike | None = None, Phi: MatrixLike | None = None
+) -> FaultFamily:
     """Step (jump) faults of eq. (4) with known profiles ``Psi`` = ``Psi~_k`` and/or ``Phi`` = ``Phi~_k``.
 
     Both are validated against ``model`` as in :func:`fault_profile`. Either may instead be an
@@ -417,22 +487,29 @@ def step_family(model: LTVModel, *, Psi: MatrixLike | None = None,
     >>> fam.profile(onset=4).Psi[:, 0, 0].tolist()  # Psi_k(r) = Psi~_k 1{k >= r}
     [0.0, 0.0, 0.0, 0.0, 1.0, 1.0]
     """
-    batched = {name: array(value, name) for name, value in (("Psi", Psi), ("Phi", Phi))
-               if value is not None and not callable(value) and np.ndim(value) > 3}
+    batched = {
+        name: array(value, name)
+        for name, value in (("Psi", Psi), ("Phi", Phi))
+        if value is not None and not callable(value) and np.ndim(value) > 3
+    }
     if not batched:
         prof = fault_profile(model, Psi=Psi, Phi=Phi)
         return FaultFamily(kind="step", Psi_tilde=prof.Psi, Phi_tilde=prof.Phi)
     N, rows = model.n_steps, {"Psi": model.n, "Phi": model.p}
     for name, arr in batched.items():
         if arr.shape[-3:-1] != (N, rows[name]):
-            raise ShapeError(f"{name}: expected per-realisation profiles (*batch, {N}, {rows[name]}, m), "
-                             f"got shape {arr.shape}")
+            raise ShapeError(
+                f"{name}: expected per-realisation profiles (*batch, {N}, {rows[name]}, m), "
+                f"got shape {arr.shape}"
+            )
     (first, a), *rest = batched.items()
     batch, m = a.shape[:-3], a.shape[-1]
     for name, arr in rest:
         if arr.shape[:-3] != batch or arr.shape[-1] != m:
-            raise ShapeError(f"{name}: expected shape {(*batch, N, rows[name], m)} (the batch and m of "
-                             f"{first}), got {arr.shape}")
+            raise ShapeError(
+                f"{name}: expected shape {(*batch, N, rows[name], m)} (the batch and m of "
+                f"{first}), got {arr.shape}"
+            )
     out = {}
     for name, value in (("Psi", Psi), ("Phi", Phi)):
         shape = (rows[name], m)
@@ -442,7 +519,9 @@ def step_family(model: LTVModel, *, Psi: MatrixLike | None = None,
         elif value is None:
             arr = np.broadcast_to(np.zeros(shape), (*batch, N, *shape))
         else:  # shared by every realisation
-            arr = np.broadcast_to(as_sequence(value, n_steps=N, shape=shape, name=name), (*batch, N, *shape))
+            arr = np.broadcast_to(
+                as_sequence(value, n_steps=N, shape=shape, name=name), (*batch, N, *shape)
+            )
         out[name] = arr
     return FaultFamily(kind="step", Psi_tilde=out["Psi"], Phi_tilde=out["Phi"])
 
@@ -461,4 +540,3 @@ def impulse_family(model: LTVModel, *, Psi: MatrixLike | None = None) -> FaultFa
     """
     prof = fault_profile(model, Psi=np.eye(model.n) if Psi is None else Psi)
     return FaultFamily(kind="impulse", Psi_tilde=prof.Psi, Phi_tilde=prof.Phi)
-

@@ -55,9 +55,21 @@ from fdi_lib.models import LTVModel
 from fdi_lib.simulate import Noise, draw_noise, noise_roots
 from fdi_lib.validation import integer, probability, seed as check_seed
 
-__all__ = ["trial_seeds", "trial_rngs", "run_monte_carlo", "run_monte_carlo_many", "draw_noise_batch", "binomial_ci",
-           "default_chunk_size", "effective_jobs", "progress_bars", "use_executor", "dask_executor",
-           "available_memory", "check_memory"]
+__all__ = [
+    "trial_seeds",
+    "trial_rngs",
+    "run_monte_carlo",
+    "run_monte_carlo_many",
+    "draw_noise_batch",
+    "binomial_ci",
+    "default_chunk_size",
+    "effective_jobs",
+    "progress_bars",
+    "use_executor",
+    "dask_executor",
+    "available_memory",
+    "check_memory",
+]
 
 ChunkFn = Callable[[Sequence[np.random.SeedSequence]], dict[str, np.ndarray]]
 #: ``task(i) -> (chunk_fn, root, start, stop)``: chunk ``i`` of a run, as :func:`_call` takes it.
@@ -91,8 +103,11 @@ def draw_noise_batch(model: LTVModel, seeds: Sequence[np.random.SeedSequence]) -
     stream), stacked on axis 0."""
     roots = noise_roots(model)  # covariance roots shared by all the draws
     draws = [draw_noise(model, rng, roots=roots) for rng in trial_rngs(seeds)]
-    return Noise(x0=np.stack([d.x0 for d in draws]), w=np.stack([d.w for d in draws]),
-                 v=np.stack([d.v for d in draws]))
+    return Noise(
+        x0=np.stack([d.x0 for d in draws]),
+        w=np.stack([d.w for d in draws]),
+        v=np.stack([d.v for d in draws]),
+    )
 
 
 def default_chunk_size(n_trials: int) -> int:
@@ -105,10 +120,17 @@ def default_chunk_size(n_trials: int) -> int:
     return max(1, min(250, -(-int(n_trials) // 4)))
 
 
-def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 1,
-                    chunk_size: int | None = None, progress: bool | None = None,
-                    description: str = "Monte Carlo",
-                    executor: concurrent.futures.Executor | None = None) -> dict[str, np.ndarray]:
+def run_monte_carlo(
+    chunk_fn: ChunkFn,
+    n_trials: int,
+    *,
+    seed: int,
+    jobs: int = 1,
+    chunk_size: int | None = None,
+    progress: bool | None = None,
+    description: str = "Monte Carlo",
+    executor: concurrent.futures.Executor | None = None,
+) -> dict[str, np.ndarray]:
     """Run ``n_trials`` realisations of ``chunk_fn`` and concatenate the results.
 
     Parameters
@@ -154,14 +176,29 @@ def run_monte_carlo(chunk_fn: ChunkFn, n_trials: int, *, seed: int, jobs: int = 
         The results would not fit in the available memory: the first chunk's size per
         realisation times ``n_trials``, checked before any other chunk runs.
     """
-    return run_monte_carlo_many([chunk_fn], n_trials, seed=seed, jobs=jobs, chunk_size=chunk_size,
-                                progress=progress, description=description, executor=executor)[0]
+    return run_monte_carlo_many(
+        [chunk_fn],
+        n_trials,
+        seed=seed,
+        jobs=jobs,
+        chunk_size=chunk_size,
+        progress=progress,
+        description=description,
+        executor=executor,
+    )[0]
 
 
-def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: int, jobs: int = 1,
-                         chunk_size: int | None = None, progress: bool | None = None,
-                         description: str = "Monte Carlo",
-                         executor: concurrent.futures.Executor | None = None) -> list[dict[str, np.ndarray]]:
+def run_monte_carlo_many(
+    chunk_fns: Sequence[ChunkFn],
+    n_trials: int,
+    *,
+    seed: int,
+    jobs: int = 1,
+    chunk_size: int | None = None,
+    progress: bool | None = None,
+    description: str = "Monte Carlo",
+    executor: concurrent.futures.Executor | None = None,
+) -> list[dict[str, np.ndarray]]:
     """:func:`run_monte_carlo` of several chunk functions on the same realisations, in one pool.
 
     E.g. the columns of a table (common random numbers: realisation ``i`` of every column uses
@@ -217,9 +254,15 @@ def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: i
 
         # on standard error, and only once a run has lasted a second (no flicker on short ones); the
         # time left is named (tqdm's own "elapsed<remaining" is easily misread)
-        bar = tqdm(total=n_tasks, desc=description, unit="chunk", file=sys.stderr, delay=1.0,
-                   bar_format="{desc}: {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} chunks "
-                              "[{elapsed} elapsed, ETA {remaining}, {rate_fmt}]")
+        bar = tqdm(
+            total=n_tasks,
+            desc=description,
+            unit="chunk",
+            file=sys.stderr,
+            delay=1.0,
+            bar_format="{desc}: {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} chunks "
+            "[{elapsed} elapsed, ETA {remaining}, {rate_fmt}]",
+        )
     try:
         started = time.thread_time()  # CPU time: what a chunk costs a core, whatever the load
         first = _call(*task(0))  # the calling process's first chunk, also the memory probe
@@ -231,22 +274,25 @@ def run_monte_carlo_many(chunk_fns: Sequence[ChunkFn], n_trials: int, *, seed: i
         if executor is None:
             results = _run_chunks(task, n_tasks, first, n_workers, done)
         else:
-            results = _run_on_executor(executor, task, n_tasks, first, done,
-                                       first_seconds=first_seconds)
+            results = _run_on_executor(
+                executor, task, n_tasks, first, done, first_seconds=first_seconds
+            )
     finally:
         if bar is not None:
             bar.close()
     outs = []
     for c in range(len(chunk_fns)):
-        col = results[c * n_parts: (c + 1) * n_parts]
+        col = results[c * n_parts : (c + 1) * n_parts]
         out = {}
         for key in col[0].keys():
             arrays = [np.asarray(r[key]) for r in col]
             for j, arr in enumerate(arrays):
                 sl = part(j)
                 if arr.shape[:1] != (sl.stop - sl.start,):
-                    raise ShapeError(f"chunk_fn: entry {key!r} must have one row per realisation "
-                                     f"({sl.stop - sl.start}), got shape {arr.shape}")
+                    raise ShapeError(
+                        f"chunk_fn: entry {key!r} must have one row per realisation "
+                        f"({sl.stop - sl.start}), got shape {arr.shape}"
+                    )
             out[key] = np.concatenate(arrays, axis=0)
         outs.append(out)
     return outs
@@ -270,7 +316,8 @@ def progress_bars(enabled: bool = True) -> Iterator[None]:
 
 #: The executor that :func:`run_monte_carlo` uses when its ``executor`` is ``None`` (see :func:`use_executor`).
 _EXECUTOR: contextvars.ContextVar[concurrent.futures.Executor | None] = contextvars.ContextVar(
-    "fdi_lib_executor", default=None)
+    "fdi_lib_executor", default=None
+)
 
 
 @contextlib.contextmanager
@@ -297,8 +344,9 @@ WATCH_INTERVAL = 0.5
 
 
 @contextlib.contextmanager
-def dask_executor(cluster: str, *, timeout: float | None = None,
-                  worker_timeout: float | None = None) -> Iterator[concurrent.futures.Executor]:
+def dask_executor(
+    cluster: str, *, timeout: float | None = None, worker_timeout: float | None = None
+) -> Iterator[concurrent.futures.Executor]:
     """Context manager: the :class:`concurrent.futures.Executor` of a Dask cluster, closed on exit.
 
     Parameters
@@ -334,16 +382,22 @@ def dask_executor(cluster: str, *, timeout: float | None = None,
         with contextlib.suppress(ValueError):
             n_workers = int(rest)
         if n_workers < 1:
-            raise ModelError(f"cluster: expected local:N with N a positive integer, got {cluster!r}")
+            raise ModelError(
+                f"cluster: expected local:N with N a positive integer, got {cluster!r}"
+            )
         n_workers = effective_jobs(n_workers, name="cluster: workers of local:N:")
     elif not (sep and rest.startswith("//") and len(rest) > 2):
-        raise ModelError(f"cluster: expected local:N or a scheduler address such as tcp://HOST:PORT, "
-                         f"got {cluster!r}")
+        raise ModelError(
+            f"cluster: expected local:N or a scheduler address such as tcp://HOST:PORT, "
+            f"got {cluster!r}"
+        )
     try:
         import distributed
     except ImportError:
-        raise ModelError("cluster: needs dask.distributed; expected it installed (pip install "
-                         "'fdi_lib[cluster]'), got none") from None
+        raise ModelError(
+            "cluster: needs dask.distributed; expected it installed (pip install "
+            "'fdi_lib[cluster]'), got none"
+        ) from None
 
     timeout = CONNECT_TIMEOUT if timeout is None else float(timeout)
     worker_timeout = WORKER_TIMEOUT if worker_timeout is None else float(worker_timeout)
@@ -382,8 +436,9 @@ def _dask_logs_quiet() -> Iterator[None]:
             lg.setLevel(level)
 
 
-def _start_dask(stack: contextlib.ExitStack, distributed: Any, cluster: str, n_workers: int,
-                timeout: float) -> Any:
+def _start_dask(
+    stack: contextlib.ExitStack, distributed: Any, cluster: str, n_workers: int, timeout: float
+) -> Any:
     """The client of :func:`dask_executor` (``n_workers > 0``: a local cluster of that many
     workers), with a worker, entered in ``stack`` with its cluster."""
     import logging
@@ -395,29 +450,45 @@ def _start_dask(stack: contextlib.ExitStack, distributed: Any, cluster: str, n_w
             # on the loopback interface only, no dashboard (the scheduler's small HTTP server,
             # health and metrics, on a free loopback port); no log on standard error (a chunk's error
             # reaches the caller as an exception)
-            address = stack.enter_context(distributed.LocalCluster(
-                n_workers=n_workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                dashboard_address=None, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
-                silence_logs=logging.CRITICAL))
+            address = stack.enter_context(
+                distributed.LocalCluster(
+                    n_workers=n_workers,
+                    threads_per_worker=1,
+                    processes=True,
+                    host="127.0.0.1",
+                    dashboard_address=None,
+                    scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+                    silence_logs=logging.CRITICAL,
+                )
+            )
         except (OSError, RuntimeError) as exc:  # RuntimeError: "Nanny failed to start"
-            raise ClusterError(f"cluster: cannot start a local cluster of {n_workers} workers "
-                               f"({_one_line(exc)})") from None
+            raise ClusterError(
+                f"cluster: cannot start a local cluster of {n_workers} workers ({_one_line(exc)})"
+            ) from None
     try:
         if not n_workers:  # an address: Dask's handshake first, on a connection of its own
             _handshake(address, timeout)
-        client = stack.enter_context(distributed.Client(address, timeout=timeout, set_as_default=False))
+        client = stack.enter_context(
+            distributed.Client(address, timeout=timeout, set_as_default=False)
+        )
     except OSError as exc:  # including TimeoutError: "Timed out trying to connect to ... after 5 s"
-        raise ClusterError(f"cluster: cannot reach the Dask scheduler at {cluster} within {timeout:g} s "
-                           f"({_one_line(exc)})") from None
+        raise ClusterError(
+            f"cluster: cannot reach the Dask scheduler at {cluster} within {timeout:g} s "
+            f"({_one_line(exc)})"
+        ) from None
     except Exception as exc:  # a server of another protocol: its bytes read as a Dask frame
         # (a length of 3 EiB: MemoryError, ValueError, a msgpack error, ...)
-        raise ClusterError(f"cluster: {cluster} is not a Dask scheduler (its answer is not Dask's "
-                           f"protocol: {_one_line(exc)[:200]})") from None
+        raise ClusterError(
+            f"cluster: {cluster} is not a Dask scheduler (its answer is not Dask's "
+            f"protocol: {_one_line(exc)[:200]})"
+        ) from None
     try:  # a scheduler without workers would leave the run waiting for ever
         client.wait_for_workers(1, timeout=timeout)
     except OSError:  # TimeoutError
-        raise ClusterError(f"cluster: the Dask scheduler at {cluster} has no worker (none joined within "
-                           f"{timeout:g} s)") from None
+        raise ClusterError(
+            f"cluster: the Dask scheduler at {cluster} has no worker (none joined within "
+            f"{timeout:g} s)"
+        ) from None
     return client
 
 
@@ -457,8 +528,9 @@ class _WatchedExecutor(concurrent.futures.Executor):
         self._clock = time.monotonic
         self._workerless_since: float | None = None
 
-    def submit(self, fn: Callable[..., Any], /, *args: Any,
-               **kwargs: Any) -> concurrent.futures.Future:
+    def submit(
+        self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any
+    ) -> concurrent.futures.Future:
         return self._executor.submit(fn, *args, **kwargs)
 
     def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
@@ -474,11 +546,15 @@ class _WatchedExecutor(concurrent.futures.Executor):
         when it is a cancellation or a lost connection, not the chunk's own error."""
         status = self._client.status
         if status not in ("running", "newly-created"):
-            raise ClusterError(f"cluster: lost the Dask scheduler at {self._address} during the "
-                               f"run (its client is {status})") from None
+            raise ClusterError(
+                f"cluster: lost the Dask scheduler at {self._address} during the "
+                f"run (its client is {status})"
+            ) from None
         if failure is not None and _is_lost_connection(failure):
-            raise ClusterError(f"cluster: lost the Dask scheduler at {self._address} during the "
-                               f"run ({_one_line(failure)[:200]})") from None
+            raise ClusterError(
+                f"cluster: lost the Dask scheduler at {self._address} during the "
+                f"run ({_one_line(failure)[:200]})"
+            ) from None
         workers = self.workers()
         now = self._clock()
         if workers:
@@ -486,8 +562,10 @@ class _WatchedExecutor(concurrent.futures.Executor):
         elif self._workerless_since is None:
             self._workerless_since = now
         elif now - self._workerless_since >= self._worker_timeout:
-            raise ClusterError(f"cluster: the Dask scheduler at {self._address} has had no worker "
-                               f"for {self._worker_timeout:g} s; the run is cancelled")
+            raise ClusterError(
+                f"cluster: the Dask scheduler at {self._address} has had no worker "
+                f"for {self._worker_timeout:g} s; the run is cancelled"
+            )
 
 
 def _is_lost_connection(exc: BaseException) -> bool:
@@ -495,8 +573,9 @@ def _is_lost_connection(exc: BaseException) -> bool:
     connection to the scheduler closed) rather than that the chunk failed."""
     import asyncio
 
-    return isinstance(exc, (concurrent.futures.CancelledError, asyncio.CancelledError)) or \
-        type(exc).__name__ in ("CommClosedError", "FutureCancelledError")
+    return isinstance(exc, (concurrent.futures.CancelledError, asyncio.CancelledError)) or type(
+        exc
+    ).__name__ in ("CommClosedError", "FutureCancelledError")
 
 
 @contextlib.contextmanager
@@ -508,7 +587,10 @@ def _sigint_held() -> Iterator[None]:
     import signal
     import threading
 
-    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
+    if (
+        not hasattr(signal, "pthread_sigmask")
+        or threading.current_thread() is not threading.main_thread()
+    ):
         yield
         return
     from multiprocessing import resource_tracker
@@ -548,15 +630,22 @@ def _batch_size(first_seconds: float | None, n_left: int, workers: int | None) -
     return max(1, min(math.ceil(TASK_SECONDS / first_seconds), n_left // (4 * workers)))
 
 
-def _call_many(calls: Sequence[tuple[ChunkFn, np.random.SeedSequence, int, int]]
-               ) -> list[dict[str, np.ndarray]]:
+def _call_many(
+    calls: Sequence[tuple[ChunkFn, np.random.SeedSequence, int, int]],
+) -> list[dict[str, np.ndarray]]:
     """:func:`_call` of each chunk of ``calls`` in turn (one task of several chunks)."""
     return [_call(*c) for c in calls]
 
 
-def _run_on_executor(executor: concurrent.futures.Executor, task: Task, n_tasks: int,
-                     first: dict[str, np.ndarray], done: Callable[[], Any] | None, *,
-                     first_seconds: float | None = None) -> list[dict[str, np.ndarray]]:
+def _run_on_executor(
+    executor: concurrent.futures.Executor,
+    task: Task,
+    n_tasks: int,
+    first: dict[str, np.ndarray],
+    done: Callable[[], Any] | None,
+    *,
+    first_seconds: float | None = None,
+) -> list[dict[str, np.ndarray]]:
     """Results of every task ``_call(*task(i))`` (a chunk), in order, ``first`` (task 0) computed
     already (in ``first_seconds`` of CPU time): the others submitted to ``executor``, at most
     :data:`IN_FLIGHT` at a time, collected as they finish. On an executor that tells its number of workers (a
@@ -580,13 +669,18 @@ def _run_on_executor(executor: concurrent.futures.Executor, task: Task, n_tasks:
             while given < n_tasks and len(pending) < IN_FLIGHT:
                 chunks = range(given, min(given + batch, n_tasks))
                 calls = [task(i) for i in chunks]
-                future = (executor.submit(_call, *calls[0]) if len(calls) == 1
-                          else executor.submit(_call_many, calls))
+                future = (
+                    executor.submit(_call, *calls[0])
+                    if len(calls) == 1
+                    else executor.submit(_call_many, calls)
+                )
                 pending[future] = chunks
                 given = chunks.stop
             finished, _ = concurrent.futures.wait(
-                pending, timeout=None if check is None else WATCH_INTERVAL,
-                return_when=concurrent.futures.FIRST_COMPLETED)
+                pending,
+                timeout=None if check is None else WATCH_INTERVAL,
+                return_when=concurrent.futures.FIRST_COMPLETED,
+            )
             if not finished and check is not None:
                 check()
             for future in finished:
@@ -617,8 +711,12 @@ def _spawned(root: np.random.SeedSequence, start: int, stop: int) -> list[np.ran
     ``n_trials`` children up front would hold one object per realisation (about 0.5 kB each)
     before anything runs. ``tests/test_montecarlo.py`` checks the identity with ``spawn``.
     """
-    return [np.random.SeedSequence(root.entropy, spawn_key=(*root.spawn_key, i), pool_size=root.pool_size)
-            for i in range(start, stop)]
+    return [
+        np.random.SeedSequence(
+            root.entropy, spawn_key=(*root.spawn_key, i), pool_size=root.pool_size
+        )
+        for i in range(start, stop)
+    ]
 
 
 def available_memory() -> int | None:
@@ -636,8 +734,10 @@ def check_memory(needed: float, name: str, what: str) -> None:
     :func:`available_memory`; ``what`` says what would need them."""
     available = available_memory()
     if available is not None and needed > available:
-        raise ResourceError(f"{name}: {what} would need about {_bytes_text(needed)} of memory; "
-                            f"{_bytes_text(available)} is available: use fewer")
+        raise ResourceError(
+            f"{name}: {what} would need about {_bytes_text(needed)} of memory; "
+            f"{_bytes_text(available)} is available: use fewer"
+        )
 
 
 def _bytes_text(n: float) -> str:
@@ -656,8 +756,12 @@ def _check_memory(first: dict[str, np.ndarray], sl: slice, n_trials: int, n_fns:
     """
     per_trial = sum(np.asarray(v).nbytes for v in first.values()) / (sl.stop - sl.start)
     needed = 2.0 * per_trial * n_trials * n_fns
-    check_memory(needed, "n_trials", f"{n_trials} realisations x {n_fns} chunk function(s) at "
-                                      f"{_bytes_text(per_trial)} each (measured on the first chunk)")
+    check_memory(
+        needed,
+        "n_trials",
+        f"{n_trials} realisations x {n_fns} chunk function(s) at "
+        f"{_bytes_text(per_trial)} each (measured on the first chunk)",
+    )
 
 
 #: Environment variable: the number of cores this process may use when it shares the machine with
@@ -674,8 +778,10 @@ def _cores_share(cores: int) -> int:
     if not value:
         return cores
     if not value.isdigit() or int(value) < 1:
-        raise ModelError(f"${CORES_ENV}: expected a positive integer (the cores this process may "
-                         f"use), got {value!r}")
+        raise ModelError(
+            f"${CORES_ENV}: expected a positive integer (the cores this process may "
+            f"use), got {value!r}"
+        )
     return int(value)
 
 
@@ -700,12 +806,18 @@ def effective_jobs(jobs: int, n_tasks: int | None = None, *, name: str = "jobs:"
         why = f"{cores} CPU core{'s' * (cores > 1)}"
         if n_tasks is not None and n_tasks < cores:
             why = f"{n_tasks} chunk{'s' * (n_tasks > 1)} of work"
-        warnings.warn(JobsCappedWarning(f"{name} {jobs} requested, {used} used ({why}); the "
-                                        f"results do not depend on it"), stacklevel=3)
+        warnings.warn(
+            JobsCappedWarning(
+                f"{name} {jobs} requested, {used} used ({why}); the results do not depend on it"
+            ),
+            stacklevel=3,
+        )
     return used
 
 
-def _call(chunk_fn: ChunkFn, root: np.random.SeedSequence, start: int, stop: int) -> dict[str, np.ndarray]:
+def _call(
+    chunk_fn: ChunkFn, root: np.random.SeedSequence, start: int, stop: int
+) -> dict[str, np.ndarray]:
     """Realisations ``start:stop`` of ``root``'s streams by ``chunk_fn`` (their seeds made here, in
     the process that runs them), with the BLAS on one thread (the same floating-point operations
     in every process)."""
@@ -716,9 +828,13 @@ def _call(chunk_fn: ChunkFn, root: np.random.SeedSequence, start: int, stop: int
         return chunk_fn(seeds)
 
 
-def _run_chunks(task: Task, n_tasks: int,
-                first: dict[str, np.ndarray], n_workers: int,
-                done: Callable[[], Any] | None) -> list[dict[str, np.ndarray]]:
+def _run_chunks(
+    task: Task,
+    n_tasks: int,
+    first: dict[str, np.ndarray],
+    n_workers: int,
+    done: Callable[[], Any] | None,
+) -> list[dict[str, np.ndarray]]:
     """Results of every task ``_call(*task(i))`` (a chunk), in order, on this process
     and ``n_workers - 1`` others; ``first`` is the result of task 0, already computed here.
 
@@ -837,9 +953,11 @@ def binomial_ci(successes: int, trials: int, level: float = 0.95) -> tuple[float
     trials = integer(trials, "trials", low=1)
     level = probability(level, "level")
     if not 0 <= successes <= trials or trials < 1:
-        raise ModelError(f"successes, trials: expected 0 <= successes <= trials, trials >= 1, "
-                         f"got {successes}, {trials}")
-    ci = scipy.stats.binomtest(int(successes), int(trials)).proportion_ci(confidence_level=level,
-                                                                        method="exact")
+        raise ModelError(
+            f"successes, trials: expected 0 <= successes <= trials, trials >= 1, "
+            f"got {successes}, {trials}"
+        )
+    ci = scipy.stats.binomtest(int(successes), int(trials)).proportion_ci(
+        confidence_level=level, method="exact"
+    )
     return float(ci.low), float(ci.high)
-

@@ -62,14 +62,28 @@ from fdi_lib.signatures import fault_signature
 from fdi_lib.validation import array, integer, missing_samples, probability
 
 __all__ = [
-    "kitanidis_predictor_gains", "InnovationSplit", "innovation_split", "nonparametric_signature",
-    "drift_signature", "kitanidis_lag_covariance", "rejection_projection", "ReducedResidual",
-    "reduce_residual", "energy_statistic", "energy_threshold", "Solution1Result", "solution1",
-    "Solution2Result", "solution2", "first_alarm_after",
+    "kitanidis_predictor_gains",
+    "InnovationSplit",
+    "innovation_split",
+    "nonparametric_signature",
+    "drift_signature",
+    "kitanidis_lag_covariance",
+    "rejection_projection",
+    "ReducedResidual",
+    "reduce_residual",
+    "energy_statistic",
+    "energy_threshold",
+    "Solution1Result",
+    "solution1",
+    "Solution2Result",
+    "solution2",
+    "first_alarm_after",
 ]
 
 
-def kitanidis_predictor_gains(model: LTVModel, E: Any, kgains: KitanidisGains | None = None) -> KalmanGains:
+def kitanidis_predictor_gains(
+    model: LTVModel, E: Any, kgains: KitanidisGains | None = None
+) -> KalmanGains:
     """The Kitanidis filter in the one-step-predictor form (27)-(28), as :class:`KalmanGains`.
 
     ``K = L_k`` (eq. 28, the Kitanidis gain of Zhang 2021 eq. 24g: no second Riccati
@@ -102,16 +116,28 @@ def kitanidis_predictor_gains(model: LTVModel, E: Any, kgains: KitanidisGains | 
     """
     g = kitanidis_gains(model, E) if kgains is None else kgains
     if g.K.shape != (model.n_steps, model.n, model.p):
-        raise ShapeError(f"kgains: expected K of shape {(model.n_steps, model.n, model.p)}, got {g.K.shape}")
+        raise ShapeError(
+            f"kgains: expected K of shape {(model.n_steps, model.n, model.p)}, got {g.K.shape}"
+        )
     IKH = np.eye(model.n) - g.K @ model.H
-    return KalmanGains(K=g.K, P=g.P, P_filt=g.P_filt, Sigma=g.Sigma, Sigma_chol=g.Sigma_chol,
-                       A=model.F @ IKH, FK=model.F @ g.K, missing=g.missing)
+    return KalmanGains(
+        K=g.K,
+        P=g.P,
+        P_filt=g.P_filt,
+        Sigma=g.Sigma,
+        Sigma_chol=g.Sigma_chol,
+        A=model.F @ IKH,
+        FK=model.F @ g.K,
+        missing=g.missing,
+    )
 
 
 def _check_gains(model: LTVModel, gains: KalmanGains) -> None:
     if not isinstance(gains, KalmanGains) or gains.K.shape != (model.n_steps, model.n, model.p):
-        raise ShapeError(f"gains: expected KalmanGains with K of shape {(model.n_steps, model.n, model.p)}, "
-                         f"got {type(gains).__name__} with K {np.shape(getattr(gains, 'K', None))}")
+        raise ShapeError(
+            f"gains: expected KalmanGains with K of shape {(model.n_steps, model.n, model.p)}, "
+            f"got {type(gains).__name__} with K {np.shape(getattr(gains, 'K', None))}"
+        )
 
 
 def _series(arr: Any, N: int, width: int, name: str) -> np.ndarray:
@@ -164,7 +190,9 @@ def nonparametric_signature(model: LTVModel, gains: KalmanGains, E: Any, f: Any)
     return z
 
 
-def drift_signature(model: LTVModel, gains: KalmanGains, Gamma: np.ndarray, theta_path: Any) -> np.ndarray:
+def drift_signature(
+    model: LTVModel, gains: KalmanGains, Gamma: np.ndarray, theta_path: Any
+) -> np.ndarray:
     """``delta_k`` of eq. (23): ``delta_{k+1} = A_k delta_k - Gamma_{k+1} (theta_{k+1} - theta_k)``.
 
     Explained in the book: :doc:`/book/bz/parametric-nonparametric`.
@@ -228,8 +256,17 @@ class InnovationSplit:
     residual: np.ndarray
 
 
-def innovation_split(model: LTVModel, gains: KalmanGains, innovations: Any, innovations0: Any, *,
-                     Psi: Any, theta_path: Any, E: Any, f: Any) -> InnovationSplit:
+def innovation_split(
+    model: LTVModel,
+    gains: KalmanGains,
+    innovations: Any,
+    innovations0: Any,
+    *,
+    Psi: Any,
+    theta_path: Any,
+    E: Any,
+    f: Any,
+) -> InnovationSplit:
     """Check Proposition 1 (eq. 25) on a record: compute each term and what is left.
 
     Parameters
@@ -250,14 +287,15 @@ def innovation_split(model: LTVModel, gains: KalmanGains, innovations: Any, inno
     N, p = model.n_steps, model.p
     eps = _series(innovations, N, p, "innovations")
     eps0 = _series(innovations0, N, p, "innovations0")
-    sig = fault_signature(model, gains, fault_profile(model, Psi=Psi))       # Gamma_k of (9)
+    sig = fault_signature(model, gains, fault_profile(model, Psi=Psi))  # Gamma_k of (9)
     th = _series(theta_path, N, sig.Gamma.shape[2], "theta_path")
     par = np.einsum("kpm,...km->...kp", sig.on_innovation, th)
     zeta = nonparametric_signature(model, gains, E, f)[..., :N, :]
     non = np.einsum("kpn,...kn->...kp", model.H, zeta)
     dr = np.einsum("kpn,...kn->...kp", model.H, drift_signature(model, gains, sig.Gamma, th))
-    return InnovationSplit(parametric=par, nonparametric=non, drift=dr,
-                           residual=eps - eps0 - par - non - dr)
+    return InnovationSplit(
+        parametric=par, nonparametric=non, drift=dr, residual=eps - eps0 - par - non - dr
+    )
 
 
 def kitanidis_lag_covariance(model: LTVModel, kgains: KitanidisGains, lag: int = 1) -> np.ndarray:
@@ -338,13 +376,15 @@ def rejection_projection(model: LTVModel, kgains: KitanidisGains) -> np.ndarray:
     Es = kgains.E
     q = Es.shape[2]
     if q >= p:
-        raise ModelError(f"E: the rejection leaves p - q = {p - q} output directions; expected q < p = {p}")
+        raise ModelError(
+            f"E: the rejection leaves p - q = {p - q} output directions; expected q < p = {p}"
+        )
     T = np.empty((N, p - q, p))
     for k in range(N):
         Lc = kgains.Sigma_chol[k]
         B = scipy.linalg.solve_triangular(Lc, model.H[k] @ Es[max(k - 1, 0)], lower=True)
-        Nk = scipy.linalg.null_space(B.T)                     # (p, p - q), orthonormal
-        T[k] = scipy.linalg.solve_triangular(Lc, Nk, lower=True, trans="T").T   # N^T L^{-1}
+        Nk = scipy.linalg.null_space(B.T)  # (p, p - q), orthonormal
+        T[k] = scipy.linalg.solve_triangular(Lc, Nk, lower=True, trans="T").T  # N^T L^{-1}
     return T
 
 
@@ -371,8 +411,9 @@ class ReducedResidual:
     T: np.ndarray
 
 
-def reduce_residual(model: LTVModel, kgains: KitanidisGains, innovations: Any,
-                    T: np.ndarray | None = None) -> ReducedResidual:
+def reduce_residual(
+    model: LTVModel, kgains: KitanidisGains, innovations: Any, T: np.ndarray | None = None
+) -> ReducedResidual:
     """Project the Kitanidis ``innovations`` (27) with :func:`rejection_projection`.
 
     ``model`` and ``kgains`` as there; ``T`` is a precomputed projection ``(N, r, p)`` (default:
@@ -385,13 +426,27 @@ def reduce_residual(model: LTVModel, kgains: KitanidisGains, innovations: Any,
     if T.shape != (N, r, p):
         raise ShapeError(f"T: expected shape ({N}, r, {p}), got {T.shape}")
     res = np.einsum("krp,...kp->...kr", T, eps)
-    red_model = ltv_model(F=model.F, G=model.G, H=T @ model.H, Q=model.Q, R=np.eye(r), n_steps=N,
-                          x0=model.x0, P0=model.P0)
+    red_model = ltv_model(
+        F=model.F,
+        G=model.G,
+        H=T @ model.H,
+        Q=model.Q,
+        R=np.eye(r),
+        n_steps=N,
+        x0=model.x0,
+        P0=model.P0,
+    )
     eye = np.broadcast_to(np.eye(r), (N, r, r))
     LT = kgains.K @ np.swapaxes(T, 1, 2)
-    red_gains = KalmanGains(K=LT, P=kgains.P, P_filt=kgains.P_filt, Sigma=np.array(eye),
-                            Sigma_chol=np.array(eye),
-                            A=model.F @ (np.eye(model.n) - kgains.K @ model.H), FK=model.F @ LT)
+    red_gains = KalmanGains(
+        K=LT,
+        P=kgains.P,
+        P_filt=kgains.P_filt,
+        Sigma=np.array(eye),
+        Sigma_chol=np.array(eye),
+        A=model.F @ (np.eye(model.n) - kgains.K @ model.H),
+        FK=model.F @ LT,
+    )
     return ReducedResidual(residuals=res, model=red_model, gains=red_gains, T=T)
 
 
@@ -435,15 +490,19 @@ def energy_statistic(residuals: Any, Sigma_chol: np.ndarray, window: int) -> np.
     diag = np.diagonal(L, axis1=-2, axis2=-1)
     if np.any(diag <= 0) or np.any(np.triu(L, 1)):
         k = int(np.argwhere((diag <= 0).any(axis=-1) | np.triu(L, 1).any(axis=(-2, -1)))[0, 0])
-        raise ModelError(f"Sigma_chol: expected lower-triangular factors with a positive diagonal, "
-                         f"got {L[k].tolist()} at step {k}")
+        raise ModelError(
+            f"Sigma_chol: expected lower-triangular factors with a positive diagonal, "
+            f"got {L[k].tolist()} at step {k}"
+        )
     r = _series(residuals, N, p, "residuals")
     missing = missing_samples(r, "residuals")
     window = integer(window, "window", low=1, high=N)
     z = np.linalg.solve(L, np.where(missing[..., None], 0.0, r)[..., None])[..., 0]
     energy = np.sum(z * z, axis=-1)
     out = np.full(energy.shape, np.nan)
-    out[..., window - 1:] = np.lib.stride_tricks.sliding_window_view(energy, window, axis=-1).sum(axis=-1)
+    out[..., window - 1 :] = np.lib.stride_tricks.sliding_window_view(energy, window, axis=-1).sum(
+        axis=-1
+    )
     return out
 
 
@@ -523,11 +582,23 @@ class Solution1Result:
     energy_threshold: float
 
 
-def solution1(model: LTVModel, y: Any, u: Any = None, *, E: Any, Psi: Any, window: int,
-              glr_threshold: float, energy_window: int, energy_alpha: float,
-              isolation_alpha: float = 0.01, partitions: Sequence[Sequence[int]] | None = None,
-              kgains: KitanidisGains | None = None, kalman: KalmanGains | None = None,
-              T: np.ndarray | None = None) -> Solution1Result:
+def solution1(
+    model: LTVModel,
+    y: Any,
+    u: Any = None,
+    *,
+    E: Any,
+    Psi: Any,
+    window: int,
+    glr_threshold: float,
+    energy_window: int,
+    energy_alpha: float,
+    isolation_alpha: float = 0.01,
+    partitions: Sequence[Sequence[int]] | None = None,
+    kgains: KitanidisGains | None = None,
+    kalman: KalmanGains | None = None,
+    T: np.ndarray | None = None,
+) -> Solution1Result:
     """Solution 1: reject ``E f``, test ``theta`` by GLR + minmax, detect ``f`` by energy.
 
     Steps, all vectorised over the leading axes of ``y`` (Monte Carlo realisations):
@@ -564,7 +635,7 @@ def solution1(model: LTVModel, y: Any, u: Any = None, *, E: Any, Psi: Any, windo
     if kgains is None:
         kgains = kitanidis_gains(model, E)
     kpred = kitanidis_predictor_gains(model, E, kgains)
-    eps_kit = kalman_filter(model, y, u, gains=kpred).innovations          # (27)
+    eps_kit = kalman_filter(model, y, u, gains=kpred).innovations  # (27)
     red = reduce_residual(model, kgains, eps_kit, T)
     fam: FaultFamily = step_family(red.model, Psi=Psi)
     glr = glr_window(red.residuals, red.model, red.gains, fam, window)
@@ -591,15 +662,24 @@ def solution1(model: LTVModel, y: Any, u: Any = None, *, E: Any, Psi: Any, windo
     iso_stat = iso_stat.reshape(*batch, len(parts))
     onset_hat = onset_hat.reshape(batch)
     kal = kalman_gains(model) if kalman is None else kalman
-    eps_kal = kalman_filter(model, y, u, gains=kal).innovations              # (46)
+    eps_kal = kalman_filter(model, y, u, gains=kal).innovations  # (46)
     thr_e = energy_threshold(energy_window, model.p, energy_alpha)
     en = energy_statistic(eps_kal, kal.Sigma_chol, energy_window)
     e_alarm = first_alarm(en, thr_e)
     nonpar = np.where((e_alarm >= 0) & ((alarm < 0) | (e_alarm < alarm)), e_alarm, -1)
-    return Solution1Result(reduced=red, glr=glr, glr_alarm=alarm, onset_hat=onset_hat, isolation=iso,
-                           isolation_stat=iso_stat, energy=en, energy_alarm=e_alarm,
-                           nonparametric_alarm=nonpar, glr_threshold=float(glr_threshold),
-                           energy_threshold=thr_e)
+    return Solution1Result(
+        reduced=red,
+        glr=glr,
+        glr_alarm=alarm,
+        onset_hat=onset_hat,
+        isolation=iso,
+        isolation_stat=iso_stat,
+        energy=en,
+        energy_alarm=e_alarm,
+        nonparametric_alarm=nonpar,
+        glr_threshold=float(glr_threshold),
+        energy_threshold=thr_e,
+    )
 
 
 @dataclass(frozen=True)
@@ -626,9 +706,19 @@ class Solution2Result:
     energy_threshold: float
 
 
-def solution2(model: LTVModel, y: Any, u: Any = None, *, Psi: Any, lam: float, energy_window: int,
-              energy_alpha: float, start: int = 0, kalman: KalmanGains | None = None,
-              rls: RLSGains | None = None) -> Solution2Result:
+def solution2(
+    model: LTVModel,
+    y: Any,
+    u: Any = None,
+    *,
+    Psi: Any,
+    lam: float,
+    energy_window: int,
+    energy_alpha: float,
+    start: int = 0,
+    kalman: KalmanGains | None = None,
+    rls: RLSGains | None = None,
+) -> Solution2Result:
     """Solution 2: Kalman filter (46), RLS with forgetting factor on (47), energy of ``E_k``.
 
     Parameters
@@ -660,5 +750,10 @@ def solution2(model: LTVModel, y: Any, u: Any = None, *, Psi: Any, lam: float, e
     res = rls_track(eps, sig.on_innovation, kal.Sigma, lam=lam, gains=rls)
     thr = energy_threshold(energy_window, model.p, energy_alpha)
     en = energy_statistic(res.errors, kal.Sigma_chol, energy_window)
-    return Solution2Result(rls=res, regressor=sig.on_innovation, energy=en,
-                           energy_alarm=first_alarm(en, thr, start), energy_threshold=thr)
+    return Solution2Result(
+        rls=res,
+        regressor=sig.on_innovation,
+        energy=en,
+        energy_alarm=first_alarm(en, thr, start),
+        energy_threshold=thr,
+    )

@@ -25,9 +25,23 @@ import matplotlib.pyplot as plt
 from matplotlib.figure import Figure
 from matplotlib.text import Text
 
-__all__ = ["STYLE", "use_style", "figure", "PAPER_COLOR", "OURS_COLOR", "THRESHOLD_COLOR",
-           "FIG_WIDTH_IN", "STACKED_HEIGHT", "MIN_FONT_PT", "DISPLAY_DPI", "RASTER_SCALE", "PHONE_COLUMN_PX",
-           "smallest_font_pt", "png_for_display", "axes3d"]
+__all__ = [
+    "STYLE",
+    "use_style",
+    "figure",
+    "PAPER_COLOR",
+    "OURS_COLOR",
+    "THRESHOLD_COLOR",
+    "FIG_WIDTH_IN",
+    "STACKED_HEIGHT",
+    "MIN_FONT_PT",
+    "DISPLAY_DPI",
+    "RASTER_SCALE",
+    "PHONE_COLUMN_PX",
+    "smallest_font_pt",
+    "png_for_display",
+    "axes3d",
+]
 
 OURS_COLOR = "#1f77b4"
 PAPER_COLOR = "#d62728"
@@ -70,8 +84,9 @@ STYLE: dict[str, Any] = {
 
 def smallest_font_pt(fig: Figure) -> float:
     """The smallest font size (points) of the visible, non-empty texts of ``fig``."""
-    sizes = [t.get_fontsize() for t in fig.findobj(Text)
-             if t.get_visible() and t.get_text().strip()]
+    sizes = [
+        t.get_fontsize() for t in fig.findobj(Text) if t.get_visible() and t.get_text().strip()
+    ]
     return float(min(sizes)) if sizes else float(MIN_FONT_PT)
 
 
@@ -87,8 +102,14 @@ def png_for_display(fig: Figure) -> tuple[str, dict[str, Any]] | None:
         return None
     dpi = fig.dpi * RASTER_SCALE
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight", facecolor="white",
-                metadata={"fdi:min_font_pt": f"{smallest_font_pt(fig):g}", "fdi:dpi": f"{dpi:g}"})
+    fig.savefig(
+        buf,
+        format="png",
+        dpi=dpi,
+        bbox_inches="tight",
+        facecolor="white",
+        metadata={"fdi:min_font_pt": f"{smallest_font_pt(fig):g}", "fdi:dpi": f"{dpi:g}"},
+    )
     data = buf.getvalue()
     width = round(_png_width(data) / RASTER_SCALE)
     return base64.b64encode(data).decode("ascii"), {"width": width}
@@ -123,8 +144,15 @@ def use_style() -> None:
     _register_display_formatter()
 
 
-def figure(nrows: int = 1, ncols: int = 1, *, fig: Any = None, sharex: bool = False,
-           figsize: tuple[float, float] | None = None, **kwargs: Any):
+def figure(
+    nrows: int = 1,
+    ncols: int = 1,
+    *,
+    fig: Any = None,
+    sharex: bool = False,
+    figsize: tuple[float, float] | None = None,
+    **kwargs: Any,
+):
     """A figure with the book's style: ``(fig, axes)``; ``fig`` reuses an existing figure (widgets).
 
     Every figure is ``FIG_WIDTH_IN`` wide (legible on a phone); ``figsize`` sets the height of
@@ -149,8 +177,9 @@ def figure(nrows: int = 1, ncols: int = 1, *, fig: Any = None, sharex: bool = Fa
         ratios = kwargs.pop("width_ratios", None) or grid.pop("width_ratios", None)
         if ratios is not None:
             grid["height_ratios"] = ratios
-        axes = fig.subplots(ncols, 1, sharex=sharex, squeeze=False, gridspec_kw=grid or None,
-                            **kwargs).reshape(1, ncols)
+        axes = fig.subplots(
+            ncols, 1, sharex=sharex, squeeze=False, gridspec_kw=grid or None, **kwargs
+        ).reshape(1, ncols)
     else:
         axes = fig.subplots(nrows, ncols, sharex=sharex, squeeze=False, **kwargs)
     return fig, axes

@@ -17,8 +17,14 @@ import numpy as np
 
 from fdi_lib.errors import ModelError
 
-__all__ = ["keep_artists", "render", "reusable_artists", "set_limits", "stepped_limit",
-           "stepped_range"]
+__all__ = [
+    "keep_artists",
+    "render",
+    "reusable_artists",
+    "set_limits",
+    "stepped_limit",
+    "stepped_range",
+]
 
 _ARTISTS = "_fdi_widget_artists"
 _BACKGROUND = "_fdi_widget_background"
@@ -115,7 +121,7 @@ def render(fig: Any) -> None:
     pixels with a full draw.
     """
     canvas = fig.canvas
-    if not hasattr(canvas, "copy_from_bbox"):   # e.g. a figure closed by pyplot has no Agg canvas
+    if not hasattr(canvas, "copy_from_bbox"):  # e.g. a figure closed by pyplot has no Agg canvas
         from matplotlib.backends.backend_agg import FigureCanvasAgg
 
         canvas = FigureCanvasAgg(fig)
@@ -126,19 +132,23 @@ def render(fig: Any) -> None:
     state = (canvas.get_width_height(physical=True), fig.dpi)
     renderer = canvas.get_renderer()
     stale = [ax for ax in fig.axes if ax.stale]
-    full = (saved is None or saved[0] != state or (fig.stale and not stale)
-            or (stale and saved[2] is None)
-            or 2 * len(stale) > len(fig.axes))   # most axes changed: drawing all is cheaper
+    full = (
+        saved is None
+        or saved[0] != state
+        or (fig.stale and not stale)
+        or (stale and saved[2] is None)
+        or 2 * len(stale) > len(fig.axes)
+    )  # most axes changed: drawing all is cheaper
     if not full:
         canvas.restore_region(saved[1])
-        if stale:   # draw the stale axes again over their part of the picture, save the result
+        if stale:  # draw the stale axes again over their part of the picture, save the result
             full = not _redraw_axes(fig, renderer, stale, saved[2])
             if not full:
                 setattr(fig, _BACKGROUND, (state, canvas.copy_from_bbox(fig.bbox), saved[2]))
     if full:
         setattr(fig, _RENDERING, True)
         try:
-            canvas.draw()   # everything static (animated artists are left out)
+            canvas.draw()  # everything static (animated artists are left out)
         finally:
             setattr(fig, _RENDERING, False)
         renderer = canvas.get_renderer()
@@ -150,17 +160,24 @@ def render(fig: Any) -> None:
 def _static_regions(fig: Any, renderer: Any) -> dict[Any, tuple[int, int, int, int]] | None:
     """Pixel box ``(x0, y0, x1, y1)`` (rows from the top) of what each axes draws, or ``None`` if
     an axes may not be redrawn alone: boxes that overlap, or figure-level artists."""
-    if (fig.texts or fig.legends or fig.patches or fig.lines or fig.images or fig.artists
-            or fig.patch.get_facecolor()[3] != 1.0):
+    if (
+        fig.texts
+        or fig.legends
+        or fig.patches
+        or fig.lines
+        or fig.images
+        or fig.artists
+        or fig.patch.get_facecolor()[3] != 1.0
+    ):
         return None
     height = fig.canvas.get_width_height(physical=True)[1]
     regions = {}
     for ax in fig.axes:
         x0, y0, x1, y1 = _static_box(ax, renderer)
-        regions[ax] = (x0 - 1, height - y1 - 1, x1 + 1, height - y0 + 1)   # rows from the top
+        regions[ax] = (x0 - 1, height - y1 - 1, x1 + 1, height - y0 + 1)  # rows from the top
     boxes = list(regions.values())
     for i, a in enumerate(boxes):
-        for b in boxes[i + 1:]:
+        for b in boxes[i + 1 :]:
             if a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]:
                 return None
     return regions
@@ -195,26 +212,38 @@ def _static_box(ax: Any, renderer: Any) -> tuple[int, int, int, int]:
                 x1, y1 = (x1, y1 + out) if high == "y1" else (x1 + out, y1)
             for tick in ticks:
                 if lo - span <= tick.get_loc() <= hi + span:
-                    boxes += [t.get_window_extent(renderer) for t in (tick.label1, tick.label2)
-                              if t.get_visible() and t.get_text()]
-        boxes += [t.get_window_extent(renderer) for t in (axis.label, axis.offsetText)
-                  if t.get_visible() and t.get_text()]
-    boxes += [a.get_window_extent(renderer) for a in ax.get_children()
-              if isinstance(a, (Text, Legend)) and a.get_visible() and not a.get_animated()
-              and (isinstance(a, Legend) or a.get_text())]
+                    boxes += [
+                        t.get_window_extent(renderer)
+                        for t in (tick.label1, tick.label2)
+                        if t.get_visible() and t.get_text()
+                    ]
+        boxes += [
+            t.get_window_extent(renderer)
+            for t in (axis.label, axis.offsetText)
+            if t.get_visible() and t.get_text()
+        ]
+    boxes += [
+        a.get_window_extent(renderer)
+        for a in ax.get_children()
+        if isinstance(a, (Text, Legend))
+        and a.get_visible()
+        and not a.get_animated()
+        and (isinstance(a, Legend) or a.get_text())
+    ]
     box = Bbox.union([Bbox([[x0, y0], [x1, y1]]), *boxes])
     return int(np.floor(box.x0)), int(np.floor(box.y0)), int(np.ceil(box.x1)), int(np.ceil(box.y1))
 
 
-def _redraw_axes(fig: Any, renderer: Any, axes: list[Any],
-                 regions: dict[Any, tuple[int, int, int, int]]) -> bool:
+def _redraw_axes(
+    fig: Any, renderer: Any, axes: list[Any], regions: dict[Any, tuple[int, int, int, int]]
+) -> bool:
     """Blank the region of each of ``axes`` and draw its static artists again; ``False`` if an
     axes now draws outside its region (then the whole figure must be drawn)."""
     buf = np.asarray(renderer.buffer_rgba())
     colour = np.round(np.asarray(fig.patch.get_facecolor()) * 255).astype(np.uint8)
     for ax in axes:
         x0, y0, x1, y1 = regions[ax]
-        buf[max(y0, 0):max(y1, 0), max(x0, 0):max(x1, 0)] = colour
+        buf[max(y0, 0) : max(y1, 0), max(x0, 0) : max(x1, 0)] = colour
         ax.draw(renderer)
         bx0, by0, bx1, by1 = _static_box(ax, renderer)
         height = buf.shape[0]
@@ -243,8 +272,9 @@ def stepped_limit(value: float, *, log: bool = False) -> float:
     raise AssertionError("unreachable")  # pragma: no cover
 
 
-def stepped_range(values: Any, *, log: bool = False,
-                  symmetric: bool = False) -> tuple[float, float]:
+def stepped_range(
+    values: Any, *, log: bool = False, symmetric: bool = False
+) -> tuple[float, float]:
     """Axis limits in :func:`stepped_limit` steps that hold the finite ``values`` with a 5 % margin.
 
     Linear: each side at a round number (``symmetric``: ``-a, a``), and at least 5 % of the
@@ -257,8 +287,10 @@ def stepped_range(values: Any, *, log: bool = False,
         v = v[v > 0]
         if not v.size:
             return 0.1, 10.0
-        return (1.0 / stepped_limit(1.05 / v.min(), log=True),
-                stepped_limit(1.05 * v.max(), log=True))
+        return (
+            1.0 / stepped_limit(1.05 / v.min(), log=True),
+            stepped_limit(1.05 * v.max(), log=True),
+        )
     lo, hi = (float(v.min()), float(v.max())) if v.size else (0.0, 0.0)
     if symmetric:
         a = stepped_limit(1.05 * max(-lo, hi)) if max(-lo, hi) > 0 else 1.0
@@ -271,8 +303,9 @@ def stepped_range(values: Any, *, log: bool = False,
     return min(bottom, -0.05 * top), max(top, -0.05 * bottom)
 
 
-def set_limits(ax: Any, *, xlim: tuple[float, float] | None = None,
-               ylim: tuple[float, float] | None = None) -> None:
+def set_limits(
+    ax: Any, *, xlim: tuple[float, float] | None = None, ylim: tuple[float, float] | None = None
+) -> None:
     """Set the limits of ``ax`` only where they change (setting equal limits still marks the
     axes stale, which would make :func:`render` draw everything again)."""
     if xlim is not None and tuple(ax.get_xlim()) != tuple(map(float, xlim)):

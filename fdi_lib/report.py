@@ -43,8 +43,18 @@ from typing import Any, Mapping, Sequence
 
 from .errors import ModelError
 
-__all__ = ["NA", "NBSP", "fmt_count", "fmt_rate", "fmt_time", "fmt_number", "fmt_value", "Table", "table",
-           "glue"]
+__all__ = [
+    "NA",
+    "NBSP",
+    "fmt_count",
+    "fmt_rate",
+    "fmt_time",
+    "fmt_number",
+    "fmt_value",
+    "Table",
+    "table",
+    "glue",
+]
 
 #: What a table cell shows when a value does not exist; the table's notes say why.
 NA = "n/a"
@@ -192,7 +202,9 @@ def fmt_value(v: Any, digits: int = 3) -> str:
         return fmt_count(v)
     if isinstance(v, numbers.Real):
         if math.isnan(float(v)):
-            raise ModelError("a table cell is NaN: pass None (shown as n/a) and explain it in a note")
+            raise ModelError(
+                "a table cell is NaN: pass None (shown as n/a) and explain it in a note"
+            )
         return fmt_number(v, digits)
     if isinstance(v, (list, tuple)) or hasattr(v, "tolist"):
         seq = v.tolist() if hasattr(v, "tolist") else v
@@ -224,20 +236,27 @@ class Table:
         # shows each row as a card, every cell after its column's header (the book's CSS)
         labels = [f' data-label="{esc(c, quote=True)}"' for c in self.columns]
         body = "".join(
-            "<tr><th>" + esc(label) + "</th>"
-            + "".join(f"<td{lab}>{esc(c)}</td>" for lab, c in zip(labels, cells)) + "</tr>"
+            "<tr><th>"
+            + esc(label)
+            + "</th>"
+            + "".join(f"<td{lab}>{esc(c)}</td>" for lab, c in zip(labels, cells))
+            + "</tr>"
             for label, cells in self.rows
         )
         notes = "".join(f"<li>{esc(n)}</li>" for n in self.notes)
         foot = f'<ul class="fdi-table-notes">{notes}</ul>' if notes else ""
-        return (f'<div class="fdi-table-wrap"><table class="fdi-table"><thead><tr>{head}</tr></thead>'
-                f"<tbody>{body}</tbody></table>{foot}</div>")
+        return (
+            f'<div class="fdi-table-wrap"><table class="fdi-table"><thead><tr>{head}</tr></thead>'
+            f"<tbody>{body}</tbody></table>{foot}</div>"
+        )
 
     def _repr_markdown_(self) -> str:
         head = (self.index_header, *self.columns)
-        lines = ["| " + " | ".join(_md_cell(c) for c in head) + " |",
-                 "|" + "---|" * len(head)]
-        lines += ["| " + " | ".join(_md_cell(c) for c in (label, *cells)) + " |" for label, cells in self.rows]
+        lines = ["| " + " | ".join(_md_cell(c) for c in head) + " |", "|" + "---|" * len(head)]
+        lines += [
+            "| " + " | ".join(_md_cell(c) for c in (label, *cells)) + " |"
+            for label, cells in self.rows
+        ]
         if self.notes:
             lines += [""] + [f"- {_md_cell(n)}" for n in self.notes]
         return "\n".join(lines) + "\n"
@@ -256,8 +275,11 @@ class Table:
         """The formatted cells as a :class:`pandas.DataFrame` (strings), indexed by row label."""
         import pandas as pd
 
-        return pd.DataFrame([list(c) for _, c in self.rows], index=[r for r, _ in self.rows],
-                            columns=list(self.columns))
+        return pd.DataFrame(
+            [list(c) for _, c in self.rows],
+            index=[r for r, _ in self.rows],
+            columns=list(self.columns),
+        )
 
 
 #: Characters with a meaning in MyST Markdown (emphasis, links, maths, roles, HTML, cell borders),
@@ -271,8 +293,14 @@ def _md_cell(text: str) -> str:
     return _MD_SPECIAL.sub(r"\\\1", re.sub(r"[ \t\r\n]+", " ", str(text)).strip()) or " "
 
 
-def table(rows: Mapping[str, Sequence[Any]], columns: Sequence[str], *, notes: Sequence[str] = (),
-          index_header: str = "", digits: int = 3) -> Table:
+def table(
+    rows: Mapping[str, Sequence[Any]],
+    columns: Sequence[str],
+    *,
+    notes: Sequence[str] = (),
+    index_header: str = "",
+    digits: int = 3,
+) -> Table:
     """Build a :class:`Table` from human row labels to cell values.
 
     Parameters
@@ -306,7 +334,9 @@ def table(rows: Mapping[str, Sequence[Any]], columns: Sequence[str], *, notes: S
             raise ModelError(f"row labels must be non-empty strings, got {label!r}")
         cells = list(cells)
         if len(cells) != len(columns):
-            raise ModelError(f"row {label!r} has {len(cells)} cells, expected {len(columns)} (columns {columns})")
+            raise ModelError(
+                f"row {label!r} has {len(cells)} cells, expected {len(columns)} (columns {columns})"
+            )
         out.append((label, tuple(fmt_value(c, digits) for c in cells)))
     if any(NA in cells for _, cells in out) and not notes:
         raise ModelError("a cell is n/a: add a note saying why")

@@ -86,13 +86,15 @@ def rls_gains(regressor: Any, Sigma: Any, *, lam: float, P0: Any = None) -> RLSG
         Pk, Mk = P[k], M[k]
         S = lam * S_all[k] + Mk @ Pk @ Mk.T
         c = cholesky(0.5 * (S + S.T), step=k, what="the RLS gain recursion", name="Sigma")
-        Lk = scipy.linalg.cho_solve(c, Mk @ Pk).T          # P M^T S^{-1}
+        Lk = scipy.linalg.cho_solve(c, Mk @ Pk).T  # P M^T S^{-1}
         Pn = (Pk - Lk @ Mk @ Pk) / lam
         L[k], P[k + 1] = Lk, 0.5 * (Pn + Pn.T)
     if not np.all(np.isfinite(P)):
         k = int(np.argwhere(~np.isfinite(P))[0, 0])
-        raise NonFiniteError(f"lam: the RLS covariance diverged (non-finite P_k at step {k}; regressor "
-                             f"not persistently exciting for lam = {lam}?)")
+        raise NonFiniteError(
+            f"lam: the RLS covariance diverged (non-finite P_k at step {k}; regressor "
+            f"not persistently exciting for lam = {lam}?)"
+        )
     return RLSGains(L=L, P=P, lam=lam)
 
 
@@ -117,8 +119,16 @@ class RLSResult:
     gains: RLSGains
 
 
-def rls_track(innovations: Any, regressor: Any, Sigma: Any, *, lam: float, P0: Any = None,
-              theta0: Any = None, gains: RLSGains | None = None) -> RLSResult:
+def rls_track(
+    innovations: Any,
+    regressor: Any,
+    Sigma: Any,
+    *,
+    lam: float,
+    P0: Any = None,
+    theta0: Any = None,
+    gains: RLSGains | None = None,
+) -> RLSResult:
     """Track ``theta_k`` in ``eps_k = M_k theta_k + noise`` (eq. 47) by RLS with forgetting.
 
     Explained in the book: :doc:`/book/bz/parametric-nonparametric`.
@@ -155,12 +165,14 @@ def rls_track(innovations: Any, regressor: Any, Sigma: Any, *, lam: float, P0: A
         raise ShapeError(f"regressor: expected shape (N, p, m), got {M.shape}")
     N, p, m = M.shape
     if np.shape(getattr(g, "L", None)) != (N, m, p):
-        raise ShapeError(f"gains: expected RLSGains with L of shape {(N, m, p)}, "
-                         f"got {np.shape(getattr(g, 'L', None))}")
+        raise ShapeError(
+            f"gains: expected RLSGains with L of shape {(N, m, p)}, "
+            f"got {np.shape(getattr(g, 'L', None))}"
+        )
     eps = array(innovations, "innovations", finite=False)
     if eps.ndim < 2 or eps.shape[-2:] != (N, p):
         raise ShapeError(f"innovations: expected shape (..., {N}, {p}), got {eps.shape}")
-    check_finite(eps, "innovations")   # RLS cannot skip a missing sample (fdi_lib.validation)
+    check_finite(eps, "innovations")  # RLS cannot skip a missing sample (fdi_lib.validation)
     batch = eps.shape[:-2]
     if theta0 is None:
         th = np.zeros((*batch, m))

@@ -43,8 +43,10 @@ class Signature:
 
 def _check_gains(model: LTVModel, gains: KalmanGains) -> None:
     if gains.K.shape != (model.n_steps, model.n, model.p):
-        raise ShapeError(f"gains: expected gains of shape {(model.n_steps, model.n, model.p)} "
-                         f"for this model, got {gains.K.shape}")
+        raise ShapeError(
+            f"gains: expected gains of shape {(model.n_steps, model.n, model.p)} "
+            f"for this model, got {gains.K.shape}"
+        )
 
 
 def fault_signature(model: LTVModel, gains: KalmanGains, fault: FaultProfile) -> Signature:
@@ -80,8 +82,10 @@ def fault_signature(model: LTVModel, gains: KalmanGains, fault: FaultProfile) ->
     _check_gains(model, gains)
     N = model.n_steps
     if fault.Psi.shape[:2] != (N, model.n) or fault.Phi.shape[:2] != (N, model.p):
-        raise ShapeError(f"fault: expected Psi ({N}, {model.n}, m) and Phi ({N}, {model.p}, m), "
-                         f"got {fault.Psi.shape} and {fault.Phi.shape}")
+        raise ShapeError(
+            f"fault: expected Psi ({N}, {model.n}, m) and Phi ({N}, {model.p}, m), "
+            f"got {fault.Psi.shape} and {fault.Phi.shape}"
+        )
     drive = fault.Psi - gains.FK @ fault.Phi  # Psi_k - F_k K_k Phi_k
     Gamma = np.zeros((N + 1, model.n, fault.m))
     for k in range(N):

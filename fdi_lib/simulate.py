@@ -22,7 +22,17 @@ from fdi_lib.errors import ModelError, NonFiniteError, ShapeError
 from fdi_lib.models import FaultProfile, LTVModel, as_record
 from fdi_lib.validation import array, check_finite, integer
 
-__all__ = ["Noise", "NoiseRoots", "Simulation", "noise_roots", "draw_noise", "noise_from_standard", "simulate", "pi_controller", "covariance_sqrt"]
+__all__ = [
+    "Noise",
+    "NoiseRoots",
+    "Simulation",
+    "noise_roots",
+    "draw_noise",
+    "noise_from_standard",
+    "simulate",
+    "pi_controller",
+    "covariance_sqrt",
+]
 
 
 @dataclass(frozen=True)
@@ -116,11 +126,18 @@ def noise_roots(model: LTVModel) -> NoiseRoots:
         r = covariance_sqrt(cov[:1] if cov.strides[0] == 0 else cov)  # one root for constants
         return np.broadcast_to(r, (N, dim, dim))
 
-    return NoiseRoots(P0=covariance_sqrt(model.P0), Q=root(model.Q, model.n), R=root(model.R, model.p))
+    return NoiseRoots(
+        P0=covariance_sqrt(model.P0), Q=root(model.Q, model.n), R=root(model.R, model.p)
+    )
 
 
-def draw_noise(model: LTVModel, rng: np.random.Generator, size: int | None = None, *,
-               roots: NoiseRoots | None = None) -> Noise:
+def draw_noise(
+    model: LTVModel,
+    rng: np.random.Generator,
+    size: int | None = None,
+    *,
+    roots: NoiseRoots | None = None,
+) -> Noise:
     """Draw ``X_0 ~ N(x0, P0)``, ``W_k ~ N(0, Q_k)``, ``V_k ~ N(0, R_k)``.
 
     Explained in the book: :doc:`/book/zb2014/signature`.
@@ -155,8 +172,14 @@ def draw_noise(model: LTVModel, rng: np.random.Generator, size: int | None = Non
     return noise_from_standard(model, z0, zw, zv, roots=roots)
 
 
-def noise_from_standard(model: LTVModel, z0: np.ndarray, zw: np.ndarray, zv: np.ndarray, *,
-                        roots: NoiseRoots | None = None) -> Noise:
+def noise_from_standard(
+    model: LTVModel,
+    z0: np.ndarray,
+    zw: np.ndarray,
+    zv: np.ndarray,
+    *,
+    roots: NoiseRoots | None = None,
+) -> Noise:
     """The noise :func:`draw_noise` makes of its standard normal draws.
 
     ``X_0 = x0 + S_0 z0``, ``W_k = S_{Q,k} zw_k``, ``V_k = S_{R,k} zv_k`` (``S`` the roots of
@@ -193,11 +216,16 @@ def noise_from_standard(model: LTVModel, z0: np.ndarray, zw: np.ndarray, zv: np.
     if roots is None:
         roots = noise_roots(model)
     x0 = model.x0 + z0 @ roots.P0.T
-    return Noise(x0=x0, w=np.einsum("kij,...kj->...ki", roots.Q, zw),
-                 v=np.einsum("kij,...kj->...ki", roots.R, zv))
+    return Noise(
+        x0=x0,
+        w=np.einsum("kij,...kj->...ki", roots.Q, zw),
+        v=np.einsum("kij,...kj->...ki", roots.R, zv),
+    )
 
 
-def pi_controller(kp: float, ki: float, setpoint: float = 0.0) -> Callable[[int, np.ndarray], np.ndarray]:
+def pi_controller(
+    kp: float, ki: float, setpoint: float = 0.0
+) -> Callable[[int, np.ndarray], np.ndarray]:
     """A discrete PI controller ``C(z) = kp + ki / (z - 1)`` acting on ``e_k = setpoint - y_k``.
 
     ``kp`` and ``ki`` are the proportional and integral gains, ``setpoint`` the reference.
@@ -234,18 +262,30 @@ def _controller_input(u_k: Any, k: int, shape: tuple[int, ...]) -> np.ndarray:
     try:
         out = np.broadcast_to(np.asarray(u_k, dtype=float), shape)
     except (TypeError, ValueError) as exc:
-        raise ShapeError(f"controller: expected an input u_k broadcastable to {shape} at step {k}, got "
-                         f"{type(u_k).__name__} of shape {np.shape(u_k)}") from exc
+        raise ShapeError(
+            f"controller: expected an input u_k broadcastable to {shape} at step {k}, got "
+            f"{type(u_k).__name__} of shape {np.shape(u_k)}"
+        ) from exc
     if not np.all(np.isfinite(out)):
         idx = tuple(int(i) for i in np.argwhere(~np.isfinite(out))[0])
-        raise NonFiniteError(f"controller: expected a finite input u_k, got {out[idx]} at step {k}, "
-                             f"index {idx} of u_k")
+        raise NonFiniteError(
+            f"controller: expected a finite input u_k, got {out[idx]} at step {k}, "
+            f"index {idx} of u_k"
+        )
     return out
 
 
-def simulate(model: LTVModel, *, rng: np.random.Generator | None = None, noise: Noise | None = None,
-             u: Any = None, controller: Callable[[int, np.ndarray], np.ndarray] | None = None,
-             fault: FaultProfile | None = None, theta: Any = None, size: int | None = None) -> Simulation:
+def simulate(
+    model: LTVModel,
+    *,
+    rng: np.random.Generator | None = None,
+    noise: Noise | None = None,
+    u: Any = None,
+    controller: Callable[[int, np.ndarray], np.ndarray] | None = None,
+    fault: FaultProfile | None = None,
+    theta: Any = None,
+    size: int | None = None,
+) -> Simulation:
     """Simulate eq. (5) (eq. (3) when ``fault.Phi`` is zero).
 
     Explained in the book: :doc:`/book/zb2014/signature`.
@@ -297,14 +337,22 @@ def simulate(model: LTVModel, *, rng: np.random.Generator | None = None, noise: 
         raise ModelError("size: only with rng; a replayed noise record has its own batch shape")
     batch = noise.batch_shape
     if noise.w.shape != (*batch, N, n) or noise.v.shape != (*batch, N, p):
-        raise ShapeError(f"noise: expected w {(*batch, N, n)} and v {(*batch, N, p)}, "
-                         f"got {noise.w.shape} and {noise.v.shape}")
-    for field in ("x0", "w", "v"):  # a replayed record: a NaN would run silently through every state
+        raise ShapeError(
+            f"noise: expected w {(*batch, N, n)} and v {(*batch, N, p)}, "
+            f"got {noise.w.shape} and {noise.v.shape}"
+        )
+    for field in (
+        "x0",
+        "w",
+        "v",
+    ):  # a replayed record: a NaN would run silently through every state
         check_finite(getattr(noise, field), f"noise.{field}")
     if u is not None and controller is not None:
         raise ModelError("simulate: give u (open loop) or controller (closed loop), not both")
     if controller is not None and np.any(model.J):
-        raise ModelError("controller: closed loop needs J_k = 0 (a non-zero J makes the loop algebraic)")
+        raise ModelError(
+            "controller: closed loop needs J_k = 0 (a non-zero J makes the loop algebraic)"
+        )
     u_arr = as_record(u, n_steps=N, width=l, name="u")  # (N, l) or per realisation (*batch, N, l)
     if fault is None:
         if theta is not None:
@@ -317,8 +365,10 @@ def simulate(model: LTVModel, *, rng: np.random.Generator | None = None, noise: 
             raise ShapeError(f"theta: expected shape ({fault.m},), got {th.shape}")
         array(th, "theta")
         if fault.Psi.shape[:2] != (N, n) or fault.Phi.shape[:2] != (N, p):
-            raise ShapeError(f"fault: expected Psi ({N}, {n}, m) and Phi ({N}, {p}, m), "
-                             f"got {fault.Psi.shape} and {fault.Phi.shape}")
+            raise ShapeError(
+                f"fault: expected Psi ({N}, {n}, m) and Phi ({N}, {p}, m), "
+                f"got {fault.Psi.shape} and {fault.Phi.shape}"
+            )
         state_fault = fault.Psi @ th
         output_fault = fault.Phi @ th
 
@@ -334,6 +384,7 @@ def simulate(model: LTVModel, *, rng: np.random.Generator | None = None, noise: 
         else:
             y_k = y_k + us[..., k, :] @ J[k].T
         y[..., k, :] = y_k
-        x[..., k + 1, :] = x[..., k, :] @ F[k].T + us[..., k, :] @ G[k].T + noise.w[..., k, :] + state_fault[k]
+        x[..., k + 1, :] = (
+            x[..., k, :] @ F[k].T + us[..., k, :] @ G[k].T + noise.w[..., k, :] + state_fault[k]
+        )
     return Simulation(x=x, y=y, u=us, noise=noise)
-

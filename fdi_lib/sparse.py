@@ -151,18 +151,25 @@ def regression_data(residuals: Any, on_residual: Any, *, start: int = 1) -> Regr
     if r.ndim < 2:
         raise ShapeError(f"residuals: expected shape (..., N, p), got {r.shape}")
     if S.ndim < 3 or S.shape[-3:-1] != r.shape[-2:]:
-        raise ShapeError(f"on_residual: expected shape (..., {r.shape[-2]}, {r.shape[-1]}, m), got {S.shape}")
+        raise ShapeError(
+            f"on_residual: expected shape (..., {r.shape[-2]}, {r.shape[-1]}, m), got {S.shape}"
+        )
     N, p = r.shape[-2:]
     start = integer(start, "start", low=0, high=N - 1)
     try:
         batch = np.broadcast_shapes(r.shape[:-2], S.shape[:-3])
     except ValueError:
-        raise ShapeError(f"residuals, on_residual: batch axes {r.shape[:-2]} and {S.shape[:-3]} "
-                         f"do not broadcast") from None
+        raise ShapeError(
+            f"residuals, on_residual: batch axes {r.shape[:-2]} and {S.shape[:-3]} do not broadcast"
+        ) from None
     m = S.shape[-1]
-    X = np.broadcast_to(S[..., start:, :, :], (*batch, N - start, p, m)).reshape(*batch, (N - start) * p, m)
+    X = np.broadcast_to(S[..., start:, :, :], (*batch, N - start, p, m)).reshape(
+        *batch, (N - start) * p, m
+    )
     y = np.broadcast_to(r[..., start:, :], (*batch, N - start, p)).reshape(*batch, (N - start) * p)
-    return RegressionData(X=X, y=y, n_samples=int(N - start))  # views of the inputs when their layout allows
+    return RegressionData(
+        X=X, y=y, n_samples=int(N - start)
+    )  # views of the inputs when their layout allows
 
 
 def _check_xy(X: Any, y: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -302,10 +309,14 @@ class PathBatch:
     def path(self, b: int) -> LassoPath:
         """Path ``b`` as a :class:`LassoPath`."""
         k = int(self.n_points[b])
-        return LassoPath(lambdas=self.lambdas[b, :k].copy(), coefs=self.coefs[b, :k].T.copy(),
-                         n_samples=self.n_samples, solver=str(self.solver[b]),
-                         kkt_residual=float(self.kkt_residual[b]),
-                         kkt_floor=float(self.kkt_floor[b]))
+        return LassoPath(
+            lambdas=self.lambdas[b, :k].copy(),
+            coefs=self.coefs[b, :k].T.copy(),
+            n_samples=self.n_samples,
+            solver=str(self.solver[b]),
+            kkt_residual=float(self.kkt_residual[b]),
+            kkt_floor=float(self.kkt_floor[b]),
+        )
 
     def paths(self) -> list[LassoPath]:
         """All the paths, as :class:`LassoPath` objects."""
@@ -318,7 +329,9 @@ class PathBatch:
         """
         mask = np.asarray(support, dtype=bool)
         if mask.shape != (len(self), self.coefs.shape[2]):
-            raise ShapeError(f"support: expected shape {(len(self), self.coefs.shape[2])}, got {mask.shape}")
+            raise ShapeError(
+                f"support: expected shape {(len(self), self.coefs.shape[2])}, got {mask.shape}"
+            )
         _, act = self._activity
         valid = np.arange(act.shape[1]) < (self.n_points - 1)[:, None]
         return np.any(valid & np.all(act == mask[:, None, :], axis=2), axis=1)
@@ -328,11 +341,15 @@ class PathBatch:
         """The batch of a sequence of :class:`LassoPath` (same number ``m`` of components)."""
         paths = list(paths)
         if not paths or not all(isinstance(p, LassoPath) for p in paths):
-            raise ModelError(f"paths: expected a non-empty sequence of LassoPath, got {paths!r:.80}")
+            raise ModelError(
+                f"paths: expected a non-empty sequence of LassoPath, got {paths!r:.80}"
+            )
         m = paths[0].coefs.shape[0]
         if any(p.coefs.shape[0] != m for p in paths):
-            raise ShapeError(f"paths: expected paths of {m} components each, got "
-                             f"{sorted({p.coefs.shape[0] for p in paths})}")
+            raise ShapeError(
+                f"paths: expected paths of {m} components each, got "
+                f"{sorted({p.coefs.shape[0] for p in paths})}"
+            )
         n_points = np.array([p.lambdas.size for p in paths])
         S = int(n_points.max())
         lambdas = np.full((len(paths), S), -np.inf)
@@ -340,14 +357,25 @@ class PathBatch:
         for b, p in enumerate(paths):
             lambdas[b, : p.lambdas.size] = p.lambdas
             coefs[b, : p.lambdas.size] = p.coefs.T
-        return cls(lambdas=lambdas, coefs=coefs, n_points=n_points, n_samples=paths[0].n_samples,
-                   solver=np.array([p.solver for p in paths], dtype=object),
-                   kkt_residual=np.array([p.kkt_residual for p in paths]),
-                   kkt_floor=np.array([p.kkt_floor for p in paths]))
+        return cls(
+            lambdas=lambdas,
+            coefs=coefs,
+            n_points=n_points,
+            n_samples=paths[0].n_samples,
+            solver=np.array([p.solver for p in paths], dtype=object),
+            kkt_residual=np.array([p.kkt_residual for p in paths]),
+            kkt_floor=np.array([p.kkt_floor for p in paths]),
+        )
 
 
-def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: float = 0.0,
-               max_size: int | None = None) -> LassoPath:
+def lasso_path(
+    X: Any,
+    y: Any,
+    *,
+    n_samples: int | None = None,
+    lambda_min: float = 0.0,
+    max_size: int | None = None,
+) -> LassoPath:
     """Exact Lasso path of (39) by the LARS-Lasso homotopy (Efron et al. 2004).
 
     The homotopy follows ``theta_hat(lambda)`` from ``lambda_max`` down, from one breakpoint (a
@@ -389,12 +417,19 @@ def lasso_path(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: floa
         When no path passes the KKT check (neither the homotopy's nor scikit-learn's).
     """
     X, y = _check_xy(X, y)
-    return lasso_path_batch(X[None], y[None], n_samples=n_samples, lambda_min=lambda_min,
-                            max_size=max_size).path(0)
+    return lasso_path_batch(
+        X[None], y[None], n_samples=n_samples, lambda_min=lambda_min, max_size=max_size
+    ).path(0)
 
 
-def lasso_paths(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: float = 0.0,
-                max_size: int | None = None) -> list[LassoPath]:
+def lasso_paths(
+    X: Any,
+    y: Any,
+    *,
+    n_samples: int | None = None,
+    lambda_min: float = 0.0,
+    max_size: int | None = None,
+) -> list[LassoPath]:
     """Exact Lasso paths of a batch of problems, as :func:`lasso_path` for each.
 
     Parameters
@@ -407,11 +442,19 @@ def lasso_paths(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: flo
     list of LassoPath
         One per problem, each identical to :func:`lasso_path` of that problem alone.
     """
-    return lasso_path_batch(X, y, n_samples=n_samples, lambda_min=lambda_min, max_size=max_size).paths()
+    return lasso_path_batch(
+        X, y, n_samples=n_samples, lambda_min=lambda_min, max_size=max_size
+    ).paths()
 
 
-def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min: float = 0.0,
-                     max_size: int | None = None) -> PathBatch:
+def lasso_path_batch(
+    X: Any,
+    y: Any,
+    *,
+    n_samples: int | None = None,
+    lambda_min: float = 0.0,
+    max_size: int | None = None,
+) -> PathBatch:
     """Exact Lasso paths of a batch of problems, followed together, as a :class:`PathBatch`.
 
     Parameters
@@ -457,8 +500,9 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
         raise ShapeError(f"y: expected shape {X.shape[:2]}, got {y.shape}")
     rows = X.shape[1]
     N = _norm(n_samples, rows)
-    lambda_min = real(lambda_min, "lambda_min", low=0.0, high=1.0, high_open=True,
-                      what="a fraction of lambda_max")
+    lambda_min = real(
+        lambda_min, "lambda_min", low=0.0, high=1.0, high_open=True, what="a fraction of lambda_max"
+    )
     if max_size is not None:
         max_size = integer(max_size, "max_size", low=1)
     # Exact rescaling X = sx X', y = sy y' per problem: theta = (sy / sx) theta', lambda = sx sy lambda'
@@ -472,7 +516,9 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
     Xy = np.einsum("bri,br->bi", Xs, ys)
     B = X.shape[0]
     c_min = lambda_min * np.abs(Xy).max(axis=1)
-    with np.errstate(all="ignore"):  # a singular step (a degenerate design) gives NaN: the KKT check rejects it
+    with np.errstate(
+        all="ignore"
+    ):  # a singular step (a degenerate design) gives NaN: the KKT check rejects it
         levels, coefs, n_points = _homotopy(Gram, Xy, c_min, max_size)
     S = int(n_points.max())
     levels, coefs = levels[:, :S], coefs[:, :S]
@@ -482,8 +528,9 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
     # for the paths it does not pass, the check in double-double from X and y (nothing subtracted),
     # then the coefficients refined on the path's own supports, then scikit-learn's lars_path.
     ynorm = np.sqrt(np.einsum("br,br->b", ys, ys))
-    g, slack, abs_gram, point_res, point_floor = _kkt_screen(Gram, Xy, ynorm, levels, coefs,
-                                                             n_points, rows)
+    g, slack, abs_gram, point_res, point_floor = _kkt_screen(
+        Gram, Xy, ynorm, levels, coefs, n_points, rows
+    )
     # the exact check where the screen does not pass (its bound holds elsewhere): all such
     # breakpoints of the batch at once
     broken = (point_res == np.inf).any(axis=1)  # a NaN (a singular step or a cycle): recomputed
@@ -510,8 +557,9 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
             lars = _lars_fallback(Xb, yb, float(c_min[b]), max_size, b, float(kkt[b]))
         except NumericalError as error:
             if res > KKT_TOL:
-                raise NumericalError(f"{error} (and by {res:.3g} lambda with the homotopy's path "
-                                     "refined)") from None
+                raise NumericalError(
+                    f"{error} (and by {res:.3g} lambda with the homotopy's path refined)"
+                ) from None
             lars = None
         if lars is None or res < lars[2]:
             coefs[b, :k], kkt[b], floor[b], solver[b] = refined, res, fl, "homotopy-refined"
@@ -523,23 +571,31 @@ def lasso_path_batch(X: Any, y: Any, *, n_samples: int | None = None, lambda_min
         coefs = np.pad(coefs, ((0, 0), (0, S - coefs.shape[1]), (0, 0)))
         for b, lev, co, res, fl in fixed:
             levels[b], coefs[b] = 0.0, 0.0
-            levels[b, :lev.size], coefs[b, :lev.size] = lev, co
+            levels[b, : lev.size], coefs[b, : lev.size] = lev, co
             n_points[b], kkt[b], floor[b], solver[b] = lev.size, res, fl, "sklearn-fallback"
     # the correlation level c is rows * alpha (scikit-learn's 1/(2 rows)); (39) has 1/(2N): lambda = c / N
-    with np.errstate(over="ignore", invalid="ignore"):   # checked just below
+    with np.errstate(over="ignore", invalid="ignore"):  # checked just below
         lam = levels * (sx * sy / N)[:, None]
         th = coefs * (sy / sx)[:, None, None]  # zeros in the padding
     on_path = np.arange(S) < n_points[:, None]
     bad = ~(np.isfinite(lam) | ~on_path).all(axis=1) | ~np.isfinite(th).all(axis=(1, 2))
     if bad.any():
         b = int(np.flatnonzero(bad)[0])
-        raise NumericalError(f"X, y (problem {b}): the Lasso path is not representable in float64 (lambda_max "
-                             f"or a coefficient overflows: RMS of X {sx[b]:.3g}, of y {sy[b]:.3g}); expected a "
-                             f"design and data scaled towards 1")
+        raise NumericalError(
+            f"X, y (problem {b}): the Lasso path is not representable in float64 (lambda_max "
+            f"or a coefficient overflows: RMS of X {sx[b]:.3g}, of y {sy[b]:.3g}); expected a "
+            f"design and data scaled towards 1"
+        )
     lam[~on_path] = -np.inf  # padding
-    return PathBatch(lambdas=lam, coefs=th, n_points=n_points, n_samples=N, solver=solver,
-                     kkt_residual=kkt,
-                     kkt_floor=floor * (sx * sy / N))
+    return PathBatch(
+        lambdas=lam,
+        coefs=th,
+        n_points=n_points,
+        n_samples=N,
+        solver=solver,
+        kkt_residual=kkt,
+        kkt_floor=floor * (sx * sy / N),
+    )
 
 
 def kkt_residual(X: Any, y: Any, path: "LassoPath") -> float:
@@ -628,10 +684,10 @@ def _gradient_dd(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> np.ndarray:
     out = np.empty(coefs.shape)
     block = max(1, 1_000_000 // (rows * m))
     for b0 in range(0, coefs.shape[0], block):
-        c = coefs[b0:b0 + block]
-        Xb = X if X.shape[0] == 1 else X[b0:b0 + block]
+        c = coefs[b0 : b0 + block]
+        Xb = X if X.shape[0] == 1 else X[b0 : b0 + block]
         Xh, Xl = _split(Xb)
-        yb = y if y.shape[0] == 1 else y[b0:b0 + block]
+        yb = y if y.shape[0] == 1 else y[b0 : b0 + block]
         s = np.array(np.broadcast_to(yb, (c.shape[0], rows)))
         e = np.zeros_like(s)
         for k in range(m):
@@ -641,40 +697,56 @@ def _gradient_dd(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> np.ndarray:
             e += err - _product_error((Xh[:, :, k], Xl[:, :, k]), t, p)
         XT = Xb.transpose(0, 2, 1)
         P = XT * s[:, None, :]  # (P, m, rows)
-        E = (_product_error((Xh.transpose(0, 2, 1), Xl.transpose(0, 2, 1)), s[:, None, :], P)
-             + XT * e[:, None, :])
+        E = (
+            _product_error((Xh.transpose(0, 2, 1), Xl.transpose(0, 2, 1)), s[:, None, :], P)
+            + XT * e[:, None, :]
+        )
         while P.shape[2] > 1:
             if P.shape[2] % 2:
                 P = np.concatenate([P, np.zeros(P.shape[:2] + (1,))], axis=2)
                 E = np.concatenate([E, np.zeros(E.shape[:2] + (1,))], axis=2)
             P, err = _two_sum(P[:, :, 0::2], P[:, :, 1::2])
             E = E[:, :, 0::2] + E[:, :, 1::2] + err
-        out[b0:b0 + block] = P[:, :, 0] + E[:, :, 0]
+        out[b0 : b0 + block] = P[:, :, 0] + E[:, :, 0]
     return out
 
 
-def _kkt_direct(X: np.ndarray, y: np.ndarray, levels: np.ndarray,
-                coefs: np.ndarray) -> tuple[float, float]:
+def _kkt_direct(
+    X: np.ndarray, y: np.ndarray, levels: np.ndarray, coefs: np.ndarray
+) -> tuple[float, float]:
     """:func:`kkt_residual` of one path, levels ``(S,)`` (``N lambda``) and coefficients ``(S, m)``,
     and its float floor (levels); the gradient in double-double (:func:`_gradient_dd`), nothing
     subtracted."""
     with np.errstate(all="ignore"):
         g = _gradient_dd(X, y, coefs)
-        res, floor = _kkt(g[None], np.zeros((1, levels.size)), levels[None], coefs[None],
-                          np.array([levels.size]),
-                          np.abs(X.T @ X)[None])
+        res, floor = _kkt(
+            g[None],
+            np.zeros((1, levels.size)),
+            levels[None],
+            coefs[None],
+            np.array([levels.size]),
+            np.abs(X.T @ X)[None],
+        )
     return float(res[0]), float(floor[0])
 
 
-def _kkt_path(X: np.ndarray, y: np.ndarray, levels: np.ndarray,
-              coefs: np.ndarray) -> tuple[float, float]:
+def _kkt_path(
+    X: np.ndarray, y: np.ndarray, levels: np.ndarray, coefs: np.ndarray
+) -> tuple[float, float]:
     """:func:`_kkt_direct`'s residual (or an upper bound of it) and float floor, computed as
     :func:`lasso_path_batch` does: the batched screen, then double-double where it does not pass."""
     k = np.array([levels.size])
     gram = X.T @ X
     with np.errstate(all="ignore"):
-        g, slack, abs_gram, res, _ = _kkt_screen(gram[None], (X.T @ y)[None], np.sqrt(y @ y)[None],
-                                                 levels[None], coefs[None], k, X.shape[0])
+        g, slack, abs_gram, res, _ = _kkt_screen(
+            gram[None],
+            (X.T @ y)[None],
+            np.sqrt(y @ y)[None],
+            levels[None],
+            coefs[None],
+            k,
+            X.shape[0],
+        )
         at = np.flatnonzero((res[0] > KKT_TOL) & (res[0] < np.inf))
         if at.size:
             g[0, at], slack[0, at] = _gradient_dd(X, y, coefs[at]), 0.0
@@ -682,8 +754,15 @@ def _kkt_path(X: np.ndarray, y: np.ndarray, levels: np.ndarray,
     return float(res[0]), float(floor[0])
 
 
-def _kkt_screen(Gram: np.ndarray, Xy: np.ndarray, ynorm: np.ndarray, levels: np.ndarray,
-                coefs: np.ndarray, n_points: np.ndarray, rows: int) -> tuple[np.ndarray, ...]:
+def _kkt_screen(
+    Gram: np.ndarray,
+    Xy: np.ndarray,
+    ynorm: np.ndarray,
+    levels: np.ndarray,
+    coefs: np.ndarray,
+    n_points: np.ndarray,
+    rows: int,
+) -> tuple[np.ndarray, ...]:
     """The batched screen of :func:`lasso_path_batch`'s KKT check, from ``Gram`` ``(B, m, m)``,
     ``Xy`` ``(B, m)`` and ``||y||`` ``(B,)``: the gradients ``g`` ``(B, S, m)`` (Gram form), the
     bound of their rounding ``slack`` ``(B, S)``, ``|Gram|``, and the per-breakpoint residuals and
@@ -694,17 +773,27 @@ def _kkt_screen(Gram: np.ndarray, Xy: np.ndarray, ynorm: np.ndarray, levels: np.
         # |fl(g_j) - g_j| <= gamma_(rows + m) ||X_j|| (||y|| + sum_k ||X_k|| |theta_k|)
         # (Cauchy-Schwarz on
         # X^T y, X^T X and G theta), doubled
-        slack = (2 * np.finfo(float).eps * (rows + m + 2)) * norms.max(axis=1, keepdims=True) * (
-            ynorm[:, None] + np.einsum("bsi,bi->bs", np.abs(coefs), norms))
+        slack = (
+            (2 * np.finfo(float).eps * (rows + m + 2))
+            * norms.max(axis=1, keepdims=True)
+            * (ynorm[:, None] + np.einsum("bsi,bi->bs", np.abs(coefs), norms))
+        )
         g = Xy[:, None, :] - np.matmul(coefs, Gram)
         abs_gram = np.abs(Gram)
         point_res, point_floor = _kkt(g, slack, levels, coefs, n_points, abs_gram, points=True)
     return g, slack, abs_gram, point_res, point_floor
 
 
-def _kkt(g: np.ndarray, slack: np.ndarray, levels: np.ndarray, coefs: np.ndarray,
-         n_points: np.ndarray, abs_gram: np.ndarray, *,
-         points: bool = False) -> tuple[np.ndarray, np.ndarray]:
+def _kkt(
+    g: np.ndarray,
+    slack: np.ndarray,
+    levels: np.ndarray,
+    coefs: np.ndarray,
+    n_points: np.ndarray,
+    abs_gram: np.ndarray,
+    *,
+    points: bool = False,
+) -> tuple[np.ndarray, np.ndarray]:
     """The residuals of :func:`kkt_residual` ``(B,)`` and the float floors ``(B,)`` (the largest
     ``floor_i``, in levels) of paths ``coefs`` ``(B, S, m)`` padded after ``n_points`` (with
     ``points=True``, per breakpoint ``(B, S)``: residual, ``-inf`` in the padding, and floor), from
@@ -733,8 +822,9 @@ def _kkt(g: np.ndarray, slack: np.ndarray, levels: np.ndarray, coefs: np.ndarray
         np.maximum(worst, levels + np.where(neg, g, -np.inf).max(axis=2), out=worst)
         # float floor: rounding theta to float64 (|delta_k| <= eps/2 |theta_k|) moves g_j by up to
         # eps/2 sum_k |G_jk theta_k|; below floor_i = that / KKT_TOL, KKT_TOL lambda cannot be met
-        floor = np.matmul(np.abs(coefs), abs_gram).max(axis=2) * (0.5 * np.finfo(float).eps
-                                                                  / KKT_TOL)
+        floor = np.matmul(np.abs(coefs), abs_gram).max(axis=2) * (
+            0.5 * np.finfo(float).eps / KKT_TOL
+        )
         scale = np.maximum(np.maximum(levels, KKT_FLOOR * levels[:, :1]), floor)
         scale = np.maximum(scale, np.finfo(float).tiny)
         res = np.where(valid, (worst + slack) / scale, -np.inf)
@@ -746,8 +836,9 @@ def _kkt(g: np.ndarray, slack: np.ndarray, levels: np.ndarray, coefs: np.ndarray
     return np.where(np.isnan(res), np.inf, np.maximum(res, 0.0)), floor
 
 
-def _refine(X: np.ndarray, y: np.ndarray, levels: np.ndarray, coefs: np.ndarray,
-            steps: int = 3) -> np.ndarray:
+def _refine(
+    X: np.ndarray, y: np.ndarray, levels: np.ndarray, coefs: np.ndarray, steps: int = 3
+) -> np.ndarray:
     """The coefficients ``(S, m)`` of a path refined at each breakpoint on the path's own supports.
 
     At breakpoint ``i`` the Lasso solution solves ``(X^T X)_AA theta_A = X_A^T y - c_i sign_A`` on
@@ -774,8 +865,10 @@ def _pow2_rms(a: np.ndarray) -> np.ndarray:
     """Per row of ``a`` ``(B, k)``, the power of 2 nearest its RMS (1 for a zero row), computed
     without squaring the raw entries (scaling by a power of 2 is exact)."""
     top = np.abs(a).max(axis=1)
-    _, e = np.frexp(top)                           # top = f 2^e, f in [0.5, 1)
-    u = np.ldexp(1.0, np.maximum(e - 1, -1074))    # 2^(e-1) <= top: representable even near the limits
+    _, e = np.frexp(top)  # top = f 2^e, f in [0.5, 1)
+    u = np.ldexp(
+        1.0, np.maximum(e - 1, -1074)
+    )  # 2^(e-1) <= top: representable even near the limits
     ok = top > 0
     u[~ok] = 1.0
     ms = np.einsum("bk,bk->b", a / u[:, None], a / u[:, None]) / a.shape[1]
@@ -785,8 +878,9 @@ def _pow2_rms(a: np.ndarray) -> np.ndarray:
     return s
 
 
-def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | None, b: int,
-                   kkt: float) -> tuple[np.ndarray, np.ndarray, float, float]:
+def _lars_fallback(
+    X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | None, b: int, kkt: float
+) -> tuple[np.ndarray, np.ndarray, float, float]:
     """The path of one problem whose homotopy path failed the KKT check, by scikit-learn's ``lars_path``.
 
     Why not only the homotopy: its inverse of ``Gram_AA`` is up/down-dated (fast, batched) and loses
@@ -821,33 +915,47 @@ def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | N
     norms = np.sqrt(np.einsum("ri,ri->i", X, X))
     keep = np.flatnonzero(norms > 0)
     cos = np.abs(X[:, keep].T @ X[:, keep]) / np.outer(norms[keep], norms[keep])
-    longest = np.ones(keep.size, bool)  # the longest column of each parallel group (the first on ties)
+    longest = np.ones(
+        keep.size, bool
+    )  # the longest column of each parallel group (the first on ties)
     for i in range(keep.size):
         par = cos[i] >= 1 - 1e-12
-        longest[i] = not np.any(par & ((norms[keep] > norms[keep[i]])
-                                       | ((norms[keep] == norms[keep[i]]) & (np.arange(keep.size) < i))))
+        longest[i] = not np.any(
+            par
+            & (
+                (norms[keep] > norms[keep[i]])
+                | ((norms[keep] == norms[keep[i]]) & (np.arange(keep.size) < i))
+            )
+        )
     designs = [np.arange(m)] + ([keep[longest]] if longest.sum() < m else [])
     # lars_path stops once alpha <= alpha_min + float32 eps (an absolute tolerance): y is scaled by a
     # power of 2 (exact) so that alpha_max is about 1e8, which puts that stop 15 decades down.
     with np.errstate(over="ignore"):
         top = float(np.abs(X.T @ y).max())
-    e = np.log2(1e8 * rows) - np.log2(top) if 0 < top < np.inf else np.inf   # in logs: no overflow
+    e = np.log2(1e8 * rows) - np.log2(top) if 0 < top < np.inf else np.inf  # in logs: no overflow
     if not abs(e) <= 1000:  # t (or t * y) would leave float64: the design's scale is the problem
-        raise NumericalError(f"X, y (problem {b}): the Lasso path violates the optimality (KKT) conditions "
-                             f"by {kkt:.3g} lambda with the homotopy, and max |X^T y| = {top:.3g} (X and y at "
-                             f"unit RMS) is too far from 1 for scikit-learn's lars_path to be scaled in float64; "
-                             f"expected X^T y not (nearly) zero or infinite")
+        raise NumericalError(
+            f"X, y (problem {b}): the Lasso path violates the optimality (KKT) conditions "
+            f"by {kkt:.3g} lambda with the homotopy, and max |X^T y| = {top:.3g} (X and y at "
+            f"unit RMS) is too far from 1 for scikit-learn's lars_path to be scaled in float64; "
+            f"expected X^T y not (nearly) zero or infinite"
+        )
     t = 2.0 ** np.round(e)
     tried = []
     for cols in designs:
-        with warnings.catch_warnings():  # degenerate-regressor warnings: the KKT check below decides
+        with (
+            warnings.catch_warnings()
+        ):  # degenerate-regressor warnings: the KKT check below decides
             warnings.simplefilter("ignore", ConvergenceWarning)
-            alphas, _, co = lars_path(X[:, cols], t * y, method="lasso", alpha_min=t * c_min / rows,
-                                      max_iter=50 * m + 100)
+            alphas, _, co = lars_path(
+                X[:, cols], t * y, method="lasso", alpha_min=t * c_min / rows, max_iter=50 * m + 100
+            )
         levels = alphas * (rows / t)
         coefs = np.zeros((levels.size, m))
         coefs[:, cols] = co.T / t
-        over = np.flatnonzero(_activity(coefs[None])[1][0].sum(axis=1) > (m if max_size is None else max_size))
+        over = np.flatnonzero(
+            _activity(coefs[None])[1][0].sum(axis=1) > (m if max_size is None else max_size)
+        )
         if over.size:  # stop after the first interval with more than max_size components
             levels, coefs = levels[: over[0] + 2], coefs[: over[0] + 2]
         res, fl = _kkt_path(X, y, levels, coefs)
@@ -859,14 +967,20 @@ def _lars_fallback(X: np.ndarray, y: np.ndarray, c_min: float, max_size: int | N
         done = over.size or levels[-1] <= max(c_min, 1e-9 * levels[0])  # lars_path's own tail ends
         if res <= KKT_TOL and done:
             return levels, coefs, res, fl
-        tried.append(f"{res:.3g} lambda" + ("" if done else f" (stopped at {levels[-1] / levels[0]:.3g} lambda_max)"))
-    raise NumericalError(f"X, y (problem {b}): the Lasso path violates the optimality (KKT) conditions by "
-                         f"{kkt:.3g} lambda with the homotopy and by {', '.join(tried)} with scikit-learn's "
-                         f"lars_path; expected at most KKT_TOL = {KKT_TOL:g} down to lambda_min")
+        tried.append(
+            f"{res:.3g} lambda"
+            + ("" if done else f" (stopped at {levels[-1] / levels[0]:.3g} lambda_max)")
+        )
+    raise NumericalError(
+        f"X, y (problem {b}): the Lasso path violates the optimality (KKT) conditions by "
+        f"{kkt:.3g} lambda with the homotopy and by {', '.join(tried)} with scikit-learn's "
+        f"lars_path; expected at most KKT_TOL = {KKT_TOL:g} down to lambda_min"
+    )
 
 
-def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
-              max_size: int | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _homotopy(
+    Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray, max_size: int | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """LARS-Lasso homotopy of Efron et al. (2004) in Gram form, batched over a leading axis.
 
     ``Gram`` ``(B, m, m)``, ``Xy`` ``(B, m)``; the path is followed in the correlation level
@@ -902,14 +1016,18 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
     cov = Xy.copy()
     sign = np.zeros((B, m + 1))  # column m: the (zero) sign of an unused slot
     active = np.zeros((B, m), bool)
-    order = np.full((B, K), m)  # active components in their slots (the first n_act[b]); m when unused
+    order = np.full(
+        (B, K), m
+    )  # active components in their slots (the first n_act[b]); m when unused
     slot = np.zeros((B, m), int)  # slot of each active component
     n_act = np.zeros(B, int)
     inv = np.zeros((B, K, K))  # inverse of Gram_AA in slot order, zero outside the used slots
     GA = np.zeros((B, K, m))  # Gram[:, order, :]: the active rows, zero in unused slots
     j = np.abs(cov).argmax(axis=1)
     c = np.abs(cov[rows, j])
-    near = 1e-12 * c  # a correlation this close to the level ties with it (rounding of cov, ~eps c_0)
+    near = (
+        1e-12 * c
+    )  # a correlation this close to the level ties with it (rounding of cov, ~eps c_0)
     cap = 2 * m + 4  # breakpoints stored per problem (grown if needed)
     levels, coefs = np.zeros((B, cap)), np.zeros((B, cap, m))
     levels[:, 0] = c
@@ -925,9 +1043,27 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
         if running.sum() <= rows.size // 2 and rows.size >= 16:  # drop finished problems
             keep = running
             Gram, c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j, near = (
-                x[keep] for x in (Gram, c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j, near))
+                x[keep]
+                for x in (
+                    Gram,
+                    c_min,
+                    beta,
+                    cov,
+                    sign,
+                    active,
+                    inv,
+                    GA,
+                    order,
+                    slot,
+                    n_act,
+                    c,
+                    j,
+                    near,
+                )
+            )
             joining, dropping, barred, barred_sign, running, ids = (
-                x[keep] for x in (joining, dropping, barred, barred_sign, running, ids))
+                x[keep] for x in (joining, dropping, barred, barred_sign, running, ids)
+            )
             rows = np.arange(ids.size)
         # slot of the event: a joining component takes the next free slot
         s_ev = np.where(joining, n_act, slot[rows, j])
@@ -943,7 +1079,9 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
         col = inv[rows, :k, s_ev]
         z = np.where(joining[:, None], u[:, :k], col)
         with np.errstate(divide="ignore", invalid="ignore"):
-            f = np.where(joining, 1.0 / schur, np.where(dropping, -1.0 / inv[rows, s_ev, s_ev], 0.0))
+            f = np.where(
+                joining, 1.0 / schur, np.where(dropping, -1.0 / inv[rows, s_ev, s_ev], 0.0)
+            )
         inv[:, :k, :k] += (z * f[:, None])[:, :, None] * z[:, None, :]
         if joining.any():
             b = rows[joining]
@@ -966,7 +1104,9 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
             n_act[b] -= 1
         active[rows, j] |= joining
         active[rows, j] &= ~dropping
-        sign[rows, j] = np.where(joining, np.sign(cov[rows, j]), np.where(dropping, 0.0, sign[rows, j]))
+        sign[rows, j] = np.where(
+            joining, np.sign(cov[rows, j]), np.where(dropping, 0.0, sign[rows, j])
+        )
         dA = np.zeros((rows.size, K))
         dA[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], sign[rows[:, None], order])
         a = np.einsum("bji,bj->bi", GA[:, :k], dA[:, :k])  # a sum in slot order: unused slots add 0
@@ -984,7 +1124,9 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
         # ones, e.g. a duplicate: joining would make Gram_AA singular, and staying out keeps the KKT
         # conditions to 1e-9 lambda).
         tol = np.where(c > 1e3 * near, near, 0.0)[:, None]
-        tie = (((c[:, None] - cov <= tol) & (a < 1 - 1e-9)) | ((c[:, None] + cov <= tol) & (a > -1 + 1e-9)))
+        tie = ((c[:, None] - cov <= tol) & (a < 1 - 1e-9)) | (
+            (c[:, None] + cov <= tol) & (a > -1 + 1e-9)
+        )
         join[tie] = 0.0
         join[active] = np.inf
         hit = barred >= 0
@@ -1021,11 +1163,15 @@ def _homotopy(Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray,
         coefs[at, point] = beta[running]
         n_points[at] += 1
         if step > 50 * m + 100:  # far more steps than a path has (a cycle of zero-length steps on a
-            levels[at, point] = np.nan  # degenerate design): NaN makes the KKT check reject the path
+            levels[at, point] = (
+                np.nan
+            )  # degenerate design): NaN makes the KKT check reject the path
             running[:] = False
         if max_size is not None:  # the interval just followed had more than max_size components
             running &= active.sum(axis=1) <= max_size
-        running &= ~ended & np.isfinite(c) & np.isfinite(beta).all(axis=1)  # the KKT check rejects it
+        running &= (
+            ~ended & np.isfinite(c) & np.isfinite(beta).all(axis=1)
+        )  # the KKT check rejects it
         joining &= running
         dropping &= running
     return levels, coefs, n_points
@@ -1123,8 +1269,9 @@ class FlatRanges:
 def _check_rule(lambda_ratio: Any, max_size: Any) -> None:
     if not 0 < lambda_ratio < 1:
         raise ModelError(f"lambda_ratio: expected a number in (0, 1), got {lambda_ratio!r}")
-    if max_size is not None and (isinstance(max_size, bool) or not isinstance(max_size, (int, np.integer))
-                                 or max_size < 1):
+    if max_size is not None and (
+        isinstance(max_size, bool) or not isinstance(max_size, (int, np.integer)) or max_size < 1
+    ):
         raise ModelError(f"max_size: expected a positive integer, got {max_size!r}")
 
 
@@ -1155,12 +1302,20 @@ def _coef_at(paths: PathBatch, lam: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):  # only in the branches not taken
         t = (a[rows, i] - lam) / (a[rows, i] - a[rows, j])
         inner = (1 - t)[:, None] * c[rows, i] + t[:, None] * c[rows, j]
-    return np.where((lam >= a[:, 0])[:, None], 0.0,
-                    np.where((lam <= a[rows, last])[:, None], c[rows, last], inner))
+    return np.where(
+        (lam >= a[:, 0])[:, None],
+        0.0,
+        np.where((lam <= a[rows, last])[:, None], c[rows, last], inner),
+    )
 
 
-def flat_ranges(paths: PathBatch, *, scale: Scale = "log", lambda_ratio: float = 1e-4,
-                max_size: int | None = None) -> FlatRanges:
+def flat_ranges(
+    paths: PathBatch,
+    *,
+    scale: Scale = "log",
+    lambda_ratio: float = 1e-4,
+    max_size: int | None = None,
+) -> FlatRanges:
     """:func:`flat_range` of every path of a batch at once (the same results, as arrays).
 
     Parameters
@@ -1182,8 +1337,9 @@ def flat_ranges(paths: PathBatch, *, scale: Scale = "log", lambda_ratio: float =
     return _flat_ranges(paths, scale, lambda_ratio, max_size, single=False)
 
 
-def _flat_ranges(paths: PathBatch, scale: Any, lambda_ratio: Any, max_size: Any, *,
-                 single: bool) -> FlatRanges:
+def _flat_ranges(
+    paths: PathBatch, scale: Any, lambda_ratio: Any, max_size: Any, *, single: bool
+) -> FlatRanges:
     if scale not in ("log", "linear"):
         raise ModelError(f"scale: expected 'log' or 'linear', got {scale!r}")
     _check_rule(lambda_ratio, max_size)
@@ -1198,7 +1354,9 @@ def _flat_ranges(paths: PathBatch, scale: Any, lambda_ratio: Any, max_size: Any,
     first_over = np.where(over.any(axis=1), over.argmax(axis=1), S - 1)
     rows = np.arange(B)
     # the window stops where the support first exceeds max_size
-    floor = np.where(first_over < S - 1, np.maximum(floor, a[rows, np.minimum(first_over, S - 1)]), floor)
+    floor = np.where(
+        first_over < S - 1, np.maximum(floor, a[rows, np.minimum(first_over, S - 1)]), floor
+    )
     sizes = np.where(np.arange(S - 1) < first_over[:, None], sizes, -1)
     # maximal ranges of constant support size: interval i (first) to stop - 1, i.e. (a[stop], a[i])
     rb, first, stop = _runs(sizes)
@@ -1206,24 +1364,39 @@ def _flat_ranges(paths: PathBatch, scale: Any, lambda_ratio: Any, max_size: Any,
     high, low = a[rb, first], np.maximum(a[rb, stop], floor[rb])
     cand = (size >= 1) & (size <= top) & (high > low)
     widths = np.full((B, max(S - 1, 1)), -np.inf)  # at the first interval of each candidate range
-    widths[rb[cand], first[cand]] = (np.log(high[cand] / low[cand]) if scale == "log"
-                                     else high[cand] - low[cand])
+    widths[rb[cand], first[cand]] = (
+        np.log(high[cand] / low[cand]) if scale == "log" else high[cand] - low[cand]
+    )
     best = widths.argmax(axis=1)  # the first (largest lambda) on ties
     bad = np.flatnonzero(widths[rows, best] == -np.inf)
     if bad.size:
-        raise ModelError(f"{_name(int(bad[0]), single)}: no range of lambda in the window with "
-                         "between 1 and max_size non-zero components")
+        raise ModelError(
+            f"{_name(int(bad[0]), single)}: no range of lambda in the window with "
+            "between 1 and max_size non-zero components"
+        )
     # run of each best interval (its index among the runs of its row)
     k = np.flatnonzero(cand)[np.searchsorted(rb[cand] * S + first[cand], rows * S + best)]
     lo, h = low[k], high[k]
     mid = np.sqrt(lo * h) if scale == "log" else 0.5 * (lo + h)
     c = _coef_at(paths, mid)
-    return FlatRanges(low=lo, high=h, middle=mid, size=size[k], support=np.abs(c) > tol[:, None],
-                      width=widths[rows, best], scale=scale)
+    return FlatRanges(
+        low=lo,
+        high=h,
+        middle=mid,
+        size=size[k],
+        support=np.abs(c) > tol[:, None],
+        width=widths[rows, best],
+        scale=scale,
+    )
 
 
-def flat_range(path: LassoPath, *, scale: Scale = "log", lambda_ratio: float = 1e-4,
-               max_size: int | None = None) -> FlatRange:
+def flat_range(
+    path: LassoPath,
+    *,
+    scale: Scale = "log",
+    lambda_ratio: float = 1e-4,
+    max_size: int | None = None,
+) -> FlatRange:
     """The paper's rule for ``lambda``: the middle of the widest range of constant support size.
 
     Ranges are maximal runs of path intervals with the same support size, clipped to the window;
@@ -1246,9 +1419,15 @@ def flat_range(path: LassoPath, *, scale: Scale = "log", lambda_ratio: float = 1
     FlatRange
     """
     fr = _flat_ranges(PathBatch.of([path]), scale, lambda_ratio, max_size, single=True)
-    return FlatRange(low=float(fr.low[0]), high=float(fr.high[0]), middle=float(fr.middle[0]),
-                     size=int(fr.size[0]), support=np.flatnonzero(fr.support[0]), width=float(fr.width[0]),
-                     scale=scale)
+    return FlatRange(
+        low=float(fr.low[0]),
+        high=float(fr.high[0]),
+        middle=float(fr.middle[0]),
+        size=int(fr.size[0]),
+        support=np.flatnonzero(fr.support[0]),
+        width=float(fr.width[0]),
+        scale=scale,
+    )
 
 
 @dataclass(frozen=True)
@@ -1308,8 +1487,9 @@ class GridFlatRanges:
     support: np.ndarray
 
 
-def grid_flat_range(path: LassoPath, n_grid: int, *, lambda_ratio: float = 1e-4,
-                    max_size: int | None = None) -> GridFlatRange:
+def grid_flat_range(
+    path: LassoPath, n_grid: int, *, lambda_ratio: float = 1e-4, max_size: int | None = None
+) -> GridFlatRange:
     """The flat-range rule of Zhang (2021, Sec. IV, after (39)) on a finite ``lambda`` grid.
 
     The grid is ``n_grid`` geometrically spaced values from ``lambda_max = path.lambdas[0]`` down to
@@ -1341,12 +1521,20 @@ def grid_flat_range(path: LassoPath, n_grid: int, *, lambda_ratio: float = 1e-4,
     GridFlatRange
     """
     g = _grid_flat_ranges(PathBatch.of([path]), n_grid, lambda_ratio, max_size, single=True)
-    return GridFlatRange(grid=g.grid[0], sizes=g.sizes[0], start=int(g.start[0]), stop=int(g.stop[0]),
-                         middle=float(g.middle[0]), size=int(g.size[0]), support=np.flatnonzero(g.support[0]))
+    return GridFlatRange(
+        grid=g.grid[0],
+        sizes=g.sizes[0],
+        start=int(g.start[0]),
+        stop=int(g.stop[0]),
+        middle=float(g.middle[0]),
+        size=int(g.size[0]),
+        support=np.flatnonzero(g.support[0]),
+    )
 
 
-def grid_flat_ranges(paths: PathBatch, n_grid: int, *, lambda_ratio: float = 1e-4,
-                     max_size: int | None = None) -> GridFlatRanges:
+def grid_flat_ranges(
+    paths: PathBatch, n_grid: int, *, lambda_ratio: float = 1e-4, max_size: int | None = None
+) -> GridFlatRanges:
     """:func:`grid_flat_range` of every path of a batch at once (the same results, as arrays).
 
     Parameters
@@ -1368,8 +1556,9 @@ def grid_flat_ranges(paths: PathBatch, n_grid: int, *, lambda_ratio: float = 1e-
     return _grid_flat_ranges(paths, n_grid, lambda_ratio, max_size, single=False)
 
 
-def _grid_flat_ranges(paths: PathBatch, n_grid: Any, lambda_ratio: Any, max_size: Any, *,
-                      single: bool) -> GridFlatRanges:
+def _grid_flat_ranges(
+    paths: PathBatch, n_grid: Any, lambda_ratio: Any, max_size: Any, *, single: bool
+) -> GridFlatRanges:
     if isinstance(n_grid, bool) or not isinstance(n_grid, (int, np.integer)) or n_grid < 3:
         raise ModelError(f"n_grid: expected an integer >= 3, got {n_grid!r}")
     _check_rule(lambda_ratio, max_size)
@@ -1378,8 +1567,9 @@ def _grid_flat_ranges(paths: PathBatch, n_grid: Any, lambda_ratio: Any, max_size
     rows = np.arange(B)
     bad = np.flatnonzero((paths.n_points < 2) | ~(a[:, 0] > 0))
     if bad.size:
-        raise ModelError(f"{_name(int(bad[0]), single)}: expected at least two breakpoints "
-                         "and lambda_max > 0")
+        raise ModelError(
+            f"{_name(int(bad[0]), single)}: expected at least two breakpoints and lambda_max > 0"
+        )
     top = paths.coefs.shape[2] // 2 if max_size is None else int(max_size)
     grid = a[:, :1] * _unit_grid(int(n_grid), float(lambda_ratio))  # geometric, from lambda_max
     grid[:, 0] = a[:, 0]
@@ -1395,13 +1585,17 @@ def _grid_flat_ranges(paths: PathBatch, n_grid: Any, lambda_ratio: Any, max_size
     over = isz > top
     has_over = over.any(axis=1)
     last = a[rows, K]
-    covers = last <= grid[:, -1] * (1 + 1e-9)  # the path covers the grid (up to rounding of its lower end)
+    covers = last <= grid[:, -1] * (
+        1 + 1e-9
+    )  # the path covers the grid (up to rounding of its lower end)
     bad = np.flatnonzero(~has_over & ~covers)
     if bad.size:
         b = int(bad[0])
-        raise ModelError(f"{_name(b, single)}: stops at lambda = {last[b]:g} > lambda_ratio * "
-                         f"lambda_max = {grid[b, -1]:g} with no support above max_size; compute it "
-                         "further (lasso_path lambda_min)")
+        raise ModelError(
+            f"{_name(b, single)}: stops at lambda = {last[b]:g} > lambda_ratio * "
+            f"lambda_max = {grid[b, -1]:g} with no support above max_size; compute it "
+            "further (lasso_path lambda_min)"
+        )
     # the window ends where the support first exceeds max_size
     end = np.where(has_over, a[rows, over.argmax(axis=1)], grid[:, -1])
     sizes = np.where(grid >= end[:, None], sizes, -1)
@@ -1412,13 +1606,22 @@ def _grid_flat_ranges(paths: PathBatch, n_grid: Any, lambda_ratio: Any, max_size
     start = lengths.argmax(axis=1)  # the first (largest lambda) on ties
     bad = np.flatnonzero(lengths[rows, start] == 0)
     if bad.size:
-        raise ModelError(f"{_name(int(bad[0]), single)}: no grid point of the {n_grid}-point grid "
-                         "has between 1 and max_size non-zero components")
+        raise ModelError(
+            f"{_name(int(bad[0]), single)}: no grid point of the {n_grid}-point grid "
+            "has between 1 and max_size non-zero components"
+        )
     stop = start + lengths[rows, start]
     k = (start + stop - 1) // 2
     support = act[rows, idx[rows, k]]  # support of the interval of grid[k]
-    return GridFlatRanges(grid=grid, sizes=sizes, start=start, stop=stop, middle=grid[rows, k],
-                          size=sizes[rows, start], support=support)
+    return GridFlatRanges(
+        grid=grid,
+        sizes=sizes,
+        start=start,
+        stop=stop,
+        middle=grid[rows, k],
+        size=sizes[rows, start],
+        support=support,
+    )
 
 
 @functools.lru_cache(maxsize=16)
@@ -1451,10 +1654,14 @@ def least_squares_on_support(X: Any, y: Any, support: Any) -> np.ndarray:
     X, y = _check_xy(X, y)
     m = X.shape[1]
     try:
-        idx = np.asarray([integer(i, "support", low=0, high=m - 1) for i in np.ravel(np.asarray(support))],
-                         dtype=int)
+        idx = np.asarray(
+            [integer(i, "support", low=0, high=m - 1) for i in np.ravel(np.asarray(support))],
+            dtype=int,
+        )
     except TypeError:
-        raise ModelError(f"support: expected a sequence of column indices, got {support!r}") from None
+        raise ModelError(
+            f"support: expected a sequence of column indices, got {support!r}"
+        ) from None
     if np.unique(idx).size != idx.size:
         raise ModelError(f"support: expected distinct column indices, got {idx.tolist()}")
     theta = np.zeros(X.shape[1])
@@ -1486,9 +1693,16 @@ class Diagnosis:
     theta_ls: np.ndarray
 
 
-def diagnose(X: Any, y: Any, *, n_samples: int | None = None, scale: Scale = "log",
-             lambda_ratio: float = 1e-4, max_size: int | None = None,
-             path: LassoPath | None = None) -> Diagnosis:
+def diagnose(
+    X: Any,
+    y: Any,
+    *,
+    n_samples: int | None = None,
+    scale: Scale = "log",
+    lambda_ratio: float = 1e-4,
+    max_size: int | None = None,
+    path: LassoPath | None = None,
+) -> Diagnosis:
     """Lasso path, the flat-range rule, then least squares on the selected support (Zhang 2021, Sec. IV-V).
 
     Parameters
@@ -1503,5 +1717,10 @@ def diagnose(X: Any, y: Any, *, n_samples: int | None = None, scale: Scale = "lo
     X, y = _check_xy(X, y)
     path = lasso_path(X, y, n_samples=n_samples) if path is None else path
     flat = flat_range(path, scale=scale, lambda_ratio=lambda_ratio, max_size=max_size)
-    return Diagnosis(path=path, flat=flat, support=flat.support, theta_lasso=path.coef(flat.middle),
-                     theta_ls=least_squares_on_support(X, y, flat.support))
+    return Diagnosis(
+        path=path,
+        flat=flat,
+        support=flat.support,
+        theta_lasso=path.coef(flat.middle),
+        theta_ls=least_squares_on_support(X, y, flat.support),
+    )

@@ -64,9 +64,26 @@ import scipy.linalg
 
 from fdi_lib.errors import CovarianceError, ModelError, NonFiniteError, ShapeError
 
-__all__ = ["COV_RTOL", "check_finite", "measurements", "missing_samples", "missing_pattern",
-           "common_pattern", "gains_missing", "check_missing_known", "check_skipped", "integer", "real",
-           "probability", "seed", "covariance", "array", "check_gains", "initial_state", "cholesky"]
+__all__ = [
+    "COV_RTOL",
+    "check_finite",
+    "measurements",
+    "missing_samples",
+    "missing_pattern",
+    "common_pattern",
+    "gains_missing",
+    "check_missing_known",
+    "check_skipped",
+    "integer",
+    "real",
+    "probability",
+    "seed",
+    "covariance",
+    "array",
+    "check_gains",
+    "initial_state",
+    "cholesky",
+]
 
 #: Relative tolerance of the symmetry and positive semi-definiteness checks.
 COV_RTOL = 1e-9
@@ -140,8 +157,9 @@ def missing_samples(arr: np.ndarray, name: str) -> np.ndarray:
     inf = np.isinf(arr)
     if inf.any():
         idx = tuple(int(i) for i in np.argwhere(inf)[0])
-        raise NonFiniteError(f"{name}: expected finite values or NaN (missing), got {arr[idx]} "
-                             f"at index {idx}")
+        raise NonFiniteError(
+            f"{name}: expected finite values or NaN (missing), got {arr[idx]} at index {idx}"
+        )
     return np.isnan(arr).any(axis=-1)
 
 
@@ -168,7 +186,9 @@ def missing_pattern(value: Any, n_steps: int, name: str = "missing") -> np.ndarr
         if arr.dtype != bool:
             raise ModelError(f"{name}: expected booleans (True: missing), got dtype {arr.dtype}")
         if arr.shape != (n_steps,):
-            raise ShapeError(f"{name}: expected shape ({n_steps},), one pattern for the record, got {arr.shape}")
+            raise ShapeError(
+                f"{name}: expected shape ({n_steps},), one pattern for the record, got {arr.shape}"
+            )
         out = arr.copy()
     out.flags.writeable = False
     return out
@@ -202,7 +222,8 @@ def common_pattern(missing: np.ndarray, name: str) -> np.ndarray:
         raise NonFiniteError(
             f"{name}: expected the same missing samples in every realisation (the gains depend on them), "
             f"got realisation {np.unravel_index(b, missing.shape[:-1])} differing from the first at "
-            f"sample {k}: filter each pattern with its own gains (missing=...)")
+            f"sample {k}: filter each pattern with its own gains (missing=...)"
+        )
     return flat[0]
 
 
@@ -249,7 +270,8 @@ def check_missing_known(missing: np.ndarray, gains: Any, name: str) -> None:
         raise NonFiniteError(
             f"{name}: a sample missing (NaN) at index {idx} is observed in the gains: compute the gains "
             f"for the missing samples (kalman_gains(model, missing=...) or kitanidis_gains(model, E, "
-            f"missing=...), with missing = numpy.isnan(y).any(axis=-1))")
+            f"missing=...), with missing = numpy.isnan(y).any(axis=-1))"
+        )
 
 
 def check_skipped(missing: np.ndarray, gains: Any, name: str) -> None:
@@ -278,11 +300,15 @@ def check_skipped(missing: np.ndarray, gains: Any, name: str) -> None:
         bad = skipped & ~missing
         if bad.any():
             idx = tuple(int(i) for i in np.argwhere(bad)[0])
-            raise ModelError(f"{name}: expected NaN at index {idx}, a sample the gains skip (missing), got a "
-                             f"finite value: innovations and gains of different filters")
+            raise ModelError(
+                f"{name}: expected NaN at index {idx}, a sample the gains skip (missing), got a "
+                f"finite value: innovations and gains of different filters"
+            )
 
 
-def measurements(value: Any, *, n_steps: int, width: int, name: str) -> tuple[np.ndarray, np.ndarray]:
+def measurements(
+    value: Any, *, n_steps: int, width: int, name: str
+) -> tuple[np.ndarray, np.ndarray]:
     """A measurement record ``(*batch, n_steps, width)`` where NaN marks a missing sample.
 
     A 1-D array of length ``n_steps`` is accepted when ``width == 1``. Returns the array and
@@ -319,14 +345,16 @@ def integer(value: Any, name: str, *, low: int | None = None, high: int | None =
     ...
     fdi_lib.errors.ModelError: window: expected an integer, got True (bool)
     """
-    if isinstance(value, np.ndarray) and value.ndim == 0:   # a 0-d array counts as its scalar
+    if isinstance(value, np.ndarray) and value.ndim == 0:  # a 0-d array counts as its scalar
         value = value[()]
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
         raise ModelError(f"{name}: expected an integer, got {value!r} ({type(value).__name__})")
     value = int(value)
     if (low is not None and value < low) or (high is not None and value > high):
         if high is None:
-            kind = {0: "a non-negative integer", 1: "a positive integer"}.get(low, f"an integer >= {low}")
+            kind = {0: "a non-negative integer", 1: "a positive integer"}.get(
+                low, f"an integer >= {low}"
+            )
             raise ModelError(f"{name}: expected {kind}, got {value!r}")
         if low is None:
             raise ModelError(f"{name}: expected an integer <= {high}, got {value!r}")
@@ -334,8 +362,16 @@ def integer(value: Any, name: str, *, low: int | None = None, high: int | None =
     return int(value)
 
 
-def real(value: Any, name: str, *, low: float | None = None, high: float | None = None,
-         low_open: bool = False, high_open: bool = False, what: str = "a number") -> float:
+def real(
+    value: Any,
+    name: str,
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    low_open: bool = False,
+    high_open: bool = False,
+    what: str = "a number",
+) -> float:
     """A finite real number in the given (closed or open) interval; ``what`` names it in errors.
 
     Explained in the book: :doc:`/book/notation`.
@@ -349,20 +385,23 @@ def real(value: Any, name: str, *, low: float | None = None, high: float | None 
         ...
     fdi_lib.errors.ModelError: threshold: expected a number in [0, inf], got -1
     """
-    if isinstance(value, np.ndarray) and value.ndim == 0:   # a 0-d array counts as its scalar
+    if isinstance(value, np.ndarray) and value.ndim == 0:  # a 0-d array counts as its scalar
         value = value[()]
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
         raise ModelError(f"{name}: expected {what}, got {value!r} ({type(value).__name__})")
     x = float(value)
     if not np.isfinite(x):
         raise NonFiniteError(f"{name}: expected a finite number, got {x}")
-    bad = ((low is not None and (x <= low if low_open else x < low))
-           or (high is not None and (x >= high if high_open else x > high)))
+    bad = (low is not None and (x <= low if low_open else x < low)) or (
+        high is not None and (x >= high if high_open else x > high)
+    )
     if bad:
         lo = "-inf" if low is None else f"{low:g}"
         hi = "inf" if high is None else f"{high:g}"
-        raise ModelError(f"{name}: expected {what} in {'(' if low_open else '['}{lo}, {hi}"
-                         f"{')' if high_open else ']'}, got {value!r}")
+        raise ModelError(
+            f"{name}: expected {what} in {'(' if low_open else '['}{lo}, {hi}"
+            f"{')' if high_open else ']'}, got {value!r}"
+        )
     return x
 
 
@@ -425,7 +464,9 @@ def covariance(arr: np.ndarray, name: str, *, definite: bool) -> None:
     bad = np.nonzero(asym > COV_RTOL * scale)[0]
     if bad.size:
         k = int(bad[0])
-        raise CovarianceError(f"{name}: expected a symmetric matrix, got asymmetry {asym[k]:.3g} at step {k}")
+        raise CovarianceError(
+            f"{name}: expected a symmetric matrix, got asymmetry {asym[k]:.3g} at step {k}"
+        )
     eig = np.linalg.eigvalsh(steps)
     emin = eig[:, 0]
     limit = COV_RTOL * np.maximum(1.0, eig[:, -1]) if not definite else 0.0
@@ -433,9 +474,9 @@ def covariance(arr: np.ndarray, name: str, *, definite: bool) -> None:
     if bad.size:
         k = int(bad[0])
         kind = "positive definite" if definite else "positive semi-definite"
-        raise CovarianceError(f"{name}: expected a {kind} matrix, got smallest eigenvalue "
-                              f"{emin[k]:.6g} at step {k}")
-
+        raise CovarianceError(
+            f"{name}: expected a {kind} matrix, got smallest eigenvalue {emin[k]:.6g} at step {k}"
+        )
 
 
 def check_gains(model: Any, gains: Any, name: str = "gains") -> None:
@@ -458,9 +499,12 @@ def check_gains(model: Any, gains: Any, name: str = "gains") -> None:
     """
     shape = (model.n_steps, model.n, model.p)
     if np.shape(getattr(gains, "K", None)) != shape or np.shape(
-            getattr(gains, "Sigma_chol", None)) != (model.n_steps, model.p, model.p):
-        raise ShapeError(f"{name}: expected gains with K of shape {shape} for this model, got "
-                         f"{type(gains).__name__} with K {np.shape(getattr(gains, 'K', None))}")
+        getattr(gains, "Sigma_chol", None)
+    ) != (model.n_steps, model.p, model.p):
+        raise ShapeError(
+            f"{name}: expected gains with K of shape {shape} for this model, got "
+            f"{type(gains).__name__} with K {np.shape(getattr(gains, 'K', None))}"
+        )
 
 
 def initial_state(model: Any, x0: Any, name: str = "x0") -> np.ndarray:
@@ -488,7 +532,9 @@ def initial_state(model: Any, x0: Any, name: str = "x0") -> np.ndarray:
     return x
 
 
-def cholesky(S: np.ndarray, *, step: int, what: str, name: str = "model") -> tuple[np.ndarray, bool]:
+def cholesky(
+    S: np.ndarray, *, step: int, what: str, name: str = "model"
+) -> tuple[np.ndarray, bool]:
     """``scipy.linalg.cho_factor(S, lower=True)`` inside a recursion, with typed errors naming the step.
 
     A non-finite ``S`` means the recursion ``what`` diverged (:class:`NonFiniteError`); a matrix
@@ -511,6 +557,8 @@ def cholesky(S: np.ndarray, *, step: int, what: str, name: str = "model") -> tup
     try:
         return scipy.linalg.cho_factor(S, lower=True)
     except np.linalg.LinAlgError as exc:
-        raise CovarianceError(f"{name}: {what} lost positive definiteness at step {step} (expected a "
-                              f"positive definite matrix, smallest eigenvalue "
-                              f"{np.linalg.eigvalsh(S)[0]:.3g})") from exc
+        raise CovarianceError(
+            f"{name}: {what} lost positive definiteness at step {step} (expected a "
+            f"positive definite matrix, smallest eigenvalue "
+            f"{np.linalg.eigvalsh(S)[0]:.3g})"
+        ) from exc

@@ -70,14 +70,48 @@ def _instance(value: Any, kind: type, name: str) -> Any:
     return value
 
 
-__all__ = ["SENSORS", "CANDIDATES", "SUBSYSTEMS", "METHODS", "PlantConstants", "plant_constants",
-           "Records", "records", "Calibration", "calibrate", "Design", "design", "MethodOutcome", "min_detectable", "run_zb", "run_zhang2021", "run_bz", "run_svo_bank", "run_methods",
-           "expected_candidates", "alarm_onsets", "score_alarms", "delays", "stream_alarms",
-           "stream_counts"]
+__all__ = [
+    "SENSORS",
+    "CANDIDATES",
+    "SUBSYSTEMS",
+    "METHODS",
+    "PlantConstants",
+    "plant_constants",
+    "Records",
+    "records",
+    "Calibration",
+    "calibrate",
+    "Design",
+    "design",
+    "MethodOutcome",
+    "min_detectable",
+    "run_zb",
+    "run_zhang2021",
+    "run_bz",
+    "run_svo_bank",
+    "run_methods",
+    "expected_candidates",
+    "alarm_onsets",
+    "score_alarms",
+    "delays",
+    "stream_alarms",
+    "stream_counts",
+]
 
 #: Measured outputs, in the order of :attr:`Records.y` (pitch in deg, speeds in rad/s, torque in kNm).
-SENSORS = ("beta1_m1", "beta1_m2", "beta2_m1", "beta2_m2", "beta3_m1", "beta3_m2",
-           "omega_r_m1", "omega_r_m2", "omega_g_m1", "omega_g_m2", "tau_g_m")
+SENSORS = (
+    "beta1_m1",
+    "beta1_m2",
+    "beta2_m1",
+    "beta2_m2",
+    "beta3_m1",
+    "beta3_m2",
+    "omega_r_m1",
+    "omega_r_m2",
+    "omega_g_m1",
+    "omega_g_m2",
+    "tau_g_m",
+)
 #: Known inputs, in the order of :attr:`Records.u`: ``beta_r`` minus the mean measured pitch of each
 #: blade (deg), the torque reference (kNm).
 INPUTS = ("w1", "w2", "w3", "tau_g_ref")
@@ -85,13 +119,22 @@ INPUTS = ("w1", "w2", "w3", "tau_g_ref")
 CANDIDATES = SENSORS + ("actuator1", "actuator2", "actuator3", "converter", "drive_train")
 #: Human labels of the candidates (tables, figures).
 CANDIDATE_LABELS = {
-    "beta1_m1": "pitch sensor 1 (blade 1)", "beta1_m2": "pitch sensor 2 (blade 1)",
-    "beta2_m1": "pitch sensor 1 (blade 2)", "beta2_m2": "pitch sensor 2 (blade 2)",
-    "beta3_m1": "pitch sensor 1 (blade 3)", "beta3_m2": "pitch sensor 2 (blade 3)",
-    "omega_r_m1": "rotor speed sensor 1", "omega_r_m2": "rotor speed sensor 2",
-    "omega_g_m1": "generator speed sensor 1", "omega_g_m2": "generator speed sensor 2",
-    "tau_g_m": "generator torque sensor", "actuator1": "pitch actuator 1", "actuator2": "pitch actuator 2",
-    "actuator3": "pitch actuator 3", "converter": "converter torque", "drive_train": "drive train",
+    "beta1_m1": "pitch sensor 1 (blade 1)",
+    "beta1_m2": "pitch sensor 2 (blade 1)",
+    "beta2_m1": "pitch sensor 1 (blade 2)",
+    "beta2_m2": "pitch sensor 2 (blade 2)",
+    "beta3_m1": "pitch sensor 1 (blade 3)",
+    "beta3_m2": "pitch sensor 2 (blade 3)",
+    "omega_r_m1": "rotor speed sensor 1",
+    "omega_r_m2": "rotor speed sensor 2",
+    "omega_g_m1": "generator speed sensor 1",
+    "omega_g_m2": "generator speed sensor 2",
+    "tau_g_m": "generator torque sensor",
+    "actuator1": "pitch actuator 1",
+    "actuator2": "pitch actuator 2",
+    "actuator3": "pitch actuator 3",
+    "converter": "converter torque",
+    "drive_train": "drive train",
 }
 #: Subsystems: name -> (state count, output indices, input indices, candidate indices).
 SUBSYSTEMS = {
@@ -101,10 +144,12 @@ SUBSYSTEMS = {
     "drive_train": ((6, 7, 8, 9, 10), (3,), (6, 7, 8, 9, 10, 14, 15)),
 }
 #: The methods of the scoreboard (keys of the JSON) and their labels.
-METHODS = {"zb2014": "Zhang & Basseville: Kalman + windowed GLR + minmax",
-           "zhang2021": "Zhang 2021: Kitanidis + Lasso",
-           "bz": "Basseville & Zhang: parametric GLR + energy",
-           "rosa2013": "Rosa & Silvestre: SVO bank"}
+METHODS = {
+    "zb2014": "Zhang & Basseville: Kalman + windowed GLR + minmax",
+    "zhang2021": "Zhang 2021: Kitanidis + Lasso",
+    "bz": "Basseville & Zhang: parametric GLR + energy",
+    "rosa2013": "Rosa & Silvestre: SVO bank",
+}
 
 
 # ----------------------------------------------------------------------------- the plant's constants
@@ -137,10 +182,16 @@ def plant_constants(params: Any = None) -> PlantConstants:
 
     p = wt.PARAMS if params is None else params
     sigma = np.array(p.noise_std[:11], dtype=float)
-    sigma[10] /= 1e3                                          # torque in kNm
-    return PlantConstants(params=p, Ts=float(p.ts), sigma=sigma,
-                          actuator_faults=((p.omega_n_pressure_drop, p.zeta_pressure_drop),
-                                           (p.omega_n_air, p.zeta_air)))
+    sigma[10] /= 1e3  # torque in kNm
+    return PlantConstants(
+        params=p,
+        Ts=float(p.ts),
+        sigma=sigma,
+        actuator_faults=(
+            (p.omega_n_pressure_drop, p.zeta_pressure_drop),
+            (p.omega_n_air, p.zeta_air),
+        ),
+    )
 
 
 # ----------------------------------------------------------------------------- records
@@ -174,8 +225,14 @@ class Records:
 
     def window(self, i0: int, i1: int) -> "Records":
         """Samples ``i0 .. i1 - 1``."""
-        return Records(self.t[i0:i1], self.y[:, i0:i1], self.u[:, i0:i1], self.x[:, i0:i1],
-                       self.tau_a[:, i0:i1], self.v[:, i0:i1])
+        return Records(
+            self.t[i0:i1],
+            self.y[:, i0:i1],
+            self.u[:, i0:i1],
+            self.x[:, i0:i1],
+            self.tau_a[:, i0:i1],
+            self.v[:, i0:i1],
+        )
 
 
 def records(run: Any) -> Records:
@@ -202,8 +259,14 @@ def records(run: Any) -> Records:
     x = batch(run.state, 1).copy()
     x[..., 8] *= 1e3
     x[..., 9] /= 1e3
-    return Records(t=np.asarray(run.t, dtype=float), y=y, u=u, x=x, tau_a=batch(run.tau_aero, 0) / 1e6,
-                   v=batch(run.v, 0))
+    return Records(
+        t=np.asarray(run.t, dtype=float),
+        y=y,
+        u=u,
+        x=x,
+        tau_a=batch(run.tau_aero, 0) / 1e6,
+        v=batch(run.v, 0),
+    )
 
 
 # ----------------------------------------------------------------------------- linear subsystems
@@ -237,22 +300,37 @@ class Subsystem:
     candidates: tuple[int, ...]
 
 
-def _blade(c: PlantConstants, i: int, wn: float | None = None, zeta: float | None = None) -> Subsystem:
+def _blade(
+    c: PlantConstants, i: int, wn: float | None = None, zeta: float | None = None
+) -> Subsystem:
     """Blade ``i`` with input ``w = beta_r - mean measured pitch``: the simulator's exact ZOH
     ``x+ = Phi x + Gamma (beta_r - nbar)`` with ``nbar = ybar - beta`` (healthy sensors) is
     ``(Phi + Gamma e1^T) x + Gamma w``."""
     from fdi_lib.systems.wind_turbine import pitch_discretisation
 
     p = c.params
-    Phi, Gam = pitch_discretisation(p.omega_n if wn is None else wn, p.zeta if zeta is None else zeta, ts=c.Ts)
+    Phi, Gam = pitch_discretisation(
+        p.omega_n if wn is None else wn, p.zeta if zeta is None else zeta, ts=c.Ts
+    )
     F = Phi + Gam @ np.array([[1.0, 0.0]])
     outputs, inputs, cands = SUBSYSTEMS[f"blade{i + 1}"]
     Phi_f = np.zeros((2, 3))
     Phi_f[0, 0] = Phi_f[1, 1] = 1.0
     Psi = np.zeros((2, 3))
-    Psi[:, 2] = Gam[:, 0]                       # offset on the actuator's input
-    return Subsystem(f"blade{i + 1}", F, Gam, np.array([[1.0, 0.0], [1.0, 0.0]]), None, Psi, Phi_f,
-                     (2 * i, 2 * i + 1), outputs, inputs, cands)
+    Psi[:, 2] = Gam[:, 0]  # offset on the actuator's input
+    return Subsystem(
+        f"blade{i + 1}",
+        F,
+        Gam,
+        np.array([[1.0, 0.0], [1.0, 0.0]]),
+        None,
+        Psi,
+        Phi_f,
+        (2 * i, 2 * i + 1),
+        outputs,
+        inputs,
+        cands,
+    )
 
 
 def _drive_train(c: PlantConstants) -> Subsystem:
@@ -268,9 +346,9 @@ def _drive_train(c: PlantConstants) -> Subsystem:
     H = np.array([[1.0, 0, 0, 0], [1.0, 0, 0, 0], [0, 1.0, 0, 0], [0, 1.0, 0, 0], [0, 0, 0, 1.0]])
     Phi_f = np.zeros((5, 7))
     Phi_f[np.arange(5), np.arange(5)] = 1.0
-    Phi_f[4, 5] = 1.0                           # converter offset: seen by the torque sensor too
+    Phi_f[4, 5] = 1.0  # converter offset: seen by the torque sensor too
     Psi = np.zeros((4, 7))
-    Psi[:, 5] = Psi[:, 6] = off                 # torque on the generator (converter; drive-train efficiency)
+    Psi[:, 5] = Psi[:, 6] = off  # torque on the generator (converter; drive-train efficiency)
     outputs, inputs, cands = SUBSYSTEMS["drive_train"]
     return Subsystem("drive_train", F, G, H, E, Psi, Phi_f, (6, 7, 8, 9), outputs, inputs, cands)
 
@@ -340,11 +418,16 @@ def calibrate(c: PlantConstants, rec: Records, *, margin: float = 1.5) -> Calibr
         mid, half = (lo + hi) / 2, (hi - lo) / 2 * margin + 1e-3
         return np.stack([mid - half, mid + half])
 
-    return Calibration(Q=Q, q_tau=float(np.var(dtau)) + 1e-12, bound=bound,
-                       dtau_bound=margin * float(np.abs(dtau).max()), margin=margin,
-                       samples=int(rec.x.shape[0] * (rec.x.shape[1] - 1)),
-                       x_range=widened(rec.x.reshape(-1, rec.x.shape[-1])),
-                       tau_range=widened(rec.tau_a.reshape(-1, 1))[:, 0])
+    return Calibration(
+        Q=Q,
+        q_tau=float(np.var(dtau)) + 1e-12,
+        bound=bound,
+        dtau_bound=margin * float(np.abs(dtau).max()),
+        margin=margin,
+        samples=int(rec.x.shape[0] * (rec.x.shape[1] - 1)),
+        x_range=widened(rec.x.reshape(-1, rec.x.shape[-1])),
+        tau_range=widened(rec.tau_a.reshape(-1, 1))[:, 0],
+    )
 
 
 # ----------------------------------------------------------------------------- design
@@ -394,17 +477,31 @@ class Settings:
     torque_bound: float = 1e3
 
     def __post_init__(self) -> None:
-        for name in ("pre_s", "post_s", "false_alarms_per_hour", "svo_sigmas", "sensor_bias_bound",
-                     "torque_bound"):
+        for name in (
+            "pre_s",
+            "post_s",
+            "false_alarms_per_hour",
+            "svo_sigmas",
+            "sensor_bias_bound",
+            "torque_bound",
+        ):
             real(getattr(self, name), name, low=0.0, low_open=True)
         real(self.warmup_s, "warmup_s", low=0.0)
-        real(self.isolation_alpha, "isolation_alpha", low=0.0, high=1.0, low_open=True,
-             high_open=True)
+        real(
+            self.isolation_alpha,
+            "isolation_alpha",
+            low=0.0,
+            high=1.0,
+            low_open=True,
+            high_open=True,
+        )
         integer(self.window, "window", low=1, high=MAX_WINDOW)
         integer(self.isolation_extra, "isolation_extra", low=0)
         if not self.warmup_s < self.pre_s:
-            raise ModelError(f"warmup_s: expected less than pre_s = {self.pre_s} s (a fault-free "
-                             f"stretch must remain after the warm-up), got {self.warmup_s}")
+            raise ModelError(
+                f"warmup_s: expected less than pre_s = {self.pre_s} s (a fault-free "
+                f"stretch must remain after the warm-up), got {self.warmup_s}"
+            )
 
 
 def _aug(s: Subsystem) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -424,14 +521,14 @@ class SubDesign:
     """Noise-independent quantities of one subsystem for one segment length (shared by all records)."""
 
     sub: Subsystem
-    kf: LTVModel            # Kalman model (tau_a a random-walk state on the drive train)
+    kf: LTVModel  # Kalman model (tau_a a random-walk state on the drive train)
     kf_gains: KalmanGains
-    family: Any             # step family of all its candidates (ZB)
+    family: Any  # step family of all its candidates (ZB)
     glr: WindowedGLR
     glr_threshold: float
-    kit: LTVModel           # Kitanidis model (no tau_a state); Kalman gains on the blades
+    kit: LTVModel  # Kitanidis model (no tau_a state); Kalman gains on the blades
     kit_gains: Any
-    kit_signature: np.ndarray   # (N, p, m_s): residual signature, onset at sample 0
+    kit_signature: np.ndarray  # (N, p, m_s): residual signature, onset at sample 0
     lasso_threshold: float
     energy_threshold: float
     bz_glr: WindowedGLR | None  # drive train: GLR on the reduced Kitanidis residual
@@ -448,18 +545,24 @@ def min_detectable(d: "Design") -> dict[str, dict[str, float]]:
     out: dict[str, dict[str, float]] = {"zb2014": {}, "zhang2021": {}}
     for sd in d.subs.values():
         sig = fault_signature(sd.kf, sd.kf_gains, sd.family.profile(d.onset)).on_innovation
-        Sw = np.linalg.solve(sd.kf_gains.Sigma_chol[d.onset:d.onset + w], sig[d.onset:d.onset + w])
+        Sw = np.linalg.solve(
+            sd.kf_gains.Sigma_chol[d.onset : d.onset + w], sig[d.onset : d.onset + w]
+        )
         info = np.einsum("kpm,kpm->m", Sw, Sw)
         if sd.sub.E is not None:
             W = _whitener(sd.kit_gains.residual_cov[-1])
         else:
             IHK = np.eye(sd.kit.p) - sd.kit.H[-1] @ sd.kit_gains.K[-1]
             W = _whitener(IHK @ sd.kit_gains.Sigma[-1] @ IHK.T)
-        kern = np.einsum("ij,kjm->kim", W, sd.kit_signature[d.warmup:d.warmup + w])
+        kern = np.einsum("ij,kjm->kim", W, sd.kit_signature[d.warmup : d.warmup + w])
         norm = np.sqrt(np.einsum("kpm,kpm->m", kern, kern))
         for i, j in enumerate(sd.sub.candidates):
-            out["zb2014"][CANDIDATES[j]] = float(np.sqrt(sd.glr_threshold / info[i])) if info[i] > 0 else float("inf")
-            out["zhang2021"][CANDIDATES[j]] = float(sd.lasso_threshold / norm[i]) if norm[i] > 0 else float("inf")
+            out["zb2014"][CANDIDATES[j]] = (
+                float(np.sqrt(sd.glr_threshold / info[i])) if info[i] > 0 else float("inf")
+            )
+            out["zhang2021"][CANDIDATES[j]] = (
+                float(sd.lasso_threshold / norm[i]) if norm[i] > 0 else float("inf")
+            )
     return out
 
 
@@ -477,7 +580,9 @@ class Design:
     subs: dict[str, SubDesign] = field(default_factory=dict)
 
 
-def design(c: PlantConstants, cal: Calibration, x0: np.ndarray, settings: Settings = Settings()) -> Design:
+def design(
+    c: PlantConstants, cal: Calibration, x0: np.ndarray, settings: Settings = Settings()
+) -> Design:
     """Build :class:`Design` for segments of ``settings.pre_s + settings.post_s`` seconds.
 
     ``x0`` ``(10,)`` is the prior mean of the true states (the filters' ``model.x0``); the prior
@@ -494,7 +599,15 @@ def design(c: PlantConstants, cal: Calibration, x0: np.ndarray, settings: Settin
     warmup = int(round(st.warmup_s / c.Ts))
     w = integer(st.window, "window", low=2, high=onset - warmup)
     alpha = st.false_alarms_per_hour * c.Ts / 3600.0
-    d = Design(constants=c, calibration=cal, settings=st, N=N, onset=onset, warmup=warmup, alpha_sample=alpha)
+    d = Design(
+        constants=c,
+        calibration=cal,
+        settings=st,
+        N=N,
+        onset=onset,
+        warmup=warmup,
+        alpha_sample=alpha,
+    )
     for s in subsystems(c):
         R = np.diag(c.sigma[list(s.outputs)] ** 2)
         F, G, H, Psi = _aug(s)
@@ -513,25 +626,36 @@ def design(c: PlantConstants, cal: Calibration, x0: np.ndarray, settings: Settin
         m = fam.m
         glr = WindowedGLR(kf, kg, fam, w)
         thr = float(scipy.stats.chi2.ppf(1.0 - alpha / w, m))
-        kit = ltv_model(F=s.F, G=s.G, H=s.H, Q=cal.Q[s.name], R=R, n_steps=N, x0=x0[list(s.states)],
-                        P0=1e2 * np.eye(len(s.states)))
+        kit = ltv_model(
+            F=s.F,
+            G=s.G,
+            H=s.H,
+            Q=cal.Q[s.name],
+            R=R,
+            n_steps=N,
+            x0=x0[list(s.states)],
+            P0=1e2 * np.eye(len(s.states)),
+        )
         if s.E is not None:
             kgains = kitanidis_gains(kit, s.E)
         else:
             kgains = kalman_gains(kit)
-        after = (np.arange(N) >= warmup)[:, None, None]           # onset at the end of the warm-up
-        sig = residual_signature(kit, kgains, fault_profile(kit, Psi=s.Psi * after,
-                                                            Phi=s.Phi * after)).on_residual
+        after = (np.arange(N) >= warmup)[:, None, None]  # onset at the end of the warm-up
+        sig = residual_signature(
+            kit, kgains, fault_profile(kit, Psi=s.Psi * after, Phi=s.Phi * after)
+        ).on_residual
         lasso_thr = float(scipy.stats.norm.ppf(1.0 - alpha / (2 * m)))
         e_thr = energy_threshold(w, kf.p, alpha)
         bz_glr = bz_red = None
         if s.E is not None:
             kpred = kitanidis_predictor_gains(kit, s.E, kgains)
             red = reduce_residual(kit, kgains, np.zeros((N, kit.p)))
-            bz_fam = step_family(red.model, Psi=s.Psi[:, 6:])     # a torque on the generator
+            bz_fam = step_family(red.model, Psi=s.Psi[:, 6:])  # a torque on the generator
             bz_glr = WindowedGLR(red.model, red.gains, bz_fam, w)
             bz_red = (kpred, red.T)
-        d.subs[s.name] = SubDesign(s, kf, kg, fam, glr, thr, kit, kgains, sig, lasso_thr, e_thr, bz_glr, bz_red)
+        d.subs[s.name] = SubDesign(
+            s, kf, kg, fam, glr, thr, kit, kgains, sig, lasso_thr, e_thr, bz_glr, bz_red
+        )
     return d
 
 
@@ -592,8 +716,9 @@ def alarm_onsets(over: np.ndarray, start: int) -> np.ndarray:
     return edge
 
 
-def score_alarms(alarms: np.ndarray, onset: int, start: int
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def score_alarms(
+    alarms: np.ndarray, onset: int, start: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The benchmark's reading of an alarm sequence ``(..., N)`` (bool, :func:`alarm_onsets`)
     around a fault that begins at sample ``onset``.
 
@@ -614,9 +739,10 @@ def score_alarms(alarms: np.ndarray, onset: int, start: int
     onset = integer(onset, "onset", low=0, high=alarms.shape[-1])
     start = integer(start, "start", low=0, high=onset)
     count = alarms[..., start:onset].sum(axis=-1)
-    after = np.concatenate([alarms[..., onset:], np.ones((*alarms.shape[:-1], 1), dtype=bool)],
-                           axis=-1)
-    first = onset + after.argmax(axis=-1)                   # the appended sample: no alarm
+    after = np.concatenate(
+        [alarms[..., onset:], np.ones((*alarms.shape[:-1], 1), dtype=bool)], axis=-1
+    )
+    first = onset + after.argmax(axis=-1)  # the appended sample: no alarm
     detect = np.where(first < alarms.shape[-1], first, -1)
     return count, count > 0, detect
 
@@ -634,14 +760,15 @@ def delays(steps: np.ndarray, onset: int, ts: float) -> np.ndarray:
     return np.where(steps >= 0, (steps - onset + 1) * float(ts), np.nan)
 
 
-def _combine(d: Design, stats: Sequence[np.ndarray], thresholds: Sequence[float]
-             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _combine(
+    d: Design, stats: Sequence[np.ndarray], thresholds: Sequence[float]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """False alarms, detection (:func:`score_alarms` of each subsystem's :func:`alarm_onsets`), the
     subsystem that raised the detection and the largest statistic over its threshold after the
     onset, from one statistic per subsystem."""
     edges = []
     for st, h in zip(stats, thresholds):
-        first_alarm(st, h, start=d.warmup)     # NaN after the warm-up: an error, never "no alarm"
+        first_alarm(st, h, start=d.warmup)  # NaN after the warm-up: an error, never "no alarm"
         edges.append(alarm_onsets(np.nan_to_num(st, nan=-np.inf) > h, d.warmup))
     scored = [score_alarms(e, d.onset, d.warmup) for e in edges]
     pre = np.stack([s[1] for s in scored]).any(axis=0)
@@ -650,7 +777,9 @@ def _combine(d: Design, stats: Sequence[np.ndarray], thresholds: Sequence[float]
     which = np.argmin(post, axis=0)
     first = post.min(axis=0)
     detect = np.where(first == big, -1, first)
-    peak = np.max([np.nanmax(st[..., d.onset:], axis=-1) / h for st, h in zip(stats, thresholds)], axis=0)
+    peak = np.max(
+        [np.nanmax(st[..., d.onset :], axis=-1) / h for st, h in zip(stats, thresholds)], axis=0
+    )
     return pre, detect, np.where(detect < 0, -1, which), peak
 
 
@@ -663,7 +792,9 @@ def _innovations(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, np.ndarra
     return out
 
 
-def run_zb(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray] | None = None) -> MethodOutcome:
+def run_zb(
+    d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray] | None = None
+) -> MethodOutcome:
     """Zhang & Basseville (2014): Kalman innovations, windowed GLR for a jump of all the
     subsystem's additive candidates, minmax isolation (one test per candidate) ``isolation_extra``
     samples after the alarm, from the onset the window estimates then."""
@@ -671,7 +802,9 @@ def run_zb(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray
     B = y.shape[0]
     res = _zb_glr(d, eps)
     names = list(d.subs)
-    fa, detect, which, peak = _combine(d, [res[n].statistic for n in names], [d.subs[n].glr_threshold for n in names])
+    fa, detect, which, peak = _combine(
+        d, [res[n].statistic for n in names], [d.subs[n].glr_threshold for n in names]
+    )
     isolated = np.zeros((B, len(CANDIDATES)), dtype=bool)
     step = np.where(detect >= 0, np.minimum(detect + d.settings.isolation_extra, d.N - 1), -1)
     for j, name in enumerate(names):
@@ -687,8 +820,12 @@ def run_zb(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray
 
 def _zb_glr(d: Design, eps: Mapping[str, np.ndarray]) -> dict[str, Any]:
     """The windowed GLR of every subsystem's innovations (Zhang & Basseville)."""
-    return {name: glr_window(eps[name], sd.kf, sd.kf_gains, sd.family, sd.glr.window, shared=sd.glr,
-                             start=d.warmup) for name, sd in d.subs.items()}
+    return {
+        name: glr_window(
+            eps[name], sd.kf, sd.kf_gains, sd.family, sd.glr.window, shared=sd.glr, start=d.warmup
+        )
+        for name, sd in d.subs.items()
+    }
 
 
 def _minmax(C: np.ndarray, dd: np.ndarray, alpha: float) -> np.ndarray:
@@ -706,7 +843,9 @@ def _minmax(C: np.ndarray, dd: np.ndarray, alpha: float) -> np.ndarray:
         except PersistentExcitationError:
             for b in range(C.shape[0]):
                 try:
-                    out[b, i] = minmax_isolation(C[b:b + 1], dd[b:b + 1], [[i]], alpha=alpha)[0].faulty[0]
+                    out[b, i] = minmax_isolation(C[b : b + 1], dd[b : b + 1], [[i]], alpha=alpha)[
+                        0
+                    ].faulty[0]
                 except PersistentExcitationError:
                     out[b, i] = False
     return out
@@ -747,12 +886,12 @@ def _lasso_test(d: Design, res: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> 
     stats = []
     for name, sd in d.subs.items():
         r, S = res[name]
-        kern = S[d.warmup:d.warmup + w]                            # (w, p, m): onset at window start
+        kern = S[d.warmup : d.warmup + w]  # (w, p, m): onset at window start
         norm = np.sqrt(np.einsum("wpm,wpm->m", kern, kern))
-        win = np.lib.stride_tricks.sliding_window_view(r, w, axis=1)    # (B, N-w+1, p, w)
+        win = np.lib.stride_tricks.sliding_window_view(r, w, axis=1)  # (B, N-w+1, p, w)
         t = np.einsum("bkpw,wpm->bkm", win, kern) / norm
         st = np.full(r.shape[:2], np.nan)
-        st[:, w - 1:] = np.abs(t).max(axis=-1)
+        st[:, w - 1 :] = np.abs(t).max(axis=-1)
         stats.append(st)
     return stats
 
@@ -791,8 +930,9 @@ def run_zhang2021(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
     return MethodOutcome(fa, detect, which, isolated, step, peak)
 
 
-def _bz_stats(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray]
-              ) -> tuple[list[np.ndarray], list[float], list[np.ndarray], list[float]]:
+def _bz_stats(
+    d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray]
+) -> tuple[list[np.ndarray], list[float], list[np.ndarray], list[float]]:
     """Basseville & Zhang's statistics and thresholds per subsystem: the parametric windowed GLRs,
     then the energy tests."""
     w = d.settings.window
@@ -802,8 +942,8 @@ def _bz_stats(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndar
         ys, us = _split(d, y, u, sd.sub)
         if sd.sub.E is None:
             # d beta'' = Delta(wn^2) (beta_r - ybar): the profile is the blade's known input
-            col = sd.sub.G[:, 0] / d.constants.params.omega_n ** 2
-            drive = us[..., 0]                                          # (B, N): beta_r - ybar
+            col = sd.sub.G[:, 0] / d.constants.params.omega_n**2
+            drive = us[..., 0]  # (B, N): beta_r - ybar
             # one profile per realisation (its own input), all realisations in one windowed GLR
             fam = step_family(sd.kf, Psi=col[None, None, :, None] * drive[:, :, None, None])
             st = glr_window(eps[name], sd.kf, sd.kf_gains, fam, w, start=d.warmup).statistic
@@ -815,15 +955,24 @@ def _bz_stats(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndar
             kpred, T = sd.bz_red
             e_kit = kalman_filter(sd.kit, ys, us, gains=kpred).innovations
             red = reduce_residual(sd.kit, sd.kit_gains, e_kit, T)
-            g = glr_window(red.residuals, sd.bz_glr.model, sd.bz_glr.gains, sd.bz_glr.family, w,
-                           shared=sd.bz_glr, start=d.warmup)
+            g = glr_window(
+                red.residuals,
+                sd.bz_glr.model,
+                sd.bz_glr.gains,
+                sd.bz_glr.family,
+                w,
+                shared=sd.bz_glr,
+                start=d.warmup,
+            )
             par_stats.append(g.statistic)
             par_thr.append(float(scipy.stats.chi2.ppf(1.0 - d.alpha_sample / w, 1)))
     en = [energy_statistic(eps[n], sd.kf_gains.Sigma_chol, w) for n, sd in d.subs.items()]
     return par_stats, par_thr, en, [sd.energy_threshold for sd in d.subs.values()]
 
 
-def run_bz(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray] | None = None) -> MethodOutcome:
+def run_bz(
+    d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray] | None = None
+) -> MethodOutcome:
     """Basseville & Zhang: parametric tests (the stiffness ``wn^2`` of each pitch actuator, a
     data-dependent profile ``Psi_k``; the converter offset and the drive-train torque on the
     Kitanidis residual projected away from ``tau_a``) by windowed GLR, and the non-parametric
@@ -847,14 +996,19 @@ def run_bz(d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray
         sub = d.subs[names[which[b]]].sub
         if par_first[b]:
             # the blade's actuator; on the drive train a torque on the generator (converter or efficiency)
-            isolated[b, [sub.candidates[2]] if sub.E is None else [sub.candidates[5], sub.candidates[6]]] = True
+            isolated[
+                b, [sub.candidates[2]] if sub.E is None else [sub.candidates[5], sub.candidates[6]]
+            ] = True
         else:
-            isolated[b, list(sub.candidates)] = True            # non-parametric: the subsystem only
-    return MethodOutcome(pfa | efa, detect, which, isolated, detect.copy(), np.maximum(ppeak, epeak))
+            isolated[b, list(sub.candidates)] = True  # non-parametric: the subsystem only
+    return MethodOutcome(
+        pfa | efa, detect, which, isolated, detect.copy(), np.maximum(ppeak, epeak)
+    )
 
 
-def stream_alarms(d: Design, y: np.ndarray, u: np.ndarray, start: int,
-                  methods: Sequence[str] = tuple(METHODS)) -> dict[str, Any]:
+def stream_alarms(
+    d: Design, y: np.ndarray, u: np.ndarray, start: int, methods: Sequence[str] = tuple(METHODS)
+) -> dict[str, Any]:
     """Alarms of the four methods on records ``y`` ``(B, N, 11)``, ``u`` ``(B, N, 4)`` from
     sample ``start`` on: one window of a long stream, whose first ``start`` samples overlap the
     previous window.
@@ -899,7 +1053,7 @@ def stream_alarms(d: Design, y: np.ndarray, u: np.ndarray, start: int,
             stats, thr = par + en, par_thr + en_thr
         count = np.zeros(y.shape[0], dtype=np.int64)
         for st, h in zip(stats, thr):
-            first_alarm(st, h, start=d.warmup)     # NaN after the warm-up: an error
+            first_alarm(st, h, start=d.warmup)  # NaN after the warm-up: an error
             edges = alarm_onsets(np.nan_to_num(st, nan=-np.inf) > h, start - 1)
             count += edges[:, start:].sum(axis=-1)
         out[name], out["tests"][name] = count, len(stats)
@@ -914,8 +1068,15 @@ def _method_keys(methods: Sequence[str]) -> tuple[str, ...]:
     return methods
 
 
-def stream_counts(d: Design, y: np.ndarray, u: np.ndarray, start: int, *, batch: int = 8,
-                  methods: Sequence[str] = tuple(METHODS)) -> dict[str, Any]:
+def stream_counts(
+    d: Design,
+    y: np.ndarray,
+    u: np.ndarray,
+    start: int,
+    *,
+    batch: int = 8,
+    methods: Sequence[str] = tuple(METHODS),
+) -> dict[str, Any]:
     """Alarm counts of the four methods over one long stream ``y`` ``(n, 11)``, ``u`` ``(n, 4)``, in
     constant memory: overlapping windows of ``d.N`` samples, each scored from its sample ``start``
     (:func:`stream_alarms` of ``methods``), so that the scored parts tile
@@ -932,8 +1093,10 @@ def stream_counts(d: Design, y: np.ndarray, u: np.ndarray, start: int, *, batch:
     y = np.asarray(y, dtype=float)
     u = np.asarray(u, dtype=float)
     if y.ndim != 2 or y.shape[1] != len(SENSORS) or u.shape != (y.shape[0], len(INPUTS)):
-        raise ShapeError(f"y, u: expected (n, {len(SENSORS)}) and (n, {len(INPUTS)}), "
-                         f"got {y.shape} and {u.shape}")
+        raise ShapeError(
+            f"y, u: expected (n, {len(SENSORS)}) and (n, {len(INPUTS)}), "
+            f"got {y.shape} and {u.shape}"
+        )
     batch = integer(batch, "batch", low=1)
     step = d.N - start
     n_windows = (y.shape[0] - d.N) // step + 1 if y.shape[0] >= d.N else 0
@@ -987,13 +1150,19 @@ def svo_banks(d: Design, T: int) -> dict[str, tuple[ModelSequence, dict[str, Mod
         noise = st.svo_sigmas * sig
         bnd = cal.bound[name]
         L = np.diag(np.r_[bnd, cal.dtau_bound] if s.E is not None else bnd)
-        if s.E is not None:   # a zero column: every hypothesis of the drive train has one structure
+        if s.E is not None:  # a zero column: every hypothesis of the drive train has one structure
             L = np.hstack([L, np.zeros((L.shape[0], 1))])
 
         def seq(A=F, B=G, L=L, noise=noise, A_unc=None, B_unc=None):
-            return ModelSequence(A=_const(A, T), B=_const(B, T), C=H, L=L, noise=noise,
-                                 A_unc=None if A_unc is None else _const(A_unc, T),
-                                 B_unc=None if B_unc is None else _const(B_unc, T))
+            return ModelSequence(
+                A=_const(A, T),
+                B=_const(B, T),
+                C=H,
+                L=L,
+                noise=noise,
+                A_unc=None if A_unc is None else _const(A_unc, T),
+                B_unc=None if B_unc is None else _const(B_unc, T),
+            )
 
         faults = {}
         for j, o in enumerate(s.outputs):
@@ -1009,9 +1178,11 @@ def svo_banks(d: Design, T: int) -> dict[str, tuple[ModelSequence, dict[str, Mod
         else:
             Psi = _aug(s)[3]
             nz = noise.copy()
-            nz[4] += st.torque_bound                # the converter offset also shows on the torque sensor
+            nz[4] += st.torque_bound  # the converter offset also shows on the torque sensor
             for col, cand, nzc in ((5, "converter", nz), (6, "drive_train", noise)):
-                faults[cand] = seq(L=np.hstack([L[:, :-1], st.torque_bound * Psi[:, col:col + 1]]), noise=nzc)
+                faults[cand] = seq(
+                    L=np.hstack([L[:, :-1], st.torque_bound * Psi[:, col : col + 1]]), noise=nzc
+                )
         out[name] = (seq(), faults)
     return out
 
@@ -1037,7 +1208,10 @@ def run_svo_bank(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
     det = np.full((len(names), B), -1)
     iso_step = np.full((len(names), B), -1)
     iso_name: list[list[str | None]] = [[None] * B for _ in names]
-    groups = [[n for n in names if d.subs[n].sub.E is None], [n for n in names if d.subs[n].sub.E is not None]]
+    groups = [
+        [n for n in names if d.subs[n].sub.E is None],
+        [n for n in names if d.subs[n].sub.E is not None],
+    ]
     for group in groups:
         nominal, faults, ys, us = [], [], [], []
         for name in group:
@@ -1061,7 +1235,7 @@ def run_svo_bank(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
                     iso_step[j, b] = i0 + r.isolation_step
                     iso_name[j][b] = _specific(r.isolated, name)
     pre = ((det >= 0) & (det < d.onset)).any(axis=0)
-    det = np.where(det >= d.onset, det, -1)          # a record that emptied earlier stopped there
+    det = np.where(det >= d.onset, det, -1)  # a record that emptied earlier stopped there
     big = np.iinfo(np.int64).max
     dd = np.where(det < 0, big, det)
     which = np.argmin(dd, axis=0)
@@ -1074,7 +1248,9 @@ def run_svo_bank(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
         if iso_name[j][b] is not None:
             isolated[b, CANDIDATES.index(iso_name[j][b])] = True
             step[b] = iso_step[j, b]
-    return MethodOutcome(pre, detect, np.where(detect < 0, -1, which), isolated, step, np.full(B, np.nan))
+    return MethodOutcome(
+        pre, detect, np.where(detect < 0, -1, which), isolated, step, np.full(B, np.nan)
+    )
 
 
 def _generic(candidate: str) -> str:
@@ -1094,7 +1270,9 @@ def _specific(generic: str, subsystem: str) -> str:
 def _prior_group(d: Design, group: Sequence[str]) -> Polytope:
     """Prior set shared by a batch of subsystems: the hull of their boxes."""
     boxes = [_prior_box(d, d.subs[n].sub) for n in group]
-    return Polytope.box(np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0))
+    return Polytope.box(
+        np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0)
+    )
 
 
 def run_methods(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, MethodOutcome]:
@@ -1102,19 +1280,31 @@ def run_methods(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, MethodOutc
     _instance(d, Design, "d")
     y = np.asarray(y, dtype=float)
     u = np.asarray(u, dtype=float)
-    if y.ndim != 3 or y.shape[1:] != (d.N, len(SENSORS)) or u.shape != (y.shape[0], d.N, len(INPUTS)):
-        raise ShapeError(f"y, u: expected (B, {d.N}, {len(SENSORS)}) and (B, {d.N}, {len(INPUTS)}), "
-                         f"got {y.shape} and {u.shape}")
+    if (
+        y.ndim != 3
+        or y.shape[1:] != (d.N, len(SENSORS))
+        or u.shape != (y.shape[0], d.N, len(INPUTS))
+    ):
+        raise ShapeError(
+            f"y, u: expected (B, {d.N}, {len(SENSORS)}) and (B, {d.N}, {len(INPUTS)}), "
+            f"got {y.shape} and {u.shape}"
+        )
     eps = _innovations(d, y, u)
-    return {"zb2014": run_zb(d, y, u, eps), "zhang2021": run_zhang2021(d, y, u),
-            "bz": run_bz(d, y, u, eps), "rosa2013": run_svo_bank(d, y, u)}
+    return {
+        "zb2014": run_zb(d, y, u, eps),
+        "zhang2021": run_zhang2021(d, y, u),
+        "bz": run_bz(d, y, u, eps),
+        "rosa2013": run_svo_bank(d, y, u),
+    }
 
 
 # ----------------------------------------------------------------------------- records around each fault
 def _shifted(fault: Any, start_s: float) -> Any:
     import dataclasses
 
-    return dataclasses.replace(fault, start_s=start_s, stop_s=start_s + (fault.stop_s - fault.start_s))
+    return dataclasses.replace(
+        fault, start_s=start_s, stop_s=start_s + (fault.stop_s - fault.start_s)
+    )
 
 
 def expected_candidates(fault: Any) -> tuple[str, ...]:
@@ -1132,12 +1322,21 @@ def expected_candidates(fault: Any) -> tuple[str, ...]:
             out.append(comp)
     for name in out:
         if name not in CANDIDATES:
-            raise ModelError(f"fault {fault.id}: component {name!r} is not a candidate of {CANDIDATES}")
+            raise ModelError(
+                f"fault {fault.id}: component {name!r} is not a candidate of {CANDIDATES}"
+            )
     return tuple(out)
 
 
-def fault_records(fault: Any, seeds: Sequence[np.random.SeedSequence], *, settings: Settings = Settings(),
-                  params: Any = None, settle_s: float = 20.0, faulty: bool = True) -> Records:
+def fault_records(
+    fault: Any,
+    seeds: Sequence[np.random.SeedSequence],
+    *,
+    settings: Settings = Settings(),
+    params: Any = None,
+    settle_s: float = 20.0,
+    faulty: bool = True,
+) -> Records:
     """One realisation per seed of the segment around ``fault`` (:class:`Settings` ``pre_s``, ``post_s``).
 
     The plant (:func:`fdi_lib.systems.wind_turbine.simulate`) runs from ``settle_s + pre_s`` seconds
@@ -1159,9 +1358,23 @@ def fault_records(fault: Any, seeds: Sequence[np.random.SeedSequence], *, settin
     duration = t0 + settings.post_s
     n = int(round(duration / params.ts))
     t_abs = fault.start_s - t0 + np.arange(n) * params.ts
-    wind = np.stack([wt.wind_speed(t_abs, seed=np.random.SeedSequence(s.entropy, spawn_key=s.spawn_key + (0,),
-                                                                      pool_size=s.pool_size)) for s in seeds])
-    run = wt.simulate(seed=seeds, faults=(_shifted(fault, t0),) if faulty else (), duration_s=duration,
-                      params=params, wind=wind)
+    wind = np.stack(
+        [
+            wt.wind_speed(
+                t_abs,
+                seed=np.random.SeedSequence(
+                    s.entropy, spawn_key=s.spawn_key + (0,), pool_size=s.pool_size
+                ),
+            )
+            for s in seeds
+        ]
+    )
+    run = wt.simulate(
+        seed=seeds,
+        faults=(_shifted(fault, t0),) if faulty else (),
+        duration_s=duration,
+        params=params,
+        wind=wind,
+    )
     i0 = int(round(settle_s / params.ts))
     return records(run).window(i0, i0 + int(round((settings.pre_s + settings.post_s) / params.ts)))

@@ -49,18 +49,29 @@ def built(tmp_path_factory) -> Path:
         "myst_enable_extensions = ['dollarmath', 'amsmath']\n"
         f"mathjax_path = {config['mathjax_path']!r}\n"
         f"mathjax3_config = {config['mathjax3_config']!r}\n"
-        + "".join(f"{k} = {v!r}\n" for k, v in tippy.items()))
+        + "".join(f"{k} = {v!r}\n" for k, v in tippy.items())
+    )
     (src / "index.md").write_text("# Index\n\n```{toctree}\nother\nplain\n```\n\nNo maths here.\n")
     (src / "other.md").write_text(
         "# Other\n\n$$\nx_k \\in \\R^n\n$$ (eq-x)\n\n"
-        "````{admonition} Live $y$\n:name: fig-live\n\n```{raw} html\n<img src=\"data:image/png;base64,AAAA\" "
-        "alt=\"a\"><script>var frames = ['MANY-FRAMES'];</script>\n```\n````\n")
-    (src / "plain.md").write_text("# Plain\n\nSee {eq}`eq-x` and\n<a href=\"other.html#fig-live\">the live "
-                                  "figure</a>.\n")
+        '````{admonition} Live $y$\n:name: fig-live\n\n```{raw} html\n<img src="data:image/png;base64,AAAA" '
+        "alt=\"a\"><script>var frames = ['MANY-FRAMES'];</script>\n```\n````\n"
+    )
+    (src / "plain.md").write_text(
+        '# Plain\n\nSee {eq}`eq-x` and\n<a href="other.html#fig-live">the live figure</a>.\n'
+    )
     warnings = io.StringIO()
     with docutils_namespace():  # the directives and nodes it registers go with it
-        app = Sphinx(str(src), str(src), str(tmp / "out"), str(tmp / "doctrees"), "html",
-                     status=None, warning=warnings, freshenv=True)
+        app = Sphinx(
+            str(src),
+            str(src),
+            str(tmp / "out"),
+            str(tmp / "doctrees"),
+            "html",
+            status=None,
+            warning=warnings,
+            freshenv=True,
+        )
         app.build()
     assert not warnings.getvalue()
     return tmp / "out"
@@ -124,20 +135,25 @@ def test_previews_hold_the_target_without_its_scripts(built):
 
 
 def test_preview_html_drops_scripts_sliders_and_permalinks():
-    html = ('<figure class="fdi-explorable" id="f"><div class="fdi-explorable-sliders"><input type="range">'
-            '</div><img src="data:image/png;base64,AAAA" alt="x"><script>var F = [1, 2];</script>'
-            '<figcaption>Caption <a class="headerlink" href="#f">#</a></figcaption></figure>')
+    html = (
+        '<figure class="fdi-explorable" id="f"><div class="fdi-explorable-sliders"><input type="range">'
+        '</div><img src="data:image/png;base64,AAAA" alt="x"><script>var F = [1, 2];</script>'
+        '<figcaption>Caption <a class="headerlink" href="#f">#</a></figcaption></figure>'
+    )
     out = EXT.preview_html(html)
     assert "<script" not in out and "range" not in out and "headerlink" not in out
     assert '<img alt="x" src="data:image/png;base64,AAAA"/>' in out and "Caption" in out
     # an image file is fetched only when its preview is shown
     assert EXT.preview_html('<figure id="g"><img alt="y" src="../_images/g.png"/></figure>') == (
-        '<figure id="g"><img alt="y" loading="lazy" src="../_images/g.png"/></figure>')
+        '<figure id="g"><img alt="y" loading="lazy" src="../_images/g.png"/></figure>'
+    )
 
 
 def test_without_script_drops_one_tag_and_fails_when_there_is_none():
-    head = ('<link href="a.css" rel="stylesheet" />\n  <script defer src="../_static/scripts/fontawesome.js'
-            '?digest=55c"></script>\n  <link rel="preload" as="script" href="b.js" />')
+    head = (
+        '<link href="a.css" rel="stylesheet" />\n  <script defer src="../_static/scripts/fontawesome.js'
+        '?digest=55c"></script>\n  <link rel="preload" as="script" href="b.js" />'
+    )
     out = EXT.without_script(head, "scripts/fontawesome.js")
     assert "fontawesome" not in out and 'href="a.css"' in out and 'href="b.js"' in out
     with pytest.raises(EXT.ExtensionError, match="fontawesome"):
@@ -145,19 +161,25 @@ def test_without_script_drops_one_tag_and_fails_when_there_is_none():
 
 
 def test_execution_times_from_the_build_log():
-    log = (f"{ROOT}/book/zb2014/glr.md: Executing notebook using local CWD [mystnb]\n"
-           f"{ROOT}/book/zb2014/glr.md: Executed notebook in 12.50 seconds [mystnb]\n"
-           f"{ROOT}/book/status.md: Using cached notebook: ID=3 [mystnb]\n"
-           f"{ROOT}/book/intro.md: Executed notebook in 0.75 seconds [mystnb]\n")
+    log = (
+        f"{ROOT}/book/zb2014/glr.md: Executing notebook using local CWD [mystnb]\n"
+        f"{ROOT}/book/zb2014/glr.md: Executed notebook in 12.50 seconds [mystnb]\n"
+        f"{ROOT}/book/status.md: Using cached notebook: ID=3 [mystnb]\n"
+        f"{ROOT}/book/intro.md: Executed notebook in 0.75 seconds [mystnb]\n"
+    )
     assert REPORT.execution_times(log, ROOT) == {"book/zb2014/glr.md": 12.5, "book/intro.md": 0.75}
     assert REPORT.execution_wall(log) is None
     # tools/execute_book.py's lines (the chapters side by side, before Jupyter Book)
-    log = ("Executing 2 notebooks, 2 at a time on 2 cores\n"
-           "book/zb2014/glr.md: Executed notebook in 7.25 seconds (on 1 core)\n"
-           "book/zz-ledger.md: Executed notebook in 2.00 seconds (on 2 cores)\n"
-           "Executed 2 notebooks in 9.5 s of wall time (9.2 s summed over the chapters)\n")
-    assert REPORT.execution_times(log, ROOT) == {"book/zb2014/glr.md": 7.25,
-                                                 "book/zz-ledger.md": 2.0}
+    log = (
+        "Executing 2 notebooks, 2 at a time on 2 cores\n"
+        "book/zb2014/glr.md: Executed notebook in 7.25 seconds (on 1 core)\n"
+        "book/zz-ledger.md: Executed notebook in 2.00 seconds (on 2 cores)\n"
+        "Executed 2 notebooks in 9.5 s of wall time (9.2 s summed over the chapters)\n"
+    )
+    assert REPORT.execution_times(log, ROOT) == {
+        "book/zb2014/glr.md": 7.25,
+        "book/zz-ledger.md": 2.0,
+    }
     assert REPORT.execution_wall(log) == 9.5
 
 
@@ -166,8 +188,10 @@ def test_inject_replaces_the_placeholder_only(tmp_path):
     page.write_text('<p>a</p><div id="fdi-x"><p>Not filled in</p></div><!-- /fdi-x --><div>b</div>')
     REPORT.inject(page, "fdi-x", "<div><table><tr><td>1 s</td></tr></table></div>")
     REPORT.inject(page, "fdi-x", "<div><table><tr><td>2 s</td></tr></table></div>")  # again
-    assert page.read_text() == ('<p>a</p><div id="fdi-x"><div><table><tr><td>2 s</td></tr></table></div>'
-                                '</div><!-- /fdi-x --><div>b</div>')
+    assert page.read_text() == (
+        '<p>a</p><div id="fdi-x"><div><table><tr><td>2 s</td></tr></table></div>'
+        "</div><!-- /fdi-x --><div>b</div>"
+    )
     with pytest.raises(SystemExit, match="fdi-y"):
         REPORT.inject(page, "fdi-y", "")
 

@@ -24,22 +24,25 @@ _spec.loader.exec_module(EXT)
 MACROS = {"R": r"\mathbb{R}", "T": r"\mathsf{T}", "E": r"\mathbb{E}"}  # as _config.yml
 
 
-@pytest.mark.parametrize("tex, text", [
-    (r"\lambda", "λ"),
-    (r"\theta = [4, 0]", "θ = [4, 0]"),
-    (r"\hat\theta_j", "θ̂ⱼ"),
-    (r"\hat{r}", "r̂"),
-    (r"\|\alpha_k(r)\|_2", "‖αₖ(r)‖₂"),
-    (r"W_k \sim \mathcal N(0, Q_k)", "Wₖ ~ N(0, Qₖ)"),
-    (r"x \in \R^n, A^\T", "x ∈ ℝⁿ, Aᵀ"),
-    (r"\chi^2(2)", "χ²(2)"),
-    (r"C_k(r)^{-1}", "Cₖ(r)⁻¹"),
-    (r"X_{k|k-1}", "X_(k|k-1)"),          # no Unicode subscript for "|": written out
-    (r"l_N", "l_N"),
-    (r"\frac{1}{2}\,\sigma^2", "1/2 σ²"),
-    (r"N > 1", "N > 1"),
-    (r"\left( a \right) \foo", "( a ) foo"),  # an unknown command: its name, no backslash
-])
+@pytest.mark.parametrize(
+    "tex, text",
+    [
+        (r"\lambda", "λ"),
+        (r"\theta = [4, 0]", "θ = [4, 0]"),
+        (r"\hat\theta_j", "θ̂ⱼ"),
+        (r"\hat{r}", "r̂"),
+        (r"\|\alpha_k(r)\|_2", "‖αₖ(r)‖₂"),
+        (r"W_k \sim \mathcal N(0, Q_k)", "Wₖ ~ N(0, Qₖ)"),
+        (r"x \in \R^n, A^\T", "x ∈ ℝⁿ, Aᵀ"),
+        (r"\chi^2(2)", "χ²(2)"),
+        (r"C_k(r)^{-1}", "Cₖ(r)⁻¹"),
+        (r"X_{k|k-1}", "X_(k|k-1)"),  # no Unicode subscript for "|": written out
+        (r"l_N", "l_N"),
+        (r"\frac{1}{2}\,\sigma^2", "1/2 σ²"),
+        (r"N > 1", "N > 1"),
+        (r"\left( a \right) \foo", "( a ) foo"),  # an unknown command: its name, no backslash
+    ],
+)
 def test_tex_to_text(tex, text):
     assert EXT.tex_to_text(tex, MACROS) == text
 
@@ -47,8 +50,10 @@ def test_tex_to_text(tex, text):
 def test_script_text_and_caption_text():
     assert script_text("k", "_") == "ₖ" and script_text("-1", "^") == "⁻¹"
     assert script_text("N", "_") == "_N" and script_text("k|k", "_") == "_(k|k)"
-    assert caption_text("Spectral norms of Γ<sub>k</sub>(r) &amp; x<sup>2</sup>, <i>w</i>\n = 1") == \
-        "Spectral norms of Γₖ(r) & x², w = 1"
+    assert (
+        caption_text("Spectral norms of Γ<sub>k</sub>(r) &amp; x<sup>2</sup>, <i>w</i>\n = 1")
+        == "Spectral norms of Γₖ(r) & x², w = 1"
+    )
 
 
 def _frame(a, fig=None):
@@ -58,23 +63,32 @@ def _frame(a, fig=None):
 
 
 def test_explorable_image_without_alt_text_has_its_caption_and_the_values_shown():
-    page = explorable(_frame, {"a": (1.0, 2.0)}, caption='GLR l<sub>k</sub> for "w" &lt; 3')._repr_html_()
-    assert re.search(r'<img [^>]*alt="([^"]*)"', page).group(1) == \
-        "GLR lₖ for &quot;w&quot; &lt; 3. Shown at a = 1."
+    page = explorable(
+        _frame, {"a": (1.0, 2.0)}, caption='GLR l<sub>k</sub> for "w" &lt; 3'
+    )._repr_html_()
+    assert (
+        re.search(r'<img [^>]*alt="([^"]*)"', page).group(1)
+        == "GLR lₖ for &quot;w&quot; &lt; 3. Shown at a = 1."
+    )
 
 
 def test_catalogue_titles_are_written_in_maths():
-    assert EXT.title_markdown("Spectral norm of Willsky-Jones alpha_k(r), GLR l_k, theta = [4, 0], "
-                              "dG0(1), Set(P, p), r = 1") == \
-        r"Spectral norm of Willsky-Jones $\alpha_k(r)$, GLR $l_k$, $\theta$ = [4, 0], dG0(1), Set(P, p), r = 1"
+    assert (
+        EXT.title_markdown(
+            "Spectral norm of Willsky-Jones alpha_k(r), GLR l_k, theta = [4, 0], "
+            "dG0(1), Set(P, p), r = 1"
+        )
+        == r"Spectral norm of Willsky-Jones $\alpha_k(r)$, GLR $l_k$, $\theta$ = [4, 0], dG0(1), Set(P, p), r = 1"
+    )
     greek = re.compile(r"\b(?:" + "|".join(EXT._GREEK + [g.title() for g in EXT._GREEK]) + r")\b")
     for r in list_reproductions():
         text = re.sub(r"\$[^$]*\$", "", EXT.title_markdown(r.title))  # what is left outside maths
         assert not re.search(r"[A-Za-z]_\w", text) and not greek.search(text), (r.id, text)
 
 
-def _sphinx_build(tmp_path, builder: str, extensions: list[str], pages: dict[str, str],
-                  conf: str = "") -> tuple[Path, str]:
+def _sphinx_build(
+    tmp_path, builder: str, extensions: list[str], pages: dict[str, str], conf: str = ""
+) -> tuple[Path, str]:
     """A small Sphinx project with the book's extension, built with ``builder``: the output
     folder and the warnings."""
     from sphinx.application import Sphinx
@@ -82,20 +96,32 @@ def _sphinx_build(tmp_path, builder: str, extensions: list[str], pages: dict[str
 
     src = tmp_path / "src"
     src.mkdir()
-    (src / "conf.py").write_text(f"import sys\nsys.path.insert(0, {str(ROOT / '_ext')!r})\n"
-                                 f"extensions = {extensions!r}\n" + conf)
+    (src / "conf.py").write_text(
+        f"import sys\nsys.path.insert(0, {str(ROOT / '_ext')!r})\n"
+        f"extensions = {extensions!r}\n" + conf
+    )
     for name, text in pages.items():
         (src / name).write_text(text)
     warnings = io.StringIO()
     with docutils_namespace():  # the directives and nodes it registers go with it
-        app = Sphinx(str(src), str(src), str(tmp_path / "out"), str(tmp_path / "doctrees"), builder,
-                     status=None, warning=warnings, freshenv=True)
+        app = Sphinx(
+            str(src),
+            str(src),
+            str(tmp_path / "out"),
+            str(tmp_path / "doctrees"),
+            builder,
+            status=None,
+            warning=warnings,
+            freshenv=True,
+        )
         app.build()
     return tmp_path / "out", warnings.getvalue()
 
 
 # a 1x1 PNG
-_PNG = base64.b64decode("iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAAAAAA6fptVAAAACklEQVR4nGP4DwABAQEAG1o0oAAAAABJRU5ErkJggg==")
+_PNG = base64.b64decode(
+    "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAAAAAA6fptVAAAACklEQVR4nGP4DwABAQEAG1o0oAAAAABJRU5ErkJggg=="
+)
 
 
 def test_references_and_alt_texts_in_a_sphinx_build(tmp_path):
@@ -111,17 +137,27 @@ def test_references_and_alt_texts_in_a_sphinx_build(tmp_path):
         f"sys.path.insert(0, {str(ROOT / '_ext')!r})\n"
         "extensions = ['myst_parser', 'fdi_book']\n"
         "myst_enable_extensions = ['dollarmath']\n"
-        f"mathjax3_config = {{'tex': {{'macros': {MACROS!r}}}}}\n")
+        f"mathjax3_config = {{'tex': {{'macros': {MACROS!r}}}}}\n"
+    )
     (src / "fig.png").write_bytes(_PNG)
     (src / "index.md").write_text(
         "# Index\n\n```{toctree}\nother\n```\n\n(lambda-rule)=\n## The rule for $\\lambda$\n\n"
         "```{figure} fig.png\n:name: fig-a\n\nInnovation $\\varepsilon_k$ and GLR $l_k$ for "
-        "$\\theta = [4, 0]$.\n```\n\n```{figure} fig.png\n:alt: own words\n\nKept.\n```\n")
+        "$\\theta = [4, 0]$.\n```\n\n```{figure} fig.png\n:alt: own words\n\nKept.\n```\n"
+    )
     (src / "other.md").write_text("# Other\n\nSee {ref}`lambda-rule`.\n")
     warnings = io.StringIO()
     with docutils_namespace():  # the directives and nodes it registers go with it
-        app = Sphinx(str(src), str(src), str(tmp_path / "out"), str(tmp_path / "doctrees"), "xml",
-                     status=None, warning=warnings, freshenv=True)
+        app = Sphinx(
+            str(src),
+            str(src),
+            str(tmp_path / "out"),
+            str(tmp_path / "doctrees"),
+            "xml",
+            status=None,
+            warning=warnings,
+            freshenv=True,
+        )
         app.build()
     assert not warnings.getvalue()
     other = (tmp_path / "out" / "other.xml").read_text()
@@ -134,10 +170,15 @@ def test_table_cells_carry_their_column_header_in_html(tmp_path):
     """Docutils tables of the book (Markdown tables, list-tables) written to HTML: every body
     cell has its column's header as ``data-label``, maths as readable text (item 9)."""
     out, warnings = _sphinx_build(
-        tmp_path, "html", ["myst_parser", "fdi_book"],
-        {"index.md": "# Index\n\n| Symbol | Size of $\\theta_k$ |\n|---|---|\n"
-                     "| $X_k$ | $n$ |\n| $U_k$ | |\n"},
-        "myst_enable_extensions = ['dollarmath']\n")
+        tmp_path,
+        "html",
+        ["myst_parser", "fdi_book"],
+        {
+            "index.md": "# Index\n\n| Symbol | Size of $\\theta_k$ |\n|---|---|\n"
+            "| $X_k$ | $n$ |\n| $U_k$ | |\n"
+        },
+        "myst_enable_extensions = ['dollarmath']\n",
+    )
     assert not warnings
     page = (out / "index.html").read_text()
     assert re.findall(r'<td data-label="([^"]*)"', page) == ["Symbol", "Size of θₖ"] * 2
@@ -157,8 +198,10 @@ def test_explorable_output_becomes_a_numbered_figure():
 
     doc = new_document("glr", get_default_settings(Parser))
     doc.settings.env = SimpleNamespace(docname="book/zb2014/glr")
-    pages = [explorable(_frame, {"a": (1.0, 2.0)}, caption=f"GLR l<sub>k</sub>, case {i}")._repr_html_()
-             for i in (1, 2)]
+    pages = [
+        explorable(_frame, {"a": (1.0, 2.0)}, caption=f"GLR l<sub>k</sub>, case {i}")._repr_html_()
+        for i in (1, 2)
+    ]
     for html in pages:
         bundle = nodes.container(nb_element="mime_bundle")
         bundle += nodes.container("", nodes.raw(html, html, format="html"), mime_type="text/html")
@@ -169,7 +212,11 @@ def test_explorable_output_becomes_a_numbered_figure():
     assert [f["ids"] for f in figures] == [["fig-glr-explore"], ["fig-glr-explore-2"]]
     assert [f[-1].astext() for f in figures] == ["GLR lₖ, case 1", "GLR lₖ, case 2"]
     html = next(figures[0].findall(nodes.raw)).astext()
-    assert "<figcaption>" not in html and "<figure" not in html and '<div class="fdi-explorable"' in html
+    assert (
+        "<figcaption>" not in html
+        and "<figure" not in html
+        and '<div class="fdi-explorable"' in html
+    )
 
 
 def _toc(tmp_path, parts: str) -> Path:
@@ -177,32 +224,43 @@ def _toc(tmp_path, parts: str) -> Path:
     return tmp_path
 
 
-_PARTS = ("  - caption: Start\n    chapters:\n      - file: book/running\n"
-          "  - caption: A paper\n    numbered: true\n    chapters:\n      - file: book/p/one\n"
-          "      - file: book/p/two\n")
+_PARTS = (
+    "  - caption: Start\n    chapters:\n      - file: book/running\n"
+    "  - caption: A paper\n    numbered: true\n    chapters:\n      - file: book/p/one\n"
+    "      - file: book/p/two\n"
+)
 
 
 def test_book_map_lists_every_page_of_the_toc_and_the_numbered_ones_in_order(tmp_path):
-    block = ("book/running: how to run\nbook/p/one: the first chapter\n  {cite:p}`key`\n"
-             "book/p/two: the second\n")
+    block = (
+        "book/running: how to run\nbook/p/one: the first chapter\n  {cite:p}`key`\n"
+        "book/p/two: the second\n"
+    )
     text = EXT.book_map_markdown(_toc(tmp_path, _PARTS), block)
     rows = [r for r in text.splitlines() if r.startswith("| ") and "doc" in r]
-    assert rows == ["| Start | {doc}`/book/running` | how to run |",
-                    "| A paper | {doc}`/book/p/one` | the first chapter {cite:p}`key` |",
-                    "|  | {doc}`/book/p/two` | the second |"]
+    assert rows == [
+        "| Start | {doc}`/book/running` | how to run |",
+        "| A paper | {doc}`/book/p/one` | the first chapter {cite:p}`key` |",
+        "|  | {doc}`/book/p/two` | the second |",
+    ]
     assert text.endswith("1. {doc}`/book/p/one`\n2. {doc}`/book/p/two`\n")
     (tmp_path / "book").mkdir()
     (tmp_path / "book" / "running.md").write_text("---\nx: 1\n---\n# Running it\n")
     unlinked = EXT.book_map_markdown(tmp_path, block, unlinked=("book/running",))
-    assert "| Start | Running it | how to run |" in unlinked   # no chapter of its own in the PDF
+    assert "| Start | Running it | how to run |" in unlinked  # no chapter of its own in the PDF
 
 
-@pytest.mark.parametrize("block, message", [
-    ("book/running: x\nbook/p/one: y\n", r"missing \['book/p/two'\]"),          # a chapter left out
-    ("book/running: x\nbook/p/one: y\nbook/p/two: z\nbook/p/old: w\n",
-     r"not in _toc.yml \['book/p/old'\]"),
-    ("book/running x\n", "expected 'FILE: what it holds'"),
-])
+@pytest.mark.parametrize(
+    "block, message",
+    [
+        ("book/running: x\nbook/p/one: y\n", r"missing \['book/p/two'\]"),  # a chapter left out
+        (
+            "book/running: x\nbook/p/one: y\nbook/p/two: z\nbook/p/old: w\n",
+            r"not in _toc.yml \['book/p/old'\]",
+        ),
+        ("book/running x\n", "expected 'FILE: what it holds'"),
+    ],
+)
 def test_book_map_fails_when_it_and_the_toc_disagree(tmp_path, block, message):
     from sphinx.errors import ExtensionError
 
@@ -225,8 +283,11 @@ def test_hidden_cell_toggle_is_named_by_its_text_and_citations_are_list_items(tm
     from types import SimpleNamespace
 
     fake = SimpleNamespace(body=[])
-    node = {"classes": ["above-input"], "prompt_show": "Show code cell source",
-            "prompt_hide": "Hide code cell <source>"}
+    node = {
+        "classes": ["above-input"],
+        "prompt_show": "Show code cell source",
+        "prompt_hide": "Hide code cell <source>",
+    }
     EXT._visit_hidden_cell(fake, node)
     html = "".join(fake.body)
     assert "aria-label" not in html
@@ -234,8 +295,12 @@ def test_hidden_cell_toggle_is_named_by_its_text_and_citations_are_list_items(tm
     assert '<p class="collapsed admonition-title">Show code cell source</p>' in html
     assert "Hide code cell &lt;source&gt;" in html
 
-    out, _ = _sphinx_build(tmp_path, "html", ["myst_nb", "fdi_book"], {
-        "index.rst": "Index\n=====\n\nSee [A]_ and [B]_.\n\n.. [A] One.\n.. [B] Two.\n"})
+    out, _ = _sphinx_build(
+        tmp_path,
+        "html",
+        ["myst_nb", "fdi_book"],
+        {"index.rst": "Index\n=====\n\nSee [A]_ and [B]_.\n\n.. [A] One.\n.. [B] Two.\n"},
+    )
     page = (out / "index.html").read_text()
     assert page.count('role="list"') == 1 and page.count('role="listitem"') == 2
     assert "doc-biblioentry" not in page

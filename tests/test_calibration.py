@@ -10,7 +10,7 @@ from fdi_lib.systems.random_ltv import random_ltv_model
 @pytest.fixture(scope="module")
 def setting():
     rng = np.random.default_rng(5)
-    model = random_ltv_model(rng, n=3, p=1, n_steps=40)       # one sensor...
+    model = random_ltv_model(rng, n=3, p=1, n_steps=40)  # one sensor...
     fault = fault_profile(model, Psi=rng.standard_normal((40, 3, 2)))  # ...two faults
     return model, fault
 

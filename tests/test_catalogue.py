@@ -20,7 +20,13 @@ import pytest
 
 from fdi_lib.reproduce import cli
 from fdi_lib.reproduce.book import CHAPTER_SEEDS, book_argv, book_order, book_run, book_settings
-from fdi_lib.reproduce.registry import CACHE_ENV, Reproduction, ReproductionResult, get, list_reproductions
+from fdi_lib.reproduce.registry import (
+    CACHE_ENV,
+    Reproduction,
+    ReproductionResult,
+    get,
+    list_reproductions,
+)
 
 from source_module import load as _load  # noqa: E402
 
@@ -45,8 +51,11 @@ def commands() -> dict[str, list[str]]:
 
 
 def _chapters() -> dict[str, str]:
-    return {doc: (ROOT / f"{doc}.md").read_text() for doc in EXT._toc_files(ROOT)
-            if doc.count("/") >= 2 and (ROOT / f"{doc}.md").is_file()}
+    return {
+        doc: (ROOT / f"{doc}.md").read_text()
+        for doc in EXT._toc_files(ROOT)
+        if doc.count("/") >= 2 and (ROOT / f"{doc}.md").is_file()
+    }
 
 
 def test_every_reproduction_has_a_command_with_the_book_settings(commands):
@@ -63,7 +72,7 @@ def test_every_reproduction_has_a_command_with_the_book_settings(commands):
         chapter_seed = CHAPTER_SEEDS[r.chapter] if r.chapter_seed else r.default_seed
         assert book_settings(r.id).seed == chapter_seed
     assert commands["zb2014-fig3"] == ["reproduce", "zb2014-fig3", "--seed", "2015", "--json"]
-    assert commands["rosa2013-fig11-rad"][-3:] == ["--trials", "10", "--json"]   # the paper's count
+    assert commands["rosa2013-fig11-rad"][-3:] == ["--trials", "10", "--json"]  # the paper's count
 
 
 def test_registrations_name_their_chapter_and_valid_book_settings():
@@ -72,11 +81,12 @@ def test_registrations_name_their_chapter_and_valid_book_settings():
     chapters = _chapters()
     for rep in list_reproductions():
         assert f"book/{rep.chapter}" in chapters, (rep.id, rep.chapter)
-        assert re.search(rf"""\bbook_run\(\s*["']{re.escape(rep.id)}["']""",
-                         chapters[f"book/{rep.chapter}"]), rep.id
+        assert re.search(
+            rf"""\bbook_run\(\s*["']{re.escape(rep.id)}["']""", chapters[f"book/{rep.chapter}"]
+        ), rep.id
         s = book_settings(rep.id)
         rep.check_arguments(seed=s.seed, trials=s.trials)
-        if rep.chapter_seed:   # a chapter's seed only for a reproduction that reads its seed
+        if rep.chapter_seed:  # a chapter's seed only for a reproduction that reads its seed
             assert rep.seeded, rep.id
     assert set(CHAPTER_SEEDS) <= {doc.removeprefix("book/") for doc in chapters}
 
@@ -114,7 +124,10 @@ def test_chapters_run_every_reproduction_through_the_book_settings():
             for m in re.finditer(r"\bbook_run\(([^)]*)\)", body):
                 args = [a.strip() for a in m.group(1).split(",")]
                 assert re.fullmatch(r"""["'][a-z0-9-]+["']""", args[0]), (doc, m.group(0))
-                assert not any(re.match(r"(seed|trials)\s*=", a) for a in args[1:]), (doc, m.group(0))
+                assert not any(re.match(r"(seed|trials)\s*=", a) for a in args[1:]), (
+                    doc,
+                    m.group(0),
+                )
                 called.add(args[0].strip("\"'"))
     assert called <= {r.id for r in list_reproductions()}
     assert "zb2014-fig3" in called and "rosa2013-fig11-rad" in called
@@ -136,8 +149,10 @@ def test_the_cli_runs_each_command_at_the_settings_of_book_run(commands, monkeyp
         book_run(rid)
         cli_call, book_call = calls[-2:]
         rep = get(rid)
-        resolved = [(i, rep.default_seed if s is None else s, rep.default_trials if t is None else t, k)
-                    for i, s, t, k in (cli_call, book_call)]
+        resolved = [
+            (i, rep.default_seed if s is None else s, rep.default_trials if t is None else t, k)
+            for i, s, t, k in (cli_call, book_call)
+        ]
         assert resolved[0] == resolved[1], rid
 
 
@@ -152,7 +167,10 @@ def test_a_printed_command_recomputes_the_chapter_result(commands, monkeypatch):
     book = json.loads(book_run("zb2014-fig3").to_json())
     assert got == book
     default = get("zb2014-fig3")().headline
-    assert (got["headline"]["glr_argmax_time"], round(got["headline"]["glr_max_after_fault"])) == (206, 1886)
+    assert (got["headline"]["glr_argmax_time"], round(got["headline"]["glr_max_after_fault"])) == (
+        206,
+        1886,
+    )
     assert (default["glr_argmax_time"], round(default["glr_max_after_fault"])) == (208, 1729)
 
 
@@ -164,10 +182,16 @@ def test_shown_in_links_the_figure_that_draws_each_reproduction():
         if w["figure"] is None:
             continue
         figures.setdefault(w["figure"], []).append(rid)
-        cell = next(c.group(1) for c in EXT._CELL.finditer(chapters[w["doc"]])
-                    if re.search(rf"^\s+name:\s*{re.escape(w['figure'])}\s*$", c.group(1), re.M))
-        assert re.search(rf"""\bget\(["']{re.escape(rid)}["']\)\.plot\(""", cell), (rid, w["figure"])
-    assert all(len(ids) == 1 for ids in figures.values()), figures   # no figure claimed twice
+        cell = next(
+            c.group(1)
+            for c in EXT._CELL.finditer(chapters[w["doc"]])
+            if re.search(rf"^\s+name:\s*{re.escape(w['figure'])}\s*$", c.group(1), re.M)
+        )
+        assert re.search(rf"""\bget\(["']{re.escape(rid)}["']\)\.plot\(""", cell), (
+            rid,
+            w["figure"],
+        )
+    assert all(len(ids) == 1 for ids in figures.values()), figures  # no figure claimed twice
     # the two links that pointed at the figure of the neighbouring reproduction
     assert where["zb2014-fig6"]["figure"] == "fig-pipeline-fig6"
     assert where["zb2014-fig8"]["figure"] == "fig-pipeline-fig8"
@@ -181,32 +205,39 @@ def test_shown_in_links_the_figure_that_draws_each_reproduction():
 
 def test_post_build_check_reads_the_commands_of_the_rendered_page():
     # the markup Sphinx writes for an inline literal (one span per word)
-    page = ('<p>Introduction: <code>python -m fdi_lib reproduce ID --describe</code></p>'
-            '<p><strong>Command (the book’s settings):</strong> <code class="docutils literal notranslate"><span class="pre">python</span> '
-            '<span class="pre">-m</span> <span class="pre">fdi_lib</span> <span class="pre">reproduce</span> '
-            '<span class="pre">zb2014-fig3</span>&#160;<span class="pre">--seed</span> <span class="pre">2015</span> '
-            '<span class="pre">--json</span></code> and <code>--plot FILE.png</code></p>')
+    page = (
+        "<p>Introduction: <code>python -m fdi_lib reproduce ID --describe</code></p>"
+        '<p><strong>Command (the book’s settings):</strong> <code class="docutils literal notranslate"><span class="pre">python</span> '
+        '<span class="pre">-m</span> <span class="pre">fdi_lib</span> <span class="pre">reproduce</span> '
+        '<span class="pre">zb2014-fig3</span>&#160;<span class="pre">--seed</span> <span class="pre">2015</span> '
+        '<span class="pre">--json</span></code> and <code>--plot FILE.png</code></p>'
+    )
     assert CHECK.page_commands(page) == [["reproduce", "zb2014-fig3", "--seed", "2015", "--json"]]
 
 
-def test_post_build_check_compares_the_command_with_the_cached_chapter_result(tmp_path, monkeypatch):
+def test_post_build_check_compares_the_command_with_the_cached_chapter_result(
+    tmp_path, monkeypatch
+):
     """A cache holding the chapter's run: the book's command passes, a command at another seed is
     'not run' (the chapters never ran it), and a cached result that the command does not
     recompute 'differs'."""
     monkeypatch.setenv(CACHE_ENV, str(tmp_path))
-    book_run("zb2014-fig1")   # deterministic and fast: the chapter's run, cached
+    book_run("zb2014-fig1")  # deterministic and fast: the chapter's run, cached
     argv = book_argv("zb2014-fig1")
     runs = []
     real_run = CHECK.subprocess.run
 
-    def run_once(*args, **kwargs):   # one real subprocess; the second check reuses its output
+    def run_once(*args, **kwargs):  # one real subprocess; the second check reuses its output
         if not runs:
             runs.append(real_run(*args, **kwargs))
         return runs[0]
 
     monkeypatch.setattr(CHECK.subprocess, "run", run_once)
     assert CHECK.check_command(argv, tmp_path)[1:] == ("ok", "")
-    assert CHECK.check_command(["reproduce", "zb2014-fig3", "--seed", "1", "--json"], tmp_path)[1] == "not run"
+    assert (
+        CHECK.check_command(["reproduce", "zb2014-fig3", "--seed", "1", "--json"], tmp_path)[1]
+        == "not run"
+    )
     # tamper with the cached chapter result: the fresh command no longer matches it
     from fdi_lib.reproduce.registry import _cache_entry, _cache_write, cached_run
     import dataclasses
@@ -249,8 +280,11 @@ def test_options_reach_the_reproduction_from_book_run_and_the_printed_command(mo
     book_run("zb2014-fig8", isolation_window="record_end", state2_scale=3.0)
     argv = book_argv("zb2014-fig8", isolation_window="record_end", state2_scale=3.0)
     assert cli.main(argv) == 0
-    assert calls[0] == calls[1] == ("zb2014-fig8", 0, 1000,
-                                    {"isolation_window": "record_end", "state2_scale": 3.0})
+    assert (
+        calls[0]
+        == calls[1]
+        == ("zb2014-fig8", 0, 1000, {"isolation_window": "record_end", "state2_scale": 3.0})
+    )
     assert cli.main(["reproduce", "zb2014-fig8", "--option", "window=1", "--json"]) == 2
     assert cli.main(["reproduce", "zb2014-fig8", "--option", "isolation_window", "--json"]) == 2
     assert len(calls) == 2

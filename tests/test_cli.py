@@ -29,12 +29,14 @@ def documented_keys(rep) -> set[str]:
         assert ref, f"{rep.id}: no 'Headline keys' section and no 'keys as ...' reference"
         if ref.group(1):
             module = __import__(rep.func.__module__, fromlist=["_"])
-            target = next(r for r in list_reproductions() if r.func is getattr(module, ref.group(1)))
+            target = next(
+                r for r in list_reproductions() if r.func is getattr(module, ref.group(1))
+            )
         else:
             target = get(ref.group(2))
         return documented_keys(target)
     section = re.split(r"Headline keys[^\n]*\n-+\n", doc, maxsplit=1)[1]
-    section = re.split(r"\n\S[^\n]*\n-+\n", section, maxsplit=1)[0]      # up to the next section
+    section = re.split(r"\n\S[^\n]*\n-+\n", section, maxsplit=1)[0]  # up to the next section
     names = re.findall(r"^(\w+(?:, \w+)*) :", section, flags=re.M)
     return {key for entry in names for key in entry.split(", ")}
 
@@ -52,8 +54,12 @@ def test_headline_keys_are_exactly_the_documented_ones(rid):
 
 
 def test_json_is_one_object_with_the_contract_keys():
-    proc = subprocess.run([sys.executable, "-m", "fdi_lib", "reproduce", "zb2014-fig3", "--json"],
-                          capture_output=True, text=True, check=True)
+    proc = subprocess.run(
+        [sys.executable, "-m", "fdi_lib", "reproduce", "zb2014-fig3", "--json"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     obj = json.loads(proc.stdout)
     assert set(obj) == {"id", "headline", "paper", "settings"}
     for key in ("glr_max_before_fault", "glr_max_after_fault", "glr_argmax_time", "onset_estimate"):
@@ -61,7 +67,9 @@ def test_json_is_one_object_with_the_contract_keys():
 
 
 def test_unknown_id_and_bad_arguments(capsys):
-    with pytest.raises(UnknownReproductionError, match="no reproduction 'zb2014-fig99'; known ids: .*zb2014-fig1"):
+    with pytest.raises(
+        UnknownReproductionError, match="no reproduction 'zb2014-fig99'; known ids: .*zb2014-fig1"
+    ):
         get("zb2014-fig99")
     assert main(["reproduce", "zb2014-fig99"]) == 2
     assert "no reproduction" in capsys.readouterr().err
@@ -81,17 +89,26 @@ def test_unknown_keyword_is_rejected_by_name():
         reproduce("zb2014-fig1", sed=3)
 
 
-@pytest.mark.parametrize("argv, pattern", [
-    (["zb2014-fig1", "--seed", "-1"], r"seed: expected a non-negative integer, got -1"),
-    (["zb2014-fig1", "--seed", "abc"], r"argument --seed: invalid int value: 'abc'"),
-    (["zb2014-fig1", "--seed", "1.5"], r"argument --seed: invalid int value: '1.5'"),
-    (["zb2014-fig1", "--plot", "/no/such/folder/fig.png"], r"--plot: expected a file in an existing folder"),
-    (["zb2014-fig1", "--plot", "fig.docx"], r"--plot: expected an image file"),
-    (["zb2014-table1", "--plot", "fig.png"], r"--plot: zb2014-table1 has no figure"),
-    (["zb2014-fig1", "--trials", "5"], r"trials: zb2014-fig1 is one deterministic or seeded run"),
-    (["zhang2021-table1", "--trials", "1"], r"--trials: expected at least 2"),
-    (["zhang2021-table1", "--jobs", "0"], r"jobs: expected a non-zero integer"),
-])
+@pytest.mark.parametrize(
+    "argv, pattern",
+    [
+        (["zb2014-fig1", "--seed", "-1"], r"seed: expected a non-negative integer, got -1"),
+        (["zb2014-fig1", "--seed", "abc"], r"argument --seed: invalid int value: 'abc'"),
+        (["zb2014-fig1", "--seed", "1.5"], r"argument --seed: invalid int value: '1.5'"),
+        (
+            ["zb2014-fig1", "--plot", "/no/such/folder/fig.png"],
+            r"--plot: expected a file in an existing folder",
+        ),
+        (["zb2014-fig1", "--plot", "fig.docx"], r"--plot: expected an image file"),
+        (["zb2014-table1", "--plot", "fig.png"], r"--plot: zb2014-table1 has no figure"),
+        (
+            ["zb2014-fig1", "--trials", "5"],
+            r"trials: zb2014-fig1 is one deterministic or seeded run",
+        ),
+        (["zhang2021-table1", "--trials", "1"], r"--trials: expected at least 2"),
+        (["zhang2021-table1", "--jobs", "0"], r"jobs: expected a non-zero integer"),
+    ],
+)
 def test_cli_checks_arguments_before_computing(argv, pattern, capsys, monkeypatch):
     """A one-line error and exit code 2, before anything is computed (no traceback)."""
     from fdi_lib.reproduce.registry import Reproduction
@@ -116,23 +133,28 @@ def test_monte_carlo_flag_follows_the_use_of_trials():
     assert not get("zb2014-fig3").monte_carlo and not get("rosa2013-fig8").monte_carlo
 
 
-@pytest.mark.parametrize("argv, pattern", [
-    (["--ledger", "zb2014-fig1"], r"an ID and --ledger do not go together"),
-    (["zb2014-fig1", "--ledger"], r"an ID and --ledger do not go together"),
-    (["--ledger", "--plot", "fig.png"], r"--plot does not apply to --ledger"),
-    (["--ledger", "--seed", "3"], r"--seed does not apply to --ledger"),
-    (["--ledger", "--option", "a=1"], r"--option does not apply to --ledger"),
-    (["--ledger", "--jobs", "0"],
-     r"argument --jobs: expected a non-zero integer \(-1 = all cores\), got 0"),
-    (["--ledger", "--seed", "-1"], r"argument --seed: expected a non-negative integer, got -1"),
-    (["--ledger", "--trials", "0"], r"argument --trials: expected a positive integer, got 0"),
-    (["--ledger", "--jobs", "two"], r"argument --jobs: invalid int value: 'two'"),
-    (["--list", "zb2014-fig1"], r"an ID and --list do not go together"),
-    (["--list", "--json"], r"--json does not apply to --list"),
-    (["--describe"], r"--describe needs a reproduction ID"),
-    (["zb2014-fig1", "--describe", "--seed", "2"], r"--seed does not apply to --describe"),
-    ([], r"give a reproduction ID, --list or --ledger"),
-])
+@pytest.mark.parametrize(
+    "argv, pattern",
+    [
+        (["--ledger", "zb2014-fig1"], r"an ID and --ledger do not go together"),
+        (["zb2014-fig1", "--ledger"], r"an ID and --ledger do not go together"),
+        (["--ledger", "--plot", "fig.png"], r"--plot does not apply to --ledger"),
+        (["--ledger", "--seed", "3"], r"--seed does not apply to --ledger"),
+        (["--ledger", "--option", "a=1"], r"--option does not apply to --ledger"),
+        (
+            ["--ledger", "--jobs", "0"],
+            r"argument --jobs: expected a non-zero integer \(-1 = all cores\), got 0",
+        ),
+        (["--ledger", "--seed", "-1"], r"argument --seed: expected a non-negative integer, got -1"),
+        (["--ledger", "--trials", "0"], r"argument --trials: expected a positive integer, got 0"),
+        (["--ledger", "--jobs", "two"], r"argument --jobs: invalid int value: 'two'"),
+        (["--list", "zb2014-fig1"], r"an ID and --list do not go together"),
+        (["--list", "--json"], r"--json does not apply to --list"),
+        (["--describe"], r"--describe needs a reproduction ID"),
+        (["zb2014-fig1", "--describe", "--seed", "2"], r"--seed does not apply to --describe"),
+        ([], r"give a reproduction ID, --list or --ledger"),
+    ],
+)
 def test_options_that_do_not_apply_are_a_usage_error_at_once(argv, pattern, capsys, monkeypatch):
     """``--ledger`` with an ID, --plot, a bad --jobs or --seed ran on for minutes: now argparse's
     usage error (one line, exit 2) before anything is computed."""

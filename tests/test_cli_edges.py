@@ -42,10 +42,13 @@ def test_jobs_above_the_cores_are_capped_with_a_one_line_warning(spy, capsys, mo
     assert main(["reproduce", "zb2014-table1", "--jobs", "1000000", "--json"]) == 0
     out, err = capsys.readouterr()
     assert spy[-1]["jobs"] == 2
-    assert err == "warning: jobs: 1000000 requested, 2 used (2 CPU cores); the results do not depend on it\n"
+    assert (
+        err
+        == "warning: jobs: 1000000 requested, 2 used (2 CPU cores); the results do not depend on it\n"
+    )
     assert out.startswith('{"id": "zb2014-table1"')
     assert main(["reproduce", "zb2014-table1", "--jobs", "-1", "--json"]) == 0
-    assert spy[-1]["jobs"] == 2 and capsys.readouterr().err == ""      # every core, no warning
+    assert spy[-1]["jobs"] == 2 and capsys.readouterr().err == ""  # every core, no warning
 
 
 def test_progress_bars_follow_a_terminal_on_standard_error(spy, monkeypatch):
@@ -75,7 +78,7 @@ def _descendants(pid: int) -> set[int]:
 def _alive(pid: int) -> bool:
     try:
         with open(f"/proc/{pid}/stat") as fh:
-            return fh.read().rsplit(")", 1)[1].split()[0] != "Z"   # a zombie has exited
+            return fh.read().rsplit(")", 1)[1].split()[0] != "Z"  # a zombie has exited
     except OSError:
         return False
 
@@ -84,14 +87,19 @@ def _alive(pid: int) -> bool:
 def test_sigint_exits_130_with_one_line_and_no_worker_left():
     """Ctrl-C used to print a 40-line traceback; now 'interrupted', exit 130, workers stopped."""
     env = {k: v for k, v in os.environ.items() if k != CACHE_ENV}
-    proc = subprocess.Popen([sys.executable, "-m", "fdi_lib", "reproduce", "zhang2021-table1", "--jobs", "2",
-                             "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "fdi_lib", "reproduce", "zhang2021-table1", "--jobs", "2", "--json"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
     try:
         deadline = time.monotonic() + 120
         workers: set[int] = set()
-        while time.monotonic() < deadline and proc.poll() is None:   # until the worker pool runs
+        while time.monotonic() < deadline and proc.poll() is None:  # until the worker pool runs
             workers = _descendants(proc.pid)
-            if len(workers) >= 2:    # loky's resource tracker and a worker
+            if len(workers) >= 2:  # loky's resource tracker and a worker
                 break
             time.sleep(0.1)
         assert workers and proc.poll() is None, "the run ended before its workers started"
@@ -116,13 +124,16 @@ def test_a_damaged_cache_entry_is_a_miss_with_a_warning(tmp_path, monkeypatch):
     (entry,) = (tmp_path / "cache" / "zb2014-table1").glob("*.pkl")
     for damage in (b"garbage", entry.read_bytes()[:40], pickle.dumps({"not": "a result"})):
         entry.write_bytes(damage)
-        with pytest.warns(CacheWarning, match=r"FDI_RESULTS_CACHE: (cannot read|expected a result of "
-                                              r"'zb2014-table1')"):
+        with pytest.warns(
+            CacheWarning,
+            match=r"FDI_RESULTS_CACHE: (cannot read|expected a result of "
+            r"'zb2014-table1')",
+        ):
             again = reproduce("zb2014-table1")
         assert again.headline == first.headline
         with warnings.catch_warnings():
             warnings.simplefilter("error")
-            assert reproduce("zb2014-table1").headline == first.headline   # rewritten: a clean hit
+            assert reproduce("zb2014-table1").headline == first.headline  # rewritten: a clean hit
             assert cached_results()["zb2014-table1"].headline == first.headline
         entry.write_bytes(damage)
         with pytest.warns(CacheWarning, match="cannot read|expected a result"):
@@ -133,11 +144,15 @@ def test_a_cache_variable_naming_a_file_is_skipped_with_a_warning(tmp_path, monk
     target = tmp_path / "a-file"
     target.write_text("not a folder")
     monkeypatch.setenv(CACHE_ENV, str(target))
-    with pytest.warns(CacheWarning, match=r"FDI_RESULTS_CACHE: cannot store the result in .*a-file"):
+    with pytest.warns(
+        CacheWarning, match=r"FDI_RESULTS_CACHE: cannot store the result in .*a-file"
+    ):
         result = reproduce("zb2014-table1")
     assert result.id == "zb2014-table1" and target.read_text() == "not a folder"
     with pytest.warns(CacheWarning, match=r"expected a directory, got the file .*a-file"):
         assert cached_results() == {}
-    assert main(["reproduce", "zb2014-table1", "--json"]) == 0       # the CLI: one warning line, no traceback
+    assert (
+        main(["reproduce", "zb2014-table1", "--json"]) == 0
+    )  # the CLI: one warning line, no traceback
     err = capsys.readouterr().err
     assert err.startswith("warning: FDI_RESULTS_CACHE: cannot store") and len(err.splitlines()) == 1

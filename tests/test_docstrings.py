@@ -6,9 +6,23 @@ import re
 
 import pytest
 
-CORE = ["fdi_lib.models", "fdi_lib.simulate", "fdi_lib.filters", "fdi_lib.signatures", "fdi_lib.glr",
-        "fdi_lib.isolation", "fdi_lib.montecarlo", "fdi_lib.calibration", "fdi_lib.kitanidis", "fdi_lib.sparse",
-        "fdi_lib.nonparametric", "fdi_lib.rls", "fdi_lib.sets.polytope", "fdi_lib.sets.svo", "fdi_lib.threads"]
+CORE = [
+    "fdi_lib.models",
+    "fdi_lib.simulate",
+    "fdi_lib.filters",
+    "fdi_lib.signatures",
+    "fdi_lib.glr",
+    "fdi_lib.isolation",
+    "fdi_lib.montecarlo",
+    "fdi_lib.calibration",
+    "fdi_lib.kitanidis",
+    "fdi_lib.sparse",
+    "fdi_lib.nonparametric",
+    "fdi_lib.rls",
+    "fdi_lib.sets.polytope",
+    "fdi_lib.sets.svo",
+    "fdi_lib.threads",
+]
 
 
 def _documented(doc: str) -> set[str]:
@@ -32,15 +46,23 @@ def _public_functions():
                 yield f"{name}.{attr}", obj
 
 
-@pytest.mark.parametrize("qualname, func", list(_public_functions()), ids=lambda x: x if isinstance(x, str) else "")
+@pytest.mark.parametrize(
+    "qualname, func", list(_public_functions()), ids=lambda x: x if isinstance(x, str) else ""
+)
 def test_parameters_section_matches_signature(qualname, func):
     doc = inspect.getdoc(func) or ""
     assert doc, f"{qualname} has no docstring"
     documented = _documented(doc)
     params = {p.name for p in inspect.signature(func).parameters.values()}
-    if not documented:  # short docstrings of small helpers document each argument inline, as ``name``
+    if (
+        not documented
+    ):  # short docstrings of small helpers document each argument inline, as ``name``
         inline = {p for p in params if re.search(rf"``\**{p}``", doc)}
-        assert inline == params, f"{qualname}: no Parameters section and {params - inline} not mentioned"
+        assert inline == params, (
+            f"{qualname}: no Parameters section and {params - inline} not mentioned"
+        )
         return
-    assert documented <= params, f"{qualname} documents parameters it does not take: {documented - params}"
+    assert documented <= params, (
+        f"{qualname} documents parameters it does not take: {documented - params}"
+    )
     assert params <= documented, f"{qualname} takes undocumented parameters: {params - documented}"

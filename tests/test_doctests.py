@@ -5,9 +5,22 @@ import importlib
 
 import pytest
 
-CORE = ["fdi_lib.models", "fdi_lib.filters", "fdi_lib.signatures", "fdi_lib.glr", "fdi_lib.isolation",
-        "fdi_lib.simulate", "fdi_lib.montecarlo", "fdi_lib.calibration", "fdi_lib.kitanidis", "fdi_lib.rls",
-        "fdi_lib.nonparametric", "fdi_lib.sparse", "fdi_lib.validation", "fdi_lib.windturbine"]
+CORE = [
+    "fdi_lib.models",
+    "fdi_lib.filters",
+    "fdi_lib.signatures",
+    "fdi_lib.glr",
+    "fdi_lib.isolation",
+    "fdi_lib.simulate",
+    "fdi_lib.montecarlo",
+    "fdi_lib.calibration",
+    "fdi_lib.kitanidis",
+    "fdi_lib.rls",
+    "fdi_lib.nonparametric",
+    "fdi_lib.sparse",
+    "fdi_lib.validation",
+    "fdi_lib.windturbine",
+]
 
 
 @pytest.mark.parametrize("name", CORE)
@@ -20,9 +33,18 @@ def test_docstring_examples(name):
 #: Modules whose every exported function has a runnable example and names the chapter that
 #: explains it (issue 34); the other core modules are not complete yet (montecarlo, sparse and
 #: four functions of nonparametric).
-EXAMPLED = ["fdi_lib.models", "fdi_lib.filters", "fdi_lib.signatures", "fdi_lib.glr", "fdi_lib.isolation",
-            "fdi_lib.simulate", "fdi_lib.calibration", "fdi_lib.kitanidis", "fdi_lib.rls",
-            "fdi_lib.validation"]
+EXAMPLED = [
+    "fdi_lib.models",
+    "fdi_lib.filters",
+    "fdi_lib.signatures",
+    "fdi_lib.glr",
+    "fdi_lib.isolation",
+    "fdi_lib.simulate",
+    "fdi_lib.calibration",
+    "fdi_lib.kitanidis",
+    "fdi_lib.rls",
+    "fdi_lib.validation",
+]
 
 
 @pytest.mark.parametrize("name", EXAMPLED)

@@ -71,10 +71,14 @@ glue("ledger_seen", sorted(os.listdir(os.environ["FDI_TEST_RESULTS"])), display=
 
 def _book(root: Path, *, failing: bool = False) -> Path:
     (root / "book").mkdir(parents=True)
-    (root / "_config.yml").write_text("execute:\n  execute_notebooks: force\n  timeout: 120\n"
-                                      "  allow_errors: false\n  run_in_temp: false\n")
-    (root / "_toc.yml").write_text("format: jb-book\nroot: book/intro\nchapters:\n"
-                                   "  - file: book/a\n  - file: book/zz-ledger\n  - file: book/b\n")
+    (root / "_config.yml").write_text(
+        "execute:\n  execute_notebooks: force\n  timeout: 120\n"
+        "  allow_errors: false\n  run_in_temp: false\n"
+    )
+    (root / "_toc.yml").write_text(
+        "format: jb-book\nroot: book/intro\nchapters:\n"
+        "  - file: book/a\n  - file: book/zz-ledger\n  - file: book/b\n"
+    )
     (root / "book" / "intro.md").write_text("# A book\n\nNo code here.\n")
     for name, seed in (("a", 1), ("b", 2)):
         body = CHAPTER.format(name=name, seed=seed)
@@ -85,14 +89,27 @@ def _book(root: Path, *, failing: bool = False) -> Path:
     return root
 
 
-def _run(root: Path, cache: Path, jobs: int, results: Path,
-         *extra: str) -> subprocess.CompletedProcess:
+def _run(
+    root: Path, cache: Path, jobs: int, results: Path, *extra: str
+) -> subprocess.CompletedProcess:
     results.mkdir(parents=True, exist_ok=True)
     env = {**os.environ, "FDI_TEST_RESULTS": str(results)}
     env.pop("FDI_CORES", None)
-    cmd = [sys.executable, str(ROOT / "tools" / "execute_book.py"), "--root", str(root),
-           "--cache", str(cache), "--jobs", str(jobs), "--report", str(root / "none.json"),
-           "--config-out", str(root / "_build" / "_config_book.yml"), *extra]
+    cmd = [
+        sys.executable,
+        str(ROOT / "tools" / "execute_book.py"),
+        "--root",
+        str(root),
+        "--cache",
+        str(cache),
+        "--jobs",
+        str(jobs),
+        "--report",
+        str(root / "none.json"),
+        "--config-out",
+        str(root / "_build" / "_config_book.yml"),
+        *extra,
+    ]
     return subprocess.run(cmd, env=env, capture_output=True, text=True)
 
 
@@ -120,14 +137,15 @@ def test_parallel_execution_glues_what_a_serial_one_does(tmp_path, monkeypatch):
         assert done.returncode == 0, done.stderr
         assert "book/a.md: Executed notebook in" in done.stdout
         assert "book/zz-ledger.md: Executed notebook in" in done.stdout
-        glued[jobs] = {doc: _glued(cache, book / "book" / f"{doc}.md")
-                       for doc in ("a", "b", "zz-ledger")}
+        glued[jobs] = {
+            doc: _glued(cache, book / "book" / f"{doc}.md") for doc in ("a", "b", "zz-ledger")
+        }
     serial, parallel = glued[1], glued[2]
     cores = min(2, joblib.cpu_count())
     for doc in ("a", "b"):
-        assert serial[doc][f"{doc}_sum"] == parallel[doc][f"{doc}_sum"]   # the same repr
-        assert serial[doc][f"{doc}_jobs"] == str(cores)    # alone: every core
-        assert parallel[doc][f"{doc}_jobs"] == "1"         # beside another chapter: its share
+        assert serial[doc][f"{doc}_sum"] == parallel[doc][f"{doc}_sum"]  # the same repr
+        assert serial[doc][f"{doc}_jobs"] == str(cores)  # alone: every core
+        assert parallel[doc][f"{doc}_jobs"] == "1"  # beside another chapter: its share
     # the ledger ran after both chapters in both runs (it is listed between them in the TOC)
     assert serial["zz-ledger"] == parallel["zz-ledger"] == {"ledger_seen": "['a', 'b']"}
     # the build's configuration reads that cache
@@ -136,8 +154,9 @@ def test_parallel_execution_glues_what_a_serial_one_does(tmp_path, monkeypatch):
     # another edition whose chapter b changed (the student edition): a and the ledger are reused
     b = book / "book" / "b.md"
     b.write_text(b.read_text().replace("seed=2", "seed=3"))
-    done = _run(book, tmp_path / "cache-3", 2, tmp_path / "results-3",
-                "--reuse", str(tmp_path / "cache-2"))
+    done = _run(
+        book, tmp_path / "cache-3", 2, tmp_path / "results-3", "--reuse", str(tmp_path / "cache-2")
+    )
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
     executed = [line.split(":")[0] for line in lines if "Executed notebook in" in line]
@@ -153,15 +172,19 @@ def test_a_cell_error_fails_the_run_with_its_traceback(tmp_path):
     done = _run(book, tmp_path / "cache", 2, tmp_path / "results")
     assert done.returncode == 1
     assert "a broken cell" in done.stderr and "Execution failed: book/b.md" in done.stderr
-    assert not (book / "_build" / "_config_book.yml").exists()   # no build configuration: no build
+    assert not (book / "_build" / "_config_book.yml").exists()  # no build configuration: no build
 
 
 def test_chapters_are_the_toc_notebooks_with_code_longest_first(tmp_path):
     book = _book(tmp_path / "src")
-    assert TOOL.toc_documents(book / "_toc.yml") == ["book/intro", "book/a", "book/zz-ledger",
-                                                     "book/b"]
+    assert TOOL.toc_documents(book / "_toc.yml") == [
+        "book/intro",
+        "book/a",
+        "book/zz-ledger",
+        "book/b",
+    ]
     found = TOOL.chapters(book, book / "_toc.yml", {"book/b.md": 9.0, "book/a.md": 1.0})
-    assert [c.doc for c in found] == ["book/a", "book/zz-ledger", "book/b"]   # intro has no code
+    assert [c.doc for c in found] == ["book/a", "book/zz-ledger", "book/b"]  # intro has no code
     assert {c.doc: c.weight for c in found}["book/b"] == 9.0
     nb = found[0].notebook
     assert isinstance(nb, nbformat.NotebookNode) and nb.metadata.kernelspec.name == "python3"

@@ -16,8 +16,17 @@ import scipy.stats
 
 from fdi_lib import exercises as E
 from fdi_lib.errors import ModelError
-from fdi_lib.exercises import (EXERCISES, AnswerError, UnknownExerciseError, check, code_cells,
-                               exercise_data, exercises_section, parse_chapter, strip_solutions)
+from fdi_lib.exercises import (
+    EXERCISES,
+    AnswerError,
+    UnknownExerciseError,
+    check,
+    code_cells,
+    exercise_data,
+    exercises_section,
+    parse_chapter,
+    strip_solutions,
+)
 from fdi_lib.exercises._reference import REFERENCES
 from fdi_lib.exercises.checker import close, zero_floor
 from fdi_lib.exercises._reference import glr as ref_glr
@@ -66,8 +75,8 @@ def test_data_is_seeded(exercise_id):
     for key in a:
         if isinstance(a[key], np.ndarray):
             np.testing.assert_array_equal(a[key], b[key])
-            assert a[key] is not b[key]          # a fresh copy: students may modify it
-    assert repr(a)                               # printable
+            assert a[key] is not b[key]  # a fresh copy: students may modify it
+    assert repr(a)  # printable
 
 
 # ----------------------------------------------------------------------------- independent references
@@ -87,22 +96,31 @@ def _kalman_by_hand(d):
 INDEPENDENT = {
     "sig-1": _kalman_by_hand,
     "sig-5": lambda d: np.log10(1.2),
-    "glr-1": lambda d: -2 * np.log(d["alpha"]),                       # chi2(2) is exponential, mean 2
-    "glr-2": lambda d: [16 / 7, 5 / 7, -6 / 7],                       # C^-1 = [[2, -1], [-1, 4]] / 7
+    "glr-1": lambda d: -2 * np.log(d["alpha"]),  # chi2(2) is exponential, mean 2
+    "glr-2": lambda d: [16 / 7, 5 / 7, -6 / 7],  # C^-1 = [[2, -1], [-1, 4]] / 7
     "glr-5": lambda d: d["w"] - d["s"],
     "pipe-1": lambda d: scipy.stats.norm.ppf(1 - d["alpha"] / 2) ** 2,
-    "pipe-5": lambda d: [scipy.stats.beta.ppf(0.025, 7, 1994), scipy.stats.beta.ppf(0.975, 8, 1993)],
+    "pipe-5": lambda d: [
+        scipy.stats.beta.ppf(0.025, 7, 1994),
+        scipy.stats.beta.ppf(0.975, 8, 1993),
+    ],
     "sparse-1": lambda d: 1 + 50 + 1225 + 19600 + 230300 + 2118760,
     "sparse-3": lambda d: np.abs(d["X"].T @ d["y"]).max() / d["n_samples"],
     "bz-5": lambda d: scipy.stats.chi2.isf(d["alpha"], d["window"] * d["p_reduced"]),
     "svo-2": lambda d: [1.2, 1.4],
-    "svo-3": lambda d: 6.0 - 5.0,                                     # hull 6, union 4 + 4 - 3
+    "svo-3": lambda d: 6.0 - 5.0,  # hull 6, union 4 + 4 - 3
     "svo-4": lambda d: 0.9 * 0.2 + 0.05 + 0.1,
     "svo-5": lambda d: 2 ** (d["N"] * d["n_A"]),
-    "wt-1": lambda d: scipy.optimize.brentq(lambda t: t * t * d["information_per_deg2"] - d["threshold"],
-                                            0.0, 100.0, xtol=1e-14),
-    "wt-2": lambda d: (math.erfc(d["k_sigma"] / math.sqrt(2)) * d["sensors"] * d["hours"] * 3600
-                       * d["sample_rate_hz"]),
+    "wt-1": lambda d: scipy.optimize.brentq(
+        lambda t: t * t * d["information_per_deg2"] - d["threshold"], 0.0, 100.0, xtol=1e-14
+    ),
+    "wt-2": lambda d: (
+        math.erfc(d["k_sigma"] / math.sqrt(2))
+        * d["sensors"]
+        * d["hours"]
+        * 3600
+        * d["sample_rate_hz"]
+    ),
 }
 
 
@@ -139,8 +157,11 @@ def _numbers(message: str) -> list[float]:
 def test_messages_never_reveal_the_answer(exercise_id):
     ref = reference(exercise_id)
     wrongs = [1.5 * ref + 1.0, -ref - 1.0, 100 * ref + 3.0, np.zeros(ref.shape) + 0.123]
-    wrongs += [np.array(m.answer(exercise_data(exercise_id)), dtype=float) for m in REFERENCES[exercise_id].mistakes]
-    secret = [v for v in np.ravel(ref) if v != round(v)]            # small integers are also indices
+    wrongs += [
+        np.array(m.answer(exercise_data(exercise_id)), dtype=float)
+        for m in REFERENCES[exercise_id].mistakes
+    ]
+    secret = [v for v in np.ravel(ref) if v != round(v)]  # small integers are also indices
     for wrong in wrongs:
         message = check(exercise_id, wrong).message
         for number in _numbers(message):
@@ -174,12 +195,24 @@ TYPICAL = [
     ("sparse-3", lambda: 1e-4 * reference("sparse-3"), "too small by about a factor 10^4"),
     ("glr-1", lambda: 1.05 * reference("glr-1"), "close (within 10 %)"),
     ("sig-2", lambda: _off_entry("sig-2", (1, 0), 1.5), "Entry [1, 0] is off"),
-    ("svo-1", lambda: _off_entry("svo-1", 2, -1.0), "Entry [2] (the rest matches): The sign is wrong."),
+    (
+        "svo-1",
+        lambda: _off_entry("svo-1", 2, -1.0),
+        "Entry [2] (the rest matches): The sign is wrong.",
+    ),
     ("svo-1", lambda: _off_entry("svo-1", 0, 1.5), "Entry [0] is off (it is too "),
     ("sig-3", lambda: reference("sig-3") + 1.0, "5 of 5 entries are off"),
-    ("sparse-5", lambda: REFERENCES["sparse-5"].mistakes[0].answer(exercise_data("sparse-5")), "shrunk towards zero"),
+    (
+        "sparse-5",
+        lambda: REFERENCES["sparse-5"].mistakes[0].answer(exercise_data("sparse-5")),
+        "shrunk towards zero",
+    ),
     ("sparse-1", lambda: 2118760, "exactly q_max"),
-    ("svo-1", lambda: ref_svo._svo1_answer(exercise_data("svo-1"), strip=False), "intersect with the strip"),
+    (
+        "svo-1",
+        lambda: ref_svo._svo1_answer(exercise_data("svo-1"), strip=False),
+        "intersect with the strip",
+    ),
 ]
 
 
@@ -192,7 +225,15 @@ def test_typical_wrong_answers_get_the_right_message(exercise_id, wrong, expecte
 
 
 CHECKABLE = [e.id for e in EXERCISES.values() if e.checkable]
-EXTREMES = [5e-324, -5e-324, 2.2e-308, 1e308, -1e308, 1.7976931348623157e308, -1.7976931348623157e308]
+EXTREMES = [
+    5e-324,
+    -5e-324,
+    2.2e-308,
+    1e308,
+    -1e308,
+    1.7976931348623157e308,
+    -1.7976931348623157e308,
+]
 
 
 @pytest.mark.parametrize("exercise_id", CHECKABLE)
@@ -205,52 +246,80 @@ def test_extreme_answers_get_a_message_not_a_crash(exercise_id):
     first = np.arange(ref.size).reshape(ref.shape) == 0
     floor = zero_floor(ref, E.get_exercise(exercise_id))
     with warnings.catch_warnings():
-        warnings.simplefilter("error")                       # no overflow or underflow warning either
+        warnings.simplefilter("error")  # no overflow or underflow warning either
         for v in EXTREMES:
-            for answer in (np.full(ref.shape, v), np.where(first, v, ref), np.where(first, v, -ref)):
+            for answer in (
+                np.full(ref.shape, v),
+                np.where(first, v, ref),
+                np.where(first, v, -ref),
+            ):
                 if np.all(close(answer, ref, E.get_exercise(exercise_id), floor)):
                     # a denormal where the reference is an exact zero is that zero (issue 36.6)
                     assert abs(v) <= floor and check(exercise_id, answer), (v, answer)
                     continue
                 result = check(exercise_id, answer)
-                assert not result and result.message.startswith(f"{exercise_id}: not yet."), (v, result)
-    if ref.size == 1 and E.get_exercise(exercise_id).tolerance != "exact (integers)" and float(ref) != 0:
-        assert "too small by about a factor 10^" in check(exercise_id, 5e-324 * np.sign(ref)).message
+                assert not result and result.message.startswith(f"{exercise_id}: not yet."), (
+                    v,
+                    result,
+                )
+    if (
+        ref.size == 1
+        and E.get_exercise(exercise_id).tolerance != "exact (integers)"
+        and float(ref) != 0
+    ):
+        assert (
+            "too small by about a factor 10^" in check(exercise_id, 5e-324 * np.sign(ref)).message
+        )
         assert "too large by about a factor 10^" in check(exercise_id, 1e308 * np.sign(ref)).message
 
 
-@pytest.mark.parametrize("exercise_id", [e.id for e in EXERCISES.values()
-                                         if e.checkable and e.tolerance == "exact (integers)"])
+@pytest.mark.parametrize(
+    "exercise_id",
+    [e.id for e in EXERCISES.values() if e.checkable and e.tolerance == "exact (integers)"],
+)
 def test_integer_answers_must_be_whole_numbers(exercise_id):
     """97.5 passed as the count 98 (within the 0.5 tolerance of an integer answer)."""
     ref = reference(exercise_id)
     for answer in (ref + 0.5, ref - 0.4999, ref + 1e-9):
         result = check(exercise_id, answer)
-        assert not result and "which is not a whole number (a count is an integer)" in result.message
-        assert f"{float(ref.ravel()[0])!r}" not in result.message.replace(f"{float(answer.ravel()[0])!r}", "")
+        assert (
+            not result and "which is not a whole number (a count is an integer)" in result.message
+        )
+        assert f"{float(ref.ravel()[0])!r}" not in result.message.replace(
+            f"{float(answer.ravel()[0])!r}", ""
+        )
     assert check(exercise_id, ref.astype(float)) and check(exercise_id, ref.astype(np.int64))
 
 
 def test_glr5_rejects_97_5():
     result = check("glr-5", 97.5)
     assert not result
-    assert result.message == ("glr-5: not yet. Expected an integer: the number of candidate onsets r at "
-                              "time k; got 97.5, which is not a whole number (a count is an integer).")
+    assert result.message == (
+        "glr-5: not yet. Expected an integer: the number of candidate onsets r at "
+        "time k; got 97.5, which is not a whole number (a count is an integer)."
+    )
 
 
 def test_unknown_exercise_is_a_typed_error_with_suggestions():
     with pytest.raises(UnknownExerciseError, match=r"no exercise 'glr-33'; did you mean 'glr-3'"):
         check("glr-33", 1.0)
-    with pytest.raises(KeyError):                 # still a KeyError for generic handlers
+    with pytest.raises(KeyError):  # still a KeyError for generic handlers
         E.get_exercise("nope")
     with pytest.raises(UnknownExerciseError, match="expected a string"):
         check(3, 1.0)
 
 
-@pytest.mark.parametrize("bad, match", [("9.2", "got str"), ({"a": 1}, "got dict"),
-                                        ([1.0, np.nan], r"got nan at index \[1\]"),
-                                        (np.inf, "got inf"), (1 + 2j, "complex"),
-                                        ([[1.0], [1.0, 2.0]], "numpy cannot read")])
+@pytest.mark.parametrize(
+    "bad, match",
+    [
+        ("9.2", "got str"),
+        ({"a": 1}, "got dict"),
+        ([1.0, np.nan], r"got nan at index \[1\]"),
+        (np.inf, "got inf"),
+        (1 + 2j, "complex"),
+        ([[1.0], [1.0, 2.0]], "numpy cannot read"),
+    ],
+)
 def test_unusable_answers_are_typed_errors(bad, match):
     with pytest.raises(AnswerError, match=match):
         check("glr-3", bad)
@@ -264,7 +333,9 @@ def test_explanations_are_not_checkable():
 
 def test_check_result_behaves_like_a_bool_and_prints_its_message():
     ok = check("glr-5", 98)
-    assert ok and repr(ok) == str(ok) == ok.message == "glr-5: correct (tolerance: exact (integers))."
+    assert (
+        ok and repr(ok) == str(ok) == ok.message == "glr-5: correct (tolerance: exact (integers))."
+    )
 
 
 def test_exercise_table_lists_every_exercise():
@@ -280,7 +351,9 @@ def _all_chapter_exercises():
     found = {}
     for path in sorted(BOOK.rglob("*.md")):
         for ex in parse_chapter(path.read_text()):
-            found.setdefault(ex.id, []).append((path.relative_to(BOOK).with_suffix("").as_posix(), ex))
+            found.setdefault(ex.id, []).append(
+                (path.relative_to(BOOK).with_suffix("").as_posix(), ex)
+            )
     return found
 
 
@@ -302,7 +375,7 @@ def test_every_exercise_appears_in_exactly_one_chapter_with_its_label():
 
 @pytest.mark.parametrize("exercise_id", list(EXERCISES))
 def test_starter_and_solution_cells(exercise_id):
-    (chapter, ex), = _all_chapter_exercises()[exercise_id]
+    ((chapter, ex),) = _all_chapter_exercises()[exercise_id]
     starter, solution = code_cells(ex.exercise), code_cells(ex.solution)
     assert len(starter) == 1 and solution
     for cell in starter + solution:
@@ -351,7 +424,9 @@ def test_strip_solutions_keeps_everything_else(chapter):
     stripped = strip_solutions(text)
     assert "solution-start" not in stripped and "solution-end" not in stripped
     assert [e.id for e in parse_chapter(stripped)] == [e.id for e in parse_chapter(text)]
-    assert [e.exercise for e in parse_chapter(stripped)] == [e.exercise for e in parse_chapter(text)]
+    assert [e.exercise for e in parse_chapter(stripped)] == [
+        e.exercise for e in parse_chapter(text)
+    ]
     assert all(not e.solution for e in parse_chapter(stripped))
     # what remains is the original with the solution blocks cut out (an independent regex cut)
     expected = E.book._SOLUTION_RE.sub("", text)
@@ -360,8 +435,10 @@ def test_strip_solutions_keeps_everything_else(chapter):
 
 
 def test_strip_solutions_small_cases():
-    text = ("a\n\n```{solution-start} ex-x\n:class: dropdown\n```\n\nsecret\n\n```{code-cell} ipython3\n"
-            "secret_code()\n```\n\n```{solution-end}\n```\n\nb\n:::{solution} ex-y\nold secret\n:::\nc\n")
+    text = (
+        "a\n\n```{solution-start} ex-x\n:class: dropdown\n```\n\nsecret\n\n```{code-cell} ipython3\n"
+        "secret_code()\n```\n\n```{solution-end}\n```\n\nb\n:::{solution} ex-y\nold secret\n:::\nc\n"
+    )
     assert strip_solutions(text) == "a\n\nb\nc\n"
     with pytest.raises(ModelError, match="has no solution-end"):
         strip_solutions("```{solution-start} ex-x\n```\nsecret\n")
@@ -369,13 +446,26 @@ def test_strip_solutions_small_cases():
 
 def test_counts_table_totals():
     counts = E.counts_table()
-    assert counts.rows[-1][1][:3] == tuple(str(sum(e.difficulty == d for e in EXERCISES.values()))
-                                           for d in E.DIFFICULTIES)
+    assert counts.rows[-1][1][:3] == tuple(
+        str(sum(e.difficulty == d for e in EXERCISES.values())) for d in E.DIFFICULTIES
+    )
 
 
 def test_words_read_sources_notebooks_and_html_alike():
-    assert E.words("Then $H_k\\Gamma_k$ is `fault_signature(m)`") == ["then", "is", "fault", "signature", "m"]
-    assert E.words("Then \\(H_k\\Gamma_k\\) is fault_signature ( m )") == ["then", "is", "fault", "signature", "m"]
+    assert E.words("Then $H_k\\Gamma_k$ is `fault_signature(m)`") == [
+        "then",
+        "is",
+        "fault",
+        "signature",
+        "m",
+    ]
+    assert E.words("Then \\(H_k\\Gamma_k\\) is fault_signature ( m )") == [
+        "then",
+        "is",
+        "fault",
+        "signature",
+        "m",
+    ]
 
 
 def test_parse_chapter_rejects_a_title_that_names_another_exercise():
@@ -387,7 +477,9 @@ def test_parse_chapter_rejects_a_title_that_names_another_exercise():
 def test_docstring_examples():
     import doctest
 
-    results = [doctest.testmod(module, optionflags=doctest.ELLIPSIS) for module in (E, E.checker, E.book)]
+    results = [
+        doctest.testmod(module, optionflags=doctest.ELLIPSIS) for module in (E, E.checker, E.book)
+    ]
     assert sum(r.attempted for r in results) >= 5 and not any(r.failed for r in results)
 
 
@@ -399,11 +491,13 @@ def test_sparse5_zeros_computed_as_1e17_are_zeros():
     answer = np.where(ref == 0, 1e-17, ref)
     assert np.any(ref == 0)
     assert check("sparse-5", answer).passed
-    assert not np.all(close(answer, ref, EXERCISES["sparse-5"], floor=0.0))   # without the floor
+    assert not np.all(close(answer, ref, EXERCISES["sparse-5"], floor=0.0))  # without the floor
 
 
-@pytest.mark.parametrize("exercise_id", [e.id for e in EXERCISES.values()
-                                         if e.checkable and not e.integer and e.rtol > 0])
+@pytest.mark.parametrize(
+    "exercise_id",
+    [e.id for e in EXERCISES.values() if e.checkable and not e.integer and e.rtol > 0],
+)
 def test_digest_buckets_never_accept_what_the_grader_rejects(exercise_id):
     """The student package stores only buckets wholly within the tolerance (one tolerance
     function, :func:`close`): an answer its digests accept is within the grader's tolerance, at

@@ -51,10 +51,18 @@ WRONG = [
     ("sig-2", "open-loop recursion", lambda: mistake("sig-2", 0), "closed-loop predictor"),
     ("sig-2", "one iteration too few (Gamma_2)", lambda: shifted("sig-2", "k", -1), SHIFT),
     ("sig-2", "one iteration too many (Gamma_4)", lambda: shifted("sig-2", "k", 1), SHIFT),
-    ("sig-3", "appended after the update (k = 1..5)",
-     lambda: np.r_[ref("sig-3")[1:], 0.0], "one sample early"),
-    ("sig-3", "started the series with Gamma_-1 = 0", lambda: np.r_[0.0, ref("sig-3")[:-1]],
-     "one sample late"),
+    (
+        "sig-3",
+        "appended after the update (k = 1..5)",
+        lambda: np.r_[ref("sig-3")[1:], 0.0],
+        "one sample early",
+    ),
+    (
+        "sig-3",
+        "started the series with Gamma_-1 = 0",
+        lambda: np.r_[0.0, ref("sig-3")[:-1]],
+        "one sample late",
+    ),
     ("sig-3", "no -F K Phi term", lambda: mistake("sig-3", 0), "-F_k K_k Phi_k"),
     ("sig-4", "entries of v swapped", lambda: ref("sig-4")[::-1], SWAP),
     ("sig-4", "open-loop steady state", lambda: mistake("sig-4", 0), "closed-loop matrix"),
@@ -64,28 +72,54 @@ WRONG = [
     ("glr-1", "lower quantile", lambda: mistake("glr-1", 2), "lower quantile"),
     ("glr-2", "[theta_hat, l] order", lambda: ref("glr-2")[[1, 2, 0]], "another order"),
     ("glr-2", "C in place of C^-1", lambda: mistake("glr-2", 0), "C^{-1} belongs"),
-    ("glr-3", "detection probability with 1 dof", lambda: mistake("glr-3", 0), "1 degree of freedom"),
+    (
+        "glr-3",
+        "detection probability with 1 dof",
+        lambda: mistake("glr-3", 0),
+        "1 degree of freedom",
+    ),
     ("glr-3", "[detection, lambda] order", lambda: ref("glr-3")[::-1], SWAP),
-    ("glr-3", "miss probability for the detection probability",
-     lambda: with_entry("glr-3", 1, lambda p: 1 - p), COMPLEMENT),
-    ("glr-3", "detection probability in percent", lambda: with_entry("glr-3", 1, lambda p: 100 * p),
-     "percentage"),
+    (
+        "glr-3",
+        "miss probability for the detection probability",
+        lambda: with_entry("glr-3", 1, lambda p: 1 - p),
+        COMPLEMENT,
+    ),
+    (
+        "glr-3",
+        "detection probability in percent",
+        lambda: with_entry("glr-3", 1, lambda p: 100 * p),
+        "percentage",
+    ),
     ("glr-4", "nuisance set to zero", lambda: mistake("glr-4", 0), "regressed out"),
     ("glr-4", "GLR of the whole theta", lambda: mistake("glr-4", 1), "whole of theta"),
     ("glr-4", "sign of the Schur complement", lambda: -ref("glr-4"), SIGN),
     ("glr-5", "one end left out", lambda: ref("glr-5") - 1, "Off by one"),
     ("glr-5", "one candidate too many", lambda: ref("glr-5") + 1, "Off by one"),
     ("pipe-1", "chi2(2) quantile", lambda: mistake("pipe-1", 0), "dim theta_a = 1"),
-    ("pipe-1", "the normal quantile, not squared",
-     lambda: scipy.stats.norm.ppf(1 - exercise_data("pipe-1")["alpha"] / 2), "square root"),
+    (
+        "pipe-1",
+        "the normal quantile, not squared",
+        lambda: scipy.stats.norm.ppf(1 - exercise_data("pipe-1")["alpha"] / 2),
+        "square root",
+    ),
     ("pipe-2", "[J_p, J_0] order", lambda: ref("pipe-2")[::-1], SWAP),
     ("pipe-2", "feed-through with the opposite sign", lambda: -ref("pipe-2"), SIGN),
-    ("pipe-3", "slice one sample too long", lambda: ref_pipeline.pipe3_answer(exercise_data("pipe-3"), 1),
-     "Off by one"),
+    (
+        "pipe-3",
+        "slice one sample too long",
+        lambda: ref_pipeline.pipe3_answer(exercise_data("pipe-3"), 1),
+        "Off by one",
+    ),
     ("pipe-3", "slice [first:last] (last left out)", lambda: shifted("pipe-3", "last", -1), SHIFT),
     ("pipe-3", "cos^2 instead of 1 - cos^2", lambda: 1 - ref("pipe-3"), COMPLEMENT),
     ("pipe-4", "F_aa without rejection", lambda: mistake("pipe-4", 0), "F_a* = F_aa"),
-    ("pipe-4", "type II error for the power", lambda: with_entry("pipe-4", 1, lambda p: 1 - p), COMPLEMENT),
+    (
+        "pipe-4",
+        "type II error for the power",
+        lambda: with_entry("pipe-4", 1, lambda p: 1 - p),
+        COMPLEMENT,
+    ),
     ("pipe-4", "window [start:stop-1]", lambda: shifted("pipe-4", "stop", -1), SHIFT),
     ("pipe-5", "percentages", lambda: mistake("pipe-5", 0), "percentages"),
     ("pipe-5", "Wald interval", lambda: mistake("pipe-5", 1), "Wald"),
@@ -95,9 +129,15 @@ WRONG = [
     ("sparse-2", "Kalman gain", lambda: mistake("sparse-2", 0), "Kalman gain K_1"),
     ("sparse-2", "K-bar_0 (k = 0)", lambda: shifted("sparse-2", "k", -1), SHIFT),
     ("sparse-3", "divided by the N p rows", lambda: mistake("sparse-3", 0), "p = 2"),
-    ("sparse-3", "kept the 1/2 of the loss (divided by 2N)",
-     lambda: np.abs(exercise_data("sparse-3")["X"].T @ exercise_data("sparse-3")["y"]).max()
-     / (2 * exercise_data("sparse-3")["n_samples"]), "p = 2"),
+    (
+        "sparse-3",
+        "kept the 1/2 of the loss (divided by 2N)",
+        lambda: (
+            np.abs(exercise_data("sparse-3")["X"].T @ exercise_data("sparse-3")["y"]).max()
+            / (2 * exercise_data("sparse-3")["n_samples"])
+        ),
+        "p = 2",
+    ),
     ("sparse-3", "no normalisation", lambda: mistake("sparse-3", 1), "without the normalisation"),
     ("sparse-4", "arithmetic middle", lambda: mistake("sparse-4", 0), "geometric mean"),
     ("sparse-5", "Lasso values", lambda: mistake("sparse-5", 0), "shrunk towards zero"),
@@ -127,7 +167,9 @@ WRONG = [
 GENERIC = ("entries are off", "The value is off", "is off (")
 
 
-@pytest.mark.parametrize("exercise_id, what, wrong, expected", WRONG, ids=[f"{w[0]}: {w[1]}" for w in WRONG])
+@pytest.mark.parametrize(
+    "exercise_id, what, wrong, expected", WRONG, ids=[f"{w[0]}: {w[1]}" for w in WRONG]
+)
 def test_a_realistic_wrong_answer_gets_its_specific_hint(exercise_id, what, wrong, expected):
     result = check(exercise_id, wrong())
     assert not result, what
@@ -164,7 +206,9 @@ def test_a_students_answers_are_not_the_books(student):
         assert own.shape == ref(exercise_id).shape
         assert not check(exercise_id, ref(exercise_id), student=student), (exercise_id, student)
         assert check(exercise_id, own, student=student)
-        assert repr(exercise_data(exercise_id, student)) == repr(exercise_data(exercise_id, student))
+        assert repr(exercise_data(exercise_id, student)) == repr(
+            exercise_data(exercise_id, student)
+        )
 
 
 def test_graded_mode_in_the_full_book():
@@ -174,8 +218,13 @@ def test_graded_mode_in_the_full_book():
     before = attempts("glr-4")
     wrong = [check("glr-4", f * ref("glr-4"), graded=True) for f in (0.5, 1.01, -1.0)]
     assert not any(wrong)
-    assert [w.message for w in wrong] == [f"glr-4: attempt {before + k}: not accepted." for k in (1, 2, 3)]
-    assert check("glr-4", ref("glr-4"), graded=True).message == f"glr-4: attempt {before + 4}: accepted."
+    assert [w.message for w in wrong] == [
+        f"glr-4: attempt {before + k}: not accepted." for k in (1, 2, 3)
+    ]
+    assert (
+        check("glr-4", ref("glr-4"), graded=True).message
+        == f"glr-4: attempt {before + 4}: accepted."
+    )
     assert attempts("glr-4") == before + 4
 
 
@@ -187,4 +236,4 @@ def test_student_seed_is_the_documented_hash():
 
     expected = int.from_bytes(hashlib.sha256(b"fdi-book/glr-3/s1").digest()[:8], "little")
     assert student_seed("glr-3", "s1") == expected
-    assert exercise_data("glr-1", "") == exercise_data("glr-1")     # an empty id is the book's data
+    assert exercise_data("glr-1", "") == exercise_data("glr-1")  # an empty id is the book's data

@@ -79,5 +79,8 @@ def test_bad_outputs():
         kalman_filter(m, np.zeros(4))
     y = np.zeros(5)
     y[3] = np.inf
-    with pytest.raises(NonFiniteError, match=r"y: expected finite values or NaN \(missing\), got inf at index \(3, 0\)"):
+    with pytest.raises(
+        NonFiniteError,
+        match=r"y: expected finite values or NaN \(missing\), got inf at index \(3, 0\)",
+    ):
         kalman_filter(m, y)

@@ -64,7 +64,9 @@ def test_windowed_glr_equals_naive_triple_loop(kind):
     m = make_random_ltv(rng, n=2, p=1, n_steps=25)
     g = kalman_gains(m)
     if kind == "step":
-        fam = step_family(m, Psi=rng.standard_normal((25, 2, 2)), Phi=rng.standard_normal((25, 1, 2)))
+        fam = step_family(
+            m, Psi=rng.standard_normal((25, 2, 2)), Phi=rng.standard_normal((25, 1, 2))
+        )
     else:
         fam = impulse_family(m)
     sim = simulate(m, rng=rng, fault=fam.profile(12), theta=[1.0, 2.0])
@@ -77,19 +79,32 @@ def test_windowed_glr_equals_naive_triple_loop(kind):
     # that contains them (the information precomputed for the window is corrected).
     eps[[13, 15]] = np.nan
     stat, onset = _naive_window(eps, m, g, fam, 8, 2)
-    for res in (glr_window(eps, m, g, fam, window=8, min_samples=2),
-                glr_window(np.stack([eps, eps]), m, g, fam, window=8, min_samples=2)):
-        np.testing.assert_allclose(res.statistic[..., 14:], np.broadcast_to(stat[14:], res.statistic[..., 14:].shape),
-                                   rtol=1e-9)
-        np.testing.assert_array_equal(res.onset[..., 14:], np.broadcast_to(onset[14:], res.onset[..., 14:].shape))
+    for res in (
+        glr_window(eps, m, g, fam, window=8, min_samples=2),
+        glr_window(np.stack([eps, eps]), m, g, fam, window=8, min_samples=2),
+    ):
+        np.testing.assert_allclose(
+            res.statistic[..., 14:],
+            np.broadcast_to(stat[14:], res.statistic[..., 14:].shape),
+            rtol=1e-9,
+        )
+        np.testing.assert_array_equal(
+            res.onset[..., 14:], np.broadcast_to(onset[14:], res.onset[..., 14:].shape)
+        )
 
 
 def test_online_updates_equal_batch_and_realisations_are_independent():
     m = ex.unstable_model(120)
     g = kalman_gains(m)
     fam = impulse_family(m)
-    sim = simulate(m, rng=np.random.default_rng(2), controller=ex.controller(), size=3,
-                   fault=fam.profile(60), theta=[2.0, 0.0])
+    sim = simulate(
+        m,
+        rng=np.random.default_rng(2),
+        controller=ex.controller(),
+        size=3,
+        fault=fam.profile(60),
+        theta=[2.0, 0.0],
+    )
     eps = kalman_filter(m, sim.y, sim.u, gains=g).innovations
     batch = glr_window(eps, m, g, fam, window=30)
     online = WindowedGLR(m, g, fam, window=30)
@@ -107,8 +122,14 @@ def test_shared_detector_gives_the_same_results_for_every_batch():
     m = ex.unstable_model(120)
     g = kalman_gains(m)
     fam = impulse_family(m)
-    sim = simulate(m, rng=np.random.default_rng(5), controller=ex.controller(), size=7,
-                   fault=fam.profile(60), theta=[2.0, 0.0])
+    sim = simulate(
+        m,
+        rng=np.random.default_rng(5),
+        controller=ex.controller(),
+        size=7,
+        fault=fam.profile(60),
+        theta=[2.0, 0.0],
+    )
     eps = kalman_filter(m, sim.y, sim.u, gains=g).innovations
     det = WindowedGLR(m, g, fam, window=30)
     eps_nan = eps.copy()
@@ -121,7 +142,9 @@ def test_shared_detector_gives_the_same_results_for_every_batch():
                 np.testing.assert_array_equal(getattr(res, key), getattr(ref, key))
     assert det.k == 0  # the template itself is never advanced
     other = WindowedGLR(m, g, fam, window=20)
-    with pytest.raises(ModelError, match="shared: expected a WindowedGLR built with the same model"):
+    with pytest.raises(
+        ModelError, match="shared: expected a WindowedGLR built with the same model"
+    ):
         glr_window(eps, m, g, fam, window=30, shared=other)
     with pytest.raises(ModelError, match="shared: expected a WindowedGLR"):
         glr_window(eps, m, kalman_gains(m), fam, window=30, shared=det)
@@ -134,8 +157,14 @@ def test_start_leaves_later_statistics_unchanged(size):
     m = ex.unstable_model(90)
     g = kalman_gains(m)
     fam = impulse_family(m)
-    sim = simulate(m, rng=np.random.default_rng(8), controller=ex.controller(), size=size,
-                   fault=fam.profile(50), theta=[3.0, 0.0])
+    sim = simulate(
+        m,
+        rng=np.random.default_rng(8),
+        controller=ex.controller(),
+        size=size,
+        fault=fam.profile(50),
+        theta=[3.0, 0.0],
+    )
     eps = kalman_filter(m, sim.y, sim.u, gains=g).innovations
     cases = [eps]
     if size == 7:
@@ -145,11 +174,18 @@ def test_start_leaves_later_statistics_unchanged(size):
     for e in cases:
         full = glr_window(e, m, g, fam, window=25)
         part = glr_window(e, m, g, fam, window=25, start=40)
-        for key, undefined in (("statistic", np.nan), ("onset", -1), ("theta_hat", np.nan),
-                               ("C_hat", np.nan), ("d_hat", np.nan)):
+        for key, undefined in (
+            ("statistic", np.nan),
+            ("onset", -1),
+            ("theta_hat", np.nan),
+            ("C_hat", np.nan),
+            ("d_hat", np.nan),
+        ):
             a, b = getattr(part, key), getattr(full, key)
-            np.testing.assert_array_equal(a[..., 40:, *([slice(None)] * (a.ndim - e.ndim + 1))],
-                                          b[..., 40:, *([slice(None)] * (b.ndim - e.ndim + 1))])
+            np.testing.assert_array_equal(
+                a[..., 40:, *([slice(None)] * (a.ndim - e.ndim + 1))],
+                b[..., 40:, *([slice(None)] * (b.ndim - e.ndim + 1))],
+            )
             before = a.reshape(*e.shape[:-2], 90, -1)[..., :40, :]
             assert np.all(np.isnan(before)) if undefined is np.nan else np.all(before == -1)
         assert np.any(np.isfinite(full.statistic[..., 30:40]))  # the masked samples had values
@@ -195,7 +231,9 @@ def test_bad_arguments():
         WindowedGLR(m, g, fam, window=0)
     with pytest.raises(ModelError, match=r"min_samples: expected an integer in \[0, 4\], got 5"):
         WindowedGLR(m, g, fam, window=5, min_samples=5)
-    with pytest.raises(ShapeError, match=r"innovations: expected shape \(\.\.\., 20, 1\), got \(19, 1\)"):
+    with pytest.raises(
+        ShapeError, match=r"innovations: expected shape \(\.\.\., 20, 1\), got \(19, 1\)"
+    ):
         glr_window(np.zeros((19, 1)), m, g, fam, window=5)
     det = WindowedGLR(m, g, fam, window=5, batch_shape=(4,))
     with pytest.raises(ShapeError, match=r"eps_k: expected shape \(4, 1\), got \(1,\)"):
@@ -204,8 +242,9 @@ def test_bad_arguments():
         glr_known_profile(np.zeros((20, 1)), g, np.zeros((20, 2, 2)))
 
 
-@pytest.mark.parametrize("kind, m_faults, batch", [("step", 3, 1), ("step", 2, 6), ("impulse", 2, 3),
-                                                   ("step", 5, 2)])
+@pytest.mark.parametrize(
+    "kind, m_faults, batch", [("step", 3, 1), ("step", 2, 6), ("impulse", 2, 3), ("step", 5, 2)]
+)
 def test_windowed_glr_estimates_equal_brute_force(kind, m_faults, batch):
     """Statistic, onset, theta_hat = C^+ d, C and d at the estimated onset, from scratch per (k, r),
     for single records and batches (both evaluation orders of glr_window), m = 2 (closed-form
@@ -215,8 +254,9 @@ def test_windowed_glr_estimates_equal_brute_force(kind, m_faults, batch):
     m = make_random_ltv(rng, n=3, p=2, n_steps=N)
     g = kalman_gains(m)
     if kind == "step":
-        fam = step_family(m, Psi=rng.standard_normal((N, 3, m_faults)),
-                          Phi=rng.standard_normal((N, 2, m_faults)))
+        fam = step_family(
+            m, Psi=rng.standard_normal((N, 3, m_faults)), Phi=rng.standard_normal((N, 2, m_faults))
+        )
     else:
         fam = impulse_family(m)
         m_faults = fam.m
@@ -242,7 +282,13 @@ def test_windowed_glr_estimates_equal_brute_force(kind, m_faults, batch):
             scale = max(1.0, abs(best))
             assert abs(fast.statistic[b, k] - best) <= 1e-9 * scale
             assert fast.onset[b, k] == r
-            np.testing.assert_allclose(fast.C_hat[b, k], C, rtol=1e-10, atol=1e-12 * np.abs(C).max())
-            np.testing.assert_allclose(fast.d_hat[b, k], d, rtol=1e-10, atol=1e-12 * np.abs(d).max())
+            np.testing.assert_allclose(
+                fast.C_hat[b, k], C, rtol=1e-10, atol=1e-12 * np.abs(C).max()
+            )
+            np.testing.assert_allclose(
+                fast.d_hat[b, k], d, rtol=1e-10, atol=1e-12 * np.abs(d).max()
+            )
             th = np.linalg.pinv(C, rcond=1e-10, hermitian=True) @ d
-            np.testing.assert_allclose(fast.theta_hat[b, k], th, rtol=1e-7, atol=1e-9 * np.abs(th).max())
+            np.testing.assert_allclose(
+                fast.theta_hat[b, k], th, rtol=1e-7, atol=1e-9 * np.abs(th).max()
+            )

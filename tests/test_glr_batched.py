@@ -37,12 +37,26 @@ def _setup(batch, m, seed=0, missing=None):
 def _loop(eps, model, gains, Psi, Phi, **kw):
     """Reference: one glr_window per realisation, each with its own (shared-profile) family."""
     batch = eps.shape[:-2]
-    flat = [glr_window(eps.reshape(-1, N, p)[b], model, gains,
-                       step_family(model, Psi=Psi.reshape(-1, N, n, Psi.shape[-1])[b],
-                                   Phi=Phi.reshape(-1, N, p, Phi.shape[-1])[b]), W, S, **kw)
-            for b in range(int(np.prod(batch)))]
-    return {key: np.stack([getattr(r, key) for r in flat]).reshape(*batch, *getattr(flat[0], key).shape)
-            for key in KEYS}
+    flat = [
+        glr_window(
+            eps.reshape(-1, N, p)[b],
+            model,
+            gains,
+            step_family(
+                model,
+                Psi=Psi.reshape(-1, N, n, Psi.shape[-1])[b],
+                Phi=Phi.reshape(-1, N, p, Phi.shape[-1])[b],
+            ),
+            W,
+            S,
+            **kw,
+        )
+        for b in range(int(np.prod(batch)))
+    ]
+    return {
+        key: np.stack([getattr(r, key) for r in flat]).reshape(*batch, *getattr(flat[0], key).shape)
+        for key in KEYS
+    }
 
 
 def _assert_same(res, ref):
@@ -52,7 +66,9 @@ def _assert_same(res, ref):
         if key == "onset":
             np.testing.assert_array_equal(got, ref[key])
         else:  # 1e-10 relative; the absolute floor is rounding of entries O(1e2) that cancel to ~0
-            np.testing.assert_allclose(got, ref[key], rtol=1e-10, atol=1e-12, equal_nan=True, err_msg=key)
+            np.testing.assert_allclose(
+                got, ref[key], rtol=1e-10, atol=1e-12, equal_nan=True, err_msg=key
+            )
 
 
 @pytest.mark.parametrize("batch, m", [((5,), 1), ((2, 3), 2)])
@@ -80,10 +96,14 @@ def test_a_shared_profile_broadcasts_against_per_realisation_ones():
     model, gains, eps, Psi, Phi = _setup((4,), 1, seed=1)
     fam = step_family(model, Psi=Psi, Phi=Phi[0])
     assert fam.Phi_tilde.shape == (4, N, p, 1)
-    _assert_same(glr_window(eps, model, gains, fam, W, S),
-                 _loop(eps, model, gains, Psi, np.broadcast_to(Phi[0], Phi.shape)))
-    fam = step_family(model, Psi=Psi)          # no output fault at all
-    _assert_same(glr_window(eps, model, gains, fam, W, S), _loop(eps, model, gains, Psi, np.zeros_like(Phi)))
+    _assert_same(
+        glr_window(eps, model, gains, fam, W, S),
+        _loop(eps, model, gains, Psi, np.broadcast_to(Phi[0], Phi.shape)),
+    )
+    fam = step_family(model, Psi=Psi)  # no output fault at all
+    _assert_same(
+        glr_window(eps, model, gains, fam, W, S), _loop(eps, model, gains, Psi, np.zeros_like(Phi))
+    )
 
 
 def test_online_updates_and_shared_detector_with_per_realisation_profiles():
@@ -93,10 +113,16 @@ def test_online_updates_and_shared_detector_with_per_realisation_profiles():
     det = WindowedGLR(model, gains, fam, W, S, batch_shape=(3,))
     for k in range(N):
         l_k, r_k, th, C_hat, d_hat = det.update(eps[:, k])
-        np.testing.assert_allclose(l_k, ref["statistic"][:, k], rtol=1e-10, atol=1e-12, equal_nan=True)
+        np.testing.assert_allclose(
+            l_k, ref["statistic"][:, k], rtol=1e-10, atol=1e-12, equal_nan=True
+        )
         np.testing.assert_array_equal(r_k, ref["onset"][:, k])
-        np.testing.assert_allclose(th, ref["theta_hat"][:, k], rtol=1e-10, atol=1e-12, equal_nan=True)
-        np.testing.assert_allclose(C_hat, ref["C_hat"][:, k], rtol=1e-10, atol=1e-12, equal_nan=True)
+        np.testing.assert_allclose(
+            th, ref["theta_hat"][:, k], rtol=1e-10, atol=1e-12, equal_nan=True
+        )
+        np.testing.assert_allclose(
+            C_hat, ref["C_hat"][:, k], rtol=1e-10, atol=1e-12, equal_nan=True
+        )
     template = WindowedGLR(model, gains, fam, W, S, batch_shape=(3,))
     _assert_same(glr_window(eps, model, gains, fam, W, S, shared=template), ref)
 
@@ -126,42 +152,60 @@ def test_blocks_of_realisations_within_the_memory_budget(monkeypatch):
     fam = step_family(model, Psi=Psi, Phi=Phi)
     whole = glr_window(eps, model, gains, fam, W, S)
     per = 8 * N * W * (n + 3 * p + 4)
-    monkeypatch.setattr(glr, "_PER_REALISATION_BYTES", 3 * per)       # blocks of 3, 3 and 1
+    monkeypatch.setattr(glr, "_PER_REALISATION_BYTES", 3 * per)  # blocks of 3, 3 and 1
     calls = []
     real = glr.WindowedGLR.__init__
 
     def spy(self, *args, **kwargs):
         calls.append(kwargs.get("batch_shape"))
         real(self, *args, **kwargs)
+
     monkeypatch.setattr(glr.WindowedGLR, "__init__", spy)
     blocked = glr_window(eps, model, gains, fam, W, S)
     assert calls == [(3,), (3,), (1,)]
-    _assert_same(blocked, {key: getattr(whole, key) for key in KEYS})   # rounding differs with the block
+    _assert_same(
+        blocked, {key: getattr(whole, key) for key in KEYS}
+    )  # rounding differs with the block
 
 
 def test_shape_errors_of_per_realisation_profiles():
     model, gains, eps, Psi, Phi = _setup((3,), 1, seed=6)
-    with pytest.raises(ShapeError, match=rf"Psi: expected per-realisation profiles \(\*batch, {N}, {n}, m\)"):
+    with pytest.raises(
+        ShapeError, match=rf"Psi: expected per-realisation profiles \(\*batch, {N}, {n}, m\)"
+    ):
         step_family(model, Psi=Psi[:, :, :2])
-    with pytest.raises(ShapeError, match=rf"Phi: expected per-realisation profiles \(\*batch, {N}, {p}, m\)"):
+    with pytest.raises(
+        ShapeError, match=rf"Phi: expected per-realisation profiles \(\*batch, {N}, {p}, m\)"
+    ):
         step_family(model, Phi=Phi[:, :-1])
-    with pytest.raises(ShapeError, match=r"Phi: expected shape \(3, 40, 2, 1\) \(the batch and m of Psi\)"):
+    with pytest.raises(
+        ShapeError, match=r"Phi: expected shape \(3, 40, 2, 1\) \(the batch and m of Psi\)"
+    ):
         step_family(model, Psi=Psi, Phi=Phi[:2])
     with pytest.raises(ShapeError, match=r"Phi: expected shape \(3, 40, 2, 1\)"):
         step_family(model, Psi=Psi, Phi=np.concatenate([Phi, Phi], axis=-1))
     fam = step_family(model, Psi=Psi, Phi=Phi)
     for bad in (eps[:2], eps[0], np.stack([eps, eps])):
-        with pytest.raises(ShapeError, match=r"family: expected per-realisation profiles of batch shape"):
+        with pytest.raises(
+            ShapeError, match=r"family: expected per-realisation profiles of batch shape"
+        ):
             glr_window(bad, model, gains, fam, W, S)
-    with pytest.raises(ShapeError, match=r"batch shape \(2,\) \(that of the innovations\) or a shared "
-                                         r"family, got batch shape \(3,\)"):
+    with pytest.raises(
+        ShapeError,
+        match=r"batch shape \(2,\) \(that of the innovations\) or a shared "
+        r"family, got batch shape \(3,\)",
+    ):
         WindowedGLR(model, gains, fam, W, S, batch_shape=(2,))
     det = WindowedGLR(model, gains, fam, W, S, batch_shape=(3,))
-    with pytest.raises(ShapeError, match=r"family: expected per-realisation profiles of batch shape \(4,\)"):
+    with pytest.raises(
+        ShapeError, match=r"family: expected per-realisation profiles of batch shape \(4,\)"
+    ):
         det.fresh((4,))
     with pytest.raises(ModelError, match=r"profile: expected a family shared by all realisations"):
         fam.profile(3)
     bad = Psi.copy()
     bad[1, 5, 0, 0] = np.inf
-    with pytest.raises(NonFiniteError, match=r"Psi: expected finite values, got inf at index \(1, 5, 0, 0\)"):
+    with pytest.raises(
+        NonFiniteError, match=r"Psi: expected finite values, got inf at index \(1, 5, 0, 0\)"
+    ):
         step_family(model, Psi=bad)

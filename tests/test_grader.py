@@ -68,7 +68,7 @@ def test_every_student_has_a_row_and_a_feedback_file(graded):
     rows, book, _ = graded
     assert sorted(rows) == sorted(synth.STUDENTS)
     header = list(next(iter(rows.values())))
-    assert header[:len(IDS) + 1] == ["student", *IDS]
+    assert header[: len(IDS) + 1] == ["student", *IDS]
     assert f"{CHAPTER} (/{FULL * len(IDS)})" in header and "rubric glr-6" in header
     for student in synth.STUDENTS:
         text = (book.with_suffix(".feedback") / f"{student}.md").read_text()
@@ -100,7 +100,7 @@ def test_each_attack_scores_zero_and_is_named(graded, attack):
     rows, book, _ = graded
     assert rows[attack][synth.ATTACKED] == "0", rows[attack]
     assert NAMED[attack] in _log_section(book, attack)
-    if attack != "import-reference":   # it purges the kernel's library: its later cells fail
+    if attack != "import-reference":  # it purges the kernel's library: its later cells fail
         others = [i for i in IDS if i != synth.ATTACKED]
         assert all(rows[attack][i] == str(FULL) for i in others), rows[attack]
 
@@ -115,8 +115,11 @@ def test_the_gradebook_was_not_written_by_the_attack(graded):
 def test_the_similarity_report_flags_the_verbatim_copy(graded):
     _, book, _ = graded
     with book.with_suffix(".similarity.csv").open() as f:
-        groups = [r for r in csv.DictReader(f)
-                  if r["exercise"] == synth.ATTACKED and r["kind"] == "verbatim"]
+        groups = [
+            r
+            for r in csv.DictReader(f)
+            if r["exercise"] == synth.ATTACKED and r["kind"] == "verbatim"
+        ]
     assert any({"copier", "reference"} <= set(r["students"].split()) for r in groups)
 
 
@@ -134,8 +137,9 @@ def test_canvas_export(graded):
 def test_a_rerun_resumes_and_skips_graded_students(graded, tmp_path):
     rows, book, limits = graded
     before = book.read_text()
-    again = grader.grade(book.with_suffix(""), book, limits=limits, secret="test-secret", jobs=1,
-                         chapters=[CHAPTER])
+    again = grader.grade(
+        book.with_suffix(""), book, limits=limits, secret="test-secret", jobs=1, chapters=[CHAPTER]
+    )
     assert book.read_text() == before and len(again) == len(rows)
 
 
@@ -161,21 +165,24 @@ def test_a_hang_that_swallows_interrupts_is_killed(tmp_path):
 
 def test_plan_attributes_cells_by_metadata():
     new = nbformat.v4
-    cells = [new.new_code_cell("import numpy as np"),
-             new.new_code_cell("def helper(x):\n    return 2 * x"),
-             new.new_code_cell("x = np.ones(3).sum()  # the chapter's body: not run"),
-             new.new_markdown_cell("**Exercise glr-1**"),
-             new.new_code_cell('data = exercise_data("glr-1")\nanswer = None'),
-             new.new_code_cell("answer = helper(1)"),               # added by the student
-             new.new_markdown_cell("**Exercise glr-6**"),
-             new.new_code_cell("answer = -1  # a challenge: not graded")]
+    cells = [
+        new.new_code_cell("import numpy as np"),
+        new.new_code_cell("def helper(x):\n    return 2 * x"),
+        new.new_code_cell("x = np.ones(3).sum()  # the chapter's body: not run"),
+        new.new_markdown_cell("**Exercise glr-1**"),
+        new.new_code_cell('data = exercise_data("glr-1")\nanswer = None'),
+        new.new_code_cell("answer = helper(1)"),  # added by the student
+        new.new_markdown_cell("**Exercise glr-6**"),
+        new.new_code_cell("answer = -1  # a challenge: not graded"),
+    ]
     for cell, ex in zip(cells, [None, None, None, "glr-1", "glr-1", None, "glr-6", "glr-6"]):
         if not (cell.cell_type == "code" and cell.source.startswith("answer = helper")):
             cell.metadata[CELL_KEY] = {"exercise": ex}
     plan = grader.plan_notebook(new.new_notebook(cells=cells))
     assert plan.setup == ["import numpy as np", "def helper(x):\n    return 2 * x"]
-    assert plan.exercises == {"glr-1": ['data = exercise_data("glr-1")\nanswer = None',
-                                        "answer = helper(1)"]}
+    assert plan.exercises == {
+        "glr-1": ['data = exercise_data("glr-1")\nanswer = None', "answer = helper(1)"]
+    }
 
 
 def test_student_notebook_tags_follow_the_chapter():
@@ -187,7 +194,7 @@ def test_student_notebook_tags_follow_the_chapter():
     tag_exercise_cells(nb)
     tags = [c.metadata[CELL_KEY]["exercise"] for c in nb.cells]
     assert [t for t in dict.fromkeys(tags) if t] == [f"glr-{i}" for i in range(1, 7)]
-    assert tags[0] is None and all(t is None for t in tags[:tags.index("glr-1")])
+    assert tags[0] is None and all(t is None for t in tags[: tags.index("glr-1")])
 
 
 @pytest.mark.parametrize("exercise_id", sorted(synth.ONE_CALL))
@@ -196,10 +203,16 @@ def test_the_cheaters_library_calls_would_pass_if_not_blocked(exercise_id):
     snippet gives the reference on the student's data."""
     namespace = {"data": exercise_data(exercise_id, "cheater")}
     exec(synth.ONE_CALL[exercise_id], namespace)
-    np.testing.assert_allclose(np.asarray(namespace["answer"], dtype=float),
-                               reference_answer(exercise_id, "cheater"), rtol=1e-9)
-    names = {line.split(" import ")[1].split(",")[0].strip() for line in
-             synth.ONE_CALL[exercise_id].splitlines() if " import " in line}
+    np.testing.assert_allclose(
+        np.asarray(namespace["answer"], dtype=float),
+        reference_answer(exercise_id, "cheater"),
+        rtol=1e-9,
+    )
+    names = {
+        line.split(" import ")[1].split(",")[0].strip()
+        for line in synth.ONE_CALL[exercise_id].splitlines()
+        if " import " in line
+    }
     assert {n.rsplit(".", 1)[1] for n in REFERENCES[exercise_id].one_call} & names
 
 
@@ -208,8 +221,9 @@ def test_the_attacks_would_get_the_answer_if_not_stopped():
     data = exercise_data(synth.ATTACKED, "wrapped")
     namespace = {"data": data}
     exec(synth.ATTACKS["wrapped"], namespace)
-    np.testing.assert_allclose(namespace["answer"], reference_answer(synth.ATTACKED, "wrapped"),
-                               rtol=1e-9)
+    np.testing.assert_allclose(
+        namespace["answer"], reference_answer(synth.ATTACKED, "wrapped"), rtol=1e-9
+    )
 
 
 def test_hidden_data_need_the_secret():
@@ -219,13 +233,20 @@ def test_hidden_data_need_the_secret():
 
 
 def test_similarity_flags_verbatim_and_renamed_copies():
-    code = ("def f(a, b):\n    s = 0\n    for x in a:\n        s += x * b\n    return s / len(a)\n"
-            "answer = f(data, 3)")
+    code = (
+        "def f(a, b):\n    s = 0\n    for x in a:\n        s += x * b\n    return s / len(a)\n"
+        "answer = f(data, 3)"
+    )
     renamed = code.replace("s", "total").replace("f(", "g(")
-    other = ("import numpy as np\n"
-             "answer = float(np.mean(np.asarray(data) * 3) + 0 * np.pi ** 2 - 1 + 1)")
-    codes = {"a": {"glr-1": [code]}, "b": {"glr-1": ["# mine\n" + code]}, "c": {"glr-1": [renamed]},
-             "d": {"glr-1": [other]}}
+    other = (
+        "import numpy as np\nanswer = float(np.mean(np.asarray(data) * 3) + 0 * np.pi ** 2 - 1 + 1)"
+    )
+    codes = {
+        "a": {"glr-1": [code]},
+        "b": {"glr-1": ["# mine\n" + code]},
+        "c": {"glr-1": [renamed]},
+        "d": {"glr-1": [other]},
+    }
     rows = grader.similarity(codes, {})
     assert {"exercise": "glr-1", "students": "a b", "kind": "verbatim", "jaccard": "1.000"} in rows
     similar = {r["students"] for r in rows if r["kind"] == "similar"}

@@ -27,7 +27,9 @@ def test_minmax_equals_the_explicit_nuisance_glr():
     Ri = np.linalg.inv(Rcov)
     F, zeta = M.T @ Ri @ M, M.T @ Ri @ Z
     for a in ([0], [2], [1, 3], [0, 1, 2, 3]):
-        np.testing.assert_allclose(minmax_statistic(F, zeta, a), _explicit(M, Rcov, Z, a), rtol=1e-10)
+        np.testing.assert_allclose(
+            minmax_statistic(F, zeta, a), _explicit(M, Rcov, Z, a), rtol=1e-10
+        )
 
 
 def test_information_from_block_diagonal_residuals():
@@ -39,6 +41,7 @@ def test_information_from_block_diagonal_residuals():
 
     class G:  # the two attributes `information` needs
         pass
+
     g = G()
     g.Sigma, g.Sigma_chol = Sigma, np.linalg.cholesky(Sigma)
     eps = rng.standard_normal((N, p))
@@ -46,7 +49,7 @@ def test_information_from_block_diagonal_residuals():
     M = np.vstack(S[3:9])
     Rcov = np.zeros((12, 12))
     for i, j in enumerate(range(3, 9)):
-        Rcov[2 * i:2 * i + 2, 2 * i:2 * i + 2] = Sigma[j]
+        Rcov[2 * i : 2 * i + 2, 2 * i : 2 * i + 2] = Sigma[j]
     np.testing.assert_allclose(F, M.T @ np.linalg.solve(Rcov, M), rtol=1e-10)
     np.testing.assert_allclose(zeta, M.T @ np.linalg.solve(Rcov, eps[3:9].ravel()), rtol=1e-10)
 
@@ -60,7 +63,9 @@ def test_chi2_with_dim_a_degrees_of_freedom_whatever_the_nuisance(theta_b):
     F, zeta = M.T @ M, Z @ M
     stat = minmax_statistic(F, zeta, [0])
     assert scipy.stats.kstest(stat, scipy.stats.chi2(1).cdf).pvalue > 0.01
-    stat2 = minmax_statistic(F, zeta, [0, 2])  # theta_a = (theta_0, theta_2) is not zero unless theta_b = 0
+    stat2 = minmax_statistic(
+        F, zeta, [0, 2]
+    )  # theta_a = (theta_0, theta_2) is not zero unless theta_b = 0
     if theta_b == 0.0:
         assert scipy.stats.kstest(stat2, scipy.stats.chi2(2).cdf).pvalue > 0.01
     else:
@@ -80,7 +85,9 @@ def test_parallel_bank_thresholds_and_decisions():
 
 def test_bad_arguments():
     F = np.eye(2)
-    with pytest.raises(ModelError, match=r"a: expected distinct component indices in \[0, 2\), got \[2\]"):
+    with pytest.raises(
+        ModelError, match=r"a: expected distinct component indices in \[0, 2\), got \[2\]"
+    ):
         minmax_statistic(F, np.zeros(2), [2])
     with pytest.raises(ShapeError, match=r"F, zeta: expected"):
         minmax_statistic(F, np.zeros(3), [0])

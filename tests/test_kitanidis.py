@@ -66,7 +66,9 @@ def test_predictor_form_joseph_covariance_matches_24f(random_ltv):
         IL = np.eye(m.n) - g.K[k] @ m.H[k]
         joseph = IL @ g.P[k] @ IL.T + g.K[k] @ m.R[k] @ g.K[k].T
         np.testing.assert_allclose(joseph, g.P_filt[k], rtol=1e-8, atol=1e-10)
-        np.testing.assert_allclose(m.F[k] @ joseph @ m.F[k].T + m.Q[k], g.P[k + 1], rtol=1e-8, atol=1e-10)
+        np.testing.assert_allclose(
+            m.F[k] @ joseph @ m.F[k].T + m.Q[k], g.P[k + 1], rtol=1e-8, atol=1e-10
+        )
 
 
 def test_residuals_do_not_depend_on_the_unknown_input(random_ltv):
@@ -105,7 +107,9 @@ def test_unbiased_minimum_variance_covariances_by_monte_carlo(random_ltv):
     emp = np.cov(err[:, k].T)
     np.testing.assert_allclose(emp, g.P_filt[k], rtol=0.08, atol=0.03 * np.abs(g.P_filt[k]).max())
     empr = np.cov(res.residuals[:, k].T)
-    np.testing.assert_allclose(empr, g.residual_cov[k], rtol=0.08, atol=0.03 * np.abs(g.residual_cov[k]).max())
+    np.testing.assert_allclose(
+        empr, g.residual_cov[k], rtol=0.08, atol=0.03 * np.abs(g.residual_cov[k]).max()
+    )
 
 
 def test_reduces_to_the_kalman_filter_without_unknown_input(random_ltv):
@@ -152,7 +156,10 @@ def test_propositions_1_and_2_residual_decomposition(random_ltv, which):
     zero_noise = type(noise)(x0=m.x0, w=np.zeros_like(noise.w), v=np.zeros_like(noise.v))
     j = 2
     ej = np.eye(mdim)[j]
-    yj = _simulate_ui(m, E0, zero_noise, np.zeros((N, 1)), np.zeros((N, 1)), Psi=Psi, theta=ej).y + Phi @ ej
+    yj = (
+        _simulate_ui(m, E0, zero_noise, np.zeros((N, 1)), np.zeros((N, 1)), Psi=Psi, theta=ej).y
+        + Phi @ ej
+    )
     base = run(_simulate_ui(m, E0, zero_noise, np.zeros((N, 1)), np.zeros((N, 1))).y)
     np.testing.assert_allclose(run(yj) - base, sig.on_residual[:, :, j], atol=1e-9)
 
@@ -188,7 +195,9 @@ def test_bad_inputs_are_rejected(random_ltv):
     with pytest.raises(ShapeError, match="E: expected the unknown-input matrices"):
         kitanidis_filter(m, np.zeros((20, 3)))
     with pytest.raises(ShapeError, match="gains: expected gains with K of shape"):
-        kitanidis_filter(m, np.zeros((20, 3)), gains=kalman_gains(random_ltv(rng, n=2, p=3, n_steps=20)))
+        kitanidis_filter(
+            m, np.zeros((20, 3)), gains=kalman_gains(random_ltv(rng, n=2, p=3, n_steps=20))
+        )
     with pytest.raises(ShapeError, match="y: expected shape"):
         kitanidis_filter(m, np.zeros((19, 3)), E=E)
     with pytest.raises(ShapeError, match="Psi: expected shape"):
@@ -199,7 +208,12 @@ from hypothesis import given, reject, settings, strategies as st  # noqa: E402
 
 
 @settings(max_examples=25, deadline=None)
-@given(seed=st.integers(0, 2**31 - 1), n=st.integers(2, 6), extra_p=st.integers(0, 2), s=st.integers(1, 3))
+@given(
+    seed=st.integers(0, 2**31 - 1),
+    n=st.integers(2, 6),
+    extra_p=st.integers(0, 2),
+    s=st.integers(1, 3),
+)
 def test_identity_30_on_random_dimensions(seed, n, extra_p, s):
     """(I - K_{k+1} H_{k+1}) E_k = 0 to machine precision whenever H_{k+1} E_k has full column rank."""
     s = min(s, n)

@@ -62,19 +62,22 @@ def import_graph(root: Path) -> dict[str, set[str]]:
         targets: set[str | None] = set()
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), filename=str(path))):
             if isinstance(node, ast.Import):
-                targets.update(_known(a.name, mods) for a in node.names
-                               if a.name.split(".")[0] == top)
+                targets.update(
+                    _known(a.name, mods) for a in node.names if a.name.split(".")[0] == top
+                )
             elif isinstance(node, ast.ImportFrom):
                 if node.level:
-                    base = package.split(".")[:len(package.split(".")) - node.level + 1]
+                    base = package.split(".")[: len(package.split(".")) - node.level + 1]
                     source = ".".join(base + ([node.module] if node.module else []))
                 else:
                     source = node.module or ""
                 if source.split(".")[0] != top:
                     continue
                 # ``from pkg import sub`` imports the submodule ``pkg.sub``
-                targets.update(f"{source}.{a.name}" if f"{source}.{a.name}" in mods
-                               else _known(source, mods) for a in node.names)
+                targets.update(
+                    f"{source}.{a.name}" if f"{source}.{a.name}" in mods else _known(source, mods)
+                    for a in node.names
+                )
         graph[name] = {t for t in targets if t is not None and t != name}
     return graph
 
@@ -111,7 +114,7 @@ def cycles(graph: dict[str, set[str]]) -> list[str]:
     stack: list[str] = []
     groups: list[set[str]] = []
 
-    def visit(m: str) -> None:   # Tarjan's strongly connected components
+    def visit(m: str) -> None:  # Tarjan's strongly connected components
         index[m] = low[m] = len(index)
         stack.append(m)
         for t in edges.get(m, ()):
@@ -134,7 +137,7 @@ def cycles(graph: dict[str, set[str]]) -> list[str]:
         if m not in index:
             visit(m)
     out = []
-    for group in groups:   # a shortest way back to the group's first module (breadth first)
+    for group in groups:  # a shortest way back to the group's first module (breadth first)
         start = min(group)
         paths = {t: [start, t] for t in edges[start] if t in group}
         frontier = list(paths)
@@ -160,7 +163,7 @@ def test_no_import_cycles():
 
 def test_the_graph_sees_function_level_relative_and_submodule_imports():
     graph = import_graph(PACKAGE)
-    assert "fdi_lib.redraw" in graph["fdi_lib.reproduce.zb2014"]            # inside a function
+    assert "fdi_lib.redraw" in graph["fdi_lib.reproduce.zb2014"]  # inside a function
     assert "fdi_lib.widgets.zb2014" in graph["fdi_lib.widgets.explorables"]  # from pkg import sub
     assert "fdi_lib.reproduce.cli" in graph["fdi_lib.__main__"]
     assert layer("fdi_lib.explorables") == (3, "explorables")
@@ -176,14 +179,17 @@ def _package(tmp_path: Path, files: dict[str, str]) -> Path:
 
 
 def test_an_upward_import_and_an_import_of_the_exercises_are_named(tmp_path):
-    root = _package(tmp_path, {
-        "widgets/__init__.py": "",
-        "reproduce/__init__.py": "",
-        "reproduce/paper.py": "def f():\n    from fdi_lib.widgets import render\n",
-        "exercises/__init__.py": "from ..reproduce import paper\n",
-        "reproduce/cli.py": "from fdi_lib.exercises import check\n",
-        "models.py": "import fdi_lib.exercises\n",
-    })
+    root = _package(
+        tmp_path,
+        {
+            "widgets/__init__.py": "",
+            "reproduce/__init__.py": "",
+            "reproduce/paper.py": "def f():\n    from fdi_lib.widgets import render\n",
+            "exercises/__init__.py": "from ..reproduce import paper\n",
+            "reproduce/cli.py": "from fdi_lib.exercises import check\n",
+            "models.py": "import fdi_lib.exercises\n",
+        },
+    )
     assert upward_edges(import_graph(root)) == [
         "fdi_lib.models (layer 1) imports fdi_lib.exercises (layer 2)",
         "fdi_lib.reproduce.cli imports fdi_lib.exercises: "
@@ -192,12 +198,19 @@ def test_an_upward_import_and_an_import_of_the_exercises_are_named(tmp_path):
     ]
 
 
-@pytest.mark.parametrize("b_imports_a", ["from fdi_lib.a import x", "from . import a",
-                                         "def g():\n    import fdi_lib.a\n"])
+@pytest.mark.parametrize(
+    "b_imports_a",
+    ["from fdi_lib.a import x", "from . import a", "def g():\n    import fdi_lib.a\n"],
+)
 def test_a_cycle_is_spelled_out(tmp_path, b_imports_a):
-    root = _package(tmp_path, {"a.py": "from fdi_lib.c import y\n",
-                               "b.py": b_imports_a + "\n",
-                               "c.py": "from fdi_lib import b\n",
-                               "sub/__init__.py": "from fdi_lib.sub.d import z\n",
-                               "sub/d.py": "from fdi_lib.sub import w\n"})
+    root = _package(
+        tmp_path,
+        {
+            "a.py": "from fdi_lib.c import y\n",
+            "b.py": b_imports_a + "\n",
+            "c.py": "from fdi_lib import b\n",
+            "sub/__init__.py": "from fdi_lib.sub.d import z\n",
+            "sub/d.py": "from fdi_lib.sub import w\n",
+        },
+    )
     assert cycles(import_graph(root)) == ["fdi_lib.a -> fdi_lib.c -> fdi_lib.b -> fdi_lib.a"]

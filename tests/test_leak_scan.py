@@ -89,9 +89,11 @@ def test_the_material_covers_every_kind(material):
 
 # ----------------------------------------------------------------------------- planted leaks
 @pytest.mark.parametrize("printed", ["{:.4g}", "{:.6f}", "{!r}", "{:.3e}"])
-def test_numbers_printed_to_four_digits_or_more_are_caught(clean_edition, material, tmp_path, printed):
+def test_numbers_printed_to_four_digits_or_more_are_caught(
+    clean_edition, material, tmp_path, printed
+):
     out = _copy(clean_edition, tmp_path)
-    value = float(S.reference_answer("glr-3")[1])      # the detection probability
+    value = float(S.reference_answer("glr-3")[1])  # the detection probability
     _plant_html(out, f"<p>so P = {printed.format(value)}</p>")
     (problem,) = S.verify(out, material=material)
     assert "glr.html" in problem and "reference answers" in problem and "glr-3" in problem
@@ -99,11 +101,18 @@ def test_numbers_printed_to_four_digits_or_more_are_caught(clean_edition, materi
 
 def test_numbers_too_short_or_printed_by_the_book_are_not_answers(material):
     value = float(S.reference_answer("glr-3")[1])
-    assert S._matches(S.printed_numbers(f"{value:.2f} and {value:.3f}"), np.array(sorted(material.answers))) == set()
+    assert (
+        S._matches(
+            S.printed_numbers(f"{value:.2f} and {value:.3f}"), np.array(sorted(material.answers))
+        )
+        == set()
+    )
     assert not S._distinctive(1.2000000001, 2.0) and not S._distinctive(98.0, 98.0)
     assert not S._distinctive(1e-20, 1.0) and S._distinctive(0.9721976, 1.0)
     assert S.printed_numbers("x = 0.59915, y = 1.5e-3, n = 12345, k = 98") == [
-        (0.59915, 5e-06), (12345.0, 0.5)]
+        (0.59915, 5e-06),
+        (12345.0, 0.5),
+    ]
     # an answer the chapter prints itself is not distinctive
     printed = S.solution_material(BOOK, printed=f"{value:.4f}", answers_of=("glr-3",))
     assert value not in printed.answers
@@ -112,11 +121,22 @@ def test_numbers_too_short_or_printed_by_the_book_are_not_answers(material):
 def test_what_the_chapters_print_outside_their_exercises_is_not_a_leak(tmp_path):
     """An answer a chapter prints itself (sig-5's slope in the claims ledger) is allowed; what a
     starter cell of the Exercises section prints is not."""
-    nb = nbformat.v4.new_notebook(cells=[
-        nbformat.v4.new_code_cell("slope", outputs=[nbformat.v4.new_output(
-            "execute_result", data={"text/plain": "0.07918"}, execution_count=1)]),
-        nbformat.v4.new_markdown_cell("## Exercises"),
-        nbformat.v4.new_code_cell("print(data)", outputs=[nbformat.v4.new_output("stream", text="x = 3.1803\n")])])
+    nb = nbformat.v4.new_notebook(
+        cells=[
+            nbformat.v4.new_code_cell(
+                "slope",
+                outputs=[
+                    nbformat.v4.new_output(
+                        "execute_result", data={"text/plain": "0.07918"}, execution_count=1
+                    )
+                ],
+            ),
+            nbformat.v4.new_markdown_cell("## Exercises"),
+            nbformat.v4.new_code_cell(
+                "print(data)", outputs=[nbformat.v4.new_output("stream", text="x = 3.1803\n")]
+            ),
+        ]
+    )
     nbformat.write(nb, tmp_path / "ch.ipynb")
     (tmp_path / "ch.glue.json").write_text('{"k": {"data": {"text/plain": "17.683"}}}')
     printed = S.printed_by_the_book(tmp_path)
@@ -141,7 +161,10 @@ def test_solution_maths_is_caught(clean_edition, material, tmp_path):
 
 def test_solution_outputs_are_caught(clean_edition, material, tmp_path):
     out = _copy(clean_edition, tmp_path)
-    _plant_html(out, "<div class='cell_output'><pre>glr-5: correct (tolerance: exact (integers)).</pre></div>")
+    _plant_html(
+        out,
+        "<div class='cell_output'><pre>glr-5: correct (tolerance: exact (integers)).</pre></div>",
+    )
     cell = nbformat.v4.new_code_cell("check('glr-5', answer)")
     cell.outputs = [nbformat.v4.new_output("stream", name="stdout", text="r from 4 to 101\n")]
     _plant_cell(out, cell)
@@ -157,7 +180,10 @@ def test_solution_metadata_is_caught(clean_edition, material, tmp_path):
     _plant_cell(out, cell)
     (problem,) = S.verify(out, material=material)
     assert "metadata naming a solution" in problem
-    _plant_cell(out, nbformat.v4.new_code_cell("", metadata={"nbgrader": {"solution": True, "grade": False}}))
+    _plant_cell(
+        out,
+        nbformat.v4.new_code_cell("", metadata={"nbgrader": {"solution": True, "grade": False}}),
+    )
     assert len(S.verify(out, material=material)) == 2
 
 
@@ -168,8 +194,10 @@ def test_a_two_line_solution_is_caught(clean_edition, material, tmp_path):
     prose = _solution("glr-5").split("```{code-cell}")[0].strip()
     assert len(prose.splitlines()) <= 2 and len(words(prose)) < 8
     full = (BOOK / "zb2014" / "glr.md").read_text()
-    assert not any(tuple(words(prose)[i:i + 8]) in solution_fingerprints(full, strip_solutions(full))
-                   for i in range(len(words(prose))))
+    assert not any(
+        tuple(words(prose)[i : i + 8]) in solution_fingerprints(full, strip_solutions(full))
+        for i in range(len(words(prose)))
+    )
     _plant_cell(out, nbformat.v4.new_markdown_cell(prose))
     (problem,) = S.verify(out, material=material)
     assert "runs of solution text" in problem
@@ -193,12 +221,22 @@ def _wheel(out: Path, files: dict[str, str]) -> None:
 
 def test_the_wheel_is_scanned(clean_edition, material, tmp_path):
     out = _copy(clean_edition, tmp_path)
-    _wheel(out, {"fdi_lib/exercises/glr.py": "def _glr2_data():\n    return {}\n",
-                 "fdi_lib-0.1.dist-info/METADATA": "Name: fdi-lib\n"})
+    _wheel(
+        out,
+        {
+            "fdi_lib/exercises/glr.py": "def _glr2_data():\n    return {}\n",
+            "fdi_lib-0.1.dist-info/METADATA": "Name: fdi-lib\n",
+        },
+    )
     assert S.verify(out, material=material) == []
     value = float(S.reference_answer("glr-4"))
-    _wheel(out, {"fdi_lib/exercises/glr.py": "def _glr4_ref(d):\n    return 0.0\n",
-                 "fdi_lib/exercises/answers.json": f'{{"glr-4": {value!r}}}'})
+    _wheel(
+        out,
+        {
+            "fdi_lib/exercises/glr.py": "def _glr4_ref(d):\n    return 0.0\n",
+            "fdi_lib/exercises/answers.json": f'{{"glr-4": {value!r}}}',
+        },
+    )
     found = S.verify(out, material=material)
     assert any("glr.py: defines the reference code _glr4_ref" in p for p in found)
     assert any("answers.json" in p and "glr-4" in p for p in found)

@@ -2,8 +2,14 @@ import numpy as np
 import pytest
 
 from fdi_lib.errors import CovarianceError, ModelError, NonFiniteError, ShapeError
-from fdi_lib.models import (as_sequence, fault_profile, impulse_family, lpv_model, ltv_model,
-                            step_family)
+from fdi_lib.models import (
+    as_sequence,
+    fault_profile,
+    impulse_family,
+    lpv_model,
+    ltv_model,
+    step_family,
+)
 
 F = [[0.5, 1.0], [0.0, 1.2]]
 BASE = dict(F=F, G=[[0.0], [1.0]], H=[[1.0, 0.0]], Q=0.0025 * np.eye(2), R=0.0025, n_steps=5)
@@ -29,17 +35,24 @@ def test_dimensions_and_defaults():
     assert no_input.l == 0
 
 
-@pytest.mark.parametrize("change, error, match", [
-    (dict(F=[[1.0, 0.0]]), ShapeError, r"F: expected square"),
-    (dict(H=[[1.0, 0.0, 0.0]]), ShapeError, r"H: expected shape \(p, 2\)"),
-    (dict(G=[[0.0], [1.0], [2.0]]), ShapeError, r"G: expected shape \(2, l\)"),
-    (dict(Q=[[1.0, 0.5], [0.0, 1.0]]), CovarianceError, r"Q: expected a symmetric matrix"),
-    (dict(Q=[[1.0, 0.0], [0.0, -1e-3]]), CovarianceError, r"Q: expected a positive semi-definite .* -0.001 at step 0"),
-    (dict(R=0.0), CovarianceError, r"R: expected a positive definite matrix"),
-    (dict(n_steps=0), ModelError, r"n_steps: expected a positive integer, got 0"),
-    (dict(x0=[0.0, 0.0, 0.0]), ShapeError, r"x0: expected shape \(2,\), got \(3,\)"),
-    (dict(P0=-np.eye(2)), CovarianceError, r"P0: expected a positive semi-definite"),
-])
+@pytest.mark.parametrize(
+    "change, error, match",
+    [
+        (dict(F=[[1.0, 0.0]]), ShapeError, r"F: expected square"),
+        (dict(H=[[1.0, 0.0, 0.0]]), ShapeError, r"H: expected shape \(p, 2\)"),
+        (dict(G=[[0.0], [1.0], [2.0]]), ShapeError, r"G: expected shape \(2, l\)"),
+        (dict(Q=[[1.0, 0.5], [0.0, 1.0]]), CovarianceError, r"Q: expected a symmetric matrix"),
+        (
+            dict(Q=[[1.0, 0.0], [0.0, -1e-3]]),
+            CovarianceError,
+            r"Q: expected a positive semi-definite .* -0.001 at step 0",
+        ),
+        (dict(R=0.0), CovarianceError, r"R: expected a positive definite matrix"),
+        (dict(n_steps=0), ModelError, r"n_steps: expected a positive integer, got 0"),
+        (dict(x0=[0.0, 0.0, 0.0]), ShapeError, r"x0: expected shape \(2,\), got \(3,\)"),
+        (dict(P0=-np.eye(2)), CovarianceError, r"P0: expected a positive semi-definite"),
+    ],
+)
 def test_bad_inputs_raise_clear_errors(change, error, match):
     with pytest.raises(error, match=match):
         ltv_model(**{**BASE, **change})
@@ -48,7 +61,9 @@ def test_bad_inputs_raise_clear_errors(change, error, match):
 def test_nan_reported_with_its_index():
     F_steps = np.broadcast_to(np.array(F), (5, 2, 2)).copy()
     F_steps[3, 1, 0] = np.nan
-    with pytest.raises(NonFiniteError, match=r"F: expected finite values, got nan at index \(3, 1, 0\)"):
+    with pytest.raises(
+        NonFiniteError, match=r"F: expected finite values, got nan at index \(3, 1, 0\)"
+    ):
         ltv_model(**{**BASE, "F": F_steps})
 
 
@@ -71,16 +86,32 @@ def test_unknown_keyword_rejected():
 
 def test_lpv_model_is_affine_in_the_schedule():
     p = np.array([0.0, 1.0, 2.0, -1.0])
-    m = lpv_model(scheduling=p, F0=np.eye(2) * 0.5, Fp=[[0.0, 0.1], [0.0, 0.0]], G0=[[1.0], [0.0]],
-                  Gp=[[0.5], [0.0]], H0=[[1.0, 0.0]], Q=np.eye(2), R=1.0)
+    m = lpv_model(
+        scheduling=p,
+        F0=np.eye(2) * 0.5,
+        Fp=[[0.0, 0.1], [0.0, 0.0]],
+        G0=[[1.0], [0.0]],
+        Gp=[[0.5], [0.0]],
+        H0=[[1.0, 0.0]],
+        Q=np.eye(2),
+        R=1.0,
+    )
     for k, pk in enumerate(p):
         np.testing.assert_allclose(m.F[k], 0.5 * np.eye(2) + pk * np.array([[0, 0.1], [0, 0]]))
         np.testing.assert_allclose(m.G[k], [[1.0 + 0.5 * pk], [0.0]])
-    two = lpv_model(scheduling=np.c_[p, p ** 2], F0=np.eye(2), Fp=[np.eye(2), 2 * np.eye(2)],
-                    H0=[[1.0, 0.0]], Q=np.eye(2), R=1.0)
+    two = lpv_model(
+        scheduling=np.c_[p, p**2],
+        F0=np.eye(2),
+        Fp=[np.eye(2), 2 * np.eye(2)],
+        H0=[[1.0, 0.0]],
+        Q=np.eye(2),
+        R=1.0,
+    )
     np.testing.assert_allclose(two.F[2], np.eye(2) * (1 + 2 + 2 * 4))
     with pytest.raises(ShapeError, match=r"Fp: expected 2 matrices"):
-        lpv_model(scheduling=np.c_[p, p], F0=np.eye(2), Fp=np.eye(2), H0=[[1.0, 0.0]], Q=np.eye(2), R=1.0)
+        lpv_model(
+            scheduling=np.c_[p, p], F0=np.eye(2), Fp=np.eye(2), H0=[[1.0, 0.0]], Q=np.eye(2), R=1.0
+        )
 
 
 def test_step_and_impulse_families():

@@ -9,8 +9,14 @@ from statsmodels.stats.proportion import proportion_confint
 
 from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.models import ltv_model
-from fdi_lib.montecarlo import (binomial_ci, default_chunk_size, draw_noise_batch, run_monte_carlo,
-                                run_monte_carlo_many, trial_seeds)
+from fdi_lib.montecarlo import (
+    binomial_ci,
+    default_chunk_size,
+    draw_noise_batch,
+    run_monte_carlo,
+    run_monte_carlo_many,
+    trial_seeds,
+)
 from fdi_lib.simulate import draw_noise
 
 
@@ -27,8 +33,10 @@ def _slow_worker_chunk(seeds, *, parent):
 
     if os.getpid() != parent:
         time.sleep(0.3)
-    return {"x": np.array([np.random.default_rng(s).standard_normal() for s in seeds]),
-            "here": np.full(len(seeds), os.getpid() == parent)}
+    return {
+        "x": np.array([np.random.default_rng(s).standard_normal() for s in seeds]),
+        "here": np.full(len(seeds), os.getpid() == parent),
+    }
 
 
 def _bad_chunk(seeds):
@@ -94,7 +102,9 @@ def test_bad_arguments_and_chunk_output():
 
 
 def test_draw_noise_batch_matches_individual_draws():
-    m = ltv_model(F=[[0.5, 0.1], [0.0, 0.9]], H=[[1.0, 0.0]], Q=np.diag([1.0, 0.0]), R=2.0, n_steps=12)
+    m = ltv_model(
+        F=[[0.5, 0.1], [0.0, 0.9]], H=[[1.0, 0.0]], Q=np.diag([1.0, 0.0]), R=2.0, n_steps=12
+    )
     seeds = trial_seeds(3, 4)
     batch = draw_noise_batch(m, seeds)
     for i, s in enumerate(seeds):
@@ -107,7 +117,7 @@ def test_draw_noise_batch_matches_individual_draws():
 @pytest.mark.parametrize("k, n", [(0, 10), (7, 2000), (17, 1000), (1000, 1000), (3, 7)])
 def test_binomial_ci_against_statsmodels(k, n):
     lo, hi = binomial_ci(k, n)
-    lo2, hi2 = proportion_confint(k, n, alpha=0.05, method="beta")   # Clopper-Pearson
+    lo2, hi2 = proportion_confint(k, n, alpha=0.05, method="beta")  # Clopper-Pearson
     assert lo == pytest.approx(lo2, abs=1e-9) and hi == pytest.approx(hi2, abs=1e-9)
     with pytest.raises(ModelError, match="successes, trials"):
         binomial_ci(5, 3)
@@ -189,14 +199,21 @@ def test_jobs_are_capped_at_cores_and_chunks_with_a_warning(monkeypatch):
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        assert mc.effective_jobs(-1, 8) == 2 and mc.effective_jobs(-1, 1) == 1   # "all cores": no warning
+        assert (
+            mc.effective_jobs(-1, 8) == 2 and mc.effective_jobs(-1, 1) == 1
+        )  # "all cores": no warning
         assert mc.effective_jobs(1, 8) == 1 and mc.effective_jobs(2) == 2
     # the engine starts the capped number of processes, and the results are those of one job
     monkeypatch.setattr(joblib, "cpu_count", lambda *a, **k: 64)
     used = []
     real = mc._run_chunks
-    monkeypatch.setattr(mc, "_run_chunks", lambda task, n, first, n_workers, done: used.append(n_workers)
-                        or real(task, n, first, 1, done))
+    monkeypatch.setattr(
+        mc,
+        "_run_chunks",
+        lambda task, n, first, n_workers, done: (
+            used.append(n_workers) or real(task, n, first, 1, done)
+        ),
+    )
     fn = functools.partial(_gaussian_chunk, dim=2)
     with pytest.warns(JobsCappedWarning, match=r"1000 requested, 4 used \(4 chunks of work\)"):
         out = run_monte_carlo(fn, 8, seed=2, jobs=1000)
@@ -227,11 +244,14 @@ def test_a_share_of_the_cores_cuts_jobs_silently_and_bad_shares_are_refused(monk
     with pytest.warns(JobsCappedWarning, match=r"jobs: 3 requested, 2 used \(2 chunks of work\)"):
         assert mc.effective_jobs(3, 2) == 2
     monkeypatch.setenv(mc.CORES_ENV, "")
-    assert mc.effective_jobs(-1) == 4   # empty: unset
+    assert mc.effective_jobs(-1) == 4  # empty: unset
     for bad in ("0", "-2", "two", "1.5"):
         monkeypatch.setenv(mc.CORES_ENV, bad)
-        with pytest.raises(ModelError, match=rf"\$FDI_CORES: expected a positive integer "
-                                             rf".*got '{re.escape(bad)}'"):
+        with pytest.raises(
+            ModelError,
+            match=rf"\$FDI_CORES: expected a positive integer "
+            rf".*got '{re.escape(bad)}'",
+        ):
             mc.effective_jobs(2)
 
 
@@ -240,15 +260,21 @@ def test_a_run_too_large_for_memory_is_refused_after_one_chunk(monkeypatch):
     from fdi_lib.errors import ResourceError
 
     calls = []
-    fn = functools.partial(_counting_chunk, calls=calls, width=50)   # 400 B per realisation
+    fn = functools.partial(_counting_chunk, calls=calls, width=50)  # 400 B per realisation
     monkeypatch.setattr(mc, "available_memory", lambda: 1_000_000)
-    with pytest.raises(ResourceError, match=r"n_trials: 2000 realisations x 1 chunk function\(s\) at 400 B "
-                                            r"each \(measured on the first chunk\) would need about 1.6 MB of "
-                                            r"memory; 1 MB is available"):
+    with pytest.raises(
+        ResourceError,
+        match=r"n_trials: 2000 realisations x 1 chunk function\(s\) at 400 B "
+        r"each \(measured on the first chunk\) would need about 1.6 MB of "
+        r"memory; 1 MB is available",
+    ):
         run_monte_carlo(fn, 2000, seed=0, chunk_size=100)
-    assert calls == [100]                                            # only the probe chunk ran
+    assert calls == [100]  # only the probe chunk ran
     calls.clear()
-    assert run_monte_carlo(fn, 1000, seed=0, chunk_size=100)["x"].shape == (1000, 50)   # 800 kB: runs
+    assert run_monte_carlo(fn, 1000, seed=0, chunk_size=100)["x"].shape == (
+        1000,
+        50,
+    )  # 800 kB: runs
     assert sum(calls) == 1000
 
 
@@ -257,11 +283,16 @@ def test_a_trillion_trials_are_refused_at_once():
     from fdi_lib.errors import ResourceError
 
     calls = []
-    with pytest.raises(ResourceError, match=r"n_trials: 1000000000000 realisations .* would need about "
-                                            r"16 TB of memory"):
+    with pytest.raises(
+        ResourceError,
+        match=r"n_trials: 1000000000000 realisations .* would need about "
+        r"16 TB of memory",
+    ):
         run_monte_carlo(functools.partial(_counting_chunk, calls=calls), 10**12, seed=0)
     assert calls == [250]
-    with pytest.raises(ResourceError, match=r"n_trials: 1000000000000 seed sequences would need about 470 TB"):
+    with pytest.raises(
+        ResourceError, match=r"n_trials: 1000000000000 seed sequences would need about 470 TB"
+    ):
         trial_seeds(0, 10**12)
 
 
@@ -279,11 +310,11 @@ def test_progress_bar_on_standard_error(capsys):
     run_monte_carlo(slow, 5, seed=0, chunk_size=1, progress=True, description="toy run")
     out, err = capsys.readouterr()
     assert out == "" and "toy run" in err and "5/5 chunks" in err
-    assert re.search(r"\d\d:\d\d elapsed, ETA \d\d:\d\d, ", err), err     # the time left, named
+    assert re.search(r"\d\d:\d\d elapsed, ETA \d\d:\d\d, ", err), err  # the time left, named
     with progress_bars():
         run_monte_carlo(slow, 5, seed=0, chunk_size=1)
     assert "5/5" in capsys.readouterr().err
-    run_monte_carlo(slow, 5, seed=0, chunk_size=1)      # default: no bar
+    run_monte_carlo(slow, 5, seed=0, chunk_size=1)  # default: no bar
     assert capsys.readouterr().err == ""
 
 

@@ -59,7 +59,11 @@ def _assert_same(got, ref, skip=("pid",)):
 def _children() -> set[int]:
     import psutil
 
-    return {p.pid for p in psutil.Process().children(recursive=True) if p.status() != psutil.STATUS_ZOMBIE}
+    return {
+        p.pid
+        for p in psutil.Process().children(recursive=True)
+        if p.status() != psutil.STATUS_ZOMBIE
+    }
 
 
 @pytest.fixture(scope="module")
@@ -70,9 +74,14 @@ def scheduler():
 
     import distributed
 
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None,
-                                  scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
-                                  silence_logs=logging.CRITICAL) as cluster:
+    with distributed.LocalCluster(
+        n_workers=2,
+        threads_per_worker=1,
+        host="127.0.0.1",
+        dashboard_address=None,
+        scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+        silence_logs=logging.CRITICAL,
+    ) as cluster:
         yield cluster.scheduler_address
 
 
@@ -101,13 +110,13 @@ def test_a_process_pool_gives_the_runs_of_one_job(executor_runs):
     ref = mc.run_monte_carlo_many(fns, 13, seed=21, chunk_size=3)
     with ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("spawn")) as ex:
         got = mc.run_monte_carlo_many(fns, 13, seed=21, chunk_size=3, executor=ex)
-        with mc.use_executor(ex):   # the context's executor, as --cluster sets it
+        with mc.use_executor(ex):  # the context's executor, as --cluster sets it
             ctx = mc.run_monte_carlo(fns[0], 13, seed=21, chunk_size=3)
     _assert_same(got, ref)
     _assert_same([ctx], ref[:1])
     assert executor_runs == [10, 5]
     assert set(got[0]["pid"][3:]) - {os.getpid()}, "no chunk ran in the pool's workers"
-    assert (got[0]["pid"][:3] == os.getpid()).all()     # the first chunk (memory probe) runs here
+    assert (got[0]["pid"][:3] == os.getpid()).all()  # the first chunk (memory probe) runs here
 
 
 class _CountingPool(concurrent.futures.ThreadPoolExecutor):
@@ -126,10 +135,12 @@ class _CountingPool(concurrent.futures.ThreadPoolExecutor):
         return super().submit(fn, *args)
 
 
-@pytest.mark.parametrize("task_seconds, tasks", [(1e-12, ["_call"] * 19),
-                                                 (1e9, ["_call_many"] * 9 + ["_call"])])
-def test_short_chunks_go_to_workers_several_to_a_task_with_the_same_results(task_seconds, tasks,
-                                                                            monkeypatch):
+@pytest.mark.parametrize(
+    "task_seconds, tasks", [(1e-12, ["_call"] * 19), (1e9, ["_call_many"] * 9 + ["_call"])]
+)
+def test_short_chunks_go_to_workers_several_to_a_task_with_the_same_results(
+    task_seconds, tasks, monkeypatch
+):
     """Chunks shorter than TASK_SECONDS (timed on the first) are batched, at least four tasks a
     worker: 20 chunks on 2 workers, the 19 after the first as 19 tasks, or as 9 tasks of 2 and
     the last alone; the arrays are those of jobs=1."""
@@ -144,15 +155,17 @@ def test_short_chunks_go_to_workers_several_to_a_task_with_the_same_results(task
 
 def test_a_task_lasts_task_seconds_and_every_worker_gets_four(monkeypatch):
     monkeypatch.setattr(mc, "TASK_SECONDS", 0.5)
-    assert mc._batch_size(0.1, 1000, None) == 1       # workers unknown: one chunk a task
-    assert mc._batch_size(0.1, 1000, 2) == 5          # 0.5 s / 0.1 s
-    assert mc._batch_size(0.01, 80, 2) == 10          # 50 by time, 10 for four tasks a worker
-    assert mc._batch_size(2.0, 1000, 16) == 1         # long chunks: one a task
+    assert mc._batch_size(0.1, 1000, None) == 1  # workers unknown: one chunk a task
+    assert mc._batch_size(0.1, 1000, 2) == 5  # 0.5 s / 0.1 s
+    assert mc._batch_size(0.01, 80, 2) == 10  # 50 by time, 10 for four tasks a worker
+    assert mc._batch_size(2.0, 1000, 16) == 1  # long chunks: one a task
 
 
 @pytest.mark.slow
 @pytest.mark.skipif(not hasattr(signal, "SIGKILL"), reason="kills a worker with SIGKILL")
-def test_a_dask_cluster_gives_the_runs_of_one_job_even_when_a_worker_is_killed(tmp_path, scheduler, executor_runs):
+def test_a_dask_cluster_gives_the_runs_of_one_job_even_when_a_worker_is_killed(
+    tmp_path, scheduler, executor_runs
+):
     """An existing Dask cluster (tcp://): bit-identical arrays to jobs=1; a worker killed in the
     middle of a chunk (SIGKILL) is replaced and its chunk run again by Dask, with the same result;
     the scheduler is left running."""
@@ -170,7 +183,9 @@ def test_a_dask_cluster_gives_the_runs_of_one_job_even_when_a_worker_is_killed(t
     assert executor_runs == [16, 8]
     import distributed
 
-    with distributed.Client(scheduler, set_as_default=False) as client:   # still there, its worker replaced
+    with distributed.Client(
+        scheduler, set_as_default=False
+    ) as client:  # still there, its worker replaced
         client.wait_for_workers(2, timeout=60)
 
 
@@ -182,13 +197,18 @@ def _free_port() -> int:
 
 def test_an_unreachable_scheduler_is_one_error_line(capsys, monkeypatch):
     monkeypatch.setattr(mc, "CONNECT_TIMEOUT", 0.5)
-    address = f"tcp://127.0.0.1:{_free_port()}"   # nothing listens there
+    address = f"tcp://127.0.0.1:{_free_port()}"  # nothing listens there
     t0 = time.monotonic()
-    assert main(["reproduce", "zhang2021-table1", "--trials", "4", "--cluster", address, "--json"]) == 2
+    assert (
+        main(["reproduce", "zhang2021-table1", "--trials", "4", "--cluster", address, "--json"])
+        == 2
+    )
     assert time.monotonic() - t0 < 30
     out, err = capsys.readouterr()
     assert out == ""
-    assert err.startswith(f"error: cluster: cannot reach the Dask scheduler at {address} within 0.5 s (")
+    assert err.startswith(
+        f"error: cluster: cannot reach the Dask scheduler at {address} within 0.5 s ("
+    )
     assert err.count("\n") == 1 and "Traceback" not in err
     with pytest.raises(ClusterError, match="cannot reach the Dask scheduler"):
         with mc.dask_executor(address, timeout=0.5):
@@ -209,14 +229,24 @@ def test_jobs_and_cluster_are_exclusive(capsys):
     with pytest.raises(SystemExit, match="2"):
         main(["reproduce", "zhang2021-table1", "--jobs", "2", "--cluster", "local:2"])
     err = capsys.readouterr().err
-    assert err.startswith("error: argument --cluster: not allowed with argument --jobs") and err.count("\n") == 1
+    assert (
+        err.startswith("error: argument --cluster: not allowed with argument --jobs")
+        and err.count("\n") == 1
+    )
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("argv, cluster", [(["zhang2021-table1", "--trials", "8"], "local:2"),
-                                           (["bz-solution1", "--trials", "40"], "tcp")],
-                         ids=["zhang2021-table1-local", "bz-solution1-tcp"])
-def test_json_is_the_same_bytes_for_jobs_and_a_cluster(argv, cluster, request, capsys, no_cache, executor_runs):
+@pytest.mark.parametrize(
+    "argv, cluster",
+    [
+        (["zhang2021-table1", "--trials", "8"], "local:2"),
+        (["bz-solution1", "--trials", "40"], "tcp"),
+    ],
+    ids=["zhang2021-table1-local", "bz-solution1-tcp"],
+)
+def test_json_is_the_same_bytes_for_jobs_and_a_cluster(
+    argv, cluster, request, capsys, no_cache, executor_runs
+):
     """--jobs 1, --jobs 2 and --cluster (a local cluster started for the run, or an existing
     scheduler) print the same JSON; a local cluster's workers are gone when the command returns."""
     if cluster == "tcp":
@@ -226,7 +256,7 @@ def test_json_is_the_same_bytes_for_jobs_and_a_cluster(argv, cluster, request, c
         assert main(["reproduce", *argv, *where, "--json"]) == 0
         outs[where[-1]] = capsys.readouterr().out
     multiprocessing.resource_tracker.ensure_running()
-    before = _children()   # loky's reusable workers of --jobs 2 stay for the next run, by design
+    before = _children()  # loky's reusable workers of --jobs 2 stay for the next run, by design
     assert main(["reproduce", *argv, "--cluster", cluster, "--json"]) == 0
     outs["cluster"] = capsys.readouterr().out
     assert _children() - before == set(), "a worker process outlived the cluster run"
@@ -253,15 +283,33 @@ def test_ctrl_c_stops_a_local_cluster_run_with_no_process_left(no_cache):
     import psutil
 
     env = {k: v for k, v in os.environ.items() if k != CACHE_ENV}
-    proc = subprocess.Popen([sys.executable, "-m", "fdi_lib", "reproduce", "zhang2021-table1", "--trials", "400",
-                             "--cluster", "local:2", "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, env=env, start_new_session=True)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "fdi_lib",
+            "reproduce",
+            "zhang2021-table1",
+            "--trials",
+            "400",
+            "--cluster",
+            "local:2",
+            "--json",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+        start_new_session=True,
+    )
     try:
         deadline = time.monotonic() + 120
         seen: set[int] = set()
-        while time.monotonic() < deadline and proc.poll() is None:   # until both workers run
+        while time.monotonic() < deadline and proc.poll() is None:  # until both workers run
             seen |= _descendants(proc.pid)
-            workers = [p for p in seen if psutil.pid_exists(p) and "spawn_main" in " ".join(_cmdline(p))]
+            workers = [
+                p for p in seen if psutil.pid_exists(p) and "spawn_main" in " ".join(_cmdline(p))
+            ]
             if len(workers) >= 2:
                 break
             time.sleep(0.2)

@@ -266,8 +266,13 @@ def test_an_address_that_is_not_a_dask_scheduler_is_one_line(monkeypatch):
                 pass
         argv = ["reproduce", "zhang2021-table1", "--trials", "4", "--cluster", server.address]
         t0 = time.monotonic()
-        proc = subprocess.run([sys.executable, "-m", "fdi_lib", *argv, "--json"], env=_env(),
-                              capture_output=True, text=True, timeout=120)
+        proc = subprocess.run(
+            [sys.executable, "-m", "fdi_lib", *argv, "--json"],
+            env=_env(),
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
         took = time.monotonic() - t0
     finally:
         server.sock.close()

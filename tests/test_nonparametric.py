@@ -11,10 +11,17 @@ from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.filters import kalman_filter, kalman_gains
 from fdi_lib.kitanidis import kitanidis_filter, kitanidis_gains
 from fdi_lib.models import fault_profile, ltv_model
-from fdi_lib.nonparametric import (energy_statistic, energy_threshold, innovation_split,
-                                   kitanidis_lag_covariance, kitanidis_predictor_gains,
-                                   nonparametric_signature, reduce_residual, rejection_projection,
-                                   solution1)
+from fdi_lib.nonparametric import (
+    energy_statistic,
+    energy_threshold,
+    innovation_split,
+    kitanidis_lag_covariance,
+    kitanidis_predictor_gains,
+    nonparametric_signature,
+    reduce_residual,
+    rejection_projection,
+    solution1,
+)
 from fdi_lib.simulate import simulate
 from fdi_lib.systems import bz_example as ex
 
@@ -71,8 +78,12 @@ def test_bz_form_27_28_agrees_with_zhang_2021_form_24(setting):
 
 def test_predictor_innovation_equals_kitanidis_filter_innovation(setting):
     model, _, kg, kpred = setting
-    _, s1 = _pair(model, np.random.default_rng(3), ex.nonparametric_profile(N, size=0.2, onset=30),
-                  ex.parametric_path(N, theta=[0.05, 0.02], onset=60))
+    _, s1 = _pair(
+        model,
+        np.random.default_rng(3),
+        ex.nonparametric_profile(N, size=0.2, onset=30),
+        ex.parametric_path(N, theta=[0.05, 0.02], onset=60),
+    )
     a = kalman_filter(model, s1.y, s1.u, gains=kpred)
     b = kitanidis_filter(model, s1.y, s1.u, gains=kg)
     assert np.abs(a.innovations - b.innovations).max() < 1e-13
@@ -85,7 +96,9 @@ def test_prop1_split_is_exact(setting, which):
     model, kal, _, kpred = setting
     gains = kal if which == "kalman" else kpred
     f = ex.nonparametric_profile(N, size=0.2, onset=20)
-    th = ex.drift_path(N, delta=1e-3, onset=10) + ex.parametric_path(N, theta=[0.05, -0.03], onset=70)
+    th = ex.drift_path(N, delta=1e-3, onset=10) + ex.parametric_path(
+        N, theta=[0.05, -0.03], onset=70
+    )
     s0, s1 = _pair(model, np.random.default_rng(11), f, th)
     e1 = kalman_filter(model, s1.y, s1.u, gains=gains).innovations
     e0 = kalman_filter(model, s0.y, s0.u, gains=gains).innovations
@@ -132,10 +145,10 @@ def test_lag_covariance_closed_form_matches_monte_carlo_and_is_nonzero():
     ks = np.arange(30, 58)
     emp1 = np.einsum("bki,bkj->kij", eps[:, ks + 1], eps[:, ks]) / eps.shape[0]
     emp2 = np.einsum("bki,bkj->kij", eps[:, ks + 2], eps[:, ks]) / eps.shape[0]
-    se = 4 * kg.Sigma[ks].max() / np.sqrt(eps.shape[0] * ks.size)   # pooled over k
+    se = 4 * kg.Sigma[ks].max() / np.sqrt(eps.shape[0] * ks.size)  # pooled over k
     assert np.abs(emp1.mean(0) - lag1[ks].mean(0)).max() < se
     assert np.abs(emp2.mean(0) - lag2[ks].mean(0)).max() < se
-    assert np.abs(lag1[ks].mean(0)).max() > 5 * se                 # clearly not white
+    assert np.abs(lag1[ks].mean(0)).max() > 5 * se  # clearly not white
     # Kalman innovation is white: same formula with D = 0 would give exactly zero
     kal = kalman_gains(model)
     e_k = kalman_filter(model, sim.y, sim.u, gains=kal).innovations
@@ -149,11 +162,23 @@ def test_projected_residual_passes_ljung_box_at_fixed_seed():
     model = ex.bz_model(400)
     kg = kitanidis_gains(model, ex.E)
     kpred = kitanidis_predictor_gains(model, ex.E, kg)
-    s0, s1 = _pair(model, np.random.default_rng(7), ex.nonparametric_profile(400, size=0.2, onset=0),
-                   np.zeros((400, 2)), size=40)
+    s0, s1 = _pair(
+        model,
+        np.random.default_rng(7),
+        ex.nonparametric_profile(400, size=0.2, onset=0),
+        np.zeros((400, 2)),
+        size=40,
+    )
     red = reduce_residual(model, kg, kalman_filter(model, s1.y, s1.u, gains=kpred).innovations)
-    pv = np.array([[acorr_ljungbox(red.residuals[i, 50:, j], lags=[10])["lb_pvalue"].iloc[0]
-                    for j in range(2)] for i in range(40)])
+    pv = np.array(
+        [
+            [
+                acorr_ljungbox(red.residuals[i, 50:, j], lags=[10])["lb_pvalue"].iloc[0]
+                for j in range(2)
+            ]
+            for i in range(40)
+        ]
+    )
     assert scipy.stats.kstest(pv.ravel(), "uniform").pvalue > 0.01
     assert np.mean(pv < 0.05) < 0.15
 
@@ -169,7 +194,9 @@ def test_energy_statistic_matches_loop_and_threshold():
         if k < 4:
             assert np.all(np.isnan(e[:, k]))
         else:
-            brute = sum(np.einsum("bi,ij,bj->b", r[:, j], S_inv, r[:, j]) for j in range(k - 4, k + 1))
+            brute = sum(
+                np.einsum("bi,ij,bj->b", r[:, j], S_inv, r[:, j]) for j in range(k - 4, k + 1)
+            )
             assert np.allclose(e[:, k], brute, rtol=1e-12)
     assert energy_threshold(5, 2, 0.05) == pytest.approx(scipy.stats.chi2.ppf(0.95, 10))
 
@@ -197,16 +224,31 @@ def test_solution1_detects_isolates_theta_and_ignores_f(setting):
     f = ex.nonparametric_profile(N, size=0.3, onset=20)
     th = ex.parametric_path(N, theta=[0.08, 0.0], onset=60)
     s0 = simulate(model, rng=rng, controller=ex.controller(), size=20)
-    kw = dict(E=ex.E, Psi=ex.PSI, window=30, glr_threshold=23.0, energy_window=20, energy_alpha=1e-4,
-              kgains=kg, kalman=kal)
+    kw = dict(
+        E=ex.E,
+        Psi=ex.PSI,
+        window=30,
+        glr_threshold=23.0,
+        energy_window=20,
+        energy_alpha=1e-4,
+        kgains=kg,
+        kalman=kal,
+    )
     res = {}
-    for name, ff, tt in (("none", 0 * f, 0 * th), ("f", f, 0 * th), ("theta", 0 * f, th), ("both", f, th)):
+    for name, ff, tt in (
+        ("none", 0 * f, 0 * th),
+        ("f", f, 0 * th),
+        ("theta", 0 * f, th),
+        ("both", f, th),
+    ):
         prof = fault_profile(model, Psi=ex.state_disturbance(ff, tt))
         s = simulate(model, noise=s0.noise, controller=ex.controller(), fault=prof, theta=[1.0])
         res[name] = solution1(model, s.y, s.u, **kw)
     # f is rejected exactly: the GLR statistic is the same with and without f
     assert np.allclose(res["f"].glr.statistic, res["none"].glr.statistic, equal_nan=True, atol=1e-9)
-    assert np.allclose(res["both"].glr.statistic, res["theta"].glr.statistic, equal_nan=True, atol=1e-9)
+    assert np.allclose(
+        res["both"].glr.statistic, res["theta"].glr.statistic, equal_nan=True, atol=1e-9
+    )
     assert np.mean(res["theta"].glr_alarm >= 60) >= 0.9
     det = res["theta"].glr_alarm >= 60
     assert np.mean(res["theta"].isolation[det, 0] & ~res["theta"].isolation[det, 1]) >= 0.8
@@ -226,14 +268,32 @@ def test_solution2_rls_converges_to_constant_theta_on_the_example(setting):
     theta = np.array([0.06, -0.04])
     th = np.broadcast_to(theta, (N, 2))
     s0, s1 = _pair(model, rng, np.zeros((N, 1)), th, size=30)
-    res = solution2(model, s1.y, s1.u, Psi=ex.PSI, lam=0.99, energy_window=20, energy_alpha=1e-4,
-                    start=30, kalman=kal)
+    res = solution2(
+        model,
+        s1.y,
+        s1.u,
+        Psi=ex.PSI,
+        lam=0.99,
+        energy_window=20,
+        energy_alpha=1e-4,
+        start=30,
+        kalman=kal,
+    )
     err = np.abs(res.rls.theta_hat[:, -1] - theta).mean(axis=0)
     assert np.all(err < 0.015)
     assert np.mean(res.energy_alarm >= 0) <= 0.1
     f = ex.nonparametric_profile(N, size=0.3, onset=60)
     prof = fault_profile(model, Psi=ex.state_disturbance(f, th))
     s2 = simulate(model, noise=s0.noise, controller=ex.controller(), fault=prof, theta=[1.0])
-    res_f = solution2(model, s2.y, s2.u, Psi=ex.PSI, lam=0.99, energy_window=20, energy_alpha=1e-4,
-                      start=30, kalman=kal)
+    res_f = solution2(
+        model,
+        s2.y,
+        s2.u,
+        Psi=ex.PSI,
+        lam=0.99,
+        energy_window=20,
+        energy_alpha=1e-4,
+        start=30,
+        kalman=kal,
+    )
     assert np.mean(res_f.energy_alarm >= 60) >= 0.9

@@ -24,6 +24,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 sys.path.insert(0, str(ROOT / "tools"))
 import notebook_markdown as NM  # noqa: E402
+
 DOC = "book/zb2014/glr"
 
 
@@ -34,10 +35,17 @@ def refs():
 
 def _glued(refs, values: dict[str, str], doc: str = DOC):
     """``refs`` with the glue values ``values`` (text/plain) for ``doc``, in myst-nb's format."""
-    out = NM.BookReferences(refs.titles, refs.notebooks, refs.targets, refs.citations, dict(refs.glue))
-    out.glue[doc] = {k: {"output_type": "display_data", "data": {NM_PREFIX + "text/plain": v},
-                         "metadata": {"scrapbook": {"name": k, "mime_prefix": NM_PREFIX}}}
-                     for k, v in values.items()}
+    out = NM.BookReferences(
+        refs.titles, refs.notebooks, refs.targets, refs.citations, dict(refs.glue)
+    )
+    out.glue[doc] = {
+        k: {
+            "output_type": "display_data",
+            "data": {NM_PREFIX + "text/plain": v},
+            "metadata": {"scrapbook": {"name": k, "mime_prefix": NM_PREFIX}},
+        }
+        for k, v in values.items()
+    }
     return out
 
 
@@ -51,29 +59,46 @@ def test_references_have_the_books_numbers_and_labels(refs):
     assert md("By {prf:ref}`zb-glr-chi2`.", DOC, refs) == "By Proposition 2.1."
     # another chapter's: a link to its notebook, relative to this one
     assert md("{prf:ref}`zb-prop-2`", DOC, refs) == "[Proposition 1.2](signature.ipynb)"
-    assert md("{prf:ref}`bz-lemma-a1`", DOC, refs) == "[Lemma 5.1](../bz/parametric-nonparametric.ipynb)"
+    assert (
+        md("{prf:ref}`bz-lemma-a1`", DOC, refs)
+        == "[Lemma 5.1](../bz/parametric-nonparametric.ipynb)"
+    )
     assert md("{doc}`../instructor`", DOC, refs) == "[For instructors](../instructor.ipynb)"
-    assert md("{doc}`../notation`", DOC, refs) == "Notation"     # not a notebook: its title
-    assert md("the {ref}`claims ledger <sec-ledger>`", DOC, refs) == "the [claims ledger](../zz-ledger.ipynb)"
-    assert md("{ref}`zhang2021-lambda-rule`", "book/zhang2021/sparse", refs) == \
-        "The rule for $\\lambda$, the oracle and the initial state"
+    assert md("{doc}`../notation`", DOC, refs) == "Notation"  # not a notebook: its title
+    assert (
+        md("the {ref}`claims ledger <sec-ledger>`", DOC, refs)
+        == "the [claims ledger](../zz-ledger.ipynb)"
+    )
+    assert (
+        md("{ref}`zhang2021-lambda-rule`", "book/zhang2021/sparse", refs)
+        == "The rule for $\\lambda$, the oracle and the initial state"
+    )
     assert md("exercise {ref}`ex-sparse-3`", "book/zhang2021/sparse", refs) == "exercise sparse-3"
 
 
 def test_citations_read_as_author_year(refs):
     md = NM.convert_markdown
-    assert md("as in {cite:t}`zhang2014statistical`", DOC, refs) == "as in Zhang and Basseville (2014)"
-    assert md("{cite:p}`zhang2014statistical,basseville_1993_detection`", DOC, refs) == \
-        "(Zhang and Basseville, 2014; Basseville and Nikiforov, 1993)"
+    assert (
+        md("as in {cite:t}`zhang2014statistical`", DOC, refs) == "as in Zhang and Basseville (2014)"
+    )
+    assert (
+        md("{cite:p}`zhang2014statistical,basseville_1993_detection`", DOC, refs)
+        == "(Zhang and Basseville, 2014; Basseville and Nikiforov, 1993)"
+    )
     assert md("{cite:p}`rosa2013svo`", DOC, refs) == "(Rosa and Silvestre, 2013)"
 
 
 def test_glue_references_show_the_formatted_values(refs):
     glued = _glued(refs, {"h": "20.123456", "n": "4000", "s": "'w − 1 and w + 3'"})
     md = NM.convert_markdown
-    assert md("threshold {glue:text}`h:.1f`, {glue:text}`n` runs", DOC, glued) == "threshold 20.1, 4000 runs"
-    assert md("between {glue:text}`s` samples and {glue}`n`", DOC, glued) == \
-        "between w − 1 and w + 3 samples and 4000"
+    assert (
+        md("threshold {glue:text}`h:.1f`, {glue:text}`n` runs", DOC, glued)
+        == "threshold 20.1, 4000 runs"
+    )
+    assert (
+        md("between {glue:text}`s` samples and {glue}`n`", DOC, glued)
+        == "between w − 1 and w + 3 samples and 4000"
+    )
     # another document's value
     other = _glued(refs, {"total": "27"}, doc="book/zz-ledger")
     assert md("{glue:text}`zz-ledger.md::total:d` claims", "book/intro", other) == "27 claims"
@@ -92,41 +117,62 @@ def test_unknown_markup_is_an_error_not_silently_dropped(refs):
 
 # ----------------------------------------------------------------------------- directives
 def test_directives_become_block_quotes_with_numbered_titles(refs):
-    text = (":::{prf:proposition} Law of the GLR statistic\n:label: zb-glr-chi2\n\n"
-            "Under $\\mathbb H_0$ it is\n\n$$\nl = d^\\T C^{-1} d\n$$\n:::\n\n(sec-x)=\n"
-            ":::{prf:proof}\nBy {prf:ref}`zb-minmax-chi2`.\n:::\n\n"
-            ":::{admonition} What you will learn\n:class: tip\n* one\n:::\n\n:::{note}\nA note.\n:::\n")
+    text = (
+        ":::{prf:proposition} Law of the GLR statistic\n:label: zb-glr-chi2\n\n"
+        "Under $\\mathbb H_0$ it is\n\n$$\nl = d^\\T C^{-1} d\n$$\n:::\n\n(sec-x)=\n"
+        ":::{prf:proof}\nBy {prf:ref}`zb-minmax-chi2`.\n:::\n\n"
+        ":::{admonition} What you will learn\n:class: tip\n* one\n:::\n\n:::{note}\nA note.\n:::\n"
+    )
     assert NM.convert_markdown(text, DOC, refs) == (
         "> **Proposition 2.1** (Law of the GLR statistic)\n>\n> Under $\\mathbb H_0$ it is\n>\n"
-        "> $$l = d^\\T C^{-1} d$$\n\n"   # display maths on one line: no ">" inside it
+        "> $$l = d^\\T C^{-1} d$$\n\n"  # display maths on one line: no ">" inside it
         "> *Proof.*\n>\n> By Proposition 2.2.\n\n"
-        "> **What you will learn**\n>\n> * one\n\n> **Note**\n>\n> A note.\n")
+        "> **What you will learn**\n>\n> * one\n\n> **Note**\n>\n> A note.\n"
+    )
 
 
 def test_labelled_equations_are_numbered_and_tagged():
     refs = NM.BookReferences()
     refs._read_document("book/x", "# X\n\n$$\na = b\n$$ (eq-a)\n\n$$\nc\n$$ (eq-c)\n", chapter=3)
     assert refs.targets["eq-c"] == ("book/x", "(3.2)")
-    assert NM.convert_markdown("$$\nc\n$$ (eq-c)\n\nas {eq}`eq-c` says", "book/x", refs) == \
-        "$$\nc\n\\tag{3.2}\n$$\n\nas (3.2) says"
+    assert (
+        NM.convert_markdown("$$\nc\n$$ (eq-c)\n\nas {eq}`eq-c` says", "book/x", refs)
+        == "$$\nc\n\\tag{3.2}\n$$\n\nas (3.2) says"
+    )
 
 
 def test_exercises_and_solutions_get_bold_headings(refs):
-    text = ("```{exercise-start} glr-1 · warm-up · A threshold\n:label: ex-glr-1\n:nonumber:\n```\n\n"
-            "Which threshold?\n\n```{exercise-end}\n```\n\n```{solution-start} ex-glr-1\n"
-            ":class: dropdown\n```\n\nThe quantile.\n\n```{solution-end}\n```\n")
+    text = (
+        "```{exercise-start} glr-1 · warm-up · A threshold\n:label: ex-glr-1\n:nonumber:\n```\n\n"
+        "Which threshold?\n\n```{exercise-end}\n```\n\n```{solution-start} ex-glr-1\n"
+        ":class: dropdown\n```\n\nThe quantile.\n\n```{solution-end}\n```\n"
+    )
     assert NM.convert_markdown(text, DOC, refs) == (
         "**Exercise glr-1 · warm-up · A threshold**\n\nWhich threshold?\n\n"
-        "**Solution of exercise glr-1**\n\nThe quantile.\n")
+        "**Solution of exercise glr-1**\n\nThe quantile.\n"
+    )
 
 
 def test_figures_with_numbers_and_their_images(refs):
     text = "```{figure} img/a.png\n:name: fig-zb2014-3\n\nThe caption.\n```\n"
-    assert NM.convert_markdown(text, DOC, refs) == "![The caption.](img/a.png)\n\n**Figure 2.2.** The caption.\n"
-    glued = NM.BookReferences(refs.titles, refs.notebooks, refs.targets, refs.citations,
-                              {DOC: {"fig": {"data": {"image/png": "iVBORw0KGgo="}, "metadata": {}}}})
-    out = NM.convert_markdown("```{glue:figure} fig\n:name: fig-zb2014-4\n\nIts caption.\n```\n", DOC, glued)
-    assert out == "![Its caption.](data:image/png;base64,iVBORw0KGgo=)\n\n**Figure 2.3.** Its caption.\n"
+    assert (
+        NM.convert_markdown(text, DOC, refs)
+        == "![The caption.](img/a.png)\n\n**Figure 2.2.** The caption.\n"
+    )
+    glued = NM.BookReferences(
+        refs.titles,
+        refs.notebooks,
+        refs.targets,
+        refs.citations,
+        {DOC: {"fig": {"data": {"image/png": "iVBORw0KGgo="}, "metadata": {}}}},
+    )
+    out = NM.convert_markdown(
+        "```{glue:figure} fig\n:name: fig-zb2014-4\n\nIts caption.\n```\n", DOC, glued
+    )
+    assert (
+        out
+        == "![Its caption.](data:image/png;base64,iVBORw0KGgo=)\n\n**Figure 2.3.** Its caption.\n"
+    )
 
 
 # ----------------------------------------------------------------------------- macros and the check
@@ -148,25 +194,40 @@ def test_the_check_finds_undefined_macros_and_raw_markup(refs):
     import jupytext
 
     raw = jupytext.read(ROOT / "book" / "zb2014" / "glr.md")
-    nb = NM.convert_notebook(jupytext.read(ROOT / "book" / "zb2014" / "glr.md"), DOC, refs, NM.book_macros(ROOT))
+    nb = NM.convert_notebook(
+        jupytext.read(ROOT / "book" / "zb2014" / "glr.md"), DOC, refs, NM.book_macros(ROOT)
+    )
     defs = f"${NM.macro_definitions(NM.book_macros(ROOT))}$\n\n"
     uses = [c for c in nb.cells[1:] if c.cell_type == "markdown" and "\\T" in c.source]
-    assert uses and all(c.source.startswith(defs) for c in uses)   # each cell defines what it uses
+    assert uses and all(c.source.startswith(defs) for c in uses)  # each cell defines what it uses
     # the converted one without its macro cell and without its cells' own definitions
-    bare = [nbformat.v4.new_markdown_cell(c.source.removeprefix(defs)) if c.cell_type == "markdown"
-            else c for c in nb.cells[1:]]
+    bare = [
+        nbformat.v4.new_markdown_cell(c.source.removeprefix(defs))
+        if c.cell_type == "markdown"
+        else c
+        for c in nb.cells[1:]
+    ]
     no_macros = nbformat.v4.new_notebook(cells=bare)
-    planted = nbformat.v4.new_notebook(cells=[*nb.cells, nbformat.v4.new_markdown_cell(
-        "> :::{note}\nSee {numref}`fig-x` and $\\foo$.")])
+    planted = nbformat.v4.new_notebook(
+        cells=[
+            *nb.cells,
+            nbformat.v4.new_markdown_cell("> :::{note}\nSee {numref}`fig-x` and $\\foo$."),
+        ]
+    )
     found_raw, found, found_no_macros, found_planted = NM.problems(raw, nb, no_macros, planted)
     assert any("Undefined control sequence \\T" in p for p in found_raw)
-    assert any("{prf:ref}" in p for p in found_raw) and any("```{exercise-start}" in p for p in found_raw)
+    assert any("{prf:ref}" in p for p in found_raw) and any(
+        "```{exercise-start}" in p for p in found_raw
+    )
     assert found == []
     assert any("Undefined control sequence" in p for p in found_no_macros)
     assert ":::{note}" in str(found_planted) and "{numref}`fig-x`" in str(found_planted)
     assert "\\foo" in str(found_planted) and len(found_planted) == 3
     # a code cell is not Markdown: its text is not checked
-    assert NM.raw_markup(nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("'{numref}`a`'")])) == []
+    assert (
+        NM.raw_markup(nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("'{numref}`a`'")]))
+        == []
+    )
 
 
 def test_every_chapter_converts_to_notebooks_that_render(tmp_path):
@@ -195,27 +256,37 @@ def test_numbers_and_labels_agree_with_the_built_book(refs):
                 assert refs.targets[label] == (doc, f"{kind.title()} {'.'.join(map(str, number))}")
                 numbered.add(label)
     macros = NM.book_macros(ROOT)
-    def readable(text: str) -> str:   # the maths as the book's text of a reference, quotes straight
+
+    def readable(text: str) -> str:  # the maths as the book's text of a reference, quotes straight
         text = re.sub(r"\$([^$]+)\$", lambda m: ext.tex_to_text(m.group(1), macros), text)
         return text.translate(str.maketrans("\u2018\u2019\u201c\u201d", "''\"\""))
 
     for label, (doc, _anchor, title) in env.domaindata["std"]["labels"].items():
         # (an exercise's {ref} reads "Exercise" in the book, the notebooks give its identifier)
         if label in refs.targets and label not in numbered and not label.startswith("ex-"):
-            assert (doc, readable(refs.targets[label][1])) == (refs.targets[label][0], readable(title))
+            assert (doc, readable(refs.targets[label][1])) == (
+                refs.targets[label][0],
+                readable(title),
+            )
     for doc, title in refs.titles.items():
         assert readable(title) == readable(env.titles[doc].astext())
     for cite in env.domaindata["cite"]["citations"]:
         assert ", ".join(refs.citations[cite.key]) == cite.formatted_entry.label
 
 
-BUILT = sorted([*(ROOT / "_build" / "html" / "_sources").rglob("*.ipynb"),
-                *(ROOT / "_build" / "notebooks").rglob("*.ipynb"),
-                *(ROOT / "_build" / "student" / "notebooks").rglob("*.ipynb"),
-                *(ROOT / "_build" / "student" / "html" / "_sources").rglob("*.ipynb")])
+BUILT = sorted(
+    [
+        *(ROOT / "_build" / "html" / "_sources").rglob("*.ipynb"),
+        *(ROOT / "_build" / "notebooks").rglob("*.ipynb"),
+        *(ROOT / "_build" / "student" / "notebooks").rglob("*.ipynb"),
+        *(ROOT / "_build" / "student" / "html" / "_sources").rglob("*.ipynb"),
+    ]
+)
 
 
-@pytest.mark.skipif(not BUILT, reason="no built notebooks (make book, make notebooks, make student)")
+@pytest.mark.skipif(
+    not BUILT, reason="no built notebooks (make book, make notebooks, make student)"
+)
 def test_built_notebooks_render():
     found = NM.problems(*[nbformat.read(p, as_version=4) for p in BUILT])
     found = [found] if len(BUILT) == 1 else found

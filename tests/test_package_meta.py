@@ -23,8 +23,12 @@ def test_citation_version_and_licence_match_pyproject():
 def test_citation_cites_the_four_papers():
     cff = yaml.safe_load((ROOT / "CITATION.cff").read_text())
     titles = [ref["title"] for ref in cff["references"]]
-    for words in ("additive faults in linear time-varying", "sparseness assumption",
-                  "parametric and non-parametric", "set-valued observers"):
+    for words in (
+        "additive faults in linear time-varying",
+        "sparseness assumption",
+        "parametric and non-parametric",
+        "set-valued observers",
+    ):
         assert any(words in t for t in titles), words
 
 

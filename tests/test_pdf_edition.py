@@ -32,16 +32,23 @@ TOOL = _load("fdi_pdf_edition", ROOT / "tools" / "pdf_edition.py")
 #: Script characters in one line: "ₖ" is in no face of FreeFont, "ᵀ" only in FreeSerif and
 #: FreeSerif Bold; "₂" and "⁻" are in all of them.
 SCRIPTED = "Kₖ, Hᵀ, e₂, Hₖᵀ"
-MACROS = {"R": r"\mathbb{R}", "T": r"\mathsf{T}", "E": r"\mathbb{E}", "norm": [r"\lVert #1 \rVert", 1]}
+MACROS = {
+    "R": r"\mathbb{R}",
+    "T": r"\mathsf{T}",
+    "E": r"\mathbb{E}",
+    "norm": [r"\lVert #1 \rVert", 1],
+}
 
 
 def test_latex_macros_are_the_mathjax_macros():
     config = SimpleNamespace(mathjax3_config={"tex": {"macros": MACROS}})
     lines = EXT.latex_macros(config).splitlines()
-    assert lines == [r"\providecommand{\R}{}\renewcommand{\R}{\mathbb{R}}",
-                     r"\providecommand{\T}{}\renewcommand{\T}{\mathsf{T}}",
-                     r"\providecommand{\E}{}\renewcommand{\E}{\mathbb{E}}",
-                     r"\providecommand{\norm}{}\renewcommand{\norm}[1]{\lVert #1 \rVert}"]
+    assert lines == [
+        r"\providecommand{\R}{}\renewcommand{\R}{\mathbb{R}}",
+        r"\providecommand{\T}{}\renewcommand{\T}{\mathsf{T}}",
+        r"\providecommand{\E}{}\renewcommand{\E}{\mathbb{E}}",
+        r"\providecommand{\norm}{}\renewcommand{\norm}[1]{\lVert #1 \rVert}",
+    ]
 
 
 def _line(a, fig=None):
@@ -50,7 +57,9 @@ def _line(a, fig=None):
     return fig
 
 
-@pytest.mark.filterwarnings("ignore:nodes.Node.traverse:PendingDeprecationWarning")  # sphinx-jupyterbook-latex's
+@pytest.mark.filterwarnings(
+    "ignore:nodes.Node.traverse:PendingDeprecationWarning"
+)  # sphinx-jupyterbook-latex's
 def test_latex_build_of_a_small_book(tmp_path):
     """Macros in the preamble, a cited caption protected, an explorable's small multiples as a
     figure with its caption, the cover with the ledger counts; compiled when xelatex exists,
@@ -72,11 +81,18 @@ def test_latex_build_of_a_small_book(tmp_path):
         "bibtex_bibfiles = ['refs.bib']\nbibtex_reference_style = 'author_year'\n"
         "latex_engine = 'xelatex'\nlatex_use_xindy = False\n"
         "latex_documents = [('index', 'fdi-book.tex', 'T', 'A', 'manual')]\n"
-        f"mathjax3_config = {{'tex': {{'macros': {MACROS!r}}}}}\n")
-    (src / "refs.bib").write_text("@article{zb2014, author = {Zhang, Q. and Basseville, M.}, title = {T},"
-                                  " journal = {J}, year = {2014}}\n")
-    ex = explorable(_line, {"a": (1.0, 2.0, 3.0)}, caption="toy Γ<sub>k</sub> &amp; more",
-                    labels={"a": "slope a"})
+        f"mathjax3_config = {{'tex': {{'macros': {MACROS!r}}}}}\n"
+    )
+    (src / "refs.bib").write_text(
+        "@article{zb2014, author = {Zhang, Q. and Basseville, M.}, title = {T},"
+        " journal = {J}, year = {2014}}\n"
+    )
+    ex = explorable(
+        _line,
+        {"a": (1.0, 2.0, 3.0)},
+        caption="toy Γ<sub>k</sub> &amp; more",
+        labels={"a": "slope a"},
+    )
     (src / "sm.png").write_bytes(ex.small_multiples())
     (src / "index.md").write_text(
         "# Index\n\nMaths $x \\in \\R^n$, $A^\\T$, $\\norm{x}$.\n\n"
@@ -84,22 +100,34 @@ def test_latex_build_of_a_small_book(tmp_path):
         "```{image} sm.png\n```\n\n"
         f"## Gains {SCRIPTED}\n\n| gain | value |\n|---|---|\n| {SCRIPTED} | 10⁻⁴ |\n\n"
         f"**{SCRIPTED}** *{SCRIPTED}* ***{SCRIPTED}***\n\n```\n{SCRIPTED}\n```\n\n"
-        "```{bibliography}\n```\n")
+        "```{bibliography}\n```\n"
+    )
     counts = {p: {s: i + j for j, s in enumerate(STATUSES)} for i, p in enumerate(PAPERS)}
     glue = tmp_path / "build" / "jupyter_execute" / "book" / "zz-ledger.glue.json"
     glue.parent.mkdir(parents=True)
     glue.write_text(json.dumps({EXT.LEDGER_GLUE: {"data": {"text/plain": repr(counts)}}}))
     out = tmp_path / "build" / "latex"
     warnings = io.StringIO()
-    with docutils_namespace():   # no node or directive left registered for the next Sphinx app
-        app = Sphinx(str(src), str(src), str(out), str(tmp_path / "doctrees"), "latex",
-                     status=None, warning=warnings, freshenv=True)
+    with docutils_namespace():  # no node or directive left registered for the next Sphinx app
+        app = Sphinx(
+            str(src),
+            str(src),
+            str(out),
+            str(tmp_path / "doctrees"),
+            "latex",
+            status=None,
+            warning=warnings,
+            freshenv=True,
+        )
         app.build()
     # a Sphinx app built earlier in the same process (tests/test_book_text.py) leaves its nodes
     # registered: the notices that they are registered again are not problems of this build
     assert [w for w in warnings.getvalue().splitlines() if "is already registered" not in w] == []
     tex = (out / "fdi-book.tex").read_text()
-    assert r"\renewcommand{\T}{\mathsf{T}}" in tex and r"\renewcommand{\norm}[1]{\lVert #1 \rVert}" in tex
+    assert (
+        r"\renewcommand{\T}{\mathsf{T}}" in tex
+        and r"\renewcommand{\norm}[1]{\lVert #1 \rVert}" in tex
+    )
     assert (out / "bbm.sty").read_text().startswith(r"\ProvidesPackage{bbm}")
     caption = re.search(r"\\caption\{As paper Fig\. 1 of (.*)\}\\label", tex).group(1)
     assert r"\protect\hyperlink{cite." in caption
@@ -129,28 +157,51 @@ def test_the_cache_gives_back_glued_values(tmp_path):
     import nbformat
     from jupyter_cache import get_cache
 
-    nb = nbformat.v4.new_notebook(metadata={"kernelspec": {"name": "python3", "display_name": "Python 3",
-                                                           "language": "python"}})
-    nb.cells = [nbformat.v4.new_markdown_cell("# T"), nbformat.v4.new_code_cell("glue('x', 1, display=False)"),
-                nbformat.v4.new_code_cell("1 + 1")]
-    source = nbformat.from_dict(json.loads(json.dumps(nb)))   # as read from the chapter
+    nb = nbformat.v4.new_notebook(
+        metadata={
+            "kernelspec": {"name": "python3", "display_name": "Python 3", "language": "python"}
+        }
+    )
+    nb.cells = [
+        nbformat.v4.new_markdown_cell("# T"),
+        nbformat.v4.new_code_cell("glue('x', 1, display=False)"),
+        nbformat.v4.new_code_cell("1 + 1"),
+    ]
+    source = nbformat.from_dict(json.loads(json.dumps(nb)))  # as read from the chapter
     executed = tmp_path / "jupyter_execute" / "book"
     executed.mkdir(parents=True)
-    nbformat.write(nb, executed / "ch.ipynb")   # as myst-nb's cache mode writes it: not executed
+    nbformat.write(nb, executed / "ch.ipynb")  # as myst-nb's cache mode writes it: not executed
     assert TOOL.prime_cache(tmp_path / "jupyter_execute", tmp_path / "cache") == 0
     nb.cells[1].execution_count = 1
     nb.cells[2].execution_count = 2
-    nb.cells[2].outputs = [nbformat.v4.new_output("execute_result", {"text/plain": "2"}, execution_count=2)]
+    nb.cells[2].outputs = [
+        nbformat.v4.new_output("execute_result", {"text/plain": "2"}, execution_count=2)
+    ]
     nbformat.write(nb, executed / "ch.ipynb")
     prefix = "application/papermill.record/"
-    (executed / "ch.glue.json").write_text(json.dumps({"x": {
-        "output_type": "display_data", "data": {"text/plain": "1"},
-        "metadata": {"scrapbook": {"name": "x", "mime_prefix": prefix}}}}))
+    (executed / "ch.glue.json").write_text(
+        json.dumps(
+            {
+                "x": {
+                    "output_type": "display_data",
+                    "data": {"text/plain": "1"},
+                    "metadata": {"scrapbook": {"name": "x", "mime_prefix": prefix}},
+                }
+            }
+        )
+    )
     # a notebook executed before the library's last change is not taken
     newest = (executed / "ch.ipynb").stat().st_mtime
-    assert TOOL.prime_cache(tmp_path / "jupyter_execute", tmp_path / "cache", newer_than=newest) == 0
-    (executed / "ch.exec.json").write_text(json.dumps({"runtime": 12.5}))   # the HTML build's run time
-    assert TOOL.prime_cache(tmp_path / "jupyter_execute", tmp_path / "cache", newer_than=newest - 1) == 1
+    assert (
+        TOOL.prime_cache(tmp_path / "jupyter_execute", tmp_path / "cache", newer_than=newest) == 0
+    )
+    (executed / "ch.exec.json").write_text(
+        json.dumps({"runtime": 12.5})
+    )  # the HTML build's run time
+    assert (
+        TOOL.prime_cache(tmp_path / "jupyter_execute", tmp_path / "cache", newer_than=newest - 1)
+        == 1
+    )
     cache = get_cache(str(tmp_path / "cache"))
     assert cache.match_cache_notebook(source).data == {"execution_seconds": 12.5}
     _, merged = cache.merge_match_into_notebook(source)
@@ -171,7 +222,7 @@ def test_publish_pdf_links_the_pdf_only_when_it_is_there(tmp_path):
     EXT.publish_pdf(html, pdf)
     assert f'const pdf = "{EXT.PDF_NAME}", a4 = null;' in script.read_text()
     assert (html / EXT.PDF_NAME).read_bytes() == b"%PDF-1.5\n"
-    EXT.publish_pdf(html, html / EXT.PDF_NAME)   # an HTML build over a published PDF keeps it
+    EXT.publish_pdf(html, html / EXT.PDF_NAME)  # an HTML build over a published PDF keeps it
     assert f'const pdf = "{EXT.PDF_NAME}", a4 = null;' in script.read_text()
     # the A4 edition beside the letter one is published and linked with it
     (tmp_path / EXT.A4_NAME).write_bytes(b"%PDF-1.5 A4\n")
@@ -201,21 +252,34 @@ def test_run_times_of_executed_chapters_are_written_beside_their_notebooks(tmp_p
     executed.cells[0].execution_count = 1
     prefix = "application/papermill.record/"
     executed.cells[0].outputs = [
-        nbformat.v4.new_output("display_data", data={f"{prefix}text/plain": "1"},
-                               metadata={"scrapbook": {"name": "x", "mime_prefix": prefix}}),
-        nbformat.v4.new_output("stream", name="stdout", text="2\n")]
+        nbformat.v4.new_output(
+            "display_data",
+            data={f"{prefix}text/plain": "1"},
+            metadata={"scrapbook": {"name": "x", "mime_prefix": prefix}},
+        ),
+        nbformat.v4.new_output("stream", name="stdout", text="2\n"),
+    ]
     cache = tmp_path / "cache"
     bundle = CacheBundleIn(executed, "book/b.md")
     get_cache(str(cache)).cache_notebook_bundle(bundle, check_validity=False)
     run = {"method": "force", "succeeded": True, "runtime": 3.25}
-    env = SimpleNamespace(found_docs={"book/a", "book/b", "book/c"}, nb_metadata=defaultdict(dict, {
-        "book/a": {"exec_data": run},
-        "book/b": {"exec_data": dict(run, method="cache", runtime=1.5)}}),
-        mystnb_config=SimpleNamespace(execution_cache_path=str(cache)))
+    env = SimpleNamespace(
+        found_docs={"book/a", "book/b", "book/c"},
+        nb_metadata=defaultdict(
+            dict,
+            {
+                "book/a": {"exec_data": run},
+                "book/b": {"exec_data": dict(run, method="cache", runtime=1.5)},
+            },
+        ),
+        mystnb_config=SimpleNamespace(execution_cache_path=str(cache)),
+    )
     EXT._record_run_times(SimpleNamespace(outdir=str(tmp_path / "_build" / "html")), env)
     written = sorted(p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*.exec.json"))
-    assert written == ["_build/jupyter_execute/book/a.exec.json",
-                       "_build/jupyter_execute/book/b.exec.json"]
+    assert written == [
+        "_build/jupyter_execute/book/a.exec.json",
+        "_build/jupyter_execute/book/b.exec.json",
+    ]
     assert json.loads((tmp_path / written[0]).read_text()) == {"runtime": 3.25}
     assert json.loads((tmp_path / written[1]).read_text()) == {"runtime": 1.5}
     cell = nbformat.read(folder / "b.ipynb", as_version=4).cells[0]
@@ -226,20 +290,29 @@ def test_check_pdf_reads_code_listings_and_the_numbered_chapters(tmp_path):
     """tools/check_pdf.py: TeX in a code listing is counted as code; the table of contents must
     number exactly the chapters of the numbered parts of _toc.yml, in order."""
     check = _load("fdi_check_pdf", ROOT / "tools" / "check_pdf.py")
-    tex = (r"\begin{sphinxVerbatim}[commandchars=\\\{\}]" "\n"
-           r"\PYG{l+s+s2}{\PYGZdq{}}\PYG{l+s+s2}{\PYGZbs{}}\PYG{l+s+s2}{Psi = I\PYGZdl{}}" "\n"
-           r"\end{sphinxVerbatim}" "\n" r"\(\Psi\) outside code")
+    tex = (
+        r"\begin{sphinxVerbatim}[commandchars=\\\{\}]"
+        "\n"
+        r"\PYG{l+s+s2}{\PYGZdq{}}\PYG{l+s+s2}{\PYGZbs{}}\PYG{l+s+s2}{Psi = I\PYGZdl{}}"
+        "\n"
+        r"\end{sphinxVerbatim}"
+        "\n"
+        r"\(\Psi\) outside code"
+    )
     assert check.code_macros(tex) == {"Psi": 1}
     chapters = check.numbered_chapters(ROOT)
     assert [doc for doc, _ in chapters][:1] == ["book/zb2014/signature"] and len(chapters) == 7
     lines = [r"\contentsline {chapter}{Notation}{7}{chapter*.3}%"] + [
         rf"\contentsline {{chapter}}{{\numberline {{{i}}}{title}}}{{{40 + i}}}{{chapter.{i}}}%"
-        for i, (_, title) in enumerate(chapters, start=1)]
+        for i, (_, title) in enumerate(chapters, start=1)
+    ]
     toc = tmp_path / "b.toc"
     toc.write_text("\n".join(lines) + "\n")
     assert check.toc_problems(toc, ROOT) == []
     toc.write_text("\n".join(lines[:-1]) + "\n")
-    assert check.toc_problems(toc, ROOT) == ["numbered chapters [1, 2, 3, 4, 5, 6], expected 1 to 7"]
+    assert check.toc_problems(toc, ROOT) == [
+        "numbered chapters [1, 2, 3, 4, 5, 6], expected 1 to 7"
+    ]
 
 
 def test_characters_the_font_lacks_fail_the_check(tmp_path):
@@ -247,22 +320,34 @@ def test_characters_the_font_lacks_fail_the_check(tmp_path):
     "Γ"): check_pdf fails, naming the character and how often."""
     check = _load("fdi_check_pdf_log", ROOT / "tools" / "check_pdf.py")
     log = tmp_path / "b.log"
-    log.write_text("Missing character: There is no \u2096 (U+2096) in font [FreeSerif.otf]/OT:script=latn;!\n" * 3
-                   + "Missing character: There is no \u1d40 (U+1D40) in font [FreeMono.otf]/OT:script=latn;!\n")
+    log.write_text(
+        "Missing character: There is no \u2096 (U+2096) in font [FreeSerif.otf]/OT:script=latn;!\n"
+        * 3
+        + "Missing character: There is no \u1d40 (U+1D40) in font [FreeMono.otf]/OT:script=latn;!\n"
+    )
     assert check.missing_characters(log.read_text()) == {"\u2096": 3, "\u1d40": 1}
-    assert check.log_problems(log) == ["LaTeX: 1 times no '\u1d40' in the font (dropped from the page)",
-                                       "LaTeX: 3 times no '\u2096' in the font (dropped from the page)"]
+    assert check.log_problems(log) == [
+        "LaTeX: 1 times no '\u1d40' in the font (dropped from the page)",
+        "LaTeX: 3 times no '\u2096' in the font (dropped from the page)",
+    ]
     log.write_text("Output written on b.pdf (3 pages).\n")
     assert check.log_problems(log) == []
 
 
 def test_log_counts_overfull_boxes_over_the_allowance_and_rerun_requests():
     check = _load("fdi_check_pdf_counts", ROOT / "tools" / "check_pdf.py")
-    log = ("Overfull \\hbox (12.5pt too wide) in paragraph at lines 3--4\n"
-           "Overfull \\hbox (1.0pt too wide) detected at line 9\n"
-           "Overfull \\vbox (6.0pt too high) has occurred while \\output is active\n"
-           "Underfull \\vbox (badness 10000) has occurred\n"
-           "LaTeX Warning: Label(s) may have changed. Rerun to get cross-references right.\n")
-    assert check.log_counts(log) == {"overfull": 3, "overfull_over_allowance": 2,
-                                     "overfull_max_pt": 12.5, "underfull": 1, "rerun": 1}
+    log = (
+        "Overfull \\hbox (12.5pt too wide) in paragraph at lines 3--4\n"
+        "Overfull \\hbox (1.0pt too wide) detected at line 9\n"
+        "Overfull \\vbox (6.0pt too high) has occurred while \\output is active\n"
+        "Underfull \\vbox (badness 10000) has occurred\n"
+        "LaTeX Warning: Label(s) may have changed. Rerun to get cross-references right.\n"
+    )
+    assert check.log_counts(log) == {
+        "overfull": 3,
+        "overfull_over_allowance": 2,
+        "overfull_max_pt": 12.5,
+        "underfull": 1,
+        "rerun": 1,
+    }
     assert check.log_counts("")["overfull_max_pt"] == 0.0

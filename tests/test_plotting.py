@@ -10,16 +10,24 @@ import matplotlib.pyplot as plt
 import pytest
 
 from fdi_lib import plotting
-from fdi_lib.plotting import (DISPLAY_DPI, FIG_WIDTH_IN, MIN_FONT_PT, PHONE_COLUMN_PX, RASTER_SCALE,
-                              figure, png_for_display, smallest_font_pt)
+from fdi_lib.plotting import (
+    DISPLAY_DPI,
+    FIG_WIDTH_IN,
+    MIN_FONT_PT,
+    PHONE_COLUMN_PX,
+    RASTER_SCALE,
+    figure,
+    png_for_display,
+    smallest_font_pt,
+)
 
 
 def _png_chunks(data: bytes) -> dict[bytes, list[bytes]]:
     chunks: dict[bytes, list[bytes]] = {}
     pos = 8
     while pos < len(data):
-        (length,) = struct.unpack(">I", data[pos:pos + 4])
-        chunks.setdefault(data[pos + 4:pos + 8], []).append(data[pos + 8:pos + 8 + length])
+        (length,) = struct.unpack(">I", data[pos : pos + 4])
+        chunks.setdefault(data[pos + 4 : pos + 8], []).append(data[pos + 8 : pos + 8 + length])
         pos += 12 + length
     return chunks
 
@@ -27,8 +35,14 @@ def _png_chunks(data: bytes) -> dict[bytes, list[bytes]]:
 def test_smallest_text_is_legible_on_a_phone():
     # text height in CSS px when the figure is shrunk to the phone column
     assert MIN_FONT_PT / 72 * PHONE_COLUMN_PX / FIG_WIDTH_IN >= 9.0
-    for key in ("font.size", "xtick.labelsize", "ytick.labelsize", "legend.fontsize",
-                "axes.labelsize", "axes.titlesize"):
+    for key in (
+        "font.size",
+        "xtick.labelsize",
+        "ytick.labelsize",
+        "legend.fontsize",
+        "axes.labelsize",
+        "axes.titlesize",
+    ):
         assert plotting.STYLE[key] >= MIN_FONT_PT, key
 
 
@@ -37,8 +51,9 @@ def test_figure_width_is_the_house_width_and_height_is_kept(figsize):
     fig, axes = figure(2, 2, figsize=figsize)
     width, height = fig.get_size_inches()
     assert width == pytest.approx(FIG_WIDTH_IN)
-    assert height == pytest.approx(plotting.STYLE["figure.figsize"][1] if figsize is None
-                                   else figsize[1])
+    assert height == pytest.approx(
+        plotting.STYLE["figure.figsize"][1] if figsize is None else figsize[1]
+    )
     assert axes.shape == (2, 2)
 
 
@@ -118,8 +133,11 @@ def _shown_texts(fig):
         out += [ax.title] + [a.label for a in axes]
         for axis in axes:
             lo, hi = sorted(axis.get_view_interval())
-            out += [t.label1 for t in axis.get_major_ticks()
-                    if lo - 1e-9 <= t.get_loc() <= hi + 1e-9 and t.label1.get_visible()]
+            out += [
+                t.label1
+                for t in axis.get_major_ticks()
+                if lo - 1e-9 <= t.get_loc() <= hi + 1e-9 and t.label1.get_visible()
+            ]
     return [t for t in out if t.get_visible() and t.get_text().strip()]
 
 

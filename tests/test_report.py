@@ -7,9 +7,15 @@ from fdi_lib.errors import ModelError
 from fdi_lib.report import NA, NBSP, fmt_count, fmt_number, fmt_rate, fmt_time, fmt_value, table
 
 
-@pytest.mark.parametrize("x, expected", [
-    (7.0, "7"), (0, "0"), (12345, "12\u202f345"), (np.int64(2000), "2\u202f000"),
-])
+@pytest.mark.parametrize(
+    "x, expected",
+    [
+        (7.0, "7"),
+        (0, "0"),
+        (12345, "12\u202f345"),
+        (np.int64(2000), "2\u202f000"),
+    ],
+)
 def test_fmt_count(x, expected):
     assert fmt_count(x) == expected
 
@@ -20,20 +26,37 @@ def test_fmt_count_rejects(bad):
         fmt_count(bad)
 
 
-@pytest.mark.parametrize("x, expected", [
-    (5.351584e-235, "< 10⁻¹⁵"), (0.0, "0"), (1.2808, "1.28"), (-0.333333, "-0.333"),
-    (43980.0, "43980"), (1.5e7, "1.5×10⁷"), (2.5e-5, "2.5×10⁻⁵"), (-4e-5, "-4×10⁻⁵"),
-    (9.9999e5, "10⁶"), (1e-3, "0.001"), (100.0, "100"),
-])
+@pytest.mark.parametrize(
+    "x, expected",
+    [
+        (5.351584e-235, "< 10⁻¹⁵"),
+        (0.0, "0"),
+        (1.2808, "1.28"),
+        (-0.333333, "-0.333"),
+        (43980.0, "43980"),
+        (1.5e7, "1.5×10⁷"),
+        (2.5e-5, "2.5×10⁻⁵"),
+        (-4e-5, "-4×10⁻⁵"),
+        (9.9999e5, "10⁶"),
+        (1e-3, "0.001"),
+        (100.0, "100"),
+    ],
+)
 def test_fmt_number(x, expected):
     assert fmt_number(x) == expected
 
 
-@pytest.mark.parametrize("rate, ci, expected", [
-    (0.017, None, "1.7 %"), (0.0, None, "0 %"), (1.0, None, "100 %"),
-    (0.017, (0.0098, 0.027), "1.7 % [0.98, 2.7]"), (0.901, (0.88, 0.92), "90 % [88, 92]"),
-    (None, None, NA),
-])
+@pytest.mark.parametrize(
+    "rate, ci, expected",
+    [
+        (0.017, None, "1.7 %"),
+        (0.0, None, "0 %"),
+        (1.0, None, "100 %"),
+        (0.017, (0.0098, 0.027), "1.7 % [0.98, 2.7]"),
+        (0.901, (0.88, 0.92), "90 % [88, 92]"),
+        (None, None, NA),
+    ],
+)
 def test_fmt_rate(rate, ci, expected):
     out = fmt_rate(rate, ci)
     assert out.replace(NBSP, " ") == expected
@@ -41,18 +64,30 @@ def test_fmt_rate(rate, ci, expected):
     assert out.count(" ") == (ci is not None)
 
 
-@pytest.mark.parametrize("rate, ci, match", [
-    (1.5, None, "fraction in"), (0.5, (0.6, 0.4), "low <= high"), (0.5, (0.1,), "pair"),
-    (float("nan"), None, "finite"),
-])
+@pytest.mark.parametrize(
+    "rate, ci, match",
+    [
+        (1.5, None, "fraction in"),
+        (0.5, (0.6, 0.4), "low <= high"),
+        (0.5, (0.1,), "pair"),
+        (float("nan"), None, "finite"),
+    ],
+)
 def test_fmt_rate_rejects(rate, ci, match):
     with pytest.raises(ModelError, match=match):
         fmt_rate(rate, ci)
 
 
-@pytest.mark.parametrize("s, expected", [
-    (0.00122, "1.22 ms"), (2.5e-5, "25 µs"), (89.4, "89.4 s"), (211.0, "3.52 min"), (0, "0 s"),
-])
+@pytest.mark.parametrize(
+    "s, expected",
+    [
+        (0.00122, "1.22 ms"),
+        (2.5e-5, "25 µs"),
+        (89.4, "89.4 s"),
+        (211.0, "3.52 min"),
+        (0, "0 s"),
+    ],
+)
 def test_fmt_time(s, expected):
     assert fmt_time(s) == expected.replace(" ", NBSP)
 
@@ -67,8 +102,11 @@ def test_fmt_value_dispatch():
 
 
 def test_table_html_and_text():
-    t = table({"false alarms (of 2000 runs)": [0, 7], "type I error": [fmt_rate(0.01), None]},
-              ["ours", "paper"], notes=["the paper gives no type I error for this case"])
+    t = table(
+        {"false alarms (of 2000 runs)": [0, 7], "type I error": [fmt_rate(0.01), None]},
+        ["ours", "paper"],
+        notes=["the paper gives no type I error for this case"],
+    )
     html = t._repr_html_().replace(NBSP, " ")
     assert html.count("<tr>") == 3 and "fdi-table" in html and "n/a" in html
     assert "the paper gives no type I error" in html
@@ -82,8 +120,11 @@ def test_table_cells_name_their_column():
     import re
 
     t = table({"delay": [1, 2, 3]}, ["ours", 'paper "A" & B', "q < 5"])
-    assert re.findall(r'<td data-label="([^"]*)">', t._repr_html_()) == \
-        ["ours", "paper &quot;A&quot; &amp; B", "q &lt; 5"]
+    assert re.findall(r'<td data-label="([^"]*)">', t._repr_html_()) == [
+        "ours",
+        "paper &quot;A&quot; &amp; B",
+        "q &lt; 5",
+    ]
 
 
 def test_table_rejects():
@@ -95,8 +136,9 @@ def test_table_rejects():
         table({"": [1]}, ["ours"])
 
 
-@pytest.mark.parametrize("value, display", [(1.2345, False), (7, True), ("text", False),
-                                            (np.float64(-2.5e-5), False)])
+@pytest.mark.parametrize(
+    "value, display", [(1.2345, False), (7, True), ("text", False), (np.float64(-2.5e-5), False)]
+)
 def test_glue_same_message_as_myst_nb(value, display):
     """fdi_lib.report.glue sends the display message of myst_nb.glue (data and metadata); a NumPy
     scalar as the Python number it holds (NumPy 2's repr "np.float64(...)" cannot be formatted)."""
@@ -116,7 +158,9 @@ def test_glue_same_message_as_myst_nb(value, display):
     assert ours.outputs[0].data == theirs.outputs[0].data
     assert ours.outputs[0].metadata == theirs.outputs[0].metadata
     assert ours.outputs[0].metadata["scrapbook"]["name"] == "key"
-    assert any(k.startswith("application/papermill.record/") for k in ours.outputs[0].data) != display
+    assert (
+        any(k.startswith("application/papermill.record/") for k in ours.outputs[0].data) != display
+    )
 
 
 def test_table_markdown_is_a_pipe_table_with_the_same_cells_literally():
@@ -124,15 +168,35 @@ def test_table_markdown_is_a_pipe_table_with_the_same_cells_literally():
     (markdown-it, the parser of MyST), are the table's cells, special characters included."""
     from markdown_it import MarkdownIt
 
-    t = table({"false alarms *of* [2000] runs": [0, fmt_rate(0.017, (0.0098, 0.027))],
-               "type I error | $x_1$ `code`": [None, "a_b <c> {d}"]},
-              ["ours", "paper"], notes=["no *type I* error_given"], index_header="")
+    t = table(
+        {
+            "false alarms *of* [2000] runs": [0, fmt_rate(0.017, (0.0098, 0.027))],
+            "type I error | $x_1$ `code`": [None, "a_b <c> {d}"],
+        },
+        ["ours", "paper"],
+        notes=["no *type I* error_given"],
+        index_header="",
+    )
     tokens = MarkdownIt("commonmark").enable("table").parse(t._repr_markdown_())
     assert sum(tok.type in ("th_open", "td_open") for tok in tokens) == 9
     texts = ["".join(c.content for c in tok.children) for tok in tokens if tok.type == "inline"]
     # the text the parser reads is the cell's, with no emphasis, code, link or HTML made of it
-    assert texts == ["", "ours", "paper", "false alarms *of* [2000] runs", "0",
-                     fmt_rate(0.017, (0.0098, 0.027)), "type I error | $x_1$ `code`", "n/a",
-                     "a_b <c> {d}", "no *type I* error_given"]
-    assert not [tok for tok in tokens if tok.type == "inline"
-                for c in tok.children if c.type not in ("text", "softbreak")]
+    assert texts == [
+        "",
+        "ours",
+        "paper",
+        "false alarms *of* [2000] runs",
+        "0",
+        fmt_rate(0.017, (0.0098, 0.027)),
+        "type I error | $x_1$ `code`",
+        "n/a",
+        "a_b <c> {d}",
+        "no *type I* error_given",
+    ]
+    assert not [
+        tok
+        for tok in tokens
+        if tok.type == "inline"
+        for c in tok.children
+        if c.type not in ("text", "softbreak")
+    ]

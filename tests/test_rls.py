@@ -26,16 +26,20 @@ def test_rls_equals_weighted_least_squares_closed_form():
     Si = np.linalg.inv(Sigma)
     for k in (0, 5, 60, 149):
         w = lam ** (k - np.arange(k + 1))
-        A = lam ** (k + 1) * np.eye(2) + np.einsum("j,jpi,jpq,jqk->ik", w, M[:k + 1], Si[:k + 1], M[:k + 1])
-        b = np.einsum("j,jpi,jpq,...jq->...i", w, M[:k + 1], Si[:k + 1], eps[:, :k + 1])
+        A = lam ** (k + 1) * np.eye(2) + np.einsum(
+            "j,jpi,jpq,jqk->ik", w, M[: k + 1], Si[: k + 1], M[: k + 1]
+        )
+        b = np.einsum("j,jpi,jpq,...jq->...i", w, M[: k + 1], Si[: k + 1], eps[:, : k + 1])
         theta = np.linalg.solve(A, b[..., None])[..., 0]
         assert np.allclose(res.theta_hat[:, k], theta, rtol=1e-8, atol=1e-10)
         assert np.allclose(res.gains.P[k + 1], np.linalg.inv(A), rtol=1e-8, atol=1e-12)
         # tracking error with the closed-form estimate (not the library's own theta_hat)
-        np.testing.assert_allclose(res.errors[:, k], eps[:, k] - theta @ M[k].T, rtol=1e-8, atol=1e-10)
+        np.testing.assert_allclose(
+            res.errors[:, k], eps[:, k] - theta @ M[k].T, rtol=1e-8, atol=1e-10
+        )
         if k > 0:  # prior error: the estimate of k-1 from the same closed form
             w1 = lam ** (k - 1 - np.arange(k))
-            A1 = lam ** k * np.eye(2) + np.einsum("j,jpi,jpq,jqk->ik", w1, M[:k], Si[:k], M[:k])
+            A1 = lam**k * np.eye(2) + np.einsum("j,jpi,jpq,jqk->ik", w1, M[:k], Si[:k], M[:k])
             b1 = np.einsum("j,jpi,jpq,...jq->...i", w1, M[:k], Si[:k], eps[:, :k])
             prior = eps[:, k] - np.linalg.solve(A1, b1[..., None])[..., 0] @ M[k].T
             np.testing.assert_allclose(res.prior_errors[:, k], prior, rtol=1e-8, atol=1e-10)
@@ -61,8 +65,10 @@ def test_rls_tracks_a_slow_ramp_better_with_forgetting():
     M, Sigma = _problem(rng, N=500)
     theta = np.linspace(0, 2, 500)[:, None] * np.array([1.0, -1.0])
     eps = np.einsum("kpm,km->kp", M, theta) + 0.1 * rng.normal(size=(500, 3))
-    lag_err = [np.abs(rls_track(eps, M, Sigma, lam=lam).theta_hat[400:] - theta[400:]).mean()
-               for lam in (0.9, 1.0)]
+    lag_err = [
+        np.abs(rls_track(eps, M, Sigma, lam=lam).theta_hat[400:] - theta[400:]).mean()
+        for lam in (0.9, 1.0)
+    ]
     assert lag_err[0] < 0.5 * lag_err[1]
 
 

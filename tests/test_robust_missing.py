@@ -68,14 +68,20 @@ def test_nan_innovation_does_not_hide_the_fault(seed):
 def test_nan_innovation_in_one_realisation_only():
     """A batch where only realisation 1 misses sample 50: each row equals its own loop."""
     m, g, sig, _ = _setup()
-    sims = simulate(m, rng=np.random.default_rng(5), size=3,
-                    fault=fault_profile(m, Psi=(np.arange(N) >= ONSET).astype(float)[:, None, None]),
-                    theta=[THETA])
+    sims = simulate(
+        m,
+        rng=np.random.default_rng(5),
+        size=3,
+        fault=fault_profile(m, Psi=(np.arange(N) >= ONSET).astype(float)[:, None, None]),
+        theta=[THETA],
+    )
     eps = kalman_filter(m, sims.y, gains=g).innovations.copy()
     eps[1, 50] = np.nan
     res = glr_known_profile(eps, g, sig)
     for b in range(3):
-        expected = _glr_loop(eps[b, :, 0], g.Sigma[:, 0, 0], sig[:, 0, 0], skip={50} if b == 1 else set())
+        expected = _glr_loop(
+            eps[b, :, 0], g.Sigma[:, 0, 0], sig[:, 0, 0], skip={50} if b == 1 else set()
+        )
         np.testing.assert_allclose(res.statistic[b], expected, rtol=1e-9, atol=1e-12)
     assert list(first_alarm(res.statistic, THRESHOLD)) == [ONSET + 1] * 3
 
@@ -85,7 +91,7 @@ def test_missing_measurement_predicts_without_update():
     m, _, _, sim = _setup()
     y = sim.y.copy()
     y[50] = np.nan
-    kf = kalman_filter(m, y)                              # gains for this missing sample
+    kf = kalman_filter(m, y)  # gains for this missing sample
     g = kf.gains
     assert list(np.nonzero(g.missing)[0]) == [50] and not g.K[50].any()
     # Independent scalar filter (F = 0.9, H = 1, Q = R = 0.01, P0 = 1), no update at k = 50.
@@ -99,12 +105,16 @@ def test_missing_measurement_predicts_without_update():
         xh, P = 0.9 * xf, 0.81 * (1 - gain) * P + 0.01
     eps, filt = np.array(eps), np.array(filt)
     np.testing.assert_allclose(kf.x_filt[:, 0], filt, rtol=1e-12, atol=1e-14)
-    np.testing.assert_allclose(kf.updated_residuals[:, 0], y[:, 0] - filt, rtol=1e-12, atol=1e-14, equal_nan=True)
+    np.testing.assert_allclose(
+        kf.updated_residuals[:, 0], y[:, 0] - filt, rtol=1e-12, atol=1e-14, equal_nan=True
+    )
     assert np.isnan(kf.innovations[50, 0]) and np.isnan(eps[50])
     assert np.count_nonzero(np.isnan(kf.innovations)) == 1
     np.testing.assert_allclose(kf.innovations[:, 0], eps, rtol=1e-12, atol=1e-14)
     assert kf.x_pred[51, 0] == pytest.approx(0.9 * kf.x_pred[50, 0], rel=1e-15)
-    sig = fault_signature(m, g, fault_profile(m, Psi=(np.arange(N) >= ONSET).astype(float)[:, None, None]))
+    sig = fault_signature(
+        m, g, fault_profile(m, Psi=(np.arange(N) >= ONSET).astype(float)[:, None, None])
+    )
     stat = glr_known_profile(kf.innovations, g, sig.on_innovation).statistic
     assert np.all(np.isfinite(stat))
     assert first_alarm(stat, THRESHOLD) == ONSET + 1
@@ -116,9 +126,11 @@ def test_filter_refuses_a_missing_sample_its_gains_observe():
     m, g, _, sim = _setup()
     y = sim.y.copy()
     y[120] = np.nan
-    with pytest.raises(NonFiniteError, match=r"y: a sample missing \(NaN\) at index \(120,\).*missing="):
+    with pytest.raises(
+        NonFiniteError, match=r"y: a sample missing \(NaN\) at index \(120,\).*missing="
+    ):
         kalman_filter(m, y, gains=g)
-    ys = np.stack([sim.y, y])                             # two realisations, two patterns
+    ys = np.stack([sim.y, y])  # two realisations, two patterns
     with pytest.raises(NonFiniteError, match=r"y: expected the same missing samples.*sample 120"):
         kalman_filter(m, ys)
 
@@ -199,9 +211,11 @@ def test_energy_after_a_glitch(spike):
     r[fault_at:] += 3.0
     L = np.ones((n, 1, 1))
     en = energy_statistic(r[:, None], L, w)
-    ok = np.arange(n) >= 100 + w            # windows after the glitch has left
+    ok = np.arange(n) >= 100 + w  # windows after the glitch has left
     tail = slice(fault_at - 500, n)
-    np.testing.assert_allclose(en[tail], _energy_loop(r[tail.start - w + 1:], w)[w - 1:], rtol=1e-12)
+    np.testing.assert_allclose(
+        en[tail], _energy_loop(r[tail.start - w + 1 :], w)[w - 1 :], rtol=1e-12
+    )
     thr = float(scipy.stats.chi2.ppf(1 - 1e-4, w))
     alarm = first_alarm(np.where(ok, en, 0.0), thr)
     assert fault_at <= alarm < fault_at + w
@@ -212,7 +226,7 @@ def test_energy_skips_missing_samples():
     r = np.random.default_rng(1).standard_normal((n, 1))
     r[37] = np.nan
     en = energy_statistic(r, np.ones((n, 1, 1)), w)
-    assert np.all(np.isfinite(en[w - 1:]))
+    assert np.all(np.isfinite(en[w - 1 :]))
     np.testing.assert_allclose(en, _energy_loop(r[:, 0], w), rtol=1e-12, equal_nan=True)
 
 
@@ -221,12 +235,12 @@ def test_kitanidis_filter_predicts_without_update_on_a_missing_sample():
 
     m = ltv_model(F=0.5 * np.eye(2), H=np.eye(2), Q=np.eye(2), R=np.eye(2), n_steps=20)
     y = np.random.default_rng(2).standard_normal((20, 2))
-    y[7, 1] = np.nan                                     # one component missing: the whole sample is
+    y[7, 1] = np.nan  # one component missing: the whole sample is
     kg = kitanidis_gains(m, [[1.0], [0.0]], missing=np.arange(20) == 7)
     res = kitanidis_filter(m, y, gains=kg)
     assert np.isnan(res.innovations[7]).all() and np.count_nonzero(np.isnan(res.innovations)) == 2
     assert not kg.K[7].any()
-    np.testing.assert_array_equal(res.x_filt[7], res.x_pred[7])       # no update
+    np.testing.assert_array_equal(res.x_filt[7], res.x_pred[7])  # no update
     np.testing.assert_allclose(res.x_pred[8], 0.5 * res.x_pred[7], rtol=1e-15)
     clean = kitanidis_filter(m, np.where(np.arange(20)[:, None] == 7, 0.0, y), E=[[1.0], [0.0]])
     np.testing.assert_allclose(res.x_filt[:7], clean.x_filt[:7], rtol=1e-15)
@@ -243,11 +257,15 @@ def test_check_finite_on_large_arrays_names_the_first_bad_index(bad):
     x = np.full((70, 80), 1e308)  # the sum overflows, every value is finite
     check_finite(x, "x")
     x[[0, 33], [5, 7]] = [-np.inf, bad]  # with a NaN or an inf elsewhere
-    with pytest.raises(NonFiniteError, match=r"x: expected finite values, got -inf at index \(0, 5\)"):
+    with pytest.raises(
+        NonFiniteError, match=r"x: expected finite values, got -inf at index \(0, 5\)"
+    ):
         check_finite(x, "x")
     y = np.zeros(10_000)
     y[9_999] = bad
-    with pytest.raises(NonFiniteError, match=r"y: expected finite values, got .* at index \(9999,\)"):
+    with pytest.raises(
+        NonFiniteError, match=r"y: expected finite values, got .* at index \(9999,\)"
+    ):
         check_finite(y, "y")
 
 
@@ -277,7 +295,9 @@ def _filterpy(model, y, missing):
     for k in range(model.n_steps):
         kf.H, kf.R = model.H[k], model.R[k]
         out["P_prior"].append(kf.P.copy())
-        out["S"].append(model.H[k] @ kf.P @ model.H[k].T + model.R[k])   # filterpy's S before an update
+        out["S"].append(
+            model.H[k] @ kf.P @ model.H[k].T + model.R[k]
+        )  # filterpy's S before an update
         kf.update(None if missing[k] else y[k])
         out["eps"].append(np.full(p, np.nan) if missing[k] else kf.y.copy())
         out["K"].append(np.zeros((n, p)) if missing[k] else kf.K.copy())
@@ -293,7 +313,7 @@ def _filterpy(model, y, missing):
 
 def _filterpy_signature(model, prof, missing):
     """(H_k Gamma_k + Phi_k): filterpy's innovations of a noise-free record driven by theta = e_i."""
-    assert not model.x0.any()                         # the filter starts at the true (zero) state
+    assert not model.x0.any()  # the filter starts at the true (zero) state
     cols = []
     for i in range(prof.Psi.shape[-1]):
         x, y = np.zeros(model.n), np.empty((model.n_steps, model.p))
@@ -301,7 +321,7 @@ def _filterpy_signature(model, prof, missing):
             y[k] = model.H[k] @ x + prof.Phi[k, :, i]
             x = model.F[k] @ x + prof.Psi[k, :, i]
         cols.append(_filterpy(model, y, missing)["eps"])
-    return np.stack(cols, axis=-1)                                      # (N, p, m), NaN where missing
+    return np.stack(cols, axis=-1)  # (N, p, m), NaN where missing
 
 
 def _missing_record(seed=11):
@@ -326,7 +346,7 @@ def test_gains_and_innovations_with_missing_samples_equal_filterpy():
     np.testing.assert_allclose(g.Sigma, ref["S"], **tol)
     np.testing.assert_allclose(kf.innovations, ref["eps"], equal_nan=True, **tol)
     np.testing.assert_allclose(kf.x_filt, ref["x_post"], **tol)
-    for k in GAPS:                                                   # P_{k|k} = P_k, A_k = F_k
+    for k in GAPS:  # P_{k|k} = P_k, A_k = F_k
         np.testing.assert_array_equal(g.P_filt[k], g.P[k])
         np.testing.assert_array_equal(g.A[k], m.F[k])
 
@@ -338,11 +358,16 @@ def test_signature_with_missing_samples_equals_filterpy():
     ref = _filterpy_signature(m, prof, miss)
     obs = ~miss
     after = np.arange(NM) > ONSET_M
-    assert np.abs(ref[after & obs]).max(axis=(1, 2)).min() > 0.1       # non-zero after the onset
+    assert np.abs(ref[after & obs]).max(axis=(1, 2)).min() > 0.1  # non-zero after the onset
     np.testing.assert_allclose(sig[obs], ref[obs], rtol=1e-12, atol=1e-13)
     # the signature of the complete record is another one after the first gap
     full = fault_signature(m, kalman_gains(m), prof).on_innovation
-    assert np.abs(full[GAPS[0] + 1:][obs[GAPS[0] + 1:]] - ref[GAPS[0] + 1:][obs[GAPS[0] + 1:]]).max() > 1e-2
+    assert (
+        np.abs(
+            full[GAPS[0] + 1 :][obs[GAPS[0] + 1 :]] - ref[GAPS[0] + 1 :][obs[GAPS[0] + 1 :]]
+        ).max()
+        > 1e-2
+    )
 
 
 def _brute_glr(eps, S, sig):
@@ -362,12 +387,14 @@ def _brute_glr(eps, S, sig):
 def test_known_profile_glr_with_missing_samples_equals_a_brute_force_loop():
     m, prof, y, miss = _missing_record()
     kf = kalman_filter(m, y)
-    res = glr_known_profile(kf.innovations, kf.gains, fault_signature(m, kf.gains, prof).on_innovation)
+    res = glr_known_profile(
+        kf.innovations, kf.gains, fault_signature(m, kf.gains, prof).on_innovation
+    )
     ref = _filterpy(m, y, miss)
     C, d = _brute_glr(ref["eps"], ref["S"], _filterpy_signature(m, prof, miss))
     np.testing.assert_allclose(res.C, C, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(res.d, d, rtol=1e-12, atol=1e-12)
-    k = np.arange(ONSET_M + 2, NM)                                    # C invertible from here on
+    k = np.arange(ONSET_M + 2, NM)  # C invertible from here on
     theta = np.linalg.solve(C[k], d[k][..., None])[..., 0]
     np.testing.assert_allclose(res.theta_hat[k], theta, rtol=1e-10)
     np.testing.assert_allclose(res.statistic[k], np.einsum("ki,ki->k", d[k], theta), rtol=1e-11)
@@ -387,7 +414,9 @@ def test_a_missing_sample_after_the_onset_is_not_in_the_information():
     for k in GAPS:
         assert np.linalg.norm(terms[k]) > 1e-3 * np.linalg.norm(res.C[-1])
     F, zeta = information(kf.innovations, sig, g, ONSET_M + 1, NM)
-    np.testing.assert_allclose(F, terms[ONSET_M + 1:][~miss[ONSET_M + 1:]].sum(axis=0), rtol=1e-12)
+    np.testing.assert_allclose(
+        F, terms[ONSET_M + 1 :][~miss[ONSET_M + 1 :]].sum(axis=0), rtol=1e-12
+    )
     np.testing.assert_allclose(F, res.C[-1] - res.C[ONSET_M], rtol=1e-12)
     np.testing.assert_allclose(zeta, res.d[-1] - res.d[ONSET_M], rtol=1e-12)
 
@@ -423,7 +452,9 @@ def test_windowed_glr_with_missing_samples_equals_a_brute_force_loop(size):
         best, arg = -np.inf, None
         for r in range(max(0, k - w + 1), k - s + 1):
             if r not in sigs:
-                sigs[r] = _brute_glr(ref["eps"], ref["S"], _filterpy_signature(m, fam.profile(r), miss))
+                sigs[r] = _brute_glr(
+                    ref["eps"], ref["S"], _filterpy_signature(m, fam.profile(r), miss)
+                )
             C, d = sigs[r]
             l_r = float(d[k] @ np.linalg.pinv(C[k], rcond=1e-10) @ d[k])
             best, arg = (l_r, r) if l_r > best else (best, arg)
@@ -438,9 +469,11 @@ def test_energy_with_missing_samples_equals_filterpy():
     ref = _filterpy(m, y, miss)
     w = 8
     en = energy_statistic(kf.innovations, kf.gains.Sigma_chol, w)
-    terms = [0.0 if miss[j] else float(ref["eps"][j] @ np.linalg.solve(ref["S"][j], ref["eps"][j]))
-             for j in range(NM)]
-    expected = [np.nan] * (w - 1) + [sum(terms[k - w + 1:k + 1]) for k in range(w - 1, NM)]
+    terms = [
+        0.0 if miss[j] else float(ref["eps"][j] @ np.linalg.solve(ref["S"][j], ref["eps"][j]))
+        for j in range(NM)
+    ]
+    expected = [np.nan] * (w - 1) + [sum(terms[k - w + 1 : k + 1]) for k in range(w - 1, NM)]
     np.testing.assert_allclose(en, expected, rtol=1e-12, equal_nan=True)
 
 
@@ -457,7 +490,7 @@ def test_kitanidis_rejects_the_unknown_input_across_missing_samples():
     E = np.array([[1.0], [0.5], [0.0]])
     miss = np.isin(np.arange(n_steps), gaps)
     noise = simulate(m, rng=rng)
-    dist = np.zeros((n_steps, 3))                       # the state response to a large d_k
+    dist = np.zeros((n_steps, 3))  # the state response to a large d_k
     x = np.zeros(3)
     for k in range(n_steps):
         dist[k] = x
@@ -467,8 +500,10 @@ def test_kitanidis_rejects_the_unknown_input_across_missing_samples():
     clean = kitanidis_filter(m, np.where(miss[:, None], np.nan, noise.y), gains=g)
     moved = kitanidis_filter(m, np.where(miss[:, None], np.nan, noise.y + dist), gains=g)
     err_clean, err_moved = clean.x_filt - noise.x[:n_steps], moved.x_filt - noise.x[:n_steps] - dist
-    np.testing.assert_allclose(err_moved[obs], err_clean[obs], rtol=0, atol=1e-9 * np.abs(dist).max())
-    assert np.abs(err_moved[~obs] - err_clean[~obs]).max() > 1.0        # at a gap, d_{k-1} is not seen
+    np.testing.assert_allclose(
+        err_moved[obs], err_clean[obs], rtol=0, atol=1e-9 * np.abs(dist).max()
+    )
+    assert np.abs(err_moved[~obs] - err_clean[~obs]).max() > 1.0  # at a gap, d_{k-1} is not seen
 
 
 def test_theta_hat_with_five_percent_missing_samples_is_unbiased():
@@ -492,13 +527,24 @@ def test_theta_hat_with_five_percent_missing_samples_is_unbiased():
 
 
 # --- Issue 21, section 4: typed errors at the edges ----------------------------------------------
-@pytest.mark.parametrize("case, error, message", [
-    ("nan", NonFiniteError, r"C: expected finite values, got nan at index \(1, 0, 1\)"),
-    ("asymmetric", CovarianceError, r"C: expected symmetric matrices, got asymmetry 0\.5 .* at index \(1,\)"),
-    ("indefinite", CovarianceError, r"C: expected positive semi-definite matrices, got smallest eigenvalue -1 "
-                                    r".* at index \(1,\)"),
-    ("d_nan", NonFiniteError, r"d: expected finite values, got nan at index \(0, 1\)"),
-])
+@pytest.mark.parametrize(
+    "case, error, message",
+    [
+        ("nan", NonFiniteError, r"C: expected finite values, got nan at index \(1, 0, 1\)"),
+        (
+            "asymmetric",
+            CovarianceError,
+            r"C: expected symmetric matrices, got asymmetry 0\.5 .* at index \(1,\)",
+        ),
+        (
+            "indefinite",
+            CovarianceError,
+            r"C: expected positive semi-definite matrices, got smallest eigenvalue -1 "
+            r".* at index \(1,\)",
+        ),
+        ("d_nan", NonFiniteError, r"d: expected finite values, got nan at index \(0, 1\)"),
+    ],
+)
 def test_quadratic_form_rejects_a_bad_information_matrix(case, error, message):
     """Before: a NaN C gave a NaN statistic, a non-symmetric or indefinite C a number, silently."""
     from fdi_lib.glr import quadratic_form
@@ -521,7 +567,7 @@ def test_quadratic_form_accepts_round_off_and_singular_matrices():
     from fdi_lib.glr import quadratic_form
 
     v = np.array([1.0, 1e-3])
-    C = np.outer(v, v)                                   # rank one: a round-off eigenvalue ~ -1e-22
+    C = np.outer(v, v)  # rank one: a round-off eigenvalue ~ -1e-22
     stat, theta = quadratic_form(C, 2.0 * v)
     assert stat == pytest.approx(4.0, rel=1e-12)
     np.testing.assert_allclose(C @ theta, 2.0 * v, rtol=1e-12)
@@ -546,6 +592,9 @@ def test_information_with_start_after_stop_is_an_error_naming_both():
     m, g, sig, sim = _setup()
     eps = kalman_filter(m, sim.y, gains=g).innovations
     for start, stop in ((120, 110), (120, 120)):
-        with pytest.raises(ModelError, match=rf"stop: expected an integer in \(start, N\] = \({start}, {N}\] "
-                                             rf"\(start = {start}.*got {stop}"):
+        with pytest.raises(
+            ModelError,
+            match=rf"stop: expected an integer in \(start, N\] = \({start}, {N}\] "
+            rf"\(start = {start}.*got {stop}",
+        ):
             information(eps, sig, g, start, stop)

@@ -26,7 +26,10 @@ def test_every_run_is_a_false_alarm_a_miss_or_a_detection(fig7_fig8):
     detected = sum(h8["type1_rate"][f]["n"] for f in ("1", "2"))
     missed = sum(h7["missed"][f] for f in ("1", "2"))
     assert detected + missed + h7["false_alarms"] == 2 * TRIALS
-    assert h7["false_alarm_rate"]["count"] == h7["false_alarms"] and h7["false_alarm_rate"]["n"] == 2 * TRIALS
+    assert (
+        h7["false_alarm_rate"]["count"] == h7["false_alarms"]
+        and h7["false_alarm_rate"]["n"] == 2 * TRIALS
+    )
 
 
 def test_rates_are_counts_over_n_inside_their_intervals(fig7_fig8):
@@ -34,7 +37,7 @@ def test_rates_are_counts_over_n_inside_their_intervals(fig7_fig8):
     for key in ("type1_rate", "type2_rate"):
         for f in ("1", "2"):
             d = r8.headline[key][f]
-            assert d["n"] == r8.headline["type1_rate"][f]["n"]          # same runs for both tests
+            assert d["n"] == r8.headline["type1_rate"][f]["n"]  # same runs for both tests
             assert d["rate"] == pytest.approx(d["count"] / d["n"], abs=1e-15)
             lo, hi = d["ci95"]
             assert lo <= d["rate"] <= hi and hi - lo < 0.5

@@ -18,8 +18,8 @@ def test_theta_estimate_within_four_standard_errors(size):
         run = unstable_run(theta=(size, 0.0), seed=seed)
         k = int(np.nanargmax(run.glr.statistic))
         se = np.sqrt(np.diag(np.linalg.inv(run.glr.C_hat[k])))
-        assert np.all(se < 0.2)                      # the information is what the paper's example gives
+        assert np.all(se < 0.2)  # the information is what the paper's example gives
         z.append((run.glr.theta_hat[k] - [size, 0.0]) / se)
     z = np.array(z)
     assert np.all(np.abs(z) < 4.0), z
-    assert np.mean(z ** 2) < 3.0                     # chi-square(1) mean 1; 3 is far in its tail for 12 values
+    assert np.mean(z**2) < 3.0  # chi-square(1) mean 1; 3 is far in its tail for 12 values

@@ -49,12 +49,18 @@ def test_proposition_holds_in_closed_loop():
     model = ex.unstable_model(300)
     prof = impulse_family(model).profile(120)
     theta = np.array([1.5, -0.5])
-    faulty = simulate(model, rng=np.random.default_rng(0), controller=ex.controller(), fault=prof, theta=theta)
+    faulty = simulate(
+        model, rng=np.random.default_rng(0), controller=ex.controller(), fault=prof, theta=theta
+    )
     healthy = simulate(model, noise=faulty.noise, controller=ex.controller())
-    assert np.abs(faulty.u - healthy.u).max() > 0.1  # the fault changes the input through the loop...
+    assert (
+        np.abs(faulty.u - healthy.u).max() > 0.1
+    )  # the fault changes the input through the loop...
     g = kalman_gains(model)
-    d = (kalman_filter(model, faulty.y, faulty.u, gains=g).innovations
-         - kalman_filter(model, healthy.y, healthy.u, gains=g).innovations)
+    d = (
+        kalman_filter(model, faulty.y, faulty.u, gains=g).innovations
+        - kalman_filter(model, healthy.y, healthy.u, gains=g).innovations
+    )
     sig = fault_signature(model, g, prof)
     np.testing.assert_allclose(d, sig.on_innovation @ theta, atol=1e-13)  # ...not the innovation
 

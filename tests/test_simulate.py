@@ -11,7 +11,9 @@ def test_open_loop_matches_a_direct_loop(random_ltv):
     rng = np.random.default_rng(1)
     m = random_ltv(rng, n=3, p=2, l=1, n_steps=30)
     u = rng.standard_normal((30, 1))
-    prof = fault_profile(m, Psi=rng.standard_normal((30, 3, 2)), Phi=rng.standard_normal((30, 2, 2)))
+    prof = fault_profile(
+        m, Psi=rng.standard_normal((30, 3, 2)), Phi=rng.standard_normal((30, 2, 2))
+    )
     theta = np.array([0.3, -0.2])
     sim = simulate(m, rng=np.random.default_rng(2), u=u, fault=prof, theta=theta)
     x = sim.noise.x0.copy()
@@ -34,12 +36,22 @@ def test_noise_has_the_model_covariances():
 def test_shared_noise_roots_change_no_draw():
     from fdi_lib.simulate import noise_from_standard, noise_roots
 
-    m = ltv_model(F=np.eye(2), H=[[1.0, 0.0]], Q=[[2.0, 0.6], [0.6, 0.5]], R=0.3, n_steps=20,
-                  P0=[[1.0, 0.2], [0.2, 0.4]])
+    m = ltv_model(
+        F=np.eye(2),
+        H=[[1.0, 0.0]],
+        Q=[[2.0, 0.6], [0.6, 0.5]],
+        R=0.3,
+        n_steps=20,
+        P0=[[1.0, 0.2], [0.2, 0.4]],
+    )
     a = draw_noise(m, np.random.default_rng(5), size=3)
     b = draw_noise(m, np.random.default_rng(5), size=3, roots=noise_roots(m))
     rng = np.random.default_rng(5)
-    z0, zw, zv = rng.standard_normal((3, 2)), rng.standard_normal((3, 20, 2)), rng.standard_normal((3, 20, 1))
+    z0, zw, zv = (
+        rng.standard_normal((3, 2)),
+        rng.standard_normal((3, 20, 2)),
+        rng.standard_normal((3, 20, 1)),
+    )
     c = noise_from_standard(m, z0, zw, zv)
     for x, y, z in ((a.x0, b.x0, c.x0), (a.w, b.w, c.w), (a.v, b.v, c.v)):
         np.testing.assert_array_equal(x, y)
@@ -60,8 +72,11 @@ def test_rank_one_process_noise_is_supported():
 def test_replay_and_batch_consistency():
     m = ex.unstable_model(50)
     batch = simulate(m, rng=np.random.default_rng(3), size=3, controller=ex.controller())
-    single = simulate(m, noise=type(batch.noise)(batch.noise.x0[1], batch.noise.w[1], batch.noise.v[1]),
-                      controller=ex.controller())
+    single = simulate(
+        m,
+        noise=type(batch.noise)(batch.noise.x0[1], batch.noise.w[1], batch.noise.v[1]),
+        controller=ex.controller(),
+    )
     np.testing.assert_allclose(batch.y[1], single.y, rtol=0, atol=1e-13)
 
 

@@ -4,8 +4,15 @@ import numpy as np
 import pytest
 
 from fdi_lib.errors import ModelError, NonFiniteError, ShapeError
-from fdi_lib.sparse import (LassoPath, diagnose, flat_range, lasso_cvxpy, lasso_path,
-                            least_squares_on_support, regression_data)
+from fdi_lib.sparse import (
+    LassoPath,
+    diagnose,
+    flat_range,
+    lasso_cvxpy,
+    lasso_path,
+    least_squares_on_support,
+    regression_data,
+)
 
 
 def _problem(seed=0, rows=80, m=20, q=3, noise=0.3):
@@ -24,7 +31,9 @@ def test_lars_path_and_cvxpy_agree(frac):
     lam = frac * path.lambdas[0]
     a = path.coef(lam)
     b = lasso_cvxpy(X, y, lam, n_samples=N)
-    np.testing.assert_allclose(a, b, atol=2e-4 * max(1.0, np.abs(a).max()))  # interior-point accuracy
+    np.testing.assert_allclose(
+        a, b, atol=2e-4 * max(1.0, np.abs(a).max())
+    )  # interior-point accuracy
 
     def objective(t):
         return np.sum((X @ t - y) ** 2) / (2 * N) + lam * np.abs(t).sum()
@@ -54,7 +63,9 @@ def _hand_path(lambdas, sizes, m=10):
     lambdas = np.asarray(lambdas, float)
     K = lambdas.size - 1
     coefs = np.zeros((m, K + 1))
-    for i, s in enumerate(sizes):  # make components active on interval i: non-zero at both ends' mean
+    for i, s in enumerate(
+        sizes
+    ):  # make components active on interval i: non-zero at both ends' mean
         coefs[:s, i + 1] = 1.0 + i
     return LassoPath(lambdas=lambdas, coefs=coefs, n_samples=10)
 
@@ -149,15 +160,21 @@ def test_truncated_path_gives_the_same_flat_range_as_the_full_path():
     for b in range(12):
         full = lasso_path(reg.X[b], reg.y[b], n_samples=reg.n_samples)
         cut = lasso_path(reg.X[b], reg.y[b], n_samples=reg.n_samples, lambda_min=1e-4)
-        short = lasso_path(reg.X[b], reg.y[b], n_samples=reg.n_samples, lambda_min=1e-4, max_size=25)
+        short = lasso_path(
+            reg.X[b], reg.y[b], n_samples=reg.n_samples, lambda_min=1e-4, max_size=25
+        )
         assert cut.lambdas[-1] >= 1e-4 * full.lambdas[0] * (1 - 1e-9)
         assert short.lambdas.size < full.lambdas.size and short.support_sizes().max() > 25
-        np.testing.assert_allclose(short.coefs, full.coefs[:, : short.lambdas.size], rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(
+            short.coefs, full.coefs[:, : short.lambdas.size], rtol=1e-9, atol=1e-12
+        )
         for scale in ("log", "linear"):
             a = flat_range(full, scale=scale)
             for c in (flat_range(cut, scale=scale), flat_range(short, scale=scale)):
                 np.testing.assert_array_equal(a.support, c.support)
-                assert a.low == pytest.approx(c.low, rel=1e-9) and a.high == pytest.approx(c.high, rel=1e-9)
+                assert a.low == pytest.approx(c.low, rel=1e-9) and a.high == pytest.approx(
+                    c.high, rel=1e-9
+                )
 
 
 def _exact_path(lambdas, first_ranges):
@@ -185,7 +202,9 @@ def test_grid_flat_range_on_a_hand_made_path_misses_a_short_range():
     # 9 points, one per half decade from 10 to 1e-3: the size-3 range (0.8, 0.9) holds no point
     g = grid_flat_range(path, 9, lambda_ratio=1e-4, max_size=3)
     np.testing.assert_allclose(g.grid, np.geomspace(10, 1e-3, 9))
-    np.testing.assert_array_equal(g.sizes, [0, 1, 1, 2, 2, 2, 2, 2, -1])  # 1e-3 is past the window end
+    np.testing.assert_array_equal(
+        g.sizes, [0, 1, 1, 2, 2, 2, 2, 2, -1]
+    )  # 1e-3 is past the window end
     assert (g.start, g.stop, g.size) == (3, 8, 2) and g.middle == pytest.approx(g.grid[5])
     np.testing.assert_array_equal(g.support, [0, 1])
     # a finer grid (one point per 0.01 decade) sees the short range
@@ -231,7 +250,9 @@ def test_grid_flat_range_bad_inputs():
         grid_flat_range(path, 50, lambda_ratio=0.0)
     with pytest.raises(ModelError, match="max_size: expected a positive integer"):
         grid_flat_range(path, 50, max_size=0)
-    short = LassoPath(lambdas=np.array([10.0, 1.0]), coefs=np.array([[0.0, 1.0], [0.0, 0.0]]), n_samples=5)
+    short = LassoPath(
+        lambdas=np.array([10.0, 1.0]), coefs=np.array([[0.0, 1.0], [0.0, 0.0]]), n_samples=5
+    )
     with pytest.raises(ModelError, match="path: stops at lambda = 1 > lambda_ratio"):
         grid_flat_range(short, 50)
     empty = LassoPath(lambdas=np.array([1.0, 0.0]), coefs=np.zeros((3, 2)), n_samples=5)
@@ -264,7 +285,9 @@ def test_homotopy_matches_scikit_learn_lars_path(seed, q, noise):
             lam, coefs = _sklearn_path(X[b], y[b], 20, lambda_min)
             assert path.lambdas.shape == lam.shape
             np.testing.assert_allclose(path.lambdas, lam, rtol=1e-9, atol=1e-12 * lam[0])
-            np.testing.assert_allclose(path.coefs, coefs, rtol=1e-8, atol=1e-10 * np.abs(coefs).max())
+            np.testing.assert_allclose(
+                path.coefs, coefs, rtol=1e-8, atol=1e-10 * np.abs(coefs).max()
+            )
             single = lasso_path(X[b], y[b], n_samples=20, lambda_min=lambda_min)  # batch of one
             # bit for bit: a problem's operations do not depend on the other problems of its batch
             np.testing.assert_array_equal(single.lambdas, path.lambdas)
@@ -287,10 +310,14 @@ def test_batched_paths_match_scikit_learn_on_example1_and_stop_at_max_size():
         lam, coefs = _sklearn_path(reg.X[b], reg.y[b], reg.n_samples, 1e-4)
         k = path.lambdas.size
         np.testing.assert_allclose(path.lambdas, lam[:k], rtol=1e-9)
-        np.testing.assert_allclose(path.coefs, coefs[:, :k], rtol=1e-8, atol=1e-10 * np.abs(coefs).max())
+        np.testing.assert_allclose(
+            path.coefs, coefs[:, :k], rtol=1e-8, atol=1e-10 * np.abs(coefs).max()
+        )
         sizes = path.support_sizes()
         # stopped at the end of the first interval with more than 25 components (or at the window's end)
-        assert (sizes[-1] > 25 and sizes[:-1].max() <= 25) or path.lambdas[-1] == pytest.approx(lam[-1])
+        assert (sizes[-1] > 25 and sizes[:-1].max() <= 25) or path.lambdas[-1] == pytest.approx(
+            lam[-1]
+        )
 
 
 def _rule_by_loops(path, scale, lambda_ratio, top):
@@ -352,13 +379,17 @@ def test_batched_rules_match_plain_loops_on_paths_of_different_lengths():
     """flat_ranges / grid_flat_ranges on one padded batch: full paths, truncated ones, hand-made ones."""
     from fdi_lib.sparse import PathBatch, flat_ranges, grid_flat_ranges, lasso_path_batch
 
-    problems = [_problem(seed=40 + i, rows=60, m=20, q=1 + i % 6, noise=0.2 + 0.3 * i) for i in range(10)]
+    problems = [
+        _problem(seed=40 + i, rows=60, m=20, q=1 + i % 6, noise=0.2 + 0.3 * i) for i in range(10)
+    ]
     X = np.stack([p[0] for p in problems])
     y = np.stack([p[1] for p in problems])
     full = lasso_path_batch(X, y, n_samples=30).paths()
     short = lasso_path_batch(X, y, n_samples=30, lambda_min=1e-4, max_size=10).paths()
-    hand = [_hand_path([10, 6, 5, 0.5, 0.01, 0.0], [1, 2, 3, 4, 5], m=20),
-            _hand_path([10, 8, 4, 3, 1], [1, 1, 2, 3], m=20)]
+    hand = [
+        _hand_path([10, 6, 5, 0.5, 0.01, 0.0], [1, 2, 3, 4, 5], m=20),
+        _hand_path([10, 8, 4, 3, 1], [1, 1, 2, 3], m=20),
+    ]
     paths = full + short + hand
     assert len({p.lambdas.size for p in paths}) > 5  # really different lengths in one batch
     batch = PathBatch.of(paths)
@@ -376,5 +407,11 @@ def test_batched_rules_match_plain_loops_on_paths_of_different_lengths():
         assert (g.start[b], g.stop[b], g.middle[b]) == (start, stop, middle)
         np.testing.assert_array_equal(np.flatnonzero(g.support[b]), support)
     with pytest.raises(ModelError, match=r"paths\[1\]: no range of lambda"):
-        flat_ranges(PathBatch.of([hand[0], LassoPath(lambdas=np.array([1.0, 0.0]), coefs=np.zeros((20, 2)),
-                                                             n_samples=5)]))
+        flat_ranges(
+            PathBatch.of(
+                [
+                    hand[0],
+                    LassoPath(lambdas=np.array([1.0, 0.0]), coefs=np.zeros((20, 2)), n_samples=5),
+                ]
+            )
+        )

@@ -15,8 +15,15 @@ import numpy as np
 import pytest
 
 from fdi_lib.errors import NumericalError
-from fdi_lib.sparse import (KKT_TOL, LassoPath, flat_range, kkt_residual, lasso_path, lasso_path_batch,
-                            lasso_paths)
+from fdi_lib.sparse import (
+    KKT_TOL,
+    LassoPath,
+    flat_range,
+    kkt_residual,
+    lasso_path,
+    lasso_path_batch,
+    lasso_paths,
+)
 
 #: Tolerance of the independent KKT check below, relative to lambda, on the breakpoints above
 #: FLOOR * lambda_max (where rounding, not the algorithm, limits any solver on these designs).
@@ -49,8 +56,13 @@ def sklearn_path(X, y, N, lambda_min=0.0):
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        alphas, _, coefs = lars_path(X, y, method="lasso", alpha_min=lambda_min * np.abs(X.T @ y).max() / X.shape[0],
-                                     max_iter=1000)
+        alphas, _, coefs = lars_path(
+            X,
+            y,
+            method="lasso",
+            alpha_min=lambda_min * np.abs(X.T @ y).max() / X.shape[0],
+            max_iter=1000,
+        )
     return LassoPath(lambdas=alphas * X.shape[0] / N, coefs=coefs, n_samples=N)
 
 
@@ -62,7 +74,9 @@ def _base(seed, rows=60, m=20, q=3):
     rng = np.random.default_rng(seed)
     X = rng.standard_normal((rows, m))
     theta = np.zeros(m)
-    theta[rng.choice(np.arange(2, m), q, replace=False)] = rng.choice([-1.0, 1.0], q) * rng.uniform(1, 2, q)
+    theta[rng.choice(np.arange(2, m), q, replace=False)] = rng.choice([-1.0, 1.0], q) * rng.uniform(
+        1, 2, q
+    )
     return rng, X, theta
 
 
@@ -132,7 +146,9 @@ def test_nearly_collinear_columns_match_scikit_learn(seed):
     np.testing.assert_allclose(path.lambdas, ref.lambdas, rtol=1e-6, atol=1e-12 * ref.lambdas[0])
     for lam in ref.lambdas[0] * np.geomspace(0.9, FLOOR, 15):
         a, b = path.coef(lam), ref.coef(lam)
-        assert abs(objective(X, y, 50, lam, a) - objective(X, y, 50, lam, b)) <= 1e-10 * objective(X, y, 50, lam, b)
+        assert abs(objective(X, y, 50, lam, a) - objective(X, y, 50, lam, b)) <= 1e-10 * objective(
+            X, y, 50, lam, b
+        )
         np.testing.assert_allclose(X @ a, X @ b, atol=1e-6 * np.abs(X @ b).max())
 
 
@@ -157,7 +173,9 @@ def test_exact_tie_at_lambda_max(seed):
     k = int(np.sum(ref.lambdas > 1e-12 * ref.lambdas[0]))
     assert k == 4 and np.sum(path.lambdas > 1e-12 * path.lambdas[0]) == k
     np.testing.assert_allclose(path.lambdas[:k], ref.lambdas[:k], rtol=1e-12)
-    np.testing.assert_allclose(path.coefs[:, :k], ref.coefs[:, :k], atol=1e-12 * np.abs(ref.coefs).max())
+    np.testing.assert_allclose(
+        path.coefs[:, :k], ref.coefs[:, :k], atol=1e-12 * np.abs(ref.coefs).max()
+    )
 
 
 def test_four_way_tie_where_a_joined_component_must_leave_at_once():
@@ -166,7 +184,9 @@ def test_four_way_tie_where_a_joined_component_must_leave_at_once():
     lars_path violates the KKT conditions here (by 2 lambda), so the reference is cvxpy's solution."""
     from fdi_lib.sparse import lasso_cvxpy
 
-    X = np.array([[0, 0, 0, 0], [1, 0, 1, 0], [0, 0, 1, 1], [1, 1, 0, 1], [1, 0, 0, 0], [1, 1, 1, 1]], float)
+    X = np.array(
+        [[0, 0, 0, 0], [1, 0, 1, 0], [0, 0, 1, 1], [1, 1, 0, 1], [1, 0, 0, 0], [1, 1, 1, 1]], float
+    )
     y = np.array([1.0, 2.0, 0.0, 2.0, -2.0, 2.0])
     np.testing.assert_array_equal(X.T @ y, [4.0, 4.0, 4.0, 4.0])
     path = lasso_path(X, y, n_samples=6, lambda_min=0.3)
@@ -176,7 +196,9 @@ def test_four_way_tie_where_a_joined_component_must_leave_at_once():
     for frac in (0.9, 0.6, 0.35):
         lam = frac * path.lambdas[0]
         a, b = path.coef(lam), lasso_cvxpy(X, y, lam, n_samples=6)
-        assert objective(X, y, 6, lam, a) <= objective(X, y, 6, lam, b) + 1e-9  # cvxpy: interior-point accuracy
+        assert (
+            objective(X, y, 6, lam, a) <= objective(X, y, 6, lam, b) + 1e-9
+        )  # cvxpy: interior-point accuracy
 
 
 def test_lambda_exactly_at_a_breakpoint():
@@ -190,7 +212,9 @@ def test_lambda_exactly_at_a_breakpoint():
         lam = path.lambdas[i]
         th = path.coef(lam)
         np.testing.assert_array_equal(th, path.coefs[:, i])
-        np.testing.assert_allclose(th, ref.coefs[:, i], rtol=1e-9, atol=1e-12 * np.abs(ref.coefs).max())
+        np.testing.assert_allclose(
+            th, ref.coefs[:, i], rtol=1e-9, atol=1e-12 * np.abs(ref.coefs).max()
+        )
         g = X.T @ (y - X @ th) / 25
         assert np.all(np.abs(g) <= lam * (1 + TOL))
         on = th != 0
@@ -241,10 +265,14 @@ def example2():
     fault = fault_profile(model, Psi=Psi)
     theta = np.zeros(EX2_M)
     theta[list(EX2_LEAKS)] = EX2_LEAK_SIZE
-    sim = simulate(model, rng=np.random.default_rng(trial_seeds(0, 1)[0]), u=u, fault=fault, theta=theta)
+    sim = simulate(
+        model, rng=np.random.default_rng(trial_seeds(0, 1)[0]), u=u, fault=fault, theta=theta
+    )
     gains = kalman_gains(model)
     res = kalman_filter(model, sim.y, u, gains=gains)
-    reg = regression_data(res.updated_residuals, residual_signature(model, gains, fault).on_residual, start=1)
+    reg = regression_data(
+        res.updated_residuals, residual_signature(model, gains, fault).on_residual, start=1
+    )
     return np.asarray(reg.X), np.asarray(reg.y), reg.n_samples
 
 
@@ -263,8 +291,13 @@ def test_example2_regression_path_is_optimal_and_matches_scikit_learn(example2):
     np.testing.assert_allclose(path.lambdas[:k], ref.lambdas[:k], rtol=1e-6)
     grid = np.geomspace(lam0, FLOOR * lam0, 200)
     zero = 1e-12 * max(1.0, np.abs(ref.coefs).max())
-    sizes = [(np.count_nonzero(np.abs(path.coef(g)) > zero), np.count_nonzero(np.abs(ref.coef(g)) > zero))
-             for g in grid]
+    sizes = [
+        (
+            np.count_nonzero(np.abs(path.coef(g)) > zero),
+            np.count_nonzero(np.abs(ref.coef(g)) > zero),
+        )
+        for g in grid
+    ]
     assert all(a == b for a, b in sizes)
     np.testing.assert_array_equal(flat_range(path).support, flat_range(ref).support)
 
@@ -314,8 +347,13 @@ def test_failure_of_every_solver_is_a_typed_error(monkeypatch):
         return alphas, None, np.full((X.shape[1], 2), np.nan)
 
     monkeypatch.setattr(sklearn.linear_model, "lars_path", broken)
-    with pytest.raises(NumericalError, match=r"X, y \(problem 1\): the Lasso path violates the optimality"):
-        lasso_path_batch(np.stack([_base(9, 50, 15)[1], X]), np.stack([_base(9, 50, 15)[1] @ _base(9, 50, 15)[2], y]))
+    with pytest.raises(
+        NumericalError, match=r"X, y \(problem 1\): the Lasso path violates the optimality"
+    ):
+        lasso_path_batch(
+            np.stack([_base(9, 50, 15)[1], X]),
+            np.stack([_base(9, 50, 15)[1] @ _base(9, 50, 15)[2], y]),
+        )
 
 
 @pytest.mark.parametrize("scale", [5.56388252e-306, 1e-200, 1e-160, 1e160])
@@ -327,10 +365,12 @@ def test_designs_far_from_unit_scale_are_solved_exactly(scale):
     y = np.array([1.0, 1.0])
     for frac in (0.0, 0.5):
         with warnings.catch_warnings():
-            warnings.simplefilter("error")          # no overflow or invalid value on the way
+            warnings.simplefilter("error")  # no overflow or invalid value on the way
             path = lasso_path(X, y, lambda_min=frac)
-        theta_end = (1 - frac) * 3.0 / (5.0 * scale)   # (X^T y - N lambda_min) / X^T X, N = 2
-        assert path.lambdas[0] == pytest.approx(3.0 * scale / 2, rel=1e-12)   # lambda_max = X^T y / N
+        theta_end = (1 - frac) * 3.0 / (5.0 * scale)  # (X^T y - N lambda_min) / X^T X, N = 2
+        assert path.lambdas[0] == pytest.approx(
+            3.0 * scale / 2, rel=1e-12
+        )  # lambda_max = X^T y / N
         assert path.coefs[0, -1] == pytest.approx(theta_end, rel=1e-12)
 
 
@@ -338,7 +378,7 @@ def test_power_of_two_rescaling_is_exact():
     """Scaling X by 2^-600 (squares underflow) scales theta by 2^600 and lambda by 2^-600, bit for bit."""
     rng = np.random.default_rng(11)
     X, y = rng.normal(size=(12, 4)), rng.normal(size=12)
-    s = 2.0 ** -600
+    s = 2.0**-600
     a, b = lasso_path(X, y), lasso_path(s * X, y)
     np.testing.assert_array_equal(b.lambdas, a.lambdas * s)
     np.testing.assert_array_equal(b.coefs, a.coefs / s)

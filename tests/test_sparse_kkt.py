@@ -59,8 +59,10 @@ def exact_violations(X, y, path):
                 for j in range(th.shape[1]):
                     if abs(th[a, j] + th[a + 1, j]) > 2 * zero:
                         signs[j].add(np.sign(th[a, j] + th[a + 1, j]))
-        v = max(max((abs(g[i, j] - int(s) * c) for s in signs[j]), default=abs(g[i, j]) - c)
-                for j in range(th.shape[1]))
+        v = max(
+            max((abs(g[i, j] - int(s) * c) for s in signs[j]), default=abs(g[i, j]) - c)
+            for j in range(th.shape[1])
+        )
         floor = 0.5 * np.finfo(float).eps * (np.abs(th[i]) @ gram).max() / KKT_TOL
         out.append((float(v), float(c), floor))
     return out
@@ -76,11 +78,11 @@ def exact_residual(X, y, path):
 
 def test_exact_gradient_is_exact():
     """The reference itself: a gradient that float64 rounds badly (cancellation of 1e16 terms)."""
-    X = np.array([[1.0, 1.0 + 2.0 ** -40], [1.0, 1.0]])
+    X = np.array([[1.0, 1.0 + 2.0**-40], [1.0, 1.0]])
     y = np.array([1.0, 0.0])
-    th = np.array([[2.0 ** 40, -2.0 ** 40]])
+    th = np.array([[2.0**40, -(2.0**40)]])
     # y - X theta = (1 + 1, 0) exactly; X^T r = (2, 2 + 2^-39)
-    assert list(exact_gradient(X, y, th)[0]) == [Fraction(2), Fraction(2) + Fraction(1, 2 ** 39)]
+    assert list(exact_gradient(X, y, th)[0]) == [Fraction(2), Fraction(2) + Fraction(1, 2**39)]
 
 
 @pytest.mark.parametrize("seed", range(6))

@@ -21,7 +21,10 @@ def design():
     c = W.plant_constants()
     seeds = np.random.SeedSequence([11, 1]).spawn(2)
     recs = [W.fault_records(FAULTS[i], seeds, settings=SETTINGS, faulty=False) for i in (1, 5, 8)]
-    rec = W.Records(recs[0].t, *(np.concatenate([getattr(r, k) for r in recs]) for k in ("y", "u", "x", "tau_a", "v")))
+    rec = W.Records(
+        recs[0].t,
+        *(np.concatenate([getattr(r, k) for r in recs]) for k in ("y", "u", "x", "tau_a", "v")),
+    )
     return W.design(c, W.calibrate(c, rec), rec.x.reshape(-1, 10).mean(axis=0), SETTINGS)
 
 
@@ -35,7 +38,9 @@ def _run(design, fault_ids, seed, faulty=True, n=3):
 
 def _one_step_error(faulty: bool) -> dict[str, float]:
     c = W.plant_constants()
-    rec = W.fault_records(FAULTS[1], np.random.SeedSequence(3).spawn(1), settings=SETTINGS, faulty=faulty)
+    rec = W.fault_records(
+        FAULTS[1], np.random.SeedSequence(3).spawn(1), settings=SETTINGS, faulty=faulty
+    )
     out = {}
     for s in W.subsystems(c):
         x = rec.x[..., list(s.states)]
@@ -68,7 +73,7 @@ def test_innovations_are_white_with_unit_variance_on_fault_free_data(design):
     u = np.concatenate([r.u for r in recs])
     eps = W._innovations(design, y, u)
     for name, e in eps.items():
-        z = design.subs[name].kf_gains.whiten(e)[:, design.warmup:]
+        z = design.subs[name].kf_gains.whiten(e)[:, design.warmup :]
         std = z.std(axis=(0, 1))
         assert np.all(np.abs(std - 1) < 0.1), (name, std)
         r1 = np.mean(z[:, 1:] * z[:, :-1], axis=(0, 1)) / z.var(axis=(0, 1))
@@ -81,13 +86,19 @@ def test_no_method_alarms_on_fault_free_data(design):
     out = _run(design, (1, 5, 8), seed=31, faulty=False)
     for name, o in out.items():
         assert not o.false_alarm.any(), name
-        assert (o.detect < 0).all(), name   # nor after the (absent) onset
+        assert (o.detect < 0).all(), name  # nor after the (absent) onset
 
 
-@pytest.mark.parametrize("fault_id, methods", [
-    (1, ("zb2014", "zhang2021", "bz", "rosa2013")),   # pitch sensor stuck at 5 deg
-    (8, ("zb2014", "zhang2021", "bz", "rosa2013")),   # converter offset, seen by the torque sensor
-])
+@pytest.mark.parametrize(
+    "fault_id, methods",
+    [
+        (1, ("zb2014", "zhang2021", "bz", "rosa2013")),  # pitch sensor stuck at 5 deg
+        (
+            8,
+            ("zb2014", "zhang2021", "bz", "rosa2013"),
+        ),  # converter offset, seen by the torque sensor
+    ],
+)
 def test_methods_detect_the_faults_they_should(design, fault_id, methods):
     out = _run(design, (fault_id,), seed=41 + fault_id)
     for name in methods:
@@ -137,7 +148,9 @@ def test_scoreboard_json_has_every_fault_and_method():
                 assert reason is not None and reason["effect_sigma_max"] >= 0, (fid, name)
                 assert name == "rosa2013" or reason["peak_over_threshold"] is not None, (fid, name)
     assert set(h["false_alarms"]) == set(W.METHODS)
-    for fid, e in h["faults"].items():   # up to the deadline the effect is at most the whole record's
+    for fid, e in h[
+        "faults"
+    ].items():  # up to the deadline the effect is at most the whole record's
         if e["required_detection_s"] is None:
             assert e["effect_sigma_at_requirement_median"] is None, fid
         else:
@@ -145,7 +158,9 @@ def test_scoreboard_json_has_every_fault_and_method():
     assert doc["paper"]["required_detection_s"]["F1"] == "<= 0.1"
     # the fastest method: among those detecting in every realisation, the smallest mean (brute force)
     for fid, e in h["faults"].items():
-        full = {m: v["detection_time_mean_s"] for m, v in e["methods"].items() if v["detected"] == 2}
+        full = {
+            m: v["detection_time_mean_s"] for m, v in e["methods"].items() if v["detected"] == 2
+        }
         fast = h["fastest_method"][fid]
         if not full:
             assert fast is None, fid
@@ -158,11 +173,21 @@ def test_scoreboard_json_has_every_fault_and_method():
 
     pub = doc["paper"]["published_detection_s"]
     assert pub == PUBLISHED_DELAYS and pub["cohal_mirea_2017"]["certain"]["F1"] == 3.21
-    rows = [row for row in build_ledger({r.id: r}, strict=True).rows if row.path[0] == "published_detection_s"]
+    rows = [
+        row
+        for row in build_ledger({r.id: r}, strict=True).rows
+        if row.path[0] == "published_detection_s"
+    ]
     assert len(rows) == sum(len(v) for v in PUBLISHED_DELAYS["cohal_mirea_2017"].values())
     for row in rows:
-        assert row.status == NOT_REPRODUCIBLE and row.paper == pub["cohal_mirea_2017"][row.path[2]][row.path[3]]
+        assert (
+            row.status == NOT_REPRODUCIBLE
+            and row.paper == pub["cohal_mirea_2017"][row.path[2]][row.path[3]]
+        )
         fast = h["fastest_method"][row.path[3]]
-        assert row.ours == ("no method detects it in every realisation" if fast is None
-                            else fast["detection_time_mean_s"])
+        assert row.ours == (
+            "no method detects it in every realisation"
+            if fast is None
+            else fast["detection_time_mean_s"]
+        )
         assert f"fault {row.path[3]}" in row.label and "{" not in row.label

@@ -57,7 +57,9 @@ def execution_times(log: str, root: Path) -> dict[str, float]:
         m = _EXECUTED.match(line.strip())
         if m:
             path = Path(m.group(1))
-            out[path.relative_to(root).as_posix() if path.is_relative_to(root) else m.group(1)] = float(m.group(2))
+            out[path.relative_to(root).as_posix() if path.is_relative_to(root) else m.group(1)] = (
+                float(m.group(2))
+            )
     return out
 
 
@@ -73,12 +75,15 @@ def times_html(times: dict[str, float], wall: float, execution: float | None = N
         slow = max(times, key=times.get)
         rows[f"execution of the {len(times)} chapters, sum"] = [fmt_time(sum(times.values()))]
         rows["slowest chapter"] = [f"{fmt_time(times[slow])} ({slow})"]
-    notes = [f"Execution budget of the book: {fmt_time(EXECUTION_BUDGET_S)} of wall time on 2 "
-             "cores, the chapters executed side by side (tools/execute_book.py), each chapter's "
-             "time being its own wall time on its share of the cores; the rest of the build is "
-             "Sphinx reading and writing the pages.",
-             "Measured on " + datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-             + " by tools/build_report.py."]
+    notes = [
+        f"Execution budget of the book: {fmt_time(EXECUTION_BUDGET_S)} of wall time on 2 "
+        "cores, the chapters executed side by side (tools/execute_book.py), each chapter's "
+        "time being its own wall time on its share of the cores; the rest of the build is "
+        "Sphinx reading and writing the pages.",
+        "Measured on "
+        + datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+        + " by tools/build_report.py.",
+    ]
     if not times:
         notes.append("No chapter was executed in this build (cached execution).")
     return table(rows, ["time"], notes=notes, index_header="")._repr_html_()
@@ -109,17 +114,20 @@ def weights_html(weights: list[dict], budget_mb: float) -> str:
     for w in sorted(weights, key=lambda w: -w["bytes"]):
         parts = weight_parts(w)
         rows[w["page"].removeprefix("book/").removesuffix(".html")] = [
-            _mb(w["bytes"]), *(_mb(v) if v else "none" for v in parts.values())]
-    notes = [f"What a first visit to the page loads (empty cache): the HTML (explorable frames are "
-             f"inside it), MathJax's scripts and fonts, the figures' image files, and the rest: the "
-             f"theme's stylesheets and scripts, its icon font, the search index, the previews; measured "
-             f"in headless Chromium from a local server that does not compress "
-             f"(tests/browser/page_weights.py). Budget: {fmt_number(budget_mb)}{NBSP}MB a page, checked "
-             "by make browser-test.",
-             "MathJax is loaded only by pages with maths; on another page a preview with maths loads it "
-             "when first shown."]
-    return table(rows, ["loaded", *PARTS], notes=notes,
-                 index_header="page")._repr_html_()
+            _mb(w["bytes"]),
+            *(_mb(v) if v else "none" for v in parts.values()),
+        ]
+    notes = [
+        f"What a first visit to the page loads (empty cache): the HTML (explorable frames are "
+        f"inside it), MathJax's scripts and fonts, the figures' image files, and the rest: the "
+        f"theme's stylesheets and scripts, its icon font, the search index, the previews; measured "
+        f"in headless Chromium from a local server that does not compress "
+        f"(tests/browser/page_weights.py). Budget: {fmt_number(budget_mb)}{NBSP}MB a page, checked "
+        "by make browser-test.",
+        "MathJax is loaded only by pages with maths; on another page a preview with maths loads it "
+        "when first shown.",
+    ]
+    return table(rows, ["loaded", *PARTS], notes=notes, index_header="page")._repr_html_()
 
 
 def inject(page: Path, ident: str, html: str) -> None:
@@ -127,7 +135,7 @@ def inject(page: Path, ident: str, html: str) -> None:
     text = page.read_text()
     pattern = re.compile(rf'(<div id="{ident}">)(.*?)(</div><!-- /{ident} -->)', re.S)
     if not pattern.search(text):
-        raise SystemExit(f"{page}: no placeholder <div id=\"{ident}\"> (book/status.md)")
+        raise SystemExit(f'{page}: no placeholder <div id="{ident}"> (book/status.md)')
     page.write_text(pattern.sub(lambda m: m.group(1) + html + m.group(3), text, count=1))
 
 
@@ -135,7 +143,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--html", default=ROOT / "_build" / "html", type=Path)
     parser.add_argument("--log", default=ROOT / "_build.log", type=Path)
-    parser.add_argument("--started", type=float, required=True, help="start of the build (Unix time)")
+    parser.add_argument(
+        "--started", type=float, required=True, help="start of the build (Unix time)"
+    )
     parser.add_argument("--json", default=ROOT / "_build" / "build-report.json", type=Path)
     args = parser.parse_args(argv)
     wall = time.time() - args.started
@@ -147,8 +157,9 @@ def main(argv: list[str] | None = None) -> int:
     print("  " + "-" * 57)
     print(f"  {'sum over the chapters':45s} {sum(times.values()):8.1f} s")
     if execution is not None:
-        print(f"  {'execution, wall time':45s} {execution:8.1f} s "
-              f"(budget {EXECUTION_BUDGET_S:g} s)")
+        print(
+            f"  {'execution, wall time':45s} {execution:8.1f} s (budget {EXECUTION_BUDGET_S:g} s)"
+        )
     print(f"  {'make book, wall time':45s} {wall:8.1f} s")
     status = args.html / STATUS_PAGE
     inject(status, "fdi-build-time", times_html(times, wall, execution))
@@ -162,12 +173,18 @@ def main(argv: list[str] | None = None) -> int:
         report["pages"] = measure(root, book_pages(root))
         inject(status, "fdi-page-weights", weights_html(report["pages"], PAGE_BUDGET_MB))
         heavy = max(report["pages"], key=lambda w: w["bytes"])
-        print(f"Page weights: {len(report['pages'])} pages, heaviest {heavy['page']} "
-              f"{heavy['bytes'] / 1e6:.2f} MB; {len(failures(report['pages']))} over budget or "
-              "loading what they do not need (make browser-test fails on them)")
+        print(
+            f"Page weights: {len(report['pages'])} pages, heaviest {heavy['page']} "
+            f"{heavy['bytes'] / 1e6:.2f} MB; {len(failures(report['pages']))} over budget or "
+            "loading what they do not need (make browser-test fails on them)"
+        )
     else:
-        inject(status, "fdi-page-weights", f"<p>Not measured in this build: no Chromium at {CHROMIUM} "
-                                           "(<code>make browser-test</code> installs it).</p>")
+        inject(
+            status,
+            "fdi-page-weights",
+            f"<p>Not measured in this build: no Chromium at {CHROMIUM} "
+            "(<code>make browser-test</code> installs it).</p>",
+        )
         print(f"Page weights not measured: no Chromium at {CHROMIUM}")
     args.json.write_text(json.dumps(report, indent=1))
     print(f"Build report in {args.json} and {status}")

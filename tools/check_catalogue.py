@@ -63,11 +63,16 @@ def check_command(argv: list[str], cache: Path) -> tuple[str, str, str]:
     if book is None:
         seed = "the default seed" if args.seed is None else f"seed {args.seed}"
         trials = "" if args.trials is None else f", {args.trials} trials"
-        return args.id, "not run", f"no result of the build at {seed}{trials}: the chapters ran other settings"
+        return (
+            args.id,
+            "not run",
+            f"no result of the build at {seed}{trials}: the chapters ran other settings",
+        )
     env = {k: v for k, v in os.environ.items() if k != CACHE_ENV}
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), env.get("PYTHONPATH")]))
-    proc = subprocess.run([sys.executable, "-m", "fdi_lib", *argv], capture_output=True, text=True,
-                          env=env, cwd=ROOT)
+    proc = subprocess.run(
+        [sys.executable, "-m", "fdi_lib", *argv], capture_output=True, text=True, env=env, cwd=ROOT
+    )
     if proc.returncode != 0:
         return args.id, "failed", proc.stderr.strip()[-300:]
     got = json.loads(proc.stdout)
@@ -76,7 +81,9 @@ def check_command(argv: list[str], cache: Path) -> tuple[str, str, str]:
         got["headline"].pop(timed), want["headline"].pop(timed)
     for key in ("headline", "settings"):
         if got[key] != want[key]:
-            diff = [k for k in set(got[key]) | set(want[key]) if got[key].get(k) != want[key].get(k)]
+            diff = [
+                k for k in set(got[key]) | set(want[key]) if got[key].get(k) != want[key].get(k)
+            ]
             return args.id, "differs", f"{key} keys {sorted(diff)} differ from the chapter's result"
     return args.id, "ok", ""
 
@@ -89,14 +96,22 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     page = args.html / "book" / "reproductions.html"
     if not page.is_file() or not args.cache.is_dir():
-        print(f"error: no built catalogue {page} or results cache {args.cache}: run make book first",
-              file=sys.stderr)
+        print(
+            f"error: no built catalogue {page} or results cache {args.cache}: run make book first",
+            file=sys.stderr,
+        )
         return 2
     commands = page_commands(page.read_text())
     ids = [c[1] for c in commands]
-    results = [(rid, "missing", "no command on the page") for rid in
-               sorted({r.id for r in list_reproductions()} - set(ids))]
-    results += [(rid, "duplicate", f"{ids.count(rid)} commands") for rid in sorted(set(ids)) if ids.count(rid) > 1]
+    results = [
+        (rid, "missing", "no command on the page")
+        for rid in sorted({r.id for r in list_reproductions()} - set(ids))
+    ]
+    results += [
+        (rid, "duplicate", f"{ids.count(rid)} commands")
+        for rid in sorted(set(ids))
+        if ids.count(rid) > 1
+    ]
     with ThreadPoolExecutor(max(1, args.jobs)) as pool:
         for rid, status, detail in pool.map(lambda c: check_command(c, args.cache), commands):
             print(f"  {rid:<22} {status}{': ' + detail if detail else ''}", flush=True)

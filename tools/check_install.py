@@ -32,7 +32,9 @@ def _run(step: str, cmd: list[str], cwd: Path) -> str:
     done = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True)
     if done.returncode != 0:
         tail = (done.stderr or done.stdout).strip().splitlines()[-5:]
-        raise SystemExit(f"install-check: {step} failed (exit {done.returncode}): " + " | ".join(tail))
+        raise SystemExit(
+            f"install-check: {step} failed (exit {done.returncode}): " + " | ".join(tail)
+        )
     print(f"install-check: {step}: ok ({time.perf_counter() - start:.0f} s)", flush=True)
     return done.stdout
 
@@ -42,27 +44,51 @@ def check(out: Path) -> None:
         shutil.rmtree(out)
     dist, env = out / "dist", out / "venv"
     dist.mkdir(parents=True)
-    _run("wheel", [sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "-w", str(dist), str(REPO)],
-         cwd=out)
+    _run(
+        "wheel",
+        [sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "-w", str(dist), str(REPO)],
+        cwd=out,
+    )
     wheels = sorted(dist.glob("fdi_lib-*.whl"))
     if len(wheels) != 1:
-        raise SystemExit(f"install-check: expected one fdi_lib wheel in {dist}, found {len(wheels)}")
+        raise SystemExit(
+            f"install-check: expected one fdi_lib wheel in {dist}, found {len(wheels)}"
+        )
     _run("venv", [sys.executable, "-m", "venv", str(env)], cwd=out)
     python, script = env / "bin" / "python", env / "bin" / "fdi-reproduce"
-    _run("install", [str(python), "-m", "pip", "install", "--quiet", "-c", str(REPO / "requirements.lock"),
-                     str(wheels[0])], cwd=out)
-    where = _run("import", [str(python), "-c", "import fdi_lib; print(fdi_lib.__file__)"], cwd=env).strip()
+    _run(
+        "install",
+        [
+            str(python),
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "-c",
+            str(REPO / "requirements.lock"),
+            str(wheels[0]),
+        ],
+        cwd=out,
+    )
+    where = _run(
+        "import", [str(python), "-c", "import fdi_lib; print(fdi_lib.__file__)"], cwd=env
+    ).strip()
     if not where.startswith(str(env)):
-        raise SystemExit(f"install-check: fdi_lib imported from {where}, not from the new environment")
+        raise SystemExit(
+            f"install-check: fdi_lib imported from {where}, not from the new environment"
+        )
     listing = _run("fdi-reproduce --list", [str(script), "--list"], cwd=env)
     if REPRODUCTION not in listing:
         raise SystemExit(f"install-check: {REPRODUCTION} missing from fdi-reproduce --list")
-    result = json.loads(_run(f"fdi-reproduce {REPRODUCTION} --json", [str(script), REPRODUCTION, "--json"],
-                             cwd=env))
+    result = json.loads(
+        _run(f"fdi-reproduce {REPRODUCTION} --json", [str(script), REPRODUCTION, "--json"], cwd=env)
+    )
     missing = PUBLIC_KEYS - set(result)
     if missing or result["id"] != REPRODUCTION:
-        raise SystemExit(f"install-check: the JSON of {REPRODUCTION} lacks {sorted(missing)} or names "
-                         f"{result.get('id')!r}")
+        raise SystemExit(
+            f"install-check: the JSON of {REPRODUCTION} lacks {sorted(missing)} or names "
+            f"{result.get('id')!r}"
+        )
     print(f"install-check: {wheels[0].name} installs and runs in a clean environment")
 
 

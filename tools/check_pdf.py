@@ -62,7 +62,7 @@ def code_macros(tex: str) -> Counter:
     (``sphinxVerbatim``, where Pygments writes a backslash as ``\\PYGZbs{}``)."""
     code = "\n".join(re.findall(r"\\begin\{sphinxVerbatim\}.*?\\end\{sphinxVerbatim\}", tex, re.S))
     code = code.replace(r"\PYGZbs{}", "\x00")
-    code = re.sub(r"\\PYG\{[^}]*\}\{", "", code)      # the opening of a highlighted token
+    code = re.sub(r"\\PYG\{[^}]*\}\{", "", code)  # the opening of a highlighted token
     code = re.sub(r"\\PYGZ\w+\{\}", " ", code).replace("}", "")
     return Counter(re.findall("\x00([a-zA-Z]{2,})", code))
 
@@ -79,11 +79,13 @@ def text_problems(pdf: Path, tex: Path) -> list[str]:
         for r in _REPRS:
             if r in text:
                 i = text.index(r)
-                problems.append(f"page {page}: a Python repr {text[i:i + 60]!r}")
+                problems.append(f"page {page}: a Python repr {text[i : i + 60]!r}")
         for m in _MACRO.finditer(text):
             if m.group(1) in raw:
-                problems.append(f"page {page}: raw macro {m.group(0)!r} in "
-                                f"{text[max(m.start() - 30, 0):m.end() + 30]!r}")
+                problems.append(
+                    f"page {page}: raw macro {m.group(0)!r} in "
+                    f"{text[max(m.start() - 30, 0) : m.end() + 30]!r}"
+                )
     return problems
 
 
@@ -91,10 +93,14 @@ def log_problems(log: Path) -> list[str]:
     if not log.is_file():
         return [f"no LaTeX log {log}"]
     text = log.read_text(errors="replace")
-    problems = [f"LaTeX: {m.group(0)}"
-                for m in re.finditer(r"LaTeX Warning: (?:Reference|Citation) .* undefined[^\n]*", text)]
-    problems += [f"LaTeX: {n} times no {c!r} in the font (dropped from the page)"
-                 for c, n in sorted(missing_characters(text).items())]
+    problems = [
+        f"LaTeX: {m.group(0)}"
+        for m in re.finditer(r"LaTeX Warning: (?:Reference|Citation) .* undefined[^\n]*", text)
+    ]
+    problems += [
+        f"LaTeX: {n} times no {c!r} in the font (dropped from the page)"
+        for c, n in sorted(missing_characters(text).items())
+    ]
     return problems
 
 
@@ -107,12 +113,15 @@ def log_counts(log_text: str) -> dict[str, float]:
     :data:`OVERFULL_ALLOWANCE_PT`, the widest in points), underfull boxes and rerun requests
     ("Rerun to get ...", "Label(s) may have changed"). Printed by :func:`main`, not failed."""
     over = [float(x) for x in re.findall(r"^Overfull \\[hv]box \(([\d.]+)pt too", log_text, re.M)]
-    return {"overfull": len(over),
-            "overfull_over_allowance": sum(x > OVERFULL_ALLOWANCE_PT for x in over),
-            "overfull_max_pt": max(over, default=0.0),
-            "underfull": len(re.findall(r"^Underfull \\[hv]box", log_text, re.M)),
-            "rerun": len(re.findall(r"^.*(?:Rerun to get|Label\(s\) may have changed).*$", log_text,
-                                    re.M))}
+    return {
+        "overfull": len(over),
+        "overfull_over_allowance": sum(x > OVERFULL_ALLOWANCE_PT for x in over),
+        "overfull_max_pt": max(over, default=0.0),
+        "underfull": len(re.findall(r"^Underfull \\[hv]box", log_text, re.M)),
+        "rerun": len(
+            re.findall(r"^.*(?:Rerun to get|Label\(s\) may have changed).*$", log_text, re.M)
+        ),
+    }
 
 
 def missing_characters(log_text: str) -> Counter:
@@ -174,7 +183,9 @@ def html_images(html: Path) -> dict[str, int]:
         doc = page.relative_to(html).with_suffix("").as_posix()
         if not doc.startswith("book/"):
             continue
-        article = BeautifulSoup(page.read_text(errors="replace"), "html.parser").select_one("article")
+        article = BeautifulSoup(page.read_text(errors="replace"), "html.parser").select_one(
+            "article"
+        )
         counts[doc] = len(article.find_all("img")) if article else 0
     return counts
 
@@ -197,12 +208,16 @@ def image_problems(html: Path, tex: Path, pdf: Path) -> list[str]:
     included = tex_images(tex)
     for doc, n in html_images(html).items():
         if n > len(included.get(doc, [])):
-            problems.append(f"{doc}: {n} images in the HTML page, {len(included.get(doc, []))} in the PDF")
+            problems.append(
+                f"{doc}: {n} images in the HTML page, {len(included.get(doc, []))} in the PDF"
+            )
     files = {f for fs in included.values() for f in fs}
     rows = [line.split() for line in run("pdfimages", "-list", str(pdf)).splitlines()[2:]]
     embedded = sum(1 for r in rows if len(r) > 2 and r[2] == "image")
     if embedded < len(files):
-        problems.append(f"the PDF embeds {embedded} images, the LaTeX source includes {len(files)} files")
+        problems.append(
+            f"the PDF embeds {embedded} images, the LaTeX source includes {len(files)} files"
+        )
     return problems
 
 
@@ -214,7 +229,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--src", type=Path, default=REPO, help="the book's sources (_toc.yml)")
     args = parser.parse_args(argv)
     pages = page_count(args.pdf)
-    problems = [] if PAGES[0] <= pages <= PAGES[1] else [f"{pages} pages, expected {PAGES[0]} to {PAGES[1]}"]
+    problems = (
+        []
+        if PAGES[0] <= pages <= PAGES[1]
+        else [f"{pages} pages, expected {PAGES[0]} to {PAGES[1]}"]
+    )
     problems += text_problems(args.pdf, args.tex)
     problems += log_problems(args.tex.with_suffix(".log"))
     problems += toc_problems(args.tex.with_suffix(".toc"), args.src)
@@ -229,8 +248,10 @@ def main(argv: list[str] | None = None) -> int:
     present = {kind: f.is_file() and f.stat().st_size > 0 for kind, f in files.items()}
     extras = [f"{kind}: {'yes' if there else 'no'}" for kind, there in present.items()]
     print("check_pdf: layout: " + ", ".join([f"{k} {v:g}" for k, v in counts.items()] + extras))
-    print(f"check_pdf: {args.pdf}: {pages} pages, {figures} images, "
-          f"{'ok' if not problems else f'{len(problems)} problems'}")
+    print(
+        f"check_pdf: {args.pdf}: {pages} pages, {figures} images, "
+        f"{'ok' if not problems else f'{len(problems)} problems'}"
+    )
     return 1 if problems else 0
 
 

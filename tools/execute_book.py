@@ -67,12 +67,11 @@ LONGEST = ("book/windturbine/benchmark", "book/zhang2021/sparse", "book/rosa2013
 AFTER_ALL = ("book/zz-ledger",)
 
 
-
 class Chapter(NamedTuple):
-    doc: str           # document name, as in _toc.yml ("book/zb2014/glr")
-    path: Path         # its source file
-    notebook: Any      # as myst-nb reads it (nbformat.NotebookNode)
-    weight: float      # expected run time (any unit): the longest are started first
+    doc: str  # document name, as in _toc.yml ("book/zb2014/glr")
+    path: Path  # its source file
+    notebook: Any  # as myst-nb reads it (nbformat.NotebookNode)
+    weight: float  # expected run time (any unit): the longest are started first
 
 
 def toc_documents(toc: Path) -> list[str]:
@@ -119,7 +118,7 @@ def chapters(root: Path, toc: Path, times: dict[str, float]) -> list[Chapter]:
         code = [c.source for c in nb.cells if c.cell_type == "code"] if nb is not None else []
         if code:
             rel = path.relative_to(root).as_posix()
-            size = sum(map(len, code)) / 1e6   # below the hint's 1, 2, 3 for any chapter
+            size = sum(map(len, code)) / 1e6  # below the hint's 1, 2, 3 for any chapter
             weight = times.get(rel, len(LONGEST) - LONGEST.index(doc) if doc in LONGEST else size)
             out.append(Chapter(doc, path, nb, weight))
     return out
@@ -132,12 +131,15 @@ def execution_settings(config: Path) -> dict:
     execute = yaml.safe_load(config.read_text()).get("execute", {})
     if execute.get("run_in_temp"):
         raise SystemExit(f"{config}: execute.run_in_temp is not supported by {Path(__file__).name}")
-    return {"timeout": execute.get("timeout", 30),
-            "allow_errors": bool(execute.get("allow_errors", False))}
+    return {
+        "timeout": execute.get("timeout", 30),
+        "allow_errors": bool(execute.get("allow_errors", False)),
+    }
 
 
-def execute(path: str, notebook: str, cores: int, timeout: int,
-            allow_errors: bool) -> tuple[float | None, str]:
+def execute(
+    path: str, notebook: str, cores: int, timeout: int, allow_errors: bool
+) -> tuple[float | None, str]:
     """In a worker process: execute ``notebook`` (JSON, as read from the chapter ``path``) in the
     chapter's folder as myst-nb does, its kernel on ``cores`` cores (``$FDI_CORES``, which the
     kernel inherits: a worker runs one chapter at a time); returns the run time and the executed
@@ -147,8 +149,13 @@ def execute(path: str, notebook: str, cores: int, timeout: int,
 
     os.environ[CORES_ENV] = str(cores)
     nb = nbformat.reads(notebook, as_version=4)
-    result = single_nb_execution(nb, cwd=str(Path(path).parent), timeout=timeout,
-                                 allow_errors=allow_errors, meta_override=True)
+    result = single_nb_execution(
+        nb,
+        cwd=str(Path(path).parent),
+        timeout=timeout,
+        allow_errors=allow_errors,
+        meta_override=True,
+    )
     if result.err is not None:
         return None, f"{type(result.err).__name__}\n{result.exc_string}"
     return result.time, nbformat.writes(result.nb)
@@ -157,8 +164,15 @@ def execute(path: str, notebook: str, cores: int, timeout: int,
 class Scheduler:
     """Runs the chapters, ``jobs`` at a time, and caches each executed notebook."""
 
-    def __init__(self, chapters: list[Chapter], cache_dir: Path, jobs: int, cores: int,
-                 settings: dict, root: Path) -> None:
+    def __init__(
+        self,
+        chapters: list[Chapter],
+        cache_dir: Path,
+        jobs: int,
+        cores: int,
+        settings: dict,
+        root: Path,
+    ) -> None:
         from jupyter_cache import get_cache
 
         from pdf_edition import library_hash
@@ -199,8 +213,11 @@ class Scheduler:
             bundle = CacheBundleIn(nb, str(chapter.path), data=dict(record.data))
             self.cache.cache_notebook_bundle(bundle, check_validity=False, overwrite=True)
             self.unfinished -= 1
-            print(f"{chapter.path.relative_to(self.root).as_posix()}: the same code cells as in "
-                  f"{other}: its outputs reused", flush=True)
+            print(
+                f"{chapter.path.relative_to(self.root).as_posix()}: the same code cells as in "
+                f"{other}: its outputs reused",
+                flush=True,
+            )
         return left
 
     def run(self, chapter: Chapter, workers) -> None:
@@ -211,10 +228,14 @@ class Scheduler:
             return  # a chapter failed: start no other one
         cores = self.share()
         try:
-            seconds, out = workers.submit(execute, str(chapter.path),
-                                          nbformat.writes(chapter.notebook), cores,
-                                          self.settings["timeout"],
-                                          self.settings["allow_errors"]).result()
+            seconds, out = workers.submit(
+                execute,
+                str(chapter.path),
+                nbformat.writes(chapter.notebook),
+                cores,
+                self.settings["timeout"],
+                self.settings["allow_errors"],
+            ).result()
         except Exception as exc:  # the worker process died (killed, out of memory)
             seconds, out = None, f"{type(exc).__name__}: {exc}"
         rel = chapter.path.relative_to(self.root).as_posix()
@@ -225,12 +246,21 @@ class Scheduler:
                 self.failed.append(rel)
                 return
             nb = nbformat.reads(out, as_version=4)
-            self.cache.cache_notebook_bundle(CacheBundleIn(nb, str(chapter.path), data={
-                "execution_seconds": seconds, "library": self.library}),
-                check_validity=False, overwrite=True)
+            self.cache.cache_notebook_bundle(
+                CacheBundleIn(
+                    nb,
+                    str(chapter.path),
+                    data={"execution_seconds": seconds, "library": self.library},
+                ),
+                check_validity=False,
+                overwrite=True,
+            )
             self.times[rel] = seconds
-            print(f"{rel}: Executed notebook in {seconds:.2f} seconds (on {cores} "
-                  f"core{'s' * (cores > 1)})", flush=True)
+            print(
+                f"{rel}: Executed notebook in {seconds:.2f} seconds (on {cores} "
+                f"core{'s' * (cores > 1)})",
+                flush=True,
+            )
 
     def run_all(self, batches: list[list[Chapter]]) -> None:
         """Each batch after the previous one, its chapters on ``jobs`` worker processes (started
@@ -239,7 +269,7 @@ class Scheduler:
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 
-        context = multiprocessing.get_context("spawn")   # this process has threads: no fork
+        context = multiprocessing.get_context("spawn")  # this process has threads: no fork
         with ProcessPoolExecutor(max_workers=self.jobs, mp_context=context) as workers:
             for batch in batches:
                 with ThreadPoolExecutor(max_workers=self.jobs) as pool:
@@ -256,20 +286,31 @@ def write_config(config: Path, cache_dir: Path, target: Path) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--root", type=Path, default=REPO,
-                        help="the book's folder (_config.yml, _toc.yml)")
-    parser.add_argument("--cache", type=Path, required=True,
-                        help="the jupyter-cache to fill (emptied first)")
-    parser.add_argument("--config-out", type=Path,
-                        help="write the build's _config.yml (mode cache) here")
-    parser.add_argument("--jobs", type=int, default=0,
-                        help="chapters at a time (default: the cores)")
+    parser.add_argument(
+        "--root", type=Path, default=REPO, help="the book's folder (_config.yml, _toc.yml)"
+    )
+    parser.add_argument(
+        "--cache", type=Path, required=True, help="the jupyter-cache to fill (emptied first)"
+    )
+    parser.add_argument(
+        "--config-out", type=Path, help="write the build's _config.yml (mode cache) here"
+    )
+    parser.add_argument(
+        "--jobs", type=int, default=0, help="chapters at a time (default: the cores)"
+    )
     parser.add_argument("--only", nargs="*", help="only these documents (e.g. book/zb2014/glr)")
-    parser.add_argument("--reuse", type=Path,
-                        help="a jupyter-cache of the same library (make book's): a chapter whose "
-                        "code cells it holds executed is taken from it, not executed")
-    parser.add_argument("--report", type=Path, default=REPO / "_build" / "build-report.json",
-                        help="the last build's report, whose run times order the chapters")
+    parser.add_argument(
+        "--reuse",
+        type=Path,
+        help="a jupyter-cache of the same library (make book's): a chapter whose "
+        "code cells it holds executed is taken from it, not executed",
+    )
+    parser.add_argument(
+        "--report",
+        type=Path,
+        default=REPO / "_build" / "build-report.json",
+        help="the last build's report, whose run times order the chapters",
+    )
     args = parser.parse_args(sys.argv[1:] if argv is None else argv)
     import shutil
 
@@ -302,11 +343,17 @@ def main(argv: list[str] | None = None) -> int:
     scheduler.run_all([b for b in (first, last) if b])
     wall = time.perf_counter() - start
     if scheduler.failed:
-        print(f"Execution failed: {', '.join(scheduler.failed)} (traceback above); the book is "
-              "not built", file=sys.stderr)
+        print(
+            f"Execution failed: {', '.join(scheduler.failed)} (traceback above); the book is "
+            "not built",
+            file=sys.stderr,
+        )
         return 1
-    print(f"Executed {len(todo)} notebooks in {wall:.1f} s of wall time "
-          f"({sum(scheduler.times.values()):.1f} s summed over the chapters)", flush=True)
+    print(
+        f"Executed {len(todo)} notebooks in {wall:.1f} s of wall time "
+        f"({sum(scheduler.times.values()):.1f} s summed over the chapters)",
+        flush=True,
+    )
     if args.config_out is not None:
         write_config(root / "_config.yml", args.cache, args.config_out)
     return 0

@@ -86,11 +86,17 @@ TOOLS = Path(__file__).resolve().parent
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
-from fdi_lib.exercises import (CHAPTERS, EXERCISES, HAND_GRADED, exercise_ids,  # noqa: E402
-                               get_exercise, reference_answer)
-from fdi_lib.exercises._reference import REFERENCES  # noqa: E402
-from fdi_lib.exercises.book import CELL_KEY  # noqa: E402
-from fdi_lib.exercises.checker import close  # noqa: E402
+from fdi_lib.exercises import (
+    CHAPTERS,
+    EXERCISES,
+    HAND_GRADED,
+    exercise_ids,
+    get_exercise,
+    reference_answer,
+)
+from fdi_lib.exercises._reference import REFERENCES
+from fdi_lib.exercises.book import CELL_KEY
+from fdi_lib.exercises.checker import close
 
 #: Points of a checkable exercise: the student's own data, then the hidden data.
 POINTS = {"own": 1, "hidden": 1}
@@ -98,11 +104,26 @@ RUNS = tuple(POINTS)
 
 #: Names whose presence in an exercise's code scores it 0 (scanned in the grader's process): the
 #: means of the attacks on the kernel's hooks, the reference package, the grader's own module.
-SUSPICIOUS = ("_reference", "reference_answer", "grader_kernel", "__wrapped__", "__code__",
-              "__closure__", "cell_contents", "getprofile", "setprofile", "settrace",
-              "addaudithook",
-              "ctypes", "get_objects", "get_referrers", "dup2", "FDI_GRADER_SECRET", "/proc/",
-              "_fdi_grader")
+SUSPICIOUS = (
+    "_reference",
+    "reference_answer",
+    "grader_kernel",
+    "__wrapped__",
+    "__code__",
+    "__closure__",
+    "cell_contents",
+    "getprofile",
+    "setprofile",
+    "settrace",
+    "addaudithook",
+    "ctypes",
+    "get_objects",
+    "get_referrers",
+    "dup2",
+    "FDI_GRADER_SECRET",
+    "/proc/",
+    "_fdi_grader",
+)
 
 #: Environment variables a kernel inherits (everything else is dropped: no secret, no path).
 ENV_KEEP = ("PATH", "LANG", "LC_ALL", "TZ")
@@ -152,8 +173,9 @@ def _is_setup(source: str) -> bool:
         return False
 
     def ok(node) -> bool:
-        if isinstance(node, (ast.Import, ast.ImportFrom, ast.FunctionDef, ast.ClassDef,
-                             ast.AsyncFunctionDef)):
+        if isinstance(
+            node, (ast.Import, ast.ImportFrom, ast.FunctionDef, ast.ClassDef, ast.AsyncFunctionDef)
+        ):
             return True
         if isinstance(node, (ast.Assign, ast.AnnAssign)) and node.value is not None:
             try:
@@ -162,6 +184,7 @@ def _is_setup(source: str) -> bool:
                 return False
             return True
         return False
+
     return bool(body) and all(ok(n) for n in body)
 
 
@@ -216,11 +239,19 @@ class Limits:
 
 def _kernel_env(scratch: Path) -> dict:
     env = {k: os.environ[k] for k in ENV_KEEP if k in os.environ}
-    env.update(PYTHONPATH=str(scratch / "lib"), HOME=str(scratch), TMPDIR=str(scratch),
-               IPYTHONDIR=str(scratch / "ipython"), MPLCONFIGDIR=str(scratch / "mpl"),
-               MPLBACKEND="Agg",
-               OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1",
-               PYTHONDONTWRITEBYTECODE="1", PYDEVD_DISABLE_FILE_VALIDATION="1")
+    env.update(
+        PYTHONPATH=str(scratch / "lib"),
+        HOME=str(scratch),
+        TMPDIR=str(scratch),
+        IPYTHONDIR=str(scratch / "ipython"),
+        MPLCONFIGDIR=str(scratch / "mpl"),
+        MPLBACKEND="Agg",
+        OMP_NUM_THREADS="1",
+        OPENBLAS_NUM_THREADS="1",
+        MKL_NUM_THREADS="1",
+        PYTHONDONTWRITEBYTECODE="1",
+        PYDEVD_DISABLE_FILE_VALIDATION="1",
+    )
     return env
 
 
@@ -231,6 +262,7 @@ def _rlimits(memory_mb: int, cpu_s: int):
         resource.setrlimit(resource.RLIMIT_AS, (memory_mb << 20, memory_mb << 20))
         resource.setrlimit(resource.RLIMIT_CPU, (cpu_s, cpu_s + 5))
         resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+
     return apply
 
 
@@ -270,9 +302,9 @@ def _outputs(cell) -> tuple[list[dict], list[str]]:
     return reports, errors
 
 
-def run_student(folder: Path, package: Path, secret: str, limits: Limits,
-                denied: list[Path]
-                ) -> tuple[dict[tuple[str, str], Run], dict[str, list[str]], list[str]]:
+def run_student(
+    folder: Path, package: Path, secret: str, limits: Limits, denied: list[Path]
+) -> tuple[dict[tuple[str, str], Run], dict[str, list[str]], list[str]]:
     """Execute one student's notebooks; returns ({(exercise, run): Run}, {exercise: code}, log)."""
     import nbformat
 
@@ -301,16 +333,26 @@ def run_student(folder: Path, package: Path, secret: str, limits: Limits,
             while todo:
                 if time.monotonic() >= deadline:
                     for ex, run in todo:
-                        runs.setdefault((ex, run), Run()).stopped = \
-                            "the student's time budget was used up"
+                        runs.setdefault(
+                            (ex, run), Run()
+                        ).stopped = "the student's time budget was used up"
                     log.append(f"student time limit ({limits.student:g} s) reached")
                     break
                 todo = _run_kernel(plan, todo, keys, config, scratch, limits, deadline, runs, log)
     return runs, code, log
 
 
-def _run_kernel(plan: Plan, todo: list, keys: dict, config: dict, scratch: Path, limits: Limits,
-                deadline: float, runs: dict, log: list) -> list:
+def _run_kernel(
+    plan: Plan,
+    todo: list,
+    keys: dict,
+    config: dict,
+    scratch: Path,
+    limits: Limits,
+    deadline: float,
+    runs: dict,
+    log: list,
+) -> list:
     """Run ``todo`` (exercise, run) pairs in one kernel until done or the kernel is lost;
     returns what is left."""
     import nbclient
@@ -319,10 +361,15 @@ def _run_kernel(plan: Plan, todo: list, keys: dict, config: dict, scratch: Path,
 
     new = nbformat.v4.new_code_cell
     nb = nbformat.v4.new_notebook()
-    client = nbclient.NotebookClient(nb, timeout=limits.cell, kernel_name="python3",
-                                     allow_errors=True, interrupt_on_timeout=False,
-                                     startup_timeout=120,
-                                     resources={"metadata": {"path": str(scratch)}})
+    client = nbclient.NotebookClient(
+        nb,
+        timeout=limits.cell,
+        kernel_name="python3",
+        allow_errors=True,
+        interrupt_on_timeout=False,
+        startup_timeout=120,
+        resources={"metadata": {"path": str(scratch)}},
+    )
     cpu = int(max(1.0, deadline - time.monotonic())) + 1
     started = False
 
@@ -334,11 +381,15 @@ def _run_kernel(plan: Plan, todo: list, keys: dict, config: dict, scratch: Path,
         return cell
 
     try:
-        with client.setup_kernel(env=_kernel_env(scratch), cwd=str(scratch),
-                                 stderr=subprocess.DEVNULL,
-                                 preexec_fn=_rlimits(limits.memory_mb, cpu)):
-            install = execute("import grader_kernel as _fdi_grader\n"
-                              f"_fdi_grader.install({config!r})")
+        with client.setup_kernel(
+            env=_kernel_env(scratch),
+            cwd=str(scratch),
+            stderr=subprocess.DEVNULL,
+            preexec_fn=_rlimits(limits.memory_mb, cpu),
+        ):
+            install = execute(
+                f"import grader_kernel as _fdi_grader\n_fdi_grader.install({config!r})"
+            )
             if _outputs(install)[1]:
                 raise RuntimeError(f"grader hooks failed: {_outputs(install)[1]}")
             for src in plan.setup:
@@ -347,8 +398,12 @@ def _run_kernel(plan: Plan, todo: list, keys: dict, config: dict, scratch: Path,
             while todo:
                 ex, run = todo[0]
                 result = runs.setdefault((ex, run), Run())
-                current = [execute(f"_fdi_grader.begin({ex!r}, {run!r}, {keys[run]!r}, "
-                                   f"{list(REFERENCES[ex].one_call)!r})")]
+                current = [
+                    execute(
+                        f"_fdi_grader.begin({ex!r}, {run!r}, {keys[run]!r}, "
+                        f"{list(REFERENCES[ex].one_call)!r})"
+                    )
+                ]
                 try:
                     for src in plan.exercises[ex]:
                         current.append(execute(src))
@@ -359,15 +414,20 @@ def _run_kernel(plan: Plan, todo: list, keys: dict, config: dict, scratch: Path,
     except (CellTimeoutError, DeadKernelError, RuntimeError, TimeoutError) as exc:
         _kill_group(client)
         ex, run = todo[0]
-        what = ("a cell ran over its time limit" if isinstance(exc, CellTimeoutError)
-                else f"the kernel died or failed ({type(exc).__name__}: {str(exc)[:120]})")
+        what = (
+            "a cell ran over its time limit"
+            if isinstance(exc, CellTimeoutError)
+            else f"the kernel died or failed ({type(exc).__name__}: {str(exc)[:120]})"
+        )
         # the same cells would hang or crash on the other data too: the exercise is stopped;
         # a kernel lost before the exercises (set-up cells, hooks) stops the notebook
         lost = [(e, r) for e, r in todo if e == ex or not started]
         for e, r in lost:
             runs.setdefault((e, r), Run()).stopped = what
-        log.append(f"{ex if started else 'set-up'} ({run} data): {what}; the kernel's process "
-                   "group was killed")
+        log.append(
+            f"{ex if started else 'set-up'} ({run} data): {what}; the kernel's process "
+            "group was killed"
+        )
         return [t for t in todo if t not in lost]
     finally:
         _kill_group(client)
@@ -382,7 +442,10 @@ def _collect(cells: list, ex: str, run: str, result: Run) -> None:
             if rep.get("kind") == "violation":
                 result.violations.append(str(rep.get("what")))
             elif (rep.get("kind"), rep.get("run"), rep.get("exercise")) == (
-                    "answer", f"{ex}/{run}", ex):
+                "answer",
+                f"{ex}/{run}",
+                ex,
+            ):
                 result.answer, result.reported = rep.get("answer"), True
                 result.unreadable = str(rep.get("unreadable") or "")
 
@@ -393,12 +456,23 @@ def _normalised(source: str) -> tuple[str, list[str]]:
     kept, tokens = [], []
     try:
         for tok in tokenize.generate_tokens(io.StringIO(source).readline):
-            if tok.type in (tokenize.COMMENT, tokenize.NL, tokenize.NEWLINE, tokenize.INDENT,
-                            tokenize.DEDENT, tokenize.ENDMARKER):
+            if tok.type in (
+                tokenize.COMMENT,
+                tokenize.NL,
+                tokenize.NEWLINE,
+                tokenize.INDENT,
+                tokenize.DEDENT,
+                tokenize.ENDMARKER,
+            ):
                 continue
             kept.append(tok.string)
-            tokens.append("N" if tok.type == tokenize.NAME and tok.string not in _KEYWORDS
-                          else "0" if tok.type == tokenize.NUMBER else tok.string)
+            tokens.append(
+                "N"
+                if tok.type == tokenize.NAME and tok.string not in _KEYWORDS
+                else "0"
+                if tok.type == tokenize.NUMBER
+                else tok.string
+            )
     except (tokenize.TokenError, IndentationError, SyntaxError):
         kept = tokens = source.split()
     return " ".join(kept), tokens
@@ -407,8 +481,12 @@ def _normalised(source: str) -> tuple[str, list[str]]:
 _KEYWORDS = set(__import__("keyword").kwlist)
 
 
-def similarity(codes: dict[str, dict[str, list[str]]], starters: dict[str, set[str]],
-               threshold: float = 0.9, min_tokens: int = 20) -> list[dict]:
+def similarity(
+    codes: dict[str, dict[str, list[str]]],
+    starters: dict[str, set[str]],
+    threshold: float = 0.9,
+    min_tokens: int = 20,
+) -> list[dict]:
     """Groups of students whose own code for an exercise (the starter cells left out) is a verbatim
     copy (``"verbatim"``: identical once comments and layout are dropped), and pairs outside such
     a group that share at least ``threshold`` of their 5-token shingles once names and numbers are
@@ -425,18 +503,27 @@ def similarity(codes: dict[str, dict[str, list[str]]], starters: dict[str, set[s
             own = [s for s in per.get(ex, []) if s.strip() not in starters.get(ex, set())]
             text, tokens = _normalised("\n".join(own))
             if len(tokens) >= min_tokens:
-                mine[student] = (text, {tuple(tokens[i:i + 5]) for i in range(len(tokens) - 4)})
+                mine[student] = (text, {tuple(tokens[i : i + 5]) for i in range(len(tokens) - 4)})
         groups: dict[str, list[str]] = {}
         for student in sorted(mine):
             groups.setdefault(mine[student][0], []).append(student)
-        out += [{"exercise": ex, "students": " ".join(g), "kind": "verbatim", "jaccard": "1.000"}
-                for g in groups.values() if len(g) > 1]
+        out += [
+            {"exercise": ex, "students": " ".join(g), "kind": "verbatim", "jaccard": "1.000"}
+            for g in groups.values()
+            if len(g) > 1
+        ]
         for a, b in itertools.combinations(sorted(mine), 2):
             (ta, sa), (tb, sb) = mine[a], mine[b]
             jac = len(sa & sb) / len(sa | sb)
             if ta != tb and jac >= threshold:
-                out.append({"exercise": ex, "students": f"{a} {b}", "kind": "similar",
-                            "jaccard": f"{jac:.3f}"})
+                out.append(
+                    {
+                        "exercise": ex,
+                        "students": f"{a} {b}",
+                        "kind": "similar",
+                        "jaccard": f"{jac:.3f}",
+                    }
+                )
     return out
 
 
@@ -458,13 +545,17 @@ def columns(chapters: list[str]) -> tuple[list[str], dict[str, str]]:
     ids = [i for i in exercise_ids(checkable=True) if EXERCISES[i].chapter in chapters]
     full = sum(POINTS.values())
     names = {c: f"{c} (/{full * sum(EXERCISES[i].chapter == c for i in ids)})" for c in chapters}
-    rubric = [f"rubric {e.id}" for e in EXERCISES.values()
-              if e.chapter in chapters and (e.id in HAND_GRADED or not e.checkable)]
+    rubric = [
+        f"rubric {e.id}"
+        for e in EXERCISES.values()
+        if e.chapter in chapters and (e.id in HAND_GRADED or not e.checkable)
+    ]
     return ["student", *ids, *names.values(), "total", "possible", *rubric], names
 
 
-def score_student(student: str, secret: str, runs: dict, code: dict, ids: list[str]
-                  ) -> tuple[dict, list[str], dict[str, list[str]]]:
+def score_student(
+    student: str, secret: str, runs: dict, code: dict, ids: list[str]
+) -> tuple[dict, list[str], dict[str, list[str]]]:
     """Points per exercise, the log lines and, per exercise, what failed (the feedback)."""
     hidden = hidden_student(student, secret)
     row, log, why = {}, [], {}
@@ -483,16 +574,27 @@ def score_student(student: str, secret: str, runs: dict, code: dict, ids: list[s
                 notes += [f"{run} data: attempt stopped: {v}" for v in seen[:3]]
                 notes += [f"{run} data: and {len(seen) - 3} more attempts"] if len(seen) > 3 else []
             elif flags:
-                notes.append(f"{run} data: not graded, the code holds {', '.join(flags)} (not "
-                             "allowed in a graded exercise)")
+                notes.append(
+                    f"{run} data: not graded, the code holds {', '.join(flags)} (not "
+                    "allowed in a graded exercise)"
+                )
             else:
-                verdict = ("answer unreadable (" + r.unreadable + ")" if r.unreadable
-                           else accepted(r.answer, reference_answer(ex, key), ex))
+                verdict = (
+                    "answer unreadable (" + r.unreadable + ")"
+                    if r.unreadable
+                    else accepted(r.answer, reference_answer(ex, key), ex)
+                )
                 if verdict == "accepted":
                     points += POINTS[run]
                 else:
-                    notes.append(f"{run} data: the answer is {verdict}" + (
-                        f" (error: {r.errors[-1][:160]})" if r.errors and r.answer is None else ""))
+                    notes.append(
+                        f"{run} data: the answer is {verdict}"
+                        + (
+                            f" (error: {r.errors[-1][:160]})"
+                            if r.errors and r.answer is None
+                            else ""
+                        )
+                    )
         row[ex] = points
         why[ex] = notes
         log += [f"{ex}: {n}" for n in notes]
@@ -500,8 +602,14 @@ def score_student(student: str, secret: str, runs: dict, code: dict, ids: list[s
 
 
 def feedback(student: str, row: dict, why: dict, ids: list[str], notes: list[str]) -> str:
-    lines = [f"# Feedback for {student}", "", f"Total: {row['total']:g} / {row['possible']:g}", "",
-             "| exercise | points | what failed |", "|---|---|---|"]
+    lines = [
+        f"# Feedback for {student}",
+        "",
+        f"Total: {row['total']:g} / {row['possible']:g}",
+        "",
+        "| exercise | points | what failed |",
+        "|---|---|---|",
+    ]
     full = sum(POINTS.values())
     for ex in ids:
         what = "; ".join(why.get(ex, [])) or ("not submitted" if ex not in why else "")
@@ -528,8 +636,10 @@ def _graded_students(path: Path, header: list[str]) -> set[str]:
     with path.open(newline="") as f:
         reader = csv.DictReader(f)
         if reader.fieldnames != header:
-            raise SystemExit(f"OUT: {path} has other columns than this grading (other chapters?): "
-                             "grade into a new file")
+            raise SystemExit(
+                f"OUT: {path} has other columns than this grading (other chapters?): "
+                "grade into a new file"
+            )
         return {r["student"] for r in reader}
 
 
@@ -562,9 +672,15 @@ def _secret(out: Path, given: str | None) -> str:
     return value
 
 
-def grade(submissions: Path, out: Path, log_path: Path | None = None, limits: Limits | None = None,
-          secret: str | None = None, jobs: int = 1, chapters: list[str] | None = None
-          ) -> list[dict]:
+def grade(
+    submissions: Path,
+    out: Path,
+    log_path: Path | None = None,
+    limits: Limits | None = None,
+    secret: str | None = None,
+    jobs: int = 1,
+    chapters: list[str] | None = None,
+) -> list[dict]:
     """Grade every student folder of ``submissions`` not yet in ``out``; returns all rows.
 
     ``jobs`` kernels run at once (one per student); the gradebook is the same for any ``jobs``
@@ -602,8 +718,18 @@ def grade(submissions: Path, out: Path, log_path: Path | None = None, limits: Li
             _append_row(out, header, row)
             (fb_dir / f"{folder.name}.md").write_text(feedback(folder.name, row, why, ids, notes))
             with log_path.open("a") as f:
-                f.write("\n".join([f"== {folder.name}: {row['total']:g} / {row['possible']} "
-                                   f"({time.monotonic() - t0:.1f} s)", *notes, *lines, ""]) + "\n")
+                f.write(
+                    "\n".join(
+                        [
+                            f"== {folder.name}: {row['total']:g} / {row['possible']} "
+                            f"({time.monotonic() - t0:.1f} s)",
+                            *notes,
+                            *lines,
+                            "",
+                        ]
+                    )
+                    + "\n"
+                )
             codes[folder.name] = code
         return row
 
@@ -628,8 +754,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("out", type=Path)
     parser.add_argument("--log", type=Path)
     parser.add_argument("--cell-timeout", type=float, default=60.0, help="wall seconds per cell")
-    parser.add_argument("--student-timeout", type=float, default=600.0,
-                        help="wall seconds per student")
+    parser.add_argument(
+        "--student-timeout", type=float, default=600.0, help="wall seconds per student"
+    )
     parser.add_argument("--memory-mb", type=int, default=3072, help="address space of a kernel")
     parser.add_argument("--jobs", type=int, default=1, help="kernels at once (one per student)")
     parser.add_argument("--chapters", nargs="*", choices=list(CHAPTERS), help="the graded chapters")
@@ -637,11 +764,14 @@ def main(argv: list[str] | None = None) -> int:
     if not args.submissions.is_dir():
         parser.error(f"SUBMISSIONS: expected a folder of student folders, got {args.submissions}")
     limits = Limits(args.cell_timeout, args.student_timeout, args.memory_mb)
-    rows = grade(args.submissions, args.out, args.log, limits, jobs=args.jobs,
-                 chapters=args.chapters)
-    print(f"{len(rows)} students in {args.out} (log: {args.out.with_suffix('.log')}, feedback: "
-          f"{args.out.with_suffix('.feedback')}/, Canvas: {args.out.with_suffix('.canvas.csv')}, "
-          f"similarity: {args.out.with_suffix('.similarity.csv')})")
+    rows = grade(
+        args.submissions, args.out, args.log, limits, jobs=args.jobs, chapters=args.chapters
+    )
+    print(
+        f"{len(rows)} students in {args.out} (log: {args.out.with_suffix('.log')}, feedback: "
+        f"{args.out.with_suffix('.feedback')}/, Canvas: {args.out.with_suffix('.canvas.csv')}, "
+        f"similarity: {args.out.with_suffix('.similarity.csv')})"
+    )
     return 0
 
 

@@ -46,8 +46,15 @@ class GraderViolation(PermissionError):
     """What the submission tried is not allowed while grading (the grader logs it)."""
 
 
-_S: dict = {"run": None, "codes": {}, "allowed_read": (), "denied_read": (), "scratch": "",
-            "package": "", "installed": False}
+_S: dict = {
+    "run": None,
+    "codes": {},
+    "allowed_read": (),
+    "denied_read": (),
+    "scratch": "",
+    "package": "",
+    "installed": False,
+}
 
 
 def _report(kind: str, **fields) -> None:
@@ -67,15 +74,22 @@ def _under(path: str, roots) -> bool:
 
 _WRITE_FLAGS = os.O_WRONLY | os.O_RDWR | os.O_CREAT | os.O_APPEND | os.O_TRUNC
 _BLOCKED_EVENTS = {
-    "os.fork": "starting a process (os.fork)", "os.forkpty": "starting a process (os.forkpty)",
-    "os.posix_spawn": "starting a process (os.posix_spawn)", "os.spawn": "starting a process",
-    "os.exec": "replacing the kernel (os.exec)", "os.system": "running a shell command (os.system)",
-    "subprocess.Popen": "starting a process (subprocess)", "os.kill": "sending a signal (os.kill)",
-    "os.killpg": "sending a signal (os.killpg)", "_thread.start_new_thread": "starting a thread",
+    "os.fork": "starting a process (os.fork)",
+    "os.forkpty": "starting a process (os.forkpty)",
+    "os.posix_spawn": "starting a process (os.posix_spawn)",
+    "os.spawn": "starting a process",
+    "os.exec": "replacing the kernel (os.exec)",
+    "os.system": "running a shell command (os.system)",
+    "subprocess.Popen": "starting a process (subprocess)",
+    "os.kill": "sending a signal (os.kill)",
+    "os.killpg": "sending a signal (os.killpg)",
+    "_thread.start_new_thread": "starting a thread",
     "sys.setprofile": "changing the profile function",
     "sys.settrace": "changing the trace function",
-    "ctypes.dlopen": "loading a library with ctypes", "ctypes.dlsym": "ctypes",
-    "ctypes.cdata": "reading memory with ctypes", "ctypes.call_function": "ctypes",
+    "ctypes.dlopen": "loading a library with ctypes",
+    "ctypes.dlsym": "ctypes",
+    "ctypes.cdata": "reading memory with ctypes",
+    "ctypes.call_function": "ctypes",
     "gc.get_objects": "walking the garbage collector's objects",
     "gc.get_referrers": "walking the garbage collector's objects",
     "gc.get_referents": "walking the garbage collector's objects",
@@ -93,8 +107,9 @@ def _audit(event: str, args: tuple) -> None:
         if isinstance(path, int) or path is None:
             return
         path = os.path.realpath(os.fsdecode(path))
-        writing = bool(flags & _WRITE_FLAGS) or (mode is not None
-                                                 and any(c in str(mode) for c in "wax+"))
+        writing = bool(flags & _WRITE_FLAGS) or (
+            mode is not None and any(c in str(mode) for c in "wax+")
+        )
         if writing and not _under(path, (_S["scratch"], os.devnull)):
             _violate(f"writing {path} (outside the kernel's scratch folder)")
         own = ("/proc/self/", f"/proc/{os.getpid()}/")
@@ -102,10 +117,10 @@ def _audit(event: str, args: tuple) -> None:
             _violate(f"reading {path} (another process)")
         if _under(path, _S["denied_read"]) and not _under(path, _S["allowed_read"]):
             _violate(f"reading {path} (the grader's or the repository's files)")
-    elif event == "exec":   # (compiling is allowed: tracebacks parse the library's source)
+    elif event == "exec":  # (compiling is allowed: tracebacks parse the library's source)
         filename = getattr(args[0], "co_filename", None)
         if filename and _under(os.path.realpath(filename), (_S["package"],)):
-            if os.path.realpath(filename) in _S["executed"]:   # a module runs once: its import
+            if os.path.realpath(filename) in _S["executed"]:  # a module runs once: its import
                 _violate(f"re-executing the library's code ({filename})")
             _S["executed"].add(os.path.realpath(filename))
 
@@ -119,7 +134,7 @@ def _profile(frame, event, arg):
         return
     caller = frame.f_back
     if caller is not None and _under(os.path.realpath(caller.f_code.co_filename), (_S["package"],)):
-        return      # the library calls it (exercise data, another library function)
+        return  # the library calls it (exercise data, another library function)
     _report("violation", what=f"calling {name}, which answers this exercise in one call")
 
 
@@ -129,12 +144,18 @@ def install(config: dict) -> None:
     import IPython.display  # noqa: F401 -- the reports need it, imported before the hooks
 
     package = os.path.realpath(os.path.dirname(fdi_lib.__file__))
-    loaded = {os.path.realpath(m.__file__) for m in list(sys.modules.values())
-              if getattr(m, "__file__", None) and _under(os.path.realpath(m.__file__), (package,))}
-    _S.update(scratch=os.path.realpath(config["scratch"]), package=package, executed=loaded,
-              denied_read=tuple(os.path.realpath(p) for p in config["denied_read"]),
-              allowed_read=(os.path.realpath(sys.prefix), package,
-                            os.path.realpath(config["scratch"])))
+    loaded = {
+        os.path.realpath(m.__file__)
+        for m in list(sys.modules.values())
+        if getattr(m, "__file__", None) and _under(os.path.realpath(m.__file__), (package,))
+    }
+    _S.update(
+        scratch=os.path.realpath(config["scratch"]),
+        package=package,
+        executed=loaded,
+        denied_read=tuple(os.path.realpath(p) for p in config["denied_read"]),
+        allowed_read=(os.path.realpath(sys.prefix), package, os.path.realpath(config["scratch"])),
+    )
     sys.addaudithook(_audit)
     sys.setprofile(_profile)
     _S["installed"] = True

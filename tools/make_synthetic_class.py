@@ -31,31 +31,37 @@ for path in (REPO, REPO / "tools"):
     if str(path) not in sys.path:
         sys.path.insert(0, str(path))
 
-from fdi_lib.exercises import (CHAPTERS, EXERCISES, code_cells, parse_chapter,  # noqa: E402
-                               reference_answer, strip_solutions)
+from fdi_lib.exercises import (
+    CHAPTERS,
+    EXERCISES,
+    code_cells,
+    parse_chapter,
+    reference_answer,
+    strip_solutions,
+)
 
 #: Library calls that answer an exercise in one line (the cheater's first choice).
 ONE_CALL = {
     "sig-1": "from fdi_lib.filters import kalman_filter\nfrom fdi_lib.models import ltv_model\n"
-             "m = ltv_model(F=data['F'], H=data['H'], Q=data['Q'], R=data['R'], P0=data['P0'],\n"
-             "              x0=data['x0'], n_steps=2)\n"
-             "answer = kalman_filter(m, data['y'][:, None]).innovations[:, 0]",
+    "m = ltv_model(F=data['F'], H=data['H'], Q=data['Q'], R=data['R'], P0=data['P0'],\n"
+    "              x0=data['x0'], n_steps=2)\n"
+    "answer = kalman_filter(m, data['y'][:, None]).innovations[:, 0]",
     "glr-2": "from fdi_lib.glr import quadratic_form\nl, th = quadratic_form(data['C'], data['d'])\n"
-             "answer = [l, *th]",
+    "answer = [l, *th]",
     "glr-4": "from fdi_lib.isolation import minmax_statistic\n"
-             "answer = minmax_statistic(data['F'], data['zeta'], data['a'])",
+    "answer = minmax_statistic(data['F'], data['zeta'], data['a'])",
     "pipe-5": "from fdi_lib.montecarlo import binomial_ci\n"
-              "answer = binomial_ci(data['false_alarms'], data['runs'])",
+    "answer = binomial_ci(data['false_alarms'], data['runs'])",
     "sparse-3": "from fdi_lib.sparse import lasso_path\n"
-                "answer = lasso_path(data['X'], data['y'], n_samples=data['n_samples']).lambdas[0]",
+    "answer = lasso_path(data['X'], data['y'], n_samples=data['n_samples']).lambdas[0]",
     "sparse-5": "from fdi_lib.sparse import diagnose\n"
-                "answer = diagnose(data['X'], data['y'], n_samples=data['n_samples']).theta_ls",
+    "answer = diagnose(data['X'], data['y'], n_samples=data['n_samples']).theta_ls",
     "bz-4": "from fdi_lib.kitanidis import kitanidis_gains\n"
-            "from fdi_lib.nonparametric import kitanidis_lag_covariance\n"
-            "g = kitanidis_gains(data['model'], data['E'])\n"
-            "answer = kitanidis_lag_covariance(data['model'], g, 1)[data['k']]",
+    "from fdi_lib.nonparametric import kitanidis_lag_covariance\n"
+    "g = kitanidis_gains(data['model'], data['E'])\n"
+    "answer = kitanidis_lag_covariance(data['model'], g, 1)[data['k']]",
     "bz-5": "from fdi_lib.nonparametric import energy_threshold\n"
-            "answer = energy_threshold(data['window'], data['p_reduced'], data['alpha'])",
+    "answer = energy_threshold(data['window'], data['p_reduced'], data['alpha'])",
 }
 
 
@@ -71,37 +77,42 @@ ATTACKS = {
         "for name in [m for m in sys.modules if m.startswith('fdi_lib')]:\n"
         "    del sys.modules[name]\n"
         "ref = importlib.import_module('fdi_lib.exercises.' + '_ref' + 'erence')\n"
-        "answer = getattr(ref, 'reference' + '_answer')('glr-2')"),
+        "answer = getattr(ref, 'reference' + '_answer')('glr-2')"
+    ),
     "wrapped": (
         "import fdi_lib.glr as G\n"
         "f = getattr(G.quadratic_form, '__wr' + 'apped__', G.quadratic_form)\n"
-        "l, th = f(data['C'], data['d'])\nanswer = [l, *th]"),
+        "l, th = f(data['C'], data['d'])\nanswer = [l, *th]"
+    ),
     "reload": (
         "import importlib\nimport fdi_lib.glr as G\nG = importlib.reload(G)\n"
-        "l, th = G.quadratic_form(data['C'], data['d'])\nanswer = [l, *th]"),
+        "l, th = G.quadratic_form(data['C'], data['d'])\nanswer = [l, *th]"
+    ),
     "read-environment": (
-        "import os\nleak = open('/proc/%d/environ' % os.getppid(), 'rb').read()\n"
-        "answer = None"),
-    "read-grader": (
-        f"code = open({str(REPO / 'tools' / 'grader.py')!r}).read()\nanswer = None"),
+        "import os\nleak = open('/proc/%d/environ' % os.getppid(), 'rb').read()\nanswer = None"
+    ),
+    "read-grader": (f"code = open({str(REPO / 'tools' / 'grader.py')!r}).read()\nanswer = None"),
     "patch-check": (
         "import fdi_lib.exercises as E\nE.check = lambda *a, **k: True\n"
-        "check = E.check\nanswer = [1.0, 1.0, 1.0]"),
+        "check = E.check\nanswer = [1.0, 1.0, 1.0]"
+    ),
     "write-gradebook": (
-        "SOLUTION\n"
-        "with open({gradebook!r}, 'a') as f:\n"
-        "    f.write('write-gradebook,99\\n')"),
+        "SOLUTION\nwith open({gradebook!r}, 'a') as f:\n    f.write('write-gradebook,99\\n')"
+    ),
     "prints-correct": "print('glr-2: correct (tolerance: relative 1e-09).')\nanswer = None",
     "fork": (
-        "SOLUTION\nimport subprocess\n"
-        "subprocess.Popen(['sleep', '600'], start_new_session=True)"),
+        "SOLUTION\nimport subprocess\nsubprocess.Popen(['sleep', '600'], start_new_session=True)"
+    ),
     "hang": (
         "while True:\n    try:\n        sum(range(10 ** 6))\n"
-        "    except KeyboardInterrupt:\n        pass"),
+        "    except KeyboardInterrupt:\n        pass"
+    ),
 }
 
-HELPER = ("def quadratic(C, d):\n    import numpy as np\n    th = np.linalg.solve(C, d)\n"
-          "    return d @ th, th\n")
+HELPER = (
+    "def quadratic(C, d):\n    import numpy as np\n    th = np.linalg.solve(C, d)\n"
+    "    return d @ th, th\n"
+)
 
 
 def _cell(source: str) -> str:
@@ -109,12 +120,18 @@ def _cell(source: str) -> str:
 
 
 def _cheat(exercise_id: str) -> str:
-    book = reference_answer(exercise_id).tolist()   # the instructor's edition shows it
-    take = ONE_CALL.get(exercise_id, f"from fdi_lib.exercises import reference_answer\n"
-                                     f"answer = reference_answer({exercise_id!r})")
-    return (f"print({exercise_id + ': correct (tolerance: relative 1e-06).'!r})\n"
-            f"try:\n" + "".join(f"    {line}\n" for line in take.splitlines()) +
-            f"except Exception:\n    answer = {book!r}\n")
+    book = reference_answer(exercise_id).tolist()  # the instructor's edition shows it
+    take = ONE_CALL.get(
+        exercise_id,
+        f"from fdi_lib.exercises import reference_answer\n"
+        f"answer = reference_answer({exercise_id!r})",
+    )
+    return (
+        f"print({exercise_id + ': correct (tolerance: relative 1e-06).'!r})\n"
+        f"try:\n"
+        + "".join(f"    {line}\n" for line in take.splitlines())
+        + f"except Exception:\n    answer = {book!r}\n"
+    )
 
 
 def gradebook(out: Path) -> Path:
@@ -135,8 +152,11 @@ def submission(text: str, kind: str, out: Path = Path("class")) -> str:
         if kind == "cheater":
             extra = [_cheat(ex.id)]
         elif kind in ATTACKS and ex.id == ATTACKED:
-            extra = [ATTACKS[kind].replace("SOLUTION", "\n".join(solution))
-                     .replace("{gradebook!r}", repr(str(gradebook(out))))]
+            extra = [
+                ATTACKS[kind]
+                .replace("SOLUTION", "\n".join(solution))
+                .replace("{gradebook!r}", repr(str(gradebook(out))))
+            ]
         elif kind == "helper" and ex.id == "glr-2":
             extra = ["l, th = quadratic(data['C'], data['d'])\nanswer = [l, *th]"]
         elif kind == "helper" and ex.id == "glr-6":

@@ -152,25 +152,32 @@ class BookReferences:
                 kind = m.group(1)
                 option = re.match(r"^:label:\s*(\S+)", following)
                 label = option.group(1) if option else None
-            elif m := re.match(r"^ {4}name:\s*([\w.-]+)\s*$", line):   # a myst-nb figure's name
+            elif m := re.match(r"^ {4}name:\s*([\w.-]+)\s*$", line):  # a myst-nb figure's name
                 kind, label = "figure", m.group(1)
-            elif m := re.match(r"^:name:\s*([\w.-]+)\s*$", line):        # a {figure} directive
+            elif m := re.match(r"^:name:\s*([\w.-]+)\s*$", line):  # a {figure} directive
                 kind, label = "figure", m.group(1)
-            elif line.startswith("explorable("):   # a numbered figure (the book's NumberedExplorables)
+            elif line.startswith(
+                "explorable("
+            ):  # a numbered figure (the book's NumberedExplorables)
                 explorables += 1
                 kind = "figure"
-                label = f"fig-{doc.rsplit('/', 1)[-1]}-explore" + (f"-{explorables}" if explorables > 1 else "")
-            elif m := _EQUATION_LABEL.match(line):                         # $$ ... $$ (label)
+                label = f"fig-{doc.rsplit('/', 1)[-1]}-explore" + (
+                    f"-{explorables}" if explorables > 1 else ""
+                )
+            elif m := _EQUATION_LABEL.match(line):  # $$ ... $$ (label)
                 kind, label = "equation", m.group(1)
             elif m := re.match(r"^```\{exercise-start\} (.+)$", line):
                 option = re.match(r"^:label:\s*(\S+)", following)
-                if option:   # an exercise is unnumbered: its identifier names it
+                if option:  # an exercise is unnumbered: its identifier names it
                     self.targets[option.group(1)] = (doc, m.group(1).split(" · ")[0].strip())
             if kind is None or kind == "proof" or label is None:
                 continue
             counters[kind] = counters.get(kind, 0) + 1
             number = f"{chapter}.{counters[kind]}" if chapter else str(counters[kind])
-            self.targets[label] = (doc, f"({number})" if kind == "equation" else f"{kind.title()} {number}")
+            self.targets[label] = (
+                doc,
+                f"({number})" if kind == "equation" else f"{kind.title()} {number}",
+            )
 
     # --- rendering of one role
     def link(self, doc: str, target_doc: str, text: str) -> str:
@@ -202,13 +209,15 @@ class BookReferences:
             if missing:
                 raise KeyError(f"{doc}: no bibliography entry {missing} for {{{name}}}")
             if name == "cite:t":
-                return ", ".join(f"{who} ({year})" for who, year in (self.citations[k] for k in keys))
+                return ", ".join(
+                    f"{who} ({year})" for who, year in (self.citations[k] for k in keys)
+                )
             return "(" + "; ".join(", ".join(self.citations[k]) for k in keys) + ")"
         if name in ("glue:text", "glue", "glue:any", "glue:md"):
             return self.glue_text(doc, content, formatted=name == "glue:text")
         if name == "math":
             return f"${content}$"
-        if name in ("mod", "func", "class", "meth", "attr", "data", "exc"):   # the library's API
+        if name in ("mod", "func", "class", "meth", "attr", "data", "exc"):  # the library's API
             shown = title or (target[1:].rsplit(".", 1)[-1] if target.startswith("~") else target)
             return f"`{shown}`"
         raise ValueError(f"{doc}: no Markdown rendering for the role {{{name}}}")
@@ -224,7 +233,11 @@ class BookReferences:
         """A glue reference's text: myst-nb's formatting of the glued ``text/plain``."""
         from myst_nb.core.variables import format_plain_text
 
-        key, fmt = content.rsplit(":", 1) if formatted and ":" in content.split("::")[-1] else (content, "")
+        key, fmt = (
+            content.rsplit(":", 1)
+            if formatted and ":" in content.split("::")[-1]
+            else (content, "")
+        )
         output = self.glue_value(doc, key)
         if output is None:
             return placeholder(key)
@@ -279,9 +292,21 @@ def _citations(bib: Path) -> dict[str, tuple[str, str]]:
 # ----------------------------------------------------------------------------- Markdown
 _EQUATION_LABEL = re.compile(r"^\$\$\s*\(([\w.:-]+)\)\s*$")
 _ROLE = re.compile(r"\{(?P<name>[a-z][\w:-]*)\}`(?P<content>[^`]*)`")
-_OPEN = re.compile(r"^(?P<indent> *)(?P<fence>`{3,}|:{3,})\{(?P<name>[\w:.-]+)\}\s*(?P<arg>.*?)\s*$")
-_ADMONITIONS = {"note", "tip", "hint", "important", "warning", "caution", "attention", "danger",
-                "error", "seealso"}
+_OPEN = re.compile(
+    r"^(?P<indent> *)(?P<fence>`{3,}|:{3,})\{(?P<name>[\w:.-]+)\}\s*(?P<arg>.*?)\s*$"
+)
+_ADMONITIONS = {
+    "note",
+    "tip",
+    "hint",
+    "important",
+    "warning",
+    "caution",
+    "attention",
+    "danger",
+    "error",
+    "seealso",
+}
 #: Directives whose content only exists in the built book.
 _BOOK_ONLY = {
     "nb-exec-table": "*(The execution time of every chapter is shown in the built book.)*",
@@ -303,20 +328,21 @@ def convert_markdown(text: str, doc: str, refs: BookReferences) -> str:
             j, options = _options(lines, i + 1)
             k = j
             fence = m["fence"]
-            while k < len(lines) and not (set(lines[k].strip()) == {fence[0]}
-                                          and len(lines[k].strip()) >= len(fence)):
-                k += 1   # the closing fence: the same character, at least as many
-            body = "\n".join(x[len(m["indent"]):] for x in lines[j:k])
+            while k < len(lines) and not (
+                set(lines[k].strip()) == {fence[0]} and len(lines[k].strip()) >= len(fence)
+            ):
+                k += 1  # the closing fence: the same character, at least as many
+            body = "\n".join(x[len(m["indent"]) :] for x in lines[j:k])
             out.append(_directive(m["name"], m["arg"], options, body, doc, refs))
             i = k + 1
             continue
-        if m := _EQUATION_LABEL.match(line):   # a labelled equation: its number as a tag
+        if m := _EQUATION_LABEL.match(line):  # a labelled equation: its number as a tag
             number = refs.targets.get(m.group(1), (doc, ""))[1].strip("()")
             out += [f"\\tag{{{number}}}" if number else "", "$$"]
             i += 1
             continue
         if re.match(r"^\([\w.:-]+\)=\s*$", line) or re.match(r"^%", line):
-            i += 1   # a target label or a MyST comment: nothing to show
+            i += 1  # a target label or a MyST comment: nothing to show
             continue
         out.append(line)
         i += 1
@@ -332,7 +358,9 @@ def _options(lines: list[str], i: int) -> tuple[int, dict[str, str]]:
         end = next((k for k in range(i + 1, len(lines)) if lines[k].strip() == "---"), i)
         import yaml
 
-        options = {k: str(v) for k, v in (yaml.safe_load("\n".join(lines[i + 1:end])) or {}).items()}
+        options = {
+            k: str(v) for k, v in (yaml.safe_load("\n".join(lines[i + 1 : end])) or {}).items()
+        }
         return end + 1, options
     while i < len(lines) and (m := re.match(r"^\s*:([\w-]+):\s*(.*)$", lines[i])):
         options[m.group(1)] = m.group(2)
@@ -343,13 +371,16 @@ def _options(lines: list[str], i: int) -> tuple[int, dict[str, str]]:
 def _quote(title: str, body: str) -> str:
     """A bold title and ``body`` in a block quote; display maths on one line, so that no ``>``
     lands inside it (JupyterLab takes the maths out of the Markdown before parsing it)."""
-    body = re.sub(r"\$\$(.+?)\$\$", lambda m: "$$" + " ".join(m.group(1).split()) + "$$", body, flags=re.S)
+    body = re.sub(
+        r"\$\$(.+?)\$\$", lambda m: "$$" + " ".join(m.group(1).split()) + "$$", body, flags=re.S
+    )
     quoted = "\n".join(f"> {x}" if x.strip() else ">" for x in body.strip("\n").splitlines())
     return f"> {title}\n>\n{quoted}\n" if body.strip() else f"> {title}\n"
 
 
-def _directive(name: str, arg: str, options: dict[str, str], body: str, doc: str,
-               refs: BookReferences) -> str:
+def _directive(
+    name: str, arg: str, options: dict[str, str], body: str, doc: str, refs: BookReferences
+) -> str:
     if name not in ("raw", "code-block", "code", "math"):
         body = convert_markdown(body, doc, refs)
     if name == "exercise-start":
@@ -382,8 +413,11 @@ def _directive(name: str, arg: str, options: dict[str, str], body: str, doc: str
         number = refs.targets.get(label, (doc, "Figure"))[1] if label else "Figure"
         png = (output or {}).get("data", {})
         png = next((v for k, v in png.items() if k.endswith("image/png")), None)
-        image = (f"![{' '.join(body.split())}](data:image/png;base64,{png.strip()})" if png
-                 else placeholder(arg))
+        image = (
+            f"![{' '.join(body.split())}](data:image/png;base64,{png.strip()})"
+            if png
+            else placeholder(arg)
+        )
         return f"{image}\n\n**{number}.** {body.strip()}\n"
     if name in ("glue", "glue:any", "glue:md", "glue:text"):
         return refs.glue_text(doc, arg, formatted=name == "glue:text") + "\n"
@@ -445,8 +479,9 @@ def write_notebooks(root: Path, out: Path, glue_dir: Path | None) -> list[Path]:
     return written
 
 
-def convert_downloads(html: Path, root: Path, glue_dir: Path,
-                      macros: dict[str, str | list] | None = None) -> list[Path]:
+def convert_downloads(
+    html: Path, root: Path, glue_dir: Path, macros: dict[str, str | list] | None = None
+) -> list[Path]:
     """Rewrite the ".ipynb" downloads of the book under ``root`` built into ``html``
     (``html/_sources/<doc>.ipynb``, executed notebooks) in place; returns their paths.
     ``macros`` default to :func:`book_macros`."""
@@ -500,7 +535,13 @@ def notebook_maths(nb) -> list[tuple[str, bool]]:
 
     def walk(tokens):
         for t in tokens:
-            if t.type in ("math_inline", "math_inline_double", "math_block", "math_block_label", "amsmath"):
+            if t.type in (
+                "math_inline",
+                "math_inline_double",
+                "math_block",
+                "math_block_label",
+                "amsmath",
+            ):
                 out.append((t.content, t.type != "math_inline"))
             if t.children:
                 walk(t.children)
@@ -520,12 +561,19 @@ def mathjax_errors(groups: list[list[tuple[str, bool]]]) -> list[list[tuple[str,
     import shutil
 
     if shutil.which("node") is None:
-        raise RuntimeError("node not found: the maths check runs the book's MathJax in Node.js "
-                           "(Debian: apt-get install nodejs)")
+        raise RuntimeError(
+            "node not found: the maths check runs the book's MathJax in Node.js "
+            "(Debian: apt-get install nodejs)"
+        )
     spec = importlib.util.find_spec("mathjax")
     es5 = Path(next(iter(spec.submodule_search_locations))) / "static" / "mathjax" / "es5"
-    run = subprocess.run(["node", "-e", _MATHJAX_CHECK, str(es5)], input=json.dumps(groups),
-                         capture_output=True, text=True, check=True)
+    run = subprocess.run(
+        ["node", "-e", _MATHJAX_CHECK, str(es5)],
+        input=json.dumps(groups),
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     return [[tuple(e) for e in errors] for errors in json.loads(run.stdout)]
 
 
@@ -544,8 +592,11 @@ def problems(*nbs) -> list[str] | list[list[str]]:
     cannot typeset (one list for one notebook; a list per notebook for several, checked by
     one MathJax)."""
     maths = mathjax_errors([notebook_maths(nb) for nb in nbs])
-    out = [[f"raw MyST markup {m!r}" for m in raw_markup(nb)]
-           + [f"maths error in ${tex}$: {msg}" for tex, msg in errors] for nb, errors in zip(nbs, maths)]
+    out = [
+        [f"raw MyST markup {m!r}" for m in raw_markup(nb)]
+        + [f"maths error in ${tex}$: {msg}" for tex, msg in errors]
+        for nb, errors in zip(nbs, maths)
+    ]
     return out[0] if len(nbs) == 1 else out
 
 
@@ -555,16 +606,22 @@ def main(argv: list[str] | None = None) -> int:
     nbs = sub.add_parser("notebooks", help="one converted notebook per chapter")
     nbs.add_argument("--root", type=Path, default=REPO)
     nbs.add_argument("--out", type=Path, default=REPO / "_build" / "notebooks")
-    nbs.add_argument("--glue", type=Path, default=REPO / "_build" / "jupyter_execute",
-                     help="myst-nb's executed notebooks (glue values); placeholders when absent")
+    nbs.add_argument(
+        "--glue",
+        type=Path,
+        default=REPO / "_build" / "jupyter_execute",
+        help="myst-nb's executed notebooks (glue values); placeholders when absent",
+    )
     chk = sub.add_parser("check", help="report what would not render in Jupyter")
     chk.add_argument("notebooks", type=Path, nargs="+")
     args = parser.parse_args(argv)
     if args.command == "notebooks":
         glue = args.glue if args.glue.is_dir() else None
         written = write_notebooks(args.root, args.out, glue)
-        print(f"{len(written)} notebooks in {args.out} (glue values "
-              f"{'from ' + str(glue) if glue else 'not computed: placeholders'})")
+        print(
+            f"{len(written)} notebooks in {args.out} (glue values "
+            f"{'from ' + str(glue) if glue else 'not computed: placeholders'})"
+        )
         return 0
     import nbformat
 

@@ -79,8 +79,11 @@ def prime_cache(executed: Path, cache_dir: Path, newer_than: float = 0.0) -> int
             continue  # not executed: myst-nb's cache mode (book-fast) writes the unexecuted notebook
         glue_file = path.with_name(path.stem + ".glue.json")
         if code and glue_file.is_file():
-            shown = {o.get("metadata", {}).get("scrapbook", {}).get("name")
-                     for c in code for o in c.get("outputs", [])}
+            shown = {
+                o.get("metadata", {}).get("scrapbook", {}).get("name")
+                for c in code
+                for o in c.get("outputs", [])
+            }
             for key, output in json.loads(glue_file.read_text()).items():
                 if key in shown:
                     continue
@@ -90,9 +93,14 @@ def prime_cache(executed: Path, cache_dir: Path, newer_than: float = 0.0) -> int
                 code[0].outputs.append(nbformat.from_dict(output))
         # its run time in the HTML build, for the status page (_ext/fdi_book.py writes it)
         timing = path.with_name(path.stem + ".exec.json")
-        data = {"execution_seconds": json.loads(timing.read_text())["runtime"]} if timing.is_file() else {}
-        cache.cache_notebook_bundle(CacheBundleIn(nb, str(path), data=data), check_validity=False,
-                                    overwrite=True)
+        data = (
+            {"execution_seconds": json.loads(timing.read_text())["runtime"]}
+            if timing.is_file()
+            else {}
+        )
+        cache.cache_notebook_bundle(
+            CacheBundleIn(nb, str(path), data=data), check_validity=False, overwrite=True
+        )
         n += 1
     return n
 
@@ -139,7 +147,9 @@ def latex_errors(log: Path, context: int = 3) -> list[str]:
     if not log.is_file():
         return [f"no LaTeX log at {log}"]
     lines = log.read_text(errors="replace").splitlines()
-    return ["\n".join(lines[i:i + context]) for i, line in enumerate(lines) if line.startswith("!")]
+    return [
+        "\n".join(lines[i : i + context]) for i, line in enumerate(lines) if line.startswith("!")
+    ]
 
 
 def a4_edition(latex: Path, tex_name: str, env: dict[str, str]) -> Path:
@@ -150,12 +160,13 @@ def a4_edition(latex: Path, tex_name: str, env: dict[str, str]) -> Path:
         shutil.rmtree(a4)
     shutil.copytree(latex, a4)
     tex = a4 / tex_name
-    source, count = re.subn(r"(\\documentclass\[[^\]]*)\bletterpaper\b", r"\1a4paper",
-                            tex.read_text(), count=1)
+    source, count = re.subn(
+        r"(\\documentclass\[[^\]]*)\bletterpaper\b", r"\1a4paper", tex.read_text(), count=1
+    )
     if count != 1:
         raise SystemExit(f"pdf: no letterpaper option in the document class of {tex}")
     tex.write_text(source)
-    for stale in a4.glob(Path(tex_name).stem + ".*"):   # the letter edition's page numbers
+    for stale in a4.glob(Path(tex_name).stem + ".*"):  # the letter edition's page numbers
         if stale.suffix != ".tex":
             stale.unlink()
     subprocess.run(["make", "-C", str(a4)], env=env, check=True, stdout=subprocess.DEVNULL)
@@ -175,20 +186,41 @@ def build(src: Path, out: Path, executed: Path | None, html: Path | None, extra:
     if executed is not None and executed.is_dir():
         library = max(p.stat().st_mtime for p in library_files())
         n = prime_cache(executed, cache_dir, newer_than=library)
-        print(f"pdf: {n} notebooks executed by the HTML build ({executed}) in the cache", flush=True)
+        print(
+            f"pdf: {n} notebooks executed by the HTML build ({executed}) in the cache", flush=True
+        )
     else:
-        print("pdf: no executed notebooks given: the LaTeX build executes every chapter", flush=True)
+        print(
+            "pdf: no executed notebooks given: the LaTeX build executes every chapter", flush=True
+        )
     config = pdf_config(src, cache_dir.resolve(), out / "_config_pdf.yml")
     work = out / "build"
     latex = work / "_build" / "latex"
     if work.exists():  # a fresh Sphinx environment: the outputs may have changed, not the sources
         shutil.rmtree(work)
-    env = dict(os.environ, LATEXOPTS="-interaction=nonstopmode -halt-on-error -file-line-error",
-               PYTHONPATH=os.pathsep.join(filter(None, [str(src), os.environ.get("PYTHONPATH")])))
+    env = dict(
+        os.environ,
+        LATEXOPTS="-interaction=nonstopmode -halt-on-error -file-line-error",
+        PYTHONPATH=os.pathsep.join(filter(None, [str(src), os.environ.get("PYTHONPATH")])),
+    )
     toc = pdf_toc(src, out / "_toc_pdf.yml")
-    cmd = [str(Path(sys.executable).with_name("jupyter-book")), "build", str(src), "--config", str(config),
-           "--toc", str(toc), "--path-output", str(work), "--builder", "pdflatex", "--warningiserror", "--nitpick",
-           "--keep-going", *extra]
+    cmd = [
+        str(Path(sys.executable).with_name("jupyter-book")),
+        "build",
+        str(src),
+        "--config",
+        str(config),
+        "--toc",
+        str(toc),
+        "--path-output",
+        str(work),
+        "--builder",
+        "pdflatex",
+        "--warningiserror",
+        "--nitpick",
+        "--keep-going",
+        *extra,
+    ]
     print("+", " ".join(cmd), flush=True)
     done = subprocess.run(cmd, env=env)
     tex_name = Path(PDF_NAME).with_suffix(".tex").name
@@ -196,11 +228,21 @@ def build(src: Path, out: Path, executed: Path | None, html: Path | None, extra:
     if done.returncode != 0 or not built.is_file():
         for error in latex_errors(latex / Path(PDF_NAME).with_suffix(".log").name)[:20]:
             print(error, file=sys.stderr)
-        raise SystemExit(f"pdf: the build failed (exit status {done.returncode}); LaTeX sources in {latex}")
+        raise SystemExit(
+            f"pdf: the build failed (exit status {done.returncode}); LaTeX sources in {latex}"
+        )
     pdf = out / PDF_NAME
     shutil.copy2(built, pdf)
-    check = [sys.executable, str(REPO / "tools" / "check_pdf.py"), "--pdf", str(pdf), "--tex", str(latex / tex_name),
-             "--src", str(src)]
+    check = [
+        sys.executable,
+        str(REPO / "tools" / "check_pdf.py"),
+        "--pdf",
+        str(pdf),
+        "--tex",
+        str(latex / tex_name),
+        "--src",
+        str(src),
+    ]
     if html is not None and (html / "index.html").is_file():
         check += ["--html", str(html)]
     print("+", " ".join(check), flush=True)
@@ -218,15 +260,30 @@ def build(src: Path, out: Path, executed: Path | None, html: Path | None, extra:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("command", choices=["build"])
-    parser.add_argument("--src", type=Path, default=REPO, help="the book's sources (with _config.yml)")
+    parser.add_argument(
+        "--src", type=Path, default=REPO, help="the book's sources (with _config.yml)"
+    )
     parser.add_argument("--out", type=Path, default=REPO / "_build" / "pdf")
-    parser.add_argument("--executed", type=Path, default=REPO / "_build" / "jupyter_execute",
-                        help="the jupyter_execute folder of an HTML build of the same sources")
-    parser.add_argument("--html", type=Path, default=REPO / "_build" / "html",
-                        help="the HTML build to put the PDF beside (if it exists)")
+    parser.add_argument(
+        "--executed",
+        type=Path,
+        default=REPO / "_build" / "jupyter_execute",
+        help="the jupyter_execute folder of an HTML build of the same sources",
+    )
+    parser.add_argument(
+        "--html",
+        type=Path,
+        default=REPO / "_build" / "html",
+        help="the HTML build to put the PDF beside (if it exists)",
+    )
     args, extra = parser.parse_known_args(argv)
-    build(args.src.resolve(), args.out.resolve(), args.executed.resolve() if args.executed else None,
-          args.html.resolve() if args.html else None, extra)
+    build(
+        args.src.resolve(),
+        args.out.resolve(),
+        args.executed.resolve() if args.executed else None,
+        args.html.resolve() if args.html else None,
+        extra,
+    )
     return 0
 
 

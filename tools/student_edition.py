@@ -52,12 +52,18 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from fdi_lib.exercises import (CELL_KEY, code_cells, parse_chapter, strip_solutions,  # noqa: E402
-                               tag_exercise_cells, words)
-from fdi_lib.exercises._reference import REFERENCES  # noqa: E402
+from fdi_lib.exercises import (
+    CELL_KEY,
+    code_cells,
+    parse_chapter,
+    strip_solutions,
+    tag_exercise_cells,
+    words,
+)
+from fdi_lib.exercises._reference import REFERENCES
 
 sys.path.insert(0, str(REPO / "tools"))
-import notebook_markdown  # noqa: E402
+import notebook_markdown
 
 #: Top-level entries of the repository that are not part of the book's sources.
 NOT_SOURCES = {"_build", "fdi_lib", "tests", "benchmarks", "tools", "build"}
@@ -73,11 +79,18 @@ def copy_sources(out: Path) -> Path:
         shutil.rmtree(src)
     src.mkdir(parents=True)
     for entry in REPO.iterdir():
-        if entry.name.startswith(".") or entry.name in NOT_SOURCES or entry.name.endswith(".egg-info"):
+        if (
+            entry.name.startswith(".")
+            or entry.name in NOT_SOURCES
+            or entry.name.endswith(".egg-info")
+        ):
             continue
         if entry.is_dir():
-            shutil.copytree(entry, src / entry.name,
-                            ignore=shutil.ignore_patterns("*.ipynb", ".ipynb_checkpoints", "__pycache__"))
+            shutil.copytree(
+                entry,
+                src / entry.name,
+                ignore=shutil.ignore_patterns("*.ipynb", ".ipynb_checkpoints", "__pycache__"),
+            )
         else:
             shutil.copy2(entry, src / entry.name)
     for path in (src / "book").rglob("*.md"):
@@ -115,8 +128,9 @@ def tag_notebook(path: Path, chapter: Path) -> None:
     nb = nbformat.read(path, as_version=4)
     body = [c for c in nb.cells if tag not in c.metadata.get("tags", [])]
     if [c.cell_type for c in body] != [c.cell_type for c in cells]:
-        raise RuntimeError(f"{path}: its cells are not those of {chapter}: cannot tag the "
-                           "exercises")
+        raise RuntimeError(
+            f"{path}: its cells are not those of {chapter}: cannot tag the exercises"
+        )
     for cell, src in zip(body, cells):
         cell.metadata[CELL_KEY] = src.metadata[CELL_KEY]
     nbformat.write(nb, path)
@@ -133,20 +147,42 @@ BOOK_RESULTS = REPO / "_build" / "results-cache"
 
 def build(out: Path, extra: list[str]) -> None:
     src = copy_sources(out)
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])))
+    env = dict(
+        os.environ,
+        PYTHONPATH=os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])),
+    )
     if BOOK_RESULTS.is_dir() and "FDI_RESULTS_CACHE" not in env:
         env["FDI_RESULTS_CACHE"] = str(BOOK_RESULTS)
     work = out / "build"
     config = out / "_config_student.yml"
     # the chapters executed side by side, those unchanged by the stripping taken from make book's
     # run, then the pages built from that cache (as make book does)
-    execute = [sys.executable, str(REPO / "tools" / "execute_book.py"), "--root", str(src),
-               "--cache", str(out / ".jupyter_cache"), "--reuse", str(BOOK_CACHE),
-               "--config-out", str(config)]
+    execute = [
+        sys.executable,
+        str(REPO / "tools" / "execute_book.py"),
+        "--root",
+        str(src),
+        "--cache",
+        str(out / ".jupyter_cache"),
+        "--reuse",
+        str(BOOK_CACHE),
+        "--config-out",
+        str(config),
+    ]
     print("+", " ".join(execute), flush=True)
     subprocess.run(execute, check=True, env=env)
-    cmd = [str(Path(sys.executable).with_name("jupyter-book")), "build", str(src),
-           "--config", str(config), "--path-output", str(work), "--builder", "html", *extra]
+    cmd = [
+        str(Path(sys.executable).with_name("jupyter-book")),
+        "build",
+        str(src),
+        "--config",
+        str(config),
+        "--path-output",
+        str(work),
+        "--builder",
+        "html",
+        *extra,
+    ]
     print("+", " ".join(cmd), flush=True)
     subprocess.run(cmd, check=True, env=env)
     html = out / "html"
@@ -191,7 +227,7 @@ def _runs(text: str) -> set[tuple[str, ...]]:
     letters of formulas, "h p h t r", would match anywhere), MyST roles left out (a page shows
     the value of ``{glue:text}`name```, not the words of its name)."""
     ws = [w for w in words(notebook_markdown._ROLE.sub(" ", text)) if len(w) >= 3]
-    return {tuple(ws[i:i + SHINGLE]) for i in range(len(ws) - SHINGLE + 1)}
+    return {tuple(ws[i : i + SHINGLE]) for i in range(len(ws) - SHINGLE + 1)}
 
 
 def _distinctive(value: float, scale: float) -> bool:
@@ -209,10 +245,12 @@ def printed_numbers(text: str) -> list[tuple[float, float]]:
     for m in _NUMBER.finditer(text):
         mantissa, exponent = m.group(1), int(m.group(2) or 0)
         digits = mantissa.replace(".", "").lstrip("0")
-        if len(digits) < SIGNIFICANT or abs(exponent) > 300:   # beyond a float (1e-400 in code): no answer
+        if (
+            len(digits) < SIGNIFICANT or abs(exponent) > 300
+        ):  # beyond a float (1e-400 in code): no answer
             continue
         decimals = len(mantissa.split(".")[1]) if "." in mantissa else 0
-        out.append((float(mantissa) * 10.0 ** exponent, 0.5 * 10.0 ** (exponent - decimals)))
+        out.append((float(mantissa) * 10.0**exponent, 0.5 * 10.0 ** (exponent - decimals)))
     return out
 
 
@@ -255,8 +293,9 @@ class SolutionMaterial:
     references: set = field(default_factory=set)
 
 
-def solution_material(book: Path = REPO / "book", printed: str = "",
-                      answers_of: tuple[str, ...] | None = None) -> SolutionMaterial:
+def solution_material(
+    book: Path = REPO / "book", printed: str = "", answers_of: tuple[str, ...] | None = None
+) -> SolutionMaterial:
     """The :class:`SolutionMaterial` of the chapters under ``book``; ``printed`` is more text the
     student edition shows legitimately (the student build's glued values); ``answers_of`` limits
     the reference answers to these exercises (default: every exercise of the chapters)."""
@@ -283,8 +322,11 @@ def solution_material(book: Path = REPO / "book", printed: str = "",
             key = _squeeze(m.group(1) or m.group(0))
             if key not in squeezed:
                 material.maths[key] = " ".join((m.group(1) or m.group(0)).split())
-    checkable = [EXERCISES[i] for i in ids if i in EXERCISES and EXERCISES[i].checkable
-                 and (answers_of is None or i in answers_of)]
+    checkable = [
+        EXERCISES[i]
+        for i in ids
+        if i in EXERCISES and EXERCISES[i].checkable and (answers_of is None or i in answers_of)
+    ]
     shown = printed_numbers(visible_text + "\n".join(str(exercise_data(e.id)) for e in checkable))
     for e in checkable:
         ref = reference_answer(e.id).ravel()
@@ -336,7 +378,9 @@ def printed_by_the_book(executed: Path) -> str:
                 break
             for output in cell.get("outputs", []):
                 data = output.get("data", {})
-                parts += [output.get("text", "")] + [v for k, v in data.items() if k.startswith("text/")]
+                parts += [output.get("text", "")] + [
+                    v for k, v in data.items() if k.startswith("text/")
+                ]
     return "\n".join(p if isinstance(p, str) else "".join(p) for p in parts)
 
 
@@ -357,7 +401,9 @@ def _names_solution(metadata: Any) -> bool:
     ``fig-bz-solution1``)."""
     if isinstance(metadata, dict):
         tagged = any("solution" in str(t).lower() for t in metadata.get("tags", []))
-        return tagged or any("solution" in str(k).lower() or _names_solution(v) for k, v in metadata.items())
+        return tagged or any(
+            "solution" in str(k).lower() or _names_solution(v) for k, v in metadata.items()
+        )
     return isinstance(metadata, list) and any(_names_solution(v) for v in metadata)
 
 
@@ -388,8 +434,9 @@ def _notebook_text(path: Path) -> tuple[str, list[str]]:
 
 def _pdf_text(path: Path) -> str:
     """Text of a PDF (``pdftotext``, poppler-utils); a solution shows as its text only."""
-    return subprocess.run(["pdftotext", "-enc", "UTF-8", str(path), "-"], capture_output=True, text=True,
-                          check=True).stdout
+    return subprocess.run(
+        ["pdftotext", "-enc", "UTF-8", str(path), "-"], capture_output=True, text=True, check=True
+    ).stdout
 
 
 #: Kinds of :func:`scan_text` finding that the library's code in the wheel shares with the solutions.
@@ -406,18 +453,27 @@ def _wheel_problems(wheel: Path, material: SolutionMaterial) -> list[str]:
             try:
                 text = z.read(name).decode("utf-8")
             except UnicodeDecodeError:
-                continue   # compiled or binary: the sources are what a student reads
-            defined = sorted(n for n in material.references if re.search(rf"\bdef {re.escape(n)}\(", text))
+                continue  # compiled or binary: the sources are what a student reads
+            defined = sorted(
+                n for n in material.references if re.search(rf"\bdef {re.escape(n)}\(", text)
+            )
             if defined:
-                found.append(f"{wheel.name}:{name}: defines the reference code {', '.join(defined)}")
+                found.append(
+                    f"{wheel.name}:{name}: defines the reference code {', '.join(defined)}"
+                )
             # the library's own code is what the solutions call: its words, lines and check's
             # messages are not leaks; answers printed in it are
-            found += [f"{wheel.name}:{name}: {f}" for f in scan_text(text, material)
-                      if not any(kind in f for kind in _LIBRARY_TEXT)]
+            found += [
+                f"{wheel.name}:{name}: {f}"
+                for f in scan_text(text, material)
+                if not any(kind in f for kind in _LIBRARY_TEXT)
+            ]
     return found
 
 
-def verify(out: Path, book: Path = REPO / "book", material: SolutionMaterial | None = None) -> list[str]:
+def verify(
+    out: Path, book: Path = REPO / "book", material: SolutionMaterial | None = None
+) -> list[str]:
     """Problems found in the student edition under ``out`` (empty when it holds no solution
     material of the chapters under ``book``): solution blocks, runs of solution text, lines of
     solution code, solution-only formulas, distinctive reference answers, the output of a
@@ -431,16 +487,22 @@ def verify(out: Path, book: Path = REPO / "book", material: SolutionMaterial | N
     problems = []
     n_exercises = sum(len(parse_chapter(p.read_text())) for p in chapters(book))
     pages = {p.relative_to(book).with_suffix("").as_posix() for p in chapters(book)}
-    html_files = sorted(p for p in (out / "html").rglob("*") if p.suffix in (".html", ".md", ".txt"))
+    html_files = sorted(
+        p for p in (out / "html").rglob("*") if p.suffix in (".html", ".md", ".txt")
+    )
     notebooks = sorted((out / "notebooks").rglob("*.ipynb"))
     downloads = sorted((out / "html").rglob("*.ipynb"))
     if not html_files:
         problems.append(f"no HTML pages under {out / 'html'}")
     if len(notebooks) != len(pages):
-        problems.append(f"expected {len(pages)} notebooks under {out / 'notebooks'}, found {len(notebooks)}")
+        problems.append(
+            f"expected {len(pages)} notebooks under {out / 'notebooks'}, found {len(notebooks)}"
+        )
     seen_exercises = 0
     for path in html_files:
-        text, found = _page_text(path) if path.suffix == ".html" else (path.read_text(errors="replace"), [])
+        text, found = (
+            _page_text(path) if path.suffix == ".html" else (path.read_text(errors="replace"), [])
+        )
         found += scan_text(text, material)
         if (out / "html" / "book" / "api") in path.parents:
             # the library reference is the wheel's docstrings on a page: as in the wheel, the
@@ -449,7 +511,7 @@ def verify(out: Path, book: Path = REPO / "book", material: SolutionMaterial | N
         problems += [f"{path}: {f}" for f in found]
     for path in notebooks + downloads:
         text, found = _notebook_text(path)
-        if path in downloads:   # the executed notebook of a page: its outputs are the page's
+        if path in downloads:  # the executed notebook of a page: its outputs are the page's
             found = [f for f in found if "has outputs" not in f]
         problems += [f"{path}: {f}" for f in found + scan_text(text, material)]
         if path in notebooks:
@@ -457,7 +519,9 @@ def verify(out: Path, book: Path = REPO / "book", material: SolutionMaterial | N
     for path in sorted((out / "pdf").glob("*.pdf")):
         problems += [f"{path}: {f}" for f in scan_text(_pdf_text(path), material)]
     if seen_exercises != n_exercises:
-        problems.append(f"the notebooks hold {seen_exercises} exercises, the chapters {n_exercises}")
+        problems.append(
+            f"the notebooks hold {seen_exercises} exercises, the chapters {n_exercises}"
+        )
     for wheel in sorted((out / "dist").glob("*.whl")):
         problems += _wheel_problems(wheel, material)
     return problems
@@ -475,9 +539,11 @@ def main(argv: list[str] | None = None) -> int:
     for p in problems:
         print("student edition:", p, file=sys.stderr)
     if not problems:
-        print(f"student edition verified: no solution material in {out / 'html'}, {out / 'notebooks'}"
-              f"{', ' + str(out / 'dist') if list((out / 'dist').glob('*.whl')) else ''}"
-              f"{' or ' + str(out / 'pdf') if list((out / 'pdf').glob('*.pdf')) else ''}")
+        print(
+            f"student edition verified: no solution material in {out / 'html'}, {out / 'notebooks'}"
+            f"{', ' + str(out / 'dist') if list((out / 'dist').glob('*.whl')) else ''}"
+            f"{' or ' + str(out / 'pdf') if list((out / 'pdf').glob('*.pdf')) else ''}"
+        )
     return 1 if problems else 0
 
 

@@ -38,7 +38,7 @@ if str(REPO) not in sys.path:
 #: What the student package leaves out of ``fdi_lib`` (relative paths, as in the wheel).
 EXCLUDED = ("fdi_lib/exercises/_reference",)
 
-_PYPROJECT = '''[build-system]
+_PYPROJECT = """[build-system]
 requires = ["setuptools>=61"]
 build-backend = "setuptools.build_meta"
 
@@ -54,7 +54,7 @@ include = ["fdi_lib*"]
 
 [tool.setuptools.package-data]
 "fdi_lib.exercises" = ["_digests.json"]
-'''
+"""
 
 
 def _project() -> dict:
@@ -66,8 +66,13 @@ def _project() -> dict:
 def digests(salt: str | None = None) -> dict:
     """The digest table of the student package: the book's data only (no graded answer)."""
     from fdi_lib.exercises import exercise_ids, get_exercise
-    from fdi_lib.exercises.checker import (DIGEST_ROUNDS, entry_digest, entry_keys, feedback_candidates,
-                                           zero_floor)
+    from fdi_lib.exercises.checker import (
+        DIGEST_ROUNDS,
+        entry_digest,
+        entry_keys,
+        feedback_candidates,
+        zero_floor,
+    )
 
     salt = salt or secrets.token_hex(16)
     table: dict = {"format": 1, "salt": salt, "rounds": DIGEST_ROUNDS, "students": {}}
@@ -81,13 +86,22 @@ def digests(salt: str | None = None) -> dict:
             floor = zero_floor(ref, ex)
 
             def sets(value):
-                return [sorted(entry_digest(salt, exercise_id, name, i, key)
-                               for key in entry_keys(float(v), ex, around=True, floor=floor))
-                        for i, v in enumerate(value.ravel())]
+                return [
+                    sorted(
+                        entry_digest(salt, exercise_id, name, i, key)
+                        for key in entry_keys(float(v), ex, around=True, floor=floor)
+                    )
+                    for i, v in enumerate(value.ravel())
+                ]
 
-            per[exercise_id] = {"shape": list(ref.shape), "floor": floor, "reference": sets(ref),
-                                "candidates": [{"hint": hint, "entries": sets(value)}
-                                               for hint, value in candidates]}
+            per[exercise_id] = {
+                "shape": list(ref.shape),
+                "floor": floor,
+                "reference": sets(ref),
+                "candidates": [
+                    {"hint": hint, "entries": sets(value)} for hint, value in candidates
+                ],
+            }
         table["students"][name] = per
     return table
 
@@ -99,16 +113,22 @@ def stage(target: Path, *, with_digests: bool = True) -> Path:
     if target.exists():
         shutil.rmtree(target)
     target.mkdir(parents=True)
-    shutil.copytree(REPO / "fdi_lib", target / "fdi_lib",
-                    ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "_digests.json"))
+    shutil.copytree(
+        REPO / "fdi_lib",
+        target / "fdi_lib",
+        ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "_digests.json"),
+    )
     for rel in EXCLUDED:
         shutil.rmtree(target / rel)
     if with_digests:
         table = digests()
         (target / "fdi_lib" / "exercises" / "_digests.json").write_text(json.dumps(table))
     project = _project()
-    (target / "pyproject.toml").write_text(_PYPROJECT.format(
-        version=project["version"], dependencies=json.dumps(project["dependencies"])))
+    (target / "pyproject.toml").write_text(
+        _PYPROJECT.format(
+            version=project["version"], dependencies=json.dumps(project["dependencies"])
+        )
+    )
     return target
 
 
@@ -117,8 +137,11 @@ def problems(wheel: Path) -> list[str]:
     out = []
     with zipfile.ZipFile(wheel) as zf:
         names = zf.namelist()
-        out += [f"{wheel.name}: ships {name}" for name in names
-                if any(name.startswith(rel + "/") for rel in EXCLUDED)]
+        out += [
+            f"{wheel.name}: ships {name}"
+            for name in names
+            if any(name.startswith(rel + "/") for rel in EXCLUDED)
+        ]
         if "fdi_lib/exercises/_digests.json" not in names:
             out.append(f"{wheel.name}: no fdi_lib/exercises/_digests.json")
     return out
@@ -130,8 +153,21 @@ def build(out: Path) -> Path:
     dist = out / "dist"
     if dist.exists():
         shutil.rmtree(dist)
-    subprocess.run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "--no-build-isolation",
-                    "--wheel-dir", str(dist), str(src)], check=True)
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "wheel",
+            "--quiet",
+            "--no-deps",
+            "--no-build-isolation",
+            "--wheel-dir",
+            str(dist),
+            str(src),
+        ],
+        check=True,
+    )
     (wheel,) = dist.glob("fdi_lib-*.whl")
     return wheel
 

@@ -41,28 +41,86 @@ import numpy as np
 
 from fdi_lib.errors import ModelError
 from fdi_lib.exercises import bz, glr, pipeline, signature, sparse, svo, windturbine
-from fdi_lib.exercises._core import (CHAPTERS, DIFFICULTIES, STUDENT_ENV, AnswerError, CheckResult,
-                                     Exercise, ExerciseData, ReferenceNotShippedError,
-                                     UnknownExerciseError, student_id, student_rng, student_seed)
-from fdi_lib.exercises.book import (CELL_KEY, COURSE_PLANS, HAND_GRADED, WRITE_UP_MINUTES,
-                                    ChapterExercise,
-                                    PlanWeek, code_cells, counts_table, exercise_table,
-                                    exercises_section, homework_minutes, parse_chapter, plan_table,
-                                    solution_fingerprints, strip_solutions,
-                                    tag_exercise_cells, words)
+from fdi_lib.exercises._core import (
+    CHAPTERS,
+    DIFFICULTIES,
+    STUDENT_ENV,
+    AnswerError,
+    CheckResult,
+    Exercise,
+    ExerciseData,
+    ReferenceNotShippedError,
+    UnknownExerciseError,
+    student_id,
+    student_rng,
+    student_seed,
+)
+from fdi_lib.exercises.book import (
+    CELL_KEY,
+    COURSE_PLANS,
+    HAND_GRADED,
+    WRITE_UP_MINUTES,
+    ChapterExercise,
+    PlanWeek,
+    code_cells,
+    counts_table,
+    exercise_table,
+    exercises_section,
+    homework_minutes,
+    parse_chapter,
+    plan_table,
+    solution_fingerprints,
+    strip_solutions,
+    tag_exercise_cells,
+    words,
+)
 from fdi_lib.exercises.checker import attempts, check
 
-__all__ = ["Exercise", "CheckResult", "ExerciseData", "EXERCISES", "CHAPTERS", "DIFFICULTIES",
-           "STUDENT_ENV", "UnknownExerciseError", "AnswerError", "ReferenceNotShippedError",
-           "get_exercise", "exercises", "exercise_ids", "exercise_data", "check", "attempts",
-           "reference_answer", "student_id", "student_seed", "student_rng", "exercise_table",
-           "counts_table", "COURSE_PLANS", "PlanWeek", "HAND_GRADED", "WRITE_UP_MINUTES",
-           "homework_minutes", "plan_table", "strip_solutions", "ChapterExercise",
-           "parse_chapter", "exercises_section", "code_cells", "words", "solution_fingerprints",
-           "CELL_KEY", "tag_exercise_cells"]
+__all__ = [
+    "Exercise",
+    "CheckResult",
+    "ExerciseData",
+    "EXERCISES",
+    "CHAPTERS",
+    "DIFFICULTIES",
+    "STUDENT_ENV",
+    "UnknownExerciseError",
+    "AnswerError",
+    "ReferenceNotShippedError",
+    "get_exercise",
+    "exercises",
+    "exercise_ids",
+    "exercise_data",
+    "check",
+    "attempts",
+    "reference_answer",
+    "student_id",
+    "student_seed",
+    "student_rng",
+    "exercise_table",
+    "counts_table",
+    "COURSE_PLANS",
+    "PlanWeek",
+    "HAND_GRADED",
+    "WRITE_UP_MINUTES",
+    "homework_minutes",
+    "plan_table",
+    "strip_solutions",
+    "ChapterExercise",
+    "parse_chapter",
+    "exercises_section",
+    "code_cells",
+    "words",
+    "solution_fingerprints",
+    "CELL_KEY",
+    "tag_exercise_cells",
+]
 
-_LIST = [e for module in (signature, glr, pipeline, sparse, bz, svo, windturbine)
-         for e in module.EXERCISES]
+_LIST = [
+    e
+    for module in (signature, glr, pipeline, sparse, bz, svo, windturbine)
+    for e in module.EXERCISES
+]
 
 #: All exercises, by identifier, in book order.
 EXERCISES: dict[str, Exercise] = {e.id: e for e in _LIST}
@@ -77,13 +135,16 @@ def get_exercise(exercise_id: str) -> Exercise:
         With the closest registered identifiers.
     """
     if not isinstance(exercise_id, str):
-        raise UnknownExerciseError(f"exercise_id: expected a string such as 'glr-3', "
-                                   f"got {type(exercise_id).__name__} {exercise_id!r}")
+        raise UnknownExerciseError(
+            f"exercise_id: expected a string such as 'glr-3', "
+            f"got {type(exercise_id).__name__} {exercise_id!r}"
+        )
     if exercise_id not in EXERCISES:
         close = difflib.get_close_matches(exercise_id, list(EXERCISES), n=3)
         hint = f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
-        raise UnknownExerciseError(f"exercise_id: no exercise {exercise_id!r}{hint} "
-                                   f"(known: {', '.join(EXERCISES)})")
+        raise UnknownExerciseError(
+            f"exercise_id: no exercise {exercise_id!r}{hint} (known: {', '.join(EXERCISES)})"
+        )
     return EXERCISES[exercise_id]
 
 
@@ -114,7 +175,9 @@ def exercise_data(exercise_id: str, student: str | None = None) -> ExerciseData:
     """
     ex = get_exercise(exercise_id)
     raw = ex.data(student_rng(exercise_id, student_id(student))) if ex.data is not None else {}
-    return ExerciseData({k: np.array(v) if isinstance(v, np.ndarray) else v for k, v in raw.items()})
+    return ExerciseData(
+        {k: np.array(v) if isinstance(v, np.ndarray) else v for k, v in raw.items()}
+    )
 
 
 def reference_answer(exercise_id: str, student: str | None = None) -> np.ndarray:
@@ -134,5 +197,6 @@ def reference_answer(exercise_id: str, student: str | None = None) -> np.ndarray
         get_exercise(exercise_id)
         raise ReferenceNotShippedError(
             f"reference_answer: reference answers are not shipped in the student package "
-            f"(asked for {exercise_id!r}); the instructor's grader holds them") from None
+            f"(asked for {exercise_id!r}); the instructor's grader holds them"
+        ) from None
     return answer(exercise_id, student)

@@ -15,9 +15,22 @@ import numpy as np
 
 from fdi_lib.errors import AnswerError, ReferenceNotShippedError, UnknownExerciseError
 
-__all__ = ["DIFFICULTIES", "CHAPTERS", "STUDENT_ENV", "UnknownExerciseError", "AnswerError",
-           "ReferenceNotShippedError", "Exercise", "ExerciseData", "CheckResult", "student_id",
-           "student_seed", "student_rng", "uniform", "rounded_normal"]
+__all__ = [
+    "DIFFICULTIES",
+    "CHAPTERS",
+    "STUDENT_ENV",
+    "UnknownExerciseError",
+    "AnswerError",
+    "ReferenceNotShippedError",
+    "Exercise",
+    "ExerciseData",
+    "CheckResult",
+    "student_id",
+    "student_seed",
+    "student_rng",
+    "uniform",
+    "rounded_normal",
+]
 
 #: Difficulty labels, in increasing order.
 DIFFICULTIES = ("warm-up", "core", "challenge")
@@ -76,8 +89,9 @@ class Exercise:
     answer: str | None = None
     rtol: float = 1e-6
     atol: float = 0.0
-    data: Callable[[np.random.Generator | None], dict] | None = field(default=None, repr=False,
-                                                                       compare=False)
+    data: Callable[[np.random.Generator | None], dict] | None = field(
+        default=None, repr=False, compare=False
+    )
     time_keys: tuple[str, ...] = ()
 
     @property
@@ -171,7 +185,8 @@ def uniform(rng: np.random.Generator, low: float, high: float, decimals: int = 2
     return round(float(rng.uniform(low, high)), decimals)
 
 
-def rounded_normal(rng: np.random.Generator, shape: Any, scale: float = 1.0, decimals: int = 2
-                   ) -> np.ndarray:
+def rounded_normal(
+    rng: np.random.Generator, shape: Any, scale: float = 1.0, decimals: int = 2
+) -> np.ndarray:
     """Standard normal entries times ``scale``, rounded to ``decimals`` (a readable array)."""
     return np.round(scale * rng.standard_normal(shape), decimals)

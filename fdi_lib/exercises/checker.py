@@ -41,11 +41,26 @@ from typing import Any
 import numpy as np
 
 from fdi_lib.errors import FDIError, ModelError
-from fdi_lib.exercises._core import (AnswerError, CheckResult, Exercise, ReferenceNotShippedError,
-                                     student_id)
+from fdi_lib.exercises._core import (
+    AnswerError,
+    CheckResult,
+    Exercise,
+    ReferenceNotShippedError,
+    student_id,
+)
 
-__all__ = ["check", "generic_candidates", "feedback_candidates", "close", "zero_floor", "attempts",
-           "entry_keys", "entry_digest", "DIGEST_ROUNDS", "DIGESTS_FILE"]
+__all__ = [
+    "check",
+    "generic_candidates",
+    "feedback_candidates",
+    "close",
+    "zero_floor",
+    "attempts",
+    "entry_keys",
+    "entry_digest",
+    "DIGEST_ROUNDS",
+    "DIGESTS_FILE",
+]
 
 #: The student package's reference digests (a file of the package, absent from the repository).
 DIGESTS_FILE = "_digests.json"
@@ -64,10 +79,16 @@ def attempts(exercise_id: str, student: str | None = None) -> int:
 #: Constant factors a wrong answer often carries, with what they usually mean.
 FACTORS: tuple[tuple[float, str], ...] = (
     (-1.0, "The sign is wrong."),
-    (2.0, "It is twice the expected value: a factor 2 (a term counted twice, a two-sided bound for "
-          "a one-sided one, or a 1/2 dropped)."),
-    (0.5, "It is half the expected value: a factor 1/2 (a 1/2 too many, or a one-sided bound for a "
-          "two-sided one)."),
+    (
+        2.0,
+        "It is twice the expected value: a factor 2 (a term counted twice, a two-sided bound for "
+        "a one-sided one, or a 1/2 dropped).",
+    ),
+    (
+        0.5,
+        "It is half the expected value: a factor 1/2 (a 1/2 too many, or a one-sided bound for a "
+        "two-sided one).",
+    ),
     (100.0, "It looks like a percentage where a fraction is expected (a factor 100)."),
     (0.01, "It looks like a fraction where a percentage is expected (a factor 1/100)."),
     (1000.0, "It is off by a factor 1000: a unit slip (ms for s, m for km, ...)?"),
@@ -75,9 +96,15 @@ FACTORS: tuple[tuple[float, str], ...] = (
     (180.0 / math.pi, "It looks like degrees where radians are expected."),
     (math.pi / 180.0, "It looks like radians where degrees are expected."),
     (60.0, "It is off by a factor 60: minutes and seconds (or hours and minutes) mixed up?"),
-    (1.0 / 60.0, "It is off by a factor 1/60: minutes and seconds (or hours and minutes) mixed up?"),
+    (
+        1.0 / 60.0,
+        "It is off by a factor 1/60: minutes and seconds (or hours and minutes) mixed up?",
+    ),
     (math.log(10.0), "It is off by a factor ln 10: a natural logarithm where log10 is meant?"),
-    (1.0 / math.log(10.0), "It is off by a factor 1/ln 10: log10 where a natural logarithm is meant?"),
+    (
+        1.0 / math.log(10.0),
+        "It is off by a factor 1/ln 10: log10 where a natural logarithm is meant?",
+    ),
 )
 
 
@@ -87,18 +114,34 @@ def generic_candidates(ex: Exercise, ref: np.ndarray) -> list[tuple[str, np.ndar
     count off by one."""
     out = [(hint, factor * ref) for factor, hint in FACTORS]
     if np.all(ref > 0):
-        out.append(("It looks like the square of the expected value (a variance for a standard "
-                    "deviation, ||.||^2 for ||.||)?", ref ** 2))
-        out.append(("It looks like the square root of the expected value (a standard deviation for "
-                    "a variance, ||.|| for ||.||^2)?", np.sqrt(ref)))
+        out.append(
+            (
+                "It looks like the square of the expected value (a variance for a standard "
+                "deviation, ||.||^2 for ||.||)?",
+                ref**2,
+            )
+        )
+        out.append(
+            (
+                "It looks like the square root of the expected value (a standard deviation for "
+                "a variance, ||.|| for ||.||^2)?",
+                np.sqrt(ref),
+            )
+        )
     prob = (ref > 0) & (ref < 1)
     if np.any(prob) and not ex.integer:
-        out.append(("A probability is replaced by its complement 1 - p (a miss probability for a "
-                    "power, a lower tail for an upper tail)?", np.where(prob, 1.0 - ref, ref)))
+        out.append(
+            (
+                "A probability is replaced by its complement 1 - p (a miss probability for a "
+                "power, a lower tail for an upper tail)?",
+                np.where(prob, 1.0 - ref, ref),
+            )
+        )
     if ex.integer:
         for step in (1, -1):
-            out.append(("Off by one: check whether both ends (or the empty case) are counted.",
-                        ref + step))
+            out.append(
+                ("Off by one: check whether both ends (or the empty case) are counted.", ref + step)
+            )
     return out
 
 
@@ -108,14 +151,24 @@ def _permutations(shape: tuple[int, ...]) -> list[tuple[str, np.ndarray]]:
     flat = np.arange(n)
     out = []
     if len(shape) == 2 and shape[0] == shape[1] > 1:
-        out.append(("It matches the transpose of the expected matrix: look for a missing or extra "
-                    "transpose.", flat.reshape(shape).T.ravel()))
+        out.append(
+            (
+                "It matches the transpose of the expected matrix: look for a missing or extra "
+                "transpose.",
+                flat.reshape(shape).T.ravel(),
+            )
+        )
     for i, j in itertools.combinations(range(n), 2):
         perm = flat.copy()
         perm[[i, j]] = perm[[j, i]]
         where = [_index_text(tuple(int(v) for v in np.unravel_index(k, shape))) for k in (i, j)]
-        out.append((f"Entries {where[0]} and {where[1]} are swapped: check the order the exercise "
-                    "asks for.", perm))
+        out.append(
+            (
+                f"Entries {where[0]} and {where[1]} are swapped: check the order the exercise "
+                "asks for.",
+                perm,
+            )
+        )
     if len(shape) == 1 and n >= 3:
         out.append(("The entries are in reverse order.", flat[::-1].copy()))
     return out
@@ -136,9 +189,12 @@ def close(a: np.ndarray, ref: np.ndarray, ex: Exercise, floor: float | None = No
     (:func:`entry_keys`) and the grader all use it."""
     ref = np.asarray(ref, dtype=float)
     floor = zero_floor(ref, ex) if floor is None else floor
-    with np.errstate(over="ignore", invalid="ignore"):  # |a - ref| beyond the float range: not close
+    with np.errstate(
+        over="ignore", invalid="ignore"
+    ):  # |a - ref| beyond the float range: not close
         return (np.abs(a - ref) <= ex.atol + ex.rtol * np.abs(ref)) | (
-            (np.abs(ref) <= floor) & (np.abs(a) <= floor))
+            (np.abs(ref) <= floor) & (np.abs(a) <= floor)
+        )
 
 
 # ----------------------------------------------------------------------------- digests
@@ -190,7 +246,7 @@ def entry_keys(value: float, ex: Exercise, *, around: bool = False, floor: float
         return {repr(float(value))}
     if not around:
         return {_bucket(value, ex, floor)}
-    if abs(value) <= floor:            # numerically zero: so is every answer within the floor
+    if abs(value) <= floor:  # numerically zero: so is every answer within the floor
         return {"z"}
     tol = ex.atol + ex.rtol * abs(value)
     ref = np.array([value])
@@ -204,8 +260,12 @@ def entry_keys(value: float, ex: Exercise, *, around: bool = False, floor: float
 
 def entry_digest(salt: str, exercise_id: str, student: str, index: int, key: str) -> str:
     """Salted PBKDF2 digest of one entry's bucket (hex, 16 characters)."""
-    return hashlib.pbkdf2_hmac("sha256", f"{exercise_id}|{student}|{index}|{key}".encode(),
-                               bytes.fromhex(salt), DIGEST_ROUNDS)[:8].hex()
+    return hashlib.pbkdf2_hmac(
+        "sha256",
+        f"{exercise_id}|{student}|{index}|{key}".encode(),
+        bytes.fromhex(salt),
+        DIGEST_ROUNDS,
+    )[:8].hex()
 
 
 @dataclass(frozen=True)
@@ -240,9 +300,14 @@ class _Values:
 
     @functools.cached_property
     def candidates(self) -> list[tuple[str, np.ndarray]]:
-        return [(hint, value.ravel()) for hint, value in feedback_candidates(self.ex.id, self.student)[1]]
+        return [
+            (hint, value.ravel())
+            for hint, value in feedback_candidates(self.ex.id, self.student)[1]
+        ]
 
-    def match(self, which: int | None, flat: np.ndarray, perm: np.ndarray | None = None) -> np.ndarray:
+    def match(
+        self, which: int | None, flat: np.ndarray, perm: np.ndarray | None = None
+    ) -> np.ndarray:
         target = self.ref.ravel() if which is None else self.candidates[which][1]
         return close(flat, target if perm is None else target[perm], self.ex)
 
@@ -260,10 +325,14 @@ class _Hashes:
     def _digest(self, index: int, value: float) -> str:
         if (index, value) not in self._memo:
             (key,) = entry_keys(value, self.ex, floor=self.d.floor)
-            self._memo[index, value] = entry_digest(self.d.salt, self.ex.id, self.d.student, index, key)
+            self._memo[index, value] = entry_digest(
+                self.d.salt, self.ex.id, self.d.student, index, key
+            )
         return self._memo[index, value]
 
-    def match(self, which: int | None, flat: np.ndarray, perm: np.ndarray | None = None) -> np.ndarray:
+    def match(
+        self, which: int | None, flat: np.ndarray, perm: np.ndarray | None = None
+    ) -> np.ndarray:
         sets = self.d.reference if which is None else self.candidates[which][1]
         idx = np.arange(flat.size) if perm is None else perm
         return np.array([self._digest(int(i), float(v)) in sets[int(i)] for v, i in zip(flat, idx)])
@@ -280,39 +349,56 @@ def _oracle(ex: Exercise, student: str | None):
         return _Values(ex, reference_answer(ex.id, student), student)
     table = _load_digests()
     if table is None and student is not None:
-        return None                  # a student's data: the grader's, never the package's
+        return None  # a student's data: the grader's, never the package's
     if table is None:
-        raise ReferenceNotShippedError("check: this package has neither the reference answers nor "
-                                       f"their digests ({DIGESTS_FILE}); reinstall the student package")
+        raise ReferenceNotShippedError(
+            "check: this package has neither the reference answers nor "
+            f"their digests ({DIGESTS_FILE}); reinstall the student package"
+        )
     rec = table["students"].get(student or "", {}).get(ex.id)
     if rec is None:
         return None
     as_sets = lambda entries: [set(e) for e in entries]  # noqa: E731
-    return _Hashes(ex, _Digests(salt=table["salt"], student=student or "", shape=tuple(rec["shape"]),
-                                floor=float(rec.get("floor", 0.0)),
-                                reference=as_sets(rec["reference"]),
-                                candidates=[(c["hint"], as_sets(c["entries"])) for c in rec["candidates"]]))
+    return _Hashes(
+        ex,
+        _Digests(
+            salt=table["salt"],
+            student=student or "",
+            shape=tuple(rec["shape"]),
+            floor=float(rec.get("floor", 0.0)),
+            reference=as_sets(rec["reference"]),
+            candidates=[(c["hint"], as_sets(c["entries"])) for c in rec["candidates"]],
+        ),
+    )
 
 
 # ----------------------------------------------------------------------------- check
 def _as_answer(answer: Any, exercise_id: str) -> np.ndarray:
     if isinstance(answer, (str, bytes, dict, set)):
-        raise AnswerError(f"answer: expected a real number or array for {exercise_id!r}, "
-                          f"got {type(answer).__name__}")
+        raise AnswerError(
+            f"answer: expected a real number or array for {exercise_id!r}, "
+            f"got {type(answer).__name__}"
+        )
     try:
         arr = np.array(answer)
     except (TypeError, ValueError) as exc:
-        raise AnswerError(f"answer: expected a real number or array for {exercise_id!r}, "
-                          f"got {type(answer).__name__} that numpy cannot read ({exc})") from None
+        raise AnswerError(
+            f"answer: expected a real number or array for {exercise_id!r}, "
+            f"got {type(answer).__name__} that numpy cannot read ({exc})"
+        ) from None
     if arr.dtype == object or arr.dtype.kind not in "biuf":
-        raise AnswerError(f"answer: expected real numbers for {exercise_id!r}, got an array of "
-                          f"{'complex numbers' if arr.dtype.kind == 'c' else arr.dtype}")
+        raise AnswerError(
+            f"answer: expected real numbers for {exercise_id!r}, got an array of "
+            f"{'complex numbers' if arr.dtype.kind == 'c' else arr.dtype}"
+        )
     arr = arr.astype(float)
     if not np.all(np.isfinite(arr)):
         idx = tuple(int(i) for i in np.argwhere(~np.isfinite(arr))[0]) if arr.ndim else ()
         where = f" at index {list(idx)}" if idx else ""
-        raise AnswerError(f"answer: expected finite numbers for {exercise_id!r}, got "
-                          f"{float(arr[idx]) if idx else float(arr)}{where}")
+        raise AnswerError(
+            f"answer: expected finite numbers for {exercise_id!r}, got "
+            f"{float(arr[idx]) if idx else float(arr)}{where}"
+        )
     return arr
 
 
@@ -332,14 +418,18 @@ def _scalar_diagnosis(a: float, ref: float, ex: Exercise) -> str:
     ratio = abs(a / ref)
     if abs(ratio - 1) <= 0.1:
         return f"it is close (within 10 %) but outside the tolerance ({ex.tolerance})"
-    return f"it is too {'large' if ratio > 1 else 'small'}, with the right sign and order of magnitude"
+    return (
+        f"it is too {'large' if ratio > 1 else 'small'}, with the right sign and order of magnitude"
+    )
 
 
 def _index_text(idx: tuple[int, ...]) -> str:
     return "[" + ", ".join(str(i) for i in idx) + "]"
 
 
-def check(exercise_id: str, answer: Any, *, student: str | None = None, graded: bool = False) -> CheckResult:
+def check(
+    exercise_id: str, answer: Any, *, student: str | None = None, graded: bool = False
+) -> CheckResult:
     """Check a student's answer to a checkable exercise.
 
     Parameters
@@ -385,24 +475,35 @@ def check(exercise_id: str, answer: Any, *, student: str | None = None, graded: 
 
     ex = get_exercise(exercise_id)
     if not ex.checkable:
-        raise ModelError(f"exercise_id: {exercise_id!r} has no checkable answer (it asks for an "
-                         "explanation): compare with its solution")
+        raise ModelError(
+            f"exercise_id: {exercise_id!r} has no checkable answer (it asks for an "
+            "explanation): compare with its solution"
+        )
     student = student_id(student)
     if answer is None:
-        return CheckResult(exercise_id, False,
-                           f"{exercise_id}: no answer yet. Replace `answer = None` by {ex.answer}.")
+        return CheckResult(
+            exercise_id,
+            False,
+            f"{exercise_id}: no answer yet. Replace `answer = None` by {ex.answer}.",
+        )
     a = _as_answer(answer, exercise_id)
     oracle = _oracle(ex, student)
     fail = lambda msg: CheckResult(exercise_id, False, f"{exercise_id}: not yet. {msg}")  # noqa: E731
     if oracle is None:
-        return fail(f"This package holds no reference for student {student!r}: your instructor's grader "
-                    f"checks answers on your own data (here the expected form is {ex.answer}).")
+        return fail(
+            f"This package holds no reference for student {student!r}: your instructor's grader "
+            f"checks answers on your own data (here the expected form is {ex.answer})."
+        )
     if graded:
         n = _ATTEMPTS[exercise_id, student] = _ATTEMPTS.get((exercise_id, student), 0) + 1
-        ok = a.size == int(np.prod(oracle.shape)) and (a.size == 1 or a.shape == oracle.shape) \
+        ok = (
+            a.size == int(np.prod(oracle.shape))
+            and (a.size == 1 or a.shape == oracle.shape)
             and bool(np.all(oracle.match(None, a.ravel())))
-        return CheckResult(exercise_id, ok, f"{exercise_id}: attempt {n}: "
-                                            f"{'accepted' if ok else 'not accepted'}.")
+        )
+        return CheckResult(
+            exercise_id, ok, f"{exercise_id}: attempt {n}: {'accepted' if ok else 'not accepted'}."
+        )
     shape = oracle.shape
     if a.size == 1 and int(np.prod(shape)) == 1:
         a = a.reshape(shape)
@@ -416,47 +517,61 @@ def check(exercise_id: str, answer: Any, *, student: str | None = None, graded: 
     if ex.integer and not np.all(a == np.round(a)):
         idx = tuple(int(i) for i in np.argwhere(a != np.round(a))[0])
         where = f" (entry {_index_text(idx)})" if a.ndim else ""
-        return fail(f"Expected {ex.answer}; got {float(a[idx])!r}{where}, which is not a whole number "
-                    "(a count is an integer).")
+        return fail(
+            f"Expected {ex.answer}; got {float(a[idx])!r}{where}, which is not a whole number "
+            "(a count is an integer)."
+        )
     flat = a.ravel()
     ok = oracle.match(None, flat)
     if np.all(ok):
-        return CheckResult(exercise_id, True, f"{exercise_id}: correct (tolerance: {ex.tolerance}).")
+        return CheckResult(
+            exercise_id, True, f"{exercise_id}: correct (tolerance: {ex.tolerance})."
+        )
     for which, (hint, _) in enumerate(oracle.candidates):
         if np.all(oracle.match(which, flat)):
             return fail(hint)
     for hint, perm in _permutations(shape):
         if np.all(oracle.match(None, flat, perm)):
             return fail(hint)
-    if a.size > 2:    # the right numbers in some other order (a perfect matching of entries)
+    if a.size > 2:  # the right numbers in some other order (a perfect matching of entries)
         import scipy.optimize
 
         hits = np.array([oracle.match(None, np.full(a.size, v), np.arange(a.size)) for v in flat])
         rows, cols = scipy.optimize.linear_sum_assignment(hits, maximize=True)
         if hits[rows, cols].all():
-            return fail("These are the right numbers in another order: check the order the exercise "
-                        "asks for.")
+            return fail(
+                "These are the right numbers in another order: check the order the exercise "
+                "asks for."
+            )
     if a.ndim == 1 and a.size >= 3:
         n = a.size
         if np.all(oracle.match(None, flat[1:], np.arange(n - 1))):
-            return fail("The series is one sample late: its entry [k] is the expected entry [k - 1] "
-                        "(an index shift; the first entry is k = 0).")
+            return fail(
+                "The series is one sample late: its entry [k] is the expected entry [k - 1] "
+                "(an index shift; the first entry is k = 0)."
+            )
         if np.all(oracle.match(None, flat[:-1], np.arange(1, n))):
-            return fail("The series is one sample early: its entry [k] is the expected entry [k + 1] "
-                        "(an index shift; the first entry is k = 0).")
+            return fail(
+                "The series is one sample early: its entry [k] is the expected entry [k + 1] "
+                "(an index shift; the first entry is k = 0)."
+            )
     bad = [tuple(int(i) for i in np.unravel_index(j, shape)) for j in np.flatnonzero(~ok)]
     where = ", ".join(_index_text(i) for i in bad[:4]) + (", ..." if len(bad) > 4 else "")
-    if a.size > 1:    # the entries that are off match a known mistake or pattern, the rest is right
+    if a.size > 1:  # the entries that are off match a known mistake or pattern, the rest is right
         for which, (hint, _) in enumerate(oracle.candidates):
             if np.all(oracle.match(which, flat[~ok], np.flatnonzero(~ok))):
-                return fail(f"{'Entry' if len(bad) == 1 else 'Entries'} {where} (the rest matches): {hint}")
+                return fail(
+                    f"{'Entry' if len(bad) == 1 else 'Entries'} {where} (the rest matches): {hint}"
+                )
     if not oracle.exact:
         if a.size == 1:
             return fail("The value is off, and it is none of the mistakes this check knows.")
         return fail(f"{len(bad)} of {a.size} entries are off: {where}.")
     ref = oracle.ref
     if ref.size == 1:
-        return fail(f"The value is off: {_scalar_diagnosis(float(flat[0]), float(ref.ravel()[0]), ex)}.")
+        return fail(
+            f"The value is off: {_scalar_diagnosis(float(flat[0]), float(ref.ravel()[0]), ex)}."
+        )
     if len(bad) == 1:
         idx = bad[0]
         why = _scalar_diagnosis(float(a[idx]), float(ref[idx]), ex)
@@ -464,8 +579,9 @@ def check(exercise_id: str, answer: Any, *, student: str | None = None, graded: 
     return fail(f"{len(bad)} of {a.size} entries are off: {where} (tolerance: {ex.tolerance}).")
 
 
-def feedback_candidates(exercise_id: str, student: str | None = None
-                        ) -> tuple[np.ndarray, tuple[tuple[str, np.ndarray], ...]]:
+def feedback_candidates(
+    exercise_id: str, student: str | None = None
+) -> tuple[np.ndarray, tuple[tuple[str, np.ndarray], ...]]:
     """The reference and the wrong answers :func:`~fdi_lib.exercises.check` recognises, in the
     order it tries them: the exercise's own mistakes, the generic transformations of the
     reference (:func:`fdi_lib.exercises.checker.generic_candidates`) and the index shifts (the
@@ -478,15 +594,18 @@ def feedback_candidates(exercise_id: str, student: str | None = None
 
 
 @functools.lru_cache(maxsize=256)
-def _feedback_candidates(exercise_id: str, student: str | None
-                         ) -> tuple[np.ndarray, tuple[tuple[str, np.ndarray], ...]]:
+def _feedback_candidates(
+    exercise_id: str, student: str | None
+) -> tuple[np.ndarray, tuple[tuple[str, np.ndarray], ...]]:
     from fdi_lib.exercises import exercise_data, get_exercise
     from fdi_lib.exercises._reference import REFERENCES, _answers, _frozen
 
     ex = get_exercise(exercise_id)
     ref = _answers(exercise_id, student)
-    out = [(m.hint, np.array(m.answer(exercise_data(exercise_id, student=student)), dtype=float))
-           for m in REFERENCES[exercise_id].mistakes]
+    out = [
+        (m.hint, np.array(m.answer(exercise_data(exercise_id, student=student)), dtype=float))
+        for m in REFERENCES[exercise_id].mistakes
+    ]
     out += generic_candidates(ex, ref)
     for key in ex.time_keys:
         for step, word in ((1, "one larger"), (-1, "one smaller")):
@@ -494,10 +613,19 @@ def _feedback_candidates(exercise_id: str, student: str | None
             data[key] = data[key] + step
             try:
                 shifted = np.array(REFERENCES[exercise_id].answer(data), dtype=float)
-            except (FDIError, ValueError, IndexError):   # the shifted index leaves the horizon
+            except (FDIError, ValueError, IndexError):  # the shifted index leaves the horizon
                 continue
-            out.append((f"This is the answer with `{key}` {word}: an index shift (off by one in "
-                        "time); count the samples as the exercise does.", shifted))
-    return ref, tuple((hint, _frozen(value)) for hint, value in out
-                      if value.shape == ref.shape and np.all(np.isfinite(value))
-                      and not np.all(close(value, ref, ex)))
+            out.append(
+                (
+                    f"This is the answer with `{key}` {word}: an index shift (off by one in "
+                    "time); count the samples as the exercise does.",
+                    shifted,
+                )
+            )
+    return ref, tuple(
+        (hint, _frozen(value))
+        for hint, value in out
+        if value.shape == ref.shape
+        and np.all(np.isfinite(value))
+        and not np.all(close(value, ref, ex))
+    )

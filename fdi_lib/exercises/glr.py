@@ -10,7 +10,7 @@ import numpy as np
 from fdi_lib.exercises._core import Exercise, rounded_normal, uniform
 
 CHAPTER = "zb2014/glr"
-_LEVELS = (0.001, 0.002, 0.005, 0.02, 0.05, 0.1)   # not the book's 0.01
+_LEVELS = (0.001, 0.002, 0.005, 0.02, 0.05, 0.1)  # not the book's 0.01
 
 
 def _glr1_data(rng):
@@ -43,22 +43,62 @@ def _glr4_data(rng):
 def _glr5_data(rng):
     if rng is None:
         return {"k": 150, "w": 100, "s": 2}
-    w = int(rng.integers(40, 96))      # w - s < 98, the book's count
+    w = int(rng.integers(40, 96))  # w - s < 98, the book's count
     return {"k": w + int(rng.integers(10, 100)), "w": w, "s": int(rng.integers(1, 6))}
 
 
 EXERCISES = [
-    Exercise("glr-1", CHAPTER, "A threshold for a false-alarm probability", "warm-up", 5,
-             answer="the 1 - alpha quantile of chi2(m) (a number)", rtol=1e-6, data=_glr1_data),
-    Exercise("glr-2", CHAPTER, "GLR statistic and estimate by hand", "warm-up", 10,
-             answer="array of shape (3,): [l, theta_hat_1, theta_hat_2]", rtol=1e-9, data=_glr2_data),
-    Exercise("glr-3", CHAPTER, "Non-centrality and detection probability", "core", 20,
-             answer="array of shape (2,): [non-centrality, detection probability]", rtol=1e-6,
-             data=_glr3_data),
-    Exercise("glr-4", CHAPTER, "The minmax statistic by the explicit regression", "core", 15,
-             answer="a number: l_a", rtol=1e-9, data=_glr4_data),
-    Exercise("glr-5", CHAPTER, "Counting the candidate onsets", "warm-up", 5,
-             answer="an integer: the number of candidate onsets r at time k", rtol=0.0, atol=0.5,
-             data=_glr5_data, time_keys=("k", "w", "s")),
+    Exercise(
+        "glr-1",
+        CHAPTER,
+        "A threshold for a false-alarm probability",
+        "warm-up",
+        5,
+        answer="the 1 - alpha quantile of chi2(m) (a number)",
+        rtol=1e-6,
+        data=_glr1_data,
+    ),
+    Exercise(
+        "glr-2",
+        CHAPTER,
+        "GLR statistic and estimate by hand",
+        "warm-up",
+        10,
+        answer="array of shape (3,): [l, theta_hat_1, theta_hat_2]",
+        rtol=1e-9,
+        data=_glr2_data,
+    ),
+    Exercise(
+        "glr-3",
+        CHAPTER,
+        "Non-centrality and detection probability",
+        "core",
+        20,
+        answer="array of shape (2,): [non-centrality, detection probability]",
+        rtol=1e-6,
+        data=_glr3_data,
+    ),
+    Exercise(
+        "glr-4",
+        CHAPTER,
+        "The minmax statistic by the explicit regression",
+        "core",
+        15,
+        answer="a number: l_a",
+        rtol=1e-9,
+        data=_glr4_data,
+    ),
+    Exercise(
+        "glr-5",
+        CHAPTER,
+        "Counting the candidate onsets",
+        "warm-up",
+        5,
+        answer="an integer: the number of candidate onsets r at time k",
+        rtol=0.0,
+        atol=0.5,
+        data=_glr5_data,
+        time_keys=("k", "w", "s"),
+    ),
     Exercise("glr-6", CHAPTER, "Why the windowed statistic is not chi-square", "challenge", 30),
 ]

@@ -45,8 +45,14 @@ def _pipe4_data(rng):
 
     st = zp.pipeline_setup()
     stop = gp.N_STEPS - (0 if rng is None else int(rng.integers(1, 120)))
-    return {"signature": st.known_signature, "Sigma": st.gains.Sigma, "start": zp.FAULT_ONSET,
-            "stop": stop, "theta": zp.fault_theta(2), "threshold": zp.MINMAX_THRESHOLD}
+    return {
+        "signature": st.known_signature,
+        "Sigma": st.gains.Sigma,
+        "start": zp.FAULT_ONSET,
+        "stop": stop,
+        "theta": zp.fault_theta(2),
+        "threshold": zp.MINMAX_THRESHOLD,
+    }
 
 
 def _pipe5_data(rng):
@@ -58,18 +64,57 @@ def _pipe5_data(rng):
 
 
 EXERCISES = [
-    Exercise("pipe-1", CHAPTER, "Where 6.6349 comes from", "warm-up", 5,
-             answer="the threshold of the level-alpha test on one component (a number)", rtol=1e-6,
-             data=_pipe1_data),
-    Exercise("pipe-2", CHAPTER, "Mass balance fixes the feed-through", "warm-up", 10,
-             answer="array of shape (2,): [J_0, J_p]", rtol=1e-9, data=_pipe2_data),
-    Exercise("pipe-3", CHAPTER, "How collinear are the two leaks?", "core", 15,
-             answer="a number: 1 - cos^2 over k = first..last", rtol=1e-6, data=_pipe3_data,
-             time_keys=("first", "last")),
-    Exercise("pipe-4", CHAPTER, "Power of the isolation test with the onset known", "core", 20,
-             answer="array of shape (2,): [non-centrality, power] for fault 2", rtol=1e-6,
-             data=_pipe4_data, time_keys=("stop",)),
-    Exercise("pipe-5", CHAPTER, "Are 7 false alarms in 2000 runs surprising?", "core", 10,
-             answer="array of shape (2,): [low, high], fractions", rtol=1e-6, data=_pipe5_data),
+    Exercise(
+        "pipe-1",
+        CHAPTER,
+        "Where 6.6349 comes from",
+        "warm-up",
+        5,
+        answer="the threshold of the level-alpha test on one component (a number)",
+        rtol=1e-6,
+        data=_pipe1_data,
+    ),
+    Exercise(
+        "pipe-2",
+        CHAPTER,
+        "Mass balance fixes the feed-through",
+        "warm-up",
+        10,
+        answer="array of shape (2,): [J_0, J_p]",
+        rtol=1e-9,
+        data=_pipe2_data,
+    ),
+    Exercise(
+        "pipe-3",
+        CHAPTER,
+        "How collinear are the two leaks?",
+        "core",
+        15,
+        answer="a number: 1 - cos^2 over k = first..last",
+        rtol=1e-6,
+        data=_pipe3_data,
+        time_keys=("first", "last"),
+    ),
+    Exercise(
+        "pipe-4",
+        CHAPTER,
+        "Power of the isolation test with the onset known",
+        "core",
+        20,
+        answer="array of shape (2,): [non-centrality, power] for fault 2",
+        rtol=1e-6,
+        data=_pipe4_data,
+        time_keys=("stop",),
+    ),
+    Exercise(
+        "pipe-5",
+        CHAPTER,
+        "Are 7 false alarms in 2000 runs surprising?",
+        "core",
+        10,
+        answer="array of shape (2,): [low, high], fractions",
+        rtol=1e-6,
+        data=_pipe5_data,
+    ),
     Exercise("pipe-6", CHAPTER, "Why centring the pressure helps isolation", "challenge", 25),
 ]

@@ -34,8 +34,15 @@ def _sig1_data(rng):
     x0, y = np.array([0.05, 0.1]), np.array([0.12, 0.31])
     if rng is not None:
         x0, y = rounded_normal(rng, 2, 0.1), np.round(y + rounded_normal(rng, 2, 0.1), 2)
-    return {"F": ex.F.copy(), "H": ex.H.copy(), "Q": ex.Q.copy(), "R": ex.R.copy(), "P0": ex.Q.copy(),
-            "x0": x0, "y": y}
+    return {
+        "F": ex.F.copy(),
+        "H": ex.H.copy(),
+        "Q": ex.Q.copy(),
+        "R": ex.R.copy(),
+        "P0": ex.Q.copy(),
+        "x0": x0,
+        "y": y,
+    }
 
 
 def _sig2_data(rng):
@@ -57,16 +64,56 @@ def _sig5_data(rng):
 
 
 EXERCISES = [
-    Exercise("sig-1", CHAPTER, "Kalman innovation by hand", "warm-up", 10,
-             answer="array of shape (2,): [eps_0, eps_1]", rtol=1e-9, data=_sig1_data),
-    Exercise("sig-2", CHAPTER, "The signature recursion for a constant bias", "warm-up", 10,
-             answer="array of shape (2, 2): Gamma_3", rtol=1e-9, data=_sig2_data, time_keys=("k",)),
-    Exercise("sig-3", CHAPTER, "A sensor bias", "core", 15,
-             answer="array of shape (5,): H_k Gamma_k + Phi_k for k = 0..4", rtol=1e-9, data=_sig3_data),
-    Exercise("sig-4", CHAPTER, "What one sensor sees of two faults", "core", 15,
-             answer="array of shape (2,): the steady-state row vector v", rtol=1e-6, data=_sig4_data),
-    Exercise("sig-5", CHAPTER, "How fast the Willsky-Jones matrix grows", "core", 10,
-             answer="a number: the slope of log10 ||alpha_k(101)|| per sample", rtol=1e-4,
-             data=_sig5_data),
+    Exercise(
+        "sig-1",
+        CHAPTER,
+        "Kalman innovation by hand",
+        "warm-up",
+        10,
+        answer="array of shape (2,): [eps_0, eps_1]",
+        rtol=1e-9,
+        data=_sig1_data,
+    ),
+    Exercise(
+        "sig-2",
+        CHAPTER,
+        "The signature recursion for a constant bias",
+        "warm-up",
+        10,
+        answer="array of shape (2, 2): Gamma_3",
+        rtol=1e-9,
+        data=_sig2_data,
+        time_keys=("k",),
+    ),
+    Exercise(
+        "sig-3",
+        CHAPTER,
+        "A sensor bias",
+        "core",
+        15,
+        answer="array of shape (5,): H_k Gamma_k + Phi_k for k = 0..4",
+        rtol=1e-9,
+        data=_sig3_data,
+    ),
+    Exercise(
+        "sig-4",
+        CHAPTER,
+        "What one sensor sees of two faults",
+        "core",
+        15,
+        answer="array of shape (2,): the steady-state row vector v",
+        rtol=1e-6,
+        data=_sig4_data,
+    ),
+    Exercise(
+        "sig-5",
+        CHAPTER,
+        "How fast the Willsky-Jones matrix grows",
+        "core",
+        10,
+        answer="a number: the slope of log10 ||alpha_k(101)|| per sample",
+        rtol=1e-4,
+        data=_sig5_data,
+    ),
     Exercise("sig-6", CHAPTER, "The identity with the wrong gains", "challenge", 25),
 ]

@@ -30,8 +30,17 @@ from typing import Any
 from fdi_lib.errors import ModelError
 from fdi_lib.reproduce.registry import ReproductionResult, get, list_reproductions
 
-__all__ = ["CHAPTER_SEEDS", "BookRun", "book_settings", "book_run", "book_argv", "book_command",
-           "toc_documents", "book_order", "BOOK_ROOT"]
+__all__ = [
+    "CHAPTER_SEEDS",
+    "BookRun",
+    "book_settings",
+    "book_run",
+    "book_argv",
+    "book_command",
+    "toc_documents",
+    "book_order",
+    "BOOK_ROOT",
+]
 
 #: The repository holding ``_toc.yml`` and ``book/`` (absent from an installed package).
 BOOK_ROOT = Path(__file__).resolve().parents[2]
@@ -76,10 +85,14 @@ def book_settings(id: str) -> BookRun:
     """
     rep = get(id)
     if rep.chapter_seed and rep.chapter not in CHAPTER_SEEDS:
-        raise ModelError(f"chapter_seed: {id} runs at its chapter's seed; expected its chapter in "
-                         f"CHAPTER_SEEDS ({sorted(CHAPTER_SEEDS)}), got {rep.chapter!r}")
-    return BookRun(seed=CHAPTER_SEEDS[rep.chapter] if rep.chapter_seed else rep.default_seed,
-                   trials=rep.default_trials)
+        raise ModelError(
+            f"chapter_seed: {id} runs at its chapter's seed; expected its chapter in "
+            f"CHAPTER_SEEDS ({sorted(CHAPTER_SEEDS)}), got {rep.chapter!r}"
+        )
+    return BookRun(
+        seed=CHAPTER_SEEDS[rep.chapter] if rep.chapter_seed else rep.default_seed,
+        trials=rep.default_trials,
+    )
 
 
 def book_run(id: str, *, jobs: int = 1, **options: Any) -> ReproductionResult:
@@ -106,8 +119,10 @@ def book_argv(id: str, **options: Any) -> list[str]:
     if rep.seeded:
         argv += ["--seed", str(s.seed)]
     elif s.seed != rep.default_seed:
-        raise ModelError(f"chapter_seed: {id} reads no seed; expected chapter_seed=False, got the "
-                         f"chapter's seed {s.seed!r}")
+        raise ModelError(
+            f"chapter_seed: {id} reads no seed; expected chapter_seed=False, got the "
+            f"chapter's seed {s.seed!r}"
+        )
     if s.trials is not None:
         argv += ["--trials", str(s.trials)]
     for name, value in options.items():
@@ -118,7 +133,6 @@ def book_argv(id: str, **options: Any) -> list[str]:
 def book_command(id: str, **options: Any) -> str:
     """The shell command that recomputes ``id`` as the book does (:func:`book_argv`)."""
     return shlex.join(["python", "-m", "fdi_lib", *book_argv(id, **options)])
-
 
 
 def toc_documents(root: Path | None = None) -> list[str]:
@@ -151,8 +165,11 @@ def book_order() -> tuple[str, ...]:
     reps = list_reproductions()
     if not docs:
         return tuple(r.id for r in reps)
-    texts = {doc: (BOOK_ROOT / f"{doc}.md").read_text() for doc in docs
-             if (BOOK_ROOT / f"{doc}.md").is_file()}
+    texts = {
+        doc: (BOOK_ROOT / f"{doc}.md").read_text()
+        for doc in docs
+        if (BOOK_ROOT / f"{doc}.md").is_file()
+    }
 
     def key(rep: Any) -> tuple[int, int, str]:
         doc = f"book/{rep.chapter}"

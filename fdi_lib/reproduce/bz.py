@@ -30,32 +30,68 @@ from fdi_lib.glr import first_alarm, glr_window
 from fdi_lib.kitanidis import KitanidisGains, kitanidis_filter, kitanidis_gains
 from fdi_lib.models import LTVModel, fault_profile, step_family
 from fdi_lib.montecarlo import binomial_ci, draw_noise_batch, run_monte_carlo
-from fdi_lib.nonparametric import (kitanidis_lag_covariance, kitanidis_predictor_gains,
-                                   nonparametric_signature, rejection_projection, solution1,
-                                   solution2)
+from fdi_lib.nonparametric import (
+    kitanidis_lag_covariance,
+    kitanidis_predictor_gains,
+    nonparametric_signature,
+    rejection_projection,
+    solution1,
+    solution2,
+)
 from fdi_lib.plotting import OURS_COLOR, THRESHOLD_COLOR, figure
 from fdi_lib.reproduce.ledger import BY_CHECK, BY_INTERVAL, Claim, in_ci
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.simulate import Noise, simulate
 from fdi_lib.systems import bz_example as ex
 
-__all__ = ["SOL1", "SOL2", "WHITE", "LABELS", "headline_table", "solution2_table", "setup",
-           "updated_residual_projection", "projected_lag_covariance", "plot_whiteness", "plot_solution1",
-           "plot_solution2", "ljung_box_pvalues"]
+__all__ = [
+    "SOL1",
+    "SOL2",
+    "WHITE",
+    "LABELS",
+    "headline_table",
+    "solution2_table",
+    "setup",
+    "updated_residual_projection",
+    "projected_lag_covariance",
+    "plot_whiteness",
+    "plot_solution1",
+    "plot_solution2",
+    "ljung_box_pvalues",
+]
 
 PAPER = "Basseville & Zhang (parametric and non-parametric faults)"
 
 #: Settings of solution 1. The GLR threshold is the chi-square(m = 2) quantile of level
 #: 1e-5 (a per-sample, per-onset level; the resulting false-alarm rate over the record is
 #: measured, not assumed). Energy test: window 20, per-sample level 1e-4.
-SOL1: dict[str, Any] = {"n_steps": 300, "theta": [0.05, 0.0], "theta_onset": 150, "f_size": 0.2,
-                        "f_onset": 100, "window": 30, "glr_level": 1e-5, "energy_window": 20,
-                        "energy_alpha": 1e-4, "isolation_alpha": 0.01}
+SOL1: dict[str, Any] = {
+    "n_steps": 300,
+    "theta": [0.05, 0.0],
+    "theta_onset": 150,
+    "f_size": 0.2,
+    "f_onset": 100,
+    "window": 30,
+    "glr_level": 1e-5,
+    "energy_window": 20,
+    "energy_alpha": 1e-4,
+    "isolation_alpha": 0.01,
+}
 #: Settings of solution 2: drift ``||e_k||_inf = delta`` from k = 50, f from k = 200.
-SOL2: dict[str, Any] = {"n_steps": 300, "delta": 3e-4, "drift_onset": 50, "f_size": 0.2, "f_onset": 200,
-                        "f_period": 25, "f_period_slow": 400,
-                        "lambdas": [0.9, 0.95, 0.98, 0.995], "energy_window": 20, "energy_alpha": 1e-4,
-                        "warmup": 30, "tracking_range": [100, 200]}
+SOL2: dict[str, Any] = {
+    "n_steps": 300,
+    "delta": 3e-4,
+    "drift_onset": 50,
+    "f_size": 0.2,
+    "f_onset": 200,
+    "f_period": 25,
+    "f_period_slow": 400,
+    "lambdas": [0.9, 0.95, 0.98, 0.995],
+    "energy_window": 20,
+    "energy_alpha": 1e-4,
+    "warmup": 30,
+    "tracking_range": [100, 200],
+}
 #: Settings of the whiteness check (long records, transient discarded).
 WHITE: dict[str, Any] = {"n_steps": 600, "discard": 50, "lags": 10, "f_size": 0.2, "f_onset": 0}
 
@@ -65,7 +101,13 @@ def setup(n_steps: int) -> tuple[LTVModel, KalmanGains, KitanidisGains, KalmanGa
     """``(model, kalman, kitanidis, kitanidis_predictor, T)`` for the example (cached, data independent)."""
     model = ex.bz_model(n_steps)
     kg = kitanidis_gains(model, ex.E)
-    return model, kalman_gains(model), kg, kitanidis_predictor_gains(model, ex.E, kg), rejection_projection(model, kg)
+    return (
+        model,
+        kalman_gains(model),
+        kg,
+        kitanidis_predictor_gains(model, ex.E, kg),
+        rejection_projection(model, kg),
+    )
 
 
 def zeta_check(n_steps: int = WHITE["n_steps"]) -> dict[str, float]:
@@ -79,8 +121,10 @@ def zeta_check(n_steps: int = WHITE["n_steps"]) -> dict[str, float]:
     model, _, _, kpred, _ = setup(n_steps)
     f = ex.nonparametric_profile(n_steps, size=WHITE["f_size"], onset=WHITE["f_onset"])
     zeta = nonparametric_signature(model, kpred, ex.E, f)
-    return {"h_zeta_max": float(np.abs(model.H @ zeta[:n_steps, :, None]).max()),
-            "zeta_minus_Ef_max": float(np.abs(zeta[1:] - f @ ex.E.T).max())}
+    return {
+        "h_zeta_max": float(np.abs(model.H @ zeta[:n_steps, :, None]).max()),
+        "zeta_minus_Ef_max": float(np.abs(zeta[1:] - f @ ex.E.T).max()),
+    }
 
 
 def _simulate(model: LTVModel, noise: Noise, f: np.ndarray, theta_path: np.ndarray):
@@ -129,7 +173,9 @@ def ljung_box_pvalues(series: np.ndarray, lags: int) -> np.ndarray:
     return scipy.stats.chi2.sf(q, lags).reshape(runs, p)
 
 
-def _whiteness_chunk(seeds: Sequence[np.random.SeedSequence], n_steps: int) -> dict[str, np.ndarray]:
+def _whiteness_chunk(
+    seeds: Sequence[np.random.SeedSequence], n_steps: int
+) -> dict[str, np.ndarray]:
     model, kal, kg, kpred, T = setup(n_steps)
     noise = draw_noise_batch(model, seeds)
     zero_th = np.zeros((n_steps, 2))
@@ -140,12 +186,17 @@ def _whiteness_chunk(seeds: Sequence[np.random.SeedSequence], n_steps: int) -> d
     eps_kit = kalman_filter(model, s0.y, s0.u, gains=kpred).innovations
     eps_kit_f = kalman_filter(model, s1.y, s1.u, gains=kpred).innovations
     red_f = np.einsum("krp,...kp->...kr", T, eps_kit_f)
-    upd_0 = kitanidis_filter(model, s0.y, s0.u, gains=kg).residuals   # Zhang 2021's residual (25)
+    upd_0 = kitanidis_filter(model, s0.y, s0.u, gains=kg).residuals  # Zhang 2021's residual (25)
     upd_f = kitanidis_filter(model, s1.y, s1.u, gains=kg).residuals
     d = WHITE["discard"]
-    return {"kalman": eps_kal[:, d:], "kitanidis": eps_kit[:, d:], "kitanidis_f": eps_kit_f[:, d:],
-            "reduced_f": red_f[:, d:], "updated_f": upd_f[:, d:],
-            "updated_change": np.abs(upd_f - upd_0).max(axis=(1, 2))}
+    return {
+        "kalman": eps_kal[:, d:],
+        "kitanidis": eps_kit[:, d:],
+        "kitanidis_f": eps_kit_f[:, d:],
+        "reduced_f": red_f[:, d:],
+        "updated_f": upd_f[:, d:],
+        "updated_change": np.abs(upd_f - upd_0).max(axis=(1, 2)),
+    }
 
 
 def updated_residual_projection(model: LTVModel, kg: KitanidisGains) -> np.ndarray:
@@ -158,8 +209,9 @@ def updated_residual_projection(model: LTVModel, kg: KitanidisGains) -> np.ndarr
     return np.eye(model.p) - model.H @ kg.K
 
 
-def projected_lag_covariance(model: LTVModel, kg: KitanidisGains, T: np.ndarray,
-                             lag: int = 1) -> np.ndarray:
+def projected_lag_covariance(
+    model: LTVModel, kg: KitanidisGains, T: np.ndarray, lag: int = 1
+) -> np.ndarray:
     """Closed-form ``Cov(T_{k+lag} eps_{k+lag}, T_k eps_k)`` of the fault-free Kitanidis innovation.
 
     ``T_{k+lag} C_k T_k^T`` with ``C_k`` from :func:`fdi_lib.nonparametric.kitanidis_lag_covariance`
@@ -175,10 +227,18 @@ def plot_whiteness(result: ReproductionResult, fig: Any = None):
     fig, axes = figure(1, 2, fig=fig, figsize=(8.0, 3.4))
     ax = axes[0, 0]
     bins = np.linspace(0, 1, 21)
-    for name, label in (("kalman", r"Kalman innovation $\varepsilon_k$"),
-                        ("kitanidis", r"Kitanidis innovation $\varepsilon_k$ (27)"),
-                        ("reduced_f", r"projected $T_k\varepsilon_k$, $f\neq 0$")):
-        ax.hist(result.data["pvalues"][name].ravel(), bins=bins, histtype="step", density=True, label=label)
+    for name, label in (
+        ("kalman", r"Kalman innovation $\varepsilon_k$"),
+        ("kitanidis", r"Kitanidis innovation $\varepsilon_k$ (27)"),
+        ("reduced_f", r"projected $T_k\varepsilon_k$, $f\neq 0$"),
+    ):
+        ax.hist(
+            result.data["pvalues"][name].ravel(),
+            bins=bins,
+            histtype="step",
+            density=True,
+            label=label,
+        )
     ax.axhline(1.0, color="k", lw=0.8, ls=":")
     ax.set(xlabel=r"Ljung-Box $p$-value", ylabel="density", title=r"Portmanteau $p$-values")
     ax.legend(loc="upper right")
@@ -187,44 +247,73 @@ def plot_whiteness(result: ReproductionResult, fig: Any = None):
     ax.plot(k, result.data["lag1_theory"], color=OURS_COLOR, label="closed form")
     ax.plot(k, result.data["lag1_empirical"], ".", ms=2, color="0.4", label="Monte Carlo")
     ax.axhline(0.0, color=THRESHOLD_COLOR, lw=0.8, ls="--", label="paper (Prop. 2): 0")
-    ax.set(xlabel=r"$k$", ylabel=r"corr$(\varepsilon^{(1)}_{k+1},\varepsilon^{(1)}_k)$",
-           title="Kitanidis innovation, lag one")
+    ax.set(
+        xlabel=r"$k$",
+        ylabel=r"corr$(\varepsilon^{(1)}_{k+1},\varepsilon^{(1)}_k)$",
+        title="Kitanidis innovation, lag one",
+    )
     ax.legend(loc="lower right")
     return fig
 
 
 _WHITENESS_CAUSE = dict(
-    explain="fig-bz-whiteness", cause="sec-bz-whiteness",
+    explain="fig-bz-whiteness",
+    cause="sec-bz-whiteness",
     cause_text="the closed-form lag-one correlation of the Kitanidis innovation is not 0, and the "
-               "Monte Carlo estimate brackets it")
+    "Monte Carlo estimate brackets it",
+)
 
 
-@register("bz-whiteness", paper=PAPER, title="Prop. 2: whiteness of the Kitanidis innovation (portmanteau tests)",
-          default_trials=None, plot=plot_whiteness, chapter="bz/parametric-nonparametric",
-          chapter_seed=True,
-          claims={
-              "lb_reject_rate_kitanidis": Claim(
-                  location="Prop. 2, whiteness", units="%", test=BY_INTERVAL, value=lambda p: 0.05,
-                  label="the Kitanidis innovation is white (Ljung-Box rejects 5 % at level 5 %)",
-                  cause_glue=("bz_lb_reject_rate_kitanidis", "bz_lag1_corr_theory"),
-                  **_WHITENESS_CAUSE),
-              "lag1_corr_empirical": Claim(
-                  location="Prop. 2, lag-one correlation", units="", test=BY_INTERVAL,
-                  value=lambda p: 0.0, label="lag-1 correlation of the Kitanidis innovation is 0",
-                  cause_glue=("bz_lag1_corr_theory", "bz_lag1_corr_empirical"), **_WHITENESS_CAUSE),
-              "cov_rel_error_kitanidis": Claim(
-                  location="Prop. 2, eq. (45)",
-                  label="the Kitanidis innovation has covariance H P_k Hᵀ + R_k",
-                  units="", test=BY_CHECK, check=lambda p, o, h: o < 0.05,
-                  criterion="relative error of the empirical covariance < 5 %"),
-              "h_zeta_max": Claim(
-                  location="Prop. 1 (§3.1), the fault term of the innovation", units="",
-                  label="H_k ζ_k = 0 with the Kitanidis gain (ours: max |H_k ζ_k|, f of size 0.2)",
-                  test=BY_CHECK, check=lambda p, o, h: o <= 1e-9, criterion="max |H_k ζ_k| ≤ 1e-9",
-                  cause="sec-bz-zeta", cause_glue=("bz_h_zeta_max", "bz_zeta_minus_ef_max"),
-                  cause_text="the book proves ζ_k = E f_(k-1) with the Kitanidis gain (Proposition "
-                             "bz-prop-zeta) and measures it: the innovation carries the fault of "
-                             "the previous step")})
+@register(
+    "bz-whiteness",
+    paper=PAPER,
+    title="Prop. 2: whiteness of the Kitanidis innovation (portmanteau tests)",
+    default_trials=None,
+    plot=plot_whiteness,
+    chapter="bz/parametric-nonparametric",
+    chapter_seed=True,
+    claims={
+        "lb_reject_rate_kitanidis": Claim(
+            location="Prop. 2, whiteness",
+            units="%",
+            test=BY_INTERVAL,
+            value=lambda p: 0.05,
+            label="the Kitanidis innovation is white (Ljung-Box rejects 5 % at level 5 %)",
+            cause_glue=("bz_lb_reject_rate_kitanidis", "bz_lag1_corr_theory"),
+            **_WHITENESS_CAUSE,
+        ),
+        "lag1_corr_empirical": Claim(
+            location="Prop. 2, lag-one correlation",
+            units="",
+            test=BY_INTERVAL,
+            value=lambda p: 0.0,
+            label="lag-1 correlation of the Kitanidis innovation is 0",
+            cause_glue=("bz_lag1_corr_theory", "bz_lag1_corr_empirical"),
+            **_WHITENESS_CAUSE,
+        ),
+        "cov_rel_error_kitanidis": Claim(
+            location="Prop. 2, eq. (45)",
+            label="the Kitanidis innovation has covariance H P_k Hᵀ + R_k",
+            units="",
+            test=BY_CHECK,
+            check=lambda p, o, h: o < 0.05,
+            criterion="relative error of the empirical covariance < 5 %",
+        ),
+        "h_zeta_max": Claim(
+            location="Prop. 1 (§3.1), the fault term of the innovation",
+            units="",
+            label="H_k ζ_k = 0 with the Kitanidis gain (ours: max |H_k ζ_k|, f of size 0.2)",
+            test=BY_CHECK,
+            check=lambda p, o, h: o <= 1e-9,
+            criterion="max |H_k ζ_k| ≤ 1e-9",
+            cause="sec-bz-zeta",
+            cause_glue=("bz_h_zeta_max", "bz_zeta_minus_ef_max"),
+            cause_text="the book proves ζ_k = E f_(k-1) with the Kitanidis gain (Proposition "
+            "bz-prop-zeta) and measures it: the innovation carries the fault of "
+            "the previous step",
+        ),
+    },
+)
 def whiteness(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Prop. 2 put to the test: is the Kitanidis innovation white with covariance ``H P H^T + R``?
 
@@ -281,18 +370,25 @@ def whiteness(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult
     """
     n = WHITE["n_steps"]
     trials = 300 if trials is None else trials
-    out = run_monte_carlo(functools.partial(_whiteness_chunk, n_steps=n), trials, seed=seed, jobs=jobs)
+    out = run_monte_carlo(
+        functools.partial(_whiteness_chunk, n_steps=n), trials, seed=seed, jobs=jobs
+    )
     model, kal, kg, kpred, T = setup(n)
     d = WHITE["discard"]
-    pv = {name: ljung_box_pvalues(out[name], WHITE["lags"]) for name in ("kalman", "kitanidis", "reduced_f")}
+    pv = {
+        name: ljung_box_pvalues(out[name], WHITE["lags"])
+        for name in ("kalman", "kitanidis", "reduced_f")
+    }
     headline: dict[str, Any] = {}
     for name in pv:
         r, ci = _rate(pv[name] < 0.05)
         headline[f"lb_reject_rate_{name}"] = r
         headline[f"lb_reject_rate_{name}_ci"] = ci
-        headline[f"ks_pvalue_{name}"] = float(scipy.stats.kstest(pv[name].ravel(), "uniform").pvalue)
+        headline[f"ks_pvalue_{name}"] = float(
+            scipy.stats.kstest(pv[name].ravel(), "uniform").pvalue
+        )
     # Lag-one correlation of component 1, theory vs Monte Carlo.
-    lag = kitanidis_lag_covariance(model, kg, 1)[d:]                  # Cov(eps_{k+1}, eps_k), k >= d
+    lag = kitanidis_lag_covariance(model, kg, 1)[d:]  # Cov(eps_{k+1}, eps_k), k >= d
     S = kg.Sigma[d:]
     rho_th = lag[:, 0, 0] / np.sqrt(S[1:, 0, 0] * S[:-1, 0, 0])
     e = out["kitanidis"][..., 0]
@@ -302,7 +398,10 @@ def whiteness(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult
     half = 1.96 * per_run.std(ddof=1) / np.sqrt(per_run.size)
     headline["lag1_corr_theory"] = float(rho_th.mean())
     headline["lag1_corr_empirical"] = float(per_run.mean())
-    headline["lag1_corr_empirical_ci"] = [float(per_run.mean() - half), float(per_run.mean() + half)]
+    headline["lag1_corr_empirical_ci"] = [
+        float(per_run.mean() - half),
+        float(per_run.mean() + half),
+    ]
     # Covariance (45): whiten each eps_k by Sigma_k = H P_k H^T + R_k and pool over runs and k.
     z = np.linalg.solve(kg.Sigma_chol[d:], out["kitanidis"][..., None])[..., 0]
     cov_w = np.einsum("rki,rkj->ij", z, z) / (z.shape[0] * z.shape[1])
@@ -333,15 +432,24 @@ def whiteness(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult
     headline["lag1_corr_updated_zmax"] = float((1.96 * np.abs(m_u) / half_u)[keep].max())
     headline["lag1_corr_updated_bonferroni_z"] = float(scipy.stats.norm.isf(0.025 / keep.sum()))
     headline.update(zeta_check(n))
-    paper = {"lb_reject_rate_kitanidis": "white (Prop. 2): about 5 %",
-             "lag1_corr_empirical": "0 (Prop. 2)",
-             "cov_rel_error_kitanidis": "Σₖ = HₖPₖHₖᵀ + Rₖ (eq. 45)",
-             "h_zeta_max": "Hₖζₖ = 0 with the gain Lₖ (Section 3.1)"}
+    paper = {
+        "lb_reject_rate_kitanidis": "white (Prop. 2): about 5 %",
+        "lag1_corr_empirical": "0 (Prop. 2)",
+        "cov_rel_error_kitanidis": "Σₖ = HₖPₖHₖᵀ + Rₖ (eq. 45)",
+        "h_zeta_max": "Hₖζₖ = 0 with the gain Lₖ (Section 3.1)",
+    }
     return ReproductionResult(
-        id="bz-whiteness", headline=headline, paper=paper,
+        id="bz-whiteness",
+        headline=headline,
+        paper=paper,
         settings={**WHITE, "seed": seed, "trials": trials},
-        data={"pvalues": pv, "lag_k": np.arange(d, d + rho_th.size), "lag1_theory": rho_th,
-              "lag1_empirical": rho_k})
+        data={
+            "pvalues": pv,
+            "lag_k": np.arange(d, d + rho_th.size),
+            "lag1_theory": rho_th,
+            "lag1_empirical": rho_k,
+        },
+    )
 
 
 # ----------------------------------------------------------------------------- solution 1
@@ -351,8 +459,13 @@ SCENARIOS1 = ("none", "theta", "f", "both", "theta2")
 def _scenario1(name: str, n: int) -> tuple[np.ndarray, np.ndarray]:
     s = SOL1
     f_on = name in ("f", "both")
-    th = {"none": [0.0, 0.0], "f": [0.0, 0.0], "theta": s["theta"], "both": s["theta"],
-          "theta2": s["theta"][::-1]}[name]
+    th = {
+        "none": [0.0, 0.0],
+        "f": [0.0, 0.0],
+        "theta": s["theta"],
+        "both": s["theta"],
+        "theta2": s["theta"][::-1],
+    }[name]
     f = ex.nonparametric_profile(n, size=s["f_size"] if f_on else 0.0, onset=s["f_onset"])
     return f, ex.parametric_path(n, theta=th, onset=s["theta_onset"])
 
@@ -365,10 +478,21 @@ def _solution1_chunk(seeds: Sequence[np.random.SeedSequence]) -> dict[str, np.nd
     thr = float(scipy.stats.chi2.ppf(1.0 - s["glr_level"], 2))
     sims = [_simulate(model, noise, *_scenario1(name, n)) for name in SCENARIOS1]
     # all scenarios in one call, stacked on a leading axis: solution 1 is vectorised over it
-    r = solution1(model, np.stack([sim.y for sim in sims]), np.stack([sim.u for sim in sims]),
-                  E=ex.E, Psi=ex.PSI, window=s["window"], glr_threshold=thr,
-                  energy_window=s["energy_window"], energy_alpha=s["energy_alpha"],
-                  isolation_alpha=s["isolation_alpha"], kgains=kg, kalman=kal, T=T)
+    r = solution1(
+        model,
+        np.stack([sim.y for sim in sims]),
+        np.stack([sim.u for sim in sims]),
+        E=ex.E,
+        Psi=ex.PSI,
+        window=s["window"],
+        glr_threshold=thr,
+        energy_window=s["energy_window"],
+        energy_alpha=s["energy_alpha"],
+        isolation_alpha=s["isolation_alpha"],
+        kgains=kg,
+        kalman=kal,
+        T=T,
+    )
     out: dict[str, np.ndarray] = {}
     for i, name in enumerate(SCENARIOS1):
         out[f"{name}_glr_alarm"] = r.glr_alarm[i]
@@ -394,49 +518,81 @@ def plot_solution1(result: ReproductionResult, fig: Any = None):
     # a pair of histograms that may coincide: the first wide and pale under the second, so that
     # neither hides the other (the legend lists both)
     under, over = dict(lw=5.0, alpha=0.4), dict(lw=1.4)
-    for (key, label), style in zip((("theta_glr_alarm", r"$\theta$ jump"),
-                                    ("both_glr_alarm", r"$\theta$ jump + $f$")), (under, over)):
+    for (key, label), style in zip(
+        (("theta_glr_alarm", r"$\theta$ jump"), ("both_glr_alarm", r"$\theta$ jump + $f$")),
+        (under, over),
+    ):
         a = d[key]
         ax.hist(a[a >= 0], bins=bins, histtype="step", label=label, **style)
-    ax.hist(d["f_kalman_glr_alarm"][d["f_kalman_glr_alarm"] >= 0], bins=bins, histtype="step", ls="--",
-            label=r"$f$ only, GLR on Kalman")
+    ax.hist(
+        d["f_kalman_glr_alarm"][d["f_kalman_glr_alarm"] >= 0],
+        bins=bins,
+        histtype="step",
+        ls="--",
+        label=r"$f$ only, GLR on Kalman",
+    )
     ax.axvline(s["theta_onset"], color=THRESHOLD_COLOR, lw=0.8, ls=":")
     ax.axvline(s["f_onset"], color="0.5", lw=0.8, ls=":")
-    ax.set(xlabel=r"alarm time $k$", ylabel="number of runs", title=r"GLR alarms on $T_k\varepsilon_k$")
+    ax.set(
+        xlabel=r"alarm time $k$", ylabel="number of runs", title=r"GLR alarms on $T_k\varepsilon_k$"
+    )
     ax.legend(loc="upper left")
     ax = axes[0, 1]
-    for (key, label), style in zip((("f_nonpar_alarm", r"$f$ only"), ("both_nonpar_alarm", r"$\theta$ + $f$"),
-                                    ("theta_energy_alarm", r"$\theta$ only (any energy alarm)")),
-                                   (under, over, over)):
+    for (key, label), style in zip(
+        (
+            ("f_nonpar_alarm", r"$f$ only"),
+            ("both_nonpar_alarm", r"$\theta$ + $f$"),
+            ("theta_energy_alarm", r"$\theta$ only (any energy alarm)"),
+        ),
+        (under, over, over),
+    ):
         a = d[key]
         ax.hist(a[a >= 0], bins=bins, histtype="step", label=label, **style)
     ax.axvline(s["f_onset"], color="0.5", lw=0.8, ls=":")
-    ax.set(xlabel=r"alarm time $k$", ylabel="number of runs", title="Energy alarms (parallel Kalman filter)")
+    ax.set(
+        xlabel=r"alarm time $k$",
+        ylabel="number of runs",
+        title="Energy alarms (parallel Kalman filter)",
+    )
     ax.legend(loc="upper left")
     return fig
 
 
-@register("bz-solution1", paper=PAPER,
-          title="Solution 1: GLR/minmax on the projected Kitanidis residual + energy test",
-          default_trials=None, plot=plot_solution1, chapter="bz/parametric-nonparametric",
-          chapter_seed=True,
-          claims={
-              "glr_detection_rate_theta_with_f": Claim(
-                  location="Solution 1 (§3.2), detection of θ",
-                  label="the GLR on the projected Kitanidis residual T_k ε_k detects θ whatever f",
-                  units="%", test=BY_CHECK, check=in_ci("glr_detection_rate_theta"),
-                  criterion="detection rate with f inside the 95 % interval of the rate without f"),
-              "glr_alarm_rate_f_only": Claim(
-                  location="Solution 1 (§3.2), rejection of f",
-                  label="f alone does not raise the GLR on the projected Kitanidis residual",
-                  units="%", test=BY_CHECK, check=in_ci("glr_false_alarm_rate"),
-                  criterion="alarm rate under f alone inside the 95 % interval of the false-alarm "
-                            "rate"),
-              "nonparametric_detection_rate_f": Claim(
-                  location="Solution 1 (§3.3)",
-                  label="the energy test on a parallel Kalman filter detects f",
-                  units="%", test=BY_CHECK, check=lambda p, o, h: o >= 0.95,
-                  criterion="detection rate of f at least 95 %")})
+@register(
+    "bz-solution1",
+    paper=PAPER,
+    title="Solution 1: GLR/minmax on the projected Kitanidis residual + energy test",
+    default_trials=None,
+    plot=plot_solution1,
+    chapter="bz/parametric-nonparametric",
+    chapter_seed=True,
+    claims={
+        "glr_detection_rate_theta_with_f": Claim(
+            location="Solution 1 (§3.2), detection of θ",
+            label="the GLR on the projected Kitanidis residual T_k ε_k detects θ whatever f",
+            units="%",
+            test=BY_CHECK,
+            check=in_ci("glr_detection_rate_theta"),
+            criterion="detection rate with f inside the 95 % interval of the rate without f",
+        ),
+        "glr_alarm_rate_f_only": Claim(
+            location="Solution 1 (§3.2), rejection of f",
+            label="f alone does not raise the GLR on the projected Kitanidis residual",
+            units="%",
+            test=BY_CHECK,
+            check=in_ci("glr_false_alarm_rate"),
+            criterion="alarm rate under f alone inside the 95 % interval of the false-alarm rate",
+        ),
+        "nonparametric_detection_rate_f": Claim(
+            location="Solution 1 (§3.3)",
+            label="the energy test on a parallel Kalman filter detects f",
+            units="%",
+            test=BY_CHECK,
+            check=lambda p, o, h: o >= 0.95,
+            criterion="detection rate of f at least 95 %",
+        ),
+    },
+)
 def solution1_mc(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Solution 1 (Section 3) in Monte Carlo on the designed example, settings :data:`SOL1`.
 
@@ -490,24 +646,41 @@ def solution1_mc(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
     rate("glr_detection_rate_theta_with_f", out["both_glr_alarm"] >= on)
     delay("glr_mean_delay_theta", out["theta_glr_alarm"], on)
     delay("glr_mean_delay_theta_with_f", out["both_glr_alarm"], on)
-    for name, truth in (("theta", [True, False]), ("both", [True, False]), ("theta2", [False, True])):
+    for name, truth in (
+        ("theta", [True, False]),
+        ("both", [True, False]),
+        ("theta2", [False, True]),
+    ):
         det = out[f"{name}_glr_alarm"] >= on
         ok = np.all(out[f"{name}_isolation"] == np.array(truth), axis=-1)
-        key = {"theta": "isolation_correct_rate_theta", "both": "isolation_correct_rate_theta_with_f",
-               "theta2": "isolation_correct_rate_theta2"}[name]
+        key = {
+            "theta": "isolation_correct_rate_theta",
+            "both": "isolation_correct_rate_theta_with_f",
+            "theta2": "isolation_correct_rate_theta2",
+        }[name]
         rate(key, ok[det] if det.any() else np.zeros(1, bool))
     rate("energy_false_alarm_rate", out["none_energy_alarm"] >= 0)
     rate("nonparametric_detection_rate_f", out["f_nonpar_alarm"] >= fon)
     delay("nonparametric_mean_delay_f", out["f_nonpar_alarm"], fon)
     rate("nonparametric_detection_rate_both", out["both_nonpar_alarm"] >= fon)
     rate("misattribution_rate_theta", out["theta_nonpar_alarm"] >= 0)
-    paper = {"glr_detection_rate_theta_with_f": "detected whatever f (Section 3.2), no number",
-             "glr_alarm_rate_f_only": "E f rejected: no effect on the GLR",
-             "nonparametric_detection_rate_f": "energy test detects f while the GLR is quiet (3.3), no number"}
-    settings = {**s, "seed": seed, "trials": trials,
-                "glr_threshold": float(scipy.stats.chi2.ppf(1.0 - s["glr_level"], 2)),
-                "energy_threshold": float(scipy.stats.chi2.ppf(1.0 - s["energy_alpha"], s["energy_window"] * 3))}
-    return ReproductionResult(id="bz-solution1", headline=h, paper=paper, settings=settings, data=out)
+    paper = {
+        "glr_detection_rate_theta_with_f": "detected whatever f (Section 3.2), no number",
+        "glr_alarm_rate_f_only": "E f rejected: no effect on the GLR",
+        "nonparametric_detection_rate_f": "energy test detects f while the GLR is quiet (3.3), no number",
+    }
+    settings = {
+        **s,
+        "seed": seed,
+        "trials": trials,
+        "glr_threshold": float(scipy.stats.chi2.ppf(1.0 - s["glr_level"], 2)),
+        "energy_threshold": float(
+            scipy.stats.chi2.ppf(1.0 - s["energy_alpha"], s["energy_window"] * 3)
+        ),
+    }
+    return ReproductionResult(
+        id="bz-solution1", headline=h, paper=paper, settings=settings, data=out
+    )
 
 
 # ----------------------------------------------------------------------------- solution 2
@@ -518,15 +691,34 @@ def _solution2_chunk(seeds: Sequence[np.random.SeedSequence]) -> dict[str, np.nd
     noise = draw_noise_batch(model, seeds)
     th = ex.drift_path(n, delta=s["delta"], onset=s["drift_onset"])
     tags = ("drift", "f", "fslow")
-    sims = [_simulate(model, noise, ex.nonparametric_profile(n, size=size, onset=s["f_onset"], period=period), th)
-            for size, period in ((0.0, s["f_period"]), (s["f_size"], s["f_period"]),
-                                 (s["f_size"], s["f_period_slow"]))]
+    sims = [
+        _simulate(
+            model,
+            noise,
+            ex.nonparametric_profile(n, size=size, onset=s["f_onset"], period=period),
+            th,
+        )
+        for size, period in (
+            (0.0, s["f_period"]),
+            (s["f_size"], s["f_period"]),
+            (s["f_size"], s["f_period_slow"]),
+        )
+    ]
     y, u = np.stack([sim.y for sim in sims]), np.stack([sim.u for sim in sims])  # scenarios stacked
     out: dict[str, np.ndarray] = {}
     for i, lam in enumerate(s["lambdas"]):
-        r = solution2(model, y, u, Psi=ex.PSI, lam=lam, energy_window=s["energy_window"],
-                      energy_alpha=s["energy_alpha"], start=s["warmup"], kalman=kal)
-        err = np.linalg.norm(r.rls.theta_hat - th, axis=-1)                          # (3, runs, N)
+        r = solution2(
+            model,
+            y,
+            u,
+            Psi=ex.PSI,
+            lam=lam,
+            energy_window=s["energy_window"],
+            energy_alpha=s["energy_alpha"],
+            start=s["warmup"],
+            kalman=kal,
+        )
+        err = np.linalg.norm(r.rls.theta_hat - th, axis=-1)  # (3, runs, N)
         for j, tag in enumerate(tags):
             out[f"{tag}_alarm_{i}"] = r.energy_alarm[j]
             out[f"{tag}_err_{i}"] = err[j]
@@ -537,7 +729,11 @@ def plot_solution2(result: ReproductionResult, fig: Any = None):
     """Mean tracking error against k for each forgetting factor, with and without ``f``."""
     fig, axes = figure(1, 3, fig=fig, figsize=(9.0, 3.2), sharex=True, sharey=True)
     s = result.settings
-    titles = {"drift": "drift only", "f": r"drift + fast $f$ (period 25)", "fslow": r"drift + slow $f$ (period 400)"}
+    titles = {
+        "drift": "drift only",
+        "f": r"drift + fast $f$ (period 25)",
+        "fslow": r"drift + slow $f$ (period 400)",
+    }
     for j, tag in enumerate(("drift", "f", "fslow")):
         ax = axes[0, j]
         for i, lam in enumerate(s["lambdas"]):
@@ -550,22 +746,33 @@ def plot_solution2(result: ReproductionResult, fig: Any = None):
     return fig
 
 
-@register("bz-solution2", paper=PAPER, title="Solution 2: RLS tracking with forgetting factor + error energy",
-          default_trials=None, plot=plot_solution2, chapter="bz/parametric-nonparametric",
-          chapter_seed=True,
-          claims={
-              "tracking_rmse": Claim(
-                  location="Solution 2 (§4), tracking",
-                  label="RLS with forgetting tracks a slowly varying θ_k",
-                  units="",
-                  test=BY_CHECK, check=lambda p, o, h: max(o) < 0.05,
-                  criterion="tracking RMSE below 0.05 for every forgetting factor"),
-              "detection_rate": Claim(
-                  location="Solution 2 (§4), detection",
-                  label="the energy of the tracking error detects f",
-                  units="%",
-                  test=BY_CHECK, check=lambda p, o, h: min(o) >= 0.95,
-                  criterion="detection rate of f at least 95 % for every forgetting factor")})
+@register(
+    "bz-solution2",
+    paper=PAPER,
+    title="Solution 2: RLS tracking with forgetting factor + error energy",
+    default_trials=None,
+    plot=plot_solution2,
+    chapter="bz/parametric-nonparametric",
+    chapter_seed=True,
+    claims={
+        "tracking_rmse": Claim(
+            location="Solution 2 (§4), tracking",
+            label="RLS with forgetting tracks a slowly varying θ_k",
+            units="",
+            test=BY_CHECK,
+            check=lambda p, o, h: max(o) < 0.05,
+            criterion="tracking RMSE below 0.05 for every forgetting factor",
+        ),
+        "detection_rate": Claim(
+            location="Solution 2 (§4), detection",
+            label="the energy of the tracking error detects f",
+            units="%",
+            test=BY_CHECK,
+            check=lambda p, o, h: min(o) >= 0.95,
+            criterion="detection rate of f at least 95 % for every forgetting factor",
+        ),
+    },
+)
 def solution2_mc(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Solution 2 (Section 4) in Monte Carlo on the designed example, settings :data:`SOL2`.
 
@@ -598,16 +805,27 @@ def solution2_mc(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
     out = run_monte_carlo(_solution2_chunk, trials, seed=seed, jobs=jobs)
     lo, hi = s["tracking_range"]
     fon = s["f_onset"]
-    h: dict[str, Any] = {"lambdas": list(s["lambdas"]), "tracking_rmse": [], "tracking_rmse_after_f": [],
-                         "tracking_rmse_after_f_no_f": [], "detection_rate": [], "detection_rate_ci": [],
-                         "mean_delay": [], "mean_delay_ci": [], "false_alarm_rate": [], "false_alarm_rate_ci": [],
-                         "tracking_rmse_after_f_slow": [], "detection_rate_slow": [], "mean_delay_slow": []}
+    h: dict[str, Any] = {
+        "lambdas": list(s["lambdas"]),
+        "tracking_rmse": [],
+        "tracking_rmse_after_f": [],
+        "tracking_rmse_after_f_no_f": [],
+        "detection_rate": [],
+        "detection_rate_ci": [],
+        "mean_delay": [],
+        "mean_delay_ci": [],
+        "false_alarm_rate": [],
+        "false_alarm_rate_ci": [],
+        "tracking_rmse_after_f_slow": [],
+        "detection_rate_slow": [],
+        "mean_delay_slow": [],
+    }
     data: dict[str, Any] = {"mean_err_drift": [], "mean_err_f": [], "mean_err_fslow": []}
     for i in range(len(s["lambdas"])):
         ed, ef = out[f"drift_err_{i}"], out[f"f_err_{i}"]
         h["tracking_rmse"].append(float(np.sqrt(np.mean(ed[:, lo:hi] ** 2))))
-        h["tracking_rmse_after_f"].append(float(np.sqrt(np.mean(ef[:, fon + 20:] ** 2))))
-        h["tracking_rmse_after_f_no_f"].append(float(np.sqrt(np.mean(ed[:, fon + 20:] ** 2))))
+        h["tracking_rmse_after_f"].append(float(np.sqrt(np.mean(ef[:, fon + 20 :] ** 2))))
+        h["tracking_rmse_after_f_no_f"].append(float(np.sqrt(np.mean(ed[:, fon + 20 :] ** 2))))
         a = out[f"f_alarm_{i}"]
         r, ci = _rate(a >= fon)
         h["detection_rate"].append(r)
@@ -619,16 +837,23 @@ def solution2_mc(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
         h["false_alarm_rate"].append(r)
         h["false_alarm_rate_ci"].append(ci)
         es, a_s = out[f"fslow_err_{i}"], out[f"fslow_alarm_{i}"]
-        h["tracking_rmse_after_f_slow"].append(float(np.sqrt(np.mean(es[:, fon + 20:] ** 2))))
+        h["tracking_rmse_after_f_slow"].append(float(np.sqrt(np.mean(es[:, fon + 20 :] ** 2))))
         h["detection_rate_slow"].append(_rate(a_s >= fon)[0])
         h["mean_delay_slow"].append(_mean_ci(a_s[a_s >= fon] - fon)[0])
         data["mean_err_drift"].append(ed.mean(axis=0))
         data["mean_err_f"].append(ef.mean(axis=0))
         data["mean_err_fslow"].append(es.mean(axis=0))
-    paper = {"tracking_rmse": "RLS tracks a slowly varying theta_k (no number)",
-             "detection_rate": "tracking error energy detects f (no number)"}
-    return ReproductionResult(id="bz-solution2", headline=h, paper=paper,
-                              settings={**s, "seed": seed, "trials": trials}, data=data)
+    paper = {
+        "tracking_rmse": "RLS tracks a slowly varying theta_k (no number)",
+        "detection_rate": "tracking error energy detects f (no number)",
+    }
+    return ReproductionResult(
+        id="bz-solution2",
+        headline=h,
+        paper=paper,
+        settings={**s, "seed": seed, "trials": trials},
+        data=data,
+    )
 
 
 # ----------------------------------------------------------------------------- tables for readers
@@ -680,10 +905,14 @@ def headline_table(result: ReproductionResult, keys: Sequence[str]):
     from fdi_lib.report import NA, table
 
     h = result.headline
-    rows = {LABELS[k]: [_cell(k, h[k], h.get(k + "_ci")), str(result.paper.get(k, "not given"))]
-            for k in keys}
-    notes = ["Rates in % with their 95 % Clopper-Pearson interval; delays with a 95 % t interval; "
-             f"{result.settings['trials']} runs."]
+    rows = {
+        LABELS[k]: [_cell(k, h[k], h.get(k + "_ci")), str(result.paper.get(k, "not given"))]
+        for k in keys
+    }
+    notes = [
+        "Rates in % with their 95 % Clopper-Pearson interval; delays with a 95 % t interval; "
+        f"{result.settings['trials']} runs."
+    ]
     if any(NA in cells for cells in rows.values()):
         notes.append(_NA_NOTE)
     return table(rows, ["ours", "paper"], notes=notes)
@@ -703,11 +932,15 @@ def solution2_table(result: ReproductionResult):
         "RMSE after the onset of f (fast f)": num(h["tracking_rmse_after_f"]),
         "RMSE on the same range, no f": num(h["tracking_rmse_after_f_no_f"]),
         "RMSE after the onset of f (slow f)": num(h["tracking_rmse_after_f_slow"]),
-        "detection of f (fast f)": [fmt_rate(r, c) for r, c in zip(h["detection_rate"], h["detection_rate_ci"])],
+        "detection of f (fast f)": [
+            fmt_rate(r, c) for r, c in zip(h["detection_rate"], h["detection_rate_ci"])
+        ],
         "mean delay, fast f (samples)": num(h["mean_delay"]),
         "detection of f (slow f)": [fmt_rate(r) for r in h["detection_rate_slow"]],
         "mean delay, slow f (samples)": num(h["mean_delay_slow"]),
-        "false alarms (no f)": [fmt_rate(r, c) for r, c in zip(h["false_alarm_rate"], h["false_alarm_rate_ci"])],
+        "false alarms (no f)": [
+            fmt_rate(r, c) for r, c in zip(h["false_alarm_rate"], h["false_alarm_rate_ci"])
+        ],
     }
     notes = [f"{result.settings['trials']} runs; rates in % (95 % Clopper-Pearson interval)."]
     if any(NA in cells for cells in rows.values()):

@@ -58,8 +58,9 @@ def _check_plot(path: str) -> None:
     """``--plot FILE``: an existing folder and an image format matplotlib writes."""
     folder = Path(path).expanduser().resolve().parent
     if not folder.is_dir():
-        raise ModelError(f"--plot: expected a file in an existing folder, got {path!r} "
-                         f"({folder} does not exist)")
+        raise ModelError(
+            f"--plot: expected a file in an existing folder, got {path!r} ({folder} does not exist)"
+        )
     suffix = Path(path).suffix.lstrip(".").lower()
     if suffix:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -67,8 +68,9 @@ def _check_plot(path: str) -> None:
 
         formats = FigureCanvasAgg(Figure()).get_supported_filetypes()
         if suffix not in formats:
-            raise ModelError(f"--plot: expected an image file ({', '.join(sorted(formats))}), "
-                             f"got {path!r}")
+            raise ModelError(
+                f"--plot: expected an image file ({', '.join(sorted(formats))}), got {path!r}"
+            )
 
 
 def _integer_type(check: Callable[[int], Any]) -> Callable[[str], int]:
@@ -96,10 +98,21 @@ def _jobs(value: int) -> None:
 
 #: The options each use of the command reads; any other one given is a usage error, rather than
 #: an option silently ignored while a long run goes on.
-_READS = {"--list": (), "--describe": (),
-          "--ledger": ("--json", "--trials", "--jobs", "--cluster", "--progress"),
-          "ID": ("--json", "--seed", "--trials", "--jobs", "--cluster", "--progress", "--option",
-                 "--plot")}
+_READS = {
+    "--list": (),
+    "--describe": (),
+    "--ledger": ("--json", "--trials", "--jobs", "--cluster", "--progress"),
+    "ID": (
+        "--json",
+        "--seed",
+        "--trials",
+        "--jobs",
+        "--cluster",
+        "--progress",
+        "--option",
+        "--plot",
+    ),
+}
 
 
 def _given(args: argparse.Namespace) -> list[str]:
@@ -111,8 +124,15 @@ def _given(args: argparse.Namespace) -> list[str]:
 
 def _check_applies(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """A usage error (exit 2) for a combination whose options would not all be read."""
-    modes = [m for m, on in (("--list", args.list), ("--ledger", args.ledger),
-                             ("--describe", args.describe)) if on]
+    modes = [
+        m
+        for m, on in (
+            ("--list", args.list),
+            ("--ledger", args.ledger),
+            ("--describe", args.describe),
+        )
+        if on
+    ]
     if args.id and args.describe:
         modes = ["--describe"] + [m for m in modes if m != "--describe"]
     elif args.id:
@@ -126,8 +146,10 @@ def _check_applies(parser: argparse.ArgumentParser, args: argparse.Namespace) ->
     extra = [o for o in _given(args) if o not in _READS[modes[0]]]
     if extra:
         what = {"ID": "a reproduction"}.get(modes[0], modes[0])
-        parser.error(f"{extra[0]} does not apply to {what} (it reads "
-                     f"{', '.join(_READS[modes[0]]) or 'no other option'})")
+        parser.error(
+            f"{extra[0]} does not apply to {what} (it reads "
+            f"{', '.join(_READS[modes[0]]) or 'no other option'})"
+        )
 
 
 def _parser(prog: str = "python -m fdi_lib") -> argparse.ArgumentParser:
@@ -148,32 +170,67 @@ def _parsers(prog: str) -> tuple[argparse.ArgumentParser, argparse.ArgumentParse
         rep = parser
     else:
         sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-        rep = sub.add_parser("reproduce", help="reproduce a figure or table of the papers",
-                             description=description,
-                             formatter_class=raw)
+        rep = sub.add_parser(
+            "reproduce",
+            help="reproduce a figure or table of the papers",
+            description=description,
+            formatter_class=raw,
+        )
     rep.add_argument("id", nargs="?", help="reproduction identifier, e.g. zb2014-fig3")
     rep.add_argument("--list", action="store_true", help="list the identifiers and exit")
-    rep.add_argument("--ledger", action="store_true",
-                     help="print the claims ledger of the four papers (with --json: one object)")
-    rep.add_argument("--describe", action="store_true", help="print the documentation of ID and exit")
-    rep.add_argument("--seed", type=_integer_type(check_seed), default=None,
-                     help="random seed, an integer >= 0 (default: the reproduction's)")
-    rep.add_argument("--trials", type=_integer_type(lambda n: integer(n, "trials", low=1)),
-                     default=None, help="Monte Carlo trials (default: the paper's own count)")
+    rep.add_argument(
+        "--ledger",
+        action="store_true",
+        help="print the claims ledger of the four papers (with --json: one object)",
+    )
+    rep.add_argument(
+        "--describe", action="store_true", help="print the documentation of ID and exit"
+    )
+    rep.add_argument(
+        "--seed",
+        type=_integer_type(check_seed),
+        default=None,
+        help="random seed, an integer >= 0 (default: the reproduction's)",
+    )
+    rep.add_argument(
+        "--trials",
+        type=_integer_type(lambda n: integer(n, "trials", low=1)),
+        default=None,
+        help="Monte Carlo trials (default: the paper's own count)",
+    )
     where = rep.add_mutually_exclusive_group()
-    where.add_argument("--jobs", type=_integer_type(_jobs), default=None,
-                       help="parallel jobs, -1 for all cores (default 1)")
-    where.add_argument("--cluster", metavar="local:N|tcp://HOST:PORT", default=None,
-                       help="run the Monte Carlo chunks on a Dask cluster: N local worker "
-                            "processes started for the run, or an existing scheduler (same "
-                            "results as --jobs 1)")
-    rep.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
-                     help="progress bar over the Monte Carlo chunks on standard error (default: when "
-                          "standard error is a terminal)")
-    rep.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
-                     help="a keyword option of the reproduction (its --describe lists them), VALUE "
-                          "in JSON or a plain string, e.g. isolation_window=record_end; repeatable")
-    rep.add_argument("--json", action="store_true", help="print one JSON object of headline numbers")
+    where.add_argument(
+        "--jobs",
+        type=_integer_type(_jobs),
+        default=None,
+        help="parallel jobs, -1 for all cores (default 1)",
+    )
+    where.add_argument(
+        "--cluster",
+        metavar="local:N|tcp://HOST:PORT",
+        default=None,
+        help="run the Monte Carlo chunks on a Dask cluster: N local worker "
+        "processes started for the run, or an existing scheduler (same "
+        "results as --jobs 1)",
+    )
+    rep.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="progress bar over the Monte Carlo chunks on standard error (default: when "
+        "standard error is a terminal)",
+    )
+    rep.add_argument(
+        "--option",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="a keyword option of the reproduction (its --describe lists them), VALUE "
+        "in JSON or a plain string, e.g. isolation_window=record_end; repeatable",
+    )
+    rep.add_argument(
+        "--json", action="store_true", help="print one JSON object of headline numbers"
+    )
     rep.add_argument("--plot", metavar="FILE", default=None, help="also save the figure to FILE")
     return parser, rep
 
@@ -230,8 +287,10 @@ def _main(argv: list[str] | None, prog: str) -> int:
         rep.check_arguments(seed=args.seed, trials=args.trials, jobs=args.jobs)
         options = _options(rep, args.option)
         if args.trials is not None and args.trials < rep.min_trials:
-            raise ModelError(f"--trials: expected at least {rep.min_trials} (the JSON's 95 % intervals need "
-                             f"two trials), got {args.trials}")
+            raise ModelError(
+                f"--trials: expected at least {rep.min_trials} (the JSON's 95 % intervals need "
+                f"two trials), got {args.trials}"
+            )
         if args.plot:
             if rep.plot is None:
                 raise ModelError(f"--plot: {args.id} has no figure")
@@ -251,7 +310,10 @@ def _main(argv: list[str] | None, prog: str) -> int:
         try:
             rep.plot(result).savefig(args.plot, dpi=120, bbox_inches="tight")
         except OSError as exc:
-            print(f"error: --plot: could not write {args.plot!r}: {exc.strerror or exc}", file=sys.stderr)
+            print(
+                f"error: --plot: could not write {args.plot!r}: {exc.strerror or exc}",
+                file=sys.stderr,
+            )
             return 2
     if args.json:
         print(result.to_json())
@@ -268,7 +330,11 @@ def _where(args: argparse.Namespace) -> Any:
     """Context of a run: the progress bars (``--progress``, default: standard error is a terminal)
     and, with ``--cluster``, the Dask cluster's executor for every Monte Carlo run inside (a local
     cluster is stopped on leaving, also on an error or Ctrl-C)."""
-    show = args.progress if args.progress is not None else bool(getattr(sys.stderr, "isatty", lambda: False)())
+    show = (
+        args.progress
+        if args.progress is not None
+        else bool(getattr(sys.stderr, "isatty", lambda: False)())
+    )
     with contextlib.ExitStack() as stack:
         if args.cluster is not None:
             stack.enter_context(use_executor(stack.enter_context(dask_executor(args.cluster))))
@@ -281,16 +347,21 @@ def _options(rep: Any, items: list[str]) -> dict[str, Any]:
     kept as a string; a name the reproduction does not take is an error naming it."""
     import json
 
-    known = [n for n, p in inspect.signature(rep.func).parameters.items()
-             if p.kind is p.KEYWORD_ONLY and n not in ("seed", "trials", "jobs")]
+    known = [
+        n
+        for n, p in inspect.signature(rep.func).parameters.items()
+        if p.kind is p.KEYWORD_ONLY and n not in ("seed", "trials", "jobs")
+    ]
     out: dict[str, Any] = {}
     for item in items:
         name, sep, text = item.partition("=")
         if not sep or not name:
             raise ModelError(f"--option: expected NAME=VALUE, got {item!r}")
         if name not in known:
-            raise ModelError(f"--option: {rep.id} has no option {name!r}; expected one of "
-                             f"{', '.join(known) or 'none'}")
+            raise ModelError(
+                f"--option: {rep.id} has no option {name!r}; expected one of "
+                f"{', '.join(known) or 'none'}"
+            )
         try:
             out[name] = json.loads(text)
         except ValueError:
@@ -316,11 +387,13 @@ def _print_ledger(args: argparse.Namespace) -> int:
     for id, seconds in led.timings.items():
         print(f"{'computed':<24} {id} in {seconds:.1f} s")
     for r in led.rows:
-        print(f"{r.status:<24} {r.claim}\n{'':<24} paper: {r.paper}  ours: {r.ours}"
-              + (f"  95 % interval: [{r.ci[0]:.4g}, {r.ci[1]:.4g}]" if r.ci else "")
-              + (f"  ({r.role})" if r.role else "")
-              + (f"  see {r.cause or r.explain}" if r.cause or r.explain else "")
-              + (f"\n{'':<24} {r.status_detail}" if r.status_detail else ""))
+        print(
+            f"{r.status:<24} {r.claim}\n{'':<24} paper: {r.paper}  ours: {r.ours}"
+            + (f"  95 % interval: [{r.ci[0]:.4g}, {r.ci[1]:.4g}]" if r.ci else "")
+            + (f"  ({r.role})" if r.role else "")
+            + (f"  see {r.cause or r.explain}" if r.cause or r.explain else "")
+            + (f"\n{'':<24} {r.status_detail}" if r.status_detail else "")
+        )
     return 0
 
 

@@ -128,17 +128,68 @@ from fdi_lib.errors import ModelError, UnknownReproductionError
 from fdi_lib.report import NA, fmt_count, fmt_number, fmt_rate, table
 from fdi_lib.reproduce.registry import ReproductionResult, cached_run, get, list_reproductions
 
-__all__ = ["STATUSES", "ROLE_KEYS", "CALIBRATION", "PREDICTION", "INPUT", "surrogate_role", "FALLBACK_TRIALS",
-           "REPRODUCED", "WITHIN", "WITHIN_SPREAD", "DIFFERS", "DIFFERS_MEASURED", "DIFFERS_UNKNOWN",
-           "INPUT_VALUE", "CALIBRATION_TARGET", "NOT_COMPUTED", "NOT_REPRODUCIBLE", "AGREES", "DIFFERING",
-           "DIFFERS_BRACKETED", "DIFFERS_HYPOTHESIS", "INPUT_RECOVERED", "TESTS", "BY_TOLERANCE",
-           "BY_INTERVAL", "BY_STANDARD_ERROR", "BY_SPREAD", "BY_CHECK", "IS_INPUT",
-           "ESTIMATES_INPUT",
-           "IS_CALIBRATION", "NOT_CHECKABLE", "shown_under", "claim_for", "chapter_of", "ours_at",
-           "ci_at", "in_ci", "SET_BY_BOOK", "MISSION", "MISSION_STATES", "item_state",
-           "DEFAULT_RTOL", "PAPERS", "Claim", "LedgerRow", "Ledger", "NO_VALUE", "claim_paths",
-           "claim_status", "build_ledger", "collect_results", "ledger", "FigureClaim",
-           "figure_claim", "glue_caption", "REPRODUCES", "COMPARE", "REDRAWS", "CAPTION_ITEMS"]
+__all__ = [
+    "STATUSES",
+    "ROLE_KEYS",
+    "CALIBRATION",
+    "PREDICTION",
+    "INPUT",
+    "surrogate_role",
+    "FALLBACK_TRIALS",
+    "REPRODUCED",
+    "WITHIN",
+    "WITHIN_SPREAD",
+    "DIFFERS",
+    "DIFFERS_MEASURED",
+    "DIFFERS_UNKNOWN",
+    "INPUT_VALUE",
+    "CALIBRATION_TARGET",
+    "NOT_COMPUTED",
+    "NOT_REPRODUCIBLE",
+    "AGREES",
+    "DIFFERING",
+    "DIFFERS_BRACKETED",
+    "DIFFERS_HYPOTHESIS",
+    "INPUT_RECOVERED",
+    "TESTS",
+    "BY_TOLERANCE",
+    "BY_INTERVAL",
+    "BY_STANDARD_ERROR",
+    "BY_SPREAD",
+    "BY_CHECK",
+    "IS_INPUT",
+    "ESTIMATES_INPUT",
+    "IS_CALIBRATION",
+    "NOT_CHECKABLE",
+    "shown_under",
+    "claim_for",
+    "chapter_of",
+    "ours_at",
+    "ci_at",
+    "in_ci",
+    "SET_BY_BOOK",
+    "MISSION",
+    "MISSION_STATES",
+    "item_state",
+    "DEFAULT_RTOL",
+    "PAPERS",
+    "Claim",
+    "LedgerRow",
+    "Ledger",
+    "NO_VALUE",
+    "claim_paths",
+    "claim_status",
+    "build_ledger",
+    "collect_results",
+    "ledger",
+    "FigureClaim",
+    "figure_claim",
+    "glue_caption",
+    "REPRODUCES",
+    "COMPARE",
+    "REDRAWS",
+    "CAPTION_ITEMS",
+]
 
 REPRODUCED, WITHIN, WITHIN_SPREAD = "reproduced", "within interval", "within spread"
 DIFFERS_MEASURED, DIFFERS_UNKNOWN = "differs, measured cause", "differs, cause unknown"
@@ -146,9 +197,20 @@ DIFFERS_BRACKETED, DIFFERS_HYPOTHESIS = "differs, bracketed", "differs, hypothes
 INPUT_VALUE, INPUT_RECOVERED, CALIBRATION_TARGET = "input", "input recovered", "calibration target"
 NOT_COMPUTED, NOT_REPRODUCIBLE = "not computed", "not reproducible"
 #: The statuses of a row, in the order of the summaries.
-STATUSES = (REPRODUCED, WITHIN, WITHIN_SPREAD, DIFFERS_MEASURED, DIFFERS_HYPOTHESIS,
-            DIFFERS_BRACKETED, DIFFERS_UNKNOWN, INPUT_VALUE, INPUT_RECOVERED, CALIBRATION_TARGET,
-            NOT_COMPUTED, NOT_REPRODUCIBLE)
+STATUSES = (
+    REPRODUCED,
+    WITHIN,
+    WITHIN_SPREAD,
+    DIFFERS_MEASURED,
+    DIFFERS_HYPOTHESIS,
+    DIFFERS_BRACKETED,
+    DIFFERS_UNKNOWN,
+    INPUT_VALUE,
+    INPUT_RECOVERED,
+    CALIBRATION_TARGET,
+    NOT_COMPUTED,
+    NOT_REPRODUCIBLE,
+)
 #: Statuses under which our result agrees with the paper's claim.
 AGREES = (REPRODUCED, WITHIN, WITHIN_SPREAD)
 #: Statuses of a difference.
@@ -170,9 +232,13 @@ NO_VALUE = (None, "not stated", "illustration, no numbers")
 #: top-level keys, see :func:`surrogate_role`); they are not claims.
 ROLE_KEYS = ("calibrated_to", "predictions")
 #: The papers (``paper_id``, the prefix of a reproduction identifier) and how rows name them.
-PAPERS = {"zb2014": "Zhang & Basseville 2014", "zhang2021": "Zhang 2021",
-          "bz": "Basseville & Zhang 2015", "rosa2013": "Rosa & Silvestre 2013",
-          "windturbine": "Wind-turbine benchmark (Odgaard et al.)"}
+PAPERS = {
+    "zb2014": "Zhang & Basseville 2014",
+    "zhang2021": "Zhang 2021",
+    "bz": "Basseville & Zhang 2015",
+    "rosa2013": "Rosa & Silvestre 2013",
+    "windturbine": "Wind-turbine benchmark (Odgaard et al.)",
+}
 
 #: Surrogate roles of a paper value: the model was fitted to it, computes it, or takes it as given.
 CALIBRATION, PREDICTION, INPUT = "calibration", "prediction", "input"
@@ -187,11 +253,29 @@ CALIBRATION, PREDICTION, INPUT = "calibration", "prediction", "input"
 #: reproduction); a value a surrogate was fitted to (calibration target); or not at all (a
 #: :attr:`Claim.reason` says why).
 BY_TOLERANCE, BY_INTERVAL, BY_STANDARD_ERROR, BY_SPREAD, BY_CHECK = (
-    "tolerance", "95 % interval", "standard error", "spread of single runs", "check")
+    "tolerance",
+    "95 % interval",
+    "standard error",
+    "spread of single runs",
+    "check",
+)
 IS_INPUT, ESTIMATES_INPUT, IS_CALIBRATION, NOT_CHECKABLE = (
-    "input", "estimate of an input", "calibration target", "not reproducible")
-TESTS = (BY_TOLERANCE, BY_INTERVAL, BY_STANDARD_ERROR, BY_SPREAD, BY_CHECK, IS_INPUT,
-         ESTIMATES_INPUT, IS_CALIBRATION, NOT_CHECKABLE)
+    "input",
+    "estimate of an input",
+    "calibration target",
+    "not reproducible",
+)
+TESTS = (
+    BY_TOLERANCE,
+    BY_INTERVAL,
+    BY_STANDARD_ERROR,
+    BY_SPREAD,
+    BY_CHECK,
+    IS_INPUT,
+    ESTIMATES_INPUT,
+    IS_CALIBRATION,
+    NOT_CHECKABLE,
+)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -295,19 +379,29 @@ class Claim:
         if self.test not in TESTS:
             raise ModelError(f"Claim.test: expected one of {list(TESTS)}, got {self.test!r}")
         if (self.test == NOT_CHECKABLE) != bool(self.reason):
-            raise ModelError(f"Claim.reason: expected a reason exactly for test {NOT_CHECKABLE!r}, "
-                             f"got test {self.test!r} with reason {self.reason!r}")
+            raise ModelError(
+                f"Claim.reason: expected a reason exactly for test {NOT_CHECKABLE!r}, "
+                f"got test {self.test!r} with reason {self.reason!r}"
+            )
         if self.test == BY_CHECK and self.check is None:
             raise ModelError(f"Claim.check: test {BY_CHECK!r} needs a check function, got None")
         if not self.shown_under and not self.location.strip():
             raise ModelError("Claim.location: expected where the paper states it, got ''")
 
 
-def shown_under(id: str, same_path: Callable[[tuple[str, ...]], tuple[str, ...]] | None = None,
-                **kwargs: Any) -> Claim:
+def shown_under(
+    id: str, same_path: Callable[[tuple[str, ...]], tuple[str, ...]] | None = None, **kwargs: Any
+) -> Claim:
     """The declaration of a claim listed under reproduction ``id`` (its row is there)."""
-    return Claim(location="", units="", test=kwargs.pop("test", BY_TOLERANCE), shown_under=id,
-                 same_path=same_path, **kwargs)
+    return Claim(
+        location="",
+        units="",
+        test=kwargs.pop("test", BY_TOLERANCE),
+        shown_under=id,
+        same_path=same_path,
+        **kwargs,
+    )
+
 
 @dataclass(frozen=True)
 class LedgerRow:
@@ -347,14 +441,30 @@ class LedgerRow:
         """JSON-serialisable form (``--ledger --json``; keys in the module docstring)."""
         from fdi_lib.reproduce.registry import _jsonable
 
-        return _jsonable({"id": self.id, "paper_id": self.paper_id, "key": "/".join(self.path),
-                          "claim": self.claim, "paper": self.paper, "ours": self.ours,
-                          "ci95": None if self.ci is None else list(self.ci), "status": self.status,
-                          "status_detail": self.status_detail, "cause": self.cause,
-                          "where": self.where, "explanation": self.explain, "note": self.note,
-                          "surrogate": self.role, "trials": self.trials,
-                          "paper_trials": self.paper_trials, "source": self.source,
-                          "location": self.location, "units": self.units, "test": self.test})
+        return _jsonable(
+            {
+                "id": self.id,
+                "paper_id": self.paper_id,
+                "key": "/".join(self.path),
+                "claim": self.claim,
+                "paper": self.paper,
+                "ours": self.ours,
+                "ci95": None if self.ci is None else list(self.ci),
+                "status": self.status,
+                "status_detail": self.status_detail,
+                "cause": self.cause,
+                "where": self.where,
+                "explanation": self.explain,
+                "note": self.note,
+                "surrogate": self.role,
+                "trials": self.trials,
+                "paper_trials": self.paper_trials,
+                "source": self.source,
+                "location": self.location,
+                "units": self.units,
+                "test": self.test,
+            }
+        )
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -397,14 +507,18 @@ def _default_ci(headline: Mapping[str, Any], path: tuple[str, ...]) -> tuple[flo
     for cpath in ((*parent, key + "_ci"), (*parent, "ci95") if key == "rate" else None):
         if cpath is not None and _has(headline, cpath):
             ci = _at(headline, cpath)
-            if (isinstance(ci, (list, tuple)) and len(ci) == 2
-                    and all(isinstance(c, numbers.Real) for c in ci)):
+            if (
+                isinstance(ci, (list, tuple))
+                and len(ci) == 2
+                and all(isinstance(c, numbers.Real) for c in ci)
+            ):
                 return float(ci[0]), float(ci[1])
     return None
 
 
-def _default_spread(headline: Mapping[str, Any], path: tuple[str, ...]
-                    ) -> tuple[float, float] | None:
+def _default_spread(
+    headline: Mapping[str, Any], path: tuple[str, ...]
+) -> tuple[float, float] | None:
     """``<key>_spread95`` next to a single-run key: the 95 % range of our runs, else ``None``."""
     spath = (*path[:-1], path[-1] + "_spread95")
     if _has(headline, spath):
@@ -437,7 +551,7 @@ def _label(id: str, path: tuple[str, ...], spec: Claim) -> str:
 
 
 def _spread_detail(headline: Mapping[str, Any], path: tuple[str, ...]) -> str:
-    """"the paper's run is at the 71st percentile of our 1000 runs" (keys ``<key>_paper_percentile``
+    """ "the paper's run is at the 71st percentile of our 1000 runs" (keys ``<key>_paper_percentile``
     and ``spread_runs`` of the headline; what is known of them)."""
     pct = headline.get(path[-1] + "_paper_percentile") if len(path) == 1 else None
     runs = headline.get("spread_runs")
@@ -468,10 +582,15 @@ _ABOUT = re.compile(r"^\s*about\s+([-+0-9.eE]+)\s*$")
 _PLAIN = Claim(location="(undeclared)", units="", test=BY_TOLERANCE)
 
 
-def claim_status(paper: Any, ours: Any, ci: tuple[float, float] | None = None,
-                 spec: Claim = _PLAIN, headline: Mapping[str, Any] | None = None,
-                 spread: tuple[float, float] | None = None,
-                 se: Sequence[float] | float | None = None) -> tuple[str, str]:
+def claim_status(
+    paper: Any,
+    ours: Any,
+    ci: tuple[float, float] | None = None,
+    spec: Claim = _PLAIN,
+    headline: Mapping[str, Any] | None = None,
+    spread: tuple[float, float] | None = None,
+    se: Sequence[float] | float | None = None,
+) -> tuple[str, str]:
     """The outcome of comparing one claim with our value by its declared test, and a note saying
     how it was decided.
 
@@ -511,8 +630,9 @@ def claim_status(paper: Any, ours: Any, ci: tuple[float, float] | None = None,
         ok = bool(spec.check(paper, ours, headline or {}))
         return (REPRODUCED if ok else DIFFERS), spec.criterion
     if spec.value is not None:
-        return claim_status(spec.value(paper), ours, ci, replace(spec, value=None), headline,
-                            spread, se)
+        return claim_status(
+            spec.value(paper), ours, ci, replace(spec, value=None), headline, spread, se
+        )
     if isinstance(paper, str):
         m, a = _INEQ.match(paper), _ABOUT.match(paper)
         if m:
@@ -520,8 +640,12 @@ def claim_status(paper: Any, ours: Any, ci: tuple[float, float] | None = None,
             if vals is None:
                 return NOT_COMPUTED, f"no number of ours to compare with {paper}"
             op, bound = m.group(1), float(m.group(2))
-            holds = {"<": lambda v: v < bound, "<=": lambda v: v <= bound,
-                     ">": lambda v: v > bound, ">=": lambda v: v >= bound}[op]
+            holds = {
+                "<": lambda v: v < bound,
+                "<=": lambda v: v <= bound,
+                ">": lambda v: v > bound,
+                ">=": lambda v: v >= bound,
+            }[op]
             return (REPRODUCED if all(holds(v) for v in vals) else DIFFERS), f"inequality {paper}"
         if a:
             return claim_status(float(a.group(1)), ours, ci, spec, headline, spread, se)
@@ -536,14 +660,18 @@ def claim_status(paper: Any, ours: Any, ci: tuple[float, float] | None = None,
     if o is None or len(o) != len(p):
         return DIFFERS, "not comparable"
     tol_note = f"tolerance {fmt_number(spec.rtol)} relative" + (
-        f", {fmt_number(spec.atol)} absolute" if spec.atol else "")
+        f", {fmt_number(spec.atol)} absolute" if spec.atol else ""
+    )
     close = all(math.isclose(a, b, rel_tol=spec.rtol, abs_tol=spec.atol) for a, b in zip(o, p))
     inside = ci is not None and len(p) == 1 and ci[0] <= p[0] <= ci[1]
     if spec.test == BY_INTERVAL:
         if ci is None:
             return NOT_COMPUTED, "no 95 % interval of ours to compare with"
-        return (WITHIN, "paper value inside our 95 % interval") if inside else (
-            DIFFERS, "paper value outside our 95 % interval")
+        return (
+            (WITHIN, "paper value inside our 95 % interval")
+            if inside
+            else (DIFFERS, "paper value outside our 95 % interval")
+        )
     if spec.test == BY_STANDARD_ERROR:
         ses = _numbers(se)
         if ses is None or len(ses) != len(p):
@@ -580,18 +708,22 @@ def ours_at(*keys: str) -> Callable[[Mapping[str, Any], tuple[str, ...]], Any]:
 def ci_at(*keys: str) -> Callable[[Mapping[str, Any], tuple[str, ...]], Any]:
     """For :attr:`Claim.ci`: the interval at ``keys`` followed by the claim path after its first
     key (tables with one ``ci95`` dictionary per column, possibly per reading of a rule)."""
+
     def ci(h: Mapping[str, Any], path: tuple[str, ...]) -> tuple[float, float] | None:
         at = (*keys, *path[1:])
         v = _at(h, at) if _has(h, at) else None
         return None if v is None else (float(v[0]), float(v[1]))
+
     return ci
 
 
 def in_ci(key: str) -> Callable[[Any, Any, Mapping[str, Any]], bool]:
     """For :attr:`Claim.check`: our value lies in the 95 % interval ``headline[key + "_ci"]``."""
+
     def check(paper: Any, ours: Any, h: Mapping[str, Any]) -> bool:
         lo, hi = h[key + "_ci"]
         return lo <= float(ours) <= hi
+
     return check
 
 
@@ -632,8 +764,9 @@ def _fig(id: str) -> str:
     return id.split("-", 1)[-1].capitalize()
 
 
-def surrogate_role(id: str, paper: Mapping[str, Any], path: tuple[str, ...],
-                   spec: Claim | None = None) -> str | None:
+def surrogate_role(
+    id: str, paper: Mapping[str, Any], path: tuple[str, ...], spec: Claim | None = None
+) -> str | None:
     """What the paper value at ``path`` is to a surrogate model (``None`` if ``id`` has none).
 
     A ``paper`` dictionary that declares :data:`ROLE_KEYS` decides alone: its key
@@ -655,8 +788,9 @@ def surrogate_role(id: str, paper: Mapping[str, Any], path: tuple[str, ...],
         return None
     if spec is None:
         return PREDICTION
-    return spec.role or {IS_INPUT: INPUT, ESTIMATES_INPUT: INPUT,
-                         IS_CALIBRATION: CALIBRATION}.get(spec.test, PREDICTION)
+    return spec.role or {IS_INPUT: INPUT, ESTIMATES_INPUT: INPUT, IS_CALIBRATION: CALIBRATION}.get(
+        spec.test, PREDICTION
+    )
 
 
 def _order(id: str) -> tuple[int, str]:
@@ -676,31 +810,77 @@ def _items(paper: str, *names: str) -> tuple[tuple[str, str, tuple[str, ...]], .
 #: item's rows are those whose location starts with one of its prefixes (a figure drawn from a
 #: table's numbers shares the table's rows).
 MISSION: tuple[tuple[str, str, tuple[str, ...]], ...] = (
-    *_items("zb2014", "Prop. 1", "Prop. 2", "Fig. 1", "Fig. 2", "Fig. 3", "Fig. 4", "Table 1",
-            "Fig. 5", "Fig. 6", "Fig. 7", "Fig. 8", "Fig. 9"),
+    *_items(
+        "zb2014",
+        "Prop. 1",
+        "Prop. 2",
+        "Fig. 1",
+        "Fig. 2",
+        "Fig. 3",
+        "Fig. 4",
+        "Table 1",
+        "Fig. 5",
+        "Fig. 6",
+        "Fig. 7",
+        "Fig. 8",
+        "Fig. 9",
+    ),
     *_items("zhang2021", "Prop. 1", "Prop. 2", "Fig. 2", "Fig. 3"),
-    ("zhang2021", "Fig. 4", ("Fig. 4", "Table I,")), ("zhang2021", "Table I", ("Table I,",)),
-    ("zhang2021", "Fig. 5", ("Fig. 5", "Table II,")), ("zhang2021", "Table II", ("Table II,",)),
+    ("zhang2021", "Fig. 4", ("Fig. 4", "Table I,")),
+    ("zhang2021", "Table I", ("Table I,",)),
+    ("zhang2021", "Fig. 5", ("Fig. 5", "Table II,")),
+    ("zhang2021", "Table II", ("Table II,",)),
     *_items("zhang2021", "Fig. 6", "Fig. 7"),
     *_items("bz", "Prop. 1", "Prop. 2", "Solution 1", "Solution 2"),
-    *_items("rosa2013", "Fig. 1", "Fig. 2", "Prop. 1", "Prop. 2", "Prop. 3", "Table 1", "Table 2",
-            "Table 3", "Fig. 8", "Fig. 9", "Fig. 10", "Fig. 11", "Fig. 12", "Remark 4"),
+    *_items(
+        "rosa2013",
+        "Fig. 1",
+        "Fig. 2",
+        "Prop. 1",
+        "Prop. 2",
+        "Prop. 3",
+        "Table 1",
+        "Table 2",
+        "Table 3",
+        "Fig. 8",
+        "Fig. 9",
+        "Fig. 10",
+        "Fig. 11",
+        "Fig. 12",
+        "Remark 4",
+    ),
 )
 #: States of a paper item (:meth:`Ledger.mission`), from its rows: every compared row agrees; the
 #: least explained difference among them; nothing compared.
-MISSION_STATES = ("reproduced", "differs, measured cause", "hypothesis tested", "bracketed",
-                  "unknown", "values the book sets", "not computed", "not reproducible", "no row")
-_ITEM_STATE = {DIFFERS_UNKNOWN: "unknown", DIFFERS_BRACKETED: "bracketed",
-               DIFFERS_HYPOTHESIS: "hypothesis tested", DIFFERS_MEASURED: "differs, measured cause"}
+MISSION_STATES = (
+    "reproduced",
+    "differs, measured cause",
+    "hypothesis tested",
+    "bracketed",
+    "unknown",
+    "values the book sets",
+    "not computed",
+    "not reproducible",
+    "no row",
+)
+_ITEM_STATE = {
+    DIFFERS_UNKNOWN: "unknown",
+    DIFFERS_BRACKETED: "bracketed",
+    DIFFERS_HYPOTHESIS: "hypothesis tested",
+    DIFFERS_MEASURED: "differs, measured cause",
+}
 
 
 def _in_item(location: str, prefixes: tuple[str, ...]) -> bool:
     """Whether a row's location belongs to an item: it starts with a prefix ending in a comma, or
     with another prefix followed by nothing, a space, a comma or a colon (not "Fig. 10" for
     "Fig. 1")."""
-    return any(location.startswith(p) if p.endswith(",") else
-               location.startswith(p) and location[len(p):len(p) + 1] in ("", " ", ",", ":")
-               for p in prefixes)
+    return any(
+        location.startswith(p)
+        if p.endswith(",")
+        else location.startswith(p) and location[len(p) : len(p) + 1] in ("", " ", ",", ":")
+        for p in prefixes
+    )
 
 
 def item_state(rows: Sequence[LedgerRow]) -> str:
@@ -712,8 +892,13 @@ def item_state(rows: Sequence[LedgerRow]) -> str:
     compared = [r for r in rows if r.status not in (*SET_BY_BOOK, NOT_COMPUTED, NOT_REPRODUCIBLE)]
     if not compared:
         statuses = {r.status for r in rows}
-        return ("not computed" if NOT_COMPUTED in statuses else
-                "not reproducible" if NOT_REPRODUCIBLE in statuses else "values the book sets")
+        return (
+            "not computed"
+            if NOT_COMPUTED in statuses
+            else "not reproducible"
+            if NOT_REPRODUCIBLE in statuses
+            else "values the book sets"
+        )
     for status, state in _ITEM_STATE.items():
         if any(r.status == status for r in compared):
             return state
@@ -737,8 +922,10 @@ class Ledger:
 
     def counts_by_paper(self) -> dict[str, dict[str, int]]:
         """``{paper_id: {status: rows}}`` for the papers of :data:`PAPERS` (every status)."""
-        return {p: {s: sum(r.status == s and r.paper_id == p for r in self.rows) for s in STATUSES}
-                for p in PAPERS}
+        return {
+            p: {s: sum(r.status == s and r.paper_id == p for r in self.rows) for s in STATUSES}
+            for p in PAPERS
+        }
 
     def mission(self) -> list[dict[str, Any]]:
         """Each paper item of :data:`MISSION`: ``{"paper_id", "item", "state", "rows",
@@ -747,37 +934,59 @@ class Ledger:
         out = []
         for paper, item, prefixes in MISSION:
             rows = [r for r in self.rows if r.paper_id == paper and _in_item(r.location, prefixes)]
-            out.append({"paper_id": paper, "item": item, "state": item_state(rows),
-                        "rows": [f"{r.id}:{'/'.join(r.path)}" for r in rows],
-                        "statuses": {st: n for st in STATUSES
-                                     if (n := sum(r.status == st for r in rows))}})
+            out.append(
+                {
+                    "paper_id": paper,
+                    "item": item,
+                    "state": item_state(rows),
+                    "rows": [f"{r.id}:{'/'.join(r.path)}" for r in rows],
+                    "statuses": {
+                        st: n for st in STATUSES if (n := sum(r.status == st for r in rows))
+                    },
+                }
+            )
         return out
 
     def mission_counts(self) -> dict[str, dict[str, int]]:
         """``{paper_id: {state: items}}`` over :data:`MISSION` (every state, possibly 0)."""
         items = self.mission()
-        return {p: {st: sum(i["state"] == st and i["paper_id"] == p for i in items)
-                    for st in MISSION_STATES} for p in dict.fromkeys(p for p, _, _ in MISSION)}
+        return {
+            p: {
+                st: sum(i["state"] == st and i["paper_id"] == p for i in items)
+                for st in MISSION_STATES
+            }
+            for p in dict.fromkeys(p for p, _, _ in MISSION)
+        }
 
     def to_json_dict(self) -> dict[str, Any]:
         """``{"counts", "counts_by_paper", "mission", "rows", "sources"}``: ``reproduce --ledger
         --json`` (no wall time: the same bytes on every run)."""
-        return {"counts": self.counts(), "counts_by_paper": self.counts_by_paper(),
-                "mission": {"items": self.mission(), "counts_by_paper": self.mission_counts()},
-                "rows": [r.to_json_dict() for r in self.rows], "sources": dict(self.sources)}
+        return {
+            "counts": self.counts(),
+            "counts_by_paper": self.counts_by_paper(),
+            "mission": {"items": self.mission(), "counts_by_paper": self.mission_counts()},
+            "rows": [r.to_json_dict() for r in self.rows],
+            "sources": dict(self.sources),
+        }
 
     def mission_table(self):
         """A :func:`fdi_lib.report.table`: each paper item, its state and its rows per status."""
-        rows = {f"{PAPERS[i['paper_id']]}, {i['item']}": [
-            i["state"], "; ".join(f"{n} {st}" for st, n in i["statuses"].items()) or "none"]
-            for i in self.mission()}
+        rows = {
+            f"{PAPERS[i['paper_id']]}, {i['item']}": [
+                i["state"],
+                "; ".join(f"{n} {st}" for st, n in i["statuses"].items()) or "none",
+            ]
+            for i in self.mission()
+        }
         return table(rows, ["state", "ledger rows"], index_header="paper item")
 
     def mission_summary(self):
         """A :func:`fdi_lib.report.table`: paper items per state (rows) and paper (columns)."""
         by = self.mission_counts()
-        rows = {st: [*(fmt_count(by[p][st]) for p in by), fmt_count(sum(by[p][st] for p in by))]
-                for st in MISSION_STATES}
+        rows = {
+            st: [*(fmt_count(by[p][st]) for p in by), fmt_count(sum(by[p][st] for p in by))]
+            for st in MISSION_STATES
+        }
         rows["all items"] = [*(fmt_count(sum(by[p].values())) for p in by), fmt_count(len(MISSION))]
         return table(rows, [*(PAPERS[p] for p in by), "all"], index_header="state")
 
@@ -786,8 +995,10 @@ class Ledger:
         by = self.counts_by_paper()
         c = self.counts()
         rows = {s: [*(fmt_count(by[p][s]) for p in PAPERS), fmt_count(c[s])] for s in STATUSES}
-        rows["all claims"] = [*(fmt_count(sum(by[p].values())) for p in PAPERS),
-                              fmt_count(len(self.rows))]
+        rows["all claims"] = [
+            *(fmt_count(sum(by[p].values())) for p in PAPERS),
+            fmt_count(len(self.rows)),
+        ]
         return table(rows, [*PAPERS.values(), "all"], index_header="status")
 
     def sources_table(self):
@@ -798,29 +1009,49 @@ class Ledger:
     def to_myst(self) -> str:
         """The ledger as a MyST list-table with links (``{doc}``, ``{ref}``) to the book; the
         status is the first column (the first thing seen on a phone)."""
-        lines = [":::{list-table}", ":header-rows: 1", ":widths: 14 30 12 20 24", "",
-                 "* - status", "  - claim (paper)", "  - paper", "  - ours", "  - why, where"]
+        lines = [
+            ":::{list-table}",
+            ":header-rows: 1",
+            ":widths: 14 30 12 20 24",
+            "",
+            "* - status",
+            "  - claim (paper)",
+            "  - paper",
+            "  - ours",
+            "  - why, where",
+        ]
         for r in self.rows:
             rate = _is_rate_claim(r)
             why = [_md(r.status_detail)] if r.status_detail else []
             if r.cause:
-                why.append(("hypothesis tested in " if r.status == DIFFERS_HYPOTHESIS
-                            else "cause measured in ") + _link(r.cause))
+                why.append(
+                    (
+                        "hypothesis tested in "
+                        if r.status == DIFFERS_HYPOTHESIS
+                        else "cause measured in "
+                    )
+                    + _link(r.cause)
+                )
             if (r.explain or r.where) != r.cause:
                 why.append(f"shown in {_link(r.explain or r.where)}")
             if r.note:
                 why.append(_md(r.note))
-            lines += [f"* - {r.status}", f"  - {_md(r.claim)}",
-                      f"  - {_md(_fmt(r.paper, rate=rate, digits=6))}",
-                      f"  - {_md(_fmt(r.ours, r.ci, rate=rate))}" + (
-                          f" ({_md(r.role)})" if r.role else ""),
-                      f"  - {'; '.join(why)}"]
+            lines += [
+                f"* - {r.status}",
+                f"  - {_md(r.claim)}",
+                f"  - {_md(_fmt(r.paper, rate=rate, digits=6))}",
+                f"  - {_md(_fmt(r.ours, r.ci, rate=rate))}"
+                + (f" ({_md(r.role)})" if r.role else ""),
+                f"  - {'; '.join(why)}",
+            ]
         lines.append(":::")
         return "\n".join(lines)
 
 
 def _md(text: str) -> str:
-    return str(text).replace("|", "\\|").replace("*", "\\*").replace("_", "\\_").replace("<", "&lt;")
+    return (
+        str(text).replace("|", "\\|").replace("*", "\\*").replace("_", "\\_").replace("<", "&lt;")
+    )
 
 
 def _link(target: str) -> str:
@@ -837,13 +1068,19 @@ def _is_rate(x: Any) -> bool:
 
 def _is_rate_claim(r: LedgerRow) -> bool:
     """A rate (a fraction with its interval, its key naming a rate): paper and ours in %."""
-    return ("rate" in "/".join(r.path) and r.ci is not None and _is_rate(r.ours)
-            and (_is_rate(r.paper) or isinstance(r.paper, str))
-            and _is_rate(r.ci[0]) and _is_rate(r.ci[1]))
+    return (
+        "rate" in "/".join(r.path)
+        and r.ci is not None
+        and _is_rate(r.ours)
+        and (_is_rate(r.paper) or isinstance(r.paper, str))
+        and _is_rate(r.ci[0])
+        and _is_rate(r.ci[1])
+    )
 
 
-def _fmt(v: Any, ci: tuple[float, float] | None = None, *, rate: bool = False,
-         digits: int = 4) -> str:
+def _fmt(
+    v: Any, ci: tuple[float, float] | None = None, *, rate: bool = False, digits: int = 4
+) -> str:
     """A cell: rates in % (with the interval if given), numbers with ``digits`` digits (and the
     interval), lists in brackets. The paper's and our cells of a row use the same ``rate``."""
     if v is None:
@@ -890,15 +1127,28 @@ def _also_note(res: ReproductionResult, path: tuple[str, ...], spec: Claim) -> s
         return ""
     ci = spec.ci(res.headline, path) if spec.ci else _default_ci(res.headline, path)
     trials = res.settings.get("trials")
-    rate = ("rate" in path[0] and ci is not None and _is_rate(ours))
+    rate = "rate" in path[0] and ci is not None and _is_rate(ours)
     value = spec.missing if ours is None and spec.missing else _fmt(ours, ci, rate=rate)
-    return (f"also checked by {res.id}" + (f" on {fmt_count(trials)} trial" + "s" * (trials != 1)
-                                           if trials else "") + f": {value}")
+    return (
+        f"also checked by {res.id}"
+        + (f" on {fmt_count(trials)} trial" + "s" * (trials != 1) if trials else "")
+        + f": {value}"
+    )
 
 
-def _row_status(outcome: str, how: str, *, spec: Claim, role: str | None, paper: Any,
-                ours: Any, headline: Mapping[str, Any], path: tuple[str, ...],
-                trials: int | None, paper_trials: int | None) -> tuple[str, str, str | None]:
+def _row_status(
+    outcome: str,
+    how: str,
+    *,
+    spec: Claim,
+    role: str | None,
+    paper: Any,
+    ours: Any,
+    headline: Mapping[str, Any],
+    path: tuple[str, ...],
+    trials: int | None,
+    paper_trials: int | None,
+) -> tuple[str, str, str | None]:
     """The row status, its detail and its link (a cause or a hypothesis), from ``outcome``."""
     agrees = outcome in AGREES
     if agrees and (role == INPUT or spec.test == IS_INPUT):
@@ -909,8 +1159,11 @@ def _row_status(outcome: str, how: str, *, spec: Claim, role: str | None, paper:
         return NOT_REPRODUCIBLE, how, None
     if paper_trials is not None and (trials is None or trials < paper_trials):
         n = "?" if trials is None else fmt_count(trials)
-        return (NOT_COMPUTED, f"{_UNSCALED}: {n} of the paper's "
-                f"{fmt_count(paper_trials)} trials", None)
+        return (
+            NOT_COMPUTED,
+            f"{_UNSCALED}: {n} of the paper's {fmt_count(paper_trials)} trials",
+            None,
+        )
     if outcome == NOT_COMPUTED:
         return NOT_COMPUTED, how, None
     if agrees and spec.test == ESTIMATES_INPUT:
@@ -927,12 +1180,24 @@ def _row_status(outcome: str, how: str, *, spec: Claim, role: str | None, paper:
         return DIFFERS_HYPOTHESIS, spec.hypothesis_text, spec.hypothesis
     if spec.bracket is not None and spec.bracket(paper, ours, headline, path):
         return DIFFERS_BRACKETED, spec.bracket_text, None
-    return DIFFERS_UNKNOWN, (f"ruled out by measurement: {spec.ruled_out}" if spec.ruled_out
-                             else "no measurement of the cause yet"), None
+    return (
+        DIFFERS_UNKNOWN,
+        (
+            f"ruled out by measurement: {spec.ruled_out}"
+            if spec.ruled_out
+            else "no measurement of the cause yet"
+        ),
+        None,
+    )
 
 
-def build_ledger(results: Mapping[str, ReproductionResult], *, strict: bool = False,
-                 sources: Mapping[str, str] | None = None, own_readings: bool = False) -> Ledger:
+def build_ledger(
+    results: Mapping[str, ReproductionResult],
+    *,
+    strict: bool = False,
+    sources: Mapping[str, str] | None = None,
+    own_readings: bool = False,
+) -> Ledger:
     """The ledger of the given results (one per reproduction id), rows in book order.
 
     Parameters
@@ -967,8 +1232,10 @@ def build_ledger(results: Mapping[str, ReproductionResult], *, strict: bool = Fa
             spec = claim_for(id, path)
             if spec is None:
                 if strict:
-                    raise ModelError(f"ledger: {id}:{'/'.join(path)} has no claim declared at its "
-                                     f"registration (register(..., claims=...))")
+                    raise ModelError(
+                        f"ledger: {id}:{'/'.join(path)} has no claim declared at its "
+                        f"registration (register(..., claims=...))"
+                    )
                 spec = _PLAIN
             if spec.shown_under and not (own_readings and spec.same_path and spec.figure_reading):
                 continue
@@ -983,8 +1250,9 @@ def build_ledger(results: Mapping[str, ReproductionResult], *, strict: bool = Fa
                 missing = f"our value ({exc}) is missing"
             ci = spec.ci(res.headline, path) if spec.ci else _default_ci(res.headline, path)
             se = spec.se(res.headline, path) if spec.se else _default_se(res.headline, path)
-            outcome, how = claim_status(paper, ours, ci, spec, res.headline,
-                                        _default_spread(res.headline, path), se)
+            outcome, how = claim_status(
+                paper, ours, ci, spec, res.headline, _default_spread(res.headline, path), se
+            )
             if ci is None and spec.test == BY_STANDARD_ERROR and _numbers(ours) and _numbers(se):
                 ci = _se_interval(ours, se, spec.z)
             if missing and outcome not in (NOT_REPRODUCIBLE,):
@@ -993,26 +1261,57 @@ def build_ledger(results: Mapping[str, ReproductionResult], *, strict: bool = Fa
                 raise ModelError(f"ledger: {id}:{'/'.join(path)} needs a rule ({how})")
             role = surrogate_role(id, res.paper, path, spec)
             status, detail, cause = _row_status(
-                outcome, how, spec=spec, role=role, paper=paper, ours=ours, headline=res.headline,
-                path=path, trials=trials, paper_trials=paper_trials)
-            note = "; ".join([how] + also.get((id, path), [])) if how != detail else "; ".join(
-                also.get((id, path), []))
-            rows.append(LedgerRow(
-                id=id, path=path, label=label, paper=paper,
-                ours=spec.missing if ours is None and spec.missing and not missing else ours,
-                ci=ci, status=status, where=chapter_of(id),
-                explain=spec.explain or (chapter_of(id) if status not in AGREES else None),
-                note=note, role=role, trials=trials,
-                source=(sources or {}).get(id, "computed"), status_detail=detail, cause=cause,
-                paper_trials=paper_trials, units=spec.units, test=spec.test,
-                location=spec.location.format(*path[1:], fig=_fig(id),
-                                              num=re.sub(r"^\D+", "", path[-1]))))
+                outcome,
+                how,
+                spec=spec,
+                role=role,
+                paper=paper,
+                ours=ours,
+                headline=res.headline,
+                path=path,
+                trials=trials,
+                paper_trials=paper_trials,
+            )
+            note = (
+                "; ".join([how] + also.get((id, path), []))
+                if how != detail
+                else "; ".join(also.get((id, path), []))
+            )
+            rows.append(
+                LedgerRow(
+                    id=id,
+                    path=path,
+                    label=label,
+                    paper=paper,
+                    ours=spec.missing if ours is None and spec.missing and not missing else ours,
+                    ci=ci,
+                    status=status,
+                    where=chapter_of(id),
+                    explain=spec.explain or (chapter_of(id) if status not in AGREES else None),
+                    note=note,
+                    role=role,
+                    trials=trials,
+                    source=(sources or {}).get(id, "computed"),
+                    status_detail=detail,
+                    cause=cause,
+                    paper_trials=paper_trials,
+                    units=spec.units,
+                    test=spec.test,
+                    location=spec.location.format(
+                        *path[1:], fig=_fig(id), num=re.sub(r"^\D+", "", path[-1])
+                    ),
+                )
+            )
     return Ledger(rows=tuple(rows), sources=dict(sources or {}))
 
 
-def collect_results(*, max_trials: int | None = None, ids: Sequence[str] | None = None,
-                    use_cache: bool = True, jobs: int = 1
-                    ) -> tuple[dict[str, ReproductionResult], dict[str, str], dict[str, float]]:
+def collect_results(
+    *,
+    max_trials: int | None = None,
+    ids: Sequence[str] | None = None,
+    use_cache: bool = True,
+    jobs: int = 1,
+) -> tuple[dict[str, ReproductionResult], dict[str, str], dict[str, float]]:
     """A result per reproduction at the book's settings (:func:`fdi_lib.reproduce.book.book_settings`,
     the seed and trials the chapters use, without options): the run the build cached, else a
     fresh one.
@@ -1045,9 +1344,15 @@ def collect_results(*, max_trials: int | None = None, ids: Sequence[str] | None 
         hit = cached_run(id, seed=book.seed, trials=book.trials) if use_cache else None
         if hit is not None:
             results[id] = hit
-            sources[id] = f"cached in this build (seed {book.seed}" + (
-                f", {fmt_count(book.trials)} trial" + "s" * (book.trials != 1)
-                if book.trials else "") + ")"
+            sources[id] = (
+                f"cached in this build (seed {book.seed}"
+                + (
+                    f", {fmt_count(book.trials)} trial" + "s" * (book.trials != 1)
+                    if book.trials
+                    else ""
+                )
+                + ")"
+            )
             continue
         trials = book.trials
         if max_trials is not None and trials is not None and trials > max_trials:
@@ -1055,8 +1360,11 @@ def collect_results(*, max_trials: int | None = None, ids: Sequence[str] | None 
         t0 = time.perf_counter()
         results[id] = get(id)(seed=book.seed, trials=trials, jobs=jobs)
         timings[id] = time.perf_counter() - t0
-        sources[id] = f"computed here (seed {book.seed}" + (
-            "" if trials is None else f", {fmt_count(trials)} trial" + "s" * (trials != 1)) + ")"
+        sources[id] = (
+            f"computed here (seed {book.seed}"
+            + ("" if trials is None else f", {fmt_count(trials)} trial" + "s" * (trials != 1))
+            + ")"
+        )
     return results, sources, timings
 
 
@@ -1135,8 +1443,10 @@ def figure_claim(result: ReproductionResult) -> FigureClaim:
             items.append(f"{fmt_count(len(shown) - CAPTION_ITEMS)} more in the claims ledger")
         parts.append("differs: " + "; ".join(items))
     if unscaled:  # not a difference: no status at all until the paper's trial count is run
-        parts.append(f"{fmt_count(len(unscaled))} claim{'s' * (len(unscaled) > 1)} "
-                     + unscaled[0].status_detail)
+        parts.append(
+            f"{fmt_count(len(unscaled))} claim{'s' * (len(unscaled) > 1)} "
+            + unscaled[0].status_detail
+        )
     return FigureClaim(COMPARE, "; " + "; ".join(parts), rows)
 
 

@@ -47,8 +47,19 @@ import numpy as np
 from fdi_lib.errors import CacheWarning, ModelError, UnknownReproductionError
 from fdi_lib.validation import seed as check_seed
 
-__all__ = ["Reproduction", "ReproductionResult", "register", "get", "list_reproductions", "reproduce",
-           "code_version", "cache_dir", "cached_run", "cached_results", "CACHE_ENV"]
+__all__ = [
+    "Reproduction",
+    "ReproductionResult",
+    "register",
+    "get",
+    "list_reproductions",
+    "reproduce",
+    "code_version",
+    "cache_dir",
+    "cached_run",
+    "cached_results",
+    "CACHE_ENV",
+]
 
 #: Environment variable naming the results cache directory (see the module docstring).
 CACHE_ENV = "FDI_RESULTS_CACHE"
@@ -81,8 +92,14 @@ class ReproductionResult:
 
     def to_json_dict(self) -> dict[str, Any]:
         """The JSON object printed by the CLI: ``id``, ``headline``, ``paper``, ``settings``."""
-        return _jsonable({"id": self.id, "headline": self.headline, "paper": self.paper,
-                          "settings": self.settings})
+        return _jsonable(
+            {
+                "id": self.id,
+                "headline": self.headline,
+                "paper": self.paper,
+                "settings": self.settings,
+            }
+        )
 
     def to_json(self, **kwargs: Any) -> str:
         return json.dumps(self.to_json_dict(), **kwargs)
@@ -125,24 +142,40 @@ class Reproduction:
         return self._reads("seed")
 
     def _reads(self, name: str) -> bool:
-        return any(ins.opname.startswith("LOAD") and ins.argval == name for ins in dis.get_instructions(self.func))
+        return any(
+            ins.opname.startswith("LOAD") and ins.argval == name
+            for ins in dis.get_instructions(self.func)
+        )
 
-    def check_arguments(self, *, seed: int | None = None, trials: int | None = None, jobs: int = 1) -> None:
+    def check_arguments(
+        self, *, seed: int | None = None, trials: int | None = None, jobs: int = 1
+    ) -> None:
         """Validate ``seed`` (integer >= 0), ``trials`` (positive integer, only for a Monte Carlo
         reproduction) and ``jobs`` (non-zero integer) before anything is computed."""
         if seed is not None:
             check_seed(seed)
         if trials is not None:
-            if isinstance(trials, (bool, np.bool_)) or not isinstance(trials, (int, np.integer)) or trials < 1:
+            if (
+                isinstance(trials, (bool, np.bool_))
+                or not isinstance(trials, (int, np.integer))
+                or trials < 1
+            ):
                 raise ModelError(f"trials: expected a positive integer, got {trials!r}")
             if not self.monte_carlo:
-                raise ModelError(f"trials: {self.id} is one deterministic or seeded run; expected no "
-                                 f"trial count, got {trials!r}")
-        if isinstance(jobs, (bool, np.bool_)) or not isinstance(jobs, (int, np.integer)) or jobs == 0:
+                raise ModelError(
+                    f"trials: {self.id} is one deterministic or seeded run; expected no "
+                    f"trial count, got {trials!r}"
+                )
+        if (
+            isinstance(jobs, (bool, np.bool_))
+            or not isinstance(jobs, (int, np.integer))
+            or jobs == 0
+        ):
             raise ModelError(f"jobs: expected a non-zero integer (-1 = all cores), got {jobs!r}")
 
-    def __call__(self, *, seed: int | None = None, trials: int | None = None, jobs: int = 1,
-                 **kwargs: Any) -> ReproductionResult:
+    def __call__(
+        self, *, seed: int | None = None, trials: int | None = None, jobs: int = 1, **kwargs: Any
+    ) -> ReproductionResult:
         self.check_arguments(seed=seed, trials=trials, jobs=jobs)
         seed = self.default_seed if seed is None else seed
         trials = self.default_trials if trials is None else trials
@@ -153,8 +186,10 @@ class Reproduction:
             return cached
         result = self.func(seed=int(seed), trials=trials, jobs=int(jobs), **kwargs)
         if not isinstance(result, ReproductionResult) or result.id != self.id:
-            raise TypeError(f"reproduction {self.id!r} returned {type(result).__name__} "
-                            f"with id {getattr(result, 'id', None)!r}")
+            raise TypeError(
+                f"reproduction {self.id!r} returned {type(result).__name__} "
+                f"with id {getattr(result, 'id', None)!r}"
+            )
         if entry is not None:
             _cache_write(*entry, result)
         return result
@@ -184,8 +219,20 @@ def cache_dir() -> Path | None:
 
 #: Distributions whose version changes a result (the numbers of a run depend on their code); with
 #: the Python version and the machine type, part of every cache key.
-_RESULT_LIBRARIES = ("numpy", "scipy", "scikit-learn", "cvxpy", "control", "statsmodels", "highspy",
-                     "numba", "pycddlib-standalone", "clarabel", "osqp", "scs")
+_RESULT_LIBRARIES = (
+    "numpy",
+    "scipy",
+    "scikit-learn",
+    "cvxpy",
+    "control",
+    "statsmodels",
+    "highspy",
+    "numba",
+    "pycddlib-standalone",
+    "clarabel",
+    "osqp",
+    "scs",
+)
 
 
 @functools.lru_cache(maxsize=1)
@@ -202,8 +249,11 @@ def _environment() -> dict[str, Any]:
         except importlib.metadata.PackageNotFoundError:
             return None
 
-    return {"python": platform.python_version(), "machine": platform.machine(),
-            "libraries": {name: version(name) for name in _RESULT_LIBRARIES}}
+    return {
+        "python": platform.python_version(),
+        "machine": platform.machine(),
+        "libraries": {name: version(name) for name in _RESULT_LIBRARIES},
+    }
 
 
 class _Uncacheable(Exception):
@@ -236,8 +286,9 @@ def _canonical(value: Any) -> Any:
     raise _Uncacheable
 
 
-def _cache_entry(id: str, seed: int, trials: int | None,
-                 kwargs: dict[str, Any]) -> tuple[Path, dict[str, Any]] | None:
+def _cache_entry(
+    id: str, seed: int, trials: int | None, kwargs: dict[str, Any]
+) -> tuple[Path, dict[str, Any]] | None:
     """Where the result of these settings is cached, and its full key (stored with the result and
     compared on reading), or ``None`` when caching is off or a keyword argument cannot be
     described exactly (then the run is not cached)."""
@@ -248,14 +299,21 @@ def _cache_entry(id: str, seed: int, trials: int | None,
         options = {k: _canonical(v) for k, v in kwargs.items()}
     except _Uncacheable:
         return None
-    key = {"id": id, "seed": int(seed), "trials": trials, "options": options,
-           "code": code_version(), "environment": _environment()}
+    key = {
+        "id": id,
+        "seed": int(seed),
+        "trials": trials,
+        "options": options,
+        "code": code_version(),
+        "environment": _environment(),
+    }
     digest = hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:24]
     return root / id / f"{code_version()[:16]}-{digest}.pkl", key
 
 
-def cached_run(id: str, *, seed: int | None = None, trials: int | None = None,
-               **kwargs: Any) -> ReproductionResult | None:
+def cached_run(
+    id: str, *, seed: int | None = None, trials: int | None = None, **kwargs: Any
+) -> ReproductionResult | None:
     """The cached result of ``reproduce(id, seed=seed, trials=trials, **kwargs)`` for the current
     code, or ``None`` if no run with exactly these settings was cached (or caching is off).
 
@@ -279,9 +337,13 @@ def _cache_read(path: Path, key: dict[str, Any]) -> ReproductionResult | None:
     stored, result = loaded
     if stored != key:
         differ = sorted(k for k in key if stored.get(k) != key[k])
-        warnings.warn(CacheWarning(f"{CACHE_ENV}: the entry {path} was stored for other settings "
-                                   f"({', '.join(differ)} differ); computing it again"),
-                      stacklevel=3)
+        warnings.warn(
+            CacheWarning(
+                f"{CACHE_ENV}: the entry {path} was stored for other settings "
+                f"({', '.join(differ)} differ); computing it again"
+            ),
+            stacklevel=3,
+        )
         return None
     return result
 
@@ -302,18 +364,27 @@ def _load(path: Path, id: str) -> tuple[dict[str, Any], ReproductionResult] | No
             entry = pickle.load(fh)
     except Exception as exc:  # unpickling damaged bytes can raise almost any type (EOFError,
         # UnpicklingError, ValueError, KeyError, a stale class's AttributeError, ...): all are a miss
-        warnings.warn(CacheWarning(f"{CACHE_ENV}: cannot read the cached result {path} "
-                                   f"({type(exc).__name__}: {exc}); computing it again"),
-                      stacklevel=4)
+        warnings.warn(
+            CacheWarning(
+                f"{CACHE_ENV}: cannot read the cached result {path} "
+                f"({type(exc).__name__}: {exc}); computing it again"
+            ),
+            stacklevel=4,
+        )
         return None
     stored = entry.get("key") if isinstance(entry, dict) else None
     result = entry.get("result") if isinstance(entry, dict) else entry
     whole = isinstance(stored, dict) and isinstance(result, ReproductionResult)
     if not whole or result.id != id:
-        got = (f"{type(result).__name__} {getattr(result, 'id', '')!r}"
-               + ("" if isinstance(stored, dict) else " without its key"))
-        warnings.warn(CacheWarning(f"{CACHE_ENV}: expected a result of {id!r} in {path}, got "
-                                   f"{got}; computing it again"), stacklevel=4)
+        got = f"{type(result).__name__} {getattr(result, 'id', '')!r}" + (
+            "" if isinstance(stored, dict) else " without its key"
+        )
+        warnings.warn(
+            CacheWarning(
+                f"{CACHE_ENV}: expected a result of {id!r} in {path}, got {got}; computing it again"
+            ),
+            stacklevel=4,
+        )
         return None
     return stored, result
 
@@ -346,8 +417,13 @@ def _cache_write(path: Path, key: dict[str, Any], result: ReproductionResult) ->
         _unlink_quietly(tmp)  # not picklable: this result is simply not cached
     except OSError as exc:
         _unlink_quietly(tmp)
-        warnings.warn(CacheWarning(f"{CACHE_ENV}: cannot store the result in {path} "
-                                   f"({exc.strerror or exc}); not cached"), stacklevel=3)
+        warnings.warn(
+            CacheWarning(
+                f"{CACHE_ENV}: cannot store the result in {path} "
+                f"({exc.strerror or exc}); not cached"
+            ),
+            stacklevel=3,
+        )
 
 
 def _unlink_quietly(path: Path | None) -> None:
@@ -368,8 +444,12 @@ def cached_results() -> dict[str, ReproductionResult]:
     root = cache_dir()
     out: dict[str, ReproductionResult] = {}
     if root is not None and root.exists() and not root.is_dir():
-        warnings.warn(CacheWarning(f"{CACHE_ENV}: expected a directory, got the file {root}; no cached "
-                                   f"result is read"), stacklevel=2)
+        warnings.warn(
+            CacheWarning(
+                f"{CACHE_ENV}: expected a directory, got the file {root}; no cached result is read"
+            ),
+            stacklevel=2,
+        )
     if root is None or not root.is_dir():
         return out
     prefix = code_version()[:16]
@@ -378,8 +458,11 @@ def cached_results() -> dict[str, ReproductionResult]:
         entries = sorted(sub.glob(f"{prefix}-*.pkl"), key=lambda p: p.stat().st_mtime)
         for entry in reversed(entries):  # the newest readable one (a damaged one is warned about)
             loaded = _load(entry, sub.name)
-            if loaded is not None and loaded[0].get("code") == code_version() \
-                    and loaded[0].get("environment") == environment:
+            if (
+                loaded is not None
+                and loaded[0].get("code") == code_version()
+                and loaded[0].get("environment") == environment
+            ):
                 out[sub.name] = loaded[1]
                 break
     return out
@@ -388,11 +471,21 @@ def cached_results() -> dict[str, ReproductionResult]:
 _REGISTRY: dict[str, Reproduction] = {}
 
 
-def register(id: str, *, paper: str, title: str, chapter: str, default_trials: int | None = None,
-             default_seed: int = 0, plot: Callable[..., Any] | None = None, min_trials: int = 2,
-             timed_keys: tuple[str, ...] = (), chapter_seed: bool = False, surrogate: bool = False,
-             claims: Mapping[str, Any] | None = None
-             ) -> Callable[[Callable[..., ReproductionResult]], Callable[..., ReproductionResult]]:
+def register(
+    id: str,
+    *,
+    paper: str,
+    title: str,
+    chapter: str,
+    default_trials: int | None = None,
+    default_seed: int = 0,
+    plot: Callable[..., Any] | None = None,
+    min_trials: int = 2,
+    timed_keys: tuple[str, ...] = (),
+    chapter_seed: bool = False,
+    surrogate: bool = False,
+    claims: Mapping[str, Any] | None = None,
+) -> Callable[[Callable[..., ReproductionResult]], Callable[..., ReproductionResult]]:
     """Decorator registering a reproduction function under ``id``.
 
     ``default_trials`` is the paper's own number of Monte Carlo trials (``None``
@@ -414,12 +507,21 @@ def register(id: str, *, paper: str, title: str, chapter: str, default_trials: i
     def decorator(func: Callable[..., ReproductionResult]) -> Callable[..., ReproductionResult]:
         if id in _REGISTRY:
             raise ModelError(f"reproduction id {id!r} registered twice")
-        _REGISTRY[id] = Reproduction(id=id, paper=paper, title=title, func=func, plot=plot,
-                                     default_trials=default_trials, default_seed=default_seed,
-                                     min_trials=min_trials, timed_keys=tuple(timed_keys),
-                                     chapter=chapter, chapter_seed=chapter_seed,
-                                     surrogate=surrogate,
-                                     claims=tuple((claims or {}).items()))
+        _REGISTRY[id] = Reproduction(
+            id=id,
+            paper=paper,
+            title=title,
+            func=func,
+            plot=plot,
+            default_trials=default_trials,
+            default_seed=default_seed,
+            min_trials=min_trials,
+            timed_keys=tuple(timed_keys),
+            chapter=chapter,
+            chapter_seed=chapter_seed,
+            surrogate=surrogate,
+            claims=tuple((claims or {}).items()),
+        )
         return func
 
     return decorator
@@ -453,8 +555,9 @@ def get(id: str) -> Reproduction:
         raise UnknownReproductionError(f"id: no reproduction {id!r}; known ids: {known}") from None
 
 
-def reproduce(id: str, *, seed: int | None = None, trials: int | None = None, jobs: int = 1,
-              **kwargs: Any) -> ReproductionResult:
+def reproduce(
+    id: str, *, seed: int | None = None, trials: int | None = None, jobs: int = 1, **kwargs: Any
+) -> ReproductionResult:
     """Run the reproduction ``id`` (same call as ``python -m fdi_lib reproduce ID``)."""
     return get(id)(seed=seed, trials=trials, jobs=jobs, **kwargs)
 

@@ -24,14 +24,34 @@ from fdi_lib.reproduce.ledger import BY_TOLERANCE, NOT_CHECKABLE, Claim
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib import windturbine as W
 
-__all__ = ["scoreboard", "chunk", "score_method", "check_trials", "SECONDS_PER_REALISATION",
-           "MAX_RUN_S", "false_alarms", "FALSE_ALARM_STREAMS", "stream_chunk", "stream_design",
-           "STREAM_WINDOW_S", "STREAM_OVERLAP_S", "calibrated_design", "plot_scoreboard",
-           "CALIBRATION_RUNS", "PUBLISHED", "PUBLISHED_DELAYS", "METHOD_LABELS"]
+__all__ = [
+    "scoreboard",
+    "chunk",
+    "score_method",
+    "check_trials",
+    "SECONDS_PER_REALISATION",
+    "MAX_RUN_S",
+    "false_alarms",
+    "FALSE_ALARM_STREAMS",
+    "stream_chunk",
+    "stream_design",
+    "STREAM_WINDOW_S",
+    "STREAM_OVERLAP_S",
+    "calibrated_design",
+    "plot_scoreboard",
+    "CALIBRATION_RUNS",
+    "PUBLISHED",
+    "PUBLISHED_DELAYS",
+    "METHOD_LABELS",
+]
 
 #: Short labels of the methods (figure legends, table columns).
-METHOD_LABELS = {"zb2014": "GLR + minmax", "zhang2021": "Kitanidis + Lasso", "bz": "parametric + energy",
-                 "rosa2013": "SVO bank"}
+METHOD_LABELS = {
+    "zb2014": "GLR + minmax",
+    "zhang2021": "Kitanidis + Lasso",
+    "bz": "parametric + energy",
+    "rosa2013": "SVO bank",
+}
 
 PAPER = "Odgaard, Stoustrup & Kinnaert benchmark"
 #: Fault-free realisations (one per fault segment) of the calibration run (:func:`fdi_lib.windturbine.calibrate`).
@@ -39,9 +59,9 @@ CALIBRATION_RUNS = 4
 #: Published results we looked for and could not reach (the ledger's rows say so).
 PUBLISHED = {
     "competition_2012": "detection times of the entries of the benchmark's FDI competition "
-                        "(Odgaard & Stoustrup, results of a wind turbine FDI competition, Safeprocess 2012)",
+    "(Odgaard & Stoustrup, results of a wind turbine FDI competition, Safeprocess 2012)",
     "casau_2015": "detection and isolation times of the set-valued FDI of Casau, Rosa, Tabatabaeipour, "
-                  "Silvestre & Stoustrup (IEEE TCST 2015) on this benchmark",
+    "Silvestre & Stoustrup (IEEE TCST 2015) on this benchmark",
 }
 #: Detection delays (s) published for another method on this benchmark, per source and fault.
 #: ``cohal_mirea_2017``: Cohal & Mirea (2017), Table 1, the mean over "several tests" of the
@@ -53,8 +73,10 @@ PUBLISHED = {
 #: Read from the paper's PDF in the repository named in :data:`fdi_lib.systems.wind_turbine`'s sources
 #: (``documentation/PaperCEAI2017-FaultDetectionAndIsolationOfAWindTurbine.pdf``).
 PUBLISHED_DELAYS = {
-    "cohal_mirea_2017": {"first": {"F1": 0.21, "F3": 0.21, "F4": 0.21},
-                         "certain": {"F1": 3.21, "F3": 3.53, "F4": 2.73, "F5": 1.1, "F8": 3.56}},
+    "cohal_mirea_2017": {
+        "first": {"F1": 0.21, "F3": 0.21, "F4": 0.21},
+        "certain": {"F1": 3.21, "F3": 3.53, "F4": 2.73, "F5": 1.1, "F8": 3.56},
+    },
 }
 
 
@@ -66,8 +88,9 @@ def calibrated_design(seed: int, settings: W.Settings = W.Settings()) -> W.Desig
 
 
 @functools.lru_cache(maxsize=4)
-def _calibration(seed: int, settings: W.Settings
-                 ) -> tuple[W.PlantConstants, W.Calibration, np.ndarray]:
+def _calibration(
+    seed: int, settings: W.Settings
+) -> tuple[W.PlantConstants, W.Calibration, np.ndarray]:
     """The plant's constants, the calibration and the filters' prior mean of
     :func:`calibrated_design`."""
     from fdi_lib.systems import wind_turbine as wt
@@ -75,7 +98,10 @@ def _calibration(seed: int, settings: W.Settings
     c = W.plant_constants()
     seeds = np.random.SeedSequence([seed, 1]).spawn(CALIBRATION_RUNS)
     recs = [W.fault_records(f, seeds, settings=settings, faulty=False) for f in wt.FAULTS]
-    rec = W.Records(recs[0].t, *(np.concatenate([getattr(r, k) for r in recs]) for k in ("y", "u", "x", "tau_a", "v")))
+    rec = W.Records(
+        recs[0].t,
+        *(np.concatenate([getattr(r, k) for r in recs]) for k in ("y", "u", "x", "tau_a", "v")),
+    )
     return c, W.calibrate(c, rec), rec.x.reshape(-1, rec.x.shape[-1]).mean(axis=0)
 
 
@@ -115,8 +141,11 @@ def stream_chunk(seeds: list, *, seed: int) -> dict[str, np.ndarray]:
 
     d, start = stream_design(seed)
     n, M = len(seeds), len(W.METHODS)
-    out = {"alarms": np.zeros((n, M), dtype=np.int64), "tests": np.zeros((n, M), dtype=np.int64),
-           "samples": np.zeros(n, dtype=np.int64)}
+    out = {
+        "alarms": np.zeros((n, M), dtype=np.int64),
+        "tests": np.zeros((n, M), dtype=np.int64),
+        "samples": np.zeros(n, dtype=np.int64),
+    }
     for i, s in enumerate(seeds):
         rec = W.records(wt.simulate(seed=[s], faults=(), duration_s=wt.SCENARIO_S))
         counts = W.stream_counts(d, rec.y[0], rec.u[0], start)
@@ -131,13 +160,17 @@ def _empty_chunk(n: int) -> dict[str, np.ndarray]:
     from fdi_lib.systems import wind_turbine as wt
 
     F, M = len(wt.FAULTS), len(W.METHODS)
-    return {"detect": np.full((n, F, M), -1), "false_alarm": np.zeros((n, F, M), dtype=bool),
-            "isolated": np.zeros((n, F, M, len(W.CANDIDATES)), dtype=bool),
-            "isolate_step": np.full((n, F, M), -1),
-            "peak": np.full((n, F, M), np.nan), "effect_sigma": np.zeros((n, F)),
-            "effect_sigma_req": np.full((n, F), np.nan),
-            "bound_violation": np.zeros((n, F), dtype=bool),
-            "torque_effect_kNm": np.full((n, F), np.nan)}
+    return {
+        "detect": np.full((n, F, M), -1),
+        "false_alarm": np.zeros((n, F, M), dtype=bool),
+        "isolated": np.zeros((n, F, M, len(W.CANDIDATES)), dtype=bool),
+        "isolate_step": np.full((n, F, M), -1),
+        "peak": np.full((n, F, M), np.nan),
+        "effect_sigma": np.zeros((n, F)),
+        "effect_sigma_req": np.full((n, F), np.nan),
+        "bound_violation": np.zeros((n, F), dtype=bool),
+        "torque_effect_kNm": np.full((n, F), np.nan),
+    }
 
 
 #: Seconds of one core that one realisation of the scoreboard (every fault's segment and its
@@ -150,9 +183,13 @@ SECONDS_PER_REALISATION = 1.1
 MAX_RUN_S = 24 * 3600.0
 
 
-def check_trials(trials: int, jobs: int = 1, *,
-                 seconds_per_realisation: float = SECONDS_PER_REALISATION,
-                 bytes_per_realisation: float | None = None) -> int:
+def check_trials(
+    trials: int,
+    jobs: int = 1,
+    *,
+    seconds_per_realisation: float = SECONDS_PER_REALISATION,
+    bytes_per_realisation: float | None = None,
+) -> int:
     """``trials`` of the scoreboard, refused with a :class:`~fdi_lib.errors.ResourceError` that
     gives the estimated time and memory when the run would take longer than :data:`MAX_RUN_S` on
     ``jobs`` processes (capped at the cores) or its results would not fit in the available memory;
@@ -165,21 +202,28 @@ def check_trials(trials: int, jobs: int = 1, *,
     from fdi_lib.validation import integer
 
     trials = integer(trials, "trials", low=1)
-    with warnings.catch_warnings():             # the run itself warns about a capped request
+    with warnings.catch_warnings():  # the run itself warns about a capped request
         warnings.simplefilter("ignore", JobsCappedWarning)
         workers = effective_jobs(jobs)
-    per = (sum(a.nbytes for a in _empty_chunk(1).values()) if bytes_per_realisation is None
-           else bytes_per_realisation)
-    memory = 2.0 * per * trials                # the chunks' arrays and their concatenation
+    per = (
+        sum(a.nbytes for a in _empty_chunk(1).values())
+        if bytes_per_realisation is None
+        else bytes_per_realisation
+    )
+    memory = 2.0 * per * trials  # the chunks' arrays and their concatenation
     seconds = trials * seconds_per_realisation / workers
-    what = (f"{trials} realisations (about {seconds_per_realisation:g} s of a core and "
-            f"{_bytes_text(per)} of results each)")
+    what = (
+        f"{trials} realisations (about {seconds_per_realisation:g} s of a core and "
+        f"{_bytes_text(per)} of results each)"
+    )
     check_memory(memory, "trials", what)
     if seconds > MAX_RUN_S:
-        raise ResourceError(f"trials: {what} would take about {seconds / 3600:.3g} h on {workers} "
-                            f"process{'es' * (workers > 1)} and need about {_bytes_text(memory)} "
-                            f"of memory; "
-                            f"the limit is {MAX_RUN_S / 3600:g} h (MAX_RUN_S): use fewer")
+        raise ResourceError(
+            f"trials: {what} would take about {seconds / 3600:.3g} h on {workers} "
+            f"process{'es' * (workers > 1)} and need about {_bytes_text(memory)} "
+            f"of memory; "
+            f"the limit is {MAX_RUN_S / 3600:g} h (MAX_RUN_S): use fewer"
+        )
     return trials
 
 
@@ -198,15 +242,19 @@ def chunk(seeds: list, *, seed: int, settings: W.Settings = W.Settings()) -> dic
         twin = W.fault_records(fault, seeds, settings=settings, faulty=False)
         ys.append(rec.y)
         us.append(rec.u)
-        dy = np.abs(rec.y[:, d.onset:] - twin.y[:, d.onset:]) / d.constants.sigma
+        dy = np.abs(rec.y[:, d.onset :] - twin.y[:, d.onset :]) / d.constants.sigma
         out["effect_sigma"][:, f] = dy.max(axis=(1, 2))
-        if fault.required_detection_s is not None:   # what a detector can have seen by the requirement
+        if (
+            fault.required_detection_s is not None
+        ):  # what a detector can have seen by the requirement
             n_req = int(round(fault.required_detection_s / d.constants.Ts))
             out["effect_sigma_req"][:, f] = dy[:, :n_req].max(axis=(1, 2))
         out["bound_violation"][:, f] = _bound_violation(d, twin)
-        if fault.kind == "drive_train":   # the generator-side torque the efficiency drop removes (kNm)
+        if (
+            fault.kind == "drive_train"
+        ):  # the generator-side torque the efficiency drop removes (kNm)
             p = d.constants.params
-            shaft = p.K_dt * rec.x[:, d.onset:, 8] * 1e-3 / p.N_g / 1e3
+            shaft = p.K_dt * rec.x[:, d.onset :, 8] * 1e-3 / p.N_g / 1e3
             out["torque_effect_kNm"][:, f] = (p.eta_dt - fault.magnitude[0]) * shaft.mean(axis=1)
     res = W.run_methods(d, np.concatenate(ys), np.concatenate(us))
     for m, name in enumerate(W.METHODS):
@@ -225,7 +273,9 @@ def _bound_violation(d: W.Design, rec: W.Records) -> np.ndarray:
     clean = rec.x[..., [0, 0, 2, 2, 4, 4, 6, 6, 7, 7, 9]]
     noise = np.abs(rec.y - clean)[:, sl] / d.constants.sigma
     dtau = np.abs(np.diff(rec.tau_a[:, sl], axis=1))
-    return (noise.max(axis=(1, 2)) > d.settings.svo_sigmas) | (dtau.max(axis=1) > d.calibration.dtau_bound)
+    return (noise.max(axis=(1, 2)) > d.settings.svo_sigmas) | (
+        dtau.max(axis=1) > d.calibration.dtau_bound
+    )
 
 
 def _summary(x: dict[str, np.ndarray], d: W.Design, trials: int) -> dict[str, Any]:
@@ -243,18 +293,31 @@ def _summary(x: dict[str, np.ndarray], d: W.Design, trials: int) -> dict[str, An
         best_upper = None
         best_mean: tuple[str, float] | None = None
         for m, name in enumerate(W.METHODS):
-            entry = score_method(x["detect"][:, f, m], x["isolated"][:, f, m],
-                                 x["isolate_step"][:, f, m], exp, req, d.onset, Ts)
+            entry = score_method(
+                x["detect"][:, f, m],
+                x["isolated"][:, f, m],
+                x["isolate_step"][:, f, m],
+                exp,
+                req,
+                d.onset,
+                Ts,
+            )
             k = entry["detected"]
             hit = x["detect"][:, f, m] >= 0
-            if k < trials:   # a miss: measured, never assumed
+            if k < trials:  # a miss: measured, never assumed
                 entry["reason"] = {
-                    "peak_over_threshold": (float(np.nanmax(x["peak"][~hit, f, m]))
-                                            if np.isfinite(x["peak"][~hit, f, m]).any() else None),
+                    "peak_over_threshold": (
+                        float(np.nanmax(x["peak"][~hit, f, m]))
+                        if np.isfinite(x["peak"][~hit, f, m]).any()
+                        else None
+                    ),
                     "effect_sigma_max": float(x["effect_sigma"][~hit, f].max()),
                     "svo_noise_bound_sigma": d.settings.svo_sigmas if name == "rosa2013" else None,
-                    "torque_effect_kNm": (float(np.nanmax(x["torque_effect_kNm"][:, f]))
-                                          if fault.kind == "drive_train" else None),
+                    "torque_effect_kNm": (
+                        float(np.nanmax(x["torque_effect_kNm"][:, f]))
+                        if fault.kind == "drive_train"
+                        else None
+                    ),
                 }
             if req is not None and k == trials and entry["within_requirement"] == 1.0:
                 met[name].append(fault.id)
@@ -264,32 +327,57 @@ def _summary(x: dict[str, np.ndarray], d: W.Design, trials: int) -> dict[str, An
                 if best_mean is None or entry["detection_time_mean_s"] < best_mean[1]:
                     best_mean = (name, entry["detection_time_mean_s"])
             per[name] = entry
-        faults[f"F{fault.id}"] = {"name": fault.name, "required_detection_s": req, "methods": per,
-                                  "effect_sigma_median": float(np.median(x["effect_sigma"][:, f])),
-                                  "effect_sigma_at_requirement_median": (
-                                      float(np.median(x["effect_sigma_req"][:, f])) if req is not None else None)}
+        faults[f"F{fault.id}"] = {
+            "name": fault.name,
+            "required_detection_s": req,
+            "methods": per,
+            "effect_sigma_median": float(np.median(x["effect_sigma"][:, f])),
+            "effect_sigma_at_requirement_median": (
+                float(np.median(x["effect_sigma_req"][:, f])) if req is not None else None
+            ),
+        }
         best[f"F{fault.id}"] = best_upper
-        fastest[f"F{fault.id}"] = (None if best_mean is None
-                                   else {"method": best_mean[0], "detection_time_mean_s": best_mean[1]})
+        fastest[f"F{fault.id}"] = (
+            None
+            if best_mean is None
+            else {"method": best_mean[0], "detection_time_mean_s": best_mean[1]}
+        )
     fa: dict[str, Any] = {}
     stretch_h = (d.onset - d.warmup) * Ts / 3600.0
     n_stretch = trials * len(wt.FAULTS)
     for m, name in enumerate(W.METHODS):
         a = int(x["false_alarm"][:, :, m].sum())
         hours = n_stretch * stretch_h
-        fa[name] = {"alarms": a, "stretches": n_stretch, "hours": hours, "rate_per_hour": a / hours,
-                    "rate_per_hour_ci": _poisson_ci(a, hours)}
+        fa[name] = {
+            "alarms": a,
+            "stretches": n_stretch,
+            "hours": hours,
+            "rate_per_hour": a / hours,
+            "rate_per_hour_ci": _poisson_ci(a, hours),
+        }
     svo_fa = x["false_alarm"][:, :, list(W.METHODS).index("rosa2013")]
     viol = x["bound_violation"]
-    return {"faults": faults, "false_alarms": fa, "requirement_met": met, "best_detection_upper_s": best,
-            "fastest_method": fastest,
-            "bound_violations": int(viol.sum()), "svo_false_alarms_with_violation": int((svo_fa & viol).sum()),
-            "svo_false_alarms_without_violation": int((svo_fa & ~viol).sum())}
+    return {
+        "faults": faults,
+        "false_alarms": fa,
+        "requirement_met": met,
+        "best_detection_upper_s": best,
+        "fastest_method": fastest,
+        "bound_violations": int(viol.sum()),
+        "svo_false_alarms_with_violation": int((svo_fa & viol).sum()),
+        "svo_false_alarms_without_violation": int((svo_fa & ~viol).sum()),
+    }
 
 
-def score_method(detect: np.ndarray, isolated: np.ndarray, isolate_step: np.ndarray,
-                 expected: set[str], required_s: float | None, onset: int,
-                 ts: float) -> dict[str, Any]:
+def score_method(
+    detect: np.ndarray,
+    isolated: np.ndarray,
+    isolate_step: np.ndarray,
+    expected: set[str],
+    required_s: float | None,
+    onset: int,
+    ts: float,
+) -> dict[str, Any]:
     """One method's score on one fault over ``R`` realisations.
 
     ``detect`` ``(R,)``: the detection sample (first alarm at or after ``onset``, ``-1``: none,
@@ -313,11 +401,15 @@ def score_method(detect: np.ndarray, isolated: np.ndarray, isolate_step: np.ndar
     # the most frequent set; a tie goes to the one seen first (in realisation order), never to
     # the iteration order of a set of strings, which changes with the process's hash seed
     mode = collections.Counter(labels).most_common(1)[0][0] if labels else None
-    within = (int(np.sum(hit & (W.delays(detect, onset, ts) <= required_s + 1e-12)))
-              if required_s is not None else None)
+    within = (
+        int(np.sum(hit & (W.delays(detect, onset, ts) <= required_s + 1e-12)))
+        if required_s is not None
+        else None
+    )
     n_iso = int(correct.sum())
     return {
-        "detected": k, "detection_rate": k / trials,
+        "detected": k,
+        "detection_rate": k / trials,
         "detection_rate_ci": list(binomial_ci(k, trials)),
         "missed": trials - k,
         "detection_time_mean_s": float(t.mean()) if k else None,
@@ -353,11 +445,20 @@ def _mean_ci(t: np.ndarray) -> list[float] | None:
 def _paper() -> dict[str, Any]:
     from fdi_lib.systems import wind_turbine as wt
 
-    return {"required_detection_s": {f"F{f.id}": (f"<= {f.required_detection_s:g}"
-                                                  if f.required_detection_s is not None else "not stated")
-                                     for f in wt.FAULTS},
-            "published": dict(PUBLISHED),
-            "published_detection_s": {src: {k: dict(v) for k, v in d.items()} for src, d in PUBLISHED_DELAYS.items()}}
+    return {
+        "required_detection_s": {
+            f"F{f.id}": (
+                f"<= {f.required_detection_s:g}"
+                if f.required_detection_s is not None
+                else "not stated"
+            )
+            for f in wt.FAULTS
+        },
+        "published": dict(PUBLISHED),
+        "published_detection_s": {
+            src: {k: dict(v) for k, v in d.items()} for src, d in PUBLISHED_DELAYS.items()
+        },
+    }
 
 
 def plot_scoreboard(result: ReproductionResult, fig: Any = None):
@@ -379,7 +480,13 @@ def plot_scoreboard(result: ReproductionResult, fig: Any = None):
                 ax.plot(v["detection_time_spread95"], [yi, yi], color=f"C{j}", lw=1)
         ax.plot(t, y, "o", color=f"C{j}", label=label, ms=4)
     req = [h["faults"][f]["required_detection_s"] for f in ids]
-    ax.plot([np.nan if r is None else r for r in req], np.arange(len(ids)), "k|", ms=14, label="required")
+    ax.plot(
+        [np.nan if r is None else r for r in req],
+        np.arange(len(ids)),
+        "k|",
+        ms=14,
+        label="required",
+    )
     ax.set_xscale("log")
     ax.set_yticks(np.arange(len(ids)), ids)
     ax.invert_yaxis()
@@ -389,35 +496,51 @@ def plot_scoreboard(result: ReproductionResult, fig: Any = None):
     return fig
 
 
-@register("windturbine-scoreboard", plot=plot_scoreboard, paper=PAPER, default_trials=10, default_seed=2009,
-          title="Wind-turbine FDI benchmark: four methods, nine faults (scoreboard)",
-          chapter="windturbine/benchmark", chapter_seed=True, claims={
-              "required_detection_s/*": Claim(
-                  location="benchmark requirements (Odgaard et al. 2013), fault {0}",
-                  label="required detection time (ours: the fastest method's 97.5th percentile)",
-                  units="s",
-                  test=BY_TOLERANCE, ours=lambda h, p: h["best_detection_upper_s"].get(p[-1]),
-                  explain="sec-wt-scoreboard",
-                  missing="no method detects it in every realisation within the 10 s after its "
-                          "start",
-                  cause="sec-wt-reasons", cause_glue=("wt-{0}-*",),
-                  cause_text="each miss and each late detection is measured against the fault's "
-                             "effect on the measurements and the smallest step each detector sees"),
-              "published/*": Claim(
-                  location="published results on this benchmark: {0}", units="", test=NOT_CHECKABLE,
-                  ours=lambda h, p: None,
-                  reason="their tables are not reachable from this machine (at most an abstract in "
-                         "the search corpora); no number is guessed"),
-              "published_detection_s/cohal_mirea_2017/*/*": Claim(
-                  location="Cohal & Mirea 2017, Table 1, delay to the {1} alarm on fault {2}",
-                  units="s",
-                  label="ours: the fastest method detecting in every realisation, its mean",
-                  test=NOT_CHECKABLE,
-                  ours=lambda h, p: (h["fastest_method"][p[-1]] or {}).get("detection_time_mean_s"),
-                  explain="sec-wt-published", missing="no method detects it in every realisation",
-                  reason="another method's result (window statistics, on the benchmark's measured "
-                         "wind, which is not public): not ours to reproduce; our four methods' "
-                         "delays on the substitute wind are set beside it")})
+@register(
+    "windturbine-scoreboard",
+    plot=plot_scoreboard,
+    paper=PAPER,
+    default_trials=10,
+    default_seed=2009,
+    title="Wind-turbine FDI benchmark: four methods, nine faults (scoreboard)",
+    chapter="windturbine/benchmark",
+    chapter_seed=True,
+    claims={
+        "required_detection_s/*": Claim(
+            location="benchmark requirements (Odgaard et al. 2013), fault {0}",
+            label="required detection time (ours: the fastest method's 97.5th percentile)",
+            units="s",
+            test=BY_TOLERANCE,
+            ours=lambda h, p: h["best_detection_upper_s"].get(p[-1]),
+            explain="sec-wt-scoreboard",
+            missing="no method detects it in every realisation within the 10 s after its start",
+            cause="sec-wt-reasons",
+            cause_glue=("wt-{0}-*",),
+            cause_text="each miss and each late detection is measured against the fault's "
+            "effect on the measurements and the smallest step each detector sees",
+        ),
+        "published/*": Claim(
+            location="published results on this benchmark: {0}",
+            units="",
+            test=NOT_CHECKABLE,
+            ours=lambda h, p: None,
+            reason="their tables are not reachable from this machine (at most an abstract in "
+            "the search corpora); no number is guessed",
+        ),
+        "published_detection_s/cohal_mirea_2017/*/*": Claim(
+            location="Cohal & Mirea 2017, Table 1, delay to the {1} alarm on fault {2}",
+            units="s",
+            label="ours: the fastest method detecting in every realisation, its mean",
+            test=NOT_CHECKABLE,
+            ours=lambda h, p: (h["fastest_method"][p[-1]] or {}).get("detection_time_mean_s"),
+            explain="sec-wt-published",
+            missing="no method detects it in every realisation",
+            reason="another method's result (window statistics, on the benchmark's measured "
+            "wind, which is not public): not ours to reproduce; our four methods' "
+            "delays on the substitute wind are set beside it",
+        ),
+    },
+)
 def scoreboard(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """The scoreboard: every fault of the benchmark scenario x the four methods.
 
@@ -483,16 +606,37 @@ def scoreboard(*, seed: int, trials: int | None, jobs: int) -> ReproductionResul
     settings = W.Settings()
     trials = check_trials(trials, jobs)
     d = calibrated_design(seed, settings)
-    x = run_monte_carlo(functools.partial(chunk, seed=seed, settings=settings), trials, seed=seed, jobs=jobs,
-                        description="wind-turbine scoreboard")
-    headline = {"realisations": trials, **_summary(x, d, trials),
-                "min_detectable": W.min_detectable(d)}
-    settings_out = {"seed": seed, "trials": trials, "pre_s": settings.pre_s, "post_s": settings.post_s,
-                    "warmup_s": settings.warmup_s, "window": settings.window,
-                    "false_alarms_per_hour": settings.false_alarms_per_hour, "svo_sigmas": settings.svo_sigmas,
-                    "calibration_runs": CALIBRATION_RUNS, "faults": [f.id for f in wt.FAULTS]}
-    return ReproductionResult(id="windturbine-scoreboard", headline=headline, paper=_paper(),
-                              settings=settings_out, data={"raw": x, "onset": d.onset, "Ts": d.constants.Ts})
+    x = run_monte_carlo(
+        functools.partial(chunk, seed=seed, settings=settings),
+        trials,
+        seed=seed,
+        jobs=jobs,
+        description="wind-turbine scoreboard",
+    )
+    headline = {
+        "realisations": trials,
+        **_summary(x, d, trials),
+        "min_detectable": W.min_detectable(d),
+    }
+    settings_out = {
+        "seed": seed,
+        "trials": trials,
+        "pre_s": settings.pre_s,
+        "post_s": settings.post_s,
+        "warmup_s": settings.warmup_s,
+        "window": settings.window,
+        "false_alarms_per_hour": settings.false_alarms_per_hour,
+        "svo_sigmas": settings.svo_sigmas,
+        "calibration_runs": CALIBRATION_RUNS,
+        "faults": [f.id for f in wt.FAULTS],
+    }
+    return ReproductionResult(
+        id="windturbine-scoreboard",
+        headline=headline,
+        paper=_paper(),
+        settings=settings_out,
+        data={"raw": x, "onset": d.onset, "Ts": d.constants.Ts},
+    )
 
 
 def _poisson_ci(alarms: int, exposure: float) -> list[float]:
@@ -507,8 +651,9 @@ def _poisson_ci(alarms: int, exposure: float) -> list[float]:
 FALSE_ALARM_STREAMS = 9
 
 
-def false_alarms(*, seed: int = 2009, trials: int = FALSE_ALARM_STREAMS,
-                 jobs: int = 1) -> ReproductionResult:
+def false_alarms(
+    *, seed: int = 2009, trials: int = FALSE_ALARM_STREAMS, jobs: int = 1
+) -> ReproductionResult:
     """False alarms of the four methods over ``trials`` continuous fault-free runs of the
     benchmark's
     whole scenario (:data:`~fdi_lib.systems.wind_turbine.SCENARIO_S` = 4400 s each, seeded wind and
@@ -540,8 +685,14 @@ def false_alarms(*, seed: int = 2009, trials: int = FALSE_ALARM_STREAMS,
     """
     settings = W.Settings()
     trials = int(trials)
-    x = run_monte_carlo(functools.partial(stream_chunk, seed=seed), trials, seed=seed, jobs=jobs,
-                        chunk_size=1, description="wind-turbine false alarms")
+    x = run_monte_carlo(
+        functools.partial(stream_chunk, seed=seed),
+        trials,
+        seed=seed,
+        jobs=jobs,
+        chunk_size=1,
+        description="wind-turbine false alarms",
+    )
     d, start = stream_design(seed)
     hours = float(x["samples"].sum() * d.constants.Ts / 3600.0)
     nominal = settings.false_alarms_per_hour
@@ -550,20 +701,33 @@ def false_alarms(*, seed: int = 2009, trials: int = FALSE_ALARM_STREAMS,
         a = int(x["alarms"][:, m].sum())
         k = int(x["tests"][0, m])
         ci = _poisson_ci(a, hours * k)
-        methods[name] = {"alarms": a, "tests": k, "rate_per_hour": a / hours,
-                         "rate_per_hour_ci": _poisson_ci(a, hours),
-                         "rate_per_test_hour": a / (hours * k), "rate_per_test_hour_ci": ci,
-                         "nominal_per_test_hour": nominal,
-                         "p_value_nominal": float(scipy.stats.poisson.sf(a - 1,
-                                                                         nominal * hours * k)),
-                         "below_nominal": bool(ci[1] < nominal)}
+        methods[name] = {
+            "alarms": a,
+            "tests": k,
+            "rate_per_hour": a / hours,
+            "rate_per_hour_ci": _poisson_ci(a, hours),
+            "rate_per_test_hour": a / (hours * k),
+            "rate_per_test_hour_ci": ci,
+            "nominal_per_test_hour": nominal,
+            "p_value_nominal": float(scipy.stats.poisson.sf(a - 1, nominal * hours * k)),
+            "below_nominal": bool(ci[1] < nominal),
+        }
     from fdi_lib.systems import wind_turbine as wt
 
     headline = {"streams": trials, "hours": hours, "methods": methods}
-    settings_out = {"seed": seed, "trials": trials, "scenario_s": wt.SCENARIO_S,
-                    "window_s": STREAM_WINDOW_S,
-                    "overlap_s": STREAM_OVERLAP_S, "false_alarms_per_hour": nominal,
-                    "calibration_runs": CALIBRATION_RUNS}
-    return ReproductionResult(id="windturbine-false-alarms", headline=headline,
-                              paper={},
-                              settings=settings_out, data={"raw": x})
+    settings_out = {
+        "seed": seed,
+        "trials": trials,
+        "scenario_s": wt.SCENARIO_S,
+        "window_s": STREAM_WINDOW_S,
+        "overlap_s": STREAM_OVERLAP_S,
+        "false_alarms_per_hour": nominal,
+        "calibration_runs": CALIBRATION_RUNS,
+    }
+    return ReproductionResult(
+        id="windturbine-false-alarms",
+        headline=headline,
+        paper={},
+        settings=settings_out,
+        data={"raw": x},
+    )

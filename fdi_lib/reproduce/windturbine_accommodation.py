@@ -158,7 +158,7 @@ SECONDS_PER_REALISATION = 2.0
     "windturbine-accommodation",
     plot=plot_accommodation,
     paper=PAPER,
-    default_trials=5,   # the book's count: SECONDS_PER_REALISATION
+    default_trials=5,  # the book's count: SECONDS_PER_REALISATION
     default_seed=2009,
     title="Wind-turbine benchmark: sensor faults accommodated after isolation",
     chapter="windturbine/benchmark",
@@ -194,9 +194,13 @@ def accommodation(
     """
     if method not in (*RUNNERS, "first"):
         raise ModelError(f"method: expected 'first' or one of {tuple(RUNNERS)}, got {method!r}")
-    n_acc = len(ACCOMMODATED)   # the chunk's results: isolation time, two energies, 2 x metrics
-    trials = check_trials(trials, jobs, seconds_per_realisation=SECONDS_PER_REALISATION,
-                          bytes_per_realisation=8.0 * n_acc * (3 + 2 * len(_METRICS)))
+    n_acc = len(ACCOMMODATED)  # the chunk's results: isolation time, two energies, 2 x metrics
+    trials = check_trials(
+        trials,
+        jobs,
+        seconds_per_realisation=SECONDS_PER_REALISATION,
+        bytes_per_realisation=8.0 * n_acc * (3 + 2 * len(_METRICS)),
+    )
     settings = W.Settings()
     x = run_monte_carlo(
         functools.partial(accommodation_chunk, seed=seed, method=method, settings=settings),

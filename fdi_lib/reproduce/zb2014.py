@@ -25,17 +25,29 @@ from fdi_lib.signatures import fault_signature, willsky_jones
 from fdi_lib.simulate import simulate
 from fdi_lib.systems import zb2014_unstable as ex
 
-__all__ = ["ONSETS", "UnstableRun", "unstable_run", "plot_detection", "plot_fig1", "plot_fig2",
-           "TypoReading", "gamma_lower_bound", "single_entry_readings", "gamma_norm_peaks",
-           "window_min_eigenvalue", "youngest_onset_information", "plot_persistent_excitation",
-           "plot_null_histograms"]
+__all__ = [
+    "ONSETS",
+    "UnstableRun",
+    "unstable_run",
+    "plot_detection",
+    "plot_fig1",
+    "plot_fig2",
+    "TypoReading",
+    "gamma_lower_bound",
+    "single_entry_readings",
+    "gamma_norm_peaks",
+    "window_min_eigenvalue",
+    "youngest_onset_information",
+    "plot_persistent_excitation",
+    "plot_null_histograms",
+]
 
 PAPER = "Zhang & Basseville 2014"
 #: Impulse onsets of Figures 1 and 2.
 ONSETS = (1, 101, 201, 301)
 #: Onset ``r`` and GLR window ``w`` of Figures 3 and 4.
 FAULT_ONSET, GLR_WINDOW = 201, 100
-_LOG12 = float(np.log10(1.2))   # the growth rate of Fig. 2: log10 of the unstable eigenvalue
+_LOG12 = float(np.log10(1.2))  # the growth rate of Fig. 2: log10 of the unstable eigenvalue
 
 
 def _spectral_norms(mats: np.ndarray) -> np.ndarray:
@@ -50,8 +62,9 @@ def _setup(n_steps: int = ex.N_STEPS) -> tuple[LTVModel, KalmanGains]:
 
 
 # ----------------------------------------------------------------------------- Figure 1
-def gamma_norm_peaks(F: np.ndarray, onsets: tuple[int, ...] = ONSETS,
-                     n_steps: int = ex.N_STEPS) -> dict[str, dict[str, np.ndarray]]:
+def gamma_norm_peaks(
+    F: np.ndarray, onsets: tuple[int, ...] = ONSETS, n_steps: int = ex.N_STEPS
+) -> dict[str, dict[str, np.ndarray]]:
     """``||Gamma_k||_2`` and ``||Gamma_k e_1||_2`` after impulses at ``onsets``, for a state matrix ``F``.
 
     The model is that of Section 6.1 with ``F`` replaced (``G``, ``H``, ``Q``, ``R``,
@@ -71,8 +84,9 @@ def gamma_norm_peaks(F: np.ndarray, onsets: tuple[int, ...] = ONSETS,
     dict
         ``{"gamma": {r: norms}, "gamma_e1": {r: norms}}``, arrays of shape ``(n_steps,)``.
     """
-    model = ltv_model(F=np.asarray(F, dtype=float), G=ex.G, H=ex.H, Q=ex.Q, R=ex.R,
-                      n_steps=n_steps, P0=ex.Q)
+    model = ltv_model(
+        F=np.asarray(F, dtype=float), G=ex.G, H=ex.H, Q=ex.Q, R=ex.R, n_steps=n_steps, P0=ex.Q
+    )
     gains = kalman_gains(model)
     fam = impulse_family(model)
     out: dict[str, dict[str, np.ndarray]] = {"gamma": {}, "gamma_e1": {}}
@@ -124,8 +138,9 @@ class TypoReading:
     gamma_e1_norm_max: float
 
 
-def single_entry_readings(eigenvalue: float = ex.QUOTED_UNSTABLE_EIGENVALUE,
-                          F: np.ndarray = ex.F) -> list[TypoReading]:
+def single_entry_readings(
+    eigenvalue: float = ex.QUOTED_UNSTABLE_EIGENVALUE, F: np.ndarray = ex.F
+) -> list[TypoReading]:
     """Every change of *one* entry of ``F`` that gives it the eigenvalue ``eigenvalue``.
 
     ``det(F - lambda I)`` is affine in any single entry, so each entry has at most one such
@@ -142,6 +157,7 @@ def single_entry_readings(eigenvalue: float = ex.QUOTED_UNSTABLE_EIGENVALUE,
     out = []
     for i in range(F.shape[0]):
         for j in range(F.shape[1]):
+
             def char(x: float) -> float:
                 G = F.copy()
                 G[i, j] = x
@@ -154,10 +170,15 @@ def single_entry_readings(eigenvalue: float = ex.QUOTED_UNSTABLE_EIGENVALUE,
             Fx = F.copy()
             Fx[i, j] = x
             peaks = gamma_norm_peaks(Fx)
-            out.append(TypoReading(
-                entry=f"F{i + 1}{j + 1}", value=float(x), eigenvalues=np.linalg.eigvals(Fx),
-                gamma_norm_max=float(max(v.max() for v in peaks["gamma"].values())),
-                gamma_e1_norm_max=float(max(v.max() for v in peaks["gamma_e1"].values()))))
+            out.append(
+                TypoReading(
+                    entry=f"F{i + 1}{j + 1}",
+                    value=float(x),
+                    eigenvalues=np.linalg.eigvals(Fx),
+                    gamma_norm_max=float(max(v.max() for v in peaks["gamma"].values())),
+                    gamma_e1_norm_max=float(max(v.max() for v in peaks["gamma_e1"].values())),
+                )
+            )
     return out
 
 
@@ -178,8 +199,9 @@ def plot_fig1(result: ReproductionResult, fig: Any = None):
     right.plot(k, result.data["gamma_norm"][r][k], label=r"$\|\Gamma_k\|_2$")
     right.plot(k, result.data["gamma_e1_norm"][r][k], ls=":", label=r"$\|\Gamma_k e_1\|_2$")
     right.axhline(1.0, color="k", lw=0.8, ls="--")
-    right.axhline(result.headline["gamma_lower_bound"], color="0.4", lw=0.8, ls="-.",
-                  label=r"$\|F e_2\|_2$")
+    right.axhline(
+        result.headline["gamma_lower_bound"], color="0.4", lw=0.8, ls="-.", label=r"$\|F e_2\|_2$"
+    )
     right.set(xlabel="$k$", title=f"zoom on $r = {r}$")
     right.legend(loc="center right")
     return fig
@@ -188,18 +210,35 @@ def plot_fig1(result: ReproductionResult, fig: Any = None):
 _FIG1_CAUSE = dict(explain="sec-zb-fig1-bound", cause="sec-zb-fig1-bound")
 
 
-@register("zb2014-fig1", paper=PAPER, title="Spectral norm of Gamma_k, impulses at r = 1, 101, 201, 301",
-          plot=plot_fig1, chapter="zb2014/signature", claims={
-              "unstable_eigenvalue": Claim(
-                  location="Fig. 1 (§6.1 text)", label="the unstable eigenvalue of F", units="",
-                  test=BY_TOLERANCE, **_FIG1_CAUSE, cause_glue=("sig-quoted", "sig-typo-count"),
-                  cause_text="the printed F is triangular, with eigenvalues 0.5 and 1.2, and we "
-                             "use it; the section checks every one-entry misprint that gives the "
-                             "quoted value"),
-              "gamma_norm_max/*": Claim(
-                  location="Fig. 1, impulse at r = {0}", label="‖Γ_k‖ stays under 1", units="",
-                  test=BY_TOLERANCE, **_FIG1_CAUSE, cause_glue=("sig-bound", "sig-gamma-max"),
-                  cause_text="‖Γ_(r+1)‖ ≥ ‖F e₂‖ > 1 for the printed matrices, whatever P₀, Q, R")})
+@register(
+    "zb2014-fig1",
+    paper=PAPER,
+    title="Spectral norm of Gamma_k, impulses at r = 1, 101, 201, 301",
+    plot=plot_fig1,
+    chapter="zb2014/signature",
+    claims={
+        "unstable_eigenvalue": Claim(
+            location="Fig. 1 (§6.1 text)",
+            label="the unstable eigenvalue of F",
+            units="",
+            test=BY_TOLERANCE,
+            **_FIG1_CAUSE,
+            cause_glue=("sig-quoted", "sig-typo-count"),
+            cause_text="the printed F is triangular, with eigenvalues 0.5 and 1.2, and we "
+            "use it; the section checks every one-entry misprint that gives the "
+            "quoted value",
+        ),
+        "gamma_norm_max/*": Claim(
+            location="Fig. 1, impulse at r = {0}",
+            label="‖Γ_k‖ stays under 1",
+            units="",
+            test=BY_TOLERANCE,
+            **_FIG1_CAUSE,
+            cause_glue=("sig-bound", "sig-gamma-max"),
+            cause_text="‖Γ_(r+1)‖ ≥ ‖F e₂‖ > 1 for the printed matrices, whatever P₀, Q, R",
+        ),
+    },
+)
 def fig1(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Paper Fig. 1: boundedness of the fault-signature filter (12) on the unstable example.
 
@@ -232,8 +271,10 @@ def fig1(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     fam = impulse_family(model)
     peaks = gamma_norm_peaks(ex.F, n_steps=model.n_steps)
     norms, e1 = peaks["gamma"], peaks["gamma_e1"]
-    sig_norms = {str(r): _spectral_norms(fault_signature(model, gains, fam.profile(r)).on_innovation)
-                 for r in ONSETS}
+    sig_norms = {
+        str(r): _spectral_norms(fault_signature(model, gains, fam.profile(r)).on_innovation)
+        for r in ONSETS
+    }
     readings = single_entry_readings()
     headline = {
         "gamma_norm_max": {r: float(v.max()) for r, v in norms.items()},
@@ -242,20 +283,34 @@ def fig1(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
         "gamma_e1_norm_max": {r: float(v.max()) for r, v in e1.items()},
         "gamma_lower_bound": gamma_lower_bound(),
         "unstable_eigenvalue": float(np.abs(np.linalg.eigvals(ex.F)).max()),
-        "typo_readings": [{"entry": t.entry, "value": t.value, "gamma_norm_max": t.gamma_norm_max,
-                           "gamma_e1_norm_max": t.gamma_e1_norm_max} for t in readings],
+        "typo_readings": [
+            {
+                "entry": t.entry,
+                "value": t.value,
+                "gamma_norm_max": t.gamma_norm_max,
+                "gamma_e1_norm_max": t.gamma_e1_norm_max,
+            }
+            for t in readings
+        ],
         "typo_readings_bounded": sum(t.gamma_norm_max <= 1.0 for t in readings),
     }
-    paper = {"gamma_norm_max": {str(r): "< 1" for r in ONSETS},
-             "unstable_eigenvalue": ex.QUOTED_UNSTABLE_EIGENVALUE}
-    return ReproductionResult(id="zb2014-fig1", headline=headline, paper=paper,
-                              settings={"onsets": list(ONSETS), "n_steps": model.n_steps},
-                              data={"gamma_norm": norms, "gamma_e1_norm": e1,
-                                    "signature_norm": sig_norms})
+    paper = {
+        "gamma_norm_max": {str(r): "< 1" for r in ONSETS},
+        "unstable_eigenvalue": ex.QUOTED_UNSTABLE_EIGENVALUE,
+    }
+    return ReproductionResult(
+        id="zb2014-fig1",
+        headline=headline,
+        paper=paper,
+        settings={"onsets": list(ONSETS), "n_steps": model.n_steps},
+        data={"gamma_norm": norms, "gamma_e1_norm": e1, "signature_norm": sig_norms},
+    )
 
 
 # ----------------------------------------------------------------------------- persistent excitation
-def window_min_eigenvalue(model: LTVModel, gains: KalmanGains, Psi: np.ndarray, s: int) -> np.ndarray:
+def window_min_eigenvalue(
+    model: LTVModel, gains: KalmanGains, Psi: np.ndarray, s: int
+) -> np.ndarray:
     """Smallest eigenvalue of the information of the last ``s`` samples (Section 3.3).
 
     ``lambda_min( sum_{j=k-s+1}^{k} S_j^T Sigma_j^{-1} S_j )`` for ``k = s-1, ..., N-1``, with
@@ -279,8 +334,9 @@ def window_min_eigenvalue(model: LTVModel, gains: KalmanGains, Psi: np.ndarray, 
     return np.linalg.eigvalsh(windowed)[:, 0]
 
 
-def plot_persistent_excitation(curves: dict[str, np.ndarray], s: int, floor: float = 1e-16,
-                               fig: Any = None):
+def plot_persistent_excitation(
+    curves: dict[str, np.ndarray], s: int, floor: float = 1e-16, fig: Any = None
+):
     """Smallest eigenvalue of the windowed information against ``k``, log scale.
 
     Parameters
@@ -321,19 +377,31 @@ def plot_null_histograms(panels: dict[str, Any], xlabel: str, fig: Any = None):
 
     fig, axes = figure(1, len(panels), fig=fig)
     for ax, (title, cal) in zip(axes[0], panels.items()):
-        ax.hist(cal.statistics, bins=50, density=True, alpha=0.6, color=OURS_COLOR,
-                label=f"{cal.statistics.size} runs")
+        ax.hist(
+            cal.statistics,
+            bins=50,
+            density=True,
+            alpha=0.6,
+            color=OURS_COLOR,
+            label=f"{cal.statistics.size} runs",
+        )
         x = np.linspace(0.02, max(8.0, float(np.quantile(cal.statistics, 0.999))), 300)
-        ax.plot(x, scipy.stats.chi2(cal.dof).pdf(x), "--", color=THRESHOLD_COLOR,
-                label=rf"$\chi^2({cal.dof})$")
+        ax.plot(
+            x,
+            scipy.stats.chi2(cal.dof).pdf(x),
+            "--",
+            color=THRESHOLD_COLOR,
+            label=rf"$\chi^2({cal.dof})$",
+        )
         ax.set(title=title, xlabel=xlabel, ylim=(0, 1.2 if cal.dof == 1 else None))
     axes[0, 0].set_ylabel("density")
     axes[0, 0].legend()
     return fig
 
 
-def youngest_onset_information(model: LTVModel, gains: KalmanGains, family: FaultFamily,
-                               min_samples: int | None = None) -> np.ndarray:
+def youngest_onset_information(
+    model: LTVModel, gains: KalmanGains, family: FaultFamily, min_samples: int | None = None
+) -> np.ndarray:
     """``C_k(k - s)``: the information of the youngest onset the windowed GLR may pick.
 
     The windowed GLR of :mod:`fdi_lib.glr` sums ``C_k(r)`` over ``j = r .. k`` and admits the
@@ -351,8 +419,9 @@ def youngest_onset_information(model: LTVModel, gains: KalmanGains, family: Faul
         ``s``; default the library's ``ceil(m / p)``.
     """
     s = -(-family.m // model.p) if min_samples is None else int(min_samples)
-    res = glr_window(np.zeros((model.n_steps, model.p)), model, gains, family, window=s + 1,
-                     min_samples=s)
+    res = glr_window(
+        np.zeros((model.n_steps, model.p)), model, gains, family, window=s + 1, min_samples=s
+    )
     return res.C_hat[s:]
 
 
@@ -370,13 +439,24 @@ def plot_fig2(result: ReproductionResult, fig: Any = None):
     return fig
 
 
-@register("zb2014-fig2", paper=PAPER, title="Spectral norm of Willsky-Jones alpha_k(r) (log scale)",
-          plot=plot_fig2, chapter="zb2014/signature", claims={
-              "alpha_log10_norm_final/*": Claim(
-                  location="Fig. 2, impulse at r = {0}", label="log ‖α_k(r)‖ grows linearly in k",
-                  units="", test=BY_CHECK, ours=ours_at("alpha_log10_slope"),
-                  check=lambda p, o, h: abs(o - _LOG12) <= 0.01 * _LOG12,
-                  criterion="fitted slope of log₁₀‖α_k(r)‖ is log₁₀ 1.2 within 1 %")})
+@register(
+    "zb2014-fig2",
+    paper=PAPER,
+    title="Spectral norm of Willsky-Jones alpha_k(r) (log scale)",
+    plot=plot_fig2,
+    chapter="zb2014/signature",
+    claims={
+        "alpha_log10_norm_final/*": Claim(
+            location="Fig. 2, impulse at r = {0}",
+            label="log ‖α_k(r)‖ grows linearly in k",
+            units="",
+            test=BY_CHECK,
+            ours=ours_at("alpha_log10_slope"),
+            check=lambda p, o, h: abs(o - _LOG12) <= 0.01 * _LOG12,
+            criterion="fitted slope of log₁₀‖α_k(r)‖ is log₁₀ 1.2 within 1 %",
+        )
+    },
+)
 def fig2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Paper Fig. 2: the Willsky-Jones ``alpha_k(r)`` of eq. (A.6) diverges on the unstable example.
 
@@ -406,13 +486,23 @@ def fig2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
         slope[str(r)] = float(np.polyfit(k, np.log10(norms[k]), 1)[0])
         sig = fault_signature(model, gains, fam.profile(r))
         rho_err[str(r)] = float(np.abs(wj.rho - sig.on_innovation).max())
-    headline = {"alpha_log10_norm_final": log_final, "alpha_log10_slope": slope,
-                "rho_minus_HGamma_max": rho_err}
-    paper = {"alpha_log10_norm_final": {str(r): "grows linearly in k (exponential divergence)"
-                                        for r in ONSETS}}
-    return ReproductionResult(id="zb2014-fig2", headline=headline, paper=paper,
-                              settings={"onsets": list(ONSETS), "n_steps": model.n_steps},
-                              data={"alpha_norm": alpha_norm})
+    headline = {
+        "alpha_log10_norm_final": log_final,
+        "alpha_log10_slope": slope,
+        "rho_minus_HGamma_max": rho_err,
+    }
+    paper = {
+        "alpha_log10_norm_final": {
+            str(r): "grows linearly in k (exponential divergence)" for r in ONSETS
+        }
+    }
+    return ReproductionResult(
+        id="zb2014-fig2",
+        headline=headline,
+        paper=paper,
+        settings={"onsets": list(ONSETS), "n_steps": model.n_steps},
+        data={"alpha_norm": alpha_norm},
+    )
 
 
 # ----------------------------------------------------------------------------- Figures 3-4
@@ -442,9 +532,14 @@ class UnstableRun:
     alarm: int
 
 
-def unstable_run(theta: tuple[float, float] = (4.0, 0.0), onset: int = FAULT_ONSET,
-                 window: int = GLR_WINDOW,
-                 threshold: float | None = None, seed: int = 0, n_steps: int = ex.N_STEPS) -> UnstableRun:
+def unstable_run(
+    theta: tuple[float, float] = (4.0, 0.0),
+    onset: int = FAULT_ONSET,
+    window: int = GLR_WINDOW,
+    threshold: float | None = None,
+    seed: int = 0,
+    n_steps: int = ex.N_STEPS,
+) -> UnstableRun:
     """Simulate Section 6.1 with ``delta_{r,k+1} theta``, run the Kalman filter and the windowed GLR.
 
     Parameters
@@ -464,16 +559,31 @@ def unstable_run(theta: tuple[float, float] = (4.0, 0.0), onset: int = FAULT_ONS
     """
     model, gains = _setup(n_steps)
     fam = impulse_family(model)
-    sim = simulate(model, rng=np.random.default_rng(seed), controller=ex.controller(),
-                   fault=fam.profile(onset), theta=np.asarray(theta, dtype=float))
+    sim = simulate(
+        model,
+        rng=np.random.default_rng(seed),
+        controller=ex.controller(),
+        fault=fam.profile(onset),
+        theta=np.asarray(theta, dtype=float),
+    )
     eps = kalman_filter(model, sim.y, sim.u, gains=gains).innovations[:, 0]
     res = glr_window(eps[:, None], model, gains, fam, window=window)
     alarm = -1 if threshold is None else int(first_alarm(res.statistic, threshold))
-    return UnstableRun(innovations=eps, glr=res, theta=(float(theta[0]), float(theta[1])), onset=onset,
-                       window=window, threshold=threshold, seed=seed, alarm=alarm)
+    return UnstableRun(
+        innovations=eps,
+        glr=res,
+        theta=(float(theta[0]), float(theta[1])),
+        onset=onset,
+        window=window,
+        threshold=threshold,
+        seed=seed,
+        alarm=alarm,
+    )
 
 
-def plot_detection(run: UnstableRun, fig: Any = None, title: str | None = None, *, widget: bool = False):
+def plot_detection(
+    run: UnstableRun, fig: Any = None, title: str | None = None, *, widget: bool = False
+):
     """Innovation (top) and GLR statistic ``l_k`` (bottom), as in paper Figs. 3-4.
 
     With a threshold, the legend has an alarm entry ("no alarm" when there is none). Given
@@ -488,20 +598,27 @@ def plot_detection(run: UnstableRun, fig: Any = None, title: str | None = None, 
 
     k = np.arange(run.innovations.size)
     stat = run.glr.statistic
-    title = title or (rf"$\theta = [{run.theta[0]:g}, {run.theta[1]:g}]$, "
-                      rf"onset $r = {run.onset}$, $w = {run.window}$")
+    title = title or (
+        rf"$\theta = [{run.theta[0]:g}, {run.theta[1]:g}]$, "
+        rf"onset $r = {run.onset}$, $w = {run.window}$"
+    )
     has_alarm = run.threshold is not None and run.alarm >= 0
     alarm_xy = ([run.alarm], [stat[run.alarm]]) if has_alarm else ([], [])
     # legend entries: [threshold, onset, alarm] with a threshold, [onset] without
     if widget:
         labels = ("threshold", "onset $r$", "alarm")
     else:
-        labels = (f"threshold {run.threshold:g}" if run.threshold is not None else "", f"onset $r = {run.onset}$",
-                  f"alarm at $k = {run.alarm}$" if has_alarm else "no alarm")
+        labels = (
+            f"threshold {run.threshold:g}" if run.threshold is not None else "",
+            f"onset $r = {run.onset}$",
+            f"alarm at $k = {run.alarm}$" if has_alarm else "no alarm",
+        )
     limits = {}
     if widget:
-        limits = {"top": stepped_range(run.innovations, symmetric=True),
-                  "bottom": stepped_range([*stat, run.threshold or 0.0])}
+        limits = {
+            "top": stepped_range(run.innovations, symmetric=True),
+            "bottom": stepped_range([*stat, run.threshold or 0.0]),
+        }
     key = f"plot_detection {k.size} {run.threshold is None} {widget}"
     art = reusable_artists(fig, key)
     if art is not None:
@@ -522,14 +639,19 @@ def plot_detection(run: UnstableRun, fig: Any = None, title: str | None = None, 
     else:
         fig, axes = figure(2, 1, fig=fig, sharex=True, figsize=(7.0, 4.6))
         top, bottom = axes[0, 0], axes[1, 0]
-        art = {"eps": top.plot(k, run.innovations, color=OURS_COLOR, lw=0.8)[0], "top": top, "bottom": bottom}
+        art = {
+            "eps": top.plot(k, run.innovations, color=OURS_COLOR, lw=0.8)[0],
+            "top": top,
+            "bottom": bottom,
+        }
         art["onsets"] = [top.axvline(run.onset, color="k", ls=":", lw=0.8)]
         top.set(ylabel=r"$\varepsilon_k$")
-        art["title"] = top.set_title(title, y=1.0)   # fixed: no re-placement at each draw
+        art["title"] = top.set_title(title, y=1.0)  # fixed: no re-placement at each draw
         art["stat"] = bottom.plot(k, stat, color=OURS_COLOR)[0]
         if run.threshold is not None:
-            art["threshold"] = bottom.axhline(run.threshold, color=THRESHOLD_COLOR, ls="--", lw=0.8,
-                                              label=labels[0])
+            art["threshold"] = bottom.axhline(
+                run.threshold, color=THRESHOLD_COLOR, ls="--", lw=0.8, label=labels[0]
+            )
         art["onsets"].append(bottom.axvline(run.onset, color="k", ls=":", lw=0.8, label=labels[1]))
         if run.threshold is not None:
             art["alarm"] = bottom.plot(*alarm_xy, "o", color=THRESHOLD_COLOR, label=labels[2])[0]
@@ -537,7 +659,7 @@ def plot_detection(run: UnstableRun, fig: Any = None, title: str | None = None, 
         legend = bottom.legend(loc="upper left")
         if widget:
             legend.set_zorder(1.9)
-        else:   # its texts change with the run
+        else:  # its texts change with the run
             art["legend"] = legend
         if limits:
             top.set_ylim(limits["top"])
@@ -558,12 +680,12 @@ def _detection_result(rid: str, theta: tuple[float, float], seed: int) -> Reprod
     run = unstable_run(theta=theta, seed=seed)
     stat = run.glr.statistic
     before = np.nanmax(stat[: run.onset])
-    after = np.nanmax(stat[run.onset:])
+    after = np.nanmax(stat[run.onset :])
     k_max = int(np.nanargmax(stat))
     theta_hat = run.glr.theta_hat[k_max]
     half = 1.96 * np.sqrt(np.diag(np.linalg.pinv(run.glr.C_hat[k_max])))
     _, gains = _setup(run.innovations.size)
-    z = np.abs(run.innovations) / np.sqrt(gains.Sigma[:, 0, 0])   # |eps_k| / sigma_k
+    z = np.abs(run.innovations) / np.sqrt(gains.Sigma[:, 0, 0])  # |eps_k| / sigma_k
     pre_max = float(np.abs(run.innovations[: run.onset]).max())
     headline = {
         "glr_max_before_fault": float(before),
@@ -573,19 +695,30 @@ def _detection_result(rid: str, theta: tuple[float, float], seed: int) -> Reprod
         "theta_estimate": theta_hat.tolist(),
         "theta_estimate_ci": [[float(t - h), float(t + h)] for t, h in zip(theta_hat, half)],
         "innovation_max_abs_before_fault": pre_max,
-        "innovation_max_abs_after_fault": float(np.abs(run.innovations[run.onset:]).max()),
+        "innovation_max_abs_after_fault": float(np.abs(run.innovations[run.onset :]).max()),
         "innovation_max_sigma_before_fault": float(z[: run.onset].max()),
-        "innovation_max_sigma_after_fault": float(z[run.onset:].max()),
-        "innovation_samples_above_premax": int(np.sum(np.abs(run.innovations[run.onset:]) > pre_max)),
+        "innovation_max_sigma_after_fault": float(z[run.onset :].max()),
+        "innovation_samples_above_premax": int(
+            np.sum(np.abs(run.innovations[run.onset :]) > pre_max)
+        ),
     }
-    paper = {"onset_estimate": run.onset, "glr_argmax_time": "within the window after 201",
-             "theta_estimate": list(theta),
-             "fault_visibility": ("visible on the innovation only briefly after 201" if theta[0] > 2
-                                  else "hardly visible on the innovation")}
-    return ReproductionResult(id=rid, headline=headline, paper=paper,
-                              settings={"theta": list(theta), "onset": run.onset, "window": run.window,
-                                        "seed": seed},
-                              data={"run": run})
+    paper = {
+        "onset_estimate": run.onset,
+        "glr_argmax_time": "within the window after 201",
+        "theta_estimate": list(theta),
+        "fault_visibility": (
+            "visible on the innovation only briefly after 201"
+            if theta[0] > 2
+            else "hardly visible on the innovation"
+        ),
+    }
+    return ReproductionResult(
+        id=rid,
+        headline=headline,
+        paper=paper,
+        settings={"theta": list(theta), "onset": run.onset, "window": run.window, "seed": seed},
+        data={"run": run},
+    )
 
 
 def plot_fig3(result: ReproductionResult, fig: Any = None):
@@ -599,32 +732,57 @@ def _glr_claims(fig: str, visibility: Claim) -> dict[str, Claim]:
         "onset_estimate": Claim(
             location=f"Fig. {fig}, the onset set at r = {FAULT_ONSET}",
             label="our onset estimate r̂ at the peak of l_k (sums from j = r̂, see the convention)",
-            units="sample", test=ESTIMATES_INPUT, explain="sec-zb-glr-onset"),
+            units="sample",
+            test=ESTIMATES_INPUT,
+            explain="sec-zb-glr-onset",
+        ),
         "glr_argmax_time": Claim(
             location=f"Fig. {fig}, bottom panel",
             label="l_k is largest while the onset is in the window",
-            units="sample", test=BY_CHECK,
+            units="sample",
+            test=BY_CHECK,
             check=lambda p, o, h: FAULT_ONSET <= o <= FAULT_ONSET + GLR_WINDOW,
-            criterion=f"{FAULT_ONSET} ≤ argmax l_k ≤ {FAULT_ONSET + GLR_WINDOW}"),
+            criterion=f"{FAULT_ONSET} ≤ argmax l_k ≤ {FAULT_ONSET + GLR_WINDOW}",
+        ),
         "theta_estimate": Claim(
             location=f"Fig. {fig}, the fault θ set in the caption",
-            label="our estimate θ̂ at the peak of l_k", units="", test=ESTIMATES_INPUT,
-            explain="sec-zb-glr-figs", ci=lambda h, p: None, rtol=0.0,
-            check=lambda p, o, h: all(lo <= t <= hi for t, (lo, hi) in zip(p,
-                                                                           h["theta_estimate_ci"])),
+            label="our estimate θ̂ at the peak of l_k",
+            units="",
+            test=ESTIMATES_INPUT,
+            explain="sec-zb-glr-figs",
+            ci=lambda h, p: None,
+            rtol=0.0,
+            check=lambda p, o, h: all(
+                lo <= t <= hi for t, (lo, hi) in zip(p, h["theta_estimate_ci"])
+            ),
             criterion="each component of the paper's θ in our 95 % interval (θ̂ ± 1.96 σ from "
-                      "C_k(r̂))"),
-        "fault_visibility": visibility}
+            "C_k(r̂))",
+        ),
+        "fault_visibility": visibility,
+    }
 
 
-@register("zb2014-fig3", paper=PAPER, title="Innovation and GLR l_k, theta = [4, 0], onset 201, w = 100",
-          plot=plot_fig3, chapter="zb2014/glr", chapter_seed=True, claims=_glr_claims("3", Claim(
-              location="Fig. 3, top panel",
-              label="the fault shows on the innovation only briefly after 201 (ours: samples above "
-                    "the pre-fault maximum)", units="sample", test=BY_CHECK,
-              ours=lambda h, p: h["innovation_samples_above_premax"],
-              check=lambda p, o, h: o <= 10,
-              criterion="at most 10 samples above the pre-fault max |ε_k|")))
+@register(
+    "zb2014-fig3",
+    paper=PAPER,
+    title="Innovation and GLR l_k, theta = [4, 0], onset 201, w = 100",
+    plot=plot_fig3,
+    chapter="zb2014/glr",
+    chapter_seed=True,
+    claims=_glr_claims(
+        "3",
+        Claim(
+            location="Fig. 3, top panel",
+            label="the fault shows on the innovation only briefly after 201 (ours: samples above "
+            "the pre-fault maximum)",
+            units="sample",
+            test=BY_CHECK,
+            ours=lambda h, p: h["innovation_samples_above_premax"],
+            check=lambda p, o, h: o <= 10,
+            criterion="at most 10 samples above the pre-fault max |ε_k|",
+        ),
+    ),
+)
 def fig3(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Paper Fig. 3: impulsive fault ``theta = [4, 0]`` at ``k = 201``, windowed GLR with ``w = 100``.
 
@@ -658,15 +816,28 @@ def plot_fig4(result: ReproductionResult, fig: Any = None):
     return plot_detection(result.data["run"], fig=fig)
 
 
-@register("zb2014-fig4", paper=PAPER, title="Innovation and GLR l_k, theta = [1.5, 0], onset 201, w = 100",
-          plot=plot_fig4, chapter="zb2014/glr", chapter_seed=True, claims=_glr_claims("4", Claim(
-              location="Fig. 4, top panel",
-              label="the fault is hardly visible on the innovation (ours: largest |ε_k|/σ_k from "
-                    "201)",
-              units="σ", test=BY_CHECK, explain="sec-zb-glr-figs",
-              ours=lambda h, p: h["innovation_max_sigma_after_fault"],
-              check=lambda p, o, h: o <= h["innovation_max_sigma_before_fault"],
-              criterion="largest |ε_k|/σ after 201 within the pre-fault range")))
+@register(
+    "zb2014-fig4",
+    paper=PAPER,
+    title="Innovation and GLR l_k, theta = [1.5, 0], onset 201, w = 100",
+    plot=plot_fig4,
+    chapter="zb2014/glr",
+    chapter_seed=True,
+    claims=_glr_claims(
+        "4",
+        Claim(
+            location="Fig. 4, top panel",
+            label="the fault is hardly visible on the innovation (ours: largest |ε_k|/σ_k from "
+            "201)",
+            units="σ",
+            test=BY_CHECK,
+            explain="sec-zb-glr-figs",
+            ours=lambda h, p: h["innovation_max_sigma_after_fault"],
+            check=lambda p, o, h: o <= h["innovation_max_sigma_before_fault"],
+            criterion="largest |ε_k|/σ after 201 within the pre-fault range",
+        ),
+    ),
+)
 def fig4(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Paper Fig. 4: the smaller impulsive fault ``theta = [1.5, 0]``; same keys as ``zb2014-fig3``."""
     return _detection_result("zb2014-fig4", (1.5, 0.0), seed)

@@ -45,21 +45,48 @@ from fdi_lib.models import FaultFamily, FaultProfile, LTVModel, step_family
 from fdi_lib.montecarlo import binomial_ci, draw_noise_batch, run_monte_carlo
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, THRESHOLD_COLOR, figure
 from fdi_lib.report import fmt_rate
-from fdi_lib.reproduce.ledger import (BY_INTERVAL, BY_SPREAD, BY_TOLERANCE, IS_INPUT, BY_CHECK,
-                                      Claim,
-                                      shown_under)
+from fdi_lib.reproduce.ledger import (
+    BY_INTERVAL,
+    BY_SPREAD,
+    BY_TOLERANCE,
+    IS_INPUT,
+    BY_CHECK,
+    Claim,
+    shown_under,
+)
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.signatures import fault_signature
 from fdi_lib.simulate import simulate
 from fdi_lib.systems import gas_pipeline as gp
 
-__all__ = ["MINMAX_THRESHOLD", "PipelineSetup", "pipeline_setup", "SingleRun", "single_run",
-           "detection_chunk", "fault_runs", "pipeline_monte_carlo", "calibration_settings",
-           "single_run_spread", "calibration_sensitivity", "ISOLATION_WINDOWS", "SPREAD_RUNS",
-           "known_onset_isolation_power", "fault_theta", "plot_single_run",
-           "SCHEDULES", "DEFAULT_SCHEDULE", "fault_schedule", "surrogate_sensitivity", "onset_profile",
-           "plot_signals", "plot_onset_profile", "format_rate",
-           "plot_fig7", "plot_fig8"]
+__all__ = [
+    "MINMAX_THRESHOLD",
+    "PipelineSetup",
+    "pipeline_setup",
+    "SingleRun",
+    "single_run",
+    "detection_chunk",
+    "fault_runs",
+    "pipeline_monte_carlo",
+    "calibration_settings",
+    "single_run_spread",
+    "calibration_sensitivity",
+    "ISOLATION_WINDOWS",
+    "SPREAD_RUNS",
+    "known_onset_isolation_power",
+    "fault_theta",
+    "plot_single_run",
+    "SCHEDULES",
+    "DEFAULT_SCHEDULE",
+    "fault_schedule",
+    "surrogate_sensitivity",
+    "onset_profile",
+    "plot_signals",
+    "plot_onset_profile",
+    "format_rate",
+    "plot_fig7",
+    "plot_fig8",
+]
 
 PAPER = "Zhang & Basseville 2014"
 #: Threshold of each minmax test (Fig. 8): the 99 % quantile of chi-square with 1 degree of freedom.
@@ -106,8 +133,9 @@ SCHEDULES = ("centred", "absolute")
 DEFAULT_SCHEDULE = {"physical": "centred", "designed": "absolute"}
 
 
-def fault_schedule(variant: str = "physical", schedule: str | None = None,
-                   state2_scale: float | None = None) -> np.ndarray:
+def fault_schedule(
+    variant: str = "physical", schedule: str | None = None, state2_scale: float | None = None
+) -> np.ndarray:
     """``p_k`` in the fault profile ``Psi_k = [[U_k, p_k U_k], [0, 0]]`` for a surrogate and a schedule origin.
 
     ``physical``: centred is the deviation ``p_k`` of the model; absolute moves its origin
@@ -143,8 +171,10 @@ def fault_schedule(variant: str = "physical", schedule: str | None = None,
 
 def _check_scale(variant: str, state2_scale: float | None) -> None:
     if state2_scale is not None and variant != "physical":
-        raise ModelError(f"state2_scale: expected None for the {variant!r} surrogate (it has no such "
-                         f"constant), got {state2_scale!r}")
+        raise ModelError(
+            f"state2_scale: expected None for the {variant!r} surrogate (it has no such "
+            f"constant), got {state2_scale!r}"
+        )
 
 
 def calibration_settings(state2_scale: float | None = None) -> dict[str, Any]:
@@ -160,8 +190,9 @@ def calibration_settings(state2_scale: float | None = None) -> dict[str, Any]:
     return {"constants": gp.calibration_for(state2_scale), "fixed_by": dict(gp.CALIBRATION["free"])}
 
 
-def pipeline_setup(variant: str = "physical", schedule: str | None = None,
-                   state2_scale: float | None = None) -> PipelineSetup:
+def pipeline_setup(
+    variant: str = "physical", schedule: str | None = None, state2_scale: float | None = None
+) -> PipelineSetup:
     """The shared model, input, Kalman gains, fault families and true-onset signature.
 
     Computed once per surrogate: the arguments are normalised (the default schedule and the
@@ -192,11 +223,19 @@ def _pipeline_setup(variant: str, schedule: str, state2_scale: float | None) -> 
     else:
         model, u = gp.pipeline_model(variant=variant), gp.pipeline_input(variant=variant)
     gains = kalman_gains(model)
-    fam = gp.input_fault_family(model, schedule=fault_schedule(variant, schedule, state2_scale), u=u)
+    fam = gp.input_fault_family(
+        model, schedule=fault_schedule(variant, schedule, state2_scale), u=u
+    )
     sig = fault_signature(model, gains, fam.profile(FAULT_ONSET)).on_innovation
-    return PipelineSetup(model=model, u=u, gains=gains, input_family=fam,
-                         leak_family=gp.output_leak_family(model), known_signature=sig,
-                         glr=WindowedGLR(model, gains, fam, gp.WINDOW))
+    return PipelineSetup(
+        model=model,
+        u=u,
+        gains=gains,
+        input_family=fam,
+        leak_family=gp.output_leak_family(model),
+        known_signature=sig,
+        glr=WindowedGLR(model, gains, fam, gp.WINDOW),
+    )
 
 
 def fault_theta(fault: int, delta: float | None = None) -> np.ndarray:
@@ -243,16 +282,26 @@ class SingleRun:
 
     @property
     def onset_estimate_min(self) -> float:
-        return float(gp.index_to_minutes(self.onset[self.alarm])) if self.alarm >= 0 else float("nan")
+        return (
+            float(gp.index_to_minutes(self.onset[self.alarm])) if self.alarm >= 0 else float("nan")
+        )
 
     @property
     def detection_delay_min(self) -> float:
         return self.alarm_time_min - self.true_onset * gp.TS_MIN
 
 
-def single_run(*, seed: int, kind: str = "input", fault: int = 1, delta: float | None = None,
-               threshold: float = gp.THRESHOLD, window: int = gp.WINDOW, variant: str = "physical",
-               state2_scale: float | None = None) -> SingleRun:
+def single_run(
+    *,
+    seed: int,
+    kind: str = "input",
+    fault: int = 1,
+    delta: float | None = None,
+    threshold: float = gp.THRESHOLD,
+    window: int = gp.WINDOW,
+    variant: str = "physical",
+    state2_scale: float | None = None,
+) -> SingleRun:
     """Simulate one record and run the windowed GLR (Figs 5, 6 and 9).
 
     Parameters
@@ -281,14 +330,22 @@ def single_run(*, seed: int, kind: str = "input", fault: int = 1, delta: float |
         theta = np.array([gp.LEAK_SIZE if delta is None else float(delta)])
     else:
         raise ModelError(f"kind: expected 'input' or 'output', got {kind!r}")
-    sim = simulate(st.model, rng=np.random.default_rng(seed), u=st.u, fault=fam.profile(onset), theta=theta)
+    sim = simulate(
+        st.model, rng=np.random.default_rng(seed), u=st.u, fault=fam.profile(onset), theta=theta
+    )
     eps = kalman_filter(st.model, sim.y, st.u, gains=st.gains).innovations
     shared = st.glr if (fam is st.input_family and window == gp.WINDOW) else None
     res = glr_window(eps, st.model, st.gains, fam, window, shared=shared)
     alarm = int(first_alarm(res.statistic, threshold, start=GLR_START))
-    return SingleRun(t_min=np.arange(st.model.n_steps) * gp.TS_MIN, innovations=eps[:, 0],
-                     statistic=res.statistic, onset=res.onset, alarm=alarm, true_onset=onset,
-                     threshold=float(threshold))
+    return SingleRun(
+        t_min=np.arange(st.model.n_steps) * gp.TS_MIN,
+        innovations=eps[:, 0],
+        statistic=res.statistic,
+        onset=res.onset,
+        alarm=alarm,
+        true_onset=onset,
+        threshold=float(threshold),
+    )
 
 
 def _onset_signatures(st: PipelineSetup, family: Any, onsets: np.ndarray) -> np.ndarray:
@@ -296,13 +353,24 @@ def _onset_signatures(st: PipelineSetup, family: Any, onsets: np.ndarray) -> np.
     ``j m .. j m + m - 1`` for ``onsets[j]``): one recursion for all of them, each column computed
     as alone (the filter acts column-wise)."""
     profiles = [family.profile(int(r)) for r in onsets]
-    return fault_signature(st.model, st.gains, FaultProfile(
-        Psi=np.concatenate([pr.Psi for pr in profiles], axis=-1),
-        Phi=np.concatenate([pr.Phi for pr in profiles], axis=-1))).on_innovation
+    return fault_signature(
+        st.model,
+        st.gains,
+        FaultProfile(
+            Psi=np.concatenate([pr.Psi for pr in profiles], axis=-1),
+            Phi=np.concatenate([pr.Phi for pr in profiles], axis=-1),
+        ),
+    ).on_innovation
 
 
-def onset_profile(run: SingleRun, *, fault: int = 1, columns: str = "both",
-                  variant: str = "physical", state2_scale: float | None = None) -> dict[str, np.ndarray]:
+def onset_profile(
+    run: SingleRun,
+    *,
+    fault: int = 1,
+    columns: str = "both",
+    variant: str = "physical",
+    state2_scale: float | None = None,
+) -> dict[str, np.ndarray]:
     """GLR statistic and ``theta_hat`` of every candidate onset at the alarm of an input-fault run.
 
     Recomputed independently of the detector: for each onset ``r`` of the window at the
@@ -343,12 +411,17 @@ def onset_profile(run: SingleRun, *, fault: int = 1, columns: str = "both",
     sigs = _onset_signatures(st, fam, onsets)
     stat, theta = [], []
     for j, r in enumerate(onsets):
-        sig = sigs[:, :, j * m:(j + 1) * m]
+        sig = sigs[:, :, j * m : (j + 1) * m]
         C, d = information(eps, sig, st.gains, int(r), k + 1)
         th = np.linalg.pinv(C) @ d
         stat.append(float(d @ th))
         theta.append(th)
-    return {"onsets": onsets, "statistic": np.array(stat), "theta_hat": np.array(theta), "fault": fault}
+    return {
+        "onsets": onsets,
+        "statistic": np.array(stat),
+        "theta_hat": np.array(theta),
+        "fault": fault,
+    }
 
 
 def plot_single_run(result: ReproductionResult, fig: Any = None, *, widget: bool = False):
@@ -373,9 +446,11 @@ def plot_single_run(result: ReproductionResult, fig: Any = None, *, widget: bool
     if widget:
         labels = ("threshold", "alarm", "onset estimate")
     else:
-        labels = ((f"threshold {run.threshold:g}",)
-                  + ((f"alarm {run.alarm_time_min:g} min", f"onset estimate {run.onset_estimate_min:g} min")
-                     if alarm else ("no alarm", "no onset estimate")))
+        labels = (f"threshold {run.threshold:g}",) + (
+            (f"alarm {run.alarm_time_min:g} min", f"onset estimate {run.onset_estimate_min:g} min")
+            if alarm
+            else ("no alarm", "no onset estimate")
+        )
     limits = {}
     if widget:
         # innovation symmetric about 0; l_k from four decades below the threshold's (room for
@@ -384,30 +459,40 @@ def plot_single_run(result: ReproductionResult, fig: Any = None, *, widget: bool
         # ``settings["innovation_bound"]`` if given: a bound that does not depend on the noise)
         low = 10.0 ** (np.floor(np.log10(run.threshold)) - 4)
         bound = result.settings.get("innovation_bound")
-        limits = {0: stepped_range(run.innovations if bound is None else [bound], symmetric=True),
-                  1: (low, stepped_range([*stat, 10 * run.threshold], log=True)[1])}
+        limits = {
+            0: stepped_range(run.innovations if bound is None else [bound], symmetric=True),
+            1: (low, stepped_range([*stat, 10 * run.threshold], log=True)[1]),
+        }
     key = f"plot_single_run {run.t_min.size} {widget}"
     art = reusable_artists(fig, key)
     if art is None:
         fig, axes = figure(2, 1, fig=fig, sharex=True, figsize=(7.0, 5.0))
         ax0, ax1 = axes[:, 0]
-        art = {"eps": ax0.plot(run.t_min, run.innovations, color=OURS_COLOR, lw=0.8)[0],
-               "onsets": [ax0.axvline(run.true_onset * gp.TS_MIN, color="k", ls=":", lw=1, label="true onset")]}
+        art = {
+            "eps": ax0.plot(run.t_min, run.innovations, color=OURS_COLOR, lw=0.8)[0],
+            "onsets": [
+                ax0.axvline(run.true_onset * gp.TS_MIN, color="k", ls=":", lw=1, label="true onset")
+            ],
+        }
         ax0.set(ylabel=r"$\varepsilon_k$ (Nm$^3$/h)")
-        art["title"] = ax0.set_title(title, y=1.0)   # fixed: no re-placement at each draw
+        art["title"] = ax0.set_title(title, y=1.0)  # fixed: no re-placement at each draw
         legends = [ax0.legend(loc="lower left")]
         art["stat"] = ax1.semilogy(run.t_min, stat, color=OURS_COLOR, label=r"$l_k$ (35)")[0]
-        art["threshold"] = ax1.axhline(run.threshold, color=THRESHOLD_COLOR, ls="--", label=labels[0])
+        art["threshold"] = ax1.axhline(
+            run.threshold, color=THRESHOLD_COLOR, ls="--", label=labels[0]
+        )
         ax1.axvspan(0, gp.DISABLED_MIN, color="0.9", label="GLR disabled")
         art["onsets"].append(ax1.axvline(run.true_onset * gp.TS_MIN, color="k", ls=":", lw=1))
-        art["alarm"] = [ax1.axvline(alarm_x[0], color=PAPER_COLOR, lw=1, label=labels[1], visible=alarm),
-                        ax1.axvline(onset_x[0], color="tab:green", lw=1, label=labels[2], visible=alarm)]
+        art["alarm"] = [
+            ax1.axvline(alarm_x[0], color=PAPER_COLOR, lw=1, label=labels[1], visible=alarm),
+            ax1.axvline(onset_x[0], color="tab:green", lw=1, label=labels[2], visible=alarm),
+        ]
         ax1.set(xlabel=r"$t = k T_s$ (min)", ylabel=r"$l_k$")
         legends.append(ax1.legend(loc="lower right", ncols=2))
         if widget:
             for legend in legends:
                 legend.set_zorder(1.9)
-        else:   # its texts change with the run
+        else:  # its texts change with the run
             art["legend"] = legends[1]
         art["axes"] = (ax0, ax1)
         for i, ylim in limits.items():
@@ -447,8 +532,13 @@ def plot_signals(variant: str = "physical", fig: Any = None):
     t = np.arange(gp.N_STEPS) * gp.TS_MIN
     fig, axes = figure(1, 2, fig=fig, figsize=(7.5, 3.0))
     axes[0, 0].plot(t, u / 1e3, color=OURS_COLOR, label=r"$U_k$")
-    axes[0, 0].plot(t, gp.noise_free_output(u, p, variant=variant) / 1e3, color=PAPER_COLOR, ls="--",
-                    label=r"$Y_k$ without noise")
+    axes[0, 0].plot(
+        t,
+        gp.noise_free_output(u, p, variant=variant) / 1e3,
+        color=PAPER_COLOR,
+        ls="--",
+        label=r"$Y_k$ without noise",
+    )
     axes[0, 0].set(xlabel=r"$t$ (min from 06:00)", ylabel=r"flow ($10^3$ Nm$^3$/h)")
     axes[0, 0].legend()
     axes[0, 1].plot(t, p, color="tab:green")
@@ -461,29 +551,51 @@ def plot_onset_profile(result: ReproductionResult, fig: Any = None):
     both, alone = result.data["profile"], result.data["profile_u_only"]
     fig, ax = figure(fig=fig, figsize=(7.0, 3.5))
     ax = ax[0, 0]
-    ax.plot(both["onsets"] * gp.TS_MIN, both["statistic"], color=OURS_COLOR,
-            label=r"both columns of $\Psi_k$ ($m = 2$)")
-    ax.plot(alone["onsets"] * gp.TS_MIN, alone["statistic"], color=PAPER_COLOR, ls="--",
-            label=r"$U_k$ column alone ($m = 1$)")
+    ax.plot(
+        both["onsets"] * gp.TS_MIN,
+        both["statistic"],
+        color=OURS_COLOR,
+        label=r"both columns of $\Psi_k$ ($m = 2$)",
+    )
+    ax.plot(
+        alone["onsets"] * gp.TS_MIN,
+        alone["statistic"],
+        color=PAPER_COLOR,
+        ls="--",
+        label=r"$U_k$ column alone ($m = 1$)",
+    )
     ax.axvline(gp.FAULT_ONSET_MIN, color="k", ls=":", lw=1, label="true onset")
     ax.set(xlabel=r"candidate onset $r T_s$ (min)", ylabel=r"$l_{k^*}(r)$")
     ax.legend()
     return fig
 
 
-def _single_result(rid: str, run: SingleRun, paper: dict[str, Any], settings: dict[str, Any]
-                   ) -> ReproductionResult:
-    headline = {"alarm_time_min": run.alarm_time_min, "onset_estimate_min": run.onset_estimate_min,
-                "detection_delay_min": run.detection_delay_min}
-    return ReproductionResult(id=rid, headline=headline, paper=paper, settings=settings, data={"run": run})
+def _single_result(
+    rid: str, run: SingleRun, paper: dict[str, Any], settings: dict[str, Any]
+) -> ReproductionResult:
+    headline = {
+        "alarm_time_min": run.alarm_time_min,
+        "onset_estimate_min": run.onset_estimate_min,
+        "detection_delay_min": run.detection_delay_min,
+    }
+    return ReproductionResult(
+        id=rid, headline=headline, paper=paper, settings=settings, data={"run": run}
+    )
 
 
 #: Runs of the spread of a single-run figure by default: the paper's count for the same fault in Fig 7.
 SPREAD_RUNS = 1000
 
 
-def single_run_spread(paper: dict[str, Any], *, seed: int, trials: int, jobs: int = 1,
-                      delta: float | None = None, state2_scale: float | None = None) -> dict[str, Any]:
+def single_run_spread(
+    paper: dict[str, Any],
+    *,
+    seed: int,
+    trials: int,
+    jobs: int = 1,
+    delta: float | None = None,
+    state2_scale: float | None = None,
+) -> dict[str, Any]:
     """Run-to-run spread of the single-run keys of Figs 5-6, and where the paper's run falls in it.
 
     ``trials`` runs of fault 1 of size ``delta`` (:func:`fault_runs`; for Table 1's size these
@@ -508,12 +620,22 @@ def single_run_spread(paper: dict[str, Any], *, seed: int, trials: int, jobs: in
         the paper's); ``spread_runs`` (runs in the distribution) and ``spread_excluded``
         (``false_alarm``, ``missed``).
     """
-    runs = fault_runs(seed=seed, trials=trials, fault=1, delta=delta, jobs=jobs, isolate=delta is None,
-                      state2_scale=state2_scale)
+    runs = fault_runs(
+        seed=seed,
+        trials=trials,
+        fault=1,
+        delta=delta,
+        jobs=jobs,
+        isolate=delta is None,
+        state2_scale=state2_scale,
+    )
     alarm, onset = runs["alarm"], runs["onset_hat"]
     hit = alarm >= FAULT_ONSET
-    values = {"alarm_time_min": alarm[hit] * gp.TS_MIN, "onset_estimate_min": onset[hit] * gp.TS_MIN,
-              "detection_delay_min": (alarm[hit] - FAULT_ONSET) * gp.TS_MIN}
+    values = {
+        "alarm_time_min": alarm[hit] * gp.TS_MIN,
+        "onset_estimate_min": onset[hit] * gp.TS_MIN,
+        "detection_delay_min": (alarm[hit] - FAULT_ONSET) * gp.TS_MIN,
+    }
     out: dict[str, Any] = {}
     for key in _SINGLE_KEYS:
         value, x = paper.get(key), values[key]
@@ -523,28 +645,50 @@ def single_run_spread(paper: dict[str, Any], *, seed: int, trials: int, jobs: in
         out[f"{key}_paper_percentile"] = float(scipy.stats.percentileofscore(x, value, kind="mean"))
     if paper.get("detection_delay_min") is not None:
         x = values["detection_delay_min"]
-        out["detection_delay_min_at_least_paper"] = _rate(int(np.sum(x >= paper["detection_delay_min"])),
-                                                          int(x.size))
+        out["detection_delay_min_at_least_paper"] = _rate(
+            int(np.sum(x >= paper["detection_delay_min"])), int(x.size)
+        )
     out["spread_runs"] = int(hit.sum())
-    out["spread_excluded"] = {"false_alarm": int(np.sum((alarm >= 0) & (alarm < FAULT_ONSET))),
-                              "missed": int(np.sum(alarm < 0))}
+    out["spread_excluded"] = {
+        "false_alarm": int(np.sum((alarm >= 0) & (alarm < FAULT_ONSET))),
+        "missed": int(np.sum(alarm < 0)),
+    }
     return out
 
 
-def _single_claims(fig: str, keys: tuple[str, ...] = _SINGLE_KEYS,
-                   **cause: Any) -> dict[str, Claim]:
+def _single_claims(
+    fig: str, keys: tuple[str, ...] = _SINGLE_KEYS, **cause: Any
+) -> dict[str, Claim]:
     """The claims of Figs 5 and 6 (one run of the paper against the spread of ours)."""
-    what = {"alarm_time_min": "alarm time", "onset_estimate_min": "onset estimate",
-            "detection_delay_min": "detection delay"}
-    return {key: Claim(location=f"Fig. {fig} (§6.2 text), {what[key]}", units="min", test=BY_SPREAD,
-                       explain=f"fig-pipeline-fig{fig}", **cause) for key in keys}
+    what = {
+        "alarm_time_min": "alarm time",
+        "onset_estimate_min": "onset estimate",
+        "detection_delay_min": "detection delay",
+    }
+    return {
+        key: Claim(
+            location=f"Fig. {fig} (§6.2 text), {what[key]}",
+            units="min",
+            test=BY_SPREAD,
+            explain=f"fig-pipeline-fig{fig}",
+            **cause,
+        )
+        for key in keys
+    }
 
 
-@register("zb2014-fig5", paper=PAPER, title="Gas pipeline, fault 1 (dG0(1) = -2e-5): innovation and GLR",
-          plot=plot_single_run, chapter="zb2014/pipeline", surrogate=True,
-          claims=_single_claims("5"))
-def fig5(*, seed: int, trials: int | None, jobs: int, state2_scale: float | None = None
-         ) -> ReproductionResult:
+@register(
+    "zb2014-fig5",
+    paper=PAPER,
+    title="Gas pipeline, fault 1 (dG0(1) = -2e-5): innovation and GLR",
+    plot=plot_single_run,
+    chapter="zb2014/pipeline",
+    surrogate=True,
+    claims=_single_claims("5"),
+)
+def fig5(
+    *, seed: int, trials: int | None, jobs: int, state2_scale: float | None = None
+) -> ReproductionResult:
     """Paper Fig. 5: one run of fault 1 (``G0(1) - 2e-5`` at 600 min), threshold 50, ``w = 160``.
 
     ``trials`` (default 1000) runs give the spread of the single-run keys; with the same seed
@@ -585,34 +729,64 @@ def fig5(*, seed: int, trials: int | None, jobs: int, state2_scale: float | None
     trials = SPREAD_RUNS if trials is None else trials
     run = single_run(seed=seed, fault=1, delta=gp.FAULT1_DELTA, state2_scale=state2_scale)
     paper = {"alarm_time_min": 786.0, "onset_estimate_min": 618.0, "detection_delay_min": 186.0}
-    res = _single_result("zb2014-fig5", run, {**paper, "calibrated_to": [], "predictions": list(_SINGLE_KEYS)},
-                         {"seed": seed, "theta": fault_theta(1).tolist(), "window": gp.WINDOW,
-                          "threshold": gp.THRESHOLD, "spread_trials": trials,
-                          "calibration": calibration_settings(state2_scale),
-                          "title": r"Fault 1, $\tilde G_0 = -2\times10^{-5}$"})
+    res = _single_result(
+        "zb2014-fig5",
+        run,
+        {**paper, "calibrated_to": [], "predictions": list(_SINGLE_KEYS)},
+        {
+            "seed": seed,
+            "theta": fault_theta(1).tolist(),
+            "window": gp.WINDOW,
+            "threshold": gp.THRESHOLD,
+            "spread_trials": trials,
+            "calibration": calibration_settings(state2_scale),
+            "title": r"Fault 1, $\tilde G_0 = -2\times10^{-5}$",
+        },
+    )
     if run.alarm >= 0:
-        both, alone = (onset_profile(run, state2_scale=state2_scale),
-                       onset_profile(run, columns="U", state2_scale=state2_scale))
+        both, alone = (
+            onset_profile(run, state2_scale=state2_scale),
+            onset_profile(run, columns="U", state2_scale=state2_scale),
+        )
         best = int(np.argmax(both["statistic"]))
-        res.headline.update({
-            "onsets_within_2_of_max": int(np.sum(both["statistic"] >= both["statistic"].max() - 2.0)),
-            "theta_hat_at_alarm": both["theta_hat"][best].tolist(),
-            "theta_hat_ratio": float(both["theta_hat"][best][0] / gp.FAULT1_DELTA),
-            "onset_estimate_u_only_min": float(alone["onsets"][np.argmax(alone["statistic"])] * gp.TS_MIN)})
+        res.headline.update(
+            {
+                "onsets_within_2_of_max": int(
+                    np.sum(both["statistic"] >= both["statistic"].max() - 2.0)
+                ),
+                "theta_hat_at_alarm": both["theta_hat"][best].tolist(),
+                "theta_hat_ratio": float(both["theta_hat"][best][0] / gp.FAULT1_DELTA),
+                "onset_estimate_u_only_min": float(
+                    alone["onsets"][np.argmax(alone["statistic"])] * gp.TS_MIN
+                ),
+            }
+        )
         res.data.update({"profile": both, "profile_u_only": alone})
-    res.headline.update(single_run_spread(paper, seed=seed, trials=trials, jobs=jobs, state2_scale=state2_scale))
+    res.headline.update(
+        single_run_spread(paper, seed=seed, trials=trials, jobs=jobs, state2_scale=state2_scale)
+    )
     return res
 
 
-@register("zb2014-fig6", paper=PAPER, title="Gas pipeline, fault 1 doubled (dG0(1) = -4e-5): innovation and GLR",
-          plot=plot_single_run, chapter="zb2014/pipeline", surrogate=True, claims=_single_claims(
-              "6", ("alarm_time_min", "detection_delay_min"),   # the paper gives no onset estimate
-              cause="sec-pipeline-calibration-sensitivity",
-              cause_glue=("pl_cs_d6_3", "pl_cs_ge6_3"),
-              cause_text="the alarm time and the delay depend on the calibrated state2_scale of "
-                         "the surrogate"))
-def fig6(*, seed: int, trials: int | None, jobs: int, state2_scale: float | None = None
-         ) -> ReproductionResult:
+@register(
+    "zb2014-fig6",
+    paper=PAPER,
+    title="Gas pipeline, fault 1 doubled (dG0(1) = -4e-5): innovation and GLR",
+    plot=plot_single_run,
+    chapter="zb2014/pipeline",
+    surrogate=True,
+    claims=_single_claims(
+        "6",
+        ("alarm_time_min", "detection_delay_min"),  # the paper gives no onset estimate
+        cause="sec-pipeline-calibration-sensitivity",
+        cause_glue=("pl_cs_d6_3", "pl_cs_ge6_3"),
+        cause_text="the alarm time and the delay depend on the calibrated state2_scale of "
+        "the surrogate",
+    ),
+)
+def fig6(
+    *, seed: int, trials: int | None, jobs: int, state2_scale: float | None = None
+) -> ReproductionResult:
     """Paper Fig. 6: as Fig. 5 with the fault doubled (``-4e-5``), same noise (same seed).
 
     ``trials`` (default 1000) runs of the doubled fault give the spread, paired run by run
@@ -637,36 +811,68 @@ def fig6(*, seed: int, trials: int | None, jobs: int, state2_scale: float | None
     trials = SPREAD_RUNS if trials is None else trials
     run = single_run(seed=seed, fault=1, delta=gp.FAULT1_DOUBLED_DELTA, state2_scale=state2_scale)
     paper = {"alarm_time_min": 688.0, "onset_estimate_min": None, "detection_delay_min": 88.0}
-    res = _single_result("zb2014-fig6", run, {**paper, "calibrated_to": [], "predictions": list(_SINGLE_KEYS)},
-                         {"seed": seed, "theta": fault_theta(1, gp.FAULT1_DOUBLED_DELTA).tolist(),
-                          "window": gp.WINDOW, "threshold": gp.THRESHOLD, "spread_trials": trials,
-                          "calibration": calibration_settings(state2_scale),
-                          "title": r"Fault 1 doubled, $\tilde G_0 = -4\times10^{-5}$"})
-    res.headline.update(single_run_spread(paper, seed=seed, trials=trials, jobs=jobs,
-                                          delta=gp.FAULT1_DOUBLED_DELTA, state2_scale=state2_scale))
+    res = _single_result(
+        "zb2014-fig6",
+        run,
+        {**paper, "calibrated_to": [], "predictions": list(_SINGLE_KEYS)},
+        {
+            "seed": seed,
+            "theta": fault_theta(1, gp.FAULT1_DOUBLED_DELTA).tolist(),
+            "window": gp.WINDOW,
+            "threshold": gp.THRESHOLD,
+            "spread_trials": trials,
+            "calibration": calibration_settings(state2_scale),
+            "title": r"Fault 1 doubled, $\tilde G_0 = -4\times10^{-5}$",
+        },
+    )
+    res.headline.update(
+        single_run_spread(
+            paper,
+            seed=seed,
+            trials=trials,
+            jobs=jobs,
+            delta=gp.FAULT1_DOUBLED_DELTA,
+            state2_scale=state2_scale,
+        )
+    )
     return res
 
 
-@register("zb2014-fig9", paper=PAPER, title="Gas pipeline, output-end leak of -43980 at 700 min",
-          plot=plot_single_run, chapter="zb2014/pipeline", surrogate=True, claims={
-              "glr_level_over_threshold": Claim(
-                  location="Fig. 9, bottom panel",
-                  label="l_k after the leak, in thresholds (paper: about 50)",
-                  units="threshold", test=BY_TOLERANCE, rtol=0.5, explain="fig-pipeline-fig9"),
-              "innovation_recovery": Claim(
-                  location="Fig. 9, top panel",
-                  label="the innovation returns near its level after the leak "
-                  "(ours: late mean / leak)", units="leak", test=BY_CHECK,
-                  explain="fig-pipeline-fig9",
-                  check=lambda p, o,
-                  h: abs(o * gp.LEAK_SIZE) <= 1.96 * h["innovation_sd"] / np.sqrt(100),
-                  criterion="mean innovation of the last 100 samples within 1.96 σ/√100 of 0",
-                  cause="sec-pipeline-fig9", cause_glue=("pl_recovery", "pl_recovery_d"),
-                  cause_text="the calibrated state noise acts mostly on the flow and cannot absorb "
-                             "an output bias; the designed surrogate, whose state noise enters "
-                             "like the inlet flow, does absorb the leak")})
-def fig9(*, seed: int, trials: int | None, jobs: int, state2_scale: float | None = None
-         ) -> ReproductionResult:
+@register(
+    "zb2014-fig9",
+    paper=PAPER,
+    title="Gas pipeline, output-end leak of -43980 at 700 min",
+    plot=plot_single_run,
+    chapter="zb2014/pipeline",
+    surrogate=True,
+    claims={
+        "glr_level_over_threshold": Claim(
+            location="Fig. 9, bottom panel",
+            label="l_k after the leak, in thresholds (paper: about 50)",
+            units="threshold",
+            test=BY_TOLERANCE,
+            rtol=0.5,
+            explain="fig-pipeline-fig9",
+        ),
+        "innovation_recovery": Claim(
+            location="Fig. 9, top panel",
+            label="the innovation returns near its level after the leak (ours: late mean / leak)",
+            units="leak",
+            test=BY_CHECK,
+            explain="fig-pipeline-fig9",
+            check=lambda p, o, h: abs(o * gp.LEAK_SIZE) <= 1.96 * h["innovation_sd"] / np.sqrt(100),
+            criterion="mean innovation of the last 100 samples within 1.96 σ/√100 of 0",
+            cause="sec-pipeline-fig9",
+            cause_glue=("pl_recovery", "pl_recovery_d"),
+            cause_text="the calibrated state noise acts mostly on the flow and cannot absorb "
+            "an output bias; the designed surrogate, whose state noise enters "
+            "like the inlet flow, does absorb the leak",
+        ),
+    },
+)
+def fig9(
+    *, seed: int, trials: int | None, jobs: int, state2_scale: float | None = None
+) -> ReproductionResult:
     """Paper Fig. 9: bias of -43980 (10 % of the mean output flow) on the output from 700 min.
 
     The GLR uses the step family ``Phi_k(r) = 1{k >= r}`` (``m = 1``) and the signature with
@@ -693,38 +899,58 @@ def fig9(*, seed: int, trials: int | None, jobs: int, state2_scale: float | None
     run = single_run(seed=seed, kind="output", state2_scale=state2_scale)
     st = pipeline_setup(state2_scale=state2_scale)
     sd = float(np.sqrt(st.gains.Sigma[LEAK_ONSET, 0, 0]))
-    after = run.statistic[run.alarm:] / gp.THRESHOLD if run.alarm >= 0 else np.array([np.nan])
-    headline = {"alarm_time_min": run.alarm_time_min,
-                "glr_level_over_threshold": float(np.median(after)),
-                "glr_max_over_threshold": float(np.max(after)),
-                "innovation_drop": float(run.innovations[LEAK_ONSET] / sd),
-                "innovation_recovery": float(np.mean(run.innovations[-100:]) / gp.LEAK_SIZE),
-                "innovation_sd": sd, "leak_over_sd_squared_over_threshold": float((gp.LEAK_SIZE / sd) ** 2
-                                                                                  / gp.THRESHOLD)}
-    return ReproductionResult(id="zb2014-fig9", headline=headline,
-                              paper={"alarm_time_min": None, "glr_level_over_threshold": 50.0,
-                                     "innovation_recovery": "close to 0",
-                                     "calibrated_to": ["glr_level_over_threshold"],
-                                     "predictions": ["alarm_time_min", "innovation_drop",
-                                                     "innovation_recovery"]},
-                              settings={"seed": seed, "leak": gp.LEAK_SIZE, "onset_min": gp.LEAK_ONSET_MIN,
-                                        "window": gp.WINDOW, "threshold": gp.THRESHOLD,
-                                        "calibration": calibration_settings(state2_scale),
-                                        "title": "Output-end leak of -43980 at 700 min"},
-                              data={"run": run})
+    after = run.statistic[run.alarm :] / gp.THRESHOLD if run.alarm >= 0 else np.array([np.nan])
+    headline = {
+        "alarm_time_min": run.alarm_time_min,
+        "glr_level_over_threshold": float(np.median(after)),
+        "glr_max_over_threshold": float(np.max(after)),
+        "innovation_drop": float(run.innovations[LEAK_ONSET] / sd),
+        "innovation_recovery": float(np.mean(run.innovations[-100:]) / gp.LEAK_SIZE),
+        "innovation_sd": sd,
+        "leak_over_sd_squared_over_threshold": float((gp.LEAK_SIZE / sd) ** 2 / gp.THRESHOLD),
+    }
+    return ReproductionResult(
+        id="zb2014-fig9",
+        headline=headline,
+        paper={
+            "alarm_time_min": None,
+            "glr_level_over_threshold": 50.0,
+            "innovation_recovery": "close to 0",
+            "calibrated_to": ["glr_level_over_threshold"],
+            "predictions": ["alarm_time_min", "innovation_drop", "innovation_recovery"],
+        },
+        settings={
+            "seed": seed,
+            "leak": gp.LEAK_SIZE,
+            "onset_min": gp.LEAK_ONSET_MIN,
+            "window": gp.WINDOW,
+            "threshold": gp.THRESHOLD,
+            "calibration": calibration_settings(state2_scale),
+            "title": "Output-end leak of -43980 at 700 min",
+        },
+        data={"run": run},
+    )
 
 
 # ----------------------------------------------------------------------------- Table 1
-@register("zb2014-table1", paper=PAPER,
-          title="Gas pipeline: nominal and faulty G0(1), Gp(1) (Table 1)",
-          chapter="zb2014/pipeline", surrogate=True, claims={
-              key: Claim(location=f"Table 1, {what}", units="", test=IS_INPUT)
-              for key, what in (("G0_1_nominal", "nominal G₀(1)"), ("G0_1_fault1",
-                                                                    "G₀(1) under fault 1"),
-                                ("Gp_1_nominal", "nominal G_p(1)"), ("Gp_1_fault2",
-                                                                     "G_p(1) under fault 2"),
-                                ("theta_fault1", "θ of fault 1"), ("theta_fault2",
-                                                                   "θ of fault 2"))})
+@register(
+    "zb2014-table1",
+    paper=PAPER,
+    title="Gas pipeline: nominal and faulty G0(1), Gp(1) (Table 1)",
+    chapter="zb2014/pipeline",
+    surrogate=True,
+    claims={
+        key: Claim(location=f"Table 1, {what}", units="", test=IS_INPUT)
+        for key, what in (
+            ("G0_1_nominal", "nominal G₀(1)"),
+            ("G0_1_fault1", "G₀(1) under fault 1"),
+            ("Gp_1_nominal", "nominal G_p(1)"),
+            ("Gp_1_fault2", "G_p(1) under fault 2"),
+            ("theta_fault1", "θ of fault 1"),
+            ("theta_fault2", "θ of fault 2"),
+        )
+    },
+)
 def table1(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     """Paper Table 1: the simulated input-end faults; deterministic.
 
@@ -740,22 +966,45 @@ def table1(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
         Steady outlet flow lost, as a fraction of the flow, in *our surrogate* (not in the paper).
     """
     rep = gp.design_report()
-    headline = {"G0_1_nominal": gp.G0_1, "G0_1_fault1": gp.G0_1 + gp.FAULT1_DELTA,
-                "Gp_1_nominal": gp.GP_1, "Gp_1_fault2": gp.GP_1 + gp.FAULT2_DELTA,
-                "theta_fault1": fault_theta(1).tolist(), "theta_fault2": fault_theta(2).tolist(),
-                "leak_fraction_fault1": rep["fault1_leak_fraction"],
-                "leak_fraction_fault2": rep["fault2_leak_fraction"]}
-    paper = {"G0_1_nominal": -7.8297e-4, "G0_1_fault1": -7.8297e-4 - 2e-5, "Gp_1_nominal": 3.8290e-5,
-             "Gp_1_fault2": 3.8290e-5 - 1e-5, "theta_fault1": [-2e-5, 0.0], "theta_fault2": [0.0, -1e-5],
-             "calibrated_to": [], "predictions": []}
-    return ReproductionResult(id="zb2014-table1", headline=headline, paper=paper,
-                              settings={"psi": "[[U_k, p_k U_k], [0, 0]]", "onset_min": gp.FAULT_ONSET_MIN})
+    headline = {
+        "G0_1_nominal": gp.G0_1,
+        "G0_1_fault1": gp.G0_1 + gp.FAULT1_DELTA,
+        "Gp_1_nominal": gp.GP_1,
+        "Gp_1_fault2": gp.GP_1 + gp.FAULT2_DELTA,
+        "theta_fault1": fault_theta(1).tolist(),
+        "theta_fault2": fault_theta(2).tolist(),
+        "leak_fraction_fault1": rep["fault1_leak_fraction"],
+        "leak_fraction_fault2": rep["fault2_leak_fraction"],
+    }
+    paper = {
+        "G0_1_nominal": -7.8297e-4,
+        "G0_1_fault1": -7.8297e-4 - 2e-5,
+        "Gp_1_nominal": 3.8290e-5,
+        "Gp_1_fault2": 3.8290e-5 - 1e-5,
+        "theta_fault1": [-2e-5, 0.0],
+        "theta_fault2": [0.0, -1e-5],
+        "calibrated_to": [],
+        "predictions": [],
+    }
+    return ReproductionResult(
+        id="zb2014-table1",
+        headline=headline,
+        paper=paper,
+        settings={"psi": "[[U_k, p_k U_k], [0, 0]]", "onset_min": gp.FAULT_ONSET_MIN},
+    )
 
 
 # ----------------------------------------------------------------------------- Monte Carlo (Figs 7-8)
-def detection_chunk(seeds, *, fault: int, variant: str = "physical", schedule: str | None = None,
-                    delta: float | None = None, state2_scale: float | None = None,
-                    isolate: bool = True) -> dict[str, np.ndarray]:
+def detection_chunk(
+    seeds,
+    *,
+    fault: int,
+    variant: str = "physical",
+    schedule: str | None = None,
+    delta: float | None = None,
+    state2_scale: float | None = None,
+    isolate: bool = True,
+) -> dict[str, np.ndarray]:
     """Detection and isolation for a chunk of realisations of input-end fault ``fault``.
 
     Vectorised over the chunk: noise (one stream per realisation), simulation, Kalman
@@ -780,10 +1029,17 @@ def detection_chunk(seeds, *, fault: int, variant: str = "physical", schedule: s
     """
     st = pipeline_setup(variant, schedule, state2_scale)
     noise = draw_noise_batch(st.model, seeds)
-    sim = simulate(st.model, noise=noise, u=st.u, fault=st.input_family.profile(FAULT_ONSET),
-                   theta=fault_theta(fault, delta))
+    sim = simulate(
+        st.model,
+        noise=noise,
+        u=st.u,
+        fault=st.input_family.profile(FAULT_ONSET),
+        theta=fault_theta(fault, delta),
+    )
     eps = kalman_filter(st.model, sim.y, st.u, gains=st.gains).innovations
-    res = glr_window(eps, st.model, st.gains, st.input_family, gp.WINDOW, shared=st.glr, start=GLR_START)
+    res = glr_window(
+        eps, st.model, st.gains, st.input_family, gp.WINDOW, shared=st.glr, start=GLR_START
+    )
     alarm = first_alarm(res.statistic, gp.THRESHOLD, start=GLR_START)
     B = alarm.shape[0]
     k = np.where(alarm >= 0, alarm, 0)
@@ -809,21 +1065,38 @@ def detection_chunk(seeds, *, fault: int, variant: str = "physical", schedule: s
         sigs = _onset_signatures(st, st.input_family, onsets)
         for j, r in enumerate(onsets):
             sel = ok & (onset_hat == r)
-            F, zeta = information(eps[sel], sigs[:, :, 2 * j:2 * j + 2], st.gains, int(r), st.model.n_steps)
+            F, zeta = information(
+                eps[sel], sigs[:, :, 2 * j : 2 * j + 2], st.gains, int(r), st.model.n_steps
+            )
             info_rec[sel] = F
             l1_rec[sel] = minmax_statistic(F, zeta, [0])
             l2_rec[sel] = minmax_statistic(F, zeta, [1])
     F, zeta = information(eps, st.known_signature, st.gains, FAULT_ONSET, st.model.n_steps)
-    out.update({"l1": l1, "l2": l2, "cos2": cos2, "info_alarm": info_alarm,
-                "l1_record": l1_rec, "l2_record": l2_rec, "info_record": info_rec,
-                "l1_known": minmax_statistic(F, zeta, [0]), "l2_known": minmax_statistic(F, zeta, [1])})
+    out.update(
+        {
+            "l1": l1,
+            "l2": l2,
+            "cos2": cos2,
+            "info_alarm": info_alarm,
+            "l1_record": l1_rec,
+            "l2_record": l2_rec,
+            "info_record": info_rec,
+            "l1_known": minmax_statistic(F, zeta, [0]),
+            "l2_known": minmax_statistic(F, zeta, [1]),
+        }
+    )
     return out
 
 
-def known_onset_isolation_power(*, schedule: np.ndarray | None = None, start: int = FAULT_ONSET,
-                                stop: int = gp.N_STEPS, alpha_threshold: float = MINMAX_THRESHOLD,
-                                variant: str = "physical", state2_scale: float | None = None
-                                ) -> dict[str, dict[str, float]]:
+def known_onset_isolation_power(
+    *,
+    schedule: np.ndarray | None = None,
+    start: int = FAULT_ONSET,
+    stop: int = gp.N_STEPS,
+    alpha_threshold: float = MINMAX_THRESHOLD,
+    variant: str = "physical",
+    state2_scale: float | None = None,
+) -> dict[str, dict[str, float]]:
     """Closed-form power of each minmax test with the onset known (no Monte Carlo).
 
     With the onset and the samples ``start .. stop-1`` fixed, the minmax statistic (41) for
@@ -857,8 +1130,10 @@ def known_onset_isolation_power(*, schedule: np.ndarray | None = None, start: in
         gains = kalman_gains(model)
         fam = gp.input_fault_family(model, schedule=schedule, u=u, variant=variant)
     elif schedule is not None:
-        raise ModelError(f"schedule: expected None with state2_scale={state2_scale!r} (the schedule is "
-                         f"that surrogate's own), got an array")
+        raise ModelError(
+            f"schedule: expected None with state2_scale={state2_scale!r} (the schedule is "
+            f"that surrogate's own), got an array"
+        )
     else:
         st = pipeline_setup(variant, state2_scale=state2_scale)
         model, gains, fam = st.model, st.gains, st.input_family
@@ -869,8 +1144,11 @@ def known_onset_isolation_power(*, schedule: np.ndarray | None = None, start: in
         a, b = (0, 1) if fault == 1 else (1, 0)
         f_star = F[a, a] - F[a, b] ** 2 / F[b, b]
         lam = float(fault_theta(fault)[a] ** 2 * f_star)
-        out[str(fault)] = {"cos2": float(F[0, 1] ** 2 / (F[0, 0] * F[1, 1])), "noncentrality": lam,
-                           "power": float(scipy.stats.ncx2.sf(alpha_threshold, 1, lam))}
+        out[str(fault)] = {
+            "cos2": float(F[0, 1] ** 2 / (F[0, 0] * F[1, 1])),
+            "noncentrality": lam,
+            "power": float(scipy.stats.ncx2.sf(alpha_threshold, 1, lam)),
+        }
     return out
 
 
@@ -882,10 +1160,20 @@ def _fault_seed(seed: int, fault: int) -> int:
 _MC_CACHE: dict[tuple, dict[str, np.ndarray]] = {}
 
 
-def fault_runs(*, seed: int, trials: int, fault: int, jobs: int = 1, delta: float | None = None,
-               isolate: bool = True, progress: bool | None = None, chunk_size: int | None = None,
-               variant: str = "physical", schedule: str | None = None, state2_scale: float | None = None
-               ) -> dict[str, np.ndarray]:
+def fault_runs(
+    *,
+    seed: int,
+    trials: int,
+    fault: int,
+    jobs: int = 1,
+    delta: float | None = None,
+    isolate: bool = True,
+    progress: bool | None = None,
+    chunk_size: int | None = None,
+    variant: str = "physical",
+    schedule: str | None = None,
+    state2_scale: float | None = None,
+) -> dict[str, np.ndarray]:
     """``trials`` runs of input-end fault ``fault`` (:func:`detection_chunk`), one stream per run.
 
     Fault ``f`` uses the root seed ``SeedSequence([seed, f])`` whatever its size ``delta``, so
@@ -907,25 +1195,53 @@ def fault_runs(*, seed: int, trials: int, fault: int, jobs: int = 1, delta: floa
         Physical surrogate calibrated with this scale (:func:`pipeline_setup`).
     """
     theta = fault_theta(fault, delta)
-    key = (int(seed), int(trials), int(fault), tuple(theta.tolist()), variant, schedule,
-           None if state2_scale is None else float(state2_scale))
-    for iso in ((True,) if isolate else (True, False)):
+    key = (
+        int(seed),
+        int(trials),
+        int(fault),
+        tuple(theta.tolist()),
+        variant,
+        schedule,
+        None if state2_scale is None else float(state2_scale),
+    )
+    for iso in (True,) if isolate else (True, False):
         if key + (iso,) in _MC_CACHE:
             return _MC_CACHE[key + (iso,)]
     if progress is None:
         progress = bool(getattr(sys.stderr, "isatty", lambda: False)())
-    chunk = functools.partial(detection_chunk, fault=fault, delta=delta, variant=variant, schedule=schedule,
-                              state2_scale=state2_scale, isolate=isolate)
-    out = run_monte_carlo(chunk, trials, seed=_fault_seed(seed, fault), jobs=jobs, chunk_size=chunk_size,
-                          progress=progress, description=f"fault {fault}")
+    chunk = functools.partial(
+        detection_chunk,
+        fault=fault,
+        delta=delta,
+        variant=variant,
+        schedule=schedule,
+        state2_scale=state2_scale,
+        isolate=isolate,
+    )
+    out = run_monte_carlo(
+        chunk,
+        trials,
+        seed=_fault_seed(seed, fault),
+        jobs=jobs,
+        chunk_size=chunk_size,
+        progress=progress,
+        description=f"fault {fault}",
+    )
     _MC_CACHE[key + (bool(isolate),)] = out
     return out
 
 
-def pipeline_monte_carlo(*, seed: int, trials: int, jobs: int = 1, progress: bool | None = None,
-                         chunk_size: int | None = None, variant: str = "physical",
-                         schedule: str | None = None, state2_scale: float | None = None
-                         ) -> dict[int, dict[str, np.ndarray]]:
+def pipeline_monte_carlo(
+    *,
+    seed: int,
+    trials: int,
+    jobs: int = 1,
+    progress: bool | None = None,
+    chunk_size: int | None = None,
+    variant: str = "physical",
+    schedule: str | None = None,
+    state2_scale: float | None = None,
+) -> dict[int, dict[str, np.ndarray]]:
     """The Monte Carlo experiment of Figs 7 and 8: ``trials`` runs of each input-end fault.
 
     Parameters
@@ -952,10 +1268,20 @@ def pipeline_monte_carlo(*, seed: int, trials: int, jobs: int = 1, progress: boo
         ``{1: arrays, 2: arrays}`` with the entries of :func:`detection_chunk` (from
         :func:`fault_runs`, cached).
     """
-    return {fault: fault_runs(seed=seed, trials=trials, fault=fault, jobs=jobs, progress=progress,
-                              chunk_size=chunk_size, variant=variant, schedule=schedule,
-                              state2_scale=state2_scale)
-            for fault in (1, 2)}
+    return {
+        fault: fault_runs(
+            seed=seed,
+            trials=trials,
+            fault=fault,
+            jobs=jobs,
+            progress=progress,
+            chunk_size=chunk_size,
+            variant=variant,
+            schedule=schedule,
+            state2_scale=state2_scale,
+        )
+        for fault in (1, 2)
+    }
 
 
 def _quartiles(x: np.ndarray) -> dict[str, float | None]:
@@ -990,7 +1316,9 @@ def plot_fig7(result: ReproductionResult, fig: Any = None):
         axes[0, j].hist(delay, bins=_grid_bins(delay), color=OURS_COLOR)
         axes[0, j].set(title=f"fault {fault}: detection delay", xlabel=r"$k^* T_s - 600$ (min)")
         axes[1, j].hist(err, bins=_grid_bins(err), color=OURS_COLOR)
-        axes[1, j].set(title=f"fault {fault}: onset estimation error", xlabel=r"$\hat r T_s - 600$ (min)")
+        axes[1, j].set(
+            title=f"fault {fault}: onset estimation error", xlabel=r"$\hat r T_s - 600$ (min)"
+        )
     return fig
 
 
@@ -1003,22 +1331,40 @@ def _count_ci(h: dict[str, Any], path: tuple[str, ...]) -> tuple[float, float] |
     return ci[0] * n, ci[1] * n
 
 
-@register("zb2014-fig7", paper=PAPER, title="Gas pipeline: histograms of detection delay and onset error",
-          default_trials=1000, plot=plot_fig7, chapter="zb2014/pipeline", surrogate=True, claims={
-              "false_alarms": Claim(
-                  location="Fig. 7 (§6.2 text), false alarms in 2 × 1000 runs", units="runs",
-                  test=BY_INTERVAL, ci=_count_ci, explain="fig-pipeline-fig7",
-                  cause="sec-pipeline-fig7",
-                  cause_glue=("pl_union", "pl_maxpre"),
-                  cause_text="under no fault the union bound allows far fewer than one false alarm "
-                             "in 2000 runs of a correctly specified model: the paper's 7 point to "
-                             "a mismatch between its simulation and its filter"),
-              # the same claim as the count (7 of 2000 runs): one row
-              "false_alarm_rate/*": shown_under("zb2014-fig7", lambda p: ("false_alarms",)),
-              "missed/*": Claim(location="Fig. 7 (§6.2 text), runs of fault {0} without alarm",
-                                units="runs", test=BY_TOLERANCE, explain="fig-pipeline-fig7")})
-def fig7(*, seed: int, trials: int | None, jobs: int, state2_scale: float | None = None
-         ) -> ReproductionResult:
+@register(
+    "zb2014-fig7",
+    paper=PAPER,
+    title="Gas pipeline: histograms of detection delay and onset error",
+    default_trials=1000,
+    plot=plot_fig7,
+    chapter="zb2014/pipeline",
+    surrogate=True,
+    claims={
+        "false_alarms": Claim(
+            location="Fig. 7 (§6.2 text), false alarms in 2 × 1000 runs",
+            units="runs",
+            test=BY_INTERVAL,
+            ci=_count_ci,
+            explain="fig-pipeline-fig7",
+            cause="sec-pipeline-fig7",
+            cause_glue=("pl_union", "pl_maxpre"),
+            cause_text="under no fault the union bound allows far fewer than one false alarm "
+            "in 2000 runs of a correctly specified model: the paper's 7 point to "
+            "a mismatch between its simulation and its filter",
+        ),
+        # the same claim as the count (7 of 2000 runs): one row
+        "false_alarm_rate/*": shown_under("zb2014-fig7", lambda p: ("false_alarms",)),
+        "missed/*": Claim(
+            location="Fig. 7 (§6.2 text), runs of fault {0} without alarm",
+            units="runs",
+            test=BY_TOLERANCE,
+            explain="fig-pipeline-fig7",
+        ),
+    },
+)
+def fig7(
+    *, seed: int, trials: int | None, jobs: int, state2_scale: float | None = None
+) -> ReproductionResult:
     """Paper Fig. 7: ``trials`` runs per input-end fault (paper: 1000 each, 2000 in all).
 
     Delays and onset errors are over runs whose first alarm is at or after the onset
@@ -1063,21 +1409,46 @@ def fig7(*, seed: int, trials: int | None, jobs: int, state2_scale: float | None
         delays[fault] = (alarm[hit] - FAULT_ONSET) * gp.TS_MIN
         errs[fault] = (onset[hit] - FAULT_ONSET) * gp.TS_MIN
     n_tested = FAULT_ONSET - GLR_START
-    headline = {"false_alarms": fa, "false_alarm_rate": _rate(fa, 2 * trials), "missed": missed,
-                "delay_min": {str(f): _quartiles(v) for f, v in delays.items()},
-                "onset_error_min": {str(f): _quartiles(v) for f, v in errs.items()},
-                "hits": hits, "false_alarms_per_fault": fa_f,
-                "max_prefault_statistic": float(max(np.nanmax(r["max_prefault"]) for r in mc.values())),
-                "union_bound_false_alarm": float(n_tested * gp.WINDOW * scipy.stats.chi2.sf(gp.THRESHOLD, 2))}
-    paper = {"false_alarms": 7, "false_alarm_rate": {"rate": 7 / 2000, "count": 7, "n": 2000},
-             "missed": {"2": 0}, "calibrated_to": ["missed"],
-             "predictions": ["false_alarms", "false_alarm_rate", "delay_min", "onset_error_min",
-                             "max_prefault_statistic"]}
-    return ReproductionResult(id="zb2014-fig7", headline=headline, paper=paper,
-                              settings={"seed": seed, "trials_per_fault": trials, "window": gp.WINDOW,
-                                        "threshold": gp.THRESHOLD, "start_min": gp.DISABLED_MIN,
-                                        "calibration": calibration_settings(state2_scale)},
-                              data={"delay_min": delays, "onset_error_min": errs})
+    headline = {
+        "false_alarms": fa,
+        "false_alarm_rate": _rate(fa, 2 * trials),
+        "missed": missed,
+        "delay_min": {str(f): _quartiles(v) for f, v in delays.items()},
+        "onset_error_min": {str(f): _quartiles(v) for f, v in errs.items()},
+        "hits": hits,
+        "false_alarms_per_fault": fa_f,
+        "max_prefault_statistic": float(max(np.nanmax(r["max_prefault"]) for r in mc.values())),
+        "union_bound_false_alarm": float(
+            n_tested * gp.WINDOW * scipy.stats.chi2.sf(gp.THRESHOLD, 2)
+        ),
+    }
+    paper = {
+        "false_alarms": 7,
+        "false_alarm_rate": {"rate": 7 / 2000, "count": 7, "n": 2000},
+        "missed": {"2": 0},
+        "calibrated_to": ["missed"],
+        "predictions": [
+            "false_alarms",
+            "false_alarm_rate",
+            "delay_min",
+            "onset_error_min",
+            "max_prefault_statistic",
+        ],
+    }
+    return ReproductionResult(
+        id="zb2014-fig7",
+        headline=headline,
+        paper=paper,
+        settings={
+            "seed": seed,
+            "trials_per_fault": trials,
+            "window": gp.WINDOW,
+            "threshold": gp.THRESHOLD,
+            "start_min": gp.DISABLED_MIN,
+            "calibration": calibration_settings(state2_scale),
+        },
+        data={"delay_min": delays, "onset_error_min": errs},
+    )
 
 
 def plot_fig8(result: ReproductionResult, fig: Any = None):
@@ -1090,9 +1461,18 @@ def plot_fig8(result: ReproductionResult, fig: Any = None):
             stat = result.data["minmax"][fault][test]
             absent = test != fault
             hi = 25 if absent else max(25, float(np.percentile(stat, 99)))
-            ax.hist(np.clip(stat, 0, hi), bins=50, range=(0, hi), density=True, color=OURS_COLOR, alpha=0.8)
+            ax.hist(
+                np.clip(stat, 0, hi),
+                bins=50,
+                range=(0, hi),
+                density=True,
+                color=OURS_COLOR,
+                alpha=0.8,
+            )
             if absent:
-                ax.plot(x, scipy.stats.chi2.pdf(x, 1), color=PAPER_COLOR, ls="--", label=r"$\chi^2(1)$")
+                ax.plot(
+                    x, scipy.stats.chi2.pdf(x, 1), color=PAPER_COLOR, ls="--", label=r"$\chi^2(1)$"
+                )
                 ax.plot(x, scipy.stats.chi2.pdf(x, 2), color="k", ls=":", label=r"$\chi^2(2)$")
                 ax.set_ylim(0, 0.6)
                 ax.legend()
@@ -1113,31 +1493,57 @@ def _efficient_noncentrality(info: np.ndarray, fault: int) -> np.ndarray:
     return fault_theta(fault)[a] ** 2 * (info[:, a, a] - info[:, a, b] ** 2 / info[:, b, b])
 
 
-@register("zb2014-fig8", paper=PAPER, title="Gas pipeline: minmax isolation after each alarm (threshold 6.6349)",
-          default_trials=1000, plot=plot_fig8, chapter="zb2014/pipeline", surrogate=True, claims={
-              "type1_rate/*/rate": Claim(
-                  location="Fig. 8, type I error of fault {0}",
-                  label="the minmax test at the alarm",
-                  units="%", test=BY_INTERVAL, explain="sec-pipeline-isolation-window",
-                  ruled_out="the isolation window (up to the alarm or to the end of the record); "
-                            "the chapter measures where our type I errors come from (runs whose "
-                            "onset estimate is more than 40 min off), not why the paper's rate is "
-                            "lower"),
-              "type2_rate/*/rate": Claim(
-                  location="Fig. 8, type II error of fault {0}",
-                  label="the minmax test at the alarm",
-                  units="%", test=BY_INTERVAL, explain="fig-pipeline-fig8",
-                  cause="sec-pipeline-isolation-window", cause_glue=("pl_we_t2c{0}", "pl_t2a{0}"),
-                  cause_text="isolating with the samples up to the end of the record gives the "
-                             "paper's type II rate; up to the alarm the two fault columns are "
-                             "nearly collinear"),
-              "threshold_dof": Claim(
-                  location="Fig. 8, caption and text", units="",
-                  label="6.6349 is a 99 % χ² quantile, 1 degree of freedom (caption) or 2 (text)",
-                  test=IS_INPUT, check=lambda p, o, h: o == 1, explain="fig-pipeline-fig8",
-                  criterion="6.6349 is the 99 % quantile of χ²(1): the caption")})
-def fig8(*, seed: int, trials: int | None, jobs: int, isolation_window: str = "alarm",
-         state2_scale: float | None = None) -> ReproductionResult:
+@register(
+    "zb2014-fig8",
+    paper=PAPER,
+    title="Gas pipeline: minmax isolation after each alarm (threshold 6.6349)",
+    default_trials=1000,
+    plot=plot_fig8,
+    chapter="zb2014/pipeline",
+    surrogate=True,
+    claims={
+        "type1_rate/*/rate": Claim(
+            location="Fig. 8, type I error of fault {0}",
+            label="the minmax test at the alarm",
+            units="%",
+            test=BY_INTERVAL,
+            explain="sec-pipeline-isolation-window",
+            ruled_out="the isolation window (up to the alarm or to the end of the record); "
+            "the chapter measures where our type I errors come from (runs whose "
+            "onset estimate is more than 40 min off), not why the paper's rate is "
+            "lower",
+        ),
+        "type2_rate/*/rate": Claim(
+            location="Fig. 8, type II error of fault {0}",
+            label="the minmax test at the alarm",
+            units="%",
+            test=BY_INTERVAL,
+            explain="fig-pipeline-fig8",
+            cause="sec-pipeline-isolation-window",
+            cause_glue=("pl_we_t2c{0}", "pl_t2a{0}"),
+            cause_text="isolating with the samples up to the end of the record gives the "
+            "paper's type II rate; up to the alarm the two fault columns are "
+            "nearly collinear",
+        ),
+        "threshold_dof": Claim(
+            location="Fig. 8, caption and text",
+            units="",
+            label="6.6349 is a 99 % χ² quantile, 1 degree of freedom (caption) or 2 (text)",
+            test=IS_INPUT,
+            check=lambda p, o, h: o == 1,
+            explain="fig-pipeline-fig8",
+            criterion="6.6349 is the 99 % quantile of χ²(1): the caption",
+        ),
+    },
+)
+def fig8(
+    *,
+    seed: int,
+    trials: int | None,
+    jobs: int,
+    isolation_window: str = "alarm",
+    state2_scale: float | None = None,
+) -> ReproductionResult:
     """Paper Fig. 8: two parallel minmax tests (41) after each alarm, threshold 6.6349.
 
     Same runs as ``zb2014-fig7``; rates over the runs with a detection at or after the onset.
@@ -1195,14 +1601,22 @@ def fig8(*, seed: int, trials: int | None, jobs: int, isolation_window: str = "a
     All rates are predictions (``paper["predictions"]``); nothing here was calibrated.
     """
     if isolation_window not in ISOLATION_WINDOWS:
-        raise ModelError(f"isolation_window: expected one of {ISOLATION_WINDOWS}, got {isolation_window!r}")
+        raise ModelError(
+            f"isolation_window: expected one of {ISOLATION_WINDOWS}, got {isolation_window!r}"
+        )
     trials = 1000 if trials is None else trials
     mc = pipeline_monte_carlo(seed=seed, trials=trials, jobs=jobs, state2_scale=state2_scale)
     t1, t2, t1k, ks1, ks2, mean_abs, minmax, cos2 = {}, {}, {}, {}, {}, {}, {}, {}
     t2k, t2k_theory, t1_le, t2_le, t1_gt, t2_gt = {}, {}, {}, {}, {}, {}
-    info_keys = ("samples_at_alarm", "samples_to_record_end", "noncentrality_at_alarm",
-                 "noncentrality_to_record_end", "type2_rate_expected_at_alarm",
-                 "type2_rate_expected_to_record_end", "median_cos2_to_record_end")
+    info_keys = (
+        "samples_at_alarm",
+        "samples_to_record_end",
+        "noncentrality_at_alarm",
+        "noncentrality_to_record_end",
+        "type2_rate_expected_at_alarm",
+        "type2_rate_expected_to_record_end",
+        "median_cos2_to_record_end",
+    )
     info: dict[str, dict[str, Any]] = {key: {} for key in info_keys}
     power = known_onset_isolation_power(state2_scale=state2_scale)
     suffix = "" if isolation_window == "alarm" else "_record"
@@ -1235,29 +1649,55 @@ def fig8(*, seed: int, trials: int | None, jobs: int, isolation_window: str = "a
             tag = "at_alarm" if window == "alarm" else "to_record_end"
             info[f"noncentrality_{tag}"][f] = _quartiles(lam)
             info[f"type2_rate_expected_{tag}"][f] = (
-                float(np.mean(scipy.stats.ncx2.cdf(MINMAX_THRESHOLD, 1, lam))) if n else None)
+                float(np.mean(scipy.stats.ncx2.cdf(MINMAX_THRESHOLD, 1, lam))) if n else None
+            )
         r_hat = res["onset_hat"][hit]
         info["samples_at_alarm"][f] = _quartiles(res["alarm"][hit] - r_hat + 1)
         info["samples_to_record_end"][f] = _quartiles(gp.N_STEPS - r_hat)
-        info["median_cos2_to_record_end"][f] = float(np.median(cos2_by["record_end"])) if n else None
+        info["median_cos2_to_record_end"][f] = (
+            float(np.median(cos2_by["record_end"])) if n else None
+        )
         cos2[f] = float(np.median(cos2_by[isolation_window])) if n else None
-    dof = int(np.argmin([abs(scipy.stats.chi2.ppf(0.99, k) - MINMAX_THRESHOLD) for k in (1, 2, 3)]) + 1)
-    headline = {"type1_rate": t1, "type2_rate": t2, "type1_rate_known_onset": t1k,
-                "type2_rate_known_onset": t2k, "type2_rate_known_onset_theory": t2k_theory,
-                "threshold_dof": dof,
-                "ks_pvalue_dof1": ks1, "ks_pvalue_dof2": ks2, "mean_absent_statistic": mean_abs,
-                "median_cos2": cos2,
-                "type1_rate_onset_error_le10": t1_le, "type2_rate_onset_error_le10": t2_le,
-                "type1_rate_onset_error_gt40": t1_gt, "type2_rate_onset_error_gt40": t2_gt, **info}
-    paper = {"type1_rate": {"1": {"rate": 0.017}, "2": {"rate": 0.013}},
-             "type2_rate": {"1": {"rate": 0.0}, "2": {"rate": 0.0}}, "threshold_dof": "1 (caption) / 2 (text)",
-             "calibrated_to": [], "predictions": ["type1_rate", "type2_rate"]}
-    return ReproductionResult(id="zb2014-fig8", headline=headline, paper=paper,
-                              settings={"seed": seed, "trials_per_fault": trials,
-                                        "minmax_threshold": MINMAX_THRESHOLD,
-                                        "isolation_window": isolation_window,
-                                        "calibration": calibration_settings(state2_scale)},
-                              data={"minmax": minmax})
+    dof = int(
+        np.argmin([abs(scipy.stats.chi2.ppf(0.99, k) - MINMAX_THRESHOLD) for k in (1, 2, 3)]) + 1
+    )
+    headline = {
+        "type1_rate": t1,
+        "type2_rate": t2,
+        "type1_rate_known_onset": t1k,
+        "type2_rate_known_onset": t2k,
+        "type2_rate_known_onset_theory": t2k_theory,
+        "threshold_dof": dof,
+        "ks_pvalue_dof1": ks1,
+        "ks_pvalue_dof2": ks2,
+        "mean_absent_statistic": mean_abs,
+        "median_cos2": cos2,
+        "type1_rate_onset_error_le10": t1_le,
+        "type2_rate_onset_error_le10": t2_le,
+        "type1_rate_onset_error_gt40": t1_gt,
+        "type2_rate_onset_error_gt40": t2_gt,
+        **info,
+    }
+    paper = {
+        "type1_rate": {"1": {"rate": 0.017}, "2": {"rate": 0.013}},
+        "type2_rate": {"1": {"rate": 0.0}, "2": {"rate": 0.0}},
+        "threshold_dof": "1 (caption) / 2 (text)",
+        "calibrated_to": [],
+        "predictions": ["type1_rate", "type2_rate"],
+    }
+    return ReproductionResult(
+        id="zb2014-fig8",
+        headline=headline,
+        paper=paper,
+        settings={
+            "seed": seed,
+            "trials_per_fault": trials,
+            "minmax_threshold": MINMAX_THRESHOLD,
+            "isolation_window": isolation_window,
+            "calibration": calibration_settings(state2_scale),
+        },
+        data={"minmax": minmax},
+    )
 
 
 # ----------------------------------------------------------------------------- sensitivity
@@ -1289,11 +1729,25 @@ def surrogate_sensitivity(*, seed: int, trials: int, jobs: int = 1) -> list[dict
     rows = []
     for variant in gp.VARIANTS:
         for schedule in SCHEDULES:
-            mc = pipeline_monte_carlo(seed=seed, trials=trials, jobs=jobs, progress=False,
-                                      chunk_size=min(trials, 250), variant=variant, schedule=schedule)
-            row: dict[str, Any] = {"variant": variant, "schedule": schedule, "trials": trials,
-                                   "missed": {}, "median_delay_min": {}, "type1_rate": {},
-                                   "type2_rate": {}, "type2_rate_known_onset": {}}
+            mc = pipeline_monte_carlo(
+                seed=seed,
+                trials=trials,
+                jobs=jobs,
+                progress=False,
+                chunk_size=min(trials, 250),
+                variant=variant,
+                schedule=schedule,
+            )
+            row: dict[str, Any] = {
+                "variant": variant,
+                "schedule": schedule,
+                "trials": trials,
+                "missed": {},
+                "median_delay_min": {},
+                "type1_rate": {},
+                "type2_rate": {},
+                "type2_rate_known_onset": {},
+            }
             fa = 0
             for fault, res in mc.items():
                 f = str(fault)
@@ -1304,16 +1758,23 @@ def surrogate_sensitivity(*, seed: int, trials: int, jobs: int = 1) -> list[dict
                 row["missed"][f] = _rate(int(np.sum(res["alarm"] < 0)), trials)
                 delays = (res["alarm"][hit] - FAULT_ONSET) * gp.TS_MIN
                 row["median_delay_min"][f] = float(np.median(delays)) if delays.size else None
-                row["type1_rate"][f] = _rate(int(np.sum(absent[hit] > MINMAX_THRESHOLD)), int(hit.sum()))
-                row["type2_rate"][f] = _rate(int(np.sum(present[hit] <= MINMAX_THRESHOLD)), int(hit.sum()))
-                row["type2_rate_known_onset"][f] = _rate(int(np.sum(present_known <= MINMAX_THRESHOLD)), trials)
+                row["type1_rate"][f] = _rate(
+                    int(np.sum(absent[hit] > MINMAX_THRESHOLD)), int(hit.sum())
+                )
+                row["type2_rate"][f] = _rate(
+                    int(np.sum(present[hit] <= MINMAX_THRESHOLD)), int(hit.sum())
+                )
+                row["type2_rate_known_onset"][f] = _rate(
+                    int(np.sum(present_known <= MINMAX_THRESHOLD)), trials
+                )
             row["false_alarm_rate"] = _rate(fa, 2 * trials)
             rows.append(row)
     return rows
 
 
-def calibration_sensitivity(*, seed: int, trials: int, jobs: int = 1,
-                            scales: tuple[float, ...] = (1.0, 3.0, 10.0, 30.0)) -> list[dict[str, Any]]:
+def calibration_sensitivity(
+    *, seed: int, trials: int, jobs: int = 1, scales: tuple[float, ...] = (1.0, 3.0, 10.0, 30.0)
+) -> list[dict[str, Any]]:
     """Every prediction of Figs 5-9 on the physical surrogate calibrated with each ``state2_scale``.
 
     For each scale, the section length and the swing are recalibrated so that both declared
@@ -1348,15 +1809,38 @@ def calibration_sensitivity(*, seed: int, trials: int, jobs: int = 1,
         # the runs first, one chunk per fault (faster than the default four for a few hundred
         # runs; same numbers), so that the reproductions find them in the cache
         for fault, delta in ((1, None), (2, None), (1, gp.FAULT1_DOUBLED_DELTA)):
-            fault_runs(seed=seed, trials=trials, fault=fault, delta=delta, jobs=jobs, isolate=delta is None,
-                       chunk_size=min(trials, 250), progress=False, state2_scale=float(k2))
-        heads = {rid: func(seed=seed, trials=trials, jobs=jobs, state2_scale=float(k2)).headline
-                 for rid, func in (("zb2014-fig5", fig5), ("zb2014-fig6", fig6), ("zb2014-fig7", fig7),
-                                   ("zb2014-fig8", fig8), ("zb2014-fig9", fig9))}
-        rows.append({"state2_scale": float(k2), "constants": cal,
-                     "targets": gp.calibration_targets(cal["section_length_km"], cal["state2_scale"],
-                                                       cal["pressure_swing_bar"]),
-                     "limits": gp.surrogate_limits(float(k2)), "headlines": heads})
+            fault_runs(
+                seed=seed,
+                trials=trials,
+                fault=fault,
+                delta=delta,
+                jobs=jobs,
+                isolate=delta is None,
+                chunk_size=min(trials, 250),
+                progress=False,
+                state2_scale=float(k2),
+            )
+        heads = {
+            rid: func(seed=seed, trials=trials, jobs=jobs, state2_scale=float(k2)).headline
+            for rid, func in (
+                ("zb2014-fig5", fig5),
+                ("zb2014-fig6", fig6),
+                ("zb2014-fig7", fig7),
+                ("zb2014-fig8", fig8),
+                ("zb2014-fig9", fig9),
+            )
+        }
+        rows.append(
+            {
+                "state2_scale": float(k2),
+                "constants": cal,
+                "targets": gp.calibration_targets(
+                    cal["section_length_km"], cal["state2_scale"], cal["pressure_swing_bar"]
+                ),
+                "limits": gp.surrogate_limits(float(k2)),
+                "headlines": heads,
+            }
+        )
     return rows
 
 

@@ -35,8 +35,14 @@ from typing import Any, Iterable, Sequence
 
 import numpy as np
 
-from fdi_lib.errors import (EmptySetError, ModelError, NonFiniteError, NumericalError, ShapeError,
-                            UnboundedSetError)
+from fdi_lib.errors import (
+    EmptySetError,
+    ModelError,
+    NonFiniteError,
+    NumericalError,
+    ShapeError,
+    UnboundedSetError,
+)
 from fdi_lib.validation import array
 
 __all__ = ["Polytope", "convex_hull", "plot_polytope", "polygon_outline", "box_corners"]
@@ -86,7 +92,9 @@ def _normalise(M: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     norms = np.linalg.norm(M, axis=1)
     zero = norms < 1e-14
     if np.any(m[zero] < 0):  # 0 <= m_i < 0: infeasible
-        return np.array([[1.0] + [0.0] * (M.shape[1] - 1)] * 2) * np.array([[1.0], [-1.0]]), np.array([-1.0, -1.0])
+        return np.array([[1.0] + [0.0] * (M.shape[1] - 1)] * 2) * np.array(
+            [[1.0], [-1.0]]
+        ), np.array([-1.0, -1.0])
     M, m, norms = M[~zero], m[~zero], norms[~zero]
     M, m = M / norms[:, None], m / norms
     key = np.round(M, 12)
@@ -115,7 +123,9 @@ def _chebyshev(M: np.ndarray, m: np.ndarray, cap: float = 1e6) -> tuple[str, np.
     try:
         cdd.linprog_solve(lp)
         solved = lp.status == cdd.LPStatusType.OPTIMAL
-    except RuntimeError:  # cddlib's float simplex can abort ("LP cycling", "numerical inconsistency")
+    except (
+        RuntimeError
+    ):  # cddlib's float simplex can abort ("LP cycling", "numerical inconsistency")
         solved = False
     if solved:
         sol = np.array(lp.primal_solution, dtype=float)
@@ -127,8 +137,13 @@ def _chebyshev(M: np.ndarray, m: np.ndarray, cap: float = 1e6) -> tuple[str, np.
     # decided by HiGHS: an empty set means an alarm, so it must not rest on a fragile solver
     from scipy.optimize import linprog
 
-    res = linprog(np.r_[np.zeros(n), -1.0], A_ub=np.column_stack([M, np.ones(len(m))]), b_ub=m,
-                  bounds=[(None, None)] * n + [(None, cap)], method="highs")
+    res = linprog(
+        np.r_[np.zeros(n), -1.0],
+        A_ub=np.column_stack([M, np.ones(len(m))]),
+        b_ub=m,
+        bounds=[(None, None)] * n + [(None, cap)],
+        method="highs",
+    )
     if res.status == 2:
         return "infeasible", np.zeros(n), -np.inf
     if res.status == 3:
@@ -141,7 +156,7 @@ def _chebyshev(M: np.ndarray, m: np.ndarray, cap: float = 1e6) -> tuple[str, np.
 def _all_inside(V: np.ndarray, M: np.ndarray, m: np.ndarray, tol: float) -> bool:
     """Whether every row of V satisfies M v <= m + tol (in blocks: V and M can both be large)."""
     step = max(1, 2_000_000 // max(1, M.shape[0]))
-    return all(np.all(V[i:i + step] @ M.T <= m + tol) for i in range(0, V.shape[0], step))
+    return all(np.all(V[i : i + step] @ M.T <= m + tol) for i in range(0, V.shape[0], step))
 
 
 #: qhull options tried in turn: default, then allowing wide merges ("Q12", the remedy qhull itself
@@ -178,9 +193,11 @@ def _qhull_vertices(M: np.ndarray, m: np.ndarray, centre: np.ndarray, radius: fl
     err: Exception | None = None
     for opts in _QHULL_RETRIES:
         for shift in (np.zeros_like(centre), centre):
-            ms = m - M @ shift   # Set(M, m) - shift
+            ms = m - M @ shift  # Set(M, m) - shift
             try:
-                hs = HalfspaceIntersection(np.column_stack([M, -ms]), centre - shift, qhull_options=opts)
+                hs = HalfspaceIntersection(
+                    np.column_stack([M, -ms]), centre - shift, qhull_options=opts
+                )
             except QhullError as exc:
                 err = exc
                 continue
@@ -208,13 +225,13 @@ _MAX_BASES = 2000
 class _Bases:
     """What the vertex enumeration by bases needs for a fixed normal matrix M (cached per M)."""
 
-    norms: np.ndarray      # (p,) row norms of M (1 for zero rows)
-    zero: np.ndarray       # (p,) rows of M that are zero
-    pad: np.ndarray        # (q, r) indices into [m / norms, +inf]: the rows of each distinct unit normal
-    U: np.ndarray          # (q, n) distinct unit normals
-    idx: np.ndarray        # (K, n) the non-singular n-subsets of U's rows
-    inv: np.ndarray        # (K, n, n) inverses of U[idx[k]]
-    bounded: bool          # whether Set(U, 1) is bounded (then every non-empty Set(M, m) is a polytope)
+    norms: np.ndarray  # (p,) row norms of M (1 for zero rows)
+    zero: np.ndarray  # (p,) rows of M that are zero
+    pad: np.ndarray  # (q, r) indices into [m / norms, +inf]: the rows of each distinct unit normal
+    U: np.ndarray  # (q, n) distinct unit normals
+    idx: np.ndarray  # (K, n) the non-singular n-subsets of U's rows
+    inv: np.ndarray  # (K, n, n) inverses of U[idx[k]]
+    bounded: bool  # whether Set(U, 1) is bounded (then every non-empty Set(M, m) is a polytope)
 
 
 @functools.lru_cache(maxsize=64)
@@ -243,7 +260,9 @@ def _bases(key: bytes, p: int, n: int) -> _Bases | None:
     order = np.argsort(group, kind="stable")
     counts = np.bincount(group, minlength=q)
     pad = np.full((q, counts.max()), p)
-    pad[group[order], np.arange(len(order)) - np.repeat(np.cumsum(counts) - counts, counts)] = rows[order]
+    pad[group[order], np.arange(len(order)) - np.repeat(np.cumsum(counts) - counts, counts)] = rows[
+        order
+    ]
     idx = _combinations(q, n)
     sub = U[idx]
     ok = np.abs(np.linalg.det(sub)) > 1e-10
@@ -325,7 +344,9 @@ def _enumerate_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray:
     if status == "infeasible" or radius < -_EMPTY_TOL * (1.0 + np.abs(m).max(initial=0.0)):
         return np.zeros((0, n))
     if status == "unbounded" or radius >= 1e6 * (1 - 1e-12):
-        raise UnboundedSetError("Set(M, m): the polytope is unbounded (it contains arbitrarily large balls)")
+        raise UnboundedSetError(
+            "Set(M, m): the polytope is unbounded (it contains arbitrarily large balls)"
+        )
     scale = 1e-9 * (1.0 + np.abs(m).max())
     if radius > scale:
         try:
@@ -337,22 +358,31 @@ def _enumerate_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray:
     try:
         V = _cdd_dd_vertices(M, m)
     except RuntimeError as exc:  # cddlib: "Numerical inconsistency is found"
-        raise NumericalError(f"Set(M, m): vertex enumeration failed in floating point for {len(m)} "
-                             f"inequalities in dimension {n} (Chebyshev radius {radius:.3g}): {exc}") from None
-    if not (V.shape[0] and _all_inside(V, M, m, 1e-9 * (1.0 + np.abs(m)))
-            and _spans_ball(V, centre, max(radius, 0.0), scale)):
-        raise NumericalError(f"Set(M, m): the linear program finds a ball of radius {radius:.3g} in the set "
-                             f"({len(m)} inequalities, dimension {n}), but vertex enumeration in floating point "
-                             f"(qhull, cddlib) found {V.shape[0]} vertices that do not span it; the set is not "
-                             f"empty (no alarm), its vertices are unknown")
+        raise NumericalError(
+            f"Set(M, m): vertex enumeration failed in floating point for {len(m)} "
+            f"inequalities in dimension {n} (Chebyshev radius {radius:.3g}): {exc}"
+        ) from None
+    if not (
+        V.shape[0]
+        and _all_inside(V, M, m, 1e-9 * (1.0 + np.abs(m)))
+        and _spans_ball(V, centre, max(radius, 0.0), scale)
+    ):
+        raise NumericalError(
+            f"Set(M, m): the linear program finds a ball of radius {radius:.3g} in the set "
+            f"({len(m)} inequalities, dimension {n}), but vertex enumeration in floating point "
+            f"(qhull, cddlib) found {V.shape[0]} vertices that do not span it; the set is not "
+            f"empty (no alarm), its vertices are unknown"
+        )
     return V
 
 
 def _spans_ball(V: np.ndarray, centre: np.ndarray, radius: float, tol: float) -> bool:
     """Whether the bounding box of V holds the ball B(centre, radius) (to ``tol``): a necessary
     condition for conv(V) to be the set in which the Chebyshev LP found that ball."""
-    return bool(V.shape[0]) and bool(np.all(V.min(axis=0) <= centre - radius + tol)
-                                      and np.all(V.max(axis=0) >= centre + radius - tol))
+    return bool(V.shape[0]) and bool(
+        np.all(V.min(axis=0) <= centre - radius + tol)
+        and np.all(V.max(axis=0) >= centre + radius - tol)
+    )
 
 
 def _cdd_dd_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray:
@@ -389,7 +419,9 @@ def _hull(V: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     from scipy.spatial import ConvexHull, QhullError
 
     scale = 1.0 + np.abs(V).max()
-    if V.shape[1] == 1:   # an interval: its end points, exactly (cddlib's float answer can miss them)
+    if (
+        V.shape[1] == 1
+    ):  # an interval: its end points, exactly (cddlib's float answer can miss them)
         keep = np.unique([V[:, 0].argmin(), V[:, 0].argmax()])
         return np.array([[1.0], [-1.0]]), np.array([V[:, 0].max(), -V[:, 0].min()]), keep
     if V.shape[0] > V.shape[1]:
@@ -408,7 +440,9 @@ def _hull(V: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
                     return M, m, hull.vertices
     M, m = _cdd_hull_exact(V)
     if not _all_inside(V, M, m, 1e-9 * scale):
-        raise NumericalError(f"conv(V): the facets found in floating point exclude some of the {len(V)} points")
+        raise NumericalError(
+            f"conv(V): the facets found in floating point exclude some of the {len(V)} points"
+        )
     return M, m, np.arange(len(V))
 
 
@@ -416,12 +450,16 @@ def _cdd_hull_exact(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """H-representation of conv(V) with cddlib (double description); handles flat sets."""
     import cdd
 
-    mat = cdd.matrix_from_array(np.column_stack([np.ones(len(V)), V]), rep_type=cdd.RepType.GENERATOR)
+    mat = cdd.matrix_from_array(
+        np.column_stack([np.ones(len(V)), V]), rep_type=cdd.RepType.GENERATOR
+    )
     try:
         poly = cdd.polyhedron_from_matrix(mat)
     except RuntimeError as exc:  # cddlib: "Numerical inconsistency is found"
-        raise NumericalError(f"conv(V): facet enumeration failed in floating point for {len(V)} points in "
-                             f"dimension {V.shape[1]} (flat or nearly flat set): {exc}") from None
+        raise NumericalError(
+            f"conv(V): facet enumeration failed in floating point for {len(V)} points in "
+            f"dimension {V.shape[1]} (flat or nearly flat set): {exc}"
+        ) from None
     ineq = cdd.copy_inequalities(poly)
     arr = np.array(ineq.array, dtype=float).reshape(-1, V.shape[1] + 1)
     lin = sorted(ineq.lin_set)
@@ -457,7 +495,9 @@ class Polytope:
         M = _as_2d("M", self.M)
         m = array(self.m, "m", finite=False)
         if m.ndim != 1 or m.shape[0] != M.shape[0]:
-            raise ShapeError(f"m: expected shape ({M.shape[0]},) to match M {M.shape}, got {m.shape}")
+            raise ShapeError(
+                f"m: expected shape ({M.shape[0]},) to match M {M.shape}, got {m.shape}"
+            )
         _check_finite("m", m)
         if M.shape[1] < 1:
             raise ShapeError(f"M: expected at least one column, got shape {M.shape}")
@@ -471,7 +511,9 @@ class Polytope:
         lo = np.atleast_1d(array(lower, "lower"))
         hi = np.atleast_1d(array(upper, "upper"))
         if lo.shape != hi.shape or lo.ndim != 1:
-            raise ShapeError(f"lower, upper: expected equal 1-D shapes, got {lo.shape} and {hi.shape}")
+            raise ShapeError(
+                f"lower, upper: expected equal 1-D shapes, got {lo.shape} and {hi.shape}"
+            )
         n = lo.size
         return cls(np.vstack([np.eye(n), -np.eye(n)]), np.concatenate([hi, -lo]))
 
@@ -586,9 +628,13 @@ class Polytope:
         """Drop redundant inequalities (cddlib ``matrix_canonicalize``); empty sets are returned unchanged."""
         import cdd
 
-        if _chebyshev(*_normalise(self.M, self.m))[0] == "infeasible":   # empty (cddlib's LP, HiGHS if unsure)
+        if (
+            _chebyshev(*_normalise(self.M, self.m))[0] == "infeasible"
+        ):  # empty (cddlib's LP, HiGHS if unsure)
             return self
-        mat = cdd.matrix_from_array(np.column_stack([self.m, -self.M]), rep_type=cdd.RepType.INEQUALITY)
+        mat = cdd.matrix_from_array(
+            np.column_stack([self.m, -self.M]), rep_type=cdd.RepType.INEQUALITY
+        )
         cdd.matrix_canonicalize(mat)
         arr = np.array(mat.array, dtype=float).reshape(-1, self.dim + 1)
         lin = sorted(mat.lin_set)
@@ -669,7 +715,9 @@ class Polytope:
         import cdd
 
         elim = [d for d in range(self.dim) if d not in dims]
-        mat = cdd.matrix_from_array(np.column_stack([self.m, -self.M]), rep_type=cdd.RepType.INEQUALITY)
+        mat = cdd.matrix_from_array(
+            np.column_stack([self.m, -self.M]), rep_type=cdd.RepType.INEQUALITY
+        )
         if elim:
             mat = cdd.block_elimination(mat, {d + 1 for d in elim})
         kept = sorted(dims)  # cdd drops the eliminated columns and keeps the others in order
@@ -677,7 +725,9 @@ class Polytope:
         M, m = -arr[:, [kept.index(d) + 1 for d in dims]], arr[:, 0]
         keep = np.linalg.norm(M, axis=1) > 1e-12
         if np.any(m[~keep] < -1e-9):  # 0 <= m_i violated: the set was empty
-            return Polytope(np.vstack([np.eye(len(dims))[:1], -np.eye(len(dims))[:1]]), np.array([-1.0, -1.0]))
+            return Polytope(
+                np.vstack([np.eye(len(dims))[:1], -np.eye(len(dims))[:1]]), np.array([-1.0, -1.0])
+            )
         return Polytope(M[keep], m[keep]).remove_redundancy()
 
     def outer_template(self, directions: Any) -> "Polytope":

@@ -65,16 +65,37 @@ import numpy as np
 
 import warnings
 
-from fdi_lib.errors import (EmptySetError, ModelError, NonFiniteError, NumericalError, ShapeError,
-                            UnboundedSetError, UnsoundOptionWarning)
+from fdi_lib.errors import (
+    EmptySetError,
+    ModelError,
+    NonFiniteError,
+    NumericalError,
+    ShapeError,
+    UnboundedSetError,
+    UnsoundOptionWarning,
+)
 from fdi_lib.validation import integer, real
 from fdi_lib.sets.polytope import Polytope, _hull, _hull_hrep, _enumerate_vertices, box_corners
 from fdi_lib.threads import single_threaded_blas
 
-__all__ = ["SVOModel", "SetValuedObserver", "SVORun", "run_svo", "FDIResult", "run_architecture_i",
-           "run_architecture_ii", "default_template", "actuator_effectiveness_model", "sensor_bias_model",
-           "dynamics_entry_model", "ModelSequence", "TemplateBatch", "SVOBatchRun", "run_svo_many",
-           "run_architecture_i_many"]
+__all__ = [
+    "SVOModel",
+    "SetValuedObserver",
+    "SVORun",
+    "run_svo",
+    "FDIResult",
+    "run_architecture_i",
+    "run_architecture_ii",
+    "default_template",
+    "actuator_effectiveness_model",
+    "sensor_bias_model",
+    "dynamics_entry_model",
+    "ModelSequence",
+    "TemplateBatch",
+    "SVOBatchRun",
+    "run_svo_many",
+    "run_architecture_i_many",
+]
 
 
 def _arr(name: str, a: Any, ndim: int) -> np.ndarray:
@@ -90,7 +111,7 @@ def _arr(name: str, a: Any, ndim: int) -> np.ndarray:
 @functools.lru_cache(maxsize=16)
 def _cube_vertices(n_A: int) -> np.ndarray:
     """The 2**n_A vertices of the cube {|Delta| <= 1} (eq. (4)), shape (2**n_A, n_A)."""
-    v = np.array(list(itertools.product((-1.0, 1.0), repeat=n_A)), dtype=float).reshape(2 ** n_A, n_A)
+    v = np.array(list(itertools.product((-1.0, 1.0), repeat=n_A)), dtype=float).reshape(2**n_A, n_A)
     v.flags.writeable = False
     return v
 
@@ -101,8 +122,8 @@ def _vertex_matrices(A: np.ndarray, A_unc: np.ndarray) -> np.ndarray:
     sum of exact terms, the same whatever the leading (batch) dimensions."""
     signs = _cube_vertices(A_unc.shape[-3])
     acc = np.zeros(A.shape[:-2] + (signs.shape[0],) + A.shape[-2:])
-    for i in range(signs.shape[1]):   # the uncertain part first, then A (as the paper's sum)
-        acc = acc + signs[:, i, None, None] * A_unc[..., i:i + 1, :, :]
+    for i in range(signs.shape[1]):  # the uncertain part first, then A (as the paper's sum)
+        acc = acc + signs[:, i, None, None] * A_unc[..., i : i + 1, :, :]
     return A[..., None, :, :] + acc
 
 
@@ -155,10 +176,15 @@ class SVOModel:
         L = np.zeros((n, 0)) if self.L is None else _arr("L", self.L, 2)
         if L.shape[0] != n:
             raise ShapeError(f"L: expected {n} rows, got shape {L.shape}")
-        noise = np.broadcast_to(_arr("noise", np.atleast_1d(self.noise), 1), (ny,)).copy() \
-            if np.size(self.noise) in (1, ny) else None
+        noise = (
+            np.broadcast_to(_arr("noise", np.atleast_1d(self.noise), 1), (ny,)).copy()
+            if np.size(self.noise) in (1, ny)
+            else None
+        )
         if noise is None:
-            raise ShapeError(f"noise: expected a scalar or shape ({ny},), got shape {np.shape(self.noise)}")
+            raise ShapeError(
+                f"noise: expected a scalar or shape ({ny},), got shape {np.shape(self.noise)}"
+            )
         if np.any(noise < 0):
             raise ModelError(f"noise: expected non-negative bounds, got {noise}")
         Au = np.zeros((0, n, n)) if self.A_unc is None else _arr("A_unc", self.A_unc, 3)
@@ -170,18 +196,44 @@ class SVOModel:
         Cu = np.zeros((0, ny, n)) if self.C_unc is None else _arr("C_unc", self.C_unc, 3)
         if Cu.shape[1:] != (ny, n):
             raise ShapeError(f"C_unc: expected shape (n_C, {ny}, {n}), got {Cu.shape}")
-        for name, val in [("A", A), ("C", C), ("B", B), ("L", L), ("noise", noise), ("A_unc", Au),
-                          ("B_unc", Bu), ("C_unc", Cu)]:
+        for name, val in [
+            ("A", A),
+            ("C", C),
+            ("B", B),
+            ("L", L),
+            ("noise", noise),
+            ("A_unc", Au),
+            ("B_unc", Bu),
+            ("C_unc", Cu),
+        ]:
             object.__setattr__(self, name, val)
         object.__setattr__(self, "_vertex_A", _vertex_matrices(A, Au))
 
     @classmethod
-    def _checked_parts(cls, A: np.ndarray, C: np.ndarray, B: np.ndarray, L: np.ndarray, noise: np.ndarray,
-                       A_unc: np.ndarray, B_unc: np.ndarray, vertex_A: np.ndarray) -> "SVOModel":
+    def _checked_parts(
+        cls,
+        A: np.ndarray,
+        C: np.ndarray,
+        B: np.ndarray,
+        L: np.ndarray,
+        noise: np.ndarray,
+        A_unc: np.ndarray,
+        B_unc: np.ndarray,
+        vertex_A: np.ndarray,
+    ) -> "SVOModel":
         """A model from parts that :class:`ModelSequence` has already checked (no second check)."""
         model = object.__new__(cls)
-        for name, val in (("A", A), ("C", C), ("B", B), ("L", L), ("noise", noise), ("A_unc", A_unc),
-                          ("B_unc", B_unc), ("C_unc", np.zeros((0,) + C.shape)), ("_vertex_A", vertex_A)):
+        for name, val in (
+            ("A", A),
+            ("C", C),
+            ("B", B),
+            ("L", L),
+            ("noise", noise),
+            ("A_unc", A_unc),
+            ("B_unc", B_unc),
+            ("C_unc", np.zeros((0,) + C.shape)),
+            ("_vertex_A", vertex_A),
+        ):
             object.__setattr__(model, name, val)
         return model
 
@@ -212,7 +264,9 @@ def default_template(n: int, C: np.ndarray | None = None) -> np.ndarray:
     """Template directions in dimension ``n``: +-e_i, plus +-normalised rows of ``C`` not parallel
     to those, shape (p, n)."""
     C = None if C is None else np.asarray(C, dtype=float)
-    return _default_template(int(n), None if C is None else C.tobytes(), None if C is None else C.shape).copy()
+    return _default_template(
+        int(n), None if C is None else C.tobytes(), None if C is None else C.shape
+    ).copy()
 
 
 @functools.lru_cache(maxsize=64)
@@ -233,11 +287,17 @@ class _Entry:
     V: np.ndarray
     model: SVOModel | None = None
     u: np.ndarray | None = None
-    P: np.ndarray | None = None   # "exact" rule: points spanning X's propagation to the latest step
+    P: np.ndarray | None = None  # "exact" rule: points spanning X's propagation to the latest step
 
 
-def _lp_maxima(D: np.ndarray, A_ub: np.ndarray, b_ub: np.ndarray, A_eq: np.ndarray, b_eq: np.ndarray,
-               bounds: list) -> np.ndarray:
+def _lp_maxima(
+    D: np.ndarray,
+    A_ub: np.ndarray,
+    b_ub: np.ndarray,
+    A_eq: np.ndarray,
+    b_eq: np.ndarray,
+    bounds: list,
+) -> np.ndarray:
     """max d . x[:n] over {A_ub x <= b_ub, A_eq x = b_eq, bounds} for every row d of ``D`` (HiGHS).
 
     One HiGHS model for all the directions: only the objective changes between them, so each
@@ -271,9 +331,11 @@ def _lp_maxima(D: np.ndarray, A_ub: np.ndarray, b_ub: np.ndarray, A_eq: np.ndarr
         solver.run()
         status = solver.getModelStatus()
         if status == highspy.HighsModelStatus.kInfeasible:
-            return out   # this vertex sequence explains nothing: no contribution to the hull
+            return out  # this vertex sequence explains nothing: no contribution to the hull
         if status != highspy.HighsModelStatus.kOptimal:
-            raise NumericalError(f"joint horizon: the support LP failed ({solver.modelStatusToString(status)})")
+            raise NumericalError(
+                f"joint horizon: the support LP failed ({solver.modelStatusToString(status)})"
+            )
         out[i] = -solver.getInfo().objective_function_value
     return out
 
@@ -330,25 +392,37 @@ class SetValuedObserver:
     False
     """
 
-    def __init__(self, X0: Polytope, *, N: int = 1, method: str = "template",
-                 template: np.ndarray | None = None, margin: float = 1e-9,
-                 strip_before_hull: bool = False, scale: Any = None, joint: bool = False) -> None:
+    def __init__(
+        self,
+        X0: Polytope,
+        *,
+        N: int = 1,
+        method: str = "template",
+        template: np.ndarray | None = None,
+        margin: float = 1e-9,
+        strip_before_hull: bool = False,
+        scale: Any = None,
+        joint: bool = False,
+    ) -> None:
         if not isinstance(X0, Polytope):
             raise ModelError(f"X0: expected a Polytope, got {type(X0).__name__}")
         N = integer(N, "N", low=1)
         if method not in ("template", "exact"):
             raise ModelError(f"method: expected 'template' or 'exact', got {method!r}")
-        try:   # no vertex only when the Chebyshev LP finds the set empty (_enumerate_vertices)
+        try:  # no vertex only when the Chebyshev LP finds the set empty (_enumerate_vertices)
             V0 = X0.vertices()
         except UnboundedSetError:
-            raise UnboundedSetError("X0: the initial set Set(M_0, m_0) is unbounded; "
-                                    "give finite bounds on every state") from None
+            raise UnboundedSetError(
+                "X0: the initial set Set(M_0, m_0) is unbounded; give finite bounds on every state"
+            ) from None
         if V0.shape[0] == 0:
             raise EmptySetError("X0: the initial set Set(M_0, m_0) is empty")
         self.N = int(N)
         self.method = method
         self.template = None if template is None else np.asarray(template, dtype=float)
-        if self.template is not None and (self.template.ndim != 2 or self.template.shape[1] != X0.dim):
+        if self.template is not None and (
+            self.template.ndim != 2 or self.template.shape[1] != X0.dim
+        ):
             raise ShapeError(f"template: expected shape (p, {X0.dim}), got {self.template.shape}")
         if scale is None:
             self._s = None
@@ -358,7 +432,7 @@ class SetValuedObserver:
                 raise ModelError(f"scale: expected {X0.dim} positive numbers, got {sc}")
             self._s = sc
             X0, V0 = Polytope(X0.M * sc[None, :], X0.m), V0 / sc[None, :]
-            if self.template is not None:   # D x = (D S) z
+            if self.template is not None:  # D x = (D S) z
                 self.template = self.template * sc[None, :]
         self.margin = real(margin, "margin", low=0.0, what="a non-negative relative inflation")
         self.strip_before_hull = bool(strip_before_hull)
@@ -396,7 +470,9 @@ class SetValuedObserver:
         """Initialise with another observer's current history (Architecture II, §4.2)."""
         if other.empty or not other.history:
             raise EmptySetError("other: the observer to copy from has no non-empty set")
-        if (self._s is None) != (other._s is None) or (self._s is not None and np.any(self._s != other._s)):
+        if (self._s is None) != (other._s is None) or (
+            self._s is not None and np.any(self._s != other._s)
+        ):
             raise ModelError("other: expected an observer with the same state scaling")
         self.history = [_Entry(e.X, e.V, e.model, e.u, e.P) for e in other.history]
         self.empty = False
@@ -429,13 +505,22 @@ class SetValuedObserver:
         """Warn once if an option that can lose the true state meets an uncertain A (module docstring)."""
         if self._warned or model.A_unc.shape[0] == 0:
             return
-        option = ("strip_before_hull=True" if self.method == "exact" and self.strip_before_hull else
-                  "joint=True" if self.method == "template" and self.joint and self.N > 1 else None)
+        option = (
+            "strip_before_hull=True"
+            if self.method == "exact" and self.strip_before_hull
+            else "joint=True"
+            if self.method == "template" and self.joint and self.N > 1
+            else None
+        )
         if option is not None:
             self._warned = True
-            warnings.warn(f"{option}: with an uncertain A (A_unc has {model.A_unc.shape[0]} directions) the set can "
-                          f"lose the true state, so an empty set is no proof of a fault; use the default "
-                          f"{option.split('=')[0]}=False for detection", UnsoundOptionWarning, stacklevel=3)
+            warnings.warn(
+                f"{option}: with an uncertain A (A_unc has {model.A_unc.shape[0]} directions) the set can "
+                f"lose the true state, so an empty set is no proof of a fault; use the default "
+                f"{option.split('=')[0]}=False for detection",
+                UnsoundOptionWarning,
+                stacklevel=3,
+            )
 
     def _wrap(self, X: Polytope | None) -> Polytope | None:
         return None if X is None else self.current
@@ -449,10 +534,17 @@ class SetValuedObserver:
         s = self._s
         if s is None:
             return model
-        T = s[None, :] / s[:, None]   # S^-1 A S
-        return SVOModel(A=model.A * T, C=model.C * s[None, :], B=model.B / s[:, None], L=model.L / s[:, None],
-                        noise=model.noise, A_unc=model.A_unc * T[None], B_unc=model.B_unc / s[None, :, None],
-                        C_unc=model.C_unc * s[None, None, :])
+        T = s[None, :] / s[:, None]  # S^-1 A S
+        return SVOModel(
+            A=model.A * T,
+            C=model.C * s[None, :],
+            B=model.B / s[:, None],
+            L=model.L / s[:, None],
+            noise=model.noise,
+            A_unc=model.A_unc * T[None],
+            B_unc=model.B_unc / s[None, :, None],
+            C_unc=model.C_unc * s[None, None, :],
+        )
 
     def _push(self, X: Polytope | None) -> Polytope | None:
         if X is None:
@@ -463,7 +555,7 @@ class SetValuedObserver:
             self.empty = True
             return None
         self.history.insert(0, _Entry(X, V))
-        del self.history[self.N + 1:]
+        del self.history[self.N + 1 :]
         return X
 
     def _strip(self, X: Polytope, model: SVOModel, y: np.ndarray, V: np.ndarray) -> Polytope:
@@ -481,7 +573,9 @@ class SetValuedObserver:
         vals = np.abs(np.einsum("cyn,vn->cyv", model.C_unc, V)).max(axis=2)  # (n_C, n_y)
         return vals.sum(axis=0)
 
-    def _propagations(self, entries: list[_Entry]) -> list[list[tuple[np.ndarray, np.ndarray, np.ndarray]]]:
+    def _propagations(
+        self, entries: list[_Entry]
+    ) -> list[list[tuple[np.ndarray, np.ndarray, np.ndarray]]]:
         """For each horizon j = 0..N'-1 and each Delta-vertex sequence of length j+1 (most recent step
         first): (Phi, c, G) such that x(k+1) in Phi X(k-j) + c + G [-1, 1]^g (eqs. (3)-(4))."""
         out = []
@@ -490,11 +584,14 @@ class SetValuedObserver:
             model, u = e.model, e.u
             G_step = model.generators(u)
             Bu = model.B @ u
-            if j == 0:   # x(k+1) = A_v x(k) + B u(k) + G s
+            if j == 0:  # x(k+1) = A_v x(k) + B u(k) + G s
                 level = [(Av, Bu, G_step) for Av in model.vertex_matrices()]
-            else:        # Phi maps x(k-j+1) to x(k+1); add step k-j
-                level = [(Phi @ Av, c + Phi @ Bu, np.column_stack([G, Phi @ G_step]))
-                         for Phi, c, G in level for Av in model.vertex_matrices()]
+            else:  # Phi maps x(k-j+1) to x(k+1); add step k-j
+                level = [
+                    (Phi @ Av, c + Phi @ Bu, np.column_stack([G, Phi @ G_step]))
+                    for Phi, c, G in level
+                    for Av in model.vertex_matrices()
+                ]
             out.append(level)
         return out
 
@@ -514,7 +611,7 @@ class SetValuedObserver:
         b_ub = [np.zeros(0)]
         for j, e in enumerate(entries[:Np]):
             blk = np.zeros((e.X.n_facets, nv))
-            blk[:, n * (j + 1):n * (j + 2)] = e.X.M
+            blk[:, n * (j + 1) : n * (j + 2)] = e.X.M
             A_ub.append(blk)
             b_ub.append(e.X.m)
         A_ub, b_ub = np.vstack(A_ub), np.concatenate(b_ub)
@@ -528,15 +625,17 @@ class SetValuedObserver:
                 Phi_j, c_j, G_j = props[j][iv // (reps[-1] // reps[j])]
                 row = np.zeros((n, nv))
                 row[:, :n] = np.eye(n)
-                row[:, n * (j + 1):n * (j + 2)] = -Phi_j
-                row[:, n * (Np + 1):n * (Np + 1) + widths[j]] = -G[:, :widths[j]]
+                row[:, n * (j + 1) : n * (j + 2)] = -Phi_j
+                row[:, n * (Np + 1) : n * (Np + 1) + widths[j]] = -G[:, : widths[j]]
                 A_eq.append(row)
                 b_eq.append(c_j)
             A_eq, b_eq = np.vstack(A_eq), np.concatenate(b_eq)
             h = np.maximum(h, _lp_maxima(Dall, A_ub, b_ub, A_eq, b_eq, bounds))
         return h
 
-    def _update_template(self, entries: list[_Entry], model_next: SVOModel, y: np.ndarray) -> Polytope | None:
+    def _update_template(
+        self, entries: list[_Entry], model_next: SVOModel, y: np.ndarray
+    ) -> Polytope | None:
         D = self.template if self.template is not None else default_template(self.n, model_next.C)
         Cu = model_next.C_unc.reshape(-1, self.n)
         Dall = np.vstack([D, Cu, -Cu]) if Cu.size else D
@@ -550,21 +649,28 @@ class SetValuedObserver:
             for j, level in enumerate(props):
                 V = entries[j].V
                 # support of co_v{Prop_j(v)} = max over the Delta-vertex sequences v (eq. (4))
-                hj = np.max([(V @ (Dall @ Phi).T).max(axis=0) + Dall @ c + np.abs(Dall @ G).sum(axis=1)
-                             for Phi, c, G in level], axis=0)
+                hj = np.max(
+                    [
+                        (V @ (Dall @ Phi).T).max(axis=0) + Dall @ c + np.abs(Dall @ G).sum(axis=1)
+                        for Phi, c, G in level
+                    ],
+                    axis=0,
+                )
                 h = np.minimum(h, hj)  # intersection over the horizon: take the tightest bound
         h = h + self.margin * (1.0 + np.abs(h))
         p = D.shape[0]
         nb = model_next.noise.copy()
         if Cu.size:
             q = Cu.shape[0]
-            rho = np.maximum(h[p:p + q], h[p + q:p + 2 * q])  # max |C_c x| over the prediction
+            rho = np.maximum(h[p : p + q], h[p + q : p + 2 * q])  # max |C_c x| over the prediction
             nb = nb + rho.reshape(model_next.C_unc.shape[:2]).sum(axis=0)
         nb = nb * (1.0 + self.margin) + self.margin
         C = model_next.C
         return Polytope(np.vstack([D, C, -C]), np.concatenate([h[:p], nb + y, nb - y]))
 
-    def _update_exact(self, entries: list[_Entry], model_next: SVOModel, y: np.ndarray) -> Polytope | None:
+    def _update_exact(
+        self, entries: list[_Entry], model_next: SVOModel, y: np.ndarray
+    ) -> Polytope | None:
         # Level j is co over the 2^(n_A (j+1)) vertex sequences of {Phi_v X̂(k-j) + c_v + G_v [-1, 1]^g}.
         # Linear maps and Minkowski sums commute with convex hulls, so it is one step (k) of level
         # j-1 of the previous update: each entry keeps the points spanning its propagation so far
@@ -577,8 +683,10 @@ class SetValuedObserver:
         per_vertex = []
         for j, e in enumerate(entries):
             P = e.V if e.P is None else e.P
-            imgs = [((P @ Av.T + Bu)[:, None, :] + corners[None, :, :]).reshape(-1, self.n)
-                    for Av in model.vertex_matrices()]
+            imgs = [
+                ((P @ Av.T + Bu)[:, None, :] + corners[None, :, :]).reshape(-1, self.n)
+                for Av in model.vertex_matrices()
+            ]
             if j == 0:
                 imgs0 = imgs
             # co_v{Prop_j(v)}: hull of the union of the vertex images (qhull / cddlib)
@@ -592,15 +700,21 @@ class SetValuedObserver:
             # the paper's literal reading: co_v{Prop_0(v) ∩ S}; can exclude the true state (see docs)
             for pts in imgs0:
                 M, m = _hull_hrep(pts)
-                Xv = Polytope(M, m + self.margin * (1.0 + np.abs(m))).intersect_strip(model_next.C, y, nb)
+                Xv = Polytope(M, m + self.margin * (1.0 + np.abs(m))).intersect_strip(
+                    model_next.C, y, nb
+                )
                 Vv = _enumerate_vertices(Xv.M, Xv.m)
                 if Vv.shape[0]:
                     per_vertex.append(Vv)
             if not per_vertex:
                 return None
             X = Polytope.from_vertices(np.vstack(per_vertex))
-            return X.intersect(Polytope(np.vstack([h[:, :-1] for h in H[1:]]) if len(H) > 1 else X.M[:0],
-                                        np.concatenate([h[:, -1] for h in H[1:]]) if len(H) > 1 else X.m[:0]))
+            return X.intersect(
+                Polytope(
+                    np.vstack([h[:, :-1] for h in H[1:]]) if len(H) > 1 else X.M[:0],
+                    np.concatenate([h[:, -1] for h in H[1:]]) if len(H) > 1 else X.m[:0],
+                )
+            )
         Hs = np.vstack(H)
         X = Polytope(Hs[:, :-1], Hs[:, -1]).intersect_strip(model_next.C, y, nb)
         # only the vertices feed the next step: no second hull for an irredundant H-representation
@@ -646,9 +760,19 @@ class SVORun:
 
 
 @single_threaded_blas
-def run_svo(models: ModelSpec, u: Any, y: Any, X0: Polytope, *, N: int = 1, method: str = "template",
-            template: np.ndarray | None = None, keep_sets: bool = False, scale: Any = None,
-            joint: bool = False) -> SVORun:
+def run_svo(
+    models: ModelSpec,
+    u: Any,
+    y: Any,
+    X0: Polytope,
+    *,
+    N: int = 1,
+    method: str = "template",
+    template: np.ndarray | None = None,
+    keep_sets: bool = False,
+    scale: Any = None,
+    joint: bool = False,
+) -> SVORun:
     """Run an SVO over a record: X̂(0), ..., X̂(T), stopping at the first empty set.
 
     Parameters
@@ -672,7 +796,9 @@ def run_svo(models: ModelSpec, u: Any, y: Any, X0: Polytope, *, N: int = 1, meth
     """
     y = _arr("y", y, 2)
     if y.shape[0] == 0:
-        raise ShapeError(f"y: expected at least one measurement y(0) (shape (T+1, n_y), T >= 0), got shape {y.shape}")
+        raise ShapeError(
+            f"y: expected at least one measurement y(0) (shape (T+1, n_y), T >= 0), got shape {y.shape}"
+        )
     T = y.shape[0] - 1
     u = _arr("u", np.asarray(u, dtype=float).reshape(T, -1) if np.size(u) == 0 else u, 2)
     if u.shape[0] != T:
@@ -731,7 +857,9 @@ class FDIResult:
 def _bank(named_models: Mapping[str, ModelSpec], u, y, X0, N, method, template):
     y = _arr("y", y, 2)
     if y.shape[0] == 0:
-        raise ShapeError(f"y: expected at least one measurement y(0) (shape (T+1, n_y), T >= 0), got shape {y.shape}")
+        raise ShapeError(
+            f"y: expected at least one measurement y(0) (shape (T+1, n_y), T >= 0), got shape {y.shape}"
+        )
     T = y.shape[0] - 1
     u = _arr("u", u, 2)
     if u.shape[0] != T:
@@ -740,9 +868,19 @@ def _bank(named_models: Mapping[str, ModelSpec], u, y, X0, N, method, template):
 
 
 @single_threaded_blas
-def run_architecture_i(nominal: ModelSpec, faults: Mapping[str, ModelSpec], u: Any, y: Any, X0: Polytope,
-                       *, N: int = 1, method: str = "template", template: np.ndarray | None = None,
-                       stop_when_isolated: bool = True, scale: Any = None) -> FDIResult:
+def run_architecture_i(
+    nominal: ModelSpec,
+    faults: Mapping[str, ModelSpec],
+    u: Any,
+    y: Any,
+    X0: Polytope,
+    *,
+    N: int = 1,
+    method: str = "template",
+    template: np.ndarray | None = None,
+    stop_when_isolated: bool = True,
+    scale: Any = None,
+) -> FDIResult:
     """Architecture I (§4.1, Fig. 6(a)): a nominal SVO for detection, and one SVO per fault whose
     model also contains the nominal plant; a fault is isolated when only one fault SVO is non-empty.
 
@@ -756,7 +894,9 @@ def run_architecture_i(nominal: ModelSpec, faults: Mapping[str, ModelSpec], u: A
     """
     y, u, T = _bank({"nominal": nominal, **faults}, u, y, X0, N, method, template)
     specs = {"nominal": nominal, **faults}
-    svos = {k: SetValuedObserver(X0, N=N, method=method, template=template, scale=scale) for k in specs}
+    svos = {
+        k: SetValuedObserver(X0, N=N, method=method, template=template, scale=scale) for k in specs
+    }
     empty_at: dict[str, int | None] = {k: None for k in specs}
     for name, svo in svos.items():
         if svo.start(_model_at(specs[name], 0), y[0]) is None:
@@ -766,7 +906,10 @@ def run_architecture_i(nominal: ModelSpec, faults: Mapping[str, ModelSpec], u: A
     for k in range(T + 1):
         if k > 0:
             for name, svo in svos.items():
-                if empty_at[name] is None and svo.update(_model_at(specs[name], k - 1), u[k - 1], y[k]) is None:
+                if (
+                    empty_at[name] is None
+                    and svo.update(_model_at(specs[name], k - 1), u[k - 1], y[k]) is None
+                ):
                     empty_at[name] = k
         if det is None and empty_at["nominal"] is not None:
             det = k
@@ -781,10 +924,20 @@ def run_architecture_i(nominal: ModelSpec, faults: Mapping[str, ModelSpec], u: A
 
 
 @single_threaded_blas
-def run_architecture_ii(nominal: ModelSpec, global_model: ModelSpec, faults: Mapping[str, ModelSpec], u: Any,
-                        y: Any, X0: Polytope, *, N: int = 1, method: str = "template",
-                        template: np.ndarray | None = None, stop_when_isolated: bool = True,
-                        scale: Any = None) -> FDIResult:
+def run_architecture_ii(
+    nominal: ModelSpec,
+    global_model: ModelSpec,
+    faults: Mapping[str, ModelSpec],
+    u: Any,
+    y: Any,
+    X0: Polytope,
+    *,
+    N: int = 1,
+    method: str = "template",
+    template: np.ndarray | None = None,
+    stop_when_isolated: bool = True,
+    scale: Any = None,
+) -> FDIResult:
     """Architecture II (§4.2, Fig. 6(b)): nominal SVO for detection, a Global SVO valid for the
     healthy and every faulty plant, and fault SVOs started from the Global SVO's set at detection.
 
@@ -797,7 +950,9 @@ def run_architecture_ii(nominal: ModelSpec, global_model: ModelSpec, faults: Map
     global_model : SVOModel, sequence or callable
         A model valid for the healthy plant and for every fault model.
     """
-    y, u, T = _bank({"nominal": nominal, "global": global_model, **faults}, u, y, X0, N, method, template)
+    y, u, T = _bank(
+        {"nominal": nominal, "global": global_model, **faults}, u, y, X0, N, method, template
+    )
     nom = SetValuedObserver(X0, N=N, method=method, template=template, scale=scale)
     glob = SetValuedObserver(X0, N=N, method=method, template=template, scale=scale)
     empty_at: dict[str, int | None] = {"nominal": None, "global": None, **{f: None for f in faults}}
@@ -810,12 +965,21 @@ def run_architecture_ii(nominal: ModelSpec, global_model: ModelSpec, faults: Map
     isolated = None
     for k in range(T + 1):
         if k > 0:
-            if empty_at["nominal"] is None and nom.update(_model_at(nominal, k - 1), u[k - 1], y[k]) is None:
+            if (
+                empty_at["nominal"] is None
+                and nom.update(_model_at(nominal, k - 1), u[k - 1], y[k]) is None
+            ):
                 empty_at["nominal"] = k
-            if empty_at["global"] is None and glob.update(_model_at(global_model, k - 1), u[k - 1], y[k]) is None:
+            if (
+                empty_at["global"] is None
+                and glob.update(_model_at(global_model, k - 1), u[k - 1], y[k]) is None
+            ):
                 empty_at["global"] = k
             for name, svo in fsvos.items():
-                if empty_at[name] is None and svo.update(_model_at(faults[name], k - 1), u[k - 1], y[k]) is None:
+                if (
+                    empty_at[name] is None
+                    and svo.update(_model_at(faults[name], k - 1), u[k - 1], y[k]) is None
+                ):
                     empty_at[name] = k
         if det is None and empty_at["nominal"] is not None:
             det = k
@@ -893,8 +1057,16 @@ class ModelSequence:
         Bu = np.zeros((T, 0) + B.shape[1:]) if self.B_unc is None else _arr("B_unc", self.B_unc, 4)
         if Bu.shape[:1] + Bu.shape[2:] != B.shape:
             raise ShapeError(f"B_unc: expected shape ({T}, n_B, {n}, {B.shape[2]}), got {Bu.shape}")
-        for name, val in (("A", A), ("B", B), ("C", C), ("L", L), ("noise", noise), ("A_unc", Au),
-                          ("B_unc", Bu), ("_vertex_A", _vertex_matrices(A, Au))):
+        for name, val in (
+            ("A", A),
+            ("B", B),
+            ("C", C),
+            ("L", L),
+            ("noise", noise),
+            ("A_unc", Au),
+            ("B_unc", Bu),
+            ("_vertex_A", _vertex_matrices(A, Au)),
+        ):
             val.flags.writeable = False
             object.__setattr__(self, name, val)
 
@@ -905,8 +1077,16 @@ class ModelSequence:
         """The model of step ``k``."""
         if not 0 <= k < len(self):
             raise ModelError(f"k: expected a step in [0, {len(self)}), got {k}")
-        return SVOModel._checked_parts(self.A[k], self.C, self.B[k], self.L, self.noise, self.A_unc[k],
-                                       self.B_unc[k], self._vertex_A[k])
+        return SVOModel._checked_parts(
+            self.A[k],
+            self.C,
+            self.B[k],
+            self.L,
+            self.noise,
+            self.A_unc[k],
+            self.B_unc[k],
+            self._vertex_A[k],
+        )
 
 
 def _dot(M: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -937,13 +1117,13 @@ def _vertices_many(M: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray
         X = np.zeros((len(Vs), K, M.shape[1]))
         F = np.zeros((len(Vs), K), dtype=bool)
         for i, V in enumerate(Vs):
-            X[i, :len(V)], F[i, :len(V)] = V, True
+            X[i, : len(V)], F[i, : len(V)] = V, True
         return X, F
     mp = np.empty((m.shape[0], m.shape[1] + 1))
     np.divide(m, b.norms, out=mp[:, :-1])
     mp[:, -1] = np.inf
-    mu = mp[:, b.pad].min(axis=2)                                  # (B, q) tightest offset per normal
-    X = np.einsum("kij,bkj->bki", b.inv, mu[:, b.idx])               # (B, K, n): inv_k mu_k
+    mu = mp[:, b.pad].min(axis=2)  # (B, q) tightest offset per normal
+    X = np.einsum("kij,bkj->bki", b.inv, mu[:, b.idx])  # (B, K, n): inv_k mu_k
     tol = 1e-12 * (1.0 + np.abs(mu).max(axis=1))
     # one (K, n) x (n, q) product per set: the same shapes, hence the same rounding, in any batch
     F = (np.matmul(X, b.U.T) <= mu[:, None, :] + tol[:, None, None]).all(axis=2)
@@ -954,7 +1134,7 @@ def _vertices_many(M: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray
         if len(V) > X.shape[1]:
             X = np.concatenate([X, np.zeros((X.shape[0], len(V) - X.shape[1], X.shape[2]))], axis=1)
             F = np.concatenate([F, np.zeros((F.shape[0], len(V) - F.shape[1]), dtype=bool)], axis=1)
-        X[i, :len(V)], F[i, :len(V)] = V, True
+        X[i, : len(V)], F[i, : len(V)] = V, True
     return X, F
 
 
@@ -992,8 +1172,16 @@ class TemplateBatch:
         Observers whose set is not empty.
     """
 
-    def __init__(self, models: Sequence[ModelSequence], u: Any, y: Any, X0: Polytope, *,
-                 template: np.ndarray | None = None, margin: float = 1e-9) -> None:
+    def __init__(
+        self,
+        models: Sequence[ModelSequence],
+        u: Any,
+        y: Any,
+        X0: Polytope,
+        *,
+        template: np.ndarray | None = None,
+        margin: float = 1e-9,
+    ) -> None:
         if not isinstance(X0, Polytope):
             raise ModelError(f"X0: expected a Polytope, got {type(X0).__name__}")
         models = list(models)
@@ -1004,13 +1192,21 @@ class TemplateBatch:
         Bn, T = y.shape[0], y.shape[1] - 1
         u = _arr("u", u, 3)
         if u.shape[:2] != (Bn, T) or len(models) != Bn:
-            raise ShapeError(f"u, models: expected u of shape ({Bn}, {T}, n_u) and {Bn} models (from y "
-                             f"{y.shape}), got u {u.shape} and {len(models)} models")
+            raise ShapeError(
+                f"u, models: expected u of shape ({Bn}, {T}, n_u) and {Bn} models (from y "
+                f"{y.shape}), got u {u.shape} and {len(models)} models"
+            )
         for b, mdl in enumerate(models):
-            if len(mdl) < T or mdl.A.shape[1] != X0.dim or mdl.C.shape[0] != y.shape[2] \
-                    or mdl.B.shape[2] != u.shape[2]:
-                raise ShapeError(f"models[{b}]: expected at least {T} steps, n = {X0.dim}, n_y = {y.shape[2]}, "
-                                 f"n_u = {u.shape[2]}, got A {mdl.A.shape}, C {mdl.C.shape}, B {mdl.B.shape}")
+            if (
+                len(mdl) < T
+                or mdl.A.shape[1] != X0.dim
+                or mdl.C.shape[0] != y.shape[2]
+                or mdl.B.shape[2] != u.shape[2]
+            ):
+                raise ShapeError(
+                    f"models[{b}]: expected at least {T} steps, n = {X0.dim}, n_y = {y.shape[2]}, "
+                    f"n_u = {u.shape[2]}, got A {mdl.A.shape}, C {mdl.C.shape}, B {mdl.B.shape}"
+                )
         self.margin = real(margin, "margin", low=0.0, what="a non-negative relative inflation")
         self.T, self.n, self.u, self.y, self.X0 = T, X0.dim, u, y, X0
         self.template = None if template is None else _arr("template", template, 2)
@@ -1025,23 +1221,34 @@ class TemplateBatch:
             first = models[idx[0]]
             D = self.template if self.template is not None else default_template(self.n, first.C)
             L = np.stack([models[b].L for b in idx])
-            self._groups.append({
-                "idx": np.array(idx), "D": D, "C": first.C,
-                "M": np.vstack([D, first.C, -first.C]),
-                "vA": np.stack([models[b]._vertex_A[:T] for b in idx]),
-                "B": np.stack([models[b].B[:T] for b in idx]),
-                "B_unc": np.stack([models[b].B_unc[:T] for b in idx]),
-                "noise": np.stack([models[b].noise for b in idx]),
-                # sum_c |D L|_{:, c}: the fixed columns of the generators (disturbance)
-                "sL": np.abs((D[None, :, :, None] * L[:, None, :, :]).sum(axis=2)).sum(axis=2),
-                "V": None, "F": None})
+            self._groups.append(
+                {
+                    "idx": np.array(idx),
+                    "D": D,
+                    "C": first.C,
+                    "M": np.vstack([D, first.C, -first.C]),
+                    "vA": np.stack([models[b]._vertex_A[:T] for b in idx]),
+                    "B": np.stack([models[b].B[:T] for b in idx]),
+                    "B_unc": np.stack([models[b].B_unc[:T] for b in idx]),
+                    "noise": np.stack([models[b].noise for b in idx]),
+                    # sum_c |D L|_{:, c}: the fixed columns of the generators (disturbance)
+                    "sL": np.abs((D[None, :, :, None] * L[:, None, :, :]).sum(axis=2)).sum(axis=2),
+                    "V": None,
+                    "F": None,
+                }
+            )
 
     def start(self) -> np.ndarray:
         """X̂(0) = X(0) ∩ strip of y(0) for every observer; returns the mask of empty ones."""
         for g in self._groups:
             y0 = self.y[g["idx"], 0]
-            m = np.column_stack([np.broadcast_to(self.X0.m, (len(y0), self.X0.m.size)), g["noise"] + y0,
-                                 g["noise"] - y0])
+            m = np.column_stack(
+                [
+                    np.broadcast_to(self.X0.m, (len(y0), self.X0.m.size)),
+                    g["noise"] + y0,
+                    g["noise"] - y0,
+                ]
+            )
             g["V"], g["F"] = _vertices_many(np.vstack([self.X0.M, g["C"], -g["C"]]), m)
             self.alive[g["idx"]] = g["F"].any(axis=1)
         return ~self.alive
@@ -1062,17 +1269,19 @@ class TemplateBatch:
     def _step(self, g: dict, a: np.ndarray, k: int) -> None:
         D, obs = g["D"], g["idx"][a]
         V, F = g["V"][a], g["F"][a]
-        if not F.all():  # the live vertex candidates of each set first (padded with its first vertex)
+        if (
+            not F.all()
+        ):  # the live vertex candidates of each set first (padded with its first vertex)
             count = F.sum(axis=1)
-            order = np.argsort(~F, axis=1, kind="stable")[:, :count.max()]
+            order = np.argsort(~F, axis=1, kind="stable")[:, : count.max()]
             order = np.where(np.arange(order.shape[1])[None] < count[:, None], order, order[:, :1])
-            V = np.take_along_axis(V, order[:, :, None], axis=1)                  # (a, v, n)
-        DPhi = np.matmul(D, g["vA"][a, k - 1])                                    # (a, 2^n_A, p, n): D A_v
-        W = _dot(DPhi[:, :, None], V[:, None])                                   # (a, 2^n_A, v, p)
+            V = np.take_along_axis(V, order[:, :, None], axis=1)  # (a, v, n)
+        DPhi = np.matmul(D, g["vA"][a, k - 1])  # (a, 2^n_A, p, n): D A_v
+        W = _dot(DPhi[:, :, None], V[:, None])  # (a, 2^n_A, v, p)
         uk = self.u[obs, k - 1]
-        c = _dot(D, _dot(g["B"][a, k - 1], uk))                                  # D B u
+        c = _dot(D, _dot(g["B"][a, k - 1], uk))  # D B u
         s = g["sL"][a]
-        Gu = _dot(g["B_unc"][a, k - 1], uk[:, None, :])                           # (a, n_B, n): B_b u
+        Gu = _dot(g["B_unc"][a, k - 1], uk[:, None, :])  # (a, n_B, n): B_b u
         for j in range(Gu.shape[1]):
             s = s + np.abs(_dot(D, Gu[:, j]))
         h = W.reshape(len(a), -1, W.shape[-1]).max(axis=1) + c + s
@@ -1084,8 +1293,8 @@ class TemplateBatch:
             pad = X.shape[1] - g["V"].shape[1]
             g["V"] = np.concatenate([g["V"], np.zeros((len(g["idx"]), pad, self.n))], axis=1)
             g["F"] = np.concatenate([g["F"], np.zeros((len(g["idx"]), pad), dtype=bool)], axis=1)
-        g["V"][a, :X.shape[1]], g["F"][a, :X.shape[1]] = X, Fn
-        g["F"][a, X.shape[1]:] = False
+        g["V"][a, : X.shape[1]], g["F"][a, : X.shape[1]] = X, Fn
+        g["F"][a, X.shape[1] :] = False
         self.alive[obs] = Fn.any(axis=1)
 
     def bounding_boxes(self) -> tuple[np.ndarray, np.ndarray]:
@@ -1119,8 +1328,15 @@ class SVOBatchRun:
 
 
 @single_threaded_blas
-def run_svo_many(models: Sequence[ModelSequence], u: Any, y: Any, X0: Polytope, *,
-                 template: np.ndarray | None = None, bounds: bool = False) -> SVOBatchRun:
+def run_svo_many(
+    models: Sequence[ModelSequence],
+    u: Any,
+    y: Any,
+    X0: Polytope,
+    *,
+    template: np.ndarray | None = None,
+    bounds: bool = False,
+) -> SVOBatchRun:
     """:func:`run_svo` (template rule, N = 1) for many records at once (:class:`TemplateBatch`).
 
     Parameters
@@ -1159,8 +1375,15 @@ def run_svo_many(models: Sequence[ModelSequence], u: Any, y: Any, X0: Polytope, 
 
 
 @single_threaded_blas
-def run_architecture_i_many(nominal: Sequence[ModelSequence], faults: Sequence[Mapping[str, ModelSequence]],
-                            u: Any, y: Any, X0: Polytope, *, template: np.ndarray | None = None) -> list[FDIResult]:
+def run_architecture_i_many(
+    nominal: Sequence[ModelSequence],
+    faults: Sequence[Mapping[str, ModelSequence]],
+    u: Any,
+    y: Any,
+    X0: Polytope,
+    *,
+    template: np.ndarray | None = None,
+) -> list[FDIResult]:
     """:func:`run_architecture_i` (template rule, N = 1, ``stop_when_isolated=True``) for many
     records at once: every SVO of every bank in one :class:`TemplateBatch`, each bank stopped
     where :func:`run_architecture_i` stops it.
@@ -1192,9 +1415,11 @@ def run_architecture_i_many(nominal: Sequence[ModelSequence], faults: Sequence[M
         raise ModelError(f"faults: expected the same fault names {names} for every record")
     y = _arr("y", y, 3)
     u = _arr("u", u, 3)
-    per = 1 + len(names)                           # observers per record: nominal, then the faults
+    per = 1 + len(names)  # observers per record: nominal, then the faults
     models = [m for r in range(R) for m in [nominal[r], *(faults[r][f] for f in names)]]
-    bank = TemplateBatch(models, np.repeat(u, per, axis=0), np.repeat(y, per, axis=0), X0, template=template)
+    bank = TemplateBatch(
+        models, np.repeat(u, per, axis=0), np.repeat(y, per, axis=0), X0, template=template
+    )
     empty_at = np.where(bank.start(), 0, -1).reshape(R, per)
     det = np.full(R, -1)
     iso = np.full(R, -1)
@@ -1214,8 +1439,15 @@ def run_architecture_i_many(nominal: Sequence[ModelSequence], faults: Sequence[M
         e = {name: None if v < 0 else int(v) for name, v in zip(["nominal", *names], empty_at[r])}
         alive = [f for f in names if e[f] is None]
         isolated = alive[0] if iso[r] >= 0 else None
-        out.append(FDIResult("I", None if det[r] < 0 else int(det[r]), None if iso[r] < 0 else int(iso[r]),
-                             isolated, e))
+        out.append(
+            FDIResult(
+                "I",
+                None if det[r] < 0 else int(det[r]),
+                None if iso[r] < 0 else int(iso[r]),
+                isolated,
+                e,
+            )
+        )
     return out
 
 
@@ -1223,7 +1455,9 @@ def run_architecture_i_many(nominal: Sequence[ModelSequence], faults: Sequence[M
 
 
 def _replace(model: SVOModel, **changes: Any) -> SVOModel:
-    fields = {k: getattr(model, k) for k in ("A", "C", "B", "L", "noise", "A_unc", "B_unc", "C_unc")}
+    fields = {
+        k: getattr(model, k) for k in ("A", "C", "B", "L", "noise", "A_unc", "B_unc", "C_unc")
+    }
     fields.update(changes)
     return SVOModel(**fields)
 

@@ -49,8 +49,23 @@ from fdi_lib.models import LTVModel, ltv_model
 from fdi_lib.simulate import pi_controller
 from fdi_lib.systems.zb2014_unstable import KI, KP, SETPOINT
 
-__all__ = ["N_STEPS", "G", "H", "E", "PSI", "Q", "R", "F_k", "bz_model", "controller",
-           "nonparametric_profile", "parametric_path", "drift_path", "DRIFT_DIRECTION", "state_disturbance"]
+__all__ = [
+    "N_STEPS",
+    "G",
+    "H",
+    "E",
+    "PSI",
+    "Q",
+    "R",
+    "F_k",
+    "bz_model",
+    "controller",
+    "nonparametric_profile",
+    "parametric_path",
+    "drift_path",
+    "DRIFT_DIRECTION",
+    "state_disturbance",
+]
 
 N_STEPS = 400
 G = np.array([[0.0], [1.0], [0.0]])
@@ -83,7 +98,9 @@ def controller() -> Callable[[int, np.ndarray], np.ndarray]:
     return pi_controller(KP, KI, SETPOINT)
 
 
-def nonparametric_profile(n_steps: int, *, size: float, onset: int, period: float = F_PERIOD) -> np.ndarray:
+def nonparametric_profile(
+    n_steps: int, *, size: float, onset: int, period: float = F_PERIOD
+) -> np.ndarray:
     """``f_k = size * sin(2 pi (k - onset) / period) 1{k >= onset}``, shape ``(n_steps, 1)``.
 
     Any bounded signal would do: the point of a non-parametric fault is that the
@@ -113,7 +130,9 @@ def parametric_path(n_steps: int, *, theta: np.ndarray, onset: int, ramp: int = 
 DRIFT_DIRECTION = np.array([1.0, -0.5])
 
 
-def drift_path(n_steps: int, *, delta: float, onset: int, direction: np.ndarray = DRIFT_DIRECTION) -> np.ndarray:
+def drift_path(
+    n_steps: int, *, delta: float, onset: int, direction: np.ndarray = DRIFT_DIRECTION
+) -> np.ndarray:
     """Slowly varying ``theta_k = delta (k - onset)_+ d / ||d||_inf``, shape ``(n_steps, m)``.
 
     The increments satisfy ``||e_k||_inf = delta`` after ``onset`` (eqs. 20-21 with the

@@ -70,31 +70,64 @@ import warnings
 from fdi_lib.errors import EnvelopeWarning, ModelError, ShapeError
 from fdi_lib.threads import single_threaded_blas
 
-__all__ = ["TABLE3", "V_TRIM", "ALPHA_TRIM", "TS", "MU_READING", "NOISE_BOUND", "DIST_ACCEL",
-           "ETA_UNITS", "ETA_UNIT", "FAULT_MODES", "ETA_TRIM", "RHO", "pitch_authority",
-           "FAULTS", "SCENARIOS", "lpv_matrices", "zoh", "discretize", "measurement_matrix",
-           "trim_state", "measure", "plant_derivative", "simulate_many", "LQG", "design_lqg", "fault_profile",
-           "UAVRun", "simulate", "svo_models", "svo_scale", "discretize_many", "excitation",
-           "ENVELOPE_AIRSPEED", "envelope_exceedance"]
+__all__ = [
+    "TABLE3",
+    "V_TRIM",
+    "ALPHA_TRIM",
+    "TS",
+    "MU_READING",
+    "NOISE_BOUND",
+    "DIST_ACCEL",
+    "ETA_UNITS",
+    "ETA_UNIT",
+    "FAULT_MODES",
+    "ETA_TRIM",
+    "RHO",
+    "pitch_authority",
+    "FAULTS",
+    "SCENARIOS",
+    "lpv_matrices",
+    "zoh",
+    "discretize",
+    "measurement_matrix",
+    "trim_state",
+    "measure",
+    "plant_derivative",
+    "simulate_many",
+    "LQG",
+    "design_lqg",
+    "fault_profile",
+    "UAVRun",
+    "simulate",
+    "svo_models",
+    "svo_scale",
+    "discretize_many",
+    "excitation",
+    "ENVELOPE_AIRSPEED",
+    "envelope_exceedance",
+]
 
 #: Table 3 of the paper (SI units). Only documentary: the LPV model (16) already folds them in.
 TABLE3 = {"S": 2.365, "c": 1.34, "aspect_ratio": 2.047, "m": 39.7, "x_cg": 1.217, "I_y": 10.43}
-V_TRIM = 37.0          #: trim airspeed (m/s), §6
-ALPHA_TRIM = 0.01      #: trim angle of attack (rad), §6
-TS = 0.01              #: sampling period (s), §6
+V_TRIM = 37.0  #: trim airspeed (m/s), §6
+ALPHA_TRIM = 0.01  #: trim angle of attack (rad), §6
+TS = 0.01  #: sampling period (s), §6
 MU_READING = 2.6146e-5  #: our reading of the garbled quadratic coefficient of M_u (eq. 16)
 #: sensor noise bounds |n_i| <= NOISE_BOUND[i]: airspeed (m/s), alpha (rad), theta (rad), q (rad/s)
 NOISE_BOUND = np.array([0.1, np.deg2rad(0.2), np.deg2rad(0.02), np.deg2rad(0.02)])
 #: disturbance accelerations bounds on (u, w, q): m/s^2, m/s^2, rad/s^2
 DIST_ACCEL = np.array([0.2, 0.2, 0.002])
-FAULTS = ("alpha", "elevator", "dynamics")   #: FDI #1, #2, #3 of §6
-SCENARIOS = ("step", "hard", "soft")          #: §6.1, §6.2, §6.3
-ONSET = 0.5                                    #: fault onset time (s)
-ETA_UNITS = ("deg", "rad")   #: readings of the elevator coefficients of (16): per degree or per radian
-ETA_UNIT = "deg"             #: default reading (see the module docstring and :func:`pitch_authority`)
+FAULTS = ("alpha", "elevator", "dynamics")  #: FDI #1, #2, #3 of §6
+SCENARIOS = ("step", "hard", "soft")  #: §6.1, §6.2, §6.3
+ONSET = 0.5  #: fault onset time (s)
+ETA_UNITS = (
+    "deg",
+    "rad",
+)  #: readings of the elevator coefficients of (16): per degree or per radian
+ETA_UNIT = "deg"  #: default reading (see the module docstring and :func:`pitch_authority`)
 FAULT_MODES = ("deviation", "total")  #: where the elevator and M_u faults act (module docstring)
 ETA_TRIM = np.deg2rad(-2.0)  #: assumed trim elevator deflection (rad) of the "total" fault mode
-RHO = 1.225                  #: air density (kg/m^3, sea level) for the coefficient form of M_eta, M_w
+RHO = 1.225  #: air density (kg/m^3, sea level) for the coefficient form of M_eta, M_w
 
 
 def _check_eta_unit(eta_unit: str) -> float:
@@ -107,19 +140,29 @@ def _check_eta_unit(eta_unit: str) -> float:
 def _coefficients(V: float, mu_scale: float = 1.0) -> dict[str, float]:
     """Stability and control derivatives of eq. (16) at airspeed V (m/s)."""
     return {
-        "Xu": -0.00102 * V - 0.009115, "Xw": 0.00018 * V**2 + 0.025 * V - 1.0499, "Xth": -9.67,
-        "Xq": -0.00166 * V**2 + 0.2308 * V - 10.037, "Xeta": 0.026, "Xtau": 24.76,
-        "Zu": -8.66e-5 * V**2 + 0.01249 * V - 0.5699, "Zw": -0.08199 * V - 0.10375,
-        "Zth": -0.001358 * V**2 + 0.1679 * V - 5.4519, "Zq": 1.012 * V - 0.77,
+        "Xu": -0.00102 * V - 0.009115,
+        "Xw": 0.00018 * V**2 + 0.025 * V - 1.0499,
+        "Xth": -9.67,
+        "Xq": -0.00166 * V**2 + 0.2308 * V - 10.037,
+        "Xeta": 0.026,
+        "Xtau": 24.76,
+        "Zu": -8.66e-5 * V**2 + 0.01249 * V - 0.5699,
+        "Zw": -0.08199 * V - 0.10375,
+        "Zth": -0.001358 * V**2 + 0.1679 * V - 5.4519,
+        "Zq": 1.012 * V - 0.77,
         "Zeta": 0.0001159 * V**2 + 4.04e-5 * V - 0.001415,
-        "Mu": mu_scale * (MU_READING * V**2 - 0.003426 * V - 0.1425), "Mw": -0.02817 * V + 0.001135,
-        "Mth": -0.0001475 * V**2 + 0.01824 * V - 0.5922, "Mq": 0.04614 * V - 0.08368,
-        "Meta": 0.00021 * V**2 - 0.00015 * V + 0.005065, "Mtau": -0.294,
+        "Mu": mu_scale * (MU_READING * V**2 - 0.003426 * V - 0.1425),
+        "Mw": -0.02817 * V + 0.001135,
+        "Mth": -0.0001475 * V**2 + 0.01824 * V - 0.5922,
+        "Mq": 0.04614 * V - 0.08368,
+        "Meta": 0.00021 * V**2 - 0.00015 * V + 0.005065,
+        "Mtau": -0.294,
     }
 
 
-def lpv_matrices(V: float, mu_scale: float = 1.0, elevator_eff: float = 1.0, eta_unit: str = ETA_UNIT
-                 ) -> tuple[np.ndarray, np.ndarray]:
+def lpv_matrices(
+    V: float, mu_scale: float = 1.0, elevator_eff: float = 1.0, eta_unit: str = ETA_UNIT
+) -> tuple[np.ndarray, np.ndarray]:
     """Continuous-time A(V_AS), B(V_AS) of eqs. (15)-(16), state (u, w, theta, q), input (eta, tau).
 
     Parameters
@@ -142,18 +185,23 @@ def lpv_matrices(V: float, mu_scale: float = 1.0, elevator_eff: float = 1.0, eta
         raise ModelError(f"V: expected a positive finite airspeed, got {V!r}")
     g = _check_eta_unit(eta_unit) * elevator_eff
     c = _coefficients(float(V), mu_scale)
-    A = np.array([[c["Xu"], c["Xw"], c["Xth"], c["Xq"]],
-                  [c["Zu"], c["Zw"], c["Zth"], c["Zq"]],
-                  [0.0, 0.0, 0.0, 1.0],
-                  [c["Mu"], c["Mw"], c["Mth"], c["Mq"]]])
-    B = np.array([[c["Xeta"] * g, c["Xtau"]],
-                  [c["Zeta"] * g, 0.0],
-                  [0.0, 0.0],
-                  [c["Meta"] * g, c["Mtau"]]])
+    A = np.array(
+        [
+            [c["Xu"], c["Xw"], c["Xth"], c["Xq"]],
+            [c["Zu"], c["Zw"], c["Zth"], c["Zq"]],
+            [0.0, 0.0, 0.0, 1.0],
+            [c["Mu"], c["Mw"], c["Mth"], c["Mq"]],
+        ]
+    )
+    B = np.array(
+        [[c["Xeta"] * g, c["Xtau"]], [c["Zeta"] * g, 0.0], [0.0, 0.0], [c["Meta"] * g, c["Mtau"]]]
+    )
     return A, B
 
 
-def pitch_authority(eta_unit: str = ETA_UNIT, V: float = V_TRIM, rho: float = RHO) -> dict[str, float]:
+def pitch_authority(
+    eta_unit: str = ETA_UNIT, V: float = V_TRIM, rho: float = RHO
+) -> dict[str, float]:
     """Pitch-moment coefficients of the elevator and of the angle of attack at airspeed V.
 
     M_alpha = M_w V (a change of alpha is a change of w = V alpha); the coefficient form divides a
@@ -167,8 +215,13 @@ def pitch_authority(eta_unit: str = ETA_UNIT, V: float = V_TRIM, rho: float = RH
     A, B = lpv_matrices(V, eta_unit=eta_unit)
     M_eta, M_alpha = float(B[3, 0]), float(A[3, 1] * V)
     k = 0.5 * rho * V**2 * TABLE3["S"] * TABLE3["c"] / TABLE3["I_y"]
-    return {"M_eta": M_eta, "M_alpha": M_alpha, "Cm_eta": M_eta / k, "Cm_alpha": M_alpha / k,
-            "ratio": abs(M_eta / M_alpha)}
+    return {
+        "M_eta": M_eta,
+        "M_alpha": M_alpha,
+        "Cm_eta": M_eta / k,
+        "Cm_alpha": M_alpha / k,
+        "ratio": abs(M_eta / M_alpha),
+    }
 
 
 def zoh(A: np.ndarray, B: np.ndarray, Ts: float = TS) -> tuple[np.ndarray, np.ndarray]:
@@ -185,8 +238,13 @@ def _discretize_cached(V: float, mu_scale: float, elevator_eff: float, Ts: float
     return zoh(*lpv_matrices(V, mu_scale, elevator_eff, eta_unit), Ts)
 
 
-def discretize(V: float, mu_scale: float = 1.0, elevator_eff: float = 1.0, Ts: float = TS,
-               eta_unit: str = ETA_UNIT) -> tuple[np.ndarray, np.ndarray]:
+def discretize(
+    V: float,
+    mu_scale: float = 1.0,
+    elevator_eff: float = 1.0,
+    Ts: float = TS,
+    eta_unit: str = ETA_UNIT,
+) -> tuple[np.ndarray, np.ndarray]:
     """(A_d, B_d) of the LPV model (15)-(16) at airspeed V (m/s), zero-order hold with period Ts (s).
 
     Results are memoised (least-recently-used cache) because every SVO of a bank asks for the
@@ -195,8 +253,13 @@ def discretize(V: float, mu_scale: float = 1.0, elevator_eff: float = 1.0, Ts: f
     return _discretize_cached(float(V), float(mu_scale), float(elevator_eff), float(Ts), eta_unit)
 
 
-def discretize_many(V: np.ndarray, mu_scale: float = 1.0, elevator_eff: float = 1.0, Ts: float = TS,
-                    eta_unit: str = ETA_UNIT) -> tuple[np.ndarray, np.ndarray]:
+def discretize_many(
+    V: np.ndarray,
+    mu_scale: float = 1.0,
+    elevator_eff: float = 1.0,
+    Ts: float = TS,
+    eta_unit: str = ETA_UNIT,
+) -> tuple[np.ndarray, np.ndarray]:
     """:func:`discretize` for an array of airspeeds at once (one batched matrix exponential,
     :func:`_expm_many`).
 
@@ -207,7 +270,7 @@ def discretize_many(V: np.ndarray, mu_scale: float = 1.0, elevator_eff: float = 
         raise ModelError(f"V: expected positive finite airspeeds, got min {V.min()!r}")
     P = _polynomial(float(mu_scale), float(elevator_eff), eta_unit)
     E = np.zeros((V.size, 6, 6))
-    E[:, :4, :] = (P[0][None] + V[:, None, None] * P[1][None] + V[:, None, None] ** 2 * P[2][None])
+    E[:, :4, :] = P[0][None] + V[:, None, None] * P[1][None] + V[:, None, None] ** 2 * P[2][None]
     F = _expm_many(E * Ts)
     return F[:, :4, :4], F[:, :4, 4:]
 
@@ -221,10 +284,10 @@ def _expm_many(E: np.ndarray) -> np.ndarray:
     """
     norm = np.abs(E).sum(axis=2).max(axis=1)
     s = np.maximum(0, np.ceil(np.log2(np.maximum(norm, 1e-300) / 0.25))).astype(int)
-    X = E * (0.5 ** s)[:, None, None]
+    X = E * (0.5**s)[:, None, None]
     eye = np.eye(E.shape[1])
     F = np.broadcast_to(eye, E.shape).copy()
-    for k in range(16, 0, -1):   # Horner: I + X (I + X/2 (I + X/3 (...)))
+    for k in range(16, 0, -1):  # Horner: I + X (I + X/2 (I + X/3 (...)))
         F = eye + (X @ F) / k
     for j in range(int(s.max(initial=0))):
         F = np.where((j < s)[:, None, None], F @ F, F)
@@ -264,12 +327,20 @@ def measure(x: np.ndarray) -> np.ndarray:
     xs = trim_state()
     u = xs[0] + x[..., 0]
     w = xs[1] + x[..., 1]
-    return np.stack([np.hypot(u, w) - V_TRIM, np.arctan2(w, u) - ALPHA_TRIM, x[..., 2], x[..., 3]], axis=-1)
+    return np.stack(
+        [np.hypot(u, w) - V_TRIM, np.arctan2(w, u) - ALPHA_TRIM, x[..., 2], x[..., 3]], axis=-1
+    )
 
 
-def plant_derivative(x: np.ndarray, delta: np.ndarray, dist: np.ndarray, mu_scale: float = 1.0,
-                     elevator_eff: float = 1.0, eta_unit: str = ETA_UNIT, fault_mode: str = "deviation"
-                     ) -> np.ndarray:
+def plant_derivative(
+    x: np.ndarray,
+    delta: np.ndarray,
+    dist: np.ndarray,
+    mu_scale: float = 1.0,
+    elevator_eff: float = 1.0,
+    eta_unit: str = ETA_UNIT,
+    fault_mode: str = "deviation",
+) -> np.ndarray:
     """Right-hand side of the nonlinear stand-in plant (deviations from trim).
 
     dx/dt = A(V_AS(x)) x + B(V_AS(x)) delta + [-q w + X_theta (sin theta - theta), 0, 0, 0]
@@ -297,13 +368,26 @@ def plant_derivative(x: np.ndarray, delta: np.ndarray, dist: np.ndarray, mu_scal
     if fault_mode not in FAULT_MODES:
         raise ModelError(f"fault_mode: expected one of {FAULT_MODES}, got {fault_mode!r}")
     one = np.ones(1)
-    return _derivative(np.asarray(x, dtype=float)[None], np.asarray(delta, dtype=float)[None],
-                       np.asarray(dist, dtype=float)[None], one * mu_scale, one * elevator_eff,
-                       _polynomial(1.0, 1.0, eta_unit), fault_mode == "total")[0]
+    return _derivative(
+        np.asarray(x, dtype=float)[None],
+        np.asarray(delta, dtype=float)[None],
+        np.asarray(dist, dtype=float)[None],
+        one * mu_scale,
+        one * elevator_eff,
+        _polynomial(1.0, 1.0, eta_unit),
+        fault_mode == "total",
+    )[0]
 
 
-def _derivative(x: np.ndarray, delta: np.ndarray, dist: np.ndarray, mu: np.ndarray, eff: np.ndarray,
-                P: tuple, total: bool) -> np.ndarray:
+def _derivative(
+    x: np.ndarray,
+    delta: np.ndarray,
+    dist: np.ndarray,
+    mu: np.ndarray,
+    eff: np.ndarray,
+    P: tuple,
+    total: bool,
+) -> np.ndarray:
     """:func:`plant_derivative` for a batch of b plants: x (b, 4), delta (b, 2), dist (b, 3), mu, eff (b,).
 
     ``P`` is the healthy polynomial of :func:`_polynomial`; M_u and the elevator column are linear in
@@ -314,13 +398,15 @@ def _derivative(x: np.ndarray, delta: np.ndarray, dist: np.ndarray, mu: np.ndarr
     u_star, w_star = _TRIM_UW
     P0, P1, P2 = P
     V = np.hypot(u_star + x[:, 0], w_star + x[:, 1])[:, None, None]
-    H = P0 + V * (P1 + V * P2)            # healthy [A B](V), shape (b, 4, 6)
+    H = P0 + V * (P1 + V * P2)  # healthy [A B](V), shape (b, 4, 6)
     S = np.ones_like(H)
     S[:, 3, 0] = mu
     S[:, :, 4] = eff[:, None]
     AB = H * S
     dx = (AB[:, :, :4] * x[:, None, :]).sum(axis=2) + (AB[:, :, 4:] * delta[:, None, :]).sum(axis=2)
-    dx[:, 0] += DIST_ACCEL[0] * dist[:, 0] - x[:, 3] * x[:, 1] + AB[:, 0, 2] * (np.sin(x[:, 2]) - x[:, 2])
+    dx[:, 0] += (
+        DIST_ACCEL[0] * dist[:, 0] - x[:, 3] * x[:, 1] + AB[:, 0, 2] * (np.sin(x[:, 2]) - x[:, 2])
+    )
     dx[:, 1] += DIST_ACCEL[1] * dist[:, 1]
     dx[:, 3] += DIST_ACCEL[2] * dist[:, 2]
     if total:
@@ -387,10 +473,10 @@ def fault_profile(t: np.ndarray, scenario: str, onset: float = ONSET) -> np.ndar
 
 def _fault_size(fault: str, scenario: str) -> float:
     if fault == "alpha":
-        return np.deg2rad(3.0 if scenario == "step" else 5.0)   # §6.1: 3 deg; §6.2-6.3: A = 5 deg
+        return np.deg2rad(3.0 if scenario == "step" else 5.0)  # §6.1: 3 deg; §6.2-6.3: A = 5 deg
     if fault == "elevator":
-        return 0.5   # effectiveness 100 % -> 50 %
-    return 0.3       # M_u +30 %
+        return 0.5  # effectiveness 100 % -> 50 %
+    return 0.3  # M_u +30 %
 
 
 @dataclass(frozen=True)
@@ -445,9 +531,17 @@ def excitation(t: np.ndarray) -> np.ndarray:
 
 
 @single_threaded_blas
-def simulate(fault: str = "none", scenario: str = "step", *, rng: np.random.Generator,
-             duration: float = 6.0, substeps: int = 2, eta_unit: str = ETA_UNIT,
-             fault_mode: str = "deviation", amplitude: float = 0.0) -> UAVRun:
+def simulate(
+    fault: str = "none",
+    scenario: str = "step",
+    *,
+    rng: np.random.Generator,
+    duration: float = 6.0,
+    substeps: int = 2,
+    eta_unit: str = ETA_UNIT,
+    fault_mode: str = "deviation",
+    amplitude: float = 0.0,
+) -> UAVRun:
     """Closed-loop simulation of the nonlinear stand-in plant with the LQG controller.
 
     Parameters
@@ -476,14 +570,28 @@ def simulate(fault: str = "none", scenario: str = "step", *, rng: np.random.Gene
     -------
     UAVRun
     """
-    return simulate_many([(fault, scenario)], [rng], duration=duration, substeps=substeps, eta_unit=eta_unit,
-                         fault_mode=fault_mode, amplitude=amplitude)[0]
+    return simulate_many(
+        [(fault, scenario)],
+        [rng],
+        duration=duration,
+        substeps=substeps,
+        eta_unit=eta_unit,
+        fault_mode=fault_mode,
+        amplitude=amplitude,
+    )[0]
 
 
 @single_threaded_blas
-def simulate_many(cases: Sequence[tuple[str, str]], rngs: Sequence[np.random.Generator], *,
-                  duration: float = 6.0, substeps: int = 2, eta_unit: str = ETA_UNIT,
-                  fault_mode: str = "deviation", amplitude: float = 0.0) -> list[UAVRun]:
+def simulate_many(
+    cases: Sequence[tuple[str, str]],
+    rngs: Sequence[np.random.Generator],
+    *,
+    duration: float = 6.0,
+    substeps: int = 2,
+    eta_unit: str = ETA_UNIT,
+    fault_mode: str = "deviation",
+    amplitude: float = 0.0,
+) -> list[UAVRun]:
     """:func:`simulate` for several (fault, scenario) cases at once, stepped together (vectorised).
 
     Run i uses ``rngs[i]``, draws exactly what :func:`simulate` draws from it, and gets the same
@@ -500,7 +608,9 @@ def simulate_many(cases: Sequence[tuple[str, str]], rngs: Sequence[np.random.Gen
     if fault_mode not in FAULT_MODES:
         raise ModelError(f"fault_mode: expected one of {FAULT_MODES}, got {fault_mode!r}")
     if not np.isfinite(amplitude) or amplitude < 0:
-        raise ModelError(f"amplitude: expected a finite non-negative airspeed (m/s), got {amplitude!r}")
+        raise ModelError(
+            f"amplitude: expected a finite non-negative airspeed (m/s), got {amplitude!r}"
+        )
     for rng in rngs:
         if not isinstance(rng, np.random.Generator):
             raise TypeError(f"rng: expected numpy.random.Generator, got {type(rng).__name__}")
@@ -516,7 +626,9 @@ def simulate_many(cases: Sequence[tuple[str, str]], rngs: Sequence[np.random.Gen
         dist[b] = _bounded_lowpass(rng, K, 3, 0.9)
         noise[b] = _bounded_lowpass(rng, K + 1, 4, 0.5) * NOISE_BOUND
     # fault activation times size, per case: alpha offset, M_u scale, elevator effectiveness
-    act = np.array([fault_profile(t, sc) * (_fault_size(f, sc) if f != "none" else 0.0) for f, sc in cases])
+    act = np.array(
+        [fault_profile(t, sc) * (_fault_size(f, sc) if f != "none" else 0.0) for f, sc in cases]
+    )
     kinds = np.array([f for f, _ in cases])
     alpha_off = act * (kinds == "alpha")[:, None]
     mu_all = 1.0 + act * (kinds == "dynamics")[:, None]
@@ -529,7 +641,7 @@ def simulate_many(cases: Sequence[tuple[str, str]], rngs: Sequence[np.random.Gen
     h = TS / substeps
     Kg, Ae, Be, Le, Ce = lqg.K, lqg.A, lqg.B, lqg.L, lqg.C
 
-    def mv(M: np.ndarray, v: np.ndarray) -> np.ndarray:   # rows of v times M^T, batch-independent
+    def mv(M: np.ndarray, v: np.ndarray) -> np.ndarray:  # rows of v times M^T, batch-independent
         return (M[None, :, :] * v[:, None, :]).sum(axis=2)
 
     for k in range(K + 1):
@@ -552,8 +664,10 @@ def simulate_many(cases: Sequence[tuple[str, str]], rngs: Sequence[np.random.Gen
         x[:, k + 1] = xi
         bad = ~np.all(np.isfinite(xi), axis=1) | (np.abs(xi).max(axis=1) > 1e3)
         if bad.any():
-            raise ModelError(f"simulate: the closed loop of case {cases[int(np.argmax(bad))]} diverged at "
-                             f"t = {t[k + 1]:.2f} s")
+            raise ModelError(
+                f"simulate: the closed loop of case {cases[int(np.argmax(bad))]} diverged at "
+                f"t = {t[k + 1]:.2f} s"
+            )
     out = []
     for b, (fault, scenario) in enumerate(cases):
         p = act[b] > 0
@@ -563,9 +677,9 @@ def simulate_many(cases: Sequence[tuple[str, str]], rngs: Sequence[np.random.Gen
 
 
 #: margins of the SVO models over the simulation bounds (all documented in the book)
-SVO_V_MARGIN = 0.05                       # airspeed scheduling margin (m/s)
+SVO_V_MARGIN = 0.05  # airspeed scheduling margin (m/s)
 SVO_NOISE_MARGIN = np.array([0.05, np.deg2rad(0.06), 1e-5, 1e-5])  # linearisation of the sensors
-SVO_DIST_MARGIN = np.array([2e-3, 1e-3, 2e-6, 2e-5])                # per-step: nonlinear terms, ZOH
+SVO_DIST_MARGIN = np.array([2e-3, 1e-3, 2e-6, 2e-5])  # per-step: nonlinear terms, ZOH
 
 
 #: Manoeuvre envelope of the SVO margins (module docstring): the largest measured airspeed deviation
@@ -590,8 +704,14 @@ def svo_scale() -> np.ndarray:
     return np.abs(np.linalg.inv(measurement_matrix())) @ (NOISE_BOUND + SVO_NOISE_MARGIN)
 
 
-def svo_models(run: UAVRun, kind: str = "nominal", *, dist_scale: float = 1.0,
-               noise_scale: float = 1.0, alpha_slack_deg: float = 0.0):
+def svo_models(
+    run: UAVRun,
+    kind: str = "nominal",
+    *,
+    dist_scale: float = 1.0,
+    noise_scale: float = 1.0,
+    alpha_slack_deg: float = 0.0,
+):
     """Per-step SVO models (a :class:`fdi_lib.sets.svo.ModelSequence`, callable k -> SVOModel) for the
     nominal plant or a fault hypothesis.
 
@@ -633,21 +753,35 @@ def svo_models(run: UAVRun, kind: str = "nominal", *, dist_scale: float = 1.0,
 
     if kind not in ("nominal", "global") + FAULTS:
         raise ModelError(f"kind: expected 'nominal', 'global' or one of {FAULTS}, got {kind!r}")
-    for name, val in (("dist_scale", dist_scale), ("noise_scale", noise_scale),
-                      ("alpha_slack_deg", alpha_slack_deg)):
-        if not isinstance(val, (int, float, np.integer, np.floating)) or not np.isfinite(val) or val < 0:
+    for name, val in (
+        ("dist_scale", dist_scale),
+        ("noise_scale", noise_scale),
+        ("alpha_slack_deg", alpha_slack_deg),
+    ):
+        if (
+            not isinstance(val, (int, float, np.integer, np.floating))
+            or not np.isfinite(val)
+            or val < 0
+        ):
             raise ModelError(f"{name}: expected a finite non-negative number, got {val!r}")
     if envelope_exceedance(run).size:
-        warnings.warn(f"run: the measured airspeed deviation leaves the manoeuvre envelope of the SVO margins "
-                      f"(|y_V| <= {ENVELOPE_AIRSPEED[run.eta_unit]} m/s, eta_unit={run.eta_unit!r}); the sets may lose "
-                      f"the true state (see uav.envelope_exceedance)", EnvelopeWarning, stacklevel=2)
+        warnings.warn(
+            f"run: the measured airspeed deviation leaves the manoeuvre envelope of the SVO margins "
+            f"(|y_V| <= {ENVELOPE_AIRSPEED[run.eta_unit]} m/s, eta_unit={run.eta_unit!r}); the sets may lose "
+            f"the true state (see uav.envelope_exceedance)",
+            EnvelopeWarning,
+            stacklevel=2,
+        )
     C = measurement_matrix()
     noise = (NOISE_BOUND + SVO_NOISE_MARGIN) * float(noise_scale)
     if kind in ("alpha", "global"):
         noise = noise + np.r_[0.0, np.deg2rad(5.0) * 1.02, 0.0, 0.0]
     if alpha_slack_deg:
         noise = noise + np.r_[0.0, np.deg2rad(float(alpha_slack_deg)), 0.0, 0.0]
-    L = np.diag(np.r_[DIST_ACCEL[:2] * TS, 0.5 * DIST_ACCEL[2] * TS**2, DIST_ACCEL[2] * TS] + SVO_DIST_MARGIN) * float(dist_scale)
+    L = np.diag(
+        np.r_[DIST_ACCEL[:2] * TS, 0.5 * DIST_ACCEL[2] * TS**2, DIST_ACCEL[2] * TS]
+        + SVO_DIST_MARGIN
+    ) * float(dist_scale)
     dV = NOISE_BOUND[0] + SVO_V_MARGIN
     mu_c, mu_r = (1.15, 0.15) if kind in ("dynamics", "global") else (1.0, 0.0)
     eff_c, eff_r = (0.75, 0.25) if kind in ("elevator", "global") else (1.0, 0.0)
@@ -665,5 +799,12 @@ def svo_models(run: UAVRun, kind: str = "nominal", *, dist_scale: float = 1.0,
         _, Bhi = discretize_many(Vh, mu_c, eff_c + eff_r, eta_unit=run.eta_unit)
         _, Blo = discretize_many(Vh, mu_c, eff_c - eff_r, eta_unit=run.eta_unit)
         B_unc.append((Bhi - Blo) / 2)
-    return ModelSequence(A=(Ap + Am) / 2, B=(Bp + Bm) / 2, C=C, L=L, noise=noise,
-                         A_unc=np.stack(A_unc, axis=1), B_unc=np.stack(B_unc, axis=1))
+    return ModelSequence(
+        A=(Ap + Am) / 2,
+        B=(Bp + Bm) / 2,
+        C=C,
+        L=L,
+        noise=noise,
+        A_unc=np.stack(A_unc, axis=1),
+        B_unc=np.stack(B_unc, axis=1),
+    )

@@ -117,14 +117,46 @@ from fdi_lib.models import FaultFamily, LTVModel, lpv_model, step_family
 from fdi_lib.simulate import Noise, simulate
 
 __all__ = [
-    "TS_MIN", "RECORD_MIN", "N_STEPS", "G0_1", "GP_1", "Q_PRINTED", "R", "MEAN_FLOW",
-    "FAULT_ONSET_MIN", "FAULT1_DELTA", "FAULT2_DELTA", "FAULT1_DOUBLED_DELTA",
-    "LEAK_ONSET_MIN", "LEAK_SIZE", "WINDOW", "THRESHOLD", "DISABLED_MIN", "VARIANTS",
-    "CALIBRATION", "PhysicalSection", "physical_section", "calibrate", "calibration_targets",
-    "calibration_for", "select_state2_scale", "surrogate", "surrogate_limits",
-    "projected_q", "pipeline_schedule", "pipeline_input", "PipelineMatrices", "pipeline_matrices",
-    "pipeline_model", "input_fault_psi", "input_fault_family", "output_leak_family",
-    "minutes_to_index", "index_to_minutes", "design_report", "noise_free_output",
+    "TS_MIN",
+    "RECORD_MIN",
+    "N_STEPS",
+    "G0_1",
+    "GP_1",
+    "Q_PRINTED",
+    "R",
+    "MEAN_FLOW",
+    "FAULT_ONSET_MIN",
+    "FAULT1_DELTA",
+    "FAULT2_DELTA",
+    "FAULT1_DOUBLED_DELTA",
+    "LEAK_ONSET_MIN",
+    "LEAK_SIZE",
+    "WINDOW",
+    "THRESHOLD",
+    "DISABLED_MIN",
+    "VARIANTS",
+    "CALIBRATION",
+    "PhysicalSection",
+    "physical_section",
+    "calibrate",
+    "calibration_targets",
+    "calibration_for",
+    "select_state2_scale",
+    "surrogate",
+    "surrogate_limits",
+    "projected_q",
+    "pipeline_schedule",
+    "pipeline_input",
+    "PipelineMatrices",
+    "pipeline_matrices",
+    "pipeline_model",
+    "input_fault_psi",
+    "input_fault_family",
+    "output_leak_family",
+    "minutes_to_index",
+    "index_to_minutes",
+    "design_report",
+    "noise_free_output",
 ]
 
 #: Sampling period (min).
@@ -156,26 +188,26 @@ DISABLED_MIN = 320.0
 VARIANTS = ("physical", "designed")
 
 # Physical constants of the "physical" surrogate (sources in the module docstring).
-SOUND_SPEED = 350.0           # m/s, isothermal, natural gas at 15 degC (Osiadacz 1987)
-NORMAL_DENSITY = 0.75         # kg/Nm3, natural gas (Menon 2005)
-DIAMETER = 0.7                # m, a 28-inch transmission line (Menon 2005)
-ROUGHNESS = 2e-5              # m, new steel line pipe (Menon 2005)
-VISCOSITY = 1.1e-5            # Pa s, natural gas (Menon 2005)
-MEAN_PRESSURE_BAR = 60.0      # bar, a typical transmission operating pressure (Menon 2005)
+SOUND_SPEED = 350.0  # m/s, isothermal, natural gas at 15 degC (Osiadacz 1987)
+NORMAL_DENSITY = 0.75  # kg/Nm3, natural gas (Menon 2005)
+DIAMETER = 0.7  # m, a 28-inch transmission line (Menon 2005)
+ROUGHNESS = 2e-5  # m, new steel line pipe (Menon 2005)
+VISCOSITY = 1.1e-5  # Pa s, natural gas (Menon 2005)
+MEAN_PRESSURE_BAR = 60.0  # bar, a typical transmission operating pressure (Menon 2005)
 #: Peak of the daily mean-pressure cycle (hour of day): the line is packed at night.
 PRESSURE_PEAK_HOUR = 3.0
 
 # Surrogate choices of the "designed" variant.
-NOMINAL_PRESSURE = 5.5          # MPa
-PRESSURE_SWING = 0.6            # MPa
+NOMINAL_PRESSURE = 5.5  # MPa
+PRESSURE_SWING = 0.6  # MPa
 TAU_FLOW_MIN = 10.0
 TAU_LINEPACK_MIN = 400.0
 COUPLING = 0.3
 
 # Shared: the daily demand pattern.
-FLOW_SWING = 0.12               # relative, daily harmonic
-FLOW_SWING_2 = 0.05             # relative, half-day harmonic
-START_HOUR = 6.0                # the record starts at 06:00
+FLOW_SWING = 0.12  # relative, daily harmonic
+FLOW_SWING_2 = 0.05  # relative, half-day harmonic
+START_HOUR = 6.0  # the record starts at 06:00
 
 #: The declared calibration of the physical surrogate. ``targets``: the paper observations
 #: used (and nothing else); ``free``: what they fix; ``fitted``: the result of
@@ -187,36 +219,49 @@ CALIBRATION = {
             "value": 50.0,
             "paper": "Fig 9: after the alarm l_k stays at about 50 times the threshold",
             "computed_as": "median over k = 351..499 of (1 + lambda_k) / 50, lambda_k the "
-                           "non-centrality of the GLR for the output leak with the onset known",
+            "non-centrality of the GLR for the output leak with the onset known",
         },
         "fault2_miss_probability": {
             "value": 1e-3,
             "paper": "Fig 7: fault 2 is detected in every one of 1000 runs",
             "computed_as": "P(chi2(2, lambda) <= 50) at k = 459, the last sample whose window "
-                           "still holds the true onset (a bound on the miss rate)",
+            "still holds the true onset (a bound on the miss rate)",
         },
     },
-    "free": {"section_length_km": "fixed by fig9_level_over_threshold",
-             "pressure_swing_bar": "fixed by fault2_miss_probability",
-             "state2_scale": "fixed by the criterion of CALIBRATION['state2_scale']"},
+    "free": {
+        "section_length_km": "fixed by fig9_level_over_threshold",
+        "pressure_swing_bar": "fixed by fault2_miss_probability",
+        "state2_scale": "fixed by the criterion of CALIBRATION['state2_scale']",
+    },
     "state2_scale": {
         "grid": [1.0, 3.0, 10.0, 30.0, 100.0],
         "tolerance": 0.05,
         "criterion": "the smallest value of the grid (half-decade steps) whose fitted swing is within "
-                     "5 % of the swing at the largest value: the fault 2 target then asks for about "
-                     "the least swing any scale allows, i.e. the state noise acts mostly on the flow. "
-                     "Stated after the value 10 was chosen; the book publishes the sensitivity of "
-                     "every prediction to it",
+        "5 % of the swing at the largest value: the fault 2 target then asks for about "
+        "the least swing any scale allows, i.e. the state noise acts mostly on the flow. "
+        "Stated after the value 10 was chosen; the book publishes the sensitivity of "
+        "every prediction to it",
         # section length and swing fitted at each grid value (_fit_length_and_swing), recorded
         # so that the criterion and the book's sensitivity table need no refit; tests refit some
-        "fits": {1.0: (43.67765844, 52.00357037), 3.0: (18.94085875, 19.24090093),
-                 10.0: (15.14551644, 15.19536685), 30.0: (14.5378379, 14.71995906),
-                 100.0: (14.35169323, 14.58700266)},
+        "fits": {
+            1.0: (43.67765844, 52.00357037),
+            3.0: (18.94085875, 19.24090093),
+            10.0: (15.14551644, 15.19536685),
+            30.0: (14.5378379, 14.71995906),
+            100.0: (14.35169323, 14.58700266),
+        },
     },
-    "fitted": {"section_length_km": 15.14551644124154, "state2_scale": 10.0,
-               "pressure_swing_bar": 15.19536685052103},
-    "not_used": ["Fig 5-6 alarm, onset and delay", "Fig 7 delays, onset errors, false alarms",
-                 "Fig 8 type I and type II rates", "Zhang 2021 Example 2 support"],
+    "fitted": {
+        "section_length_km": 15.14551644124154,
+        "state2_scale": 10.0,
+        "pressure_swing_bar": 15.19536685052103,
+    },
+    "not_used": [
+        "Fig 5-6 alarm, onset and delay",
+        "Fig 7 delays, onset errors, false alarms",
+        "Fig 8 type I and type II rates",
+        "Zhang 2021 Example 2 support",
+    ],
 }
 
 
@@ -317,18 +362,18 @@ class PhysicalSection:
 
 def _colebrook(reynolds: float, rel_roughness: float) -> float:
     """Darcy friction factor from the Colebrook-White equation (fixed-point iteration)."""
-    x = 0.02 ** -0.5
+    x = 0.02**-0.5
     for _ in range(50):
         x = -2.0 * np.log10(rel_roughness / 3.7 + 2.51 * x / reynolds)
-    return float(x ** -2)
+    return float(x**-2)
 
 
 def _section_zoh(length_m: float, pressure_bar: float, lam: float) -> tuple[np.ndarray, np.ndarray]:
     """Exact ZOH discretisation, physical state ``(q [Nm3/h], dp [bar])``, input ``U`` [Nm3/h]."""
-    c2 = SOUND_SPEED ** 2
-    area = np.pi * DIAMETER ** 2 / 4
+    c2 = SOUND_SPEED**2
+    area = np.pi * DIAMETER**2 / 4
     q_kg = MEAN_FLOW * NORMAL_DENSITY / 3600.0
-    res = lam * length_m * c2 * q_kg / (DIAMETER * area ** 2 * pressure_bar * 1e5)
+    res = lam * length_m * c2 * q_kg / (DIAMETER * area**2 * pressure_bar * 1e5)
     ind, cap = length_m / area, area * length_m / c2
     # SI state (q [kg/s], dp [Pa]), input U [kg/s].
     Ac = np.array([[-res / ind, 1.0 / ind], [-1.0 / cap, 0.0]])
@@ -336,13 +381,15 @@ def _section_zoh(length_m: float, pressure_bar: float, lam: float) -> tuple[np.n
     M = np.zeros((3, 3))
     M[:2, :2], M[:2, 2:] = Ac * TS_MIN * 60.0, Bc * TS_MIN * 60.0
     E = scipy.linalg.expm(M)
-    kappa = NORMAL_DENSITY / 3600.0          # kg/s per Nm3/h
-    T = np.diag([1.0 / kappa, 1e-5])         # SI -> (Nm3/h, bar)
+    kappa = NORMAL_DENSITY / 3600.0  # kg/s per Nm3/h
+    T = np.diag([1.0 / kappa, 1e-5])  # SI -> (Nm3/h, bar)
     return T @ E[:2, :2] @ np.linalg.inv(T), T @ E[:2, 2:] * kappa
 
 
 @functools.lru_cache(maxsize=256)
-def physical_section(length_km: float | None = None, state2_scale: float | None = None) -> PhysicalSection:
+def physical_section(
+    length_km: float | None = None, state2_scale: float | None = None
+) -> PhysicalSection:
     """Derive the physical surrogate's matrices for a section of ``length_km`` km.
 
     Parameters
@@ -362,14 +409,14 @@ def physical_section(length_km: float | None = None, state2_scale: float | None 
     if not L_km > 0:
         raise ModelError(f"length_km: expected a positive number, got {length_km!r}")
     L = 1e3 * L_km
-    area = np.pi * DIAMETER ** 2 / 4
+    area = np.pi * DIAMETER**2 / 4
     q_kg = MEAN_FLOW * NORMAL_DENSITY / 3600.0
-    rho = MEAN_PRESSURE_BAR * 1e5 / SOUND_SPEED ** 2
+    rho = MEAN_PRESSURE_BAR * 1e5 / SOUND_SPEED**2
     velocity = q_kg / (rho * area)
     reynolds = 4 * q_kg / (np.pi * DIAMETER * VISCOSITY)
     lam = _colebrook(reynolds, ROUGHNESS / DIAMETER)
-    res = lam * L * SOUND_SPEED ** 2 * q_kg / (DIAMETER * area ** 2 * MEAN_PRESSURE_BAR * 1e5)
-    ind, cap = L / area, area * L / SOUND_SPEED ** 2
+    res = lam * L * SOUND_SPEED**2 * q_kg / (DIAMETER * area**2 * MEAN_PRESSURE_BAR * 1e5)
+    ind, cap = L / area, area * L / SOUND_SPEED**2
     F, G = _section_zoh(L, MEAN_PRESSURE_BAR, lam)
     # d/d(pbar) by central differences (the matrices are smooth in pbar; step 1e-3 bar).
     h = 1e-3
@@ -377,7 +424,7 @@ def physical_section(length_km: float | None = None, state2_scale: float | None 
     Fd, Gd = _section_zoh(L, MEAN_PRESSURE_BAR - h, lam)
     dF, dG = (Fu - Fd) / (2 * h), (Gu - Gd) / (2 * h)
     g1 = float(G[0, 0])
-    beta = -(GP_1 / G0_1) / (dG[0, 0] / g1)   # bar per unit of -p_k
+    beta = -(GP_1 / G0_1) / (dG[0, 0] / g1)  # bar per unit of -p_k
     # p_k = -(pbar - mean) / beta  =>  d/dp_k = -beta d/dpbar.
     dF_dp, dG_dp = -beta * dF, -beta * dG
     s1 = G0_1 / g1
@@ -386,18 +433,38 @@ def physical_section(length_km: float | None = None, state2_scale: float | None 
     Si = np.diag([1.0 / s1, 1.0 / s2])
     eig = np.sort(np.abs(np.linalg.eigvals(F)))
     G0s, Gps = S @ G, S @ dG_dp
-    G0s[0, 0], Gps[0, 0] = G0_1, GP_1   # equal by construction up to rounding: make them exact
+    G0s[0, 0], Gps[0, 0] = G0_1, GP_1  # equal by construction up to rounding: make them exact
     return PhysicalSection(
-        length_km=L_km, area=area, velocity=velocity, reynolds=reynolds, friction_factor=lam,
-        resistance=res, inertance=ind, capacity=cap,
-        tau_slow_min=float(-TS_MIN / np.log(eig[1])), tau_fast_s=float(-TS_MIN * 60.0 / np.log(eig[0])),
-        g1=g1, bar_per_unit=float(beta), s1=float(s1), s2=float(s2),
-        F0=S @ F @ Si, Fp=S @ dF_dp @ Si, G0=G0s, Gp=Gps)
+        length_km=L_km,
+        area=area,
+        velocity=velocity,
+        reynolds=reynolds,
+        friction_factor=lam,
+        resistance=res,
+        inertance=ind,
+        capacity=cap,
+        tau_slow_min=float(-TS_MIN / np.log(eig[1])),
+        tau_fast_s=float(-TS_MIN * 60.0 / np.log(eig[0])),
+        g1=g1,
+        bar_per_unit=float(beta),
+        s1=float(s1),
+        s2=float(s2),
+        F0=S @ F @ Si,
+        Fp=S @ dF_dp @ Si,
+        G0=G0s,
+        Gp=Gps,
+    )
 
 
 # ----------------------------------------------------------------------------- signals
-def pipeline_schedule(n_steps: int = N_STEPS, *, variant: str = "physical", fast_swing: float = 0.0,
-                      fast_period_min: float = 60.0, pressure_swing_bar: float | None = None) -> np.ndarray:
+def pipeline_schedule(
+    n_steps: int = N_STEPS,
+    *,
+    variant: str = "physical",
+    fast_swing: float = 0.0,
+    fast_period_min: float = 60.0,
+    pressure_swing_bar: float | None = None,
+) -> np.ndarray:
     """Scheduling parameter ``p_k``, shape ``(n_steps,)``.
 
     ``physical``: the daily cycle of the mean pressure, ``pbar_k - mean = a cos(2 pi (h_k - 3)
@@ -427,7 +494,11 @@ def pipeline_schedule(n_steps: int = N_STEPS, *, variant: str = "physical", fast
     t_min = np.arange(n_steps) * TS_MIN
     daily = np.cos(2 * np.pi * (_hours(n_steps) - PRESSURE_PEAK_HOUR) / 24.0)
     if variant == "physical":
-        a = CALIBRATION["fitted"]["pressure_swing_bar"] if pressure_swing_bar is None else pressure_swing_bar
+        a = (
+            CALIBRATION["fitted"]["pressure_swing_bar"]
+            if pressure_swing_bar is None
+            else pressure_swing_bar
+        )
         base = -a * daily / physical_section().bar_per_unit
     else:
         base = NOMINAL_PRESSURE + PRESSURE_SWING * daily
@@ -436,8 +507,11 @@ def pipeline_schedule(n_steps: int = N_STEPS, *, variant: str = "physical", fast
 
 def _demand_shape(n_steps: int) -> np.ndarray:
     h = _hours(n_steps)
-    return (1.0 + FLOW_SWING * np.cos(2 * np.pi * (h - 9.0) / 24.0)
-            + FLOW_SWING_2 * np.cos(4 * np.pi * (h - 7.0) / 24.0))
+    return (
+        1.0
+        + FLOW_SWING * np.cos(2 * np.pi * (h - 9.0) / 24.0)
+        + FLOW_SWING_2 * np.cos(4 * np.pi * (h - 7.0) / 24.0)
+    )
 
 
 def pipeline_input(n_steps: int = N_STEPS, *, variant: str = "physical") -> np.ndarray:
@@ -482,7 +556,9 @@ def noise_free_output(u: np.ndarray, p: np.ndarray, *, variant: str = "physical"
     """
     u = np.asarray(u, dtype=float)
     model = pipeline_model(u.shape[0], variant=variant, schedule=p, u=u)
-    zero = Noise(x0=model.x0, w=np.zeros((model.n_steps, model.n)), v=np.zeros((model.n_steps, model.p)))
+    zero = Noise(
+        x0=model.x0, w=np.zeros((model.n_steps, model.n)), v=np.zeros((model.n_steps, model.p))
+    )
     return simulate(model, noise=zero, u=u).y[:, 0]
 
 
@@ -509,8 +585,9 @@ def _designed_matrices() -> PipelineMatrices:
     ratio = Q_PRINTED[0, 1] / Q_PRINTED[0, 0]
     G0 = np.array([[G0_1], [ratio * G0_1]])
     Gp = np.array([[GP_1], [ratio * GP_1]])
-    F0 = np.array([[np.exp(-TS_MIN / TAU_FLOW_MIN), 0.0],
-                   [COUPLING, np.exp(-TS_MIN / TAU_LINEPACK_MIN)]])
+    F0 = np.array(
+        [[np.exp(-TS_MIN / TAU_FLOW_MIN), 0.0], [COUPLING, np.exp(-TS_MIN / TAU_LINEPACK_MIN)]]
+    )
     X = scipy.linalg.solve_discrete_lyapunov(F0, Q)
     inv = np.linalg.inv(np.eye(2) - F0)
     h2 = np.sqrt(R[0, 0] / X[1, 1]) * np.sign(inv[1, 0])
@@ -518,19 +595,41 @@ def _designed_matrices() -> PipelineMatrices:
     J0 = 1.0 - H0 @ inv @ G0
     Jp = -(H0 @ inv @ Gp)
     P0 = scipy.linalg.solve_discrete_are(F0.T, H0.T, Q, R)
-    return PipelineMatrices(F0=F0, Fp=np.zeros((2, 2)), G0=G0, Gp=Gp, H0=H0, Hp=np.zeros((1, 2)),
-                            J0=J0, Jp=Jp, Q=Q, R=R.copy(), P0=0.5 * (P0 + P0.T))
+    return PipelineMatrices(
+        F0=F0,
+        Fp=np.zeros((2, 2)),
+        G0=G0,
+        Gp=Gp,
+        H0=H0,
+        Hp=np.zeros((1, 2)),
+        J0=J0,
+        Jp=Jp,
+        Q=Q,
+        R=R.copy(),
+        P0=0.5 * (P0 + P0.T),
+    )
 
 
-def _physical_matrices(length_km: float | None = None, state2_scale: float | None = None
-                       ) -> PipelineMatrices:
+def _physical_matrices(
+    length_km: float | None = None, state2_scale: float | None = None
+) -> PipelineMatrices:
     sec = physical_section(length_km, state2_scale)
     Q = projected_q()
     H0 = np.array([[1.0 / sec.s1, 0.0]])
     P0 = scipy.linalg.solve_discrete_are(sec.F0.T, H0.T, Q, R)
-    return PipelineMatrices(F0=sec.F0, Fp=sec.Fp, G0=sec.G0, Gp=sec.Gp, H0=H0, Hp=np.zeros((1, 2)),
-                            J0=np.zeros((1, 1)), Jp=np.zeros((1, 1)), Q=Q, R=R.copy(),
-                            P0=0.5 * (P0 + P0.T))
+    return PipelineMatrices(
+        F0=sec.F0,
+        Fp=sec.Fp,
+        G0=sec.G0,
+        Gp=sec.Gp,
+        H0=H0,
+        Hp=np.zeros((1, 2)),
+        J0=np.zeros((1, 1)),
+        Jp=np.zeros((1, 1)),
+        Q=Q,
+        R=R.copy(),
+        P0=0.5 * (P0 + P0.T),
+    )
 
 
 def pipeline_matrices(variant: str = "physical") -> PipelineMatrices:
@@ -556,12 +655,30 @@ def _model_from(mats: PipelineMatrices, p: np.ndarray, uu: np.ndarray) -> LTVMod
     F_first = mats.F0 + mats.Fp * p[0]
     G_first = mats.G0 + mats.Gp * p[0]
     x0 = np.linalg.solve(np.eye(2) - F_first, G_first[:, 0] * uu[0])
-    return lpv_model(scheduling=p, F0=mats.F0, Fp=mats.Fp, G0=mats.G0, Gp=mats.Gp, H0=mats.H0,
-                     Hp=mats.Hp, J0=mats.J0, Jp=mats.Jp, Q=mats.Q, R=mats.R, x0=x0, P0=mats.P0)
+    return lpv_model(
+        scheduling=p,
+        F0=mats.F0,
+        Fp=mats.Fp,
+        G0=mats.G0,
+        Gp=mats.Gp,
+        H0=mats.H0,
+        Hp=mats.Hp,
+        J0=mats.J0,
+        Jp=mats.Jp,
+        Q=mats.Q,
+        R=mats.R,
+        x0=x0,
+        P0=mats.P0,
+    )
 
 
-def pipeline_model(n_steps: int = N_STEPS, *, variant: str = "physical", schedule: np.ndarray | None = None,
-                   u: np.ndarray | None = None) -> LTVModel:
+def pipeline_model(
+    n_steps: int = N_STEPS,
+    *,
+    variant: str = "physical",
+    schedule: np.ndarray | None = None,
+    u: np.ndarray | None = None,
+) -> LTVModel:
     """The fault-free surrogate LPV pipeline model (53) as an :class:`~fdi_lib.models.LTVModel`.
 
     Parameters
@@ -591,7 +708,11 @@ def pipeline_model(n_steps: int = N_STEPS, *, variant: str = "physical", schedul
     """
     _check_steps(n_steps)
     _check_variant(variant)
-    p = pipeline_schedule(n_steps, variant=variant) if schedule is None else np.asarray(schedule, dtype=float)
+    p = (
+        pipeline_schedule(n_steps, variant=variant)
+        if schedule is None
+        else np.asarray(schedule, dtype=float)
+    )
     if p.shape != (n_steps,):
         raise ShapeError(f"schedule: expected shape ({n_steps},), got {p.shape}")
     uu = pipeline_input(n_steps, variant=variant) if u is None else np.asarray(u, dtype=float)
@@ -600,15 +721,24 @@ def pipeline_model(n_steps: int = N_STEPS, *, variant: str = "physical", schedul
     return _model_from(pipeline_matrices(variant), p, uu)
 
 
-def input_fault_psi(n_steps: int = N_STEPS, *, schedule: np.ndarray | None = None,
-                    u: np.ndarray | None = None, variant: str = "physical") -> np.ndarray:
+def input_fault_psi(
+    n_steps: int = N_STEPS,
+    *,
+    schedule: np.ndarray | None = None,
+    u: np.ndarray | None = None,
+    variant: str = "physical",
+) -> np.ndarray:
     """Input-end fault profile ``Psi~_k = [[U_k, p_k U_k], [0, 0]]`` of Section 6.2, ``(N, 2, 2)``.
 
     ``theta = [dG0(1), dGp(1)]``: the increments of ``G0(1)`` and ``Gp(1)``
     (fault 1: ``theta = [-2e-5, 0]``, fault 2: ``theta = [0, -1e-5]``). ``schedule`` and
     ``u`` default to those of ``variant``.
     """
-    p = pipeline_schedule(n_steps, variant=variant) if schedule is None else np.asarray(schedule, dtype=float)
+    p = (
+        pipeline_schedule(n_steps, variant=variant)
+        if schedule is None
+        else np.asarray(schedule, dtype=float)
+    )
     uu = pipeline_input(n_steps, variant=variant) if u is None else np.asarray(u, dtype=float)
     if p.shape != (n_steps,) or uu.shape != (n_steps,):
         raise ShapeError(f"schedule, u: expected shape ({n_steps},), got {p.shape} and {uu.shape}")
@@ -618,10 +748,17 @@ def input_fault_psi(n_steps: int = N_STEPS, *, schedule: np.ndarray | None = Non
     return psi
 
 
-def input_fault_family(model: LTVModel, *, schedule: np.ndarray | None = None,
-                       u: np.ndarray | None = None, variant: str = "physical") -> FaultFamily:
+def input_fault_family(
+    model: LTVModel,
+    *,
+    schedule: np.ndarray | None = None,
+    u: np.ndarray | None = None,
+    variant: str = "physical",
+) -> FaultFamily:
     """Step family (eq. 4) of the input-end leaks: ``Psi_k(r) = Psi~_k 1{k >= r}``, ``m = 2``."""
-    return step_family(model, Psi=input_fault_psi(model.n_steps, schedule=schedule, u=u, variant=variant))
+    return step_family(
+        model, Psi=input_fault_psi(model.n_steps, schedule=schedule, u=u, variant=variant)
+    )
 
 
 def output_leak_family(model: LTVModel) -> FaultFamily:
@@ -630,8 +767,9 @@ def output_leak_family(model: LTVModel) -> FaultFamily:
 
 
 # ----------------------------------------------------------------------------- calibration
-def surrogate(section_length_km: float, state2_scale: float, pressure_swing_bar: float
-              ) -> tuple[LTVModel, np.ndarray, np.ndarray]:
+def surrogate(
+    section_length_km: float, state2_scale: float, pressure_swing_bar: float
+) -> tuple[LTVModel, np.ndarray, np.ndarray]:
     """The physical surrogate for given free constants: model, input flow and schedule.
 
     With the calibrated constants (:data:`CALIBRATION` ``["fitted"]``) this is
@@ -662,8 +800,9 @@ def surrogate(section_length_km: float, state2_scale: float, pressure_swing_bar:
     return _model_from(mats, p, u), u, p
 
 
-def calibration_targets(length_km: float, state2_scale: float, pressure_swing_bar: float
-                        ) -> dict[str, float]:
+def calibration_targets(
+    length_km: float, state2_scale: float, pressure_swing_bar: float
+) -> dict[str, float]:
     """The two calibration quantities of :data:`CALIBRATION` for given free constants.
 
     Closed forms (no Monte Carlo), with the filter and signatures of
@@ -693,7 +832,7 @@ def calibration_targets(length_km: float, state2_scale: float, pressure_swing_ba
     leak_on = minutes_to_index(LEAK_ONSET_MIN)
     sig = fault_signature(model, gains, output_leak_family(model).profile(leak_on)).on_innovation
     # lambda_k = theta^2 sum_{j=r}^{k} rho_j^2 / Sigma_j (p = 1), for k = r+1 .. N-1.
-    lam = LEAK_SIZE ** 2 * np.cumsum(sig[leak_on:, 0, 0] ** 2 / gains.Sigma[leak_on:, 0, 0])[1:]
+    lam = LEAK_SIZE**2 * np.cumsum(sig[leak_on:, 0, 0] ** 2 / gains.Sigma[leak_on:, 0, 0])[1:]
     level = float(np.median((1.0 + lam) / THRESHOLD))
     onset = minutes_to_index(FAULT_ONSET_MIN)
     fam = step_family(model, Psi=input_fault_psi(N_STEPS, schedule=p, u=u))
@@ -717,8 +856,12 @@ def _fit_length_and_swing(k2: float) -> tuple[float, float]:
 
     def residuals(L: float, a: float) -> np.ndarray:
         t = calibration_targets(L, k2, a)
-        return np.log([t["fig9_level_over_threshold"] / level,
-                       max(t["fault2_miss_probability"], 1e-300) / miss])
+        return np.log(
+            [
+                t["fig9_level_over_threshold"] / level,
+                max(t["fault2_miss_probability"], 1e-300) / miss,
+            ]
+        )
 
     L, a = 20.0, 10.0
     for _ in range(30):
@@ -728,11 +871,14 @@ def _fit_length_and_swing(k2: float) -> tuple[float, float]:
         L, a = L_new, a_new
         if done:
             break
-    sol = scipy.optimize.least_squares(lambda z: residuals(*np.exp(z)), np.log([L, a]),
-                                       xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    sol = scipy.optimize.least_squares(
+        lambda z: residuals(*np.exp(z)), np.log([L, a]), xtol=1e-15, ftol=1e-15, gtol=1e-15
+    )
     if not (sol.success and np.max(np.abs(sol.fun)) < 1e-8):
-        raise ModelError(f"state2_scale: expected both calibration targets to be met at {k2!r}, "
-                         f"got log-residuals {sol.fun.tolist()}")
+        raise ModelError(
+            f"state2_scale: expected both calibration targets to be met at {k2!r}, "
+            f"got log-residuals {sol.fun.tolist()}"
+        )
     L, a = np.exp(sol.x)
     return float(L), float(a)
 
@@ -838,10 +984,14 @@ def surrogate_limits(state2_scale: float | None = None) -> dict[str, float]:
     # pbar - mean = a cos(2 pi t / 1 day): largest |d pbar / dt| = a 2 pi / day (Pa/s)
     rate_kg = sec.capacity * cal["pressure_swing_bar"] * 1e5 * 2 * np.pi / 86400.0
     q_kg = MEAN_FLOW * NORMAL_DENSITY / 3600.0
-    return {"tau_fast_s": sec.tau_fast_s, "tau_slow_s": 60.0 * sec.tau_slow_min, "sample_s": 60.0 * TS_MIN,
-            "eig_F0": np.sort(np.abs(np.linalg.eigvals(sec.F0))).tolist(),
-            "linepack_imbalance": float(rate_kg / q_kg),
-            "linepack_imbalance_sd": float(rate_kg / q_kg * MEAN_FLOW / sigma)}
+    return {
+        "tau_fast_s": sec.tau_fast_s,
+        "tau_slow_s": 60.0 * sec.tau_slow_min,
+        "sample_s": 60.0 * TS_MIN,
+        "eig_F0": np.sort(np.abs(np.linalg.eigvals(sec.F0))).tolist(),
+        "linepack_imbalance": float(rate_kg / q_kg),
+        "linepack_imbalance_sd": float(rate_kg / q_kg * MEAN_FLOW / sigma),
+    }
 
 
 def design_report(model: LTVModel | None = None, *, variant: str = "physical") -> dict[str, float]:
@@ -873,7 +1023,9 @@ def design_report(model: LTVModel | None = None, *, variant: str = "physical") -
     F = mats.F0[None] + mats.Fp[None] * p[:, None, None]
     G = mats.G0[None] + mats.Gp[None] * p[:, None, None]
     J = mats.J0[None] + mats.Jp[None] * p[:, None, None]
-    dc = np.array([(mats.H0 @ np.linalg.solve(np.eye(2) - F[k], G[k]) + J[k])[0, 0] for k in range(p.size)])
+    dc = np.array(
+        [(mats.H0 @ np.linalg.solve(np.eye(2) - F[k], G[k]) + J[k])[0, 0] for k in range(p.size)]
+    )
     X = scipy.linalg.solve_discrete_lyapunov(mats.F0, mats.Q)
     Sigma = float((mats.H0 @ mats.P0 @ mats.H0.T + mats.R)[0, 0])
     K = mats.P0 @ mats.H0.T / Sigma
@@ -885,8 +1037,10 @@ def design_report(model: LTVModel | None = None, *, variant: str = "physical") -
     p_ext = float(p[np.argmax(np.abs(p))])
     return {
         "eig_F": float(max(np.max(np.abs(np.linalg.eigvals(Fk))) for Fk in F)),
-        "dc_gain_min": float(dc.min()), "dc_gain_max": float(dc.max()),
-        "J_min": float(J.min()), "J_max": float(J.max()),
+        "dc_gain_min": float(dc.min()),
+        "dc_gain_max": float(dc.max()),
+        "J_min": float(J.min()),
+        "J_max": float(J.max()),
         "leak_gain": leak_gain,
         "output_std_from_W": float(np.sqrt(mats.H0 @ X @ mats.H0.T)[0, 0]),
         "sqrt_R": float(np.sqrt(mats.R[0, 0])),
@@ -897,5 +1051,6 @@ def design_report(model: LTVModel | None = None, *, variant: str = "physical") -
         "fault1_gain_change": float(FAULT1_DELTA / np.mean(G1)),
         "fault2_gain_change_max": float(np.max(np.abs(FAULT2_DELTA * p / G1))),
         "q_min_eig_printed": float(np.linalg.eigvalsh(Q_PRINTED)[0]),
-        "p_min": float(p.min()), "p_max": float(p.max()),
+        "p_min": float(p.min()),
+        "p_max": float(p.max()),
     }

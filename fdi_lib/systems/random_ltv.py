@@ -9,8 +9,15 @@ from fdi_lib.models import LTVModel, ltv_model
 __all__ = ["random_ltv_model"]
 
 
-def random_ltv_model(rng: np.random.Generator, *, n: int = 3, p: int = 1, l: int = 1, n_steps: int = 60,
-                     unstable: bool = True) -> LTVModel:
+def random_ltv_model(
+    rng: np.random.Generator,
+    *,
+    n: int = 3,
+    p: int = 1,
+    l: int = 1,
+    n_steps: int = 60,
+    unstable: bool = True,
+) -> LTVModel:
     """A random LTV model ``F_k = F + 0.05 sin(0.3 k) D_F`` (and likewise ``G_k``, ``H_k``).
 
     The constant part of ``F_k`` is scaled to spectral radius 1.15 (``unstable``) or 0.8;

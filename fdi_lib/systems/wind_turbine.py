@@ -114,12 +114,40 @@ from fdi_lib.errors import ModelError, NumericalError, ResourceError, ShapeError
 from fdi_lib.montecarlo import check_memory
 from fdi_lib.validation import array, integer, real
 
-__all__ = ["TS", "SCENARIO_S", "WindTurbineParams", "PARAMS", "LAMBDA_GRID", "BETA_GRID_DEG", "CQ_TABLE",
-           "torque_coefficient", "power_coefficient", "aero_torque", "OUTPUT_NAMES", "STATE_NAMES",
-           "FAULT_KINDS", "Fault", "FAULTS", "fault_profiles", "WIND_PROFILE", "TURBULENCE_INTENSITY",
-           "LENGTH_SCALE_M", "wind_speed", "pitch_discretisation", "drive_train_discretisation",
-           "OperatingPoint", "operating_point", "rated_wind_speed", "Linearisation", "linearise",
-           "LPVSchedule", "lpv_schedule", "plant_step", "WindTurbineRun", "simulate"]
+__all__ = [
+    "TS",
+    "SCENARIO_S",
+    "WindTurbineParams",
+    "PARAMS",
+    "LAMBDA_GRID",
+    "BETA_GRID_DEG",
+    "CQ_TABLE",
+    "torque_coefficient",
+    "power_coefficient",
+    "aero_torque",
+    "OUTPUT_NAMES",
+    "STATE_NAMES",
+    "FAULT_KINDS",
+    "Fault",
+    "FAULTS",
+    "fault_profiles",
+    "WIND_PROFILE",
+    "TURBULENCE_INTENSITY",
+    "LENGTH_SCALE_M",
+    "wind_speed",
+    "pitch_discretisation",
+    "drive_train_discretisation",
+    "OperatingPoint",
+    "operating_point",
+    "rated_wind_speed",
+    "Linearisation",
+    "linearise",
+    "LPVSchedule",
+    "lpv_schedule",
+    "plant_step",
+    "WindTurbineRun",
+    "simulate",
+]
 
 #: Sampling period (s) [script] ``Ts = 1/100``.
 TS = 0.01
@@ -139,46 +167,48 @@ class WindTurbineParams:
     """
 
     # --- aerodynamics -----------------------------------------------------------------------------
-    rho: float = 1.225           #: air density (kg/m^3) [script] ``rho``; [Felix] ``rho_r``
-    radius: float = 57.5         #: rotor radius R (m) [script] ``R``; [Felix] ``R_r``
+    rho: float = 1.225  #: air density (kg/m^3) [script] ``rho``; [Felix] ``rho_r``
+    radius: float = 57.5  #: rotor radius R (m) [script] ``R``; [Felix] ``R_r``
     # --- drive train (two-mass model) [script] "Drive Train Model"; [Felix] "Drive train Parameters" --
-    J_r: float = 55e6            #: rotor inertia
-    J_g: float = 390.0           #: generator inertia
-    B_dt: float = 775.49         #: torsion damping (N m s/rad)
-    B_r: float = 7.11            #: rotor bearing friction (N m s/rad)
-    B_g: float = 45.6            #: generator bearing friction (N m s/rad)
-    K_dt: float = 2.7e9          #: torsion stiffness (N m/rad)
-    N_g: float = 95.0            #: gear ratio
-    eta_dt: float = 0.97         #: drive-train efficiency
+    J_r: float = 55e6  #: rotor inertia
+    J_g: float = 390.0  #: generator inertia
+    B_dt: float = 775.49  #: torsion damping (N m s/rad)
+    B_r: float = 7.11  #: rotor bearing friction (N m s/rad)
+    B_g: float = 45.6  #: generator bearing friction (N m s/rad)
+    K_dt: float = 2.7e9  #: torsion stiffness (N m/rad)
+    N_g: float = 95.0  #: gear ratio
+    eta_dt: float = 0.97  #: drive-train efficiency
     # --- generator and converter [script] "Generator & Converter"; [Felix] --------------------------
-    alpha_gc: float = 50.0       #: converter bandwidth (rad/s) [script] ``alpha_gc = 1/20e-3``
-    eta_gc: float = 0.98         #: generator-converter efficiency
+    alpha_gc: float = 50.0  #: converter bandwidth (rad/s) [script] ``alpha_gc = 1/20e-3``
+    eta_gc: float = 0.98  #: generator-converter efficiency
     # --- pitch actuators [script] "Pitch and Blade Model"; [Felix]; faulty sets [script] "fault 6/7" --
-    omega_n: float = 11.11       #: nominal natural frequency (rad/s)
-    zeta: float = 0.6            #: nominal damping ratio
-    omega_n_pressure_drop: float = 5.73   #: hydraulic pressure drop (fault 6) [script] ``omega_n2``
-    zeta_pressure_drop: float = 0.45      #: hydraulic pressure drop (fault 6) [script] ``xi2``
-    omega_n_air: float = 3.42             #: high air content in the oil (fault 7) [script] ``omega_n3``
-    zeta_air: float = 0.9                 #: high air content in the oil (fault 7) [script] ``xi3``
+    omega_n: float = 11.11  #: nominal natural frequency (rad/s)
+    zeta: float = 0.6  #: nominal damping ratio
+    omega_n_pressure_drop: float = 5.73  #: hydraulic pressure drop (fault 6) [script] ``omega_n2``
+    zeta_pressure_drop: float = 0.45  #: hydraulic pressure drop (fault 6) [script] ``xi2``
+    omega_n_air: float = 3.42  #: high air content in the oil (fault 7) [script] ``omega_n3``
+    zeta_air: float = 0.9  #: high air content in the oil (fault 7) [script] ``xi3``
     # --- sensor noise: standard deviations = sqrt of the script's sigma_* (used as variances by the
     #     Simulink "Random Number" blocks [model]; module docstring, disagreement 1) ----------------
-    std_beta: float = math.sqrt(0.2)                    #: pitch sensors (deg) [script] ``sigma_Beta``
-    std_omega_r: float = math.sqrt(0.004 * 2 * math.pi)  #: rotor speed (rad/s) [script] ``sigma_omega_r``
-    std_omega_g: float = math.sqrt(0.05)                #: generator speed (rad/s) [script] ``sigma_omega_g``
-    std_tau_g: float = math.sqrt(90.0)                  #: generator torque (N m) [script] ``sigma_tau_g``
-    std_p_g: float = math.sqrt(1e3)                     #: generator power (W) [script] ``sigma_P_g``
+    std_beta: float = math.sqrt(0.2)  #: pitch sensors (deg) [script] ``sigma_Beta``
+    std_omega_r: float = math.sqrt(
+        0.004 * 2 * math.pi
+    )  #: rotor speed (rad/s) [script] ``sigma_omega_r``
+    std_omega_g: float = math.sqrt(0.05)  #: generator speed (rad/s) [script] ``sigma_omega_g``
+    std_tau_g: float = math.sqrt(90.0)  #: generator torque (N m) [script] ``sigma_tau_g``
+    std_p_g: float = math.sqrt(1e3)  #: generator power (W) [script] ``sigma_P_g``
     # --- sampling -----------------------------------------------------------------------------------
-    ts: float = TS               #: sampling period (s) [script] ``Ts``
+    ts: float = TS  #: sampling period (s) [script] ``Ts``
     # --- controller [script] "Controller"; [model] "Controller"; [Felix] "Controller Pitch" ------------
-    K_p: float = 4.0             #: pitch PI proportional gain (deg per rad/s)
-    K_i: float = 1.0             #: pitch PI integral gain (deg per rad)
-    cp_max: float = 0.4554       #: Cp used in K_opt [script] ``K_opt = ... 0.4554 / (N_g 8)^3``
-    lambda_opt: float = 8.0      #: optimal tip-speed ratio used in K_opt [script]
-    P_r: float = 4.8e6           #: rated (reference) power (W)
-    omega_nom: float = 162.0     #: nominal generator speed (rad/s) ``Omega_nom``
-    omega_delta: float = 15.0    #: hysteresis of the zone switch 2 -> 1 (rad/s) ``Omega_delta``
-    beta_min: float = -2.0       #: pitch reference and integrator lower limit (deg) [model] saturations
-    beta_max: float = 90.0       #: pitch reference and integrator upper limit (deg) [model] saturations
+    K_p: float = 4.0  #: pitch PI proportional gain (deg per rad/s)
+    K_i: float = 1.0  #: pitch PI integral gain (deg per rad)
+    cp_max: float = 0.4554  #: Cp used in K_opt [script] ``K_opt = ... 0.4554 / (N_g 8)^3``
+    lambda_opt: float = 8.0  #: optimal tip-speed ratio used in K_opt [script]
+    P_r: float = 4.8e6  #: rated (reference) power (W)
+    omega_nom: float = 162.0  #: nominal generator speed (rad/s) ``Omega_nom``
+    omega_delta: float = 15.0  #: hysteresis of the zone switch 2 -> 1 (rad/s) ``Omega_delta``
+    beta_min: float = -2.0  #: pitch reference and integrator lower limit (deg) [model] saturations
+    beta_max: float = 90.0  #: pitch reference and integrator upper limit (deg) [model] saturations
     # --- the reading of the faulty pitch actuators (module docstring, disagreement 3) ------------
     #: "simulink": the benchmark's Simulink realisation (the pitch jumps by (omega_n,f / omega_n)^2
     #: when the parameters change); "jump_free": the physical parameters change, the pitch is
@@ -189,34 +219,85 @@ class WindTurbineParams:
     def K_opt(self) -> float:
         """Optimal-mode gain ``tau_g,r = K_opt omega_g^2`` (N m s^2) [script]:
         ``0.5 rho pi R^2 eta_dt R^3 Cp_max / (N_g lambda_opt)^3``."""
-        return (0.5 * self.rho * math.pi * self.radius**2 * self.eta_dt * self.radius**3 * self.cp_max
-                / (self.N_g * self.lambda_opt) ** 3)
+        return (
+            0.5
+            * self.rho
+            * math.pi
+            * self.radius**2
+            * self.eta_dt
+            * self.radius**3
+            * self.cp_max
+            / (self.N_g * self.lambda_opt) ** 3
+        )
 
     @property
     def noise_std(self) -> np.ndarray:
         """Noise standard deviations of the 12 measured outputs, in :data:`OUTPUT_NAMES` order."""
-        return np.array([self.std_beta] * 6 + [self.std_omega_r] * 2 + [self.std_omega_g] * 2
-                        + [self.std_tau_g, self.std_p_g])
+        return np.array(
+            [self.std_beta] * 6
+            + [self.std_omega_r] * 2
+            + [self.std_omega_g] * 2
+            + [self.std_tau_g, self.std_p_g]
+        )
 
     def __post_init__(self) -> None:
-        for name in ("rho", "radius", "J_r", "J_g", "K_dt", "N_g", "eta_dt", "alpha_gc", "eta_gc",
-                     "omega_n", "zeta", "omega_n_pressure_drop", "zeta_pressure_drop", "omega_n_air",
-                     "zeta_air", "ts", "P_r", "omega_nom", "cp_max", "lambda_opt"):
+        for name in (
+            "rho",
+            "radius",
+            "J_r",
+            "J_g",
+            "K_dt",
+            "N_g",
+            "eta_dt",
+            "alpha_gc",
+            "eta_gc",
+            "omega_n",
+            "zeta",
+            "omega_n_pressure_drop",
+            "zeta_pressure_drop",
+            "omega_n_air",
+            "zeta_air",
+            "ts",
+            "P_r",
+            "omega_nom",
+            "cp_max",
+            "lambda_opt",
+        ):
             real(getattr(self, name), name, low=0.0, low_open=True)
-        for name in ("B_dt", "B_r", "B_g", "std_beta", "std_omega_r", "std_omega_g", "std_tau_g",
-                     "std_p_g", "K_p", "K_i", "omega_delta"):
+        for name in (
+            "B_dt",
+            "B_r",
+            "B_g",
+            "std_beta",
+            "std_omega_r",
+            "std_omega_g",
+            "std_tau_g",
+            "std_p_g",
+            "K_p",
+            "K_i",
+            "omega_delta",
+        ):
             real(getattr(self, name), name, low=0.0)
         if self.actuator_faults not in ACTUATOR_FAULT_MODELS:
-            raise ModelError(f"actuator_faults: expected one of {ACTUATOR_FAULT_MODELS}, got "
-                             f"{self.actuator_faults!r}")
+            raise ModelError(
+                f"actuator_faults: expected one of {ACTUATOR_FAULT_MODELS}, got "
+                f"{self.actuator_faults!r}"
+            )
         if not self.beta_min < self.beta_max:
-            raise ModelError(f"beta_min, beta_max: expected beta_min < beta_max, got {self.beta_min}, "
-                             f"{self.beta_max}")
+            raise ModelError(
+                f"beta_min, beta_max: expected beta_min < beta_max, got {self.beta_min}, "
+                f"{self.beta_max}"
+            )
 
 
 #: The script's noise parameters ``sigma_*`` [script], by :class:`WindTurbineParams` field.
-NOISE_SCRIPT_VALUES = {"std_beta": 0.2, "std_omega_r": 0.004 * 2 * math.pi, "std_omega_g": 0.05,
-                       "std_tau_g": 90.0, "std_p_g": 1e3}
+NOISE_SCRIPT_VALUES = {
+    "std_beta": 0.2,
+    "std_omega_r": 0.004 * 2 * math.pi,
+    "std_omega_g": 0.05,
+    "std_tau_g": 90.0,
+    "std_p_g": 1e3,
+}
 #: Readings of :data:`NOISE_SCRIPT_VALUES` (module docstring, disagreement 1): ``"variance"`` (the
 #: Simulink blocks' reading, the default: standard deviation = square root) or ``"std"`` (the names'
 #: reading: the values are standard deviations).
@@ -231,14 +312,17 @@ def check_params(params: Any, name: str = "params") -> "WindTurbineParams":
     return params
 
 
-def benchmark_params(*, noise_reading: str = "variance",
-                     actuator_faults: str = "simulink") -> WindTurbineParams:
+def benchmark_params(
+    *, noise_reading: str = "variance", actuator_faults: str = "simulink"
+) -> WindTurbineParams:
     """The benchmark's parameters under a reading of the noise values (:data:`NOISE_READINGS`) and
     of the actuator faults (:data:`ACTUATOR_FAULT_MODELS`); the defaults give :data:`PARAMS`."""
     if noise_reading not in NOISE_READINGS:
         raise ModelError(f"noise_reading: expected one of {NOISE_READINGS}, got {noise_reading!r}")
-    std = {k: (math.sqrt(v) if noise_reading == "variance" else v)
-           for k, v in NOISE_SCRIPT_VALUES.items()}
+    std = {
+        k: (math.sqrt(v) if noise_reading == "variance" else v)
+        for k, v in NOISE_SCRIPT_VALUES.items()
+    }
     return WindTurbineParams(**std, actuator_faults=actuator_faults)
 
 
@@ -246,13 +330,35 @@ def benchmark_params(*, noise_reading: str = "variance",
 PARAMS = WindTurbineParams()
 
 #: Names of the 12 measured outputs, the order of :attr:`WindTurbineRun.y` and :attr:`Linearisation.C`.
-OUTPUT_NAMES = ("beta_1_m1", "beta_1_m2", "beta_2_m1", "beta_2_m2", "beta_3_m1", "beta_3_m2",
-                "omega_r_m1", "omega_r_m2", "omega_g_m1", "omega_g_m2", "tau_g_m", "p_g_m")
+OUTPUT_NAMES = (
+    "beta_1_m1",
+    "beta_1_m2",
+    "beta_2_m1",
+    "beta_2_m2",
+    "beta_3_m1",
+    "beta_3_m2",
+    "omega_r_m1",
+    "omega_r_m2",
+    "omega_g_m1",
+    "omega_g_m2",
+    "tau_g_m",
+    "p_g_m",
+)
 #: Names of the 10 plant states, the order of :attr:`WindTurbineRun.state` and :attr:`Linearisation.A`:
 #: pitch angle and rate of each blade, rotor and generator speeds, shaft torsion angle, generator torque
 #: (converter output without the fault-8 offset).
-STATE_NAMES = ("beta_1", "dbeta_1", "beta_2", "dbeta_2", "beta_3", "dbeta_3", "omega_r", "omega_g",
-               "theta_delta", "tau_gc")
+STATE_NAMES = (
+    "beta_1",
+    "dbeta_1",
+    "beta_2",
+    "dbeta_2",
+    "beta_3",
+    "dbeta_3",
+    "omega_r",
+    "omega_g",
+    "theta_delta",
+    "tau_gc",
+)
 
 # ---------------------------------------------------------------------------------------------------
 # Aerodynamic table [tables] code/AeroDynamics.mat: ``Lambda`` (rows), ``Angle`` (columns, deg), ``Cq``.
@@ -260,8 +366,44 @@ STATE_NAMES = ("beta_1", "dbeta_1", "beta_2", "dbeta_2", "beta_3", "dbeta_3", "o
 #: Tip-speed ratios of the rows of :data:`CQ_TABLE` [tables] ``Lambda``.
 LAMBDA_GRID = np.arange(1.0, 13.01, 0.5)
 #: Pitch angles (deg) of the columns of :data:`CQ_TABLE` [tables] ``Angle``.
-BETA_GRID_DEG = np.array([-2, -1.5, -1, -0.75, -0.5, -0.25, 0, 0.25, 0.5, 0.75, 1, 1.5, 2, 3, 5, 10, 15, 20,
-                          25, 30, 35, 40, 45, 50, 55, 60, 65, 70, 75, 80, 85, 90, 95], dtype=float)
+BETA_GRID_DEG = np.array(
+    [
+        -2,
+        -1.5,
+        -1,
+        -0.75,
+        -0.5,
+        -0.25,
+        0,
+        0.25,
+        0.5,
+        0.75,
+        1,
+        1.5,
+        2,
+        3,
+        5,
+        10,
+        15,
+        20,
+        25,
+        30,
+        35,
+        40,
+        45,
+        50,
+        55,
+        60,
+        65,
+        70,
+        75,
+        80,
+        85,
+        90,
+        95,
+    ],
+    dtype=float,
+)
 _CQ_ROWS = (
     "0.0117 0.0126 0.0126 0.0126 0.0126 0.0126 0.0126 0.0126 0.0135 0.0135 0.0135 0.0135 0.0135 0.0144 "
     "0.0144 0.0162 0.0171 0.018 0.0198 0.0225 0.0252 0.0252 0.0225 0.0171 0.0072 -0.0036 -0.0126 -0.018 "
@@ -366,8 +508,9 @@ def _cell(grid: np.ndarray, x: float) -> int:
 
 
 @numba.njit(cache=True, inline="always")
-def _cq_grad(lam: float, beta: float, lam_grid: np.ndarray, beta_grid: np.ndarray,
-             table: np.ndarray) -> tuple[float, float, float]:
+def _cq_grad(
+    lam: float, beta: float, lam_grid: np.ndarray, beta_grid: np.ndarray, table: np.ndarray
+) -> tuple[float, float, float]:
     """Bilinear interpolation (linear extrapolation outside) of ``table``: value, d/dlambda, d/dbeta."""
     i = _cell(lam_grid, lam)
     j = _cell(beta_grid, beta)
@@ -383,8 +526,13 @@ def _cq_grad(lam: float, beta: float, lam_grid: np.ndarray, beta_grid: np.ndarra
 
 
 @numba.njit(cache=True)
-def _cq_many(lam: np.ndarray, beta: np.ndarray, lam_grid: np.ndarray, beta_grid: np.ndarray,
-             table: np.ndarray) -> np.ndarray:
+def _cq_many(
+    lam: np.ndarray,
+    beta: np.ndarray,
+    lam_grid: np.ndarray,
+    beta_grid: np.ndarray,
+    table: np.ndarray,
+) -> np.ndarray:
     out = np.empty((3, lam.shape[0]))
     for k in range(lam.shape[0]):
         out[0, k], out[1, k], out[2, k] = _cq_grad(lam[k], beta[k], lam_grid, beta_grid, table)
@@ -397,9 +545,16 @@ def _coefficient_arrays(lam: Any, beta_deg: Any) -> tuple[np.ndarray, np.ndarray
     try:
         lam_b, beta_b = np.broadcast_arrays(lam_a, beta_a)
     except ValueError as exc:
-        raise ShapeError(f"lam, beta_deg: shapes {lam_a.shape} and {beta_a.shape} do not broadcast") from exc
-    res = _cq_many(np.ascontiguousarray(lam_b, dtype=float).ravel(),
-                   np.ascontiguousarray(beta_b, dtype=float).ravel(), LAMBDA_GRID, BETA_GRID_DEG, CQ_TABLE)
+        raise ShapeError(
+            f"lam, beta_deg: shapes {lam_a.shape} and {beta_a.shape} do not broadcast"
+        ) from exc
+    res = _cq_many(
+        np.ascontiguousarray(lam_b, dtype=float).ravel(),
+        np.ascontiguousarray(beta_b, dtype=float).ravel(),
+        LAMBDA_GRID,
+        BETA_GRID_DEG,
+        CQ_TABLE,
+    )
     return tuple(r.reshape(lam_b.shape) for r in res)  # type: ignore[return-value]
 
 
@@ -434,7 +589,9 @@ def power_coefficient(lam: Any, beta_deg: Any) -> np.ndarray:
     return lam_a * _coefficient_arrays(lam_a, beta_deg)[0]
 
 
-def aero_torque(v: Any, omega_r: Any, beta_deg: Any, params: WindTurbineParams = PARAMS) -> np.ndarray:
+def aero_torque(
+    v: Any, omega_r: Any, beta_deg: Any, params: WindTurbineParams = PARAMS
+) -> np.ndarray:
     """Aerodynamic rotor torque (N m) for wind ``v`` (m/s), rotor speed ``omega_r`` (rad/s) and the three
     pitch angles ``beta_deg`` (last axis of length 3, degrees): ``sum_i rho pi R^3 Cq(lambda, beta_i) v^2 / 6``
     [model] "AeroDyn i"."""
@@ -443,7 +600,9 @@ def aero_torque(v: Any, omega_r: Any, beta_deg: Any, params: WindTurbineParams =
         raise ModelError(f"v: expected positive wind speeds, got minimum {v_a.min()}")
     beta_a = array(beta_deg, "beta_deg")
     if beta_a.shape[-1:] != (3,):
-        raise ShapeError(f"beta_deg: expected a last axis of length 3 (one angle per blade), got {beta_a.shape}")
+        raise ShapeError(
+            f"beta_deg: expected a last axis of length 3 (one angle per blade), got {beta_a.shape}"
+        )
     lam = array(omega_r, "omega_r") * params.radius / v_a
     cq = _coefficient_arrays(lam[..., None], beta_a)[0].sum(axis=-1)
     return params.rho * math.pi * params.radius**3 / 6.0 * cq * v_a**2
@@ -456,7 +615,13 @@ def aero_torque(v: Any, omega_r: Any, beta_deg: Any, params: WindTurbineParams =
 #: ("sensor_gain"), a pitch actuator's ``(omega_n, zeta)`` changed to ``magnitude`` ("actuator_dynamics"),
 #: an additive converter torque offset ``magnitude`` N m ("converter_offset"), the drive-train efficiency
 #: changed to ``magnitude`` ("drive_train").
-FAULT_KINDS = ("sensor_fixed", "sensor_gain", "actuator_dynamics", "converter_offset", "drive_train")
+FAULT_KINDS = (
+    "sensor_fixed",
+    "sensor_gain",
+    "actuator_dynamics",
+    "converter_offset",
+    "drive_train",
+)
 _PITCH_ACTUATORS = ("pitch_actuator_1", "pitch_actuator_2", "pitch_actuator_3")
 
 
@@ -487,65 +652,180 @@ class Fault:
     def __post_init__(self) -> None:
         integer(self.id, "id")
         if self.kind not in FAULT_KINDS:
-            raise ModelError(f"fault {self.id}: kind expected one of {FAULT_KINDS}, got {self.kind!r}")
-        allowed = {"sensor_fixed": OUTPUT_NAMES, "sensor_gain": OUTPUT_NAMES,
-                   "actuator_dynamics": _PITCH_ACTUATORS, "converter_offset": ("converter",),
-                   "drive_train": ("drive_train",)}[self.kind]
+            raise ModelError(
+                f"fault {self.id}: kind expected one of {FAULT_KINDS}, got {self.kind!r}"
+            )
+        allowed = {
+            "sensor_fixed": OUTPUT_NAMES,
+            "sensor_gain": OUTPUT_NAMES,
+            "actuator_dynamics": _PITCH_ACTUATORS,
+            "converter_offset": ("converter",),
+            "drive_train": ("drive_train",),
+        }[self.kind]
         if not self.component or any(c not in allowed for c in self.component):
-            raise ModelError(f"fault {self.id}: component expected names from {allowed}, got {self.component!r}")
-        n_mag = {"sensor_fixed": len(self.component), "sensor_gain": len(self.component),
-                 "actuator_dynamics": 2, "converter_offset": 1, "drive_train": 1}[self.kind]
-        if self.kind in ("actuator_dynamics", "converter_offset", "drive_train") and len(self.component) != 1:
-            raise ModelError(f"fault {self.id}: kind {self.kind!r} acts on one component, got {self.component!r}")
+            raise ModelError(
+                f"fault {self.id}: component expected names from {allowed}, got {self.component!r}"
+            )
+        n_mag = {
+            "sensor_fixed": len(self.component),
+            "sensor_gain": len(self.component),
+            "actuator_dynamics": 2,
+            "converter_offset": 1,
+            "drive_train": 1,
+        }[self.kind]
+        if (
+            self.kind in ("actuator_dynamics", "converter_offset", "drive_train")
+            and len(self.component) != 1
+        ):
+            raise ModelError(
+                f"fault {self.id}: kind {self.kind!r} acts on one component, got {self.component!r}"
+            )
         if len(self.magnitude) != n_mag:
-            raise ModelError(f"fault {self.id}: magnitude expected {n_mag} values, got {self.magnitude!r}")
+            raise ModelError(
+                f"fault {self.id}: magnitude expected {n_mag} values, got {self.magnitude!r}"
+            )
         for m in self.magnitude:
             real(m, f"fault {self.id} magnitude")
         if self.kind == "actuator_dynamics" and min(self.magnitude) <= 0:
-            raise ModelError(f"fault {self.id}: (omega_n, zeta) must be positive, got {self.magnitude!r}")
+            raise ModelError(
+                f"fault {self.id}: (omega_n, zeta) must be positive, got {self.magnitude!r}"
+            )
         if self.kind == "drive_train" and not 0 < self.magnitude[0]:
-            raise ModelError(f"fault {self.id}: drive-train efficiency must be positive, got {self.magnitude!r}")
+            raise ModelError(
+                f"fault {self.id}: drive-train efficiency must be positive, got {self.magnitude!r}"
+            )
         start = real(self.start_s, f"fault {self.id} start_s", low=0.0)
         stop = real(self.stop_s, f"fault {self.id} stop_s", low=0.0)
         if not start < stop:
             raise ModelError(f"fault {self.id}: expected start_s < stop_s, got {start}, {stop}")
         ramp = real(self.ramp_s, f"fault {self.id} ramp_s", low=0.0)
         if ramp > 0 and self.kind == "drive_train":
-            raise ModelError(f"fault {self.id}: a drive-train fault is abrupt (ramp_s = 0), got {ramp}")
+            raise ModelError(
+                f"fault {self.id}: a drive-train fault is abrupt (ramp_s = 0), got {ramp}"
+            )
         if self.required_detection_s is not None:
-            real(self.required_detection_s, f"fault {self.id} required_detection_s", low=0.0, low_open=True)
+            real(
+                self.required_detection_s,
+                f"fault {self.id} required_detection_s",
+                low=0.0,
+                low_open=True,
+            )
 
 
-_SRC09 = "required detection time: Odgaard, Stoustrup & Kinnaert (2009), fault list (not cross-checked)"
-_SRCS = "[script] FDIBenchMarkData.m, 'fault models' and 'Fault signals' (the commented D_Fault lines)"
+_SRC09 = (
+    "required detection time: Odgaard, Stoustrup & Kinnaert (2009), fault list (not cross-checked)"
+)
+_SRCS = (
+    "[script] FDIBenchMarkData.m, 'fault models' and 'Fault signals' (the commented D_Fault lines)"
+)
 #: The benchmark scenario's fault schedule. Times and magnitudes: [script] (the commented ``D_Fault``
 #: lines give the scenario's intervals; fault 7's ramp of 30 s up, 40 s full, 30 s down), cross-checked
 #: against [CEAI] §5 for faults 1, 3, 4, 5, 8. Required detection times: the 2009 paper, in samples
 #: (10 Ts for the sensor faults, 8 Ts and 600 Ts for the actuator faults, 3 Ts for the converter), not
 #: cross-checked (module docstring, substitutes).
 FAULTS: tuple[Fault, ...] = (
-    Fault(1, "pitch sensor beta_1,m1 fixed at 5 deg", "sensor_fixed", ("beta_1_m1",), 2000.0, 2100.0,
-          (5.0,), 10 * TS, f"{_SRCS} Constant_Beta_1_m1 = 5; [CEAI] 5.1; {_SRC09}"),
-    Fault(2, "pitch sensor beta_2,m2 gain 1.2", "sensor_gain", ("beta_2_m2",), 2300.0, 2400.0,
-          (1.2,), 10 * TS, f"{_SRCS} Gain_Beta_2_m2 = 1.2; {_SRC09}"),
-    Fault(3, "pitch sensor beta_3,m1 fixed at 10 deg", "sensor_fixed", ("beta_3_m1",), 2600.0, 2700.0,
-          (10.0,), 10 * TS, f"{_SRCS} Constant_Beta_3_m1 = 10; [CEAI] 5.1; {_SRC09}"),
-    Fault(4, "rotor speed sensor omega_r,m1 fixed at 1.4 rad/s", "sensor_fixed", ("omega_r_m1",), 1500.0,
-          1600.0, (1.4,), 10 * TS, f"{_SRCS} Constant_Omega_r_m1 = 1.4; [CEAI] 5.1; {_SRC09}"),
-    Fault(5, "speed sensors omega_r,m2 gain 1.1 and omega_g,m2 gain 0.9", "sensor_gain",
-          ("omega_r_m2", "omega_g_m2"), 1000.0, 1100.0, (1.1, 0.9), 10 * TS,
-          f"{_SRCS} Gain_Omega_r_m2 = 1.1, Gain_Omega_g_m1 = 0.9 (on sensor m2: [CEAI] 5.2; module "
-          f"docstring, disagreement 2); {_SRC09}"),
-    Fault(6, "pitch actuator 2 hydraulic pressure drop", "actuator_dynamics", ("pitch_actuator_2",), 2900.0,
-          3000.0, (5.73, 0.45), 8 * TS, f"{_SRCS} omega_n2 = 5.73, xi2 = 0.45; [model] PitchSystem 2; {_SRC09}"),
-    Fault(7, "pitch actuator 3 high air content in the oil", "actuator_dynamics", ("pitch_actuator_3",),
-          3400.0, 3500.0, (3.42, 0.9), 600 * TS,
-          f"{_SRCS} omega_n3 = 3.42, xi3 = 0.9, D_Fault7 ramps; [model] PitchSystem 3; {_SRC09}", ramp_s=30.0),
-    Fault(8, "converter torque offset 100 N m", "converter_offset", ("converter",), 3800.0, 3900.0,
-          (100.0,), 3 * TS, f"{_SRCS} Constant_tau_gc = 100; [CEAI] 5.3; [model] Generator & Converter; {_SRC09}"),
-    Fault(9, "drive train efficiency drop to 0.92", "drive_train", ("drive_train",), 4000.0, 4200.0,
-          (0.92,), None, f"{_SRCS} eta_dt2 = .92, D_Fault9; [model] Drive Train; Odgaard, Stoustrup & "
-          "Kinnaert (2013); required detection time not found in the sources reachable here"),
+    Fault(
+        1,
+        "pitch sensor beta_1,m1 fixed at 5 deg",
+        "sensor_fixed",
+        ("beta_1_m1",),
+        2000.0,
+        2100.0,
+        (5.0,),
+        10 * TS,
+        f"{_SRCS} Constant_Beta_1_m1 = 5; [CEAI] 5.1; {_SRC09}",
+    ),
+    Fault(
+        2,
+        "pitch sensor beta_2,m2 gain 1.2",
+        "sensor_gain",
+        ("beta_2_m2",),
+        2300.0,
+        2400.0,
+        (1.2,),
+        10 * TS,
+        f"{_SRCS} Gain_Beta_2_m2 = 1.2; {_SRC09}",
+    ),
+    Fault(
+        3,
+        "pitch sensor beta_3,m1 fixed at 10 deg",
+        "sensor_fixed",
+        ("beta_3_m1",),
+        2600.0,
+        2700.0,
+        (10.0,),
+        10 * TS,
+        f"{_SRCS} Constant_Beta_3_m1 = 10; [CEAI] 5.1; {_SRC09}",
+    ),
+    Fault(
+        4,
+        "rotor speed sensor omega_r,m1 fixed at 1.4 rad/s",
+        "sensor_fixed",
+        ("omega_r_m1",),
+        1500.0,
+        1600.0,
+        (1.4,),
+        10 * TS,
+        f"{_SRCS} Constant_Omega_r_m1 = 1.4; [CEAI] 5.1; {_SRC09}",
+    ),
+    Fault(
+        5,
+        "speed sensors omega_r,m2 gain 1.1 and omega_g,m2 gain 0.9",
+        "sensor_gain",
+        ("omega_r_m2", "omega_g_m2"),
+        1000.0,
+        1100.0,
+        (1.1, 0.9),
+        10 * TS,
+        f"{_SRCS} Gain_Omega_r_m2 = 1.1, Gain_Omega_g_m1 = 0.9 (on sensor m2: [CEAI] 5.2; module "
+        f"docstring, disagreement 2); {_SRC09}",
+    ),
+    Fault(
+        6,
+        "pitch actuator 2 hydraulic pressure drop",
+        "actuator_dynamics",
+        ("pitch_actuator_2",),
+        2900.0,
+        3000.0,
+        (5.73, 0.45),
+        8 * TS,
+        f"{_SRCS} omega_n2 = 5.73, xi2 = 0.45; [model] PitchSystem 2; {_SRC09}",
+    ),
+    Fault(
+        7,
+        "pitch actuator 3 high air content in the oil",
+        "actuator_dynamics",
+        ("pitch_actuator_3",),
+        3400.0,
+        3500.0,
+        (3.42, 0.9),
+        600 * TS,
+        f"{_SRCS} omega_n3 = 3.42, xi3 = 0.9, D_Fault7 ramps; [model] PitchSystem 3; {_SRC09}",
+        ramp_s=30.0,
+    ),
+    Fault(
+        8,
+        "converter torque offset 100 N m",
+        "converter_offset",
+        ("converter",),
+        3800.0,
+        3900.0,
+        (100.0,),
+        3 * TS,
+        f"{_SRCS} Constant_tau_gc = 100; [CEAI] 5.3; [model] Generator & Converter; {_SRC09}",
+    ),
+    Fault(
+        9,
+        "drive train efficiency drop to 0.92",
+        "drive_train",
+        ("drive_train",),
+        4000.0,
+        4200.0,
+        (0.92,),
+        None,
+        f"{_SRCS} eta_dt2 = .92, D_Fault9; [model] Drive Train; Odgaard, Stoustrup & "
+        "Kinnaert (2013); required detection time not found in the sources reachable here",
+    ),
 )
 
 
@@ -584,8 +864,11 @@ def fault_profiles(faults: Sequence[Fault], n_steps: int, ts: float = TS) -> np.
     for f in faults:
         if not isinstance(f, Fault):
             raise ModelError(f"faults: expected Fault objects, got {type(f).__name__}")
-    check_memory(8.0 * n_steps * max(1, len(faults)), "n_steps",
-                 f"profiles of {len(faults)} fault(s) over {n_steps} samples")
+    check_memory(
+        8.0 * n_steps * max(1, len(faults)),
+        "n_steps",
+        f"profiles of {len(faults)} fault(s) over {n_steps} samples",
+    )
     start = np.array([_samples(f.start_s, ts) for f in faults], dtype=np.int64)
     stop = np.array([_samples(f.stop_s, ts) for f in faults], dtype=np.int64)
     ramp = np.array([_samples(f.ramp_s, ts) for f in faults], dtype=np.int64)
@@ -608,33 +891,73 @@ def fault_profiles(faults: Sequence[Fault], n_steps: int, ts: float = TS) -> np.
 #: lambda_opt v / R``), which gives the mean wind there; in full load the knots are set so that the
 #: pitch is active (F7, F8, F9) or about zero (F6's onset). The resulting regions are checked
 #: against :data:`BENCHMARK_REGIONS` by :func:`fault_regions` (tests and the book).
-WIND_PROFILE = np.array([
-    [0.0, 6.2], [100.0, 5.8], [250.0, 5.0], [600.0, 5.3], [780.0, 4.7], [900.0, 5.2],  # low wind
-    [1000.0, 5.3], [1100.0, 5.6],        # fault 5 (speed-sensor gains), partial load
-    [1300.0, 5.8], [1450.0, 7.3],
-    [1500.0, 7.0], [1600.0, 7.0],        # fault 4 (rotor speed stuck at 1.4 rad/s: >= 3 sigma away)
-    [1700.0, 11.0], [1850.0, 8.2],
-    [2000.0, 10.0], [2100.0, 10.0],      # fault 1 (pitch sensor stuck), partial load, zero pitch
-    [2170.0, 7.8], [2280.0, 13.5],       # rise to full load
-    [2300.0, 14.0], [2400.0, 14.5],      # fault 2 (pitch-sensor gain)
-    [2600.0, 15.0], [2700.0, 15.0],      # fault 3 (pitch sensor stuck at 10 deg)
-    [2780.0, 11.5], [2955.0, 11.5],      # fault 6's onset (2900 s) at about zero pitch
-    [3010.0, 16.0],                      # pitch control again
-    [3400.0, 16.5], [3500.0, 16.5],      # fault 7 (air in the oil)
-    [3800.0, 16.0], [3900.0, 16.0],      # fault 8 (converter offset), torque at its rated value
-    [4000.0, 16.5], [4200.0, 16.5],      # fault 9 (drive train), full load under pitch control
-    [4400.0, 16.0]])
+WIND_PROFILE = np.array(
+    [
+        [0.0, 6.2],
+        [100.0, 5.8],
+        [250.0, 5.0],
+        [600.0, 5.3],
+        [780.0, 4.7],
+        [900.0, 5.2],  # low wind
+        [1000.0, 5.3],
+        [1100.0, 5.6],  # fault 5 (speed-sensor gains), partial load
+        [1300.0, 5.8],
+        [1450.0, 7.3],
+        [1500.0, 7.0],
+        [1600.0, 7.0],  # fault 4 (rotor speed stuck at 1.4 rad/s: >= 3 sigma away)
+        [1700.0, 11.0],
+        [1850.0, 8.2],
+        [2000.0, 10.0],
+        [2100.0, 10.0],  # fault 1 (pitch sensor stuck), partial load, zero pitch
+        [2170.0, 7.8],
+        [2280.0, 13.5],  # rise to full load
+        [2300.0, 14.0],
+        [2400.0, 14.5],  # fault 2 (pitch-sensor gain)
+        [2600.0, 15.0],
+        [2700.0, 15.0],  # fault 3 (pitch sensor stuck at 10 deg)
+        [2780.0, 11.5],
+        [2955.0, 11.5],  # fault 6's onset (2900 s) at about zero pitch
+        [3010.0, 16.0],  # pitch control again
+        [3400.0, 16.5],
+        [3500.0, 16.5],  # fault 7 (air in the oil)
+        [3800.0, 16.0],
+        [3900.0, 16.0],  # fault 8 (converter offset), torque at its rated value
+        [4000.0, 16.5],
+        [4200.0, 16.5],  # fault 9 (drive train), full load under pitch control
+        [4400.0, 16.0],
+    ]
+)
 WIND_PROFILE.setflags(write=False)
 #: The book's former designed profile, kept as the second schedule (:data:`WIND_SCHEDULES`
 #: ``"designed"``): the faults in other operating conditions than the benchmark's, as the
 #: benchmark's comparison of methods also ran them. Criterion: partial load (9 m/s) for faults 5, 4
 #: and 9, full load (17-18.5 m/s, pitch active) for faults 1, 2, 3, 6, 7 and 8, away from the rated
 #: wind by more than two turbulence standard deviations.
-DESIGNED_PROFILE = np.array([
-    [0.0, 8.0], [900.0, 9.0], [1000.0, 9.0], [1100.0, 9.0], [1500.0, 9.0], [1600.0, 9.0],
-    [2000.0, 17.0], [2100.0, 17.0], [2300.0, 17.5], [2400.0, 17.5], [2600.0, 18.0], [2700.0, 18.0],
-    [2900.0, 18.5], [3000.0, 18.5], [3400.0, 18.0], [3500.0, 18.0], [3800.0, 17.0], [3900.0, 17.0],
-    [4000.0, 9.0], [4200.0, 9.0], [4400.0, 9.0]])
+DESIGNED_PROFILE = np.array(
+    [
+        [0.0, 8.0],
+        [900.0, 9.0],
+        [1000.0, 9.0],
+        [1100.0, 9.0],
+        [1500.0, 9.0],
+        [1600.0, 9.0],
+        [2000.0, 17.0],
+        [2100.0, 17.0],
+        [2300.0, 17.5],
+        [2400.0, 17.5],
+        [2600.0, 18.0],
+        [2700.0, 18.0],
+        [2900.0, 18.5],
+        [3000.0, 18.5],
+        [3400.0, 18.0],
+        [3500.0, 18.0],
+        [3800.0, 17.0],
+        [3900.0, 17.0],
+        [4000.0, 9.0],
+        [4200.0, 9.0],
+        [4400.0, 9.0],
+    ]
+)
 DESIGNED_PROFILE.setflags(write=False)
 #: Named wind schedules (mean profiles): ``"benchmark"`` (default, :data:`WIND_PROFILE`) and
 #: ``"designed"`` (:data:`DESIGNED_PROFILE`).
@@ -662,9 +985,15 @@ def _schedule(schedule: Any) -> np.ndarray:
     return WIND_SCHEDULES[schedule]
 
 
-def wind_speed(t: Any, *, seed: int | np.random.SeedSequence, turbulence_intensity: float = TURBULENCE_INTENSITY,
-               model: str = "kaimal", length_scale_m: float = LENGTH_SCALE_M,
-               schedule: str = "benchmark") -> np.ndarray:
+def wind_speed(
+    t: Any,
+    *,
+    seed: int | np.random.SeedSequence,
+    turbulence_intensity: float = TURBULENCE_INTENSITY,
+    model: str = "kaimal",
+    length_scale_m: float = LENGTH_SCALE_M,
+    schedule: str = "benchmark",
+) -> np.ndarray:
     """Hub wind speed (m/s) at the times ``t`` (s): a mean profile plus Kaimal turbulence.
 
     ``schedule`` names the mean profile (:data:`WIND_SCHEDULES`: ``"benchmark"``,
@@ -708,11 +1037,13 @@ def wind_speed(t: Any, *, seed: int | np.random.SeedSequence, turbulence_intensi
     psd = (4 * L / V) / (1 + 6 * f * L / V) ** (5.0 / 3.0)
     # white noise of unit variance per sample has the one-sided density 2 dt: scale to psd
     shaped = rfft(rng.standard_normal(n_fft)) * np.sqrt(psd / (2 * dt))
-    shaped[0] = 0.0                      # zero mean: the mean wind is vbar
+    shaped[0] = 0.0  # zero mean: the mean wind is vbar
     u = irfft(shaped, n_fft)[:n]
     v = mean * (1 + ti * u)
     if np.any(v <= 0):
-        raise ModelError(f"turbulence_intensity: {ti} makes the wind speed non-positive (min {v.min():.3g} m/s)")
+        raise ModelError(
+            f"turbulence_intensity: {ti} makes the wind speed non-positive (min {v.min():.3g} m/s)"
+        )
     return v
 
 
@@ -746,16 +1077,17 @@ def _pitch_zoh(c0: float, c1: float, gain: float, T: float, out: np.ndarray) -> 
     p12 = e * f2
     p21 = -e * c0 * f2
     p22 = e * (f1 + (-c1 - s) * f2)
-    g1 = gain * p12                 # (Phi - I) B with B = (0, gain)
+    g1 = gain * p12  # (Phi - I) B with B = (0, gain)
     g2 = gain * (p22 - 1.0)
     out[0], out[1], out[2] = c0, c1, gain
     out[3], out[4], out[5], out[6] = p11, p12, p21, p22
-    out[7] = (-c1 * g1 - g2) / c0   # A^{-1} = [[-c1, -1], [c0, 0]] / c0
+    out[7] = (-c1 * g1 - g2) / c0  # A^{-1} = [[-c1, -1], [c0, 0]] / c0
     out[8] = g1
 
 
-def pitch_discretisation(omega_n: float, zeta: float, *, ts: float = TS,
-                         feedback: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+def pitch_discretisation(
+    omega_n: float, zeta: float, *, ts: float = TS, feedback: float = 1.0
+) -> tuple[np.ndarray, np.ndarray]:
     """Exact ZOH model ``(Phi, Gamma)`` of a pitch actuator, state ``(beta, beta')``, input ``beta_r``.
 
     ``beta'' = -2 zeta omega_n beta' + omega_n^2 (u - feedback beta)``: ``feedback = 1`` for healthy
@@ -767,24 +1099,38 @@ def pitch_discretisation(omega_n: float, zeta: float, *, ts: float = TS,
     zeta = real(zeta, "zeta", low=0.0)
     feedback = real(feedback, "feedback", low=0.0, low_open=True)
     out = np.empty(9)
-    _pitch_zoh(omega_n**2 * feedback, 2 * zeta * omega_n, omega_n**2, real(ts, "ts", low=0.0, low_open=True), out)
+    _pitch_zoh(
+        omega_n**2 * feedback,
+        2 * zeta * omega_n,
+        omega_n**2,
+        real(ts, "ts", low=0.0, low_open=True),
+        out,
+    )
     return out[3:7].reshape(2, 2), out[7:9].reshape(2, 1)
 
 
-def _drive_train_continuous(params: WindTurbineParams, eta_dt: float) -> tuple[np.ndarray, np.ndarray]:
+def _drive_train_continuous(
+    params: WindTurbineParams, eta_dt: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Continuous ``(A, B)`` of drive train + generator, state ``(omega_r, omega_g, theta, tau_gc)``,
     inputs ``(tau_aero, tau_g,r, tau_offset)`` [script] ``Addt``, ``Bddt``; [model] Generator & Converter."""
     p = params
-    A = np.array([
-        [-(p.B_dt + p.B_r) / p.J_r, p.B_dt / p.N_g / p.J_r, -p.K_dt / p.J_r, 0.0],
-        [eta_dt * p.B_dt / p.N_g / p.J_g, -(eta_dt * p.B_dt / p.N_g**2 + p.B_g) / p.J_g,
-         eta_dt * p.K_dt / p.N_g / p.J_g, -1.0 / p.J_g],
-        [1.0, -1.0 / p.N_g, 0.0, 0.0],
-        [0.0, 0.0, 0.0, -p.alpha_gc]])
-    B = np.array([[1.0 / p.J_r, 0.0, 0.0],
-                  [0.0, 0.0, -1.0 / p.J_g],
-                  [0.0, 0.0, 0.0],
-                  [0.0, p.alpha_gc, 0.0]])
+    A = np.array(
+        [
+            [-(p.B_dt + p.B_r) / p.J_r, p.B_dt / p.N_g / p.J_r, -p.K_dt / p.J_r, 0.0],
+            [
+                eta_dt * p.B_dt / p.N_g / p.J_g,
+                -(eta_dt * p.B_dt / p.N_g**2 + p.B_g) / p.J_g,
+                eta_dt * p.K_dt / p.N_g / p.J_g,
+                -1.0 / p.J_g,
+            ],
+            [1.0, -1.0 / p.N_g, 0.0, 0.0],
+            [0.0, 0.0, 0.0, -p.alpha_gc],
+        ]
+    )
+    B = np.array(
+        [[1.0 / p.J_r, 0.0, 0.0], [0.0, 0.0, -1.0 / p.J_g], [0.0, 0.0, 0.0], [0.0, p.alpha_gc, 0.0]]
+    )
     return A, B
 
 
@@ -796,8 +1142,9 @@ def _zoh(A: np.ndarray, B: np.ndarray, ts: float) -> tuple[np.ndarray, np.ndarra
     return E[:n, :n], E[:n, n:]
 
 
-def drive_train_discretisation(params: WindTurbineParams = PARAMS, *,
-                               eta_dt: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+def drive_train_discretisation(
+    params: WindTurbineParams = PARAMS, *, eta_dt: float | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Exact ZOH ``(Phi, Gamma)`` (4x4, 4x3) of drive train + generator at ``Ts``: state ``(omega_r,
     omega_g, theta_delta, tau_gc)``, inputs ``(tau_aero, tau_g,r, converter offset)`` held over the
     sample. ``eta_dt`` defaults to ``params.eta_dt`` (a drive-train fault changes it)."""
@@ -810,8 +1157,23 @@ def drive_train_discretisation(params: WindTurbineParams = PARAMS, *,
 # The compiled closed loop
 # ---------------------------------------------------------------------------------------------------
 # constants vector of the kernels
-_C_AERO, _C_R, _C_TS, _C_WN2, _C_2ZW, _C_KP, _C_KI, _C_KOPT, _C_PR, _C_WNOM, _C_WDELTA, _C_BMIN, _C_BMAX, \
-    _C_ETAGC, _C_JUMP = range(15)
+(
+    _C_AERO,
+    _C_R,
+    _C_TS,
+    _C_WN2,
+    _C_2ZW,
+    _C_KP,
+    _C_KI,
+    _C_KOPT,
+    _C_PR,
+    _C_WNOM,
+    _C_WDELTA,
+    _C_BMIN,
+    _C_BMAX,
+    _C_ETAGC,
+    _C_JUMP,
+) = range(15)
 
 
 def _constants(p: WindTurbineParams) -> np.ndarray:
@@ -820,24 +1182,42 @@ def _constants(p: WindTurbineParams) -> np.ndarray:
     c[_C_R], c[_C_TS] = p.radius, p.ts
     c[_C_WN2], c[_C_2ZW] = p.omega_n**2, 2 * p.zeta * p.omega_n
     c[_C_KP], c[_C_KI], c[_C_KOPT], c[_C_PR] = p.K_p, p.K_i, p.K_opt, p.P_r
-    c[_C_WNOM], c[_C_WDELTA], c[_C_BMIN], c[_C_BMAX] = p.omega_nom, p.omega_delta, p.beta_min, p.beta_max
+    c[_C_WNOM], c[_C_WDELTA], c[_C_BMIN], c[_C_BMAX] = (
+        p.omega_nom,
+        p.omega_delta,
+        p.beta_min,
+        p.beta_max,
+    )
     c[_C_ETAGC] = p.eta_gc
     c[_C_JUMP] = float(p.actuator_faults == "simulink")
     return c
 
 
 @numba.njit(cache=True, inline="always")
-def _aero(v: float, omega_r: float, b1: float, b2: float, b3: float, c: np.ndarray, lam_grid: np.ndarray,
-          beta_grid: np.ndarray, table: np.ndarray) -> float:
+def _aero(
+    v: float,
+    omega_r: float,
+    b1: float,
+    b2: float,
+    b3: float,
+    c: np.ndarray,
+    lam_grid: np.ndarray,
+    beta_grid: np.ndarray,
+    table: np.ndarray,
+) -> float:
     lam = omega_r * c[_C_R] / v
-    q = (_cq_grad(lam, b1, lam_grid, beta_grid, table)[0] + _cq_grad(lam, b2, lam_grid, beta_grid, table)[0]
-         + _cq_grad(lam, b3, lam_grid, beta_grid, table)[0])
+    q = (
+        _cq_grad(lam, b1, lam_grid, beta_grid, table)[0]
+        + _cq_grad(lam, b2, lam_grid, beta_grid, table)[0]
+        + _cq_grad(lam, b3, lam_grid, beta_grid, table)[0]
+    )
     return c[_C_AERO] * q * v * v
 
 
 @numba.njit(cache=True, inline="always")
-def _pitch_update(x: np.ndarray, b: int, c0: float, c1: float, gain: float, u: float, T: float,
-                  caches: np.ndarray) -> None:
+def _pitch_update(
+    x: np.ndarray, b: int, c0: float, c1: float, gain: float, u: float, T: float, caches: np.ndarray
+) -> None:
     """Advance blade ``b`` of state ``x`` one sample (exact ZOH), its discretisation cached in ``caches[b]``
     (recomputed when the parameters change)."""
     if c0 != caches[b, 0] or c1 != caches[b, 1] or gain != caches[b, 2]:
@@ -848,23 +1228,71 @@ def _pitch_update(x: np.ndarray, b: int, c0: float, c1: float, gain: float, u: f
 
 
 @numba.njit(cache=True, inline="always")
-def _dt_update(x: np.ndarray, phi: np.ndarray, gam: np.ndarray, tau_a: float, tgr: float, off: float) -> None:
+def _dt_update(
+    x: np.ndarray, phi: np.ndarray, gam: np.ndarray, tau_a: float, tgr: float, off: float
+) -> None:
     y0 = x[6]
     y1 = x[7]
     y2 = x[8]
     y3 = x[9]
     for i in range(4):
-        x[6 + i] = (phi[i, 0] * y0 + phi[i, 1] * y1 + phi[i, 2] * y2 + phi[i, 3] * y3
-                    + gam[i, 0] * tau_a + gam[i, 1] * tgr + gam[i, 2] * off)
+        x[6 + i] = (
+            phi[i, 0] * y0
+            + phi[i, 1] * y1
+            + phi[i, 2] * y2
+            + phi[i, 3] * y3
+            + gam[i, 0] * tau_a
+            + gam[i, 1] * tgr
+            + gam[i, 2] * off
+        )
 
 
 @numba.njit(cache=True)
-def _run(k0, n, wind, noise, state, xint, zone, pcache, wprev, acc_chan, acc_k, c, lam_grid,
-         beta_grid, table,
-         sf_chan, sf_kind, sf_mag, sf_start, sf_stop, sf_ramp,
-         af_blade, af_wn2, af_2zw, af_start, af_stop, af_ramp,
-         cf_mag, cf_start, cf_stop, cf_ramp, df_start, df_stop, phi_dt, gam_dt,
-         o0, o_state, o_y, o_u, o_tau_a, o_tau_g, o_p_g, o_zone):
+def _run(
+    k0,
+    n,
+    wind,
+    noise,
+    state,
+    xint,
+    zone,
+    pcache,
+    wprev,
+    acc_chan,
+    acc_k,
+    c,
+    lam_grid,
+    beta_grid,
+    table,
+    sf_chan,
+    sf_kind,
+    sf_mag,
+    sf_start,
+    sf_stop,
+    sf_ramp,
+    af_blade,
+    af_wn2,
+    af_2zw,
+    af_start,
+    af_stop,
+    af_ramp,
+    cf_mag,
+    cf_start,
+    cf_stop,
+    cf_ramp,
+    df_start,
+    df_stop,
+    phi_dt,
+    gam_dt,
+    o0,
+    o_state,
+    o_y,
+    o_u,
+    o_tau_a,
+    o_tau_g,
+    o_p_g,
+    o_zone,
+):
     """Closed loop over samples ``k0 .. k0 + n - 1`` for every realisation (first axis of the arrays).
 
     Per sample: sensors (noise ``noise[r, :, k - k0]``, sensor faults), controller (zone switch, PI,
@@ -915,10 +1343,10 @@ def _run(k0, n, wind, noise, state, xint, zone, pcache, wprev, acc_chan, acc_k, 
                 p = _profile(k, sf_start[j], sf_stop[j], sf_ramp[j])
                 if p > 0.0:
                     ch = sf_chan[j]
-                    if sf_kind[j] == 0:          # stuck at sf_mag: y = (1 - p) y + p m
+                    if sf_kind[j] == 0:  # stuck at sf_mag: y = (1 - p) y + p m
                         al[ch] *= 1.0 - p
                         cst[ch] = cst[ch] * (1.0 - p) + p * sf_mag[j]
-                    else:                        # gain: y = (1 + p (g - 1)) y
+                    else:  # gain: y = (1 + p (g - 1)) y
                         g = 1.0 + p * (sf_mag[j] - 1.0)
                         al[ch] *= g
                         cst[ch] *= g
@@ -976,10 +1404,12 @@ def _run(k0, n, wind, noise, state, xint, zone, pcache, wprev, acc_chan, acc_k, 
                 w1 = use[2 * b] / (use[2 * b] + use[2 * b + 1])
                 w2 = 1.0 - w1
                 a = w1 * al[2 * b] + w2 * al[2 * b + 1]
-                bbar = (w1 * (al[2 * b] * noise[r, 2 * b, kk] + cst[2 * b])
-                        + w2 * (al[2 * b + 1] * noise[r, 2 * b + 1, kk] + cst[2 * b + 1]))
-                _pitch_update(x, b, act[b, 0] * a, act[b, 1], act[b, 0], beta_r - bbar, T,
-                              pcache[r])
+                bbar = w1 * (al[2 * b] * noise[r, 2 * b, kk] + cst[2 * b]) + w2 * (
+                    al[2 * b + 1] * noise[r, 2 * b + 1, kk] + cst[2 * b + 1]
+                )
+                _pitch_update(
+                    x, b, act[b, 0] * a, act[b, 1], act[b, 0], beta_r - bbar, T, pcache[r]
+                )
             mode = 0
             for j in range(df_start.shape[0]):
                 if df_start[j] <= k < df_stop[j]:
@@ -1015,10 +1445,14 @@ class OperatingPoint:
     def state(self) -> np.ndarray:
         """The plant state in :data:`STATE_NAMES` order."""
         b = self.beta
-        return np.array([b, 0.0, b, 0.0, b, 0.0, self.omega_r, self.omega_g, self.theta_delta, self.tau_g])
+        return np.array(
+            [b, 0.0, b, 0.0, b, 0.0, self.omega_r, self.omega_g, self.theta_delta, self.tau_g]
+        )
 
 
-def _torque_balance(v: float, omega_r: float, beta: float, tau_g: float, p: WindTurbineParams) -> float:
+def _torque_balance(
+    v: float, omega_r: float, beta: float, tau_g: float, p: WindTurbineParams
+) -> float:
     """Steady generator-side balance of the drive train: ``eta_dt (tau_aero - B_r omega_r) / N_g - B_g
     omega_g - tau_g`` (zero at equilibrium; from ``Addt`` with ``omega_g = N_g omega_r``)."""
     tau_a = float(aero_torque(v, omega_r, np.full(3, beta), p))
@@ -1028,20 +1462,34 @@ def _torque_balance(v: float, omega_r: float, beta: float, tau_g: float, p: Wind
 def _region1_speed(v: float, p: WindTurbineParams) -> float:
     def f(w: float) -> float:
         return _torque_balance(v, w, 0.0, p.K_opt * (p.N_g * w) ** 2, p)
+
     return brentq(f, 1e-3, 5.0, xtol=1e-14, rtol=1e-14)
 
 
-def _make_point(v: float, region: int, omega_r: float, beta: float, tau_g: float,
-                p: WindTurbineParams) -> OperatingPoint:
+def _make_point(
+    v: float, region: int, omega_r: float, beta: float, tau_g: float, p: WindTurbineParams
+) -> OperatingPoint:
     tau_a = float(aero_torque(v, omega_r, np.full(3, beta), p))
     lam = omega_r * p.radius / v
     omega_g = p.N_g * omega_r
-    return OperatingPoint(v=v, region=region, omega_r=omega_r, omega_g=omega_g,
-                          theta_delta=(tau_a - p.B_r * omega_r) / p.K_dt, tau_g=tau_g, beta=beta, lam=lam,
-                          cp=float(power_coefficient(lam, beta)), tau_aero=tau_a, p_g=p.eta_gc * omega_g * tau_g)
+    return OperatingPoint(
+        v=v,
+        region=region,
+        omega_r=omega_r,
+        omega_g=omega_g,
+        theta_delta=(tau_a - p.B_r * omega_r) / p.K_dt,
+        tau_g=tau_g,
+        beta=beta,
+        lam=lam,
+        cp=float(power_coefficient(lam, beta)),
+        tau_aero=tau_a,
+        p_g=p.eta_gc * omega_g * tau_g,
+    )
 
 
-def operating_point(v: float, *, params: WindTurbineParams = PARAMS, region: int | None = None) -> OperatingPoint:
+def operating_point(
+    v: float, *, params: WindTurbineParams = PARAMS, region: int | None = None
+) -> OperatingPoint:
     """The equilibrium of the benchmark's closed loop at constant wind ``v`` (m/s), noise-free.
 
     ``region=None`` picks the region the controller settles in when the wind rises slowly: region 2
@@ -1078,17 +1526,27 @@ def operating_point(v: float, *, params: WindTurbineParams = PARAMS, region: int
 
     lo, hi = p.beta_min, 45.0
     if g(hi) > 0:
-        raise ModelError(f"v: no region-2 equilibrium at {v} m/s (a pitch of {hi} deg is not enough)")
+        raise ModelError(
+            f"v: no region-2 equilibrium at {v} m/s (a pitch of {hi} deg is not enough)"
+        )
     # the torque is not monotonic in the pitch near 0 deg (Cq peaks at -0.75 .. 0 deg): take the largest
     # root, on the branch where more pitch means less torque (the one the PI loop holds)
     grid = np.unique(np.r_[lo, BETA_GRID_DEG[(BETA_GRID_DEG > lo) & (BETA_GRID_DEG < hi)], hi])
     positive = [b for b in grid if g(b) > 0]
     if not positive:
-        raise ModelError(f"v: no region-2 equilibrium at {v} m/s (no pitch in [{lo}, {hi}] deg balances the "
-                         f"rated torque at Omega_nom; the controller cycles between the regions)")
+        raise ModelError(
+            f"v: no region-2 equilibrium at {v} m/s (no pitch in [{lo}, {hi}] deg balances the "
+            f"rated torque at Omega_nom; the controller cycles between the regions)"
+        )
     b0 = max(positive)
-    return _make_point(v, 2, w2, brentq(g, b0, grid[np.searchsorted(grid, b0) + 1], xtol=1e-13, rtol=1e-14),
-                       tau_g, p)
+    return _make_point(
+        v,
+        2,
+        w2,
+        brentq(g, b0, grid[np.searchsorted(grid, b0) + 1], xtol=1e-13, rtol=1e-14),
+        tau_g,
+        p,
+    )
 
 
 def rated_wind_speed(params: WindTurbineParams = PARAMS) -> float:
@@ -1182,7 +1640,9 @@ def _output_matrix(op: OperatingPoint, p: WindTurbineParams) -> np.ndarray:
     return C
 
 
-def linearise(v: float, *, params: WindTurbineParams = PARAMS, region: int | None = None) -> Linearisation:
+def linearise(
+    v: float, *, params: WindTurbineParams = PARAMS, region: int | None = None
+) -> Linearisation:
     """Linearise the plant (pitch actuators, drive train, generator) at constant wind ``v`` (m/s).
 
     The operating point is :func:`operating_point` (``region`` as there: region-dependent pitch and
@@ -1203,9 +1663,25 @@ def linearise(v: float, *, params: WindTurbineParams = PARAMS, region: int | Non
     x0 = op.state
     C = _output_matrix(op, p)
     y0 = np.array([op.beta] * 6 + [op.omega_r] * 2 + [op.omega_g] * 2 + [op.tau_g, op.p_g])
-    return Linearisation(point=op, A=A, A_open=m["A_open"], B=m["B"], E=m["E"], G=m["E"] * d_v, N=m["N"], C=C,
-                         K=K, B_offset=m["B_offset"], d_tau_d_omega_r=d_om, d_tau_d_beta=d_b, d_tau_d_v=d_v,
-                         x0=x0, u0=np.array([op.beta, op.tau_g]), y0=y0, ts=p.ts)
+    return Linearisation(
+        point=op,
+        A=A,
+        A_open=m["A_open"],
+        B=m["B"],
+        E=m["E"],
+        G=m["E"] * d_v,
+        N=m["N"],
+        C=C,
+        K=K,
+        B_offset=m["B_offset"],
+        d_tau_d_omega_r=d_om,
+        d_tau_d_beta=d_b,
+        d_tau_d_v=d_v,
+        x0=x0,
+        u0=np.array([op.beta, op.tau_g]),
+        y0=y0,
+        ts=p.ts,
+    )
 
 
 @dataclass(frozen=True)
@@ -1244,8 +1720,13 @@ class LPVSchedule:
 MAX_LPV_GRID = 100_000
 
 
-def lpv_schedule(v_min: float | None = None, v_max: float | None = None, *, params: WindTurbineParams = PARAMS,
-                 n_grid: int = 200) -> LPVSchedule:
+def lpv_schedule(
+    v_min: float | None = None,
+    v_max: float | None = None,
+    *,
+    params: WindTurbineParams = PARAMS,
+    n_grid: int = 200,
+) -> LPVSchedule:
     """The scheduling set of the LPV form over winds ``[v_min, v_max]`` (m/s), ``n_grid`` points.
 
     Defaults: the scenario's range, the extremes of :data:`WIND_PROFILE` widened by three turbulence
@@ -1278,13 +1759,32 @@ def lpv_schedule(v_min: float | None = None, v_max: float | None = None, *, para
         if sel.any():
             b = np.vstack([rho[sel].min(axis=0), rho[sel].max(axis=0)])
             box[g] = b
-            vertices[g] = np.array([[b[i, 0], b[j, 1], b[k, 2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
-    return LPVSchedule(v_grid=v_grid, region=region, rho=rho, A0=m["A_open"], E=m["E"], B=m["B"], N=m["N"],
-                       box=box, vertices=vertices)
+            vertices[g] = np.array(
+                [[b[i, 0], b[j, 1], b[k, 2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)]
+            )
+    return LPVSchedule(
+        v_grid=v_grid,
+        region=region,
+        rho=rho,
+        A0=m["A_open"],
+        E=m["E"],
+        B=m["B"],
+        N=m["N"],
+        box=box,
+        vertices=vertices,
+    )
 
 
-def plant_step(x: Any, *, beta_r: float, tau_g_r: float, v: float, params: WindTurbineParams = PARAMS,
-               offset: float = 0.0, eta_dt: float | None = None) -> tuple[np.ndarray, float]:
+def plant_step(
+    x: Any,
+    *,
+    beta_r: float,
+    tau_g_r: float,
+    v: float,
+    params: WindTurbineParams = PARAMS,
+    offset: float = 0.0,
+    eta_dt: float | None = None,
+) -> tuple[np.ndarray, float]:
     """One sample of the nonlinear plant (healthy, noise-free pitch sensors), the update :func:`simulate` uses.
 
     Returns ``(x_next, tau_aero)`` with ``x`` in :data:`STATE_NAMES` order, ``beta_r`` (deg), ``tau_g_r``
@@ -1395,23 +1895,46 @@ def _check_no_duplicates(faults: Sequence[Fault]) -> None:
     ids = [f.id for f in faults]
     twice = sorted({i for i in ids if ids.count(i) > 1})
     if twice:
-        raise ModelError(f"faults: expected each fault once, got fault id(s) {twice} more than "
-                         "once")
+        raise ModelError(
+            f"faults: expected each fault once, got fault id(s) {twice} more than once"
+        )
     for i, f in enumerate(faults):
-        for g in faults[i + 1:]:
+        for g in faults[i + 1 :]:
             shared = sorted(set(f.component) & set(g.component))
             if shared and f.start_s < g.stop_s and g.start_s < f.stop_s:
-                raise ModelError(f"faults: faults {f.id} and {g.id} both act on {shared[0]} over "
-                                 f"overlapping times ([{f.start_s}, {f.stop_s}) and [{g.start_s}, "
-                                 f"{g.stop_s}) s); one fault per component at a time")
+                raise ModelError(
+                    f"faults: faults {f.id} and {g.id} both act on {shared[0]} over "
+                    f"overlapping times ([{f.start_s}, {f.stop_s}) and [{g.start_s}, "
+                    f"{g.stop_s}) s); one fault per component at a time"
+                )
 
 
 def _compile_faults(faults: Sequence[Fault], p: WindTurbineParams) -> dict[str, np.ndarray]:
     """The fault schedule as the kernel's arrays (sample indices, channels, magnitudes)."""
     ts = p.ts
-    out: dict[str, list] = {k: [] for k in ("sf_chan", "sf_kind", "sf_mag", "sf_start", "sf_stop", "sf_ramp",
-                                           "af_blade", "af_wn2", "af_2zw", "af_start", "af_stop", "af_ramp",
-                                           "cf_mag", "cf_start", "cf_stop", "cf_ramp", "df_start", "df_stop")}
+    out: dict[str, list] = {
+        k: []
+        for k in (
+            "sf_chan",
+            "sf_kind",
+            "sf_mag",
+            "sf_start",
+            "sf_stop",
+            "sf_ramp",
+            "af_blade",
+            "af_wn2",
+            "af_2zw",
+            "af_start",
+            "af_stop",
+            "af_ramp",
+            "cf_mag",
+            "cf_start",
+            "cf_stop",
+            "cf_ramp",
+            "df_start",
+            "df_stop",
+        )
+    }
     dt_tables = [drive_train_discretisation(p)]
     for f in faults:
         if not isinstance(f, Fault):
@@ -1421,16 +1944,33 @@ def _compile_faults(faults: Sequence[Fault], p: WindTurbineParams) -> dict[str, 
         s, e, rmp = _samples(f.start_s, ts), _samples(f.stop_s, ts), _samples(f.ramp_s, ts)
         if f.kind in ("sensor_fixed", "sensor_gain"):
             for comp, mag in zip(f.component, f.magnitude):
-                for key, val in (("sf_chan", OUTPUT_NAMES.index(comp)), ("sf_kind", int(f.kind == "sensor_gain")),
-                                 ("sf_mag", mag), ("sf_start", s), ("sf_stop", e), ("sf_ramp", rmp)):
+                for key, val in (
+                    ("sf_chan", OUTPUT_NAMES.index(comp)),
+                    ("sf_kind", int(f.kind == "sensor_gain")),
+                    ("sf_mag", mag),
+                    ("sf_start", s),
+                    ("sf_stop", e),
+                    ("sf_ramp", rmp),
+                ):
                     out[key].append(val)
         elif f.kind == "actuator_dynamics":
             wn, zeta = f.magnitude
-            for key, val in (("af_blade", _PITCH_ACTUATORS.index(f.component[0])), ("af_wn2", wn**2),
-                             ("af_2zw", 2 * zeta * wn), ("af_start", s), ("af_stop", e), ("af_ramp", rmp)):
+            for key, val in (
+                ("af_blade", _PITCH_ACTUATORS.index(f.component[0])),
+                ("af_wn2", wn**2),
+                ("af_2zw", 2 * zeta * wn),
+                ("af_start", s),
+                ("af_stop", e),
+                ("af_ramp", rmp),
+            ):
                 out[key].append(val)
         elif f.kind == "converter_offset":
-            for key, val in (("cf_mag", f.magnitude[0]), ("cf_start", s), ("cf_stop", e), ("cf_ramp", rmp)):
+            for key, val in (
+                ("cf_mag", f.magnitude[0]),
+                ("cf_start", s),
+                ("cf_stop", e),
+                ("cf_ramp", rmp),
+            ):
                 out[key].append(val)
         else:
             out["df_start"].append(s)
@@ -1447,15 +1987,33 @@ def _compile_faults(faults: Sequence[Fault], p: WindTurbineParams) -> dict[str, 
         sel = [j for j, bb in enumerate(out["af_blade"]) if bb == b]
         if overlapping([out["af_start"][j] for j in sel], [out["af_stop"][j] for j in sel]):
             raise ModelError(f"faults: actuator faults on pitch_actuator_{b + 1} overlap in time")
-        stuck = [[j for j, (ch, kind) in enumerate(zip(out["sf_chan"], out["sf_kind"]))
-                  if ch == 2 * b + m and kind == 0] for m in (0, 1)]
+        stuck = [
+            [
+                j
+                for j, (ch, kind) in enumerate(zip(out["sf_chan"], out["sf_kind"]))
+                if ch == 2 * b + m and kind == 0
+            ]
+            for m in (0, 1)
+        ]
         for j1 in stuck[0]:
             for j2 in stuck[1]:
-                if out["sf_start"][j1] < out["sf_stop"][j2] and out["sf_start"][j2] < out["sf_stop"][j1]:
-                    raise ModelError(f"faults: both pitch sensors of blade {b + 1} stuck at once (the actuator's "
-                                     "internal loop would have no feedback)")
-    arrays = {k: np.array(val, dtype=np.int64 if k.split("_")[1] in ("chan", "kind", "start", "stop", "ramp", "blade")
-                          else float) for k, val in out.items()}
+                if (
+                    out["sf_start"][j1] < out["sf_stop"][j2]
+                    and out["sf_start"][j2] < out["sf_stop"][j1]
+                ):
+                    raise ModelError(
+                        f"faults: both pitch sensors of blade {b + 1} stuck at once (the actuator's "
+                        "internal loop would have no feedback)"
+                    )
+    arrays = {
+        k: np.array(
+            val,
+            dtype=np.int64
+            if k.split("_")[1] in ("chan", "kind", "start", "stop", "ramp", "blade")
+            else float,
+        )
+        for k, val in out.items()
+    }
     arrays["phi_dt"] = np.array([t[0] for t in dt_tables])
     arrays["gam_dt"] = np.array([t[1] for t in dt_tables])
     return arrays
@@ -1464,9 +2022,13 @@ def _compile_faults(faults: Sequence[Fault], p: WindTurbineParams) -> dict[str, 
 def _seeds(seed: Any, n_realisations: int | None) -> tuple[list[np.random.SeedSequence], bool]:
     if isinstance(seed, (list, tuple)):
         if n_realisations is not None:
-            raise ModelError("n_realisations: give either a sequence of seed sequences or n_realisations")
+            raise ModelError(
+                "n_realisations: give either a sequence of seed sequences or n_realisations"
+            )
         if not seed or not all(isinstance(s, np.random.SeedSequence) for s in seed):
-            raise ModelError("seed: expected an integer >= 0 or a non-empty sequence of SeedSequence")
+            raise ModelError(
+                "seed: expected an integer >= 0 or a non-empty sequence of SeedSequence"
+            )
         return list(seed), True
     root = np.random.SeedSequence(integer(seed, "seed", low=0))
     if n_realisations is None:
@@ -1486,14 +2048,17 @@ def check_wind(v: Any, name: str = "wind") -> np.ndarray:
     w = array(v, name)
     lo, hi = WIND_RANGE_MS
     if w.size and (w.min() < lo or w.max() > hi):
-        raise ModelError(f"{name}: expected wind speeds in [{lo:g}, {hi:g}] m/s (WIND_RANGE_MS, "
-                         "where the aerodynamic table and the controller have an equilibrium), "
-                         f"got [{w.min():.4g}, {w.max():.4g}] m/s")
+        raise ModelError(
+            f"{name}: expected wind speeds in [{lo:g}, {hi:g}] m/s (WIND_RANGE_MS, "
+            "where the aerodynamic table and the controller have an equilibrium), "
+            f"got [{w.min():.4g}, {w.max():.4g}] m/s"
+        )
     return w
 
 
-def _wind_array(wind: Any, t: np.ndarray, seeds: list[np.random.SeedSequence],
-                schedule: str) -> np.ndarray:
+def _wind_array(
+    wind: Any, t: np.ndarray, seeds: list[np.random.SeedSequence], schedule: str
+) -> np.ndarray:
     n_real, n = len(seeds), t.size
     if wind is None:
         w = np.array([wind_speed(t, seed=_child(s, 0), schedule=schedule) for s in seeds])
@@ -1523,20 +2088,26 @@ def simulation_bytes(n_samples: int, n_realisations: int, dtype: Any = np.float6
     """Estimated memory (bytes) of a :func:`simulate` call: the recorded signals (27 values and the
     zone per sample), the wind, the noise and the chunk buffers, per realisation."""
     item = np.dtype(dtype).itemsize
-    per_sample = 27 * item + 1 + 8     # records (state, y, u, tau_aero, tau_g, p_g), zone, wind
+    per_sample = 27 * item + 1 + 8  # records (state, y, u, tau_aero, tau_g, p_g), zone, wind
     chunk = min(_CHUNK, n_samples) * (12 + 27) * 8
-    synthesis = 2 * 8 * n_samples      # the wind's spectral synthesis
+    synthesis = 2 * 8 * n_samples  # the wind's spectral synthesis
     return float(n_realisations) * (n_samples * per_sample + chunk + synthesis)
 
 
 #: The redundant twin of each duplicated sensor (accommodation switches to it).
-_TWIN = {"beta_1_m1": "beta_1_m2", "beta_2_m1": "beta_2_m2", "beta_3_m1": "beta_3_m2",
-         "omega_r_m1": "omega_r_m2", "omega_g_m1": "omega_g_m2"}
+_TWIN = {
+    "beta_1_m1": "beta_1_m2",
+    "beta_2_m1": "beta_2_m2",
+    "beta_3_m1": "beta_3_m2",
+    "omega_r_m1": "omega_r_m2",
+    "omega_g_m1": "omega_g_m2",
+}
 _TWIN.update({b: a for a, b in list(_TWIN.items())})
 
 
-def _accommodation(acc: Mapping[int, Any] | None, faults: tuple[Fault, ...], n_real: int, n: int,
-                   ts: float) -> tuple[np.ndarray, np.ndarray]:
+def _accommodation(
+    acc: Mapping[int, Any] | None, faults: tuple[Fault, ...], n_real: int, n: int, ts: float
+) -> tuple[np.ndarray, np.ndarray]:
     """The kernel's accommodation arrays: switched-off channels and, per realisation, their first
     sample."""
     chans: list[int] = []
@@ -1544,28 +2115,35 @@ def _accommodation(acc: Mapping[int, Any] | None, faults: tuple[Fault, ...], n_r
     if acc is None:
         return np.zeros(0, dtype=np.int64), np.zeros((n_real, 0), dtype=np.int64)
     if not isinstance(acc, Mapping):
-        raise ModelError("accommodation: expected a mapping fault id -> isolation time, got "
-                         f"{type(acc).__name__}")
+        raise ModelError(
+            "accommodation: expected a mapping fault id -> isolation time, got "
+            f"{type(acc).__name__}"
+        )
     by_id = {f.id: f for f in faults}
     for fid, when in acc.items():
         if fid not in by_id:
-            raise ModelError(f"accommodation: fault {fid!r} is not in the run's faults "
-                             f"{sorted(by_id)}")
+            raise ModelError(
+                f"accommodation: fault {fid!r} is not in the run's faults {sorted(by_id)}"
+            )
         f = by_id[fid]
         sensors = f.kind in ("sensor_fixed", "sensor_gain")
         if not sensors or any(c not in _TWIN for c in f.component):
-            raise ModelError(f"accommodation: fault {fid} ({f.kind} on {f.component}) has no "
-                             "healthy redundant sensor to switch to (only faults on duplicated "
-                             "sensors can be accommodated)")
+            raise ModelError(
+                f"accommodation: fault {fid} ({f.kind} on {f.component}) has no "
+                "healthy redundant sensor to switch to (only faults on duplicated "
+                "sensors can be accommodated)"
+            )
         tw = np.broadcast_to(np.asarray(when, dtype=float), (n_real,))
         if np.any(np.isinf(tw)) or np.any(tw[~np.isnan(tw)] < 0):
-            raise ModelError(f"accommodation: fault {fid}: expected isolation times >= 0 s or NaN "
-                             f"(not isolated), got {when!r}")
+            raise ModelError(
+                f"accommodation: fault {fid}: expected isolation times >= 0 s or NaN "
+                f"(not isolated), got {when!r}"
+            )
         k = np.where(np.isnan(tw), n + 1, np.ceil(np.nan_to_num(tw) / ts - 1e-9)).astype(np.int64)
         for comp in f.component:
             chans.append(OUTPUT_NAMES.index(comp))
             ks.append(k)
-    for comp in _TWIN:       # a sensor and its twin both switched off would leave nothing to read
+    for comp in _TWIN:  # a sensor and its twin both switched off would leave nothing to read
         a, b = OUTPUT_NAMES.index(comp), OUTPUT_NAMES.index(_TWIN[comp])
         if a in chans and b in chans:
             raise ModelError(f"accommodation: both {comp} and {_TWIN[comp]} would be switched off")
@@ -1577,10 +2155,18 @@ def _accommodation(acc: Mapping[int, Any] | None, faults: tuple[Fault, ...], n_r
 _CHUNK = 20_000
 
 
-def simulate(*, seed: Any, faults: Sequence[Fault] = FAULTS, duration_s: float = SCENARIO_S,
-             params: WindTurbineParams = PARAMS, wind: Any = None, n_realisations: int | None = None,
-             dtype: Any = np.float64, schedule: str = "benchmark",
-             accommodation: Mapping[int, Any] | None = None) -> WindTurbineRun:
+def simulate(
+    *,
+    seed: Any,
+    faults: Sequence[Fault] = FAULTS,
+    duration_s: float = SCENARIO_S,
+    params: WindTurbineParams = PARAMS,
+    wind: Any = None,
+    n_realisations: int | None = None,
+    dtype: Any = np.float64,
+    schedule: str = "benchmark",
+    accommodation: Mapping[int, Any] | None = None,
+) -> WindTurbineRun:
     """Simulate the benchmark's closed loop: plant, controller, sensors and the fault schedule.
 
     Parameters
@@ -1635,22 +2221,28 @@ def simulate(*, seed: Any, faults: Sequence[Fault] = FAULTS, duration_s: float =
     duration = real(duration_s, "duration_s", low=0.0, low_open=True)
     n = max(1, int(round(duration / p.ts)))
     if n < 2:
-        raise ModelError(f"duration_s: expected at least two samples ({2 * p.ts:g} s), "
-                         f"got {duration:g} s")
+        raise ModelError(
+            f"duration_s: expected at least two samples ({2 * p.ts:g} s), got {duration:g} s"
+        )
     try:
         dtype = np.dtype(dtype)
     except TypeError as exc:
         raise ModelError(f"dtype: expected float32 or float64, got {dtype!r}") from exc
     if dtype not in (np.dtype(np.float32), np.dtype(np.float64)):
         raise ModelError(f"dtype: expected float32 or float64, got {dtype}")
-    n_req = len(seed) if isinstance(seed, (list, tuple)) else (
-        1 if n_realisations is None else integer(n_realisations, "n_realisations", low=1))
+    n_req = (
+        len(seed)
+        if isinstance(seed, (list, tuple))
+        else (1 if n_realisations is None else integer(n_realisations, "n_realisations", low=1))
+    )
     needed = simulation_bytes(n, n_req, dtype)
     if needed > MEMORY_BUDGET_BYTES:
-        raise ResourceError(f"duration_s, n_realisations: {n_req} realisation(s) of {n} samples "
-                            f"would need about {needed / 1e9:.3g} GB, over the budget of "
-                            f"{MEMORY_BUDGET_BYTES / 1e9:g} GB (MEMORY_BUDGET_BYTES): simulate in "
-                            "batches or shorter")
+        raise ResourceError(
+            f"duration_s, n_realisations: {n_req} realisation(s) of {n} samples "
+            f"would need about {needed / 1e9:.3g} GB, over the budget of "
+            f"{MEMORY_BUDGET_BYTES / 1e9:g} GB (MEMORY_BUDGET_BYTES): simulate in "
+            "batches or shorter"
+        )
     check_memory(needed, "n_realisations", f"{n_req} realisation(s) of {n} samples")
     _schedule(schedule)
     seeds, batched = _seeds(seed, n_realisations)
@@ -1667,7 +2259,7 @@ def simulate(*, seed: Any, faults: Sequence[Fault] = FAULTS, duration_s: float =
     for r in range(n_real):
         try:
             op = operating_point(float(v[r, 0]), params=p)
-        except ModelError:          # the band just above rated without equilibrium: start in region 1
+        except ModelError:  # the band just above rated without equilibrium: start in region 1
             op = operating_point(float(v[r, 0]), params=p, region=1)
         state[r] = op.state
         zone[r] = op.region
@@ -1691,34 +2283,88 @@ def simulate(*, seed: Any, faults: Sequence[Fault] = FAULTS, duration_s: float =
     # the loop writes double precision: into the result at its offset, or (float32) into chunk
     # buffers copied after each chunk (one compiled version of the loop either way)
     direct = dtype == np.dtype(np.float64)
-    buffers = outputs if direct else (
-        np.empty((n_real, width, 10)), np.empty((n_real, width, 12)), np.empty((n_real, width, 2)),
-        np.empty((n_real, width)), np.empty((n_real, width)), np.empty((n_real, width)),
-        np.empty((n_real, width), dtype=np.int8))
+    buffers = (
+        outputs
+        if direct
+        else (
+            np.empty((n_real, width, 10)),
+            np.empty((n_real, width, 12)),
+            np.empty((n_real, width, 2)),
+            np.empty((n_real, width)),
+            np.empty((n_real, width)),
+            np.empty((n_real, width)),
+            np.empty((n_real, width), dtype=np.int8),
+        )
+    )
     for k0 in range(0, n, _CHUNK):
         m = min(_CHUNK, n - k0)
         for r in range(n_real):
             d = draw[:, :m] if m == width else np.empty((12, m))
-            rngs[r].standard_normal(out=d)           # the same stream as standard_normal((12, m))
+            rngs[r].standard_normal(out=d)  # the same stream as standard_normal((12, m))
             np.multiply(d, std, out=noise[r, :, :m])
-        _run(k0, m, v, noise, state, xint, zone, pcache, wprev, acc_chan, acc_k, c, LAMBDA_GRID,
-             BETA_GRID_DEG, CQ_TABLE, fz["sf_chan"], fz["sf_kind"], fz["sf_mag"], fz["sf_start"],
-             fz["sf_stop"], fz["sf_ramp"],
-             fz["af_blade"], fz["af_wn2"], fz["af_2zw"], fz["af_start"], fz["af_stop"], fz["af_ramp"],
-             fz["cf_mag"], fz["cf_start"], fz["cf_stop"], fz["cf_ramp"], fz["df_start"], fz["df_stop"],
-             fz["phi_dt"], fz["gam_dt"], k0 if direct else 0, *buffers)
+        _run(
+            k0,
+            m,
+            v,
+            noise,
+            state,
+            xint,
+            zone,
+            pcache,
+            wprev,
+            acc_chan,
+            acc_k,
+            c,
+            LAMBDA_GRID,
+            BETA_GRID_DEG,
+            CQ_TABLE,
+            fz["sf_chan"],
+            fz["sf_kind"],
+            fz["sf_mag"],
+            fz["sf_start"],
+            fz["sf_stop"],
+            fz["sf_ramp"],
+            fz["af_blade"],
+            fz["af_wn2"],
+            fz["af_2zw"],
+            fz["af_start"],
+            fz["af_stop"],
+            fz["af_ramp"],
+            fz["cf_mag"],
+            fz["cf_start"],
+            fz["cf_stop"],
+            fz["cf_ramp"],
+            fz["df_start"],
+            fz["df_stop"],
+            fz["phi_dt"],
+            fz["gam_dt"],
+            k0 if direct else 0,
+            *buffers,
+        )
         if not direct:
             for out, buf in zip(outputs, buffers):
-                out[:, k0:k0 + m] = buf[:, :m]
+                out[:, k0 : k0 + m] = buf[:, :m]
         if not np.all(np.isfinite(state)):
-            raise NumericalError(f"simulate: the state became non-finite before t = {(k0 + m) * p.ts:.2f} s")
+            raise NumericalError(
+                f"simulate: the state became non-finite before t = {(k0 + m) * p.ts:.2f} s"
+            )
     if np.any(o_state[:, :, 6] <= 0):
         raise NumericalError("simulate: the rotor stopped or turned backwards (omega_r <= 0)")
     pick = (lambda a: a) if batched else (lambda a: a[0])
-    return WindTurbineRun(t=t, v=pick(v), state=pick(o_state), y=pick(o_y), u=pick(o_u),
-                          tau_aero=pick(o_tau_a), tau_g=pick(o_tau_g), p_g=pick(o_p_g),
-                          region=pick(o_zone), fault_active=fault_profiles(faults, n, p.ts), faults=faults,
-                          params=p)
+    return WindTurbineRun(
+        t=t,
+        v=pick(v),
+        state=pick(o_state),
+        y=pick(o_y),
+        u=pick(o_u),
+        tau_aero=pick(o_tau_a),
+        tau_g=pick(o_tau_g),
+        p_g=pick(o_p_g),
+        region=pick(o_zone),
+        fault_active=fault_profiles(faults, n, p.ts),
+        faults=faults,
+        params=p,
+    )
 
 
 # --------------------------------------------------------------------------------------------------
@@ -1733,31 +2379,66 @@ _SLIDE = "thesis presentation (2015), slide 14: generator speed over the 4400 s"
 #: ``offset_sigma_min`` (the fault's offset on its sensor is at least this many noise standard
 #: deviations), and the ``source``. :func:`fault_regions` measures the same quantities on a run.
 BENCHMARK_REGIONS: dict[int, dict[str, Any]] = {
-    1: {"region": 1, "pitch_before_max_deg": 1.0, "offset_sigma_min": None,
+    1: {
+        "region": 1,
+        "pitch_before_max_deg": 1.0,
+        "offset_sigma_min": None,
         "source": f"{_FIG} Fig. 4: beta_1,m1 at zero (noise only) until about 2450 s; "
-                  f"{_SLIDE}: 110-135 rad/s"},
-    2: {"region": 2, "pitch_before_max_deg": None, "offset_sigma_min": None,
-        "source": f"{_SLIDE}: at Omega_nom from about 2300 s"},
-    3: {"region": 2, "pitch_before_max_deg": None, "offset_sigma_min": None,
+        f"{_SLIDE}: 110-135 rad/s",
+    },
+    2: {
+        "region": 2,
+        "pitch_before_max_deg": None,
+        "offset_sigma_min": None,
+        "source": f"{_SLIDE}: at Omega_nom from about 2300 s",
+    },
+    3: {
+        "region": 2,
+        "pitch_before_max_deg": None,
+        "offset_sigma_min": None,
         "source": f"{_SLIDE}: 150-162 rad/s; {_FIG} Fig. 4: pitch control in bursts from about "
-                  "2450 s"},
-    4: {"region": 1, "pitch_before_max_deg": 1.0, "offset_sigma_min": 3.0,
+        "2450 s",
+    },
+    4: {
+        "region": 1,
+        "pitch_before_max_deg": 1.0,
+        "offset_sigma_min": 3.0,
         "source": f"{_SLIDE}: 75-95 rad/s over 1500-1600 s (omega_r 0.8-1.0 rad/s against the "
-                  "stuck 1.4)"},
-    5: {"region": 1, "pitch_before_max_deg": 1.0, "offset_sigma_min": None,
-        "source": f"{_FIG} Fig. 9 and {_SLIDE}: 50-65 rad/s over 1000-1100 s"},
-    6: {"region": None, "pitch_before_max_deg": 2.0, "offset_sigma_min": None,
+        "stuck 1.4)",
+    },
+    5: {
+        "region": 1,
+        "pitch_before_max_deg": 1.0,
+        "offset_sigma_min": None,
+        "source": f"{_FIG} Fig. 9 and {_SLIDE}: 50-65 rad/s over 1000-1100 s",
+    },
+    6: {
+        "region": None,
+        "pitch_before_max_deg": 2.0,
+        "offset_sigma_min": None,
         "source": f"{_FIG} Fig. 4: pitch about zero over about 2800-2955 s; "
-                  f"{_SLIDE}: near Omega_nom"},
-    7: {"region": 2, "pitch_before_max_deg": None, "offset_sigma_min": None,
+        f"{_SLIDE}: near Omega_nom",
+    },
+    7: {
+        "region": 2,
+        "pitch_before_max_deg": None,
+        "offset_sigma_min": None,
         "source": f"{_FIG} Fig. 4: pitch control over 3400-3500 s; "
-                  f"{_SLIDE}: at Omega_nom with dips"},
-    8: {"region": 2, "pitch_before_max_deg": None, "offset_sigma_min": None,
-        "source": f"{_FIG} Fig. 13: generator torque at its rated value (30 kN m) over "
-                  "3800-3900 s"},
-    9: {"region": 2, "pitch_before_max_deg": None, "offset_sigma_min": None,
+        f"{_SLIDE}: at Omega_nom with dips",
+    },
+    8: {
+        "region": 2,
+        "pitch_before_max_deg": None,
+        "offset_sigma_min": None,
+        "source": f"{_FIG} Fig. 13: generator torque at its rated value (30 kN m) over 3800-3900 s",
+    },
+    9: {
+        "region": 2,
+        "pitch_before_max_deg": None,
+        "offset_sigma_min": None,
         "source": f"{_FIG} Fig. 4: pitch control over 4000-4200 s; "
-                  f"{_SLIDE}: at Omega_nom with dips"},
+        f"{_SLIDE}: at Omega_nom with dips",
+    },
 }
 
 
@@ -1771,9 +2452,20 @@ def _offset_sigma(run: WindTurbineRun, f: Fault, sel: np.ndarray) -> float | Non
         return float(abs(f.magnitude[0]) / std[10])
     if f.kind not in ("sensor_fixed", "sensor_gain"):
         return None
-    clean = {0: run.beta[..., 0], 1: run.beta[..., 0], 2: run.beta[..., 1], 3: run.beta[..., 1],
-             4: run.beta[..., 2], 5: run.beta[..., 2], 6: run.omega_r, 7: run.omega_r,
-             8: run.omega_g, 9: run.omega_g, 10: run.tau_g, 11: run.p_g}
+    clean = {
+        0: run.beta[..., 0],
+        1: run.beta[..., 0],
+        2: run.beta[..., 1],
+        3: run.beta[..., 1],
+        4: run.beta[..., 2],
+        5: run.beta[..., 2],
+        6: run.omega_r,
+        7: run.omega_r,
+        8: run.omega_g,
+        9: run.omega_g,
+        10: run.tau_g,
+        11: run.p_g,
+    }
     out = 0.0
     for comp, mag in zip(f.component, f.magnitude):
         ch = OUTPUT_NAMES.index(comp)
@@ -1802,15 +2494,20 @@ def fault_regions(run: WindTurbineRun, *, before_s: float = 10.0) -> dict[str, d
     for j, f in enumerate(run.faults):
         sel = run.fault_active[:, j] > 0
         if not sel.any():
-            raise ModelError(f"run: fault {f.id} is not active within the run's {run.t.size} "
-                             "samples")
+            raise ModelError(
+                f"run: fault {f.id} is not active within the run's {run.t.size} samples"
+            )
         k0 = int(np.argmax(sel))
         pre = slice(max(0, k0 - n_before), k0) if k0 > 0 else slice(0, 1)
         share = float((run.region[..., sel] == 2).mean())
-        entry = {"mean_wind_ms": float(run.v[..., sel].mean()),
-                 "mean_pitch_deg": float(pitch[..., sel].mean()),
-                 "pitch_before_deg": float(pitch[..., pre].mean()), "full_load_share": share,
-                 "region": 2 if share >= 0.5 else 1, "offset_sigma": _offset_sigma(run, f, sel)}
+        entry = {
+            "mean_wind_ms": float(run.v[..., sel].mean()),
+            "mean_pitch_deg": float(pitch[..., sel].mean()),
+            "pitch_before_deg": float(pitch[..., pre].mean()),
+            "full_load_share": share,
+            "region": 2 if share >= 0.5 else 1,
+            "offset_sigma": _offset_sigma(run, f, sel),
+        }
         ref = BENCHMARK_REGIONS.get(f.id)
         if ref is None:
             entry["benchmark"], entry["matches"] = None, None
@@ -1826,8 +2523,9 @@ def fault_regions(run: WindTurbineRun, *, before_s: float = 10.0) -> dict[str, d
     return out
 
 
-def plot_scenario(run: WindTurbineRun, *, realisation: int = 0, step_s: float = 1.0,
-                  fig: Any = None):
+def plot_scenario(
+    run: WindTurbineRun, *, realisation: int = 0, step_s: float = 1.0, fig: Any = None
+):
     """The scenario over its duration: wind, true pitch (blade mean), generator speed and the
     controller's region, one sample every ``step_s`` seconds of one realisation, faults shaded."""
     from fdi_lib.plotting import MIN_FONT_PT, figure
@@ -1838,10 +2536,14 @@ def plot_scenario(run: WindTurbineRun, *, realisation: int = 0, step_s: float = 
     n_real = run.v.shape[0] if batched else 1
     r = integer(realisation, "realisation", low=0, high=n_real - 1)
     every = max(1, int(round(real(step_s, "step_s", low=0.0, low_open=True) / run.params.ts)))
-    pick = (lambda a: a[r, ::every]) if batched else (lambda a: a[::every])   # noqa: E731
+    pick = (lambda a: a[r, ::every]) if batched else (lambda a: a[::every])  # noqa: E731
     t = run.t[::every]
-    panels = (("wind (m/s)", pick(run.v)), ("pitch (deg)", pick(run.beta.mean(axis=-1))),
-              ("$\\omega_g$ (rad/s)", pick(run.omega_g)), ("region", pick(run.region)))
+    panels = (
+        ("wind (m/s)", pick(run.v)),
+        ("pitch (deg)", pick(run.beta.mean(axis=-1))),
+        ("$\\omega_g$ (rad/s)", pick(run.omega_g)),
+        ("region", pick(run.region)),
+    )
     fig, axes = figure(4, 1, fig=fig, sharex=True, figsize=(6.4, 6.4))
     on = run.fault_active > 0
     for ax, (label, y) in zip(axes[:, 0], panels):
@@ -1854,9 +2556,13 @@ def plot_scenario(run: WindTurbineRun, *, realisation: int = 0, step_s: float = 
                 ax.axvspan(run.t[k[0]], run.t[k[-1]], color="C3", alpha=0.15, lw=0)
     for j, f in enumerate(run.faults):
         if on[:, j].any():
-            axes[0, 0].annotate(f"F{f.id}", (run.t[np.flatnonzero(on[:, j])[0]], 1.0),
-                                xycoords=("data", "axes fraction"), fontsize=MIN_FONT_PT,
-                                va="bottom")
+            axes[0, 0].annotate(
+                f"F{f.id}",
+                (run.t[np.flatnonzero(on[:, j])[0]], 1.0),
+                xycoords=("data", "axes fraction"),
+                fontsize=MIN_FONT_PT,
+                va="bottom",
+            )
     axes[3, 0].set_yticks([1, 2])
     axes[3, 0].set_xlabel("time (s)")
     return fig

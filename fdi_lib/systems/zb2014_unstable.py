@@ -29,8 +29,20 @@ import numpy as np
 from fdi_lib.models import LTVModel, ltv_model
 from fdi_lib.simulate import pi_controller
 
-__all__ = ["F", "G", "H", "Q", "R", "KP", "KI", "SETPOINT", "N_STEPS", "QUOTED_UNSTABLE_EIGENVALUE",
-           "unstable_model", "controller"]
+__all__ = [
+    "F",
+    "G",
+    "H",
+    "Q",
+    "R",
+    "KP",
+    "KI",
+    "SETPOINT",
+    "N_STEPS",
+    "QUOTED_UNSTABLE_EIGENVALUE",
+    "unstable_model",
+    "controller",
+]
 
 F = np.array([[0.5, 1.0], [0.0, 1.2]])
 G = np.array([[0.0], [1.0]])

@@ -25,8 +25,19 @@ from fdi_lib.errors import ModelError
 from fdi_lib.models import LTVModel, ltv_model
 from fdi_lib.simulate import Noise, noise_from_standard, simulate
 
-__all__ = ["N_DATA", "N_PARAMS", "PSI_HALF_WIDTH", "E", "C", "state_matrices", "example1_model",
-           "Example1Trial", "draw_trial", "draw_trials", "simulate_trials"]
+__all__ = [
+    "N_DATA",
+    "N_PARAMS",
+    "PSI_HALF_WIDTH",
+    "E",
+    "C",
+    "state_matrices",
+    "example1_model",
+    "Example1Trial",
+    "draw_trial",
+    "draw_trials",
+    "simulate_trials",
+]
 
 N_DATA = 100
 N_PARAMS = 50
@@ -58,8 +69,15 @@ def example1_model(*, r: float = 0.5, n_data: int = N_DATA) -> LTVModel:
     if not np.isfinite(r) or r <= 0:
         raise ModelError(f"r: expected a positive noise factor, got {r!r}")
     n = int(n_data) + 1
-    return ltv_model(F=state_matrices(n), H=C, Q=np.eye(3), R=r * np.eye(2), n_steps=n,
-                     x0=np.zeros(3), P0=np.eye(3))
+    return ltv_model(
+        F=state_matrices(n),
+        H=C,
+        Q=np.eye(3),
+        R=r * np.eye(2),
+        n_steps=n,
+        x0=np.zeros(3),
+        P0=np.eye(3),
+    )
 
 
 @dataclass(frozen=True)
@@ -88,12 +106,16 @@ class Example1Trial:
         return [np.flatnonzero(t) for t in self.theta]
 
 
-def draw_trial(model: LTVModel, rng: np.random.Generator, *, q: int, m: int = N_PARAMS) -> Example1Trial:
+def draw_trial(
+    model: LTVModel, rng: np.random.Generator, *, q: int, m: int = N_PARAMS
+) -> Example1Trial:
     """Draw one trial (batch of 1): support of ``theta``, ``Psi_k``, ``d_k`` and the noise, in that order."""
     return draw_trials(model, [rng], q=q, m=m)
 
 
-def draw_trials(model: LTVModel, rngs: list[np.random.Generator], *, q: int, m: int = N_PARAMS) -> Example1Trial:
+def draw_trials(
+    model: LTVModel, rngs: list[np.random.Generator], *, q: int, m: int = N_PARAMS
+) -> Example1Trial:
     """One trial per generator, stacked: trial ``i`` depends on ``rngs[i]`` only.
 
     Each generator draws, in this order, the support of ``theta`` (``q`` of ``m`` components,
@@ -116,7 +138,9 @@ def draw_trials(model: LTVModel, rngs: list[np.random.Generator], *, q: int, m: 
     span = PSI_HALF_WIDTH - (-PSI_HALF_WIDTH)
     for b, rng in enumerate(rngs):
         theta[b, rng.choice(m, size=int(q), replace=False)] = 1.0
-        rng.random(out=P)  # rng.uniform(low, high) is low + (high - low) U for these U, bit for bit:
+        rng.random(
+            out=P
+        )  # rng.uniform(low, high) is low + (high - low) U for these U, bit for bit:
         P *= span
         P += -PSI_HALF_WIDTH
         Psi_s[:, :, b] = P
@@ -124,10 +148,17 @@ def draw_trials(model: LTVModel, rngs: list[np.random.Generator], *, q: int, m: 
         for z in (z0[b], zw[b], zv[b]):  # the draws of fdi_lib.simulate.draw_noise, in its order
             rng.standard_normal(out=z)
     d = 10.0 * np.sin(0.1 * np.arange(N)) + eps + 100.0
-    return Example1Trial(Psi=Psi_s.transpose(2, 0, 1, 3), theta=theta, d=d[:, :, None], noise=noise_from_standard(model, z0, zw, zv))
+    return Example1Trial(
+        Psi=Psi_s.transpose(2, 0, 1, 3),
+        theta=theta,
+        d=d[:, :, None],
+        noise=noise_from_standard(model, z0, zw, zv),
+    )
 
 
-def simulate_trials(model: LTVModel, trials: Example1Trial, *, theta_scale: float = 1.0) -> np.ndarray:
+def simulate_trials(
+    model: LTVModel, trials: Example1Trial, *, theta_scale: float = 1.0
+) -> np.ndarray:
     """Outputs ``Y_k`` of (40), shape ``(B, N+1, 2)``, vectorised over trials.
 
     :func:`fdi_lib.simulate.simulate` does the recursion: the unknown input and the
@@ -137,7 +168,8 @@ def simulate_trials(model: LTVModel, trials: Example1Trial, *, theta_scale: floa
     N = model.n_steps
     fault = np.einsum("bkim,bm->bki", trials.Psi, theta_scale * trials.theta)
     G = np.concatenate([E, np.eye(3)], axis=1)
-    sim_model = ltv_model(F=model.F, G=G, H=model.H, Q=model.Q, R=model.R, n_steps=N,
-                          x0=model.x0, P0=model.P0)
+    sim_model = ltv_model(
+        F=model.F, G=G, H=model.H, Q=model.Q, R=model.R, n_steps=N, x0=model.x0, P0=model.P0
+    )
     u = np.concatenate([trials.d, fault], axis=2)
     return simulate(sim_model, noise=trials.noise, u=u).y

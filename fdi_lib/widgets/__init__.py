@@ -27,9 +27,17 @@ from fdi_lib.redraw import render
 __all__ = ["interactive_figure", "widget_png", "batched_glr"]
 
 
-def batched_glr(cache: dict, key: tuple, size: float, grid: Sequence[float],
-                innovations: Callable[[float], np.ndarray], run: Callable[[np.ndarray], Any],
-                *, batch: int = 4, keep: int = 96) -> Any:
+def batched_glr(
+    cache: dict,
+    key: tuple,
+    size: float,
+    grid: Sequence[float],
+    innovations: Callable[[float], np.ndarray],
+    run: Callable[[np.ndarray], Any],
+    *,
+    batch: int = 4,
+    keep: int = 96,
+) -> Any:
     """The windowed GLR (a ``WindowGLRResult``) of the record with fault ``size``.
 
     The windowed GLR's noise-independent precomputation (signatures, informations, their
@@ -49,12 +57,17 @@ def batched_glr(cache: dict, key: tuple, size: float, grid: Sequence[float],
         ``eps (B, N, p) -> WindowGLRResult``.
     """
     if key + (size,) not in cache:
-        sizes = [size] + [g for g in grid if g != size and key + (g,) not in cache][:batch - 1]
+        sizes = [size] + [g for g in grid if g != size and key + (g,) not in cache][: batch - 1]
         res = run(np.stack([innovations(g) for g in sizes]))
         for i, g in enumerate(sizes):
             cache[key + (g,)] = dataclasses.replace(
-                res, **{f: getattr(res, f)[i] for f in ("statistic", "onset", "theta_hat", "C_hat", "d_hat")})
-        for old in list(cache)[:max(0, len(cache) - keep)]:   # oldest first (insertion order)
+                res,
+                **{
+                    f: getattr(res, f)[i]
+                    for f in ("statistic", "onset", "theta_hat", "C_hat", "d_hat")
+                },
+            )
+        for old in list(cache)[: max(0, len(cache) - keep)]:  # oldest first (insertion order)
             del cache[old]
     return cache[key + (size,)]
 
@@ -78,7 +91,9 @@ def _encode_png(fig: Any) -> bytes:
     from PIL import Image
 
     canvas = fig.canvas
-    img = Image.frombuffer("RGBA", canvas.get_width_height(physical=True), canvas.buffer_rgba(), "raw", "RGBA", 0, 1)
+    img = Image.frombuffer(
+        "RGBA", canvas.get_width_height(physical=True), canvas.buffer_rgba(), "raw", "RGBA", 0, 1
+    )
     out = io.BytesIO()
     img.convert("RGB").save(out, format="PNG", compress_level=1)
     return out.getvalue()
@@ -112,16 +127,19 @@ def interactive_figure(callback: Callable[..., Any], **sliders: Any):
         if hasattr(w, "continuous_update"):
             w.continuous_update = False
     state: dict[str, Any] = {"fig": None}
-    image = widgets.Image(format="png", width=round(FIG_WIDTH_IN * DISPLAY_DPI),
-                          layout=widgets.Layout(max_width="100%", height="auto"))
+    image = widgets.Image(
+        format="png",
+        width=round(FIG_WIDTH_IN * DISPLAY_DPI),
+        layout=widgets.Layout(max_width="100%", height="auto"),
+    )
 
-    errors = widgets.Output()   # the message of a bad value, below the figure
+    errors = widgets.Output()  # the message of a bad value, below the figure
 
     def redraw(_change: Any = None) -> None:
         errors.outputs = ()
         try:
             fig = callback(**{k: w.value for k, w in sliders.items()}, fig=state["fig"])
-        except FDIError as exc:   # a typed error of a bad value: say why, keep the last figure
+        except FDIError as exc:  # a typed error of a bad value: say why, keep the last figure
             errors.append_stdout(f"{type(exc).__name__}: {exc}\n")
             return
         if fig is not state["fig"]:
@@ -134,5 +152,11 @@ def interactive_figure(callback: Callable[..., Any], **sliders: Any):
     for w in sliders.values():
         w.observe(redraw, names="value")
     redraw()
-    return widgets.VBox([widgets.HBox(list(sliders.values())[:3]),
-                         widgets.HBox(list(sliders.values())[3:]), image, errors])
+    return widgets.VBox(
+        [
+            widgets.HBox(list(sliders.values())[:3]),
+            widgets.HBox(list(sliders.values())[3:]),
+            image,
+            errors,
+        ]
+    )

@@ -67,8 +67,18 @@ def bz_run(lam: float = 0.95, delta: float = 3e-4, f_size: float = 0.2, *, seed:
         raise ModelError(f"delta, f_size: expected non-negative values, got {delta!r}, {f_size!r}")
     th, f, sim, s1 = _record(float(delta), float(f_size), int(seed))
     model, kal = setup(SOL2["n_steps"])[:2]
-    s2 = solution2(model, sim.y, sim.u, Psi=ex.PSI, lam=lam, energy_window=SOL2["energy_window"],
-                   energy_alpha=SOL2["energy_alpha"], start=SOL2["warmup"], kalman=kal, rls=_rls_gains(float(lam)))
+    s2 = solution2(
+        model,
+        sim.y,
+        sim.u,
+        Psi=ex.PSI,
+        lam=lam,
+        energy_window=SOL2["energy_window"],
+        energy_alpha=SOL2["energy_alpha"],
+        start=SOL2["warmup"],
+        kalman=kal,
+        rls=_rls_gains(float(lam)),
+    )
     return BZRun(theta_path=th, f=f, sol1=s1, sol2=s2)
 
 
@@ -92,14 +102,26 @@ def _record(delta: float, f_size: float, seed: int):
     f = ex.nonparametric_profile(n, size=f_size, onset=SOL2["f_onset"])
     sim = _simulate(model, noise, f, th)
     thr = float(scipy.stats.chi2.ppf(1.0 - SOL1["glr_level"], 2))
-    s1 = solution1(model, sim.y, sim.u, E=ex.E, Psi=ex.PSI, window=SOL1["window"], glr_threshold=thr,
-                   energy_window=SOL1["energy_window"], energy_alpha=SOL1["energy_alpha"], kgains=kg,
-                   kalman=kal, T=T)
+    s1 = solution1(
+        model,
+        sim.y,
+        sim.u,
+        E=ex.E,
+        Psi=ex.PSI,
+        window=SOL1["window"],
+        glr_threshold=thr,
+        energy_window=SOL1["energy_window"],
+        energy_alpha=SOL1["energy_alpha"],
+        kgains=kg,
+        kalman=kal,
+        T=T,
+    )
     return th, f, sim, s1
 
 
-def explore_bz(lam: float = 0.95, delta: float = 3e-4, f_size: float = 0.2, fig: Any = None, *,
-               seed: int = 0):
+def explore_bz(
+    lam: float = 0.95, delta: float = 3e-4, f_size: float = 0.2, fig: Any = None, *, seed: int = 0
+):
     """Tracking and detection plots for the given forgetting factor, drift speed and fault size.
 
     Returns
@@ -111,9 +133,11 @@ def explore_bz(lam: float = 0.95, delta: float = 3e-4, f_size: float = 0.2, fig:
     title = f"RLS tracking, λ = {lam:g}, δ = {delta:.1e}, f amplitude {f_size:g}"
     alarm2, alarm1 = int(run.sol2.energy_alarm), int(run.sol1.nonparametric_alarm)
     # round limits: a move that keeps the curves within the same steps redraws only the data
-    limits = (stepped_range([*run.theta_path.ravel(), *run.sol2.rls.theta_hat.ravel()], symmetric=True),
-              stepped_range([*run.sol2.energy, *run.sol1.energy, run.sol2.energy_threshold], log=True),
-              stepped_range([*run.sol1.glr.statistic, run.sol1.glr_threshold]))
+    limits = (
+        stepped_range([*run.theta_path.ravel(), *run.sol2.rls.theta_hat.ravel()], symmetric=True),
+        stepped_range([*run.sol2.energy, *run.sol1.energy, run.sol2.energy_threshold], log=True),
+        stepped_range([*run.sol1.glr.statistic, run.sol1.glr_threshold]),
+    )
     art = reusable_artists(fig, "explore_bz")
     if art is None:  # first call: build the figure; later calls move its artists
         fig, axes = figure(3, 1, fig=fig, sharex=True, figsize=(7.5, 7.0))
@@ -122,30 +146,42 @@ def explore_bz(lam: float = 0.95, delta: float = 3e-4, f_size: float = 0.2, fig:
         art = {"theta": [], "theta_hat": []}
         for i, c in enumerate((OURS_COLOR, "#ff7f0e")):
             art["theta"] += ax.plot(k, run.theta_path[:, i], color=c, ls="--", lw=1.0)
-            art["theta_hat"] += ax.plot(k, run.sol2.rls.theta_hat[:, i], color=c,
-                                        label=rf"$\hat\theta^{{({i + 1})}}_k$ (dashed: true)")
+            art["theta_hat"] += ax.plot(
+                k,
+                run.sol2.rls.theta_hat[:, i],
+                color=c,
+                label=rf"$\hat\theta^{{({i + 1})}}_k$ (dashed: true)",
+            )
         ax.axvline(SOL2["f_onset"], color="0.5", lw=0.8, ls=":")
         ax.set(ylabel=r"$\theta_k$")
-        art["title"] = ax.set_title(title, y=1.0)   # fixed: no re-placement at each draw
+        art["title"] = ax.set_title(title, y=1.0)  # fixed: no re-placement at each draw
         # fixed legends under the curves: render() keeps them in its saved background
         ax.legend(loc="upper left", ncols=2).set_zorder(1.9)
         ax = axes[1, 0]
-        art["energy"] = ax.semilogy(k, run.sol2.energy, color=OURS_COLOR, label="RLS error energy (solution 2)")[0]
-        art["energy1"] = ax.semilogy(k, run.sol1.energy, color="0.5", lw=0.9,
-                                     label="Kalman innovation energy (solution 1)")[0]
-        art["threshold"] = ax.axhline(run.sol2.energy_threshold, color=THRESHOLD_COLOR, ls="--", lw=0.9,
-                                      label="threshold")
+        art["energy"] = ax.semilogy(
+            k, run.sol2.energy, color=OURS_COLOR, label="RLS error energy (solution 2)"
+        )[0]
+        art["energy1"] = ax.semilogy(
+            k, run.sol1.energy, color="0.5", lw=0.9, label="Kalman innovation energy (solution 1)"
+        )[0]
+        art["threshold"] = ax.axhline(
+            run.sol2.energy_threshold, color=THRESHOLD_COLOR, ls="--", lw=0.9, label="threshold"
+        )
         # alarms of solution 2 and of solution 1's energy test (hidden, at 0, when there is none)
-        art["alarms"] = [ax.axvline(max(a, 0), color=c, ls=":", lw=1.0, visible=a >= 0)
-                         for a, c in ((alarm2, OURS_COLOR), (alarm1, "0.5"))]
+        art["alarms"] = [
+            ax.axvline(max(a, 0), color=c, ls=":", lw=1.0, visible=a >= 0)
+            for a, c in ((alarm2, OURS_COLOR), (alarm1, "0.5"))
+        ]
         ax.axvline(SOL2["f_onset"], color="0.5", lw=0.8, ls=":")
         ax.set(ylabel="energy (w = 20)")
         ax.legend(loc="upper left").set_zorder(1.9)
         ax = axes[2, 0]
-        art["glr"] = ax.plot(k, run.sol1.glr.statistic, color=OURS_COLOR,
-                             label="GLR on projected Kitanidis residual")[0]
-        art["glr_threshold"] = ax.axhline(run.sol1.glr_threshold, color=THRESHOLD_COLOR, ls="--", lw=0.9,
-                                          label="threshold")
+        art["glr"] = ax.plot(
+            k, run.sol1.glr.statistic, color=OURS_COLOR, label="GLR on projected Kitanidis residual"
+        )[0]
+        art["glr_threshold"] = ax.axhline(
+            run.sol1.glr_threshold, color=THRESHOLD_COLOR, ls="--", lw=0.9, label="threshold"
+        )
         ax.axvline(SOL2["f_onset"], color="0.5", lw=0.8, ls=":")
         ax.set(xlabel="k", ylabel=r"$l_k$")
         ax.legend(loc="upper left").set_zorder(1.9)

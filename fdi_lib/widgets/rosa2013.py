@@ -52,13 +52,22 @@ def _mean_width(run: Any) -> float:
     """Mean width of the bounds on x2 over the record (of a run whose sets never became empty:
     the record is healthy, so an empty set would contradict Proposition 2)."""
     if run.empty_at is not None:
-        raise EmptySetError(f"SVO: expected a non-empty set at every sample of the healthy record, "
-                            f"got an empty set at k = {run.empty_at}")
+        raise EmptySetError(
+            f"SVO: expected a non-empty set at every sample of the healthy record, "
+            f"got an empty set at k = {run.empty_at}"
+        )
     return float(np.mean(run.upper[:, 1] - run.lower[:, 1]))
 
 
-def explore_svo(delta_bound: float = 0.4, horizon: int = 1, noise: float = 0.5, *, seed: int = 0,
-                steps: int = 25, fig: Any = None):
+def explore_svo(
+    delta_bound: float = 0.4,
+    horizon: int = 1,
+    noise: float = 0.5,
+    *,
+    seed: int = 0,
+    steps: int = 25,
+    fig: Any = None,
+):
     """Redraw the SVO hull (paper Fig. 2) and the bounds on x2 of the 2-D example for horizon N.
 
     The bounds of the bottom panel are those of the template rule (:func:`fdi_lib.sets.svo.run_svo`,
@@ -96,12 +105,13 @@ def explore_svo(delta_bound: float = 0.4, horizon: int = 1, noise: float = 0.5, 
         raise ModelError(f"noise: expected a value in (0, 2], got {noise!r}")
     if int(horizon) != horizon or not (1 <= horizon <= MAX_HORIZON):
         raise ModelError(f"horizon: expected an integer in 1..{MAX_HORIZON}, got {horizon!r}")
-    model, x, u, y, per_vertex, hull, area, exact = _example(float(delta_bound), float(noise), int(seed),
-                                                              int(steps))
+    model, x, u, y, per_vertex, hull, area, exact = _example(
+        float(delta_bound), float(noise), int(seed), int(steps)
+    )
     res = run_svo(model, u, y, toy_prior(), N=int(horizon), method="template")
     k = np.arange(len(x))
     shapes = [polygon_outline(P) for P in (hull, *per_vertex)]
-    box = shapes[0]   # the hull contains the per-vertex sets
+    box = shapes[0]  # the hull contains the per-vertex sets
     shown = np.concatenate([res.lower[:, 1], res.upper[:, 1], x[:, 1]])
     title = f"N = {int(horizon)}: mean width {_mean_width(res):.2f}, exact {_mean_width(exact):.2f}"
     art = reusable_artists(fig, "explore_svo")
@@ -113,12 +123,25 @@ def explore_svo(delta_bound: float = 0.4, horizon: int = 1, noise: float = 0.5, 
             plot_polytope(P, ax, color=c)
         ax.set_xlabel("$x_1$")
         ax.set_ylabel("$x_2$")
-        band = ax2.fill_between(k, res.lower[:, 1], res.upper[:, 1], color=OURS_COLOR, alpha=0.3,
-                                label="template SVO, horizon N")
-        art = {"ax": ax, "ax2": ax2, "patches": list(ax.patches), "edges": list(ax.lines), "band": band,
-               "exact": ax2.plot(k, exact.lower[:, 1], "--", k, exact.upper[:, 1], "--", color=PAPER_COLOR,
-                                 lw=1.0),
-               "true": ax2.plot(k, x[:, 1], "k.-", lw=0.8, label="true $x_2$")[0]}
+        band = ax2.fill_between(
+            k,
+            res.lower[:, 1],
+            res.upper[:, 1],
+            color=OURS_COLOR,
+            alpha=0.3,
+            label="template SVO, horizon N",
+        )
+        art = {
+            "ax": ax,
+            "ax2": ax2,
+            "patches": list(ax.patches),
+            "edges": list(ax.lines),
+            "band": band,
+            "exact": ax2.plot(
+                k, exact.lower[:, 1], "--", k, exact.upper[:, 1], "--", color=PAPER_COLOR, lw=1.0
+            ),
+            "true": ax2.plot(k, x[:, 1], "k.-", lw=0.8, label="true $x_2$")[0],
+        }
         art["exact"][0].set_label("exact SVO, N = 1 to 6")
         ax2.set_xlabel("k")
         ax2.set_ylabel("bounds on $x_2$")
@@ -142,8 +165,14 @@ def explore_svo(delta_bound: float = 0.4, horizon: int = 1, noise: float = 0.5, 
     return fig
 
 
-def horizon_study(delta_bounds=GRID["delta_bound"], horizons=range(1, MAX_HORIZON + 1), *,
-                  noise: float = 0.5, seed: int = 0, steps: int = 25) -> dict[str, Any]:
+def horizon_study(
+    delta_bounds=GRID["delta_bound"],
+    horizons=range(1, MAX_HORIZON + 1),
+    *,
+    noise: float = 0.5,
+    seed: int = 0,
+    steps: int = 25,
+) -> dict[str, Any]:
     """What the horizon N does to the SVO bounds of the explorable's record, for both rules.
 
     Returns
@@ -165,10 +194,19 @@ def horizon_study(delta_bounds=GRID["delta_bound"], horizons=range(1, MAX_HORIZO
         for n in horizons:
             if n > 1:
                 ex_n = run_svo(model, u, y, toy_prior(), N=int(n), method="exact")
-                _mean_width(ex_n)   # never empty
-                gap = max(gap, float(np.max(np.abs(np.r_[ex_n.lower - exact.lower, ex_n.upper - exact.upper]))))
+                _mean_width(ex_n)  # never empty
+                gap = max(
+                    gap,
+                    float(
+                        np.max(np.abs(np.r_[ex_n.lower - exact.lower, ex_n.upper - exact.upper]))
+                    ),
+                )
             tmp = run_svo(model, u, y, toy_prior(), N=int(n), method="template", keep_sets=True)
             template_width[db][n] = _mean_width(tmp)
             inside = inside and all(S.contains(x[i], 1e-7) for i, S in enumerate(tmp.sets))
-    return {"exact_gap": gap, "exact_width": exact_width, "template_width": template_width,
-            "template_inside": inside}
+    return {
+        "exact_gap": gap,
+        "exact_width": exact_width,
+        "template_width": template_width,
+        "template_inside": inside,
+    }

@@ -25,8 +25,12 @@ __all__ = ["explore_windturbine", "mean_signal_delays", "GRID", "SIZES"]
 GRID = {"size": (0.25, 0.5, 1.0, 2.0, 4.0), "noise": (0.5, 1.0, 2.0)}
 #: Offsets (deg) along the curves.
 SIZES = np.geomspace(0.05, 20.0, 60)
-_LABELS = {"zb2014": "GLR (Zhang & Basseville)", "zhang2021": "Lasso test (Zhang 2021)",
-           "bz": "energy (Basseville & Zhang)", "rosa2013": "SVO (Rosa & Silvestre)"}
+_LABELS = {
+    "zb2014": "GLR (Zhang & Basseville)",
+    "zhang2021": "Lasso test (Zhang 2021)",
+    "bz": "energy (Basseville & Zhang)",
+    "rosa2013": "SVO (Rosa & Silvestre)",
+}
 
 
 @functools.lru_cache(maxsize=8)
@@ -45,22 +49,38 @@ def _curves(noise: float) -> dict[str, np.ndarray]:
     s = _blade(c, 0)
     sigma = noise * c.sigma[0]
     N, onset = 4 * w, 2 * w
-    model = ltv_model(F=s.F, G=s.G, H=s.H, Q=1e-12 * np.eye(2), R=sigma ** 2 * np.eye(2), n_steps=N,
-                      P0=1e2 * np.eye(2))
+    model = ltv_model(
+        F=s.F,
+        G=s.G,
+        H=s.H,
+        Q=1e-12 * np.eye(2),
+        R=sigma**2 * np.eye(2),
+        n_steps=N,
+        P0=1e2 * np.eye(2),
+    )
     g = kalman_gains(model)
     after = (np.arange(N) >= onset)[:, None, None]
     prof = fault_profile(model, Psi=s.Psi * after, Phi=s.Phi * after)
-    Sw = np.linalg.solve(g.Sigma_chol, fault_signature(model, g, prof).on_innovation)[onset:onset + w]
+    Sw = np.linalg.solve(g.Sigma_chol, fault_signature(model, g, prof).on_innovation)[
+        onset : onset + w
+    ]
     IHK = np.eye(2) - model.H[-1] @ g.K[-1]
     Wr = _whitener(IHK @ g.Sigma[-1] @ IHK.T)
-    Sr = np.einsum("ij,kjm->kim", Wr, residual_signature(model, g, prof).on_residual)[onset:onset + w]
+    Sr = np.einsum("ij,kjm->kim", Wr, residual_signature(model, g, prof).on_residual)[
+        onset : onset + w
+    ]
     alpha = st.false_alarms_per_hour * c.Ts / 3600.0
-    return {"glr": np.cumsum(np.einsum("kp,kp->k", Sw[..., 0], Sw[..., 0])),
-            "glr_h": float(scipy.stats.chi2.ppf(1.0 - alpha / w, 3)),
-            "lasso": np.cumsum(np.einsum("kp,kp->k", Sr[..., 0], Sr[..., 0])) / np.sqrt(np.sum(Sr[..., 0] ** 2)),
-            "lasso_h": float(scipy.stats.norm.ppf(1.0 - alpha / 6)),
-            "energy_h": float(scipy.stats.chi2.ppf(1.0 - alpha, 2 * w)) - 2 * w,
-            "svo_bound": 2 * st.svo_sigmas * sigma, "Ts": c.Ts, "w": w}
+    return {
+        "glr": np.cumsum(np.einsum("kp,kp->k", Sw[..., 0], Sw[..., 0])),
+        "glr_h": float(scipy.stats.chi2.ppf(1.0 - alpha / w, 3)),
+        "lasso": np.cumsum(np.einsum("kp,kp->k", Sr[..., 0], Sr[..., 0]))
+        / np.sqrt(np.sum(Sr[..., 0] ** 2)),
+        "lasso_h": float(scipy.stats.norm.ppf(1.0 - alpha / 6)),
+        "energy_h": float(scipy.stats.chi2.ppf(1.0 - alpha, 2 * w)) - 2 * w,
+        "svo_bound": 2 * st.svo_sigmas * sigma,
+        "Ts": c.Ts,
+        "w": w,
+    }
 
 
 def mean_signal_delays(size: Any, noise: float = 1.0) -> dict[str, np.ndarray]:
@@ -74,7 +94,9 @@ def mean_signal_delays(size: Any, noise: float = 1.0) -> dict[str, np.ndarray]:
     its first sample (below it, the mean record stays consistent).
     """
     if not 0.1 <= noise <= 10.0:
-        raise ModelError(f"noise: expected a multiple of the benchmark's noise in [0.1, 10], got {noise!r}")
+        raise ModelError(
+            f"noise: expected a multiple of the benchmark's noise in [0.1, 10], got {noise!r}"
+        )
     cv = _curves(float(noise))
     a = np.atleast_1d(np.asarray(size, dtype=float))
 
@@ -82,10 +104,12 @@ def mean_signal_delays(size: Any, noise: float = 1.0) -> dict[str, np.ndarray]:
         over = stat > h
         return np.where(over.any(axis=-1), (np.argmax(over, axis=-1) + 1) * cv["Ts"], np.nan)
 
-    return {"zb2014": first(a[:, None] ** 2 * cv["glr"], cv["glr_h"]),
-            "zhang2021": first(a[:, None] * cv["lasso"], cv["lasso_h"]),
-            "bz": first(a[:, None] ** 2 * cv["glr"], cv["energy_h"]),
-            "rosa2013": np.where(a > cv["svo_bound"], cv["Ts"], np.nan)}
+    return {
+        "zb2014": first(a[:, None] ** 2 * cv["glr"], cv["glr_h"]),
+        "zhang2021": first(a[:, None] * cv["lasso"], cv["lasso_h"]),
+        "bz": first(a[:, None] ** 2 * cv["glr"], cv["energy_h"]),
+        "rosa2013": np.where(a > cv["svo_bound"], cv["Ts"], np.nan),
+    }
 
 
 def explore_windturbine(size: float = 1.0, noise: float = 1.0, *, fig: Any = None):

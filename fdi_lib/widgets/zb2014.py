@@ -25,8 +25,15 @@ from fdi_lib.redraw import keep_artists, reusable_artists, set_limits, stepped_l
 from fdi_lib.widgets import batched_glr
 from fdi_lib.systems import zb2014_unstable as ex
 
-__all__ = ["explore_glr", "explore_signature", "glr_run", "glr_grid_alarms", "DEFAULTS", "GLR_GRID",
-           "SIGNATURE_GRID"]
+__all__ = [
+    "explore_glr",
+    "explore_signature",
+    "glr_run",
+    "glr_grid_alarms",
+    "DEFAULTS",
+    "GLR_GRID",
+    "SIGNATURE_GRID",
+]
 
 #: Onsets of the signature explorable (paper Figs. 1-2 show r = 1, 101, 201, 301).
 SIGNATURE_GRID = {"onset": (1, 51, 101, 151, 201, 251, 301, 351, 401, 451)}
@@ -51,8 +58,13 @@ def _glr_record(onset: int, seed: int):
     model, gains = _unstable_setup()
     fam = impulse_family(model)
     profile = fam.profile(onset)
-    sim = simulate(model, rng=np.random.default_rng(seed), controller=ex.controller(), fault=profile,
-                   theta=np.zeros(fam.m))
+    sim = simulate(
+        model,
+        rng=np.random.default_rng(seed),
+        controller=ex.controller(),
+        fault=profile,
+        theta=np.zeros(fam.m),
+    )
     eps = kalman_filter(model, sim.y, sim.u, gains=gains).innovations[:, 0]
     return fam, eps, fault_signature(model, gains, profile).on_innovation[:, 0, :]
 
@@ -89,18 +101,27 @@ def explore_signature(onset: int = 101, fig: Any = None):
     if art is None:  # first call: build the figure; later calls only move its artists
         fig, axes = figure(2, 1, fig=fig, sharex=True, figsize=(7.0, 5.0))
         top, bottom = axes[:, 0]
-        art = {"gamma": top.plot(np.arange(gamma.size), gamma, color=OURS_COLOR,
-                                 label=r"$\|\Gamma_k\|_2$")[0],
-               "h_gamma": top.plot(np.arange(h_gamma.size), h_gamma, color="0.4", lw=1.0,
-                                   label=r"$\|H_k\Gamma_k\|_2$")[0],
-               "r_top": top.axvline(r, color="k", ls=":", lw=0.8),
-               "alpha": bottom.semilogy(alpha_k, alpha_v, color=PAPER_COLOR, label=r"$\|\alpha_k(r)\|_2$")[0],
-               "r_bottom": bottom.axvline(r, color="k", ls=":", lw=0.8), "title": top.set_title(title, y=1.0),
-               "top": top}
+        art = {
+            "gamma": top.plot(
+                np.arange(gamma.size), gamma, color=OURS_COLOR, label=r"$\|\Gamma_k\|_2$"
+            )[0],
+            "h_gamma": top.plot(
+                np.arange(h_gamma.size), h_gamma, color="0.4", lw=1.0, label=r"$\|H_k\Gamma_k\|_2$"
+            )[0],
+            "r_top": top.axvline(r, color="k", ls=":", lw=0.8),
+            "alpha": bottom.semilogy(
+                alpha_k, alpha_v, color=PAPER_COLOR, label=r"$\|\alpha_k(r)\|_2$"
+            )[0],
+            "r_bottom": bottom.axvline(r, color="k", ls=":", lw=0.8),
+            "title": top.set_title(title, y=1.0),
+            "top": top,
+        }
         top.set(ylabel="norm", ylim=top_ylim)
         # fixed legends under the curves: render() keeps them in its saved background
         top.legend(loc="upper right").set_zorder(1.9)
-        bottom.set(xlabel="k", ylabel=r"$\|\alpha_k(r)\|_2$", xlim=(0, alpha.size - 1), ylim=(0.1, 1e45))
+        bottom.set(
+            xlabel="k", ylabel=r"$\|\alpha_k(r)\|_2$", xlim=(0, alpha.size - 1), ylim=(0.1, 1e45)
+        )
         bottom.legend(loc="upper left").set_zorder(1.9)
         keep_artists(fig, "explore_signature", art)
     else:
@@ -113,15 +134,21 @@ def explore_signature(onset: int = 101, fig: Any = None):
         set_limits(art["top"], ylim=top_ylim)
     return fig
 
+
 #: Default slider values (paper Fig. 3 setting, plus an illustrative threshold).
 DEFAULTS = {"fault_size": 1.5, "onset": 201, "window": 100, "threshold": 20.0, "seed": 0}
 #: Slider values of the GLR explorable (the other arguments at their defaults).
 GLR_GRID = {"fault_size": (0.0, 0.5, 1.0, 1.5, 2.0, 3.0), "window": (10, 25, 50, 100, 150, 200)}
 
 
-def explore_glr(fault_size: float = DEFAULTS["fault_size"], onset: int = DEFAULTS["onset"],
-                window: int = DEFAULTS["window"], threshold: float = DEFAULTS["threshold"],
-                seed: int = DEFAULTS["seed"], fig: Any = None):
+def explore_glr(
+    fault_size: float = DEFAULTS["fault_size"],
+    onset: int = DEFAULTS["onset"],
+    window: int = DEFAULTS["window"],
+    threshold: float = DEFAULTS["threshold"],
+    seed: int = DEFAULTS["seed"],
+    fig: Any = None,
+):
     """Redraw the innovation and the windowed GLR ``l_k`` for ``theta = [fault_size, 0]``.
 
     Parameters
@@ -145,16 +172,26 @@ def explore_glr(fault_size: float = DEFAULTS["fault_size"], onset: int = DEFAULT
     """
     run = glr_run(fault_size, onset, window, threshold, seed)
     delay = run.alarm - run.onset if run.alarm >= run.onset else None
-    status = ("no alarm" if run.alarm < 0 else
-              f"false alarm at {run.alarm}" if delay is None else f"alarm after {delay} samples")
+    status = (
+        "no alarm"
+        if run.alarm < 0
+        else f"false alarm at {run.alarm}"
+        if delay is None
+        else f"alarm after {delay} samples"
+    )
     # short enough to fit above the axes in every frame (the title is not re-laid out)
-    return plot_detection(run, fig=fig, title=f"θ₁ = {fault_size:g}, r = {onset}, w = {window}: {status}",
-                          widget=True)
+    return plot_detection(
+        run, fig=fig, title=f"θ₁ = {fault_size:g}, r = {onset}, w = {window}: {status}", widget=True
+    )
 
 
-def glr_run(fault_size: float = DEFAULTS["fault_size"], onset: int = DEFAULTS["onset"],
-            window: int = DEFAULTS["window"], threshold: float = DEFAULTS["threshold"],
-            seed: int = DEFAULTS["seed"]) -> UnstableRun:
+def glr_run(
+    fault_size: float = DEFAULTS["fault_size"],
+    onset: int = DEFAULTS["onset"],
+    window: int = DEFAULTS["window"],
+    threshold: float = DEFAULTS["threshold"],
+    seed: int = DEFAULTS["seed"],
+) -> UnstableRun:
     """The run that :func:`explore_glr` draws (same arguments): innovation, windowed GLR, alarm."""
     if not 10 <= onset <= 490:
         raise ModelError(f"onset: expected an integer in [10, 490], got {onset!r}")
@@ -170,11 +207,24 @@ def glr_run(fault_size: float = DEFAULTS["fault_size"], onset: int = DEFAULTS["o
         # fault signature H_k Gamma_k(r) theta (tests: equal to unstable_run's)
         return (eps_noise + eps_fault[:, 0] * size)[:, None]
 
-    glr = batched_glr(_GLR_CACHE, (int(onset), int(seed), int(window)), float(fault_size), GLR_GRID["fault_size"],
-                      innovations, lambda eps: glr_window(eps, model, gains, fam, window=int(window)))
-    return UnstableRun(innovations=innovations(float(fault_size))[:, 0], glr=glr, theta=(float(fault_size), 0.0),
-                       onset=int(onset), window=int(window), threshold=float(threshold), seed=int(seed),
-                       alarm=int(first_alarm(glr.statistic, float(threshold))))
+    glr = batched_glr(
+        _GLR_CACHE,
+        (int(onset), int(seed), int(window)),
+        float(fault_size),
+        GLR_GRID["fault_size"],
+        innovations,
+        lambda eps: glr_window(eps, model, gains, fam, window=int(window)),
+    )
+    return UnstableRun(
+        innovations=innovations(float(fault_size))[:, 0],
+        glr=glr,
+        theta=(float(fault_size), 0.0),
+        onset=int(onset),
+        window=int(window),
+        threshold=float(threshold),
+        seed=int(seed),
+        alarm=int(first_alarm(glr.statistic, float(threshold))),
+    )
 
 
 def glr_grid_alarms(grid: dict = GLR_GRID) -> dict[str, Any]:

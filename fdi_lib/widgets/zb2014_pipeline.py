@@ -11,8 +11,14 @@ from fdi_lib.errors import ModelError
 from fdi_lib.filters import kalman_filter
 from fdi_lib.glr import first_alarm, glr_window
 from fdi_lib.reproduce.registry import ReproductionResult
-from fdi_lib.reproduce.zb2014_pipeline import (FAULT_ONSET, GLR_START, SingleRun, fault_theta, pipeline_setup,
-                                               plot_single_run)
+from fdi_lib.reproduce.zb2014_pipeline import (
+    FAULT_ONSET,
+    GLR_START,
+    SingleRun,
+    fault_theta,
+    pipeline_setup,
+    plot_single_run,
+)
 from fdi_lib.simulate import simulate
 from fdi_lib.systems import gas_pipeline as gp
 from fdi_lib.widgets import batched_glr
@@ -24,12 +30,20 @@ DEFAULTS = {"fault_size_e5": -2.0, "fault": 1, "threshold": 50.0, "window": 160,
 #: Slider values of the pipeline explorable (the other arguments at their defaults). A window
 #: longer than 200 samples changes nothing on a faulty record: from 200 on, the window of every
 #: sample after the onset (600 min, sample 300, of 500) already reaches back to it.
-GRID = {"fault_size_e5": (-10.0, -6.0, -4.0, -2.0, -1.0, 0.0), "window": (20, 40, 80, 120, 160, 200)}
+GRID = {
+    "fault_size_e5": (-10.0, -6.0, -4.0, -2.0, -1.0, 0.0),
+    "window": (20, 40, 80, 120, 160, 200),
+}
 
 
-def explore_pipeline(fault_size_e5: float = DEFAULTS["fault_size_e5"], fault: int = DEFAULTS["fault"],
-                     threshold: float = DEFAULTS["threshold"], window: int = DEFAULTS["window"],
-                     seed: int = DEFAULTS["seed"], fig: Any = None):
+def explore_pipeline(
+    fault_size_e5: float = DEFAULTS["fault_size_e5"],
+    fault: int = DEFAULTS["fault"],
+    threshold: float = DEFAULTS["threshold"],
+    window: int = DEFAULTS["window"],
+    seed: int = DEFAULTS["seed"],
+    fig: Any = None,
+):
     """Redraw one run of an input-end leak on the surrogate pipeline (as paper Figs 5-6).
 
     Parameters
@@ -63,15 +77,25 @@ def explore_pipeline(fault_size_e5: float = DEFAULTS["fault_size_e5"], fault: in
     # a record exceeds with probability below 1 % (a new seed keeps the axes)
     st = pipeline_setup()
     theta = fault_theta(int(fault), float(fault_size_e5) * 1e-5)
-    bound = float(np.max(np.abs(st.known_signature @ theta)[:, 0] + 4.5 * np.sqrt(st.gains.Sigma[:, 0, 0])))
-    result = ReproductionResult(id="explore", headline={}, settings={"title": title, "innovation_bound": bound},
-                                data={"run": run})
+    bound = float(
+        np.max(np.abs(st.known_signature @ theta)[:, 0] + 4.5 * np.sqrt(st.gains.Sigma[:, 0, 0]))
+    )
+    result = ReproductionResult(
+        id="explore",
+        headline={},
+        settings={"title": title, "innovation_bound": bound},
+        data={"run": run},
+    )
     return plot_single_run(result, fig=fig, widget=True)
 
 
-def pipeline_run(fault_size_e5: float = DEFAULTS["fault_size_e5"], fault: int = DEFAULTS["fault"],
-                 threshold: float = DEFAULTS["threshold"], window: int = DEFAULTS["window"],
-                 seed: int = DEFAULTS["seed"]) -> SingleRun:
+def pipeline_run(
+    fault_size_e5: float = DEFAULTS["fault_size_e5"],
+    fault: int = DEFAULTS["fault"],
+    threshold: float = DEFAULTS["threshold"],
+    window: int = DEFAULTS["window"],
+    seed: int = DEFAULTS["seed"],
+) -> SingleRun:
     """The run that :func:`explore_pipeline` draws (same arguments): innovation, GLR, alarm."""
     if not -10.0 <= fault_size_e5 <= 0.0:
         raise ModelError(f"fault_size_e5: expected a number in [-10, 0], got {fault_size_e5!r}")
@@ -87,11 +111,23 @@ def pipeline_run(fault_size_e5: float = DEFAULTS["fault_size_e5"], fault: int = 
         # theta (tests: equal to single_run's)
         return eps_noise + st.known_signature @ fault_theta(int(fault), size * 1e-5)
 
-    glr = batched_glr(_GLR_CACHE, (int(seed), int(fault), int(window)), float(fault_size_e5), GRID["fault_size_e5"],
-                      innovations, lambda eps: glr_window(eps, st.model, st.gains, st.input_family, int(window)))
-    return SingleRun(t_min=np.arange(st.model.n_steps) * gp.TS_MIN, innovations=innovations(float(fault_size_e5))[:, 0],
-                     statistic=glr.statistic, onset=glr.onset, true_onset=FAULT_ONSET, threshold=float(threshold),
-                     alarm=int(first_alarm(glr.statistic, float(threshold), start=GLR_START)))
+    glr = batched_glr(
+        _GLR_CACHE,
+        (int(seed), int(fault), int(window)),
+        float(fault_size_e5),
+        GRID["fault_size_e5"],
+        innovations,
+        lambda eps: glr_window(eps, st.model, st.gains, st.input_family, int(window)),
+    )
+    return SingleRun(
+        t_min=np.arange(st.model.n_steps) * gp.TS_MIN,
+        innovations=innovations(float(fault_size_e5))[:, 0],
+        statistic=glr.statistic,
+        onset=glr.onset,
+        true_onset=FAULT_ONSET,
+        threshold=float(threshold),
+        alarm=int(first_alarm(glr.statistic, float(threshold), start=GLR_START)),
+    )
 
 
 def pipeline_grid_delays(grid: dict = GRID) -> dict[tuple[float, int], float | None]:
@@ -115,6 +151,11 @@ def _noise_innovations(seed: int) -> np.ndarray:
     # fault acts): what no slider but the seed changes
     st = pipeline_setup()
     profile = st.input_family.profile(FAULT_ONSET)
-    sim = simulate(st.model, rng=np.random.default_rng(seed), u=st.u, fault=profile,
-                   theta=np.zeros(st.input_family.m))
+    sim = simulate(
+        st.model,
+        rng=np.random.default_rng(seed),
+        u=st.u,
+        fault=profile,
+        theta=np.zeros(st.input_family.m),
+    )
     return kalman_filter(st.model, sim.y, st.u, gains=st.gains).innovations

@@ -39,7 +39,9 @@ def _trial_path(q: int, r: float, seed: int):
     return X, y, path, flat_range(path, scale="log"), np.flatnonzero(trials.theta[0])
 
 
-def explore_sparse(q: int = 5, r: float = 0.5, lam_scale: float = 1.0, seed: int = 0, fig: Any = None):
+def explore_sparse(
+    q: int = 5, r: float = 0.5, lam_scale: float = 1.0, seed: int = 0, fig: Any = None
+):
     """Draw one trial of Example 1 at ``lambda = lam_scale * lambda_rule``; returns the figure.
 
     Parameters
@@ -73,8 +75,10 @@ def explore_sparse(q: int = 5, r: float = 0.5, lam_scale: float = 1.0, seed: int
     edges = np.concatenate([np.clip(lam_b[::-1], floor, None), [3 * lam_b[0]]])
     steps = np.concatenate([sizes[::-1], [0]])
     # round limits (decades of lambda): a move within the same steps redraws only the data
-    limits = {"left": (stepped_range([floor, 3 * lam_b[0]], log=True), stepped_range(steps)),
-              "right": stepped_range([*coef[support], *ls[support], 1.0, 0.0])}
+    limits = {
+        "left": (stepped_range([floor, 3 * lam_b[0]], log=True), stepped_range(steps)),
+        "right": stepped_range([*coef[support], *ls[support], 1.0, 0.0]),
+    }
     # the value in the title, in plain text: a mathtext label would be parsed anew at every value
     left_title = f"support size (flat range: {fr.size}), λ = {lam:.3g}"
     art = reusable_artists(fig, "explore_sparse")
@@ -96,18 +100,38 @@ def explore_sparse(q: int = 5, r: float = 0.5, lam_scale: float = 1.0, seed: int
     ax = axes[0, 0]
     # the staircase and the flat range over the grid (z-order 1.6, not the patches' 1): the
     # moving artists are then all above the axis, which render() keeps as background
-    art = {"steps": ax.stairs(steps, edges, color=OURS_COLOR, baseline=None, zorder=1.6),
-           "flat": ax.axvspan(fr.low, fr.high, color=PAPER_COLOR, alpha=0.15, label="flat range", zorder=1.6),
-           "lam": ax.axvline(lam, color="k", ls="--", lw=1, label=r"chosen $\lambda$")}
-    ax.set(xscale="log", xlabel=r"$\lambda$", ylabel="non-zero components", xlim=limits["left"][0],
-           ylim=limits["left"][1])
-    art["left_title"] = ax.set_title(left_title, y=1.0)   # fixed: no re-placement at each draw
+    art = {
+        "steps": ax.stairs(steps, edges, color=OURS_COLOR, baseline=None, zorder=1.6),
+        "flat": ax.axvspan(
+            fr.low, fr.high, color=PAPER_COLOR, alpha=0.15, label="flat range", zorder=1.6
+        ),
+        "lam": ax.axvline(lam, color="k", ls="--", lw=1, label=r"chosen $\lambda$"),
+    }
+    ax.set(
+        xscale="log",
+        xlabel=r"$\lambda$",
+        ylabel="non-zero components",
+        xlim=limits["left"][0],
+        ylim=limits["left"][1],
+    )
+    art["left_title"] = ax.set_title(left_title, y=1.0)  # fixed: no re-placement at each draw
     ax.legend(loc="upper right")
     ax = axes[0, 1]
-    art["lasso"] = ax.plot(idx[support], coef[support], "D", color=OURS_COLOR, ms=5, label="Lasso")[0]
-    art["ls"] = ax.plot(idx[support], ls[support], "o", mfc="none", mec="k", ms=10, label="least squares")[0]
-    art["truth"] = ax.plot(idx[truth], np.ones(truth.size), "*", color=PAPER_COLOR, ms=10, label="true")[0]
-    ax.set(xlabel=r"component of $\theta$", ylabel="value", xlim=(0, X.shape[1] + 1), ylim=limits["right"])
+    art["lasso"] = ax.plot(idx[support], coef[support], "D", color=OURS_COLOR, ms=5, label="Lasso")[
+        0
+    ]
+    art["ls"] = ax.plot(
+        idx[support], ls[support], "o", mfc="none", mec="k", ms=10, label="least squares"
+    )[0]
+    art["truth"] = ax.plot(
+        idx[truth], np.ones(truth.size), "*", color=PAPER_COLOR, ms=10, label="true"
+    )[0]
+    ax.set(
+        xlabel=r"component of $\theta$",
+        ylabel="value",
+        xlim=(0, X.shape[1] + 1),
+        ylim=limits["right"],
+    )
     art["right_title"] = ax.set_title(title, y=1.0)
     # a fixed place under the markers (z-order 1.9): render() keeps it in its saved background
     # ("best" would move it, so draw it, at every value)
@@ -137,5 +161,7 @@ def sparse_grid_facts(grid: dict = GRID, *, r: float = 0.5, seed: int = 0) -> di
             support = np.flatnonzero(path.coef(lam))
             out["false_alarms"][(q, scale)] = int(np.setdiff1d(support, truth).size)
             out["missed"][(q, scale)] = int(np.setdiff1d(truth, support).size)
-            out["position"][(q, scale)] = "below" if lam < fr.low else "above" if lam > fr.high else "in"
+            out["position"][(q, scale)] = (
+                "below" if lam < fr.low else "above" if lam > fr.high else "in"
+            )
     return out

@@ -72,16 +72,28 @@ from pathlib import Path
 CHROMIUM = "/usr/bin/chromium"
 # As root, in a sandbox with no network: no setuid sandbox, and none of Chromium's own
 # background connections (they would be refused, many at a time).
-CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update",
-                 "--disable-sync", "--disable-dev-shm-usage"]
+CHROMIUM_ARGS = [
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--disable-dev-shm-usage",
+]
 VIEWPORTS = {"1280": {"width": 1280, "height": 900}, "phone": {"width": 390, "height": 844}}
 #: The two modes, as playwright context options (``device_scale_factor``, ``is_mobile`` and
 #: ``has_touch`` are DevTools' device emulation: Emulation.setDeviceMetricsOverride with
 #: ``mobile: true`` and Emulation.setTouchEmulationEnabled).
 MODES = {
     "1280": {"viewport": VIEWPORTS["1280"], "device_scale_factor": 1},
-    "phone": {"viewport": VIEWPORTS["phone"], "device_scale_factor": 2, "is_mobile": True, "has_touch": True},
+    "phone": {
+        "viewport": VIEWPORTS["phone"],
+        "device_scale_factor": 2,
+        "is_mobile": True,
+        "has_touch": True,
+    },
 }
 MIN_TEXT_CSS_PX = 9.0
 #: Checks whose findings are counted in the report but do not fail the test: the TeX-like text
@@ -277,9 +289,9 @@ def png_text_chunks(data: bytes) -> dict[str, str]:
     """The tEXt chunks of a PNG file."""
     out, pos = {}, 8
     while pos + 8 <= len(data):
-        length = int.from_bytes(data[pos:pos + 4], "big")
-        kind = data[pos + 4:pos + 8]
-        body = data[pos + 8:pos + 8 + length]
+        length = int.from_bytes(data[pos : pos + 4], "big")
+        kind = data[pos + 4 : pos + 8]
+        body = data[pos + 8 : pos + 8 + length]
         if kind == b"tEXt" and b"\0" in body:
             key, value = body.split(b"\0", 1)
             out[key.decode("latin-1")] = value.decode("latin-1")
@@ -319,7 +331,7 @@ def font_failures(images: list[dict], html_root: Path, base: str) -> list[tuple[
             continue
         url = urllib.parse.unquote(urllib.parse.urlsplit(im["src"]).path)
         if im["src"].startswith(base):
-            path = html_root / urllib.parse.unquote(im["src"][len(base):]).split("?")[0]
+            path = html_root / urllib.parse.unquote(im["src"][len(base) :]).split("?")[0]
         else:
             path = Path(url)
         element = f'img "{im["caption"]}" ({path.name[:12]})'
@@ -332,14 +344,26 @@ def font_failures(images: list[dict], html_root: Path, base: str) -> list[tuple[
 
 def _font_failure(element: str, meta: dict[str, str], im: dict) -> list[tuple[str, str, str]]:
     if "fdi:min_font_pt" not in meta or "fdi:dpi" not in meta:
-        return [("font", element, "PNG without fdi:min_font_pt/fdi:dpi metadata "
-                                  "(not drawn with fdi_lib.plotting): text size unknown")]
+        return [
+            (
+                "font",
+                element,
+                "PNG without fdi:min_font_pt/fdi:dpi metadata "
+                "(not drawn with fdi_lib.plotting): text size unknown",
+            )
+        ]
     pt, dpi = float(meta["fdi:min_font_pt"]), float(meta["fdi:dpi"])
     px = pt / 72.0 * dpi * im["width"] / im["natural"]
     if px < MIN_TEXT_CSS_PX:
-        return [("font", element, f"smallest text {px:.1f} CSS px < {MIN_TEXT_CSS_PX:g} "
-                                  f"({pt:g} pt at {dpi:g} dpi shown {im['width']:.0f} of "
-                                  f"{im['natural']} px)")]
+        return [
+            (
+                "font",
+                element,
+                f"smallest text {px:.1f} CSS px < {MIN_TEXT_CSS_PX:g} "
+                f"({pt:g} pt at {dpi:g} dpi shown {im['width']:.0f} of "
+                f"{im['natural']} px)",
+            )
+        ]
     return []
 
 
@@ -370,22 +394,48 @@ def axe_violations(page, axe_js: Path) -> list[list[str]]:
     return page.evaluate(AXE_RUN_JS)
 
 
-def check_page(context, url: str, page_name: str, viewport: str, html_root: Path, base: str,
-               shots: Path | None, axe_js: Path | None = None,
-               axe_found: list | None = None) -> list[tuple[str, str, str]]:
+def check_page(
+    context,
+    url: str,
+    page_name: str,
+    viewport: str,
+    html_root: Path,
+    base: str,
+    shots: Path | None,
+    axe_js: Path | None = None,
+    axe_found: list | None = None,
+) -> list[tuple[str, str, str]]:
     failures: list[tuple[str, str, str]] = []
     page = context.new_page()
-    page.on("console", lambda m: failures.append(("console", m.location.get("url", "").rsplit("/", 1)[-1] or "page", m.text[:200]))
-            if m.type == "error" else None)
+    page.on(
+        "console",
+        lambda m: (
+            failures.append(
+                ("console", m.location.get("url", "").rsplit("/", 1)[-1] or "page", m.text[:200])
+            )
+            if m.type == "error"
+            else None
+        ),
+    )
     page.on("pageerror", lambda e: failures.append(("console", "uncaught", str(e)[:200])))
-    page.on("requestfailed", lambda r: failures.append(("image", r.url.rsplit("/", 1)[-1][:60], f"request failed: {r.failure}"))
-            if r.resource_type == "image" and is_local(r.url, base) else None)
+    page.on(
+        "requestfailed",
+        lambda r: (
+            failures.append(
+                ("image", r.url.rsplit("/", 1)[-1][:60], f"request failed: {r.failure}")
+            )
+            if r.resource_type == "image" and is_local(r.url, base)
+            else None
+        ),
+    )
     page.goto(url, wait_until="load")
     if not page.evaluate(WAIT_MATHJAX_JS):
         failures.append(("math", "document", "MathJax did not finish within 20 s"))
     # load every image (some are lazy) before checking them
-    page.evaluate("() => Promise.all(Array.from(document.images).map(i => { i.loading = 'eager';"
-                  " return i.decode().catch(() => null); }))")
+    page.evaluate(
+        "() => Promise.all(Array.from(document.images).map(i => { i.loading = 'eager';"
+        " return i.decode().catch(() => null); }))"
+    )
     pdf_beside = (html_root / "fdi-book.pdf").is_file() if base.startswith("http") else False
     failures += [tuple(f) for f in page.evaluate(PAGE_CHECKS_JS, [viewport, pdf_beside])]
     if viewport == "phone":
@@ -394,15 +444,23 @@ def check_page(context, url: str, page_name: str, viewport: str, html_root: Path
         found = axe_violations(page, axe_js)
         if axe_found is not None:
             axe_found.extend([page_name, viewport, *v] for v in found)
-        failures += [("a11y", element, f"{rule} ({impact}): {summary}")
-                     for rule, impact, element, summary in found if impact in AXE_FAILING]
+        failures += [
+            ("a11y", element, f"{rule} ({impact}): {summary}")
+            for rule, impact, element, summary in found
+            if impact in AXE_FAILING
+        ]
     if shots is not None:
         # the whole page, or its top MAX_SHOT_PX (the ledger is some 50 000 px tall on a phone:
         # a full screenshot at scale 2 would be a 100 000 px high image)
         height = page.evaluate("() => document.documentElement.scrollHeight")
         width = page.viewport_size["width"]
-        page.screenshot(path=str(shots / f"{page_name.removesuffix('.html').replace('/', '__')}-{viewport}.png"),
-                        full_page=True, clip={"x": 0, "y": 0, "width": width, "height": min(height, MAX_SHOT_PX)})
+        page.screenshot(
+            path=str(
+                shots / f"{page_name.removesuffix('.html').replace('/', '__')}-{viewport}.png"
+            ),
+            full_page=True,
+            clip={"x": 0, "y": 0, "width": width, "height": min(height, MAX_SHOT_PX)},
+        )
     page.close()
     return failures
 
@@ -419,9 +477,12 @@ def built_book(html: Path) -> Path | None:
 def book_pages(root: Path) -> list[str]:
     """Every page of the built book at ``root`` (paths relative to it), but redirects (Jupyter
     Book's root index.html only redirects to the first page) and the asset folders."""
-    return sorted(p.relative_to(root).as_posix() for p in root.rglob("*.html")
-                  if not SKIP_DIRS & set(p.relative_to(root).parts[:-1])
-                  and 'http-equiv="Refresh"' not in p.read_text(errors="replace")[:2000])
+    return sorted(
+        p.relative_to(root).as_posix()
+        for p in root.rglob("*.html")
+        if not SKIP_DIRS & set(p.relative_to(root).parts[:-1])
+        and 'http-equiv="Refresh"' not in p.read_text(errors="replace")[:2000]
+    )
 
 
 def axe_summary(found: list[list[str]], n_pages: int) -> str:
@@ -431,8 +492,9 @@ def axe_summary(found: list[list[str]], n_pages: int) -> str:
         counts = collections.Counter(v[3] for v in found if v[1] == viewport)
         lines.append(f"  {viewport}: " + ", ".join(f"{counts.get(i, 0)} {i}" for i in AXE_IMPACTS))
     rules = collections.Counter((v[1], v[3], v[2]) for v in found)
-    lines += [f"  {vp} {impact} {rule}: {n} nodes"
-              for (vp, impact, rule), n in sorted(rules.items())]
+    lines += [
+        f"  {vp} {impact} {rule}: {n} nodes" for (vp, impact, rule), n in sorted(rules.items())
+    ]
     return "\n".join(lines)
 
 
@@ -464,37 +526,64 @@ def main(argv: list[str] | None = None) -> int:
         if is_local(r.request.url, local_base):
             r.continue_()
         else:
-            results.append((page_name, viewport, "network", r.request.resource_type,
-                            f"blocked request to {r.request.url[:150]}"))
+            results.append(
+                (
+                    page_name,
+                    viewport,
+                    "network",
+                    r.request.resource_type,
+                    f"blocked request to {r.request.url[:150]}",
+                )
+            )
             r.abort("blockedbyclient")
 
     try:
         with sync_playwright() as pw:
             # Playwright hides scrollbars in headless mode by default: show them as a browser
             # would (classic ones at 1280 px, a phone's overlay ones under mobile emulation).
-            browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS,
-                                         headless=True, ignore_default_args=["--hide-scrollbars"])
+            browser = pw.chromium.launch(
+                executable_path=CHROMIUM,
+                args=CHROMIUM_ARGS,
+                headless=True,
+                ignore_default_args=["--hide-scrollbars"],
+            )
             for viewport, options in MODES.items():
                 for name in pages:
                     context = browser.new_context(**options, service_workers="block")
                     context.route("**/*", lambda r, *_, n=name, v=viewport: route(r, n, v, base))
                     t0 = time.monotonic()
                     try:
-                        found = check_page(context, base + name, name, viewport, root, base,
-                                           args.screenshots, args.axe, axe_found)
+                        found = check_page(
+                            context,
+                            base + name,
+                            name,
+                            viewport,
+                            root,
+                            base,
+                            args.screenshots,
+                            args.axe,
+                            axe_found,
+                        )
                     except Exception as exc:  # a page that breaks the driver is a failure too
                         found = [("driver", "page", f"{type(exc).__name__}: {exc}"[:200])]
                     results.extend((name, viewport, *f) for f in found)
-                    print(f"  {viewport:>5} {name}: {len(found)} failures "
-                          f"({time.monotonic() - t0:.1f} s)", file=sys.stderr, flush=True)
+                    print(
+                        f"  {viewport:>5} {name}: {len(found)} failures "
+                        f"({time.monotonic() - t0:.1f} s)",
+                        file=sys.stderr,
+                        flush=True,
+                    )
                     context.close()
             # the same book opened from file:// (no server): math and assets must still load
             for name in [p for p in ("book/intro.html", "book/zb2014/glr.html") if p in pages]:
                 context = browser.new_context(**MODES["1280"])
                 file_base = root.as_uri() + "/"
-                context.route("**/*", lambda r, *_, n=name: route(r, "file://" + n, "1280", file_base))
+                context.route(
+                    "**/*", lambda r, *_, n=name: route(r, "file://" + n, "1280", file_base)
+                )
                 for check, element, detail in check_page(
-                        context, file_base + name, name, "1280", root, file_base, None):
+                    context, file_base + name, name, "1280", root, file_base, None
+                ):
                     results.append(("file://" + name, "1280", check, element, detail))
                 context.close()
             browser.close()
@@ -509,25 +598,37 @@ def main(argv: list[str] | None = None) -> int:
     table = ["", "Failures per page and check:", "page | " + " | ".join(checks)]
     for name in sorted({p for p, _ in counts}):
         table.append(f"{name} | " + " | ".join(str(counts.get((name, c), 0)) for c in checks))
-    table.append("total | " + " | ".join(str(sum(v for (p, c), v in counts.items() if c == ck))
-                                         for ck in checks))
+    table.append(
+        "total | "
+        + " | ".join(str(sum(v for (p, c), v in counts.items() if c == ck)) for ck in checks)
+    )
     reported = sum(r[2] in REPORTED for r in results)
-    summary = (f"{len(pages)} pages x {len(MODES)} modes (+ file://): "
-               f"{len(results) - reported} failures, "
-               f"{reported} reported ({', '.join(sorted(REPORTED))})")
+    summary = (
+        f"{len(pages)} pages x {len(MODES)} modes (+ file://): "
+        f"{len(results) - reported} failures, "
+        f"{reported} reported ({', '.join(sorted(REPORTED))})"
+    )
     report = "\n".join(lines + (table if results else []) + ["", summary])
     print(report)
     args.report.parent.mkdir(parents=True, exist_ok=True)
     args.report.with_suffix(".txt").write_text(report + "\n")
-    args.report.with_suffix(".json").write_text(json.dumps(
-        [dict(zip(("page", "viewport", "check", "element", "detail"), r)) for r in results],
-        indent=1))
+    args.report.with_suffix(".json").write_text(
+        json.dumps(
+            [dict(zip(("page", "viewport", "check", "element", "detail"), r)) for r in results],
+            indent=1,
+        )
+    )
     if args.axe is not None:
         print(axe_summary(axe_found, len(pages)))
-        args.report.with_name("axe-report.json").write_text(json.dumps(
-            [dict(zip(("page", "viewport", "rule", "impact", "element", "summary"), v))
-             for v in axe_found],
-            indent=1))
+        args.report.with_name("axe-report.json").write_text(
+            json.dumps(
+                [
+                    dict(zip(("page", "viewport", "rule", "impact", "element", "summary"), v))
+                    for v in axe_found
+                ],
+                indent=1,
+            )
+        )
     print(f"screenshots in {args.screenshots}/, report in {args.report}.txt")
     return 1 if any(r[2] not in REPORTED for r in results) else 0
 

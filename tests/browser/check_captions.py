@@ -43,8 +43,12 @@ def captions(page: Path) -> list[str]:
     removed, entities and typographic quotes undone, white space collapsed)."""
     out = []
     figures = re.findall(r"<figure\b([^>]*)>(.*?)</figure>", page.read_text(), flags=re.S)
-    for raw in (c for attrs, body in figures if "fdi-explorable" not in attrs  # -figure too
-                for c in re.findall(r"<figcaption>(.*?)</figcaption>", body, flags=re.S)):
+    for raw in (
+        c
+        for attrs, body in figures
+        if "fdi-explorable" not in attrs  # -figure too
+        for c in re.findall(r"<figcaption>(.*?)</figcaption>", body, flags=re.S)
+    ):
         text = html.unescape(re.sub(r"<[^>]+>", "", raw))
         text = text.replace("\u2019", "'").replace("\u00b6", "")
         out.append(" ".join(text.split()))
@@ -65,26 +69,30 @@ def check(root: Path) -> list[tuple[str, str, str]]:
         if hit is not None:
             results[rep.id] = hit
     failures = []
-    pages = sorted(p for p in root.rglob("*.html")
-                   if not SKIP_DIRS & set(p.relative_to(root).parts[:-1]))
+    pages = sorted(
+        p for p in root.rglob("*.html") if not SKIP_DIRS & set(p.relative_to(root).parts[:-1])
+    )
     for page in pages:
         name = page.relative_to(root).as_posix()
         for text in captions(page):
             m = _PAPER_FIGURE.search(text)
             if not m:
                 continue
-            ids = _ID.findall(text[m.end():])
+            ids = _ID.findall(text[m.end() :])
             if m.group(1) not in VERBS or not ids:
                 failures.append((name, "caption", f"no ledger verb or identifier: {text[:120]}"))
                 continue
             id = ids[0]
             if id not in results:
-                failures.append((name, "result", f"{id}: no cached result at the book's settings in this build"))
+                failures.append(
+                    (name, "result", f"{id}: no cached result at the book's settings in this build")
+                )
                 continue
             claim = figure_claim(results[id])
             if m.group(1) != claim.verb:
-                failures.append((name, "verb", f"{id}: caption says {m.group(1)!r}, the ledger "
-                                               f"{claim.verb!r}"))
+                failures.append(
+                    (name, "verb", f"{id}: caption says {m.group(1)!r}, the ledger {claim.verb!r}")
+                )
             differs = " ".join(claim.differs.replace("\u2019", "'").split())
             if f"{id}{differs})" not in text:
                 failures.append((name, "differs", f"{id}: the ledger says {differs!r}"))
@@ -97,15 +105,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--cache", default="_build/results-cache", type=Path)
     args = parser.parse_args(argv)
     if not (args.html / "index.html").exists() or not args.cache.is_dir():
-        print(f"error: build the book first (no {args.html}/index.html or {args.cache})",
-              file=sys.stderr)
+        print(
+            f"error: build the book first (no {args.html}/index.html or {args.cache})",
+            file=sys.stderr,
+        )
         return 2
     os.environ["FDI_RESULTS_CACHE"] = str(args.cache.resolve())
     failures = check(args.html)
     for f in failures:
         print(" | ".join(f))
-    n = sum(len([t for t in captions(p) if _PAPER_FIGURE.search(t)])
-            for p in args.html.rglob("*.html") if not SKIP_DIRS & set(p.relative_to(args.html).parts[:-1]))
+    n = sum(
+        len([t for t in captions(p) if _PAPER_FIGURE.search(t)])
+        for p in args.html.rglob("*.html")
+        if not SKIP_DIRS & set(p.relative_to(args.html).parts[:-1])
+    )
     print(f"{n} captions naming a paper figure, {len(failures)} disagreeing with the ledger")
     return 1 if failures else 0
 

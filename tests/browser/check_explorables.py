@@ -29,9 +29,14 @@ from check_book import CHROMIUM, CHROMIUM_ARGS, VIEWPORTS, built_book, is_local,
 
 MAX_RESPONSE_MS = 50.0
 # The chapters with an Explore section (issue 10); each must have at least one explorable.
-EXPECTED = ["book/zb2014/signature.html", "book/zb2014/glr.html", "book/zb2014/pipeline.html",
-            "book/zhang2021/sparse.html", "book/bz/parametric-nonparametric.html",
-            "book/rosa2013/svo.html"]
+EXPECTED = [
+    "book/zb2014/signature.html",
+    "book/zb2014/glr.html",
+    "book/zb2014/pipeline.html",
+    "book/zhang2021/sparse.html",
+    "book/bz/parametric-nonparametric.html",
+    "book/rosa2013/svo.html",
+]
 
 # Runs in the page: for explorable `e`, slider `j`, moves the slider through all its values
 # (from the last back to the first, then to its start value) and reports, per move, the
@@ -107,7 +112,10 @@ def check_page(context, url: str) -> tuple[list[tuple[str, str, str]], list[str]
     failures: list[tuple[str, str, str]] = []
     notes: list[str] = []
     page = context.new_page()
-    page.on("console", lambda m: failures.append(("console", "page", m.text[:200])) if m.type == "error" else None)
+    page.on(
+        "console",
+        lambda m: failures.append(("console", "page", m.text[:200])) if m.type == "error" else None,
+    )
     page.on("pageerror", lambda e: failures.append(("console", "uncaught", str(e)[:200])))
     page.goto(url, wait_until="load")
     for e, info in enumerate(page.evaluate(COUNT_JS)):
@@ -124,13 +132,19 @@ def check_page(context, url: str) -> tuple[list[tuple[str, str, str]], list[str]
                     failures.append(("pixels", where, "figure pixels unchanged"))
                 expected = sum(s * p for s, p in zip(strides, move["positions"]))
                 if move["frame"] != expected:
-                    failures.append(("pixels", where, f"frame {move['frame']} shown, {expected} indexed"))
+                    failures.append(
+                        ("pixels", where, f"frame {move['frame']} shown, {expected} indexed")
+                    )
                 failures += [("aria", where, problem) for problem in aria_problems(move)]
                 if move["ms"] >= MAX_RESPONSE_MS:
-                    failures.append(("response", where, f"{move['ms']:.1f} ms >= {MAX_RESPONSE_MS:g} ms"))
-        notes.append(f"{name}: {info['sliders']} sliders {info['sizes']}, {info['bytes'] / 1e6:.2f} MB, "
-                     f"{len(times)} moves, response max {max(times, default=0):.1f} ms, "
-                     f"median {sorted(times)[len(times) // 2] if times else 0:.1f} ms")
+                    failures.append(
+                        ("response", where, f"{move['ms']:.1f} ms >= {MAX_RESPONSE_MS:g} ms")
+                    )
+        notes.append(
+            f"{name}: {info['sliders']} sliders {info['sizes']}, {info['bytes'] / 1e6:.2f} MB, "
+            f"{len(times)} moves, response max {max(times, default=0):.1f} ms, "
+            f"median {sorted(times)[len(times) // 2] if times else 0:.1f} ms"
+        )
     page.close()
     return failures, notes
 
@@ -138,16 +152,23 @@ def check_page(context, url: str) -> tuple[list[tuple[str, str, str]], list[str]
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--html", default="_build/html", type=Path)
-    parser.add_argument("--expect", nargs="*", default=EXPECTED,
-                        help="pages that must have an explorable (paths relative to --html)")
+    parser.add_argument(
+        "--expect",
+        nargs="*",
+        default=EXPECTED,
+        help="pages that must have an explorable (paths relative to --html)",
+    )
     args = parser.parse_args(argv)
     from playwright.sync_api import sync_playwright
 
     root = built_book(args.html)
     if root is None:
         return 2
-    pages = sorted(p.relative_to(root).as_posix() for p in root.rglob("*.html")
-                   if "fdi-explorable" in p.read_text(errors="replace"))
+    pages = sorted(
+        p.relative_to(root).as_posix()
+        for p in root.rglob("*.html")
+        if "fdi-explorable" in p.read_text(errors="replace")
+    )
     results = [(p, "missing", "page", "no explorable") for p in args.expect if p not in pages]
     server, base = serve(root)
 
@@ -155,15 +176,20 @@ def main(argv: list[str] | None = None) -> int:
         if is_local(r.request.url, base):
             r.continue_()
         else:
-            results.append((name, "network", r.request.resource_type, f"blocked {r.request.url[:150]}"))
+            results.append(
+                (name, "network", r.request.resource_type, f"blocked {r.request.url[:150]}")
+            )
             r.abort("blockedbyclient")
 
     try:
         with sync_playwright() as pw:
-            browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True)
+            browser = pw.chromium.launch(
+                executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True
+            )
             for name in pages:
-                context = browser.new_context(viewport=VIEWPORTS["1280"], device_scale_factor=1,
-                                              service_workers="block")
+                context = browser.new_context(
+                    viewport=VIEWPORTS["1280"], device_scale_factor=1, service_workers="block"
+                )
                 context.route("**/*", lambda r, *_, n=name: route(r, n))
                 try:
                     found, notes = check_page(context, base + name)

@@ -67,9 +67,13 @@ RENDERED_JS = r"""
 """
 
 #: JupyterLab settings for the test: the whole notebook drawn (not only the cells in view).
-SETTINGS = {"@jupyterlab/notebook-extension/tracker.jupyterlab-settings": {"windowingMode": "none"},
-            "@jupyterlab/apputils-extension/notification.jupyterlab-settings":
-                {"fetchNews": "false", "checkForUpdates": False}}
+SETTINGS = {
+    "@jupyterlab/notebook-extension/tracker.jupyterlab-settings": {"windowingMode": "none"},
+    "@jupyterlab/apputils-extension/notification.jupyterlab-settings": {
+        "fetchNews": "false",
+        "checkForUpdates": False,
+    },
+}
 
 
 def free_port() -> int:
@@ -89,13 +93,23 @@ def start_lab(root: Path, settings: Path) -> tuple[subprocess.Popen, str, str]:
     lab = Path(sys.executable).with_name("jupyter-lab")
     env = dict(os.environ, JUPYTERLAB_SETTINGS_DIR=str(settings))
     log = (settings / "lab.log").open("w")
-    proc = subprocess.Popen(   # as root in CI; no extension manager (it asks PyPI)
-        [str(lab), "--no-browser", "--allow-root", "--ServerApp.ip=127.0.0.1",
-         f"--ServerApp.port={port}", "--ServerApp.port_retries=0",
-         f"--IdentityProvider.token={token}", f"--ServerApp.root_dir={root}",
-         "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate",
-         "--LabApp.extension_manager=readonly"],
-        env=env, stdout=subprocess.DEVNULL, stderr=log)
+    proc = subprocess.Popen(  # as root in CI; no extension manager (it asks PyPI)
+        [
+            str(lab),
+            "--no-browser",
+            "--allow-root",
+            "--ServerApp.ip=127.0.0.1",
+            f"--ServerApp.port={port}",
+            "--ServerApp.port_retries=0",
+            f"--IdentityProvider.token={token}",
+            f"--ServerApp.root_dir={root}",
+            "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate",
+            "--LabApp.extension_manager=readonly",
+        ],
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=log,
+    )
     base = f"http://127.0.0.1:{port}"
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline:
@@ -114,22 +128,26 @@ def start_lab(root: Path, settings: Path) -> tuple[subprocess.Popen, str, str]:
 def check_notebook(context, base: str, token: str, name: str) -> list[tuple[str, str, str]]:
     page = context.new_page()
     page.goto(f"{base}/lab/tree/{name}?token={token}", wait_until="load")
-    page.wait_for_selector(".jp-MarkdownCell .jp-RenderedMarkdown", state="attached",
-                           timeout=120_000)
+    page.wait_for_selector(
+        ".jp-MarkdownCell .jp-RenderedMarkdown", state="attached", timeout=120_000
+    )
     # every cell drawn and its maths typeset: the count of MathJax's containers stops growing
     seen, still = -1, 0
     for _ in range(120):
-        n = page.evaluate("() => document.querySelectorAll('.jp-MarkdownCell mjx-container')"
-                          ".length")
+        n = page.evaluate(
+            "() => document.querySelectorAll('.jp-MarkdownCell mjx-container').length"
+        )
         still = still + 1 if n == seen else 0
         seen = n
         if still >= 4:
             break
         page.wait_for_timeout(500)
     found = [tuple(f) for f in page.evaluate(RENDERED_JS)]
-    tex = page.evaluate("() => Array.from(document.querySelectorAll("
-                        "'.jp-MarkdownCell .jp-RenderedMarkdown'))"
-                        ".some(c => /\\$[^$]+\\$/.test(c.innerText))")
+    tex = page.evaluate(
+        "() => Array.from(document.querySelectorAll("
+        "'.jp-MarkdownCell .jp-RenderedMarkdown'))"
+        ".some(c => /\\$[^$]+\\$/.test(c.innerText))"
+    )
     if seen == 0 and tex:
         found.append(("render", "maths", "the notebook's maths never typeset"))
     page.close()
@@ -144,8 +162,11 @@ def main(argv: list[str] | None = None) -> int:
     from playwright.sync_api import sync_playwright
 
     root = args.notebooks.resolve()
-    names = args.names or sorted(p.relative_to(root).as_posix() for p in root.rglob("*.ipynb")
-                                 if ".ipynb_checkpoints" not in p.parts)
+    names = args.names or sorted(
+        p.relative_to(root).as_posix()
+        for p in root.rglob("*.ipynb")
+        if ".ipynb_checkpoints" not in p.parts
+    )
     if not names:
         print(f"no notebooks under {root}: run `make notebooks` first", file=sys.stderr)
         return 2
@@ -154,8 +175,9 @@ def main(argv: list[str] | None = None) -> int:
         proc, base, token = start_lab(root, Path(settings))
         try:
             with sync_playwright() as pw:
-                browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS,
-                                             headless=True)
+                browser = pw.chromium.launch(
+                    executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True
+                )
                 context = browser.new_context(viewport=VIEWPORTS["1280"], service_workers="block")
                 blocked = []
 
@@ -174,10 +196,14 @@ def main(argv: list[str] | None = None) -> int:
                     except Exception as exc:  # a notebook that breaks the driver is a failure too
                         found = [("driver", "page", f"{type(exc).__name__}: {exc}"[:200])]
                     results += [(name, *f) for f in found]
-                    print(f"  {name}: {len(found)} failures ({time.monotonic() - t0:.1f} s)",
-                          file=sys.stderr, flush=True)
-                results += [("jupyterlab", "network", "request", f"blocked {u[:150]}")
-                            for u in blocked]
+                    print(
+                        f"  {name}: {len(found)} failures ({time.monotonic() - t0:.1f} s)",
+                        file=sys.stderr,
+                        flush=True,
+                    )
+                results += [
+                    ("jupyterlab", "network", "request", f"blocked {u[:150]}") for u in blocked
+                ]
                 browser.close()
         finally:
             proc.terminate()

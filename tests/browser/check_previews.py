@@ -97,25 +97,36 @@ async () => {
 """
 
 
-def check_page(browser, base: str, name: str, kinds: tuple[str, ...], maths: bool) -> list[tuple[str, str, str]]:
+def check_page(
+    browser, base: str, name: str, kinds: tuple[str, ...], maths: bool
+) -> list[tuple[str, str, str]]:
     failures: list[tuple[str, str, str]] = []
-    context = browser.new_context(viewport=VIEWPORTS["1280"], device_scale_factor=1, service_workers="block")
+    context = browser.new_context(
+        viewport=VIEWPORTS["1280"], device_scale_factor=1, service_workers="block"
+    )
 
     def route(r):
         if is_local(r.request.url, base):
             r.continue_()
         else:
-            failures.append(("network", r.request.resource_type, f"blocked request to {r.request.url[:150]}"))
+            failures.append(
+                ("network", r.request.resource_type, f"blocked request to {r.request.url[:150]}")
+            )
             r.abort("blockedbyclient")
 
     context.route("**/*", route)
     page = context.new_page()
-    page.on("console", lambda m: failures.append(("console", "page", m.text[:200])) if m.type == "error" else None)
+    page.on(
+        "console",
+        lambda m: failures.append(("console", "page", m.text[:200])) if m.type == "error" else None,
+    )
     page.on("pageerror", lambda e: failures.append(("console", "uncaught", str(e)[:200])))
     page.goto(base + name, wait_until="load")
     marked = page.evaluate(MARK_LINKS_JS)
     if marked is None:
-        failures.append(("missing", "page", "no previews data (sphinx-tippy's script for this page)"))
+        failures.append(
+            ("missing", "page", "no previews data (sphinx-tippy's script for this page)")
+        )
         context.close()
         return failures
     typeset = 0
@@ -128,7 +139,9 @@ def check_page(browser, base: str, name: str, kinds: tuple[str, ...], maths: boo
         state = page.evaluate(PREVIEW_STATE_JS)
         where = f"{kind} {marked[kind][:70]}"
         if not state or not state["text"]:
-            failures.append(("preview", where, "no preview shown" if not state else "empty preview"))
+            failures.append(
+                ("preview", where, "no preview shown" if not state else "empty preview")
+            )
             continue
         if state["hasMath"] and not state["typeset"]:
             failures.append(("math", where, "maths not typeset within 20 s"))
@@ -138,8 +151,11 @@ def check_page(browser, base: str, name: str, kinds: tuple[str, ...], maths: boo
             typeset += state["hasMath"]
         for src in state["badImages"]:
             failures.append(("image", where, f"not loaded: {src}"))
-        print(f"  {name}: {kind} preview ok{' (maths typeset)' if state['hasMath'] else ''}: "
-              f"{state['text'][:60]!r}", file=sys.stderr)
+        print(
+            f"  {name}: {kind} preview ok{' (maths typeset)' if state['hasMath'] else ''}: "
+            f"{state['text'][:60]!r}",
+            file=sys.stderr,
+        )
     if maths and not typeset:
         failures.append(("missing", "maths", "no preview with maths typeset"))
     context.close()
@@ -159,9 +175,14 @@ def main(argv: list[str] | None = None) -> int:
     results = []
     try:
         with sync_playwright() as pw:
-            browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True)
+            browser = pw.chromium.launch(
+                executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True
+            )
             for name, spec in PAGES.items():
-                results += [(name, *f) for f in check_page(browser, base, name, spec["kinds"], spec["maths"])]
+                results += [
+                    (name, *f)
+                    for f in check_page(browser, base, name, spec["kinds"], spec["maths"])
+                ]
             browser.close()
     finally:
         server.shutdown()

@@ -30,8 +30,16 @@ import urllib.parse
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from check_book import (CHROMIUM, CHROMIUM_ARGS, VIEWPORTS, WAIT_MATHJAX_JS, book_pages,  # noqa: E402
-                        built_book, is_local, serve)
+from check_book import (
+    CHROMIUM,
+    CHROMIUM_ARGS,
+    VIEWPORTS,
+    WAIT_MATHJAX_JS,
+    book_pages,  # noqa: E402
+    built_book,
+    is_local,
+    serve,
+)
 
 #: Most bytes a page may load on a first visit (HTML and every asset). Issue 23 measured the
 #: chapters at 4.3-6.2 MB, 1.5 MB of them a Font Awesome script on every page; without it (and
@@ -42,8 +50,10 @@ PAGE_BUDGET_MB = 5.0
 MATHJAX_ENTRY = "mathjax/tex-chtml.js"
 FONTAWESOME_JS = "scripts/fontawesome.js"
 
-_LOAD_ALL_IMAGES_JS = ("() => Promise.all(Array.from(document.images).map(i => { i.loading = 'eager';"
-                       " return i.decode().catch(() => null); }))")
+_LOAD_ALL_IMAGES_JS = (
+    "() => Promise.all(Array.from(document.images).map(i => { i.loading = 'eager';"
+    " return i.decode().catch(() => null); }))"
+)
 
 
 def _kind(path: str, resource_type: str) -> str:
@@ -67,11 +77,15 @@ def measure_page(browser, base: str, root: Path, name: str) -> dict:
         other: bytes), ``assets`` (``[path, bytes]`` of every file, largest first),
         ``has_math`` (the page has a ``.math`` element).
     """
-    context = browser.new_context(viewport=VIEWPORTS["1280"], device_scale_factor=1,
-                                  service_workers="block")
+    context = browser.new_context(
+        viewport=VIEWPORTS["1280"], device_scale_factor=1, service_workers="block"
+    )
     requested: dict[str, str] = {}
     # another host is never asked (check_book.py reports such requests)
-    context.route("**/*", lambda r: r.continue_() if is_local(r.request.url, base) else r.abort("blockedbyclient"))
+    context.route(
+        "**/*",
+        lambda r: r.continue_() if is_local(r.request.url, base) else r.abort("blockedbyclient"),
+    )
     page = context.new_page()
     last = [time.monotonic()]
 
@@ -88,7 +102,9 @@ def measure_page(browser, base: str, root: Path, name: str) -> dict:
     start = time.monotonic()
     while time.monotonic() - last[0] < 0.5 and time.monotonic() - start < 10:
         page.wait_for_timeout(100)
-    has_math = page.evaluate("() => document.querySelector('article .math, article mjx-container') !== null")
+    has_math = page.evaluate(
+        "() => document.querySelector('article .math, article mjx-container') !== null"
+    )
     context.close()
     assets: dict[str, int] = {}
     for url, resource_type in requested.items():
@@ -100,9 +116,13 @@ def measure_page(browser, base: str, root: Path, name: str) -> dict:
     for path, size in assets.items():
         kind = _kind(path, requested.get(base + path, ""))
         by_kind[kind] = by_kind.get(kind, 0) + size
-    return {"page": name, "bytes": sum(assets.values()), "by_kind": by_kind,
-            "assets": sorted(([p, s] for p, s in assets.items()), key=lambda a: -a[1]),
-            "has_math": has_math}
+    return {
+        "page": name,
+        "bytes": sum(assets.values()),
+        "by_kind": by_kind,
+        "assets": sorted(([p, s] for p, s in assets.items()), key=lambda a: -a[1]),
+        "has_math": has_math,
+    }
 
 
 def measure(root: Path, pages: list[str]) -> list[dict]:
@@ -112,11 +132,17 @@ def measure(root: Path, pages: list[str]) -> list[dict]:
     server, base = serve(root)
     try:
         with sync_playwright() as pw:
-            browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True)
+            browser = pw.chromium.launch(
+                executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True
+            )
             out = []
             for name in pages:
                 out.append(measure_page(browser, base, root, name))
-                print(f"  measured {name}: {out[-1]['bytes'] / 1e6:.2f} MB", file=sys.stderr, flush=True)
+                print(
+                    f"  measured {name}: {out[-1]['bytes'] / 1e6:.2f} MB",
+                    file=sys.stderr,
+                    flush=True,
+                )
             browser.close()
     finally:
         server.shutdown()
@@ -131,7 +157,9 @@ def failures(weights: list[dict], budget_mb: float = PAGE_BUDGET_MB) -> list[tup
         loaded = {path for path, _ in w["assets"]}
         if w["bytes"] > budget_mb * 1e6:
             top = ", ".join(f"{Path(p).name} {s / 1e6:.2f} MB" for p, s in w["assets"][:3])
-            out.append((w["page"], "weight", f"{w['bytes'] / 1e6:.2f} MB > {budget_mb:g} MB ({top})"))
+            out.append(
+                (w["page"], "weight", f"{w['bytes'] / 1e6:.2f} MB > {budget_mb:g} MB ({top})")
+            )
         if any(p.endswith(MATHJAX_ENTRY) for p in loaded) and not w["has_math"]:
             out.append((w["page"], "mathjax", "loads MathJax but has no maths"))
         if any(p.endswith(FONTAWESOME_JS) for p in loaded):

@@ -15,13 +15,16 @@ from fdi_lib.reproduce.registry import get, reproduce
 
 @pytest.fixture(scope="module")
 def results():
-    return {rid: reproduce(rid, seed=1, trials=12) for rid in ("bz-whiteness", "bz-solution1", "bz-solution2")}
+    return {
+        rid: reproduce(rid, seed=1, trials=12)
+        for rid in ("bz-whiteness", "bz-solution1", "bz-solution2")
+    }
 
 
 def test_registered_with_documented_keys(results):
     for rid, res in results.items():
         rep = get(rid)
-        assert rep.default_trials is None and rep.plot is not None   # the paper has no Monte Carlo
+        assert rep.default_trials is None and rep.plot is not None  # the paper has no Monte Carlo
         doc = rep.func.__doc__
         for key in res.headline:
             if not key.endswith("_ci"):
@@ -34,7 +37,7 @@ def test_registered_with_documented_keys(results):
 
 def test_whiteness_headline(results):
     h = results["bz-whiteness"].headline
-    assert h["lag1_corr_theory"] < -0.05                       # the closed form is clearly non-zero
+    assert h["lag1_corr_theory"] < -0.05  # the closed form is clearly non-zero
     lo, hi = h["lag1_corr_empirical_ci"]
     assert lo < h["lag1_corr_theory"] < hi
     assert h["cov_rel_error_kitanidis"] < 0.1 and h["cov_rel_error_reduced"] < 0.1
@@ -48,7 +51,7 @@ def test_whiteness_headline(results):
 def test_solution_headlines(results):
     h1 = results["bz-solution1"].headline
     assert h1["glr_detection_rate_theta"] > 0.8 and h1["glr_detection_rate_theta_with_f"] > 0.8
-    assert h1["glr_mean_delay_theta"] == h1["glr_mean_delay_theta_with_f"]   # f rejected exactly
+    assert h1["glr_mean_delay_theta"] == h1["glr_mean_delay_theta_with_f"]  # f rejected exactly
     assert h1["glr_alarm_rate_f_only"] == h1["glr_false_alarm_rate"]
     assert h1["nonparametric_detection_rate_f"] > 0.8
     h2 = results["bz-solution2"].headline
@@ -86,9 +89,13 @@ def test_updated_residual_is_free_of_f_white_and_singular(results):
     # the maximum is over the pairs of components with non-zero variance (here p - 1 of them)
     assert h["lag1_corr_updated_entries"] == (model.p - 1) ** 2
     assert h["lag1_corr_updated_bonferroni_z"] == pytest.approx(
-        scipy.stats.norm.ppf(1 - 0.05 / (2 * h["lag1_corr_updated_entries"])), rel=1e-12)
+        scipy.stats.norm.ppf(1 - 0.05 / (2 * h["lag1_corr_updated_entries"])), rel=1e-12
+    )
     # the entry of the largest |correlation| has a half-width at most the largest one
-    assert h["lag1_corr_updated_zmax"] >= 1.96 * h["lag1_corr_updated_max"] / h["lag1_corr_updated_halfwidth"]
+    assert (
+        h["lag1_corr_updated_zmax"]
+        >= 1.96 * h["lag1_corr_updated_max"] / h["lag1_corr_updated_halfwidth"]
+    )
     assert abs(h["lag1_corr_theory"]) > 5 * h["lag1_cov_updated_theory_max"] + 0.05
 
 
@@ -116,9 +123,16 @@ def test_ljung_box_pvalues_equal_statsmodels(shape, lags):
 
     rng = np.random.default_rng(shape[1])
     series = 3.0 * rng.standard_normal(shape) + 1.0
-    series[..., 0] = 0.05 * np.cumsum(series[..., 0], axis=1)              # strongly correlated
+    series[..., 0] = 0.05 * np.cumsum(series[..., 0], axis=1)  # strongly correlated
     ours = ljung_box_pvalues(series, lags)
-    ref = np.array([[float(acorr_ljungbox(series[i, :, j], lags=[lags])["lb_pvalue"].iloc[0])
-                     for j in range(shape[2])] for i in range(shape[0])])
+    ref = np.array(
+        [
+            [
+                float(acorr_ljungbox(series[i, :, j], lags=[lags])["lb_pvalue"].iloc[0])
+                for j in range(shape[2])
+            ]
+            for i in range(shape[0])
+        ]
+    )
     np.testing.assert_array_equal(ours, ref)
     assert ours[:, 0].max() < 1e-6 and ours.shape == shape[::2]

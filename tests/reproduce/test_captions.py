@@ -23,27 +23,42 @@ ROOT = Path(__file__).resolve().parents[2]
 # ----------------------------------------------------------------------------- the verb rule
 RATES = ReproductionResult(
     id="zhang2021-table1",
-    headline={"success_rate": {"5": 0.998, "15": 0.31}, "ci95": {"5": [0.99, 1.0], "15": [0.28, 0.34]}},
-    paper={"success_rate": {"5": 0.995, "15": 0.295}}, settings={"trials": 1000})
+    headline={
+        "success_rate": {"5": 0.998, "15": 0.31},
+        "ci95": {"5": [0.99, 1.0], "15": [0.28, 0.34]},
+    },
+    paper={"success_rate": {"5": 0.995, "15": 0.295}},
+    settings={"trials": 1000},
+)
 
 
 def test_verb_reproduces_only_when_every_compared_claim_agrees():
-    claim = L.figure_claim(RATES)                          # within interval, twice
+    claim = L.figure_claim(RATES)  # within interval, twice
     assert (claim.verb, claim.differs) == (L.REPRODUCES, "")
-    off = dataclasses.replace(RATES, headline={"success_rate": {"5": 0.998, "15": 0.465},
-                                               "ci95": {"5": [0.99, 1.0], "15": [0.43, 0.50]}})
+    off = dataclasses.replace(
+        RATES,
+        headline={
+            "success_rate": {"5": 0.998, "15": 0.465},
+            "ci95": {"5": [0.99, 1.0], "15": [0.43, 0.50]},
+        },
+    )
     claim = L.figure_claim(off)
     assert claim.verb == L.COMPARE
     assert claim.differs.replace("\u00a0", " ") == (
-        "; differs: success rate at q = 15: paper 29.5 %, ours 46.5 %")   # both in %
+        "; differs: success rate at q = 15: paper 29.5 %, ours 46.5 %"
+    )  # both in %
 
 
 def test_verb_ignores_inputs_and_calibration_targets():
     """Values the book sets count neither way: only inputs gives "redraws", inputs and our
     estimates of them do not spoil agreement."""
     paper = {"onset_estimate": 201, "glr_argmax_time": "within the window after 201"}
-    res = ReproductionResult(id="zb2014-fig3", paper=paper, settings={},
-                             headline={"onset_estimate": 201, "glr_argmax_time": 208})
+    res = ReproductionResult(
+        id="zb2014-fig3",
+        paper=paper,
+        settings={},
+        headline={"onset_estimate": 201, "glr_argmax_time": 208},
+    )
     statuses = {r.path[0]: r.status for r in L.figure_claim(res).rows}
     assert statuses == {"onset_estimate": L.INPUT_RECOVERED, "glr_argmax_time": L.REPRODUCED}
     assert L.figure_claim(res).verb == L.REPRODUCES
@@ -52,15 +67,24 @@ def test_verb_ignores_inputs_and_calibration_targets():
     assert claim.verb == L.COMPARE and "bottom panel: l_k is largest" in claim.differs
     # Rosa & Silvestre Figs 8-10: the fault the book sets, and the §6.4 detection time, which is
     # Fig. 11's claim (listed there once): the figure redraws
-    alpha = ReproductionResult(id="rosa2013-fig8", settings={},
-                               headline={"onset_s": 0.5, "detection_time_ms": 10.0},
-                               paper={"onset_s": 0.5, "detection_time_ms": 10})
+    alpha = ReproductionResult(
+        id="rosa2013-fig8",
+        settings={},
+        headline={"onset_s": 0.5, "detection_time_ms": 10.0},
+        paper={"onset_s": 0.5, "detection_time_ms": 10},
+    )
     assert [r.path for r in L.figure_claim(alpha).rows] == [("onset_s",)]
     assert L.figure_claim(alpha).verb == L.REDRAWS
     calibrated = ReproductionResult(
-        id="zb2014-fig9", headline={"glr_level_over_threshold": 50.6},
-        paper={"glr_level_over_threshold": 50.0, "calibrated_to": ["glr_level_over_threshold"],
-               "predictions": []}, settings={})
+        id="zb2014-fig9",
+        headline={"glr_level_over_threshold": 50.6},
+        paper={
+            "glr_level_over_threshold": 50.0,
+            "calibrated_to": ["glr_level_over_threshold"],
+            "predictions": [],
+        },
+        settings={},
+    )
     assert L.figure_claim(calibrated).verb == L.REDRAWS
 
 
@@ -68,17 +92,24 @@ def test_verb_with_too_few_trials_and_many_differences():
     few = dataclasses.replace(RATES, settings={"trials": 2})
     claim = L.figure_claim(few)
     assert claim.verb == L.COMPARE and "not computed at paper scale" in claim.differs
-    assert "differs" not in claim.differs          # too few trials is no difference
-    many = dataclasses.replace(RATES, paper={"success_rate": {str(q): 0.9 for q in range(5, 9)}},
-                               headline={"success_rate": {str(q): 0.1 for q in range(5, 9)},
-                                         "ci95": {str(q): [0.05, 0.15] for q in range(5, 9)}})
+    assert "differs" not in claim.differs  # too few trials is no difference
+    many = dataclasses.replace(
+        RATES,
+        paper={"success_rate": {str(q): 0.9 for q in range(5, 9)}},
+        headline={
+            "success_rate": {str(q): 0.1 for q in range(5, 9)},
+            "ci95": {str(q): [0.05, 0.15] for q in range(5, 9)},
+        },
+    )
     claim = L.figure_claim(many)
     assert claim.differs.replace("\u00a0", " ").count("paper 90 %") == L.CAPTION_ITEMS
     assert "2 more in the claims ledger" in claim.differs
 
 
 # ----------------------------------------------------------------------------- the chapters
-CHAPTERS = sorted(p for p in (ROOT / "book").rglob("*.md") if p.read_text().startswith("---\njupytext"))
+CHAPTERS = sorted(
+    p for p in (ROOT / "book").rglob("*.md") if p.read_text().startswith("---\njupytext")
+)
 _GLUED = re.compile(r"\{glue:text\}`caption-(?P<id>[\w-]+)-verb` paper (Fig|Table)")
 _TYPED = re.compile(r"\b([Rr]eproduces|[Cc]ompare with|[Rr]edraws)\b")
 
@@ -95,8 +126,11 @@ def test_chapters_have_figures():
     assert len(list(_figure_cells())) >= 24
 
 
-@pytest.mark.parametrize("doc, caption, source", list(_figure_cells()),
-                         ids=lambda v: str(v)[:40] if isinstance(v, Path) else "")
+@pytest.mark.parametrize(
+    "doc, caption, source",
+    list(_figure_cells()),
+    ids=lambda v: str(v)[:40] if isinstance(v, Path) else "",
+)
 def test_caption_verbs_come_from_the_ledger(doc, caption, source):
     """A caption naming a paper figure or table takes its verb and "what differs" from
     ``glue_caption`` of the result it plots; no verb about a paper figure is typed."""
@@ -110,7 +144,7 @@ def test_caption_verbs_come_from_the_ledger(doc, caption, source):
     id = glued.group("id")
     assert id in ids, (doc, id)
     assert f"{{glue:text}}`caption-{id}-differs`" in caption, (doc, caption)
-    var = re.search(r'^glue_caption\((\w+)\)$', source, flags=re.M)
+    var = re.search(r"^glue_caption\((\w+)\)$", source, flags=re.M)
     assert var, (doc, "the figure cell must call glue_caption(result)")
     assert re.search(rf'get\("{id}"\)\.plot\({var.group(1)}\b', source), (doc, id, source)
 
@@ -119,8 +153,9 @@ def test_caption_verbs_come_from_the_ledger(doc, caption, source):
 def _load_check():
     import importlib.util
 
-    spec = importlib.util.spec_from_file_location("check_captions",
-                                                  ROOT / "tests" / "browser" / "check_captions.py")
+    spec = importlib.util.spec_from_file_location(
+        "check_captions", ROOT / "tests" / "browser" / "check_captions.py"
+    )
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
@@ -133,30 +168,38 @@ def test_post_build_check_fails_on_a_caption_that_disagrees(tmp_path, monkeypatc
 
     check = _load_check()
     monkeypatch.setenv("FDI_RESULTS_CACHE", str(tmp_path / "cache"))
-    f1, f3 = book_run("zb2014-fig1"), book_run("zb2014-fig3")       # cached, as in a build
-    reproduce("zb2014-fig3", seed=1)         # another run, used last: not the book's, not read
+    f1, f3 = book_run("zb2014-fig1"), book_run("zb2014-fig3")  # cached, as in a build
+    reproduce("zb2014-fig3", seed=1)  # another run, used last: not the book's, not read
     c1, c3 = L.figure_claim(f1), L.figure_claim(f3)
-    assert (c1.verb, c3.verb) == (L.COMPARE, L.REPRODUCES)        # Γ_k over 1; Fig. 3 agrees
+    assert (c1.verb, c3.verb) == (L.COMPARE, L.REPRODUCES)  # Γ_k over 1; Fig. 3 agrees
 
     def page(*caps, attrs=""):
         (tmp_path / "html").mkdir(exist_ok=True)
-        body = "".join(f"<figure{attrs}><figcaption><p><span>{c}</span></p></figcaption></figure>"
-                       for c in caps)
+        body = "".join(
+            f"<figure{attrs}><figcaption><p><span>{c}</span></p></figcaption></figure>"
+            for c in caps
+        )
         (tmp_path / "html" / "page.html").write_text(f"<html><body>{body}</body></html>")
         return check.check(tmp_path / "html")
 
-    good1 = (f"Norms; <span class='pasted-text'>{c1.verb}</span> paper Fig. 1 of Z "
-             f"(zb2014-fig1{html.escape(c1.differs)}).")
+    good1 = (
+        f"Norms; <span class='pasted-text'>{c1.verb}</span> paper Fig. 1 of Z "
+        f"(zb2014-fig1{html.escape(c1.differs)})."
+    )
     good3 = f"GLR; {c3.verb} paper Fig. 3 of Z (zb2014-fig3)."
     assert page(good1, good3, "Not in the paper.") == []
     kinds = [f[1] for f in page(good1.replace(c1.verb, "reproduces"), good3)]
     assert kinds == ["verb"]
     assert [f[1] for f in page(good1.replace(html.escape(c1.differs), ""))] == ["differs"]
     assert [f[1] for f in page("Paper Fig. 11 under the other reading (rosa2013-fig11-rad).")] == [
-        "caption"]
+        "caption"
+    ]
     assert [f[1] for f in page("GLR; reproduces paper Fig. 4 of Z (zb2014-fig4).")] == ["result"]
     # an explorable redraws a paper figure's setting and claims nothing: not checked
     sliders = "SVO hull against the bound (as paper Fig. 2)."
     assert [f[1] for f in page(sliders)] == ["caption"]
     assert page(sliders, attrs=' class="fdi-explorable" id="x"') == []
-    assert page(sliders, attrs=' class="align-default fdi-explorable-figure" id="fig-svo-explore"') == []
+    assert (
+        page(sliders, attrs=' class="align-default fdi-explorable-figure" id="fig-svo-explore"')
+        == []
+    )

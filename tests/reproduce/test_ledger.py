@@ -14,8 +14,18 @@ from fdi_lib.reproduce.registry import ReproductionResult, cached_results
 
 ROOT = Path(__file__).resolve().parents[2]
 # Cheap reproductions (no Monte Carlo) covering numbers, lists, booleans, inequalities, checks.
-CHEAP = ["zb2014-fig1", "zb2014-fig2", "zb2014-fig3", "zb2014-fig4", "zb2014-table1",
-         "zhang2021-fig2", "zhang2021-fig3", "rosa2013-fig8", "rosa2013-fig10", "rosa2013-timing"]
+CHEAP = [
+    "zb2014-fig1",
+    "zb2014-fig2",
+    "zb2014-fig3",
+    "zb2014-fig4",
+    "zb2014-table1",
+    "zhang2021-fig2",
+    "zhang2021-fig3",
+    "rosa2013-fig8",
+    "rosa2013-fig10",
+    "rosa2013-timing",
+]
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +40,7 @@ def _claim(test=L.BY_TOLERANCE, **kw):
 
 def test_status_of_numbers_lists_and_intervals():
     assert L.claim_status(786.0, 786.0)[0] == L.REPRODUCED
-    assert L.claim_status(786.0, 786.5)[0] == L.REPRODUCED          # within 1e-3 relative
+    assert L.claim_status(786.0, 786.5)[0] == L.REPRODUCED  # within 1e-3 relative
     assert L.claim_status(786.0, 790.0)[0] == L.DIFFERS
     interval = _claim(L.BY_INTERVAL)
     assert L.claim_status(0.295, 0.465, (0.43, 0.50), interval)[0] == L.DIFFERS
@@ -43,12 +53,12 @@ def test_status_of_numbers_lists_and_intervals():
     se = _claim(L.BY_STANDARD_ERROR)
     assert L.claim_status([10.0, 9.0], [10.1, 9.1], se=[0.1, 0.1], spec=se)[0] == L.WITHIN
     assert L.claim_status([10.78, 9.0], [10.1, 9.1], se=[0.1, 0.1], spec=se)[0] == L.DIFFERS
-    assert L.claim_status([10.0, 9.0], [10.0, 9.0], spec=se)[0] == L.NOT_COMPUTED   # no se
+    assert L.claim_status([10.0, 9.0], [10.0, 9.0], spec=se)[0] == L.NOT_COMPUTED  # no se
     assert L.claim_status([4.0, 0.0], [4.0, 0.0])[0] == L.REPRODUCED
     assert L.claim_status([4.0, 0.0], [4.0, 0.1])[0] == L.DIFFERS
     assert L.claim_status([4.0, 0.0], [4.0])[0] == L.DIFFERS
-    assert L.claim_status(20, None)[0] == L.NOT_COMPUTED             # we have no value
-    never = _claim(missing="not detected")                           # None is a result
+    assert L.claim_status(20, None)[0] == L.NOT_COMPUTED  # we have no value
+    never = _claim(missing="not detected")  # None is a result
     assert L.claim_status(20, None, spec=never) == (L.DIFFERS, "ours: not detected")
     # a single run: inside the 95 % range of our runs, or not
     spread = _claim(L.BY_SPREAD)
@@ -65,7 +75,7 @@ def test_status_of_text_claims():
     assert L.claim_status("< 500", [100.0, 499.0])[0] == L.REPRODUCED
     assert L.claim_status("about 3500", 3500.0)[0] == L.REPRODUCED
     assert L.claim_status("about 3500", 280.0)[0] == L.DIFFERS
-    assert L.claim_status("grows", 1.0)[0] == L.NOT_REPRODUCIBLE    # no check: flagged
+    assert L.claim_status("grows", 1.0)[0] == L.NOT_REPRODUCIBLE  # no check: flagged
     spec = _claim(L.BY_CHECK, check=lambda p, o, h: o > 2, criterion="o > 2")
     assert L.claim_status("grows", 3.0, spec=spec) == (L.REPRODUCED, "o > 2")
     assert L.claim_status("grows", 1.0, spec=spec)[0] == L.DIFFERS
@@ -73,8 +83,10 @@ def test_status_of_text_claims():
     assert L.claim_status("0 (Prop. 2)", -0.08, (-0.09, -0.07), zero)[0] == L.DIFFERS
     assert L.claim_status("0 (Prop. 2)", -0.01, (-0.03, 0.01), zero)[0] == L.WITHIN
     why = "timing on another machine"
-    assert L.claim_status(5.0, 5.0, spec=_claim(L.NOT_CHECKABLE,
-                                                reason=why)) == (L.NOT_REPRODUCIBLE, why)
+    assert L.claim_status(5.0, 5.0, spec=_claim(L.NOT_CHECKABLE, reason=why)) == (
+        L.NOT_REPRODUCIBLE,
+        why,
+    )
 
 
 def test_a_declaration_states_its_location_and_a_known_test():
@@ -87,32 +99,45 @@ def test_a_declaration_states_its_location_and_a_known_test():
     with pytest.raises(L.ModelError, match="Claim.check"):
         L.Claim(location="Fig. 1", units="", test=L.BY_CHECK)
     with pytest.raises(TypeError):
-        L.Claim(location="Fig. 1", test=L.BY_TOLERANCE)     # units must be stated
+        L.Claim(location="Fig. 1", test=L.BY_TOLERANCE)  # units must be stated
 
 
 def test_claim_paths_skip_values_that_state_nothing():
-    paper = {"a": 1, "b": {"x": "< 1", "y": None}, "c": "not stated", "d": [1, 2],
-             "e": "illustration, no numbers"}
+    paper = {
+        "a": 1,
+        "b": {"x": "< 1", "y": None},
+        "c": "not stated",
+        "d": [1, 2],
+        "e": "illustration, no numbers",
+    }
     assert L.claim_paths(paper) == [("a",), ("b", "x"), ("d",)]
     declared = {"a": 1, "calibrated_to": ["a"], "predictions": [], "b": {"predictions": 2}}
-    assert L.claim_paths(declared) == [("a",), ("b", "predictions")]   # role lists: top level only
+    assert L.claim_paths(declared) == [("a",), ("b", "predictions")]  # role lists: top level only
 
 
 def test_surrogate_role_is_the_reproductions_declaration():
     paper = {"x": 1, "y": 2, "z": 3, "calibrated_to": ["x"], "predictions": ["y"]}
     typed = _claim(role=L.CALIBRATION)
     assert [L.surrogate_role("zb2014-fig9", paper, (k,), typed) for k in "xyz"] == [
-        L.CALIBRATION, L.PREDICTION, L.INPUT]                 # the typed role is ignored
+        L.CALIBRATION,
+        L.PREDICTION,
+        L.INPUT,
+    ]  # the typed role is ignored
     assert L.surrogate_role("rosa2013-fig8", {"x": 1}, ("x",), typed) == L.CALIBRATION
     assert L.surrogate_role("rosa2013-fig8", {"x": 1}, ("x",)) == L.PREDICTION
     assert L.surrogate_role("zb2014-fig1", {"x": 1}, ("x",), typed) is None
     # moving a key between the lists moves its row
-    res = ReproductionResult(id="zb2014-fig9", headline={"x": 1.0, "y": 2.0},
-                             paper={"x": 1.0, "y": 2.0, "calibrated_to": ["x"], "predictions": ["y"]},
-                             settings={})
+    res = ReproductionResult(
+        id="zb2014-fig9",
+        headline={"x": 1.0, "y": 2.0},
+        paper={"x": 1.0, "y": 2.0, "calibrated_to": ["x"], "predictions": ["y"]},
+        settings={},
+    )
     roles = {r.path: r.role for r in L.build_ledger({"zb2014-fig9": res}).rows}
     assert roles == {("x",): L.CALIBRATION, ("y",): L.PREDICTION}
-    swapped = dataclasses.replace(res, paper={**res.paper, "calibrated_to": ["y"], "predictions": ["x"]})
+    swapped = dataclasses.replace(
+        res, paper={**res.paper, "calibrated_to": ["y"], "predictions": ["x"]}
+    )
     roles = {r.path: r.role for r in L.build_ledger({"zb2014-fig9": swapped}).rows}
     assert roles == {("x",): L.PREDICTION, ("y",): L.CALIBRATION}
 
@@ -138,15 +163,20 @@ def test_every_paper_value_appears(cheap_results):
 def test_statuses_are_computed_not_typed(cheap_results):
     """Perturb a paper value: the status follows the numbers."""
     base = {(r.id, r.path): r.status for r in L.build_ledger(cheap_results).rows}
-    assert base[("zb2014-table1", ("G0_1_nominal",))] == L.INPUT_VALUE      # set by the book
+    assert base[("zb2014-table1", ("G0_1_nominal",))] == L.INPUT_VALUE  # set by the book
     assert base[("zb2014-fig1", ("gamma_norm_max", "101"))] == L.DIFFERS_MEASURED
     t1 = cheap_results["zb2014-table1"]
-    moved = dataclasses.replace(t1, paper={**t1.paper, "G0_1_nominal": t1.paper["G0_1_nominal"] * 1.01})
+    moved = dataclasses.replace(
+        t1, paper={**t1.paper, "G0_1_nominal": t1.paper["G0_1_nominal"] * 1.01}
+    )
     f1 = cheap_results["zb2014-fig1"]
     relaxed = dataclasses.replace(f1, paper={**f1.paper, "gamma_norm_max": {"101": "< 2"}})
-    rows = {(r.id, r.path): r.status
-            for r in L.build_ledger({**cheap_results, "zb2014-table1": moved,
-                                     "zb2014-fig1": relaxed}).rows}
+    rows = {
+        (r.id, r.path): r.status
+        for r in L.build_ledger(
+            {**cheap_results, "zb2014-table1": moved, "zb2014-fig1": relaxed}
+        ).rows
+    }
     assert rows[("zb2014-table1", ("G0_1_nominal",))] == L.DIFFERS_UNKNOWN  # an input we miss
     assert rows[("zb2014-fig1", ("gamma_norm_max", "101"))] == L.REPRODUCED
     # the status column (the first) of the rendered table is the computed one
@@ -156,17 +186,24 @@ def test_statuses_are_computed_not_typed(cheap_results):
 
 
 def test_within_interval_from_a_stochastic_result():
-    res = ReproductionResult(id="zhang2021-table1", headline={
-        "success_rate": {"15": 0.31, "16": 0.46}, "ci95": {"15": [0.28, 0.34], "16": [0.43, 0.49]}},
-        paper={"success_rate": {"15": 0.295, "16": 0.251}}, settings={"trials": 1000})
+    res = ReproductionResult(
+        id="zhang2021-table1",
+        headline={
+            "success_rate": {"15": 0.31, "16": 0.46},
+            "ci95": {"15": [0.28, 0.34], "16": [0.43, 0.49]},
+        },
+        paper={"success_rate": {"15": 0.295, "16": 0.251}},
+        settings={"trials": 1000},
+    )
     rows = L.build_ledger({"zhang2021-table1": res}, strict=True).rows
     assert [r.status for r in rows] == [L.WITHIN, L.DIFFERS_UNKNOWN]
     assert rows[0].ci == (0.28, 0.34) and rows[1].explain and rows[0].trials == 1000
     assert rows[1].cause is None and rows[0].paper_trials == 1000
     # the paper's rate between our two readings of the rule, on the same trials: a bracket, not
     # a cause (neither reading's interval holds it)
-    between = dataclasses.replace(res, headline={**res.headline,
-                                                 "success_rate_linear": {"15": 0.30, "16": 0.20}})
+    between = dataclasses.replace(
+        res, headline={**res.headline, "success_rate_linear": {"15": 0.30, "16": 0.20}}
+    )
     rows = L.build_ledger({"zhang2021-table1": between}, strict=True).rows
     assert [r.status for r in rows] == [L.WITHIN, L.DIFFERS_BRACKETED]
     assert rows[1].cause is None and "between" in rows[1].status_detail
@@ -177,46 +214,73 @@ def test_within_interval_from_a_stochastic_result():
 
 def test_statuses_need_the_papers_trial_count():
     """A Monte Carlo result with fewer trials than the paper's gives no comparison status."""
-    res = ReproductionResult(id="zhang2021-table1", headline={
-        "success_rate": {"15": 0.31, "16": 0.46}, "ci95": {"15": [0.0, 0.9], "16": [0.0, 0.9]}},
-        paper={"success_rate": {"15": 0.295, "16": 0.251}}, settings={"trials": L.FALLBACK_TRIALS})
+    res = ReproductionResult(
+        id="zhang2021-table1",
+        headline={
+            "success_rate": {"15": 0.31, "16": 0.46},
+            "ci95": {"15": [0.0, 0.9], "16": [0.0, 0.9]},
+        },
+        paper={"success_rate": {"15": 0.295, "16": 0.251}},
+        settings={"trials": L.FALLBACK_TRIALS},
+    )
     rows = L.build_ledger({"zhang2021-table1": res}, strict=True).rows
-    assert {r.status for r in rows} == {L.NOT_COMPUTED}       # not "within interval" (huge CI)
+    assert {r.status for r in rows} == {L.NOT_COMPUTED}  # not "within interval" (huge CI)
     assert all(r.status_detail.startswith("not computed at paper scale") for r in rows)
     assert L.get("zhang2021-table1").default_trials == rows[0].paper_trials == 1000
     # an input stays an input at any trial count
-    f8 = ReproductionResult(id="zb2014-fig8", headline={"threshold_dof": 1},
-                            paper={"threshold_dof": "1 (caption) / 2 (text)", "calibrated_to": [],
-                                   "predictions": []}, settings={"trials": 2})
+    f8 = ReproductionResult(
+        id="zb2014-fig8",
+        headline={"threshold_dof": 1},
+        paper={"threshold_dof": "1 (caption) / 2 (text)", "calibrated_to": [], "predictions": []},
+        settings={"trials": 2},
+    )
     assert [r.status for r in L.build_ledger({"zb2014-fig8": f8}).rows] == [L.INPUT_VALUE]
 
 
 def test_within_spread_of_a_single_run():
     """Figs. 5-6 of the pipeline: one run of the paper against our run-to-run distribution."""
-    paper = {"alarm_time_min": 786.0, "detection_delay_min": 186.0,
-             "calibrated_to": [], "predictions": ["alarm_time_min", "detection_delay_min"]}
+    paper = {
+        "alarm_time_min": 786.0,
+        "detection_delay_min": 186.0,
+        "calibrated_to": [],
+        "predictions": ["alarm_time_min", "detection_delay_min"],
+    }
     head = {"alarm_time_min": 778.0, "detection_delay_min": 178.0}
     plain = ReproductionResult(id="zb2014-fig5", headline=head, paper=paper, settings={})
     # declared by the spread of single runs: without our spread there is nothing to compare
     assert {r.status for r in L.build_ledger({"zb2014-fig5": plain}).rows} == {L.NOT_COMPUTED}
-    spread = dataclasses.replace(plain, headline={
-        **head, "alarm_time_min_spread95": [700.0, 800.0], "alarm_time_min_paper_percentile": 71.0,
-        "detection_delay_min_spread95": [100.0, 180.0], "spread_runs": 1000})
+    spread = dataclasses.replace(
+        plain,
+        headline={
+            **head,
+            "alarm_time_min_spread95": [700.0, 800.0],
+            "alarm_time_min_paper_percentile": 71.0,
+            "detection_delay_min_spread95": [100.0, 180.0],
+            "spread_runs": 1000,
+        },
+    )
     rows = {r.path[0]: r for r in L.build_ledger({"zb2014-fig5": spread}).rows}
     assert rows["alarm_time_min"].status == L.WITHIN_SPREAD
     assert "71" in rows["alarm_time_min"].status_detail and "1 000" in rows[
-        "alarm_time_min"].status_detail.replace("\u202f", " ")
-    assert rows["detection_delay_min"].status in L.DIFFERING      # 186 outside [100, 180]
+        "alarm_time_min"
+    ].status_detail.replace("\u202f", " ")
+    assert rows["detection_delay_min"].status in L.DIFFERING  # 186 outside [100, 180]
 
 
 def test_one_row_per_claim():
     """The Table I/II values the λ-rule study checks again are listed once, under the table."""
-    t1 = ReproductionResult(id="zhang2021-table1", headline={
-        "success_rate": {"15": 0.465}, "ci95": {"15": [0.43, 0.50]}},
-        paper={"success_rate": {"15": 0.295}}, settings={"trials": 1000})
-    lr = ReproductionResult(id="zhang2021-lambda-rule", headline={
-        "success_rate": {"log": {"q15": 0.455}}, "ci95": {"log": {"q15": [0.38, 0.53]}}},
-        paper={"success_rate": {"q15": 0.295}}, settings={"trials": 200})
+    t1 = ReproductionResult(
+        id="zhang2021-table1",
+        headline={"success_rate": {"15": 0.465}, "ci95": {"15": [0.43, 0.50]}},
+        paper={"success_rate": {"15": 0.295}},
+        settings={"trials": 1000},
+    )
+    lr = ReproductionResult(
+        id="zhang2021-lambda-rule",
+        headline={"success_rate": {"log": {"q15": 0.455}}, "ci95": {"log": {"q15": [0.38, 0.53]}}},
+        paper={"success_rate": {"q15": 0.295}},
+        settings={"trials": 200},
+    )
     rows = L.build_ledger({"zhang2021-table1": t1, "zhang2021-lambda-rule": lr}, strict=True).rows
     assert [(r.id, r.path) for r in rows] == [("zhang2021-table1", ("success_rate", "15"))]
     assert "zhang2021-lambda-rule on 200 trials: 45.5" in rows[0].note
@@ -225,11 +289,15 @@ def test_one_row_per_claim():
 def test_the_other_reading_of_a_figure_is_a_note_and_its_caption_has_its_own_statuses():
     """The per-radian UAV figures check the paper's Figs 11-12 again: one row per claim (the
     per-degree reading's), the other reading in its note; its own figure's caption judges it."""
-    deg = ReproductionResult(id="rosa2013-fig11", headline={
-        "detection_time_ms": {"alpha": {"step": 10.0}}}, paper={
-        "detection_time_ms": {"alpha": {"step": 10}}}, settings={"trials": 10})
-    rad = dataclasses.replace(deg, id="rosa2013-fig11-rad", headline={
-        "detection_time_ms": {"alpha": {"step": None}}})
+    deg = ReproductionResult(
+        id="rosa2013-fig11",
+        headline={"detection_time_ms": {"alpha": {"step": 10.0}}},
+        paper={"detection_time_ms": {"alpha": {"step": 10}}},
+        settings={"trials": 10},
+    )
+    rad = dataclasses.replace(
+        deg, id="rosa2013-fig11-rad", headline={"detection_time_ms": {"alpha": {"step": None}}}
+    )
     rows = L.build_ledger({"rosa2013-fig11": deg, "rosa2013-fig11-rad": rad}, strict=True).rows
     assert [(r.id, r.status) for r in rows] == [("rosa2013-fig11", L.REPRODUCED)]
     assert "rosa2013-fig11-rad on 10 trials: not detected in any run" in rows[0].note
@@ -240,8 +308,9 @@ def test_the_other_reading_of_a_figure_is_a_note_and_its_caption_has_its_own_sta
 
 def _declarations():
     """``(id, pattern, Claim)`` of every registration."""
-    return [(rep.id, pattern, claim) for rep in list_reproductions() for pattern,
-            claim in rep.claims]
+    return [
+        (rep.id, pattern, claim) for rep in list_reproductions() for pattern, claim in rep.claims
+    ]
 
 
 def test_every_difference_links_to_where_it_is_shown(cheap_results):
@@ -254,7 +323,9 @@ def test_every_difference_links_to_where_it_is_shown(cheap_results):
         if r.status in (*L.DIFFERING, L.NOT_REPRODUCIBLE, L.NOT_COMPUTED):
             assert r.explain, (r.id, r.path)
         assert (r.cause is not None) == (r.status in (L.DIFFERS_MEASURED, L.DIFFERS_HYPOTHESIS)), (
-            r.id, r.path)
+            r.id,
+            r.path,
+        )
 
 
 _FENCE = re.compile(r"^(`{3,}|:{3,})")
@@ -268,7 +339,7 @@ def _sections():
     out = {}
     for md in (ROOT / "book").rglob("*.md"):
         lines = md.read_text().splitlines()
-        heads, fenced = [], False           # (line, level) of each heading outside code
+        heads, fenced = [], False  # (line, level) of each heading outside code
         for i, line in enumerate(lines):
             if line.startswith("```"):
                 fenced = not fenced
@@ -303,8 +374,11 @@ def _missing_glue(results=None):
     sections = _sections()
     linked = set()
     if results:
-        linked = {(r.id, r.path) for r in L.build_ledger(results).rows
-                  if r.status in (L.DIFFERS_MEASURED, L.DIFFERS_HYPOTHESIS)}
+        linked = {
+            (r.id, r.path)
+            for r in L.build_ledger(results).rows
+            if r.status in (L.DIFFERS_MEASURED, L.DIFFERS_HYPOTHESIS)
+        }
     missing = []
     for id, pattern, c in _declarations():
         for label, keys in ((c.cause, c.cause_glue), (c.hypothesis, c.hypothesis_glue)):
@@ -315,8 +389,11 @@ def _missing_glue(results=None):
                 continue
             shown = _glued(sections[label])
             leaves = L.claim_paths(results[id].paper) if results and id in results else []
-            paths = [p for p in leaves if L.fnmatch.fnmatchcase("/".join(p), pattern)
-                     and (id, p) in linked]
+            paths = [
+                p
+                for p in leaves
+                if L.fnmatch.fnmatchcase("/".join(p), pattern) and (id, p) in linked
+            ]
             for parts in [p[1:] for p in paths] if results else [("*",) * 5]:
                 for key in keys:
                     want = key.format(*parts).lower()
@@ -352,8 +429,12 @@ def _book_labels():
 def test_every_cause_and_explanation_names_an_existing_book_label():
     """A "differs, measured cause" row links a section of the book that exists (read from the
     book's sources: ``(label)=``, ``:label:``, figure ``name:``)."""
-    targets = {t for _, _, c in _declarations() for t in (c.cause, c.hypothesis, c.explain)
-               if t and "/" not in t}
+    targets = {
+        t
+        for _, _, c in _declarations()
+        for t in (c.cause, c.hypothesis, c.explain)
+        if t and "/" not in t
+    }
     missing = sorted(targets - _book_labels())
     assert not missing, missing
 
@@ -367,12 +448,16 @@ def test_claims_are_declared_at_registration_and_the_central_lists_are_gone():
     for id, pattern, c in _declarations():
         assert isinstance(c, L.Claim), (id, pattern)
         if c.shown_under:
-            L.get(c.shown_under)                       # names a registered reproduction
+            L.get(c.shown_under)  # names a registered reproduction
 
 
 def test_a_claim_without_a_declaration_fails():
-    res = ReproductionResult(id="zb2014-fig1", headline={"unstable_eigenvalue": 1.2, "new": 1.0},
-                             paper={"unstable_eigenvalue": 1.2808, "new_claim": 3.0}, settings={})
+    res = ReproductionResult(
+        id="zb2014-fig1",
+        headline={"unstable_eigenvalue": 1.2, "new": 1.0},
+        paper={"unstable_eigenvalue": 1.2808, "new_claim": 3.0},
+        settings={},
+    )
     with pytest.raises(L.ModelError, match="no claim declared"):
         L.build_ledger({"zb2014-fig1": res}, strict=True)
 
@@ -384,20 +469,40 @@ def test_json_and_summary(cheap_results):
     assert set(d["counts_by_paper"]) == set(L.PAPERS)
     assert sum(sum(c.values()) for c in d["counts_by_paper"].values()) == len(d["rows"])
     assert len(d["rows"]) == len(led.rows)
-    old_keys = {"id", "key", "claim", "paper", "ours", "ci95", "status", "where", "explanation",
-                "note", "surrogate", "trials", "source"}                # backward compatible
-    assert old_keys | {"paper_id", "status_detail", "cause", "paper_trials", "location", "units",
-                       "test"} == set(d["rows"][0])
+    old_keys = {
+        "id",
+        "key",
+        "claim",
+        "paper",
+        "ours",
+        "ci95",
+        "status",
+        "where",
+        "explanation",
+        "note",
+        "surrogate",
+        "trials",
+        "source",
+    }  # backward compatible
+    assert old_keys | {
+        "paper_id",
+        "status_detail",
+        "cause",
+        "paper_trials",
+        "location",
+        "units",
+        "test",
+    } == set(d["rows"][0])
     for row in d["rows"]:
         assert row["status"] in L.STATUSES
         assert row["claim"].startswith(L.PAPERS[row["paper_id"]] + ", ")
         assert row["id"].startswith(row["paper_id"] + "-")
-        if row["surrogate"] == L.INPUT:                 # never counted as reproduced
+        if row["surrogate"] == L.INPUT:  # never counted as reproduced
             assert row["status"] != L.REPRODUCED, row
     html = led.summary()._repr_html_()
     assert all(s in html for s in L.STATUSES)
-    assert "<thead><tr><th>status</th>" in html                         # status first
-    inputs = [r for r in led.rows if r.id == "zb2014-table1"]      # declared: neither list
+    assert "<thead><tr><th>status</th>" in html  # status first
+    inputs = [r for r in led.rows if r.id == "zb2014-table1"]  # declared: neither list
     assert inputs and all(r.role == L.INPUT for r in inputs)
     # its detection time is the §6.4 sentence, listed under Fig. 11
     assert {r.role for r in led.rows if r.id == "rosa2013-fig8"} == {L.INPUT}
@@ -405,9 +510,22 @@ def test_json_and_summary(cheap_results):
 
 
 def _row(status, location="Fig. 1, x", paper_id="zb2014"):
-    return L.LedgerRow(id=f"{paper_id}-fig1", path=("x",), label=location, paper=1, ours=1, ci=None,
-                       status=status, where="book/x", explain=None, note="", role=None, trials=None,
-                       source="", location=location)
+    return L.LedgerRow(
+        id=f"{paper_id}-fig1",
+        path=("x",),
+        label=location,
+        paper=1,
+        ours=1,
+        ci=None,
+        status=status,
+        where="book/x",
+        explain=None,
+        note="",
+        role=None,
+        trials=None,
+        source="",
+        location=location,
+    )
 
 
 def test_mission_items_take_their_state_from_their_rows(cheap_results):
@@ -426,7 +544,7 @@ def test_mission_items_take_their_state_from_their_rows(cheap_results):
     assert items[("zb2014", "Fig. 1")]["state"] == "differs, measured cause"
     assert items[("zb2014", "Fig. 2")]["state"] == "reproduced"
     assert items[("zb2014", "Table 1")]["state"] == "values the book sets"
-    assert items[("zb2014", "Fig. 9")]["state"] == "no row"      # not among the cheap results
+    assert items[("zb2014", "Fig. 9")]["state"] == "no row"  # not among the cheap results
     # "Fig. 1" is not "Fig. 10"
     assert not any("fig10" in r for r in items[("rosa2013", "Fig. 1")]["rows"])
     assert items[("rosa2013", "Fig. 10")]["rows"]
@@ -442,8 +560,9 @@ def test_ledger_json_is_the_same_bytes_on_every_run_and_any_jobs(monkeypatch):
     ids = ["zb2014-fig1", "zb2014-table1", "zhang2021-table1"]
     texts = []
     for jobs in (1, 1, 2):
-        results, sources, timings = L.collect_results(ids=ids, max_trials=4, use_cache=False,
-                                                      jobs=jobs)
+        results, sources, timings = L.collect_results(
+            ids=ids, max_trials=4, use_cache=False, jobs=jobs
+        )
         assert set(timings) == set(ids) and all(t >= 0 for t in timings.values())
         texts.append(json.dumps(L.build_ledger(results, sources=sources).to_json_dict()))
     assert texts[0] == texts[1] == texts[2]
@@ -460,14 +579,14 @@ def test_results_cache_round_trip(tmp_path, monkeypatch):
     assert b.headline == a.headline and len(list(tmp_path.rglob("*.pkl"))) == 1
     reproduce("zb2014-fig3", seed=1)
     book_seed = book_settings("zb2014-fig3").seed
-    reproduce("zb2014-fig3", seed=book_seed)          # the chapter's run
-    reproduce("zb2014-fig3", seed=2)                  # used last, with other settings
+    reproduce("zb2014-fig3", seed=book_seed)  # the chapter's run
+    reproduce("zb2014-fig3", seed=2)  # used last, with other settings
     got = cached_results()
     assert set(got) == {"zb2014-table1", "zb2014-fig3"}
     assert got["zb2014-fig3"].settings["seed"] == 2
     # the ledger reads the run at the book's settings, not the one used last
     results, sources, timings = L.collect_results(ids=["zb2014-fig3"])
-    assert timings == {}                              # read, not computed
+    assert timings == {}  # read, not computed
     assert results["zb2014-fig3"].settings["seed"] == book_seed != 2
     assert sources["zb2014-fig3"].startswith("cached")
     monkeypatch.delenv("FDI_RESULTS_CACHE")
@@ -477,13 +596,19 @@ def test_results_cache_round_trip(tmp_path, monkeypatch):
 def test_cli_ledger_json(monkeypatch, capsys, cheap_results):
     from fdi_lib.reproduce import cli
 
-    monkeypatch.setattr(L, "collect_results",
-                        lambda **kw: (cheap_results, {id: "computed" for id in cheap_results},
-                                      {id: 1.0 for id in cheap_results}))
+    monkeypatch.setattr(
+        L,
+        "collect_results",
+        lambda **kw: (
+            cheap_results,
+            {id: "computed" for id in cheap_results},
+            {id: 1.0 for id in cheap_results},
+        ),
+    )
     assert cli.main(["reproduce", "--ledger", "--json"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert sum(d["counts"].values()) == len(d["rows"]) > 20
-    assert set(d) == {"counts", "counts_by_paper", "mission", "rows", "sources"}   # no timings
+    assert set(d) == {"counts", "counts_by_paper", "mission", "rows", "sources"}  # no timings
     assert len(d["mission"]["items"]) == 40
     assert cli.main(["reproduce", "--ledger"]) == 0
     text = capsys.readouterr().out
@@ -494,17 +619,22 @@ def test_cli_ledger_json(monkeypatch, capsys, cheap_results):
 def test_every_registered_paper_value_appears_in_the_ledger():
     """All reproductions (Monte Carlo ones with 2 trials): strict build, nothing left out, one row
     per paper location, every declaration used."""
-    results = {r.id: r(trials=None if r.default_trials is None else 2)
-               for r in list_reproductions()}
-    led = L.build_ledger(results, strict=True)      # raises on a claim without a declaration
+    results = {
+        r.id: r(trials=None if r.default_trials is None else 2) for r in list_reproductions()
+    }
+    led = L.build_ledger(results, strict=True)  # raises on a claim without a declaration
     listed = _listed(led)
     n_claims = 0
     for id, res in results.items():
         for path in L.claim_paths(res.paper):
             n_claims += 1
             assert L._owner(id, path, L.claim_for(id, path)) in listed, (id, path)
-    shown_twice = sum(1 for id, res in results.items() for p in L.claim_paths(res.paper)
-                      if L.claim_for(id, p).shown_under)
+    shown_twice = sum(
+        1
+        for id, res in results.items()
+        for p in L.claim_paths(res.paper)
+        if L.claim_for(id, p).shown_under
+    )
     assert len(led.rows) == n_claims - shown_twice
     assert all(r.status in L.STATUSES for r in led.rows)
     # one claim, one row: no two rows share a paper location
@@ -542,6 +672,9 @@ def test_every_registered_paper_value_appears_in_the_ledger():
     # each measured cause's section glues the measurement of each of its claims
     assert not _missing_glue(results)
     # the rows the issue named exist
-    for id, key in (("zb2014-fig9", "innovation_recovery"), ("bz-whiteness", "h_zeta_max"),
-                    ("zhang2021-table2", "snr_db/150")):
+    for id, key in (
+        ("zb2014-fig9", "innovation_recovery"),
+        ("bz-whiteness", "h_zeta_max"),
+        ("zhang2021-table2", "snr_db/150"),
+    ):
         assert (id, tuple(key.split("/"))) in listed, (id, key)

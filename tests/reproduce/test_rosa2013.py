@@ -20,7 +20,9 @@ from fdi_lib.systems import eclipse_uav as uav
 def test_fig1_two_projection_routes_agree():
     res = reproduce("rosa2013-fig1")
     assert res.headline["max_support_gap"] < 1e-9
-    assert res.headline["area_fourier_motzkin"] == pytest.approx(res.headline["area_vertex"], rel=1e-9)
+    assert res.headline["area_fourier_motzkin"] == pytest.approx(
+        res.headline["area_vertex"], rel=1e-9
+    )
     get("rosa2013-fig1").plot(res)
 
 
@@ -54,8 +56,17 @@ def test_fig8_step_fault_detected_in_one_sample():
 def test_study_smoke_and_summary_keys():
     run = R._one_uav_run("alpha", "hard", seed=2, duration=1.8)
     assert run["detection"] is not None and run["isolated"] == "alpha"
-    runs = (run, {"fault": "none", "scenario": "step", "onset": 601, "detection": None, "isolation": None,
-                  "isolated": None})
+    runs = (
+        run,
+        {
+            "fault": "none",
+            "scenario": "step",
+            "onset": 601,
+            "detection": None,
+            "isolation": None,
+            "isolated": None,
+        },
+    )
     det = R._summarise(runs, "detection")
     assert det["alpha"]["hard"] == pytest.approx((run["detection"] - run["onset"] + 1) * 10.0)
     assert det["elevator"]["step"] is None
@@ -70,7 +81,12 @@ def test_exact_step_times_keys():
     """The exact rule's timing of rosa2013-timing (one update here: its sets grow tenfold per update)."""
     out = R.exact_step_times(1, 0, steps=1)
     assert set(out) == {"ms", "vertices", "empty_at"}
-    assert len(out["ms"]) == 1 and out["ms"][0] > 0 and out["vertices"][0] >= 5 and out["empty_at"] is None
+    assert (
+        len(out["ms"]) == 1
+        and out["ms"][0] > 0
+        and out["vertices"][0] >= 5
+        and out["empty_at"] is None
+    )
 
 
 def test_timing_reports_the_exact_rule_per_horizon(monkeypatch):
@@ -82,7 +98,13 @@ def test_timing_reports_the_exact_rule_per_horizon(monkeypatch):
     monkeypatch.setattr(R, "step_times", lambda N, seed: short(N, seed, duration=0.1))
     monkeypatch.setattr(R, "exact_step_times", lambda N, seed: exact(N, seed, steps=1))
     h = R.timing(seed=0, trials=None, jobs=1).headline
-    for key in ("step_ms", "step_ms_exact", "step_ms_exact_each", "vertices_exact", "exact_within_ts"):
+    for key in (
+        "step_ms",
+        "step_ms_exact",
+        "step_ms_exact_each",
+        "vertices_exact",
+        "exact_within_ts",
+    ):
         assert set(h[key]) == {1, 2, 3}, key
     assert h["exact_steps"] == R.EXACT_TIMED_STEPS
     assert all(h["step_ms_exact"][N] == h["step_ms_exact_each"][N][0] for N in (1, 2, 3))
@@ -134,18 +156,39 @@ def test_hidden_fault_study_effect_sizes():
     f = uav.simulate("dynamics", "step", rng=np.random.default_rng(7), duration=1.2)
     q = np.abs(f.y[:, 3] - h.y[:, 3]).max() / (uav.NOISE_BOUND[3] + uav.SVO_NOISE_MARGIN[3])
     assert out["effect"]["dynamics"]["q"] == pytest.approx(q, rel=1e-12)
-    assert out["template"][1.0]["none"] is None                            # no false alarm at the design bounds
+    assert out["template"][1.0]["none"] is None  # no false alarm at the design bounds
 
 
 def test_isolation_lags_on_synthetic_runs():
-    runs = ({"fault": "alpha", "scenario": "soft", "detection": 80, "onset": 51,
-             "empty_at": {"nominal": 80, "alpha": None, "elevator": 85, "dynamics": 80}},
-            {"fault": "alpha", "scenario": "soft", "detection": None, "onset": 51,
-             "empty_at": {"nominal": None}},
-            {"fault": "elevator", "scenario": "soft", "detection": 90, "onset": 51,
-             "empty_at": {"nominal": 90, "alpha": 91, "elevator": None, "dynamics": 99}})
+    runs = (
+        {
+            "fault": "alpha",
+            "scenario": "soft",
+            "detection": 80,
+            "onset": 51,
+            "empty_at": {"nominal": 80, "alpha": None, "elevator": 85, "dynamics": 80},
+        },
+        {
+            "fault": "alpha",
+            "scenario": "soft",
+            "detection": None,
+            "onset": 51,
+            "empty_at": {"nominal": None},
+        },
+        {
+            "fault": "elevator",
+            "scenario": "soft",
+            "detection": 90,
+            "onset": 51,
+            "empty_at": {"nominal": 90, "alpha": 91, "elevator": None, "dynamics": 99},
+        },
+    )
     lags = R.isolation_lags(runs)
-    assert lags == {"alpha": [None], "elevator": [pytest.approx(50.0)], "dynamics": [pytest.approx(0.0)]}
+    assert lags == {
+        "alpha": [None],
+        "elevator": [pytest.approx(50.0)],
+        "dynamics": [pytest.approx(0.0)],
+    }
 
 
 def test_total_speed_mu_fault_is_seen_at_once_and_the_deviation_one_is_not():
@@ -168,8 +211,9 @@ def test_alpha_slack_loosens_only_the_elevator_and_mu_observers():
         base = uav.svo_models(run, kind)
         assert np.array_equal(uav.svo_models(run, kind, alpha_slack_deg=0.0).noise, base.noise)
         loose = uav.svo_models(run, kind, alpha_slack_deg=4.0).noise
-        np.testing.assert_allclose(loose - base.noise, [0.0, np.deg2rad(4.0), 0.0, 0.0],
-                                   rtol=0, atol=1e-15)
+        np.testing.assert_allclose(
+            loose - base.noise, [0.0, np.deg2rad(4.0), 0.0, 0.0], rtol=0, atol=1e-15
+        )
     with pytest.raises(ModelError, match="alpha_slack_deg"):
         uav.svo_models(run, "elevator", alpha_slack_deg=-1.0)
     with pytest.raises(ModelError, match="alpha_slack_deg"):

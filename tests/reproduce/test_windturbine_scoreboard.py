@@ -66,10 +66,12 @@ def test_every_alarm_in_a_fault_free_stretch_is_counted():
 def test_combine_reads_each_subsystem_and_names_the_first(monkeypatch):
     """The methods' combination of subsystem statistics: a pre-onset alarm on one subsystem is a false
     alarm; the detection is the earliest fresh alarm after the onset on any subsystem."""
+
     class D:
         warmup, onset = 2, 6
-    a = np.array([[0, 0, 0, 5, 5, 5, 5, 5, 5, 5.0]])     # false alarm at 3, still over after the onset
-    b = np.array([[0, 0, 0, 0, 0, 0, 0, 0, 5, 5.0]])     # a fresh alarm at 8
+
+    a = np.array([[0, 0, 0, 5, 5, 5, 5, 5, 5, 5.0]])  # false alarm at 3, still over after the onset
+    b = np.array([[0, 0, 0, 0, 0, 0, 0, 0, 5, 5.0]])  # a fresh alarm at 8
     fa, det, which, peak = W._combine(D, [a, b], [1.0, 1.0])
     assert fa.tolist() == [True] and det.tolist() == [8] and which.tolist() == [1]
     assert peak.tolist() == [5.0]
@@ -80,7 +82,9 @@ def test_combine_reads_each_subsystem_and_names_the_first(monkeypatch):
 
 
 def test_delays_count_the_first_faulty_sample():
-    np.testing.assert_allclose(W.delays(np.array([100, 109, 100 + 4999]), 100, TS), [0.01, 0.10, 50.0])
+    np.testing.assert_allclose(
+        W.delays(np.array([100, 109, 100 + 4999]), 100, TS), [0.01, 0.10, 50.0]
+    )
     assert np.isnan(W.delays(np.array([-1]), 100, TS)).all()
 
 
@@ -92,10 +96,12 @@ def test_score_method_on_hand_built_outcomes():
     j, k = W.CANDIDATES.index("beta1_m1"), W.CANDIDATES.index("beta2_m1")
     iso = np.zeros((4, len(W.CANDIDATES)), dtype=bool)
     iso[0, j] = iso[1, j] = iso[2, k] = True
-    iso[3, j] = True                                      # named by a record that never detected
-    e = RW.score_method(np.array([100, 109, 150, -1]), iso, np.array([120, 200, 160, 130]), exp, 0.1, onset, TS)
+    iso[3, j] = True  # named by a record that never detected
+    e = RW.score_method(
+        np.array([100, 109, 150, -1]), iso, np.array([120, 200, 160, 130]), exp, 0.1, onset, TS
+    )
     assert e["detected"] == 3 and e["missed"] == 1
-    assert e["within_requirement"] == 0.5                   # 0.01 s and 0.10 s; 0.51 s is late
+    assert e["within_requirement"] == 0.5  # 0.01 s and 0.10 s; 0.51 s is late
     np.testing.assert_allclose(e["detection_time_mean_s"], (0.01 + 0.10 + 0.51) / 3)
     assert e["isolation_correct"] == 0.5 and e["wrong_isolations"] == 1 and e["not_isolated"] == 0
     np.testing.assert_allclose(e["isolation_time_mean_s"], (0.21 + 1.01) / 2)
@@ -103,7 +109,11 @@ def test_score_method_on_hand_built_outcomes():
     assert lo < 0.5 < hi
     assert e["isolated_mode"] == "beta1_m1"
     none = RW.score_method(np.full(4, -1), np.zeros_like(iso), np.full(4, -1), exp, None, onset, TS)
-    assert none["detected"] == 0 and none["within_requirement"] is None and none["isolation_time_mean_s"] is None
+    assert (
+        none["detected"] == 0
+        and none["within_requirement"] is None
+        and none["isolation_time_mean_s"] is None
+    )
     assert none["isolation_correct"] == 0.0 and none["isolated_mode"] is None
 
 
@@ -113,13 +123,17 @@ def _slow_chunks(seeds):
     finished."""
     idx = np.array([s.spawn_key[-1] for s in seeds])
     time.sleep(0.1 * max(1, 8 - int(idx[0]) // 2))
-    return {"detect": np.where(idx % 3 == 0, -1, 100 + idx), "idx": idx,
-            "pid": np.full(len(seeds), os.getpid()), "done": np.full(len(seeds), time.monotonic_ns())}
+    return {
+        "detect": np.where(idx % 3 == 0, -1, 100 + idx),
+        "idx": idx,
+        "pid": np.full(len(seeds), os.getpid()),
+        "done": np.full(len(seeds), time.monotonic_ns()),
+    }
 
 
 def _check_order(one: dict, two: dict) -> None:
-    assert (two["pid"] != os.getpid()).any()                 # another process ran some chunks
-    assert (np.diff(two["done"][::2]) < 0).any()             # ... and delivered them out of trial order
+    assert (two["pid"] != os.getpid()).any()  # another process ran some chunks
+    assert (np.diff(two["done"][::2]) < 0).any()  # ... and delivered them out of trial order
     assert two["idx"].tolist() == list(range(16)) == one["idx"].tolist()
     np.testing.assert_array_equal(one["detect"], two["detect"])
     # the scoreboard's summary reads the same realisations whichever run it is given
@@ -146,9 +160,13 @@ def test_trial_order_does_not_depend_on_which_worker_finishes_first():
         _check_order(one, run_monte_carlo(_slow_chunks, 16, seed=5, chunk_size=2, executor=pool))
 
 
-@pytest.mark.parametrize("trials, why", [(10**12, r"would need about .* of memory"),
-                                         (10**6, r"would take about 153 h on 2 processes")])
-def test_scoreboard_refuses_a_budget_breaking_trials_count_before_simulating(trials, why, monkeypatch):
+@pytest.mark.parametrize(
+    "trials, why",
+    [(10**12, r"would need about .* of memory"), (10**6, r"would take about 153 h on 2 processes")],
+)
+def test_scoreboard_refuses_a_budget_breaking_trials_count_before_simulating(
+    trials, why, monkeypatch
+):
     """``--trials`` beyond the time or memory budget: a ResourceError with the estimate, before any
     simulation (a simulation here would fail the test)."""
     import fdi_lib.montecarlo as mc
@@ -157,8 +175,12 @@ def test_scoreboard_refuses_a_budget_breaking_trials_count_before_simulating(tri
 
     monkeypatch.setattr(mc, "available_memory", lambda: 16 * 10**9)
     monkeypatch.setattr(mc, "effective_jobs", lambda jobs, n_tasks=None: 2)
-    monkeypatch.setattr(RW, "calibrated_design", lambda *a, **k: pytest.fail("simulated before the check"))
-    with pytest.raises(ResourceError, match=rf"trials: {trials} realisations \(about 1.1 s of a core .*{why}"):
+    monkeypatch.setattr(
+        RW, "calibrated_design", lambda *a, **k: pytest.fail("simulated before the check")
+    )
+    with pytest.raises(
+        ResourceError, match=rf"trials: {trials} realisations \(about 1.1 s of a core .*{why}"
+    ):
         reproduce("windturbine-scoreboard", trials=trials, jobs=2)
     assert RW.check_trials(100, 1) == 100
     # the limit itself: the largest count accepted on two processes, and one more refused
@@ -175,12 +197,16 @@ def stream():
     from fdi_lib.systems import wind_turbine as wt
 
     d, start = RW.stream_design(2009)
-    healthy = W.records(wt.simulate(seed=np.random.SeedSequence(77).spawn(1), faults=(), duration_s=100.0))
+    healthy = W.records(
+        wt.simulate(seed=np.random.SeedSequence(77).spawn(1), faults=(), duration_s=100.0)
+    )
     f8 = next(f for f in wt.FAULTS if f.id == 8)
     import dataclasses
 
     fault = dataclasses.replace(f8, start_s=50.0, stop_s=70.0)
-    faulty = W.records(wt.simulate(seed=np.random.SeedSequence(77).spawn(1), faults=(fault,), duration_s=100.0))
+    faulty = W.records(
+        wt.simulate(seed=np.random.SeedSequence(77).spawn(1), faults=(fault,), duration_s=100.0)
+    )
     return d, start, healthy, faulty
 
 
@@ -231,7 +257,9 @@ def test_false_alarm_study_json_and_its_exact_poisson_bounds(monkeypatch):
         lo, hi = v["rate_per_test_hour_ci"]
         assert scipy.stats.poisson.cdf(v["alarms"], hi * exposure) == pytest.approx(0.025, abs=1e-9)
         if v["alarms"]:
-            assert scipy.stats.poisson.sf(v["alarms"] - 1, lo * exposure) == pytest.approx(0.025, abs=1e-9)
+            assert scipy.stats.poisson.sf(v["alarms"] - 1, lo * exposure) == pytest.approx(
+                0.025, abs=1e-9
+            )
         assert v["below_nominal"] == (hi < v["nominal_per_test_hour"])
     # 0 alarms over 1 h gives an upper bound of 3.69 per hour: what "can test 1 per hour" needs
     assert RW._poisson_ci(0, 1.0)[1] == pytest.approx(-np.log(0.025))

@@ -4,18 +4,27 @@ import numpy as np
 import pytest
 
 from fdi_lib.reproduce import reproduce
-from fdi_lib.reproduce.zb2014 import (ONSETS, gamma_lower_bound, gamma_norm_peaks,
-                                      single_entry_readings, unstable_run)
+from fdi_lib.reproduce.zb2014 import (
+    ONSETS,
+    gamma_lower_bound,
+    gamma_norm_peaks,
+    single_entry_readings,
+    unstable_run,
+)
 from fdi_lib.systems import zb2014_unstable as ex
 
 
 def test_fig1_gamma_bounded_and_decaying():
     res = reproduce("zb2014-fig1")
     for r in map(str, ONSETS):
-        assert 1.0 <= res.headline["gamma_norm_max"][r] < 3.0  # bounded (the paper's "< 1": see book)
+        assert (
+            1.0 <= res.headline["gamma_norm_max"][r] < 3.0
+        )  # bounded (the paper's "< 1": see book)
         assert res.headline["gamma_norm_final"][r] < 1e-50
     # Onsets after the Kalman transient all give the same (steady-state) peak, ||F(I - KH)||_2.
-    assert res.headline["gamma_norm_max"]["101"] == pytest.approx(res.headline["gamma_norm_max"]["301"], rel=1e-9)
+    assert res.headline["gamma_norm_max"]["101"] == pytest.approx(
+        res.headline["gamma_norm_max"]["301"], rel=1e-9
+    )
 
 
 def test_fig2_alpha_grows_like_the_unstable_mode():
@@ -50,7 +59,12 @@ def test_plot_functions_draw_the_figures():
     matplotlib.use("Agg")
     from fdi_lib.reproduce import get
 
-    for rid, n_axes in [("zb2014-fig1", 2), ("zb2014-fig2", 1), ("zb2014-fig3", 2), ("zb2014-fig4", 2)]:
+    for rid, n_axes in [
+        ("zb2014-fig1", 2),
+        ("zb2014-fig2", 1),
+        ("zb2014-fig3", 2),
+        ("zb2014-fig4", 2),
+    ]:
         rep = get(rid)
         fig = rep.plot(rep())
         assert len(fig.axes) == n_axes
@@ -74,7 +88,7 @@ def _gamma_by_hand(F, r, n_steps=ex.N_STEPS):
         K = P @ H.T @ np.linalg.inv(S)
         A = F @ (np.eye(2) - K @ H)
         Gamma = A @ Gamma + (np.eye(2) if k == r - 1 else 0.0)
-        P = A @ P @ F.T + Q   # = F (I - KH) P F^T + Q
+        P = A @ P @ F.T + Q  # = F (I - KH) P F^T + Q
     return np.array(norms), np.array(e1)
 
 
@@ -100,8 +114,12 @@ def test_fig1_norms_match_an_independent_recursion():
     peaks = gamma_norm_peaks(ex.F, onsets=(1, 101))
     for r in (1, 101):
         norms, e1 = _gamma_by_hand(ex.F, r)
-        np.testing.assert_allclose(peaks["gamma"][str(r)][:300], norms[:300], rtol=1e-9, atol=1e-300)
-        np.testing.assert_allclose(peaks["gamma_e1"][str(r)][:300], e1[:300], rtol=1e-9, atol=1e-300)
+        np.testing.assert_allclose(
+            peaks["gamma"][str(r)][:300], norms[:300], rtol=1e-9, atol=1e-300
+        )
+        np.testing.assert_allclose(
+            peaks["gamma_e1"][str(r)][:300], e1[:300], rtol=1e-9, atol=1e-300
+        )
 
 
 def test_single_entry_readings_of_the_quoted_eigenvalue():
@@ -114,7 +132,7 @@ def test_single_entry_readings_of_the_quoted_eigenvalue():
     assert readings["F21"].value == pytest.approx((0.5 - lam) * (1.2 - lam), rel=1e-9)
     for t in readings.values():
         assert np.min(np.abs(t.eigenvalues - lam)) < 1e-9
-        assert t.gamma_norm_max > 1.0            # none keeps the paper's bound
+        assert t.gamma_norm_max > 1.0  # none keeps the paper's bound
     # F22 = 1.2808: peak 1.95, checked against the plain-loop recursion
     F22 = ex.F.copy()
     F22[1, 1] = lam
@@ -177,12 +195,14 @@ def test_pipeline_youngest_onset_information_with_the_default_s():
     for variant in ("designed", "physical"):
         model = gp.pipeline_model(variant=variant)
         fam = gp.input_fault_family(model, variant=variant)
-        ev[variant] = np.linalg.eigvalsh(youngest_onset_information(model, kalman_gains(model), fam))
+        ev[variant] = np.linalg.eigvalsh(
+            youngest_onset_information(model, kalman_gains(model), fam)
+        )
         assert np.all(ev[variant][:, 1] > 0)
     d, p = ev["designed"], ev["physical"]
-    assert np.all(np.abs(d[:, 0]) <= 1e-12 * d[:, 1])          # rank one at every k
-    assert np.all(p[:, 0] >= 1e-13 * p[:, 1])                  # rank two at every k ...
-    assert (p[:, 0] / p[:, 1]).min() < 1e-8                    # ... barely invertible
+    assert np.all(np.abs(d[:, 0]) <= 1e-12 * d[:, 1])  # rank one at every k
+    assert np.all(p[:, 0] >= 1e-13 * p[:, 1])  # rank two at every k ...
+    assert (p[:, 0] / p[:, 1]).min() < 1e-8  # ... barely invertible
 
 
 def test_window_min_eigenvalue_constant_versus_varying_profile():
@@ -206,8 +226,14 @@ def test_chapter_plot_helpers_draw():
     from fdi_lib.calibration import Calibration
     from fdi_lib.reproduce.zb2014 import plot_null_histograms, plot_persistent_excitation
 
-    cal = Calibration(statistics=np.random.default_rng(0).chisquare(2, 200), dof=2,
-                      ks_pvalue=0.5, alpha=0.05, rejection_rate=0.05, rejection_ci=(0.02, 0.09))
+    cal = Calibration(
+        statistics=np.random.default_rng(0).chisquare(2, 200),
+        dof=2,
+        ks_pvalue=0.5,
+        alpha=0.05,
+        rejection_rate=0.05,
+        rejection_ci=(0.02, 0.09),
+    )
     fig = plot_null_histograms({"a": cal, "b": cal}, xlabel="$l$")
     assert len(fig.axes) == 2 and all(ax.patches and ax.lines for ax in fig.axes)
     fig = plot_persistent_excitation({"x": np.ones(5), "y": np.zeros(5)}, s=3)

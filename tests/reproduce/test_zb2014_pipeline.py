@@ -21,14 +21,24 @@ def _loop_detector(seed_seq, fault):
     """Per-realisation reference: own noise draw, online WindowedGLR sample by sample."""
     st = zp.pipeline_setup()
     noise = draw_noise(st.model, np.random.default_rng(seed_seq))
-    sim = simulate(st.model, noise=noise, u=st.u, fault=st.input_family.profile(zp.FAULT_ONSET),
-                   theta=zp.fault_theta(fault))
+    sim = simulate(
+        st.model,
+        noise=noise,
+        u=st.u,
+        fault=st.input_family.profile(zp.FAULT_ONSET),
+        theta=zp.fault_theta(fault),
+    )
     eps = kalman_filter(st.model, sim.y, st.u, gains=st.gains).innovations
     det = WindowedGLR(st.model, st.gains, st.input_family, gp.WINDOW)
     for k in range(st.model.n_steps):
         l_k, r_k, _, C, d = det.update(eps[k])
         if k >= zp.GLR_START and l_k > gp.THRESHOLD:
-            return k, int(r_k), float(minmax_statistic(C, d, [0])), float(minmax_statistic(C, d, [1]))
+            return (
+                k,
+                int(r_k),
+                float(minmax_statistic(C, d, [0])),
+                float(minmax_statistic(C, d, [1])),
+            )
     return -1, -1, np.nan, np.nan
 
 
@@ -47,7 +57,7 @@ def test_single_run_matches_chunk_path():
     run = zp.single_run(seed=3, fault=1)
     assert run.alarm >= zp.GLR_START
     assert run.statistic[run.alarm] > gp.THRESHOLD
-    assert np.all(np.nan_to_num(run.statistic[zp.GLR_START:run.alarm], nan=0) <= gp.THRESHOLD)
+    assert np.all(np.nan_to_num(run.statistic[zp.GLR_START : run.alarm], nan=0) <= gp.THRESHOLD)
     assert run.detection_delay_min == run.alarm_time_min - 600.0
 
 
@@ -69,9 +79,13 @@ def test_monte_carlo_identical_for_any_chunk_size(variant, schedule):
     """The detection chunk is batch-invariant: surrogate_sensitivity's one chunk per fault gives
     the numbers of the default chunks, bit for bit."""
     zp._MC_CACHE.clear()
-    default = zp.pipeline_monte_carlo(seed=9, trials=20, variant=variant, schedule=schedule)  # 4 chunks
-    zp._MC_CACHE.clear()   # the cache ignores chunk_size (because of this very property)
-    one = zp.pipeline_monte_carlo(seed=9, trials=20, chunk_size=20, variant=variant, schedule=schedule)
+    default = zp.pipeline_monte_carlo(
+        seed=9, trials=20, variant=variant, schedule=schedule
+    )  # 4 chunks
+    zp._MC_CACHE.clear()  # the cache ignores chunk_size (because of this very property)
+    one = zp.pipeline_monte_carlo(
+        seed=9, trials=20, chunk_size=20, variant=variant, schedule=schedule
+    )
     zp._MC_CACHE.clear()
     for fault in (1, 2):
         for key in default[fault]:
@@ -82,12 +96,19 @@ def test_known_onset_minmax_type1_is_nominal():
     """With the onset known (no selection), each minmax test on the absent fault is chi2(1)."""
     st = zp.pipeline_setup()
     from fdi_lib.isolation import information
+
     n = 3000
     rng = np.random.default_rng(2024)
     power = zp.known_onset_isolation_power()
     for fault, absent in ((1, [1]), (2, [0])):
-        sim = simulate(st.model, rng=rng, u=st.u, fault=st.input_family.profile(zp.FAULT_ONSET),
-                       theta=zp.fault_theta(fault), size=n)
+        sim = simulate(
+            st.model,
+            rng=rng,
+            u=st.u,
+            fault=st.input_family.profile(zp.FAULT_ONSET),
+            theta=zp.fault_theta(fault),
+            size=n,
+        )
         eps = kalman_filter(st.model, sim.y, st.u, gains=st.gains).innovations
         F, zeta = information(eps, st.known_signature, st.gains, zp.FAULT_ONSET, st.model.n_steps)
         stat = minmax_statistic(F, zeta, absent)
@@ -119,7 +140,7 @@ def test_table1():
     assert abs(h["leak_fraction_fault2"]) < 0.05
 
 
-SPREAD = 30    # spread runs in the tests of Figs 5-6 (the book: 1000)
+SPREAD = 30  # spread runs in the tests of Figs 5-6 (the book: 1000)
 
 
 def test_fig5_fig6_single_runs():
@@ -149,7 +170,7 @@ def test_paper_dicts_mark_calibration_and_predictions():
         kw = {"trials": SPREAD} if rid in ("zb2014-fig5", "zb2014-fig6") else {}
         res = reproduce(rid, **kw)
         assert set(res.paper["calibrated_to"]) | set(res.paper["predictions"]) <= set(res.headline)
-        if rid != "zb2014-table1":    # the calibrated constants each ran with, and what fixed them
+        if rid != "zb2014-table1":  # the calibrated constants each ran with, and what fixed them
             cal = res.settings["calibration"]
             assert cal["constants"] == gp.CALIBRATION["fitted"]
             assert set(cal["fixed_by"]) == set(cal["constants"])
@@ -162,13 +183,13 @@ def test_fig9_output_leak():
     assert 700.0 <= h["alarm_time_min"] <= 710.0
     # The calibration target is a closed-form mean level; one run scatters around it.
     assert 35 < h["glr_level_over_threshold"] < 70
-    assert h["innovation_drop"] < -3                  # sudden drop ...
+    assert h["innovation_drop"] < -3  # sudden drop ...
     # ... but, unlike the paper's Fig 9, the physical surrogate's filter does not absorb the
     # bias: the innovation stays shifted by about the whole leak (a prediction, not a target).
     assert h["innovation_recovery"] > 0.5
     designed = zp.single_run(seed=0, kind="output", variant="designed")
     late = designed.innovations[-100:].mean() / gp.LEAK_SIZE
-    assert abs(late) < 0.2                            # the designed variant does absorb it
+    assert abs(late) < 0.2  # the designed variant does absorb it
 
 
 def test_fig7_fig8_smoke_and_json():
@@ -205,6 +226,7 @@ def test_cli_json(capsys):
 
 def test_bad_arguments():
     from fdi_lib.errors import ModelError
+
     with pytest.raises(ModelError, match="fault: expected 1 or 2"):
         zp.fault_theta(3)
     with pytest.raises(ModelError, match="kind: expected 'input' or 'output'"):
@@ -220,12 +242,16 @@ def test_isolation_power_depends_on_relative_variation_of_p():
     assert centred["1"]["cos2"] < 0.9 < ours["1"]["cos2"]
     assert centred["2"]["power"] > ours["2"]["power"]
     from fdi_lib.errors import ModelError
+
     with pytest.raises(ModelError, match="fast_period_min: expected a positive number"):
         gp.pipeline_schedule(fast_period_min=0.0)
 
 
 def test_format_rate_and_reader_plots():
-    assert zp.format_rate({"rate": 0.017, "ci95": [0.0098, 0.027]}).replace("\u00a0", " ") == "1.7 % [0.98, 2.7]"
+    assert (
+        zp.format_rate({"rate": 0.017, "ci95": [0.0098, 0.027]}).replace("\u00a0", " ")
+        == "1.7 % [0.98, 2.7]"
+    )
     assert zp.format_rate({"rate": None, "count": 0, "n": 0, "ci95": [None, None]}) == "n/a"
     fig = zp.plot_signals()
     assert fig.axes[1].get_ylabel() == r"$p_k$"
@@ -234,6 +260,7 @@ def test_format_rate_and_reader_plots():
     assert fig.axes[0].get_ylabel() == r"$l_{k^*}(r)$"
     assert len(fig.axes[0].lines) == 3
     import matplotlib.pyplot as plt
+
     plt.close("all")
 
 
@@ -243,32 +270,48 @@ def test_fig5_fig6_spread_keys_against_their_runs():
     zp._MC_CACHE.clear()
     r5, r6 = reproduce("zb2014-fig5", trials=SPREAD), reproduce("zb2014-fig6", trials=SPREAD)
     runs5 = zp.pipeline_monte_carlo(seed=0, trials=SPREAD)[1]
-    runs6 = zp.fault_runs(seed=0, trials=SPREAD, fault=1, delta=gp.FAULT1_DOUBLED_DELTA, isolate=False)
+    runs6 = zp.fault_runs(
+        seed=0, trials=SPREAD, fault=1, delta=gp.FAULT1_DOUBLED_DELTA, isolate=False
+    )
     zp._MC_CACHE.clear()
     fresh = zp.fault_runs(seed=0, trials=SPREAD, fault=1, chunk_size=SPREAD)
-    np.testing.assert_array_equal(fresh["alarm"], runs5["alarm"])      # same runs as Fig 7's
+    np.testing.assert_array_equal(fresh["alarm"], runs5["alarm"])  # same runs as Fig 7's
     zp._MC_CACHE.clear()
     for r, runs in ((r5, runs5), (r6, runs6)):
         h = r.headline
         hit = runs["alarm"] >= zp.FAULT_ONSET
         assert h["spread_runs"] == hit.sum()
-        assert h["spread_runs"] + h["spread_excluded"]["false_alarm"] + h["spread_excluded"]["missed"] == SPREAD
-        values = {"alarm_time_min": 2.0 * runs["alarm"][hit], "onset_estimate_min": 2.0 * runs["onset_hat"][hit],
-                  "detection_delay_min": 2.0 * runs["alarm"][hit] - 600.0}
+        assert (
+            h["spread_runs"] + h["spread_excluded"]["false_alarm"] + h["spread_excluded"]["missed"]
+            == SPREAD
+        )
+        values = {
+            "alarm_time_min": 2.0 * runs["alarm"][hit],
+            "onset_estimate_min": 2.0 * runs["onset_hat"][hit],
+            "detection_delay_min": 2.0 * runs["alarm"][hit] - 600.0,
+        }
         for key, x in values.items():
             if r.paper[key] is None:
                 assert f"{key}_spread95" not in h and f"{key}_paper_percentile" not in h
                 continue
             v = r.paper[key]
-            below, ties = sum(xi < v for xi in x), sum(xi == v for xi in x)   # by hand, ties half
-            assert h[f"{key}_paper_percentile"] == pytest.approx(100 * (below + ties / 2) / x.size, abs=1e-9)
+            below, ties = sum(xi < v for xi in x), sum(xi == v for xi in x)  # by hand, ties half
+            assert h[f"{key}_paper_percentile"] == pytest.approx(
+                100 * (below + ties / 2) / x.size, abs=1e-9
+            )
             xs = sorted(x)
-            for q, got in zip((0.025, 0.975), h[f"{key}_spread95"]):   # linear interpolation (type 7)
+            for q, got in zip(
+                (0.025, 0.975), h[f"{key}_spread95"]
+            ):  # linear interpolation (type 7)
                 pos = (len(xs) - 1) * q
                 j = int(pos)
-                assert got == pytest.approx(xs[j] + (pos - j) * (xs[min(j + 1, len(xs) - 1)] - xs[j]), abs=1e-9)
+                assert got == pytest.approx(
+                    xs[j] + (pos - j) * (xs[min(j + 1, len(xs) - 1)] - xs[j]), abs=1e-9
+                )
         d = h["detection_delay_min_at_least_paper"]
-        assert d["count"] == int(np.sum(values["detection_delay_min"] >= r.paper["detection_delay_min"]))
+        assert d["count"] == int(
+            np.sum(values["detection_delay_min"] >= r.paper["detection_delay_min"])
+        )
         assert d["n"] == h["spread_runs"]
     # Figs 5 and 6 share their noise run by run: the doubled fault is seen at least as early
     # on average (the GLR is monotone in the fault size only on average, not run by run).
@@ -286,8 +329,13 @@ def test_fig8_isolation_window_option_and_information():
     out = zp.detection_chunk(seeds, fault=2)
     for i, s in enumerate(seeds):
         # per run: own noise, own filter, the signature of its own onset estimate alone
-        sim = simulate(st.model, noise=draw_noise(st.model, np.random.default_rng(s)), u=st.u,
-                       fault=st.input_family.profile(zp.FAULT_ONSET), theta=zp.fault_theta(2))
+        sim = simulate(
+            st.model,
+            noise=draw_noise(st.model, np.random.default_rng(s)),
+            u=st.u,
+            fault=st.input_family.profile(zp.FAULT_ONSET),
+            theta=zp.fault_theta(2),
+        )
         eps = kalman_filter(st.model, sim.y, st.u, gains=st.gains).innovations
         r = int(out["onset_hat"][i])
         sig = fault_signature(st.model, st.gains, st.input_family.profile(r)).on_innovation
@@ -302,18 +350,35 @@ def test_fig8_isolation_window_option_and_information():
     alarm = reproduce("zb2014-fig8", trials=SPREAD)
     end = zp.fig8(seed=0, trials=SPREAD, jobs=1, isolation_window="record_end")
     zp._MC_CACHE.clear()
-    assert alarm.settings["isolation_window"] == "alarm" and end.settings["isolation_window"] == "record_end"
+    assert (
+        alarm.settings["isolation_window"] == "alarm"
+        and end.settings["isolation_window"] == "record_end"
+    )
     ha, he = alarm.headline, end.headline
-    for key in ("noncentrality_at_alarm", "noncentrality_to_record_end", "samples_at_alarm",
-                "type2_rate_expected_at_alarm", "type2_rate_expected_to_record_end", "median_cos2_to_record_end"):
-        assert ha[key] == he[key]                    # the information keys cover both windows
+    for key in (
+        "noncentrality_at_alarm",
+        "noncentrality_to_record_end",
+        "samples_at_alarm",
+        "type2_rate_expected_at_alarm",
+        "type2_rate_expected_to_record_end",
+        "median_cos2_to_record_end",
+    ):
+        assert ha[key] == he[key]  # the information keys cover both windows
     for f in ("1", "2"):
         assert ha["type2_rate"][f]["n"] == he["type2_rate"][f]["n"]
         # the cause, measured: far more information on the present fault up to the record's end
         assert he["median_cos2"][f] == ha["median_cos2_to_record_end"][f] < ha["median_cos2"][f]
-        assert ha["noncentrality_to_record_end"][f]["median"] > 10 * ha["noncentrality_at_alarm"][f]["median"]
+        assert (
+            ha["noncentrality_to_record_end"][f]["median"]
+            > 10 * ha["noncentrality_at_alarm"][f]["median"]
+        )
         assert ha["samples_to_record_end"][f]["median"] > ha["samples_at_alarm"][f]["median"]
-        assert ha["type2_rate_expected_to_record_end"][f] < 1e-3 < 0.5 < ha["type2_rate_expected_at_alarm"][f]
+        assert (
+            ha["type2_rate_expected_to_record_end"][f]
+            < 1e-3
+            < 0.5
+            < ha["type2_rate_expected_at_alarm"][f]
+        )
         assert he["type2_rate"][f]["count"] == 0 < ha["type2_rate"][f]["count"]
     with pytest.raises(ModelError, match="isolation_window: expected one of"):
         zp.fig8(seed=0, trials=2, jobs=1, isolation_window="alarm_time")
@@ -322,24 +387,31 @@ def test_fig8_isolation_window_option_and_information():
 def test_state2_scale_option_and_sensitivity():
     from fdi_lib.errors import ModelError
 
-    assert zp.pipeline_setup() is zp.pipeline_setup("physical", "centred", 10.0)   # one setup
+    assert zp.pipeline_setup() is zp.pipeline_setup("physical", "centred", 10.0)  # one setup
     st3 = zp.pipeline_setup(state2_scale=3.0)
     assert not np.allclose(st3.model.F, zp.pipeline_setup().model.F)
     rows = zp.calibration_sensitivity(seed=0, trials=SPREAD, scales=(3.0,))
     (row,) = rows
     assert row["constants"] == gp.calibration_for(3.0)
-    for key, spec in gp.CALIBRATION["targets"].items():     # both targets still hold at 3 ...
+    for key, spec in gp.CALIBRATION["targets"].items():  # both targets still hold at 3 ...
         assert row["targets"][key] == pytest.approx(spec["value"], rel=1e-6)
     h3 = row["headlines"]
     h10 = zp.fig7(seed=0, trials=SPREAD, jobs=1).headline
     # ... yet fault 1 is missed in some runs at 3 and in none at 10 (the same noise)
     assert h3["zb2014-fig7"]["missed"]["1"] > 0 == h10["missed"]["1"]
-    assert h3["zb2014-fig5"]["spread_runs"] == SPREAD - h3["zb2014-fig7"]["missed"]["1"] \
+    assert (
+        h3["zb2014-fig5"]["spread_runs"]
+        == SPREAD
+        - h3["zb2014-fig7"]["missed"]["1"]
         - h3["zb2014-fig7"]["false_alarms_per_fault"]["1"]
-    assert zp.fig9(seed=0, trials=None, jobs=1, state2_scale=3.0).settings["calibration"]["constants"] \
-        == gp.calibration_for(3.0)
+    )
+    assert zp.fig9(seed=0, trials=None, jobs=1, state2_scale=3.0).settings["calibration"][
+        "constants"
+    ] == gp.calibration_for(3.0)
     zp._MC_CACHE.clear()
-    with pytest.raises(ModelError, match="state2_scale: expected None for the 'designed' surrogate"):
+    with pytest.raises(
+        ModelError, match="state2_scale: expected None for the 'designed' surrogate"
+    ):
         zp.pipeline_setup("designed", state2_scale=3.0)
     with pytest.raises(ModelError, match="state2_scale: expected a positive number"):
         gp.calibration_for(-1.0)

@@ -77,7 +77,9 @@ def test_snr_definition():
     for b in range(2):
         for i in range(2):
             yy, vv = sig[0, 1:, 0] + v[b, 1:, i], v[b, 1:, i]
-            expected = 10 * np.log10(np.mean((yy - yy.mean()) ** 2) / np.mean((vv - vv.mean()) ** 2))
+            expected = 10 * np.log10(
+                np.mean((yy - yy.mean()) ** 2) / np.mean((vv - vv.mean()) ** 2)
+            )
             assert s[b, i] == pytest.approx(expected, rel=1e-12)
     variants = snr_variants(sig + v, v)
     np.testing.assert_allclose(variants["var(Y) / var(V)"], s)
@@ -145,7 +147,9 @@ def test_lambda_rule_chunk_oracle_bounds_every_rule_and_matches_an_independent_s
         mids = np.sqrt(lam[:-1] * np.maximum(lam[1:], 1e-3 * lam[0]))
         found = False
         for m in mids:
-            fit = Lasso(alpha=m * reg.n_samples / rows, fit_intercept=False, tol=1e-12, max_iter=100000)
+            fit = Lasso(
+                alpha=m * reg.n_samples / rows, fit_intercept=False, tol=1e-12, max_iter=100000
+            )
             coef = fit.fit(X, y).coef_
             found |= np.array_equal(np.flatnonzero(np.abs(coef) > 1e-6), true)
         assert found == a["oracle"][i], i
@@ -158,7 +162,9 @@ def _on_path_by_coordinate_descent(X, y, lambdas, n_samples, *, intercept=False)
     mids = np.sqrt(lambdas[:-1] * np.maximum(lambdas[1:], 1e-3 * lambdas[0]))
     out = []
     for m in mids:
-        fit = Lasso(alpha=m * n_samples / X.shape[0], fit_intercept=intercept, tol=1e-12, max_iter=100000)
+        fit = Lasso(
+            alpha=m * n_samples / X.shape[0], fit_intercept=intercept, tol=1e-12, max_iter=100000
+        )
         out.append(np.flatnonzero(np.abs(fit.fit(X, y).coef_) > 1e-6))
     return out
 
@@ -172,7 +178,7 @@ def test_scaled_regressors():
     Xr, yr = scaled_regressors(X, y, "raw")
     assert Xr is X and yr is y
     Xs, ys = scaled_regressors(X, y, "standardised")
-    np.testing.assert_allclose(np.sqrt((Xs ** 2).mean(axis=1)), 1.0, rtol=1e-12)
+    np.testing.assert_allclose(np.sqrt((Xs**2).mean(axis=1)), 1.0, rtol=1e-12)
     assert ys is y
     Xm, ym = scaled_regressors(X, y, "matlab")  # Matlab's lasso: centred, unit variance, intercept
     from sklearn.preprocessing import StandardScaler
@@ -191,8 +197,11 @@ def test_a_scaled_path_can_solve_what_the_raw_oracle_excludes():
     from sklearn.linear_model import Lasso
 
     from fdi_lib.montecarlo import trial_rngs, trial_seeds
-    from fdi_lib.reproduce.zhang2021 import (example1_regression, lambda_rule_chunk,
-                                             scaled_regressors)
+    from fdi_lib.reproduce.zhang2021 import (
+        example1_regression,
+        lambda_rule_chunk,
+        scaled_regressors,
+    )
     from fdi_lib.sparse import flat_range, lasso_path
     from fdi_lib.systems import zhang2021_example1 as ex
 
@@ -201,24 +210,36 @@ def test_a_scaled_path_can_solve_what_the_raw_oracle_excludes():
     beyond = np.flatnonzero(a["standardised"] & ~a["oracle"])
     assert beyond.size >= 1
     i = int(beyond[0])
-    tr = ex.draw_trials(ex.example1_model(), trial_rngs(seeds[i:i + 1]), q=15)
+    tr = ex.draw_trials(ex.example1_model(), trial_rngs(seeds[i : i + 1]), q=15)
     reg, _ = example1_regression(tr)
     X, y, N, true = reg.X[0], reg.y[0], reg.n_samples, np.flatnonzero(tr.theta[0])
     raw = _on_path_by_coordinate_descent(X, y, lasso_path(X, y, n_samples=N).lambdas, N)
     assert not any(np.array_equal(s, true) for s in raw)
     Xs, ys = scaled_regressors(X, y, "standardised")
     lam = flat_range(lasso_path(Xs, ys, n_samples=N)).middle
-    coef = Lasso(alpha=lam * N / X.shape[0], fit_intercept=False, tol=1e-12, max_iter=100000).fit(Xs, ys).coef_
+    coef = (
+        Lasso(alpha=lam * N / X.shape[0], fit_intercept=False, tol=1e-12, max_iter=100000)
+        .fit(Xs, ys)
+        .coef_
+    )
     np.testing.assert_array_equal(np.flatnonzero(np.abs(coef) > 1e-6), true)
     Xm, ym = scaled_regressors(X, y, "matlab")
-    mat = _on_path_by_coordinate_descent(Xm, y, lasso_path(Xm, ym, n_samples=N).lambdas, N, intercept=True)
+    mat = _on_path_by_coordinate_descent(
+        Xm, y, lasso_path(Xm, ym, n_samples=N).lambdas, N, intercept=True
+    )
     assert any(np.array_equal(s, true) for s in mat) == a["oracle_matlab"][i]
 
 
 def test_example2_inputs_and_noise_interventions():
     from fdi_lib.errors import ModelError
-    from fdi_lib.reproduce.zhang2021 import (EX2_INTERVENTIONS, EX2_N, EX2_Q, EX2_R, example2_input,
-                                             example2_setup)
+    from fdi_lib.reproduce.zhang2021 import (
+        EX2_INTERVENTIONS,
+        EX2_N,
+        EX2_Q,
+        EX2_R,
+        example2_input,
+        example2_setup,
+    )
     from fdi_lib.systems import gas_pipeline as gp
 
     demand = gp.pipeline_input(EX2_N)
@@ -233,8 +254,9 @@ def test_example2_inputs_and_noise_interventions():
         runs = np.diff(np.concatenate([[0], change]))
         assert runs.min() >= 10 and runs.max() <= 30, k  # held 20-60 min at 2 min per sample
     assert np.abs(rel["steps_uniform"]).max() <= 0.3
-    np.testing.assert_allclose(example2_input("steps", np.random.default_rng(1)), demand * (1 + rel["steps"]),
-                               rtol=1e-12)  # the same rng, the same input
+    np.testing.assert_allclose(
+        example2_input("steps", np.random.default_rng(1)), demand * (1 + rel["steps"]), rtol=1e-12
+    )  # the same rng, the same input
     with pytest.raises(ModelError, match="intervention: expected one of"):
         example2_input("pink", np.random.default_rng(0))
     # the model for another input and other noise levels: steady state of u_0, as the surrogate's own
@@ -242,7 +264,9 @@ def test_example2_inputs_and_noise_interventions():
     model, u2, Psi = example2_setup(u, q_scale=1e-6, r_scale=2.0)
     ref = gp.pipeline_model(EX2_N, u=u)
     np.testing.assert_allclose(model.x0, ref.x0, rtol=1e-12)
-    np.testing.assert_allclose(model.F[0] @ model.x0 + model.G[0, :, 0] * u[0], model.x0, rtol=1e-12)
+    np.testing.assert_allclose(
+        model.F[0] @ model.x0 + model.G[0, :, 0] * u[0], model.x0, rtol=1e-12
+    )
     np.testing.assert_allclose(model.Q[3], 1e-6 * EX2_Q)
     np.testing.assert_allclose(model.R[3], 2.0 * EX2_R)
     np.testing.assert_array_equal(Psi[20, 0, 9], -u[10])
@@ -263,7 +287,12 @@ def test_example2_interventions_reproduction():
     for k in EX2_INTERVENTIONS:
         assert h["isolated"][k] <= h["on_path"][k] <= n
         assert h["isolated"][k] == sum(s == [10, 15] for s in h["supports_1based"][k])
-    assert h["isolated"]["nominal"] == h["isolated"]["state_noise"] == h["isolated"]["output_noise"] == 0
+    assert (
+        h["isolated"]["nominal"]
+        == h["isolated"]["state_noise"]
+        == h["isolated"]["output_noise"]
+        == 0
+    )
     assert h["isolated"]["white"] >= 9 and h["isolated"]["white_uniform"] >= 5
     for k in ("steps", "steps_uniform"):
         assert h["isolated"][k] < h["on_path"][k]
@@ -281,7 +310,7 @@ def test_initial_state_models_start_like_the_paper():
     for init, s in INIT_VARIANTS.items():
         sim, filt = initial_state_models(0.5, init)
         g = kitanidis_gains(filt, ex.E)
-        np.testing.assert_allclose(g.P_filt[0], s ** 2 * np.eye(3), atol=1e-9 * max(1.0, s ** 2))
+        np.testing.assert_allclose(g.P_filt[0], s**2 * np.eye(3), atol=1e-9 * max(1.0, s**2))
         assert np.abs(g.K[0]).max() < 1e-9
         np.testing.assert_array_equal(sim.R[5], 0.5 * np.eye(2))
         np.testing.assert_array_equal(filt.R[5], sim.R[5])
@@ -299,11 +328,19 @@ def test_paper_between_readings_and_closest_snr():
     from fdi_lib.reproduce.registry import ReproductionResult
     from fdi_lib.reproduce.zhang2021 import closest_snr_reading, paper_between_readings
 
-    res = ReproductionResult(id="x", headline={"success_rate": {"a": 0.8, "b": 0.5, "c": 0.3},
-                                               "success_rate_linear": {"a": 0.6, "b": 0.6, "c": 0.2}},
-                             paper={"success_rate": {"a": 0.7, "b": 0.55, "c": 0.35}})
+    res = ReproductionResult(
+        id="x",
+        headline={
+            "success_rate": {"a": 0.8, "b": 0.5, "c": 0.3},
+            "success_rate_linear": {"a": 0.6, "b": 0.6, "c": 0.2},
+        },
+        paper={"success_rate": {"a": 0.7, "b": 0.55, "c": 0.35}},
+    )
     assert paper_between_readings(res) == ["a", "b"]
-    readings = {"one": np.array([[34.0, 32.6], [0.0, 0.0]]), "two": np.array([[30.0, 30.0], [11.6, 9.9]])}
+    readings = {
+        "one": np.array([[34.0, 32.6], [0.0, 0.0]]),
+        "two": np.array([[30.0, 30.0], [11.6, 9.9]]),
+    }
     assert closest_snr_reading(readings, (0.5, 100.0)) == ["one", "two"]
 
 
@@ -311,13 +348,29 @@ def test_lambda_rule_reproduction_contract():
     r = reproduce("zhang2021-lambda-rule", trials=3)
     json.loads(r.to_json())
     h = r.headline
-    assert set(h["success_rate"]) == {"log", "linear", "grid20", "grid100", "standardised", "matlab", "oracle"}
-    assert set(h["success_rate"]["oracle"]) == set(r.paper["success_rate"]) == {"q9", "q15", "q25", "r100", "r200"}
+    assert set(h["success_rate"]) == {
+        "log",
+        "linear",
+        "grid20",
+        "grid100",
+        "standardised",
+        "matlab",
+        "oracle",
+    }
+    assert (
+        set(h["success_rate"]["oracle"])
+        == set(r.paper["success_rate"])
+        == {"q9", "q15", "q25", "r100", "r200"}
+    )
     assert set(h["oracle_rate"]) == {"raw", "standardised", "matlab", "union"}
     assert h["oracle_rate"]["raw"] == h["success_rate"]["oracle"]
     for c in h["oracle_rate"]["union"]:
-        assert h["oracle_rate"]["union"][c] >= max(h["oracle_rate"][p][c] for p in ("raw", "standardised", "matlab"))
-        assert all(h["beyond_raw_oracle"][k][c] == 0 for k in ("log", "linear", "grid20", "grid100"))
+        assert h["oracle_rate"]["union"][c] >= max(
+            h["oracle_rate"][p][c] for p in ("raw", "standardised", "matlab")
+        )
+        assert all(
+            h["beyond_raw_oracle"][k][c] == 0 for k in ("log", "linear", "grid20", "grid100")
+        )
         assert h["success_rate"]["standardised"][c] <= h["oracle_rate"]["standardised"][c]
     assert set(h["init_success_rate"]) == {"paper", "spread"}
     from fdi_lib.reproduce.zhang2021 import initial_state_table, lambda_rule_table
@@ -331,14 +384,26 @@ def test_lambda_rule_reproduction_contract():
 
 def test_reader_tables_and_counts():
     from fdi_lib.reproduce.registry import ReproductionResult
-    from fdi_lib.reproduce.zhang2021 import (grid_rule_difference, paper_outside_ci, rate_table,
-                                             snr_table)
+    from fdi_lib.reproduce.zhang2021 import (
+        grid_rule_difference,
+        paper_outside_ci,
+        rate_table,
+        snr_table,
+    )
 
-    h = {"success_rate": {"5": 0.99, "15": 0.46}, "success_rate_linear": {"5": 0.98, "15": 0.41},
-         "ci95": {"5": [0.98, 0.995], "15": [0.43, 0.49]},
-         "success_rate_grid50": {"5": 0.99, "15": 0.47}, "success_rate_grid200": {"5": 0.97, "15": 0.46}}
-    res = ReproductionResult(id="x", headline=h, paper={"success_rate": {"5": 0.995, "15": 0.295}},
-                             settings={"trials": 1000})
+    h = {
+        "success_rate": {"5": 0.99, "15": 0.46},
+        "success_rate_linear": {"5": 0.98, "15": 0.41},
+        "ci95": {"5": [0.98, 0.995], "15": [0.43, 0.49]},
+        "success_rate_grid50": {"5": 0.99, "15": 0.47},
+        "success_rate_grid200": {"5": 0.97, "15": 0.46},
+    }
+    res = ReproductionResult(
+        id="x",
+        headline=h,
+        paper={"success_rate": {"5": 0.995, "15": 0.295}},
+        settings={"trials": 1000},
+    )
     assert paper_outside_ci(res) == (1, 1)
     assert grid_rule_difference(res) == pytest.approx(0.02)
     text = str(rate_table(res)).replace("\u00a0", " ")
@@ -354,9 +419,19 @@ def test_outputs_with_unknown_input_matches_a_direct_loop():
 
     rng = np.random.default_rng(3)
     N, n, p, s, m = 8, 3, 2, 1, 4
-    model = ltv_model(F=0.5 * np.eye(n), G=rng.standard_normal((n, 1)), H=rng.standard_normal((p, n)),
-                      Q=np.eye(n), R=np.eye(p), n_steps=N)
-    E, Psi, Phi = rng.standard_normal((N, n, s)), rng.standard_normal((N, n, m)), rng.standard_normal((N, p, m))
+    model = ltv_model(
+        F=0.5 * np.eye(n),
+        G=rng.standard_normal((n, 1)),
+        H=rng.standard_normal((p, n)),
+        Q=np.eye(n),
+        R=np.eye(p),
+        n_steps=N,
+    )
+    E, Psi, Phi = (
+        rng.standard_normal((N, n, s)),
+        rng.standard_normal((N, n, m)),
+        rng.standard_normal((N, p, m)),
+    )
     u, d, theta = rng.standard_normal((N, 1)), rng.standard_normal((N, s)), rng.standard_normal(m)
     noise = draw_noise(model, rng)
     y = outputs_with_unknown_input(model, E, Psi, Phi, noise=noise, u=u, d=d, theta=theta)

@@ -15,7 +15,9 @@ DIRS2 = np.column_stack([np.cos(ANG), np.sin(ANG)])
 
 def random_polytope(rng: np.random.Generator, n: int = 2, p: int = 8) -> Polytope:
     M = rng.standard_normal((p, n))
-    return Polytope(np.vstack([M, np.eye(n), -np.eye(n)]), np.r_[rng.uniform(0.2, 1.0, p), 3 * np.ones(2 * n)])
+    return Polytope(
+        np.vstack([M, np.eye(n), -np.eye(n)]), np.r_[rng.uniform(0.2, 1.0, p), 3 * np.ones(2 * n)]
+    )
 
 
 def support_lp(P: Polytope, c: np.ndarray) -> float:
@@ -61,8 +63,8 @@ def test_linear_map_invertible_vs_vertex_route():
     rng = np.random.default_rng(1)
     P = random_polytope(rng)
     A = np.array([[1.2, 0.4], [-0.3, 0.8]])
-    Q = P.linear_map(A)                     # H-representation route
-    R = Polytope.from_vertices(P.vertices() @ A.T)   # vertex route
+    Q = P.linear_map(A)  # H-representation route
+    R = Polytope.from_vertices(P.vertices() @ A.T)  # vertex route
     np.testing.assert_allclose(Q.support(DIRS2), R.support(DIRS2), atol=1e-9)
     assert Q.volume() == pytest.approx(abs(np.linalg.det(A)) * P.volume(), rel=1e-9)
 
@@ -71,7 +73,7 @@ def test_linear_map_singular_and_rectangular():
     P = Polytope.box([-1, -1], [1, 1])
     Q = P.linear_map(np.array([[1.0, 1.0]]))
     np.testing.assert_allclose(np.sort(Q.vertices().ravel()), [-2, 2])
-    S = P.linear_map(np.array([[1.0, 1.0], [1.0, 1.0]]))    # flat image: cddlib handles it
+    S = P.linear_map(np.array([[1.0, 1.0], [1.0, 1.0]]))  # flat image: cddlib handles it
     assert S.volume() == 0.0
     assert S.contains(np.array([1.5, 1.5])) and not S.contains(np.array([1.0, -1.0]))
 
@@ -96,7 +98,9 @@ def test_hull_qhull_vs_cdd_and_convex_hull():
     B = A.translate(np.array([2.0, 0.5]))
     H = convex_hull([A, B])
     assert H.contains(np.array([1.5, 0.75]))
-    np.testing.assert_allclose(H.support(DIRS2), np.maximum(A.support(DIRS2), B.support(DIRS2)), atol=1e-9)
+    np.testing.assert_allclose(
+        H.support(DIRS2), np.maximum(A.support(DIRS2), B.support(DIRS2)), atol=1e-9
+    )
 
 
 @pytest.mark.parametrize("seed", range(5))

@@ -8,8 +8,15 @@ import pytest
 from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.reproduce import rosa2013 as R
 from fdi_lib.sets import Polytope
-from fdi_lib.sets.svo import (ModelSequence, SVOModel, TemplateBatch, run_architecture_i,
-                              run_architecture_i_many, run_svo, run_svo_many)
+from fdi_lib.sets.svo import (
+    ModelSequence,
+    SVOModel,
+    TemplateBatch,
+    run_architecture_i,
+    run_architecture_i_many,
+    run_svo,
+    run_svo_many,
+)
 from fdi_lib.systems import eclipse_uav as uav
 
 from tests.sets.test_svo_props import random_system, simulate
@@ -19,9 +26,16 @@ X0 = Polytope.box([-1.0, -1.0], [1.0, 1.0])
 
 def _constant(model: SVOModel, T: int) -> ModelSequence:
     """``model`` at every one of T steps, as a ModelSequence."""
-    rep = lambda a: np.repeat(a[None], T, axis=0)   # noqa: E731
-    return ModelSequence(A=rep(model.A), B=rep(model.B), C=model.C, L=model.L, noise=model.noise,
-                         A_unc=rep(model.A_unc), B_unc=rep(model.B_unc))
+    rep = lambda a: np.repeat(a[None], T, axis=0)  # noqa: E731
+    return ModelSequence(
+        A=rep(model.A),
+        B=rep(model.B),
+        C=model.C,
+        L=model.L,
+        noise=model.noise,
+        A_unc=rep(model.A_unc),
+        B_unc=rep(model.B_unc),
+    )
 
 
 def _records(seed: int, count: int, T: int = 25):
@@ -40,7 +54,9 @@ def _records(seed: int, count: int, T: int = 25):
 def test_model_sequence_steps_equal_the_direct_models():
     rng = np.random.default_rng(3)
     m = random_system(rng)
-    A2 = np.concatenate([m.A_unc, 0.05 * rng.standard_normal((1, 2, 2))])   # two uncertain directions
+    A2 = np.concatenate(
+        [m.A_unc, 0.05 * rng.standard_normal((1, 2, 2))]
+    )  # two uncertain directions
     direct = SVOModel(A=m.A, B=m.B, C=m.C, L=m.L, noise=m.noise, A_unc=A2, B_unc=m.B_unc)
     seq = _constant(direct, 4)
     step = seq(2)
@@ -87,7 +103,7 @@ def test_batch_equals_one_observer_at_a_time_on_random_systems():
         alarms += one.empty_at is not None
         np.testing.assert_allclose(many.lower[i], one.lower, rtol=0, atol=1e-12)
         np.testing.assert_allclose(many.upper[i], one.upper, rtol=0, atol=1e-12)
-    assert alarms >= 4   # the faulty records do raise alarms: the comparison covers both outcomes
+    assert alarms >= 4  # the faulty records do raise alarms: the comparison covers both outcomes
 
 
 def test_each_observer_is_independent_of_its_batch():
@@ -96,19 +112,29 @@ def test_each_observer_is_independent_of_its_batch():
     seqs = [_constant(m, u.shape[1]) for m in models]
     whole = run_svo_many(seqs, u, y, X0, bounds=True)
     for i in (0, 3):
-        alone = run_svo_many(seqs[i:i + 1], u[i:i + 1], y[i:i + 1], X0, bounds=True)
+        alone = run_svo_many(seqs[i : i + 1], u[i : i + 1], y[i : i + 1], X0, bounds=True)
         assert alone.empty_at[0] == whole.empty_at[i]
         np.testing.assert_array_equal(alone.lower[0], whole.lower[i])
         np.testing.assert_array_equal(alone.upper[0], whole.upper[i])
 
 
 def test_architecture_i_batch_equals_one_bank_at_a_time_on_the_uav():
-    runs = uav.simulate_many([("alpha", "hard"), ("alpha", "step"), ("elevator", "step"), ("dynamics", "soft"),
-                              ("none", "step")], [np.random.default_rng(s) for s in range(5)], duration=1.5)
+    runs = uav.simulate_many(
+        [
+            ("alpha", "hard"),
+            ("alpha", "step"),
+            ("elevator", "step"),
+            ("dynamics", "soft"),
+            ("none", "step"),
+        ],
+        [np.random.default_rng(s) for s in range(5)],
+        duration=1.5,
+    )
     nominal = [uav.svo_models(r, "nominal") for r in runs]
     faults = [{f: uav.svo_models(r, f) for f in uav.FAULTS} for r in runs]
-    many = run_architecture_i_many(nominal, faults, np.stack([r.u for r in runs]), np.stack([r.y for r in runs]),
-                                   R.UAV_X0)
+    many = run_architecture_i_many(
+        nominal, faults, np.stack([r.u for r in runs]), np.stack([r.y for r in runs]), R.UAV_X0
+    )
     for r, n, f, res in zip(runs, nominal, faults, many):
         assert res == run_architecture_i(n, f, r.u, r.y, R.UAV_X0)
     assert many[0].isolated == "alpha" and many[4].detection_step is None
@@ -123,13 +149,22 @@ def test_uav_study_is_the_same_for_any_number_of_jobs():
 def test_staged_banks_equal_banks_on_the_whole_records():
     """_bank_outcomes runs the fault banks on a first stretch of the records, then the undecided ones
     again: the outcomes are those of run_architecture_i on each whole record."""
-    runs = uav.simulate_many([("alpha", "step"), ("alpha", "soft"), ("elevator", "hard"), ("elevator", "soft")],
-                             [np.random.default_rng(s) for s in range(4)], duration=3.5)
+    runs = uav.simulate_many(
+        [("alpha", "step"), ("alpha", "soft"), ("elevator", "hard"), ("elevator", "soft")],
+        [np.random.default_rng(s) for s in range(4)],
+        duration=3.5,
+    )
     staged = R._bank_outcomes(runs)
     dets = [o["detection"] for o in staged]
-    assert max(dets) > 2 * np.median(dets)   # one bank is still undecided after the first stretch
+    assert max(dets) > 2 * np.median(dets)  # one bank is still undecided after the first stretch
     for r, o in zip(runs, staged):
         nominal = uav.svo_models(r, "nominal")
-        ref = run_architecture_i(nominal, {f: uav.svo_models(r, f) for f in uav.FAULTS}, r.u, r.y, R.UAV_X0)
-        assert (o["detection"], o["isolation"], o["isolated"], o["empty_at"]) == \
-            (ref.detection_step, ref.isolation_step, ref.isolated, dict(ref.empty_at))
+        ref = run_architecture_i(
+            nominal, {f: uav.svo_models(r, f) for f in uav.FAULTS}, r.u, r.y, R.UAV_X0
+        )
+        assert (o["detection"], o["isolation"], o["isolated"], o["empty_at"]) == (
+            ref.detection_step,
+            ref.isolation_step,
+            ref.isolated,
+            dict(ref.empty_at),
+        )

@@ -5,10 +5,21 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fdi_lib.errors import EmptySetError, ModelError, ShapeError, UnboundedSetError, UnsoundOptionWarning
+from fdi_lib.errors import (
+    EmptySetError,
+    ModelError,
+    ShapeError,
+    UnboundedSetError,
+    UnsoundOptionWarning,
+)
 from fdi_lib.sets import Polytope
-from fdi_lib.sets.svo import (SetValuedObserver, SVOModel, run_architecture_i, run_architecture_ii,
-                              run_svo)
+from fdi_lib.sets.svo import (
+    SetValuedObserver,
+    SVOModel,
+    run_architecture_i,
+    run_architecture_ii,
+    run_svo,
+)
 
 
 def random_system(rng: np.random.Generator, c_unc: bool = False):
@@ -21,7 +32,9 @@ def random_system(rng: np.random.Generator, c_unc: bool = False):
     C = np.array([[1.0, rng.uniform(-0.5, 0.5)]])
     C1 = 0.05 * rng.standard_normal((1, 1, 2)) if c_unc else None
     L = np.diag(rng.uniform(0.01, 0.1, 2))
-    return SVOModel(A=A, B=B, C=C, L=L, noise=rng.uniform(0.05, 0.2), A_unc=A1[None], B_unc=B1, C_unc=C1)
+    return SVOModel(
+        A=A, B=B, C=C, L=L, noise=rng.uniform(0.05, 0.2), A_unc=A1[None], B_unc=B1, C_unc=C1
+    )
 
 
 def simulate(model: SVOModel, rng: np.random.Generator, T: int, fault=None):
@@ -38,7 +51,7 @@ def simulate(model: SVOModel, rng: np.random.Generator, T: int, fault=None):
         C = model.C + (rng.uniform(-1, 1) * model.C_unc[0] if model.C_unc.shape[0] else 0)
         y[k] = C @ x[k] + model.noise * rng.uniform(-1, 1)
     if fault is not None:
-        y[fault[0]:] += fault[1]
+        y[fault[0] :] += fault[1]
     return x, u, y
 
 
@@ -82,11 +95,11 @@ def test_paper_literal_hull_can_exclude_the_true_state():
     """co_v{Prop(v) ∩ S} (strip before hull) misses x(k+1) = 1 when Delta = 0; ours keeps it."""
     model = SVOModel(A=np.array([[1.0]]), A_unc=np.array([[[0.5]]]), C=np.array([[1.0]]), noise=0.1)
     X = Polytope.box([0.99], [1.01])
-    y0, y1 = np.array([1.0]), np.array([1.0])   # true x(0) = 1, Delta = 0, x(1) = 1
+    y0, y1 = np.array([1.0]), np.array([1.0])  # true x(0) = 1, Delta = 0, x(1) = 1
     literal = SetValuedObserver(X, method="exact", strip_before_hull=True)
     literal.start(model, y0)
     with pytest.warns(UnsoundOptionWarning, match="strip_before_hull=True"):
-        assert literal.update(model, np.zeros(0), y1) is None      # a false alarm, announced
+        assert literal.update(model, np.zeros(0), y1) is None  # a false alarm, announced
     ours = SetValuedObserver(X, method="exact")
     ours.start(model, y0)
     assert ours.update(model, np.zeros(0), y1).contains(np.array([1.0]))
@@ -97,10 +110,24 @@ def test_architectures_isolate_a_sensor_bias():
     model = random_system(rng)
     bias = 3.0
     x, u, y = simulate(model, rng, T=30, fault=(10, bias))
-    sensor = SVOModel(A=model.A, B=model.B, C=model.C, L=model.L, noise=model.noise + bias + 0.1,
-                      A_unc=model.A_unc, B_unc=model.B_unc)
-    big_dist = SVOModel(A=model.A, B=model.B, C=model.C, L=model.L * 1.5, noise=model.noise,
-                        A_unc=model.A_unc, B_unc=model.B_unc)
+    sensor = SVOModel(
+        A=model.A,
+        B=model.B,
+        C=model.C,
+        L=model.L,
+        noise=model.noise + bias + 0.1,
+        A_unc=model.A_unc,
+        B_unc=model.B_unc,
+    )
+    big_dist = SVOModel(
+        A=model.A,
+        B=model.B,
+        C=model.C,
+        L=model.L * 1.5,
+        noise=model.noise,
+        A_unc=model.A_unc,
+        B_unc=model.B_unc,
+    )
     res = run_architecture_i(model, {"sensor": sensor, "process": big_dist}, u, y, X0)
     assert res.detection_step == 10 and res.isolated == "sensor" and res.isolation_step == 10
     res2 = run_architecture_ii(model, sensor, {"sensor": sensor, "process": big_dist}, u, y, X0)
@@ -126,8 +153,12 @@ def test_bad_inputs():
     with pytest.raises(ShapeError, match=r"model: expected state dimension 2"):
         SetValuedObserver(X0).start(SVOModel(A=np.eye(3), C=np.ones((1, 3))), np.zeros(1))
     with pytest.raises(ShapeError, match=r"u: expected 3 rows"):
-        run_svo(SVOModel(A=np.eye(2), B=np.ones((2, 1)), C=np.array([[1.0, 0.0]])), np.zeros((2, 1)),
-                np.zeros((4, 1)), X0)
+        run_svo(
+            SVOModel(A=np.eye(2), B=np.ones((2, 1)), C=np.array([[1.0, 0.0]])),
+            np.zeros((2, 1)),
+            np.zeros((4, 1)),
+            X0,
+        )
     svo = SetValuedObserver(X0)
     svo.start(model, np.zeros(1))
     with pytest.raises(ShapeError, match=r"y_next: expected shape \(1,\)"):
@@ -135,7 +166,11 @@ def test_bad_inputs():
 
 
 def test_fault_models_of_tables_1_2_contain_the_healthy_and_the_faulty_plant():
-    from fdi_lib.sets.svo import actuator_effectiveness_model, dynamics_entry_model, sensor_bias_model
+    from fdi_lib.sets.svo import (
+        actuator_effectiveness_model,
+        dynamics_entry_model,
+        sensor_bias_model,
+    )
 
     rng = np.random.default_rng(21)
     model = random_system(rng)
@@ -160,8 +195,11 @@ def test_fault_models_of_tables_1_2_contain_the_healthy_and_the_faulty_plant():
     u = rng.uniform(-1, 1, (30, 1))
     for k in range(30):
         gain = 1.0 if k < 10 else 0.5
-        x[k + 1] = ((model.A + rng.uniform(-1, 1) * model.A_unc[0]) @ x[k]
-                    + (model.B + rng.uniform(-1, 1) * model.B_unc[0]) @ (gain * u[k]) + model.L @ rng.uniform(-1, 1, 2))
+        x[k + 1] = (
+            (model.A + rng.uniform(-1, 1) * model.A_unc[0]) @ x[k]
+            + (model.B + rng.uniform(-1, 1) * model.B_unc[0]) @ (gain * u[k])
+            + model.L @ rng.uniform(-1, 1, 2)
+        )
     y = x @ model.C.T + model.noise * rng.uniform(-1, 1, (31, 1))
     res = run_svo(act, u, y, X0, keep_sets=True)
     assert res.empty_at is None and all(S.contains(x[k], 1e-7) for k, S in enumerate(res.sets))
@@ -195,8 +233,15 @@ def test_exact_rule_runs_on_the_uav_and_contains_the_true_state():
     from fdi_lib.systems import eclipse_uav as uav
 
     run = uav.simulate("none", "step", rng=np.random.default_rng(0), duration=0.02)
-    res = run_svo(uav.svo_models(run, "nominal"), run.u, run.y, UAV_X0, method="exact",
-                  scale=uav.svo_scale(), keep_sets=True)
+    res = run_svo(
+        uav.svo_models(run, "nominal"),
+        run.u,
+        run.y,
+        UAV_X0,
+        method="exact",
+        scale=uav.svo_scale(),
+        keep_sets=True,
+    )
     assert res.empty_at is None
     assert all(S.contains(run.x[k], 1e-9) for k, S in enumerate(res.sets))
     tmpl = run_svo(uav.svo_models(run, "nominal"), run.u, run.y, UAV_X0)
@@ -214,7 +259,11 @@ def test_joint_horizon_is_inside_the_separate_one_and_contains_the_state():
     x = np.zeros_like(x)
     x[0] = rng.uniform(-0.5, 0.5, 2)
     for k in range(5):
-        x[k + 1] = m.A @ x[k] + (m.B + rng.uniform(-1, 1) * m.B_unc[0]) @ u[k] + m.L @ rng.uniform(-1, 1, 2)
+        x[k + 1] = (
+            m.A @ x[k]
+            + (m.B + rng.uniform(-1, 1) * m.B_unc[0]) @ u[k]
+            + m.L @ rng.uniform(-1, 1, 2)
+        )
     y = x @ m.C.T + m.noise * rng.uniform(-1, 1, (6, 1))
     X0 = Polytope.box([-1, -1], [1, 1])
     D = np.array([[np.cos(a), np.sin(a)] for a in np.linspace(0, 2 * np.pi, 12, endpoint=False)])
@@ -223,7 +272,7 @@ def test_joint_horizon_is_inside_the_separate_one_and_contains_the_state():
     assert b.empty_at is None
     assert all(S.contains(x[k], 1e-7) for k, S in enumerate(b.sets))
     gaps = np.array([Sa.support(D) - Sb.support(D) for Sa, Sb in zip(a.sets, b.sets)])
-    assert gaps.min() > -1e-7 and gaps.max() > 1e-6   # never looser, tighter somewhere
+    assert gaps.min() > -1e-7 and gaps.max() > 1e-6  # never looser, tighter somewhere
 
 
 def test_joint_horizon_can_lose_the_true_state_when_a_is_uncertain():
@@ -262,12 +311,16 @@ def test_exact_horizon_equals_the_hull_over_all_vertex_sequences():
                 for step, a in zip(range(k - j, k + 1), seq):
                     # disturbance L d and input uncertainty B_1 u(step) Delta_b: corners of their box
                     corners = signs @ np.column_stack([model.L, model.B_unc[0] @ u[step]]).T
-                    pts = ((pts @ Avs[a].T + model.B @ u[step])[:, None, :] + corners[None]).reshape(-1, 2)
+                    pts = (
+                        (pts @ Avs[a].T + model.B @ u[step])[:, None, :] + corners[None]
+                    ).reshape(-1, 2)
                 pts_all.append(pts)
             eq = ConvexHull(np.vstack(pts_all)).equations
             rows.append(eq[:, :2])
             rhs.append(-eq[:, 2])
         A_ub, b_ub = np.vstack(rows), np.concatenate(rhs)
-        brute = np.array([-linprog(-d, A_ub=A_ub, b_ub=b_ub, bounds=[(None, None)] * 2).fun for d in D])
+        brute = np.array(
+            [-linprog(-d, A_ub=A_ub, b_ub=b_ub, bounds=[(None, None)] * 2).fun for d in D]
+        )
         np.testing.assert_allclose(sets[-1].support(D), brute, rtol=0, atol=1e-7)
         assert sets[-1].contains(x[k + 1], 1e-9)

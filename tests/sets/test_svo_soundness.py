@@ -31,7 +31,7 @@ def test_a_failed_enumeration_of_a_non_empty_set_raises_instead_of_reporting_it_
     """The failure of issue 21: qhull fails and cddlib's float answer has no vertex; the Chebyshev LP
     finds a ball, so the answer must be a NumericalError, never the empty set (an alarm)."""
     P = _many_sided_polygon()
-    assert poly._bases(P.M.tobytes(), *P.M.shape) is None           # the general route is taken
+    assert poly._bases(P.M.tobytes(), *P.M.shape) is None  # the general route is taken
     assert P.vertices().shape == (80, 2)
 
     def qhull_fails(*args):
@@ -61,8 +61,16 @@ def test_healthy_uav_records_of_issue_21_raise_no_alarm(seed):
     """3 healthy samples, exact rule, N = 1: the set emptied at k = 3 (qhull failed, cddlib's empty
     vertex list was read as an empty set) although the true state is inside; no alarm now."""
     run = uav.simulate("none", "step", rng=np.random.default_rng(seed), duration=3 * uav.TS)
-    res = run_svo(uav.svo_models(run, "nominal"), run.u, run.y, UAV_X0, N=1, method="exact",
-                  scale=uav.svo_scale(), keep_sets=True)
+    res = run_svo(
+        uav.svo_models(run, "nominal"),
+        run.u,
+        run.y,
+        UAV_X0,
+        N=1,
+        method="exact",
+        scale=uav.svo_scale(),
+        keep_sets=True,
+    )
     assert res.empty_at is None
     assert all(S.contains(run.x[k], 1e-7) for k, S in enumerate(res.sets))
 
@@ -77,9 +85,11 @@ def test_one_dimensional_exact_observer_with_a_tiny_noise_bound(noise):
     for k in range(10):
         x[k + 1] = 0.9 * x[k] + 0.1 * rng.uniform(-1, 1)
     y = x[:, None] + noise * rng.uniform(-1, 1, (11, 1))
-    res = run_svo(model, np.zeros((10, 0)), y, Polytope.box([-1], [1]), method="exact", keep_sets=True)
+    res = run_svo(
+        model, np.zeros((10, 0)), y, Polytope.box([-1], [1]), method="exact", keep_sets=True
+    )
     assert res.empty_at is None
-    assert all(S.contains(x[k:k + 1], 1e-9) for k, S in enumerate(res.sets))
+    assert all(S.contains(x[k : k + 1], 1e-9) for k, S in enumerate(res.sets))
 
 
 # ----------------------------------------------------------------------------- margins and horizon
@@ -94,8 +104,8 @@ def test_exact_round_off_margin_points_outward():
     res = run_svo(model, np.zeros((6, 0)), y, X0, method="exact", keep_sets=True)
     assert res.empty_at is None
     for k, S in enumerate(res.sets):
-        assert np.all(S.M @ y[k] <= S.m)                     # inside with no tolerance at all
-        assert np.ptp(S.vertices(), axis=0).max() < 1e-7     # and the set is that point
+        assert np.all(S.M @ y[k] <= S.m)  # inside with no tolerance at all
+        assert np.ptp(S.vertices(), axis=0).max() < 1e-7  # and the set is that point
 
 
 def test_exact_sets_hold_every_vertex_image_with_no_tolerance():
@@ -109,9 +119,13 @@ def test_exact_sets_hold_every_vertex_image_with_no_tolerance():
     corners = poly.box_corners(m.generators(u[0]))
     V = svo.current_vertices
     X1 = svo.update(m, u[0], y[1])
-    pts = np.vstack([((V @ Av.T + m.B @ u[0])[:, None] + corners[None]).reshape(-1, 2)
-                     for Av in m.vertex_matrices()])
-    hull_M, hull_m = X1.M[:-2], X1.m[:-2]              # intersect_strip appends [C; -C]
+    pts = np.vstack(
+        [
+            ((V @ Av.T + m.B @ u[0])[:, None] + corners[None]).reshape(-1, 2)
+            for Av in m.vertex_matrices()
+        ]
+    )
+    hull_M, hull_m = X1.M[:-2], X1.m[:-2]  # intersect_strip appends [C; -C]
     np.testing.assert_array_equal(X1.M[-2:], np.vstack([m.C, -m.C]))
     assert np.all(pts @ hull_M.T <= hull_m)
     assert np.all(X1.m[-2:] > np.r_[m.noise + y[1], m.noise - y[1]])
@@ -133,17 +147,23 @@ def test_a_longer_horizon_tightens_a_two_dimensional_set():
 
 def test_run_svo_with_no_measurement_names_y():
     model = SVOModel(A=np.eye(2), C=np.array([[1.0, 0.0]]), noise=0.1)
-    with pytest.raises(ShapeError, match=r"y: expected at least one measurement .* got shape \(0, 1\)"):
+    with pytest.raises(
+        ShapeError, match=r"y: expected at least one measurement .* got shape \(0, 1\)"
+    ):
         run_svo(model, np.zeros((0, 0)), np.zeros((0, 1)), X0)
 
 
 # ----------------------------------------------------------------------------- options that can lose the state
 def test_options_that_can_lose_the_true_state_warn_once():
-    uncertain = SVOModel(A=np.array([[1.0]]), A_unc=np.array([[[0.5]]]), C=np.array([[1.0]]), noise=0.1)
+    uncertain = SVOModel(
+        A=np.array([[1.0]]), A_unc=np.array([[[0.5]]]), C=np.array([[1.0]]), noise=0.1
+    )
     known = SVOModel(A=np.array([[1.0]]), C=np.array([[1.0]]), noise=0.1)
     box = Polytope.box([0.99], [1.01])
-    cases = [({"method": "exact", "strip_before_hull": True}, uncertain, "strip_before_hull=True"),
-             ({"method": "template", "joint": True, "N": 2}, uncertain, "joint=True")]
+    cases = [
+        ({"method": "exact", "strip_before_hull": True}, uncertain, "strip_before_hull=True"),
+        ({"method": "template", "joint": True, "N": 2}, uncertain, "joint=True"),
+    ]
     for kwargs, model, name in cases:
         svo = SetValuedObserver(box, **kwargs)
         svo.start(model, np.array([1.0]))
@@ -151,10 +171,14 @@ def test_options_that_can_lose_the_true_state_warn_once():
             svo.update(model, np.zeros(0), np.array([1.0]))
         with warnings.catch_warnings():
             warnings.simplefilter("error")
-            svo.update(model, np.zeros(0), np.array([1.0]))          # once per observer
+            svo.update(model, np.zeros(0), np.array([1.0]))  # once per observer
     # sound combinations stay silent: defaults, and either option with a known A
-    for kwargs, model in [({}, uncertain), ({"method": "exact"}, uncertain), (cases[0][0], known),
-                          (cases[1][0], known)]:
+    for kwargs, model in [
+        ({}, uncertain),
+        ({"method": "exact"}, uncertain),
+        (cases[0][0], known),
+        (cases[1][0], known),
+    ]:
         svo = SetValuedObserver(box, **kwargs)
         svo.start(model, np.array([1.0]))
         with warnings.catch_warnings():
@@ -164,8 +188,10 @@ def test_options_that_can_lose_the_true_state_warn_once():
 
 
 # ----------------------------------------------------------------------------- the property
-@pytest.mark.parametrize("method,N", [("template", 1), ("template", 2), ("template", 3),
-                                      ("exact", 1), ("exact", 2), ("exact", 3)])
+@pytest.mark.parametrize(
+    "method,N",
+    [("template", 1), ("template", 2), ("template", 3), ("exact", 1), ("exact", 2), ("exact", 3)],
+)
 def test_soundness_on_random_stable_lpv_systems(method, N):
     """Healthy records of random stable 2-D systems (uncertain A and B, every uncertainty uniform in
     its bound): with the default options the true state is in every set and no alarm is raised."""
@@ -185,8 +211,14 @@ def _inside_envelope_runs(eta_unit: str, amplitudes, seeds, duration: float):
     runs = []
     for a in amplitudes:
         for s in seeds:
-            run = uav.simulate("none", "step", rng=np.random.default_rng(s), duration=duration,
-                               eta_unit=eta_unit, amplitude=a)
+            run = uav.simulate(
+                "none",
+                "step",
+                rng=np.random.default_rng(s),
+                duration=duration,
+                eta_unit=eta_unit,
+                amplitude=a,
+            )
             assert uav.envelope_exceedance(run).size == 0
             runs.append(run)
     return runs
@@ -201,7 +233,9 @@ def test_soundness_on_the_uav_inside_its_envelope(eta_unit):
         warnings.simplefilter("error", EnvelopeWarning)
         runs = _inside_envelope_runs(eta_unit, (0.0, 2.0), range(4), 1.0)
         models = [uav.svo_models(r) for r in runs]
-        batch = run_svo_many(models, np.stack([r.u for r in runs]), np.stack([r.y for r in runs]), UAV_X0)
+        batch = run_svo_many(
+            models, np.stack([r.u for r in runs]), np.stack([r.y for r in runs]), UAV_X0
+        )
         assert batch.empty_at == (None,) * len(runs)
         for r, mdl in zip(runs[:2], models[:2]):
             res = run_svo(mdl, r.u, r.y, UAV_X0, keep_sets=True)
@@ -211,8 +245,15 @@ def test_soundness_on_the_uav_inside_its_envelope(eta_unit):
             res = run_svo(models[-1], short.u[:30], short.y[:31], UAV_X0, N=N, keep_sets=True)
             assert res.empty_at is None
             assert all(S.contains(short.x[k], 1e-7) for k, S in enumerate(res.sets))
-        res = run_svo(models[-1], short.u[:2], short.y[:3], UAV_X0, method="exact", scale=uav.svo_scale(),
-                      keep_sets=True)
+        res = run_svo(
+            models[-1],
+            short.u[:2],
+            short.y[:3],
+            UAV_X0,
+            method="exact",
+            scale=uav.svo_scale(),
+            keep_sets=True,
+        )
         assert res.empty_at is None
         assert all(S.contains(short.x[k], 1e-7) for k, S in enumerate(res.sets))
 
@@ -225,13 +266,17 @@ def test_vertices_found_with_wide_merges_are_expanded_outward(monkeypatch):
     rng = np.random.default_rng(4)
     D = rng.standard_normal((40, 3))
     P = Polytope(D / np.linalg.norm(D, axis=1)[:, None], rng.uniform(0.5, 1.0, 40))
-    assert poly._bases(P.M.tobytes(), *P.M.shape) is None           # the general route is taken
+    assert poly._bases(P.M.tobytes(), *P.M.shape) is None  # the general route is taken
     plain = P.vertices()
     monkeypatch.setattr(poly, "_QHULL_RETRIES", ("Q12",))
     merged = poly._enumerate_vertices(P.M, P.m)
     dirs = rng.standard_normal((60, 3))
-    lp = np.array([-linprog(-d, A_ub=P.M, b_ub=P.m, bounds=[(None, None)] * 3, method="highs").fun
-                   for d in dirs])
+    lp = np.array(
+        [
+            -linprog(-d, A_ub=P.M, b_ub=P.m, bounds=[(None, None)] * 3, method="highs").fun
+            for d in dirs
+        ]
+    )
     for V, low, high in ((plain, -1e-9, 1e-9), (merged, 1e-7, 1e-4)):
         excess = (V @ dirs.T).max(axis=0) - lp
         assert low <= excess.min() and excess.max() <= high

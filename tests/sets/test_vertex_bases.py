@@ -47,11 +47,11 @@ def _cases(rng):
         m = np.concatenate([P.m, rng.uniform(-0.5, 1.0, len(cut)), 3.0 * P.m[:1] + 0.1])
         out.append((M, m))
     box = Polytope.box([-1, -1, -1], [1, 1, 1])
-    out.append((np.vstack([box.M, np.zeros((1, 3))]), np.r_[box.m, 1.0]))            # zero row, 0 <= 1
-    out.append((np.vstack([box.M, np.zeros((1, 3))]), np.r_[box.m, -1.0]))           # zero row, 0 <= -1
-    out.append((np.vstack([box.M, [[1.0, 1.0, 1.0]]]), np.r_[box.m, -4.0]))          # empty
-    out.append((np.vstack([box.M, [[1.0, 1.0, 1.0]]]), np.r_[box.m, -3.0]))          # one corner left
-    out.append((np.vstack([box.M, [[1.0, 1.0, 0.0]]]), np.r_[box.m, 0.0]))           # plane through an edge
+    out.append((np.vstack([box.M, np.zeros((1, 3))]), np.r_[box.m, 1.0]))  # zero row, 0 <= 1
+    out.append((np.vstack([box.M, np.zeros((1, 3))]), np.r_[box.m, -1.0]))  # zero row, 0 <= -1
+    out.append((np.vstack([box.M, [[1.0, 1.0, 1.0]]]), np.r_[box.m, -4.0]))  # empty
+    out.append((np.vstack([box.M, [[1.0, 1.0, 1.0]]]), np.r_[box.m, -3.0]))  # one corner left
+    out.append((np.vstack([box.M, [[1.0, 1.0, 0.0]]]), np.r_[box.m, 0.0]))  # plane through an edge
     flat = Polytope.box([-1, 0.5, -1], [1, 0.5, 1])
     out.append((flat.M, flat.m))
     return out
@@ -71,7 +71,7 @@ def test_bases_equal_general_route(general_route):
 
 
 def test_bases_decline_unbounded_and_large():
-    strip = (np.array([[1.0, 0.0], [-1.0, 0.0]]), np.array([1.0, 1.0]))   # no vertex, unbounded
+    strip = (np.array([[1.0, 0.0], [-1.0, 0.0]]), np.array([1.0, 1.0]))  # no vertex, unbounded
     assert _basis_vertices(*strip) is None
     with pytest.raises(UnboundedSetError):
         Polytope(*strip).vertices()
@@ -80,13 +80,17 @@ def test_bases_decline_unbounded_and_large():
     ang = np.linspace(0, 2 * np.pi, 200, endpoint=False)
     disc = np.column_stack([np.cos(ang), np.sin(ang), np.zeros(200), np.zeros(200)])
     M = np.vstack([disc, np.eye(4)[2:], -np.eye(4)[2:]])
-    assert _basis_vertices(M, np.ones(len(M))) is None                    # too many bases
+    assert _basis_vertices(M, np.ones(len(M))) is None  # too many bases
 
 
 def _uav_runs():
     out = []
-    for fault, scenario, seed in (("none", "step", 3), ("alpha", "step", 4), ("alpha", "soft", 5),
-                                  ("elevator", "step", 6)):
+    for fault, scenario, seed in (
+        ("none", "step", 3),
+        ("alpha", "step", 4),
+        ("alpha", "soft", 5),
+        ("elevator", "step", 6),
+    ):
         run = uav.simulate(fault, scenario, rng=np.random.default_rng(seed), duration=2.0)
         for kind in ("nominal", fault if fault != "none" else "dynamics"):
             res = run_svo(uav.svo_models(run, kind), run.u, run.y, rosa2013.UAV_X0)
@@ -102,7 +106,7 @@ def test_uav_template_svo_same_with_either_route(monkeypatch):
         slow = _uav_runs()
     finally:
         polytope._bases.cache_clear()
-    assert any(f[0] is not None for f in fast)          # some alarm is compared, not only silence
+    assert any(f[0] is not None for f in fast)  # some alarm is compared, not only silence
     for (ea, lo_a, hi_a, nv_a), (eb, lo_b, hi_b, nv_b) in zip(fast, slow):
         assert ea == eb
         np.testing.assert_array_equal(np.isnan(lo_a), np.isnan(lo_b))
@@ -125,11 +129,17 @@ def test_boundedness_matches_lp():
         q = int(rng.integers(n, n + 4))
         U = rng.normal(size=(q, n))
         if rng.random() < 0.5:
-            U[:, 0] = np.abs(U[:, 0])          # all normals in a half-space: unbounded
+            U[:, 0] = np.abs(U[:, 0])  # all normals in a half-space: unbounded
         U /= np.linalg.norm(U, axis=1, keepdims=True)
         b = polytope._bases(U.tobytes(), q, n)
-        lp = all(linprog(s * np.eye(n)[i], A_ub=U, b_ub=np.ones(q), bounds=[(None, None)] * n,
-                         method="highs").status == 0 for i in range(n) for s in (1, -1))
+        lp = all(
+            linprog(
+                s * np.eye(n)[i], A_ub=U, b_ub=np.ones(q), bounds=[(None, None)] * n, method="highs"
+            ).status
+            == 0
+            for i in range(n)
+            for s in (1, -1)
+        )
         assert b.bounded == lp
         seen.add(lp)
     assert seen == {True, False}

@@ -14,7 +14,7 @@ from fdi_lib.systems import bz_example as ex
 def test_dimensions_and_rank_conditions():
     m = ex.bz_model(50)
     assert (m.n, m.p, m.l, m.n_steps) == (3, 3, 1, 50)
-    assert np.linalg.matrix_rank(m.H[0] @ ex.E) == 1                      # Kitanidis (iv)
+    assert np.linalg.matrix_rank(m.H[0] @ ex.E) == 1  # Kitanidis (iv)
     # p >= q + m: after rejecting E, the parametric directions stay visible
     assert m.p >= ex.E.shape[1] + ex.PSI.shape[1]
     # the 2x2 block is the Section 6.1 matrix with a_k in [0.4, 0.6]
@@ -33,7 +33,9 @@ def test_closed_loop_is_stable_and_tracks_setpoint():
 
 def test_profiles():
     f = ex.nonparametric_profile(100, size=0.3, onset=40)
-    assert f.shape == (100, 1) and np.all(f[:40] == 0) and np.isclose(np.abs(f).max(), 0.3, atol=1e-3)
+    assert (
+        f.shape == (100, 1) and np.all(f[:40] == 0) and np.isclose(np.abs(f).max(), 0.3, atol=1e-3)
+    )
     th = ex.parametric_path(100, theta=[1.0, 2.0], onset=10)
     assert np.all(th[:10] == 0) and np.all(th[10:] == [1.0, 2.0])
     ramp = ex.parametric_path(100, theta=[1.0, 0.0], onset=10, ramp=20)

@@ -16,10 +16,10 @@ from fdi_lib.reproduce.rosa2013 import UAV_X0
 def test_matrices_at_trim_against_hand_values():
     """Entries of (16) at 37 m/s, evaluated by hand (not with the module's formulas)."""
     A, B = uav.lpv_matrices(37.0, eta_unit="rad")
-    assert A[3, 0] == pytest.approx(-0.2334681, abs=1e-6)   # M_u: 0.0357939 - 0.126762 - 0.1425
-    assert A[3, 1] == pytest.approx(-1.041155, abs=1e-6)    # M_w
-    assert A[1, 3] == pytest.approx(36.674, abs=1e-9)       # Z_q
-    assert B[3, 0] == pytest.approx(0.287005, abs=1e-6)     # M_eta: 0.28749 - 0.00555 + 0.005065
+    assert A[3, 0] == pytest.approx(-0.2334681, abs=1e-6)  # M_u: 0.0357939 - 0.126762 - 0.1425
+    assert A[3, 1] == pytest.approx(-1.041155, abs=1e-6)  # M_w
+    assert A[1, 3] == pytest.approx(36.674, abs=1e-9)  # Z_q
+    assert B[3, 0] == pytest.approx(0.287005, abs=1e-6)  # M_eta: 0.28749 - 0.00555 + 0.005065
     assert B[0, 1] == 24.76 and B[3, 1] == -0.294
     Ad, Bd = uav.lpv_matrices(37.0, eta_unit="deg")
     np.testing.assert_array_equal(Ad, A)
@@ -59,13 +59,16 @@ def test_fast_paths_match_direct_formulas():
     A, B = uav.lpv_matrices(Vx, 1.3, 0.5)
     expected = A @ x + B @ d + np.r_[-x[3] * x[1] + A[0, 2] * (np.sin(x[2]) - x[2]), 0, 0, 0]
     expected[[0, 1, 3]] += uav.DIST_ACCEL * e
-    np.testing.assert_allclose(uav.plant_derivative(x, d, e, 1.3, 0.5), expected, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(
+        uav.plant_derivative(x, d, e, 1.3, 0.5), expected, rtol=1e-12, atol=1e-14
+    )
     # "total" mode: the loss also removes half of the trim deflection's effect, the M_u change acts on u*
     A1, B1 = uav.lpv_matrices(Vx)
     total = expected - 0.5 * B1[:, 0] * uav.ETA_TRIM
     total[3] += 0.3 * A1[3, 0] * xs[0]
-    np.testing.assert_allclose(uav.plant_derivative(x, d, e, 1.3, 0.5, fault_mode="total"), total,
-                               rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(
+        uav.plant_derivative(x, d, e, 1.3, 0.5, fault_mode="total"), total, rtol=1e-12, atol=1e-14
+    )
 
 
 def test_zoh_matches_python_control():
@@ -82,14 +85,14 @@ def test_lqg_closed_loop_is_stable():
     lqg = uav.design_lqg()
     assert max(abs(np.linalg.eigvals(lqg.A - lqg.B @ lqg.K))) < 1.0
     assert max(abs(np.linalg.eigvals(lqg.A - lqg.L @ lqg.C))) < 1.0
-    assert max(abs(np.linalg.eigvals(lqg.A))) > 1.0     # the open loop of (16) is unstable
+    assert max(abs(np.linalg.eigvals(lqg.A))) > 1.0  # the open loop of (16) is unstable
 
 
 @pytest.mark.parametrize("seed", [3, 11])
 def test_containment_under_a_larger_manoeuvre(seed):
     """+-3.6 m/s airspeed commands (3 s): the true state stays in every nominal SVO set (eta per degree)."""
     run = uav.simulate("none", "step", rng=np.random.default_rng(seed), duration=3.0, amplitude=3.6)
-    assert np.ptp(run.y[:, 0]) > 5.0     # the manoeuvre is large: > 5 m/s of airspeed swing
+    assert np.ptp(run.y[:, 0]) > 5.0  # the manoeuvre is large: > 5 m/s of airspeed swing
     res = run_svo(uav.svo_models(run, "nominal"), run.u, run.y, UAV_X0, keep_sets=True)
     assert res.empty_at is None
     assert all(S.contains(run.x[k], 1e-7) for k, S in enumerate(res.sets))
@@ -127,17 +130,24 @@ def test_bad_inputs():
 def test_elevator_and_mu_faults_reach_the_plant():
     """Same seed: identical before the onset, then a pitch-rate difference (in noise bounds)."""
     h = uav.simulate("none", "step", rng=np.random.default_rng(5), duration=1.0)
-    for fault, mode, least in (("elevator", "deviation", 5), ("dynamics", "deviation", 1),
-                               ("dynamics", "total", 50)):
+    for fault, mode, least in (
+        ("elevator", "deviation", 5),
+        ("dynamics", "deviation", 1),
+        ("dynamics", "total", 50),
+    ):
         f = uav.simulate(fault, "step", rng=np.random.default_rng(5), duration=1.0, fault_mode=mode)
         k = f.onset_step
-        np.testing.assert_array_equal(f.y[:k + 1], h.y[:k + 1])   # the fault acts from u(k) on
-        assert np.abs(f.y[k + 1:, 3] - h.y[k + 1:, 3]).max() > least * uav.NOISE_BOUND[3]
-        assert np.all(np.abs(f.y[k + 1:, 3] - h.y[k + 1:, 3]) > 0)
+        np.testing.assert_array_equal(f.y[: k + 1], h.y[: k + 1])  # the fault acts from u(k) on
+        assert np.abs(f.y[k + 1 :, 3] - h.y[k + 1 :, 3]).max() > least * uav.NOISE_BOUND[3]
+        assert np.all(np.abs(f.y[k + 1 :, 3] - h.y[k + 1 :, 3]) > 0)
     # total speed: one sample after the onset, 0.3 M_u u* Ts of pitch rate (the LQG has not reacted yet)
-    f = uav.simulate("dynamics", "step", rng=np.random.default_rng(5), duration=0.6, fault_mode="total")
+    f = uav.simulate(
+        "dynamics", "step", rng=np.random.default_rng(5), duration=0.6, fault_mode="total"
+    )
     k = f.onset_step
-    assert f.y[k + 1, 3] - h.y[k + 1, 3] == pytest.approx(0.3 * -0.2334681 * 36.998 * uav.TS, rel=0.05)
+    assert f.y[k + 1, 3] - h.y[k + 1, 3] == pytest.approx(
+        0.3 * -0.2334681 * 36.998 * uav.TS, rel=0.05
+    )
 
 
 def test_svo_model_scales():
@@ -183,6 +193,7 @@ def _reference_loop(fault, scenario, rng, duration, substeps=2):
 
         def f(z):
             return uav.plant_derivative(z, uk, dist[k], mu, eff)
+
         for _ in range(substeps):
             k1 = f(x)
             k2 = f(x + h / 2 * k1)
@@ -213,7 +224,10 @@ def test_batched_expm_against_scipy():
     from scipy.linalg import expm
 
     rng = np.random.default_rng(3)
-    E = rng.normal(size=(12, 6, 6)) * np.array([0, 1e-3, 0.1, 0.5, 1, 2, 4, 8, 0.01, 0.2, 3, 6])[:, None, None]
+    E = (
+        rng.normal(size=(12, 6, 6))
+        * np.array([0, 1e-3, 0.1, 0.5, 1, 2, 4, 8, 0.01, 0.2, 3, 6])[:, None, None]
+    )
     F = uav._expm_many(E)
     for e, f in zip(E, F):
         ref = expm(e)
@@ -229,7 +243,11 @@ def test_envelope_lies_below_the_measured_loss_of_the_true_state(eta_unit, seed,
 
     c = containment_check(eta_unit, seed, amplitude=amplitude)
     assert c["outside"] > 0
-    assert uav.ENVELOPE_AIRSPEED[eta_unit] < c["loss_airspeed"] <= uav.ENVELOPE_AIRSPEED[eta_unit] + 0.5
+    assert (
+        uav.ENVELOPE_AIRSPEED[eta_unit]
+        < c["loss_airspeed"]
+        <= uav.ENVELOPE_AIRSPEED[eta_unit] + 0.5
+    )
 
 
 def test_svo_models_warn_when_a_record_leaves_the_envelope():

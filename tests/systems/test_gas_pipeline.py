@@ -63,10 +63,16 @@ def test_physical_section_from_first_principles():
     """Independent check: the continuous lumped section, discretised by Euler sub-steps."""
     sec = gp.physical_section()
     L = sec.length_km * 1e3
-    c2 = gp.SOUND_SPEED ** 2
+    c2 = gp.SOUND_SPEED**2
     # Resistance from the linearised square law and the stated mean flow.
     q_kg = gp.MEAN_FLOW * gp.NORMAL_DENSITY / 3600
-    res = sec.friction_factor * L * c2 * q_kg / (gp.DIAMETER * sec.area ** 2 * gp.MEAN_PRESSURE_BAR * 1e5)
+    res = (
+        sec.friction_factor
+        * L
+        * c2
+        * q_kg
+        / (gp.DIAMETER * sec.area**2 * gp.MEAN_PRESSURE_BAR * 1e5)
+    )
     assert sec.resistance == pytest.approx(res, rel=1e-12)
     # Colebrook-White holds at the returned friction factor.
     lam = sec.friction_factor
@@ -81,7 +87,7 @@ def test_physical_section_from_first_principles():
     assert sec.g1 == pytest.approx(z[0], rel=2e-3)
     assert sec.G0[0, 0] == gp.G0_1 and sec.s1 * sec.g1 == pytest.approx(gp.G0_1, rel=1e-12)
     # States keep the paper's meaning: X1 proportional to the flow, X2 to the pressure drop.
-    assert sec.G0[1, 0] / sec.s2 > 0          # an inflow raises the pressure drop
+    assert sec.G0[1, 0] / sec.s2 > 0  # an inflow raises the pressure drop
     assert sec.tau_fast_s < 60 < 60 * sec.tau_slow_min
 
 
@@ -96,8 +102,12 @@ def test_mass_balance_and_scheduling():
     # Gp(1) / G0(1) is the physical sensitivity of g1 to p_k (finite difference on the section).
     sec = gp.physical_section()
     beta = sec.bar_per_unit
-    Fu, Gu = gp._section_zoh(sec.length_km * 1e3, gp.MEAN_PRESSURE_BAR - 0.01 * beta, sec.friction_factor)
-    Fd, Gd = gp._section_zoh(sec.length_km * 1e3, gp.MEAN_PRESSURE_BAR + 0.01 * beta, sec.friction_factor)
+    Fu, Gu = gp._section_zoh(
+        sec.length_km * 1e3, gp.MEAN_PRESSURE_BAR - 0.01 * beta, sec.friction_factor
+    )
+    Fd, Gd = gp._section_zoh(
+        sec.length_km * 1e3, gp.MEAN_PRESSURE_BAR + 0.01 * beta, sec.friction_factor
+    )
     assert (Gu[0, 0] - Gd[0, 0]) / 0.02 / sec.g1 == pytest.approx(gp.GP_1 / gp.G0_1, rel=1e-6)
     # The schedule is a deviation signal: zero mean over a full day.
     p_day = gp.pipeline_schedule(720)
@@ -121,7 +131,9 @@ def test_calibration_reproduces_the_recorded_fit():
     fit = gp.calibrate()
     for key, value in gp.CALIBRATION["fitted"].items():
         assert fit[key] == pytest.approx(value, rel=1e-7), key
-    tg = gp.calibration_targets(fit["section_length_km"], fit["state2_scale"], fit["pressure_swing_bar"])
+    tg = gp.calibration_targets(
+        fit["section_length_km"], fit["state2_scale"], fit["pressure_swing_bar"]
+    )
     for key, spec in gp.CALIBRATION["targets"].items():
         assert tg[key] == pytest.approx(spec["value"], rel=1e-6), key
 
@@ -145,7 +157,7 @@ def test_stationary_kalman_and_simulation(model):
     # F_k varies with p_k (Fp != 0): P_k stays within 0.1 % of the stationary P0 of F0.
     np.testing.assert_allclose(g.P[-1], g.P[0], rtol=1e-3)
     designed = gp.pipeline_model(variant="designed")
-    gd = kalman_gains(designed)   # constant F: exactly stationary
+    gd = kalman_gains(designed)  # constant F: exactly stationary
     np.testing.assert_allclose(gd.P[-1], gd.P[0], rtol=1e-8)
     sim = simulate(model, rng=np.random.default_rng(3), u=gp.pipeline_input(), size=20)
     rel = np.abs(sim.y.mean(axis=(0, 1))[0] / gp.MEAN_FLOW - 1)
@@ -166,12 +178,22 @@ def test_fault_profiles(model):
     # A depression of G(1) by theta via Psi equals the same change in the model's G.
     th = np.array([gp.FAULT1_DELTA, 0.0])
     faulty = gp.pipeline_model()
-    sim_a = simulate(faulty, rng=np.random.default_rng(0), u=gp.pipeline_input(),
-                     fault=fam.profile(0), theta=th)
+    sim_a = simulate(
+        faulty, rng=np.random.default_rng(0), u=gp.pipeline_input(), fault=fam.profile(0), theta=th
+    )
     G_changed = np.array(faulty.G)
     G_changed[:, 0, 0] += gp.FAULT1_DELTA
-    m2 = ltv_model(F=faulty.F, G=G_changed, H=faulty.H, J=faulty.J, Q=faulty.Q, R=faulty.R,
-                   n_steps=500, x0=faulty.x0, P0=faulty.P0)
+    m2 = ltv_model(
+        F=faulty.F,
+        G=G_changed,
+        H=faulty.H,
+        J=faulty.J,
+        Q=faulty.Q,
+        R=faulty.R,
+        n_steps=500,
+        x0=faulty.x0,
+        P0=faulty.P0,
+    )
     sim_b = simulate(m2, noise=sim_a.noise, u=gp.pipeline_input())
     np.testing.assert_allclose(sim_a.y, sim_b.y, rtol=1e-12)
 
@@ -194,7 +216,9 @@ def test_noise_free_output_equals_a_direct_recursion():
     gp = systems.gas_pipeline
     u, p = gp.pipeline_input(), gp.pipeline_schedule()
     mats = gp.pipeline_matrices()
-    x = np.linalg.solve(np.eye(2) - mats.F0 - mats.Fp * p[0], (mats.G0[:, 0] + mats.Gp[:, 0] * p[0]) * u[0])
+    x = np.linalg.solve(
+        np.eye(2) - mats.F0 - mats.Fp * p[0], (mats.G0[:, 0] + mats.Gp[:, 0] * p[0]) * u[0]
+    )
     expected = np.empty(u.shape)
     for k in range(u.shape[0]):  # eq. (53) without noise, written out
         expected[k] = mats.H0[0] @ x + (mats.J0[0, 0] + mats.Jp[0, 0] * p[k]) * u[k]
@@ -212,15 +236,18 @@ def test_state2_scale_is_calibrated_by_its_criterion():
     # the criterion by hand: smallest scale within 5 % of the swing at the largest
     assert min(k for k in swings if swings[k] <= 1.05 * swings[100.0]) == 10.0
     assert gp.select_state2_scale(swings, tolerance=0.001) == 100.0
-    assert gp.select_state2_scale({1.0: 5.0, 2.0: 9.0}) == 1.0     # not monotone: still the rule
+    assert gp.select_state2_scale({1.0: 5.0, 2.0: 9.0}) == 1.0  # not monotone: still the rule
     # a recorded grid fit is reproduced, and both targets hold there (they hold at every scale)
     L, a = gp._fit_length_and_swing(3.0)
     assert (L, a) == pytest.approx(spec["fits"][3.0], rel=1e-6)
     tg = gp.calibration_targets(L, 3.0, a)
     for key, target in gp.CALIBRATION["targets"].items():
         assert tg[key] == pytest.approx(target["value"], rel=1e-6), key
-    assert gp.calibration_for(3.0) == {"section_length_km": spec["fits"][3.0][0], "state2_scale": 3.0,
-                                       "pressure_swing_bar": spec["fits"][3.0][1]}
+    assert gp.calibration_for(3.0) == {
+        "section_length_km": spec["fits"][3.0][0],
+        "state2_scale": 3.0,
+        "pressure_swing_bar": spec["fits"][3.0][1],
+    }
     assert gp.calibration_for(None) == gp.calibration_for(10.0) == gp.CALIBRATION["fitted"]
     with pytest.raises(ModelError, match="state2_scale: expected a positive number"):
         gp.calibration_for(0.0)
@@ -241,16 +268,22 @@ def test_surrogate_limits_from_first_principles():
     lim = gp.surrogate_limits()
     sec = gp.physical_section()
     # time constants: eigenvalues of the continuous section [[-R/I, 1/I], [-1/C, 0]]
-    lam = np.linalg.eigvals(np.array([[-sec.resistance / sec.inertance, 1 / sec.inertance],
-                                      [-1 / sec.capacity, 0.0]]))
+    lam = np.linalg.eigvals(
+        np.array([[-sec.resistance / sec.inertance, 1 / sec.inertance], [-1 / sec.capacity, 0.0]])
+    )
     taus = sorted(-1 / lam.real)
     assert lim["tau_fast_s"] == pytest.approx(taus[0], rel=1e-6)
     assert lim["tau_slow_s"] == pytest.approx(taus[1], rel=1e-6)
-    assert lim["tau_fast_s"] < lim["tau_slow_s"] < lim["sample_s"] == 120.0      # no slow mode
+    assert lim["tau_fast_s"] < lim["tau_slow_s"] < lim["sample_s"] == 120.0  # no slow mode
     np.testing.assert_allclose(lim["eig_F0"], np.exp(-120.0 / np.array(taus)), rtol=1e-6)
     # line pack: mass stored C pbar(t) over a fine day grid, its largest rate over the mean flow
     t = np.linspace(0.0, 86400.0, 200001)
-    stored = sec.capacity * gp.CALIBRATION["fitted"]["pressure_swing_bar"] * 1e5 * np.cos(2 * np.pi * t / 86400)
+    stored = (
+        sec.capacity
+        * gp.CALIBRATION["fitted"]["pressure_swing_bar"]
+        * 1e5
+        * np.cos(2 * np.pi * t / 86400)
+    )
     rate = np.max(np.abs(np.gradient(stored, t)))
     q_kg = gp.MEAN_FLOW * gp.NORMAL_DENSITY / 3600
     assert lim["linepack_imbalance"] == pytest.approx(rate / q_kg, rel=1e-6)

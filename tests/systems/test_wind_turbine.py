@@ -23,7 +23,9 @@ from fdi_lib.systems import wind_turbine as wt
 
 P = wt.PARAMS
 #: the benchmark's parameters without sensor noise: exact checks of the fault models
-QUIET = dataclasses.replace(P, std_beta=0.0, std_omega_r=0.0, std_omega_g=0.0, std_tau_g=0.0, std_p_g=0.0)
+QUIET = dataclasses.replace(
+    P, std_beta=0.0, std_omega_r=0.0, std_omega_g=0.0, std_tau_g=0.0, std_p_g=0.0
+)
 #: the same with the jump-free reading of the actuator faults (physical parameters change, pitch
 #: continuous)
 JUMP_FREE = dataclasses.replace(QUIET, actuator_faults="jump_free")
@@ -50,10 +52,17 @@ def test_constants_against_hand_values():
     # 628 549 121.09375; 0.6125 pi 57.5^5 = 1.209473e9; x 0.97 x 0.4554 = 5.342703e8; / 760^3 = 1.217082
     assert P.K_opt == pytest.approx(1.21708, rel=1e-5)
     # noise: the script's sigma_* are the Simulink blocks' variances (module docstring, disagreement 1)
-    np.testing.assert_allclose(P.noise_std ** 2, [0.2] * 6 + [0.004 * 2 * math.pi] * 2 + [0.05] * 2 + [90.0, 1e3],
-                               rtol=1e-12)
-    assert (P.omega_n, P.zeta, P.omega_n_pressure_drop, P.zeta_pressure_drop, P.omega_n_air, P.zeta_air) == \
-        (11.11, 0.6, 5.73, 0.45, 3.42, 0.9)
+    np.testing.assert_allclose(
+        P.noise_std**2, [0.2] * 6 + [0.004 * 2 * math.pi] * 2 + [0.05] * 2 + [90.0, 1e3], rtol=1e-12
+    )
+    assert (
+        P.omega_n,
+        P.zeta,
+        P.omega_n_pressure_drop,
+        P.zeta_pressure_drop,
+        P.omega_n_air,
+        P.zeta_air,
+    ) == (11.11, 0.6, 5.73, 0.45, 3.42, 0.9)
 
 
 def test_cq_table_spot_values_and_cp_maximum():
@@ -75,7 +84,9 @@ def test_interpolation_matches_scipy_and_extrapolates_linearly():
     np.testing.assert_allclose(wt.torque_coefficient(lam, beta), ref(np.c_[lam, beta]), atol=1e-14)
     # beyond the last tip-speed ratio: the line through the last two rows (Simulink's extrapolation)
     row12, row13 = wt.CQ_TABLE[-2, 6], wt.CQ_TABLE[-1, 6]
-    assert float(wt.torque_coefficient(14.0, 0.0)) == pytest.approx(row13 + 2 * (row13 - row12), abs=1e-14)
+    assert float(wt.torque_coefficient(14.0, 0.0)) == pytest.approx(
+        row13 + 2 * (row13 - row12), abs=1e-14
+    )
 
 
 # ------------------------------------------------------------------------------------------ steady states
@@ -106,8 +117,12 @@ def test_equilibria_solve_the_linear_drive_train_balance():
     # the noise-free closed loop started there does not move
     for v in (8.0, 16.0):
         run = wt.simulate(seed=0, faults=(), duration_s=30.0, wind=v, params=QUIET)
-        np.testing.assert_allclose(run.state, np.broadcast_to(wt.operating_point(v).state, run.state.shape),
-                                   rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(
+            run.state,
+            np.broadcast_to(wt.operating_point(v).state, run.state.shape),
+            rtol=1e-9,
+            atol=1e-9,
+        )
 
 
 def test_region1_tracks_the_optimal_tip_speed_ratio():
@@ -137,7 +152,7 @@ def test_rated_wind_speed_separates_the_regions():
     v_rated = wt.rated_wind_speed()
     assert 12.0 < v_rated < 14.0
     below = wt.operating_point(v_rated - 1e-6)
-    assert below.region == 1 and below.p_g == pytest.approx(P.P_r, rel=1e-6)   # the switch on power
+    assert below.region == 1 and below.p_g == pytest.approx(P.P_r, rel=1e-6)  # the switch on power
     assert below.omega_g < P.omega_nom
     above = wt.operating_point(v_rated + 0.05)
     assert above.region == 2 and 0.0 < above.beta < 0.5
@@ -150,12 +165,15 @@ def test_rated_wind_speed_separates_the_regions():
 
 
 # ---------------------------------------------------------------------------------- pitch actuators
-@pytest.mark.parametrize("wn, zeta", [(11.11, 0.6), (5.73, 0.45), (3.42, 0.9)],
-                         ids=["nominal", "pressure_drop", "high_air_content"])
+@pytest.mark.parametrize(
+    "wn, zeta",
+    [(11.11, 0.6), (5.73, 0.45), (3.42, 0.9)],
+    ids=["nominal", "pressure_drop", "high_air_content"],
+)
 def test_actuator_step_response_is_the_closed_form_second_order(wn, zeta):
     ts = 1e-4
     phi, gam = wt.pitch_discretisation(wn, zeta, ts=ts)
-    A = np.array([[0.0, 1.0], [-wn**2, -2 * zeta * wn]])
+    A = np.array([[0.0, 1.0], [-(wn**2), -2 * zeta * wn]])
     M = expm(np.block([[A, np.array([[0.0], [wn**2]])], [np.zeros((1, 3))]]) * ts)
     np.testing.assert_allclose(phi, M[:2, :2], rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(gam, M[:2, 2:], rtol=1e-10, atol=1e-16)
@@ -167,7 +185,9 @@ def test_actuator_step_response_is_the_closed_form_second_order(wn, zeta):
         x = phi @ x + gam[:, 0]
     t = np.arange(n) * ts
     wd = wn * math.sqrt(1 - zeta**2)
-    closed = 1 - np.exp(-zeta * wn * t) * (np.cos(wd * t) + zeta / math.sqrt(1 - zeta**2) * np.sin(wd * t))
+    closed = 1 - np.exp(-zeta * wn * t) * (
+        np.cos(wd * t) + zeta / math.sqrt(1 - zeta**2) * np.sin(wd * t)
+    )
     np.testing.assert_allclose(beta, closed, atol=1e-10)
     overshoot = beta.max() - 1.0
     assert overshoot == pytest.approx(math.exp(-math.pi * zeta / math.sqrt(1 - zeta**2)), abs=1e-6)
@@ -182,7 +202,9 @@ def test_sample_and_hold_of_the_aerodynamic_torque_is_accurate():
         dx = np.empty(10)
         for b in range(3):
             dx[2 * b] = x[2 * b + 1]
-            dx[2 * b + 1] = -2 * P.zeta * P.omega_n * x[2 * b + 1] + P.omega_n**2 * (beta_r - x[2 * b])
+            dx[2 * b + 1] = -2 * P.zeta * P.omega_n * x[2 * b + 1] + P.omega_n**2 * (
+                beta_r - x[2 * b]
+            )
         tau = float(wt.aero_torque(v, x[6], x[[0, 2, 4]]))
         dx[6:] = A @ x[6:] + B @ np.array([tau, tau_g_r, 0.0])
         return dx
@@ -192,13 +214,17 @@ def test_sample_and_hold_of_the_aerodynamic_torque_is_accurate():
         for k in range(500, 6000, 500):
             x = run.state[k]
             args = (run.beta_r[k], run.tau_g_r[k], run.v[k])
-            ref = solve_ivp(f, (0.0, P.ts), x, args=args, method="DOP853", rtol=1e-12, atol=1e-12).y[:, -1]
+            ref = solve_ivp(
+                f, (0.0, P.ts), x, args=args, method="DOP853", rtol=1e-12, atol=1e-12
+            ).y[:, -1]
             got = wt.plant_step(x, beta_r=args[0], tau_g_r=args[1], v=args[2])[0]
             np.testing.assert_allclose(got[:6], ref[:6], atol=1e-9)
             assert abs(got[6] - ref[6]) < 2e-5 * ref[6] and abs(got[7] - ref[7]) < 1e-6 * ref[7]
 
 
-@pytest.mark.parametrize("c0, c1", [(50.0, 30.0), (25.0, 10.0), (4.0, 1.0)], ids=["over", "critical", "under"])
+@pytest.mark.parametrize(
+    "c0, c1", [(50.0, 30.0), (25.0, 10.0), (4.0, 1.0)], ids=["over", "critical", "under"]
+)
 def test_pitch_closed_form_exponential_in_every_damping_regime(c0, c1):
     out = np.empty(9)
     wt._pitch_zoh(c0, c1, 7.0, 0.01, out)
@@ -208,19 +234,22 @@ def test_pitch_closed_form_exponential_in_every_damping_regime(c0, c1):
     np.testing.assert_allclose(out[7:9], M[:2, 2], rtol=1e-10)
 
 
-def _one_step_pitch(run: wt.WindTurbineRun, blade: int, wn2: float, tzw: float, feedback: float = 1.0) -> np.ndarray:
+def _one_step_pitch(
+    run: wt.WindTurbineRun, blade: int, wn2: float, tzw: float, feedback: float = 1.0
+) -> np.ndarray:
     """Residual of the pitch update of ``blade`` against the exact model with ``(omega_n^2, 2 zeta omega_n)``."""
     wn, zeta = math.sqrt(wn2), tzw / (2 * math.sqrt(wn2))
     phi, gam = wt.pitch_discretisation(wn, zeta, feedback=feedback)
-    x = run.state[:, 2 * blade:2 * blade + 2]
+    x = run.state[:, 2 * blade : 2 * blade + 2]
     return x[1:] - (x[:-1] @ phi.T + run.beta_r[:-1, None] * gam[:, 0])
 
 
 def test_actuator_faults_change_the_dynamics_on_schedule():
-    f6, f7 = shifted(fault(6), 20.0), shifted(fault(7), 20.0)      # 100 s each
+    f6, f7 = shifted(fault(6), 20.0), shifted(fault(7), 20.0)  # 100 s each
     nominal = (P.omega_n**2, 2 * P.zeta * P.omega_n)
-    run = wt.simulate(seed=1, faults=(f6,), duration_s=140.0, wind=turbulent(16.0, 140.0, 1),
-                      params=JUMP_FREE)
+    run = wt.simulate(
+        seed=1, faults=(f6,), duration_s=140.0, wind=turbulent(16.0, 140.0, 1), params=JUMP_FREE
+    )
     assert np.all(run.region == 2)
     k_on, k_off = 2000, 12000
     faulty = (5.73**2, 2 * 0.45 * 5.73)
@@ -228,16 +257,19 @@ def test_actuator_faults_change_the_dynamics_on_schedule():
     res_f = np.abs(_one_step_pitch(run, 1, *faulty)).max(axis=1)
     assert res_nom[:k_on].max() < 1e-12 and res_nom[k_off:].max() < 1e-12
     assert res_f[k_on:k_off].max() < 1e-12
-    assert res_nom[k_on:k_off].max() > 1e-6          # the faulty dynamics differ visibly from the nominal
-    assert np.abs(_one_step_pitch(run, 0, *nominal)).max() < 1e-12   # the other blades are untouched
+    assert res_nom[k_on:k_off].max() > 1e-6  # the faulty dynamics differ visibly from the nominal
+    assert np.abs(_one_step_pitch(run, 0, *nominal)).max() < 1e-12  # the other blades are untouched
     # fault 7: mixed parameters along the 30 s ramps (p = j / 3000), full fault in the middle
-    run = wt.simulate(seed=1, faults=(f7,), duration_s=140.0, wind=turbulent(16.0, 140.0, 1),
-                      params=JUMP_FREE)
+    run = wt.simulate(
+        seed=1, faults=(f7,), duration_s=140.0, wind=turbulent(16.0, 140.0, 1), params=JUMP_FREE
+    )
     air = (3.42**2, 2 * 0.9 * 3.42)
     for k, p in ((2000, 0.0), (2000 + 1500, 0.5), (2000 + 5000, 1.0), (2000 + 9999 - 600, 0.2)):
         mixed = tuple((1 - p) * a + p * b for a, b in zip(nominal, air))
         assert np.abs(_one_step_pitch(run, 2, *mixed)[k]).max() < 1e-12
-    np.testing.assert_allclose(run.fault_active[[2000, 3500, 7000, 11_399], 0], [0.0, 0.5, 1.0, 0.2], atol=1e-12)
+    np.testing.assert_allclose(
+        run.fault_active[[2000, 3500, 7000, 11_399], 0], [0.0, 0.5, 1.0, 0.2], atol=1e-12
+    )
 
 
 def test_simulink_actuator_faults_scale_the_pitch_at_each_parameter_change():
@@ -257,14 +289,14 @@ def test_simulink_actuator_faults_scale_the_pitch_at_each_parameter_change():
     nominal = (P.omega_n**2, 2 * P.zeta * P.omega_n)
     faulty = (5.73**2, 2 * 0.45 * 5.73)
     x = run.state[:, 2:4]
-    res_nom = _one_step_pitch(run, 1, *nominal)        # residual of the transition k -> k + 1
+    res_nom = _one_step_pitch(run, 1, *nominal)  # residual of the transition k -> k + 1
     res_f = _one_step_pitch(run, 1, *faulty)
-    pred_on = x[k_on] - res_nom[k_on - 1]             # the healthy update into the onset sample
+    pred_on = x[k_on] - res_nom[k_on - 1]  # the healthy update into the onset sample
     np.testing.assert_allclose(x[k_on], ratio * pred_on, rtol=1e-12)
     pred_off = x[k_off] - res_f[k_off - 1]
     np.testing.assert_allclose(x[k_off], pred_off / ratio, rtol=1e-12)
-    assert np.abs(res_f[k_on:k_off - 1]).max() < 1e-9
-    assert run.beta[k_on, 1] < 0.3 * run.beta[k_on - 1, 1]     # the drop the benchmark's users saw
+    assert np.abs(res_f[k_on : k_off - 1]).max() < 1e-9
+    assert run.beta[k_on, 1] < 0.3 * run.beta[k_on - 1, 1]  # the drop the benchmark's users saw
     with pytest.raises(ModelError, match="actuator_faults: expected one of"):
         dataclasses.replace(P, actuator_faults="smooth")
 
@@ -295,14 +327,25 @@ def test_region_switch_follows_the_stated_rule():
 # --------------------------------------------------------------------------------------- sensors
 def test_sensor_noise_standard_deviations_from_fault_free_data():
     run = wt.simulate(seed=5, faults=(), duration_s=300.0, wind=16.0)
-    true = np.column_stack([run.beta[:, [0, 0, 1, 1, 2, 2]], run.omega_r, run.omega_r, run.omega_g, run.omega_g,
-                            run.tau_g, run.p_g])
+    true = np.column_stack(
+        [
+            run.beta[:, [0, 0, 1, 1, 2, 2]],
+            run.omega_r,
+            run.omega_r,
+            run.omega_g,
+            run.omega_g,
+            run.tau_g,
+            run.p_g,
+        ]
+    )
     err = run.y - true
     n = err.shape[0]
-    np.testing.assert_allclose(err.std(axis=0), P.noise_std, rtol=4 / math.sqrt(2 * n))   # 4 sigma of a std
+    np.testing.assert_allclose(
+        err.std(axis=0), P.noise_std, rtol=4 / math.sqrt(2 * n)
+    )  # 4 sigma of a std
     np.testing.assert_allclose(err.mean(axis=0) / P.noise_std, 0.0, atol=4 / math.sqrt(n))
     corr = np.corrcoef(err.T)
-    assert np.abs(corr - np.eye(12)).max() < 4 / math.sqrt(n)                              # independent sensors
+    assert np.abs(corr - np.eye(12)).max() < 4 / math.sqrt(n)  # independent sensors
     doubled = dataclasses.replace(P, std_tau_g=2 * P.std_tau_g)
     run2 = wt.simulate(seed=5, faults=(), duration_s=100.0, wind=16.0, params=doubled)
     assert (run2.tau_g_m - run2.tau_g).std() == pytest.approx(2 * P.std_tau_g, rel=0.03)
@@ -310,7 +353,9 @@ def test_sensor_noise_standard_deviations_from_fault_free_data():
 
 def test_pitch_sensor_noise_reaches_the_blades_through_the_internal_loop():
     run = wt.simulate(seed=5, faults=(), duration_s=100.0, wind=16.0)
-    quiet = wt.simulate(seed=5, faults=(), duration_s=100.0, wind=16.0, params=dataclasses.replace(P, std_beta=0.0))
+    quiet = wt.simulate(
+        seed=5, faults=(), duration_s=100.0, wind=16.0, params=dataclasses.replace(P, std_beta=0.0)
+    )
     spread = (run.beta[:, 0] - run.beta[:, 1]).std()
     assert spread > 0.05 and (quiet.beta[:, 0] - quiet.beta[:, 1]).std() < 1e-9
 
@@ -320,11 +365,29 @@ def test_scenario_schedule_matches_the_benchmark():
     ids = [f.id for f in wt.FAULTS]
     assert ids == list(range(1, 10))
     times = {f.id: (f.start_s, f.stop_s) for f in wt.FAULTS}
-    assert times == {1: (2000, 2100), 2: (2300, 2400), 3: (2600, 2700), 4: (1500, 1600), 5: (1000, 1100),
-                     6: (2900, 3000), 7: (3400, 3500), 8: (3800, 3900), 9: (4000, 4200)}
+    assert times == {
+        1: (2000, 2100),
+        2: (2300, 2400),
+        3: (2600, 2700),
+        4: (1500, 1600),
+        5: (1000, 1100),
+        6: (2900, 3000),
+        7: (3400, 3500),
+        8: (3800, 3900),
+        9: (4000, 4200),
+    }
     req = {f.id: f.required_detection_s for f in wt.FAULTS}
-    assert req == {1: 0.1, 2: 0.1, 3: 0.1, 4: 0.1, 5: 0.1, 6: pytest.approx(0.08), 7: pytest.approx(6.0),
-                   8: pytest.approx(0.03), 9: None}
+    assert req == {
+        1: 0.1,
+        2: 0.1,
+        3: 0.1,
+        4: 0.1,
+        5: 0.1,
+        6: pytest.approx(0.08),
+        7: pytest.approx(6.0),
+        8: pytest.approx(0.03),
+        9: None,
+    }
     prof = wt.fault_profiles(wt.FAULTS, 440_000)
     for j, f in enumerate(wt.FAULTS):
         on = np.flatnonzero(prof[:, j] > 0)
@@ -344,24 +407,38 @@ def _exact_sensor_run(f: wt.Fault, wind: float) -> tuple[wt.WindTurbineRun, slic
     return run, slice(1000, 2000), run.fault_active[:, 0] > 0
 
 
-@pytest.mark.parametrize("fid, wind, channels", [
-    (1, 16.0, {0: ("fixed", 5.0)}),
-    (2, 16.0, {3: ("gain", 1.2)}),
-    (3, 16.0, {4: ("fixed", 10.0)}),
-    (4, 8.0, {6: ("fixed", 1.4)}),
-    (5, 8.0, {7: ("gain", 1.1), 9: ("gain", 0.9)}),
-])
+@pytest.mark.parametrize(
+    "fid, wind, channels",
+    [
+        (1, 16.0, {0: ("fixed", 5.0)}),
+        (2, 16.0, {3: ("gain", 1.2)}),
+        (3, 16.0, {4: ("fixed", 10.0)}),
+        (4, 8.0, {6: ("fixed", 1.4)}),
+        (5, 8.0, {7: ("gain", 1.1), 9: ("gain", 0.9)}),
+    ],
+)
 def test_sensor_faults_act_on_their_sensor_at_their_time(fid, wind, channels):
     run, window, on = _exact_sensor_run(fault(fid), wind)
     assert np.array_equal(np.flatnonzero(on), np.arange(1000, 2000))
-    true = np.column_stack([run.beta[:, [0, 0, 1, 1, 2, 2]], run.omega_r, run.omega_r, run.omega_g, run.omega_g,
-                            run.tau_g, run.p_g])
+    true = np.column_stack(
+        [
+            run.beta[:, [0, 0, 1, 1, 2, 2]],
+            run.omega_r,
+            run.omega_r,
+            run.omega_g,
+            run.omega_g,
+            run.tau_g,
+            run.p_g,
+        ]
+    )
     for ch in range(12):
         if ch in channels:
             kind, m = channels[ch]
             expect = np.full(on.sum(), m) if kind == "fixed" else m * true[on, ch]
             np.testing.assert_allclose(run.y[on, ch], expect, rtol=1e-12)
-            assert np.abs(run.y[~on, ch] - true[~on, ch]).max() < 1e-9 * max(1.0, np.abs(true[:, ch]).max())
+            assert np.abs(run.y[~on, ch] - true[~on, ch]).max() < 1e-9 * max(
+                1.0, np.abs(true[:, ch]).max()
+            )
         else:
             np.testing.assert_allclose(run.y[:, ch], true[:, ch], rtol=1e-12, atol=1e-12)
 
@@ -376,20 +453,29 @@ def test_stuck_pitch_sensor_moves_the_true_pitch():
 
 
 def test_converter_and_drive_train_faults():
-    run = wt.simulate(seed=2, faults=(shifted(fault(8), 10.0),), duration_s=30.0, wind=16.0, params=QUIET)
+    run = wt.simulate(
+        seed=2, faults=(shifted(fault(8), 10.0),), duration_s=30.0, wind=16.0, params=QUIET
+    )
     on = run.fault_active[:, 0] > 0
     np.testing.assert_allclose(run.tau_g[on] - run.state[on, 9], 100.0, rtol=1e-12)
     np.testing.assert_allclose(run.tau_g[~on], run.state[~on, 9], rtol=1e-15)
     np.testing.assert_allclose(run.tau_g_m[on], run.state[on, 9] + 100.0, rtol=1e-12)
     # drive-train efficiency 0.92 on schedule: one-step update of (omega_r, omega_g, theta, tau_gc)
-    run = wt.simulate(seed=2, faults=(shifted(fault(9), 10.0),), duration_s=40.0, wind=8.0, params=QUIET)
+    run = wt.simulate(
+        seed=2, faults=(shifted(fault(9), 10.0),), duration_s=40.0, wind=8.0, params=QUIET
+    )
     on = run.fault_active[:-1, 0] > 0
-    x, u = run.state[:, 6:], np.column_stack([run.tau_aero, run.tau_g_r, np.zeros_like(run.tau_aero)])
+    x, u = (
+        run.state[:, 6:],
+        np.column_stack([run.tau_aero, run.tau_g_r, np.zeros_like(run.tau_aero)]),
+    )
     for eta, sel in ((0.92, on), (P.eta_dt, ~on)):
         phi, gam = wt.drive_train_discretisation(P, eta_dt=eta)
         pred = x[:-1] @ phi.T + u[:-1] @ gam.T
         np.testing.assert_allclose(x[1:][sel], pred[sel], rtol=1e-12, atol=1e-9)
-    assert run.omega_g[2999] < run.omega_g[999] - 1.0     # less torque reaches the generator: it slows down
+    assert (
+        run.omega_g[2999] < run.omega_g[999] - 1.0
+    )  # less torque reaches the generator: it slows down
 
 
 def test_faults_show_up_in_the_full_scenario():
@@ -397,7 +483,11 @@ def test_faults_show_up_in_the_full_scenario():
     run = wt.simulate(seed=4)
     on = run.fault_active > 0
     y, b = run.y, run.beta
-    assert np.all(y[on[:, 0], 0] == 5.0) and np.all(y[on[:, 2], 4] == 10.0) and np.all(y[on[:, 3], 6] == 1.4)
+    assert (
+        np.all(y[on[:, 0], 0] == 5.0)
+        and np.all(y[on[:, 2], 4] == 10.0)
+        and np.all(y[on[:, 3], 6] == 1.4)
+    )
     f2 = on[:, 1]
     assert y[f2, 3].mean() / y[f2, 2].mean() == pytest.approx(1.2, rel=0.02)
     f5 = on[:, 4]
@@ -423,7 +513,20 @@ def test_fault_validation_messages():
         dataclasses.replace(f, stop_s=1000.0)
     with pytest.raises(ModelError, match="drive-train fault is abrupt"):
         dataclasses.replace(fault(9), ramp_s=1.0)
-    both = (f, wt.Fault(10, "beta_1,m2 stuck", "sensor_fixed", ("beta_1_m2",), 2050.0, 2150.0, (3.0,), None, "test"))
+    both = (
+        f,
+        wt.Fault(
+            10,
+            "beta_1,m2 stuck",
+            "sensor_fixed",
+            ("beta_1_m2",),
+            2050.0,
+            2150.0,
+            (3.0,),
+            None,
+            "test",
+        ),
+    )
     with pytest.raises(ModelError, match="both pitch sensors of blade 1 stuck"):
         wt.simulate(seed=0, faults=both, duration_s=1.0)
     with pytest.raises(ShapeError, match="wind: expected a number"):
@@ -440,10 +543,10 @@ def test_seeded_runs_are_reproducible_and_batch_consistent():
     np.testing.assert_array_equal(a.v, b.v)
     batch = wt.simulate(seed=42, duration_s=5.0, n_realisations=3)
     assert batch.y.shape == (3, 500, 12) and batch.region.shape == (3, 500)
-    np.testing.assert_array_equal(batch.y[0], a.y)                     # realisation 0 = the single run
+    np.testing.assert_array_equal(batch.y[0], a.y)  # realisation 0 = the single run
     seeds = np.random.SeedSequence(42).spawn(3)
     again = wt.simulate(seed=seeds, duration_s=5.0)
-    twice = wt.simulate(seed=seeds, duration_s=5.0)                   # the seed sequences are not consumed
+    twice = wt.simulate(seed=seeds, duration_s=5.0)  # the seed sequences are not consumed
     np.testing.assert_array_equal(again.y, batch.y)
     np.testing.assert_array_equal(twice.y, batch.y)
     assert not np.array_equal(batch.y[1], batch.y[2])
@@ -462,13 +565,17 @@ def test_linearisation_matches_finite_differences(v):
     def step(x=x0, beta_r=beta0, tau_g_r=tau0, wind=v):
         return wt.plant_step(x, beta_r=beta_r, tau_g_r=tau_g_r, v=wind)[0]
 
-    np.testing.assert_allclose(step(), x0, rtol=1e-10, atol=1e-10)     # the operating point is a fixed point
+    np.testing.assert_allclose(
+        step(), x0, rtol=1e-10, atol=1e-10
+    )  # the operating point is a fixed point
     # forward differences: inside a cell of the table the step is linear in each state and reference
     # (the region-1 pitch, 0 deg, lies on a grid line: the linearisation takes the cell above it)
     scale = np.array([1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-5, 1e-3, 1e-7, 1.0])
     A_fd = np.column_stack([(step(x=x0 + h * e) - step()) / h for h, e in zip(scale, np.eye(10))])
     np.testing.assert_allclose(lin.A, A_fd, rtol=1e-5, atol=1e-9)
-    B_fd = np.column_stack([(step(beta_r=beta0 + 1e-3) - step()) / 1e-3, (step(tau_g_r=tau0 + 1.0) - step())])
+    B_fd = np.column_stack(
+        [(step(beta_r=beta0 + 1e-3) - step()) / 1e-3, (step(tau_g_r=tau0 + 1.0) - step())]
+    )
     np.testing.assert_allclose(lin.B, B_fd, rtol=1e-6, atol=1e-12)
     G_fd = (step(wind=v + 1e-4) - step(wind=v - 1e-4)) / 2e-4
     np.testing.assert_allclose(lin.G[:, 0], G_fd, rtol=1e-5, atol=1e-12)
@@ -478,11 +585,15 @@ def test_linearisation_matches_finite_differences(v):
     def tau(om=op.omega_r, b=op.beta, wind=v):
         return float(wt.aero_torque(wind, om, np.array([b, op.beta, op.beta])))
 
-    assert lin.d_tau_d_omega_r == pytest.approx((tau(om=op.omega_r + 1e-6) - tau()) / 1e-6, rel=1e-5)
+    assert lin.d_tau_d_omega_r == pytest.approx(
+        (tau(om=op.omega_r + 1e-6) - tau()) / 1e-6, rel=1e-5
+    )
     assert lin.d_tau_d_beta == pytest.approx((tau(b=op.beta + 1e-4) - tau()) / 1e-4, rel=1e-5)
-    assert lin.d_tau_d_v == pytest.approx((tau(wind=v + 1e-5) - tau(wind=v - 1e-5)) / 2e-5, rel=1e-6)
+    assert lin.d_tau_d_v == pytest.approx(
+        (tau(wind=v + 1e-5) - tau(wind=v - 1e-5)) / 2e-5, rel=1e-6
+    )
     # measurement map: P_g = eta_gc omega_g tau_g
-    y = lambda x: np.r_[x[[0, 0, 2, 2, 4, 4, 6, 6, 7, 7, 9]], P.eta_gc * x[7] * x[9]]   # noqa: E731
+    y = lambda x: np.r_[x[[0, 0, 2, 2, 4, 4, 6, 6, 7, 7, 9]], P.eta_gc * x[7] * x[9]]  # noqa: E731
     C_fd = np.column_stack([(y(x0 + e) - y(x0 - e)) / 2 for e in np.eye(10)])
     np.testing.assert_allclose(lin.C, C_fd, rtol=1e-9)
     np.testing.assert_allclose(lin.y0, y(x0), rtol=1e-12)
@@ -493,7 +604,9 @@ def test_lpv_schedule_reproduces_the_pointwise_linearisations():
     lo, hi = wt.WIND_PROFILE[:, 1].min(), wt.WIND_PROFILE[:, 1].max()
     assert sched.v_grid[0] == pytest.approx(lo * 0.64)
     assert sched.v_grid[-1] == pytest.approx(hi * 1.36)
-    np.testing.assert_array_equal(sched.region, np.where(sched.v_grid > wt.rated_wind_speed(), 2, 1))
+    np.testing.assert_array_equal(
+        sched.region, np.where(sched.v_grid > wt.rated_wind_speed(), 2, 1)
+    )
     for i in (0, 12, 24):
         lin = wt.linearise(float(sched.v_grid[i]))
         A, G = sched.matrices(sched.rho[i])
@@ -520,8 +633,17 @@ def test_wind_profile_and_kaimal_turbulence():
     mean_s = mean[:131_072]
     V = mean_s.mean()
     seg = 2**16
-    psd = np.mean([welch((wt.wind_speed(ts, seed=s) / mean_s - 1) / wt.TURBULENCE_INTENSITY, fs=1 / P.ts,
-                         nperseg=seg)[1] for s in range(10)], axis=0)
+    psd = np.mean(
+        [
+            welch(
+                (wt.wind_speed(ts, seed=s) / mean_s - 1) / wt.TURBULENCE_INTENSITY,
+                fs=1 / P.ts,
+                nperseg=seg,
+            )[1]
+            for s in range(10)
+        ],
+        axis=0,
+    )
     f = np.fft.rfftfreq(seg, P.ts)
     band = (f > 0.005) & (f < 1.0)
     kaimal = (4 * wt.LENGTH_SCALE_M / V) / (1 + 6 * f[band] * wt.LENGTH_SCALE_M / V) ** (5 / 3)
@@ -541,19 +663,21 @@ def test_every_fault_falls_in_the_benchmarks_operating_region():
     run = wt.simulate(seed=2026, n_realisations=4, dtype=np.float32)
     reg = wt.fault_regions(run)
     assert sorted(reg) == [f"F{i}" for i in range(1, 10)]
-    assert all(e["matches"] for e in reg.values()), {k: e for k, e in reg.items()
-                                                       if not e["matches"]}
+    assert all(e["matches"] for e in reg.values()), {
+        k: e for k, e in reg.items() if not e["matches"]
+    }
     # the criteria, recomputed by hand for F1 (zero pitch, partial load) and F4 (>= 3 sigma)
     on = run.fault_active > 0
     assert (run.region[:, on[:, 0]] == 1).mean() > 0.9
     k1 = int(np.argmax(on[:, 0]))
-    assert abs(run.beta[:, k1 - 1000:k1].mean()) < 0.1
+    assert abs(run.beta[:, k1 - 1000 : k1].mean()) < 0.1
     wr = run.omega_r[:, on[:, 3]].mean()
     assert reg["F4"]["offset_sigma"] == pytest.approx((1.4 - wr) / P.std_omega_r, rel=1e-5)
     assert reg["F4"]["offset_sigma"] >= 3.0
     assert (run.region[:, on[:, 8]] == 2).mean() > 0.8 and run.beta[:, on[:, 8]].mean() > 3.0
-    other = wt.fault_regions(wt.simulate(seed=2026, n_realisations=2, dtype=np.float32,
-                                         schedule="designed"))
+    other = wt.fault_regions(
+        wt.simulate(seed=2026, n_realisations=2, dtype=np.float32, schedule="designed")
+    )
     assert other["F1"]["region"] == 2 and other["F9"]["region"] == 1 and not other["F1"]["matches"]
     with pytest.raises(ModelError, match="schedule: expected one of"):
         wt.wind_speed(np.arange(0.0, 1.0, 0.01), seed=0, schedule="measured")
@@ -568,10 +692,13 @@ def test_noise_readings_change_the_fault_sizes_in_sigma():
     f4, f8 = fault(4), fault(8)
     sizes = {}
     for name, p in (("variance", var), ("std", std)):
-        run = wt.simulate(seed=5, faults=(shifted(f4, 30.0), shifted(f8, 140.0)), duration_s=250.0,
-                          wind=turbulent(7.0, 250.0, 5)
-                          * np.r_[np.ones(11_000), np.full(14_000, 16.0 / 7.0)],
-                          params=p)
+        run = wt.simulate(
+            seed=5,
+            faults=(shifted(f4, 30.0), shifted(f8, 140.0)),
+            duration_s=250.0,
+            wind=turbulent(7.0, 250.0, 5) * np.r_[np.ones(11_000), np.full(14_000, 16.0 / 7.0)],
+            params=p,
+        )
         sizes[name] = wt.fault_regions(run)
     # the converter offset: 100 N m over sqrt(90) = 10.5 sigma, or over 90 = 1.1 sigma
     assert sizes["variance"]["F8"]["offset_sigma"] == pytest.approx(100 / math.sqrt(90), rel=1e-12)
@@ -600,7 +727,7 @@ def test_accommodation_switches_the_controller_to_the_healthy_twin():
     f1_never = dataclasses.replace(f1, start_s=59.0, stop_s=59.5)
     free_m2 = wt.simulate(faults=(f1_never,), accommodation={1: 0.0}, **kw)
     np.testing.assert_array_equal(early.state[:5900], free_m2.state[:5900])
-    assert not np.array_equal(early.state, free_off.state)   # m2's noise alone, not the mean
+    assert not np.array_equal(early.state, free_off.state)  # m2's noise alone, not the mean
     np.testing.assert_array_equal(late.state[:2501], faulty.state[:2501])
     dev_faulty = np.abs(faulty.beta[3000:4000, 0] - free_off.beta[3000:4000, 0]).mean()
     dev_late = np.abs(late.beta[3000:4000, 0] - free_off.beta[3000:4000, 0]).mean()
@@ -609,22 +736,32 @@ def test_accommodation_switches_the_controller_to_the_healthy_twin():
     np.testing.assert_array_equal(wt.simulate(faults=(f5,), **kw).state, free_off.state)
     # per-realisation times, NaN = not isolated (that realisation keeps the faulty sensor)
     twice = [np.random.SeedSequence(3)] * 2
-    both = wt.simulate(seed=twice, faults=(f1,), duration_s=60.0, wind=wind,
-                       accommodation={1: np.array([25.0, np.nan])})
+    both = wt.simulate(
+        seed=twice,
+        faults=(f1,),
+        duration_s=60.0,
+        wind=wind,
+        accommodation={1: np.array([25.0, np.nan])},
+    )
     alone = wt.simulate(seed=twice[:1], faults=(f1,), duration_s=60.0, wind=wind)
     np.testing.assert_array_equal(both.state[1], alone.state[0])
 
 
 def test_accommodation_refuses_what_it_cannot_do():
     kw = dict(seed=0, duration_s=1.0, wind=10.0)
-    for acc, match in (({8: 0.0}, "no healthy redundant sensor"),
-                       ({6: 0.0}, "no healthy redundant"),
-                       ({7: 0.0}, "not in the run's faults"), ({1: -1.0}, "isolation times >= 0"),
-                       ({1: np.inf}, "isolation times >= 0"), ([1, 2], "expected a mapping")):
+    for acc, match in (
+        ({8: 0.0}, "no healthy redundant sensor"),
+        ({6: 0.0}, "no healthy redundant"),
+        ({7: 0.0}, "not in the run's faults"),
+        ({1: -1.0}, "isolation times >= 0"),
+        ({1: np.inf}, "isolation times >= 0"),
+        ([1, 2], "expected a mapping"),
+    ):
         with pytest.raises(ModelError, match=match):
             wt.simulate(faults=(fault(1), fault(6), fault(8)), accommodation=acc, **kw)
-    m2 = wt.Fault(10, "beta_1,m2 x2", "sensor_gain", ("beta_1_m2",), 2500.0, 2600.0, (2.0,), None,
-                  "test")
+    m2 = wt.Fault(
+        10, "beta_1,m2 x2", "sensor_gain", ("beta_1_m2",), 2500.0, 2600.0, (2.0,), None, "test"
+    )
     with pytest.raises(ModelError, match="both beta_1_m1 and beta_1_m2 would be switched off"):
         wt.simulate(faults=(fault(1), m2), accommodation={1: 0.0, 10: 0.0}, **kw)
 
@@ -645,18 +782,23 @@ def test_plant_api_limits_and_typed_errors():
             mp.setitem(wt.WIND_SCHEDULES, "benchmark", np.array([[0.0, 34.0], [4400.0, 34.0]]))
             wt.simulate(seed=0, duration_s=100.0)
     # sizes: refused with the estimate before anything is allocated
-    with pytest.raises(ResourceError,
-                       match=r"n_realisations: 1000000 realisation\(s\) .* GB, over the budget"):
+    with pytest.raises(
+        ResourceError, match=r"n_realisations: 1000000 realisation\(s\) .* GB, over the budget"
+    ):
         wt.simulate(seed=0, n_realisations=10**6)
     with pytest.raises(ResourceError, match="over the budget"):
         wt.simulate(seed=0, duration_s=1e6)
-    assert wt.simulation_bytes(440_000, 1) == pytest.approx(116e6, rel=0.2)   # the docstring's
-    for bad, match in ((dict(duration_s=-1.0), "duration_s"),
-                       (dict(duration_s=np.nan), "duration_s"),
-                       (dict(n_realisations=0), "n_realisations"),
-                       (dict(n_realisations=2.5), "n_realisations"),
-                       (dict(dtype="int8"), "dtype"), (dict(dtype="no such type"), "dtype"),
-                       (dict(schedule="calm"), "schedule"), (dict(seed=-1), "seed")):
+    assert wt.simulation_bytes(440_000, 1) == pytest.approx(116e6, rel=0.2)  # the docstring's
+    for bad, match in (
+        (dict(duration_s=-1.0), "duration_s"),
+        (dict(duration_s=np.nan), "duration_s"),
+        (dict(n_realisations=0), "n_realisations"),
+        (dict(n_realisations=2.5), "n_realisations"),
+        (dict(dtype="int8"), "dtype"),
+        (dict(dtype="no such type"), "dtype"),
+        (dict(schedule="calm"), "schedule"),
+        (dict(seed=-1), "seed"),
+    ):
         with pytest.raises(FDIError, match=match):
             wt.simulate(**{"seed": 0, "duration_s": 1.0, "wind": 10.0, **bad})
 
@@ -669,20 +811,24 @@ def test_duplicate_faults_are_refused():
     other = dataclasses.replace(fault(2), id=12, start_s=2350.0, stop_s=2450.0)
     with pytest.raises(ModelError, match="faults 2 and 12 both act on beta_2_m2 over overlapping"):
         wt.simulate(seed=0, duration_s=1.0, wind=10.0, faults=(fault(2), other))
-    later = dataclasses.replace(fault(2), id=12, start_s=2400.0, stop_s=2500.0)   # back to back
+    later = dataclasses.replace(fault(2), id=12, start_s=2400.0, stop_s=2500.0)  # back to back
     wt.simulate(seed=0, duration_s=1.0, wind=10.0, faults=(fault(2), later))
 
 
 def test_method_settings_are_validated():
     from fdi_lib import windturbine as W
 
-    for bad, match in ((dict(pre_s=-1.0), "pre_s"), (dict(post_s=0.0), "post_s"),
-                       (dict(window=0), "window"),
-                       (dict(window=2.5), "window"), (dict(isolation_alpha=1.0), "isolation_alpha"),
-                       (dict(warmup_s=7.0), "warmup_s: expected less than pre_s"),
-                       (dict(svo_sigmas=float("nan")), "svo_sigmas"),
-                       (dict(isolation_extra=-1), "isolation_extra"),
-                       (dict(false_alarms_per_hour=0.0), "false_alarms_per_hour")):
+    for bad, match in (
+        (dict(pre_s=-1.0), "pre_s"),
+        (dict(post_s=0.0), "post_s"),
+        (dict(window=0), "window"),
+        (dict(window=2.5), "window"),
+        (dict(isolation_alpha=1.0), "isolation_alpha"),
+        (dict(warmup_s=7.0), "warmup_s: expected less than pre_s"),
+        (dict(svo_sigmas=float("nan")), "svo_sigmas"),
+        (dict(isolation_extra=-1), "isolation_extra"),
+        (dict(false_alarms_per_hour=0.0), "false_alarms_per_hour"),
+    ):
         with pytest.raises(FDIError, match=match):
             W.Settings(**bad)
     assert W.Settings() == W.Settings(pre_s=7.0)

@@ -12,8 +12,10 @@ from fdi_lib.systems import zhang2021_example1 as ex
 def test_matrices_of_eq_41_42():
     A = ex.state_matrices(4)
     k = 3
-    np.testing.assert_allclose(A[k], [[-0.8, 0.7, 0.1 * np.exp(-k)], [-0.6, 0, 0.1 * np.cos(k)],
-                                      [0.1 * np.sin(k), -0.5, -0.4]])
+    np.testing.assert_allclose(
+        A[k],
+        [[-0.8, 0.7, 0.1 * np.exp(-k)], [-0.6, 0, 0.1 * np.cos(k)], [0.1 * np.sin(k), -0.5, -0.4]],
+    )
     m = ex.example1_model(r=20.0)
     assert (m.n, m.p, m.n_steps) == (3, 2, 101)
     np.testing.assert_allclose(m.R[50], 20.0 * np.eye(2))
@@ -52,8 +54,14 @@ def test_batched_draws_are_bit_for_bit_those_of_each_generator_alone(r):
         Psi = rng.uniform(-ex.PSI_HALF_WIDTH, ex.PSI_HALF_WIDTH, size=(m.n_steps, 3, ex.N_PARAMS))
         d = 10.0 * np.sin(0.1 * np.arange(m.n_steps)) + rng.standard_normal(m.n_steps) + 100.0
         noise = draw_noise(m, rng)
-        for ours, ref in ((t.theta[b], theta), (t.Psi[b], Psi), (t.d[b, :, 0], d), (t.noise.x0[b], noise.x0),
-                          (t.noise.w[b], noise.w), (t.noise.v[b], noise.v)):
+        for ours, ref in (
+            (t.theta[b], theta),
+            (t.Psi[b], Psi),
+            (t.d[b, :, 0], d),
+            (t.noise.x0[b], noise.x0),
+            (t.noise.w[b], noise.w),
+            (t.noise.v[b], noise.v),
+        ):
             np.testing.assert_array_equal(ours, ref)
 
 

@@ -49,11 +49,31 @@ def test_cached_rls_gains_give_solution2_exactly():
     run = bz_run(0.9, 3e-4, 0.2)
     model, kal = setup(SOL2["n_steps"])[:2]
     sim = _record(3e-4, 0.2, 0)[2]
-    alone = solution2(model, sim.y, sim.u, Psi=ex.PSI, lam=0.9, energy_window=SOL2["energy_window"],
-                      energy_alpha=SOL2["energy_alpha"], start=SOL2["warmup"], kalman=kal)
+    alone = solution2(
+        model,
+        sim.y,
+        sim.u,
+        Psi=ex.PSI,
+        lam=0.9,
+        energy_window=SOL2["energy_window"],
+        energy_alpha=SOL2["energy_alpha"],
+        start=SOL2["warmup"],
+        kalman=kal,
+    )
     np.testing.assert_array_equal(run.sol2.rls.theta_hat, alone.rls.theta_hat)
     np.testing.assert_array_equal(run.sol2.energy, alone.energy)
     assert run.sol2.energy_alarm == alone.energy_alarm
-    with pytest.raises(ModelError, match="rls: expected RLS gains for lam = 0.8, got gains for lam = 0.9"):
-        solution2(model, sim.y, sim.u, Psi=ex.PSI, lam=0.8, energy_window=SOL2["energy_window"],
-                  energy_alpha=SOL2["energy_alpha"], kalman=kal, rls=run.sol2.rls.gains)
+    with pytest.raises(
+        ModelError, match="rls: expected RLS gains for lam = 0.8, got gains for lam = 0.9"
+    ):
+        solution2(
+            model,
+            sim.y,
+            sim.u,
+            Psi=ex.PSI,
+            lam=0.8,
+            energy_window=SOL2["energy_window"],
+            energy_alpha=SOL2["energy_alpha"],
+            kalman=kal,
+            rls=run.sol2.rls.gains,
+        )

@@ -27,7 +27,6 @@ from fdi_lib.widgets import bz, rosa2013, zb2014, zb2014_pipeline, zhang2021  # 
 from fdi_lib.widgets.explorables import EXPLORABLES  # noqa: E402
 
 
-
 @functools.lru_cache(maxsize=None)
 def frames(name: str) -> dict[tuple, list]:
     """figure_data of every grid point, drawn into one reused figure in the build's order."""
@@ -61,7 +60,9 @@ def test_every_slider_move_changes_the_plotted_data(name):
             for a, b in zip(points, points[1:]):
                 da, db = _plotted(data[a]), _plotted(data[b])
                 scale = max(np.nanmax(np.abs(da)), np.nanmax(np.abs(db)), 1e-300)
-                if da.shape == db.shape and np.allclose(da, db, rtol=0, atol=1e-6 * scale, equal_nan=True):
+                if da.shape == db.shape and np.allclose(
+                    da, db, rtol=0, atol=1e-6 * scale, equal_nan=True
+                ):
                     unchanged.append((slider, a, b))
     assert not unchanged, f"{len(unchanged)} moves change no plotted data, e.g. {unchanged[:3]}"
 
@@ -76,12 +77,12 @@ def test_signature_statements():
         peak = int(np.argmax(gamma))
         assert k[peak] - r <= 1
         small = np.flatnonzero((k > k[peak]) & (gamma < 0.01 * gamma[peak]))
-        assert k[small[0]] - k[peak] <= 10          # "within a few samples"
+        assert k[small[0]] - k[peak] <= 10  # "within a few samples"
         ka, alpha = d[1][5][0].T
         assert ka.min() == r and ka.max() == k.max()
-        assert np.all(np.diff(alpha) > 0)            # grows until the end of the record
+        assert np.all(np.diff(alpha) > 0)  # grows until the end of the record
         ends.append(alpha[-1])
-    assert np.all(np.diff(ends) < 0)                 # later impulse, later start, smaller at the end
+    assert np.all(np.diff(ends) < 0)  # later impulse, later start, smaller at the end
 
 
 def _glr_frame(d):
@@ -106,13 +107,15 @@ def test_glr_statements():
             assert facts["delay"][(size, w)] == (None if alarm is None else alarm - onset)
             assert facts["above"][(size, w)] == above
             alarms.append(alarm), aboves.append(above), peaks.append(np.nanmax(stat))
-        assert len(set(alarms)) == 1                          # the window does not move the alarm
+        assert len(set(alarms)) == 1  # the window does not move the alarm
         np.testing.assert_allclose(peaks, peaks[0], rtol=1e-12)  # nor the peak of l_k
         if alarms[0] is not None:
-            assert np.all(np.diff(aboves) > 0)                # a shorter window, a shorter plateau
+            assert np.all(np.diff(aboves) > 0)  # a shorter window, a shorter plateau
             assert all(abs(a - w) <= 5 for a, w in zip(aboves, grid["window"]))
-    with_alarm = [s for s in grid["fault_size"] if _glr_frame(data[(s, grid["window"][0])])[2] is not None]
-    assert with_alarm and min(with_alarm) > grid["fault_size"][1]   # the small faults raise none
+    with_alarm = [
+        s for s in grid["fault_size"] if _glr_frame(data[(s, grid["window"][0])])[2] is not None
+    ]
+    assert with_alarm and min(with_alarm) > grid["fault_size"][1]  # the small faults raise none
     assert with_alarm == [s for s in grid["fault_size"] if s >= min(with_alarm)]
 
 
@@ -128,16 +131,21 @@ def test_pipeline_statements():
         np.testing.assert_array_equal(d[1][5][0][:, 1], W.pipeline_run(c, window=w).statistic)
     fig5 = book_run("zb2014-fig5").data["run"]
     # the same run, up to rounding (the explorable's GLRs are computed for several sizes at once)
-    np.testing.assert_allclose(data[(W.DEFAULTS["fault_size_e5"], W.DEFAULTS["window"])][1][5][0][:, 1],
-                               fig5.statistic, rtol=1e-9, atol=1e-9, equal_nan=True)
+    np.testing.assert_allclose(
+        data[(W.DEFAULTS["fault_size_e5"], W.DEFAULTS["window"])][1][5][0][:, 1],
+        fig5.statistic,
+        rtol=1e-9,
+        atol=1e-9,
+        equal_nan=True,
+    )
     w0, c0 = W.DEFAULTS["window"], W.DEFAULTS["fault_size_e5"]
-    column = [delays[(c, w0)] for c in grid["fault_size_e5"]]       # from -10e-5 to 0
+    column = [delays[(c, w0)] for c in grid["fault_size_e5"]]  # from -10e-5 to 0
     alarmed = [d for d in column if d is not None]
-    assert column[:len(alarmed)] == alarmed and np.all(np.diff(alarmed) > 0)
-    assert column[-1] is None and len(alarmed) < len(column) - 1     # -1e-5 and 0: no alarm
+    assert column[: len(alarmed)] == alarmed and np.all(np.diff(alarmed) > 0)
+    assert column[-1] is None and len(alarmed) < len(column) - 1  # -1e-5 and 0: no alarm
     row = [delays[(c0, w)] for w in grid["window"]]
     quiet = [w for w, d in zip(grid["window"], row) if d is None]
-    assert quiet and quiet == list(grid["window"][:len(quiet)])      # the short windows, only
+    assert quiet and quiet == list(grid["window"][: len(quiet)])  # the short windows, only
     first = grid["window"][len(quiet)]
     assert len({d for d in row if d is not None}) == 1
     assert max(quiet) < delays[(c0, first)] / gp.TS_MIN <= first
@@ -160,8 +168,11 @@ def test_sparse_statements():
     for q in grid["q"]:
         rows = [_sparse_frame(data[(q, s)]) for s in grid["lam_scale"]]
         for s, (pos, fa, miss, ratio) in zip(grid["lam_scale"], rows):
-            assert (pos, fa, miss) == (facts["position"][(q, s)], facts["false_alarms"][(q, s)],
-                                       facts["missed"][(q, s)])
+            assert (pos, fa, miss) == (
+                facts["position"][(q, s)],
+                facts["false_alarms"][(q, s)],
+                facts["missed"][(q, s)],
+            )
             np.testing.assert_allclose(ratio, facts["flat_ratio"][q], rtol=1e-9)
             if pos == "above":
                 assert miss >= 1
@@ -171,7 +182,9 @@ def test_sparse_statements():
         assert below[0] > rule[1]
         assert (rule[1] + rule[2] > 0) == (q >= 10)
     ratios = facts["flat_ratio"]
-    assert min(ratios[q] for q in grid["q"] if q <= 5) > max(ratios[q] for q in grid["q"] if q >= 10)
+    assert min(ratios[q] for q in grid["q"] if q <= 5) > max(
+        ratios[q] for q in grid["q"] if q >= 10
+    )
 
 
 def test_bz_statements():
@@ -190,9 +203,14 @@ def test_bz_statements():
     for lam in grid["lam"]:
         d = data[(0.0, lam)]
         true0, hat0, true1, hat1 = (line[:, 1] for line in d[0][5][:4])
-        lags.append([np.mean(np.sign(t[window][-1]) * (t[window] - h[window])) for t, h in ((true0, hat0), (true1, hat1))])
-        energies.append(np.mean(d[1][5][0][SOL2["drift_onset"]:onset, 1]))
-    assert np.all(np.diff(np.asarray(lags), axis=0) > 0)     # each component lags more
+        lags.append(
+            [
+                np.mean(np.sign(t[window][-1]) * (t[window] - h[window]))
+                for t, h in ((true0, hat0), (true1, hat1))
+            ]
+        )
+        energies.append(np.mean(d[1][5][0][SOL2["drift_onset"] : onset, 1]))
+    assert np.all(np.diff(np.asarray(lags), axis=0) > 0)  # each component lags more
     assert np.all(np.diff(energies) > 0)
 
 
@@ -209,7 +227,9 @@ def test_svo_statements():
         widths = []
         for n in grid["horizon"]:
             d = data[(db, n)][1]
-            (_, true), (_, lo_exact), (_, hi_exact) = (line.T for line in (d[5][2], d[5][0], d[5][1]))
+            (_, true), (_, lo_exact), (_, hi_exact) = (
+                line.T for line in (d[5][2], d[5][0], d[5][1])
+            )
             band = d[6][0]
             k = np.arange(true.size)
             lo = np.array([band[np.isclose(band[:, 0], i), 1].min() for i in k])
@@ -219,13 +239,14 @@ def test_svo_statements():
             widths.append(np.mean(hi - lo))
             shown[(db, n)] = (widths[-1], np.mean(hi_exact - lo_exact))
             if n > 1:
-                np.testing.assert_array_equal(d[5][0], data[(db, 1)][1][5][0])   # exact: any N
+                np.testing.assert_array_equal(d[5][0], data[(db, 1)][1][5][0])  # exact: any N
         assert np.all(np.diff(widths) < 0)
     study = rosa2013.horizon_study(delta_bounds=(0.4,), horizons=(1, 2, 3, 4, 5, 6))
     assert study["exact_gap"] < 1e-6 and study["template_inside"]
-    for n in (1, 4):   # the glued widths are those the frames show
-        np.testing.assert_allclose(shown[(0.4, n)], (study["template_width"][0.4][n], study["exact_width"][0.4]),
-                                   rtol=1e-9)
+    for n in (1, 4):  # the glued widths are those the frames show
+        np.testing.assert_allclose(
+            shown[(0.4, n)], (study["template_width"][0.4][n], study["exact_width"][0.4]), rtol=1e-9
+        )
     for db in grid["delta_bound"][2:]:
         model, x, u, y, *_ = rosa2013._example(db, 0.5, 0, 25)
         runs = [run_svo(model, u, y, toy_prior(), N=n, method="template") for n in (4, 5, 6)]

@@ -38,34 +38,52 @@ def assert_same_data(got, expected):
         elif isinstance(e, list):
             assert_same_data(g, e)
         else:
-            np.testing.assert_allclose(np.asarray(g, float), np.asarray(e, float), rtol=0, atol=1e-12,
-                                       equal_nan=True)
+            np.testing.assert_allclose(
+                np.asarray(g, float), np.asarray(e, float), rtol=0, atol=1e-12, equal_nan=True
+            )
 
 
 def test_frames_follow_the_product_order_and_the_page_indexes_them_the_same_way():
-    ex = explorable(_line, {"a": (1.0, 2.0, 3.0), "b": (10, 20)}, caption="toy",
-                    labels={"a": "$a$"}, default={"a": 2.0, "b": 20}, offset=0.5)
+    ex = explorable(
+        _line,
+        {"a": (1.0, 2.0, 3.0), "b": (10, 20)},
+        caption="toy",
+        labels={"a": "$a$"},
+        default={"a": 2.0, "b": 20},
+        offset=0.5,
+    )
     assert ex.strides == (2, 1) and len(ex.frames) == 6
     for a in (1.0, 2.0, 3.0):
         for b in (10, 20):
             i = ex.index(a=a, b=b)
-            y = ex.data[i][0][5][0][:, 1]   # axes 0, lines, line 0, y column
+            y = ex.data[i][0][5][0][:, 1]  # axes 0, lines, line 0, y column
             np.testing.assert_array_equal(y, [a, b + 0.5, a * b])
     page = ex._repr_html_()
     # the strides and labels the script uses, and one range input per slider starting at the default
     assert json.loads(re.search(r"S = (\[[^\]]*\])", page).group(1)) == [2, 1]
-    assert json.loads(re.search(r"L = (\[\[.*?\]\])", page).group(1)) == [["1", "2", "3"], ["10", "20"]]
-    assert re.findall(r'<input type="range" min="0" max="(\d)" step="1" value="(\d)"', page) == [("2", "1"), ("1", "1")]
+    assert json.loads(re.search(r"L = (\[\[.*?\]\])", page).group(1)) == [
+        ["1", "2", "3"],
+        ["10", "20"],
+    ]
+    assert re.findall(r'<input type="range" min="0" max="(\d)" step="1" value="(\d)"', page) == [
+        ("2", "1"),
+        ("1", "1"),
+    ]
     assert f'data-frame="{ex.index(a=2.0, b=20)}"' in page
     assert "<figcaption>toy</figcaption>" in page and "$a$" in page
     assert "http" not in page.replace("data:image/png", "")  # nothing fetched from elsewhere
     assert repr(ex).startswith("<Explorable a (3) x b (2): 6 frames, 0.") and len(repr(ex)) < 80
 
 
-
 def test_a_screen_reader_hears_the_values_shown_and_the_alt_text_names_them():
-    ex = explorable(_line, {"a": (1.0, 2.5, 3.0), "b": (10, 20)}, caption="toy <i>caption</i>",
-                    alt="A line through three points", labels={"a": "slope a"}, default={"a": 2.5})
+    ex = explorable(
+        _line,
+        {"a": (1.0, 2.5, 3.0), "b": (10, 20)},
+        caption="toy <i>caption</i>",
+        alt="A line through three points",
+        labels={"a": "slope a"},
+        default={"a": 2.5},
+    )
     page = ex._repr_html_()
     # each slider announces the value it shows (not its position on the grid: "1")
     assert re.findall(r'value="(\d)" aria-valuetext="([^"]*)"', page) == [("1", "2.5"), ("0", "10")]
@@ -92,15 +110,30 @@ def test_frames_are_house_style_pngs_with_font_metadata():
     assert img.format == "PNG" and img.mode == "P"
     assert img.width == round(FIG_WIDTH_IN * DISPLAY_DPI)
     assert img.text["fdi:dpi"] == f"{DISPLAY_DPI:g}" and float(img.text["fdi:min_font_pt"]) >= 11
-    assert len(set(ex.frames)) == 4   # every point draws something different
+    assert len(set(ex.frames)) == 4  # every point draws something different
 
 
-@pytest.mark.parametrize("grid, default, message", [
-    ({}, None, "grid: expected at least one name"),
-    ({"a": (1.0,), "b": (1, 2)}, None, "grid: expected at least one name with two or more values"),
-    ({"a": (1.0, 2.0), "b": (1, 2)}, {"c": 1}, r"default: expected names of the grid \['a', 'b'\], got \['c'\]"),
-    ({"a": (1.0, 2.0), "b": (1, 2)}, {"a": 5.0}, r"default: expected a among the grid values \[1.0, 2.0\], got 5.0"),
-])
+@pytest.mark.parametrize(
+    "grid, default, message",
+    [
+        ({}, None, "grid: expected at least one name"),
+        (
+            {"a": (1.0,), "b": (1, 2)},
+            None,
+            "grid: expected at least one name with two or more values",
+        ),
+        (
+            {"a": (1.0, 2.0), "b": (1, 2)},
+            {"c": 1},
+            r"default: expected names of the grid \['a', 'b'\], got \['c'\]",
+        ),
+        (
+            {"a": (1.0, 2.0), "b": (1, 2)},
+            {"a": 5.0},
+            r"default: expected a among the grid values \[1.0, 2.0\], got 5.0",
+        ),
+    ],
+)
 def test_bad_grids_are_rejected(grid, default, message):
     with pytest.raises(ModelError, match=message):
         explorable(_line, grid, caption="x", default=default)
@@ -127,39 +160,72 @@ CHAPTERS = {
 @pytest.mark.parametrize("name", list(CHAPTERS))
 def test_chapter_frames_equal_the_callback_at_the_same_slider_values(name):
     callback, grid, fixed = CHAPTERS[name]
-    assert all(len(v) >= 4 for v in grid.values())   # the SVO's horizon: 1-4 (N = 5, 6 add nothing)
+    assert all(len(v) >= 4 for v in grid.values())  # the SVO's horizon: 1-4 (N = 5, 6 add nothing)
     corners = {k: (v[0], v[-1]) for k, v in grid.items()}
     ex = explorable(callback, corners, caption=name, **fixed)
-    for i, values in enumerate(np.array(np.meshgrid(*corners.values(), indexing="ij"), dtype=object)
-                               .reshape(len(corners), -1).T):
+    for i, values in enumerate(
+        np.array(np.meshgrid(*corners.values(), indexing="ij"), dtype=object)
+        .reshape(len(corners), -1)
+        .T
+    ):
         point = dict(zip(corners, values))
         assert ex.index(**point) == i
         fig = callback(**point, **fixed)
         assert_same_data(ex.data[i], figure_data(fig))
         plt.close(fig)
-    assert len(set(ex.frames)) == len(ex.frames)   # each slider changes the picture
+    assert len(set(ex.frames)) == len(ex.frames)  # each slider changes the picture
 
 
 # ----------------------------------------------------------------------------- edges (issue 21)
-@pytest.mark.parametrize("grid, error, message", [
-    ([("a", (1.0, 2.0))], ModelError, r"grid: expected a mapping of keyword names to sequences of values, got list"),
-    ({"a": 3.0}, ShapeError, r"grid\['a'\]: expected a 1-D sequence of values, got float"),
-    ({"a": "abc"}, ShapeError, r"grid\['a'\]: expected a 1-D sequence of values, got str"),
-    ({"a": np.ones((2, 2))}, ShapeError, r"grid\['a'\]: expected a 1-D sequence of values, got shape \(2, 2\)"),
-    ({"a": (1.0, np.nan)}, NonFiniteError, r"grid\['a'\]: expected finite values, got nan at index 1"),
-    ({"a": (1.0, 2.0, 1.0)}, ModelError, r"grid\['a'\]: expected distinct values, got 1.0 at indices 0 and 2"),
-    ({3: (1.0, 2.0)}, ModelError, r"grid: expected keyword names of the callback \(not 'fig'\), got 3"),
-    ({"fig": (1.0, 2.0)}, ModelError, r"got 'fig'"),
-    ({"offset": (1.0, 2.0), "a": (1.0, 2.0)}, ModelError, r"grid: 'offset' is also given as a fixed keyword"),
-])
+@pytest.mark.parametrize(
+    "grid, error, message",
+    [
+        (
+            [("a", (1.0, 2.0))],
+            ModelError,
+            r"grid: expected a mapping of keyword names to sequences of values, got list",
+        ),
+        ({"a": 3.0}, ShapeError, r"grid\['a'\]: expected a 1-D sequence of values, got float"),
+        ({"a": "abc"}, ShapeError, r"grid\['a'\]: expected a 1-D sequence of values, got str"),
+        (
+            {"a": np.ones((2, 2))},
+            ShapeError,
+            r"grid\['a'\]: expected a 1-D sequence of values, got shape \(2, 2\)",
+        ),
+        (
+            {"a": (1.0, np.nan)},
+            NonFiniteError,
+            r"grid\['a'\]: expected finite values, got nan at index 1",
+        ),
+        (
+            {"a": (1.0, 2.0, 1.0)},
+            ModelError,
+            r"grid\['a'\]: expected distinct values, got 1.0 at indices 0 and 2",
+        ),
+        (
+            {3: (1.0, 2.0)},
+            ModelError,
+            r"grid: expected keyword names of the callback \(not 'fig'\), got 3",
+        ),
+        ({"fig": (1.0, 2.0)}, ModelError, r"got 'fig'"),
+        (
+            {"offset": (1.0, 2.0), "a": (1.0, 2.0)},
+            ModelError,
+            r"grid: 'offset' is also given as a fixed keyword",
+        ),
+    ],
+)
 def test_bad_grid_values_are_typed_errors_naming_the_entry(grid, error, message):
     with pytest.raises(error, match=message):
         explorable(_line, grid, caption="x", b=1.0, offset=0.0)
 
 
 def test_a_callback_must_return_a_figure():
-    with pytest.raises(ModelError, match=r"callback: expected a matplotlib Figure from .*\(\{'a': 1.0, "
-                                         r"'b': 1\}\), got NoneType"):
+    with pytest.raises(
+        ModelError,
+        match=r"callback: expected a matplotlib Figure from .*\(\{'a': 1.0, "
+        r"'b': 1\}\), got NoneType",
+    ):
         explorable(lambda a, b, fig=None: None, {"a": (1.0, 2.0), "b": (1, 2)}, caption="x")
     with pytest.raises(ModelError, match=r"callback: expected a function drawing into fig"):
         explorable(None, {"a": (1.0, 2.0)}, caption="x")
@@ -188,40 +254,66 @@ def test_size_guards_refuse_too_many_frames_before_drawing_and_too_heavy_pages(m
         calls.append((a, b))
         return _line(a, b, fig=fig)
 
-    with pytest.raises(ResourceError, match=r"grid: expected at most 100 frames \(MAX_FRAMES\), got "
-                                            r"1000 \(a\) x 1000 \(b\) = 1000000: use fewer values"):
+    with pytest.raises(
+        ResourceError,
+        match=r"grid: expected at most 100 frames \(MAX_FRAMES\), got "
+        r"1000 \(a\) x 1000 \(b\) = 1000000: use fewer values",
+    ):
         explorable(counted, {"a": range(1000), "b": range(1000)}, caption="x")
-    assert calls == []                                          # refused before any frame
-    monkeypatch.setattr(exp, "MAX_BYTES", 30_000)               # a frame of this toy weighs ~10-20 kB
-    with pytest.raises(ResourceError, match=r"grid: expected at most 0.03 MB of frames \(MAX_BYTES\), got "
-                                            r"0.0\d MB after \d of 9 frames \(about 0.\d MB for all\)"):
+    assert calls == []  # refused before any frame
+    monkeypatch.setattr(exp, "MAX_BYTES", 30_000)  # a frame of this toy weighs ~10-20 kB
+    with pytest.raises(
+        ResourceError,
+        match=r"grid: expected at most 0.03 MB of frames \(MAX_BYTES\), got "
+        r"0.0\d MB after \d of 9 frames \(about 0.\d MB for all\)",
+    ):
         explorable(counted, {"a": (1.0, 2.0, 3.0), "b": (1, 2, 3)}, caption="x")
-    assert len(calls) < 9                                       # stopped as soon as the budget is exceeded
-    assert plt.get_fignums() == []                              # and the figure closed
+    assert len(calls) < 9  # stopped as soon as the budget is exceeded
+    assert plt.get_fignums() == []  # and the figure closed
 
 
 def test_small_multiples_paste_the_frames_unscaled_with_the_default_among_them():
     """The paper form of an explorable: the chosen frames, pixel for pixel, under their titles."""
     from fdi_lib.explorables import _spread
 
-    assert _spread(10, 2, 4) == [0, 2, 6, 9] and _spread(6, 3, 2) == [0, 3] and _spread(6, 0, 2) == [0, 5]
-    one = explorable(_line, {"a": (1.0, 2.0, 3.0, 4.0, 5.0)}, caption="toy Γ<sub>k</sub>",
-                     labels={"a": "slope a"}, default={"a": 2.0}, b=1)
+    assert (
+        _spread(10, 2, 4) == [0, 2, 6, 9]
+        and _spread(6, 3, 2) == [0, 3]
+        and _spread(6, 0, 2) == [0, 5]
+    )
+    one = explorable(
+        _line,
+        {"a": (1.0, 2.0, 3.0, 4.0, 5.0)},
+        caption="toy Γ<sub>k</sub>",
+        labels={"a": "slope a"},
+        default={"a": 2.0},
+        b=1,
+    )
     sheet = Image.open(io.BytesIO(one._repr_png_()))
-    assert sheet.text["fdi:caption"] == "toy Γ<sub>k</sub>" and float(sheet.text["fdi:min_font_pt"]) >= 11
+    assert (
+        sheet.text["fdi:caption"] == "toy Γ<sub>k</sub>"
+        and float(sheet.text["fdi:min_font_pt"]) >= 11
+    )
     frames = [Image.open(io.BytesIO(base64.b64decode(f))).convert("RGB") for f in one.frames]
     w, h = frames[0].size
     title_h = (sheet.height - 2 * h) // 2
     assert sheet.width == 2 * w and title_h > 0
-    tiles = [sheet.convert("RGB").crop((c * w, r * (h + title_h) + title_h, (c + 1) * w, (r + 1) * (h + title_h)))
-             for r in range(2) for c in range(2)]
+    tiles = [
+        sheet.convert("RGB").crop(
+            (c * w, r * (h + title_h) + title_h, (c + 1) * w, (r + 1) * (h + title_h))
+        )
+        for r in range(2)
+        for c in range(2)
+    ]
     # 4 of the 5 values, evenly spread (0, 1.33, 2.67, 4 rounded), the default 2.0 (index 1) among them
     for tile, i in zip(tiles, [0, 1, 3, 4]):
         diff = np.abs(np.asarray(tile, int) - np.asarray(frames[i], int))
-        assert diff.max() <= 24 and diff.mean() < 0.1   # the sheet's palette of 256 colours
+        assert diff.max() <= 24 and diff.mean() < 0.1  # the sheet's palette of 256 colours
     assert not np.array_equal(np.asarray(tiles[0]), np.asarray(tiles[1]))
     # two sliders: the default and the farthest value of each, 2 x 2
-    two = explorable(_line, {"a": (1.0, 2.0, 3.0), "b": (10, 20)}, caption="toy", default={"a": 3.0})
+    two = explorable(
+        _line, {"a": (1.0, 2.0, 3.0), "b": (10, 20)}, caption="toy", default={"a": 3.0}
+    )
     assert Image.open(io.BytesIO(two.small_multiples())).size == (2 * w, sheet.height)
     with pytest.raises(ModelError, match="panels: expected an integer of at least 2, got 1"):
         one.small_multiples(panels=1)

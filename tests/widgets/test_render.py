@@ -26,10 +26,21 @@ from fdi_lib.plotting import DISPLAY_DPI, RASTER_SCALE, figure  # noqa: E402
 from fdi_lib.reproduce.zb2014 import unstable_run  # noqa: E402
 from fdi_lib.reproduce.zb2014_pipeline import single_run  # noqa: E402
 from fdi_lib.glr import glr_window  # noqa: E402
-from fdi_lib.redraw import (keep_artists, render, reusable_artists, stepped_limit,  # noqa: E402
-                            stepped_range)
-from fdi_lib.widgets import (batched_glr, bz, widget_png, zb2014, zb2014_pipeline,  # noqa: E402
-                             zhang2021)
+from fdi_lib.redraw import (
+    keep_artists,
+    render,
+    reusable_artists,
+    stepped_limit,  # noqa: E402
+    stepped_range,
+)
+from fdi_lib.widgets import (
+    batched_glr,
+    bz,
+    widget_png,
+    zb2014,
+    zb2014_pipeline,  # noqa: E402
+    zhang2021,
+)
 
 
 @pytest.fixture
@@ -69,7 +80,11 @@ MOVES = {
     "signature": (zb2014.explore_signature, "onset", (201, 301, 1, 451)),
     "glr fault size": (zb2014.explore_glr, "fault_size", (1.6, 2.0, 0.0, 3.0)),
     "glr window": (zb2014.explore_glr, "window", (50, 10, 200)),
-    "pipeline fault size": (zb2014_pipeline.explore_pipeline, "fault_size_e5", (-2.5, -4.0, 0.0, -10.0)),
+    "pipeline fault size": (
+        zb2014_pipeline.explore_pipeline,
+        "fault_size_e5",
+        (-2.5, -4.0, 0.0, -10.0),
+    ),
     "sparse lambda": (zhang2021.explore_sparse, "lam_scale", (0.3, 0.01, 10.0)),
     "sparse q": (zhang2021.explore_sparse, "q", (6, 1, 25)),
     "bz lambda": (bz.explore_bz, "lam", (0.9, 0.8, 1.0)),
@@ -96,11 +111,11 @@ def test_every_redraw_equals_a_full_draw(name, dpi, draws):
 def test_moves_that_keep_the_limits_draw_no_axes(draws):
     fig = zb2014.explore_glr()
     render(fig)
-    for window in (50, 150, 100):   # the same limits: only the curves move
+    for window in (50, 150, 100):  # the same limits: only the curves move
         fig = zb2014.explore_glr(window=window, fig=fig)
         render(fig)
     assert draws == {"full": 1, "axes": 0}
-    fig = zb2014.explore_glr(fault_size=2.0, fig=fig)   # l_k's limit 300 -> 500: that axes alone
+    fig = zb2014.explore_glr(fault_size=2.0, fig=fig)  # l_k's limit 300 -> 500: that axes alone
     render(fig)
     assert draws == {"full": 1, "axes": 1}
     plt.close(fig)
@@ -109,26 +124,30 @@ def test_moves_that_keep_the_limits_draw_no_axes(draws):
 def test_a_changed_static_artist_is_drawn_and_other_figures_are_drawn_in_full(draws):
     fig = zb2014.explore_signature()
     render(fig)
-    fig.axes[1].set_ylim(0.1, 1e40)   # a change that no dynamic artist holds: that axes is drawn again
+    fig.axes[1].set_ylim(
+        0.1, 1e40
+    )  # a change that no dynamic artist holds: that axes is drawn again
     render(fig)
     assert draws == {"full": 1, "axes": 1}
-    np.testing.assert_array_equal(np.array(fig.canvas.buffer_rgba()), full_draw(fig))   # a copy
-    before = dict(draws)   # (savefig draws in full too)
-    fig.set_size_inches(5.5, 4.0)   # a new size: everything
+    np.testing.assert_array_equal(np.array(fig.canvas.buffer_rgba()), full_draw(fig))  # a copy
+    before = dict(draws)  # (savefig draws in full too)
+    fig.set_size_inches(5.5, 4.0)  # a new size: everything
     render(fig)
     assert draws == {"full": before["full"] + 1, "axes": 1}
-    np.testing.assert_array_equal(np.array(fig.canvas.buffer_rgba()), full_draw(fig))   # a copy
+    np.testing.assert_array_equal(np.array(fig.canvas.buffer_rgba()), full_draw(fig))  # a copy
     before = dict(draws)
     plain, ax = figure()
     ax[0, 0].plot([0, 1], [1, 0])
     render(plain)
-    render(plain)   # a figure without kept artists: a full draw each time
+    render(plain)  # a figure without kept artists: a full draw each time
     assert draws == {"full": before["full"] + 2, "axes": 1}
     plt.close(plain)
-    plt.close(fig)   # a closed pyplot figure loses its Agg canvas: render gives it one
+    plt.close(fig)  # a closed pyplot figure loses its Agg canvas: render gives it one
     png = widget_png(zb2014.explore_signature(onset=301, fig=fig))
-    assert Image.open(io.BytesIO(png)).size == (round(5.5 * DISPLAY_DPI * RASTER_SCALE),
-                                                round(4.0 * DISPLAY_DPI * RASTER_SCALE))
+    assert Image.open(io.BytesIO(png)).size == (
+        round(5.5 * DISPLAY_DPI * RASTER_SCALE),
+        round(4.0 * DISPLAY_DPI * RASTER_SCALE),
+    )
 
 
 def test_keep_artists_animates_the_dynamic_artists_and_what_is_drawn_over_them():
@@ -154,10 +173,21 @@ def test_keep_artists_animates_the_dynamic_artists_and_what_is_drawn_over_them()
     plt.close(fig)
 
 
-@pytest.mark.parametrize("value, log, expected", [
-    (1.34, False, 2.0), (2.0, False, 2.0), (3.01, False, 5.0), (5.0, False, 5.0), (5.2, False, 10.0),
-    (0.031, False, 0.05), (216.0, False, 300.0), (91.0, True, 100.0), (101.0, True, 1000.0), (0.3, True, 1.0),
-])
+@pytest.mark.parametrize(
+    "value, log, expected",
+    [
+        (1.34, False, 2.0),
+        (2.0, False, 2.0),
+        (3.01, False, 5.0),
+        (5.0, False, 5.0),
+        (5.2, False, 10.0),
+        (0.031, False, 0.05),
+        (216.0, False, 300.0),
+        (91.0, True, 100.0),
+        (101.0, True, 1000.0),
+        (0.3, True, 1.0),
+    ],
+)
 def test_stepped_limit(value, log, expected):
     assert stepped_limit(value, log=log) == pytest.approx(expected, rel=1e-12)
 
@@ -167,7 +197,7 @@ def test_stepped_range_holds_the_data_with_a_margin():
     assert stepped_range([-0.3, 1.34], symmetric=True) == (-2.0, 2.0)
     assert stepped_range([-31922.0, 28432.0]) == (-50000.0, 30000.0)
     assert stepped_range([-4.0, -1.0]) == (-5.0, 0.25)
-    assert stepped_range([-0.001, 1.9]) == (pytest.approx(-0.1), 2.0)   # 0 is not on the frame
+    assert stepped_range([-0.001, 1.9]) == (pytest.approx(-0.1), 2.0)  # 0 is not on the frame
     lo, hi = stepped_range([0.085, np.nan, 91.4, 0.0], log=True)
     assert lo == pytest.approx(0.01) and hi == pytest.approx(100.0)
     assert stepped_range([np.nan]) == (-0.05, 1.0)
@@ -180,29 +210,42 @@ def test_glr_widget_equals_unstable_run():
     # innovations, statistic and alarm as simulating with the fault
     for fault, onset, window, seed in [(1.5, 201, 100, 0), (3.0, 50, 10, 3), (0.7, 400, 200, 1)]:
         fig = zb2014.explore_glr(fault_size=fault, onset=onset, window=window, seed=seed)
-        run = unstable_run(theta=(fault, 0.0), onset=onset, window=window, threshold=20.0, seed=seed)
+        run = unstable_run(
+            theta=(fault, 0.0), onset=onset, window=window, threshold=20.0, seed=seed
+        )
         top, bottom = fig.axes
         scale = np.abs(run.innovations).max()
-        np.testing.assert_allclose(top.lines[0].get_ydata(), run.innovations, rtol=0, atol=1e-12 * scale)
-        np.testing.assert_allclose(bottom.lines[0].get_ydata(), run.glr.statistic, rtol=1e-9, atol=1e-9,
-                                   equal_nan=True)
+        np.testing.assert_allclose(
+            top.lines[0].get_ydata(), run.innovations, rtol=0, atol=1e-12 * scale
+        )
+        np.testing.assert_allclose(
+            bottom.lines[0].get_ydata(), run.glr.statistic, rtol=1e-9, atol=1e-9, equal_nan=True
+        )
         expected = "no alarm" if run.alarm < 0 else f"alarm after {run.alarm - onset} samples"
         assert top.get_title().endswith(expected)
         plt.close(fig)
 
 
 def test_pipeline_widget_equals_single_run():
-    for size, fault, window, seed, threshold in [(-2.0, 1, 160, 0, 50.0), (-10.0, 2, 40, 3, 20.0),
-                                                 (-1.0, 1, 250, 1, 5.0)]:
-        fig = zb2014_pipeline.explore_pipeline(fault_size_e5=size, fault=fault, window=window, seed=seed,
-                                               threshold=threshold)
-        run = single_run(seed=seed, fault=fault, delta=size * 1e-5, threshold=threshold, window=window)
+    for size, fault, window, seed, threshold in [
+        (-2.0, 1, 160, 0, 50.0),
+        (-10.0, 2, 40, 3, 20.0),
+        (-1.0, 1, 250, 1, 5.0),
+    ]:
+        fig = zb2014_pipeline.explore_pipeline(
+            fault_size_e5=size, fault=fault, window=window, seed=seed, threshold=threshold
+        )
+        run = single_run(
+            seed=seed, fault=fault, delta=size * 1e-5, threshold=threshold, window=window
+        )
         top, bottom = fig.axes
         scale = np.abs(run.innovations).max()
-        np.testing.assert_allclose(top.lines[0].get_ydata(), run.innovations, rtol=0, atol=1e-12 * scale)
+        np.testing.assert_allclose(
+            top.lines[0].get_ydata(), run.innovations, rtol=0, atol=1e-12 * scale
+        )
         stat = np.where(run.statistic > 0, run.statistic, np.nan)
         np.testing.assert_allclose(bottom.lines[0].get_ydata(), stat, rtol=1e-9, equal_nan=True)
-        alarm = bottom.lines[-2]   # the alarm line, hidden when there is none
+        alarm = bottom.lines[-2]  # the alarm line, hidden when there is none
         assert alarm.get_visible() == (run.alarm >= 0)
         if run.alarm >= 0:
             assert alarm.get_xdata()[0] == run.alarm_time_min
@@ -223,13 +266,17 @@ def test_batched_glr_computes_a_few_grid_values_with_the_asked_one_and_forgets_t
         return (eps_noise + eps_fault[:, 0] * size)[:, None]
 
     cache = {}
-    got = batched_glr(cache, ("k",), 0.7, (0.0, 0.7, 1.0, 2.0, 3.0), innovations, run, batch=3, keep=4)
+    got = batched_glr(
+        cache, ("k",), 0.7, (0.0, 0.7, 1.0, 2.0, 3.0), innovations, run, batch=3, keep=4
+    )
     assert calls == [3] and set(cache) == {("k", 0.7), ("k", 0.0), ("k", 1.0)}
     alone = glr_window(innovations(0.7), model, gains, fam, window=20)
     np.testing.assert_allclose(got.statistic, alone.statistic, rtol=1e-9, equal_nan=True)
     np.testing.assert_array_equal(got.onset, alone.onset)
     assert got.theta_hat.shape == alone.theta_hat.shape and got.window == 20
-    assert batched_glr(cache, ("k",), 1.0, (), innovations, run) is cache[("k", 1.0)] and calls == [3]
+    assert batched_glr(cache, ("k",), 1.0, (), innovations, run) is cache[("k", 1.0)] and calls == [
+        3
+    ]
     batched_glr(cache, ("k",), 2.0, (0.0, 2.0, 3.0), innovations, run, batch=3, keep=4)
     assert calls == [3, 2] and list(cache) == [("k", 0.0), ("k", 1.0), ("k", 2.0), ("k", 3.0)]
 
@@ -240,7 +287,7 @@ def test_a_plain_draw_of_a_widget_figure_shows_its_moving_artists_too():
     fig = zb2014.explore_glr()
     fig = zb2014.explore_glr(fault_size=2.5, fig=fig)
     fig.canvas.draw()
-    np.testing.assert_array_equal(np.array(fig.canvas.buffer_rgba()), full_draw(fig))   # a copy
-    render(fig)   # and render's own draws are not drawn over twice
-    np.testing.assert_array_equal(np.array(fig.canvas.buffer_rgba()), full_draw(fig))   # a copy
+    np.testing.assert_array_equal(np.array(fig.canvas.buffer_rgba()), full_draw(fig))  # a copy
+    render(fig)  # and render's own draws are not drawn over twice
+    np.testing.assert_array_equal(np.array(fig.canvas.buffer_rgba()), full_draw(fig))  # a copy
     plt.close(fig)

@@ -24,8 +24,8 @@ def test_sliders_redraw_the_same_figure_with_the_new_values():
     b = widgets.IntSlider(value=2, min=0, max=5)
     box = interactive_figure(callback, a=a, b=b)
     assert isinstance(box, widgets.VBox)
-    assert calls == [(1.0, 2)]                 # drawn once at the default values
-    assert a.continuous_update is False        # redraw on release only
+    assert calls == [(1.0, 2)]  # drawn once at the default values
+    assert a.continuous_update is False  # redraw on release only
     image = box.children[2]
     assert isinstance(image, widgets.Image) and image.format == "png"
     first = bytes(image.value)
@@ -33,7 +33,9 @@ def test_sliders_redraw_the_same_figure_with_the_new_values():
     a.value = 3.0
     b.value = 4
     assert calls[-2:] == [(3.0, 2), (3.0, 4)]
-    assert bytes(image.value).startswith(b"\x89PNG") and bytes(image.value) != first   # the new picture
+    assert (
+        bytes(image.value).startswith(b"\x89PNG") and bytes(image.value) != first
+    )  # the new picture
 
 
 def test_a_bad_value_shows_its_error_below_the_figure():

@@ -22,8 +22,10 @@ def test_explore_svo_draws_and_reuses_the_figure():
     assert fig2 is fig and len(fig.axes) == 2
 
 
-@pytest.mark.parametrize("kw,msg", [({"delta_bound": 2.0}, "delta_bound"), ({"noise": 0.0}, "noise"),
-                                    ({"horizon": 7}, "horizon")])
+@pytest.mark.parametrize(
+    "kw,msg",
+    [({"delta_bound": 2.0}, "delta_bound"), ({"noise": 0.0}, "noise"), ({"horizon": 7}, "horizon")],
+)
 def test_explore_svo_rejects_bad_values(kw, msg):
     with pytest.raises(ModelError, match=msg):
         explore_svo(**kw)

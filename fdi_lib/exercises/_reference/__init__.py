@@ -79,8 +79,10 @@ def reference_answer(exercise_id: str, student: str | None = None) -> np.ndarray
 
     ex = get_exercise(exercise_id)
     if not ex.checkable:
-        raise ModelError(f"exercise_id: {exercise_id!r} has no checkable answer (it asks for an "
-                         "explanation): compare with its solution")
+        raise ModelError(
+            f"exercise_id: {exercise_id!r} has no checkable answer (it asks for an "
+            "explanation): compare with its solution"
+        )
     return _answers(exercise_id, student_id(student))
 
 

@@ -12,7 +12,9 @@ from fdi_lib.exercises._reference.signature import gains
 def _bz1_answer(d: dict, lam: float) -> np.ndarray:
     from fdi_lib.rls import rls_track
 
-    return rls_track(d["eps"][None], d["M"][None], d["Sigma"][None], lam=lam, P0=d["P0"]).theta_hat[0]
+    return rls_track(d["eps"][None], d["M"][None], d["Sigma"][None], lam=lam, P0=d["P0"]).theta_hat[
+        0
+    ]
 
 
 def _bz2_ref(d: dict) -> np.ndarray:
@@ -63,18 +65,34 @@ def _bz5_ref(d: dict) -> float:
 _WINDOW_DOF = "Degrees of freedom: the window sums w vectors of p components each."
 
 REFERENCES = {
-    "bz-1": Reference(lambda d: _bz1_answer(d, d["lam"]), (
-        Mistake(lambda d: _bz1_answer(d, 1.0), "This is the step without forgetting: "
-                                               "S_1 = lambda Sigma_1 + M_1 P_0 M_1^T."),),
-        one_call=("fdi_lib.rls.rls_track",)),
+    "bz-1": Reference(
+        lambda d: _bz1_answer(d, d["lam"]),
+        (
+            Mistake(
+                lambda d: _bz1_answer(d, 1.0),
+                "This is the step without forgetting: S_1 = lambda Sigma_1 + M_1 P_0 M_1^T.",
+            ),
+        ),
+        one_call=("fdi_lib.rls.rls_track",),
+    ),
     "bz-2": Reference(_bz2_ref),
-    "bz-3": Reference(_bz3_ref, (
-        Mistake(_bz3_unwhitened, "This projection is not whitened: T_k must also satisfy "
-                                 "T_k Sigma_k T_k^T = I."),),
-        one_call=("fdi_lib.nonparametric.rejection_projection",)),
+    "bz-3": Reference(
+        _bz3_ref,
+        (
+            Mistake(
+                _bz3_unwhitened,
+                "This projection is not whitened: T_k must also satisfy T_k Sigma_k T_k^T = I.",
+            ),
+        ),
+        one_call=("fdi_lib.nonparametric.rejection_projection",),
+    ),
     "bz-4": Reference(_bz4_ref, one_call=("fdi_lib.nonparametric.kitanidis_lag_covariance",)),
-    "bz-5": Reference(_bz5_ref, (
-        Mistake(lambda d: chi2_ppf(1 - d["alpha"], d["window"]), _WINDOW_DOF),
-        Mistake(lambda d: chi2_ppf(1 - d["alpha"], d["p_reduced"]), _WINDOW_DOF)),
-        one_call=("fdi_lib.nonparametric.energy_threshold",)),
+    "bz-5": Reference(
+        _bz5_ref,
+        (
+            Mistake(lambda d: chi2_ppf(1 - d["alpha"], d["window"]), _WINDOW_DOF),
+            Mistake(lambda d: chi2_ppf(1 - d["alpha"], d["p_reduced"]), _WINDOW_DOF),
+        ),
+        one_call=("fdi_lib.nonparametric.energy_threshold",),
+    ),
 }

@@ -41,7 +41,7 @@ def _sig1_ref(d: dict) -> np.ndarray:
 def _sig1_no_f(d: dict) -> np.ndarray:
     g = gains(_sig1_model(d))
     eps0 = d["y"][0] - d["H"] @ d["x0"]
-    x1 = d["x0"] + g.K[0] @ eps0            # the update, but no propagation by F_0
+    x1 = d["x0"] + g.K[0] @ eps0  # the update, but no propagation by F_0
     return np.array([eps0[0], (d["y"][1] - d["H"] @ x1)[0]])
 
 
@@ -95,25 +95,62 @@ def _sig5_slope(d: dict, log: Callable[[np.ndarray], np.ndarray]) -> float:
 _SIGNATURE = ("fdi_lib.signatures.fault_signature",)
 
 REFERENCES = {
-    "sig-1": Reference(_sig1_ref, (
-        Mistake(_sig1_no_f, "eps_1 looks like the prediction skipped F_0: the predictor is "
-                            "X_1 = F_0 (X_0 + K_0 eps_0)."),
-        Mistake(_sig1_prior_gain, "eps_1 looks like the predictor X_1 = F_0 X_0 + K_0 eps_0: the "
-                                  "gain of the predictor is F_0 K_0, not K_0.")),
-        one_call=("fdi_lib.filters.kalman_filter",)),
-    "sig-2": Reference(_sig2_ref, (
-        Mistake(_sig2_open_loop, "This is the recursion with F_k in place of F_k (I - K_k H_k): "
-                                 "the signature filter runs on the closed-loop predictor."),),
-        one_call=_SIGNATURE),
-    "sig-3": Reference(_sig3_ref, (
-        Mistake(_sig3_no_fk, "This ignores the term -F_k K_k Phi_k of Proposition 2: the filter "
-                             "partly absorbs a sensor bias into its state estimate."),),
-        one_call=_SIGNATURE),
-    "sig-4": Reference(_sig4_ref, (
-        Mistake(_sig4_open_loop, "This uses (I - F)^{-1}: the steady state of the signature "
-                                 "filter involves the closed-loop matrix A = F (I - K H)."),),
-        one_call=_SIGNATURE),
-    "sig-5": Reference(lambda d: _sig5_slope(d, np.log10), (
-        Mistake(lambda d: _sig5_slope(d, np.log), "This is the slope of the natural logarithm; "
-                                                  "the figure uses log10."),)),
+    "sig-1": Reference(
+        _sig1_ref,
+        (
+            Mistake(
+                _sig1_no_f,
+                "eps_1 looks like the prediction skipped F_0: the predictor is "
+                "X_1 = F_0 (X_0 + K_0 eps_0).",
+            ),
+            Mistake(
+                _sig1_prior_gain,
+                "eps_1 looks like the predictor X_1 = F_0 X_0 + K_0 eps_0: the "
+                "gain of the predictor is F_0 K_0, not K_0.",
+            ),
+        ),
+        one_call=("fdi_lib.filters.kalman_filter",),
+    ),
+    "sig-2": Reference(
+        _sig2_ref,
+        (
+            Mistake(
+                _sig2_open_loop,
+                "This is the recursion with F_k in place of F_k (I - K_k H_k): "
+                "the signature filter runs on the closed-loop predictor.",
+            ),
+        ),
+        one_call=_SIGNATURE,
+    ),
+    "sig-3": Reference(
+        _sig3_ref,
+        (
+            Mistake(
+                _sig3_no_fk,
+                "This ignores the term -F_k K_k Phi_k of Proposition 2: the filter "
+                "partly absorbs a sensor bias into its state estimate.",
+            ),
+        ),
+        one_call=_SIGNATURE,
+    ),
+    "sig-4": Reference(
+        _sig4_ref,
+        (
+            Mistake(
+                _sig4_open_loop,
+                "This uses (I - F)^{-1}: the steady state of the signature "
+                "filter involves the closed-loop matrix A = F (I - K H).",
+            ),
+        ),
+        one_call=_SIGNATURE,
+    ),
+    "sig-5": Reference(
+        lambda d: _sig5_slope(d, np.log10),
+        (
+            Mistake(
+                lambda d: _sig5_slope(d, np.log),
+                "This is the slope of the natural logarithm; the figure uses log10.",
+            ),
+        ),
+    ),
 }

@@ -23,7 +23,12 @@ def _svo1_intervals(d: dict) -> np.ndarray:
     """Box arithmetic: the prediction's bounding box, then the strip cut on x1 alone."""
     from fdi_lib.sets import Polytope
 
-    lo, hi = Polytope.box(d["X_lower"], d["X_upper"]).linear_map(d["A"]).minkowski_box(d["L"]).bounding_box()
+    lo, hi = (
+        Polytope.box(d["X_lower"], d["X_upper"])
+        .linear_map(d["A"])
+        .minkowski_box(d["L"])
+        .bounding_box()
+    )
     y, nb = float(d["y_next"][0]), d["noise"]
     return np.array([max(lo[0], y - nb), min(hi[0], y + nb), lo[1], hi[1]])
 
@@ -32,7 +37,9 @@ def _svo2_answer(d: dict, strip: bool = True) -> np.ndarray:
     from fdi_lib.sets import Polytope
     from fdi_lib.sets.svo import SetValuedObserver, SVOModel
 
-    model = SVOModel(A=[[d["A"]]], A_unc=[[[d["A_unc"]]]], C=[[1.0]], noise=d["noise"] if strip else 1e6)
+    model = SVOModel(
+        A=[[d["A"]]], A_unc=[[[d["A_unc"]]]], C=[[1.0]], noise=d["noise"] if strip else 1e6
+    )
     svo = SetValuedObserver(Polytope.box([d["x_lower"]], [d["x_upper"]]), method="exact")
     svo.start(model, np.array([d["y0"]]))
     X = svo.update(model, np.zeros(0), np.array([d["y_next"]]))
@@ -68,30 +75,69 @@ def _svo5_answer(d: dict) -> int:
 
 
 REFERENCES = {
-    "svo-1": Reference(_svo1_answer, (
-        Mistake(lambda d: _svo1_answer(d, disturbance=False),
-                "The disturbance is missing: add the Minkowski sum with L [-1, 1]^2."),
-        Mistake(lambda d: _svo1_answer(d, strip=False),
-                "The measurement is missing: intersect with the strip |y - C x| <= nbar."),
-        Mistake(_svo1_intervals,
+    "svo-1": Reference(
+        _svo1_answer,
+        (
+            Mistake(
+                lambda d: _svo1_answer(d, disturbance=False),
+                "The disturbance is missing: add the Minkowski sum with L [-1, 1]^2.",
+            ),
+            Mistake(
+                lambda d: _svo1_answer(d, strip=False),
+                "The measurement is missing: intersect with the strip |y - C x| <= nbar.",
+            ),
+            Mistake(
+                _svo1_intervals,
                 "The bounds of x2 ignore the measurement: box (interval) arithmetic loses the coupling "
                 "between the states that the polytope A X keeps. Intersect the strip with the "
-                "polytope itself, then take its bounding box."))),
-    "svo-2": Reference(_svo2_answer, (
-        Mistake(lambda d: _svo2_answer(d, strip=False),
+                "polytope itself, then take its bounding box.",
+            ),
+        ),
+    ),
+    "svo-2": Reference(
+        _svo2_answer,
+        (
+            Mistake(
+                lambda d: _svo2_answer(d, strip=False),
                 "This is the hull of the vertex predictions alone: intersect it with the measurement "
-                "strip."),)),
-    "svo-3": Reference(lambda d: _svo3_answer(d, "gap"), (
-        Mistake(lambda d: _svo3_answer(d, "hull"), "This is the area of the hull: subtract the area of "
-                                                   "the union."),
-        Mistake(lambda d: _svo3_answer(d, "no_overlap"), "The two sets overlap: the area of the union "
-                                                         "counts the overlap once."))),
-    "svo-4": Reference(_svo4_answer, (
-        Mistake(lambda d: _svo4_answer(d, disturbance=False), "The disturbance L d(k) widens the "
-                                                              "prediction too."),
-        Mistake(lambda d: _svo4_answer(d, noise=False), "The noise bound widens the measurement strip "
-                                                        "too."))),
-    "svo-5": Reference(_svo5_answer, (
-        Mistake(lambda d: d["N"] * 2 ** d["n_A"], "The parameters may sit at a different vertex at each "
-                                                  "of the N steps: the counts multiply."),)),
+                "strip.",
+            ),
+        ),
+    ),
+    "svo-3": Reference(
+        lambda d: _svo3_answer(d, "gap"),
+        (
+            Mistake(
+                lambda d: _svo3_answer(d, "hull"),
+                "This is the area of the hull: subtract the area of the union.",
+            ),
+            Mistake(
+                lambda d: _svo3_answer(d, "no_overlap"),
+                "The two sets overlap: the area of the union counts the overlap once.",
+            ),
+        ),
+    ),
+    "svo-4": Reference(
+        _svo4_answer,
+        (
+            Mistake(
+                lambda d: _svo4_answer(d, disturbance=False),
+                "The disturbance L d(k) widens the prediction too.",
+            ),
+            Mistake(
+                lambda d: _svo4_answer(d, noise=False),
+                "The noise bound widens the measurement strip too.",
+            ),
+        ),
+    ),
+    "svo-5": Reference(
+        _svo5_answer,
+        (
+            Mistake(
+                lambda d: d["N"] * 2 ** d["n_A"],
+                "The parameters may sit at a different vertex at each "
+                "of the N steps: the counts multiply.",
+            ),
+        ),
+    ),
 }

@@ -14,13 +14,27 @@ def _wt2_answer(d: dict, tails: int = 2) -> float:
 
 
 REFERENCES = {
-    "wt-1": Reference(lambda d: float(np.sqrt(d["threshold"] / d["information_per_deg2"])), (
-        Mistake(lambda d: d["threshold"] / d["information_per_deg2"],
-                "The statistic grows with the square of the offset: undo the square."),
-        Mistake(lambda d: float(np.sqrt(d["information_per_deg2"] / d["threshold"])),
+    "wt-1": Reference(
+        lambda d: float(np.sqrt(d["threshold"] / d["information_per_deg2"])),
+        (
+            Mistake(
+                lambda d: d["threshold"] / d["information_per_deg2"],
+                "The statistic grows with the square of the offset: undo the square.",
+            ),
+            Mistake(
+                lambda d: float(np.sqrt(d["information_per_deg2"] / d["threshold"])),
                 "This is the inverse: a larger information must make the smallest visible offset "
-                "smaller."))),
-    "wt-2": Reference(_wt2_answer, (
-        Mistake(lambda d: _wt2_answer(d, tails=1),
-                "A sample leaves the band on either side: count both tails."),)),
+                "smaller.",
+            ),
+        ),
+    ),
+    "wt-2": Reference(
+        _wt2_answer,
+        (
+            Mistake(
+                lambda d: _wt2_answer(d, tails=1),
+                "A sample leaves the band on either side: count both tails.",
+            ),
+        ),
+    ),
 }
