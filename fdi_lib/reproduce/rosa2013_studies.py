@@ -195,7 +195,6 @@ HIDDEN_TIMES_MS = (20, 50, 100, 500, 2500)
 HIDDEN_SCALES = (1.0, 0.1, 0.01)
 
 
-@lru_cache(maxsize=4)
 def _hidden_widths(
     runs: dict[str, Any], svo: Any, keys: list, onset: int, eta_unit: str
 ) -> tuple[dict, dict]:
@@ -235,6 +234,7 @@ def _explanation_scales(runs: dict[str, Any], onset: int) -> tuple[dict, dict, d
     return explanation, first, full
 
 
+@lru_cache(maxsize=4)
 def hidden_fault_study(seed: int, duration: float = 3.0, eta_unit: str = uav.ETA_UNIT) -> dict:
     """Why the elevator and M_u step faults are not detected: effect sizes, LP bounds, sensitivity.
 

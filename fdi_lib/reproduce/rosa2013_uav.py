@@ -60,7 +60,6 @@ def _one_uav_run(
 LOOSENED_OBSERVERS = ("elevator", "dynamics")
 
 
-@single_threaded_blas
 def _record_up_to(run: "uav.UAVRun", stop: int) -> "uav.UAVRun":
     """``run`` cut after sample ``stop`` (the inputs up to ``stop - 1``)."""
     return dataclasses.replace(
@@ -68,6 +67,7 @@ def _record_up_to(run: "uav.UAVRun", stop: int) -> "uav.UAVRun":
     )
 
 
+@single_threaded_blas
 def _bank_outcomes(runs: "list[uav.UAVRun]", alpha_slack_deg: float = 0.0) -> list[dict]:
     """The Architecture I bank (template SVOs, N = 1) on each run, all runs stepped together.
 
