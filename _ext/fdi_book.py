@@ -1285,6 +1285,18 @@ def latex_script_fallback() -> str:
     )
 
 
+#: Preamble lines for the printed layout (issue 33; ``tools/check_pdf.py`` fails on what they
+#: prevent): tables ragged-right (tabulary's ``L`` for Sphinx's ``T``, which is ``J``,
+#: justified into wide gaps), a table column never squeezed below 5 em (tabulary's ``\tymin``:
+#: Sphinx's 3 digits left "week" and "99.4 %" wider than their column), and an image at most 80 %
+#: of the text height, so that a figure and its caption fit on a page (Sphinx caps the image
+#: alone at the text height: "Float too large for page").
+LATEX_LAYOUT = r"""\newcolumntype{T}{L}
+\setlength{\tymin}{5em}
+\makeatletter\AtBeginDocument{\spx@image@maxheight=0.8\textheight}\makeatother
+"""
+
+
 def _latex_preamble(app: Sphinx, config) -> None:
     elements = config.latex_elements
     elements.setdefault("tableofcontents", "\\sphinxtableofcontents\n\\listoffigures\n")
@@ -1294,6 +1306,7 @@ def _latex_preamble(app: Sphinx, config) -> None:
         "% sub- and superscript characters the text font lacks, from DejaVu\n"
         + latex_script_fallback()
         + "\n"
+        + LATEX_LAYOUT
     )
 
 
@@ -1369,7 +1382,11 @@ def cover_latex(title: str, version: str, counts: dict[str, dict[str, int]]) -> 
             r"\vfill",
             r"{\large Claims of the papers checked by this edition, by status (see the claims ledger)\par}",
             r"\vspace{1em}\small",
-            r"\begin{tabular}{l" + "r" * (len(papers) + 1) + "}",
+            # within the text width: the papers' names wrap in columns sharing what the status
+            # column leaves, ragged-left over their counts
+            r"\begin{tabular}{@{}>{\raggedright\arraybackslash}p{0.3\linewidth}"
+            + rf"*{{{len(papers) + 1}}}{{>{{\raggedleft\arraybackslash}}"
+            + rf"p{{\dimexpr(0.7\linewidth-{2 * (len(papers) + 1)}\tabcolsep)/{len(papers) + 1}\relax}}}}@{{}}}}",
             r"\toprule " + head + r" \\ \midrule",
             *rows,
             r"\bottomrule\end{tabular}",
@@ -1461,6 +1478,73 @@ class _IndexTerms(SphinxPostTransform):
             for term in terms:
                 done.add((term, par.source))
                 par.insert(0, addnodes.index(entries=[("single", term, "", "", None)]))
+
+
+#: A bracketed interval of two numbers ("[0.02, 0.05]", "[-0.333, 1]") and a number before its
+#: unit ("0.032 s", "5 %"): the spaces that a printed table must not break at.
+_INTERVAL = re.compile(r"(\[[^\[\]\s,]{1,20},)\s+([^\[\]\s,]{1,20}\])")
+_NUMBER_UNIT = re.compile(r"(\d)\s+(%|s|ms|µs|min|m/s|rad|°|deg)(?![\w/])")
+NBSP = "\u00a0"
+
+#: Characters of the text width that a table's columns share (FreeSerif 10 pt on the narrower
+#: page, A4, with Sphinx's margins: about 80 average characters), for :class:`_PrintedTables`.
+TABLE_CHARS = 80
+
+
+def printed_widths(columns: list[list[str]], chars: int = TABLE_CHARS) -> list[int] | None:
+    """Column widths (in characters) for a long table that would not fit on one line per row:
+    each column gets at least its longest word, the rest of ``chars`` in proportion to its
+    longest cell; ``None`` when every column fits at its natural width (``l`` columns do)."""
+    natural = [max((len(c) for c in col), default=1) or 1 for col in columns]
+    if sum(natural) + 2 * len(columns) <= chars:
+        return None
+    words = [max((len(w) for c in col for w in c.split()), default=1) or 1 for col in columns]
+    spare = max(chars - sum(words), 0)
+    extra = [n - w for n, w in zip(natural, words)]
+    total = sum(extra) or 1
+    return [w + round(spare * e / total) for w, e in zip(words, extra)]
+
+
+class _PrintedTables(SphinxPostTransform):
+    """Tables for the printed page (issue 33): the spaces in an interval and between a number
+    and its unit are no-break spaces (a cell wraps between a value and its interval, not inside
+    either), and a long table (Sphinx's ``longtable``, more than 30 rows, whose columns are
+    ``l`` and never wrap) gets ragged-right columns of :func:`printed_widths` (a
+    ``tabularcolumns`` spec before it); the shorter tables are ragged-right by the preamble
+    (tabulary's ``L`` for Sphinx's ``T``, :func:`_latex_preamble`)."""
+
+    default_priority = 820
+    builders = ("latex",)
+
+    def run(self, **kwargs: Any) -> None:
+        from sphinx import addnodes
+
+        for table in list(self.document.findall(nodes.table)):
+            for entry in table.findall(nodes.entry):
+                for text in list(entry.findall(nodes.Text)):
+                    new = _NUMBER_UNIT.sub(rf"\1{NBSP}\2", _INTERVAL.sub(rf"\1{NBSP}\2", str(text)))
+                    if new != str(text):
+                        text.parent.replace(text, nodes.Text(new))
+            previous = table.previous_sibling()
+            if isinstance(previous, addnodes.tabular_col_spec):
+                continue
+            for tgroup in table.findall(nodes.tgroup):
+                rows = list(tgroup.findall(nodes.row))
+                if len(rows) <= 30 or any(
+                    e.get("morecols") or e.get("morerows") for e in tgroup.findall(nodes.entry)
+                ):
+                    continue
+                columns: list[list[str]] = [[] for _ in range(int(tgroup.get("cols", 0)))]
+                for row in rows:
+                    for column, entry in zip(columns, row.children):
+                        column.append(entry.astext().strip())
+                widths = printed_widths(columns)
+                if widths is None:
+                    continue
+                spec = "".join(
+                    rf">{{\raggedright\arraybackslash}}\X{{{w}}}{{{sum(widths)}}}" for w in widths
+                )
+                table.parent.insert(table.parent.index(table), addnodes.tabular_col_spec(spec=spec))
 
 
 class _NumberedParts(SphinxPostTransform):
@@ -1718,6 +1802,7 @@ def setup(app: Sphinx) -> dict[str, Any]:
     app.add_post_transform(_NumberedParts)
     app.add_post_transform(_IndexTerms)
     app.add_post_transform(_ExplorableFigures)
+    app.add_post_transform(_PrintedTables)
     app.add_js_file(PDF_SCRIPT)
     app.connect("build-finished", _pdf_script)
     app.connect("env-updated", _record_run_times)
