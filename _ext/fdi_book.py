@@ -315,7 +315,7 @@ def _docstring_html(func, id_prefix: str) -> str:
     for the build to fail); cross-reference roles become literals."""
     from docutils.core import publish_parts
 
-    doc = re.sub(r":[\w:]+:`~?([^`]+)`", r"``\1``", inspect.getdoc(func) or "")
+    doc = docstring_rst(re.sub(r":[\w:]+:`~?([^`]+)`", r"``\1``", inspect.getdoc(func) or ""))
     parts = publish_parts(
         doc,
         writer_name="html5",
@@ -327,6 +327,7 @@ def _docstring_html(func, id_prefix: str) -> str:
             "embed_stylesheet": False,
             "warning_stream": False,
             "id_prefix": id_prefix,
+            "math_output": "MathJax",  # \\( \\) spans that the page's MathJax typesets
         },
     )
     return parts["body"]
@@ -342,6 +343,65 @@ _ASCII_MATH = re.compile(
     + r")|(?P<letter>[A-Za-z]))"
     r"(?:_(?P<sub>[A-Za-z0-9]+))?(?P<arg>\([a-z]\))?(?!\w)"
 )
+
+
+#: A numpydoc entry's line "name : type" (or "a, b : type"): its names.
+_TERM_LINE = re.compile(r"^(\s*)([A-Za-z_]\w*(?:, [A-Za-z_]\w*)*)( : .*)$", re.M)
+#: A name with an underscore and a word after it ("hull_area", "state2_scale"): code.
+_CODE_NAME = re.compile(r"(?<![\w`\\{])([A-Za-z]\w*_(?:\w*[A-Za-z]{2,}\w*))(?![\w`}])")
+_NORM = re.compile(r"\|\|([^|\n]+?)\|\|(_\w)?")
+
+
+def _ascii_tex(text: str) -> str:
+    r"""ASCII maths as TeX: Greek letters' names as macros, subscripts of several characters
+    braced, ``max``/``min`` as operators ("max_k Gamma_k" -> ``\max_k \Gamma_k``)."""
+    text = re.sub(
+        r"(?<![A-Za-z\\])("
+        + "|".join(_GREEK + [g.title() for g in _GREEK] + ["max", "min"])
+        + r")(?![A-Za-z])",
+        r"\\\1",
+        text,
+    )
+    return re.sub(r"([_^])([A-Za-z0-9]{2,})", r"\1{\2}", text)
+
+
+_SYMBOL = re.compile(
+    r"(?<![\w\\`])(?:(?P<base>max|min|"
+    + "|".join(_GREEK + [g.title() for g in _GREEK])
+    + r")|[A-Za-z])(?:(?P<sub>_(?:\{[^{}\n]*\}|[A-Za-z0-9]+))?(?P<sup>\^(?:\{[^{}\n]*\}|[A-Za-z0-9]+))?)"
+    r"(?:\([a-z]\))?(?![\w`])"
+)
+
+
+def docstring_rst(doc: str) -> str:
+    """A registry docstring (written for a terminal) with its names as code and its ASCII maths
+    as maths (issue 33: no TeX-like text outside maths on the catalogue page): the names of
+    numpydoc entries and names with a worded subscript ("hull_area") as literals, symbols with
+    a sub- or superscript, Greek letters' names with one, and norms ("||Gamma_k||_2") as
+    ``:math:``. Literals and roles already in the text are left as they are."""
+
+    def symbol(m: re.Match) -> str:
+        if not (m["sub"] or m["sup"]):
+            return m[0]
+        return f":math:`{_ascii_tex(m[0])}`"
+
+    def prose(text: str) -> str:
+        text = _TERM_LINE.sub(
+            lambda m: m[1] + ", ".join(f"``{n}``" for n in m[2].split(", ")) + m[3], text
+        )
+        parts = re.split(r"(``[^`]+``|:\w+:`[^`]+`)", text)
+        for i in range(0, len(parts), 2):
+            piece = _CODE_NAME.sub(r"``\1``", parts[i])
+            pieces = re.split(r"(``[^`]+``)", piece)
+            for j in range(0, len(pieces), 2):
+                pieces[j] = _SYMBOL.sub(
+                    symbol,
+                    _NORM.sub(lambda m: f":math:`\\|{_ascii_tex(m[1])}\\|{m[2] or ''}`", pieces[j]),
+                )
+            parts[i] = "".join(pieces)
+        return "".join(parts)
+
+    return prose(doc)
 
 
 def title_markdown(title: str) -> str:
@@ -370,7 +430,9 @@ def claims_markdown(rep) -> str:
             if under
             else "none (an illustration, or a study of ours)"
         )
-    return "; ".join(f"{re.sub(r'{[^}]*}', '…', c.location)} ({c.test})" for c in own)
+    return "; ".join(
+        f"{title_markdown(re.sub(r'{[^}]*}', '…', c.location))} ({c.test})" for c in own
+    )
 
 
 def catalogue_markdown(confdir: Path) -> tuple[str, list[Path]]:
@@ -1290,10 +1352,19 @@ def latex_script_fallback() -> str:
 #: justified into wide gaps), a table column never squeezed below 5 em (tabulary's ``\tymin``:
 #: Sphinx's 3 digits left "week" and "99.4 %" wider than their column), and an image at most 80 %
 #: of the text height, so that a figure and its caption fit on a page (Sphinx caps the image
-#: alone at the text height: "Float too large for page").
+#: alone at the text height: "Float too large for page"). And LaTeX passes that converge: the
+#: end-of-run check of the labels compares their text, not their tokens. unicode-math gives the
+#: Greek letters of the text (a caption's "Γ", a heading's "α") catcode 12 at
+#: ``\begin{document}``, after the ``.aux`` was read with catcode 11, so that a label with one
+#: never matched its stored self and every pass asked for a rerun ("Label(s) may have changed").
 LATEX_LAYOUT = r"""\newcolumntype{T}{L}
 \setlength{\tymin}{5em}
-\makeatletter\AtBeginDocument{\spx@image@maxheight=0.8\textheight}\makeatother
+\makeatletter\AtBeginDocument{\spx@image@maxheight=0.8\textheight}
+\def\@testdef#1#2#3{\edef\reserved@a{\detokenize{#3}}%
+  \edef\reserved@b{\expandafter\expandafter\expandafter\detokenize
+    \expandafter\expandafter\expandafter{\csname #1@#2\endcsname}}%
+  \ifx\reserved@a\reserved@b\else\@tempswatrue\fi}
+\makeatother
 """
 
 
