@@ -1560,16 +1560,23 @@ NBSP = "\u00a0"
 #: Characters of the text width that a table's columns share (FreeSerif 10 pt on the narrower
 #: page, A4, with Sphinx's margins: about 80 average characters), for :class:`_PrintedTables`.
 TABLE_CHARS = 80
+#: What a column's padding (two ``\tabcolsep``, 12 pt) and the wider header font take, in characters.
+PAD_CHARS = 3
 
 
 def printed_widths(columns: list[list[str]], chars: int = TABLE_CHARS) -> list[int] | None:
-    """Column widths (in characters) for a long table that would not fit on one line per row:
-    each column gets at least its longest word, the rest of ``chars`` in proportion to its
-    longest cell; ``None`` when every column fits at its natural width (``l`` columns do)."""
-    natural = [max((len(c) for c in col), default=1) or 1 for col in columns]
-    if sum(natural) + 2 * len(columns) <= chars:
+    """Column widths (in characters, padding included) for a long table that would not fit on one
+    line per row: each column gets at least its longest unbreakable piece (no-break spaces join),
+    the rest of ``chars`` in proportion to its longest cell; ``None`` when every column fits at
+    its natural width (``l`` columns do)."""
+    natural = [max((len(c) for c in col), default=1) + PAD_CHARS for col in columns]
+    if sum(natural) <= chars:
         return None
-    words = [max((len(w) for c in col for w in c.split()), default=1) or 1 for col in columns]
+    # the unbreakable pieces: split at ordinary spaces, not at the no-break ones
+    words = [
+        max((len(w) for c in col for w in re.split(r"[ \t\n]+", c)), default=1) + PAD_CHARS
+        for col in columns
+    ]
     spare = max(chars - sum(words), 0)
     extra = [n - w for n, w in zip(natural, words)]
     total = sum(extra) or 1
