@@ -1352,12 +1352,15 @@ def latex_script_fallback() -> str:
 #: justified into wide gaps), a table column never squeezed below 5 em (tabulary's ``\tymin``:
 #: Sphinx's 3 digits left "week" and "99.4 %" wider than their column), and an image at most 80 %
 #: of the text height, so that a figure and its caption fit on a page (Sphinx caps the image
-#: alone at the text height: "Float too large for page"). And LaTeX passes that converge: the
-#: end-of-run check of the labels compares their text, not their tokens. unicode-math gives the
+#: alone at the text height: "Float too large for page"). A float stays in its section
+#: (placeins), so that a page's running footer names the section its figures belong to. And
+#: LaTeX passes that converge: the end-of-run check of the labels compares their text, not
+#: their tokens. unicode-math gives the
 #: Greek letters of the text (a caption's "Γ", a heading's "α") catcode 12 at
 #: ``\begin{document}``, after the ``.aux`` was read with catcode 11, so that a label with one
 #: never matched its stored self and every pass asked for a rerun ("Label(s) may have changed").
 LATEX_LAYOUT = r"""\newcolumntype{T}{L}
+\usepackage[section]{placeins}
 \setlength{\tymin}{5em}
 \makeatletter\AtBeginDocument{\spx@image@maxheight=0.8\textheight}
 \def\@testdef#1#2#3{\edef\reserved@a{\detokenize{#3}}%
