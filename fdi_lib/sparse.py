@@ -864,14 +864,15 @@ def _refine(
 def _pow2_rms(a: np.ndarray) -> np.ndarray:
     """Per row of ``a`` ``(B, k)``, the power of 2 nearest its RMS (1 for a zero row), computed
     without squaring the raw entries (scaling by a power of 2 is exact)."""
-    top = np.abs(a).max(axis=1)
+    top = np.maximum(a.max(axis=1), -a.min(axis=1))  # max |a|, without an |a| temporary
     _, e = np.frexp(top)  # top = f 2^e, f in [0.5, 1)
     u = np.ldexp(
         1.0, np.maximum(e - 1, -1074)
     )  # 2^(e-1) <= top: representable even near the limits
     ok = top > 0
     u[~ok] = 1.0
-    ms = np.einsum("bk,bk->b", a / u[:, None], a / u[:, None]) / a.shape[1]
+    t = a / u[:, None]
+    ms = np.einsum("bk,bk->b", t, t) / a.shape[1]
     with np.errstate(divide="ignore"):
         s = np.exp2(np.round(np.log2(ms) / 2 + (e - 1)))
     s[~ok] = 1.0
