@@ -1125,6 +1125,7 @@ def _homotopy(
     barred = np.full(B, -1)  # a component that just dropped cannot rejoin with its old sign at once
     barred_sign = np.zeros(B)
     stalled = np.zeros(B, int)  # zero-length steps in a row
+    outer_buf = np.empty(B * K * K)  # the rank-one change of inv (below)
     while running.any():
         if running.sum() <= rows.size // 2 and rows.size >= 16:  # drop finished problems
             keep = running
@@ -1168,7 +1169,11 @@ def _homotopy(
             f = np.where(
                 joining, 1.0 / schur, np.where(dropping, -1.0 / inv[rows, s_ev, s_ev], 0.0)
             )
-        inv[:, :k, :k] += (z * f[:, None])[:, :, None] * z[:, None, :]
+        # the outer product in a buffer kept across steps: a new (B, k, k) array at each step
+        # (megabytes) is mapped and faulted in anew by the allocator (same products, same sums)
+        outer = outer_buf[: rows.size * k * k].reshape(rows.size, k, k)
+        np.multiply((z * f[:, None])[:, :, None], z[:, None, :], out=outer)
+        inv[:, :k, :k] += outer
         if joining.any():
             b = rows[joining]
             GA[b, s_ev[b]] = Gram[b, j[b]]  # row j (the Gram matrix is symmetric)
