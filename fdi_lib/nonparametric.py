@@ -53,7 +53,7 @@ import scipy.stats
 
 from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.filters import KalmanGains, kalman_filter, kalman_gains
-from fdi_lib.glr import WindowGLRResult, first_alarm, glr_window
+from fdi_lib.glr import WindowedGLR, WindowGLRResult, first_alarm, glr_window
 from fdi_lib.isolation import minmax_isolation
 from fdi_lib.kitanidis import KitanidisGains, as_unknown_input_matrix, kitanidis_gains
 from fdi_lib.models import FaultFamily, LTVModel, fault_profile, ltv_model, step_family
@@ -642,6 +642,30 @@ class Solution1Result:
     energy_threshold: float
 
 
+def _solution1_detector(red: ReducedResidual, Psi: Any, window: int) -> WindowedGLR:
+    """The windowed GLR of :func:`solution1` on the projected residual ``red`` (its model and gains
+    do not depend on the record)."""
+    return WindowedGLR(red.model, red.gains, step_family(red.model, Psi=Psi), window)
+
+
+def solution1_glr(
+    model: LTVModel,
+    *,
+    E: Any,
+    Psi: Any,
+    window: int,
+    kgains: KitanidisGains | None = None,
+    T: np.ndarray | None = None,
+) -> WindowedGLR:
+    """The noise-independent part of :func:`solution1`'s windowed GLR (signatures, informations
+    and their pseudo-inverses: most of a record's cost), for ``solution1(..., glr=...)`` with the
+    same arguments: it depends on the model, ``E``, ``Psi`` and the window, not on the record."""
+    if kgains is None:
+        kgains = kitanidis_gains(model, E)
+    red = reduce_residual(model, kgains, np.zeros((model.n_steps, model.p)), T)
+    return _solution1_detector(red, Psi, window)
+
+
 def solution1(
     model: LTVModel,
     y: Any,
@@ -658,6 +682,7 @@ def solution1(
     kgains: KitanidisGains | None = None,
     kalman: KalmanGains | None = None,
     T: np.ndarray | None = None,
+    glr: WindowedGLR | None = None,
 ) -> Solution1Result:
     """Solution 1: reject ``E f``, test ``theta`` by GLR + minmax, detect ``f`` by energy.
 
@@ -693,6 +718,10 @@ def solution1(
         Minmax partitions; default one test per component of ``theta``.
     kgains, kalman, T : optional
         Precomputed Kitanidis gains, Kalman gains, projection (shared across chunks).
+    glr : WindowedGLR, optional
+        The GLR's noise-independent arrays, :func:`solution1_glr` of the same ``model``, ``E``,
+        ``Psi``, ``window``, ``kgains`` and ``T``: reused instead of computed again (e.g. by a
+        widget whose record changes and whose setting does not). The results are the same.
 
     Returns
     -------
@@ -724,8 +753,11 @@ def solution1(
     kpred = kitanidis_predictor_gains(model, E, kgains)
     eps_kit = kalman_filter(model, y, u, gains=kpred).innovations  # (27)
     red = reduce_residual(model, kgains, eps_kit, T)
-    fam: FaultFamily = step_family(red.model, Psi=Psi)
-    glr = glr_window(red.residuals, red.model, red.gains, fam, window)
+    if glr is None:
+        glr = _solution1_detector(red, Psi, window)
+    res = glr_window(red.residuals, glr.model, glr.gains, glr.family, window, shared=glr)
+    fam: FaultFamily = glr.family
+    glr = res
     alarm = first_alarm(glr.statistic, glr_threshold)
     batch = alarm.shape
     m = fam.m

@@ -62,7 +62,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any, Iterator, Literal
 
 import numpy as np
 
@@ -526,7 +526,9 @@ def lasso_path_batch(
     batch at once in the Gram form of the homotopy (one batched product and a few passes over
     the breakpoints), with a bound of that form's rounding *added* to each violation (the screen
     can fail a good path, never pass a bad one), then, at the breakpoints the screen does not
-    pass, exactly from ``X`` and ``y`` (the gradient in double-double, nothing subtracted). A path
+    pass, from ``X`` and ``y``: the residual in double-double and the bound of the rest of the
+    gradient's rounding added (it passes where nearly collinear columns defeat the screen), and,
+    where that does not pass either, the gradient in double-double, nothing subtracted. A path
     that fails is recomputed alone: its coefficients refined on its own supports
     (``solver="homotopy-refined"``) and by scikit-learn's ``lars_path(method="lasso")``
     (``solver="sklearn-fallback"``: on the whole design, then, if that path fails too, with its
@@ -585,12 +587,9 @@ def lasso_path_batch(
     # the exact check where the screen does not pass (its bound holds elsewhere): all such
     # breakpoints of the batch at once
     broken = (point_res == np.inf).any(axis=1)  # a NaN (a singular step or a cycle): recomputed
-    pb, pi = np.nonzero((point_res > KKT_TOL) & ~broken[:, None])
-    if pb.size:
-        with np.errstate(all="ignore"):
-            g[pb, pi] = _gradient_dd(Xs[pb], ys[pb], coefs[pb, pi])
-            slack[pb, pi] = 0.0
-            point_res, point_floor = _kkt(g, slack, levels, coefs, n_points, abs_gram, points=True)
+    point_res = _kkt_where_screen_fails(
+        Xs, ys, g, slack, levels, coefs, n_points, abs_gram, point_res
+    )
     kkt, floor = np.maximum(point_res.max(axis=1), 0.0), point_floor.max(axis=1)
     solver = np.full(B, "homotopy", dtype=object)
     fixed = []
@@ -744,10 +743,33 @@ def _gradient_dd(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> np.ndarray:
     values, not ``eps`` (no cancellation between large coefficients of nearly collinear columns
     survives). Processed in blocks of ``coefs`` rows.
     """
+    out = np.empty(coefs.shape)
+    for sl, Xb, (Xh, Xl), s, e in _residual_blocks(X, y, coefs):
+        XT = Xb.transpose(0, 2, 1)
+        P = XT * s[:, None, :]  # (P, m, rows)
+        E = (
+            _product_error((Xh.transpose(0, 2, 1), Xl.transpose(0, 2, 1)), s[:, None, :], P)
+            + XT * e[:, None, :]
+        )
+        while P.shape[2] > 1:
+            if P.shape[2] % 2:
+                P = np.concatenate([P, np.zeros(P.shape[:2] + (1,))], axis=2)
+                E = np.concatenate([E, np.zeros(E.shape[:2] + (1,))], axis=2)
+            P, err = _two_sum(P[:, :, 0::2], P[:, :, 1::2])
+            E = E[:, :, 0::2] + E[:, :, 1::2] + err
+        out[sl] = P[:, :, 0] + E[:, :, 0]
+    return out
+
+
+def _residual_blocks(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> Iterator[tuple[Any, ...]]:
+    """The residuals ``y_b - X_b theta_b`` of :func:`_gradient_dd` (its first stage), in blocks of
+    ``coefs`` rows: for each block, its slice of the rows of ``coefs``, its ``X`` ``(1 or P, rows,
+    m)``, that ``X``'s Dekker split and the residuals as unevaluated sums ``s + e`` ``(P, rows)``
+    (Ogita, Rump and Oishi's Dot2: ``|fl(s + e) - r| <= eps/2 |r| + gamma_(m+1)^2 (|y| + |X|
+    |theta|)``, ``gamma_n = n (eps/2) / (1 - n eps/2)``)."""
     X = X[None] if X.ndim == 2 else X
     y = y[None] if y.ndim == 1 else y
     rows, m = X.shape[1:]
-    out = np.empty(coefs.shape)
     block = max(1, 1_000_000 // (rows * m))
     for b0 in range(0, coefs.shape[0], block):
         c = coefs[b0 : b0 + block]
@@ -761,20 +783,81 @@ def _gradient_dd(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> np.ndarray:
             p = a * t
             s, err = _two_sum(s, -p)
             e += err - _product_error((Xh[:, :, k], Xl[:, :, k]), t, p)
-        XT = Xb.transpose(0, 2, 1)
-        P = XT * s[:, None, :]  # (P, m, rows)
-        E = (
-            _product_error((Xh.transpose(0, 2, 1), Xl.transpose(0, 2, 1)), s[:, None, :], P)
-            + XT * e[:, None, :]
-        )
-        while P.shape[2] > 1:
-            if P.shape[2] % 2:
-                P = np.concatenate([P, np.zeros(P.shape[:2] + (1,))], axis=2)
-                E = np.concatenate([E, np.zeros(E.shape[:2] + (1,))], axis=2)
-            P, err = _two_sum(P[:, :, 0::2], P[:, :, 1::2])
-            E = E[:, :, 0::2] + E[:, :, 1::2] + err
-        out[b0 : b0 + block] = P[:, :, 0] + E[:, :, 0]
-    return out
+        yield slice(b0, b0 + c.shape[0]), Xb, (Xh, Xl), s, e
+
+
+def _gradient_bounded(
+    X: np.ndarray, y: np.ndarray, coefs: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``X_b^T (y_b - X_b theta_b)`` for each row of ``coefs`` (shapes of :func:`_gradient_dd`) and a
+    bound of its error ``(P,)``: the residual in double-double (:func:`_residual_blocks`), rounded,
+    then its product with ``X^T`` in float64.
+
+    Between the Gram-form screen and the gradient in double-double: where the columns are nearly
+    collinear (large coefficients that cancel), the screen's bound, which grows with ``|X|^T |X|
+    |theta|``, cannot pass a breakpoint; this one grows with ``|X|^T |r|`` only (the residual,
+    which the first stage computes without cancellation): ``|fl(X_j^T fl(r)) - X_j^T r| <=
+    (gamma_rows + eps/2 (1 + gamma_rows)) (|X|^T |fl(r)|)_j + (1 + gamma_rows) gamma_(m+1)^2
+    (|X|^T (|y| + |X| |theta|))_j``, bounded here by ``2 eps (rows + 2)`` and ``2 (eps (m +
+    2))^2`` times those sums (twice the bound or more). It costs the first stage of
+    :func:`_gradient_dd` (about a third of it) and two products with ``|X|^T``."""
+    Xd = X[None] if X.ndim == 2 else X
+    rows, m = Xd.shape[1:]
+    eps = np.finfo(float).eps
+    g, slack = np.empty(coefs.shape), np.empty(coefs.shape[0])
+    for sl, Xb, _, s, e in _residual_blocks(X, y, coefs):
+        r = s + e
+        absX = np.abs(Xb)
+        yb = np.abs(y[None] if y.ndim == 1 else y)
+        yb = yb if yb.shape[0] == 1 else yb[sl]
+        if Xb.shape[0] == 1:  # one X for every row of coefs: matrix products
+            g[sl] = r @ Xb[0]
+            big = (yb + np.abs(coefs[sl]) @ absX[0].T) @ absX[0]
+            small = np.abs(r) @ absX[0]
+        else:
+            g[sl] = np.einsum("pri,pr->pi", Xb, r)
+            big = np.einsum(
+                "pri,pr->pi", absX, yb + np.einsum("prk,pk->pr", absX, np.abs(coefs[sl]))
+            )
+            small = np.einsum("pri,pr->pi", absX, np.abs(r))
+        slack[sl] = (2 * eps * (rows + 2) * small + 2 * (eps * (m + 2)) ** 2 * big).max(axis=1)
+    return g, slack
+
+
+def _gradient_exact(
+    X: np.ndarray, y: np.ndarray, coefs: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_gradient_dd` with a zero error bound (the form of :func:`_gradient_bounded`)."""
+    return _gradient_dd(X, y, coefs), np.zeros(coefs.shape[0])
+
+
+def _kkt_where_screen_fails(
+    X: np.ndarray,
+    y: np.ndarray,
+    g: np.ndarray,
+    slack: np.ndarray,
+    levels: np.ndarray,
+    coefs: np.ndarray,
+    n_points: np.ndarray,
+    abs_gram: np.ndarray,
+    point_res: np.ndarray,
+) -> np.ndarray:
+    """The per-breakpoint residuals of :func:`_kkt` after the screen (:func:`_kkt_screen`'s ``g``,
+    ``slack``, ``point_res``, updated in place), its failures checked again: with the gradient from
+    the residual in double-double and its bound (:func:`_gradient_bounded`), then, where that does
+    not pass either, with the gradient in double-double, nothing subtracted (:func:`_gradient_dd`).
+    ``X`` ``(B, rows, m)``, ``y`` ``(B, rows)`` (``B = 1``: one problem). A problem with a
+    non-finite residual (a NaN path) is left as it is: no check can pass it."""
+    broken = (point_res == np.inf).any(axis=1)
+    for gradient in (_gradient_bounded, _gradient_exact):
+        pb, pi = np.nonzero((point_res > KKT_TOL) & ~broken[:, None])
+        if not pb.size:
+            break
+        with np.errstate(all="ignore"):
+            Xp, yp = (X[0], y[0]) if X.shape[0] == 1 else (X[pb], y[pb])
+            g[pb, pi], slack[pb, pi] = gradient(Xp, yp, coefs[pb, pi])
+            point_res = _kkt(g, slack, levels, coefs, n_points, abs_gram, points=True)[0]
+    return point_res
 
 
 def _kkt_direct(
@@ -800,7 +883,8 @@ def _kkt_path(
     X: np.ndarray, y: np.ndarray, levels: np.ndarray, coefs: np.ndarray
 ) -> tuple[float, float]:
     """:func:`_kkt_direct`'s residual (or an upper bound of it) and float floor, computed as
-    :func:`lasso_path_batch` does: the batched screen, then double-double where it does not pass."""
+    :func:`lasso_path_batch` does: the batched screen, then double-double where it does not pass
+    (:func:`_kkt_where_screen_fails`)."""
     k = np.array([levels.size])
     gram = X.T @ X
     with np.errstate(all="ignore"):
@@ -813,9 +897,9 @@ def _kkt_path(
             k,
             X.shape[0],
         )
-        at = np.flatnonzero((res[0] > KKT_TOL) & (res[0] < np.inf))
-        if at.size:
-            g[0, at], slack[0, at] = _gradient_dd(X, y, coefs[at]), 0.0
+        _kkt_where_screen_fails(
+            X[None], y[None], g, slack, levels[None], coefs[None], k, abs_gram, res
+        )
         res, floor = _kkt(g, slack, levels[None], coefs[None], k, abs_gram)
     return float(res[0]), float(floor[0])
 
@@ -930,14 +1014,15 @@ def _refine(
 def _pow2_rms(a: np.ndarray) -> np.ndarray:
     """Per row of ``a`` ``(B, k)``, the power of 2 nearest its RMS (1 for a zero row), computed
     without squaring the raw entries (scaling by a power of 2 is exact)."""
-    top = np.abs(a).max(axis=1)
+    top = np.maximum(a.max(axis=1), -a.min(axis=1))  # max |a|, without an |a| temporary
     _, e = np.frexp(top)  # top = f 2^e, f in [0.5, 1)
     u = np.ldexp(
         1.0, np.maximum(e - 1, -1074)
     )  # 2^(e-1) <= top: representable even near the limits
     ok = top > 0
     u[~ok] = 1.0
-    ms = np.einsum("bk,bk->b", a / u[:, None], a / u[:, None]) / a.shape[1]
+    t = a / u[:, None]
+    ms = np.einsum("bk,bk->b", t, t) / a.shape[1]
     with np.errstate(divide="ignore"):
         s = np.exp2(np.round(np.log2(ms) / 2 + (e - 1)))
     s[~ok] = 1.0
@@ -1068,9 +1153,9 @@ def _homotopy(
     Degenerate designs: components tied with the level (to ``1e-12 c_0``) join in zero-length
     steps, one per step; a component that joined so with a direction against its sign leaves at
     once; a column in the span of the active ones is kept out; a path ends at an exact fit (``c``
-    down to ``1e-12 c_0``). A path that meets a singular step (NaN) or runs more than
-    ``50 m + 100`` steps (a cycle) ends with a NaN, which :func:`lasso_path_batch`'s KKT check
-    rejects.
+    down to ``1e-12 c_0``). A path that meets a singular step (NaN), runs more than
+    ``50 m + 100`` steps or more than ``4 m + 10`` zero-length steps in a row (a cycle) ends with
+    a NaN, which :func:`lasso_path_batch`'s KKT check rejects.
 
     Returns the correlation levels ``(B, S)`` and coefficients ``(B, S, m)`` at the
     breakpoints, and the number ``(B,)`` of breakpoints of each problem (the tails are padding).
@@ -1105,6 +1190,8 @@ def _homotopy(
     dropping = np.zeros(B, bool)  # ... the drop of component j
     barred = np.full(B, -1)  # a component that just dropped cannot rejoin with its old sign at once
     barred_sign = np.zeros(B)
+    stalled = np.zeros(B, int)  # zero-length steps in a row
+    outer_buf = np.empty(B * K * K)  # the rank-one change of inv (below)
     while running.any():
         if running.sum() <= rows.size // 2 and rows.size >= 16:  # drop finished problems
             keep = running
@@ -1127,8 +1214,8 @@ def _homotopy(
                     near,
                 )
             )
-            joining, dropping, barred, barred_sign, running, ids = (
-                x[keep] for x in (joining, dropping, barred, barred_sign, running, ids)
+            joining, dropping, barred, barred_sign, stalled, running, ids = (
+                x[keep] for x in (joining, dropping, barred, barred_sign, stalled, running, ids)
             )
             rows = np.arange(ids.size)
         # slot of the event: a joining component takes the next free slot
@@ -1148,7 +1235,11 @@ def _homotopy(
             f = np.where(
                 joining, 1.0 / schur, np.where(dropping, -1.0 / inv[rows, s_ev, s_ev], 0.0)
             )
-        inv[:, :k, :k] += (z * f[:, None])[:, :, None] * z[:, None, :]
+        # the outer product in a buffer kept across steps: a new (B, k, k) array at each step
+        # (megabytes) is mapped and faulted in anew by the allocator (same products, same sums)
+        outer = outer_buf[: rows.size * k * k].reshape(rows.size, k, k)
+        np.multiply((z * f[:, None])[:, :, None], z[:, None, :], out=outer)
+        inv[:, :k, :k] += outer
         if joining.any():
             b = rows[joining]
             GA[b, s_ev[b]] = Gram[b, j[b]]  # row j (the Gram matrix is symmetric)
@@ -1206,6 +1297,7 @@ def _homotopy(
         g_join, g_drop = join[rows, j_join], zero[rows, j_drop]
         g_end = c - c_min
         gamma = np.where(running, np.minimum(np.minimum(g_join, g_drop), g_end), 0.0)
+        stalled = np.where(gamma == 0, stalled + 1, 0)
         beta += gamma[:, None] * d
         cov -= gamma[:, None] * a
         c = c - gamma
@@ -1233,6 +1325,14 @@ def _homotopy(
                 np.nan
             )  # degenerate design): NaN makes the KKT check reject the path
             running[:] = False
+        # More zero-length steps in a row than ties can make (each component joins once and, if
+        # its direction opposes its sign, leaves at once: 2 m), with a margin: a cycle on a
+        # degenerate design (Example 2's regression ran the 50 m + 100 steps of the cap in zero-
+        # length steps), rejected at once in the same way
+        cycling = running & (stalled > 4 * m + 10)
+        if cycling.any():
+            levels[ids[cycling], point] = np.nan
+            running &= ~cycling
         if max_size is not None:  # the interval just followed had more than max_size components
             running &= active.sum(axis=1) <= max_size
         running &= (
