@@ -191,11 +191,22 @@ def test_plan_attributes_cells_by_metadata():
     for cell, ex in zip(cells, [None, None, None, "glr-1", "glr-1", None, "glr-6", "glr-6"]):
         if not (cell.cell_type == "code" and cell.source.startswith("answer = helper")):
             cell.metadata[CELL_KEY] = {"exercise": ex}
+    # the graded-mode attempts the saved outputs show (a glr-6 cell's output is not glr-1's)
+    cells[4].outputs = [
+        new.new_output("execute_result", {"text/plain": "glr-1: attempt 4: accepted."})
+    ]
+    cells[5].outputs = [
+        new.new_output("stream", name="stdout", text="glr-1: attempt 3: not accepted.\n")
+    ]
+    cells[7].outputs = [
+        new.new_output("stream", name="stdout", text="glr-1: attempt 9: accepted.\n")
+    ]
     plan = grader.plan_notebook(new.new_notebook(cells=cells))
     assert plan.setup == ["import numpy as np", "def helper(x):\n    return 2 * x"]
     assert plan.exercises == {
         "glr-1": ['data = exercise_data("glr-1")\nanswer = None', "answer = helper(1)"]
     }
+    assert plan.attempts == {"glr-1": 4}
 
 
 def test_student_notebook_tags_follow_the_chapter():

@@ -163,6 +163,10 @@ class Plan:
 
     setup: list[str] = field(default_factory=list)
     exercises: dict[str, list[str]] = field(default_factory=dict)
+    #: The highest graded-mode attempt number (``check(id, answer, graded=True)``: "attempt N")
+    #: that each exercise's saved outputs show: what the student's own session counted, as
+    #: handed in (a student can edit outputs: for the instructor's information, never a grade).
+    attempts: dict[str, int] = field(default_factory=dict)
 
 
 def _is_setup(source: str) -> bool:
@@ -209,7 +213,20 @@ def plan_notebook(nb) -> Plan:
                 plan.setup.append(source)
         elif current in REFERENCES:
             plan.exercises.setdefault(current, []).append(source)
+            shown = re.compile(rf"{re.escape(current)}: attempt (\d+): (?:accepted|not accepted)")
+            for n in shown.findall(_output_text(cell)):
+                plan.attempts[current] = max(plan.attempts.get(current, 0), int(n))
     return plan
+
+
+def _output_text(cell) -> str:
+    """The text a code cell's saved outputs show (streams and plain-text results)."""
+    parts = []
+    for out in cell.get("outputs", []):
+        text = out.get("text") if out.get("output_type") == "stream" else None
+        text = text if text is not None else out.get("data", {}).get("text/plain", "")
+        parts.append(text if isinstance(text, str) else "".join(text))
+    return "\n".join(parts)
 
 
 def suspicious(sources: list[str]) -> list[str]:
@@ -338,6 +355,12 @@ def run_student(
             log.append(f"{path.name}: unreadable notebook ({type(exc).__name__}: {str(exc)[:200]})")
     runs: dict[tuple[str, str], Run] = {}
     code = {ex: src for plan in plans for ex, src in plan.exercises.items()}
+    tries = {ex: n for plan in plans for ex, n in plan.attempts.items()}
+    if tries:
+        log.append(
+            "graded-mode attempts the submitted outputs show (as handed in): "
+            + ", ".join(f"{ex} {n}" for ex, n in tries.items())
+        )
     if not code:
         log.append("no checkable exercise found in the submission")
         return runs, code, log
