@@ -1129,6 +1129,63 @@ def _support_max(DPhi: np.ndarray, V: np.ndarray, F: np.ndarray) -> np.ndarray: 
     return out
 
 
+@numba.njit(cache=True)
+def _basic_solutions(
+    m: np.ndarray,
+    norms: np.ndarray,
+    pad: np.ndarray,
+    idx: np.ndarray,
+    inv: np.ndarray,
+    U: np.ndarray,
+    zero: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
+    """The basic solutions ``x = U_S^-1 mu_S`` of every set ``Set(M, m[b])`` ``(B, K, n)`` and
+    whether each is feasible ``(B, K)`` (:func:`fdi_lib.sets.polytope._basis_vertices`'s route and
+    tolerance, the arrays of its :class:`~fdi_lib.sets.polytope._Bases`): ``mu`` the tightest
+    offset per distinct unit normal, feasible to ``1e-12 (1 + max |mu|)``, none where a zero row
+    has a negative offset. Each set is computed on its own, with sums in a fixed order, so its
+    result does not depend on the batch."""
+    B, p = m.shape
+    q, r = pad.shape
+    K, n = idx.shape
+    X = np.empty((B, K, n))
+    F = np.empty((B, K), dtype=np.bool_)
+    mu = np.empty(q)
+    for b in range(B):
+        bad = False
+        for i in range(p):
+            if zero[i] and m[b, i] < 0:
+                bad = True
+        big = 0.0
+        for g in range(q):
+            best = np.inf
+            for j in range(r):
+                i = pad[g, j]
+                if i < p:
+                    v = m[b, i] / norms[i]
+                    if v < best:
+                        best = v
+            mu[g] = best
+            big = max(big, abs(best))
+        tol = 1e-12 * (1.0 + big)
+        for k in range(K):
+            for i in range(n):
+                acc = 0.0
+                for j in range(n):
+                    acc += inv[k, i, j] * mu[idx[k, j]]
+                X[b, k, i] = acc
+            ok = not bad
+            for g in range(q):
+                if not ok:
+                    break
+                acc = 0.0
+                for c in range(n):
+                    acc += X[b, k, c] * U[g, c]
+                ok = acc <= mu[g] + tol
+            F[b, k] = ok
+    return X, F
+
+
 def _vertices_many(M: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Vertices of Set(M, m[b]) for every row b of m, shape (B, K, n), with a mask (B, K) of the
     rows that are vertices; a set is empty when its mask is all False, which the Chebyshev LP
@@ -1149,15 +1206,9 @@ def _vertices_many(M: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray
         for i, V in enumerate(Vs):
             X[i, : len(V)], F[i, : len(V)] = V, True
         return X, F
-    mp = np.empty((m.shape[0], m.shape[1] + 1))
-    np.divide(m, b.norms, out=mp[:, :-1])
-    mp[:, -1] = np.inf
-    mu = mp[:, b.pad].min(axis=2)  # (B, q) tightest offset per normal
-    X = np.einsum("kij,bkj->bki", b.inv, mu[:, b.idx])  # (B, K, n): inv_k mu_k
-    tol = 1e-12 * (1.0 + np.abs(mu).max(axis=1))
-    # one (K, n) x (n, q) product per set: the same shapes, hence the same rounding, in any batch
-    F = (np.matmul(X, b.U.T) <= mu[:, None, :] + tol[:, None, None]).all(axis=2)
-    F &= ~np.any(m[:, b.zero] < 0, axis=1)[:, None]
+    X, F = _basic_solutions(
+        np.ascontiguousarray(m, dtype=float), b.norms, b.pad, b.idx, b.inv, b.U, b.zero
+    )
     # no feasible basis is not a proof of emptiness: the Chebyshev LP decides (_enumerate_vertices)
     for i in np.flatnonzero(~F.any(axis=1)):
         V = _enumerate_vertices(M, m[i])
