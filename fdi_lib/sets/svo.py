@@ -1301,17 +1301,27 @@ class TemplateBatch:
         for idx in groups.values():
             first = models[idx[0]]
             D = self.template if self.template is not None else default_template(self.n, first.C)
-            L = np.stack([models[b].L for b in idx])
+            # a model object shared by many observers (one bank on many records) is stored once;
+            # "mi" gives each observer's row in the model arrays
+            rows: dict[int, int] = {}
+            uniq: list[ModelSequence] = []
+            for b in idx:
+                if id(models[b]) not in rows:
+                    rows[id(models[b])] = len(uniq)
+                    uniq.append(models[b])
+            mi = np.array([rows[id(models[b])] for b in idx])
+            L = np.stack([mdl.L for mdl in uniq])
             self._groups.append(
                 {
                     "idx": np.array(idx),
+                    "mi": mi,
                     "D": D,
                     "C": first.C,
                     "M": np.vstack([D, first.C, -first.C]),
-                    "vA": np.stack([models[b]._vertex_A[:T] for b in idx]),
-                    "B": np.stack([models[b].B[:T] for b in idx]),
-                    "B_unc": np.stack([models[b].B_unc[:T] for b in idx]),
-                    "noise": np.stack([models[b].noise for b in idx]),
+                    "vA": np.stack([mdl._vertex_A[:T] for mdl in uniq]),
+                    "B": np.stack([mdl.B[:T] for mdl in uniq]),
+                    "B_unc": np.stack([mdl.B_unc[:T] for mdl in uniq]),
+                    "noise": np.stack([mdl.noise for mdl in uniq]),
                     # sum_c |D L|_{:, c}: the fixed columns of the generators (disturbance)
                     "sL": np.abs((D[None, :, :, None] * L[:, None, :, :]).sum(axis=2)).sum(axis=2),
                     "V": None,
@@ -1326,8 +1336,8 @@ class TemplateBatch:
             m = np.column_stack(
                 [
                     np.broadcast_to(self.X0.m, (len(y0), self.X0.m.size)),
-                    g["noise"] + y0,
-                    g["noise"] - y0,
+                    g["noise"][g["mi"]] + y0,
+                    g["noise"][g["mi"]] - y0,
                 ]
             )
             g["V"], g["F"] = _vertices_many(np.vstack([self.X0.M, g["C"], -g["C"]]), m)
@@ -1349,17 +1359,18 @@ class TemplateBatch:
 
     def _step(self, g: dict, a: np.ndarray, k: int) -> None:
         D, obs = g["D"], g["idx"][a]
-        DPhi = np.matmul(D, g["vA"][a, k - 1])  # (a, 2^n_A, p, n): D A_v
+        mi = g["mi"][a]  # the observers' rows in the model arrays
+        DPhi = np.matmul(D, g["vA"][mi, k - 1])  # (a, 2^n_A, p, n): D A_v
         W = _support_max(DPhi, g["V"][a], g["F"][a])  # (a, p): over A_v and the live vertices
         uk = self.u[obs, k - 1]
-        c = _dot(D, _dot(g["B"][a, k - 1], uk))  # D B u
-        s = g["sL"][a]
-        Gu = _dot(g["B_unc"][a, k - 1], uk[:, None, :])  # (a, n_B, n): B_b u
+        c = _dot(D, _dot(g["B"][mi, k - 1], uk))  # D B u
+        s = g["sL"][mi]
+        Gu = _dot(g["B_unc"][mi, k - 1], uk[:, None, :])  # (a, n_B, n): B_b u
         for j in range(Gu.shape[1]):
             s = s + np.abs(_dot(D, Gu[:, j]))
         h = W + c + s
         h = h + self.margin * (1.0 + np.abs(h))
-        nb = g["noise"][a] * (1.0 + self.margin) + self.margin
+        nb = g["noise"][mi] * (1.0 + self.margin) + self.margin
         yk = self.y[obs, k]
         X, Fn = _vertices_many(g["M"], np.column_stack([h, nb + yk, nb - yk]))
         if g["V"].shape[1] < X.shape[1]:
