@@ -169,3 +169,21 @@ def test_staged_banks_equal_banks_on_the_whole_records():
             ref.isolated,
             dict(ref.empty_at),
         )
+
+
+def test_support_max_is_dot_then_max_bit_for_bit():
+    """The compiled support bound equals the elementwise products of ``_dot`` and a ``max`` over
+    the live vertices, to the last bit (the batch's sets do not change with the kernel)."""
+    from fdi_lib.sets.svo import _dot, _support_max
+
+    rng = np.random.default_rng(5)
+    DPhi = rng.normal(size=(7, 4, 6, 3)) * 10.0 ** rng.integers(-3, 4, size=(7, 4, 6, 1))
+    V = rng.normal(size=(7, 9, 3))
+    F = rng.random((7, 9)) < 0.6
+    F[:, 0] = True
+    ref = np.stack(
+        [_dot(DPhi[a][:, None], V[a][F[a]][None]).reshape(-1, 6).max(axis=0) for a in range(7)]
+    )
+    assert np.array_equal(_support_max(DPhi, V, F), ref)
+    DPhi[2, 1, 3, 0] = np.nan  # a NaN propagates, as in numpy's max
+    assert np.isnan(_support_max(DPhi, V, F)[2, 3])
