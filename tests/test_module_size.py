@@ -22,9 +22,7 @@ MAX_FUNCTION_LINES = 80
 NOT_CHECKED = ("windturbine.py", "windturbine_accommodation.py")
 #: Still over a limit, at their present size: ``module`` or ``module:function`` -> lines.
 OVER = {
-    "ledger.py": 1465,
-    "ledger.py:claim_status": 109,
-    "ledger.py:build_ledger": 112,
+    "ledger.py": 1514,
 }
 
 
