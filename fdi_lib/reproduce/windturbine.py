@@ -176,8 +176,9 @@ def _empty_chunk(n: int) -> dict[str, np.ndarray]:
 #: Seconds of one core that one realisation of the scoreboard (every fault's segment and its
 #: fault-free twin, the four methods) takes with the default :class:`~fdi_lib.windturbine.Settings`:
 #: the process time of 6 realisations less that of 2, over 4 (1.09 s on the book's 2-core machine,
-#: the design cached): the estimate with which a too large ``trials`` is refused.
-SECONDS_PER_REALISATION = 1.1
+#: the design cached, before the compiled SVO steps; 0.63 of that after them, both measured in one
+#: run): the estimate with which a too large ``trials`` is refused.
+SECONDS_PER_REALISATION = 0.7
 #: The longest scoreboard run accepted (s, estimated with :data:`SECONDS_PER_REALISATION` over the
 #: jobs).
 MAX_RUN_S = 24 * 3600.0
@@ -742,9 +743,11 @@ def false_alarms(
     :data:`STREAM_OVERLAP_S`): the statistical tests re-arm when their statistic falls below its
     threshold, the SVO bank at every window.
 
-    Not yet in the registry of the command line: at about 340 s of a core per stream (the four
-    methods, ``benchmarks/bench_windturbine_stream.py``), the default 9 streams take about 50 min
-    of a core, which the ledger and ``make check-book`` would pay on every CI run.
+    Not yet in the registry of the command line: at about 70 s of a core per stream (the four
+    methods, ``benchmarks/bench_windturbine_stream.py``: about 21,000, 100,000, 24,000 and
+    16,000 samples per second of one core for ``zb2014``, ``zhang2021``, ``bz`` and
+    ``rosa2013``), the default 9 streams take about 11 min of a core, which the ledger and
+    ``make check-book`` would pay on every CI run.
 
     Headline keys
     -------------
