@@ -122,7 +122,7 @@ def test_a_fifth_method_is_one_record_and_moves_no_other_number(monkeypatch, pla
         h[key].pop("pairs")
     del h["best_detection_upper_s"], base["fastest_method"], base["best_detection_upper_s"]
     assert h == base
-    from fdi_lib.reproduce.windturbine import plot_scoreboard
+    from fdi_lib.reproduce.views.windturbine import plot_scoreboard
 
     fig = plot_scoreboard(r)
     legend = [t.get_text() for t in fig.legends[0].get_texts()]
