@@ -129,6 +129,8 @@ class RegressionData:
 def regression_data(residuals: Any, on_residual: Any, *, start: int = 1) -> RegressionData:
     """Stack residuals and their fault signature into the regression (36)-(38).
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     residuals : array_like
@@ -145,6 +147,13 @@ def regression_data(residuals: Any, on_residual: Any, *, start: int = 1) -> Regr
     Returns
     -------
     RegressionData
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> d = regression_data(np.ones((5, 2)), np.ones((5, 2, 3)))   # N = 5, p = 2, m = 3
+    >>> d.X.shape, d.y.shape, d.n_samples          # rows of k = 1 .. 4 stacked
+    ((8, 3), (8,), 4)
     """
     r = array(residuals, "residuals")
     S = array(on_residual, "on_residual")
@@ -389,6 +398,8 @@ def lasso_path(
     nearly collinear columns) is recomputed by scikit-learn's ``lars_path``, and
     :attr:`LassoPath.solver` says which.
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     X : array_like
@@ -415,6 +426,18 @@ def lasso_path(
     ------
     NumericalError
         When no path passes the KKT check (neither the homotopy's nor scikit-learn's).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> path = lasso_path(X, y)
+    >>> [sorted(map(int, np.flatnonzero(c))) for c in path.coefs[:, 1:3].T]  # breakpoints 1, 2
+    [[1], [1, 4]]
+    >>> path.kkt_residual <= KKT_TOL
+    True
     """
     X, y = _check_xy(X, y)
     return lasso_path_batch(
@@ -432,6 +455,8 @@ def lasso_paths(
 ) -> list[LassoPath]:
     """Exact Lasso paths of a batch of problems, as :func:`lasso_path` for each.
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     X, y, n_samples, lambda_min, max_size
@@ -441,6 +466,18 @@ def lasso_paths(
     -------
     list of LassoPath
         One per problem, each identical to :func:`lasso_path` of that problem alone.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> paths = lasso_paths(np.stack([X, X]), np.stack([y, -y]))
+    >>> bool(np.array_equal(paths[0].lambdas, lasso_path(X, y).lambdas))
+    True
+    >>> bool(np.allclose(paths[1].coefs, -paths[0].coefs))     # the path of -y is minus that of y
+    True
     """
     return lasso_path_batch(
         X, y, n_samples=n_samples, lambda_min=lambda_min, max_size=max_size
@@ -456,6 +493,8 @@ def lasso_path_batch(
     max_size: int | None = None,
 ) -> PathBatch:
     """Exact Lasso paths of a batch of problems, followed together, as a :class:`PathBatch`.
+
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
 
     Parameters
     ----------
@@ -495,6 +534,18 @@ def lasso_path_batch(
     (``solver="sklearn-fallback"``: on the whole design, then, if that path fails too, with its
     duplicated or scaled columns merged and its zero columns removed); the one with the smaller
     residual is kept, and a path that no route brings to :data:`KKT_TOL` is a NumericalError.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> batch = lasso_path_batch(np.stack([X, X]), np.stack([y, 2 * y]))
+    >>> bool(np.array_equal(batch.path(0).coefs, lasso_path(X, y).coefs))
+    True
+    >>> bool(np.allclose(batch.path(1).lambdas, 2 * batch.path(0).lambdas))
+    True
     """
     X = array(X, "X", ndim=3)
     y = array(y, "y")
@@ -622,6 +673,8 @@ def kkt_residual(X: Any, y: Any, path: "LassoPath") -> float:
     :func:`lasso_path_batch` checks every path it returns and stores the residual in
     :attr:`LassoPath.kkt_residual`; it is at most :data:`KKT_TOL`.
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     X, y : array_like
@@ -632,6 +685,19 @@ def kkt_residual(X: Any, y: Any, path: "LassoPath") -> float:
     Returns
     -------
     float
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> path = lasso_path(X, y)
+    >>> kkt_residual(X, y, path) <= KKT_TOL
+    True
+    >>> wrong = LassoPath(path.lambdas, 1.1 * path.coefs, path.n_samples)
+    >>> kkt_residual(X, y, wrong) > KKT_TOL                # scaled coefficients are not optimal
+    True
     """
     X, y = _check_xy(X, y)
     if not isinstance(path, LassoPath) or path.coefs.shape[0] != X.shape[1]:
@@ -1283,6 +1349,8 @@ def lasso_cvxpy(X: Any, y: Any, lam: float, *, n_samples: int | None = None) -> 
     cvxpy does the hard part (conic reformulation of the l1 norm and an interior-point
     solver); it is slow for Monte Carlo but reads like the maths.
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     X : array_like
@@ -1298,6 +1366,17 @@ def lasso_cvxpy(X: Any, y: Any, lam: float, *, n_samples: int | None = None) -> 
     -------
     numpy.ndarray
         ``theta_hat``, shape ``(m,)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> path = lasso_path(X, y)
+    >>> lam = 0.5 * path.lambdas[2]                  # any lambda: the exact path has it too
+    >>> bool(np.allclose(lasso_cvxpy(X, y, lam), path.coef(lam), atol=1e-5))
+    True
     """
     import cvxpy as cp
 
@@ -1418,6 +1497,8 @@ def flat_ranges(
 ) -> FlatRanges:
     """:func:`flat_range` of every path of a batch at once (the same results, as arrays).
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     paths : PathBatch
@@ -1433,6 +1514,17 @@ def flat_ranges(
     ------
     ModelError
         Naming the first path with no candidate range.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> batch = lasso_path_batch(np.stack([X, X]), np.stack([y, 2 * y]))
+    >>> flats = flat_ranges(batch)
+    >>> flats.size.tolist(), bool(np.isclose(flats.middle[0], flat_range(batch.path(0)).middle))
+    ([2, 2], True)
     """
     return _flat_ranges(paths, scale, lambda_ratio, max_size, single=False)
 
@@ -1503,6 +1595,8 @@ def flat_range(
     the widest candidate wins (ties: the one at the larger ``lambda``). :func:`flat_ranges` applies
     the rule to a whole :class:`PathBatch` at once (this function is that, for a batch of one).
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     path : LassoPath
@@ -1517,6 +1611,18 @@ def flat_range(
     Returns
     -------
     FlatRange
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> flat = flat_range(lasso_path(X, y))
+    >>> int(flat.size), [int(j) for j in flat.support]     # the two faulty components
+    (2, [1, 4])
+    >>> bool(flat.low < flat.middle < flat.high)
+    True
     """
     fr = _flat_ranges(PathBatch.of([path]), scale, lambda_ratio, max_size, single=True)
     return FlatRange(
@@ -1604,6 +1710,8 @@ def grid_flat_range(
     :func:`flat_range` with ``scale="log"``; a range shorter than the grid step
     ``log(1 / lambda_ratio) / (n_grid - 1)`` may hold no grid point at all.
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     path : LassoPath
@@ -1619,6 +1727,16 @@ def grid_flat_range(
     Returns
     -------
     GridFlatRange
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> grid = grid_flat_range(lasso_path(X, y), 100)
+    >>> int(grid.size), [int(j) for j in grid.support]
+    (2, [1, 4])
     """
     g = _grid_flat_ranges(PathBatch.of([path]), n_grid, lambda_ratio, max_size, single=True)
     return GridFlatRange(
@@ -1637,6 +1755,8 @@ def grid_flat_ranges(
 ) -> GridFlatRanges:
     """:func:`grid_flat_range` of every path of a batch at once (the same results, as arrays).
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     paths : PathBatch
@@ -1652,6 +1772,17 @@ def grid_flat_ranges(
     ------
     ModelError
         Naming the first path the rule cannot be applied to.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> batch = lasso_path_batch(np.stack([X, X]), np.stack([y, 2 * y]))
+    >>> grids = grid_flat_ranges(batch, 100)
+    >>> grids.size.tolist(), int(grid_flat_range(batch.path(1), 100).size)
+    ([2, 2], 2)
     """
     return _grid_flat_ranges(paths, n_grid, lambda_ratio, max_size, single=False)
 
@@ -1735,6 +1866,8 @@ def _unit_grid(n_grid: int, lambda_ratio: float) -> np.ndarray:
 def least_squares_on_support(X: Any, y: Any, support: Any) -> np.ndarray:
     """Least-squares re-estimate of the selected components (the others set to 0), shape ``(m,)``.
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     X : array_like
@@ -1805,6 +1938,8 @@ def diagnose(
 ) -> Diagnosis:
     """Lasso path, the flat-range rule, then least squares on the selected support (Zhang 2021, Sec. IV-V).
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     X, y, n_samples
@@ -1813,6 +1948,16 @@ def diagnose(
         As in :func:`flat_range`.
     path : LassoPath, optional
         A precomputed :func:`lasso_path` of ``X``, ``y``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> d = diagnose(X, y)
+    >>> [int(j) for j in d.support], np.round(d.theta_ls, 1).tolist()
+    ([1, 4], [0.0, 2.0, 0.0, 0.0, -1.5, 0.0])
     """
     X, y = _check_xy(X, y)
     path = lasso_path(X, y, n_samples=n_samples) if path is None else path
