@@ -58,7 +58,9 @@
    (:meth:`fdi_lib.explorables.Explorable.small_multiples`); a cover page with the version and
    the claims ledger per status and paper, as the ledger page of the same build computed it; a
    list of figures after the contents and an index of the terms a student looks up
-   (:data:`INDEX_TERMS`, :class:`_IndexTerms`).
+   (:data:`INDEX_TERMS`, :class:`_IndexTerms`); tables within the text width, ragged-right,
+   intervals and units unbroken (:class:`_PrintedTables`, :data:`LATEX_LAYOUT`), floats kept in
+   their section and LaTeX passes that converge (:data:`LATEX_LAYOUT`).
    In the HTML, the header's download menu links the PDF when there is one: ``make pdf`` puts it
    beside the pages (:func:`publish_pdf`), and ``make book`` after ``make pdf`` copies it there.
 12. Tables that can be read on a phone: every body cell of a table carries its column's header as
