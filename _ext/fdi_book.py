@@ -23,7 +23,7 @@
    figure that draws it (the figure label of the cell that calls ``get(ID).plot``) or else to the
    section that runs it, the command line that recomputes it at the book's settings
    (:func:`fdi_lib.reproduce.book.book_command`, the settings the chapters' ``book_run`` uses) and
-   its documentation rendered.
+   its documentation rendered, names as code and ASCII maths as maths (:func:`docstring_rst`).
 7. The execution table of the status page (myst-nb's ``nb-exec-table``) says "ok" / "failed"
    instead of emoji, which show as empty boxes without an emoji font.
 8. Maths as readable text where it cannot be typeset: the text of references to a heading with
