@@ -389,6 +389,7 @@ class WindowedGLR:
         # Per-realisation profiles: the arrays of _shared carry a realisation axis after the slot,
         # (N, w, B, ...) instead of (N, w, ...); _project and _pick hide the difference.
         self._per_realisation = bool(family.batch_shape)
+        self._admissible: list[np.ndarray] | None = None  # per sample, the admissible slots
         self._shared()
         self._reset()
 
@@ -460,7 +461,6 @@ class WindowedGLR:
         del inc
         self._onsets = onset
         self._allowed = (onset >= 0) & (onset <= k_all[:, None] - self.min_samples)  # (N, w)
-        self._admissible = [np.nonzero(a)[0] for a in self._allowed]
         V, inv = _pinv_factors(C)
         root = V * np.sqrt(inv)[..., None, :]  # C^+ = root root^T
         if not self._per_realisation:  # drop the realisation axis of a shared family
@@ -551,6 +551,8 @@ class WindowedGLR:
             self._d += self._score_terms(np.array([k]), e_w[None])[0]
         self.k = k + 1
         shape = self.batch_shape
+        if self._admissible is None:  # built by the first update (a whole record never needs it)
+            self._admissible = [np.nonzero(a)[0] for a in self._allowed]
         slots = self._admissible[k]
         if not slots.size or not statistics:
             return (

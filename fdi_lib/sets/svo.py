@@ -40,7 +40,7 @@ tightness and **can lose the true state when A is uncertain** (``A_unc`` given):
 with N > 1 (template rule) and ``strip_before_hull=True`` (exact rule, the paper's literal order
 of Fig. 2). With either, a healthy record can empty the set (a false alarm); both issue an
 :class:`~fdi_lib.errors.UnsoundOptionWarning` at the first update with an uncertain A, and the
-book measures how often they fail (:func:`fdi_lib.reproduce.rosa2013.horizon_comparison`).
+book measures how often they fail (:func:`fdi_lib.reproduce.rosa2013_studies.horizon_comparison`).
 
 Many records at once: :class:`TemplateBatch` steps many template observers (N = 1) together on
 stacked arrays (:class:`ModelSequence`), with :func:`run_svo_many` and
@@ -61,6 +61,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping, Sequence
 
+import numba
 import numpy as np
 
 import warnings
@@ -370,7 +371,7 @@ class SetValuedObserver:
         per direction and Delta-vertex sequence (HiGHS); tighter, and much slower. Sound (contains
         every compatible state) when A is known (no ``A_unc``); with an uncertain A the hull over
         vertex sequences can miss the true state, as the paper's strip-before-hull order can
-        (:func:`fdi_lib.reproduce.rosa2013.horizon_comparison` measures it): an
+        (:func:`fdi_lib.reproduce.rosa2013_studies.horizon_comparison` measures it): an
         :class:`~fdi_lib.errors.UnsoundOptionWarning` is issued at the first update with an uncertain A.
     strip_before_hull : bool
         ``"exact"`` method only. False (default): X̂(k+1) = ∩_j co_v{Prop_j(v)} ∩ S, which always
@@ -1099,6 +1100,92 @@ def _dot(M: np.ndarray, x: np.ndarray) -> np.ndarray:
     return out
 
 
+@numba.njit(cache=True)
+def _support_max(DPhi: np.ndarray, V: np.ndarray, F: np.ndarray) -> np.ndarray:  # pragma: no cover
+    """``max`` over the vertex matrices ``v`` and the live vertices ``j`` (``F[a, j]``) of
+    ``DPhi[a, v] @ V[a, j]``, shape ``(a, p)``: the support of the propagated set in each template
+    direction (:meth:`TemplateBatch._step`). Each product is summed in column order from its first
+    term, as :func:`_dot` does, so the result is the same bits as ``_dot`` followed by ``max`` (a
+    NaN propagates), in one pass without the ``(a, 2^n_A, v, p)`` intermediate."""
+    na, nv, p, n = DPhi.shape
+    out = np.empty((na, p))
+    for a in range(na):
+        for i in range(p):
+            best = -np.inf
+            for v in range(nv):
+                for j in range(V.shape[1]):
+                    if not F[a, j]:
+                        continue
+                    acc = DPhi[a, v, i, 0] * V[a, j, 0]
+                    for c in range(1, n):
+                        acc = acc + DPhi[a, v, i, c] * V[a, j, c]
+                    if acc > best or acc != acc:
+                        best = acc
+                        if acc != acc:
+                            break
+                if best != best:
+                    break
+            out[a, i] = best
+    return out
+
+
+@numba.njit(cache=True)
+def _basic_solutions(
+    m: np.ndarray,
+    norms: np.ndarray,
+    pad: np.ndarray,
+    idx: np.ndarray,
+    inv: np.ndarray,
+    U: np.ndarray,
+    zero: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
+    """The basic solutions ``x = U_S^-1 mu_S`` of every set ``Set(M, m[b])`` ``(B, K, n)`` and
+    whether each is feasible ``(B, K)`` (:func:`fdi_lib.sets.polytope._basis_vertices`'s route and
+    tolerance, the arrays of its :class:`~fdi_lib.sets.polytope._Bases`): ``mu`` the tightest
+    offset per distinct unit normal, feasible to ``1e-12 (1 + max |mu|)``, none where a zero row
+    has a negative offset. Each set is computed on its own, with sums in a fixed order, so its
+    result does not depend on the batch."""
+    B, p = m.shape
+    q, r = pad.shape
+    K, n = idx.shape
+    X = np.empty((B, K, n))
+    F = np.empty((B, K), dtype=np.bool_)
+    mu = np.empty(q)
+    for b in range(B):
+        bad = False
+        for i in range(p):
+            if zero[i] and m[b, i] < 0:
+                bad = True
+        big = 0.0
+        for g in range(q):
+            best = np.inf
+            for j in range(r):
+                i = pad[g, j]
+                if i < p:
+                    v = m[b, i] / norms[i]
+                    if v < best:
+                        best = v
+            mu[g] = best
+            big = max(big, abs(best))
+        tol = 1e-12 * (1.0 + big)
+        for k in range(K):
+            for i in range(n):
+                acc = 0.0
+                for j in range(n):
+                    acc += inv[k, i, j] * mu[idx[k, j]]
+                X[b, k, i] = acc
+            ok = not bad
+            for g in range(q):
+                if not ok:
+                    break
+                acc = 0.0
+                for c in range(n):
+                    acc += X[b, k, c] * U[g, c]
+                ok = acc <= mu[g] + tol
+            F[b, k] = ok
+    return X, F
+
+
 def _vertices_many(M: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Vertices of Set(M, m[b]) for every row b of m, shape (B, K, n), with a mask (B, K) of the
     rows that are vertices; a set is empty when its mask is all False, which the Chebyshev LP
@@ -1119,15 +1206,9 @@ def _vertices_many(M: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray
         for i, V in enumerate(Vs):
             X[i, : len(V)], F[i, : len(V)] = V, True
         return X, F
-    mp = np.empty((m.shape[0], m.shape[1] + 1))
-    np.divide(m, b.norms, out=mp[:, :-1])
-    mp[:, -1] = np.inf
-    mu = mp[:, b.pad].min(axis=2)  # (B, q) tightest offset per normal
-    X = np.einsum("kij,bkj->bki", b.inv, mu[:, b.idx])  # (B, K, n): inv_k mu_k
-    tol = 1e-12 * (1.0 + np.abs(mu).max(axis=1))
-    # one (K, n) x (n, q) product per set: the same shapes, hence the same rounding, in any batch
-    F = (np.matmul(X, b.U.T) <= mu[:, None, :] + tol[:, None, None]).all(axis=2)
-    F &= ~np.any(m[:, b.zero] < 0, axis=1)[:, None]
+    X, F = _basic_solutions(
+        np.ascontiguousarray(m, dtype=float), b.norms, b.pad, b.idx, b.inv, b.U, b.zero
+    )
     # no feasible basis is not a proof of emptiness: the Chebyshev LP decides (_enumerate_vertices)
     for i in np.flatnonzero(~F.any(axis=1)):
         V = _enumerate_vertices(M, m[i])
@@ -1220,17 +1301,27 @@ class TemplateBatch:
         for idx in groups.values():
             first = models[idx[0]]
             D = self.template if self.template is not None else default_template(self.n, first.C)
-            L = np.stack([models[b].L for b in idx])
+            # a model object shared by many observers (one bank on many records) is stored once;
+            # "mi" gives each observer's row in the model arrays
+            rows: dict[int, int] = {}
+            uniq: list[ModelSequence] = []
+            for b in idx:
+                if id(models[b]) not in rows:
+                    rows[id(models[b])] = len(uniq)
+                    uniq.append(models[b])
+            mi = np.array([rows[id(models[b])] for b in idx])
+            L = np.stack([mdl.L for mdl in uniq])
             self._groups.append(
                 {
                     "idx": np.array(idx),
+                    "mi": mi,
                     "D": D,
                     "C": first.C,
                     "M": np.vstack([D, first.C, -first.C]),
-                    "vA": np.stack([models[b]._vertex_A[:T] for b in idx]),
-                    "B": np.stack([models[b].B[:T] for b in idx]),
-                    "B_unc": np.stack([models[b].B_unc[:T] for b in idx]),
-                    "noise": np.stack([models[b].noise for b in idx]),
+                    "vA": np.stack([mdl._vertex_A[:T] for mdl in uniq]),
+                    "B": np.stack([mdl.B[:T] for mdl in uniq]),
+                    "B_unc": np.stack([mdl.B_unc[:T] for mdl in uniq]),
+                    "noise": np.stack([mdl.noise for mdl in uniq]),
                     # sum_c |D L|_{:, c}: the fixed columns of the generators (disturbance)
                     "sL": np.abs((D[None, :, :, None] * L[:, None, :, :]).sum(axis=2)).sum(axis=2),
                     "V": None,
@@ -1245,8 +1336,8 @@ class TemplateBatch:
             m = np.column_stack(
                 [
                     np.broadcast_to(self.X0.m, (len(y0), self.X0.m.size)),
-                    g["noise"] + y0,
-                    g["noise"] - y0,
+                    g["noise"][g["mi"]] + y0,
+                    g["noise"][g["mi"]] - y0,
                 ]
             )
             g["V"], g["F"] = _vertices_many(np.vstack([self.X0.M, g["C"], -g["C"]]), m)
@@ -1268,25 +1359,18 @@ class TemplateBatch:
 
     def _step(self, g: dict, a: np.ndarray, k: int) -> None:
         D, obs = g["D"], g["idx"][a]
-        V, F = g["V"][a], g["F"][a]
-        if (
-            not F.all()
-        ):  # the live vertex candidates of each set first (padded with its first vertex)
-            count = F.sum(axis=1)
-            order = np.argsort(~F, axis=1, kind="stable")[:, : count.max()]
-            order = np.where(np.arange(order.shape[1])[None] < count[:, None], order, order[:, :1])
-            V = np.take_along_axis(V, order[:, :, None], axis=1)  # (a, v, n)
-        DPhi = np.matmul(D, g["vA"][a, k - 1])  # (a, 2^n_A, p, n): D A_v
-        W = _dot(DPhi[:, :, None], V[:, None])  # (a, 2^n_A, v, p)
+        mi = g["mi"][a]  # the observers' rows in the model arrays
+        DPhi = np.matmul(D, g["vA"][mi, k - 1])  # (a, 2^n_A, p, n): D A_v
+        W = _support_max(DPhi, g["V"][a], g["F"][a])  # (a, p): over A_v and the live vertices
         uk = self.u[obs, k - 1]
-        c = _dot(D, _dot(g["B"][a, k - 1], uk))  # D B u
-        s = g["sL"][a]
-        Gu = _dot(g["B_unc"][a, k - 1], uk[:, None, :])  # (a, n_B, n): B_b u
+        c = _dot(D, _dot(g["B"][mi, k - 1], uk))  # D B u
+        s = g["sL"][mi]
+        Gu = _dot(g["B_unc"][mi, k - 1], uk[:, None, :])  # (a, n_B, n): B_b u
         for j in range(Gu.shape[1]):
             s = s + np.abs(_dot(D, Gu[:, j]))
-        h = W.reshape(len(a), -1, W.shape[-1]).max(axis=1) + c + s
+        h = W + c + s
         h = h + self.margin * (1.0 + np.abs(h))
-        nb = g["noise"][a] * (1.0 + self.margin) + self.margin
+        nb = g["noise"][mi] * (1.0 + self.margin) + self.margin
         yk = self.y[obs, k]
         X, Fn = _vertices_many(g["M"], np.column_stack([h, nb + yk, nb - yk]))
         if g["V"].shape[1] < X.shape[1]:
