@@ -23,7 +23,7 @@
    figure that draws it (the figure label of the cell that calls ``get(ID).plot``) or else to the
    section that runs it, the command line that recomputes it at the book's settings
    (:func:`fdi_lib.reproduce.book.book_command`, the settings the chapters' ``book_run`` uses) and
-   its documentation rendered.
+   its documentation rendered, names as code and ASCII maths as maths (:func:`docstring_rst`).
 7. The execution table of the status page (myst-nb's ``nb-exec-table``) says "ok" / "failed"
    instead of emoji, which show as empty boxes without an emoji font.
 8. Maths as readable text where it cannot be typeset: the text of references to a heading with
@@ -58,7 +58,9 @@
    (:meth:`fdi_lib.explorables.Explorable.small_multiples`); a cover page with the version and
    the claims ledger per status and paper, as the ledger page of the same build computed it; a
    list of figures after the contents and an index of the terms a student looks up
-   (:data:`INDEX_TERMS`, :class:`_IndexTerms`).
+   (:data:`INDEX_TERMS`, :class:`_IndexTerms`); tables within the text width, ragged-right,
+   intervals and units unbroken (:class:`_PrintedTables`, :data:`LATEX_LAYOUT`), floats kept in
+   their section and LaTeX passes that converge (:data:`LATEX_LAYOUT`).
    In the HTML, the header's download menu links the PDF when there is one: ``make pdf`` puts it
    beside the pages (:func:`publish_pdf`), and ``make book`` after ``make pdf`` copies it there.
 12. Tables that can be read on a phone: every body cell of a table carries its column's header as
