@@ -37,6 +37,7 @@ __all__ = [
     "stream_design",
     "STREAM_WINDOW_S",
     "STREAM_OVERLAP_S",
+    "STREAM_BATCH",
     "calibrated_design",
     "plot_scoreboard",
     "CALIBRATION_RUNS",
