@@ -11,7 +11,7 @@ export OPENBLAS_NUM_THREADS := 1
 export OMP_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 
-.PHONY: book book-fast test venv lock clean benchmarks student student-pdf notebooks browser-test check-book grade pdf install-check lint format
+.PHONY: book book-fast test venv lock clean benchmarks student student-pdf notebooks browser-test check-book grade pdf install-check lint format system-deps
 
 venv: $(STAMP)
 
@@ -153,6 +153,12 @@ $(NPM):
 $(AXE_JS): | $(NODE) $(NPM)
 	npm install --silent --no-save --no-package-lock --no-audit --no-fund --prefix _build/axe \
 	  axe-core@$(AXE_VERSION)
+
+## The Debian packages that the targets install when absent (Chromium, Node.js, npm, TeX
+## Live), all at once: .ci/run installs them first, before it runs steps side by side (two apt-get
+## at once wait on each other's lock, or fail).
+system-deps: $(CHROMIUM) $(NODE) $(NPM)
+	$(TEX_INSTALL)
 
 ## The live notebooks as the README opens them: `make notebooks`, then JupyterLab (headless, on
 ## 127.0.0.1) shows each in Chromium with no raw MyST role, directive or undefined macro

@@ -315,7 +315,7 @@ def _docstring_html(func, id_prefix: str) -> str:
     for the build to fail); cross-reference roles become literals."""
     from docutils.core import publish_parts
 
-    doc = re.sub(r":[\w:]+:`~?([^`]+)`", r"``\1``", inspect.getdoc(func) or "")
+    doc = docstring_rst(re.sub(r":[\w:]+:`~?([^`]+)`", r"``\1``", inspect.getdoc(func) or ""))
     parts = publish_parts(
         doc,
         writer_name="html5",
@@ -327,6 +327,7 @@ def _docstring_html(func, id_prefix: str) -> str:
             "embed_stylesheet": False,
             "warning_stream": False,
             "id_prefix": id_prefix,
+            "math_output": "MathJax",  # \\( \\) spans that the page's MathJax typesets
         },
     )
     return parts["body"]
@@ -342,6 +343,65 @@ _ASCII_MATH = re.compile(
     + r")|(?P<letter>[A-Za-z]))"
     r"(?:_(?P<sub>[A-Za-z0-9]+))?(?P<arg>\([a-z]\))?(?!\w)"
 )
+
+
+#: A numpydoc entry's line "name : type" (or "a, b : type"): its names.
+_TERM_LINE = re.compile(r"^(\s*)([A-Za-z_]\w*(?:, [A-Za-z_]\w*)*)( : .*)$", re.M)
+#: A name with an underscore and a word after it ("hull_area", "state2_scale"): code.
+_CODE_NAME = re.compile(r"(?<![\w`\\{])([A-Za-z]\w*_(?:\w*[A-Za-z]{2,}\w*))(?![\w`}])")
+_NORM = re.compile(r"\|\|([^|\n]+?)\|\|(_\w)?")
+
+
+def _ascii_tex(text: str) -> str:
+    r"""ASCII maths as TeX: Greek letters' names as macros, subscripts of several characters
+    braced, ``max``/``min`` as operators ("max_k Gamma_k" -> ``\max_k \Gamma_k``)."""
+    text = re.sub(
+        r"(?<![A-Za-z\\])("
+        + "|".join(_GREEK + [g.title() for g in _GREEK] + ["max", "min"])
+        + r")(?![A-Za-z])",
+        r"\\\1",
+        text,
+    )
+    return re.sub(r"([_^])([A-Za-z0-9]{2,})", r"\1{\2}", text)
+
+
+_SYMBOL = re.compile(
+    r"(?<![\w\\`])(?:(?P<base>max|min|"
+    + "|".join(_GREEK + [g.title() for g in _GREEK])
+    + r")|[A-Za-z])(?:(?P<sub>_(?:\{[^{}\n]*\}|[A-Za-z0-9]+))?(?P<sup>\^(?:\{[^{}\n]*\}|[A-Za-z0-9]+))?)"
+    r"(?:\([a-z]\))?(?![\w`])"
+)
+
+
+def docstring_rst(doc: str) -> str:
+    """A registry docstring (written for a terminal) with its names as code and its ASCII maths
+    as maths (issue 33: no TeX-like text outside maths on the catalogue page): the names of
+    numpydoc entries and names with a worded subscript ("hull_area") as literals, symbols with
+    a sub- or superscript, Greek letters' names with one, and norms ("||Gamma_k||_2") as
+    ``:math:``. Literals and roles already in the text are left as they are."""
+
+    def symbol(m: re.Match) -> str:
+        if not (m["sub"] or m["sup"]):
+            return m[0]
+        return f":math:`{_ascii_tex(m[0])}`"
+
+    def prose(text: str) -> str:
+        text = _TERM_LINE.sub(
+            lambda m: m[1] + ", ".join(f"``{n}``" for n in m[2].split(", ")) + m[3], text
+        )
+        parts = re.split(r"(``[^`]+``|:\w+:`[^`]+`)", text)
+        for i in range(0, len(parts), 2):
+            piece = _CODE_NAME.sub(r"``\1``", parts[i])
+            pieces = re.split(r"(``[^`]+``)", piece)
+            for j in range(0, len(pieces), 2):
+                pieces[j] = _SYMBOL.sub(
+                    symbol,
+                    _NORM.sub(lambda m: f":math:`\\|{_ascii_tex(m[1])}\\|{m[2] or ''}`", pieces[j]),
+                )
+            parts[i] = "".join(pieces)
+        return "".join(parts)
+
+    return prose(doc)
 
 
 def title_markdown(title: str) -> str:
@@ -370,7 +430,9 @@ def claims_markdown(rep) -> str:
             if under
             else "none (an illustration, or a study of ours)"
         )
-    return "; ".join(f"{re.sub(r'{[^}]*}', '…', c.location)} ({c.test})" for c in own)
+    return "; ".join(
+        f"{title_markdown(re.sub(r'{[^}]*}', '…', c.location))} ({c.test})" for c in own
+    )
 
 
 def catalogue_markdown(confdir: Path) -> tuple[str, list[Path]]:
@@ -1285,6 +1347,30 @@ def latex_script_fallback() -> str:
     )
 
 
+#: Preamble lines for the printed layout (issue 33; ``tools/check_pdf.py`` fails on what they
+#: prevent): tables ragged-right (tabulary's ``L`` for Sphinx's ``T``, which is ``J``,
+#: justified into wide gaps), a table column never squeezed below 5 em (tabulary's ``\tymin``:
+#: Sphinx's 3 digits left "week" and "99.4 %" wider than their column), and an image at most 80 %
+#: of the text height, so that a figure and its caption fit on a page (Sphinx caps the image
+#: alone at the text height: "Float too large for page"). A float stays in its section
+#: (placeins), so that a page's running footer names the section its figures belong to. And
+#: LaTeX passes that converge: the end-of-run check of the labels compares their text, not
+#: their tokens. unicode-math gives the
+#: Greek letters of the text (a caption's "Γ", a heading's "α") catcode 12 at
+#: ``\begin{document}``, after the ``.aux`` was read with catcode 11, so that a label with one
+#: never matched its stored self and every pass asked for a rerun ("Label(s) may have changed").
+LATEX_LAYOUT = r"""\newcolumntype{T}{L}
+\usepackage[section]{placeins}
+\setlength{\tymin}{5em}
+\makeatletter\AtBeginDocument{\spx@image@maxheight=0.8\textheight}
+\def\@testdef#1#2#3{\edef\reserved@a{\detokenize{#3}}%
+  \edef\reserved@b{\expandafter\expandafter\expandafter\detokenize
+    \expandafter\expandafter\expandafter{\csname #1@#2\endcsname}}%
+  \ifx\reserved@a\reserved@b\else\@tempswatrue\fi}
+\makeatother
+"""
+
+
 def _latex_preamble(app: Sphinx, config) -> None:
     elements = config.latex_elements
     elements.setdefault("tableofcontents", "\\sphinxtableofcontents\n\\listoffigures\n")
@@ -1294,6 +1380,7 @@ def _latex_preamble(app: Sphinx, config) -> None:
         "% sub- and superscript characters the text font lacks, from DejaVu\n"
         + latex_script_fallback()
         + "\n"
+        + LATEX_LAYOUT
     )
 
 
@@ -1369,7 +1456,11 @@ def cover_latex(title: str, version: str, counts: dict[str, dict[str, int]]) -> 
             r"\vfill",
             r"{\large Claims of the papers checked by this edition, by status (see the claims ledger)\par}",
             r"\vspace{1em}\small",
-            r"\begin{tabular}{l" + "r" * (len(papers) + 1) + "}",
+            # within the text width: the papers' names wrap in columns sharing what the status
+            # column leaves, ragged-left over their counts
+            r"\begin{tabular}{@{}>{\raggedright\arraybackslash}p{0.3\linewidth}"
+            + rf"*{{{len(papers) + 1}}}{{>{{\raggedleft\arraybackslash}}"
+            + rf"p{{\dimexpr(0.7\linewidth-{2 * (len(papers) + 1)}\tabcolsep)/{len(papers) + 1}\relax}}}}@{{}}}}",
             r"\toprule " + head + r" \\ \midrule",
             *rows,
             r"\bottomrule\end{tabular}",
@@ -1461,6 +1552,80 @@ class _IndexTerms(SphinxPostTransform):
             for term in terms:
                 done.add((term, par.source))
                 par.insert(0, addnodes.index(entries=[("single", term, "", "", None)]))
+
+
+#: A bracketed interval of two numbers ("[0.02, 0.05]", "[-0.333, 1]") and a number before its
+#: unit ("0.032 s", "5 %"): the spaces that a printed table must not break at.
+_INTERVAL = re.compile(r"(\[[^\[\]\s,]{1,20},)\s+([^\[\]\s,]{1,20}\])")
+_NUMBER_UNIT = re.compile(r"(\d)\s+(%|s|ms|µs|min|m/s|rad|°|deg)(?![\w/])")
+NBSP = "\u00a0"
+
+#: Characters of the text width that a table's columns share (FreeSerif 10 pt on the narrower
+#: page, A4, with Sphinx's margins: about 80 average characters), for :class:`_PrintedTables`.
+TABLE_CHARS = 80
+#: What a column's padding (two ``\tabcolsep``, 12 pt) and the wider header font take, in characters.
+PAD_CHARS = 3
+
+
+def printed_widths(columns: list[list[str]], chars: int = TABLE_CHARS) -> list[int] | None:
+    """Column widths (in characters, padding included) for a long table that would not fit on one
+    line per row: each column gets at least its longest unbreakable piece (no-break spaces join),
+    the rest of ``chars`` in proportion to its longest cell; ``None`` when every column fits at
+    its natural width (``l`` columns do)."""
+    natural = [max((len(c) for c in col), default=1) + PAD_CHARS for col in columns]
+    if sum(natural) <= chars:
+        return None
+    # the unbreakable pieces: split at ordinary spaces, not at the no-break ones
+    words = [
+        max((len(w) for c in col for w in re.split(r"[ \t\n]+", c)), default=1) + PAD_CHARS
+        for col in columns
+    ]
+    spare = max(chars - sum(words), 0)
+    extra = [n - w for n, w in zip(natural, words)]
+    total = sum(extra) or 1
+    return [w + round(spare * e / total) for w, e in zip(words, extra)]
+
+
+class _PrintedTables(SphinxPostTransform):
+    """Tables for the printed page (issue 33): the spaces in an interval and between a number
+    and its unit are no-break spaces (a cell wraps between a value and its interval, not inside
+    either), and a long table (Sphinx's ``longtable``, more than 30 rows, whose columns are
+    ``l`` and never wrap) gets ragged-right columns of :func:`printed_widths` (a
+    ``tabularcolumns`` spec before it); the shorter tables are ragged-right by the preamble
+    (tabulary's ``L`` for Sphinx's ``T``, :func:`_latex_preamble`)."""
+
+    default_priority = 820
+    builders = ("latex",)
+
+    def run(self, **kwargs: Any) -> None:
+        from sphinx import addnodes
+
+        for table in list(self.document.findall(nodes.table)):
+            for entry in table.findall(nodes.entry):
+                for text in list(entry.findall(nodes.Text)):
+                    new = _NUMBER_UNIT.sub(rf"\1{NBSP}\2", _INTERVAL.sub(rf"\1{NBSP}\2", str(text)))
+                    if new != str(text):
+                        text.parent.replace(text, nodes.Text(new))
+            previous = table.previous_sibling()
+            if isinstance(previous, addnodes.tabular_col_spec):
+                continue
+            for tgroup in table.findall(nodes.tgroup):
+                rows = list(tgroup.findall(nodes.row))
+                if len(rows) <= 30 or any(
+                    e.get("morecols") or e.get("morerows") for e in tgroup.findall(nodes.entry)
+                ):
+                    continue
+                columns: list[list[str]] = [[] for _ in range(int(tgroup.get("cols", 0)))]
+                for row in rows:
+                    for column, entry in zip(columns, row.children):
+                        column.append(entry.astext().strip())
+                widths = printed_widths(columns)
+                if widths is None:
+                    continue
+                spec = "".join(
+                    rf">{{\raggedright\arraybackslash}}\X{{{w}}}{{{sum(widths)}}}" for w in widths
+                )
+                table.parent.insert(table.parent.index(table), addnodes.tabular_col_spec(spec=spec))
 
 
 class _NumberedParts(SphinxPostTransform):
@@ -1718,6 +1883,7 @@ def setup(app: Sphinx) -> dict[str, Any]:
     app.add_post_transform(_NumberedParts)
     app.add_post_transform(_IndexTerms)
     app.add_post_transform(_ExplorableFigures)
+    app.add_post_transform(_PrintedTables)
     app.add_js_file(PDF_SCRIPT)
     app.connect("build-finished", _pdf_script)
     app.connect("env-updated", _record_run_times)

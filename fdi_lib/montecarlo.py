@@ -86,6 +86,14 @@ def trial_seeds(seed: int, n_trials: int) -> list[np.random.SeedSequence]:
     would not fit in memory (about 0.5 kB a realisation) is refused with a
     :class:`~fdi_lib.errors.ResourceError` before anything is made; :func:`run_monte_carlo`
     makes each chunk's seeds when it runs the chunk instead.
+
+    Explained in the book: :doc:`/book/running`.
+
+    Examples
+    --------
+    >>> seeds = trial_seeds(7, 3)
+    >>> len(seeds), seeds[2].spawn_key             # realisation i is child i of the root seed
+    (3, (2,))
     """
     seed = check_seed(seed)
     n_trials = integer(n_trials, "n_trials", low=1)
@@ -94,13 +102,35 @@ def trial_seeds(seed: int, n_trials: int) -> list[np.random.SeedSequence]:
 
 
 def trial_rngs(seeds: Sequence[np.random.SeedSequence]) -> list[np.random.Generator]:
-    """A :class:`~numpy.random.Generator` per seed sequence of ``seeds``."""
+    """A :class:`~numpy.random.Generator` per seed sequence of ``seeds``.
+
+    Explained in the book: :doc:`/book/running`.
+
+    Examples
+    --------
+    >>> a = trial_rngs(trial_seeds(7, 2))[1].standard_normal()
+    >>> b = trial_rngs(trial_seeds(7, 50))[1].standard_normal()
+    >>> bool(a == b)                      # realisation 1's stream does not depend on the count
+    True
+    """
     return [np.random.default_rng(s) for s in seeds]
 
 
 def draw_noise_batch(model: LTVModel, seeds: Sequence[np.random.SeedSequence]) -> Noise:
     """Noise of ``model`` for a chunk of realisations, one per entry of ``seeds`` (each its own
-    stream), stacked on axis 0."""
+    stream), stacked on axis 0.
+
+    Explained in the book: :doc:`/book/running`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fdi_lib.models import ltv_model
+    >>> m = ltv_model(F=0.5 * np.eye(2), H=np.eye(2), Q=np.eye(2), R=np.eye(2), n_steps=30)
+    >>> noise = draw_noise_batch(m, trial_seeds(0, 4))
+    >>> noise.x0.shape, noise.w.shape, noise.v.shape      # (realisations, [steps,] size)
+    ((4, 2), (4, 30, 2), (4, 30, 2))
+    """
     roots = noise_roots(model)  # covariance roots shared by all the draws
     draws = [draw_noise(model, rng, roots=roots) for rng in trial_rngs(seeds)]
     return Noise(
@@ -116,6 +146,13 @@ def default_chunk_size(n_trials: int) -> int:
     Four chunks or more keep two workers busy; about 250 realisations per chunk
     amortise the noise-independent work of a chunk (e.g. the windowed GLR's
     ``Gamma_k(r)``, ``C_k(r)``) while keeping its arrays small (a few MiB).
+
+    Explained in the book: :doc:`/book/running`.
+
+    Examples
+    --------
+    >>> default_chunk_size(10), default_chunk_size(1000), default_chunk_size(100_000)
+    (3, 250, 250)
     """
     return max(1, min(250, -(-int(n_trials) // 4)))
 
@@ -132,6 +169,8 @@ def run_monte_carlo(
     executor: concurrent.futures.Executor | None = None,
 ) -> dict[str, np.ndarray]:
     """Run ``n_trials`` realisations of ``chunk_fn`` and concatenate the results.
+
+    Explained in the book: :doc:`/book/running`.
 
     Parameters
     ----------
@@ -175,6 +214,19 @@ def run_monte_carlo(
     ResourceError
         The results would not fit in the available memory: the first chunk's size per
         realisation times ``n_trials``, checked before any other chunk runs.
+
+    Examples
+    --------
+    A chunk function draws each realisation from its own seed; the chunks and the number of
+    processes do not change the results:
+
+    >>> import numpy as np
+    >>> def chunk(seeds):
+    ...     return {"x": np.array([np.random.default_rng(s).standard_normal() for s in seeds])}
+    >>> a = run_monte_carlo(chunk, 10, seed=1)
+    >>> b = run_monte_carlo(chunk, 10, seed=1, chunk_size=3)
+    >>> a["x"].shape, bool(np.array_equal(a["x"], b["x"]))
+    ((10,), True)
     """
     return run_monte_carlo_many(
         [chunk_fn],
@@ -206,6 +258,8 @@ def run_monte_carlo_many(
     with the same arguments; but the chunks of all the columns are handed out together, so
     that no process waits at the end of a column for the others to finish theirs.
 
+    Explained in the book: :doc:`/book/running`.
+
     Parameters
     ----------
     chunk_fns : sequence of callable
@@ -223,6 +277,17 @@ def run_monte_carlo_many(
     ResourceError
         The results of ``n_trials`` realisations would not fit in the available memory (estimated
         from the first chunk, before any other is run).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> def chunk(seeds):
+    ...     return {"x": np.array([np.random.default_rng(s).standard_normal() for s in seeds])}
+    >>> def square(seeds):
+    ...     return {"x2": chunk(seeds)["x"] ** 2}
+    >>> first, second = run_monte_carlo_many([chunk, square], 10, seed=1)
+    >>> bool(np.array_equal(first["x"] ** 2, second["x2"]))    # the same realisations
+    True
     """
     seed = check_seed(seed)
     n_trials = integer(n_trials, "n_trials", low=1)
@@ -306,7 +371,20 @@ _PROGRESS: contextvars.ContextVar[bool] = contextvars.ContextVar("fdi_lib_progre
 @contextlib.contextmanager
 def progress_bars(enabled: bool = True) -> Iterator[None]:
     """Context manager: Monte Carlo runs inside show a progress bar on standard error if ``enabled``
-    (hide it otherwise), unless their ``progress`` argument says otherwise."""
+    (hide it otherwise), unless their ``progress`` argument says otherwise.
+
+    Explained in the book: :doc:`/book/running`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> def chunk(seeds):
+    ...     return {"k": np.arange(len(seeds))}
+    >>> with progress_bars(False):           # no bar, whatever the command line said
+    ...     out = run_monte_carlo(chunk, 8, seed=0)
+    >>> out["k"].shape
+    (8,)
+    """
     token = _PROGRESS.set(bool(enabled))
     try:
         yield
@@ -327,6 +405,19 @@ def use_executor(executor: concurrent.futures.Executor | None) -> Iterator[None]
 
     So a whole reproduction, or the claims ledger, runs on a cluster without passing the executor
     down every call (as the command line's ``--cluster`` does). The setting is this thread's.
+
+    Explained in the book: :doc:`/book/running`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from concurrent.futures import ThreadPoolExecutor
+    >>> def chunk(seeds):
+    ...     return {"x": np.array([np.random.default_rng(s).random() for s in seeds])}
+    >>> with ThreadPoolExecutor(2) as pool, use_executor(pool):
+    ...     a = run_monte_carlo(chunk, 12, seed=3)
+    >>> bool(np.array_equal(a["x"], run_monte_carlo(chunk, 12, seed=3)["x"]))
+    True
     """
     token = _EXECUTOR.set(executor)
     try:
@@ -348,6 +439,8 @@ def dask_executor(
     cluster: str, *, timeout: float | None = None, worker_timeout: float | None = None
 ) -> Iterator[concurrent.futures.Executor]:
     """Context manager: the :class:`concurrent.futures.Executor` of a Dask cluster, closed on exit.
+
+    Explained in the book: :doc:`/book/running`.
 
     Parameters
     ----------
@@ -375,6 +468,18 @@ def dask_executor(
         answer within ``timeout``), the address is not a Dask scheduler's, the scheduler has no
         worker within ``timeout``, or the local cluster cannot start. During a run (raised by
         :func:`run_monte_carlo`): no worker for ``worker_timeout`` seconds, or the scheduler lost.
+
+    Examples
+    --------
+    ``with dask_executor("local:2") as ex, use_executor(ex): ...`` runs the block's Monte Carlo
+    on two local workers (the chapter's recipes); a malformed cluster is refused before anything
+    starts:
+
+    >>> with dask_executor("local:0"):
+    ...     pass
+    Traceback (most recent call last):
+    ...
+    fdi_lib.errors.ModelError: cluster: expected local:N with N a positive integer, got 'local:0'
     """
     kind, sep, rest = str(cluster).partition(":")
     n_workers = 0  # of a local cluster; 0 for a scheduler's address
@@ -445,22 +550,40 @@ def _start_dask(
 
     address: Any = cluster
     if n_workers:
+        import dask
+
         try:
             # processes (one BLAS thread each: Dask's nanny sets OMP/OPENBLAS/MKL_NUM_THREADS=1),
             # on the loopback interface only, no dashboard (the scheduler's small HTTP server,
             # health and metrics, on a free loopback port); no log on standard error (a chunk's error
-            # reaches the caller as an exception)
-            address = stack.enter_context(
-                distributed.LocalCluster(
-                    n_workers=n_workers,
-                    threads_per_worker=1,
-                    processes=True,
-                    host="127.0.0.1",
-                    dashboard_address=None,
-                    scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
-                    silence_logs=logging.CRITICAL,
+            # reaches the caller as an exception). Two of Dask's defaults cost a chunk CPU time
+            # (the nannies pass this configuration to their workers): glibc's malloc trim threshold
+            # set to 64 kiB in the workers' environment (MALLOC_TRIM_THRESHOLD_, to return freed
+            # memory to the system at once) made a chunk of Table I of Zhang 2021 (100
+            # realisations) take 0.074 s of CPU in a worker against 0.057 s in this process: its
+            # many temporary arrays of a few MiB were given back and faulted in again at each
+            # operation; without it, 0.057 s in both. And the workers' statistical profiler (a
+            # thread sampling the running task's stack every 10 ms for the dashboard, which is
+            # off): 0.025 s of CPU per second per idle worker against 0.015 s without.
+            environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}))
+            environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+            with dask.config.set(
+                {
+                    "distributed.worker.profile.enabled": False,
+                    "distributed.nanny.pre-spawn-environ": environ,
+                }
+            ):
+                address = stack.enter_context(
+                    distributed.LocalCluster(
+                        n_workers=n_workers,
+                        threads_per_worker=1,
+                        processes=True,
+                        host="127.0.0.1",
+                        dashboard_address=None,
+                        scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+                        silence_logs=logging.CRITICAL,
+                    )
                 )
-            )
         except (OSError, RuntimeError) as exc:  # RuntimeError: "Nanny failed to start"
             raise ClusterError(
                 f"cluster: cannot start a local cluster of {n_workers} workers ({_one_line(exc)})"
@@ -630,6 +753,17 @@ def _batch_size(first_seconds: float | None, n_left: int, workers: int | None) -
     return max(1, min(math.ceil(TASK_SECONDS / first_seconds), n_left // (4 * workers)))
 
 
+def _task_chunks(batch: int, n_left: int, workers: int | None) -> int:
+    """Chunks in the next task handed out, ``n_left`` chunks not handed out yet: ``batch`` (from
+    :func:`_batch_size`), but no more than ``n_left / (2 workers)``, so that the tasks shrink
+    towards the end of the run (guided self-scheduling, Polychronopoulos and Kuck 1987): the
+    cluster takes tasks in the order given, the last ones are single chunks, and the workers
+    finish within about a chunk of each other instead of a whole task."""
+    if not workers:
+        return min(batch, n_left)
+    return max(1, min(batch, n_left // (2 * workers)))
+
+
 def _call_many(
     calls: Sequence[tuple[ChunkFn, np.random.SeedSequence, int, int]],
 ) -> list[dict[str, np.ndarray]]:
@@ -663,11 +797,12 @@ def _run_on_executor(
     given = 1  # tasks handed out: range(1, given)
     check = getattr(executor, "check", None)  # a cluster's watchdog (see dask_executor)
     workers = getattr(executor, "workers", None)
-    batch = _batch_size(first_seconds, n_tasks - 1, workers() if workers is not None else None)
+    n_workers = workers() if workers is not None else None
+    batch = _batch_size(first_seconds, n_tasks - 1, n_workers)
     try:
         while given < n_tasks or pending:
             while given < n_tasks and len(pending) < IN_FLIGHT:
-                chunks = range(given, min(given + batch, n_tasks))
+                chunks = range(given, given + _task_chunks(batch, n_tasks - given, n_workers))
                 calls = [task(i) for i in chunks]
                 future = (
                     executor.submit(_call, *calls[0])
@@ -721,7 +856,15 @@ def _spawned(root: np.random.SeedSequence, start: int, stop: int) -> list[np.ran
 
 def available_memory() -> int | None:
     """Bytes of memory available to a new allocation without swapping (psutil's ``available``),
-    or ``None`` when it cannot be read (no psutil: then nothing is refused)."""
+    or ``None`` when it cannot be read (no psutil: then nothing is refused).
+
+    Explained in the book: :doc:`/book/running`.
+
+    Examples
+    --------
+    >>> available_memory() > 0
+    True
+    """
     try:
         import psutil
     except ImportError:  # pragma: no cover (psutil is present wherever Jupyter is)
@@ -731,7 +874,18 @@ def available_memory() -> int | None:
 
 def check_memory(needed: float, name: str, what: str) -> None:
     """Raise :class:`~fdi_lib.errors.ResourceError` naming ``name`` when ``needed`` bytes exceed
-    :func:`available_memory`; ``what`` says what would need them."""
+    :func:`available_memory`; ``what`` says what would need them.
+
+    Explained in the book: :doc:`/book/running`.
+
+    Examples
+    --------
+    >>> check_memory(1e3, "n_trials", "1 realisation")         # fits: nothing happens
+    >>> check_memory(1e30, "n_trials", "1e26 trials")    # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    fdi_lib.errors.ResourceError: n_trials: 1e26 trials would need about 1e+15 PB of memory; ...
+    """
     available = available_memory()
     if available is not None and needed > available:
         raise ResourceError(
@@ -793,6 +947,19 @@ def effective_jobs(jobs: int, n_tasks: int | None = None, *, name: str = "jobs:"
     (results do not depend on the number of processes, only the time does), its message starting
     with ``name``. When ``$FDI_CORES`` (:data:`CORES_ENV`) is set, at most that many processes are
     used, without a warning.
+
+    Explained in the book: :doc:`/book/running`.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> effective_jobs(1), effective_jobs(-1, n_tasks=1)    # one process; all cores but one task
+    (1, 1)
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     used = effective_jobs(10**6)
+    >>> used < 10**6, caught[0].category.__name__
+    (True, 'JobsCappedWarning')
     """
     if isinstance(jobs, (bool, np.bool_)) or not isinstance(jobs, (int, np.integer)) or jobs == 0:
         raise ModelError(f"jobs: expected a non-zero integer (-1 = all cores), got {jobs!r}")
@@ -934,6 +1101,8 @@ def _run_chunks(
 
 def binomial_ci(successes: int, trials: int, level: float = 0.95) -> tuple[float, float]:
     """Exact (Clopper-Pearson) confidence interval of a binomial proportion (scipy's ``binomtest``).
+
+    Explained in the book: :doc:`/book/zb2014/glr`.
 
     Parameters
     ----------

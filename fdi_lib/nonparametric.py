@@ -53,7 +53,7 @@ import scipy.stats
 
 from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.filters import KalmanGains, kalman_filter, kalman_gains
-from fdi_lib.glr import WindowGLRResult, first_alarm, glr_window
+from fdi_lib.glr import WindowedGLR, WindowGLRResult, first_alarm, glr_window
 from fdi_lib.isolation import minmax_isolation
 from fdi_lib.kitanidis import KitanidisGains, as_unknown_input_matrix, kitanidis_gains
 from fdi_lib.models import FaultFamily, LTVModel, fault_profile, ltv_model, step_family
@@ -91,6 +91,8 @@ def kitanidis_predictor_gains(
     ``P = P_k`` (the prior covariance), ``Sigma = H_k P_k H_k^T + R_k``,
     ``A = F_k (I - L_k H_k)`` and ``FK = F_k L_k``. :func:`fdi_lib.filters.kalman_filter`
     with these gains is recursion (27); its innovation is the paper's ``eps_k``.
+
+    Explained in the book: :doc:`/book/bz/parametric-nonparametric`.
 
     Parameters
     ----------
@@ -269,6 +271,8 @@ def innovation_split(
 ) -> InnovationSplit:
     """Check Proposition 1 (eq. 25) on a record: compute each term and what is left.
 
+    Explained in the book: :doc:`/book/bz/parametric-nonparametric`.
+
     Parameters
     ----------
     model, gains
@@ -282,6 +286,36 @@ def innovation_split(
         ``theta_k``, ``(*batch, N, m)``.
     E, f
         As in :func:`nonparametric_signature`.
+
+    Returns
+    -------
+    InnovationSplit
+
+    Examples
+    --------
+    A record with a non-parametric fault ``f`` and a parametric jump of ``theta``, and the same
+    noise without them; the four terms add up to the difference of the innovations:
+
+    >>> import numpy as np
+    >>> from fdi_lib.filters import kalman_filter
+    >>> from fdi_lib.models import fault_profile
+    >>> from fdi_lib.simulate import simulate
+    >>> from fdi_lib.systems import bz_example as ex
+    >>> N = 120
+    >>> model = ex.bz_model(N)
+    >>> gains = kitanidis_predictor_gains(model, ex.E)
+    >>> f = ex.nonparametric_profile(N, size=0.2, onset=20)
+    >>> theta = ex.parametric_path(N, theta=[0.05, -0.03], onset=70)
+    >>> fault = fault_profile(model, Psi=ex.state_disturbance(f, theta))
+    >>> s0 = simulate(model, rng=np.random.default_rng(11), controller=ex.controller())
+    >>> s1 = simulate(model, noise=s0.noise, controller=ex.controller(), fault=fault, theta=[1.0])
+    >>> eps1 = kalman_filter(model, s1.y, s1.u, gains=gains).innovations
+    >>> eps0 = kalman_filter(model, s0.y, s0.u, gains=gains).innovations
+    >>> split = innovation_split(
+    ...     model, gains, eps1, eps0, Psi=ex.PSI, theta_path=theta, E=ex.E, f=f
+    ... )
+    >>> float(np.abs(split.residual).max()) < 1e-10          # Proposition 1, eq. (25)
+    True
     """
     _check_gains(model, gains)
     N, p = model.n_steps, model.p
@@ -418,6 +452,32 @@ def reduce_residual(
 
     ``model`` and ``kgains`` as there; ``T`` is a precomputed projection ``(N, r, p)`` (default:
     computed).
+
+    Explained in the book: :doc:`/book/bz/parametric-nonparametric`.
+
+    Examples
+    --------
+    The projected residual of a record with a non-parametric fault ``f`` is that of the same noise
+    without it (``f`` is rejected):
+
+    >>> import numpy as np
+    >>> from fdi_lib.filters import kalman_filter
+    >>> from fdi_lib.kitanidis import kitanidis_gains
+    >>> from fdi_lib.models import fault_profile
+    >>> from fdi_lib.simulate import simulate
+    >>> from fdi_lib.systems import bz_example as ex
+    >>> N = 120
+    >>> model = ex.bz_model(N)
+    >>> kg = kitanidis_gains(model, ex.E)
+    >>> gains = kitanidis_predictor_gains(model, ex.E, kg)
+    >>> f = ex.nonparametric_profile(N, size=0.5, onset=10)
+    >>> fault = fault_profile(model, Psi=ex.state_disturbance(f, np.zeros((N, 2))))
+    >>> s0 = simulate(model, rng=np.random.default_rng(5), controller=ex.controller())
+    >>> s1 = simulate(model, noise=s0.noise, controller=ex.controller(), fault=fault, theta=[1.0])
+    >>> r0 = reduce_residual(model, kg, kalman_filter(model, s0.y, s0.u, gains=gains).innovations)
+    >>> r1 = reduce_residual(model, kg, kalman_filter(model, s1.y, s1.u, gains=gains).innovations)
+    >>> r1.residuals.shape, float(np.abs(r1.residuals - r0.residuals).max()) < 1e-10
+    ((120, 2), True)
     """
     N, p = model.n_steps, model.p
     eps = _series(innovations, N, p, "innovations")
@@ -582,6 +642,30 @@ class Solution1Result:
     energy_threshold: float
 
 
+def _solution1_detector(red: ReducedResidual, Psi: Any, window: int) -> WindowedGLR:
+    """The windowed GLR of :func:`solution1` on the projected residual ``red`` (its model and gains
+    do not depend on the record)."""
+    return WindowedGLR(red.model, red.gains, step_family(red.model, Psi=Psi), window)
+
+
+def solution1_glr(
+    model: LTVModel,
+    *,
+    E: Any,
+    Psi: Any,
+    window: int,
+    kgains: KitanidisGains | None = None,
+    T: np.ndarray | None = None,
+) -> WindowedGLR:
+    """The noise-independent part of :func:`solution1`'s windowed GLR (signatures, informations
+    and their pseudo-inverses: most of a record's cost), for ``solution1(..., glr=...)`` with the
+    same arguments: it depends on the model, ``E``, ``Psi`` and the window, not on the record."""
+    if kgains is None:
+        kgains = kitanidis_gains(model, E)
+    red = reduce_residual(model, kgains, np.zeros((model.n_steps, model.p)), T)
+    return _solution1_detector(red, Psi, window)
+
+
 def solution1(
     model: LTVModel,
     y: Any,
@@ -598,6 +682,7 @@ def solution1(
     kgains: KitanidisGains | None = None,
     kalman: KalmanGains | None = None,
     T: np.ndarray | None = None,
+    glr: WindowedGLR | None = None,
 ) -> Solution1Result:
     """Solution 1: reject ``E f``, test ``theta`` by GLR + minmax, detect ``f`` by energy.
 
@@ -608,6 +693,8 @@ def solution1(
        alarm when ``l_k > glr_threshold``; minmax isolation (41) from ``C_k(r_hat), d_k(r_hat)``.
     3. Parallel Kalman filter (46); windowed energy of its innovation (Section 3.3), an alarm
        counts as "non-parametric" while the GLR is quiet.
+
+    Explained in the book: :doc:`/book/bz/parametric-nonparametric`.
 
     Parameters
     ----------
@@ -631,14 +718,46 @@ def solution1(
         Minmax partitions; default one test per component of ``theta``.
     kgains, kalman, T : optional
         Precomputed Kitanidis gains, Kalman gains, projection (shared across chunks).
+    glr : WindowedGLR, optional
+        The GLR's noise-independent arrays, :func:`solution1_glr` of the same ``model``, ``E``,
+        ``Psi``, ``window``, ``kgains`` and ``T``: reused instead of computed again (e.g. by a
+        widget whose record changes and whose setting does not). The results are the same.
+
+    Returns
+    -------
+    Solution1Result
+
+    Examples
+    --------
+    A jump of the first component of ``theta`` at ``k = 60``, on 5 realisations:
+
+    >>> import numpy as np
+    >>> from fdi_lib.models import fault_profile
+    >>> from fdi_lib.simulate import simulate
+    >>> from fdi_lib.systems import bz_example as ex
+    >>> N = 120
+    >>> model = ex.bz_model(N)
+    >>> theta = ex.parametric_path(N, theta=[0.08, 0.0], onset=60)
+    >>> fault = fault_profile(model, Psi=ex.state_disturbance(np.zeros((N, 1)), theta))
+    >>> s = simulate(model, rng=np.random.default_rng(9), controller=ex.controller(), size=5,
+    ...              fault=fault, theta=[1.0])
+    >>> res = solution1(model, s.y, s.u, E=ex.E, Psi=ex.PSI, window=30, glr_threshold=23.0,
+    ...                 energy_window=20, energy_alpha=1e-4)
+    >>> res.glr_alarm.shape, res.isolation.shape           # per realisation; per theta component
+    ((5,), (5, 2))
+    >>> bool(np.all(res.glr_alarm >= 60)), res.isolation[:, 0].all()   # detected after the onset
+    (True, np.True_)
     """
     if kgains is None:
         kgains = kitanidis_gains(model, E)
     kpred = kitanidis_predictor_gains(model, E, kgains)
     eps_kit = kalman_filter(model, y, u, gains=kpred).innovations  # (27)
     red = reduce_residual(model, kgains, eps_kit, T)
-    fam: FaultFamily = step_family(red.model, Psi=Psi)
-    glr = glr_window(red.residuals, red.model, red.gains, fam, window)
+    if glr is None:
+        glr = _solution1_detector(red, Psi, window)
+    res = glr_window(red.residuals, glr.model, glr.gains, glr.family, window, shared=glr)
+    fam: FaultFamily = glr.family
+    glr = res
     alarm = first_alarm(glr.statistic, glr_threshold)
     batch = alarm.shape
     m = fam.m
@@ -721,6 +840,8 @@ def solution2(
 ) -> Solution2Result:
     """Solution 2: Kalman filter (46), RLS with forgetting factor on (47), energy of ``E_k``.
 
+    Explained in the book: :doc:`/book/bz/parametric-nonparametric`.
+
     Parameters
     ----------
     model : LTVModel
@@ -741,6 +862,29 @@ def solution2(
     rls : RLSGains, optional
         Precomputed :func:`fdi_lib.rls.rls_gains` of the regressor ``H_k Gamma_k``, ``Sigma_k``
         and ``lam`` (they do not depend on the record: shared across calls).
+
+    Returns
+    -------
+    Solution2Result
+
+    Examples
+    --------
+    A constant ``theta`` tracked by the RLS on 10 realisations:
+
+    >>> import numpy as np
+    >>> from fdi_lib.models import fault_profile
+    >>> from fdi_lib.simulate import simulate
+    >>> from fdi_lib.systems import bz_example as ex
+    >>> N = 120
+    >>> model = ex.bz_model(N)
+    >>> theta = np.broadcast_to([0.06, -0.04], (N, 2))
+    >>> fault = fault_profile(model, Psi=ex.state_disturbance(np.zeros((N, 1)), theta))
+    >>> s = simulate(model, rng=np.random.default_rng(21), controller=ex.controller(), size=10,
+    ...              fault=fault, theta=[1.0])
+    >>> res = solution2(model, s.y, s.u, Psi=ex.PSI, lam=0.99, energy_window=20,
+    ...                 energy_alpha=1e-4, start=30)
+    >>> res.rls.theta_hat[:, -1].mean(axis=0).round(2).tolist()     # the mean of the estimates
+    [0.06, -0.04]
     """
     kal = kalman_gains(model) if kalman is None else kalman
     if rls is not None and rls.lam != lam:

@@ -62,7 +62,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any, Iterator, Literal
 
 import numpy as np
 
@@ -129,6 +129,8 @@ class RegressionData:
 def regression_data(residuals: Any, on_residual: Any, *, start: int = 1) -> RegressionData:
     """Stack residuals and their fault signature into the regression (36)-(38).
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     residuals : array_like
@@ -145,6 +147,13 @@ def regression_data(residuals: Any, on_residual: Any, *, start: int = 1) -> Regr
     Returns
     -------
     RegressionData
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> d = regression_data(np.ones((5, 2)), np.ones((5, 2, 3)))   # N = 5, p = 2, m = 3
+    >>> d.X.shape, d.y.shape, d.n_samples          # rows of k = 1 .. 4 stacked
+    ((8, 3), (8,), 4)
     """
     r = array(residuals, "residuals")
     S = array(on_residual, "on_residual")
@@ -389,6 +398,8 @@ def lasso_path(
     nearly collinear columns) is recomputed by scikit-learn's ``lars_path``, and
     :attr:`LassoPath.solver` says which.
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     X : array_like
@@ -415,6 +426,18 @@ def lasso_path(
     ------
     NumericalError
         When no path passes the KKT check (neither the homotopy's nor scikit-learn's).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> path = lasso_path(X, y)
+    >>> [sorted(map(int, np.flatnonzero(c))) for c in path.coefs[:, 1:3].T]  # breakpoints 1, 2
+    [[1], [1, 4]]
+    >>> path.kkt_residual <= KKT_TOL
+    True
     """
     X, y = _check_xy(X, y)
     return lasso_path_batch(
@@ -432,6 +455,8 @@ def lasso_paths(
 ) -> list[LassoPath]:
     """Exact Lasso paths of a batch of problems, as :func:`lasso_path` for each.
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     X, y, n_samples, lambda_min, max_size
@@ -441,6 +466,18 @@ def lasso_paths(
     -------
     list of LassoPath
         One per problem, each identical to :func:`lasso_path` of that problem alone.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> paths = lasso_paths(np.stack([X, X]), np.stack([y, -y]))
+    >>> bool(np.array_equal(paths[0].lambdas, lasso_path(X, y).lambdas))
+    True
+    >>> bool(np.allclose(paths[1].coefs, -paths[0].coefs))     # the path of -y is minus that of y
+    True
     """
     return lasso_path_batch(
         X, y, n_samples=n_samples, lambda_min=lambda_min, max_size=max_size
@@ -456,6 +493,8 @@ def lasso_path_batch(
     max_size: int | None = None,
 ) -> PathBatch:
     """Exact Lasso paths of a batch of problems, followed together, as a :class:`PathBatch`.
+
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
 
     Parameters
     ----------
@@ -487,12 +526,26 @@ def lasso_path_batch(
     batch at once in the Gram form of the homotopy (one batched product and a few passes over
     the breakpoints), with a bound of that form's rounding *added* to each violation (the screen
     can fail a good path, never pass a bad one), then, at the breakpoints the screen does not
-    pass, exactly from ``X`` and ``y`` (the gradient in double-double, nothing subtracted). A path
+    pass, from ``X`` and ``y``: the residual in double-double and the bound of the rest of the
+    gradient's rounding added (it passes where nearly collinear columns defeat the screen), and,
+    where that does not pass either, the gradient in double-double, nothing subtracted. A path
     that fails is recomputed alone: its coefficients refined on its own supports
     (``solver="homotopy-refined"``) and by scikit-learn's ``lars_path(method="lasso")``
     (``solver="sklearn-fallback"``: on the whole design, then, if that path fails too, with its
     duplicated or scaled columns merged and its zero columns removed); the one with the smaller
     residual is kept, and a path that no route brings to :data:`KKT_TOL` is a NumericalError.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> batch = lasso_path_batch(np.stack([X, X]), np.stack([y, 2 * y]))
+    >>> bool(np.array_equal(batch.path(0).coefs, lasso_path(X, y).coefs))
+    True
+    >>> bool(np.allclose(batch.path(1).lambdas, 2 * batch.path(0).lambdas))
+    True
     """
     X = array(X, "X", ndim=3)
     y = array(y, "y")
@@ -534,12 +587,9 @@ def lasso_path_batch(
     # the exact check where the screen does not pass (its bound holds elsewhere): all such
     # breakpoints of the batch at once
     broken = (point_res == np.inf).any(axis=1)  # a NaN (a singular step or a cycle): recomputed
-    pb, pi = np.nonzero((point_res > KKT_TOL) & ~broken[:, None])
-    if pb.size:
-        with np.errstate(all="ignore"):
-            g[pb, pi] = _gradient_dd(Xs[pb], ys[pb], coefs[pb, pi])
-            slack[pb, pi] = 0.0
-            point_res, point_floor = _kkt(g, slack, levels, coefs, n_points, abs_gram, points=True)
+    point_res = _kkt_where_screen_fails(
+        Xs, ys, g, slack, levels, coefs, n_points, abs_gram, point_res
+    )
     kkt, floor = np.maximum(point_res.max(axis=1), 0.0), point_floor.max(axis=1)
     solver = np.full(B, "homotopy", dtype=object)
     fixed = []
@@ -623,6 +673,8 @@ def kkt_residual(X: Any, y: Any, path: "LassoPath") -> float:
     :func:`lasso_path_batch` checks every path it returns and stores the residual in
     :attr:`LassoPath.kkt_residual`; it is at most :data:`KKT_TOL`.
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     X, y : array_like
@@ -633,6 +685,19 @@ def kkt_residual(X: Any, y: Any, path: "LassoPath") -> float:
     Returns
     -------
     float
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> path = lasso_path(X, y)
+    >>> kkt_residual(X, y, path) <= KKT_TOL
+    True
+    >>> wrong = LassoPath(path.lambdas, 1.1 * path.coefs, path.n_samples)
+    >>> kkt_residual(X, y, wrong) > KKT_TOL                # scaled coefficients are not optimal
+    True
     """
     X, y = _check_xy(X, y)
     if not isinstance(path, LassoPath) or path.coefs.shape[0] != X.shape[1]:
@@ -678,10 +743,33 @@ def _gradient_dd(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> np.ndarray:
     values, not ``eps`` (no cancellation between large coefficients of nearly collinear columns
     survives). Processed in blocks of ``coefs`` rows.
     """
+    out = np.empty(coefs.shape)
+    for sl, Xb, (Xh, Xl), s, e in _residual_blocks(X, y, coefs):
+        XT = Xb.transpose(0, 2, 1)
+        P = XT * s[:, None, :]  # (P, m, rows)
+        E = (
+            _product_error((Xh.transpose(0, 2, 1), Xl.transpose(0, 2, 1)), s[:, None, :], P)
+            + XT * e[:, None, :]
+        )
+        while P.shape[2] > 1:
+            if P.shape[2] % 2:
+                P = np.concatenate([P, np.zeros(P.shape[:2] + (1,))], axis=2)
+                E = np.concatenate([E, np.zeros(E.shape[:2] + (1,))], axis=2)
+            P, err = _two_sum(P[:, :, 0::2], P[:, :, 1::2])
+            E = E[:, :, 0::2] + E[:, :, 1::2] + err
+        out[sl] = P[:, :, 0] + E[:, :, 0]
+    return out
+
+
+def _residual_blocks(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> Iterator[tuple[Any, ...]]:
+    """The residuals ``y_b - X_b theta_b`` of :func:`_gradient_dd` (its first stage), in blocks of
+    ``coefs`` rows: for each block, its slice of the rows of ``coefs``, its ``X`` ``(1 or P, rows,
+    m)``, that ``X``'s Dekker split and the residuals as unevaluated sums ``s + e`` ``(P, rows)``
+    (Ogita, Rump and Oishi's Dot2: ``|fl(s + e) - r| <= eps/2 |r| + gamma_(m+1)^2 (|y| + |X|
+    |theta|)``, ``gamma_n = n (eps/2) / (1 - n eps/2)``)."""
     X = X[None] if X.ndim == 2 else X
     y = y[None] if y.ndim == 1 else y
     rows, m = X.shape[1:]
-    out = np.empty(coefs.shape)
     block = max(1, 1_000_000 // (rows * m))
     for b0 in range(0, coefs.shape[0], block):
         c = coefs[b0 : b0 + block]
@@ -695,20 +783,81 @@ def _gradient_dd(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> np.ndarray:
             p = a * t
             s, err = _two_sum(s, -p)
             e += err - _product_error((Xh[:, :, k], Xl[:, :, k]), t, p)
-        XT = Xb.transpose(0, 2, 1)
-        P = XT * s[:, None, :]  # (P, m, rows)
-        E = (
-            _product_error((Xh.transpose(0, 2, 1), Xl.transpose(0, 2, 1)), s[:, None, :], P)
-            + XT * e[:, None, :]
-        )
-        while P.shape[2] > 1:
-            if P.shape[2] % 2:
-                P = np.concatenate([P, np.zeros(P.shape[:2] + (1,))], axis=2)
-                E = np.concatenate([E, np.zeros(E.shape[:2] + (1,))], axis=2)
-            P, err = _two_sum(P[:, :, 0::2], P[:, :, 1::2])
-            E = E[:, :, 0::2] + E[:, :, 1::2] + err
-        out[b0 : b0 + block] = P[:, :, 0] + E[:, :, 0]
-    return out
+        yield slice(b0, b0 + c.shape[0]), Xb, (Xh, Xl), s, e
+
+
+def _gradient_bounded(
+    X: np.ndarray, y: np.ndarray, coefs: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``X_b^T (y_b - X_b theta_b)`` for each row of ``coefs`` (shapes of :func:`_gradient_dd`) and a
+    bound of its error ``(P,)``: the residual in double-double (:func:`_residual_blocks`), rounded,
+    then its product with ``X^T`` in float64.
+
+    Between the Gram-form screen and the gradient in double-double: where the columns are nearly
+    collinear (large coefficients that cancel), the screen's bound, which grows with ``|X|^T |X|
+    |theta|``, cannot pass a breakpoint; this one grows with ``|X|^T |r|`` only (the residual,
+    which the first stage computes without cancellation): ``|fl(X_j^T fl(r)) - X_j^T r| <=
+    (gamma_rows + eps/2 (1 + gamma_rows)) (|X|^T |fl(r)|)_j + (1 + gamma_rows) gamma_(m+1)^2
+    (|X|^T (|y| + |X| |theta|))_j``, bounded here by ``2 eps (rows + 2)`` and ``2 (eps (m +
+    2))^2`` times those sums (twice the bound or more). It costs the first stage of
+    :func:`_gradient_dd` (about a third of it) and two products with ``|X|^T``."""
+    Xd = X[None] if X.ndim == 2 else X
+    rows, m = Xd.shape[1:]
+    eps = np.finfo(float).eps
+    g, slack = np.empty(coefs.shape), np.empty(coefs.shape[0])
+    for sl, Xb, _, s, e in _residual_blocks(X, y, coefs):
+        r = s + e
+        absX = np.abs(Xb)
+        yb = np.abs(y[None] if y.ndim == 1 else y)
+        yb = yb if yb.shape[0] == 1 else yb[sl]
+        if Xb.shape[0] == 1:  # one X for every row of coefs: matrix products
+            g[sl] = r @ Xb[0]
+            big = (yb + np.abs(coefs[sl]) @ absX[0].T) @ absX[0]
+            small = np.abs(r) @ absX[0]
+        else:
+            g[sl] = np.einsum("pri,pr->pi", Xb, r)
+            big = np.einsum(
+                "pri,pr->pi", absX, yb + np.einsum("prk,pk->pr", absX, np.abs(coefs[sl]))
+            )
+            small = np.einsum("pri,pr->pi", absX, np.abs(r))
+        slack[sl] = (2 * eps * (rows + 2) * small + 2 * (eps * (m + 2)) ** 2 * big).max(axis=1)
+    return g, slack
+
+
+def _gradient_exact(
+    X: np.ndarray, y: np.ndarray, coefs: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_gradient_dd` with a zero error bound (the form of :func:`_gradient_bounded`)."""
+    return _gradient_dd(X, y, coefs), np.zeros(coefs.shape[0])
+
+
+def _kkt_where_screen_fails(
+    X: np.ndarray,
+    y: np.ndarray,
+    g: np.ndarray,
+    slack: np.ndarray,
+    levels: np.ndarray,
+    coefs: np.ndarray,
+    n_points: np.ndarray,
+    abs_gram: np.ndarray,
+    point_res: np.ndarray,
+) -> np.ndarray:
+    """The per-breakpoint residuals of :func:`_kkt` after the screen (:func:`_kkt_screen`'s ``g``,
+    ``slack``, ``point_res``, updated in place), its failures checked again: with the gradient from
+    the residual in double-double and its bound (:func:`_gradient_bounded`), then, where that does
+    not pass either, with the gradient in double-double, nothing subtracted (:func:`_gradient_dd`).
+    ``X`` ``(B, rows, m)``, ``y`` ``(B, rows)`` (``B = 1``: one problem). A problem with a
+    non-finite residual (a NaN path) is left as it is: no check can pass it."""
+    broken = (point_res == np.inf).any(axis=1)
+    for gradient in (_gradient_bounded, _gradient_exact):
+        pb, pi = np.nonzero((point_res > KKT_TOL) & ~broken[:, None])
+        if not pb.size:
+            break
+        with np.errstate(all="ignore"):
+            Xp, yp = (X[0], y[0]) if X.shape[0] == 1 else (X[pb], y[pb])
+            g[pb, pi], slack[pb, pi] = gradient(Xp, yp, coefs[pb, pi])
+            point_res = _kkt(g, slack, levels, coefs, n_points, abs_gram, points=True)[0]
+    return point_res
 
 
 def _kkt_direct(
@@ -734,7 +883,8 @@ def _kkt_path(
     X: np.ndarray, y: np.ndarray, levels: np.ndarray, coefs: np.ndarray
 ) -> tuple[float, float]:
     """:func:`_kkt_direct`'s residual (or an upper bound of it) and float floor, computed as
-    :func:`lasso_path_batch` does: the batched screen, then double-double where it does not pass."""
+    :func:`lasso_path_batch` does: the batched screen, then double-double where it does not pass
+    (:func:`_kkt_where_screen_fails`)."""
     k = np.array([levels.size])
     gram = X.T @ X
     with np.errstate(all="ignore"):
@@ -747,9 +897,9 @@ def _kkt_path(
             k,
             X.shape[0],
         )
-        at = np.flatnonzero((res[0] > KKT_TOL) & (res[0] < np.inf))
-        if at.size:
-            g[0, at], slack[0, at] = _gradient_dd(X, y, coefs[at]), 0.0
+        _kkt_where_screen_fails(
+            X[None], y[None], g, slack, levels[None], coefs[None], k, abs_gram, res
+        )
         res, floor = _kkt(g, slack, levels[None], coefs[None], k, abs_gram)
     return float(res[0]), float(floor[0])
 
@@ -864,14 +1014,15 @@ def _refine(
 def _pow2_rms(a: np.ndarray) -> np.ndarray:
     """Per row of ``a`` ``(B, k)``, the power of 2 nearest its RMS (1 for a zero row), computed
     without squaring the raw entries (scaling by a power of 2 is exact)."""
-    top = np.abs(a).max(axis=1)
+    top = np.maximum(a.max(axis=1), -a.min(axis=1))  # max |a|, without an |a| temporary
     _, e = np.frexp(top)  # top = f 2^e, f in [0.5, 1)
     u = np.ldexp(
         1.0, np.maximum(e - 1, -1074)
     )  # 2^(e-1) <= top: representable even near the limits
     ok = top > 0
     u[~ok] = 1.0
-    ms = np.einsum("bk,bk->b", a / u[:, None], a / u[:, None]) / a.shape[1]
+    t = a / u[:, None]
+    ms = np.einsum("bk,bk->b", t, t) / a.shape[1]
     with np.errstate(divide="ignore"):
         s = np.exp2(np.round(np.log2(ms) / 2 + (e - 1)))
     s[~ok] = 1.0
@@ -1002,9 +1153,9 @@ def _homotopy(
     Degenerate designs: components tied with the level (to ``1e-12 c_0``) join in zero-length
     steps, one per step; a component that joined so with a direction against its sign leaves at
     once; a column in the span of the active ones is kept out; a path ends at an exact fit (``c``
-    down to ``1e-12 c_0``). A path that meets a singular step (NaN) or runs more than
-    ``50 m + 100`` steps (a cycle) ends with a NaN, which :func:`lasso_path_batch`'s KKT check
-    rejects.
+    down to ``1e-12 c_0``). A path that meets a singular step (NaN), runs more than
+    ``50 m + 100`` steps or more than ``4 m + 10`` zero-length steps in a row (a cycle) ends with
+    a NaN, which :func:`lasso_path_batch`'s KKT check rejects.
 
     Returns the correlation levels ``(B, S)`` and coefficients ``(B, S, m)`` at the
     breakpoints, and the number ``(B,)`` of breakpoints of each problem (the tails are padding).
@@ -1039,6 +1190,8 @@ def _homotopy(
     dropping = np.zeros(B, bool)  # ... the drop of component j
     barred = np.full(B, -1)  # a component that just dropped cannot rejoin with its old sign at once
     barred_sign = np.zeros(B)
+    stalled = np.zeros(B, int)  # zero-length steps in a row
+    outer_buf = np.empty(B * K * K)  # the rank-one change of inv (below)
     while running.any():
         if running.sum() <= rows.size // 2 and rows.size >= 16:  # drop finished problems
             keep = running
@@ -1061,8 +1214,8 @@ def _homotopy(
                     near,
                 )
             )
-            joining, dropping, barred, barred_sign, running, ids = (
-                x[keep] for x in (joining, dropping, barred, barred_sign, running, ids)
+            joining, dropping, barred, barred_sign, stalled, running, ids = (
+                x[keep] for x in (joining, dropping, barred, barred_sign, stalled, running, ids)
             )
             rows = np.arange(ids.size)
         # slot of the event: a joining component takes the next free slot
@@ -1082,7 +1235,11 @@ def _homotopy(
             f = np.where(
                 joining, 1.0 / schur, np.where(dropping, -1.0 / inv[rows, s_ev, s_ev], 0.0)
             )
-        inv[:, :k, :k] += (z * f[:, None])[:, :, None] * z[:, None, :]
+        # the outer product in a buffer kept across steps: a new (B, k, k) array at each step
+        # (megabytes) is mapped and faulted in anew by the allocator (same products, same sums)
+        outer = outer_buf[: rows.size * k * k].reshape(rows.size, k, k)
+        np.multiply((z * f[:, None])[:, :, None], z[:, None, :], out=outer)
+        inv[:, :k, :k] += outer
         if joining.any():
             b = rows[joining]
             GA[b, s_ev[b]] = Gram[b, j[b]]  # row j (the Gram matrix is symmetric)
@@ -1140,6 +1297,7 @@ def _homotopy(
         g_join, g_drop = join[rows, j_join], zero[rows, j_drop]
         g_end = c - c_min
         gamma = np.where(running, np.minimum(np.minimum(g_join, g_drop), g_end), 0.0)
+        stalled = np.where(gamma == 0, stalled + 1, 0)
         beta += gamma[:, None] * d
         cov -= gamma[:, None] * a
         c = c - gamma
@@ -1167,6 +1325,14 @@ def _homotopy(
                 np.nan
             )  # degenerate design): NaN makes the KKT check reject the path
             running[:] = False
+        # More zero-length steps in a row than ties can make (each component joins once and, if
+        # its direction opposes its sign, leaves at once: 2 m), with a margin: a cycle on a
+        # degenerate design (Example 2's regression ran the 50 m + 100 steps of the cap in zero-
+        # length steps), rejected at once in the same way
+        cycling = running & (stalled > 4 * m + 10)
+        if cycling.any():
+            levels[ids[cycling], point] = np.nan
+            running &= ~cycling
         if max_size is not None:  # the interval just followed had more than max_size components
             running &= active.sum(axis=1) <= max_size
         running &= (
@@ -1183,6 +1349,8 @@ def lasso_cvxpy(X: Any, y: Any, lam: float, *, n_samples: int | None = None) -> 
     cvxpy does the hard part (conic reformulation of the l1 norm and an interior-point
     solver); it is slow for Monte Carlo but reads like the maths.
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     X : array_like
@@ -1198,6 +1366,17 @@ def lasso_cvxpy(X: Any, y: Any, lam: float, *, n_samples: int | None = None) -> 
     -------
     numpy.ndarray
         ``theta_hat``, shape ``(m,)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> path = lasso_path(X, y)
+    >>> lam = 0.5 * path.lambdas[2]                  # any lambda: the exact path has it too
+    >>> bool(np.allclose(lasso_cvxpy(X, y, lam), path.coef(lam), atol=1e-5))
+    True
     """
     import cvxpy as cp
 
@@ -1318,6 +1497,8 @@ def flat_ranges(
 ) -> FlatRanges:
     """:func:`flat_range` of every path of a batch at once (the same results, as arrays).
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     paths : PathBatch
@@ -1333,6 +1514,17 @@ def flat_ranges(
     ------
     ModelError
         Naming the first path with no candidate range.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> batch = lasso_path_batch(np.stack([X, X]), np.stack([y, 2 * y]))
+    >>> flats = flat_ranges(batch)
+    >>> flats.size.tolist(), bool(np.isclose(flats.middle[0], flat_range(batch.path(0)).middle))
+    ([2, 2], True)
     """
     return _flat_ranges(paths, scale, lambda_ratio, max_size, single=False)
 
@@ -1403,6 +1595,8 @@ def flat_range(
     the widest candidate wins (ties: the one at the larger ``lambda``). :func:`flat_ranges` applies
     the rule to a whole :class:`PathBatch` at once (this function is that, for a batch of one).
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     path : LassoPath
@@ -1417,6 +1611,18 @@ def flat_range(
     Returns
     -------
     FlatRange
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> flat = flat_range(lasso_path(X, y))
+    >>> int(flat.size), [int(j) for j in flat.support]     # the two faulty components
+    (2, [1, 4])
+    >>> bool(flat.low < flat.middle < flat.high)
+    True
     """
     fr = _flat_ranges(PathBatch.of([path]), scale, lambda_ratio, max_size, single=True)
     return FlatRange(
@@ -1504,6 +1710,8 @@ def grid_flat_range(
     :func:`flat_range` with ``scale="log"``; a range shorter than the grid step
     ``log(1 / lambda_ratio) / (n_grid - 1)`` may hold no grid point at all.
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     path : LassoPath
@@ -1519,6 +1727,16 @@ def grid_flat_range(
     Returns
     -------
     GridFlatRange
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> grid = grid_flat_range(lasso_path(X, y), 100)
+    >>> int(grid.size), [int(j) for j in grid.support]
+    (2, [1, 4])
     """
     g = _grid_flat_ranges(PathBatch.of([path]), n_grid, lambda_ratio, max_size, single=True)
     return GridFlatRange(
@@ -1537,6 +1755,8 @@ def grid_flat_ranges(
 ) -> GridFlatRanges:
     """:func:`grid_flat_range` of every path of a batch at once (the same results, as arrays).
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     paths : PathBatch
@@ -1552,6 +1772,17 @@ def grid_flat_ranges(
     ------
     ModelError
         Naming the first path the rule cannot be applied to.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> batch = lasso_path_batch(np.stack([X, X]), np.stack([y, 2 * y]))
+    >>> grids = grid_flat_ranges(batch, 100)
+    >>> grids.size.tolist(), int(grid_flat_range(batch.path(1), 100).size)
+    ([2, 2], 2)
     """
     return _grid_flat_ranges(paths, n_grid, lambda_ratio, max_size, single=False)
 
@@ -1635,6 +1866,8 @@ def _unit_grid(n_grid: int, lambda_ratio: float) -> np.ndarray:
 def least_squares_on_support(X: Any, y: Any, support: Any) -> np.ndarray:
     """Least-squares re-estimate of the selected components (the others set to 0), shape ``(m,)``.
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     X : array_like
@@ -1705,6 +1938,8 @@ def diagnose(
 ) -> Diagnosis:
     """Lasso path, the flat-range rule, then least squares on the selected support (Zhang 2021, Sec. IV-V).
 
+    Explained in the book: :doc:`/book/zhang2021/sparse`.
+
     Parameters
     ----------
     X, y, n_samples
@@ -1713,6 +1948,16 @@ def diagnose(
         As in :func:`flat_range`.
     path : LassoPath, optional
         A precomputed :func:`lasso_path` of ``X``, ``y``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> X = rng.standard_normal((40, 6))
+    >>> y = X @ [0.0, 2.0, 0.0, 0.0, -1.5, 0.0] + 0.1 * rng.standard_normal(40)
+    >>> d = diagnose(X, y)
+    >>> [int(j) for j in d.support], np.round(d.theta_ls, 1).tolist()
+    ([1, 4], [0.0, 2.0, 0.0, 0.0, -1.5, 0.0])
     """
     X, y = _check_xy(X, y)
     path = lasso_path(X, y, n_samples=n_samples) if path is None else path

@@ -41,8 +41,10 @@ the fault-free stretch on which false alarms are counted.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Any, Mapping, Sequence
+import dataclasses
+import functools
+from dataclasses import dataclass
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 import scipy.linalg
@@ -75,6 +77,13 @@ __all__ = [
     "CANDIDATES",
     "SUBSYSTEMS",
     "METHODS",
+    "Method",
+    "MethodInputs",
+    "PlotStyle",
+    "statistic_alarms",
+    "Thresholds",
+    "detection_thresholds",
+    "whitener",
     "PlantConstants",
     "plant_constants",
     "Records",
@@ -85,6 +94,7 @@ __all__ = [
     "design",
     "MethodOutcome",
     "min_detectable",
+    "separability",
     "run_zb",
     "run_zhang2021",
     "run_bz",
@@ -117,23 +127,15 @@ SENSORS = (
 INPUTS = ("w1", "w2", "w3", "tau_g_ref")
 #: Additive fault candidates: the sensors' offsets, then the actuators and the drive train.
 CANDIDATES = SENSORS + ("actuator1", "actuator2", "actuator3", "converter", "drive_train")
-#: Human labels of the candidates (tables, figures).
+#: Labels of the candidates for readers, in the spelling of the benchmark's fault names
+#: (:data:`fdi_lib.systems.wind_turbine.FAULTS`): one spelling per signal.
 CANDIDATE_LABELS = {
-    "beta1_m1": "pitch sensor 1 (blade 1)",
-    "beta1_m2": "pitch sensor 2 (blade 1)",
-    "beta2_m1": "pitch sensor 1 (blade 2)",
-    "beta2_m2": "pitch sensor 2 (blade 2)",
-    "beta3_m1": "pitch sensor 1 (blade 3)",
-    "beta3_m2": "pitch sensor 2 (blade 3)",
-    "omega_r_m1": "rotor speed sensor 1",
-    "omega_r_m2": "rotor speed sensor 2",
-    "omega_g_m1": "generator speed sensor 1",
-    "omega_g_m2": "generator speed sensor 2",
-    "tau_g_m": "generator torque sensor",
-    "actuator1": "pitch actuator 1",
-    "actuator2": "pitch actuator 2",
-    "actuator3": "pitch actuator 3",
-    "converter": "converter torque",
+    **{f"beta{b}_m{k}": f"pitch sensor beta_{b},m{k}" for b in (1, 2, 3) for k in (1, 2)},
+    **{f"omega_r_m{k}": f"rotor speed sensor omega_r,m{k}" for k in (1, 2)},
+    **{f"omega_g_m{k}": f"generator speed sensor omega_g,m{k}" for k in (1, 2)},
+    "tau_g_m": "torque sensor tau_g,m",
+    **{f"actuator{b}": f"pitch actuator {b}" for b in (1, 2, 3)},
+    "converter": "converter",
     "drive_train": "drive train",
 }
 #: Subsystems: name -> (state count, output indices, input indices, candidate indices).
@@ -142,13 +144,6 @@ SUBSYSTEMS = {
     "blade2": ((2, 3), (1,), (2, 3, 12)),
     "blade3": ((4, 5), (2,), (4, 5, 13)),
     "drive_train": ((6, 7, 8, 9, 10), (3,), (6, 7, 8, 9, 10, 14, 15)),
-}
-#: The methods of the scoreboard (keys of the JSON) and their labels.
-METHODS = {
-    "zb2014": "Zhang & Basseville: Kalman + windowed GLR + minmax",
-    "zhang2021": "Zhang 2021: Kitanidis + Lasso",
-    "bz": "Basseville & Zhang: parametric GLR + energy",
-    "rosa2013": "Rosa & Silvestre: SVO bank",
 }
 
 
@@ -214,6 +209,9 @@ class Records:
         Aerodynamic torque ``(R, N)`` in MNm.
     v : numpy.ndarray
         Wind speed ``(R, N)`` (m/s).
+    region : numpy.ndarray or None
+        The controller's operating region ``(R, N)`` (1 partial load, 2 full load; ``None``: not
+        recorded).
     """
 
     t: np.ndarray
@@ -222,6 +220,7 @@ class Records:
     x: np.ndarray
     tau_a: np.ndarray
     v: np.ndarray
+    region: np.ndarray | None = None
 
     def window(self, i0: int, i1: int) -> "Records":
         """Samples ``i0 .. i1 - 1``."""
@@ -232,6 +231,7 @@ class Records:
             self.x[:, i0:i1],
             self.tau_a[:, i0:i1],
             self.v[:, i0:i1],
+            None if self.region is None else self.region[:, i0:i1],
         )
 
 
@@ -266,6 +266,7 @@ def records(run: Any) -> Records:
         x=x,
         tau_a=batch(run.tau_aero, 0) / 1e6,
         v=batch(run.v, 0),
+        region=batch(run.region, 0),
     )
 
 
@@ -516,7 +517,52 @@ def _aug(s: Subsystem) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     return F, G, H, np.vstack([s.Psi, np.zeros((1, s.Psi.shape[1]))])
 
 
-@dataclass
+@dataclass(frozen=True)
+class Thresholds:
+    """The thresholds of one subsystem's statistical tests (:func:`detection_thresholds`).
+
+    Attributes
+    ----------
+    glr : float
+        Windowed GLR of a jump of the ``m`` candidates (Zhang & Basseville): the chi-square(``m``)
+        quantile at ``1 - alpha / w``.
+    lasso : float
+        Lasso test (Zhang 2021): the normal quantile at ``1 - alpha / (2 m)``.
+    energy : float
+        Energy test (Basseville & Zhang): the chi-square(``w p``) quantile at ``1 - alpha``.
+    """
+
+    glr: float
+    lasso: float
+    energy: float
+
+
+def detection_thresholds(settings: Settings, ts: float, m: int, p: int) -> Thresholds:
+    """The thresholds of a subsystem with ``m`` candidates and ``p`` outputs sampled every ``ts``
+    seconds: each test's per-sample level is ``alpha = ts * false_alarms_per_hour / 3600``
+    (:class:`Settings`), split by Bonferroni over the ``w`` onsets of a window (GLR) or the ``m``
+    candidates (Lasso test).
+
+    Examples
+    --------
+    >>> t = detection_thresholds(Settings(), 0.01, m=3, p=2)
+    >>> round(t.glr, 2), round(t.lasso, 2), round(t.energy, 1)
+    (36.61, 4.91, 177.8)
+    """
+    _instance(settings, Settings, "settings")
+    ts = real(ts, "ts", low=0.0, low_open=True)
+    m = integer(m, "m", low=1)
+    p = integer(p, "p", low=1)
+    w = settings.window
+    alpha = settings.false_alarms_per_hour * ts / 3600.0
+    return Thresholds(
+        glr=float(scipy.stats.chi2.ppf(1.0 - alpha / w, m)),
+        lasso=float(scipy.stats.norm.ppf(1.0 - alpha / (2 * m))),
+        energy=energy_threshold(w, p, alpha),
+    )
+
+
+@dataclass(frozen=True)
 class SubDesign:
     """Noise-independent quantities of one subsystem for one segment length (shared by all records)."""
 
@@ -550,10 +596,10 @@ def min_detectable(d: "Design") -> dict[str, dict[str, float]]:
         )
         info = np.einsum("kpm,kpm->m", Sw, Sw)
         if sd.sub.E is not None:
-            W = _whitener(sd.kit_gains.residual_cov[-1])
+            W = whitener(sd.kit_gains.residual_cov[-1])
         else:
             IHK = np.eye(sd.kit.p) - sd.kit.H[-1] @ sd.kit_gains.K[-1]
-            W = _whitener(IHK @ sd.kit_gains.Sigma[-1] @ IHK.T)
+            W = whitener(IHK @ sd.kit_gains.Sigma[-1] @ IHK.T)
         kern = np.einsum("ij,kjm->kim", W, sd.kit_signature[d.warmup : d.warmup + w])
         norm = np.sqrt(np.einsum("kpm,kpm->m", kern, kern))
         for i, j in enumerate(sd.sub.candidates):
@@ -566,7 +612,37 @@ def min_detectable(d: "Design") -> dict[str, dict[str, float]]:
     return out
 
 
-@dataclass
+def separability(d: "Design") -> dict[str, float]:
+    """How well each candidate can be told from the other candidates of its subsystem: the sine of
+    the angle between its whitened signature on the Kalman innovations (a step at the onset, over
+    the ``window + isolation_extra`` samples the minmax isolation reads) and the span of the
+    others', ``sqrt(I_j|others / I_jj)`` with ``I_j|others`` the information left on ``j`` once the
+    others are estimated (the Schur complement that the minmax test of ``j`` uses).
+
+    1: orthogonal to the others; 0: a combination of them, which no test on these residuals can
+    tell apart from ``j`` (whatever the noise or the fault's size). Values under ``1e-6`` are
+    rounding of an exact 0 and are returned as 0.
+    """
+    _instance(d, Design, "d")
+    n = min(d.settings.window + d.settings.isolation_extra, d.N - d.onset)
+    out: dict[str, float] = {}
+    for sd in d.subs.values():
+        sig = fault_signature(sd.kf, sd.kf_gains, sd.family.profile(d.onset)).on_innovation
+        Sw = np.linalg.solve(
+            sd.kf_gains.Sigma_chol[d.onset : d.onset + n], sig[d.onset : d.onset + n]
+        )
+        X = Sw.reshape(-1, Sw.shape[-1])
+        info = X.T @ X
+        for i, j in enumerate(sd.sub.candidates):
+            others = [k for k in range(X.shape[1]) if k != i]
+            Xo = X[:, others]
+            resid = X[:, i] - Xo @ np.linalg.lstsq(Xo, X[:, i], rcond=None)[0]
+            sine = float(np.sqrt(resid @ resid / info[i, i])) if info[i, i] > 0 else 0.0
+            out[CANDIDATES[j]] = sine if sine > 1e-6 else 0.0
+    return out
+
+
+@dataclass(frozen=True)
 class Design:
     """Everything noise-independent that the methods need for records of ``N`` samples."""
 
@@ -577,7 +653,7 @@ class Design:
     onset: int
     warmup: int
     alpha_sample: float
-    subs: dict[str, SubDesign] = field(default_factory=dict)
+    subs: Mapping[str, SubDesign]
 
 
 def design(
@@ -599,15 +675,7 @@ def design(
     warmup = int(round(st.warmup_s / c.Ts))
     w = integer(st.window, "window", low=2, high=onset - warmup)
     alpha = st.false_alarms_per_hour * c.Ts / 3600.0
-    d = Design(
-        constants=c,
-        calibration=cal,
-        settings=st,
-        N=N,
-        onset=onset,
-        warmup=warmup,
-        alpha_sample=alpha,
-    )
+    subs = {}
     for s in subsystems(c):
         R = np.diag(c.sigma[list(s.outputs)] ** 2)
         F, G, H, Psi = _aug(s)
@@ -625,7 +693,7 @@ def design(
         fam = step_family(kf, Psi=Psi, Phi=s.Phi)
         m = fam.m
         glr = WindowedGLR(kf, kg, fam, w)
-        thr = float(scipy.stats.chi2.ppf(1.0 - alpha / w, m))
+        thr = detection_thresholds(st, c.Ts, m, kf.p)
         kit = ltv_model(
             F=s.F,
             G=s.G,
@@ -644,8 +712,6 @@ def design(
         sig = residual_signature(
             kit, kgains, fault_profile(kit, Psi=s.Psi * after, Phi=s.Phi * after)
         ).on_residual
-        lasso_thr = float(scipy.stats.norm.ppf(1.0 - alpha / (2 * m)))
-        e_thr = energy_threshold(w, kf.p, alpha)
         bz_glr = bz_red = None
         if s.E is not None:
             kpred = kitanidis_predictor_gains(kit, s.E, kgains)
@@ -653,14 +719,35 @@ def design(
             bz_fam = step_family(red.model, Psi=s.Psi[:, 6:])  # a torque on the generator
             bz_glr = WindowedGLR(red.model, red.gains, bz_fam, w)
             bz_red = (kpred, red.T)
-        d.subs[s.name] = SubDesign(
-            s, kf, kg, fam, glr, thr, kit, kgains, sig, lasso_thr, e_thr, bz_glr, bz_red
+        subs[s.name] = SubDesign(
+            sub=s,
+            kf=kf,
+            kf_gains=kg,
+            family=fam,
+            glr=glr,
+            glr_threshold=thr.glr,
+            kit=kit,
+            kit_gains=kgains,
+            kit_signature=sig,
+            lasso_threshold=thr.lasso,
+            energy_threshold=thr.energy,
+            bz_glr=bz_glr,
+            bz_red=bz_red,
         )
-    return d
+    return Design(
+        constants=c,
+        calibration=cal,
+        settings=st,
+        N=N,
+        onset=onset,
+        warmup=warmup,
+        alpha_sample=alpha,
+        subs=subs,
+    )
 
 
 # ----------------------------------------------------------------------------- the four methods
-@dataclass
+@dataclass(frozen=True)
 class MethodOutcome:
     """One method on ``B`` records of ``N`` samples (fault onset at ``design.onset``).
 
@@ -851,9 +938,16 @@ def _minmax(C: np.ndarray, dd: np.ndarray, alpha: float) -> np.ndarray:
     return out
 
 
-def _whitener(cov: np.ndarray) -> np.ndarray:
+def whitener(cov: np.ndarray) -> np.ndarray:
     """``W`` ``(r, p)`` with ``W cov W^T = I_r`` on the range of a covariance ``(p, p)`` of rank ``r``:
-    the Kitanidis residual has no variance along the direction it spends on the unknown input."""
+    the Kitanidis residual has no variance along the direction it spends on the unknown input.
+
+    Examples
+    --------
+    >>> W = whitener(np.diag([4.0, 1.0, 0.0]))
+    >>> W.shape, np.allclose(W @ np.diag([4.0, 1.0, 0.0]) @ W.T, np.eye(2))
+    ((2, 3), True)
+    """
     lam, V = np.linalg.eigh(cov)
     keep = lam > 1e-9 * lam.max()
     return (V[:, keep] / np.sqrt(lam[keep])).T
@@ -873,7 +967,7 @@ def _residuals(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, tuple[np.nd
             r = res.updated_residuals
             IHK = np.eye(sd.kit.p) - sd.kit.H[-1] @ sd.kit_gains.K[-1]
             cov = IHK @ sd.kit_gains.Sigma[-1] @ IHK.T
-        W = _whitener(cov)
+        W = whitener(cov)
         out[name] = (r @ W.T, np.einsum("ij,kjm->kim", W, sd.kit_signature))
     return out
 
@@ -1007,9 +1101,13 @@ def run_bz(
 
 
 def stream_alarms(
-    d: Design, y: np.ndarray, u: np.ndarray, start: int, methods: Sequence[str] = tuple(METHODS)
+    d: Design,
+    y: np.ndarray,
+    u: np.ndarray,
+    start: int,
+    methods: Sequence[str] | None = None,
 ) -> dict[str, Any]:
-    """Alarms of the four methods on records ``y`` ``(B, N, 11)``, ``u`` ``(B, N, 4)`` from
+    """Alarms of the methods ``methods`` (keys of :data:`METHODS`; default all) on records ``y`` ``(B, N, 11)``, ``u`` ``(B, N, 4)`` from
     sample ``start`` on: one window of a long stream, whose first ``start`` samples overlap the
     previous window.
 
@@ -1028,40 +1126,17 @@ def stream_alarms(
         number of tests summed.
     """
     _instance(d, Design, "d")
-    import dataclasses
-
     start = integer(start, "start", low=d.warmup + d.settings.window, high=d.N - 1)
     methods = _method_keys(methods)
-    y = np.asarray(y, dtype=float)
-    u = np.asarray(u, dtype=float)
-    eps = _innovations(d, y, u) if {"zb2014", "bz"} & set(methods) else {}
+    inputs = MethodInputs(d, np.asarray(y, dtype=float), np.asarray(u, dtype=float))
     out: dict[str, Any] = {"tests": {}}
     for name in methods:
-        if name == "rosa2013":
-            svo = run_svo_bank(dataclasses.replace(d, warmup=start, onset=d.N), y, u)
-            out[name], out["tests"][name] = svo.false_alarm.astype(np.int64), 1
-            continue
-        if name == "zb2014":
-            zb = _zb_glr(d, eps)
-            stats = [zb[n].statistic for n in d.subs]
-            thr = [sd.glr_threshold for sd in d.subs.values()]
-        elif name == "zhang2021":
-            stats = _lasso_test(d, _residuals(d, y, u))
-            thr = [sd.lasso_threshold for sd in d.subs.values()]
-        else:
-            par, par_thr, en, en_thr = _bz_stats(d, y, u, eps)
-            stats, thr = par + en, par_thr + en_thr
-        count = np.zeros(y.shape[0], dtype=np.int64)
-        for st, h in zip(stats, thr):
-            first_alarm(st, h, start=d.warmup)  # NaN after the warm-up: an error
-            edges = alarm_onsets(np.nan_to_num(st, nan=-np.inf) > h, start - 1)
-            count += edges[:, start:].sum(axis=-1)
-        out[name], out["tests"][name] = count, len(stats)
+        out[name], out["tests"][name] = METHODS[name].alarms(d, inputs, start)
     return out
 
 
-def _method_keys(methods: Sequence[str]) -> tuple[str, ...]:
-    methods = tuple(methods)
+def _method_keys(methods: Sequence[str] | None) -> tuple[str, ...]:
+    methods = tuple(METHODS) if methods is None else tuple(methods)
     bad = [m for m in methods if m not in METHODS]
     if bad or not methods or len(set(methods)) != len(methods):
         raise ModelError(f"methods: expected distinct keys of {tuple(METHODS)}, got {methods}")
@@ -1075,9 +1150,9 @@ def stream_counts(
     start: int,
     *,
     batch: int = 8,
-    methods: Sequence[str] = tuple(METHODS),
+    methods: Sequence[str] | None = None,
 ) -> dict[str, Any]:
-    """Alarm counts of the four methods over one long stream ``y`` ``(n, 11)``, ``u`` ``(n, 4)``, in
+    """Alarm counts of the methods ``methods`` (default all) over one long stream ``y`` ``(n, 11)``, ``u`` ``(n, 4)``, in
     constant memory: overlapping windows of ``d.N`` samples, each scored from its sample ``start``
     (:func:`stream_alarms` of ``methods``), so that the scored parts tile
     ``[start, start + K (N - start))``; ``batch`` windows at a time are one batch of records (the
@@ -1275,8 +1350,202 @@ def _prior_group(d: Design, group: Sequence[str]) -> Polytope:
     )
 
 
+# ----------------------------------------------------------------------------- the method registry
+class MethodInputs:
+    """The records ``y`` ``(B, N, 11)``, ``u`` ``(B, N, 4)`` of one call to the methods, and the work
+    they share, computed once on first use: the Kalman innovations of every subsystem (Zhang &
+    Basseville's GLR, Basseville & Zhang's energy test).
+
+    Attributes
+    ----------
+    design : Design
+    y, u : numpy.ndarray
+    """
+
+    def __init__(self, d: Design, y: np.ndarray, u: np.ndarray) -> None:
+        self.design, self.y, self.u = _instance(d, Design, "d"), y, u
+
+    @functools.cached_property
+    def innovations(self) -> dict[str, np.ndarray]:
+        """Subsystem name -> Kalman innovations ``(B, N, p)``."""
+        return _innovations(self.design, self.y, self.u)
+
+
+@dataclass(frozen=True)
+class PlotStyle:
+    """How a method is drawn in every figure of the chapter (matplotlib colour and marker)."""
+
+    color: str
+    marker: str = "o"
+
+
+@dataclass(frozen=True)
+class Method:
+    """One FDI method of the wind-turbine chapter: a record of :data:`METHODS`.
+
+    A new method is one new record: the scoreboard, its figure, the false-alarm study and the
+    accommodation study iterate over :data:`METHODS`.
+
+    Attributes
+    ----------
+    name : str
+        Its key in :data:`METHODS` and in every JSON output.
+    label : str
+        Its name in tables and figure legends (one spelling everywhere).
+    diagnose : callable
+        ``diagnose(d, inputs) -> MethodOutcome``: detection and isolation on the records of a
+        :class:`MethodInputs` (``inputs``), with the noise-independent :class:`Design` ``d``.
+    alarms : callable
+        ``alarms(d, inputs, start) -> (counts, tests)``: the ``(B,)`` alarm counts from sample
+        ``start`` on and the number of tests summed (:func:`stream_alarms`).
+    nameable : callable
+        ``nameable(expected) -> bool``: whether the method's isolation can name exactly the
+        frozenset ``expected`` of candidates at all (its vocabulary: a failure to isolate a set it
+        cannot name is explained by construction).
+    style : PlotStyle
+    bounded : bool
+        A set-valued method: it assumes bounds on the noise and the disturbances instead of a
+        false-alarm rate (its misses report the noise bound, :class:`Settings` ``svo_sigmas``).
+    """
+
+    name: str
+    label: str
+    diagnose: Callable[[Design, MethodInputs], MethodOutcome]
+    alarms: Callable[[Design, MethodInputs, int], tuple[np.ndarray, int]]
+    nameable: Callable[[frozenset[str]], bool]
+    style: PlotStyle
+    bounded: bool = False
+
+
+def statistic_alarms(
+    statistics: Callable[[Design, MethodInputs], tuple[list[np.ndarray], list[float]]],
+) -> Callable[[Design, MethodInputs, int], tuple[np.ndarray, int]]:
+    """:attr:`Method.alarms` of a method that compares statistics with thresholds:
+    ``statistics(d, inputs)`` returns the statistics ``(B, N)`` (``nan`` where not yet defined) and
+    their thresholds; the alarms are the onsets (:func:`alarm_onsets`) of each statistic over its
+    threshold at samples ``[start, N)``, one test per statistic."""
+
+    def alarms(d: Design, inputs: MethodInputs, start: int) -> tuple[np.ndarray, int]:
+        stats, thr = statistics(d, inputs)
+        count = np.zeros(inputs.y.shape[0], dtype=np.int64)
+        for st, h in zip(stats, thr):
+            first_alarm(st, h, start=d.warmup)  # NaN after the warm-up: an error
+            edges = alarm_onsets(np.nan_to_num(st, nan=-np.inf) > h, start - 1)
+            count += edges[:, start:].sum(axis=-1)
+        return count, len(stats)
+
+    return alarms
+
+
+def _zb_statistics(d: Design, inputs: MethodInputs) -> tuple[list[np.ndarray], list[float]]:
+    zb = _zb_glr(d, inputs.innovations)
+    return [zb[n].statistic for n in d.subs], [sd.glr_threshold for sd in d.subs.values()]
+
+
+def _lasso_statistics(d: Design, inputs: MethodInputs) -> tuple[list[np.ndarray], list[float]]:
+    stats = _lasso_test(d, _residuals(d, inputs.y, inputs.u))
+    return stats, [sd.lasso_threshold for sd in d.subs.values()]
+
+
+def _bz_statistics(d: Design, inputs: MethodInputs) -> tuple[list[np.ndarray], list[float]]:
+    par, par_thr, en, en_thr = _bz_stats(d, inputs.y, inputs.u, inputs.innovations)
+    return par + en, par_thr + en_thr
+
+
+def _svo_alarms(d: Design, inputs: MethodInputs, start: int) -> tuple[np.ndarray, int]:
+    """The SVO bank from ``start`` on, from its prior set: at most one alarm (an emptied set)."""
+    svo = run_svo_bank(dataclasses.replace(d, warmup=start, onset=d.N), inputs.y, inputs.u)
+    return svo.false_alarm.astype(np.int64), 1
+
+
+def _zb_diagnose(d: Design, inputs: MethodInputs) -> MethodOutcome:
+    return run_zb(d, inputs.y, inputs.u, inputs.innovations)
+
+
+def _zhang2021_diagnose(d: Design, inputs: MethodInputs) -> MethodOutcome:
+    return run_zhang2021(d, inputs.y, inputs.u)
+
+
+def _bz_diagnose(d: Design, inputs: MethodInputs) -> MethodOutcome:
+    return run_bz(d, inputs.y, inputs.u, inputs.innovations)
+
+
+def _svo_diagnose(d: Design, inputs: MethodInputs) -> MethodOutcome:
+    return run_svo_bank(d, inputs.y, inputs.u)
+
+
+def _subsystem_sets() -> list[frozenset[str]]:
+    return [frozenset(CANDIDATES[j] for j in c) for _, _, c in SUBSYSTEMS.values()]
+
+
+def _within_a_subsystem(expected: frozenset[str]) -> bool:
+    """Zhang & Basseville: the minmax tests of the alarming subsystem's candidates."""
+    return bool(expected) and any(expected <= s for s in _subsystem_sets())
+
+
+def _any_set(expected: frozenset[str]) -> bool:
+    """Zhang 2021: the Lasso's support among all candidates."""
+    return bool(expected)
+
+
+def _bz_sets(expected: frozenset[str]) -> bool:
+    """Basseville & Zhang: a servo, the generator-side torque (converter or efficiency, one
+    parametric test) or, after a non-parametric alarm, a whole subsystem."""
+    named = [frozenset({f"actuator{i}"}) for i in (1, 2, 3)]
+    named += [frozenset({"converter", "drive_train"}), *_subsystem_sets()]
+    return expected in named
+
+
+def _one_hypothesis(expected: frozenset[str]) -> bool:
+    """Rosa & Silvestre: the one hypothesis of the bank left consistent."""
+    return len(expected) == 1
+
+
+#: The methods of the chapter, in the order of every table, figure and JSON object: name ->
+#: :class:`Method`.
+METHODS: dict[str, Method] = {
+    m.name: m
+    for m in (
+        Method(
+            "zb2014",
+            "GLR + minmax",
+            _zb_diagnose,
+            statistic_alarms(_zb_statistics),
+            _within_a_subsystem,
+            PlotStyle("C0"),
+        ),
+        Method(
+            "zhang2021",
+            "Kitanidis + Lasso",
+            _zhang2021_diagnose,
+            statistic_alarms(_lasso_statistics),
+            _any_set,
+            PlotStyle("C1"),
+        ),
+        Method(
+            "bz",
+            "parametric + energy",
+            _bz_diagnose,
+            statistic_alarms(_bz_statistics),
+            _bz_sets,
+            PlotStyle("C2"),
+        ),
+        Method(
+            "rosa2013",
+            "SVO bank",
+            _svo_diagnose,
+            _svo_alarms,
+            _one_hypothesis,
+            PlotStyle("C3"),
+            bounded=True,
+        ),
+    )
+}
+
+
 def run_methods(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, MethodOutcome]:
-    """The four methods (keys of :data:`METHODS`) on records ``y`` ``(B, N, 11)``, ``u`` ``(B, N, 4)``."""
+    """Every method of :data:`METHODS` on records ``y`` ``(B, N, 11)``, ``u`` ``(B, N, 4)``, sharing
+    their common work (:class:`MethodInputs`)."""
     _instance(d, Design, "d")
     y = np.asarray(y, dtype=float)
     u = np.asarray(u, dtype=float)
@@ -1289,19 +1558,12 @@ def run_methods(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, MethodOutc
             f"y, u: expected (B, {d.N}, {len(SENSORS)}) and (B, {d.N}, {len(INPUTS)}), "
             f"got {y.shape} and {u.shape}"
         )
-    eps = _innovations(d, y, u)
-    return {
-        "zb2014": run_zb(d, y, u, eps),
-        "zhang2021": run_zhang2021(d, y, u),
-        "bz": run_bz(d, y, u, eps),
-        "rosa2013": run_svo_bank(d, y, u),
-    }
+    inputs = MethodInputs(d, y, u)
+    return {name: m.diagnose(d, inputs) for name, m in METHODS.items()}
 
 
 # ----------------------------------------------------------------------------- records around each fault
 def _shifted(fault: Any, start_s: float) -> Any:
-    import dataclasses
-
     return dataclasses.replace(
         fault, start_s=start_s, stop_s=start_s + (fault.stop_s - fault.start_s)
     )
@@ -1336,12 +1598,14 @@ def fault_records(
     params: Any = None,
     settle_s: float = 20.0,
     faulty: bool = True,
+    schedule: str = "benchmark",
 ) -> Records:
     """One realisation per seed of the segment around ``fault`` (:class:`Settings` ``pre_s``, ``post_s``).
 
     The plant (:func:`fdi_lib.systems.wind_turbine.simulate`) runs from ``settle_s + pre_s`` seconds
     before the fault's start, in the scenario's wind of that stretch (:func:`~fdi_lib.systems.
-    wind_turbine.wind_speed` at those times, seeded by each seed's child 0), with the fault moved
+    wind_turbine.wind_speed` at those times, seeded by each seed's child 0, its mean profile the
+    named ``schedule``, :data:`~fdi_lib.systems.wind_turbine.WIND_SCHEDULES`), with the fault moved
     accordingly (``faulty=False``: without it); the first ``settle_s`` seconds (the plant leaving its
     initial equilibrium) are dropped.
     """
@@ -1365,6 +1629,7 @@ def fault_records(
                 seed=np.random.SeedSequence(
                     s.entropy, spawn_key=s.spawn_key + (0,), pool_size=s.pool_size
                 ),
+                schedule=schedule,
             )
             for s in seeds
         ]

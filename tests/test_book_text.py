@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import base64
 import importlib.util
+import inspect
 import io
 import re
 from pathlib import Path
@@ -320,3 +321,24 @@ def test_pages_link_the_pdf_of_an_earlier_make_pdf(tmp_path):
     script = (html / "_static" / EXT.PDF_SCRIPT).read_text()
     assert f'const pdf = "{EXT.PDF_NAME}", a4 = null;' in script
     assert (html / EXT.PDF_NAME).read_bytes() == b"%PDF-1.5 edition"
+
+
+def test_catalogue_docstrings_have_their_names_as_code_and_their_maths_as_maths():
+    """docstring_rst (issue 33): the names of numpydoc entries and worded subscripts become
+    literals, ASCII symbols and norms become :math:, literals already there stay; and no
+    TeX-like token is left outside them in any registered reproduction's docstring."""
+    assert EXT.docstring_rst(
+        "flat_size_linear : int\nlambda_mid : float\n    Middle of ``flat_range``.\n"
+        "Area of X_{+1}; hull_area - union_area; max_k ||Gamma_k||_2 for R = r I_2, n_A = 1."
+    ) == (
+        "``flat_size_linear`` : int\n``lambda_mid`` : float\n    Middle of ``flat_range``.\n"
+        r"Area of :math:`X_{+1}`; ``hull_area`` - ``union_area``; :math:`\max_k` "
+        r":math:`\|\Gamma_k\|_2` for R = r :math:`I_2`, :math:`n_A` = 1."
+    )
+    tex_like = re.compile(
+        r"\b[A-Za-z][A-Za-z0-9]*(?:_(?:\{|[A-Za-z0-9])|\^(?:\{|[A-Za-z0-9(]))|\|\|"
+    )
+    for r in list_reproductions():
+        text = EXT.docstring_rst(inspect.getdoc(r.func) or "")
+        left = re.sub(r"``[^`]+``|:\w+:`[^`]+`", "", text)
+        assert not tex_like.search(left), (r.id, tex_like.findall(left)[:5])

@@ -31,8 +31,7 @@ def test_docstring_examples(name):
 
 
 #: Modules whose every exported function has a runnable example and names the chapter that
-#: explains it (issue 34); the other core modules are not complete yet (montecarlo, sparse and
-#: four functions of nonparametric).
+#: explains it (issue 34).
 EXAMPLED = [
     "fdi_lib.models",
     "fdi_lib.filters",
@@ -40,9 +39,12 @@ EXAMPLED = [
     "fdi_lib.glr",
     "fdi_lib.isolation",
     "fdi_lib.simulate",
+    "fdi_lib.montecarlo",
     "fdi_lib.calibration",
     "fdi_lib.kitanidis",
     "fdi_lib.rls",
+    "fdi_lib.nonparametric",
+    "fdi_lib.sparse",
     "fdi_lib.validation",
 ]
 

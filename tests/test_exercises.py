@@ -79,6 +79,48 @@ def test_data_is_seeded(exercise_id):
     assert repr(a)  # printable
 
 
+# ----------------------------------------------------------------------------- data that tell students apart
+#: A class roster of 100 (issue 30.4): at least 99 % of its pairs must have different answers.
+ROSTER = [f"student-{i:03d}" for i in range(100)]
+
+
+def shared_pairs(answers: list[np.ndarray], ex) -> int:
+    """Pairs of students whose answers are the same within the grader's tolerance (:func:`close`,
+    either way round: a copied answer passes when it is close to the copier's own reference)."""
+    same = 0
+    for i, a in enumerate(answers):
+        for b in answers[i + 1 :]:
+            if a.shape == b.shape and (np.all(close(a, b, ex)) or np.all(close(b, a, ex))):
+                same += 1
+    return same
+
+
+def test_shared_pairs_counts_a_small_menu_of_data():
+    """The count can fail: six equally likely levels (glr-1's old menu) share about 1/6 of pairs."""
+    ex = EXERCISES["glr-1"]
+    rng = np.random.default_rng(7)
+    levels = rng.choice((0.001, 0.002, 0.005, 0.02, 0.05, 0.1), size=len(ROSTER))
+    same = shared_pairs([np.array(-2 * np.log(a)) for a in levels], ex)
+    assert same > 0.1 * 4950
+    assert shared_pairs([np.array(1.0), np.array(1.0 + 2e-6)], ex) == 0  # outside rtol 1e-6
+    assert shared_pairs([np.array(1.0), np.array(1.0 + 5e-7)], ex) == 1
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("exercise_id", CHECKABLE)
+def test_answers_differ_between_students(exercise_id):
+    """On a 100-student roster, at least 99 % of the 4950 pairs of students have answers outside
+    each other's tolerance (a copied number never earns the own-data point), every reference is
+    finite, and no student's answer is the book's."""
+    ex = EXERCISES[exercise_id]
+    answers = [np.asarray(E.reference_answer(exercise_id, s)) for s in ROSTER]
+    pairs = len(ROSTER) * (len(ROSTER) - 1) // 2
+    same = shared_pairs(answers, ex)
+    assert same <= 0.01 * pairs, f"{exercise_id}: {same} of {pairs} pairs share an answer"
+    book = reference(exercise_id)
+    assert shared_pairs([book, *answers], ex) - same <= 0.01 * len(ROSTER)
+
+
 # ----------------------------------------------------------------------------- independent references
 # Each reference of the registry is recomputed here another way (closed forms, explicit loops).
 def _kalman_by_hand(d):
@@ -110,7 +152,7 @@ INDEPENDENT = {
     "svo-2": lambda d: [1.2, 1.4],
     "svo-3": lambda d: 6.0 - 5.0,  # hull 6, union 4 + 4 - 3
     "svo-4": lambda d: 0.9 * 0.2 + 0.05 + 0.1,
-    "svo-5": lambda d: 2 ** (d["N"] * d["n_A"]),
+    "svo-5": lambda d: d["T"] * 2 ** (d["N"] * d["n_A"]),
     "wt-1": lambda d: scipy.optimize.brentq(
         lambda t: t * t * d["information_per_deg2"] - d["threshold"], 0.0, 100.0, xtol=1e-14
     ),

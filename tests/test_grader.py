@@ -144,7 +144,9 @@ def test_a_rerun_resumes_and_skips_graded_students(graded, tmp_path):
 
 
 def test_a_hang_that_swallows_interrupts_is_killed(tmp_path):
-    """The kernel's process group is killed at the cell limit, the next exercise still runs."""
+    """The kernel's process group is killed at the cell limit, the next exercise still runs, and
+    so does the student's next notebook (all of a student's notebooks share a kernel until a
+    kill: a fresh one runs the next notebook's set-up cells before its exercises)."""
     out = tmp_path / "class"
     folder = out / "hang"
     folder.mkdir(parents=True)
@@ -157,9 +159,20 @@ def test_a_hang_that_swallows_interrupts_is_killed(tmp_path):
     tag_exercise_cells(nb)
     nb.cells = [c for c in nb.cells if c.metadata[CELL_KEY]["exercise"] in (None, "glr-1", "glr-2")]
     jupytext.write(nb, folder / "glr.ipynb")
+    pipeline = "zb2014/pipeline"
+    nb = jupytext.reads(
+        synth.submission((grader.REPO / "book" / f"{pipeline}.md").read_text(), "reference", out),
+        fmt="md:myst",
+    )
+    tag_exercise_cells(nb)
+    nb.cells = [c for c in nb.cells if c.metadata[CELL_KEY]["exercise"] in (None, "pipe-1")]
+    jupytext.write(nb, folder / "pipeline.ipynb")
     limits = grader.Limits(cell=20, student=200)
-    rows = grader.grade(out, tmp_path / "g.csv", limits=limits, secret="s", chapters=[CHAPTER])
+    rows = grader.grade(
+        out, tmp_path / "g.csv", limits=limits, secret="s", chapters=[CHAPTER, pipeline]
+    )
     assert rows[0]["glr-2"] == "0" and rows[0]["glr-1"] == str(FULL)
+    assert rows[0]["pipe-1"] == str(FULL)
     assert "a cell ran over its time limit" in (tmp_path / "g.log").read_text()
 
 
@@ -178,11 +191,22 @@ def test_plan_attributes_cells_by_metadata():
     for cell, ex in zip(cells, [None, None, None, "glr-1", "glr-1", None, "glr-6", "glr-6"]):
         if not (cell.cell_type == "code" and cell.source.startswith("answer = helper")):
             cell.metadata[CELL_KEY] = {"exercise": ex}
+    # the graded-mode attempts the saved outputs show (a glr-6 cell's output is not glr-1's)
+    cells[4].outputs = [
+        new.new_output("execute_result", {"text/plain": "glr-1: attempt 4: accepted."})
+    ]
+    cells[5].outputs = [
+        new.new_output("stream", name="stdout", text="glr-1: attempt 3: not accepted.\n")
+    ]
+    cells[7].outputs = [
+        new.new_output("stream", name="stdout", text="glr-1: attempt 9: accepted.\n")
+    ]
     plan = grader.plan_notebook(new.new_notebook(cells=cells))
     assert plan.setup == ["import numpy as np", "def helper(x):\n    return 2 * x"]
     assert plan.exercises == {
         "glr-1": ['data = exercise_data("glr-1")\nanswer = None', "answer = helper(1)"]
     }
+    assert plan.attempts == {"glr-1": 4}
 
 
 def test_student_notebook_tags_follow_the_chapter():

@@ -136,14 +136,15 @@ class _CountingPool(concurrent.futures.ThreadPoolExecutor):
 
 
 @pytest.mark.parametrize(
-    "task_seconds, tasks", [(1e-12, ["_call"] * 19), (1e9, ["_call_many"] * 9 + ["_call"])]
+    "task_seconds, tasks", [(1e-12, ["_call"] * 19), (1e9, ["_call_many"] * 6 + ["_call"] * 7)]
 )
 def test_short_chunks_go_to_workers_several_to_a_task_with_the_same_results(
     task_seconds, tasks, monkeypatch
 ):
     """Chunks shorter than TASK_SECONDS (timed on the first) are batched, at least four tasks a
-    worker: 20 chunks on 2 workers, the 19 after the first as 19 tasks, or as 9 tasks of 2 and
-    the last alone; the arrays are those of jobs=1."""
+    worker: 20 chunks on 2 workers, the 19 after the first as 19 tasks, or as tasks of 2 while
+    more than 4 per worker are left (6 tasks, 12 chunks), then the last 7 alone (the tasks shrink
+    towards the end); the arrays are those of jobs=1."""
     monkeypatch.setattr(mc, "TASK_SECONDS", task_seconds)
     fn = functools.partial(_draws_chunk, dim=3)
     ref = mc.run_monte_carlo(fn, 40, seed=4, chunk_size=2)
@@ -159,6 +160,16 @@ def test_a_task_lasts_task_seconds_and_every_worker_gets_four(monkeypatch):
     assert mc._batch_size(0.1, 1000, 2) == 5  # 0.5 s / 0.1 s
     assert mc._batch_size(0.01, 80, 2) == 10  # 50 by time, 10 for four tasks a worker
     assert mc._batch_size(2.0, 1000, 16) == 1  # long chunks: one a task
+
+
+def test_tasks_shrink_towards_the_end_of_the_run():
+    """Guided self-scheduling: at most the batch, at most n_left / (2 workers), at least 1."""
+    sizes, left = [], 41
+    while left:
+        sizes.append(mc._task_chunks(5, left, 2))
+        left -= sizes[-1]
+    assert sizes == [5, 5, 5, 5, 5, 4, 3, 2, 1, 1, 1, 1, 1, 1, 1]
+    assert mc._task_chunks(5, 3, None) == 3  # workers unknown: the batch, within what is left
 
 
 @pytest.mark.slow

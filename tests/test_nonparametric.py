@@ -21,6 +21,7 @@ from fdi_lib.nonparametric import (
     reduce_residual,
     rejection_projection,
     solution1,
+    solution1_glr,
 )
 from fdi_lib.simulate import simulate
 from fdi_lib.systems import bz_example as ex
@@ -257,6 +258,14 @@ def test_solution1_detects_isolates_theta_and_ignores_f(setting):
     # unbatched record works too
     one = solution1(model, s0.y[0], s0.u[0], **kw)
     assert one.glr_alarm.shape == () and one.isolation.shape == (2,)
+    # the GLR's noise-independent arrays built once (solution1_glr) and reused: the same bits
+    glr = solution1_glr(model, E=ex.E, Psi=ex.PSI, window=30, kgains=kg)
+    for y, u, ref in ((s.y, s.u, res["both"]), (s0.y[0], s0.u[0], one)):
+        again = solution1(model, y, u, glr=glr, **kw)
+        for name in ("statistic", "onset", "C_hat", "d_hat"):
+            np.testing.assert_array_equal(getattr(again.glr, name), getattr(ref.glr, name))
+        np.testing.assert_array_equal(again.isolation, ref.isolation)
+        np.testing.assert_array_equal(again.glr_alarm, ref.glr_alarm)
 
 
 def test_solution2_rls_converges_to_constant_theta_on_the_example(setting):

@@ -234,6 +234,16 @@ def test_every_chapter_converts_to_notebooks_that_render(tmp_path):
     """All chapters as `make notebooks` writes them (no build: glued values are placeholders)."""
     written = NM.write_notebooks(ROOT, tmp_path, None)
     assert len(written) == len(NM.chapters(ROOT / "book"))
+    # every cell says which exercise it belongs to (issue 30.3), as in the student notebooks
+    from fdi_lib.exercises import CELL_KEY, EXERCISES
+
+    glr = nbformat.read(tmp_path / "zb2014" / "glr.ipynb", as_version=4)
+    tags = [c.metadata.get(CELL_KEY, {"missing": True}) for c in glr.cells]
+    assert all(set(t) == {"exercise"} for t in tags), tags
+    seen = {t["exercise"] for t in tags} - {None}
+    assert seen == {e for e in EXERCISES if EXERCISES[e].chapter == "zb2014/glr"}
+    first = next(c for c in glr.cells if c.metadata[CELL_KEY]["exercise"] == "glr-5")
+    assert "glr-5" in first.source and first.cell_type == "markdown"
     found = NM.problems(*[nbformat.read(p, as_version=4) for p in written])
     bad = {p.relative_to(tmp_path).as_posix(): f for p, f in zip(written, found) if f}
     assert bad == {}

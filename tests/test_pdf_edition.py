@@ -351,3 +351,68 @@ def test_log_counts_overfull_boxes_over_the_allowance_and_rerun_requests():
         "rerun": 1,
     }
     assert check.log_counts("")["overfull_max_pt"] == 0.0
+    assert check.log_problems_in(log) == [
+        "LaTeX: the last pass asks for a rerun (cross-references not settled)"
+    ]
+    check.OVERFULL_BUDGET = 1  # two over the allowance: over the budget, each one named
+    assert check.log_problems_in(log) == [
+        "LaTeX: 2 overfull boxes over 5 pt, 1 allowed (OVERFULL_BUDGET)",
+        "LaTeX: overfull box 12.5 pt beyond the text in paragraph at lines 3--4",
+        "LaTeX: overfull box 6.0 pt beyond the text has occurred while \\output is active",
+        "LaTeX: the last pass asks for a rerun (cross-references not settled)",
+    ]
+    assert check.log_problems_in(
+        "LaTeX Warning: Float too large for page by 3.1pt on input line 7.\n"
+    ) == ["LaTeX: Float too large for page by 3.1pt on input line 7."]
+
+
+def _bbox_page(lines):
+    """A page of ``pdftotext -bbox-layout``: one line per ``(x0, x1, words)``."""
+    out = []
+    for x0, x1, words in lines:
+        out.append(f'<line xMin="{x0}" yMin="1" xMax="{x1}" yMax="2">')
+        step = (x1 - x0) / len(words)
+        out += [
+            f'<word xMin="{x0 + i * step}" yMin="1" xMax="{x0 + (i + 1) * step}" yMax="2">{w}</word>'
+            for i, w in enumerate(words)
+        ]
+        out.append("</line>")
+    return "\n".join(out)
+
+
+def test_words_beyond_the_text_block_are_measured_in_the_pdf():
+    """check_pdf measures the text block from the PDF (the most frequent start and end of a
+    line) and names every word beyond it by more than the allowance: a table 40 pt too wide on
+    page 2, none on page 1 (a short line, a line 1 pt over)."""
+    check = _load("fdi_check_pdf_width", ROOT / "tools" / "check_pdf.py")
+    body = [(72.0, 540.0, ["a", "justified", "line"])] * 5
+    page1 = _bbox_page(body + [(72.0, 300.0, ["short"]), (72.0, 541.0, ["rounding"])])
+    page2 = _bbox_page(body + [(60.0, 580.0, ["wide", "table", "row", "&amp;", "cut"])])
+    assert check.text_block([page1, page2]) == (72.0, 540.0)
+    assert check.outside_words([page1, page2]) == [(2, 12.0, "wide"), (2, 40.0, "cut")]
+
+
+def test_long_tables_get_ragged_right_columns_that_fit_and_intervals_stay_whole():
+    """_PrintedTables: a long table wider than the text gets columns that share the text width,
+    each at least its longest word; one that fits keeps its natural columns; an interval and a
+    number with its unit are joined by no-break spaces."""
+    columns = [["ex-1"] * 40, ["a title of an exercise that goes on and on"] * 40, ["10 min"]]
+    widths = EXT.printed_widths(columns, chars=40)
+    assert sum(widths) == 40 and widths[0] >= 4 and widths[1] >= len("exercise") and widths[2] >= 3
+    assert EXT.printed_widths([["ex-1"], ["short"]], chars=40) is None
+    nb = EXT.NBSP
+    cell = "0.032 s [0.02, 0.05], 5 % [-0.333, 1] and 4 sets"
+    joined = EXT._NUMBER_UNIT.sub(rf"\1{nb}\2", EXT._INTERVAL.sub(rf"\1{nb}\2", cell))
+    assert joined == f"0.032{nb}s [0.02,{nb}0.05], 5{nb}% [-0.333,{nb}1] and 4 sets"
+
+
+def test_the_cover_table_spans_the_text_width():
+    """The cover's ledger table: a status column of 0.3 text widths and one column per paper
+    plus the total sharing the rest, its padding included (the names wrap)."""
+    counts = {p: {STATUSES[0]: 1} for p in PAPERS}
+    spec = re.search(r"\\begin\{tabular\}\{(.*)\}$", EXT.cover_latex("a: b", "1", counts), re.M)
+    n = len(PAPERS) + 1
+    assert spec.group(1) == (
+        r"@{}>{\raggedright\arraybackslash}p{0.3\linewidth}"
+        rf"*{{{n}}}{{>{{\raggedleft\arraybackslash}}p{{\dimexpr(0.7\linewidth-{2 * n}\tabcolsep)/{n}\relax}}}}@{{}}"
+    )

@@ -257,7 +257,7 @@ def example2():
     from fdi_lib.kitanidis import residual_signature
     from fdi_lib.models import fault_profile
     from fdi_lib.montecarlo import trial_seeds
-    from fdi_lib.reproduce.zhang2021 import EX2_LEAK_SIZE, EX2_LEAKS, EX2_M, example2_setup
+    from fdi_lib.reproduce.zhang2021_example2 import EX2_LEAK_SIZE, EX2_LEAKS, EX2_M, example2_setup
     from fdi_lib.simulate import simulate
     from fdi_lib.sparse import regression_data
 

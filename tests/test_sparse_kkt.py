@@ -156,3 +156,44 @@ def test_float_floor_is_not_an_allowance(seed):
         coefs[j, i] += 10 * np.spacing(coefs[j, i])
         bad = LassoPath(lambdas=path.lambdas, coefs=coefs, n_samples=path.n_samples)
         assert kkt_residual(X, y, bad) > KKT_TOL
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_gradient_from_the_double_double_residual_is_within_its_bound(seed):
+    """The middle tier of the check (between the Gram-form screen and the gradient in
+    double-double): ``X^T fl(r)`` with ``r`` in double-double, and its error bound, which must
+    contain the exact gradient at every breakpoint of a nearly collinear design's full path (and
+    that path moved by 1000 ulps), for one ``X`` shared by the rows of ``coefs`` and for one ``X``
+    per row; the bound is also far below the Gram-form screen's there (why the tier exists)."""
+    from fdi_lib.sparse import _gradient_bounded, _kkt_screen
+
+    X, y = collinear(seed)
+    th = sklearn_path(X, y, 50).coefs.T.copy()  # (S, m)
+    moved = th + 1000 * np.spacing(th)
+    for coefs in (th, moved):
+        exact = exact_gradient(X, y, coefs)
+        for g, slack in (
+            _gradient_bounded(X, y, coefs),
+            _gradient_bounded(
+                np.repeat(X[None], len(coefs), axis=0), np.repeat(y[None], len(coefs), 0), coefs
+            ),
+        ):
+            err = np.array(
+                [
+                    [abs(Fraction(float(g[i, j])) - exact[i, j]) for j in range(g.shape[1])]
+                    for i in range(g.shape[0])
+                ],
+                dtype=float,
+            )
+            assert np.all(err.max(axis=1) <= slack)
+            assert np.all(slack > 0)
+    gram_slack = _kkt_screen(
+        (X.T @ X)[None],
+        (X.T @ y)[None],
+        np.sqrt(y @ y)[None],
+        np.zeros((1, len(th))),
+        th[None],
+        np.array([len(th)]),
+        X.shape[0],
+    )[1][0]
+    assert np.median(_gradient_bounded(X, y, th)[1] / gram_slack) < 0.1

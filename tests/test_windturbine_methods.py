@@ -191,3 +191,46 @@ def test_scoreboard_json_has_every_fault_and_method():
             else fast["detection_time_mean_s"]
         )
         assert f"fault {row.path[3]}" in row.label and "{" not in row.label
+
+
+def test_separability_is_the_sine_of_the_principal_angle(design):
+    """Against scipy's principal angles between a candidate's whitened signature and the span of
+    the others'; the converter's signature is the drive-train torque's plus the torque sensor's in
+    the model itself, so the three have separability 0."""
+    import scipy.linalg
+
+    from fdi_lib.signatures import fault_signature
+
+    sep = W.separability(design)
+    assert set(sep) == set(W.CANDIDATES)
+    d = design
+    n = min(d.settings.window + d.settings.isolation_extra, d.N - d.onset)
+    for sd in d.subs.values():
+        sig = fault_signature(sd.kf, sd.kf_gains, sd.family.profile(d.onset)).on_innovation
+        Sw = np.linalg.solve(
+            sd.kf_gains.Sigma_chol[d.onset : d.onset + n], sig[d.onset : d.onset + n]
+        )
+        X = Sw.reshape(-1, Sw.shape[-1])
+        for i, j in enumerate(sd.sub.candidates):
+            angle = scipy.linalg.subspace_angles(X[:, [i]], np.delete(X, i, axis=1))[0]
+            assert sep[W.CANDIDATES[j]] == pytest.approx(np.sin(angle), abs=1e-6), W.CANDIDATES[j]
+    s = W.subsystems(W.plant_constants())[3]
+    assert np.array_equal(s.Psi[:, 5], s.Psi[:, 6]) and s.Phi[4, 5] == 1.0
+    for c in ("converter", "drive_train", "tau_g_m"):
+        assert sep[c] == 0.0, c
+    assert 0.1 < sep["omega_g_m2"] < sep["omega_r_m2"] <= 1.0
+
+
+def test_every_set_a_method_names_is_in_its_vocabulary(design):
+    """``Method.nameable`` describes what each method's isolation can output: every set named on
+    faulty records is in it, and the sets the chapter explains by it are not."""
+    res = _run(design, (1, 5, 8), seed=5)
+    for name, o in res.items():
+        for row in o.isolated:
+            named = frozenset(W.CANDIDATES[j] for j in np.flatnonzero(row))
+            if named:
+                assert W.METHODS[name].nameable(named), (name, sorted(named))
+    f5 = frozenset(W.expected_candidates(FAULTS[5]))
+    f8 = frozenset(W.expected_candidates(FAULTS[8]))
+    assert [m for m in W.METHODS if not W.METHODS[m].nameable(f5)] == ["bz", "rosa2013"]
+    assert [m for m in W.METHODS if not W.METHODS[m].nameable(f8)] == ["bz"]

@@ -2,7 +2,9 @@
 
     python tools/check_install.py [--out _build/install-check]
 
-Builds the wheel of ``fdi_lib`` from the repository (``pip wheel --no-deps``), installs it into a
+Builds the wheel of ``fdi_lib`` from a copy of the repository's package files (``pip wheel
+--no-deps`` builds in the source tree: a copy leaves ``build/`` and ``fdi_lib.egg-info`` out of
+the repository, where CI's test suite runs at the same time), installs it into a
 new virtual environment that shares nothing with the book's (no system site-packages, no
 repository on its path: every command runs from the environment's own folder), with its
 dependencies resolved by pip from the wheel's metadata and held to the tested versions by
@@ -22,6 +24,9 @@ import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
+#: What the wheel is built from (pyproject.toml's readme, the licence file setuptools adds, the
+#: package), copied to ``OUT/src``.
+PACKAGE_FILES = ("pyproject.toml", "README.md", "LICENSE", "fdi_lib")
 #: A reproduction that runs in a second: the console script's JSON contract is what is checked.
 REPRODUCTION = "zb2014-table1"
 PUBLIC_KEYS = {"id", "headline", "paper", "settings"}
@@ -42,11 +47,19 @@ def _run(step: str, cmd: list[str], cwd: Path) -> str:
 def check(out: Path) -> None:
     if out.exists():
         shutil.rmtree(out)
-    dist, env = out / "dist", out / "venv"
+    src, dist, env = out / "src", out / "dist", out / "venv"
     dist.mkdir(parents=True)
+    src.mkdir()
+    for name in PACKAGE_FILES:
+        if (REPO / name).is_dir():
+            shutil.copytree(
+                REPO / name, src / name, ignore=shutil.ignore_patterns("__pycache__", "*.pyc")
+            )
+        else:
+            shutil.copy2(REPO / name, src / name)
     _run(
         "wheel",
-        [sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "-w", str(dist), str(REPO)],
+        [sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "-w", str(dist), str(src)],
         cwd=out,
     )
     wheels = sorted(dist.glob("fdi_lib-*.whl"))

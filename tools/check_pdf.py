@@ -11,6 +11,13 @@ Fails (exit status 1, one line per problem) when:
   :data:`ALLOWED_MACROS`;
 - the LaTeX log has an undefined reference or citation (printed as "??" in the PDF), or a
   character that the font lacks (xelatex drops it from the page: "Missing character");
+- the layout regressed (issue 33): more overfull boxes over :data:`OVERFULL_ALLOWANCE_PT` (a
+  table, a figure or a line beyond the text width) than :data:`OVERFULL_BUDGET`, a float too
+  large for its page, or a last LaTeX pass that still asks for a rerun (cross-references not
+  settled);
+- a word of the PDF lies outside the text block (:func:`width_problems`, measured in the PDF by
+  ``pdftotext -bbox-layout``: a table, a figure's label or a code line wider than the text,
+  whatever the log says);
 - the chapters numbered in the PDF's table of contents are not 1, 2, ... for the chapters of the
   parts ``numbered: true`` of ``_toc.yml``, in order and with their titles, or another chapter
   is numbered;
@@ -22,6 +29,7 @@ Fails (exit status 1, one line per problem) when:
 from __future__ import annotations
 
 import argparse
+import html
 import re
 from collections import Counter
 import subprocess
@@ -92,11 +100,25 @@ def text_problems(pdf: Path, tex: Path) -> list[str]:
 def log_problems(log: Path) -> list[str]:
     if not log.is_file():
         return [f"no LaTeX log {log}"]
-    text = log.read_text(errors="replace")
+    return log_problems_in(log.read_text(errors="replace"))
+
+
+def log_problems_in(text: str) -> list[str]:
+    """The problems of a LaTeX log's text (see the module docstring)."""
     problems = [
         f"LaTeX: {m.group(0)}"
         for m in re.finditer(r"LaTeX Warning: (?:Reference|Citation) .* undefined[^\n]*", text)
     ]
+    over = overfull_boxes(text)
+    if len(over) > OVERFULL_BUDGET:
+        problems += [
+            f"LaTeX: {len(over)} overfull boxes over {OVERFULL_ALLOWANCE_PT:g} pt, "
+            f"{OVERFULL_BUDGET} allowed (OVERFULL_BUDGET)",
+            *over,
+        ]
+    problems += [f"LaTeX: {m.group(0)}" for m in re.finditer(r"Float too large[^\n]*", text)]
+    if log_counts(text)["rerun"]:
+        problems.append("LaTeX: the last pass asks for a rerun (cross-references not settled)")
     problems += [
         f"LaTeX: {n} times no {c!r} in the font (dropped from the page)"
         for c, n in sorted(missing_characters(text).items())
@@ -104,14 +126,75 @@ def log_problems(log: Path) -> list[str]:
     return problems
 
 
-#: Overfull boxes up to this many points are tolerated in the counts of :func:`log_counts`.
+#: Overfull boxes up to this many points are tolerated (:func:`log_problems`).
 OVERFULL_ALLOWANCE_PT = 5.0
+#: Overfull boxes over the allowance that the book still has (issue 33: 63 before the printed
+#: layout of the tables): all vertical, none beyond the text width: solution boxes (Sphinx's
+#: framed admonitions) that a page break splits with up to 20 pt in the bottom margin, and the
+#: output routine at two page breaks (the front matter; a long table of the ledger). More
+#: fails: lower it when one goes, never raise it.
+OVERFULL_BUDGET = 8
+_OVERFULL = re.compile(r"^Overfull \\[hv]box \(([\d.]+)pt too \w+\) (.*)$", re.M)
+
+#: How far (in PDF points) a word may stick out of the text block: the rounding of glyph boxes.
+OUTSIDE_ALLOWANCE_PT = 2.0
+_LINE_BOX = re.compile(r'<line xMin="([\d.]+)" yMin="[\d.]+" xMax="([\d.]+)"')
+_WORD_BOX = re.compile(
+    r'<word xMin="([\d.]+)" yMin="[\d.]+" xMax="([\d.]+)" yMax="[\d.]+">([^<]*)<'
+)
+
+
+def overfull_boxes(log_text: str) -> list[str]:
+    """Each overfull box of a LaTeX log over :data:`OVERFULL_ALLOWANCE_PT`, with where it is."""
+    return [
+        f"LaTeX: overfull box {m.group(1)} pt beyond the text {m.group(2)}"
+        for m in _OVERFULL.finditer(log_text)
+        if float(m.group(1)) > OVERFULL_ALLOWANCE_PT
+    ]
+
+
+def text_block(pages: list[str]) -> tuple[float, float]:
+    """The left and right edges of the text block (PDF points), measured: the most frequent
+    start and end of a line of the PDF (a justified paragraph's lines fill the text width)."""
+    starts = Counter(round(float(a)) for page in pages for a, _ in _LINE_BOX.findall(page))
+    ends = Counter(round(float(b)) for page in pages for _, b in _LINE_BOX.findall(page))
+    if not starts:
+        raise RuntimeError("pdftotext found no line of text")
+    return float(starts.most_common(1)[0][0]), float(ends.most_common(1)[0][0])
+
+
+def outside_words(pages: list[str]) -> list[tuple[int, float, str]]:
+    """``(page, points outside, word)`` for each word of the PDF that lies outside the text block
+    (:func:`text_block`) by more than :data:`OUTSIDE_ALLOWANCE_PT`; the cover page included."""
+    left, right = text_block(pages)
+    out = []
+    for number, page in enumerate(pages, start=1):
+        for x0, x1, word in _WORD_BOX.findall(page):
+            beyond = max(left - float(x0), float(x1) - right)
+            if beyond > OUTSIDE_ALLOWANCE_PT:
+                out.append((number, round(beyond, 1), html.unescape(word)))
+    return out
+
+
+def width_problems(pdf: Path) -> list[str]:
+    """Every page with words beyond the text block: how far the widest goes, and the words
+    (the cut of a table, figure or listing wider than the text)."""
+    layout = run("pdftotext", "-bbox-layout", str(pdf), "-")
+    pages = layout.split("<page ")[1:]
+    by_page: dict[int, list[tuple[float, str]]] = {}
+    for number, beyond, word in outside_words(pages):
+        by_page.setdefault(number, []).append((beyond, word))
+    return [
+        f"page {n}: {len(w)} words beyond the text block, up to {max(w)[0]:g} pt "
+        f"({' '.join(x for _, x in w[:6])})"
+        for n, w in sorted(by_page.items())
+    ]
 
 
 def log_counts(log_text: str) -> dict[str, float]:
     """What the LaTeX log says of the layout: overfull boxes (all, those over
     :data:`OVERFULL_ALLOWANCE_PT`, the widest in points), underfull boxes and rerun requests
-    ("Rerun to get ...", "Label(s) may have changed"). Printed by :func:`main`, not failed."""
+    ("Rerun to get ...", "Label(s) may have changed"). Printed by :func:`main`; :func:`log_problems` fails on them."""
     over = [float(x) for x in re.findall(r"^Overfull \\[hv]box \(([\d.]+)pt too", log_text, re.M)]
     return {
         "overfull": len(over),
@@ -235,6 +318,7 @@ def main(argv: list[str] | None = None) -> int:
         else [f"{pages} pages, expected {PAGES[0]} to {PAGES[1]}"]
     )
     problems += text_problems(args.pdf, args.tex)
+    problems += width_problems(args.pdf)
     problems += log_problems(args.tex.with_suffix(".log"))
     problems += toc_problems(args.tex.with_suffix(".toc"), args.src)
     if args.html is not None:

@@ -26,8 +26,9 @@ notebooks (``*.ipynb``, any names). Beside ``OUT.csv`` the grader writes:
 
 How a submission is graded
 --------------------------
-1. **Isolation.** Each student's notebooks run in a fresh Jupyter kernel started in a scratch
-   folder that holds the student package (``tools/student_package.py``: ``fdi_lib`` without
+1. **Isolation.** Each student's notebooks run, one after the other, in a fresh Jupyter kernel
+   of that student alone (a new one after a kill; never shared between students) started in a
+   scratch folder that holds the student package (``tools/student_package.py``: ``fdi_lib`` without
    ``exercises._reference``) and ``grader_kernel.py``; its import path is that folder and the
    pinned environment, its environment a short allow-list (no secret, no repository path), its
    arguments the kernel's own. The kernel never sees an expected answer: it reports the
@@ -162,6 +163,10 @@ class Plan:
 
     setup: list[str] = field(default_factory=list)
     exercises: dict[str, list[str]] = field(default_factory=dict)
+    #: The highest graded-mode attempt number (``check(id, answer, graded=True)``: "attempt N")
+    #: that each exercise's saved outputs show: what the student's own session counted, as
+    #: handed in (a student can edit outputs: for the instructor's information, never a grade).
+    attempts: dict[str, int] = field(default_factory=dict)
 
 
 def _is_setup(source: str) -> bool:
@@ -208,7 +213,20 @@ def plan_notebook(nb) -> Plan:
                 plan.setup.append(source)
         elif current in REFERENCES:
             plan.exercises.setdefault(current, []).append(source)
+            shown = re.compile(rf"{re.escape(current)}: attempt (\d+): (?:accepted|not accepted)")
+            for n in shown.findall(_output_text(cell)):
+                plan.attempts[current] = max(plan.attempts.get(current, 0), int(n))
     return plan
+
+
+def _output_text(cell) -> str:
+    """The text a code cell's saved outputs show (streams and plain-text results)."""
+    parts = []
+    for out in cell.get("outputs", []):
+        text = out.get("text") if out.get("output_type") == "stream" else None
+        text = text if text is not None else out.get("data", {}).get("text/plain", "")
+        parts.append(text if isinstance(text, str) else "".join(text))
+    return "\n".join(parts)
 
 
 def suspicious(sources: list[str]) -> list[str]:
@@ -302,6 +320,25 @@ def _outputs(cell) -> tuple[list[dict], list[str]]:
     return reports, errors
 
 
+#: Folder of the staged package that holds matplotlib's font cache (:func:`font_cache`).
+FONT_CACHE = "mpl"
+
+
+def font_cache(package: Path) -> None:
+    """Build matplotlib's font cache once, in ``package / FONT_CACHE``, for every kernel to copy:
+    built in a fresh ``MPLCONFIGDIR`` it runs ``fc-list`` in a process (a violation inside a
+    kernel, see ``grader_kernel.install``) and costs each kernel the scan of the system's fonts."""
+    env = {k: os.environ[k] for k in ENV_KEEP if k in os.environ}
+    env.update(MPLCONFIGDIR=str(package / FONT_CACHE), MPLBACKEND="Agg")
+    subprocess.run(
+        [sys.executable, "-c", "import matplotlib.font_manager"],
+        env=env,
+        check=True,
+        capture_output=True,
+        timeout=300,
+    )
+
+
 def run_student(
     folder: Path, package: Path, secret: str, limits: Limits, denied: list[Path]
 ) -> tuple[dict[tuple[str, str], Run], dict[str, list[str]], list[str]]:
@@ -318,6 +355,12 @@ def run_student(
             log.append(f"{path.name}: unreadable notebook ({type(exc).__name__}: {str(exc)[:200]})")
     runs: dict[tuple[str, str], Run] = {}
     code = {ex: src for plan in plans for ex, src in plan.exercises.items()}
+    tries = {ex: n for plan in plans for ex, n in plan.attempts.items()}
+    if tries:
+        log.append(
+            "graded-mode attempts the submitted outputs show (as handed in): "
+            + ", ".join(f"{ex} {n}" for ex, n in tries.items())
+        )
     if not code:
         log.append("no checkable exercise found in the submission")
         return runs, code, log
@@ -326,24 +369,29 @@ def run_student(
     with tempfile.TemporaryDirectory(prefix="grade-") as tmp:
         scratch = Path(tmp)
         shutil.copytree(package / "fdi_lib", scratch / "lib" / "fdi_lib")
+        if (package / FONT_CACHE).is_dir():
+            shutil.copytree(package / FONT_CACHE, scratch / "mpl")
         shutil.copy2(TOOLS / "grader_kernel.py", scratch / "lib" / "grader_kernel.py")
         config = {"scratch": str(scratch), "denied_read": [str(p) for p in denied]}
-        for plan in plans:
-            todo = [(ex, run) for ex in plan.exercises for run in RUNS]
-            while todo:
-                if time.monotonic() >= deadline:
-                    for ex, run in todo:
-                        runs.setdefault(
-                            (ex, run), Run()
-                        ).stopped = "the student's time budget was used up"
-                    log.append(f"student time limit ({limits.student:g} s) reached")
-                    break
-                todo = _run_kernel(plan, todo, keys, config, scratch, limits, deadline, runs, log)
+        # one kernel for all the student's notebooks (a fresh one only after a kill): a kernel's
+        # start, hooks and imports cost about a tenth of a student's time (issue 30.2)
+        todo = [
+            (i, ex, run) for i, plan in enumerate(plans) for ex in plan.exercises for run in RUNS
+        ]
+        while todo:
+            if time.monotonic() >= deadline:
+                for _, ex, run in todo:
+                    runs.setdefault(
+                        (ex, run), Run()
+                    ).stopped = "the student's time budget was used up"
+                log.append(f"student time limit ({limits.student:g} s) reached")
+                break
+            todo = _run_kernel(plans, todo, keys, config, scratch, limits, deadline, runs, log)
     return runs, code, log
 
 
 def _run_kernel(
-    plan: Plan,
+    plans: list[Plan],
     todo: list,
     keys: dict,
     config: dict,
@@ -353,8 +401,8 @@ def _run_kernel(
     runs: dict,
     log: list,
 ) -> list:
-    """Run ``todo`` (exercise, run) pairs in one kernel until done or the kernel is lost;
-    returns what is left."""
+    """Run ``todo`` (notebook index, exercise, run) triples in one kernel until done or the kernel
+    is lost, each notebook's set-up cells before its first exercise; returns what is left."""
     import nbclient
     import nbformat
     from nbclient.exceptions import CellTimeoutError, DeadKernelError
@@ -371,7 +419,7 @@ def _run_kernel(
         resources={"metadata": {"path": str(scratch)}},
     )
     cpu = int(max(1.0, deadline - time.monotonic())) + 1
-    started = False
+    started, set_up = False, set()
 
     def execute(source: str) -> list[dict]:
         cell = new(source)
@@ -392,11 +440,14 @@ def _run_kernel(
             )
             if _outputs(install)[1]:
                 raise RuntimeError(f"grader hooks failed: {_outputs(install)[1]}")
-            for src in plan.setup:
-                execute(src)
-            started = True
             while todo:
-                ex, run = todo[0]
+                i, ex, run = todo[0]
+                if i not in set_up:
+                    started = False
+                    for src in plans[i].setup:
+                        execute(src)
+                    set_up.add(i)
+                started = True
                 result = runs.setdefault((ex, run), Run())
                 current = [
                     execute(
@@ -405,7 +456,7 @@ def _run_kernel(
                     )
                 ]
                 try:
-                    for src in plan.exercises[ex]:
+                    for src in plans[i].exercises[ex]:
                         current.append(execute(src))
                     current.append(execute(f"_fdi_grader.end({ex!r}, {run!r})"))
                 finally:
@@ -413,7 +464,7 @@ def _run_kernel(
                 todo = todo[1:]
     except (CellTimeoutError, DeadKernelError, RuntimeError, TimeoutError) as exc:
         _kill_group(client)
-        ex, run = todo[0]
+        i, ex, run = todo[0]
         what = (
             "a cell ran over its time limit"
             if isinstance(exc, CellTimeoutError)
@@ -421,8 +472,8 @@ def _run_kernel(
         )
         # the same cells would hang or crash on the other data too: the exercise is stopped;
         # a kernel lost before the exercises (set-up cells, hooks) stops the notebook
-        lost = [(e, r) for e, r in todo if e == ex or not started]
-        for e, r in lost:
+        lost = [(j, e, r) for j, e, r in todo if j == i and (e == ex or not started)]
+        for _, e, r in lost:
             runs.setdefault((e, r), Run()).stopped = what
         log.append(
             f"{ex if started else 'set-up'} ({run} data): {what}; the kernel's process "
@@ -735,6 +786,7 @@ def grade(
 
     with tempfile.TemporaryDirectory(prefix="fdi-student-package-") as tmp:
         package = student_package.stage(Path(tmp) / "package", with_digests=False)
+        font_cache(package)
         with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
             for fut in as_completed([pool.submit(one, f, package) for f in folders]):
                 fut.result()

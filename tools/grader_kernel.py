@@ -139,7 +139,16 @@ def _profile(frame, event, arg):
 
 
 def install(config: dict) -> None:
-    """Install the hooks (once per kernel, before any submission cell)."""
+    """Install the hooks (once per kernel, before any submission cell).
+
+    Matplotlib is imported first: on its first import in a fresh ``MPLCONFIGDIR`` its font
+    manager runs ``fc-list`` in a process, which the hooks would report against the first
+    exercise whose library code draws (pipe-3 lost its point so), and swallow (matplotlib
+    catches the error and goes on without the system's fonts). The grader hands every kernel a
+    font cache built once (:func:`grader.font_cache`); this import then starts nothing, and
+    without the cache it builds it here, before the hooks.
+    """
+    import matplotlib.font_manager  # noqa: F401 -- see above: before the hooks
     import fdi_lib
     import IPython.display  # noqa: F401 -- the reports need it, imported before the hooks
 

@@ -437,7 +437,17 @@ def convert_notebook(nb, doc: str, refs: BookReferences, macros: dict[str, str |
     and put the macro cell first (replacing one there already). A cell that uses a macro also
     starts with the definitions (typesetting nothing): JupyterLab renders the cells of a notebook
     concurrently, and under load a cell's maths was typeset before the macro cell's, its macros
-    undefined (``tests/browser/check_jupyterlab.py``, 21 red ``\\T`` in one chapter)."""
+    undefined (``tests/browser/check_jupyterlab.py``, 21 red ``\\T`` in one chapter).
+
+    Every cell also gets the exercise it belongs to as metadata
+    (:func:`fdi_lib.exercises.tag_exercise_cells`, read from the MyST exercise directives before
+    they become Markdown; kept when a cell has it already): the notebooks of ``make notebooks``,
+    the book's downloads and the student edition's notebooks carry the exercise boundaries the
+    grader (``tools/grader.py``) attributes cells by."""
+    from fdi_lib.exercises import CELL_KEY, tag_exercise_cells
+
+    if not any(CELL_KEY in c.metadata for c in nb.cells):
+        tag_exercise_cells(nb)
     uses = re.compile(r"\\(?:" + "|".join(map(re.escape, macros)) + r")(?![A-Za-z])")
     defs = f"${macro_definitions(macros)}$\n\n"
     for cell in nb.cells:
@@ -447,6 +457,7 @@ def convert_notebook(nb, doc: str, refs: BookReferences, macros: dict[str, str |
                 cell.source = defs + cell.source
     nb.cells = [c for c in nb.cells if MACRO_TAG not in c.metadata.get("tags", [])]
     nb.cells.insert(0, macro_cell(macros))
+    nb.cells[0].metadata[CELL_KEY] = {"exercise": None}
     return nb
 
 

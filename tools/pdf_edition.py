@@ -21,7 +21,8 @@
    ``--html`` holds a built book, puts it beside the pages, whose header menu then links it
    (``publish_pdf`` of ``_ext/fdi_book.py``);
 4. typesets the same LaTeX source again on A4 paper (:func:`a4_edition`): ``OUT/fdi-book-a4.pdf``,
-   beside the US letter one (Sphinx's default paper), and beside the pages too.
+   beside the US letter one (Sphinx's default paper), and beside the pages too; checked as the
+   letter one is (its narrower text block, its own page breaks).
 """
 
 from __future__ import annotations
@@ -248,8 +249,19 @@ def build(src: Path, out: Path, executed: Path | None, html: Path | None, extra:
     print("+", " ".join(check), flush=True)
     subprocess.run(check, check=True)
     a4 = out / A4_NAME
-    shutil.copy2(a4_edition(latex, tex_name, env), a4)
+    a4_pdf = a4_edition(latex, tex_name, env)
+    shutil.copy2(a4_pdf, a4)
     print(f"pdf: the A4 edition {a4}")
+    a4_check = check[: check.index("--pdf")] + [
+        "--pdf",
+        str(a4),
+        "--tex",
+        str(a4_pdf.with_suffix(".tex")),
+        "--src",
+        str(src),
+    ]
+    print("+", " ".join(a4_check), flush=True)
+    subprocess.run(a4_check, check=True)
     if html is not None and (html / "index.html").is_file():
         publish_pdf(html, pdf)
         print(f"pdf: linked from the pages of {html}")

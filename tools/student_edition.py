@@ -53,11 +53,9 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from fdi_lib.exercises import (
-    CELL_KEY,
     code_cells,
     parse_chapter,
     strip_solutions,
-    tag_exercise_cells,
     words,
 )
 from fdi_lib.exercises._reference import REFERENCES
@@ -108,32 +106,7 @@ def write_notebooks(src: Path, out: Path, glue_dir: Path | None = None) -> list[
     target = out / "notebooks"
     if target.exists():
         shutil.rmtree(target)
-    written = notebook_markdown.write_notebooks(src, target, glue_dir)
-    for path in written:
-        tag_notebook(path, src / "book" / path.relative_to(target).with_suffix(".md"))
-    return written
-
-
-def tag_notebook(path: Path, chapter: Path) -> None:
-    """Write the exercise boundaries of the MyST ``chapter`` into its converted notebook ``path``
-    as cell metadata (:func:`fdi_lib.exercises.tag_exercise_cells`); the conversion keeps the
-    cells one for one, after its macro cell."""
-    import jupytext
-    import nbformat
-
-    source = jupytext.read(chapter)
-    tag_exercise_cells(source)
-    tag = notebook_markdown.MACRO_TAG
-    cells = [c for c in source.cells if tag not in c.metadata.get("tags", [])]
-    nb = nbformat.read(path, as_version=4)
-    body = [c for c in nb.cells if tag not in c.metadata.get("tags", [])]
-    if [c.cell_type for c in body] != [c.cell_type for c in cells]:
-        raise RuntimeError(
-            f"{path}: its cells are not those of {chapter}: cannot tag the exercises"
-        )
-    for cell, src in zip(body, cells):
-        cell.metadata[CELL_KEY] = src.metadata[CELL_KEY]
-    nbformat.write(nb, path)
+    return notebook_markdown.write_notebooks(src, target, glue_dir)
 
 
 #: The jupyter-cache of the last ``make book`` (``tools/execute_book.py``): a student chapter whose

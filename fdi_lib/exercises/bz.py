@@ -1,8 +1,9 @@
 """Exercises of "Parametric and non-parametric faults" (bz/parametric-nonparametric): statements
 and data.
 
-A student's variant draws the RLS step's numbers, the impulse time and the level, the sample ``k`` and the
-innovation, and the energy test's window, dimension and level.
+A student's variant draws the RLS step's numbers, the noise levels of the designed model
+(:func:`student_model`), the impulse time and the level, the sample ``k`` and the innovation, and
+the energy test's window, dimension and level.
 """
 
 from __future__ import annotations
@@ -12,6 +13,20 @@ import numpy as np
 from fdi_lib.exercises._core import Exercise, rounded_normal, uniform
 
 CHAPTER = "bz/parametric-nonparametric"
+
+
+def student_model(n_steps: int, rng: np.random.Generator | None):
+    """The designed example (:func:`fdi_lib.systems.bz_example.bz_model`); ``rng`` given: its
+    noise covariances ``Q`` (and ``P_0 = Q``) and ``R`` scaled by factors drawn on a continuum in
+    [0.5, 2], so the gains, and the answers that depend on them, differ between classmates while
+    the structure (``H = I``, ``E = e_1``) the exercises' lessons rest on stays."""
+    from fdi_lib.models import ltv_model
+    from fdi_lib.systems import bz_example as ex
+
+    if rng is None:
+        return ex.bz_model(n_steps)
+    Q, R = rng.uniform(0.5, 2.0) * ex.Q, rng.uniform(0.5, 2.0) * ex.R
+    return ltv_model(F=ex.F_k, G=ex.G, H=ex.H, Q=Q, R=R, n_steps=n_steps, P0=Q)
 
 
 def _bz1_data(rng):
@@ -36,11 +51,16 @@ def _bz1_data(rng):
 def _bz2_data(rng):
     from fdi_lib.systems import bz_example as ex
 
+    if rng is None:
+        return {"model": ex.bz_model(200), "E": ex.E.copy(), "impulse_at": 100, "level": 1e-6}
+    # the impulse anywhere on the record, a level with two significant digits between 1e-8 and
+    # 1e-4, the model's noise levels: the samples affected differ between classmates
+    level = float(f"{10 ** rng.uniform(-8.0, -4.0):.1e}")
     return {
-        "model": ex.bz_model(200),
+        "model": student_model(200, rng),
         "E": ex.E.copy(),
-        "impulse_at": 100 if rng is None else int(rng.integers(60, 141)),
-        "level": 1e-6 if rng is None else float(rng.choice((1e-4, 1e-5, 1e-7, 1e-8))),
+        "impulse_at": int(rng.integers(20, 181)),
+        "level": level,
     }
 
 
@@ -66,7 +86,8 @@ def _bz4_data(rng):
     from fdi_lib.systems import bz_example as ex
 
     k = 10 if rng is None else int(rng.integers(3, 16))
-    return {"model": ex.bz_model(20), "E": ex.E.copy(), "k": k + (rng is not None and k >= 10)}
+    k += rng is not None and k >= 10  # never the book's k = 10
+    return {"model": student_model(20, rng), "E": ex.E.copy(), "k": k}
 
 
 def _bz5_data(rng):
@@ -96,10 +117,12 @@ EXERCISES = [
         "How long an impulse of f stays on the innovation",
         "warm-up",
         10,
-        answer="array of shape (2,): samples affected [Kitanidis, Kalman]",
+        answer="array of shape (2, 2): first and last samples affected, "
+        "[[first, last] Kitanidis, [first, last] Kalman]",
         rtol=0.0,
         atol=0.5,
         data=_bz2_data,
+        time_keys=("impulse_at",),
     ),
     Exercise(
         "bz-3",

@@ -10,12 +10,12 @@ import numpy as np
 from fdi_lib.exercises._core import Exercise, rounded_normal, uniform
 
 CHAPTER = "zb2014/glr"
-_LEVELS = (0.001, 0.002, 0.005, 0.02, 0.05, 0.1)  # not the book's 0.01
 
 
 def _glr1_data(rng):
-    # m stays 2: the exercise's closed form is that of chi2(2)
-    return {"alpha": 0.01 if rng is None else float(rng.choice(_LEVELS)), "m": 2}
+    # m stays 2: the exercise's closed form is that of chi2(2); alpha is drawn on a continuum
+    # (four decimals, never the book's 0.01) so that classmates' thresholds differ
+    return {"alpha": 0.01 if rng is None else uniform(rng, 0.011, 0.1, 4), "m": 2}
 
 
 def _glr2_data(rng):
@@ -43,8 +43,10 @@ def _glr4_data(rng):
 def _glr5_data(rng):
     if rng is None:
         return {"k": 150, "w": 100, "s": 2}
-    w = int(rng.integers(40, 96))  # w - s < 98, the book's count
-    return {"k": w + int(rng.integers(10, 100)), "w": w, "s": int(rng.integers(1, 6))}
+    # w - s spans hundreds of counts (classmates' answers differ), never the book's 98
+    w, s = int(rng.integers(40, 401)), int(rng.integers(1, 21))
+    w += w - s == 98
+    return {"k": w + int(rng.integers(10, 100)), "w": w, "s": s}
 
 
 EXERCISES = [

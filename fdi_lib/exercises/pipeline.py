@@ -1,8 +1,8 @@
 """Exercises of "Leak detection on a gas pipeline" (zb2014/pipeline): statements and data.
 
 A student's variant draws the test level, the inflow gains of the designed surrogate, the
-samples of the collinearity window, the end of the isolation test's window and the false-alarm
-count.
+samples of the collinearity window, the end of the isolation test's window and its threshold, and
+the false-alarm count and the number of runs.
 """
 
 from __future__ import annotations
@@ -13,7 +13,8 @@ CHAPTER = "zb2014/pipeline"
 
 
 def _pipe1_data(rng):
-    alpha = 0.01 if rng is None else float(rng.choice((0.001, 0.002, 0.005, 0.02, 0.05, 0.1)))
+    # a level on a continuum (four decimals, never the book's 0.01): classmates' thresholds differ
+    alpha = 0.01 if rng is None else uniform(rng, 0.011, 0.1, 4)
     return {"alpha": alpha, "dim_theta_a": 1}
 
 
@@ -34,7 +35,9 @@ def _pipe3_data(rng):
     from fdi_lib.reproduce import zb2014_pipeline as zp
 
     st = zp.pipeline_setup()
-    first = 300 if rng is None else int(rng.integers(250, 401))
+    # the window starts after the onset: before it the signature is zero, and a window that
+    # holds one non-zero sample makes F singular (cos^2 = 0 / 0, the reference lost pipe-3)
+    first = 300 if rng is None else int(rng.integers(zp.FAULT_ONSET + 5, 401))
     last = first + (49 if rng is None else int(rng.integers(30, 80)))
     return {"signature": st.known_signature, "Sigma": st.gains.Sigma, "first": first, "last": last}
 
@@ -51,14 +54,15 @@ def _pipe4_data(rng):
         "start": zp.FAULT_ONSET,
         "stop": stop,
         "theta": zp.fault_theta(2),
-        "threshold": zp.MINMAX_THRESHOLD,
+        # a threshold on a continuum: classmates with the same stop still get other powers
+        "threshold": zp.MINMAX_THRESHOLD if rng is None else uniform(rng, 5.0, 9.0, 3),
     }
 
 
 def _pipe5_data(rng):
     if rng is None:
         return {"false_alarms": 7, "runs": 2000}
-    runs = int(rng.choice((1000, 2000, 5000)))
+    runs = int(rng.integers(1000, 5001))  # thousands of values: classmates' intervals differ
     false_alarms = int(rng.integers(2, 20))
     return {"false_alarms": false_alarms + (runs == 2000 and false_alarms == 7), "runs": runs}
 

@@ -16,15 +16,16 @@ CHAPTER = "zb2014/signature"
 
 def unstable_model(n_steps: int, rng: np.random.Generator | None):
     """The unstable example of Section 6.1 (``rng`` given: ``F`` scaled by a factor in [1.01, 1.1]
-    and the measurement noise ``R`` by a factor in [0.5, 2], so the gains and the growth rate
-    differ)."""
+    and the measurement noise ``R`` by a factor in [0.5, 2], drawn on a continuum (not rounded:
+    the data are a model, not numbers to type), so the gains and the growth rate differ between
+    classmates)."""
     from fdi_lib.models import ltv_model
     from fdi_lib.systems import zb2014_unstable as ex
 
     if rng is None:
         return ex.unstable_model(n_steps)
-    F = uniform(rng, 1.01, 1.1) * ex.F
-    R = uniform(rng, 0.5, 2.0) * ex.R
+    F = rng.uniform(1.01, 1.1) * ex.F
+    R = rng.uniform(0.5, 2.0) * ex.R
     return ltv_model(F=F, G=ex.G, H=ex.H, Q=ex.Q, R=R, n_steps=n_steps, P0=ex.Q)
 
 

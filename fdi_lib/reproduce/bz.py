@@ -38,7 +38,6 @@ from fdi_lib.nonparametric import (
     solution1,
     solution2,
 )
-from fdi_lib.plotting import OURS_COLOR, THRESHOLD_COLOR, figure
 from fdi_lib.reproduce.ledger import BY_CHECK, BY_INTERVAL, Claim, in_ci
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.simulate import Noise, simulate
@@ -48,15 +47,9 @@ __all__ = [
     "SOL1",
     "SOL2",
     "WHITE",
-    "LABELS",
-    "headline_table",
-    "solution2_table",
     "setup",
     "updated_residual_projection",
     "projected_lag_covariance",
-    "plot_whiteness",
-    "plot_solution1",
-    "plot_solution2",
     "ljung_box_pvalues",
 ]
 
@@ -222,40 +215,6 @@ def projected_lag_covariance(
     return T[lag:] @ C @ np.swapaxes(T[:-lag], 1, 2)
 
 
-def plot_whiteness(result: ReproductionResult, fig: Any = None):
-    """Histograms of the Ljung-Box p-values (uniform under whiteness) and the lag-one covariance."""
-    fig, axes = figure(1, 2, fig=fig, figsize=(8.0, 3.4))
-    ax = axes[0, 0]
-    bins = np.linspace(0, 1, 21)
-    for name, label in (
-        ("kalman", r"Kalman innovation $\varepsilon_k$"),
-        ("kitanidis", r"Kitanidis innovation $\varepsilon_k$ (27)"),
-        ("reduced_f", r"projected $T_k\varepsilon_k$, $f\neq 0$"),
-    ):
-        ax.hist(
-            result.data["pvalues"][name].ravel(),
-            bins=bins,
-            histtype="step",
-            density=True,
-            label=label,
-        )
-    ax.axhline(1.0, color="k", lw=0.8, ls=":")
-    ax.set(xlabel=r"Ljung-Box $p$-value", ylabel="density", title=r"Portmanteau $p$-values")
-    ax.legend(loc="upper right")
-    ax = axes[0, 1]
-    k = result.data["lag_k"]
-    ax.plot(k, result.data["lag1_theory"], color=OURS_COLOR, label="closed form")
-    ax.plot(k, result.data["lag1_empirical"], ".", ms=2, color="0.4", label="Monte Carlo")
-    ax.axhline(0.0, color=THRESHOLD_COLOR, lw=0.8, ls="--", label="paper (Prop. 2): 0")
-    ax.set(
-        xlabel=r"$k$",
-        ylabel=r"corr$(\varepsilon^{(1)}_{k+1},\varepsilon^{(1)}_k)$",
-        title="Kitanidis innovation, lag one",
-    )
-    ax.legend(loc="lower right")
-    return fig
-
-
 _WHITENESS_CAUSE = dict(
     explain="fig-bz-whiteness",
     cause="sec-bz-whiteness",
@@ -264,12 +223,116 @@ _WHITENESS_CAUSE = dict(
 )
 
 
+def _lag1_kitanidis(
+    eps: np.ndarray, model: LTVModel, kg: KitanidisGains, d: int
+) -> tuple[dict[str, Any], np.ndarray, np.ndarray]:
+    """Lag-one correlation of component 1 of the Kitanidis innovation ``eps`` (runs, samples,
+    outputs) from sample ``d`` on, theory against Monte Carlo: the ``lag1_corr_*`` keys of
+    ``bz-whiteness``, and the per-sample curves (theory, runs' mean) for the figure."""
+    headline: dict[str, Any] = {}
+    # Lag-one correlation of component 1, theory vs Monte Carlo.
+    lag = kitanidis_lag_covariance(model, kg, 1)[d:]  # Cov(eps_{k+1}, eps_k), k >= d
+    S = kg.Sigma[d:]
+    rho_th = lag[:, 0, 0] / np.sqrt(S[1:, 0, 0] * S[:-1, 0, 0])
+    e = eps[..., 0]
+    prod = e[:, 1:] * e[:, :-1] / np.sqrt(S[1:, 0, 0] * S[:-1, 0, 0])
+    rho_k = prod.mean(axis=0)
+    per_run = prod.mean(axis=1)
+    half = 1.96 * per_run.std(ddof=1) / np.sqrt(per_run.size)
+    headline["lag1_corr_theory"] = float(rho_th.mean())
+    headline["lag1_corr_empirical"] = float(per_run.mean())
+    headline["lag1_corr_empirical_ci"] = [
+        float(per_run.mean() - half),
+        float(per_run.mean() + half),
+    ]
+    return headline, rho_th, rho_k
+
+
+def _whitened_covariances(
+    out: dict[str, np.ndarray], kg: KitanidisGains, d: int
+) -> dict[str, float]:
+    """Relative errors of the pooled covariance of the whitened Kitanidis innovation and of the
+    reduced residual against the identity (``cov_rel_error_*`` of ``bz-whiteness``)."""
+    headline: dict[str, float] = {}
+    # Covariance (45): whiten each eps_k by Sigma_k = H P_k H^T + R_k and pool over runs and k.
+    z = np.linalg.solve(kg.Sigma_chol[d:], out["kitanidis"][..., None])[..., 0]
+    cov_w = np.einsum("rki,rkj->ij", z, z) / (z.shape[0] * z.shape[1])
+    eye3 = np.eye(cov_w.shape[0])
+    headline["cov_rel_error_kitanidis"] = float(np.linalg.norm(cov_w - eye3) / np.linalg.norm(eye3))
+    zr = out["reduced_f"]
+    cov_r = np.einsum("rki,rkj->ij", zr, zr) / (zr.shape[0] * zr.shape[1])
+    eye = np.eye(cov_r.shape[0])
+    headline["cov_rel_error_reduced"] = float(np.linalg.norm(cov_r - eye) / np.linalg.norm(eye))
+    return headline
+
+
+def _updated_residual(
+    out: dict[str, np.ndarray], model: LTVModel, kg: KitanidisGains, d: int
+) -> dict[str, Any]:
+    """Zhang (2021)'s updated residual ``T_k eps_k``: its change with ``f``, its lag-one
+    covariance (theory), the rank of its covariance and its lag-one correlations with their
+    simultaneous (Bonferroni) test: the ``updated_*`` and ``lag1_*_updated_*`` keys of
+    ``bz-whiteness``."""
+    headline: dict[str, Any] = {}
+    # Zhang 2021's updated residual T_k eps_k, T_k = I - H_k L_k: free of f, white, singular covariance.
+    Tu = updated_residual_projection(model, kg)
+    headline["updated_f_change"] = float(out["updated_change"].max())
+    lagu = projected_lag_covariance(model, kg, Tu, 1)[d:]
+    headline["lag1_cov_updated_theory_max"] = float(np.abs(lagu).max() / np.abs(kg.Sigma).max())
+    ru = out["updated_f"]
+    cu = np.einsum("rki,rkj->ij", ru, ru) / (ru.shape[0] * ru.shape[1])
+    eig = np.linalg.eigvalsh(cu)
+    headline["updated_cov_rank"] = int(np.sum(eig > 1e-9 * eig[-1]))
+    sd = np.sqrt(np.diag(cu))
+    prod_u = np.einsum("rki,rkj->rij", ru[:, 1:], ru[:, :-1]) / (ru.shape[1] - 1) / np.outer(sd, sd)
+    keep = np.outer(sd > 1e-9 * sd.max(), sd > 1e-9 * sd.max())
+    m_u = prod_u.mean(axis=0)
+    half_u = 1.96 * prod_u.std(axis=0, ddof=1) / np.sqrt(prod_u.shape[0])
+    headline["lag1_corr_updated_max"] = float(np.abs(m_u[keep]).max())
+    headline["lag1_corr_updated_halfwidth"] = float(half_u[keep].max())
+    # the maximum is over several entries: their simultaneous test (Bonferroni)
+    headline["lag1_corr_updated_entries"] = int(keep.sum())
+    headline["lag1_corr_updated_zmax"] = float((1.96 * np.abs(m_u) / half_u)[keep].max())
+    headline["lag1_corr_updated_bonferroni_z"] = float(scipy.stats.norm.isf(0.025 / keep.sum()))
+    return headline
+
+
+def _portmanteau_rates(
+    out: dict[str, np.ndarray],
+) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    """Per residual of ``out`` (Kalman, Kitanidis, reduced): the Ljung-Box p-values of every run,
+    and their rejection rate at 5 % with its 95 % interval and KS p-value against the uniform
+    law."""
+    pv = {
+        name: ljung_box_pvalues(out[name], WHITE["lags"])
+        for name in ("kalman", "kitanidis", "reduced_f")
+    }
+    headline: dict[str, Any] = {}
+    for name in pv:
+        r, ci = _rate(pv[name] < 0.05)
+        headline[f"lb_reject_rate_{name}"] = r
+        headline[f"lb_reject_rate_{name}_ci"] = ci
+        headline[f"ks_pvalue_{name}"] = float(
+            scipy.stats.kstest(pv[name].ravel(), "uniform").pvalue
+        )
+    return pv, headline
+
+
+#: What the paper states for ``bz-whiteness`` (copied into each result).
+_WHITENESS_PAPER = {
+    "lb_reject_rate_kitanidis": "white (Prop. 2): about 5 %",
+    "lag1_corr_empirical": "0 (Prop. 2)",
+    "cov_rel_error_kitanidis": "Σₖ = HₖPₖHₖᵀ + Rₖ (eq. 45)",
+    "h_zeta_max": "Hₖζₖ = 0 with the gain Lₖ (Section 3.1)",
+}
+
+
 @register(
     "bz-whiteness",
     paper=PAPER,
     title="Prop. 2: whiteness of the Kitanidis innovation (portmanteau tests)",
     default_trials=None,
-    plot=plot_whiteness,
+    plot="fdi_lib.reproduce.views.bz.plot_whiteness",
     chapter="bz/parametric-nonparametric",
     chapter_seed=True,
     claims={
@@ -375,73 +438,16 @@ def whiteness(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult
     )
     model, kal, kg, kpred, T = setup(n)
     d = WHITE["discard"]
-    pv = {
-        name: ljung_box_pvalues(out[name], WHITE["lags"])
-        for name in ("kalman", "kitanidis", "reduced_f")
-    }
-    headline: dict[str, Any] = {}
-    for name in pv:
-        r, ci = _rate(pv[name] < 0.05)
-        headline[f"lb_reject_rate_{name}"] = r
-        headline[f"lb_reject_rate_{name}_ci"] = ci
-        headline[f"ks_pvalue_{name}"] = float(
-            scipy.stats.kstest(pv[name].ravel(), "uniform").pvalue
-        )
-    # Lag-one correlation of component 1, theory vs Monte Carlo.
-    lag = kitanidis_lag_covariance(model, kg, 1)[d:]  # Cov(eps_{k+1}, eps_k), k >= d
-    S = kg.Sigma[d:]
-    rho_th = lag[:, 0, 0] / np.sqrt(S[1:, 0, 0] * S[:-1, 0, 0])
-    e = out["kitanidis"][..., 0]
-    prod = e[:, 1:] * e[:, :-1] / np.sqrt(S[1:, 0, 0] * S[:-1, 0, 0])
-    rho_k = prod.mean(axis=0)
-    per_run = prod.mean(axis=1)
-    half = 1.96 * per_run.std(ddof=1) / np.sqrt(per_run.size)
-    headline["lag1_corr_theory"] = float(rho_th.mean())
-    headline["lag1_corr_empirical"] = float(per_run.mean())
-    headline["lag1_corr_empirical_ci"] = [
-        float(per_run.mean() - half),
-        float(per_run.mean() + half),
-    ]
-    # Covariance (45): whiten each eps_k by Sigma_k = H P_k H^T + R_k and pool over runs and k.
-    z = np.linalg.solve(kg.Sigma_chol[d:], out["kitanidis"][..., None])[..., 0]
-    cov_w = np.einsum("rki,rkj->ij", z, z) / (z.shape[0] * z.shape[1])
-    eye3 = np.eye(cov_w.shape[0])
-    headline["cov_rel_error_kitanidis"] = float(np.linalg.norm(cov_w - eye3) / np.linalg.norm(eye3))
-    zr = out["reduced_f"]
-    cov_r = np.einsum("rki,rkj->ij", zr, zr) / (zr.shape[0] * zr.shape[1])
-    eye = np.eye(cov_r.shape[0])
-    headline["cov_rel_error_reduced"] = float(np.linalg.norm(cov_r - eye) / np.linalg.norm(eye))
-    # Zhang 2021's updated residual T_k eps_k, T_k = I - H_k L_k: free of f, white, singular covariance.
-    Tu = updated_residual_projection(model, kg)
-    headline["updated_f_change"] = float(out["updated_change"].max())
-    lagu = projected_lag_covariance(model, kg, Tu, 1)[d:]
-    headline["lag1_cov_updated_theory_max"] = float(np.abs(lagu).max() / np.abs(kg.Sigma).max())
-    ru = out["updated_f"]
-    cu = np.einsum("rki,rkj->ij", ru, ru) / (ru.shape[0] * ru.shape[1])
-    eig = np.linalg.eigvalsh(cu)
-    headline["updated_cov_rank"] = int(np.sum(eig > 1e-9 * eig[-1]))
-    sd = np.sqrt(np.diag(cu))
-    prod_u = np.einsum("rki,rkj->rij", ru[:, 1:], ru[:, :-1]) / (ru.shape[1] - 1) / np.outer(sd, sd)
-    keep = np.outer(sd > 1e-9 * sd.max(), sd > 1e-9 * sd.max())
-    m_u = prod_u.mean(axis=0)
-    half_u = 1.96 * prod_u.std(axis=0, ddof=1) / np.sqrt(prod_u.shape[0])
-    headline["lag1_corr_updated_max"] = float(np.abs(m_u[keep]).max())
-    headline["lag1_corr_updated_halfwidth"] = float(half_u[keep].max())
-    # the maximum is over several entries: their simultaneous test (Bonferroni)
-    headline["lag1_corr_updated_entries"] = int(keep.sum())
-    headline["lag1_corr_updated_zmax"] = float((1.96 * np.abs(m_u) / half_u)[keep].max())
-    headline["lag1_corr_updated_bonferroni_z"] = float(scipy.stats.norm.isf(0.025 / keep.sum()))
+    pv, headline = _portmanteau_rates(out)
+    lag1, rho_th, rho_k = _lag1_kitanidis(out["kitanidis"], model, kg, d)
+    headline.update(lag1)
+    headline.update(_whitened_covariances(out, kg, d))
+    headline.update(_updated_residual(out, model, kg, d))
     headline.update(zeta_check(n))
-    paper = {
-        "lb_reject_rate_kitanidis": "white (Prop. 2): about 5 %",
-        "lag1_corr_empirical": "0 (Prop. 2)",
-        "cov_rel_error_kitanidis": "Σₖ = HₖPₖHₖᵀ + Rₖ (eq. 45)",
-        "h_zeta_max": "Hₖζₖ = 0 with the gain Lₖ (Section 3.1)",
-    }
     return ReproductionResult(
         id="bz-whiteness",
         headline=headline,
-        paper=paper,
+        paper=dict(_WHITENESS_PAPER),
         settings={**WHITE, "seed": seed, "trials": trials},
         data={
             "pvalues": pv,
@@ -507,55 +513,44 @@ def _solution1_chunk(seeds: Sequence[np.random.SeedSequence]) -> dict[str, np.nd
     return out
 
 
-def plot_solution1(result: ReproductionResult, fig: Any = None):
-    """Histograms of the GLR alarm times (theta, with and without f) and of the energy alarms (f only),
-    in two stacked panels; in each, the first series is drawn wide and pale under the others."""
-    fig, axes = figure(1, 2, fig=fig, figsize=(8.0, 3.4))
-    d = result.data
-    s = result.settings
-    ax = axes[0, 0]
-    bins = np.arange(0, s["n_steps"] + 1, 5)
-    # a pair of histograms that may coincide: the first wide and pale under the second, so that
-    # neither hides the other (the legend lists both)
-    under, over = dict(lw=5.0, alpha=0.4), dict(lw=1.4)
-    for (key, label), style in zip(
-        (("theta_glr_alarm", r"$\theta$ jump"), ("both_glr_alarm", r"$\theta$ jump + $f$")),
-        (under, over),
+def _solution1_headline(out: dict[str, np.ndarray], on: int, fon: int) -> dict[str, Any]:
+    """The headline of ``bz-solution1`` from its runs ``out`` (:func:`_solution1_chunk`), the
+    parametric jump at ``on`` and the non-parametric fault at ``fon``."""
+    h: dict[str, Any] = {}
+
+    def rate(key: str, hits: np.ndarray) -> None:
+        h[key], h[key + "_ci"] = _rate(hits)
+
+    def delay(key: str, alarms: np.ndarray, onset: int) -> None:
+        a = alarms[alarms >= onset] - onset
+        h[key], h[key + "_ci"] = _mean_ci(a)
+
+    rate("glr_false_alarm_rate", out["none_glr_alarm"] >= 0)
+    rate("glr_alarm_rate_f_only", out["f_glr_alarm"] >= 0)
+    rate("kalman_glr_alarm_rate_f_only", out["f_kalman_glr_alarm"] >= 0)
+    rate("glr_detection_rate_theta", out["theta_glr_alarm"] >= on)
+    rate("glr_detection_rate_theta_with_f", out["both_glr_alarm"] >= on)
+    delay("glr_mean_delay_theta", out["theta_glr_alarm"], on)
+    delay("glr_mean_delay_theta_with_f", out["both_glr_alarm"], on)
+    for name, truth in (
+        ("theta", [True, False]),
+        ("both", [True, False]),
+        ("theta2", [False, True]),
     ):
-        a = d[key]
-        ax.hist(a[a >= 0], bins=bins, histtype="step", label=label, **style)
-    ax.hist(
-        d["f_kalman_glr_alarm"][d["f_kalman_glr_alarm"] >= 0],
-        bins=bins,
-        histtype="step",
-        ls="--",
-        label=r"$f$ only, GLR on Kalman",
-    )
-    ax.axvline(s["theta_onset"], color=THRESHOLD_COLOR, lw=0.8, ls=":")
-    ax.axvline(s["f_onset"], color="0.5", lw=0.8, ls=":")
-    ax.set(
-        xlabel=r"alarm time $k$", ylabel="number of runs", title=r"GLR alarms on $T_k\varepsilon_k$"
-    )
-    ax.legend(loc="upper left")
-    ax = axes[0, 1]
-    for (key, label), style in zip(
-        (
-            ("f_nonpar_alarm", r"$f$ only"),
-            ("both_nonpar_alarm", r"$\theta$ + $f$"),
-            ("theta_energy_alarm", r"$\theta$ only (any energy alarm)"),
-        ),
-        (under, over, over),
-    ):
-        a = d[key]
-        ax.hist(a[a >= 0], bins=bins, histtype="step", label=label, **style)
-    ax.axvline(s["f_onset"], color="0.5", lw=0.8, ls=":")
-    ax.set(
-        xlabel=r"alarm time $k$",
-        ylabel="number of runs",
-        title="Energy alarms (parallel Kalman filter)",
-    )
-    ax.legend(loc="upper left")
-    return fig
+        det = out[f"{name}_glr_alarm"] >= on
+        ok = np.all(out[f"{name}_isolation"] == np.array(truth), axis=-1)
+        key = {
+            "theta": "isolation_correct_rate_theta",
+            "both": "isolation_correct_rate_theta_with_f",
+            "theta2": "isolation_correct_rate_theta2",
+        }[name]
+        rate(key, ok[det] if det.any() else np.zeros(1, bool))
+    rate("energy_false_alarm_rate", out["none_energy_alarm"] >= 0)
+    rate("nonparametric_detection_rate_f", out["f_nonpar_alarm"] >= fon)
+    delay("nonparametric_mean_delay_f", out["f_nonpar_alarm"], fon)
+    rate("nonparametric_detection_rate_both", out["both_nonpar_alarm"] >= fon)
+    rate("misattribution_rate_theta", out["theta_nonpar_alarm"] >= 0)
+    return h
 
 
 @register(
@@ -563,7 +558,7 @@ def plot_solution1(result: ReproductionResult, fig: Any = None):
     paper=PAPER,
     title="Solution 1: GLR/minmax on the projected Kitanidis residual + energy test",
     default_trials=None,
-    plot=plot_solution1,
+    plot="fdi_lib.reproduce.views.bz.plot_solution1",
     chapter="bz/parametric-nonparametric",
     chapter_seed=True,
     claims={
@@ -629,41 +624,7 @@ def solution1_mc(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
     s = SOL1
     trials = 300 if trials is None else trials
     out = run_monte_carlo(_solution1_chunk, trials, seed=seed, jobs=jobs)
-    on, fon = s["theta_onset"], s["f_onset"]
-    h: dict[str, Any] = {}
-
-    def rate(key: str, hits: np.ndarray) -> None:
-        h[key], h[key + "_ci"] = _rate(hits)
-
-    def delay(key: str, alarms: np.ndarray, onset: int) -> None:
-        a = alarms[alarms >= onset] - onset
-        h[key], h[key + "_ci"] = _mean_ci(a)
-
-    rate("glr_false_alarm_rate", out["none_glr_alarm"] >= 0)
-    rate("glr_alarm_rate_f_only", out["f_glr_alarm"] >= 0)
-    rate("kalman_glr_alarm_rate_f_only", out["f_kalman_glr_alarm"] >= 0)
-    rate("glr_detection_rate_theta", out["theta_glr_alarm"] >= on)
-    rate("glr_detection_rate_theta_with_f", out["both_glr_alarm"] >= on)
-    delay("glr_mean_delay_theta", out["theta_glr_alarm"], on)
-    delay("glr_mean_delay_theta_with_f", out["both_glr_alarm"], on)
-    for name, truth in (
-        ("theta", [True, False]),
-        ("both", [True, False]),
-        ("theta2", [False, True]),
-    ):
-        det = out[f"{name}_glr_alarm"] >= on
-        ok = np.all(out[f"{name}_isolation"] == np.array(truth), axis=-1)
-        key = {
-            "theta": "isolation_correct_rate_theta",
-            "both": "isolation_correct_rate_theta_with_f",
-            "theta2": "isolation_correct_rate_theta2",
-        }[name]
-        rate(key, ok[det] if det.any() else np.zeros(1, bool))
-    rate("energy_false_alarm_rate", out["none_energy_alarm"] >= 0)
-    rate("nonparametric_detection_rate_f", out["f_nonpar_alarm"] >= fon)
-    delay("nonparametric_mean_delay_f", out["f_nonpar_alarm"], fon)
-    rate("nonparametric_detection_rate_both", out["both_nonpar_alarm"] >= fon)
-    rate("misattribution_rate_theta", out["theta_nonpar_alarm"] >= 0)
+    h = _solution1_headline(out, s["theta_onset"], s["f_onset"])
     paper = {
         "glr_detection_rate_theta_with_f": "detected whatever f (Section 3.2), no number",
         "glr_alarm_rate_f_only": "E f rejected: no effect on the GLR",
@@ -725,33 +686,12 @@ def _solution2_chunk(seeds: Sequence[np.random.SeedSequence]) -> dict[str, np.nd
     return out
 
 
-def plot_solution2(result: ReproductionResult, fig: Any = None):
-    """Mean tracking error against k for each forgetting factor, with and without ``f``."""
-    fig, axes = figure(1, 3, fig=fig, figsize=(9.0, 3.2), sharex=True, sharey=True)
-    s = result.settings
-    titles = {
-        "drift": "drift only",
-        "f": r"drift + fast $f$ (period 25)",
-        "fslow": r"drift + slow $f$ (period 400)",
-    }
-    for j, tag in enumerate(("drift", "f", "fslow")):
-        ax = axes[0, j]
-        for i, lam in enumerate(s["lambdas"]):
-            ax.plot(result.data[f"mean_err_{tag}"][i], label=rf"$\lambda$ = {lam}")
-        if tag != "drift":
-            ax.axvline(s["f_onset"], color=THRESHOLD_COLOR, lw=0.8, ls=":")
-        ax.set(xlabel=r"$k$", ylim=(0, None), title=titles[tag])
-    axes[0, 0].set_ylabel(r"mean $\|\hat\theta_k-\theta_k\|$")
-    axes[0, 0].legend(loc="upper right")
-    return fig
-
-
 @register(
     "bz-solution2",
     paper=PAPER,
     title="Solution 2: RLS tracking with forgetting factor + error energy",
     default_trials=None,
-    plot=plot_solution2,
+    plot="fdi_lib.reproduce.views.bz.plot_solution2",
     chapter="bz/parametric-nonparametric",
     chapter_seed=True,
     claims={
@@ -843,106 +783,13 @@ def solution2_mc(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
         data["mean_err_drift"].append(ed.mean(axis=0))
         data["mean_err_f"].append(ef.mean(axis=0))
         data["mean_err_fslow"].append(es.mean(axis=0))
-    paper = {
-        "tracking_rmse": "RLS tracks a slowly varying theta_k (no number)",
-        "detection_rate": "tracking error energy detects f (no number)",
-    }
     return ReproductionResult(
         id="bz-solution2",
         headline=h,
-        paper=paper,
+        paper={
+            "tracking_rmse": "RLS tracks a slowly varying theta_k (no number)",
+            "detection_rate": "tracking error energy detects f (no number)",
+        },
         settings={**s, "seed": seed, "trials": trials},
         data=data,
     )
-
-
-# ----------------------------------------------------------------------------- tables for readers
-#: Human labels (with units) of the headline keys the book shows.
-LABELS: dict[str, str] = {
-    "lb_reject_rate_kalman": "Ljung-Box rejections at 5 %, Kalman innovation",
-    "lb_reject_rate_kitanidis": "Ljung-Box rejections at 5 %, Kitanidis innovation",
-    "lb_reject_rate_reduced_f": "Ljung-Box rejections at 5 %, projected residual, f active",
-    "ks_pvalue_kalman": "KS p-value of the Ljung-Box p-values, Kalman",
-    "ks_pvalue_kitanidis": "KS p-value of the Ljung-Box p-values, Kitanidis",
-    "ks_pvalue_reduced_f": "KS p-value of the Ljung-Box p-values, projected",
-    "lag1_corr_theory": "lag-one correlation of ε⁽¹⁾, closed form",
-    "lag1_corr_empirical": "lag-one correlation of ε⁽¹⁾, Monte Carlo",
-    "cov_rel_error_kitanidis": "relative error of Σₖ = HPHᵀ + R (Kitanidis)",
-    "cov_rel_error_reduced": "relative error of the unit covariance (projected)",
-    "glr_false_alarm_rate": "GLR false alarms (no fault)",
-    "glr_alarm_rate_f_only": "GLR alarms with f only (projected residual)",
-    "kalman_glr_alarm_rate_f_only": "GLR alarms with f only (Kalman innovation)",
-    "glr_detection_rate_theta": "GLR detection of the θ jump",
-    "glr_detection_rate_theta_with_f": "GLR detection of the θ jump, f active",
-    "glr_mean_delay_theta": "GLR mean delay, θ jump (samples)",
-    "glr_mean_delay_theta_with_f": "GLR mean delay, θ jump, f active (samples)",
-    "isolation_correct_rate_theta": "correct isolation, θ = (0.05, 0)",
-    "isolation_correct_rate_theta_with_f": "correct isolation, θ = (0.05, 0), f active",
-    "isolation_correct_rate_theta2": "correct isolation, θ = (0, 0.05)",
-    "energy_false_alarm_rate": "energy-test false alarms (no fault)",
-    "nonparametric_detection_rate_f": "f declared non-parametric (f only)",
-    "nonparametric_mean_delay_f": "mean delay of that decision (samples)",
-    "nonparametric_detection_rate_both": "f declared non-parametric (θ and f)",
-    "misattribution_rate_theta": "θ jump first declared non-parametric",
-}
-_NA_NOTE = "n/a: no run raised the alarm, so there is no delay to average."
-
-
-def _cell(key: str, value: Any, ci: Any) -> str:
-    from fdi_lib.report import NA, fmt_number, fmt_rate
-
-    if value is None:
-        return NA
-    if "rate" in key:
-        return fmt_rate(value, ci)
-    if ci is not None and ci[0] is not None:
-        return f"{fmt_number(value)} [{fmt_number(ci[0])}, {fmt_number(ci[1])}]"
-    return fmt_number(value)
-
-
-def headline_table(result: ReproductionResult, keys: Sequence[str]):
-    """Our values (95 % intervals where known) beside the paper's claim, for the keys of :data:`LABELS`."""
-    from fdi_lib.report import NA, table
-
-    h = result.headline
-    rows = {
-        LABELS[k]: [_cell(k, h[k], h.get(k + "_ci")), str(result.paper.get(k, "not given"))]
-        for k in keys
-    }
-    notes = [
-        "Rates in % with their 95 % Clopper-Pearson interval; delays with a 95 % t interval; "
-        f"{result.settings['trials']} runs."
-    ]
-    if any(NA in cells for cells in rows.values()):
-        notes.append(_NA_NOTE)
-    return table(rows, ["ours", "paper"], notes=notes)
-
-
-def solution2_table(result: ReproductionResult):
-    """Tracking errors, detection rates and delays of ``bz-solution2``, one column per forgetting factor."""
-    from fdi_lib.report import NA, fmt_number, fmt_rate, table
-
-    h = result.headline
-
-    def num(xs: Sequence[Any]) -> list[str]:
-        return [NA if x is None else fmt_number(x) for x in xs]
-
-    rows = {
-        "tracking RMSE, k = 100 to 199": num(h["tracking_rmse"]),
-        "RMSE after the onset of f (fast f)": num(h["tracking_rmse_after_f"]),
-        "RMSE on the same range, no f": num(h["tracking_rmse_after_f_no_f"]),
-        "RMSE after the onset of f (slow f)": num(h["tracking_rmse_after_f_slow"]),
-        "detection of f (fast f)": [
-            fmt_rate(r, c) for r, c in zip(h["detection_rate"], h["detection_rate_ci"])
-        ],
-        "mean delay, fast f (samples)": num(h["mean_delay"]),
-        "detection of f (slow f)": [fmt_rate(r) for r in h["detection_rate_slow"]],
-        "mean delay, slow f (samples)": num(h["mean_delay_slow"]),
-        "false alarms (no f)": [
-            fmt_rate(r, c) for r, c in zip(h["false_alarm_rate"], h["false_alarm_rate_ci"])
-        ],
-    }
-    notes = [f"{result.settings['trials']} runs; rates in % (95 % Clopper-Pearson interval)."]
-    if any(NA in cells for cells in rows.values()):
-        notes.append(_NA_NOTE)
-    return table(rows, [f"λ = {lam:g}" for lam in h["lambdas"]], notes=notes)

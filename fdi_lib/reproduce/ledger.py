@@ -582,6 +582,81 @@ _ABOUT = re.compile(r"^\s*about\s+([-+0-9.eE]+)\s*$")
 _PLAIN = Claim(location="(undeclared)", units="", test=BY_TOLERANCE)
 
 
+def _statement_status(
+    paper: str,
+    ours: Any,
+    ci: tuple[float, float] | None,
+    spec: Claim,
+    headline: Mapping[str, Any] | None,
+    spread: tuple[float, float] | None,
+    se: Sequence[float] | float | None,
+) -> tuple[str, str]:
+    """:func:`claim_status` of a paper value given as text: an inequality (``"< x"``), ``"about
+    x"`` (compared as the number ``x``) or a statement equal to ours."""
+    m, a = _INEQ.match(paper), _ABOUT.match(paper)
+    if m:
+        vals = _numbers(ours)
+        if vals is None:
+            return NOT_COMPUTED, f"no number of ours to compare with {paper}"
+        op, bound = m.group(1), float(m.group(2))
+        holds = {
+            "<": lambda v: v < bound,
+            "<=": lambda v: v <= bound,
+            ">": lambda v: v > bound,
+            ">=": lambda v: v >= bound,
+        }[op]
+        return (REPRODUCED if all(holds(v) for v in vals) else DIFFERS), f"inequality {paper}"
+    if a:
+        return claim_status(float(a.group(1)), ours, ci, spec, headline, spread, se)
+    if ours == paper:
+        return REPRODUCED, "same text"
+    return NOT_REPRODUCIBLE, "no check defined for this statement"
+
+
+def _number_status(
+    p: list[float],
+    o: list[float],
+    ci: tuple[float, float] | None,
+    spec: Claim,
+    spread: tuple[float, float] | None,
+    se: Sequence[float] | float | None,
+) -> tuple[str, str]:
+    """:func:`claim_status` of the paper's numbers ``p`` against ours ``o`` (same length) by the
+    declared test: our interval, standard error or spread, else the tolerances."""
+    tol_note = f"tolerance {fmt_number(spec.rtol)} relative" + (
+        f", {fmt_number(spec.atol)} absolute" if spec.atol else ""
+    )
+    close = all(math.isclose(a, b, rel_tol=spec.rtol, abs_tol=spec.atol) for a, b in zip(o, p))
+    inside = ci is not None and len(p) == 1 and ci[0] <= p[0] <= ci[1]
+    if spec.test == BY_INTERVAL:
+        if ci is None:
+            return NOT_COMPUTED, "no 95 % interval of ours to compare with"
+        return (
+            (WITHIN, "paper value inside our 95 % interval")
+            if inside
+            else (DIFFERS, "paper value outside our 95 % interval")
+        )
+    if spec.test == BY_STANDARD_ERROR:
+        ses = _numbers(se)
+        if ses is None or len(ses) != len(p):
+            return NOT_COMPUTED, "no standard error of ours to compare with"
+        note = f"within {fmt_number(spec.z)} standard errors of ours"
+        if all(abs(a - b) <= spec.z * e for a, b, e in zip(o, p, ses)):
+            return WITHIN, "paper value " + note
+        return DIFFERS, "paper value not " + note
+    if spec.test == BY_SPREAD:
+        if spread is None:
+            return NOT_COMPUTED, "no spread of our runs to compare with"
+        if len(p) == 1 and spread[0] <= p[0] <= spread[1]:
+            return WITHIN_SPREAD, "paper's single run inside the 95 % range of our runs"
+        return DIFFERS, "paper's single run outside the 95 % range of our runs"
+    if close:
+        return REPRODUCED, tol_note
+    if inside and spec.test in (ESTIMATES_INPUT, IS_CALIBRATION):
+        return WITHIN, "paper value inside our 95 % interval"
+    return DIFFERS, tol_note + ("; outside our 95 % interval" if ci is not None else "")
+
+
 def claim_status(
     paper: Any,
     ours: Any,
@@ -634,24 +709,7 @@ def claim_status(
             spec.value(paper), ours, ci, replace(spec, value=None), headline, spread, se
         )
     if isinstance(paper, str):
-        m, a = _INEQ.match(paper), _ABOUT.match(paper)
-        if m:
-            vals = _numbers(ours)
-            if vals is None:
-                return NOT_COMPUTED, f"no number of ours to compare with {paper}"
-            op, bound = m.group(1), float(m.group(2))
-            holds = {
-                "<": lambda v: v < bound,
-                "<=": lambda v: v <= bound,
-                ">": lambda v: v > bound,
-                ">=": lambda v: v >= bound,
-            }[op]
-            return (REPRODUCED if all(holds(v) for v in vals) else DIFFERS), f"inequality {paper}"
-        if a:
-            return claim_status(float(a.group(1)), ours, ci, spec, headline, spread, se)
-        if ours == paper:
-            return REPRODUCED, "same text"
-        return NOT_REPRODUCIBLE, "no check defined for this statement"
+        return _statement_status(paper, ours, ci, spec, headline, spread, se)
     if isinstance(paper, bool) or isinstance(ours, bool):
         return (REPRODUCED if paper == ours else DIFFERS), "equality"
     p, o = _numbers(paper), _numbers(ours)
@@ -659,38 +717,7 @@ def claim_status(
         return (REPRODUCED if paper == ours else DIFFERS), "equality"
     if o is None or len(o) != len(p):
         return DIFFERS, "not comparable"
-    tol_note = f"tolerance {fmt_number(spec.rtol)} relative" + (
-        f", {fmt_number(spec.atol)} absolute" if spec.atol else ""
-    )
-    close = all(math.isclose(a, b, rel_tol=spec.rtol, abs_tol=spec.atol) for a, b in zip(o, p))
-    inside = ci is not None and len(p) == 1 and ci[0] <= p[0] <= ci[1]
-    if spec.test == BY_INTERVAL:
-        if ci is None:
-            return NOT_COMPUTED, "no 95 % interval of ours to compare with"
-        return (
-            (WITHIN, "paper value inside our 95 % interval")
-            if inside
-            else (DIFFERS, "paper value outside our 95 % interval")
-        )
-    if spec.test == BY_STANDARD_ERROR:
-        ses = _numbers(se)
-        if ses is None or len(ses) != len(p):
-            return NOT_COMPUTED, "no standard error of ours to compare with"
-        note = f"within {fmt_number(spec.z)} standard errors of ours"
-        if all(abs(a - b) <= spec.z * e for a, b, e in zip(o, p, ses)):
-            return WITHIN, "paper value " + note
-        return DIFFERS, "paper value not " + note
-    if spec.test == BY_SPREAD:
-        if spread is None:
-            return NOT_COMPUTED, "no spread of our runs to compare with"
-        if len(p) == 1 and spread[0] <= p[0] <= spread[1]:
-            return WITHIN_SPREAD, "paper's single run inside the 95 % range of our runs"
-        return DIFFERS, "paper's single run outside the 95 % range of our runs"
-    if close:
-        return REPRODUCED, tol_note
-    if inside and spec.test in (ESTIMATES_INPUT, IS_CALIBRATION):
-        return WITHIN, "paper value inside our 95 % interval"
-    return DIFFERS, tol_note + ("; outside our 95 % interval" if ci is not None else "")
+    return _number_status(p, o, ci, spec, spread, se)
 
 
 # ----------------------------------------------------------------------------- declaring claims
@@ -1191,6 +1218,78 @@ def _row_status(
     )
 
 
+def _ledger_row(
+    id: str,
+    res: ReproductionResult,
+    path: tuple[str, ...],
+    spec: Claim,
+    *,
+    strict: bool,
+    notes: list[str],
+    source: str,
+    trials: int | None,
+    paper_trials: int | None,
+) -> LedgerRow:
+    """The row of :func:`build_ledger` for the claim at ``path`` of ``res.paper``, declared by
+    ``spec`` (``notes``: what other claims' rows say of this one; ``source``: how ``res`` was
+    obtained)."""
+    paper = _at(res.paper, path)
+    label = _label(id, path, spec)
+    ours, missing = None, ""
+    try:
+        ours = spec.ours(res.headline, path) if spec.ours else _at(res.headline, path)
+    except KeyError as exc:
+        if strict:
+            raise ModelError(f"ledger: {id} has no value of ours for {exc}") from None
+        missing = f"our value ({exc}) is missing"
+    ci = spec.ci(res.headline, path) if spec.ci else _default_ci(res.headline, path)
+    se = spec.se(res.headline, path) if spec.se else _default_se(res.headline, path)
+    outcome, how = claim_status(
+        paper, ours, ci, spec, res.headline, _default_spread(res.headline, path), se
+    )
+    if ci is None and spec.test == BY_STANDARD_ERROR and _numbers(ours) and _numbers(se):
+        ci = _se_interval(ours, se, spec.z)
+    if missing and outcome not in (NOT_REPRODUCIBLE,):
+        outcome, how = NOT_COMPUTED, missing
+    if strict and outcome == NOT_REPRODUCIBLE and not spec.reason:
+        raise ModelError(f"ledger: {id}:{'/'.join(path)} needs a rule ({how})")
+    role = surrogate_role(id, res.paper, path, spec)
+    status, detail, cause = _row_status(
+        outcome,
+        how,
+        spec=spec,
+        role=role,
+        paper=paper,
+        ours=ours,
+        headline=res.headline,
+        path=path,
+        trials=trials,
+        paper_trials=paper_trials,
+    )
+    note = "; ".join([how] + notes) if how != detail else "; ".join(notes)
+    return LedgerRow(
+        id=id,
+        path=path,
+        label=label,
+        paper=paper,
+        ours=spec.missing if ours is None and spec.missing and not missing else ours,
+        ci=ci,
+        status=status,
+        where=chapter_of(id),
+        explain=spec.explain or (chapter_of(id) if status not in AGREES else None),
+        note=note,
+        role=role,
+        trials=trials,
+        source=source,
+        status_detail=detail,
+        cause=cause,
+        paper_trials=paper_trials,
+        units=spec.units,
+        test=spec.test,
+        location=spec.location.format(*path[1:], fig=_fig(id), num=re.sub(r"^\D+", "", path[-1])),
+    )
+
+
 def build_ledger(
     results: Mapping[str, ReproductionResult],
     *,
@@ -1239,67 +1338,17 @@ def build_ledger(
                 spec = _PLAIN
             if spec.shown_under and not (own_readings and spec.same_path and spec.figure_reading):
                 continue
-            paper = _at(res.paper, path)
-            label = _label(id, path, spec)
-            ours, missing = None, ""
-            try:
-                ours = spec.ours(res.headline, path) if spec.ours else _at(res.headline, path)
-            except KeyError as exc:
-                if strict:
-                    raise ModelError(f"ledger: {id} has no value of ours for {exc}") from None
-                missing = f"our value ({exc}) is missing"
-            ci = spec.ci(res.headline, path) if spec.ci else _default_ci(res.headline, path)
-            se = spec.se(res.headline, path) if spec.se else _default_se(res.headline, path)
-            outcome, how = claim_status(
-                paper, ours, ci, spec, res.headline, _default_spread(res.headline, path), se
-            )
-            if ci is None and spec.test == BY_STANDARD_ERROR and _numbers(ours) and _numbers(se):
-                ci = _se_interval(ours, se, spec.z)
-            if missing and outcome not in (NOT_REPRODUCIBLE,):
-                outcome, how = NOT_COMPUTED, missing
-            if strict and outcome == NOT_REPRODUCIBLE and not spec.reason:
-                raise ModelError(f"ledger: {id}:{'/'.join(path)} needs a rule ({how})")
-            role = surrogate_role(id, res.paper, path, spec)
-            status, detail, cause = _row_status(
-                outcome,
-                how,
-                spec=spec,
-                role=role,
-                paper=paper,
-                ours=ours,
-                headline=res.headline,
-                path=path,
-                trials=trials,
-                paper_trials=paper_trials,
-            )
-            note = (
-                "; ".join([how] + also.get((id, path), []))
-                if how != detail
-                else "; ".join(also.get((id, path), []))
-            )
             rows.append(
-                LedgerRow(
-                    id=id,
-                    path=path,
-                    label=label,
-                    paper=paper,
-                    ours=spec.missing if ours is None and spec.missing and not missing else ours,
-                    ci=ci,
-                    status=status,
-                    where=chapter_of(id),
-                    explain=spec.explain or (chapter_of(id) if status not in AGREES else None),
-                    note=note,
-                    role=role,
-                    trials=trials,
+                _ledger_row(
+                    id,
+                    res,
+                    path,
+                    spec,
+                    strict=strict,
+                    notes=also.get((id, path), []),
                     source=(sources or {}).get(id, "computed"),
-                    status_detail=detail,
-                    cause=cause,
+                    trials=trials,
                     paper_trials=paper_trials,
-                    units=spec.units,
-                    test=spec.test,
-                    location=spec.location.format(
-                        *path[1:], fig=_fig(id), num=re.sub(r"^\D+", "", path[-1])
-                    ),
                 )
             )
     return Ledger(rows=tuple(rows), sources=dict(sources or {}))

@@ -48,6 +48,7 @@ from fdi_lib.errors import CacheWarning, ModelError, UnknownReproductionError
 from fdi_lib.validation import seed as check_seed
 
 __all__ = [
+    "DeferredPlot",
     "Reproduction",
     "ReproductionResult",
     "register",
@@ -471,6 +472,29 @@ def cached_results() -> dict[str, ReproductionResult]:
 _REGISTRY: dict[str, Reproduction] = {}
 
 
+@dataclass(frozen=True)
+class DeferredPlot:
+    """A figure function named by its dotted path, imported at its first call.
+
+    The paper modules of :mod:`fdi_lib.reproduce` compute; their figures live in
+    :mod:`fdi_lib.reproduce.views`, which imports them (never the reverse). A registration names
+    its figure with this (``register(..., plot="fdi_lib.reproduce.views.zb2014.plot_fig1")``):
+    ``rep.plot(result, fig=None)`` draws as before, and ``--json`` runs import no view.
+    """
+
+    path: str
+
+    def resolve(self) -> Callable[..., Any]:
+        """The function ``path`` names (an ``ImportError`` or ``AttributeError`` if none)."""
+        import importlib
+
+        module, _, name = self.path.rpartition(".")
+        return getattr(importlib.import_module(module), name)
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        return self.resolve()(*args, **kwargs)
+
+
 def register(
     id: str,
     *,
@@ -479,7 +503,7 @@ def register(
     chapter: str,
     default_trials: int | None = None,
     default_seed: int = 0,
-    plot: Callable[..., Any] | None = None,
+    plot: str | Callable[..., Any] | None = None,
     min_trials: int = 2,
     timed_keys: tuple[str, ...] = (),
     chapter_seed: bool = False,
@@ -489,7 +513,10 @@ def register(
     """Decorator registering a reproduction function under ``id``.
 
     ``default_trials`` is the paper's own number of Monte Carlo trials (``None``
-    for deterministic or single-run figures); ``plot(result, fig=None)`` draws it.
+    for deterministic or single-run figures); ``plot(result, fig=None)`` draws it. A paper's
+    module gives ``plot`` as the dotted name of a function of its presentation module
+    (``"fdi_lib.reproduce.views.zb2014.plot_fig1"``), imported when a figure is drawn: computing
+    never imports presentation (:class:`DeferredPlot`).
     ``min_trials`` is the fewest trials the command line accepts: 2 where the JSON has 95 %
     intervals (they need two trials), 1 for a reproduction whose JSON has none.
     ``timed_keys`` are the headline keys that measure wall time on this machine (not
@@ -512,7 +539,7 @@ def register(
             paper=paper,
             title=title,
             func=func,
-            plot=plot,
+            plot=DeferredPlot(plot) if isinstance(plot, str) else plot,
             default_trials=default_trials,
             default_seed=default_seed,
             min_trials=min_trials,
@@ -535,7 +562,7 @@ def _load_all() -> None:
     import fdi_lib.reproduce as pkg
 
     for info in pkgutil.iter_modules(pkg.__path__):
-        if info.name not in {"registry", "cli"}:
+        if not info.ispkg and info.name not in {"registry", "cli"}:  # views/ registers nothing
             importlib.import_module(f"{pkg.__name__}.{info.name}")
 
 

@@ -7,8 +7,8 @@ sensor and to read its healthy redundant twin (:func:`fdi_lib.systems.wind_turbi
 argument ``accommodation``). :func:`accommodation` measures, per sensor fault F1-F5 and
 realisation, the effect of the fault on the generator power, the pitch and the generator speed
 against a fault-free twin (same wind, same noise), without and with the switch made at the time one
-of the book's methods isolates the fault (:func:`fdi_lib.windturbine.run_methods`'s method
-functions, on the same record).
+of the book's methods isolates the fault (:data:`fdi_lib.windturbine.METHODS`, on the same
+record).
 """
 
 from __future__ import annotations
@@ -24,18 +24,10 @@ from fdi_lib.montecarlo import run_monte_carlo
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.reproduce.windturbine import PAPER, calibrated_design, check_trials
 
-__all__ = ["ACCOMMODATED", "RUNNERS", "accommodation", "accommodation_chunk", "plot_accommodation"]
+__all__ = ["ACCOMMODATED", "accommodation", "accommodation_chunk", "plot_accommodation"]
 
 #: The sensor faults accommodated by switching to the redundant sensor.
 ACCOMMODATED = (1, 2, 3, 4, 5)
-#: The method functions whose isolation triggers the switch (keys of
-#: :data:`fdi_lib.windturbine.METHODS`).
-RUNNERS = {
-    "zb2014": W.run_zb,
-    "zhang2021": W.run_zhang2021,
-    "bz": W.run_bz,
-    "rosa2013": W.run_svo_bank,
-}
 #: Seconds simulated after the fault's end (the plant's recovery is part of the effect).
 AFTER_S = 20.0
 #: Settling time dropped at the start of each run (as :func:`fdi_lib.windturbine.fault_records`).
@@ -98,7 +90,7 @@ def accommodation_chunk(
         outcomes = (
             list(W.run_methods(d, rec.y, rec.u).values())
             if method == "first"
-            else [RUNNERS[method](d, rec.y, rec.u)]
+            else [W.METHODS[method].diagnose(d, W.MethodInputs(d, rec.y, rec.u))]
         )
         steps = [
             np.where((o.isolate_step >= 0) & _switchable(o.isolated, fault), o.isolate_step, np.inf)
@@ -173,8 +165,8 @@ def accommodation(
     noise, the benchmark schedule), three runs of the fault's stretch (from 27 s before its start to
     :data:`AFTER_S` after its end; the first 20 s dropped): fault-free, faulty, and faulty with the
     controller switched to the healthy redundant sensor from the time ``method`` (a key of
-    :data:`RUNNERS`, or ``"first"``: the earliest of the four; ``--option method=...``) isolates the
-    faulty sensors on the run's record (the scoreboard's 10 s segment): its isolated set names them
+    :data:`fdi_lib.windturbine.METHODS`, or ``"first"``: the earliest of them; ``--option
+    method=...``) isolates the faulty sensors on the run's record (the scoreboard's 10 s segment): its isolated set names them
     and not their twins (other candidates it names cannot be switched and are ignored; otherwise no
     switch).
 
@@ -192,8 +184,8 @@ def accommodation(
         fault-free twin (power; true pitch, the largest over the blades; generator speed), and
         ``energy_kwh`` (mean energy change over that stretch, kWh; negative: lost).
     """
-    if method not in (*RUNNERS, "first"):
-        raise ModelError(f"method: expected 'first' or one of {tuple(RUNNERS)}, got {method!r}")
+    if method not in (*W.METHODS, "first"):
+        raise ModelError(f"method: expected 'first' or one of {tuple(W.METHODS)}, got {method!r}")
     n_acc = len(ACCOMMODATED)  # the chunk's results: isolation time, two energies, 2 x metrics
     trials = check_trials(
         trials,

@@ -40,7 +40,7 @@ tightness and **can lose the true state when A is uncertain** (``A_unc`` given):
 with N > 1 (template rule) and ``strip_before_hull=True`` (exact rule, the paper's literal order
 of Fig. 2). With either, a healthy record can empty the set (a false alarm); both issue an
 :class:`~fdi_lib.errors.UnsoundOptionWarning` at the first update with an uncertain A, and the
-book measures how often they fail (:func:`fdi_lib.reproduce.rosa2013.horizon_comparison`).
+book measures how often they fail (:func:`fdi_lib.reproduce.rosa2013_studies.horizon_comparison`).
 
 Many records at once: :class:`TemplateBatch` steps many template observers (N = 1) together on
 stacked arrays (:class:`ModelSequence`), with :func:`run_svo_many` and
@@ -371,7 +371,7 @@ class SetValuedObserver:
         per direction and Delta-vertex sequence (HiGHS); tighter, and much slower. Sound (contains
         every compatible state) when A is known (no ``A_unc``); with an uncertain A the hull over
         vertex sequences can miss the true state, as the paper's strip-before-hull order can
-        (:func:`fdi_lib.reproduce.rosa2013.horizon_comparison` measures it): an
+        (:func:`fdi_lib.reproduce.rosa2013_studies.horizon_comparison` measures it): an
         :class:`~fdi_lib.errors.UnsoundOptionWarning` is issued at the first update with an uncertain A.
     strip_before_hull : bool
         ``"exact"`` method only. False (default): X̂(k+1) = ∩_j co_v{Prop_j(v)} ∩ S, which always

@@ -39,7 +39,7 @@ the book chapter as well):
   linearisation and the neglected nonlinear terms only for moderate manoeuvres: with larger airspeed
   commands (the ``amplitude`` of :func:`simulate`) the true state leaves the nominal SVO's sets and a
   healthy record can raise an alarm. Measured on healthy 3 s runs
-  (:func:`fdi_lib.reproduce.rosa2013.envelope_study`, seeds 0-9, square-wave commands of 1 to 7 m/s,
+  (:func:`fdi_lib.reproduce.rosa2013_studies.envelope_study`, seeds 0-9, square-wave commands of 1 to 7 m/s,
   90 runs per reading): with ±7 m/s commands the true state left the set in 3 to 40 of 301 samples
   per run (elevator read per degree). Over the runs that lost it, the smallest airspeed deviation
   reached up to the loss was 4.19 m/s per degree and 2.96 m/s per radian; runs reached up to
@@ -685,7 +685,7 @@ SVO_DIST_MARGIN = np.array([2e-3, 1e-3, 2e-6, 2e-5])  # per-step: nonlinear term
 #: Manoeuvre envelope of the SVO margins (module docstring): the largest measured airspeed deviation
 #: |y_V(k)| (m/s) per reading of the elevator coefficients, a multiple of 0.5 m/s below the smallest
 #: deviation at which the true state was seen outside the nominal SVO's set
-#: (:func:`fdi_lib.reproduce.rosa2013.envelope_study`; a test keeps the two consistent).
+#: (:func:`fdi_lib.reproduce.rosa2013_studies.envelope_study`; a test keeps the two consistent).
 ENVELOPE_AIRSPEED = {"deg": 4.0, "rad": 2.5}
 
 
@@ -735,7 +735,7 @@ def svo_models(
         Degrees added to the angle-of-attack noise bound of this observer only (0: the design
         bound). The book's hypothesis on the paper's 3.5 s isolation of a soft alpha fault
         loosens the elevator and M_u observers (#3, #4) this way
-        (:func:`fdi_lib.reproduce.rosa2013.uav_study`).
+        (:func:`fdi_lib.reproduce.rosa2013_uav.uav_study`).
 
     Warns
     -----

@@ -13,8 +13,8 @@ import functools
 from typing import Any
 
 import numpy as np
-import scipy.stats
 
+from fdi_lib import windturbine as W
 from fdi_lib.errors import ModelError
 from fdi_lib.plotting import figure
 from fdi_lib.redraw import keep_artists, reusable_artists
@@ -25,28 +25,24 @@ __all__ = ["explore_windturbine", "mean_signal_delays", "GRID", "SIZES"]
 GRID = {"size": (0.25, 0.5, 1.0, 2.0, 4.0), "noise": (0.5, 1.0, 2.0)}
 #: Offsets (deg) along the curves.
 SIZES = np.geomspace(0.05, 20.0, 60)
-_LABELS = {
-    "zb2014": "GLR (Zhang & Basseville)",
-    "zhang2021": "Lasso test (Zhang 2021)",
-    "bz": "energy (Basseville & Zhang)",
-    "rosa2013": "SVO (Rosa & Silvestre)",
-}
 
 
 @functools.lru_cache(maxsize=8)
 def _curves(noise: float) -> dict[str, np.ndarray]:
     """Cumulative whitened signature energies of an offset on sensor 1 of blade 1 after its onset,
-    for the GLR (Kalman innovation), the Lasso test (updated residual) and the energy test."""
+    for the GLR (Kalman innovation), the Lasso test (updated residual) and the energy test, and
+    the thresholds of the chapter's design (:func:`fdi_lib.windturbine.detection_thresholds` of the
+    blade)."""
     from fdi_lib.filters import kalman_gains
     from fdi_lib.kitanidis import residual_signature
     from fdi_lib.models import fault_profile, ltv_model
     from fdi_lib.signatures import fault_signature
-    from fdi_lib.windturbine import Settings, _blade, _whitener, plant_constants
 
-    c = plant_constants()
-    st = Settings()
+    c = W.plant_constants()
+    st = W.Settings()
     w = st.window
-    s = _blade(c, 0)
+    s = W.subsystems(c)[0]  # blade 1
+    thr = W.detection_thresholds(st, c.Ts, len(s.candidates), len(s.outputs))
     sigma = noise * c.sigma[0]
     N, onset = 4 * w, 2 * w
     model = ltv_model(
@@ -65,18 +61,17 @@ def _curves(noise: float) -> dict[str, np.ndarray]:
         onset : onset + w
     ]
     IHK = np.eye(2) - model.H[-1] @ g.K[-1]
-    Wr = _whitener(IHK @ g.Sigma[-1] @ IHK.T)
+    Wr = W.whitener(IHK @ g.Sigma[-1] @ IHK.T)
     Sr = np.einsum("ij,kjm->kim", Wr, residual_signature(model, g, prof).on_residual)[
         onset : onset + w
     ]
-    alpha = st.false_alarms_per_hour * c.Ts / 3600.0
     return {
         "glr": np.cumsum(np.einsum("kp,kp->k", Sw[..., 0], Sw[..., 0])),
-        "glr_h": float(scipy.stats.chi2.ppf(1.0 - alpha / w, 3)),
+        "glr_h": thr.glr,
         "lasso": np.cumsum(np.einsum("kp,kp->k", Sr[..., 0], Sr[..., 0]))
         / np.sqrt(np.sum(Sr[..., 0] ** 2)),
-        "lasso_h": float(scipy.stats.norm.ppf(1.0 - alpha / 6)),
-        "energy_h": float(scipy.stats.chi2.ppf(1.0 - alpha, 2 * w)) - 2 * w,
+        "lasso_h": thr.lasso,
+        "energy_h": thr.energy - w * len(s.outputs),  # over the statistic's mean
         "svo_bound": 2 * st.svo_sigmas * sigma,
         "Ts": c.Ts,
         "w": w,
@@ -139,9 +134,16 @@ def explore_windturbine(size: float = 1.0, noise: float = 1.0, *, fig: Any = Non
         fig, axes = figure(1, 1, fig=fig, figsize=(6.4, 3.6))
         ax = axes[0][0]
         art = {}
-        for m, label in _LABELS.items():
-            (art[m],) = ax.plot(SIZES, curves[m], label=label, drawstyle="steps-post")
-            (art[m + "_mark"],) = ax.plot([size], marks[m], "o", color=art[m].get_color())
+        for m in curves:
+            style = W.METHODS[m].style
+            (art[m],) = ax.plot(
+                SIZES,
+                curves[m],
+                label=W.METHODS[m].label,
+                color=style.color,
+                drawstyle="steps-post",
+            )
+            (art[m + "_mark"],) = ax.plot([size], marks[m], style.marker, color=style.color)
         art["vline"] = ax.axvline(size, color="0.6", lw=0.8)
         ax.set_xscale("log")
         ax.set_yscale("log")
@@ -152,7 +154,7 @@ def explore_windturbine(size: float = 1.0, noise: float = 1.0, *, fig: Any = Non
         art["title"] = ax.set_title(title)
         keep_artists(fig, "explore_windturbine", art)
     else:
-        for m in _LABELS:
+        for m in curves:
             art[m].set_ydata(curves[m])
             art[m + "_mark"].set_data([size], marks[m])
         art["vline"].set_xdata([size, size])

@@ -18,7 +18,8 @@ from fdi_lib.filters import kalman_filter, kalman_gains
 from fdi_lib.glr import first_alarm, glr_window
 from fdi_lib.models import impulse_family
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
-from fdi_lib.reproduce.zb2014 import UnstableRun, plot_detection
+from fdi_lib.reproduce.zb2014 import UnstableRun
+from fdi_lib.reproduce.views.zb2014 import plot_detection
 from fdi_lib.simulate import simulate
 from fdi_lib.signatures import fault_signature, willsky_jones
 from fdi_lib.redraw import keep_artists, reusable_artists, set_limits, stepped_limit

@@ -17,8 +17,8 @@ from fdi_lib.reproduce.zb2014_pipeline import (
     SingleRun,
     fault_theta,
     pipeline_setup,
-    plot_single_run,
 )
+from fdi_lib.reproduce.views.zb2014_pipeline import plot_single_run
 from fdi_lib.simulate import simulate
 from fdi_lib.systems import gas_pipeline as gp
 from fdi_lib.widgets import batched_glr

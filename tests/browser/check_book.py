@@ -11,10 +11,11 @@ also opened from ``file://``. Fails on:
 - ``math``: unrendered TeX (``\\(``, ``\\[``, ``$$``) left in the visible text, or no MathJax;
 - ``macro``: a raw TeX macro (``\\lambda``: a backslash and two letters or more) in the visible
   text outside maths (a link to a heading with maths, a title written in TeX);
-- ``tex`` (counted in the report, not yet failed: :data:`REPORTED`): TeX-like text outside the
-  maths, an ASCII subscript or superscript (``Gamma_k``, ``x^T``) or a norm's double bar
-  (``||``) in the visible text, code and parameter names (``<code>``, literals, ``<pre>``, the
-  catalogue's docstring terms) excepted: to be written as maths or words;
+- ``tex``: TeX-like text outside the maths, an ASCII subscript or superscript (``Gamma_k``,
+  ``x^T``) or a norm's double bar (``||``) in the visible text, code and parameter names
+  (``<code>``, literals, ``<pre>``, the catalogue's docstring terms) excepted: to be written as
+  maths, code or words. A page fails with more such tokens in one mode than its budget in
+  :data:`TEX_BUDGET` (0 for a page not listed): the budgets only go down;
 - ``pdf``: when a PDF edition sits beside the pages (``fdi-book.pdf``), a page whose download
   menu does not link it;
 - ``alt``: an image in the text whose alt text is empty, a file name or path, or raw TeX (it
@@ -96,10 +97,32 @@ MODES = {
     },
 }
 MIN_TEXT_CSS_PX = 9.0
-#: Checks whose findings are counted in the report but do not fail the test: the TeX-like text
-#: outside maths still comes from tables and descriptions that other modules write (the claims
-#: ledger, the chapters' tables, the registry's docstrings; issue 33).
-REPORTED = {"tex"}
+#: Checks whose findings are counted in the report but do not fail the test.
+REPORTED: set[str] = set()
+#: TeX-like tokens (check ``tex``) that a page may still show in one mode (its file:// copy
+#: counted with it), as measured when the check started failing (issue 33, 366 tokens at
+#: 1280 px; the catalogue's 21 typeset): they come from
+#: tables and descriptions that other modules write (the claims ledger, the chapters' tables,
+#: the library reference's docstrings). A page not listed has none; lower a budget when a page
+#: loses tokens, never raise one.
+TEX_BUDGET: dict[str, int] = {
+    "book/api/index.html": 2,
+    "book/api/models.html": 2,
+    "book/api/running.html": 35,
+    "book/api/sets.html": 62,
+    "book/api/systems.html": 98,
+    "book/api/widgets.html": 3,
+    "book/instructor.html": 1,
+    "book/intro.html": 2,
+    "book/rosa2013/svo.html": 37,
+    "book/status.html": 3,
+    "book/windturbine/benchmark.html": 23,
+    "book/zb2014/glr.html": 8,
+    "book/zb2014/pipeline.html": 15,
+    "book/zb2014/signature.html": 4,
+    "book/zhang2021/sparse.html": 14,
+    "book/zz-ledger.html": 57,
+}
 MAX_SHOT_PX = 15000
 SKIP_DIRS = {"_static", "_sources", "_images", "mathjax", "_sphinx_design_static"}
 
@@ -602,11 +625,21 @@ def main(argv: list[str] | None = None) -> int:
         "total | "
         + " | ".join(str(sum(v for (p, c), v in counts.items() if c == ck)) for ck in checks)
     )
-    reported = sum(r[2] in REPORTED for r in results)
+    tex = collections.Counter(
+        (r[0].removeprefix("file://"), r[1]) for r in results if r[2] == "tex"
+    )
+    over_budget = {key: n for key, n in sorted(tex.items()) if n > TEX_BUDGET.get(key[0], 0)}
+    table += [
+        f"tex over budget: {page} ({viewport}): {n} TeX-like tokens, budget "
+        f"{TEX_BUDGET.get(page, 0)}"
+        for (page, viewport), n in over_budget.items()
+    ]
+    reported = sum(r[2] in REPORTED or r[2] == "tex" for r in results)
     summary = (
         f"{len(pages)} pages x {len(MODES)} modes (+ file://): "
         f"{len(results) - reported} failures, "
-        f"{reported} reported ({', '.join(sorted(REPORTED))})"
+        f"{reported} reported ({', '.join(sorted(REPORTED | {'tex'}))}), "
+        f"{len(over_budget)} pages over their TeX-like budget"
     )
     report = "\n".join(lines + (table if results else []) + ["", summary])
     print(report)
@@ -630,7 +663,8 @@ def main(argv: list[str] | None = None) -> int:
             )
         )
     print(f"screenshots in {args.screenshots}/, report in {args.report}.txt")
-    return 1 if any(r[2] not in REPORTED for r in results) else 0
+    failed = any(r[2] not in REPORTED and r[2] != "tex" for r in results)
+    return 1 if failed or over_budget else 0
 
 
 if __name__ == "__main__":

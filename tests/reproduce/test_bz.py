@@ -100,7 +100,8 @@ def test_updated_residual_is_free_of_f_white_and_singular(results):
 
 
 def test_reader_tables(results):
-    from fdi_lib.reproduce.bz import LABELS, headline_table, solution2_table
+    from fdi_lib.reproduce.views.bz import LABELS
+    from fdi_lib.reproduce.views.bz import headline_table, solution2_table
 
     r1 = results["bz-solution1"]
     keys = [k for k in LABELS if k in r1.headline]

@@ -14,6 +14,8 @@ import pytest
 from fdi_lib.errors import ModelError
 from fdi_lib.reproduce import get, reproduce
 from fdi_lib.reproduce import rosa2013 as R
+from fdi_lib.reproduce import rosa2013_studies as RS
+from fdi_lib.reproduce import rosa2013_uav as RU
 from fdi_lib.systems import eclipse_uav as uav
 
 
@@ -54,7 +56,7 @@ def test_fig8_step_fault_detected_in_one_sample():
 
 
 def test_study_smoke_and_summary_keys():
-    run = R._one_uav_run("alpha", "hard", seed=2, duration=1.8)
+    run = RU._one_uav_run("alpha", "hard", seed=2, duration=1.8)
     assert run["detection"] is not None and run["isolated"] == "alpha"
     runs = (
         run,
@@ -67,7 +69,7 @@ def test_study_smoke_and_summary_keys():
             "isolated": None,
         },
     )
-    det = R._summarise(runs, "detection")
+    det = RU._summarise(runs, "detection")
     assert det["alpha"]["hard"] == pytest.approx((run["detection"] - run["onset"] + 1) * 10.0)
     assert det["elevator"]["step"] is None
 
@@ -122,16 +124,16 @@ def test_explanation_scale_agrees_with_the_svo():
     from fdi_lib.systems import eclipse_uav as uav
 
     h = uav.simulate("none", "step", rng=np.random.default_rng(2013), duration=1.0)
-    assert 0.0 <= R.explanation_scale(h) <= 1.0
+    assert 0.0 <= RS.explanation_scale(h) <= 1.0
     f = uav.simulate("elevator", "step", rng=np.random.default_rng(2013), duration=1.0)
     k = run_svo(uav.svo_models(f, "nominal"), f.u, f.y, R.UAV_X0).empty_at
     assert k is not None
-    assert R.explanation_scale(f, stop=k) > 1.0
+    assert RS.explanation_scale(f, stop=k) > 1.0
     # a bias far outside the alpha bound cannot be explained by the disturbance bound
     y = f.y.copy()
     y[20:, 1] += np.deg2rad(10.0)
     biased = uav.UAVRun(f.t, f.x, y, f.u, "alpha", "step", 20)
-    assert R.explanation_scale(biased, stop=40) > 1.0
+    assert RS.explanation_scale(biased, stop=40) > 1.0
 
 
 def test_explanation_scale_bad_inputs():
@@ -140,18 +142,18 @@ def test_explanation_scale_bad_inputs():
 
     run = uav.simulate("none", "step", rng=np.random.default_rng(0), duration=0.1)
     with pytest.raises(ModelError, match="scale: expected 'disturbance' or 'noise'"):
-        R.explanation_scale(run, scale="both")
+        RS.explanation_scale(run, scale="both")
     with pytest.raises(ModelError, match="start, stop: expected"):
-        R.explanation_scale(run, start=5, stop=5)
+        RS.explanation_scale(run, start=5, stop=5)
     with pytest.raises(ModelError, match="start, stop: expected"):
-        R.explanation_scale(run, stop=100)
+        RS.explanation_scale(run, stop=100)
 
 
 def test_hidden_fault_study_effect_sizes():
     """Effect ratios recomputed from the two records; the healthy run raises no alarm."""
     from fdi_lib.systems import eclipse_uav as uav
 
-    out = R.hidden_fault_study(7, duration=1.2)
+    out = RS.hidden_fault_study(7, duration=1.2)
     h = uav.simulate("none", "step", rng=np.random.default_rng(7), duration=1.2)
     f = uav.simulate("dynamics", "step", rng=np.random.default_rng(7), duration=1.2)
     q = np.abs(f.y[:, 3] - h.y[:, 3]).max() / (uav.NOISE_BOUND[3] + uav.SVO_NOISE_MARGIN[3])
@@ -183,7 +185,7 @@ def test_isolation_lags_on_synthetic_runs():
             "empty_at": {"nominal": 90, "alpha": 91, "elevator": None, "dynamics": 99},
         },
     )
-    lags = R.isolation_lags(runs)
+    lags = RS.isolation_lags(runs)
     assert lags == {
         "alpha": [None],
         "elevator": [pytest.approx(50.0)],
@@ -194,8 +196,8 @@ def test_isolation_lags_on_synthetic_runs():
 def test_total_speed_mu_fault_is_seen_at_once_and_the_deviation_one_is_not():
     """0.3 M_u u* Ts on the pitch rate is about 74 noise bounds: the nominal set must empty at the
     first sample after the onset (20 ms); on the speed deviation the same fault stays hidden."""
-    total = R.study_headline(R.uav_study(2013, 1, duration=0.8, fault_mode="total"))
-    dev = R.study_headline(R.uav_study(2013, 1, duration=0.8))
+    total = RU.study_headline(RU.uav_study(2013, 1, duration=0.8, fault_mode="total"))
+    dev = RU.study_headline(RU.uav_study(2013, 1, duration=0.8))
     assert total["detected_runs"]["dynamics"]["step"] == 1
     assert total["detection_time_ms"]["dynamics"]["step"] == pytest.approx(20.0)
     assert dev["detected_runs"]["dynamics"]["step"] == 0
@@ -217,17 +219,17 @@ def test_alpha_slack_loosens_only_the_elevator_and_mu_observers():
     with pytest.raises(ModelError, match="alpha_slack_deg"):
         uav.svo_models(run, "elevator", alpha_slack_deg=-1.0)
     with pytest.raises(ModelError, match="alpha_slack_deg"):
-        R.fig12(seed=0, trials=1, jobs=1, alpha_slack_deg="4")
+        RU.fig12(seed=0, trials=1, jobs=1, alpha_slack_deg="4")
     with pytest.raises(ModelError, match="fault_mode"):
-        R.fig11(seed=0, trials=1, jobs=1, fault_mode="totl")
+        RU.fig11(seed=0, trials=1, jobs=1, fault_mode="totl")
 
 
 def test_a_looser_alpha_bound_delays_isolation_and_never_detection():
     """The nominal SVO is untouched, so detections are identical; a 3 deg alpha step that stays
     inside a 4 deg slack keeps the elevator and M_u hypotheses alive, so it is not isolated, where
     the design bound isolates it at the first faulty sample."""
-    base = R.study_headline(R.uav_study(5, 1, duration=1.0))
-    loose = R.study_headline(R.uav_study(5, 1, duration=1.0, alpha_slack_deg=4.0))
+    base = RU.study_headline(RU.uav_study(5, 1, duration=1.0))
+    loose = RU.study_headline(RU.uav_study(5, 1, duration=1.0, alpha_slack_deg=4.0))
     assert loose["detection_time_ms"] == base["detection_time_ms"]
     assert loose["false_alarms"] == base["false_alarms"]
     assert base["correctly_isolated_runs"]["alpha"]["step"] == 1
@@ -241,5 +243,5 @@ def test_uav_study_streams_are_independent_across_seeds():
     draws_a = {float(np.random.default_rng(s).uniform()) for s in a}
     draws_b = {float(np.random.default_rng(s).uniform()) for s in b}
     assert not draws_a & draws_b
-    run = R._one_uav_run("none", "step", a[1], 0.3)
+    run = RU._one_uav_run("none", "step", a[1], 0.3)
     assert run["detection"] is None and run["empty_at"] == {"nominal": None}

@@ -224,7 +224,7 @@ def test_chapter_plot_helpers_draw():
 
     matplotlib.use("Agg")
     from fdi_lib.calibration import Calibration
-    from fdi_lib.reproduce.zb2014 import plot_null_histograms, plot_persistent_excitation
+    from fdi_lib.reproduce.views.zb2014 import plot_null_histograms, plot_persistent_excitation
 
     cal = Calibration(
         statistics=np.random.default_rng(0).chisquare(2, 200),

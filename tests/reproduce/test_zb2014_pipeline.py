@@ -12,6 +12,9 @@ from fdi_lib.isolation import minmax_statistic
 from fdi_lib.montecarlo import binomial_ci, trial_seeds
 from fdi_lib.reproduce import reproduce
 from fdi_lib.reproduce import zb2014_pipeline as zp
+from fdi_lib.reproduce.views import zb2014_pipeline as zpv
+from fdi_lib.reproduce import zb2014_pipeline_mc as zpm
+from fdi_lib.reproduce import zb2014_pipeline_single as zps
 from fdi_lib.reproduce.cli import main
 from fdi_lib.simulate import draw_noise, simulate
 from fdi_lib.systems import gas_pipeline as gp
@@ -150,7 +153,7 @@ def test_fig5_fig6_single_runs():
         assert r.headline["alarm_time_min"] > 600.0
     # Same noise, doubled fault: no later alarm.
     assert r6.headline["detection_delay_min"] <= r5.headline["detection_delay_min"]
-    assert zp.plot_single_run(r5) is not None
+    assert zpv.plot_single_run(r5) is not None
 
 
 def test_onset_profile_matches_the_detector():
@@ -214,7 +217,7 @@ def test_fig7_fig8_smoke_and_json():
     assert r8.headline["threshold_dof"] == 1
     json.dumps(r7.to_json_dict())
     json.dumps(r8.to_json_dict())
-    assert zp.plot_fig7(r7) is not None and zp.plot_fig8(r8) is not None
+    assert zpv.plot_fig7(r7) is not None and zpv.plot_fig8(r8) is not None
     zp._MC_CACHE.clear()
 
 
@@ -249,14 +252,14 @@ def test_isolation_power_depends_on_relative_variation_of_p():
 
 def test_format_rate_and_reader_plots():
     assert (
-        zp.format_rate({"rate": 0.017, "ci95": [0.0098, 0.027]}).replace("\u00a0", " ")
+        zpv.format_rate({"rate": 0.017, "ci95": [0.0098, 0.027]}).replace("\u00a0", " ")
         == "1.7 % [0.98, 2.7]"
     )
-    assert zp.format_rate({"rate": None, "count": 0, "n": 0, "ci95": [None, None]}) == "n/a"
-    fig = zp.plot_signals()
+    assert zpv.format_rate({"rate": None, "count": 0, "n": 0, "ci95": [None, None]}) == "n/a"
+    fig = zpv.plot_signals()
     assert fig.axes[1].get_ylabel() == r"$p_k$"
     r5 = reproduce("zb2014-fig5", trials=SPREAD)
-    fig = zp.plot_onset_profile(r5)
+    fig = zpv.plot_onset_profile(r5)
     assert fig.axes[0].get_ylabel() == r"$l_{k^*}(r)$"
     assert len(fig.axes[0].lines) == 3
     import matplotlib.pyplot as plt
@@ -344,11 +347,11 @@ def test_fig8_isolation_window_option_and_information():
         assert out["l1_record"][i] == pytest.approx(float(minmax_statistic(F, zeta, [0])), rel=1e-7)
         assert out["l2_record"][i] == pytest.approx(float(minmax_statistic(F, zeta, [1])), rel=1e-7)
         # efficient information by the Schur complement identity F_a* = 1 / (F^-1)_aa
-        lam = zp._efficient_noncentrality(F[None], 2)[0]
+        lam = zpm._efficient_noncentrality(F[None], 2)[0]
         assert lam == pytest.approx(1e-10 / np.linalg.inv(F)[1, 1], rel=1e-9)
     zp._MC_CACHE.clear()
     alarm = reproduce("zb2014-fig8", trials=SPREAD)
-    end = zp.fig8(seed=0, trials=SPREAD, jobs=1, isolation_window="record_end")
+    end = zpm.fig8(seed=0, trials=SPREAD, jobs=1, isolation_window="record_end")
     zp._MC_CACHE.clear()
     assert (
         alarm.settings["isolation_window"] == "alarm"
@@ -381,7 +384,7 @@ def test_fig8_isolation_window_option_and_information():
         )
         assert he["type2_rate"][f]["count"] == 0 < ha["type2_rate"][f]["count"]
     with pytest.raises(ModelError, match="isolation_window: expected one of"):
-        zp.fig8(seed=0, trials=2, jobs=1, isolation_window="alarm_time")
+        zpm.fig8(seed=0, trials=2, jobs=1, isolation_window="alarm_time")
 
 
 def test_state2_scale_option_and_sensitivity():
@@ -390,13 +393,13 @@ def test_state2_scale_option_and_sensitivity():
     assert zp.pipeline_setup() is zp.pipeline_setup("physical", "centred", 10.0)  # one setup
     st3 = zp.pipeline_setup(state2_scale=3.0)
     assert not np.allclose(st3.model.F, zp.pipeline_setup().model.F)
-    rows = zp.calibration_sensitivity(seed=0, trials=SPREAD, scales=(3.0,))
+    rows = zpm.calibration_sensitivity(seed=0, trials=SPREAD, scales=(3.0,))
     (row,) = rows
     assert row["constants"] == gp.calibration_for(3.0)
     for key, spec in gp.CALIBRATION["targets"].items():  # both targets still hold at 3 ...
         assert row["targets"][key] == pytest.approx(spec["value"], rel=1e-6)
     h3 = row["headlines"]
-    h10 = zp.fig7(seed=0, trials=SPREAD, jobs=1).headline
+    h10 = zpm.fig7(seed=0, trials=SPREAD, jobs=1).headline
     # ... yet fault 1 is missed in some runs at 3 and in none at 10 (the same noise)
     assert h3["zb2014-fig7"]["missed"]["1"] > 0 == h10["missed"]["1"]
     assert (
@@ -405,7 +408,7 @@ def test_state2_scale_option_and_sensitivity():
         - h3["zb2014-fig7"]["missed"]["1"]
         - h3["zb2014-fig7"]["false_alarms_per_fault"]["1"]
     )
-    assert zp.fig9(seed=0, trials=None, jobs=1, state2_scale=3.0).settings["calibration"][
+    assert zps.fig9(seed=0, trials=None, jobs=1, state2_scale=3.0).settings["calibration"][
         "constants"
     ] == gp.calibration_for(3.0)
     zp._MC_CACHE.clear()

@@ -88,7 +88,7 @@ def test_snr_definition():
 def test_example2_surrogate_pipeline_contract_and_collinearity():
     """Figs 6-7 on the surrogate pipeline: the leak profile (48), and the documented finding that
     delayed-input columns are nearly collinear (the support found is a single merged component)."""
-    from fdi_lib.reproduce.zhang2021 import EX2_M, example2_setup
+    from fdi_lib.reproduce.zhang2021_example2 import EX2_M, example2_setup
 
     model, u, Psi = example2_setup()
     assert Psi.shape == (500, 2, EX2_M) and np.all(Psi[:, 1] == 0)
@@ -123,7 +123,8 @@ def test_lambda_rule_chunk_oracle_bounds_every_rule_and_matches_an_independent_s
     from sklearn.linear_model import Lasso
 
     from fdi_lib.montecarlo import trial_rngs, trial_seeds
-    from fdi_lib.reproduce.zhang2021 import RULE_READINGS, example1_regression, lambda_rule_chunk
+    from fdi_lib.reproduce.zhang2021 import example1_regression
+    from fdi_lib.reproduce.zhang2021_lambda import RULE_READINGS, lambda_rule_chunk
     from fdi_lib.sparse import lasso_path
     from fdi_lib.systems import zhang2021_example1 as ex
 
@@ -171,7 +172,7 @@ def _on_path_by_coordinate_descent(X, y, lambdas, n_samples, *, intercept=False)
 
 def test_scaled_regressors():
     from fdi_lib.errors import ModelError
-    from fdi_lib.reproduce.zhang2021 import scaled_regressors
+    from fdi_lib.reproduce.zhang2021_lambda import scaled_regressors
 
     rng = np.random.default_rng(0)
     X, y = 3.0 + rng.standard_normal((2, 40, 5)) * [1, 2, 3, 4, 5], rng.standard_normal((2, 40))
@@ -197,11 +198,8 @@ def test_a_scaled_path_can_solve_what_the_raw_oracle_excludes():
     from sklearn.linear_model import Lasso
 
     from fdi_lib.montecarlo import trial_rngs, trial_seeds
-    from fdi_lib.reproduce.zhang2021 import (
-        example1_regression,
-        lambda_rule_chunk,
-        scaled_regressors,
-    )
+    from fdi_lib.reproduce.zhang2021 import example1_regression
+    from fdi_lib.reproduce.zhang2021_lambda import lambda_rule_chunk, scaled_regressors
     from fdi_lib.sparse import flat_range, lasso_path
     from fdi_lib.systems import zhang2021_example1 as ex
 
@@ -232,7 +230,7 @@ def test_a_scaled_path_can_solve_what_the_raw_oracle_excludes():
 
 def test_example2_inputs_and_noise_interventions():
     from fdi_lib.errors import ModelError
-    from fdi_lib.reproduce.zhang2021 import (
+    from fdi_lib.reproduce.zhang2021_example2 import (
         EX2_INTERVENTIONS,
         EX2_N,
         EX2_Q,
@@ -276,7 +274,8 @@ def test_example2_interventions_reproduction():
     """The chapter's reading of the study (sec-zhang2021-example2-causes), at the book's settings:
     white input variations separate the leaks, smaller noise does not, and steps held 20-60 min
     put the leaks on the path more often than the rule finds them."""
-    from fdi_lib.reproduce.zhang2021 import EX2_INTERVENTIONS, intervention_table
+    from fdi_lib.reproduce.views.zhang2021 import intervention_table
+    from fdi_lib.reproduce.zhang2021_example2 import EX2_INTERVENTIONS
 
     r = reproduce("zhang2021-example2-interventions")
     json.loads(r.to_json())
@@ -304,7 +303,7 @@ def test_initial_state_models_start_like_the_paper():
     """The filter model ignores Y_0: xhat_{0|0} = 0 and P_{0|0} = s^2 I up to 1e-9."""
     from fdi_lib.kitanidis import kitanidis_gains
     from fdi_lib.errors import ModelError
-    from fdi_lib.reproduce.zhang2021 import INIT_VARIANTS, initial_state_models
+    from fdi_lib.reproduce.zhang2021_lambda import INIT_VARIANTS, initial_state_models
     from fdi_lib.systems import zhang2021_example1 as ex
 
     for init, s in INIT_VARIANTS.items():
@@ -319,14 +318,15 @@ def test_initial_state_models_start_like_the_paper():
 
 
 def test_unknown_input_cannot_change_the_regression():
-    from fdi_lib.reproduce.zhang2021 import unknown_input_effect
+    from fdi_lib.reproduce.zhang2021_lambda import unknown_input_effect
 
     assert unknown_input_effect(trials=5) < 1e-12
 
 
 def test_paper_between_readings_and_closest_snr():
     from fdi_lib.reproduce.registry import ReproductionResult
-    from fdi_lib.reproduce.zhang2021 import closest_snr_reading, paper_between_readings
+    from fdi_lib.reproduce.zhang2021 import closest_snr_reading
+    from fdi_lib.reproduce.views.zhang2021 import paper_between_readings
 
     res = ReproductionResult(
         id="x",
@@ -373,10 +373,10 @@ def test_lambda_rule_reproduction_contract():
         )
         assert h["success_rate"]["standardised"][c] <= h["oracle_rate"]["standardised"][c]
     assert set(h["init_success_rate"]) == {"paper", "spread"}
-    from fdi_lib.reproduce.zhang2021 import initial_state_table, lambda_rule_table
+    from fdi_lib.reproduce.views.zhang2021 import initial_state_table, lambda_rule_table
 
     assert "oracle: true support on the path" in str(lambda_rule_table(r))
-    from fdi_lib.reproduce.zhang2021 import oracle_table
+    from fdi_lib.reproduce.views.zhang2021 import oracle_table
 
     assert "any of the three paths" in str(oracle_table(r))
     assert "not given" in str(initial_state_table(r))
@@ -384,7 +384,7 @@ def test_lambda_rule_reproduction_contract():
 
 def test_reader_tables_and_counts():
     from fdi_lib.reproduce.registry import ReproductionResult
-    from fdi_lib.reproduce.zhang2021 import (
+    from fdi_lib.reproduce.views.zhang2021 import (
         grid_rule_difference,
         paper_outside_ci,
         rate_table,

@@ -7,6 +7,7 @@ import pytest
 
 from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.reproduce import rosa2013 as R
+from fdi_lib.reproduce import rosa2013_uav as RU
 from fdi_lib.sets import Polytope
 from fdi_lib.sets.svo import (
     ModelSequence,
@@ -141,8 +142,8 @@ def test_architecture_i_batch_equals_one_bank_at_a_time_on_the_uav():
 
 
 def test_uav_study_is_the_same_for_any_number_of_jobs():
-    one = R.uav_study(4, 1, 1, duration=0.9)
-    assert one == R.uav_study(4, 1, 2, duration=0.9)
+    one = RU.uav_study(4, 1, 1, duration=0.9)
+    assert one == RU.uav_study(4, 1, 2, duration=0.9)
     assert sum(r["detection"] is not None for r in one) >= 3
 
 
@@ -154,7 +155,7 @@ def test_staged_banks_equal_banks_on_the_whole_records():
         [np.random.default_rng(s) for s in range(4)],
         duration=3.5,
     )
-    staged = R._bank_outcomes(runs)
+    staged = RU._bank_outcomes(runs)
     dets = [o["detection"] for o in staged]
     assert max(dets) > 2 * np.median(dets)  # one bank is still undecided after the first stretch
     for r, o in zip(runs, staged):

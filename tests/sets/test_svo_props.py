@@ -250,7 +250,7 @@ def test_exact_rule_runs_on_the_uav_and_contains_the_true_state():
 
 def test_joint_horizon_is_inside_the_separate_one_and_contains_the_state():
     """Eq. (3) with shared disturbances (LPs) against the row-by-row projection (closed form)."""
-    from fdi_lib.reproduce.rosa2013 import healthy_record, random_system
+    from fdi_lib.reproduce.rosa2013_studies import healthy_record, random_system
 
     rng = np.random.default_rng(8)
     m0 = random_system(rng)
@@ -277,7 +277,7 @@ def test_joint_horizon_is_inside_the_separate_one_and_contains_the_state():
 
 def test_joint_horizon_can_lose_the_true_state_when_a_is_uncertain():
     """The counter-example the book shows: with an uncertain A, the joint form raised a false alarm."""
-    from fdi_lib.reproduce.rosa2013 import horizon_comparison
+    from fdi_lib.reproduce.rosa2013_studies import horizon_comparison
 
     out = horizon_comparison(2013, runs=3, steps=6, horizons=(2,))[2]
     assert out["alarms"] >= 1 and out["outside"] >= 1

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from fdi_lib.errors import EnvelopeWarning, NumericalError, ShapeError, UnsoundOptionWarning
-from fdi_lib.reproduce.rosa2013 import UAV_X0, healthy_record, random_system
+from fdi_lib.reproduce.rosa2013 import UAV_X0
+from fdi_lib.reproduce.rosa2013_studies import healthy_record, random_system
 from fdi_lib.sets import Polytope
 from fdi_lib.sets import polytope as poly
 from fdi_lib.sets.svo import SetValuedObserver, SVOModel, run_svo, run_svo_many

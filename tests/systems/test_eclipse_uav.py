@@ -239,7 +239,7 @@ def test_batched_expm_against_scipy():
 def test_envelope_lies_below_the_measured_loss_of_the_true_state(eta_unit, seed, amplitude):
     """The runs of the envelope study that lost the true state at the smallest airspeed deviation:
     the envelope is the largest multiple of 0.5 m/s below it (4.19 -> 4, 2.97 -> 2.5 measured)."""
-    from fdi_lib.reproduce.rosa2013 import containment_check
+    from fdi_lib.reproduce.rosa2013_studies import containment_check
 
     c = containment_check(eta_unit, seed, amplitude=amplitude)
     assert c["outside"] > 0

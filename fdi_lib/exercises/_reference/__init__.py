@@ -90,7 +90,13 @@ def reference_answer(exercise_id: str, student: str | None = None) -> np.ndarray
 def _answers(exercise_id: str, student: str | None) -> np.ndarray:
     from fdi_lib.exercises import exercise_data
 
-    return _frozen(REFERENCES[exercise_id].answer(exercise_data(exercise_id, student=student)))
+    answer = _frozen(REFERENCES[exercise_id].answer(exercise_data(exercise_id, student=student)))
+    if not np.all(np.isfinite(answer)):  # a numerical failure is never a reference to grade by
+        raise ModelError(
+            f"reference_answer: the reference of {exercise_id!r} for student {student!r} is not "
+            f"finite ({answer.tolist()}): the exercise's data for this student are degenerate"
+        )
+    return answer
 
 
 def _frozen(value: Any) -> np.ndarray:

@@ -26,7 +26,8 @@ def _bz2_ref(d: dict) -> np.ndarray:
     out = []
     for g in (kitanidis_predictor_gains(m, d["E"]), gains(m)):
         z = nonparametric_signature(m, g, d["E"], f)
-        out.append(int(np.count_nonzero(np.abs(z).max(axis=1) > d["level"])))
+        hit = np.flatnonzero(np.abs(z).max(axis=1) > d["level"])
+        out.append([hit[0], hit[-1]])
     return np.array(out)
 
 

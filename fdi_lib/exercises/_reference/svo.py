@@ -71,7 +71,7 @@ def _svo5_answer(d: dict) -> int:
     from fdi_lib.sets.svo import SVOModel
 
     model = SVOModel(A=np.eye(2), C=np.eye(2), A_unc=np.zeros((d["n_A"], 2, 2)))
-    return int(model.vertex_matrices().shape[0] ** d["N"])
+    return d["T"] * int(model.vertex_matrices().shape[0] ** d["N"])
 
 
 REFERENCES = {
@@ -134,7 +134,7 @@ REFERENCES = {
         _svo5_answer,
         (
             Mistake(
-                lambda d: d["N"] * 2 ** d["n_A"],
+                lambda d: d["T"] * d["N"] * 2 ** d["n_A"],
                 "The parameters may sit at a different vertex at each "
                 "of the N steps: the counts multiply.",
             ),
