@@ -58,7 +58,7 @@ def captions(page: Path) -> list[str]:
 def check(root: Path) -> list[tuple[str, str, str]]:
     """``(page, check, detail)`` for every caption that disagrees with the ledger."""
     from fdi_lib.reproduce.book import book_settings
-    from fdi_lib.reproduce.ledger import figure_claim
+    from fdi_lib.reproduce.views.ledger import figure_claim
     from fdi_lib.reproduce.registry import cached_run, list_reproductions
 
     # the build's run of each id at the book's settings, the one the ledger reads (none computed)
