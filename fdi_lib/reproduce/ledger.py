@@ -4,12 +4,13 @@ Declaring a claim
 -----------------
 Each claim is declared **where it is computed**: at the registration of the reproduction that
 tests it (:func:`fdi_lib.reproduce.registry.register`), in its paper module. A declaration
-(:class:`~fdi_lib.reproduce.ledger_claims.Claim`) says where in the paper the value is (``location``, unique among the rows),
-its units, and how it is compared (``test``, one of :data:`~fdi_lib.reproduce.ledger_claims.TESTS`): by tolerance, by our 95 %
-interval at the paper's trial count, by the standard error of our estimate, by the spread of
-single runs, by a stated check, or not at all (an input the book sets, our estimate of such an
-input, a calibration target, a value that cannot be reproduced here). The registration also
-carries the chapter, the book's seed and the surrogate role; the book's order is that of
+(:class:`~fdi_lib.reproduce.ledger_claims.Claim`) says where in the paper the value is
+(``location``, unique among the rows), its units, and how it is compared (``test``, one of
+:data:`~fdi_lib.reproduce.ledger_claims.TESTS`): by tolerance, by our 95 % interval at the paper's
+trial count, by the standard error of our estimate, by the spread of single runs, by a stated check,
+or not at all (an input the book sets, our estimate of such an input, a calibration target, a value
+that cannot be reproduced here). The registration also carries the chapter, the book's seed and the
+surrogate role; the book's order is that of
 ``_toc.yml`` (:func:`fdi_lib.reproduce.book.book_order`). Adding a figure touches its paper
 module and its chapter only::
 
@@ -37,7 +38,8 @@ The paper's values are read from the ``paper`` dictionary of each reproduction's
 from its ``headline``. A *claim* is one leaf of a ``paper`` dictionary that states something
 (``None``, ``"not stated"`` and ``"illustration, no numbers"`` state nothing); a claim listed by
 two reproductions (a value of Table I also checked by ``zhang2021-lambda-rule``) is one row,
-under the reproduction that runs the paper's setting (:attr:`~fdi_lib.reproduce.ledger_claims.Claim.shown_under`). Its status is
+under the reproduction that runs the paper's setting
+(:attr:`~fdi_lib.reproduce.ledger_claims.Claim.shown_under`). Its status is
 **computed** by the declared test only, never typed, and is one of the fixed vocabulary
 :data:`~fdi_lib.reproduce.ledger_claims.STATUSES`:
 
@@ -45,8 +47,10 @@ under the reproduction that runs the paper's setting (:attr:`~fdi_lib.reproduce.
     our value equals the paper's within the claim's tolerance, satisfies the paper's inequality
     (``"< 1"``), or passes the claim's stated check (a statement such as "grows linearly in k");
 ``within interval``
-    the paper's value lies in our 95 % interval (:data:`~fdi_lib.reproduce.ledger_claims.BY_INTERVAL`), or within ``z`` standard
-    errors of our estimate (:data:`~fdi_lib.reproduce.ledger_claims.BY_STANDARD_ERROR`, the interval shown is ours ± z se);
+    the paper's value lies in our 95 % interval
+    (:data:`~fdi_lib.reproduce.ledger_claims.BY_INTERVAL`), or within ``z`` standard errors of our
+    estimate (:data:`~fdi_lib.reproduce.ledger_claims.BY_STANDARD_ERROR`, the interval shown is ours
+    ± z se);
 ``within spread``
     a claim about one run of the paper (a single alarm time) inside the 95 % range of our
     run-to-run distribution (headline key ``<key>_spread95``); the detail gives the percentile
@@ -58,8 +62,8 @@ under the reproduction that runs the paper's setting (:attr:`~fdi_lib.reproduce.
     a named alternative setting reproduces the paper's value, with its side effects measured
     and stated in the section ``hypothesis`` (``cause`` in the JSON);
 ``differs, bracketed``
-    two of our readings bracket the paper's value but neither agrees (:attr:`~fdi_lib.reproduce.ledger_claims.Claim.bracket`):
-    not a cause;
+    two of our readings bracket the paper's value but neither agrees
+    (:attr:`~fdi_lib.reproduce.ledger_claims.Claim.bracket`): not a cause;
 ``differs, cause unknown``
     no measurement of the cause exists (the row still links to where the difference is shown,
     ``explanation``; the detail names the candidate causes measured and ruled out);
@@ -80,17 +84,21 @@ under the reproduction that runs the paper's setting (:attr:`~fdi_lib.reproduce.
     the claim cannot be checked here (the detail says why, e.g. a timing on the authors'
     MATLAB machine).
 
-The first three are :data:`~fdi_lib.reproduce.ledger_claims.AGREES`: a figure caption says "reproduces paper Fig. N" only when
-every compared row of its reproduction is one of them (:func:`~fdi_lib.reproduce.views.ledger.figure_claim`; the rows of
-:data:`~fdi_lib.reproduce.ledger_claims.SET_BY_BOOK` are not compared). The paper items of :data:`~fdi_lib.reproduce.ledger_status.MISSION` (propositions,
-figures, tables, remarks) get a state derived from their rows (:meth:`Ledger.mission`).
+The first three are :data:`~fdi_lib.reproduce.ledger_claims.AGREES`: a figure caption says
+"reproduces paper Fig. N" only when every compared row of its reproduction is one of them
+(:func:`~fdi_lib.reproduce.views.ledger.figure_claim`; the rows of
+:data:`~fdi_lib.reproduce.ledger_claims.SET_BY_BOOK` are not compared). The paper items of
+:data:`~fdi_lib.reproduce.ledger_status.MISSION` (propositions, figures, tables, remarks) get a
+state derived from their rows (:meth:`Ledger.mission`).
 
 Surrogate models: for a reproduction registered with ``surrogate=True`` each row also says
-what the paper's number is to the model (:func:`~fdi_lib.reproduce.ledger_status.surrogate_role`): a value the surrogate was
+what the paper's number is to the model (:func:`~fdi_lib.reproduce.ledger_status.surrogate_role`): a
+value the surrogate was
 *calibrated* to, a *prediction* of it, or an *input* set into it. A ``paper`` dictionary that
-declares the lists ``paper["calibrated_to"]`` and ``paper["predictions"]`` (:data:`~fdi_lib.reproduce.ledger_claims.ROLE_KEYS`,
-never claims) is the only source; the declared test (:data:`~fdi_lib.reproduce.ledger_claims.IS_INPUT`, :data:`~fdi_lib.reproduce.ledger_claims.IS_CALIBRATION`)
-or ``role`` applies otherwise.
+declares the lists ``paper["calibrated_to"]`` and ``paper["predictions"]``
+(:data:`~fdi_lib.reproduce.ledger_claims.ROLE_KEYS`, never claims) is the only source; the declared
+test (:data:`~fdi_lib.reproduce.ledger_claims.IS_INPUT`,
+:data:`~fdi_lib.reproduce.ledger_claims.IS_CALIBRATION`) or ``role`` applies otherwise.
 
 JSON
 ----
@@ -194,15 +202,17 @@ class Ledger:
         return {s: sum(r.status == s for r in self.rows) for s in STATUSES}
 
     def counts_by_paper(self) -> dict[str, dict[str, int]]:
-        """``{paper_id: {status: rows}}`` for the papers of :data:`~fdi_lib.reproduce.ledger_claims.PAPERS` (every status)."""
+        """``{paper_id: {status: rows}}`` for the papers of
+        :data:`~fdi_lib.reproduce.ledger_claims.PAPERS` (every status)."""
         return {
             p: {s: sum(r.status == s and r.paper_id == p for r in self.rows) for s in STATUSES}
             for p in PAPERS
         }
 
     def mission(self) -> list[dict[str, Any]]:
-        """Each paper item of :data:`~fdi_lib.reproduce.ledger_status.MISSION`: ``{"paper_id", "item", "state", "rows",
-        "statuses"}`` (its state from :func:`~fdi_lib.reproduce.ledger_status.item_state`, its rows' identifiers and locations,
+        """Each paper item of :data:`~fdi_lib.reproduce.ledger_status.MISSION`: ``{"paper_id",
+        "item", "state", "rows", "statuses"}`` (its state from
+        :func:`~fdi_lib.reproduce.ledger_status.item_state`, its rows' identifiers and locations,
         the number of rows per status)."""
         out = []
         for paper, item, prefixes in MISSION:
@@ -221,7 +231,8 @@ class Ledger:
         return out
 
     def mission_counts(self) -> dict[str, dict[str, int]]:
-        """``{paper_id: {state: items}}`` over :data:`~fdi_lib.reproduce.ledger_status.MISSION` (every state, possibly 0)."""
+        """``{paper_id: {state: items}}`` over :data:`~fdi_lib.reproduce.ledger_status.MISSION`
+        (every state, possibly 0)."""
         items = self.mission()
         return {
             p: {
@@ -558,7 +569,8 @@ def build_ledger(
     own_readings : bool
         List a result's other readings of claims shown under another reproduction (rules with
         ``shown_under`` and ``same_path``, e.g. the λ-rule study, the per-radian UAV figures) as
-        its own rows: the rows of that result's figure (:func:`~fdi_lib.reproduce.views.ledger.figure_claim`), not the ledger's.
+        its own rows: the rows of that result's figure
+        (:func:`~fdi_lib.reproduce.views.ledger.figure_claim`), not the ledger's.
     """
     also: dict[tuple[str, tuple[str, ...]], list[str]] = {}
     for id, res in results.items():
@@ -607,9 +619,9 @@ def collect_results(
     use_cache: bool = True,
     jobs: int = 1,
 ) -> tuple[dict[str, ReproductionResult], dict[str, str], dict[str, float]]:
-    """A result per reproduction at the book's settings (:func:`fdi_lib.reproduce.book.book_settings`,
-    the seed and trials the chapters use, without options): the run the build cached, else a
-    fresh one.
+    """A result per reproduction at the book's settings
+    (:func:`fdi_lib.reproduce.book.book_settings`, the seed and trials the chapters use, without
+    options): the run the build cached, else a fresh one.
 
     Parameters
     ----------

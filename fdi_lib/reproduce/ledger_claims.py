@@ -80,8 +80,9 @@ AGREES = (REPRODUCED, WITHIN, WITHIN_SPREAD)
 DIFFERING = (DIFFERS_MEASURED, DIFFERS_HYPOTHESIS, DIFFERS_BRACKETED, DIFFERS_UNKNOWN)
 #: Statuses of a value the book sets (never a reproduction, never compared in a caption).
 SET_BY_BOOK = (INPUT_VALUE, INPUT_RECOVERED, CALIBRATION_TARGET)
-#: Outcome of :func:`~fdi_lib.reproduce.ledger_status.claim_status` when the numbers disagree (refined by :func:`~fdi_lib.reproduce.ledger.build_ledger`
-#: into :data:`DIFFERING`; never a row's status).
+#: Outcome of :func:`~fdi_lib.reproduce.ledger_status.claim_status` when the numbers disagree
+#: (refined by :func:`~fdi_lib.reproduce.ledger.build_ledger` into :data:`DIFFERING`; never a row's
+#: status).
 DIFFERS = "differs"
 #: Relative tolerance of "reproduced" for a number without its own tolerance.
 DEFAULT_RTOL = 1e-3
@@ -92,7 +93,8 @@ FALLBACK_TRIALS = 2
 #: Paper values that state nothing (not claims).
 NO_VALUE = (None, "not stated", "illustration, no numbers")
 #: Keys of a ``paper`` dictionary that declare the surrogate role of its other keys (lists of
-#: top-level keys, see :func:`~fdi_lib.reproduce.ledger_status.surrogate_role`); they are not claims.
+#: top-level keys, see :func:`~fdi_lib.reproduce.ledger_status.surrogate_role`); they are not
+#: claims.
 ROLE_KEYS = ("calibrated_to", "predictions")
 #: The papers (``paper_id``, the prefix of a reproduction identifier) and how rows name them.
 PAPERS = {

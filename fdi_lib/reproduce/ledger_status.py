@@ -59,10 +59,11 @@ __all__ = [
 
 
 def claim_paths(paper: Mapping[str, Any], prefix: tuple[str, ...] = ()) -> list[tuple[str, ...]]:
-    """Paths of the leaves of a ``paper`` dictionary that state a value (see :data:`~fdi_lib.reproduce.ledger_claims.NO_VALUE`).
+    """Paths of the leaves of a ``paper`` dictionary that state a value (see
+    :data:`~fdi_lib.reproduce.ledger_claims.NO_VALUE`).
 
-    A list is a leaf (e.g. ``theta_estimate = [4, 0]``). The top-level :data:`~fdi_lib.reproduce.ledger_claims.ROLE_KEYS`
-    declare roles and are skipped.
+    A list is a leaf (e.g. ``theta_estimate = [4, 0]``). The top-level
+    :data:`~fdi_lib.reproduce.ledger_claims.ROLE_KEYS` declare roles and are skipped.
     """
     out: list[tuple[str, ...]] = []
     for k, v in paper.items():
@@ -109,7 +110,8 @@ def _default_se(headline: Mapping[str, Any], path: tuple[str, ...]) -> Any:
 
 
 def _se_interval(ours: Any, se: Any, z: float) -> tuple[float, float] | None:
-    """``ours ± z se`` of a scalar (the interval of :data:`~fdi_lib.reproduce.ledger_claims.BY_STANDARD_ERROR`), else ``None``."""
+    """``ours ± z se`` of a scalar (the interval of
+    :data:`~fdi_lib.reproduce.ledger_claims.BY_STANDARD_ERROR`), else ``None``."""
     o, e = _numbers(ours), _numbers(se)
     if o is None or e is None or len(o) != 1 or len(e) != 1:
         return None
@@ -125,8 +127,8 @@ def _label(id: str, path: tuple[str, ...], spec: Claim) -> str:
 
 
 def _spread_detail(headline: Mapping[str, Any], path: tuple[str, ...]) -> str:
-    """ "the paper's run is at the 71st percentile of our 1000 runs" (keys ``<key>_paper_percentile``
-    and ``spread_runs`` of the headline; what is known of them)."""
+    """ "the paper's run is at the 71st percentile of our 1000 runs" (keys
+    ``<key>_paper_percentile`` and ``spread_runs`` of the headline; what is known of them)."""
     pct = headline.get(path[-1] + "_paper_percentile") if len(path) == 1 else None
     runs = headline.get("spread_runs")
     of = f" of our {fmt_count(runs)} runs" if _is_number(runs) else " of our runs"
@@ -243,11 +245,16 @@ def claim_status(
     """The outcome of comparing one claim with our value by its declared test, and a note saying
     how it was decided.
 
-    The outcome is :data:`~fdi_lib.reproduce.ledger_claims.REPRODUCED`, :data:`~fdi_lib.reproduce.ledger_claims.WITHIN`, :data:`~fdi_lib.reproduce.ledger_claims.WITHIN_SPREAD`, :data:`~fdi_lib.reproduce.ledger_claims.DIFFERS`,
-    :data:`~fdi_lib.reproduce.ledger_claims.NOT_COMPUTED` (we have no value, or not the statistic the test needs) or
-    :data:`~fdi_lib.reproduce.ledger_claims.NOT_REPRODUCIBLE`; :func:`~fdi_lib.reproduce.ledger.build_ledger` turns it into a row status (input, input
-    recovered, calibration target, a difference's cause, the paper's trial count). Only the
-    declared test can agree: a value close to the paper's but outside our interval differs.
+    The outcome is :data:`~fdi_lib.reproduce.ledger_claims.REPRODUCED`,
+    :data:`~fdi_lib.reproduce.ledger_claims.WITHIN`,
+    :data:`~fdi_lib.reproduce.ledger_claims.WITHIN_SPREAD`,
+    :data:`~fdi_lib.reproduce.ledger_claims.DIFFERS`,
+    :data:`~fdi_lib.reproduce.ledger_claims.NOT_COMPUTED` (we have no value, or not the statistic
+    the test needs) or
+    :data:`~fdi_lib.reproduce.ledger_claims.NOT_REPRODUCIBLE`;
+    :func:`~fdi_lib.reproduce.ledger.build_ledger` turns it into a row status (input, input
+    recovered, calibration target, a difference's cause, the paper's trial count). Only the declared
+    test can agree: a value close to the paper's but outside our interval differs.
 
     Parameters
     ----------
@@ -258,16 +265,19 @@ def claim_status(
         Our value (``None`` when we have none; with ``spec.missing``, ``None`` is a result,
         e.g. never detected, that differs from any number).
     ci : (float, float), optional
-        Our 95 % interval of a scalar value (:data:`~fdi_lib.reproduce.ledger_claims.BY_INTERVAL`, :data:`~fdi_lib.reproduce.ledger_claims.ESTIMATES_INPUT`,
+        Our 95 % interval of a scalar value (:data:`~fdi_lib.reproduce.ledger_claims.BY_INTERVAL`,
+        :data:`~fdi_lib.reproduce.ledger_claims.ESTIMATES_INPUT`,
         :data:`~fdi_lib.reproduce.ledger_claims.IS_CALIBRATION`).
     spec : Claim
         The declaration: test, tolerances, check, or the reason the claim is not reproducible.
     headline : dict, optional
         The reproduction's headline, passed to ``spec.check``.
     spread : (float, float), optional
-        95 % range of our run-to-run distribution of a single-run value (:data:`~fdi_lib.reproduce.ledger_claims.BY_SPREAD`).
+        95 % range of our run-to-run distribution of a single-run value
+        (:data:`~fdi_lib.reproduce.ledger_claims.BY_SPREAD`).
     se : float or list of float, optional
-        Standard error of our value, per component (:data:`~fdi_lib.reproduce.ledger_claims.BY_STANDARD_ERROR`).
+        Standard error of our value, per component
+        (:data:`~fdi_lib.reproduce.ledger_claims.BY_STANDARD_ERROR`).
     """
     if spec.reason:
         return NOT_REPRODUCIBLE, spec.reason
@@ -336,12 +346,17 @@ def surrogate_role(
 ) -> str | None:
     """What the paper value at ``path`` is to a surrogate model (``None`` if ``id`` has none).
 
-    A ``paper`` dictionary that declares :data:`~fdi_lib.reproduce.ledger_claims.ROLE_KEYS` decides alone: its key
-    ``path[0]`` listed in ``calibrated_to`` is a :data:`~fdi_lib.reproduce.ledger_claims.CALIBRATION`, in ``predictions`` a
-    :data:`~fdi_lib.reproduce.ledger_claims.PREDICTION`, in neither an :data:`~fdi_lib.reproduce.ledger_claims.INPUT` (set into the model). Otherwise, for a
-    reproduction registered with ``surrogate=True``, the claim's ``role``, else its test's
-    (an input for :data:`~fdi_lib.reproduce.ledger_claims.IS_INPUT` and :data:`~fdi_lib.reproduce.ledger_claims.ESTIMATES_INPUT`, a calibration for
-    :data:`~fdi_lib.reproduce.ledger_claims.IS_CALIBRATION`), else :data:`~fdi_lib.reproduce.ledger_claims.PREDICTION`.
+    A ``paper`` dictionary that declares :data:`~fdi_lib.reproduce.ledger_claims.ROLE_KEYS` decides
+    alone: its key
+    ``path[0]`` listed in ``calibrated_to`` is a
+    :data:`~fdi_lib.reproduce.ledger_claims.CALIBRATION`, in ``predictions`` a
+    :data:`~fdi_lib.reproduce.ledger_claims.PREDICTION`, in neither an
+    :data:`~fdi_lib.reproduce.ledger_claims.INPUT` (set into the model). Otherwise, for a
+    reproduction registered with ``surrogate=True``, the claim's ``role``, else its test's (an input
+    for :data:`~fdi_lib.reproduce.ledger_claims.IS_INPUT` and
+    :data:`~fdi_lib.reproduce.ledger_claims.ESTIMATES_INPUT`, a calibration for
+    :data:`~fdi_lib.reproduce.ledger_claims.IS_CALIBRATION`), else
+    :data:`~fdi_lib.reproduce.ledger_claims.PREDICTION`.
     """
     if any(k in paper for k in ROLE_KEYS):
         if path[0] in paper.get("calibrated_to", ()):
@@ -417,8 +432,8 @@ MISSION: tuple[tuple[str, str, tuple[str, ...]], ...] = (
         "Remark 4",
     ),
 )
-#: States of a paper item (:meth:`~fdi_lib.reproduce.ledger.Ledger.mission`), from its rows: every compared row agrees; the
-#: least explained difference among them; nothing compared.
+#: States of a paper item (:meth:`~fdi_lib.reproduce.ledger.Ledger.mission`), from its rows: every
+#: compared row agrees; the least explained difference among them; nothing compared.
 MISSION_STATES = (
     "reproduced",
     "differs, measured cause",

@@ -48,7 +48,8 @@ class FigureClaim:
     ----------
     verb : str
         :data:`REPRODUCES` when every compared ledger row of the reproduction is in
-        :data:`~fdi_lib.reproduce.ledger_claims.AGREES` (the rows of :data:`~fdi_lib.reproduce.ledger_claims.SET_BY_BOOK`, inputs, our estimates of them and
+        :data:`~fdi_lib.reproduce.ledger_claims.AGREES` (the rows of
+        :data:`~fdi_lib.reproduce.ledger_claims.SET_BY_BOOK`, inputs, our estimates of them and
         calibration targets, are not compared), :data:`REDRAWS` when no row is compared,
         :data:`COMPARE` otherwise.
     differs : str
