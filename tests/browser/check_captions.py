@@ -3,7 +3,7 @@
 After ``make book`` (not collected by pytest; ``tests/reproduce/test_captions.py`` tests the
 rule and the chapter sources). For each caption in ``_build/html`` that names a paper figure or
 table ("reproduces / compare with / redraws paper Fig. N"), it reads the reproduction identifier
-in the caption's parenthesis and recomputes :func:`fdi_lib.reproduce.ledger.figure_claim` from
+in the caption's parenthesis and recomputes :func:`fdi_lib.reproduce.views.ledger.figure_claim` from
 the result the build cached for that identifier (``_build/results-cache``, the results the
 claims ledger page shows). It fails when
 

@@ -1,6 +1,6 @@
 """Figure captions say "reproduces" only when the claims ledger says so.
 
-The rule (:func:`fdi_lib.reproduce.ledger.figure_claim`) is tested on hand-made results; the
+The rule (:func:`fdi_lib.reproduce.views.ledger.figure_claim`) is tested on hand-made results; the
 chapters are checked to take every caption verb about a paper figure from the ledger (a glued
 value, never typed). ``tests/browser/check_captions.py`` checks the built book: each glued verb
 against the ledger of the build's cached results, and the rendered captions.
