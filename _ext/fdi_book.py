@@ -1435,7 +1435,7 @@ def ledger_counts(app: Sphinx) -> dict[str, dict[str, int]]:
 def cover_latex(title: str, version: str, counts: dict[str, dict[str, int]]) -> str:
     """The cover page: title, version, and the claims ledger (statuses as rows, papers as
     columns, totals), for ``latex_elements["maketitle"]``."""
-    from fdi_lib.reproduce.ledger import PAPERS, STATUSES
+    from fdi_lib.reproduce.ledger_claims import PAPERS, STATUSES
 
     papers = [p for p in PAPERS if p in counts]
     head = " & ".join(["status", *(_latex_escape(PAPERS[p]) for p in papers), "all"])

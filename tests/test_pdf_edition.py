@@ -20,7 +20,7 @@ import pytest
 
 from fdi_lib.explorables import explorable
 from fdi_lib.plotting import figure
-from fdi_lib.reproduce.ledger import PAPERS, STATUSES
+from fdi_lib.reproduce.ledger_claims import PAPERS, STATUSES
 
 from source_module import load as _load  # noqa: E402
 

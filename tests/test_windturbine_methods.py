@@ -168,7 +168,8 @@ def test_scoreboard_json_has_every_fault_and_method():
             assert fast["detection_time_mean_s"] == min(full.values()), fid
             assert full[fast["method"]] == fast["detection_time_mean_s"], fid
     # the published delays of another method: in the paper block, and in the ledger beside ours
-    from fdi_lib.reproduce.ledger import NOT_REPRODUCIBLE, build_ledger
+    from fdi_lib.reproduce.ledger_claims import NOT_REPRODUCIBLE
+    from fdi_lib.reproduce.ledger import build_ledger
     from fdi_lib.reproduce.windturbine import PUBLISHED_DELAYS
 
     pub = doc["paper"]["published_detection_s"]

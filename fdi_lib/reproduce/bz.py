@@ -38,7 +38,7 @@ from fdi_lib.nonparametric import (
     solution1,
     solution2,
 )
-from fdi_lib.reproduce.ledger import BY_CHECK, BY_INTERVAL, Claim, in_ci
+from fdi_lib.reproduce.ledger_claims import BY_CHECK, BY_INTERVAL, Claim, in_ci
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.simulate import Noise, simulate
 from fdi_lib.systems import bz_example as ex

@@ -526,8 +526,8 @@ def register(
     (``"zb2014/glr"``: the book document ``book/zb2014/glr.md`` that runs and shows it; the
     book's order of reproductions is that of ``_toc.yml``), ``chapter_seed`` (the book runs it at
     its chapter's seed), ``surrogate`` (it runs on a surrogate model) and ``claims``: for each
-    path pattern of its ``paper`` dictionary, the :class:`~fdi_lib.reproduce.ledger.Claim` that
-    says where in the paper the value is, its units and how it is compared (see
+    path pattern of its ``paper`` dictionary, the :class:`~fdi_lib.reproduce.ledger_claims.Claim`
+    that says where in the paper the value is, its units and how it is compared (see
     :mod:`fdi_lib.reproduce.ledger`; a paper value without a declaration fails the tests).
     """
 

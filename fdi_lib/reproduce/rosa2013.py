@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fdi_lib.reproduce.ledger import IS_INPUT, NOT_CHECKABLE, Claim, shown_under
+from fdi_lib.reproduce.ledger_claims import IS_INPUT, NOT_CHECKABLE, Claim, shown_under
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.sets.polytope import Polytope, convex_hull
 from fdi_lib.sets.svo import SVOModel, run_svo

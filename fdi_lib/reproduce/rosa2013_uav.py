@@ -18,7 +18,7 @@ import numpy as np
 
 from fdi_lib.errors import ModelError
 from fdi_lib.montecarlo import effective_jobs, trial_seeds
-from fdi_lib.reproduce.ledger import BY_TOLERANCE, Claim, shown_under
+from fdi_lib.reproduce.ledger_claims import BY_TOLERANCE, Claim, shown_under
 from fdi_lib.reproduce.registry import register, ReproductionResult
 from fdi_lib.reproduce.rosa2013 import DURATION, PAPER, UAV_X0
 from fdi_lib.sets.svo import run_architecture_i_many, run_svo_many

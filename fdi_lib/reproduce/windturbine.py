@@ -20,7 +20,7 @@ import scipy.stats
 
 from fdi_lib.errors import ModelError, ResourceError
 from fdi_lib.montecarlo import binomial_ci, run_monte_carlo
-from fdi_lib.reproduce.ledger import BY_TOLERANCE, NOT_CHECKABLE, Claim
+from fdi_lib.reproduce.ledger_claims import BY_TOLERANCE, NOT_CHECKABLE, Claim
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib import windturbine as W
 

@@ -17,7 +17,7 @@ import numpy as np
 from fdi_lib.filters import KalmanGains, kalman_filter, kalman_gains
 from fdi_lib.glr import WindowGLRResult, first_alarm, glr_window
 from fdi_lib.models import FaultFamily, LTVModel, fault_profile, impulse_family, ltv_model
-from fdi_lib.reproduce.ledger import BY_CHECK, BY_TOLERANCE, ESTIMATES_INPUT, Claim, ours_at
+from fdi_lib.reproduce.ledger_claims import BY_CHECK, BY_TOLERANCE, ESTIMATES_INPUT, Claim, ours_at
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.signatures import fault_signature, willsky_jones
 from fdi_lib.simulate import simulate

@@ -19,7 +19,7 @@ import numpy as np
 import scipy.stats
 
 from fdi_lib.errors import ModelError
-from fdi_lib.reproduce.ledger import BY_INTERVAL, BY_TOLERANCE, Claim, IS_INPUT, shown_under
+from fdi_lib.reproduce.ledger_claims import BY_INTERVAL, BY_TOLERANCE, Claim, IS_INPUT, shown_under
 from fdi_lib.reproduce.registry import register, ReproductionResult
 from fdi_lib.reproduce.zb2014_pipeline import (
     _quartiles,

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import scipy.stats
 
-from fdi_lib.reproduce.ledger import BY_CHECK, BY_SPREAD, BY_TOLERANCE, Claim, IS_INPUT
+from fdi_lib.reproduce.ledger_claims import BY_CHECK, BY_SPREAD, BY_TOLERANCE, Claim, IS_INPUT
 from fdi_lib.reproduce.registry import register, ReproductionResult
 from fdi_lib.reproduce.zb2014_pipeline import (
     _rate,

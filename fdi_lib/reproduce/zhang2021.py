@@ -32,7 +32,7 @@ import numpy as np
 from fdi_lib.kitanidis import kitanidis_filter, kitanidis_gains, residual_signature
 from fdi_lib.errors import ModelError
 from fdi_lib.montecarlo import binomial_ci, run_monte_carlo_many, trial_rngs, trial_seeds
-from fdi_lib.reproduce.ledger import (
+from fdi_lib.reproduce.ledger_claims import (
     BY_INTERVAL,
     BY_STANDARD_ERROR,
     BY_TOLERANCE,

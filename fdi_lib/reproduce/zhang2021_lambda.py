@@ -20,7 +20,7 @@ import numpy as np
 from fdi_lib.errors import ModelError
 from fdi_lib.kitanidis import kitanidis_filter, kitanidis_gains, residual_signature
 from fdi_lib.montecarlo import binomial_ci, run_monte_carlo_many, trial_rngs, trial_seeds
-from fdi_lib.reproduce.ledger import ci_at, ours_at, shown_under
+from fdi_lib.reproduce.ledger_claims import ci_at, ours_at, shown_under
 from fdi_lib.reproduce.registry import register, ReproductionResult
 from fdi_lib.reproduce.zhang2021 import (
     example1_regression,

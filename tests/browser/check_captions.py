@@ -3,7 +3,7 @@
 After ``make book`` (not collected by pytest; ``tests/reproduce/test_captions.py`` tests the
 rule and the chapter sources). For each caption in ``_build/html`` that names a paper figure or
 table ("reproduces / compare with / redraws paper Fig. N"), it reads the reproduction identifier
-in the caption's parenthesis and recomputes :func:`fdi_lib.reproduce.ledger.figure_claim` from
+in the caption's parenthesis and recomputes :func:`fdi_lib.reproduce.views.ledger.figure_claim` from
 the result the build cached for that identifier (``_build/results-cache``, the results the
 claims ledger page shows). It fails when
 
@@ -58,7 +58,7 @@ def captions(page: Path) -> list[str]:
 def check(root: Path) -> list[tuple[str, str, str]]:
     """``(page, check, detail)`` for every caption that disagrees with the ledger."""
     from fdi_lib.reproduce.book import book_settings
-    from fdi_lib.reproduce.ledger import figure_claim
+    from fdi_lib.reproduce.views.ledger import figure_claim
     from fdi_lib.reproduce.registry import cached_run, list_reproductions
 
     # the build's run of each id at the book's settings, the one the ledger reads (none computed)

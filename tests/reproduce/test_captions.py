@@ -1,6 +1,6 @@
 """Figure captions say "reproduces" only when the claims ledger says so.
 
-The rule (:func:`fdi_lib.reproduce.ledger.figure_claim`) is tested on hand-made results; the
+The rule (:func:`fdi_lib.reproduce.views.ledger.figure_claim`) is tested on hand-made results; the
 chapters are checked to take every caption verb about a paper figure from the ledger (a glued
 value, never typed). ``tests/browser/check_captions.py`` checks the built book: each glued verb
 against the ledger of the build's cached results, and the rendered captions.
@@ -14,7 +14,8 @@ from pathlib import Path
 import jupytext
 import pytest
 
-from fdi_lib.reproduce import ledger as L
+from fdi_lib.reproduce import ledger_claims as C
+from fdi_lib.reproduce.views import ledger as V
 from fdi_lib.reproduce import list_reproductions
 from fdi_lib.reproduce.registry import ReproductionResult
 
@@ -33,8 +34,8 @@ RATES = ReproductionResult(
 
 
 def test_verb_reproduces_only_when_every_compared_claim_agrees():
-    claim = L.figure_claim(RATES)  # within interval, twice
-    assert (claim.verb, claim.differs) == (L.REPRODUCES, "")
+    claim = V.figure_claim(RATES)  # within interval, twice
+    assert (claim.verb, claim.differs) == (V.REPRODUCES, "")
     off = dataclasses.replace(
         RATES,
         headline={
@@ -42,8 +43,8 @@ def test_verb_reproduces_only_when_every_compared_claim_agrees():
             "ci95": {"5": [0.99, 1.0], "15": [0.43, 0.50]},
         },
     )
-    claim = L.figure_claim(off)
-    assert claim.verb == L.COMPARE
+    claim = V.figure_claim(off)
+    assert claim.verb == V.COMPARE
     assert claim.differs.replace("\u00a0", " ") == (
         "; differs: success rate at q = 15: paper 29.5 %, ours 46.5 %"
     )  # both in %
@@ -59,12 +60,12 @@ def test_verb_ignores_inputs_and_calibration_targets():
         settings={},
         headline={"onset_estimate": 201, "glr_argmax_time": 208},
     )
-    statuses = {r.path[0]: r.status for r in L.figure_claim(res).rows}
-    assert statuses == {"onset_estimate": L.INPUT_RECOVERED, "glr_argmax_time": L.REPRODUCED}
-    assert L.figure_claim(res).verb == L.REPRODUCES
+    statuses = {r.path[0]: r.status for r in V.figure_claim(res).rows}
+    assert statuses == {"onset_estimate": C.INPUT_RECOVERED, "glr_argmax_time": C.REPRODUCED}
+    assert V.figure_claim(res).verb == V.REPRODUCES
     missed = dataclasses.replace(res, headline={"onset_estimate": 201, "glr_argmax_time": 400})
-    claim = L.figure_claim(missed)
-    assert claim.verb == L.COMPARE and "bottom panel: l_k is largest" in claim.differs
+    claim = V.figure_claim(missed)
+    assert claim.verb == V.COMPARE and "bottom panel: l_k is largest" in claim.differs
     # Rosa & Silvestre Figs 8-10: the fault the book sets, and the §6.4 detection time, which is
     # Fig. 11's claim (listed there once): the figure redraws
     alpha = ReproductionResult(
@@ -73,8 +74,8 @@ def test_verb_ignores_inputs_and_calibration_targets():
         headline={"onset_s": 0.5, "detection_time_ms": 10.0},
         paper={"onset_s": 0.5, "detection_time_ms": 10},
     )
-    assert [r.path for r in L.figure_claim(alpha).rows] == [("onset_s",)]
-    assert L.figure_claim(alpha).verb == L.REDRAWS
+    assert [r.path for r in V.figure_claim(alpha).rows] == [("onset_s",)]
+    assert V.figure_claim(alpha).verb == V.REDRAWS
     calibrated = ReproductionResult(
         id="zb2014-fig9",
         headline={"glr_level_over_threshold": 50.6},
@@ -85,13 +86,13 @@ def test_verb_ignores_inputs_and_calibration_targets():
         },
         settings={},
     )
-    assert L.figure_claim(calibrated).verb == L.REDRAWS
+    assert V.figure_claim(calibrated).verb == V.REDRAWS
 
 
 def test_verb_with_too_few_trials_and_many_differences():
     few = dataclasses.replace(RATES, settings={"trials": 2})
-    claim = L.figure_claim(few)
-    assert claim.verb == L.COMPARE and "not computed at paper scale" in claim.differs
+    claim = V.figure_claim(few)
+    assert claim.verb == V.COMPARE and "not computed at paper scale" in claim.differs
     assert "differs" not in claim.differs  # too few trials is no difference
     many = dataclasses.replace(
         RATES,
@@ -101,8 +102,8 @@ def test_verb_with_too_few_trials_and_many_differences():
             "ci95": {str(q): [0.05, 0.15] for q in range(5, 9)},
         },
     )
-    claim = L.figure_claim(many)
-    assert claim.differs.replace("\u00a0", " ").count("paper 90 %") == L.CAPTION_ITEMS
+    claim = V.figure_claim(many)
+    assert claim.differs.replace("\u00a0", " ").count("paper 90 %") == V.CAPTION_ITEMS
     assert "2 more in the claims ledger" in claim.differs
 
 
@@ -170,8 +171,8 @@ def test_post_build_check_fails_on_a_caption_that_disagrees(tmp_path, monkeypatc
     monkeypatch.setenv("FDI_RESULTS_CACHE", str(tmp_path / "cache"))
     f1, f3 = book_run("zb2014-fig1"), book_run("zb2014-fig3")  # cached, as in a build
     reproduce("zb2014-fig3", seed=1)  # another run, used last: not the book's, not read
-    c1, c3 = L.figure_claim(f1), L.figure_claim(f3)
-    assert (c1.verb, c3.verb) == (L.COMPARE, L.REPRODUCES)  # Γ_k over 1; Fig. 3 agrees
+    c1, c3 = V.figure_claim(f1), V.figure_claim(f3)
+    assert (c1.verb, c3.verb) == (V.COMPARE, V.REPRODUCES)  # Γ_k over 1; Fig. 3 agrees
 
     def page(*caps, attrs=""):
         (tmp_path / "html").mkdir(exist_ok=True)

@@ -1,6 +1,7 @@
 """The claims ledger: every paper value appears, every status is computed from the numbers."""
 
 import dataclasses
+import fnmatch
 import json
 import re
 from pathlib import Path
@@ -9,6 +10,9 @@ import pytest
 
 from fdi_lib.reproduce import list_reproductions, reproduce
 from fdi_lib.reproduce import ledger as L
+from fdi_lib.reproduce import ledger_claims as C
+from fdi_lib.reproduce import ledger_status as S
+from fdi_lib.reproduce.views import ledger as V
 from fdi_lib.reproduce.book import book_order, book_settings
 from fdi_lib.reproduce.registry import ReproductionResult, cached_results
 
@@ -34,72 +38,72 @@ def cheap_results():
 
 
 # ----------------------------------------------------------------------------- statuses
-def _claim(test=L.BY_TOLERANCE, **kw):
-    return L.Claim(location="Fig. 0", units="", test=test, **kw)
+def _claim(test=C.BY_TOLERANCE, **kw):
+    return C.Claim(location="Fig. 0", units="", test=test, **kw)
 
 
 def test_status_of_numbers_lists_and_intervals():
-    assert L.claim_status(786.0, 786.0)[0] == L.REPRODUCED
-    assert L.claim_status(786.0, 786.5)[0] == L.REPRODUCED  # within 1e-3 relative
-    assert L.claim_status(786.0, 790.0)[0] == L.DIFFERS
-    interval = _claim(L.BY_INTERVAL)
-    assert L.claim_status(0.295, 0.465, (0.43, 0.50), interval)[0] == L.DIFFERS
-    assert L.claim_status(0.295, 0.31, (0.28, 0.34), interval)[0] == L.WITHIN
+    assert S.claim_status(786.0, 786.0)[0] == C.REPRODUCED
+    assert S.claim_status(786.0, 786.5)[0] == C.REPRODUCED  # within 1e-3 relative
+    assert S.claim_status(786.0, 790.0)[0] == C.DIFFERS
+    interval = _claim(C.BY_INTERVAL)
+    assert S.claim_status(0.295, 0.465, (0.43, 0.50), interval)[0] == C.DIFFERS
+    assert S.claim_status(0.295, 0.31, (0.28, 0.34), interval)[0] == C.WITHIN
     # only the declared test agrees: inside the interval is no agreement by tolerance, and an
     # equal value without an interval is not computed by the interval test
-    assert L.claim_status(0.295, 0.31, (0.28, 0.34))[0] == L.DIFFERS
-    assert L.claim_status(0.295, 0.295, None, interval)[0] == L.NOT_COMPUTED
+    assert S.claim_status(0.295, 0.31, (0.28, 0.34))[0] == C.DIFFERS
+    assert S.claim_status(0.295, 0.295, None, interval)[0] == C.NOT_COMPUTED
     # by standard error: within z = 1.96 standard errors of ours, per component
-    se = _claim(L.BY_STANDARD_ERROR)
-    assert L.claim_status([10.0, 9.0], [10.1, 9.1], se=[0.1, 0.1], spec=se)[0] == L.WITHIN
-    assert L.claim_status([10.78, 9.0], [10.1, 9.1], se=[0.1, 0.1], spec=se)[0] == L.DIFFERS
-    assert L.claim_status([10.0, 9.0], [10.0, 9.0], spec=se)[0] == L.NOT_COMPUTED  # no se
-    assert L.claim_status([4.0, 0.0], [4.0, 0.0])[0] == L.REPRODUCED
-    assert L.claim_status([4.0, 0.0], [4.0, 0.1])[0] == L.DIFFERS
-    assert L.claim_status([4.0, 0.0], [4.0])[0] == L.DIFFERS
-    assert L.claim_status(20, None)[0] == L.NOT_COMPUTED  # we have no value
+    se = _claim(C.BY_STANDARD_ERROR)
+    assert S.claim_status([10.0, 9.0], [10.1, 9.1], se=[0.1, 0.1], spec=se)[0] == C.WITHIN
+    assert S.claim_status([10.78, 9.0], [10.1, 9.1], se=[0.1, 0.1], spec=se)[0] == C.DIFFERS
+    assert S.claim_status([10.0, 9.0], [10.0, 9.0], spec=se)[0] == C.NOT_COMPUTED  # no se
+    assert S.claim_status([4.0, 0.0], [4.0, 0.0])[0] == C.REPRODUCED
+    assert S.claim_status([4.0, 0.0], [4.0, 0.1])[0] == C.DIFFERS
+    assert S.claim_status([4.0, 0.0], [4.0])[0] == C.DIFFERS
+    assert S.claim_status(20, None)[0] == C.NOT_COMPUTED  # we have no value
     never = _claim(missing="not detected")  # None is a result
-    assert L.claim_status(20, None, spec=never) == (L.DIFFERS, "ours: not detected")
+    assert S.claim_status(20, None, spec=never) == (C.DIFFERS, "ours: not detected")
     # a single run: inside the 95 % range of our runs, or not
-    spread = _claim(L.BY_SPREAD)
-    assert L.claim_status(786.0, 778.0, spread=(700.0, 800.0), spec=spread)[0] == L.WITHIN_SPREAD
-    assert L.claim_status(88.0, 36.0, spread=(20.0, 60.0), spec=spread)[0] == L.DIFFERS
-    assert L.claim_status(786.0, 786.0, spread=(700.0, 800.0), spec=spread)[0] == L.WITHIN_SPREAD
-    assert L.claim_status(True, True)[0] == L.REPRODUCED
-    assert L.claim_status(True, False)[0] == L.DIFFERS
+    spread = _claim(C.BY_SPREAD)
+    assert S.claim_status(786.0, 778.0, spread=(700.0, 800.0), spec=spread)[0] == C.WITHIN_SPREAD
+    assert S.claim_status(88.0, 36.0, spread=(20.0, 60.0), spec=spread)[0] == C.DIFFERS
+    assert S.claim_status(786.0, 786.0, spread=(700.0, 800.0), spec=spread)[0] == C.WITHIN_SPREAD
+    assert S.claim_status(True, True)[0] == C.REPRODUCED
+    assert S.claim_status(True, False)[0] == C.DIFFERS
 
 
 def test_status_of_text_claims():
-    assert L.claim_status("< 1", 0.99)[0] == L.REPRODUCED
-    assert L.claim_status("< 1", 1.81)[0] == L.DIFFERS
-    assert L.claim_status("< 500", [100.0, 499.0])[0] == L.REPRODUCED
-    assert L.claim_status("about 3500", 3500.0)[0] == L.REPRODUCED
-    assert L.claim_status("about 3500", 280.0)[0] == L.DIFFERS
-    assert L.claim_status("grows", 1.0)[0] == L.NOT_REPRODUCIBLE  # no check: flagged
-    spec = _claim(L.BY_CHECK, check=lambda p, o, h: o > 2, criterion="o > 2")
-    assert L.claim_status("grows", 3.0, spec=spec) == (L.REPRODUCED, "o > 2")
-    assert L.claim_status("grows", 1.0, spec=spec)[0] == L.DIFFERS
-    zero = _claim(L.BY_INTERVAL, value=lambda p: 0.0)
-    assert L.claim_status("0 (Prop. 2)", -0.08, (-0.09, -0.07), zero)[0] == L.DIFFERS
-    assert L.claim_status("0 (Prop. 2)", -0.01, (-0.03, 0.01), zero)[0] == L.WITHIN
+    assert S.claim_status("< 1", 0.99)[0] == C.REPRODUCED
+    assert S.claim_status("< 1", 1.81)[0] == C.DIFFERS
+    assert S.claim_status("< 500", [100.0, 499.0])[0] == C.REPRODUCED
+    assert S.claim_status("about 3500", 3500.0)[0] == C.REPRODUCED
+    assert S.claim_status("about 3500", 280.0)[0] == C.DIFFERS
+    assert S.claim_status("grows", 1.0)[0] == C.NOT_REPRODUCIBLE  # no check: flagged
+    spec = _claim(C.BY_CHECK, check=lambda p, o, h: o > 2, criterion="o > 2")
+    assert S.claim_status("grows", 3.0, spec=spec) == (C.REPRODUCED, "o > 2")
+    assert S.claim_status("grows", 1.0, spec=spec)[0] == C.DIFFERS
+    zero = _claim(C.BY_INTERVAL, value=lambda p: 0.0)
+    assert S.claim_status("0 (Prop. 2)", -0.08, (-0.09, -0.07), zero)[0] == C.DIFFERS
+    assert S.claim_status("0 (Prop. 2)", -0.01, (-0.03, 0.01), zero)[0] == C.WITHIN
     why = "timing on another machine"
-    assert L.claim_status(5.0, 5.0, spec=_claim(L.NOT_CHECKABLE, reason=why)) == (
-        L.NOT_REPRODUCIBLE,
+    assert S.claim_status(5.0, 5.0, spec=_claim(C.NOT_CHECKABLE, reason=why)) == (
+        C.NOT_REPRODUCIBLE,
         why,
     )
 
 
 def test_a_declaration_states_its_location_and_a_known_test():
     with pytest.raises(L.ModelError, match="Claim.test"):
-        L.Claim(location="Fig. 1", units="", test="close enough")
+        C.Claim(location="Fig. 1", units="", test="close enough")
     with pytest.raises(L.ModelError, match="Claim.location"):
-        L.Claim(location=" ", units="", test=L.BY_TOLERANCE)
+        C.Claim(location=" ", units="", test=C.BY_TOLERANCE)
     with pytest.raises(L.ModelError, match="Claim.reason"):
-        L.Claim(location="Fig. 1", units="", test=L.NOT_CHECKABLE)
+        C.Claim(location="Fig. 1", units="", test=C.NOT_CHECKABLE)
     with pytest.raises(L.ModelError, match="Claim.check"):
-        L.Claim(location="Fig. 1", units="", test=L.BY_CHECK)
+        C.Claim(location="Fig. 1", units="", test=C.BY_CHECK)
     with pytest.raises(TypeError):
-        L.Claim(location="Fig. 1", test=L.BY_TOLERANCE)  # units must be stated
+        C.Claim(location="Fig. 1", test=C.BY_TOLERANCE)  # units must be stated
 
 
 def test_claim_paths_skip_values_that_state_nothing():
@@ -110,22 +114,22 @@ def test_claim_paths_skip_values_that_state_nothing():
         "d": [1, 2],
         "e": "illustration, no numbers",
     }
-    assert L.claim_paths(paper) == [("a",), ("b", "x"), ("d",)]
+    assert S.claim_paths(paper) == [("a",), ("b", "x"), ("d",)]
     declared = {"a": 1, "calibrated_to": ["a"], "predictions": [], "b": {"predictions": 2}}
-    assert L.claim_paths(declared) == [("a",), ("b", "predictions")]  # role lists: top level only
+    assert S.claim_paths(declared) == [("a",), ("b", "predictions")]  # role lists: top level only
 
 
 def test_surrogate_role_is_the_reproductions_declaration():
     paper = {"x": 1, "y": 2, "z": 3, "calibrated_to": ["x"], "predictions": ["y"]}
-    typed = _claim(role=L.CALIBRATION)
-    assert [L.surrogate_role("zb2014-fig9", paper, (k,), typed) for k in "xyz"] == [
-        L.CALIBRATION,
-        L.PREDICTION,
-        L.INPUT,
+    typed = _claim(role=C.CALIBRATION)
+    assert [S.surrogate_role("zb2014-fig9", paper, (k,), typed) for k in "xyz"] == [
+        C.CALIBRATION,
+        C.PREDICTION,
+        C.INPUT,
     ]  # the typed role is ignored
-    assert L.surrogate_role("rosa2013-fig8", {"x": 1}, ("x",), typed) == L.CALIBRATION
-    assert L.surrogate_role("rosa2013-fig8", {"x": 1}, ("x",)) == L.PREDICTION
-    assert L.surrogate_role("zb2014-fig1", {"x": 1}, ("x",), typed) is None
+    assert S.surrogate_role("rosa2013-fig8", {"x": 1}, ("x",), typed) == C.CALIBRATION
+    assert S.surrogate_role("rosa2013-fig8", {"x": 1}, ("x",)) == C.PREDICTION
+    assert S.surrogate_role("zb2014-fig1", {"x": 1}, ("x",), typed) is None
     # moving a key between the lists moves its row
     res = ReproductionResult(
         id="zb2014-fig9",
@@ -134,12 +138,12 @@ def test_surrogate_role_is_the_reproductions_declaration():
         settings={},
     )
     roles = {r.path: r.role for r in L.build_ledger({"zb2014-fig9": res}).rows}
-    assert roles == {("x",): L.CALIBRATION, ("y",): L.PREDICTION}
+    assert roles == {("x",): C.CALIBRATION, ("y",): C.PREDICTION}
     swapped = dataclasses.replace(
         res, paper={**res.paper, "calibrated_to": ["y"], "predictions": ["x"]}
     )
     roles = {r.path: r.role for r in L.build_ledger({"zb2014-fig9": swapped}).rows}
-    assert roles == {("x",): L.PREDICTION, ("y",): L.CALIBRATION}
+    assert roles == {("x",): C.PREDICTION, ("y",): C.CALIBRATION}
 
 
 # ----------------------------------------------------------------------------- the ledger
@@ -151,8 +155,8 @@ def test_every_paper_value_appears(cheap_results):
     led = L.build_ledger(cheap_results, strict=True)
     listed = _listed(led)
     for id, res in cheap_results.items():
-        for path in L.claim_paths(res.paper):
-            owner = L._owner(id, path, L.claim_for(id, path))
+        for path in S.claim_paths(res.paper):
+            owner = L._owner(id, path, S.claim_for(id, path))
             assert owner in listed or owner[0] not in cheap_results, (id, path)
     assert sum(led.counts().values()) == len(led.rows)
     # rows in book order (the table of contents)
@@ -163,8 +167,8 @@ def test_every_paper_value_appears(cheap_results):
 def test_statuses_are_computed_not_typed(cheap_results):
     """Perturb a paper value: the status follows the numbers."""
     base = {(r.id, r.path): r.status for r in L.build_ledger(cheap_results).rows}
-    assert base[("zb2014-table1", ("G0_1_nominal",))] == L.INPUT_VALUE  # set by the book
-    assert base[("zb2014-fig1", ("gamma_norm_max", "101"))] == L.DIFFERS_MEASURED
+    assert base[("zb2014-table1", ("G0_1_nominal",))] == C.INPUT_VALUE  # set by the book
+    assert base[("zb2014-fig1", ("gamma_norm_max", "101"))] == C.DIFFERS_MEASURED
     t1 = cheap_results["zb2014-table1"]
     moved = dataclasses.replace(
         t1, paper={**t1.paper, "G0_1_nominal": t1.paper["G0_1_nominal"] * 1.01}
@@ -177,11 +181,11 @@ def test_statuses_are_computed_not_typed(cheap_results):
             {**cheap_results, "zb2014-table1": moved, "zb2014-fig1": relaxed}
         ).rows
     }
-    assert rows[("zb2014-table1", ("G0_1_nominal",))] == L.DIFFERS_UNKNOWN  # an input we miss
-    assert rows[("zb2014-fig1", ("gamma_norm_max", "101"))] == L.REPRODUCED
+    assert rows[("zb2014-table1", ("G0_1_nominal",))] == C.DIFFERS_UNKNOWN  # an input we miss
+    assert rows[("zb2014-fig1", ("gamma_norm_max", "101"))] == C.REPRODUCED
     # the status column (the first) of the rendered table is the computed one
     text = L.build_ledger(cheap_results).to_myst()
-    for status in L.STATUSES:
+    for status in C.STATUSES:
         assert text.count(f"* - {status}\n") == sum(s == status for s in base.values()), status
 
 
@@ -196,7 +200,7 @@ def test_within_interval_from_a_stochastic_result():
         settings={"trials": 1000},
     )
     rows = L.build_ledger({"zhang2021-table1": res}, strict=True).rows
-    assert [r.status for r in rows] == [L.WITHIN, L.DIFFERS_UNKNOWN]
+    assert [r.status for r in rows] == [C.WITHIN, C.DIFFERS_UNKNOWN]
     assert rows[0].ci == (0.28, 0.34) and rows[1].explain and rows[0].trials == 1000
     assert rows[1].cause is None and rows[0].paper_trials == 1000
     # the paper's rate between our two readings of the rule, on the same trials: a bracket, not
@@ -205,7 +209,7 @@ def test_within_interval_from_a_stochastic_result():
         res, headline={**res.headline, "success_rate_linear": {"15": 0.30, "16": 0.20}}
     )
     rows = L.build_ledger({"zhang2021-table1": between}, strict=True).rows
-    assert [r.status for r in rows] == [L.WITHIN, L.DIFFERS_BRACKETED]
+    assert [r.status for r in rows] == [C.WITHIN, C.DIFFERS_BRACKETED]
     assert rows[1].cause is None and "between" in rows[1].status_detail
     # both cells of a rate in %: no paper fraction beside a percentage of ours
     text = L.build_ledger({"zhang2021-table1": res}).to_myst().replace("\u00a0", " ")
@@ -221,10 +225,10 @@ def test_statuses_need_the_papers_trial_count():
             "ci95": {"15": [0.0, 0.9], "16": [0.0, 0.9]},
         },
         paper={"success_rate": {"15": 0.295, "16": 0.251}},
-        settings={"trials": L.FALLBACK_TRIALS},
+        settings={"trials": C.FALLBACK_TRIALS},
     )
     rows = L.build_ledger({"zhang2021-table1": res}, strict=True).rows
-    assert {r.status for r in rows} == {L.NOT_COMPUTED}  # not "within interval" (huge CI)
+    assert {r.status for r in rows} == {C.NOT_COMPUTED}  # not "within interval" (huge CI)
     assert all(r.status_detail.startswith("not computed at paper scale") for r in rows)
     assert L.get("zhang2021-table1").default_trials == rows[0].paper_trials == 1000
     # an input stays an input at any trial count
@@ -234,7 +238,7 @@ def test_statuses_need_the_papers_trial_count():
         paper={"threshold_dof": "1 (caption) / 2 (text)", "calibrated_to": [], "predictions": []},
         settings={"trials": 2},
     )
-    assert [r.status for r in L.build_ledger({"zb2014-fig8": f8}).rows] == [L.INPUT_VALUE]
+    assert [r.status for r in L.build_ledger({"zb2014-fig8": f8}).rows] == [C.INPUT_VALUE]
 
 
 def test_within_spread_of_a_single_run():
@@ -248,7 +252,7 @@ def test_within_spread_of_a_single_run():
     head = {"alarm_time_min": 778.0, "detection_delay_min": 178.0}
     plain = ReproductionResult(id="zb2014-fig5", headline=head, paper=paper, settings={})
     # declared by the spread of single runs: without our spread there is nothing to compare
-    assert {r.status for r in L.build_ledger({"zb2014-fig5": plain}).rows} == {L.NOT_COMPUTED}
+    assert {r.status for r in L.build_ledger({"zb2014-fig5": plain}).rows} == {C.NOT_COMPUTED}
     spread = dataclasses.replace(
         plain,
         headline={
@@ -260,11 +264,11 @@ def test_within_spread_of_a_single_run():
         },
     )
     rows = {r.path[0]: r for r in L.build_ledger({"zb2014-fig5": spread}).rows}
-    assert rows["alarm_time_min"].status == L.WITHIN_SPREAD
+    assert rows["alarm_time_min"].status == C.WITHIN_SPREAD
     assert "71" in rows["alarm_time_min"].status_detail and "1 000" in rows[
         "alarm_time_min"
     ].status_detail.replace("\u202f", " ")
-    assert rows["detection_delay_min"].status in L.DIFFERING  # 186 outside [100, 180]
+    assert rows["detection_delay_min"].status in C.DIFFERING  # 186 outside [100, 180]
 
 
 def test_one_row_per_claim():
@@ -299,11 +303,11 @@ def test_the_other_reading_of_a_figure_is_a_note_and_its_caption_has_its_own_sta
         deg, id="rosa2013-fig11-rad", headline={"detection_time_ms": {"alpha": {"step": None}}}
     )
     rows = L.build_ledger({"rosa2013-fig11": deg, "rosa2013-fig11-rad": rad}, strict=True).rows
-    assert [(r.id, r.status) for r in rows] == [("rosa2013-fig11", L.REPRODUCED)]
+    assert [(r.id, r.status) for r in rows] == [("rosa2013-fig11", C.REPRODUCED)]
     assert "rosa2013-fig11-rad on 10 trials: not detected in any run" in rows[0].note
-    claim = L.figure_claim(rad)
-    assert claim.verb == L.COMPARE and "not detected" in claim.differs
-    assert L.figure_claim(deg).verb == L.REPRODUCES
+    claim = V.figure_claim(rad)
+    assert claim.verb == V.COMPARE and "not detected" in claim.differs
+    assert V.figure_claim(deg).verb == V.REPRODUCES
 
 
 def _declarations():
@@ -315,14 +319,14 @@ def _declarations():
 
 def test_every_difference_links_to_where_it_is_shown(cheap_results):
     for rep in list_reproductions():
-        assert (ROOT / f"{L.chapter_of(rep.id)}.md").exists(), rep.id
+        assert (ROOT / f"{S.chapter_of(rep.id)}.md").exists(), rep.id
     for _, _, c in _declarations():
         if c.explain and "/" in c.explain:
             assert (ROOT / f"{c.explain}.md").exists(), c.explain
     for r in L.build_ledger(cheap_results).rows:
-        if r.status in (*L.DIFFERING, L.NOT_REPRODUCIBLE, L.NOT_COMPUTED):
+        if r.status in (*C.DIFFERING, C.NOT_REPRODUCIBLE, C.NOT_COMPUTED):
             assert r.explain, (r.id, r.path)
-        assert (r.cause is not None) == (r.status in (L.DIFFERS_MEASURED, L.DIFFERS_HYPOTHESIS)), (
+        assert (r.cause is not None) == (r.status in (C.DIFFERS_MEASURED, C.DIFFERS_HYPOTHESIS)), (
             r.id,
             r.path,
         )
@@ -377,7 +381,7 @@ def _missing_glue(results=None):
         linked = {
             (r.id, r.path)
             for r in L.build_ledger(results).rows
-            if r.status in (L.DIFFERS_MEASURED, L.DIFFERS_HYPOTHESIS)
+            if r.status in (C.DIFFERS_MEASURED, C.DIFFERS_HYPOTHESIS)
         }
     missing = []
     for id, pattern, c in _declarations():
@@ -388,16 +392,14 @@ def _missing_glue(results=None):
                 missing.append((id, pattern, label, "no glued measurement declared or no section"))
                 continue
             shown = _glued(sections[label])
-            leaves = L.claim_paths(results[id].paper) if results and id in results else []
+            leaves = S.claim_paths(results[id].paper) if results and id in results else []
             paths = [
-                p
-                for p in leaves
-                if L.fnmatch.fnmatchcase("/".join(p), pattern) and (id, p) in linked
+                p for p in leaves if fnmatch.fnmatchcase("/".join(p), pattern) and (id, p) in linked
             ]
             for parts in [p[1:] for p in paths] if results else [("*",) * 5]:
                 for key in keys:
                     want = key.format(*parts).lower()
-                    if not any(L.fnmatch.fnmatchcase(k, want) for k in shown):
+                    if not any(fnmatch.fnmatchcase(k, want) for k in shown):
                         missing.append((id, pattern, label, want))
     return missing
 
@@ -446,7 +448,7 @@ def test_claims_are_declared_at_registration_and_the_central_lists_are_gone():
 
     assert not hasattr(book, "BOOK_RUNS")
     for id, pattern, c in _declarations():
-        assert isinstance(c, L.Claim), (id, pattern)
+        assert isinstance(c, C.Claim), (id, pattern)
         if c.shown_under:
             L.get(c.shown_under)  # names a registered reproduction
 
@@ -465,8 +467,8 @@ def test_a_claim_without_a_declaration_fails():
 def test_json_and_summary(cheap_results):
     led = L.build_ledger(cheap_results, sources={id: "computed" for id in cheap_results})
     d = json.loads(json.dumps(led.to_json_dict()))
-    assert set(d["counts"]) == set(L.STATUSES)
-    assert set(d["counts_by_paper"]) == set(L.PAPERS)
+    assert set(d["counts"]) == set(C.STATUSES)
+    assert set(d["counts_by_paper"]) == set(C.PAPERS)
     assert sum(sum(c.values()) for c in d["counts_by_paper"].values()) == len(d["rows"])
     assert len(d["rows"]) == len(led.rows)
     old_keys = {
@@ -494,23 +496,23 @@ def test_json_and_summary(cheap_results):
         "test",
     } == set(d["rows"][0])
     for row in d["rows"]:
-        assert row["status"] in L.STATUSES
-        assert row["claim"].startswith(L.PAPERS[row["paper_id"]] + ", ")
+        assert row["status"] in C.STATUSES
+        assert row["claim"].startswith(C.PAPERS[row["paper_id"]] + ", ")
         assert row["id"].startswith(row["paper_id"] + "-")
-        if row["surrogate"] == L.INPUT:  # never counted as reproduced
-            assert row["status"] != L.REPRODUCED, row
+        if row["surrogate"] == C.INPUT:  # never counted as reproduced
+            assert row["status"] != C.REPRODUCED, row
     html = led.summary()._repr_html_()
-    assert all(s in html for s in L.STATUSES)
+    assert all(s in html for s in C.STATUSES)
     assert "<thead><tr><th>status</th>" in html  # status first
     inputs = [r for r in led.rows if r.id == "zb2014-table1"]  # declared: neither list
-    assert inputs and all(r.role == L.INPUT for r in inputs)
+    assert inputs and all(r.role == C.INPUT for r in inputs)
     # its detection time is the §6.4 sentence, listed under Fig. 11
-    assert {r.role for r in led.rows if r.id == "rosa2013-fig8"} == {L.INPUT}
+    assert {r.role for r in led.rows if r.id == "rosa2013-fig8"} == {C.INPUT}
     assert all(r.role is None for r in led.rows if r.id.startswith("zb2014-fig1"))
 
 
 def _row(status, location="Fig. 1, x", paper_id="zb2014"):
-    return L.LedgerRow(
+    return C.LedgerRow(
         id=f"{paper_id}-fig1",
         path=("x",),
         label=location,
@@ -529,16 +531,16 @@ def _row(status, location="Fig. 1, x", paper_id="zb2014"):
 
 
 def test_mission_items_take_their_state_from_their_rows(cheap_results):
-    assert len(L.MISSION) == 40
-    assert len({(p, item) for p, item, _ in L.MISSION}) == 40
-    assert L.item_state([]) == "no row"
-    assert L.item_state([_row(L.REPRODUCED), _row(L.INPUT_RECOVERED)]) == "reproduced"
-    assert L.item_state([_row(L.INPUT_VALUE)]) == "values the book sets"
-    assert L.item_state([_row(L.REPRODUCED), _row(L.DIFFERS_MEASURED)]) == "differs, measured cause"
+    assert len(S.MISSION) == 40
+    assert len({(p, item) for p, item, _ in S.MISSION}) == 40
+    assert S.item_state([]) == "no row"
+    assert S.item_state([_row(C.REPRODUCED), _row(C.INPUT_RECOVERED)]) == "reproduced"
+    assert S.item_state([_row(C.INPUT_VALUE)]) == "values the book sets"
+    assert S.item_state([_row(C.REPRODUCED), _row(C.DIFFERS_MEASURED)]) == "differs, measured cause"
     # the least explained difference decides
-    assert L.item_state([_row(L.DIFFERS_MEASURED), _row(L.DIFFERS_BRACKETED)]) == "bracketed"
-    assert L.item_state([_row(L.DIFFERS_HYPOTHESIS), _row(L.DIFFERS_UNKNOWN)]) == "unknown"
-    assert L.item_state([_row(L.NOT_REPRODUCIBLE)]) == "not reproducible"
+    assert S.item_state([_row(C.DIFFERS_MEASURED), _row(C.DIFFERS_BRACKETED)]) == "bracketed"
+    assert S.item_state([_row(C.DIFFERS_HYPOTHESIS), _row(C.DIFFERS_UNKNOWN)]) == "unknown"
+    assert S.item_state([_row(C.NOT_REPRODUCIBLE)]) == "not reproducible"
     led = L.build_ledger(cheap_results)
     items = {(i["paper_id"], i["item"]): i for i in led.mission()}
     assert items[("zb2014", "Fig. 1")]["state"] == "differs, measured cause"
@@ -626,49 +628,49 @@ def test_every_registered_paper_value_appears_in_the_ledger():
     listed = _listed(led)
     n_claims = 0
     for id, res in results.items():
-        for path in L.claim_paths(res.paper):
+        for path in S.claim_paths(res.paper):
             n_claims += 1
-            assert L._owner(id, path, L.claim_for(id, path)) in listed, (id, path)
+            assert L._owner(id, path, S.claim_for(id, path)) in listed, (id, path)
     shown_twice = sum(
         1
         for id, res in results.items()
-        for p in L.claim_paths(res.paper)
-        if L.claim_for(id, p).shown_under
+        for p in S.claim_paths(res.paper)
+        if S.claim_for(id, p).shown_under
     )
     assert len(led.rows) == n_claims - shown_twice
-    assert all(r.status in L.STATUSES for r in led.rows)
+    assert all(r.status in C.STATUSES for r in led.rows)
     # one claim, one row: no two rows share a paper location
     where = [(r.paper_id, r.location) for r in led.rows]
     assert len(where) == len(set(where)), sorted(w for w in where if where.count(w) > 1)
-    assert all(r.location and r.test in L.TESTS for r in led.rows)
+    assert all(r.location and r.test in C.TESTS for r in led.rows)
     # 2 trials: no Monte Carlo claim gets a comparison status
     for r in led.rows:
-        if r.paper_trials is not None and r.status not in (L.INPUT_VALUE, L.NOT_REPRODUCIBLE):
-            assert r.status == L.NOT_COMPUTED, (r.id, r.path, r.status)
+        if r.paper_trials is not None and r.status not in (C.INPUT_VALUE, C.NOT_REPRODUCIBLE):
+            assert r.status == C.NOT_COMPUTED, (r.id, r.path, r.status)
     # no estimate of a value the book sets counts as a reproduction
     for r in led.rows:
-        if r.test in (L.IS_INPUT, L.ESTIMATES_INPUT, L.IS_CALIBRATION) or r.role == L.INPUT:
-            assert r.status not in L.AGREES, (r.id, r.path, r.status)
+        if r.test in (C.IS_INPUT, C.ESTIMATES_INPUT, C.IS_CALIBRATION) or r.role == C.INPUT:
+            assert r.status not in C.AGREES, (r.id, r.path, r.status)
     for r in led.rows:
         if L.get(r.id).surrogate:
-            assert r.role in (L.CALIBRATION, L.PREDICTION, L.INPUT)
+            assert r.role in (C.CALIBRATION, C.PREDICTION, C.INPUT)
         else:
             assert r.role is None
     # declarations: every declared key is compared (a paper value or a headline key), and the
     # ledger's roles follow them (fig 7: "missed" calibrated, fig 9: the level calibrated)
     for id, res in results.items():
-        if any(k in res.paper for k in L.ROLE_KEYS):
+        if any(k in res.paper for k in C.ROLE_KEYS):
             assert L.get(id).surrogate, id
             for k in res.paper.get("calibrated_to", []) + res.paper.get("predictions", []):
                 assert k in res.paper or k in res.headline, (id, k)
     roles = {(r.id, r.path): r.role for r in led.rows}
-    assert roles[("zb2014-fig7", ("missed", "2"))] == L.CALIBRATION
-    assert roles[("zb2014-fig9", ("glr_level_over_threshold",))] == L.CALIBRATION
-    assert roles[("zb2014-fig5", ("alarm_time_min",))] == L.PREDICTION
+    assert roles[("zb2014-fig7", ("missed", "2"))] == C.CALIBRATION
+    assert roles[("zb2014-fig9", ("glr_level_over_threshold",))] == C.CALIBRATION
+    assert roles[("zb2014-fig5", ("alarm_time_min",))] == C.PREDICTION
     # every declaration is used by some claim (no dead declaration)
-    keys = {id: ["/".join(p) for p in L.claim_paths(res.paper)] for id, res in results.items()}
+    keys = {id: ["/".join(p) for p in S.claim_paths(res.paper)] for id, res in results.items()}
     for id, pattern, _ in _declarations():
-        assert any(L.fnmatch.fnmatchcase(k, pattern) for k in keys[id]), (id, pattern)
+        assert any(fnmatch.fnmatchcase(k, pattern) for k in keys[id]), (id, pattern)
     # each measured cause's section glues the measurement of each of its claims
     assert not _missing_glue(results)
     # the rows the issue named exist
