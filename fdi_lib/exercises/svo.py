@@ -1,7 +1,7 @@
 """Exercises of "Set-valued observers" (rosa2013/svo): statements and data.
 
 A student's variant draws the dynamics, the measurement, the shear of the two images and the
-counts, inside ranges where every set of the exercise stays non-empty and that leave out the book's
+counts, to four decimals (so classmates' answers differ), inside ranges where every set of the exercise stays non-empty and that leave out the book's
 values (a student's answer is never the book's).
 """
 
@@ -55,7 +55,7 @@ def _svo2_data(rng):
 
 
 def _svo3_data(rng):
-    s = 0.5 if rng is None else uniform(rng, 0.55, 0.85)
+    s = 0.5 if rng is None else uniform(rng, 0.55, 0.85, 4)
     return {
         "square_lower": np.array([-1.0, -1.0]),
         "square_upper": np.array([1.0, 1.0]),
@@ -70,9 +70,9 @@ def _svo4_data(rng):
     return {
         "x_lower": -0.2,
         "x_upper": 0.2,
-        "A": uniform(rng, 0.5, 0.85),
-        "L": uniform(rng, 0.02, 0.1),
-        "noise": uniform(rng, 0.05, 0.2),
+        "A": uniform(rng, 0.5, 0.85, 4),
+        "L": uniform(rng, 0.02, 0.1, 4),
+        "noise": uniform(rng, 0.05, 0.2, 4),
     }
 
 
