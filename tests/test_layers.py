@@ -190,8 +190,6 @@ def test_every_registered_figure_is_drawn_by_a_view():
     from fdi_lib.reproduce.registry import DeferredPlot
 
     for rep in list_reproductions():
-        if rep.id.startswith("windturbine"):  # the wind-turbine chapter's own (not split yet)
-            continue
         if rep.plot is not None:
             assert isinstance(rep.plot, DeferredPlot), rep.id
             assert rep.plot.path.startswith("fdi_lib.reproduce.views."), rep.id

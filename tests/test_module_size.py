@@ -2,8 +2,7 @@
 80 lines from its ``def`` to its end, docstring included (a registration's decorator, which
 declares the paper's claims, is not counted), so that a reproduction reads in a few screens.
 
-The wind-turbine reproductions are their chapter's to split (``windturbine*.py``). The other
-modules and functions still over a limit are listed with their present size: the list may only
+The modules and functions still over a limit are listed with their present size: the list may only
 shrink (a listed one that grows fails, and so does one that is back within its limit, so that its
 entry is removed).
 """
@@ -18,20 +17,16 @@ import pytest
 REPRODUCE = Path(__file__).resolve().parents[1] / "fdi_lib" / "reproduce"
 MAX_MODULE_LINES = 799
 MAX_FUNCTION_LINES = 80
-#: Owned by the wind-turbine chapter (its own split, issue 34.3's records of methods).
-NOT_CHECKED = ("windturbine.py", "windturbine_accommodation.py")
 #: Still over a limit, at their present size: ``module`` or ``module:function`` -> lines.
 OVER: dict[str, int] = {}
 
 
 def sizes() -> dict[str, int]:
     """``module`` and ``module:function`` (nested functions too) -> lines, for every module of
-    ``fdi_lib/reproduce`` but :data:`NOT_CHECKED` (names relative to it: ``views/bz.py``)."""
+    ``fdi_lib/reproduce`` (names relative to it: ``views/bz.py``)."""
     out = {}
     for path in sorted(REPRODUCE.rglob("*.py")):
         rel = path.relative_to(REPRODUCE).as_posix()
-        if rel in NOT_CHECKED:
-            continue
         text = path.read_text(encoding="utf-8")
         out[rel] = len(text.splitlines())
         for node in ast.walk(ast.parse(text)):

@@ -7,6 +7,36 @@ with the Monte Carlo engine (:func:`fdi_lib.montecarlo.run_monte_carlo`: results
 detection times, and sets next to them the per-fault detection delays published for another method
 on this benchmark (:data:`PUBLISHED_DELAYS`). The other published results we looked for could not be
 reached from this machine (:data:`PUBLISHED`): the ledger lists them as not reproducible, with the reason.
+
+.. rubric:: A fault's entry in the scoreboard
+
+The headline's ``faults`` of :func:`scoreboard` maps each ``F<id>`` to a dictionary with the keys
+``name``, ``required_detection_s`` (the benchmark's, ``None`` where not stated),
+``effect_sigma_median`` (median over realisations of the fault's largest effect on a measurement, in
+noise standard deviations), ``effect_sigma_at_requirement_median`` (the same over the fault's first
+samples up to its required detection time only: what any detector can have seen by then; ``None``
+without a requirement) and ``methods`` -> method key (``zb2014``, ``zhang2021``, ``bz``,
+``rosa2013``) -> ``detected`` (count), ``detection_rate`` and its ``detection_rate_ci`` (95 %, exact
+binomial), ``detection_time_mean_s`` over the detected realisations (one sample = 0.01 s: detected
+at the fault's first sample), its ``detection_time_ci`` (95 % t-interval of the mean) and
+``detection_time_spread95`` (2.5-97.5 percentiles over realisations), ``within_requirement``
+(fraction of realisations detected within the requirement), ``isolation_correct`` (fraction
+isolating exactly the faulty components), ``isolation_contains`` (fraction whose isolated set
+contains them), ``isolated_mode`` (the most frequent isolated set), ``reason`` (for a miss:
+``peak_over_threshold``, the largest statistic over its threshold after the onset in the missed
+realisations; ``effect_sigma_max``, the fault's largest effect on a measurement in noise standard
+deviations; ``svo_noise_bound_sigma``; ``torque_effect_kNm`` for the drive-train fault, the
+generator-side torque its efficiency drop removes), ``None`` when every realisation detects;
+``isolation_reason`` (when some detected realisations are not isolated exactly: ``failed``, their
+count; ``nameable``, whether the method's isolation can name the faulty set at all,
+:attr:`fdi_lib.windturbine.Method.nameable`; ``separability_min``, the smallest
+:func:`fdi_lib.windturbine.separability` of the faulty candidates;
+``effect_variation_sigma_median``, the median over realisations of the standard deviation of the
+fault's effect on a measurement over the samples the isolation reads, in noise standard deviations,
+the largest over the measurements: 0 for a step), ``None`` otherwise. Per fault also
+``full_load_share`` (the share of its scored samples in full load, mean over realisations),
+``region`` (2 if at least one half, else 1), ``benchmark_region`` (the benchmark's,
+:data:`fdi_lib.systems.wind_turbine.BENCHMARK_REGIONS`) and ``region_matches``.
 """
 
 from __future__ import annotations
@@ -517,6 +547,25 @@ def _paper() -> dict[str, Any]:
     }
 
 
+def _scoreboard_settings(seed: int, trials: int, settings: W.Settings, schedule: str) -> dict:
+    """The settings of :func:`scoreboard`'s result."""
+    from fdi_lib.systems import wind_turbine as wt
+
+    return {
+        "seed": seed,
+        "trials": trials,
+        "pre_s": settings.pre_s,
+        "post_s": settings.post_s,
+        "warmup_s": settings.warmup_s,
+        "window": settings.window,
+        "false_alarms_per_hour": settings.false_alarms_per_hour,
+        "svo_sigmas": settings.svo_sigmas,
+        "calibration_runs": CALIBRATION_RUNS,
+        "faults": [f.id for f in wt.FAULTS],
+        "schedule": schedule,
+    }
+
+
 @register(
     "windturbine-scoreboard",
     plot="fdi_lib.reproduce.views.windturbine.plot_scoreboard",
@@ -580,35 +629,8 @@ def scoreboard(
     realisations : int
         ``trials``.
     faults : dict
-        ``F<id>`` -> ``name``, ``required_detection_s`` (the benchmark's, ``None`` where not stated),
-        ``effect_sigma_median`` (median over realisations of the fault's largest effect on a
-        measurement, in noise standard deviations), ``effect_sigma_at_requirement_median`` (the
-        same over the fault's first samples up to its required detection time only: what any
-        detector can have seen by then; ``None`` without a requirement) and ``methods`` -> method
-        key (``zb2014``,
-        ``zhang2021``, ``bz``, ``rosa2013``) -> ``detected`` (count), ``detection_rate`` and its
-        ``detection_rate_ci`` (95 %, exact binomial), ``detection_time_mean_s`` over the detected
-        realisations (one sample = 0.01 s: detected at the fault's first sample), its
-        ``detection_time_ci`` (95 % t-interval of the mean) and ``detection_time_spread95``
-        (2.5-97.5 percentiles over realisations), ``within_requirement`` (fraction of realisations
-        detected within the requirement), ``isolation_correct`` (fraction isolating exactly the
-        faulty components), ``isolation_contains`` (fraction whose isolated set contains them),
-        ``isolated_mode`` (the most frequent isolated set), ``reason`` (for a miss:
-        ``peak_over_threshold``, the largest statistic over its threshold after the onset in the
-        missed realisations; ``effect_sigma_max``, the fault's largest effect on a measurement in
-        noise standard deviations; ``svo_noise_bound_sigma``; ``torque_effect_kNm`` for the
-        drive-train fault, the generator-side torque its efficiency drop removes), ``None`` when
-        every realisation detects; ``isolation_reason`` (when some detected realisations are not
-        isolated exactly: ``failed``, their count; ``nameable``, whether the method's isolation can
-        name the faulty set at all, :attr:`fdi_lib.windturbine.Method.nameable`;
-        ``separability_min``, the smallest :data:`separability` of the faulty candidates;
-        ``effect_variation_sigma_median``, the median over realisations of the standard deviation
-        of the fault's effect on a measurement over the samples the isolation reads, in noise
-        standard deviations, the largest over the measurements: 0 for a step), ``None`` otherwise.
-        Per fault also ``full_load_share`` (the share of its scored samples in full load, mean over
-        realisations), ``region`` (2 if at least one half, else 1), ``benchmark_region`` (the
-        benchmark's, :data:`fdi_lib.systems.wind_turbine.BENCHMARK_REGIONS`) and
-        ``region_matches``.
+        ``F<id>`` -> the fault's entry: its keys are listed in the module's introduction
+        (*A fault's entry in the scoreboard*).
     false_alarms : dict
         method -> ``alarms`` over the fault-free stretches (4 s before each fault, after the
         warm-up), ``stretches``, ``hours``, ``rate_per_hour`` and ``rate_per_hour_ci`` (exact Poisson).
@@ -642,8 +664,6 @@ def scoreboard(
         Source -> ``first`` / ``certain`` -> ``F<id>`` -> another method's published detection
         delay in seconds (:data:`PUBLISHED_DELAYS`).
     """
-    from fdi_lib.systems import wind_turbine as wt
-
     from fdi_lib.systems.wind_turbine import WIND_SCHEDULES
 
     if schedule not in WIND_SCHEDULES:
@@ -664,24 +684,11 @@ def scoreboard(
         "min_detectable": W.min_detectable(d),
         "separability": W.separability(d),
     }
-    settings_out = {
-        "seed": seed,
-        "trials": trials,
-        "pre_s": settings.pre_s,
-        "post_s": settings.post_s,
-        "warmup_s": settings.warmup_s,
-        "window": settings.window,
-        "false_alarms_per_hour": settings.false_alarms_per_hour,
-        "svo_sigmas": settings.svo_sigmas,
-        "calibration_runs": CALIBRATION_RUNS,
-        "faults": [f.id for f in wt.FAULTS],
-        "schedule": schedule,
-    }
     return ReproductionResult(
         id="windturbine-scoreboard",
         headline=headline,
         paper=_paper(),
-        settings=settings_out,
+        settings=_scoreboard_settings(seed, trials, settings, schedule),
         data={"raw": x, "onset": d.onset, "Ts": d.constants.Ts},
     )
 
@@ -696,6 +703,28 @@ def _poisson_ci(alarms: int, exposure: float) -> list[float]:
 #: Continuous fault-free scenarios of :func:`false_alarms` by default: 9 x 4400 s, 10.95 scored
 #: hours.
 FALSE_ALARM_STREAMS = 9
+
+
+def _alarm_rates(x: dict[str, np.ndarray], hours: float, nominal: float) -> dict[str, dict]:
+    """The headline's ``methods`` of :func:`false_alarms`: each method's alarms over ``hours``
+    of streams, per hour and per test-hour, against the ``nominal`` rate of each test."""
+    methods = {}
+    for m, name in enumerate(W.METHODS):
+        a = int(x["alarms"][:, m].sum())
+        k = int(x["tests"][0, m])
+        ci = _poisson_ci(a, hours * k)
+        methods[name] = {
+            "alarms": a,
+            "tests": k,
+            "rate_per_hour": a / hours,
+            "rate_per_hour_ci": _poisson_ci(a, hours),
+            "rate_per_test_hour": a / (hours * k),
+            "rate_per_test_hour_ci": ci,
+            "nominal_per_test_hour": nominal,
+            "p_value_nominal": float(scipy.stats.poisson.sf(a - 1, nominal * hours * k)),
+            "below_nominal": bool(ci[1] < nominal),
+        }
+    return methods
 
 
 def false_alarms(
@@ -745,25 +774,9 @@ def false_alarms(
     d, start = stream_design(seed)
     hours = float(x["samples"].sum() * d.constants.Ts / 3600.0)
     nominal = settings.false_alarms_per_hour
-    methods = {}
-    for m, name in enumerate(W.METHODS):
-        a = int(x["alarms"][:, m].sum())
-        k = int(x["tests"][0, m])
-        ci = _poisson_ci(a, hours * k)
-        methods[name] = {
-            "alarms": a,
-            "tests": k,
-            "rate_per_hour": a / hours,
-            "rate_per_hour_ci": _poisson_ci(a, hours),
-            "rate_per_test_hour": a / (hours * k),
-            "rate_per_test_hour_ci": ci,
-            "nominal_per_test_hour": nominal,
-            "p_value_nominal": float(scipy.stats.poisson.sf(a - 1, nominal * hours * k)),
-            "below_nominal": bool(ci[1] < nominal),
-        }
     from fdi_lib.systems import wind_turbine as wt
 
-    headline = {"streams": trials, "hours": hours, "methods": methods}
+    headline = {"streams": trials, "hours": hours, "methods": _alarm_rates(x, hours, nominal)}
     settings_out = {
         "seed": seed,
         "trials": trials,

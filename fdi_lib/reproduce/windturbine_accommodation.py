@@ -24,7 +24,7 @@ from fdi_lib.montecarlo import run_monte_carlo
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.reproduce.windturbine import PAPER, calibrated_design, check_trials
 
-__all__ = ["ACCOMMODATED", "accommodation", "accommodation_chunk", "plot_accommodation"]
+__all__ = ["ACCOMMODATED", "METRICS", "accommodation", "accommodation_chunk"]
 
 #: The sensor faults accommodated by switching to the redundant sensor.
 ACCOMMODATED = (1, 2, 3, 4, 5)
@@ -32,7 +32,8 @@ ACCOMMODATED = (1, 2, 3, 4, 5)
 AFTER_S = 20.0
 #: Settling time dropped at the start of each run (as :func:`fdi_lib.windturbine.fault_records`).
 SETTLE_S = 20.0
-_METRICS = ("power_kw", "pitch_deg", "speed_rad_s")
+#: The effects measured of each run against its fault-free twin (RMS change; headline keys).
+METRICS = ("power_kw", "pitch_deg", "speed_rad_s")
 
 
 def _effects(run: Any, free: Any, sl: slice) -> np.ndarray:
@@ -112,33 +113,30 @@ def accommodation_chunk(
     return out
 
 
-def plot_accommodation(result: ReproductionResult, fig: Any = None):
-    """RMS effect on power, pitch and generator speed per sensor fault: faulty (left bar) and
-    accommodated (right bar), means over the realisations."""
-    from fdi_lib.plotting import MIN_FONT_PT, figure
+def _fault_summaries(x: dict[str, np.ndarray]) -> dict[str, dict[str, Any]]:
+    """The headline's ``faults``: per accommodated fault, the means of :func:`accommodation_chunk`'s
+    results over the realisations (see :func:`accommodation`)."""
+    from fdi_lib.systems import wind_turbine as wt
 
-    h = result.headline
-    ids = list(h["faults"])
-    fig, axes = figure(1, 3, fig=fig, figsize=(7.2, 3.0))
-    labels = {
-        "power_kw": "power (kW)",
-        "pitch_deg": "pitch (deg)",
-        "speed_rad_s": "gen. speed (rad/s)",
-    }
-    x = np.arange(len(ids))
-    for ax, m in zip(axes[0], _METRICS):
-        ax.bar(x - 0.2, [h["faults"][f]["faulty"][m] for f in ids], 0.4, label="faulty", color="C3")
-        ax.bar(
-            x + 0.2,
-            [h["faults"][f]["accommodated"][m] for f in ids],
-            0.4,
-            label="accommodated",
-            color="C0",
-        )
-        ax.set_xticks(x, ids)
-        ax.set_title(f"RMS change, {labels[m]}", fontsize=MIN_FONT_PT)
-    fig.legend(*axes[0][0].get_legend_handles_labels(), loc="outside lower center", ncol=2)
-    return fig
+    faults = {}
+    for j, fid in enumerate(ACCOMMODATED):
+        fault = next(f for f in wt.FAULTS if f.id == fid)
+        iso = x["isolation_s"][:, j]
+        hit = ~np.isnan(iso)
+        faults[f"F{fid}"] = {
+            "name": fault.name,
+            "isolated": int(hit.sum()),
+            "isolation_time_mean_s": float(iso[hit].mean()) if hit.any() else None,
+            "faulty": {
+                **{m: float(x["faulty"][:, j, i].mean()) for i, m in enumerate(METRICS)},
+                "energy_kwh": float(x["energy_faulty_kwh"][:, j].mean()),
+            },
+            "accommodated": {
+                **{m: float(x["accommodated"][:, j, i].mean()) for i, m in enumerate(METRICS)},
+                "energy_kwh": float(x["energy_accommodated_kwh"][:, j].mean()),
+            },
+        }
+    return faults
 
 
 #: Seconds of one core per realisation (the book's count: about 2 s of CPU with the four methods),
@@ -148,7 +146,7 @@ SECONDS_PER_REALISATION = 2.0
 
 @register(
     "windturbine-accommodation",
-    plot=plot_accommodation,
+    plot="fdi_lib.reproduce.views.windturbine.plot_accommodation",
     paper=PAPER,
     default_trials=5,  # the book's count: SECONDS_PER_REALISATION
     default_seed=2009,
@@ -191,7 +189,7 @@ def accommodation(
         trials,
         jobs,
         seconds_per_realisation=SECONDS_PER_REALISATION,
-        bytes_per_realisation=8.0 * n_acc * (3 + 2 * len(_METRICS)),
+        bytes_per_realisation=8.0 * n_acc * (3 + 2 * len(METRICS)),
     )
     settings = W.Settings()
     x = run_monte_carlo(
@@ -201,27 +199,7 @@ def accommodation(
         jobs=jobs,
         description="wind-turbine accommodation",
     )
-    from fdi_lib.systems import wind_turbine as wt
-
-    faults = {}
-    for j, fid in enumerate(ACCOMMODATED):
-        fault = next(f for f in wt.FAULTS if f.id == fid)
-        iso = x["isolation_s"][:, j]
-        hit = ~np.isnan(iso)
-        faults[f"F{fid}"] = {
-            "name": fault.name,
-            "isolated": int(hit.sum()),
-            "isolation_time_mean_s": float(iso[hit].mean()) if hit.any() else None,
-            "faulty": {
-                **{m: float(x["faulty"][:, j, i].mean()) for i, m in enumerate(_METRICS)},
-                "energy_kwh": float(x["energy_faulty_kwh"][:, j].mean()),
-            },
-            "accommodated": {
-                **{m: float(x["accommodated"][:, j, i].mean()) for i, m in enumerate(_METRICS)},
-                "energy_kwh": float(x["energy_accommodated_kwh"][:, j].mean()),
-            },
-        }
-    headline = {"realisations": trials, "method": method, "faults": faults}
+    headline = {"realisations": trials, "method": method, "faults": _fault_summaries(x)}
     settings_out = {
         "seed": seed,
         "trials": trials,

@@ -1,4 +1,4 @@
-"""Figures of the wind-turbine reproductions (the scoreboard).
+"""Figures of the wind-turbine reproductions (the scoreboard, the accommodation).
 
 The computing side, with the registrations, is :mod:`fdi_lib.reproduce.windturbine`; every method
 is drawn as its record of :data:`fdi_lib.windturbine.METHODS` says.
@@ -12,8 +12,9 @@ import numpy as np
 
 from fdi_lib import windturbine as W
 from fdi_lib.reproduce.registry import ReproductionResult
+from fdi_lib.reproduce.windturbine_accommodation import METRICS
 
-__all__ = ["plot_scoreboard"]
+__all__ = ["plot_scoreboard", "plot_accommodation"]
 
 
 def plot_scoreboard(result: ReproductionResult, fig: Any = None):
@@ -52,4 +53,33 @@ def plot_scoreboard(result: ReproductionResult, fig: Any = None):
     ax.set_xlabel("detection time (s)")
     # below the axes: inside, the legend hid the slow faults' points (F6, F7)
     fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", ncol=3)
+    return fig
+
+
+def plot_accommodation(result: ReproductionResult, fig: Any = None):
+    """RMS effect on power, pitch and generator speed per sensor fault: faulty (left bar) and
+    accommodated (right bar), means over the realisations."""
+    from fdi_lib.plotting import MIN_FONT_PT, figure
+
+    h = result.headline
+    ids = list(h["faults"])
+    fig, axes = figure(1, 3, fig=fig, figsize=(7.2, 3.0))
+    labels = {
+        "power_kw": "power (kW)",
+        "pitch_deg": "pitch (deg)",
+        "speed_rad_s": "gen. speed (rad/s)",
+    }
+    x = np.arange(len(ids))
+    for ax, m in zip(axes[0], METRICS):
+        ax.bar(x - 0.2, [h["faults"][f]["faulty"][m] for f in ids], 0.4, label="faulty", color="C3")
+        ax.bar(
+            x + 0.2,
+            [h["faults"][f]["accommodated"][m] for f in ids],
+            0.4,
+            label="accommodated",
+            color="C0",
+        )
+        ax.set_xticks(x, ids)
+        ax.set_title(f"RMS change, {labels[m]}", fontsize=MIN_FONT_PT)
+    fig.legend(*axes[0][0].get_legend_handles_labels(), loc="outside lower center", ncol=2)
     return fig
