@@ -162,7 +162,14 @@ def test_trial_order_does_not_depend_on_which_worker_finishes_first():
 
 @pytest.mark.parametrize(
     "trials, why",
-    [(10**12, r"would need about .* of memory"), (10**6, r"would take about 153 h on 2 processes")],
+    [
+        (10**12, r"would need about .* of memory"),
+        # 10**6 realisations x SECONDS_PER_REALISATION s / 2 processes, in hours
+        (
+            10**6,
+            rf"would take about {10**6 * RW.SECONDS_PER_REALISATION / 2 / 3600:.3g} h on 2 processes",
+        ),
+    ],
 )
 def test_scoreboard_refuses_a_budget_breaking_trials_count_before_simulating(
     trials, why, monkeypatch
@@ -179,7 +186,8 @@ def test_scoreboard_refuses_a_budget_breaking_trials_count_before_simulating(
         RW, "calibrated_design", lambda *a, **k: pytest.fail("simulated before the check")
     )
     with pytest.raises(
-        ResourceError, match=rf"trials: {trials} realisations \(about 1.1 s of a core .*{why}"
+        ResourceError,
+        match=rf"trials: {trials} realisations \(about {RW.SECONDS_PER_REALISATION:g} s of a core .*{why}",
     ):
         reproduce("windturbine-scoreboard", trials=trials, jobs=2)
     assert RW.check_trials(100, 1) == 100
