@@ -141,7 +141,8 @@ def gradebook(out: Path) -> Path:
 
 def submission(text: str, kind: str, out: Path = Path("class")) -> str:
     """A chapter's student MyST text as the ``kind`` student (a folder name of the class) hands it
-    in; ``out`` is the class folder (the attack on the gradebook aims at :func:`gradebook`)."""
+    in; ``out`` is the class folder (the attack on the gradebook aims at :func:`gradebook`, by its
+    absolute path: a relative one would name a file in the student's own working folder)."""
     stripped = strip_solutions(text)
     if kind == "starter":
         return stripped
@@ -155,7 +156,7 @@ def submission(text: str, kind: str, out: Path = Path("class")) -> str:
             extra = [
                 ATTACKS[kind]
                 .replace("SOLUTION", "\n".join(solution))
-                .replace("{gradebook!r}", repr(str(gradebook(out))))
+                .replace("{gradebook!r}", repr(str(gradebook(out).resolve())))
             ]
         elif kind == "helper" and ex.id == "glr-2":
             extra = ["l, th = quadratic(data['C'], data['d'])\nanswer = [l, *th]"]
