@@ -230,11 +230,11 @@ class Table:
     index_header: str = ""
 
     def _repr_html_(self) -> str:
-        esc = html.escape
+        esc = _html_text
         head = "".join(f"<th>{esc(c)}</th>" for c in (self.index_header, *self.columns))
         # each cell names its column (data-label): on a phone, a table too wide for the column
         # shows each row as a card, every cell after its column's header (the book's CSS)
-        labels = [f' data-label="{esc(c, quote=True)}"' for c in self.columns]
+        labels = [f' data-label="{html.escape(c, quote=True)}"' for c in self.columns]
         body = "".join(
             "<tr><th>"
             + esc(label)
@@ -285,6 +285,22 @@ class Table:
 #: Characters with a meaning in MyST Markdown (emphasis, links, maths, roles, HTML, cell borders),
 #: escaped in a table cell; CommonMark removes the backslash before any ASCII punctuation.
 _MD_SPECIAL = re.compile(r"([\\`*_{}\[\]<>|$~#&!])")
+
+
+#: A name from the code in a table's text: an identifier with an underscore between words
+#: (``lars_path``, ``explore_glr``) or a Python file (``tools/build_report.py``). A one-character
+#: subscript (``x_k``, ``Gamma_k``) is not one: it is maths, and stays as written.
+_CODE_NAME = re.compile(
+    r"(?<![\w/.-])((?:[\w-]+/)*(?:[A-Za-z][A-Za-z0-9]*(?:_[A-Za-z0-9]{2,})+(?:\.py)?"
+    r"|[\w-]+\.py))(?![\w/])"
+)
+
+
+def _html_text(text: str) -> str:
+    """A table cell's or note's text as HTML: escaped, the names from the code set as code (a
+    reader, and a screen reader, reads ``explore_glr`` as a name, not as ``explore`` with a
+    subscript)."""
+    return _CODE_NAME.sub(r"<code>\1</code>", html.escape(str(text)))
 
 
 def _md_cell(text: str) -> str:

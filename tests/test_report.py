@@ -127,6 +127,25 @@ def test_table_cells_name_their_column():
     ]
 
 
+def test_table_sets_names_from_the_code_as_code():
+    """An identifier with an underscore between words, or a Python file, reads as code in the HTML
+    (not as maths with a subscript); a one-character subscript stays maths as written; the text
+    around is escaped."""
+    t = table(
+        {"redraw, explore_glr (onset)": ["x_k < 1 & Gamma_k"]},
+        ["ours"],
+        notes=["timed by tools/build_report.py against lars_path"],
+    )
+    html = t._repr_html_()
+    assert "<th>redraw, <code>explore_glr</code> (onset)</th>" in html
+    assert ">x_k &lt; 1 &amp; Gamma_k</td>" in html
+    assert (
+        "<li>timed by <code>tools/build_report.py</code> against <code>lars_path</code></li>"
+        in html
+    )
+    assert "explore_glr" in str(t) and "<code>" not in str(t)
+
+
 def test_table_rejects():
     with pytest.raises(ModelError, match="expected 2"):
         table({"a": [1]}, ["ours", "paper"])
