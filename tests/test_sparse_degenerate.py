@@ -162,20 +162,25 @@ def tie_problem(seed):
 
 @pytest.mark.parametrize("seed", range(4))
 def test_exact_tie_at_lambda_max(seed):
+    """Against the closed form: ``X^T X = n I``, so the path soft-thresholds ``z = X^T y / n`` and
+    its breakpoints are the ``|z_j|``. scikit-learn's ``lars_path`` is no reference here: where the
+    rounding of ``X^T y`` leaves the two tied correlations 1e-14 apart (seed 1 on an AVX2 machine,
+    not on an AVX-512 one), its path ends at 3.5 for a true coefficient of 2."""
     X, y = tie_problem(seed)
     path = lasso_path(X, y)
-    ref = sklearn_path(X, y, 40)
     assert path.solver == "homotopy"  # the homotopy itself handles the tie (no fallback needed)
     assert kkt_violation(X, y, path, floor=1e-12) <= TOL
     np.testing.assert_array_equal(np.flatnonzero(path.coef(0.99 * path.lambdas[0])), [0, 1])
-    # the same breakpoints down to the exact fit (y is in the span of X: below, both paths only
-    # follow correlations of rounding size, ~1e-16 lambda_max, which neither resolves)
-    k = int(np.sum(ref.lambdas > 1e-12 * ref.lambdas[0]))
-    assert k == 4 and np.sum(path.lambdas > 1e-12 * path.lambdas[0]) == k
-    np.testing.assert_allclose(path.lambdas[:k], ref.lambdas[:k], rtol=1e-12)
-    np.testing.assert_allclose(
-        path.coefs[:, :k], ref.coefs[:, :k], atol=1e-12 * np.abs(ref.coefs).max()
-    )
+    z = X.T @ y / X.shape[0]
+    knots = np.sort(np.abs(z[np.abs(z) > 1e-12 * np.abs(z).max()]))[::-1]  # 2, 2, 0.5, 0.3
+    # the same breakpoints down to the exact fit (y is in the span of X: below, the path only
+    # follows correlations of rounding size, ~1e-16 lambda_max)
+    k = int(np.sum(path.lambdas > 1e-12 * path.lambdas[0]))
+    assert k == knots.size == 4
+    np.testing.assert_allclose(path.lambdas[:k], knots, rtol=1e-12)
+    for lam in [*path.lambdas[:k], 0.7, 0.1]:
+        soft = np.sign(z) * np.maximum(np.abs(z) - lam, 0.0)
+        np.testing.assert_allclose(path.coef(lam), soft, atol=1e-12 * np.abs(z).max())
 
 
 def test_four_way_tie_where_a_joined_component_must_leave_at_once():
