@@ -339,7 +339,14 @@ class Explorable:
         scale = min(1.0, PAPER_TEXT_WIDTH_IN / (columns * width))  # printed / drawn
         font_scale = PAPER_DRAWN_FONT_PT / (float(first.info.get("fdi:min_font_pt")) * scale)
         title_pt = STYLE["axes.titlesize"] * font_scale
-        title_h = 2.2 * title_pt / 72  # inches, as _tiled draws them
+        shown = [[_fmt(v) for v in g] for g in self.grid]
+        # the longest title the panels can have (the first two sliders' widest values), on as
+        # many lines as it needs at the frame's width: every row of titles gets those lines
+        longest = ", ".join(
+            f"{label} = {max(values, key=len)}" for label, values in zip(self.labels, shown[:2])
+        )
+        lines = _wrapped(longest, title_pt, width).count("\n") + 1
+        title_h = (1.0 + 1.2 * lines) * title_pt / 72  # inches, as _tiled draws them
         rows = max(1, min(2, int(PAPER_IMAGE_HEIGHT_IN / (scale * (height + title_h)))))
         # taller frames where the page has room: the legends above the axes take some of it
         grow = max(
@@ -351,7 +358,6 @@ class Explorable:
             else [2, 2 if rows > 1 else 1] + [1] * (len(self.grid) - 2)
         )
         picks = [_spread(len(g), d, m) for g, d, m in zip(self.grid, self.default, per)]
-        shown = [[_fmt(v) for v in g] for g in self.grid]
         tiles = []
         for point in itertools.product(*picks):
             values = {n: g[i] for n, g, i in zip(self.names, self.grid, point)}
@@ -369,8 +375,10 @@ class Explorable:
                 for j, (label, i) in enumerate(zip(self.labels, point))
                 if len(picks[j]) > 1
             )
-            tiles.append((Image.open(out).convert("RGB"), title, smallest))
-        sheet, title_pt = _tiled(tiles, columns, dpi * RASTER_SCALE, title_pt)
+            tiles.append(
+                (Image.open(out).convert("RGB"), _wrapped(title, title_pt, width), smallest)
+            )
+        sheet, title_pt = _tiled(tiles, columns, dpi * RASTER_SCALE, title_pt, lines)
         fonts = [t[2] for t in tiles] + ([title_pt] if title_pt else [])
         info = PngInfo()
         info.add_text("fdi:caption", self.caption)
@@ -397,12 +405,41 @@ def _spread(n: int, default: int, m: int) -> list[int]:
     return sorted({default, *(i for i in picks if i != nearest)})
 
 
+def _wrapped(title: str, size: float, width: float) -> str:
+    """``title`` on as many lines as it needs to fit ``width`` inches at ``size`` points (with
+    a margin), broken after its commas (between slider values)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    fig = Figure(dpi=72)
+    renderer = FigureCanvasAgg(fig).get_renderer()
+
+    def fits(text: str) -> bool:
+        return (
+            fig.text(0, 0, text, fontsize=size).get_window_extent(renderer).width
+            < 0.95 * width * 72
+        )
+
+    parts = title.split(", ")
+    lines = parts[:1]
+    for part in parts[1:]:
+        if fits(f"{lines[-1]}, {part}"):
+            lines[-1] = f"{lines[-1]}, {part}"
+        else:
+            lines[-1] += ","
+            lines.append(part)
+    return "\n".join(lines)
+
+
 def _tiled(
-    tiles: Sequence[tuple[Any, str, Any]], columns: int, dpi: float, title_pt: float
+    tiles: Sequence[tuple[Any, str, Any]],
+    columns: int,
+    dpi: float,
+    title_pt: float,
+    title_lines: int,
 ) -> tuple[Any, float | None]:
     """One RGB image of the ``(image, title, _)`` tiles, ``columns`` per row, each image pasted
-    unscaled (no resampling) under its title, and the size of the titles (``title_pt`` points
-    at ``dpi``; ``None`` without titles). The titles alone are drawn by
+    unscaled (no resampling) under its title (room for ``title_lines`` lines), and the size of
+    the titles (``title_pt`` points at ``dpi``; ``None`` without titles). The titles alone are drawn by
     matplotlib, on a white sheet; Pillow pastes the images (an Agg ``figimage`` of the frames
     took ten times longer)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -411,7 +448,7 @@ def _tiled(
     w = max(t[0].width for t in tiles)
     h = max(t[0].height for t in tiles)
     size = title_pt if any(t[1] for t in tiles) else None
-    title_h = int(2.2 * size / 72 * dpi) if size else 0
+    title_h = int((1.0 + 1.2 * title_lines) * size / 72 * dpi) if size else 0
     rows, cols = -(-len(tiles) // columns), min(columns, len(tiles))
     width, height = cols * w, rows * (h + title_h)
     fig = Figure(figsize=(width / dpi, height / dpi), dpi=dpi, facecolor="white")

@@ -290,6 +290,7 @@ def test_small_multiples_are_redrawn_for_paper_with_the_default_among_them():
         PAPER_IMAGE_HEIGHT_IN,
         PAPER_TEXT_WIDTH_IN,
         _spread,
+        _wrapped,
     )
 
     assert (
@@ -342,3 +343,7 @@ def test_small_multiples_are_redrawn_for_paper_with_the_default_among_them():
     assert float(sheet.text["fdi:min_font_pt"]) * scale == pytest.approx(PAPER_DRAWN_FONT_PT)
     with pytest.raises(ModelError, match="panels: expected an integer of at least 2, got 1"):
         one.small_multiples(panels=1)
+    # a title wider than its panel goes on two lines, after a comma (between slider values)
+    long = "change of G₀(1) (10⁻⁵) = -10, window w = 160"
+    assert _wrapped(long, 17.0, 5.5) == "change of G₀(1) (10⁻⁵) = -10,\nwindow w = 160"
+    assert _wrapped("a = 1, b = 2", 17.0, 5.5) == "a = 1, b = 2"
