@@ -1365,7 +1365,7 @@ def latex_script_fallback() -> str:
 #: its first part on the page: framed.sty splits the box (``\vsplit``) with TeX's default
 #: ``\splitmaxdepth`` (any depth) and then boxes the part with no depth, so that the depth of
 #: its last line or code cell (up to 20 pt) went into the bottom margin ("Overfull \vbox ...
-#: detected at" the box's end: 11 of them in the two editions of December 2026); split with no
+#: detected at" the box's end: 13 over 5 pt in the two editions of December 2026); split with no
 #: depth, the part is measured as it is set.
 LATEX_LAYOUT = r"""\newcolumntype{T}{L}
 \usepackage[section]{placeins}
