@@ -1361,10 +1361,18 @@ def latex_script_fallback() -> str:
 #: Greek letters of the text (a caption's "Γ", a heading's "α") catcode 12 at
 #: ``\begin{document}``, after the ``.aux`` was read with catcode 11, so that a label with one
 #: never matched its stored self and every pass asked for a rerun ("Label(s) may have changed").
+#: And a framed box (Sphinx's admonitions: exercises, solutions) that a page break splits keeps
+#: its first part on the page: framed.sty splits the box (``\vsplit``) with TeX's default
+#: ``\splitmaxdepth`` (any depth) and then boxes the part with no depth, so that the depth of
+#: its last line or code cell (up to 20 pt) went into the bottom margin ("Overfull \vbox ...
+#: detected at" the box's end: 13 over 5 pt in the two editions of December 2026); split with no
+#: depth, the part is measured as it is set.
 LATEX_LAYOUT = r"""\newcolumntype{T}{L}
 \usepackage[section]{placeins}
 \setlength{\tymin}{5em}
 \makeatletter\AtBeginDocument{\spx@image@maxheight=0.8\textheight}
+\AtBeginDocument{\patchcmd{\fb@put@frame}{\boxmaxdepth\z@\splittopskip\z@}%
+  {\boxmaxdepth\z@\splittopskip\z@\splitmaxdepth\z@}{}{\errmessage{fdi-book: framed.sty changed}}}
 \def\@testdef#1#2#3{\edef\reserved@a{\detokenize{#3}}%
   \edef\reserved@b{\expandafter\expandafter\expandafter\detokenize
     \expandafter\expandafter\expandafter{\csname #1@#2\endcsname}}%
@@ -1569,6 +1577,32 @@ TABLE_CHARS = 80
 PAD_CHARS = 3
 
 
+#: Printed lines of a table (its rows' wrapped lines, :func:`printed_lines`) above which it is
+#: made a ``longtable``, which breaks across pages: tabulary's box does not, and a taller one ran
+#: into the bottom margin (the map of the book, 38 pt: 92 lines by the estimate; a ten-week
+#: course plan, 230 pt: 85 lines). The estimate counts more lines than tabulary prints (its
+#: widths follow the text better): the map, about 57 lines printed, is a page of US letter's
+#: shorter text block and a bit; the tallest table that fitted was 63 lines by the estimate.
+PAGE_TABLE_LINES = 70
+
+
+def printed_lines(columns: list[list[str]], chars: int = TABLE_CHARS) -> int:
+    """Lines that a table of ``columns`` (cell texts, the header row first) takes when printed
+    at the widths of :func:`printed_widths` (the natural ones when they fit), each row as many
+    as its cell that wraps most (about: words do not break, a line holds its width's
+    characters), and a third of a line of padding per row."""
+    widths = printed_widths(columns, chars) or [
+        max((len(c) for c in col), default=1) + PAD_CHARS for col in columns
+    ]
+    rows = zip(*columns)
+    return round(
+        sum(
+            max(-(-len(cell) // max(w - PAD_CHARS, 1)) or 1 for cell, w in zip(row, widths)) + 1 / 3
+            for row in rows
+        )
+    )
+
+
 def printed_widths(columns: list[list[str]], chars: int = TABLE_CHARS) -> list[int] | None:
     """Column widths (in characters, padding included) for a long table that would not fit on one
     line per row: each column gets at least its longest unbreakable piece (no-break spaces join),
@@ -1592,9 +1626,10 @@ class _PrintedTables(SphinxPostTransform):
     """Tables for the printed page (issue 33): the spaces in an interval and between a number
     and its unit are no-break spaces (a cell wraps between a value and its interval, not inside
     either), and a long table (Sphinx's ``longtable``, more than 30 rows, whose columns are
-    ``l`` and never wrap) gets ragged-right columns of :func:`printed_widths` (a
-    ``tabularcolumns`` spec before it); the shorter tables are ragged-right by the preamble
-    (tabulary's ``L`` for Sphinx's ``T``, :func:`_latex_preamble`)."""
+    ``l`` and never wrap, or one made so because it takes more than :data:`PAGE_TABLE_LINES`
+    printed lines) gets ragged-right columns of :func:`printed_widths` (a ``tabularcolumns``
+    spec before it); the shorter tables are ragged-right by the preamble (tabulary's ``L`` for
+    Sphinx's ``T``, :func:`_latex_preamble`)."""
 
     default_priority = 820
     builders = ("latex",)
@@ -1613,14 +1648,16 @@ class _PrintedTables(SphinxPostTransform):
                 continue
             for tgroup in table.findall(nodes.tgroup):
                 rows = list(tgroup.findall(nodes.row))
-                if len(rows) <= 30 or any(
-                    e.get("morecols") or e.get("morerows") for e in tgroup.findall(nodes.entry)
-                ):
+                if any(e.get("morecols") or e.get("morerows") for e in tgroup.findall(nodes.entry)):
                     continue
                 columns: list[list[str]] = [[] for _ in range(int(tgroup.get("cols", 0)))]
                 for row in rows:
                     for column, entry in zip(columns, row.children):
                         column.append(entry.astext().strip())
+                if len(rows) <= 30:
+                    if printed_lines(columns) <= PAGE_TABLE_LINES:
+                        continue
+                    table["classes"].append("longtable")
                 widths = printed_widths(columns)
                 if widths is None:
                     continue

@@ -17,9 +17,11 @@ is an image swap on already decoded images (a few ms in Chromium, far under 50 m
 The frames keep the ``fdi:min_font_pt``/``fdi:dpi`` PNG metadata that the browser test reads.
 
 On paper (the PDF edition of the book) an explorable is a small-multiples figure: a few of the
-same frames side by side, each titled with its slider values (:meth:`Explorable.small_multiples`,
-the ``image/png`` output that myst-nb's LaTeX builder prefers to HTML); the PNG carries the
-caption (``fdi:caption``) for the book's extension to typeset under it.
+same figures, two side by side, each titled with its slider values (:meth:`Explorable.small_multiples`,
+the ``image/png`` output that myst-nb's LaTeX builder prefers to HTML), drawn again by the callback
+for paper (:func:`fdi_lib.plotting.for_paper`: larger text, so that it prints at
+:data:`PAPER_MIN_FONT_PT` or more at the width of the text, legends above the axes, no axes
+title); the PNG carries the caption (``fdi:caption``) for the book's extension to typeset under it.
 
 :func:`figure_data` reduces a figure to its data arrays and texts; the tests compare the frames
 of the grid with the callback's output at the same slider values through it.
@@ -34,20 +36,23 @@ import io
 import itertools
 import json
 import uuid
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from fdi_lib.errors import ModelError, NonFiniteError, ResourceError, ShapeError
-from fdi_lib.plotting import DISPLAY_DPI, smallest_font_pt
+from fdi_lib.plotting import DISPLAY_DPI, RASTER_SCALE, for_paper, smallest_font_pt
 from fdi_lib.redraw import render
 
 __all__ = [
     "Explorable",
     "explorable",
     "PANELS",
+    "PAPER_MIN_FONT_PT",
+    "PAPER_TEXT_WIDTH_IN",
+    "PAPER_IMAGE_HEIGHT_IN",
     "figure_data",
     "caption_text",
     "script_text",
@@ -65,6 +70,20 @@ MAX_FRAMES = 100
 
 #: Frames of the small-multiples figure of an explorable on paper (:meth:`Explorable.small_multiples`).
 PANELS = 4
+
+#: Smallest text of the small multiples printed, in points (issue 33; ``tools/check_pdf.py``
+#: measures it in the PDF). They are drawn for :data:`PAPER_DRAWN_FONT_PT`, above it, because
+#: the PDF's image resolution that the check reads is rounded to a whole pixel per inch.
+PAPER_MIN_FONT_PT = 8.0
+PAPER_DRAWN_FONT_PT = 8.5
+#: The page that the small multiples are drawn for, in inches: the narrower text of the two
+#: editions of the PDF (A4, 210 mm wide less Sphinx's two 1 in margins) and the tallest image of
+#: a figure there (Sphinx's LaTeX, as the book sets it: 0.8 of the shorter text height, US
+#: letter's 11 in less two 1 in margins; ``LATEX_LAYOUT`` of ``_ext/fdi_book.py``).
+PAPER_TEXT_WIDTH_IN = 210 / 25.4 - 2
+PAPER_IMAGE_HEIGHT_IN = 0.8 * (11 - 2)
+#: Most a frame of the small multiples grows in height on paper, where the page has room.
+PAPER_GROWTH = 1.4
 
 #: Most bytes of one explorable's HTML, its page weight (the chapters' measure 0.15 to 1.6 MB).
 MAX_BYTES = 3_000_000
@@ -195,6 +214,10 @@ class Explorable:
     alt : str
         What the figure shows, in one or two sentences of plain text (the image's alt text,
         followed by the slider values of the frame shown: :meth:`frame_alt`).
+    callback : callable
+        The callback that drew the frames (called again by :meth:`small_multiples`).
+    fixed : mapping
+        The keyword arguments passed unchanged to every call of ``callback``.
     """
 
     names: tuple[str, ...]
@@ -205,6 +228,8 @@ class Explorable:
     default: tuple[int, ...]
     caption: str
     alt: str
+    callback: Callable[..., Figure] = field(compare=False)
+    fixed: Mapping[str, Any] = field(compare=False)
 
     @property
     def strides(self) -> tuple[int, ...]:
@@ -274,56 +299,94 @@ class Explorable:
         )
 
     def small_multiples(self, panels: int = PANELS) -> bytes:
-        """A few frames side by side as one PNG, for paper: two per row, each titled with its
-        slider values.
+        """A few frames as one PNG, for paper: two per row, each titled with its slider values,
+        drawn again by the callback for paper.
 
         The frames are spread evenly over each slider's values and always include the shown
         (default) value: ``panels`` values of a single slider, two values (the default and the
         value farthest from it) of each of the first two sliders otherwise, the other sliders at
-        their defaults. The frames are pasted unscaled (no resampling); the PNG carries the
-        caption (``fdi:caption``, HTML) and the house-style metadata of the frames. Its palette
-        has 256 colours, room for those of the frames (:data:`PALETTE_COLOURS` each).
+        their defaults; only as many rows as fit the tallest image of a page
+        (:data:`PAPER_IMAGE_HEIGHT_IN`) at the width of the text (:data:`PAPER_TEXT_WIDTH_IN`).
+        Each is drawn by the callback and :func:`fdi_lib.plotting.for_paper`, its text (and the
+        titles') enlarged to print at :data:`PAPER_DRAWN_FONT_PT` or more at that width, up to
+        :data:`PAPER_GROWTH` times taller where the page has room. The PNG
+        carries the caption (``fdi:caption``, HTML) and the house-style metadata (smallest font,
+        resolution); its palette has 256 colours.
 
         Parameters
         ----------
         panels : int
             Frames to show when there is a single slider (at least 2).
         """
+        import matplotlib.pyplot as plt
         from PIL import Image
         from PIL.PngImagePlugin import PngInfo
 
+        from fdi_lib.plotting import STYLE
+
         if isinstance(panels, bool) or not isinstance(panels, int) or panels < 2:
             raise ModelError(f"panels: expected an integer of at least 2, got {panels!r}")
-        per = (
-            [min(panels, len(self.grid[0]))]
-            if len(self.grid) == 1
-            else [2, 2] + [1] * (len(self.grid) - 2)
-        )
-        picks = [_spread(len(g), d, m) for g, d, m in zip(self.grid, self.default, per)]
-        shown = [[_fmt(v) for v in g] for g in self.grid]
-        tiles = []
-        for point in itertools.product(*picks):
-            frame = Image.open(
-                io.BytesIO(
-                    base64.b64decode(self.frames[sum(s * i for s, i in zip(self.strides, point))])
+        columns = 2
+        first = Image.open(
+            io.BytesIO(
+                base64.b64decode(
+                    self.frames[sum(s * d for s, d in zip(self.strides, self.default))]
                 )
             )
+        )
+        dpi = float(first.info.get("fdi:dpi", DISPLAY_DPI))
+        width, height = first.width / dpi, first.height / dpi  # inches
+        scale = min(1.0, PAPER_TEXT_WIDTH_IN / (columns * width))  # printed / drawn
+        font_scale = PAPER_DRAWN_FONT_PT / (float(first.info.get("fdi:min_font_pt")) * scale)
+        title_pt = STYLE["axes.titlesize"] * font_scale
+        shown = [[_fmt(v) for v in g] for g in self.grid]
+        # the longest title the panels can have (the first two sliders' widest values), on as
+        # many lines as it needs at the frame's width: every row of titles gets those lines
+        longest = ", ".join(
+            f"{label} = {max(values, key=len)}" for label, values in zip(self.labels, shown[:2])
+        )
+        lines = _wrapped(longest, title_pt, width).count("\n") + 1
+        title_h = (1.0 + 1.2 * lines) * title_pt / 72  # inches, as _tiled draws them
+        rows = max(1, min(2, int(PAPER_IMAGE_HEIGHT_IN / (scale * (height + title_h)))))
+        # taller frames where the page has room: the legends above the axes take some of it
+        grow = max(
+            1.0, min(PAPER_GROWTH, (PAPER_IMAGE_HEIGHT_IN / (scale * rows) - title_h) / height)
+        )
+        per = (
+            [min(panels, len(self.grid[0]), columns * rows)]
+            if len(self.grid) == 1
+            else [2, 2 if rows > 1 else 1] + [1] * (len(self.grid) - 2)
+        )
+        picks = [_spread(len(g), d, m) for g, d, m in zip(self.grid, self.default, per)]
+        tiles = []
+        for point in itertools.product(*picks):
+            values = {n: g[i] for n, g, i in zip(self.names, self.grid, point)}
+            fig = self.callback(**values, **self.fixed, fig=None)
+            try:
+                fig.set_size_inches(width, height * grow)
+                for_paper(fig, font_scale)
+                out = io.BytesIO()
+                fig.savefig(out, format="png", dpi=dpi * RASTER_SCALE, facecolor="white")
+                smallest = smallest_font_pt(fig)
+            finally:
+                plt.close(fig)
             title = ", ".join(
                 f"{label} = {shown[j][i]}"
                 for j, (label, i) in enumerate(zip(self.labels, point))
                 if len(picks[j]) > 1
             )
-            tiles.append((frame.convert("RGB"), title, frame.info.get("fdi:min_font_pt")))
-            dpi = float(frame.info.get("fdi:dpi", DISPLAY_DPI))
-        sheet, title_pt = _tiled(tiles, columns=2, dpi=dpi)
-        fonts = [float(t[2]) for t in tiles if t[2]] + ([title_pt] if title_pt else [])
+            tiles.append(
+                (Image.open(out).convert("RGB"), _wrapped(title, title_pt, width), smallest)
+            )
+        sheet, title_pt = _tiled(tiles, columns, dpi * RASTER_SCALE, title_pt, lines)
+        fonts = [t[2] for t in tiles] + ([title_pt] if title_pt else [])
         info = PngInfo()
         info.add_text("fdi:caption", self.caption)
-        info.add_text("fdi:min_font_pt", f"{min(fonts):g}" if fonts else "")
-        info.add_text("fdi:dpi", f"{dpi:g}")
+        info.add_text("fdi:min_font_pt", f"{min(fonts):g}")
+        info.add_text("fdi:dpi", f"{dpi * RASTER_SCALE:g}")
         out = io.BytesIO()
         sheet.quantize(colors=256, method=Image.Quantize.FASTOCTREE).save(
-            out, format="PNG", pnginfo=info, dpi=(dpi, dpi)
+            out, format="PNG", pnginfo=info, dpi=(dpi * RASTER_SCALE,) * 2
         )
         return out.getvalue()
 
@@ -342,23 +405,50 @@ def _spread(n: int, default: int, m: int) -> list[int]:
     return sorted({default, *(i for i in picks if i != nearest)})
 
 
+def _wrapped(title: str, size: float, width: float) -> str:
+    """``title`` on as many lines as it needs to fit ``width`` inches at ``size`` points (with
+    a margin), broken after its commas (between slider values)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    fig = Figure(dpi=72)
+    renderer = FigureCanvasAgg(fig).get_renderer()
+
+    def fits(text: str) -> bool:
+        return (
+            fig.text(0, 0, text, fontsize=size).get_window_extent(renderer).width
+            < 0.95 * width * 72
+        )
+
+    parts = title.split(", ")
+    lines = parts[:1]
+    for part in parts[1:]:
+        if fits(f"{lines[-1]}, {part}"):
+            lines[-1] = f"{lines[-1]}, {part}"
+        else:
+            lines[-1] += ","
+            lines.append(part)
+    return "\n".join(lines)
+
+
 def _tiled(
-    tiles: Sequence[tuple[Any, str, Any]], columns: int, dpi: float
+    tiles: Sequence[tuple[Any, str, Any]],
+    columns: int,
+    dpi: float,
+    title_pt: float,
+    title_lines: int,
 ) -> tuple[Any, float | None]:
     """One RGB image of the ``(image, title, _)`` tiles, ``columns`` per row, each image pasted
-    unscaled (no resampling) under its title, and the size of the titles (points at ``dpi``,
-    the house style's title size; ``None`` without titles). The titles alone are drawn by
+    unscaled (no resampling) under its title (room for ``title_lines`` lines), and the size of
+    the titles (``title_pt`` points at ``dpi``; ``None`` without titles). The titles alone are drawn by
     matplotlib, on a white sheet; Pillow pastes the images (an Agg ``figimage`` of the frames
     took ten times longer)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from PIL import Image
 
-    from fdi_lib.plotting import STYLE
-
     w = max(t[0].width for t in tiles)
     h = max(t[0].height for t in tiles)
-    size = STYLE["axes.titlesize"] if any(t[1] for t in tiles) else None
-    title_h = int(2.2 * size / 72 * dpi) if size else 0
+    size = title_pt if any(t[1] for t in tiles) else None
+    title_h = int((1.0 + 1.2 * title_lines) * size / 72 * dpi) if size else 0
     rows, cols = -(-len(tiles) // columns), min(columns, len(tiles))
     width, height = cols * w, rows * (h + title_h)
     fig = Figure(figsize=(width / dpi, height / dpi), dpi=dpi, facecolor="white")
@@ -625,4 +715,6 @@ def explorable(
         default=tuple(start),
         caption=caption,
         alt=_sentence(alt or caption_text(caption)),
+        callback=callback,
+        fixed=dict(fixed),
     )

@@ -18,12 +18,15 @@ import base64
 import importlib
 import io
 import struct
+from textwrap import fill
 from typing import Any
 
 import matplotlib as mpl
 import matplotlib.pyplot as plt
 from matplotlib.figure import Figure
 from matplotlib.text import Text
+
+from fdi_lib.errors import ModelError
 
 __all__ = [
     "STYLE",
@@ -40,6 +43,7 @@ __all__ = [
     "PHONE_COLUMN_PX",
     "smallest_font_pt",
     "png_for_display",
+    "for_paper",
     "axes3d",
 ]
 
@@ -183,6 +187,82 @@ def figure(
     else:
         axes = fig.subplots(nrows, ncols, sharex=sharex, squeeze=False, **kwargs)
     return fig, axes
+
+
+def for_paper(fig: Figure, font_scale: float) -> Figure:
+    """``fig`` redrawn for paper, where it prints smaller than on screen: every text
+    ``font_scale`` times larger, no axes title (the panel's title says what it shows) and each
+    axes' legend above its axes instead of over the curves (as many columns as fit the axes'
+    width). Returns ``fig``, changed in place; a layout engine (:func:`figure`'s) makes room.
+
+    Used for the small multiples of an explorable in the PDF edition
+    (:meth:`fdi_lib.explorables.Explorable.small_multiples`).
+    """
+    if isinstance(font_scale, bool) or not isinstance(font_scale, (int, float)) or font_scale <= 0:
+        raise ModelError(f"font_scale: expected a positive number, got {font_scale!r}")
+    axes = [
+        (ax, [getattr(ax, f"{n}axis") for n in "xyz" if hasattr(ax, f"{n}axis")]) for ax in fig.axes
+    ]
+    for ax, _ in axes:
+        for loc in ("center", "left", "right"):
+            ax.set_title("", loc=loc)
+    # tick labels are made anew at each draw, at their axis' tick label size: set that instead
+    tick_size = {
+        id(axis): axis.get_major_ticks()[0].label1.get_fontsize() for _, axs in axes for axis in axs
+    }
+    ticks = {
+        id(text)
+        for _, axs in axes
+        for axis in axs
+        for tick in axis.get_major_ticks() + axis.get_minor_ticks()
+        for text in (tick.label1, tick.label2)
+    } | {id(axis.offsetText) for _, axs in axes for axis in axs}
+    for text in fig.findobj(Text):
+        if id(text) not in ticks:
+            text.set_fontsize(text.get_fontsize() * font_scale)
+    for _, axs in axes:
+        for axis in axs:
+            axis.set_tick_params(which="both", labelsize=tick_size[id(axis)] * font_scale)
+            axis.offsetText.set_fontsize(tick_size[id(axis)] * font_scale)
+    renderer = fig.canvas.get_renderer()
+    for ax in fig.axes:
+        legend = ax.get_legend()
+        if legend is None:
+            continue
+        handles = list(legend.legend_handles)
+        labels = [t.get_text() for t in legend.get_texts()]
+        size = legend.get_texts()[0].get_fontsize() if labels else None
+        shown = [(h, lab) for h, lab in zip(handles, labels) if h is not None and h.get_visible()]
+        handles, labels = [h for h, _ in shown], [lab for _, lab in shown]
+        legend.remove()
+        if not handles:
+            continue
+        # as many columns as fit the axes (narrower once the layout makes room for the text)
+        limit = 0.9 * ax.get_window_extent(renderer).width
+        for ncols in range(len(handles), 0, -1):
+            legend = _legend_above(ax, handles, labels, ncols, size)
+            width = legend.get_window_extent(renderer).width
+            if width <= limit:
+                break
+            legend.remove()
+        else:  # one column is still too wide: its long labels on more lines (not maths)
+            chars = [max(12, int(len(lab) * limit / width)) for lab in labels]
+            labels = [lab if "$" in lab else fill(lab, n) for lab, n in zip(labels, chars)]
+            _legend_above(ax, handles, labels, 1, size)
+    return fig
+
+
+def _legend_above(ax: Any, handles: list, labels: list[str], ncols: int, size: Any) -> Any:
+    """A legend of ``ax`` just above it, left-aligned with it (:func:`for_paper`)."""
+    return ax.legend(
+        handles,
+        labels,
+        loc="lower left",
+        bbox_to_anchor=(0.0, 1.0),
+        borderaxespad=0.2,
+        ncols=ncols,
+        fontsize=size,
+    )
 
 
 def axes3d(fig: Figure, spec: Any, *, nbins: int = 3, labelpad: float = 10, zoom: float = 0.8):

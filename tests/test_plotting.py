@@ -156,3 +156,43 @@ def test_no_two_texts_of_the_3d_figure_overlap():
     overlaps = [(a, b) for (a, ba), (b, bb) in combinations(boxes, 2) if ba.overlaps(bb)]
     plt.close(fig)
     assert overlaps == []
+
+
+def test_for_paper_enlarges_every_text_drops_axes_titles_and_lifts_legends_off_the_curves():
+    """for_paper: every text (tick labels, offsets, labels, legends) font_scale times larger,
+    no axes title, each legend above its axes (outside the curves' box), long entries wrapped
+    to the axes' width, hidden legend entries left out; a bad scale is refused."""
+    import matplotlib.pyplot as plt
+    from matplotlib.text import Text
+
+    from fdi_lib.errors import ModelError
+    from fdi_lib.plotting import figure, for_paper, smallest_font_pt
+
+    fig, axes = figure(2, 1, figsize=(6.0, 5.0))
+    top, bottom = axes[0, 0], axes[1, 0]
+    top.plot([0, 1], [0, 1e-6], label="a")
+    top.plot([0, 1], [1, 0], label="b")
+    top.set(title="the values of the sliders", ylabel="y")
+    top.legend(loc="upper left")
+    bottom.plot([0, 1], [0, 1], label="a legend entry that is too long for the axes at this size")
+    bottom.plot([0, 1], [1, 1], label="hidden", visible=False)
+    bottom.legend(loc="upper left").legend_handles[1].set_visible(False)
+    bottom.set(title="left", xlabel="k")
+    fig.canvas.draw()
+    before = smallest_font_pt(fig)
+    for_paper(fig, 1.5)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    assert smallest_font_pt(fig) == pytest.approx(1.5 * before)
+    assert top.yaxis.get_offset_text().get_fontsize() == pytest.approx(1.5 * before)
+    assert all(not t.get_text() for ax in (top, bottom) for t in (ax.title, ax._left_title))
+    for ax in (top, bottom):
+        legend, box = ax.get_legend().get_window_extent(renderer), ax.get_window_extent(renderer)
+        assert legend.y0 >= box.y1 - 1 and legend.width <= box.width  # above, not wider
+    texts = [t.get_text() for t in bottom.get_legend().get_texts()]
+    assert len(texts) == 1 and "\n" in texts[0]
+    assert [t.get_text() for t in top.get_legend().get_texts()] == ["a", "b"]
+    assert all(t.get_fontsize() >= 1.5 * before - 1e-9 for t in fig.findobj(Text) if t.get_text())
+    with pytest.raises(ModelError, match="font_scale: expected a positive number, got 0"):
+        for_paper(fig, 0)
+    plt.close(fig)

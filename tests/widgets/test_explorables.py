@@ -272,48 +272,78 @@ def test_size_guards_refuse_too_many_frames_before_drawing_and_too_heavy_pages(m
     assert plt.get_fignums() == []  # and the figure closed
 
 
-def test_small_multiples_paste_the_frames_unscaled_with_the_default_among_them():
-    """The paper form of an explorable: the chosen frames, pixel for pixel, under their titles."""
-    from fdi_lib.explorables import _spread
+def _tall(a, fig=None):
+    """Three stacked panels 7 in high, each with a legend (as explore_bz)."""
+    fig, axes = figure(3, 1, fig=fig, figsize=(7.5, 7.0))
+    for ax in axes[:, 0]:
+        ax.plot([0.0, 1.0], [0.0, a], label="a line with a long legend entry")
+        ax.legend(loc="upper left")
+    return fig
+
+
+def test_small_multiples_are_redrawn_for_paper_with_the_default_among_them():
+    """The paper form of an explorable: the chosen frames drawn again by the callback, two per
+    row, one title each (the slider values), text that prints at PAPER_DRAWN_FONT_PT or more at
+    the text width, as many rows as the page holds."""
+    from fdi_lib.explorables import (
+        PAPER_DRAWN_FONT_PT,
+        PAPER_IMAGE_HEIGHT_IN,
+        PAPER_TEXT_WIDTH_IN,
+        _spread,
+        _wrapped,
+    )
 
     assert (
         _spread(10, 2, 4) == [0, 2, 6, 9]
         and _spread(6, 3, 2) == [0, 3]
         and _spread(6, 0, 2) == [0, 5]
     )
+    calls = []
+
+    def counted(a, b, fig=None):
+        calls.append((a, fig))
+        return _line(a, b, fig=fig)
+
     one = explorable(
-        _line,
+        counted,
         {"a": (1.0, 2.0, 3.0, 4.0, 5.0)},
         caption="toy Γ<sub>k</sub>",
         labels={"a": "slope a"},
         default={"a": 2.0},
         b=1,
     )
+    calls.clear()
     sheet = Image.open(io.BytesIO(one._repr_png_()))
-    assert (
-        sheet.text["fdi:caption"] == "toy Γ<sub>k</sub>"
-        and float(sheet.text["fdi:min_font_pt"]) >= 11
-    )
-    frames = [Image.open(io.BytesIO(base64.b64decode(f))).convert("RGB") for f in one.frames]
-    w, h = frames[0].size
-    title_h = (sheet.height - 2 * h) // 2
-    assert sheet.width == 2 * w and title_h > 0
-    tiles = [
-        sheet.convert("RGB").crop(
-            (c * w, r * (h + title_h) + title_h, (c + 1) * w, (r + 1) * (h + title_h))
-        )
-        for r in range(2)
-        for c in range(2)
-    ]
-    # 4 of the 5 values, evenly spread (0, 1.33, 2.67, 4 rounded), the default 2.0 (index 1) among them
-    for tile, i in zip(tiles, [0, 1, 3, 4]):
-        diff = np.abs(np.asarray(tile, int) - np.asarray(frames[i], int))
-        assert diff.max() <= 24 and diff.mean() < 0.1  # the sheet's palette of 256 colours
-    assert not np.array_equal(np.asarray(tiles[0]), np.asarray(tiles[1]))
+    # 4 of the 5 values, evenly spread (0, 1.33, 2.67, 4 rounded), the default 2.0 (index 1)
+    # among them, each drawn afresh (no figure passed)
+    assert calls == [(1.0, None), (2.0, None), (4.0, None), (5.0, None)]
+    dpi = float(sheet.text["fdi:dpi"])
+    frame = Image.open(io.BytesIO(base64.b64decode(one.frames[0])))
+    assert sheet.text["fdi:caption"] == "toy Γ<sub>k</sub>" and dpi == 2 * DISPLAY_DPI
+    assert sheet.width == 2 * 2 * frame.width  # two frames a row, at twice their resolution
+    width, height = sheet.width / dpi, sheet.height / dpi
+    scale = min(PAPER_TEXT_WIDTH_IN / width, PAPER_IMAGE_HEIGHT_IN / height)
+    assert float(sheet.text["fdi:min_font_pt"]) * scale == pytest.approx(PAPER_DRAWN_FONT_PT)
+    assert height > 2 * frame.height / DISPLAY_DPI  # two rows, taller frames (room on the page)
+    # the panels differ (each drawn at its own value)
+    pixels = np.asarray(sheet.convert("L"), int)
+    half = pixels.shape[1] // 2
+    assert not np.array_equal(pixels[:, :half], pixels[:, half:])
     # two sliders: the default and the farthest value of each, 2 x 2
     two = explorable(
         _line, {"a": (1.0, 2.0, 3.0), "b": (10, 20)}, caption="toy", default={"a": 3.0}
     )
-    assert Image.open(io.BytesIO(two.small_multiples())).size == (2 * w, sheet.height)
+    assert Image.open(io.BytesIO(two.small_multiples())).size[0] == sheet.width
+    # frames too tall for two rows on a page: one row, at the same printed text size
+    tall = explorable(_tall, {"a": (1.0, 2.0, 3.0)}, caption="tall")
+    sheet = Image.open(io.BytesIO(tall.small_multiples()))
+    width, height = sheet.width / dpi, sheet.height / dpi
+    assert height < 7.0 * 1.4 + 1  # one row of 7 in frames (grown by PAPER_GROWTH at most)
+    scale = min(PAPER_TEXT_WIDTH_IN / width, PAPER_IMAGE_HEIGHT_IN / height)
+    assert float(sheet.text["fdi:min_font_pt"]) * scale == pytest.approx(PAPER_DRAWN_FONT_PT)
     with pytest.raises(ModelError, match="panels: expected an integer of at least 2, got 1"):
         one.small_multiples(panels=1)
+    # a title wider than its panel goes on two lines, after a comma (between slider values)
+    long = "change of G₀(1) (10⁻⁵) = -10, window w = 160"
+    assert _wrapped(long, 17.0, 5.5) == "change of G₀(1) (10⁻⁵) = -10,\nwindow w = 160"
+    assert _wrapped("a = 1, b = 2", 17.0, 5.5) == "a = 1, b = 2"
