@@ -29,7 +29,7 @@ Model (units: pitch angles in degrees, speeds in rad/s, torques in N m, power in
   coefficient is ``Cp = lambda Cq`` (:func:`power_coefficient`).
 * **Pitch actuators** *[model]* "PitchSystem i": ``beta_i'' = -2 zeta omega_n beta_i' + omega_n^2 (u_i -
   beta_i)``. The actuator's internal loop uses the measured pitch: ``u_i = beta_r + beta_i - (beta_i,m1
-  + beta_i,m2) / 2`` *[model]* ("Beta_i_f" signals), so a pitch-sensor fault moves the true pitch and the
+  + beta_i,m2) / 2`` *[model]* (``Beta_i_f`` signals), so a pitch-sensor fault moves the true pitch and the
   pitch-sensor noise reaches the blade. A change of dynamics mixes ``omega_n^2`` and ``2 zeta omega_n``
   linearly with the fault profile ``p(t)`` in ``[0, 1]`` (as *[model]* "PitchSystem 3" mixes the
   nominal and faulty state-space models with ``p``).
@@ -161,9 +161,9 @@ ACTUATOR_FAULT_MODELS = ("simulink", "jump_free")
 
 @dataclass(frozen=True)
 class WindTurbineParams:
-    """Every constant of the benchmark model, with its source (see the module docstring for the keys).
+    r"""Every constant of the benchmark model, with its source (see the module docstring for the keys).
 
-    Angles in degrees, speeds in rad/s, torques in N m, power in W, inertias in kg m^2.
+    Angles in degrees, speeds in rad/s, torques in N m, power in W, inertias in :math:`\mathrm{kg\,m^2}`.
     """
 
     # --- aerodynamics -----------------------------------------------------------------------------
@@ -217,7 +217,7 @@ class WindTurbineParams:
 
     @property
     def K_opt(self) -> float:
-        """Optimal-mode gain ``tau_g,r = K_opt omega_g^2`` (N m s^2) [script]:
+        r"""Optimal-mode gain ``tau_g,r = K_opt omega_g^2`` (:math:`\mathrm{N\,m\,s^2}`) [script]:
         ``0.5 rho pi R^2 eta_dt R^3 Cp_max / (N_g lambda_opt)^3``."""
         return (
             0.5
