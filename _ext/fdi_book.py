@@ -314,10 +314,11 @@ def _docstring_html(func, id_prefix: str) -> str:
 
     Docstrings are written for ``--describe`` in a terminal, not as strict reStructuredText:
     docutils renders what it can and its complaints are not shown (a docstring is never a reason
-    for the build to fail); cross-reference roles become literals."""
+    for the build to fail); cross-reference roles become literals, ``:math:`` stays maths."""
     from docutils.core import publish_parts
 
-    doc = docstring_rst(re.sub(r":[\w:]+:`~?([^`]+)`", r"``\1``", inspect.getdoc(func) or ""))
+    doc = inspect.getdoc(func) or ""
+    doc = docstring_rst(re.sub(r":(?!math:)[\w:]+:`~?([^`]+)`", r"``\1``", doc))
     parts = publish_parts(
         doc,
         writer_name="html5",
