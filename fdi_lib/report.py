@@ -55,6 +55,7 @@ __all__ = [
     "Table",
     "table",
     "text_pieces",
+    "markdown_text",
     "glue",
 ]
 
@@ -439,16 +440,29 @@ def _html_text(text: str) -> str:
     return "".join(render[kind](piece) for kind, piece in text_pieces(text))
 
 
-def _md_cell(text: str) -> str:
-    """A cell's text as Markdown: special characters escaped, line breaks as spaces (no-break
-    spaces kept), the names from the code as code and the maths as maths (:func:`text_pieces`)."""
+def markdown_text(text: Any) -> str:
+    """Text as MyST Markdown that reads as written: special characters escaped, line breaks as
+    spaces (no-break spaces kept), the names from the code as code and the maths as maths
+    (:func:`text_pieces`). For a table's cells (the PDF) and for text glued into a page with
+    ``{glue:md}`` (a :class:`IPython.display.Markdown` of it).
+
+    Examples
+    --------
+    >>> markdown_text("pitch sensor beta_1,m1 of *explore_glr*")
+    'pitch sensor $\\\\beta_{1,m1}$ of \\\\*`explore_glr`\\\\*'
+    """
     render = {
         "text": lambda p: _MD_SPECIAL.sub(r"\\\1", p),
         "code": lambda p: f"`{p}`",
         "math": lambda p: f"${p}$",
     }
     flat = re.sub(r"[ \t\r\n]+", " ", str(text)).strip()
-    return "".join(render[kind](piece) for kind, piece in text_pieces(flat)) or " "
+    return "".join(render[kind](piece) for kind, piece in text_pieces(flat))
+
+
+def _md_cell(text: str) -> str:
+    """A cell's text as Markdown (:func:`markdown_text`; an empty cell as a space)."""
+    return markdown_text(text) or " "
 
 
 def table(
