@@ -444,7 +444,7 @@ def markdown_text(text: Any) -> str:
     """Text as MyST Markdown that reads as written: special characters escaped, line breaks as
     spaces (no-break spaces kept), the names from the code as code and the maths as maths
     (:func:`text_pieces`). For a table's cells (the PDF) and for text glued into a page with
-    ``{glue:md}`` (a :class:`IPython.display.Markdown` of it).
+    ``{glue:md}`` (an ``IPython.display.Markdown`` of it).
 
     Examples
     --------

@@ -99,6 +99,8 @@ def test_glue_references_show_the_formatted_values(refs):
         md("between {glue:text}`s` samples and {glue}`n`", DOC, glued)
         == "between w − 1 and w + 3 samples and 4000"
     )
+    # {glue:md} with the Markdown's format after the key (myst-nb's `key:myst`)
+    assert md("{glue:md}`n:myst` runs", DOC, glued) == "4000 runs"
     # another document's value
     other = _glued(refs, {"total": "27"}, doc="book/zz-ledger")
     assert md("{glue:text}`zz-ledger.md::total:d` claims", "book/intro", other) == "27 claims"

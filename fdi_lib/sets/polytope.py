@@ -674,9 +674,10 @@ class Polytope:
         return Polytope(self.M, self.m + self.M @ b)
 
     def linear_map(self, A: Any) -> "Polytope":
-        """Image {A x : x in P}.
+        r"""Image :math:`\{A x : x \in P\}`.
 
-        Invertible square ``A``: exact in H-representation, Set(M A^{-1}, m). Otherwise
+        Invertible square ``A``: exact in H-representation, :math:`\mathrm{Set}(M A^{-1}, m)`.
+        Otherwise
         (singular or rectangular ``A``, shape (r, n)): map the vertices and take their hull.
         """
         A = _as_2d("A", A, self.dim)

@@ -4,8 +4,8 @@ Rosa & Silvestre (2013), §2-§4. The model (eq. (1)) is
 
 .. math::
 
-    x(k+1) &= \Big(A(k) + \sum_i \Delta_i(k) A_i(k)\Big) x(k) + L(k) d(k)
-              + \Big(B(k) + \sum_b \Delta_b(k) B_b(k)\Big) u(k), \\
+    x(k+1) &= \Big(A(k) + \sum_i \Delta_i(k) A_i(k)\Big) x(k) + L(k) d(k) \\
+           &\quad + \Big(B(k) + \sum_b \Delta_b(k) B_b(k)\Big) u(k), \\
     y(k) &= \Big(C(k) + \sum_c \Delta_c(k) C_c(k)\Big) x(k) + n(k),
 
 with :math:`|\Delta| \le 1`, :math:`\|d(k)\|_\infty \le 1` and :math:`|n_i(k)| \le \bar n_i`.
@@ -271,8 +271,8 @@ class SVOModel:
 
 
 def default_template(n: int, C: np.ndarray | None = None) -> np.ndarray:
-    """Template directions in dimension ``n``: +-e_i, plus +-normalised rows of ``C`` not parallel
-    to those, shape (p, n)."""
+    r"""Template directions in dimension ``n``: :math:`\pm e_i`, plus :math:`\pm` the normalised
+    rows of ``C`` not parallel to those, shape (p, n)."""
     C = None if C is None else np.asarray(C, dtype=float)
     return _default_template(
         int(n), None if C is None else C.tobytes(), None if C is None else C.shape

@@ -4,7 +4,7 @@ The paper gives the LPV model (15)-(16) (airspeed-scheduled stability derivative
 full nonlinear aerodynamic model used in its simulations. Choices made here (documented in
 the book chapter as well):
 
-* **:math:`M_u` reading.** The OCR prints ``M_u = 0.2.6146 V^2 - 0.003426 V - 0.1425``. We read the
+* :math:`M_u` **reading.** The OCR prints ``M_u = 0.2.6146 V^2 - 0.003426 V - 0.1425``. We read the
   quadratic coefficient as ``2.6146e-5`` (the ":math:`\times 10^{-5}`" lost, as it is printed for :math:`Z_u`);
   see :data:`MU_READING`.
 * **Elevator unit.** The paper does not say in which unit :math:`\eta` enters (16). Read per
@@ -358,10 +358,10 @@ def plant_derivative(
 
     .. math::
 
-        \dot x = A(V_{AS}(x))\, x + B(V_{AS}(x))\, \delta
-                 + [-q w + X_\theta (\sin\theta - \theta), 0, 0, 0]^\top
-                 + [a_u, a_w, 0, a_q]^\top \odot d,
-        \qquad V_{AS}(x) = |(u^*, w^*) + (u, w)|,
+        \dot x &= A(V_{AS}(x))\, x + B(V_{AS}(x))\, \delta \\
+               &\quad + [-q w + X_\theta (\sin\theta - \theta), 0, 0, 0]^\top \\
+               &\quad + [a_u, a_w, 0, a_q]^\top \odot d, \\
+        V_{AS}(x) &= |(u^*, w^*) + (u, w)|,
 
     with :math:`d` the disturbance ``dist``, plus, when ``fault_mode="total"``, the faults'
     action on the trim values: :math:`(\epsilon - 1)\, b_\eta \eta^*` and
