@@ -271,6 +271,7 @@ def test_numbers_and_labels_agree_with_the_built_book(refs):
 
     def readable(text: str) -> str:  # the maths as the book's text of a reference, quotes straight
         text = re.sub(r"\$([^$]+)\$", lambda m: ext.tex_to_text(m.group(1), macros), text)
+        text = re.sub(r"`([^`]+)`", r"\1", text)  # code in a title: its text
         return text.translate(str.maketrans("\u2018\u2019\u201c\u201d", "''\"\""))
 
     for label, (doc, _anchor, title) in env.domaindata["std"]["labels"].items():
