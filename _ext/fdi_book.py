@@ -314,10 +314,11 @@ def _docstring_html(func, id_prefix: str) -> str:
 
     Docstrings are written for ``--describe`` in a terminal, not as strict reStructuredText:
     docutils renders what it can and its complaints are not shown (a docstring is never a reason
-    for the build to fail); cross-reference roles become literals."""
+    for the build to fail); cross-reference roles become literals, ``:math:`` stays maths."""
     from docutils.core import publish_parts
 
-    doc = docstring_rst(re.sub(r":[\w:]+:`~?([^`]+)`", r"``\1``", inspect.getdoc(func) or ""))
+    doc = inspect.getdoc(func) or ""
+    doc = docstring_rst(re.sub(r":(?!math:)[\w:]+:`~?([^`]+)`", r"``\1``", doc))
     parts = publish_parts(
         doc,
         writer_name="html5",
@@ -571,11 +572,14 @@ def book_map_markdown(confdir: Path, block: str, unlinked: tuple[str, ...] = ())
     for caption, _, chapters in parts:
         for k, f in enumerate(chapters):
             plain = any(f == u or (u.endswith("/") and f.startswith(u)) for u in unlinked)
-            page = (
-                _HEADING.search((confdir / f"{f}.md").read_text()).group(2)
-                if plain
-                else f"{{doc}}`/{f}`"
-            )
+            source = confdir / f"{f}.md"
+            title = _HEADING.search(source.read_text()).group(2) if source.is_file() else ""
+            if plain:
+                page = title
+            elif "`" in title:  # code in the title: {doc} would show it as plain text
+                page = f"[{title}](/{f}.md)"
+            else:
+                page = f"{{doc}}`/{f}`"
             rows.append(f"| {caption if k == 0 else ''} | {page} | {what[f]} |")
     numbered = [f for _, num, chapters in parts if num for f in chapters]
     path = "\n".join(f"{i}. {{doc}}`/{f}`" for i, f in enumerate(numbered, 1))

@@ -1,4 +1,4 @@
-"""fdi_lib: statistical and set-based fault detection and isolation for LTV/LPV systems.
+"""``fdi_lib``: statistical and set-based fault detection and isolation for LTV/LPV systems.
 
 The library behind *fdi-book*. Modules: :mod:`~fdi_lib.models` (LTV/LPV containers),
 :mod:`~fdi_lib.simulate`, :mod:`~fdi_lib.filters` (Kalman), :mod:`~fdi_lib.signatures`

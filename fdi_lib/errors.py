@@ -62,7 +62,7 @@ class PersistentExcitationError(FDIError, ValueError):
 
 
 class RankConditionError(FDIError, ValueError):
-    """A rank assumption (e.g. full column rank of C_{k+1} E_k for the Kitanidis filter) fails."""
+    """A rank assumption (e.g. full column rank of :math:`C_{k+1} E_k` for the Kitanidis filter) fails."""
 
 
 class UnknownReproductionError(FDIError, KeyError):

@@ -57,7 +57,7 @@ FIG_WIDTH_IN = 5.5
 MIN_FONT_PT = 11.0
 #: CSS pixels per inch at which a figure is displayed at its natural size (5.5 in -> 605 px).
 DISPLAY_DPI = 110
-#: The PNG holds RASTER_SCALE device pixels per CSS pixel (sharp on high-density screens).
+#: The PNG holds ``RASTER_SCALE`` device pixels per CSS pixel (sharp on high-density screens).
 RASTER_SCALE = 2
 #: Height of each stacked panel, as a fraction of the height asked for one row (see figure).
 STACKED_HEIGHT = 0.8

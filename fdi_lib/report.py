@@ -38,6 +38,7 @@ import html
 import math
 import numbers
 import re
+import unicodedata
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Sequence
 
@@ -53,6 +54,8 @@ __all__ = [
     "fmt_value",
     "Table",
     "table",
+    "text_pieces",
+    "markdown_text",
     "glue",
 ]
 
@@ -289,24 +292,177 @@ _MD_SPECIAL = re.compile(r"([\\`*_{}\[\]<>|$~#&!])")
 
 #: A name from the code in a table's text: an identifier with an underscore between words
 #: (``lars_path``, ``explore_glr``) or a Python file (``tools/build_report.py``). A one-character
-#: subscript (``x_k``, ``Gamma_k``) is not one: it is maths, and stays as written.
+#: subscript (``x_k``, ``Gamma_k``) is not one: it is maths (:data:`_SYMBOL`).
 _CODE_NAME = re.compile(
-    r"(?<![\w/.-])((?:[\w-]+/)*(?:[A-Za-z][A-Za-z0-9]*(?:_[A-Za-z0-9]{2,})+(?:\.py)?"
-    r"|[\w-]+\.py))(?![\w/])"
+    r"(?<![\w/.-])((?:[\w-]+/)*(?:(?:[A-Za-z]\w*\.)*[A-Za-z][A-Za-z0-9]*(?:_[A-Za-z0-9]{2,})+"
+    r"(?:\.[A-Za-z]\w*)*(?:\.py)?|[\w-]+\.py))(?![\w/])"
 )
+#: What a table's text marks itself: maths as TeX between dollars (``$C_{m\eta}$``) and code
+#: between backticks (a dotted name without an underscore, ``fdi_lib.report``).
+_MARKED = re.compile(r"\$([^$\s](?:[^$]*[^$\s])?)\$|`([^`\n]+)`")
+_GREEK = (
+    "alpha beta gamma delta epsilon zeta eta theta iota kappa lambda mu nu xi pi rho sigma tau "
+    "upsilon phi chi psi omega"
+).split()
+#: Greek letters as TeX macros, by name ("beta", "Gamma") and as Unicode letters ("ζ", "Γ"); the
+#: capitals that look like Latin letters (A, B, ...) have no macro and are not listed.
+_CAPITALS = "gamma delta theta lambda xi pi sigma upsilon phi psi omega".split()
+_GREEK_TEX = {
+    **{g: "\\" + g for g in _GREEK},
+    **{g.title(): "\\" + g.title() for g in _CAPITALS},
+    **{
+        unicodedata.lookup(f"greek small letter {g.replace('lambda', 'lamda')}"): "\\" + g
+        for g in _GREEK
+    },
+    **{
+        unicodedata.lookup(f"greek capital letter {g.replace('lambda', 'lamda')}"): "\\" + g.title()
+        for g in _CAPITALS
+    },
+}
+#: An ASCII symbol with a subscript or a superscript, as a table's text writes it: a letter, a
+#: Greek letter (by name or Unicode) or max/min, then ``_k``, ``_{k+1}``, ``_(k-1)`` or
+#: ``_1,m1`` (a comma and no space: one subscript, the wind turbine's ``beta_1,m1``), then
+#: ``^2``, ``^{-1}``. A name of several letters with a subscript of two (``lars_path``) is code.
+_SYMBOL = re.compile(
+    r"(?<![\w\\])(?P<base>"
+    + "|".join(sorted(_GREEK_TEX, key=len, reverse=True) + ["max", "min"])
+    + r"|[A-Za-z])"
+    r"(?:_(?P<sub>\{[^{}\n]*\}|\([^()\n]*\)|[A-Za-z0-9]+(?:,[A-Za-z0-9]+)*))?"
+    r"(?:\^(?P<sup>\{[^{}\n]*\}|\([^()\n]*\)|[A-Za-z0-9]+))?"
+    r"(?![A-Za-z0-9_])"
+)
+#: A norm written with double bars: ``||r_k||`` or ``||x||_2``.
+_NORM = re.compile(r"\|\|([^|\n]+?)\|\|(?:_(\w+))?")
+
+
+def _tex_group(s: str) -> str:
+    """A sub- or superscript as TeX: braces kept, parentheses dropped, longer than one character
+    braced."""
+    if s.startswith("(") or s.startswith("{"):
+        s = s[1:-1]
+    return s if len(s) == 1 else "{" + s + "}"
+
+
+def _symbol_tex(m: re.Match) -> str:
+    base = m["base"]
+    tex = _GREEK_TEX.get(base, "\\" + base if base in ("max", "min") else base)
+    if m["sub"]:
+        tex += "_" + _tex_group(m["sub"])
+    if m["sup"]:
+        tex += "^" + _tex_group(m["sup"])
+    return tex
+
+
+def text_pieces(text: Any) -> list[tuple[str, str]]:
+    r"""A table's or a note's text cut into ``(kind, piece)``: ``"text"``, ``"code"`` (a name from
+    the code: an identifier with an underscore between words, a dotted name with one, a Python
+    file, or what the text writes between backticks) or ``"math"`` (TeX:
+    what the text writes between dollars, and the ASCII symbols with a sub- or superscript,
+    ``x_k``, ``Gamma_k``, ``beta_1,m1``, ``V^2``, and norms ``||r||``, as maths).
+
+    The renderings of a :class:`Table` (HTML, Markdown) and the claims ledger set the names as
+    code and the symbols as maths from these pieces (issue 33: a reader, and a screen reader,
+    reads ``explore_glr`` as a name and :math:`M_u` as a symbol, not as ``M`` and ``_u``); the
+    plain text (``str``, the JSON) keeps the text as written. Symbols side by side (``H_k ζ_k``)
+    make one formula.
+
+    Examples
+    --------
+    >>> text_pieces("l_k of explore_glr")
+    [('math', 'l_k'), ('text', ' of '), ('code', 'explore_glr')]
+    >>> text_pieces("max_k |beta_1,m1|, $y_{k+1}$")
+    [('math', '\\max_k'), ('text', ' |'), ('math', '\\beta_{1,m1}'), ('text', '|, '), ('math', 'y_{k+1}')]
+    """
+    out: list[tuple[str, str]] = []
+
+    def add(kind: str, piece: str) -> None:
+        if not piece:
+            return
+        if out and out[-1][0] == kind == "text":
+            out[-1] = ("text", out[-1][1] + piece)
+        elif kind == "math" and len(out) >= 1 and out[-1][0] == "math":
+            out[-1] = ("math", out[-1][1] + " " + piece)
+        elif (
+            kind == "math"
+            and len(out) >= 2
+            and out[-1][0] == "text"
+            and not out[-1][1].strip()
+            and out[-2][0] == "math"
+        ):
+            out[-2:] = [("math", out[-2][1] + " " + piece)]
+        else:
+            out.append((kind, piece))
+
+    def symbols(part: str) -> None:
+        pos = 0
+        for m in re.finditer(f"{_NORM.pattern}|{_SYMBOL.pattern}", part):
+            if m.group(0).startswith("||"):
+                inner = "".join(piece for _, piece in text_pieces(m.group(1)))
+                tex = f"\\Vert {inner}\\Vert" + (f"_{_tex_group(m.group(2))}" if m.group(2) else "")
+            elif m["sub"] is None and m["sup"] is None:
+                continue
+            else:
+                tex = _symbol_tex(m)
+            add("text", part[pos : m.start()])
+            add("math", tex)
+            pos = m.end()
+        add("text", part[pos:])
+
+    def names(part: str) -> None:
+        for j, piece in enumerate(_CODE_NAME.split(part)):
+            if j % 2:
+                add("code", piece)
+            else:
+                symbols(piece)
+
+    text, pos = str(text), 0
+    for m in _MARKED.finditer(text):
+        names(text[pos : m.start()])
+        if m[1] is not None:
+            add("math", m[1])
+        else:
+            add("code", m[2])
+        pos = m.end()
+    names(text[pos:])
+    return out
 
 
 def _html_text(text: str) -> str:
-    """A table cell's or note's text as HTML: escaped, the names from the code set as code (a
-    reader, and a screen reader, reads ``explore_glr`` as a name, not as ``explore`` with a
-    subscript)."""
-    return _CODE_NAME.sub(r"<code>\1</code>", html.escape(str(text)))
+    """A table cell's or note's text as HTML: escaped, the names from the code as code and the
+    maths as maths (:func:`text_pieces`), which the page's MathJax typesets."""
+    render = {
+        "text": html.escape,
+        "code": lambda p: f"<code>{html.escape(p)}</code>",
+        "math": lambda p: (
+            f'<span class="math notranslate nohighlight">\\({html.escape(p)}\\)</span>'
+        ),
+    }
+    return "".join(render[kind](piece) for kind, piece in text_pieces(text))
+
+
+def markdown_text(text: Any) -> str:
+    """Text as MyST Markdown that reads as written: special characters escaped, line breaks as
+    spaces (no-break spaces kept), the names from the code as code and the maths as maths
+    (:func:`text_pieces`). For a table's cells (the PDF) and for text glued into a page with
+    ``{glue:md}`` (an ``IPython.display.Markdown`` of it).
+
+    Examples
+    --------
+    >>> markdown_text("pitch sensor beta_1,m1 of *explore_glr*")
+    'pitch sensor $\\\\beta_{1,m1}$ of \\\\*`explore_glr`\\\\*'
+    """
+    render = {
+        "text": lambda p: _MD_SPECIAL.sub(r"\\\1", p),
+        "code": lambda p: f"`{p}`",
+        "math": lambda p: f"${p}$",
+    }
+    flat = re.sub(r"[ \t\r\n]+", " ", str(text)).strip()
+    return "".join(render[kind](piece) for kind, piece in text_pieces(flat))
 
 
 def _md_cell(text: str) -> str:
-    """A cell's text as literal Markdown: special characters escaped, line breaks as spaces (no-break
-    spaces kept)."""
-    return _MD_SPECIAL.sub(r"\\\1", re.sub(r"[ \t\r\n]+", " ", str(text)).strip()) or " "
+    """A cell's text as Markdown (:func:`markdown_text`; an empty cell as a space)."""
+    return markdown_text(text) or " "
 
 
 def table(

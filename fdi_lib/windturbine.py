@@ -362,7 +362,7 @@ def subsystems(c: PlantConstants) -> list[Subsystem]:
 # ----------------------------------------------------------------------------- calibration
 @dataclass(frozen=True)
 class Calibration:
-    """What a fault-free calibration run tells the methods about the model error.
+    r"""What a fault-free calibration run tells the methods about the model error.
 
     Attributes
     ----------
@@ -371,7 +371,7 @@ class Calibration:
         ``x_{k+1} - F x_k - G u_k - E tau_a,k`` (the model is exact up to discretisation and
         actuator limits), plus a floor of ``1e-12`` on the diagonal.
     q_tau : float
-        Variance of the increments of ``tau_a`` (MNm^2 per sample): the random walk of the
+        Variance of the increments of ``tau_a`` (:math:`\mathrm{MN^2 m^2}` per sample): the random walk of the
         Kalman filter's ``tau_a`` state.
     bound : dict
         Per subsystem, the largest one-step model error of each state times ``margin``: the

@@ -275,6 +275,8 @@ def test_the_intro_has_a_book_map_line_for_every_page_of_the_toc():
     assert len(blocks) == 1
     text = EXT.book_map_markdown(ROOT, blocks[0])
     assert "{doc}`/book/windturbine/benchmark`" in text
+    # a title with code links by its Markdown, which keeps the code (issue 33)
+    assert "[The library `fdi_lib`](/book/api/index.md)" in text
     assert "static figure at default values" not in intro
 
 

@@ -99,6 +99,8 @@ def test_glue_references_show_the_formatted_values(refs):
         md("between {glue:text}`s` samples and {glue}`n`", DOC, glued)
         == "between w − 1 and w + 3 samples and 4000"
     )
+    # {glue:md} with the Markdown's format after the key (myst-nb's `key:myst`)
+    assert md("{glue:md}`n:myst` runs", DOC, glued) == "4000 runs"
     # another document's value
     other = _glued(refs, {"total": "27"}, doc="book/zz-ledger")
     assert md("{glue:text}`zz-ledger.md::total:d` claims", "book/intro", other) == "27 claims"
@@ -269,6 +271,7 @@ def test_numbers_and_labels_agree_with_the_built_book(refs):
 
     def readable(text: str) -> str:  # the maths as the book's text of a reference, quotes straight
         text = re.sub(r"\$([^$]+)\$", lambda m: ext.tex_to_text(m.group(1), macros), text)
+        text = re.sub(r"`([^`]+)`", r"\1", text)  # code in a title: its text
         return text.translate(str.maketrans("\u2018\u2019\u201c\u201d", "''\"\""))
 
     for label, (doc, _anchor, title) in env.domaindata["std"]["labels"].items():

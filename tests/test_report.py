@@ -127,23 +127,43 @@ def test_table_cells_name_their_column():
     ]
 
 
-def test_table_sets_names_from_the_code_as_code():
+def test_table_sets_names_from_the_code_as_code_and_symbols_as_maths():
     """An identifier with an underscore between words, or a Python file, reads as code in the HTML
-    (not as maths with a subscript); a one-character subscript stays maths as written; the text
-    around is escaped."""
+    (not as maths with a subscript); a symbol with a one-character subscript, a Greek letter's name
+    with one and TeX between dollars are maths for the page's MathJax (issue 33); the text around
+    is escaped, and the plain text keeps what was written."""
     t = table(
-        {"redraw, explore_glr (onset)": ["x_k < 1 & Gamma_k"]},
+        {"redraw, explore_glr (onset)": ["x_k < 1 & Gamma_k"], "$C_{m\\eta}$ (per rad)": ["1"]},
         ["ours"],
-        notes=["timed by tools/build_report.py against lars_path"],
+        notes=["timed by tools/build_report.py against lars_path; beta_1,m1 and ||r_k||_2"],
     )
     html = t._repr_html_()
+    math = '<span class="math notranslate nohighlight">\\({}\\)</span>'.format
     assert "<th>redraw, <code>explore_glr</code> (onset)</th>" in html
-    assert ">x_k &lt; 1 &amp; Gamma_k</td>" in html
+    assert f">{math('x_k')} &lt; 1 &amp; {math(chr(92) + 'Gamma_k')}</td>" in html
+    assert f"<th>{math('C_{m' + chr(92) + 'eta}')} (per rad)</th>" in html
     assert (
-        "<li>timed by <code>tools/build_report.py</code> against <code>lars_path</code></li>"
+        "<li>timed by <code>tools/build_report.py</code> against <code>lars_path</code>; "
+        f"{math(chr(92) + 'beta_{1,m1}')} and {math(chr(92) + 'Vert r_k' + chr(92) + 'Vert_2')}</li>"
         in html
     )
-    assert "explore_glr" in str(t) and "<code>" not in str(t)
+    assert "explore_glr" in str(t) and "x_k < 1" in str(t) and "<code>" not in str(t)
+
+
+def test_table_markdown_sets_code_as_code_and_maths_as_maths():
+    """The PDF's form of a table: the names from the code are code spans, the symbols and the TeX
+    between dollars are the maths of MyST's parser (its dollarmath plugin)."""
+    from markdown_it import MarkdownIt
+    from mdit_py_plugins.dollarmath import dollarmath_plugin
+
+    t = table({"M_u, $C_{m\\eta}$ of explore_glr": ["beta_1,m1 | 2"]}, ["ours"])
+    md = MarkdownIt("commonmark").enable("table").use(dollarmath_plugin)
+    tokens = md.parse(t._repr_markdown_())
+    assert sum(tok.type in ("th_open", "td_open") for tok in tokens) == 4
+    pieces = [(c.type, c.content) for tok in tokens if tok.type == "inline" for c in tok.children]
+    assert ("math_inline", "M_u") in pieces and ("math_inline", "C_{m\\eta}") in pieces
+    assert ("code_inline", "explore_glr") in pieces
+    assert ("math_inline", "\\beta_{1,m1}") in pieces and ("text", " | 2") in pieces
 
 
 def test_table_rejects():
@@ -190,10 +210,10 @@ def test_table_markdown_is_a_pipe_table_with_the_same_cells_literally():
     t = table(
         {
             "false alarms *of* [2000] runs": [0, fmt_rate(0.017, (0.0098, 0.027))],
-            "type I error | $x_1$ `code`": [None, "a_b <c> {d}"],
+            "type I error | #1 !x": [None, "a~b <c> {d}"],
         },
         ["ours", "paper"],
-        notes=["no *type I* error_given"],
+        notes=["no *type I* _error_"],
         index_header="",
     )
     tokens = MarkdownIt("commonmark").enable("table").parse(t._repr_markdown_())
@@ -207,10 +227,10 @@ def test_table_markdown_is_a_pipe_table_with_the_same_cells_literally():
         "false alarms *of* [2000] runs",
         "0",
         fmt_rate(0.017, (0.0098, 0.027)),
-        "type I error | $x_1$ `code`",
+        "type I error | #1 !x",
         "n/a",
-        "a_b <c> {d}",
-        "no *type I* error_given",
+        "a~b <c> {d}",
+        "no *type I* _error_",
     ]
     assert not [
         tok

@@ -233,6 +233,8 @@ class BookReferences:
         """A glue reference's text: myst-nb's formatting of the glued ``text/plain``."""
         from myst_nb.core.variables import format_plain_text
 
+        if not formatted and content.endswith((":myst", ":commonmark", ":gfm")):
+            content = content.rsplit(":", 1)[0]  # {glue:md}`key:myst`: the Markdown's format
         key, fmt = (
             content.rsplit(":", 1)
             if formatted and ":" in content.split("::")[-1]

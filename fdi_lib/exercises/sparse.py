@@ -94,7 +94,7 @@ EXERCISES = [
     Exercise(
         "sparse-3",
         CHAPTER,
-        "lambda_max and the normalisation",
+        "The λ above which the Lasso is zero, and the normalisation",
         "core",
         10,
         answer="a number: lambda_max in the normalisation of (39)",

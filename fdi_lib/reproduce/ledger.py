@@ -130,7 +130,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any, Mapping, Sequence
 
 from fdi_lib.errors import ModelError, UnknownReproductionError
-from fdi_lib.report import NA, fmt_count, fmt_number, fmt_rate, table
+from fdi_lib.report import NA, fmt_count, fmt_number, fmt_rate, table, text_pieces
 from fdi_lib.reproduce.ledger_claims import (
     AGREES,
     BY_STANDARD_ERROR,
@@ -333,9 +333,16 @@ class Ledger:
 
 
 def _md(text: str) -> str:
-    return (
-        str(text).replace("|", "\\|").replace("*", "\\*").replace("_", "\\_").replace("<", "&lt;")
-    )
+    """A claim's text as MyST: special characters escaped, the names from the code as code and the
+    symbols as maths (:func:`fdi_lib.report.text_pieces`; the JSON keeps the text as written)."""
+    render = {
+        "text": lambda p: (
+            p.replace("|", "\\|").replace("*", "\\*").replace("_", "\\_").replace("<", "&lt;")
+        ),
+        "code": lambda p: f"`{p}`",
+        "math": lambda p: f"${p}$",
+    }
+    return "".join(render[kind](piece) for kind, piece in text_pieces(text))
 
 
 def _link(target: str) -> str:

@@ -37,11 +37,17 @@ PAPER = "Rosa & Silvestre 2013"
 
 
 def toy_model(delta_bound: float = 0.4, noise: float = 0.5, dist: float = 0.02) -> SVOModel:
-    """A 2-D uncertain model of the form (1) used for Figs 1-2 and the widget.
+    r"""A 2-D uncertain model of the form (1) used for Figs 1-2 and the widget.
 
-    x(k+1) = (A + Delta A_1) x(k) + L d(k) + B u(k),  y = [1 0] x + n, with
-    A = [[0.9, 0.3], [-0.1, 0.9]], A_1 = delta_bound * [[0, 0], [1, 0]] (an uncertain
-    coupling from x1 to x2), L = dist * I, B = [0, 1]^T, |n| <= noise, |Delta| <= 1.
+    .. math::
+
+        x(k+1) = (A + \Delta A_1)\, x(k) + L d(k) + B u(k), \qquad y = [1\ 0]\, x + n,
+
+    with :math:`A = \begin{bmatrix} 0.9 & 0.3 \\ -0.1 & 0.9 \end{bmatrix}`,
+    :math:`A_1 = \delta \begin{bmatrix} 0 & 0 \\ 1 & 0 \end{bmatrix}` (:math:`\delta` =
+    ``delta_bound``: an uncertain coupling from :math:`x_1` to :math:`x_2`), :math:`L = \epsilon I`
+    (:math:`\epsilon` = ``dist``), :math:`B = [0, 1]^\top`, :math:`|n| \le` ``noise``,
+    :math:`|\Delta| \le 1`.
     """
     A = np.array([[0.9, 0.3], [-0.1, 0.9]])
     A1 = delta_bound * np.array([[0.0, 0.0], [1.0, 0.0]])
@@ -163,7 +169,7 @@ def fig1(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     chapter="rosa2013/svo",
 )
 def fig2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
-    """Fig. 2: the sets for Delta = +1 and Delta = -1 (n_A = 1, N = 1) and their convex hull.
+    """Fig. 2: the sets for Delta = +1 and Delta = -1 (:math:`n_A = 1`, N = 1) and their convex hull.
 
     One SVO step of the toy model (:func:`toy_model`) from X(k) = [-1, 1] x [-0.5, 0.5] with
     u(k) = 0 and y(k+1) = 0.2.
@@ -171,9 +177,11 @@ def fig2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
     Headline keys
     -------------
     hull_area : float
-        Area of co{X_{+1}, X_{-1}} (the paper's construction: strip applied per vertex).
+        Area of :math:`\\mathrm{co}\\{X_{+1}, X_{-1}\\}` (the paper's construction: strip applied
+        per vertex).
     union_area : float
-        Area of X_{+1} union X_{-1} (inclusion-exclusion); the hull adds hull_area - union_area.
+        Area of :math:`X_{+1} \\cup X_{-1}` (inclusion-exclusion); the hull adds ``hull_area`` -
+        ``union_area``.
     vertices : int
         Number of vertices of the hull.
     sound_hull_area : float

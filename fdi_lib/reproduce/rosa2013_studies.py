@@ -116,16 +116,19 @@ def explanation_scale(
     stop: int | None = None,
     dist_scale: float = 1.0,
 ) -> float:
-    """Smallest multiplier s of one bound for which the SVO model still explains the record (one LP).
+    r"""Smallest multiplier s of one bound for which the SVO model still explains the record (one LP).
 
     The model is the one of :func:`fdi_lib.systems.eclipse_uav.svo_models` with every uncertain
     parameter frozen at the centre of its interval (Delta = 0, no input uncertainty). The linear
     program finds states x(start..stop), disturbances d and noises n with
 
-        x(k+1) = A(k) x(k) + B(k) u(k) + L(k) d(k),   y(k) = C x(k) + n(k),   x(0) in UAV_X0 (if start = 0),
+    .. math::
 
-    and minimises s subject to |d_i(k)| <= s, |n_j(k)| <= nbar_j (``scale="disturbance"``) or
-    |d_i(k)| <= dist_scale, |n_j(k)| <= s nbar_j (``scale="noise"``).
+        x(k+1) = A(k) x(k) + B(k) u(k) + L(k) d(k), \qquad y(k) = C x(k) + n(k),
+
+    with :math:`x(0)` in ``UAV_X0`` (if ``start`` = 0), and minimises :math:`s` subject to
+    :math:`|d_i(k)| \le s`, :math:`|n_j(k)| \le \bar n_j` (``scale="disturbance"``) or
+    :math:`|d_i(k)| \le` ``dist_scale``, :math:`|n_j(k)| \le s \bar n_j` (``scale="noise"``).
 
     How to read it: Delta = 0 is one admissible value, so when s <= 1 the data of the window are
     reproduced by the healthy model within the bounds, and **no** SVO built on that model (exact
@@ -236,20 +239,22 @@ def _explanation_scales(runs: dict[str, Any], onset: int) -> tuple[dict, dict, d
 
 @lru_cache(maxsize=4)
 def hidden_fault_study(seed: int, duration: float = 3.0, eta_unit: str = uav.ETA_UNIT) -> dict:
-    """Why the elevator and M_u step faults are not detected: effect sizes, LP bounds, sensitivity.
+    r"""Why the elevator and :math:`M_u` step faults are not detected: effect sizes, LP bounds,
+    sensitivity.
 
     Healthy and faulty runs share ``seed``, hence the same disturbance and noise sequences;
     ``eta_unit`` is the reading of the elevator coefficients (per radian, the elevator fault is
-    hidden as well; per degree only the M_u fault is).
+    hidden as well; per degree only the :math:`M_u` fault is).
 
     Returns
     -------
     dict with keys
-        ``effect``: fault -> output -> max_k |y_faulty(k) - y_healthy(k)| divided by the SVO noise
+        ``effect``: fault -> output -> :math:`\max_k |y_\mathrm{faulty}(k) - y_\mathrm{healthy}(k)|`
+        divided by the SVO noise
         bound of that output (sensor bound plus margin);
         ``width``: fault -> state -> median width of the nominal template SVO's bounding box on the
         faulty run, together with ``width_needed``: the w-offset (m/s) whose pitch-rate effect
-        (through M_w) equals the fault's largest one-step pitch-rate effect;
+        (through :math:`M_w`) equals the fault's largest one-step pitch-rate effect;
         ``explanation``: run ("none", "elevator", "dynamics") -> detection time (ms, as in Fig. 11)
         -> :func:`explanation_scale` of the disturbance on the window from 0 to the sample at
         which that detection time would be reached (an SVO whose disturbance bound is s times ours
@@ -337,11 +342,13 @@ def containment_check(
 ) -> dict:
     """Nominal template SVO on a healthy run with +-``amplitude`` m/s airspeed commands.
 
-    Returns {"samples": checked samples, "outside": samples whose true state is outside the set,
-    "empty_at": first empty sample or None, "airspeed_swing": peak-to-peak measured airspeed (m/s),
-    "max_airspeed": largest measured airspeed deviation |y_V(k)| over the checked samples (m/s),
-    "loss_airspeed": largest |y_V(k)| up to the first sample whose true state is outside the set, the
-    deviation the record had reached when the state was lost (None if never)}.
+    Returns ``{"samples": ..., ...}``: ``samples``, the checked samples; ``outside``, the samples
+    whose true state is outside the set; ``empty_at``, the first empty sample or None;
+    ``airspeed_swing``, the peak-to-peak measured airspeed (m/s); ``max_airspeed``, the largest
+    measured airspeed deviation :math:`|y_V(k)|` over the checked samples (m/s);
+    ``loss_airspeed``, the largest :math:`|y_V(k)|` up to the first sample whose true state is
+    outside the set, the deviation the record had reached when the state was lost (None if
+    never).
     The record may leave the manoeuvre envelope on purpose: its :class:`EnvelopeWarning` is not shown.
     """
     run = uav.simulate(
@@ -436,10 +443,11 @@ def horizon_comparison(
     """Separate projection of the horizon rows against the joint form of eq. (3) (template rule).
 
     Random stable 2-D systems with one A and one B uncertainty (:func:`random_system`), healthy
-    records of ``steps`` samples, 16 template directions, N in ``horizons``. Returns N -> {"cases": runs, "tighter":
-    runs in which the joint set is smaller in some direction by more than 1e-9, "max_gap": largest
-    support difference over the runs without alarm, "outside": samples with the true state outside
-    the joint set, "alarms": runs in which the joint set became empty}.
+    records of ``steps`` samples, 16 template directions, N in ``horizons``. Returns N -> a dict:
+    ``cases``, the runs; ``tighter``, the runs in which the joint set is smaller in some direction by
+    more than 1e-9; ``max_gap``, the largest support difference over the runs without alarm;
+    ``outside``, the samples with the true state outside the joint set; ``alarms``, the runs in
+    which the joint set became empty.
 
     With an uncertain A the joint form can lose the true state: for a vertex sequence, the image of
     x(k-1) under the older vertex matrix stands in for x(k) and need not lie in X̂(k), which the

@@ -160,7 +160,7 @@ def uav_study(
     (independent streams, as :mod:`fdi_lib.montecarlo` does; the cases share them, so they are
     compared on the same realisations). ``eta_unit`` and ``fault_mode`` are passed to
     :func:`fdi_lib.systems.eclipse_uav.simulate`; ``alpha_slack_deg`` loosens the alpha noise
-    bound of the elevator and M_u observers (:func:`_bank_outcomes`). Cached.
+    bound of the elevator and :math:`M_u` observers (:func:`_bank_outcomes`). Cached.
     """
     from joblib.externals.loky import get_reusable_executor
 
@@ -488,9 +488,9 @@ def fig11(
     the i-th stream spawned from ``seed`` (settings ``streams``).
 
     Options (the book's hypotheses on the paper's values; the defaults are the design):
-    ``fault_mode`` (:data:`fdi_lib.systems.eclipse_uav.FAULT_MODES`), where the elevator and M_u
-    faults act; ``alpha_slack_deg``, degrees added to the alpha noise bound of the elevator and
-    M_u observers (:data:`LOOSENED_OBSERVERS`).
+    ``fault_mode`` (:data:`fdi_lib.systems.eclipse_uav.FAULT_MODES`), where the elevator and
+    :math:`M_u` faults act; ``alpha_slack_deg``, degrees added to the alpha noise bound of the
+    elevator and :math:`M_u` observers (:data:`LOOSENED_OBSERVERS`).
     """
     return _study_result(
         "rosa2013-fig11",

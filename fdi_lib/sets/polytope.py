@@ -473,7 +473,8 @@ def _cdd_hull_exact(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 @dataclass(frozen=True, eq=False)
 class Polytope:
-    """The convex polytope Set(M, m) = {x in R^n : M x <= m} (Rosa & Silvestre 2013, eq. (2)).
+    r"""The convex polytope :math:`\mathrm{Set}(M, m) = \{x \in \mathbb{R}^n : M x \le m\}`
+    (Rosa & Silvestre 2013, eq. (2)).
 
     Parameters
     ----------
@@ -557,7 +558,8 @@ class Polytope:
         return self._cache["V"]
 
     def is_empty(self, tol: float = _TOL) -> bool:
-        """Emptiness by linear programming (HiGHS): maximise the slack t with M x + t ||M_i|| <= m.
+        r"""Emptiness by linear programming (HiGHS): maximise the slack :math:`t` with
+        :math:`M_i x + t \|M_i\| \le m_i` for every row :math:`i`.
 
         The set is declared empty when the optimal slack is below ``-tol`` (a point violating
         no inequality by more than ``tol`` does not exist). Independent of vertex enumeration.
@@ -586,7 +588,8 @@ class Polytope:
         return bool(np.all(self.M @ x <= self.m + tol * (1.0 + np.abs(self.m))))
 
     def support(self, directions: Any) -> np.ndarray:
-        """Support function h(c) = max_{x in P} c.x for each row c of ``directions`` (via vertices).
+        r"""Support function :math:`h(c) = \max_{x \in P} c^\top x` for each row :math:`c` of
+        ``directions`` (via vertices).
 
         Returns ``-inf`` for every direction when the set is empty.
         """
@@ -671,9 +674,10 @@ class Polytope:
         return Polytope(self.M, self.m + self.M @ b)
 
     def linear_map(self, A: Any) -> "Polytope":
-        """Image {A x : x in P}.
+        r"""Image :math:`\{A x : x \in P\}`.
 
-        Invertible square ``A``: exact in H-representation, Set(M A^{-1}, m). Otherwise
+        Invertible square ``A``: exact in H-representation, :math:`\mathrm{Set}(M A^{-1}, m)`.
+        Otherwise
         (singular or rectangular ``A``, shape (r, n)): map the vertices and take their hull.
         """
         A = _as_2d("A", A, self.dim)
@@ -693,7 +697,8 @@ class Polytope:
         return Polytope.from_vertices(pts)
 
     def project(self, dims: Sequence[int], method: str = "fourier-motzkin") -> "Polytope":
-        """Orthogonal projection onto the coordinates ``dims`` (eq. (3) -> R^n, Fig. 1).
+        r"""Orthogonal projection onto the coordinates ``dims`` (eq. (3) :math:`\to \mathbb{R}^n`,
+        Fig. 1).
 
         Parameters
         ----------
@@ -731,7 +736,8 @@ class Polytope:
         return Polytope(M[keep], m[keep]).remove_redundancy()
 
     def outer_template(self, directions: Any) -> "Polytope":
-        """Outer approximation Set(D, h_P(D)) by a fixed set of directions (support via vertices).
+        r"""Outer approximation :math:`\mathrm{Set}(D, h_P(D))` by a fixed set of directions
+        (support via vertices).
 
         Always contains P, with at most ``len(D)`` inequalities: the complexity reduction used by
         the fast SVO update.
@@ -741,7 +747,8 @@ class Polytope:
 
 
 def convex_hull(polytopes: Iterable[Polytope]) -> Polytope:
-    """co{P_1, ..., P_r} of ``polytopes``: hull of the union of their vertices (eq. (4) of Rosa & Silvestre 2013).
+    r""":math:`\mathrm{co}\{P_1, \dots, P_r\}` of ``polytopes``: hull of the union of their
+    vertices (eq. (4) of Rosa & Silvestre 2013).
 
     Empty members are ignored; raises :class:`EmptySetError` if all are empty.
     """

@@ -1,31 +1,35 @@
-"""Set-valued observers (SVOs) for uncertain LPV systems, and FDI by model invalidation.
+r"""Set-valued observers (SVOs) for uncertain LPV systems, and FDI by model invalidation.
 
 Rosa & Silvestre (2013), §2-§4. The model (eq. (1)) is
 
-    x(k+1) = (A(k) + sum_i Delta_i(k) A_i(k)) x(k) + L(k) d(k) + (B(k) + sum_b Delta_b(k) B_b(k)) u(k)
-    y(k)   = (C(k) + sum_c Delta_c(k) C_c(k)) x(k) + n(k),
+.. math::
 
-with |Delta| <= 1, ||d(k)||_inf <= 1 and |n_i(k)| <= nbar_i. An SVO returns a convex
-polytope X̂(k) that contains every state compatible with the model and the data
-(Proposition 2); an empty X̂(k) proves that the data cannot come from the model, i.e. a
-fault (Proposition 3). No threshold is involved.
+    x(k+1) &= \Big(A(k) + \sum_i \Delta_i(k) A_i(k)\Big) x(k) + L(k) d(k) \\
+           &\quad + \Big(B(k) + \sum_b \Delta_b(k) B_b(k)\Big) u(k), \\
+    y(k) &= \Big(C(k) + \sum_c \Delta_c(k) C_c(k)\Big) x(k) + n(k),
+
+with :math:`|\Delta| \le 1`, :math:`\|d(k)\|_\infty \le 1` and :math:`|n_i(k)| \le \bar n_i`.
+An SVO returns a convex polytope :math:`\hat X(k)` that contains every state compatible with the
+model and the data (Proposition 2); an empty :math:`\hat X(k)` proves that the data cannot come
+from the model, i.e. a fault (Proposition 3). No threshold is involved.
 
 Two update rules are offered (``method``):
 
 ``"exact"``
     The paper's construction: for every vertex v of the uncertainty cube (eq. (4)) the
-    set X̂_v(k+1) of states compatible with (3) is computed exactly (images of vertices,
-    Minkowski sum with the disturbance zonotope, facet and vertex enumeration by cddlib,
-    intersection with the measurement strip), and X̂(k+1) = co{X̂_v(k+1)}. Complexity
+    set :math:`\hat X_v(k+1)` of states compatible with (3) is computed exactly (images of
+    vertices, Minkowski sum with the disturbance zonotope, facet and vertex enumeration by
+    cddlib, intersection with the measurement strip), and
+    :math:`\hat X(k+1) = \mathrm{co}\{\hat X_v(k+1)\}`. Complexity
     grows with time: on the 4-state UAV model (run with ``scale``) the sets reach hundreds of
     vertices after two steps; used for the 2-D figures and the comparisons of the book. With
-    N > 1 the hull over the 2^(N n_A) vertex sequences is built recursively, one one-step hull
+    :math:`N > 1` the hull over the :math:`2^{N n_A}` vertex sequences is built recursively, one one-step hull
     per horizon level and update (hulls commute with linear maps and Minkowski sums).
 ``"template"``
     A fixed-complexity outer approximation of the same set: the support function of each
-    X̂_v in a fixed set of directions D (template) is computed in closed form from the
-    vertices of the previous sets, so X̂(k+1) = Set([D; C; -C], [max_v h_v; y + nbar; nbar - y])
-    always has |D| + 2 n_y inequalities. It contains the exact set, so Propositions 2 and 3
+    :math:`\hat X_v` in a fixed set of directions :math:`D` (template) is computed in closed form
+    from the vertices of the previous sets, so :math:`\hat X(k+1) = \mathrm{Set}([D; C; -C],
+    [\max_v h_v; y + \bar n; \bar n - y])` always has :math:`|D| + 2 n_y` inequalities. It contains the exact set, so Propositions 2 and 3
     still hold; only conservatism is added. Used for the UAV (fast, bounded complexity).
     With N > 1 each row of the horizon is projected on its own and the results intersected
     (disturbances not shared between rows); ``joint=True`` solves the stacked form of eq. (3)
@@ -46,10 +50,10 @@ Many records at once: :class:`TemplateBatch` steps many template observers (N = 
 stacked arrays (:class:`ModelSequence`), with :func:`run_svo_many` and
 :func:`run_architecture_i_many` on top; each observer's result is the one it gets alone.
 
-B uncertainty is folded into the disturbance as in the paper (L_d(k) = B_b(k) u(k)). C
-uncertainty is handled by the relaxation idea of eq. (11) applied directly to the output:
-the bilinear term Delta_c C_c x is replaced by an extra bounded noise whose bound is the
-largest |C_c x| over the predicted set (see :func:`SVOModel` and the book chapter, which
+B uncertainty is folded into the disturbance as in the paper (:math:`L_d(k) = B_b(k) u(k)`).
+C uncertainty is handled by the relaxation idea of eq. (11) applied directly to the output:
+the bilinear term :math:`\Delta_c C_c x` is replaced by an extra bounded noise whose bound is the
+largest :math:`|C_c x|` over the predicted set (see :func:`SVOModel` and the book chapter, which
 explains why this differs from the augmented system (9)-(10)).
 """
 
@@ -130,26 +134,29 @@ def _vertex_matrices(A: np.ndarray, A_unc: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class SVOModel:
-    """One step of the uncertain model (1) of Rosa & Silvestre (2013).
+    r"""One step of the uncertain model (1) of Rosa & Silvestre (2013).
 
     Parameters
     ----------
     A : ndarray, shape (n, n)
-        Known part A(k).
+        Known part :math:`A(k)`.
     B : ndarray, shape (n, n_u), optional
         Known input matrix (default: no input).
     C : ndarray, shape (n_y, n)
         Known output matrix.
     L : ndarray, shape (n, n_d), optional
-        Disturbance directions; ||d(k)||_inf <= 1 (scale L to set the bounds).
+        Disturbance directions; :math:`\|d(k)\|_\infty \le 1` (scale ``L`` to set the bounds).
     noise : float or ndarray, shape (n_y,)
-        Sensor noise bounds nbar_i, |n_i(k)| <= nbar_i (a vector generalises the paper's scalar).
+        Sensor noise bounds :math:`\bar n_i`, :math:`|n_i(k)| \le \bar n_i` (a vector generalises
+        the paper's scalar).
     A_unc : ndarray, shape (n_A, n, n), optional
-        Directions A_i of the parametric uncertainty A_d = sum Delta_i A_i, |Delta_i| <= 1.
+        Directions :math:`A_i` of the parametric uncertainty :math:`\sum_i \Delta_i A_i`,
+        :math:`|\Delta_i| \le 1`.
     B_unc : ndarray, shape (n_B, n, n_u), optional
-        Directions B_b of the input uncertainty; handled as disturbance L = B_b u(k) (§2).
+        Directions :math:`B_b` of the input uncertainty; handled as disturbance
+        :math:`L = B_b u(k)` (§2).
     C_unc : ndarray, shape (n_C, n_y, n), optional
-        Directions C_c of the output uncertainty (eq. (8)).
+        Directions :math:`C_c` of the output uncertainty (eq. (8)).
     """
 
     A: Any
@@ -251,19 +258,21 @@ class SVOModel:
         return int(self.B.shape[1])
 
     def vertex_matrices(self) -> np.ndarray:
-        """A(k) + sum_i v_i A_i(k) for every vertex v of the cube {|Delta| <= 1}, shape (2**n_A, n, n) (eq. (4))."""
+        r""":math:`A(k) + \sum_i v_i A_i(k)` for every vertex :math:`v` of the cube
+        :math:`\{|\Delta| \le 1\}`, shape ``(2**n_A, n, n)`` (eq. (4))."""
         return self._vertex_A
 
     def generators(self, u: np.ndarray) -> np.ndarray:
-        """Columns G with L d + sum_b Delta_b B_b u = G s, ||s||_inf <= 1 (B uncertainty as disturbance, §2)."""
+        r"""Columns :math:`G` with :math:`L d + \sum_b \Delta_b B_b u = G s`,
+        :math:`\|s\|_\infty \le 1` (B uncertainty as disturbance, §2)."""
         if self.B_unc.shape[0] == 0:
             return self.L
         return np.column_stack([self.L, np.einsum("bij,j->ib", self.B_unc, u)])
 
 
 def default_template(n: int, C: np.ndarray | None = None) -> np.ndarray:
-    """Template directions in dimension ``n``: +-e_i, plus +-normalised rows of ``C`` not parallel
-    to those, shape (p, n)."""
+    r"""Template directions in dimension ``n``: :math:`\pm e_i`, plus :math:`\pm` the normalised
+    rows of ``C`` not parallel to those, shape (p, n)."""
     C = None if C is None else np.asarray(C, dtype=float)
     return _default_template(
         int(n), None if C is None else C.tobytes(), None if C is None else C.shape
@@ -342,14 +351,14 @@ def _lp_maxima(
 
 
 class SetValuedObserver:
-    """Recursive SVO of Rosa & Silvestre (2013), §2, with horizon N (eq. (3)).
+    r"""Recursive SVO of Rosa & Silvestre (2013), §2, with horizon N (eq. (3)).
 
     Parameters
     ----------
     X0 : Polytope
-        Prior set of x(0), Set(M_0, m_0); must be non-empty and bounded.
+        Prior set of :math:`x(0)`, :math:`\mathrm{Set}(M_0, m_0)`; must be non-empty and bounded.
     N : int
-        Horizon: X̂(k+1) uses X̂(k), ..., X̂(k-N+1) (Remark 1).
+        Horizon: :math:`\hat X(k+1)` uses :math:`\hat X(k), \dots, \hat X(k-N+1)` (Remark 1).
     method : {"template", "exact"}
         Update rule (see module docstring).
     template : ndarray, shape (p, n), optional
@@ -374,8 +383,10 @@ class SetValuedObserver:
         (:func:`fdi_lib.reproduce.rosa2013_studies.horizon_comparison` measures it): an
         :class:`~fdi_lib.errors.UnsoundOptionWarning` is issued at the first update with an uncertain A.
     strip_before_hull : bool
-        ``"exact"`` method only. False (default): X̂(k+1) = ∩_j co_v{Prop_j(v)} ∩ S, which always
-        contains the true state. True: the paper's literal construction co_v{Prop_0(v) ∩ S} (Fig. 2),
+        ``"exact"`` method only. False (default):
+        :math:`\hat X(k+1) = \bigcap_j \mathrm{co}_v\{\mathrm{Prop}_j(v)\} \cap S`, which always
+        contains the true state. True: the paper's literal construction
+        :math:`\mathrm{co}_v\{\mathrm{Prop}_0(v) \cap S\}` (Fig. 2),
         which is tighter but can exclude the true state when the uncertain parameter is strictly
         inside the cube (a counter-example is in the tests and the book): an
         :class:`~fdi_lib.errors.UnsoundOptionWarning` is issued at the first update with an uncertain A.
@@ -1582,8 +1593,8 @@ def dynamics_entry_model(model: SVOModel, row: int, col: int, low: float, high: 
     """Fault hypothesis "system dynamics" (§4.3.1) of ``model``: entry A[``row``, ``col``] anywhere in
     [``low``, ``high``].
 
-    Adds the direction (high - low)/2 E_{row,col} to the parametric uncertainty and moves the
-    entry to the middle of the interval. Include the healthy value in [low, high] for Architecture I.
+    Adds the direction ``(high - low) / 2`` times :math:`E_{rc}` (1 at ``row``, ``col``, 0
+    elsewhere) to the parametric uncertainty and moves the entry to the middle of the interval. Include the healthy value in [low, high] for Architecture I.
     """
     n = model.n
     if not (0 <= row < n and 0 <= col < n):

@@ -1,39 +1,42 @@
-"""The Eclipse UAV longitudinal model of Rosa & Silvestre (2013), §5-§6, eqs. (14)-(16), Table 3.
+r"""The Eclipse UAV longitudinal model of Rosa & Silvestre (2013), §5-§6, eqs. (14)-(16), Table 3.
 
 The paper gives the LPV model (15)-(16) (airspeed-scheduled stability derivatives) but not the
 full nonlinear aerodynamic model used in its simulations. Choices made here (documented in
 the book chapter as well):
 
-* **M_u reading.** The OCR prints ``M_u = 0.2.6146 V^2 - 0.003426 V - 0.1425``. We read the
-  quadratic coefficient as ``2.6146e-5`` (the "x 10^-5" lost, as it is printed for Z_u);
+* :math:`M_u` **reading.** The OCR prints ``M_u = 0.2.6146 V^2 - 0.003426 V - 0.1425``. We read the
+  quadratic coefficient as ``2.6146e-5`` (the ":math:`\times 10^{-5}`" lost, as it is printed for :math:`Z_u`);
   see :data:`MU_READING`.
-* **Elevator unit.** The paper does not say in which unit eta enters (16). Read per radian,
-  Table 3's M_eta = 0.287 1/s^2 at 37 m/s is 0.7 % of |M_alpha| = |M_w| V: an elevator with
-  almost no pitch authority. Read per degree (X_eta, Z_eta, M_eta per degree of deflection),
-  M_eta / M_alpha = -0.43, the usual order for a conventional aircraft. The default
-  :data:`ETA_UNIT` is "deg"; the input eta of every function is in radians either way
+* **Elevator unit.** The paper does not say in which unit :math:`\eta` enters (16). Read per
+  radian, Table 3's :math:`M_\eta = 0.287\ \mathrm{s^{-2}}` at 37 m/s is 0.7 % of
+  :math:`|M_\alpha| = |M_w| V`: an elevator with almost no pitch authority. Read per degree
+  (:math:`X_\eta, Z_\eta, M_\eta` per degree of deflection), :math:`M_\eta / M_\alpha = -0.43`,
+  the usual order for a conventional aircraft. The default :data:`ETA_UNIT` is "deg"; the input
+  :math:`\eta` of every function is in radians either way
   (:func:`pitch_authority` computes the ratios).
-* **Coordinates.** Deviations from the trim point x* = (V cos a, V sin a, a, 0) with
-  V = 37 m/s and a = 0.01 rad (level flight, theta* = alpha*); inputs are deviations of the
-  elevator eta (rad) and of the thrust variable tau from their (unstated) trim values.
+* **Coordinates.** Deviations from the trim point :math:`x^* = (V \cos a, V \sin a, a, 0)`
+  with :math:`V = 37` m/s and :math:`a = 0.01` rad (level flight, :math:`\theta^* = \alpha^*`);
+  inputs are deviations of the elevator :math:`\eta` (rad) and of the thrust variable
+  :math:`\tau` from their (unstated) trim values.
 * **Where the faults act** (:data:`FAULT_MODES`). "deviation" (default): the elevator loss
-  scales the deviation eta, and the M_u change multiplies the speed deviation u, as the LPV
-  model (16) written in deviations suggests. "total": the loss scales the total deflection
-  eta* + eta (eta* = :data:`ETA_TRIM`, an assumption: the paper gives no trim deflection) and the
-  M_u change multiplies the total axial speed u* + u, which adds the moment 0.3 M_u u* at the
-  onset.
+  scales the deviation :math:`\eta`, and the :math:`M_u` change multiplies the speed deviation
+  :math:`u`, as the LPV model (16) written in deviations suggests. "total": the loss scales the
+  total deflection :math:`\eta^* + \eta` (:math:`\eta^*` = :data:`ETA_TRIM`, an assumption: the
+  paper gives no trim deflection) and the :math:`M_u` change multiplies the total axial speed
+  :math:`u^* + u`, which adds the moment :math:`0.3 M_u u^*` at the onset.
 * **Nonlinear stand-in plant** (:func:`plant_derivative`): the LPV model (15) with the
-  airspeed evaluated on the *true* state, V_AS(x) = sqrt(u^2 + w^2) of (14), plus the two
-  terms of (14) that a linearisation drops: the Coriolis product -q w in the axial equation
-  and the exact gravity term X_theta sin(theta) instead of X_theta theta. The outputs are the
-  nonlinear airspeed and angle of attack alpha = arctan(w/u) of (14).
+  airspeed evaluated on the *true* state, :math:`V_{AS}(x) = \sqrt{u^2 + w^2}` of (14), plus
+  the two terms of (14) that a linearisation drops: the Coriolis product :math:`-q w` in the
+  axial equation and the exact gravity term :math:`X_\theta \sin\theta` instead of
+  :math:`X_\theta \theta`. The outputs are the nonlinear airspeed and angle of attack
+  :math:`\alpha = \arctan(w/u)` of (14).
 * **Sensors.** Airspeed, angle of attack, pitch angle and pitch rate, with bounded noise
   (:data:`NOISE_BOUND`).
 * **Disturbances.** Band-limited, bounded accelerations on u, w and q (:data:`DIST_ACCEL`):
   a first-order low-pass filter driven by uniform noise is a convex combination of values in
   [-1, 1], so it never leaves the bound.
 * **Excitation.** A known multisine is added to the LQG command on both inputs (the paper
-  does not describe its manoeuvre) so that elevator and M_u faults have an effect to detect.
+  does not describe its manoeuvre) so that elevator and :math:`M_u` faults have an effect to detect.
 * **Manoeuvre envelope** (:data:`ENVELOPE_AIRSPEED`). The SVO models' margins
   (:data:`SVO_NOISE_MARGIN`, :data:`SVO_DIST_MARGIN`, :data:`SVO_V_MARGIN`) cover the sensor
   linearisation and the neglected nonlinear terms only for moderate manoeuvres: with larger airspeed
@@ -44,12 +47,12 @@ the book chapter as well):
   per run (elevator read per degree). Over the runs that lost it, the smallest airspeed deviation
   reached up to the loss was 4.19 m/s per degree and 2.96 m/s per radian; runs reached up to
   5.54 m/s and 2.43 m/s without a loss. The envelope is the measured airspeed deviation
-  |y_V(k)| <= 4 m/s (per degree) and 2.5 m/s (per radian), the largest multiples of 0.5 m/s below
+  :math:`|y_V(k)| \le 4` m/s (per degree) and 2.5 m/s (per radian), the largest multiples of 0.5 m/s below
   those losses; :func:`svo_models` issues an :class:`~fdi_lib.errors.EnvelopeWarning` for a record
   that leaves it (:func:`envelope_exceedance`). The study's records (no extra command) stay well
-  inside (below 0.8 m/s at seed 2013, healthy or faulty), except with the "total" M_u fault read
+  inside (below 0.8 m/s at seed 2013, healthy or faulty), except with the "total" :math:`M_u` fault read
   per radian (13 m/s: the fault itself drives the airspeed away, and the SVO detects it).
-* **Discretisation.** Ts = 10 ms, zero-order hold: python-control's ``c2d`` for the
+* **Discretisation.** :math:`T_s` = 10 ms, zero-order hold: python-control's ``c2d`` for the
   controller design; the per-step SVO models use the same ZOH formula with a vectorised matrix
   exponential (cross-checked against ``c2d`` and ``scipy.linalg.expm`` in the tests) because they
   are rebuilt at every sample.
@@ -112,10 +115,12 @@ TABLE3 = {"S": 2.365, "c": 1.34, "aspect_ratio": 2.047, "m": 39.7, "x_cg": 1.217
 V_TRIM = 37.0  #: trim airspeed (m/s), §6
 ALPHA_TRIM = 0.01  #: trim angle of attack (rad), §6
 TS = 0.01  #: sampling period (s), §6
-MU_READING = 2.6146e-5  #: our reading of the garbled quadratic coefficient of M_u (eq. 16)
-#: sensor noise bounds |n_i| <= NOISE_BOUND[i]: airspeed (m/s), alpha (rad), theta (rad), q (rad/s)
+MU_READING = 2.6146e-5  #: our reading of the garbled quadratic coefficient of :math:`M_u` (eq. 16)
+#: sensor noise bounds :math:`|n_i|` <= ``NOISE_BOUND[i]``: airspeed (m/s), :math:`\alpha` (rad),
+#: :math:`\theta` (rad), :math:`q` (rad/s)
 NOISE_BOUND = np.array([0.1, np.deg2rad(0.2), np.deg2rad(0.02), np.deg2rad(0.02)])
-#: disturbance accelerations bounds on (u, w, q): m/s^2, m/s^2, rad/s^2
+#: disturbance accelerations bounds on :math:`(u, w, q)`: :math:`\mathrm{m/s^2}`, :math:`\mathrm{m/s^2}`,
+#: :math:`\mathrm{rad/s^2}`
 DIST_ACCEL = np.array([0.2, 0.2, 0.002])
 FAULTS = ("alpha", "elevator", "dynamics")  #: FDI #1, #2, #3 of §6
 SCENARIOS = ("step", "hard", "soft")  #: §6.1, §6.2, §6.3
@@ -125,9 +130,12 @@ ETA_UNITS = (
     "rad",
 )  #: readings of the elevator coefficients of (16): per degree or per radian
 ETA_UNIT = "deg"  #: default reading (see the module docstring and :func:`pitch_authority`)
-FAULT_MODES = ("deviation", "total")  #: where the elevator and M_u faults act (module docstring)
+#: where the elevator and :math:`M_u` faults act (module docstring)
+FAULT_MODES = ("deviation", "total")
 ETA_TRIM = np.deg2rad(-2.0)  #: assumed trim elevator deflection (rad) of the "total" fault mode
-RHO = 1.225  #: air density (kg/m^3, sea level) for the coefficient form of M_eta, M_w
+#: air density (:math:`\mathrm{kg/m^3}`, sea level) for the coefficient form of
+#: :math:`M_\eta, M_w`
+RHO = 1.225
 
 
 def _check_eta_unit(eta_unit: str) -> float:
@@ -163,18 +171,20 @@ def _coefficients(V: float, mu_scale: float = 1.0) -> dict[str, float]:
 def lpv_matrices(
     V: float, mu_scale: float = 1.0, elevator_eff: float = 1.0, eta_unit: str = ETA_UNIT
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Continuous-time A(V_AS), B(V_AS) of eqs. (15)-(16), state (u, w, theta, q), input (eta, tau).
+    r"""Continuous-time :math:`A(V_{AS}), B(V_{AS})` of eqs. (15)-(16), state
+    :math:`(u, w, \theta, q)`, input :math:`(\eta, \tau)`.
 
     Parameters
     ----------
     V : float
-        Airspeed V_AS (m/s).
+        Airspeed :math:`V_{AS}` (m/s).
     mu_scale : float
-        Multiplier of M_u (dynamics fault: 1.3 = +30 %).
+        Multiplier of :math:`M_u` (dynamics fault: 1.3 = +30 %).
     elevator_eff : float
         Elevator effectiveness (actuator fault: 0.5 = 50 %).
     eta_unit : {"deg", "rad"}
-        Unit of the printed elevator coefficients X_eta, Z_eta, M_eta; the input eta is in rad.
+        Unit of the printed elevator coefficients :math:`X_\eta, Z_\eta, M_\eta`; the input
+        :math:`\eta` is in rad.
 
     Returns
     -------
@@ -202,15 +212,17 @@ def lpv_matrices(
 def pitch_authority(
     eta_unit: str = ETA_UNIT, V: float = V_TRIM, rho: float = RHO
 ) -> dict[str, float]:
-    """Pitch-moment coefficients of the elevator and of the angle of attack at airspeed V.
+    r"""Pitch-moment coefficients of the elevator and of the angle of attack at airspeed V.
 
-    M_alpha = M_w V (a change of alpha is a change of w = V alpha); the coefficient form divides a
-    moment derivative by qbar S c / I_y (Table 3, qbar = rho V^2 / 2), the ratio does not need it.
+    :math:`M_\alpha = M_w V` (a change of :math:`\alpha` is a change of :math:`w = V \alpha`); the
+    coefficient form divides a moment derivative by :math:`\bar q S c / I_y` (Table 3,
+    :math:`\bar q = \rho V^2 / 2`), the ratio does not need it.
 
     Returns
     -------
-    dict with keys ``M_eta`` (1/s^2 per rad), ``M_alpha`` (1/s^2 per rad), ``Cm_eta``, ``Cm_alpha``
-    (per rad) and ``ratio`` (Cm_eta / |Cm_alpha|).
+    dict with keys ``M_eta`` (:math:`\mathrm{s^{-2}}` per rad), ``M_alpha``
+    (:math:`\mathrm{s^{-2}}` per rad), ``Cm_eta``, ``Cm_alpha`` (per rad) and ``ratio``
+    (:math:`C_{m\eta} / |C_{m\alpha}|`).
     """
     A, B = lpv_matrices(V, eta_unit=eta_unit)
     M_eta, M_alpha = float(B[3, 0]), float(A[3, 1] * V)
@@ -245,7 +257,8 @@ def discretize(
     Ts: float = TS,
     eta_unit: str = ETA_UNIT,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(A_d, B_d) of the LPV model (15)-(16) at airspeed V (m/s), zero-order hold with period Ts (s).
+    """:math:`(A_d, B_d)` of the LPV model (15)-(16) at airspeed V (m/s), zero-order hold with
+    period :math:`T_s` (s).
 
     Results are memoised (least-recently-used cache) because every SVO of a bank asks for the
     same airspeeds at the same sample.
@@ -263,7 +276,7 @@ def discretize_many(
     """:func:`discretize` for an array of airspeeds at once (one batched matrix exponential,
     :func:`_expm_many`).
 
-    Returns A_d of shape (len(V), 4, 4) and B_d of shape (len(V), 4, 2).
+    Returns :math:`A_d` of shape (len(V), 4, 4) and :math:`B_d` of shape (len(V), 4, 2).
     """
     V = np.asarray(V, dtype=float).reshape(-1)
     if not np.all(np.isfinite(V)) or np.any(V <= 0):
@@ -341,20 +354,26 @@ def plant_derivative(
     eta_unit: str = ETA_UNIT,
     fault_mode: str = "deviation",
 ) -> np.ndarray:
-    """Right-hand side of the nonlinear stand-in plant (deviations from trim).
+    r"""Right-hand side of the nonlinear stand-in plant (deviations from trim), eqs. (14)-(16):
 
-    dx/dt = A(V_AS(x)) x + B(V_AS(x)) delta + [-q w + X_theta (sin theta - theta), 0, 0, 0]
-            + [a_u, a_w, 0, a_q] * dist,    V_AS(x) = |(u*, w*) + (u, w)|   (eqs. (14)-(16)),
+    .. math::
 
-    plus, when ``fault_mode="total"``, the faults' action on the trim values:
-    (elevator_eff - 1) b_eta eta* and (mu_scale - 1) M_u u* e_q.
+        \dot x &= A(V_{AS}(x))\, x + B(V_{AS}(x))\, \delta \\
+               &\quad + [-q w + X_\theta (\sin\theta - \theta), 0, 0, 0]^\top \\
+               &\quad + [a_u, a_w, 0, a_q]^\top \odot d, \\
+        V_{AS}(x) &= |(u^*, w^*) + (u, w)|,
+
+    with :math:`d` the disturbance ``dist``, plus, when ``fault_mode="total"``, the faults'
+    action on the trim values: :math:`(\epsilon - 1)\, b_\eta \eta^*` and
+    :math:`(\mu - 1)\, M_u u^* e_q` (:math:`\epsilon` = ``elevator_eff``, :math:`\mu` =
+    ``mu_scale``).
 
     Parameters
     ----------
     x : ndarray, shape (4,)
-        (u, w, theta, q) deviations (m/s, m/s, rad, rad/s).
+        :math:`(u, w, \theta, q)` deviations (m/s, m/s, rad, rad/s).
     delta : ndarray, shape (2,)
-        (eta, tau) deviations.
+        :math:`(\eta, \tau)` deviations.
     dist : ndarray, shape (3,)
         Normalised disturbances in [-1, 1] on (u, w, q).
     mu_scale, elevator_eff : float
@@ -417,16 +436,17 @@ def _derivative(
 
 @dataclass(frozen=True)
 class LQG:
-    """Discrete LQG controller (predictor form) designed at V = 37 m/s, alpha = 0.01 rad.
+    r"""Discrete LQG controller (predictor form) designed at V = 37 m/s, :math:`\alpha` = 0.01 rad.
 
     Attributes
     ----------
     K : ndarray, shape (2, 4)
-        State-feedback gain (python-control ``dlqr``), u = -K x_hat.
+        State-feedback gain (python-control ``dlqr``), :math:`u = -K \hat x`.
     L : ndarray, shape (4, 4)
-        Estimator gain (python-control ``dlqe``), x_hat+ = A x_hat + B u + L (y - C x_hat).
+        Estimator gain (python-control ``dlqe``),
+        :math:`\hat x^+ = A \hat x + B u + L (y - C \hat x)`.
     A, B, C : ndarray
-        Design model (python-control ``c2d``, ZOH, Ts = 10 ms).
+        Design model (python-control ``c2d``, ZOH, :math:`T_s` = 10 ms).
     """
 
     K: np.ndarray
@@ -442,7 +462,8 @@ def design_lqg(eta_unit: str = ETA_UNIT) -> LQG:
 
     ``eta_unit`` selects the reading of the elevator coefficients (the controller is designed on
     the same model as the plant). Bryson weights: states (1 m/s, 1 m/s, 2 deg, 5 deg/s), inputs (5 deg, 0.05); estimator with
-    process noise DIST_ACCEL * Ts and measurement noise NOISE_BOUND (as standard deviations).
+    process noise ``DIST_ACCEL * Ts`` and measurement noise ``NOISE_BOUND`` (as standard
+    deviations).
     """
     import control
 
@@ -547,7 +568,7 @@ def simulate(
     Parameters
     ----------
     fault : {"none", "alpha", "elevator", "dynamics"}
-        §6: additive alpha-sensor fault, elevator loss of effectiveness, M_u increase.
+        §6: additive alpha-sensor fault, elevator loss of effectiveness, :math:`M_u` increase.
     scenario : {"step", "hard", "soft"}
         Fault shape (:func:`fault_profile`), onset at 0.5 s.
     rng : numpy.random.Generator
@@ -560,7 +581,7 @@ def simulate(
     eta_unit : {"deg", "rad"}
         Reading of the elevator coefficients (:data:`ETA_UNIT`).
     fault_mode : {"deviation", "total"}
-        Where the elevator and M_u faults act (:data:`FAULT_MODES`).
+        Where the elevator and :math:`M_u` faults act (:data:`FAULT_MODES`).
     amplitude : float
         Extra airspeed command (m/s): a 0.25 Hz square wave of this amplitude is added to the
         LQG's state reference of u (0: the manoeuvre of the study). Used to test containment under
@@ -683,23 +704,25 @@ SVO_DIST_MARGIN = np.array([2e-3, 1e-3, 2e-6, 2e-5])  # per-step: nonlinear term
 
 
 #: Manoeuvre envelope of the SVO margins (module docstring): the largest measured airspeed deviation
-#: |y_V(k)| (m/s) per reading of the elevator coefficients, a multiple of 0.5 m/s below the smallest
+#: :math:`|y_V(k)|` (m/s) per reading of the elevator coefficients, a multiple of 0.5 m/s below the smallest
 #: deviation at which the true state was seen outside the nominal SVO's set
 #: (:func:`fdi_lib.reproduce.rosa2013_studies.envelope_study`; a test keeps the two consistent).
 ENVELOPE_AIRSPEED = {"deg": 4.0, "rad": 2.5}
 
 
 def envelope_exceedance(run: UAVRun) -> np.ndarray:
-    """Samples k of ``run`` whose measured airspeed deviation |y_V(k)| exceeds the manoeuvre envelope
-    :data:`ENVELOPE_AIRSPEED` of its elevator reading (empty: the record stays inside)."""
+    """Samples k of ``run`` whose measured airspeed deviation :math:`|y_V(k)|` exceeds the
+    manoeuvre envelope :data:`ENVELOPE_AIRSPEED` of its elevator reading (empty: the record stays
+    inside)."""
     return np.flatnonzero(np.abs(run.y[:, 0]) > ENVELOPE_AIRSPEED[run.eta_unit])
 
 
 def svo_scale() -> np.ndarray:
-    """State scaling for the SVOs (argument ``scale`` of :func:`fdi_lib.sets.svo.run_svo`).
+    r"""State scaling for the SVOs (argument ``scale`` of :func:`fdi_lib.sets.svo.run_svo`).
 
-    Half-widths of the box that the measurement strip alone allows, |C^-1| (nbar + margin): about
-    0.16, 0.16 m/s on u, w and 3.6e-4 rad, rad/s on theta, q. In these units the SVO sets are round.
+    Half-widths of the box that the measurement strip alone allows, :math:`|C^{-1}| (\bar n +
+    \text{margin})`: about 0.16, 0.16 m/s on :math:`u, w` and :math:`3.6 \cdot 10^{-4}` rad, rad/s
+    on :math:`\theta, q`. In these units the SVO sets are round.
     """
     return np.abs(np.linalg.inv(measurement_matrix())) @ (NOISE_BOUND + SVO_NOISE_MARGIN)
 
@@ -712,17 +735,18 @@ def svo_models(
     noise_scale: float = 1.0,
     alpha_slack_deg: float = 0.0,
 ):
-    """Per-step SVO models (a :class:`fdi_lib.sets.svo.ModelSequence`, callable k -> SVOModel) for the
+    r"""Per-step SVO models (a :class:`fdi_lib.sets.svo.ModelSequence`, callable k -> SVOModel) for the
     nominal plant or a fault hypothesis.
 
     Parameters
     ----------
     run : UAVRun
-        Supplies the measured airspeed used for scheduling (V_hat = V_TRIM + y[k, 0]) and the
+        Supplies the measured airspeed used for scheduling (``V_hat = V_TRIM + y[k, 0]``) and the
         reading of the elevator coefficients (``run.eta_unit``).
     kind : {"nominal", "alpha", "elevator", "dynamics", "global"}
         SVO #1 (nominal), #2 (alpha-sensor noise bound enlarged by 5 deg), #3 (elevator
-        effectiveness in [0.5, 1]: B + B_1 Delta, §2), #4 (M_u scale in [1, 1.3]: A + A_2 Delta),
+        effectiveness in [0.5, 1]: :math:`B + B_1 \Delta`, §2), #4 (:math:`M_u` scale in [1, 1.3]:
+        :math:`A + A_2 \Delta`),
         or the Global SVO of Architecture II (all three at once).
     dist_scale : float
         Multiplier of the whole per-step disturbance bound L (simulation bound plus margin);
@@ -734,7 +758,7 @@ def svo_models(
     alpha_slack_deg : float
         Degrees added to the angle-of-attack noise bound of this observer only (0: the design
         bound). The book's hypothesis on the paper's 3.5 s isolation of a soft alpha fault
-        loosens the elevator and M_u observers (#3, #4) this way
+        loosens the elevator and :math:`M_u` observers (#3, #4) this way
         (:func:`fdi_lib.reproduce.rosa2013_uav.uav_study`).
 
     Warns
@@ -746,8 +770,9 @@ def svo_models(
 
     Notes
     -----
-    Airspeed uncertainty: V in [V_hat - dV, V_hat + dV], dV = noise bound + margin, gives the
-    parametric uncertainty A_1 = (A_d(V+) - A_d(V-)) / 2 (n_A = 1) and B_1 likewise.
+    Airspeed uncertainty: :math:`V \in [\hat V - \delta V, \hat V + \delta V]`,
+    :math:`\delta V` = noise bound + margin, gives the parametric uncertainty
+    :math:`A_1 = (A_d(V^+) - A_d(V^-)) / 2` (:math:`n_A = 1`) and :math:`B_1` likewise.
     """
     from fdi_lib.sets.svo import ModelSequence
 

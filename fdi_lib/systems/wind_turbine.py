@@ -29,7 +29,7 @@ Model (units: pitch angles in degrees, speeds in rad/s, torques in N m, power in
   coefficient is ``Cp = lambda Cq`` (:func:`power_coefficient`).
 * **Pitch actuators** *[model]* "PitchSystem i": ``beta_i'' = -2 zeta omega_n beta_i' + omega_n^2 (u_i -
   beta_i)``. The actuator's internal loop uses the measured pitch: ``u_i = beta_r + beta_i - (beta_i,m1
-  + beta_i,m2) / 2`` *[model]* ("Beta_i_f" signals), so a pitch-sensor fault moves the true pitch and the
+  + beta_i,m2) / 2`` *[model]* (``Beta_i_f`` signals), so a pitch-sensor fault moves the true pitch and the
   pitch-sensor noise reaches the blade. A change of dynamics mixes ``omega_n^2`` and ``2 zeta omega_n``
   linearly with the fault profile ``p(t)`` in ``[0, 1]`` (as *[model]* "PitchSystem 3" mixes the
   nominal and faulty state-space models with ``p``).
@@ -161,13 +161,13 @@ ACTUATOR_FAULT_MODELS = ("simulink", "jump_free")
 
 @dataclass(frozen=True)
 class WindTurbineParams:
-    """Every constant of the benchmark model, with its source (see the module docstring for the keys).
+    r"""Every constant of the benchmark model, with its source (see the module docstring for the keys).
 
-    Angles in degrees, speeds in rad/s, torques in N m, power in W, inertias in kg m^2.
+    Angles in degrees, speeds in rad/s, torques in N m, power in W, inertias in :math:`\mathrm{kg\,m^2}`.
     """
 
     # --- aerodynamics -----------------------------------------------------------------------------
-    rho: float = 1.225  #: air density (kg/m^3) [script] ``rho``; [Felix] ``rho_r``
+    rho: float = 1.225  #: air density (:math:`\mathrm{kg/m^3}`) [script] ``rho``; [Felix] ``rho_r``
     radius: float = 57.5  #: rotor radius R (m) [script] ``R``; [Felix] ``R_r``
     # --- drive train (two-mass model) [script] "Drive Train Model"; [Felix] "Drive train Parameters" --
     J_r: float = 55e6  #: rotor inertia
@@ -202,22 +202,22 @@ class WindTurbineParams:
     # --- controller [script] "Controller"; [model] "Controller"; [Felix] "Controller Pitch" ------------
     K_p: float = 4.0  #: pitch PI proportional gain (deg per rad/s)
     K_i: float = 1.0  #: pitch PI integral gain (deg per rad)
-    cp_max: float = 0.4554  #: Cp used in K_opt [script] ``K_opt = ... 0.4554 / (N_g 8)^3``
-    lambda_opt: float = 8.0  #: optimal tip-speed ratio used in K_opt [script]
+    cp_max: float = 0.4554  #: Cp used in ``K_opt`` [script] ``K_opt = ... 0.4554 / (N_g 8)^3``
+    lambda_opt: float = 8.0  #: optimal tip-speed ratio used in ``K_opt`` [script]
     P_r: float = 4.8e6  #: rated (reference) power (W)
     omega_nom: float = 162.0  #: nominal generator speed (rad/s) ``Omega_nom``
     omega_delta: float = 15.0  #: hysteresis of the zone switch 2 -> 1 (rad/s) ``Omega_delta``
     beta_min: float = -2.0  #: pitch reference and integrator lower limit (deg) [model] saturations
     beta_max: float = 90.0  #: pitch reference and integrator upper limit (deg) [model] saturations
     # --- the reading of the faulty pitch actuators (module docstring, disagreement 3) ------------
-    #: "simulink": the benchmark's Simulink realisation (the pitch jumps by (omega_n,f / omega_n)^2
-    #: when the parameters change); "jump_free": the physical parameters change, the pitch is
-    #: continuous
+    #: ``"simulink"``: the benchmark's Simulink realisation (the pitch jumps by
+    #: :math:`(\omega_{n,f} / \omega_n)^2` when the parameters change); ``"jump_free"``: the
+    #: physical parameters change, the pitch is continuous
     actuator_faults: str = "simulink"
 
     @property
     def K_opt(self) -> float:
-        """Optimal-mode gain ``tau_g,r = K_opt omega_g^2`` (N m s^2) [script]:
+        r"""Optimal-mode gain ``tau_g,r = K_opt omega_g^2`` (:math:`\mathrm{N\,m\,s^2}`) [script]:
         ``0.5 rho pi R^2 eta_dt R^3 Cp_max / (N_g lambda_opt)^3``."""
         return (
             0.5
@@ -611,10 +611,11 @@ def aero_torque(
 # ---------------------------------------------------------------------------------------------------
 # Faults
 # ---------------------------------------------------------------------------------------------------
-#: Fault kinds: a sensor stuck at ``magnitude`` ("sensor_fixed"), multiplied by ``magnitude``
-#: ("sensor_gain"), a pitch actuator's ``(omega_n, zeta)`` changed to ``magnitude`` ("actuator_dynamics"),
-#: an additive converter torque offset ``magnitude`` N m ("converter_offset"), the drive-train efficiency
-#: changed to ``magnitude`` ("drive_train").
+#: Fault kinds: a sensor stuck at ``magnitude`` (``"sensor_fixed"``), multiplied by ``magnitude``
+#: (``"sensor_gain"``), a pitch actuator's ``(omega_n, zeta)`` changed to ``magnitude``
+#: (``"actuator_dynamics"``), an additive converter torque offset ``magnitude`` N m
+#: (``"converter_offset"``), the drive-train efficiency changed to ``magnitude``
+#: (``"drive_train"``).
 FAULT_KINDS = (
     "sensor_fixed",
     "sensor_gain",
@@ -631,7 +632,7 @@ class Fault:
 
     ``component`` names what it acts on: sensors by :data:`OUTPUT_NAMES`, ``"pitch_actuator_i"``,
     ``"converter"`` or ``"drive_train"``; ``magnitude`` has one value per sensor for the sensor kinds,
-    ``(omega_n, zeta)`` for "actuator_dynamics", one value otherwise. The fault acts on the samples
+    ``(omega_n, zeta)`` for ``"actuator_dynamics"``, one value otherwise. The fault acts on the samples
     ``start_s <= t < stop_s``; with ``ramp_s > 0`` its profile rises linearly over ``ramp_s`` seconds
     and falls over the last ``ramp_s`` (the benchmark's slowly introduced fault 7). The profile
     mixes the healthy and faulty behaviour (:func:`fault_profiles`). ``required_detection_s`` is the

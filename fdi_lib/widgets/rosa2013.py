@@ -78,7 +78,7 @@ def explore_svo(
     Parameters
     ----------
     delta_bound : float
-        Size of the parametric uncertainty (scales A_1 of :func:`fdi_lib.reproduce.rosa2013.toy_model`).
+        Size of the parametric uncertainty (scales :math:`A_1` of :func:`fdi_lib.reproduce.rosa2013.toy_model`).
     horizon : int
         Horizon N of the template SVO (eq. (3)), from 1 to :data:`MAX_HORIZON`.
     noise : float

@@ -147,8 +147,8 @@ def sparse_grid_facts(grid: dict = GRID, *, r: float = 0.5, seed: int = 0) -> di
     Returns
     -------
     dict
-        ``false_alarms``, ``missed``: (q, lam_scale) -> components wrongly in / wrongly out of the
-        Lasso support; ``position``: (q, lam_scale) -> ``"below"``, ``"in"`` or ``"above"`` the
+        ``false_alarms``, ``missed``: ``(q, lam_scale)`` -> components wrongly in / wrongly out of
+        the Lasso support; ``position``: ``(q, lam_scale)`` -> ``"below"``, ``"in"`` or ``"above"`` the
         flat range; ``flat_ratio``: q -> high / low end of the flat range (its length in decades
         is the log10 of it).
     """

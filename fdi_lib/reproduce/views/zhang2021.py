@@ -455,6 +455,14 @@ def rate_table(result: ReproductionResult):
     )
 
 
+def _snr_tex(key: str) -> str:
+    """A reading's key (``"sum Y^2 / sum V^2"``, a ratio of sums or of variances) as TeX, the
+    SNR's row label."""
+    tex = key.replace("sum ", "\\sum ").replace("var(", "\\operatorname{var}(")
+    num, den = (f"{{{part}}}" for part in tex.split(" / "))
+    return rf"10 \log_{{10}} \frac{num}{den}"
+
+
 def snr_table(readings: dict[str, np.ndarray], r_values: Sequence[float] = (0.5, 100.0, 200.0)):
     """Mean SNR (dB, output 1 / output 2) of each reading of :func:`~fdi_lib.reproduce.zhang2021.snr_variants` beside Table II's."""
     from fdi_lib.report import fmt_number, table
@@ -462,8 +470,9 @@ def snr_table(readings: dict[str, np.ndarray], r_values: Sequence[float] = (0.5,
     def cell(v: Sequence[float]) -> str:
         return " / ".join(fmt_number(float(x), 4) for x in v)
 
+    # the readings' keys ("sum Y^2 / sum V^2") as maths: 10 log10 of a ratio of sums
     rows = {
-        f"10 log₁₀ {k}": [cell(v[i]) for i in range(len(r_values))] for k, v in readings.items()
+        f"${_snr_tex(k)}$": [cell(v[i]) for i in range(len(r_values))] for k, v in readings.items()
     }
     rows["paper (Table II)"] = [
         cell(PAPER_TABLE2["snr_db"][float(r) if r != int(r) else int(r)]) for r in r_values
