@@ -177,11 +177,8 @@ def explanation_scale(
         bounds[:n] = list(zip(lo, hi))
     c = np.zeros(nv)
     c[si] = 1.0
-    for method in (
-        "highs-ds",
-        "highs-ipm",
-        "highs",
-    ):  # fall back when one HiGHS solver stalls numerically
+    # fall back when one HiGHS solver stalls numerically
+    for method in ("highs-ds", "highs-ipm", "highs"):
         res = linprog(c, A_ub=Aub, b_ub=bub, A_eq=Aeq, b_eq=beq, bounds=bounds, method=method)
         if res.status in (0, 2):
             break
