@@ -454,7 +454,8 @@ def markdown_text(text: Any) -> str:
     render = {
         "text": lambda p: _MD_SPECIAL.sub(r"\\\1", p),
         "code": lambda p: f"`{p}`",
-        "math": lambda p: f"${p}$",
+        # bars as \vert and \Vert: a bare "|" would end a table's cell inside the maths
+        "math": lambda p: "$" + p.replace(r"\|", r"\Vert{}").replace("|", r"\vert{}") + "$",
     }
     flat = re.sub(r"[ \t\r\n]+", " ", str(text)).strip()
     return "".join(render[kind](piece) for kind, piece in text_pieces(flat))

@@ -166,6 +166,21 @@ def test_table_markdown_sets_code_as_code_and_maths_as_maths():
     assert ("math_inline", "\\beta_{1,m1}") in pieces and ("text", " | 2") in pieces
 
 
+def test_table_markdown_keeps_bars_in_maths_inside_their_cell():
+    """A bar in the maths (an absolute value, a norm) would end the table's cell, leaving raw TeX
+    in the PDF (C_{m\\alpha} on the SVO chapter's page): written as \\vert and \\Vert."""
+    from markdown_it import MarkdownIt
+    from mdit_py_plugins.dollarmath import dollarmath_plugin
+
+    t = table({r"$C_{m\eta} / |C_{m\alpha}|$ (%), $\|r\|_2$": [1.0]}, ["ours"])
+    md = MarkdownIt("commonmark").enable("table").use(dollarmath_plugin)
+    tokens = md.parse(t._repr_markdown_())
+    assert sum(tok.type in ("th_open", "td_open") for tok in tokens) == 4
+    pieces = [(c.type, c.content) for tok in tokens if tok.type == "inline" for c in tok.children]
+    assert ("math_inline", r"C_{m\eta} / \vert{}C_{m\alpha}\vert{}") in pieces
+    assert ("math_inline", r"\Vert{}r\Vert{}_2") in pieces
+
+
 def test_table_rejects():
     with pytest.raises(ModelError, match="expected 2"):
         table({"a": [1]}, ["ours", "paper"])
