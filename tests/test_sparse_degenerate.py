@@ -165,7 +165,7 @@ def test_exact_tie_at_lambda_max(seed):
     """Against the closed form: ``X^T X = n I``, so the path soft-thresholds ``z = X^T y / n`` and
     its breakpoints are the ``|z_j|``. scikit-learn's ``lars_path`` is no reference here: where the
     rounding of ``X^T y`` leaves the two tied correlations 1e-14 apart (seed 1 on an AVX2 machine,
-    not on an AVX-512 one), its path ends at 3.5 for a true coefficient of 2."""
+    not on the one where the test was written), its path ends at 3.5 for a true coefficient of 2."""
     X, y = tie_problem(seed)
     path = lasso_path(X, y)
     assert path.solver == "homotopy"  # the homotopy itself handles the tie (no fallback needed)

@@ -8,9 +8,10 @@ headline keys that measure wall time (``timed_keys``) set to ``null``. A refacto
 every text byte-identical: ``tests/test_json_identity.py`` recomputes them.
 
 Byte-identical on the machine that recorded; elsewhere, up to its rounding (:func:`differences`).
-The last bits of a float depend on the processor's kernels (OpenBLAS's and numpy's SIMD code paths
-differ between an AVX-512 and an AVX2 machine): measured between the two, the recorded floats moved
-by at most 3.6e-10 relative, and a handful of values that are zero up to rounding by about 1e-18.
+The last bits of a float can depend on the processor (the same code and seeds; OpenBLAS and numpy
+pick their kernels by the processor's instruction sets, a likely cause we have not isolated):
+recomputed on an AVX2 AMD EPYC, the recorded floats moved by at most 3.6e-10 relative, and a
+handful of values that are zero up to rounding by about 1e-18.
 So a recomputed text is the record when it is the same text once each float within :data:`REL_TOL`
 (or :data:`ABS_TOL`) of the recorded one is written as recorded, and every other byte (keys, their
 order, strings, integers, booleans, the layout) is the same. Integers that count what rounding
@@ -53,8 +54,8 @@ ROUNDING_DEPENDENT: dict[str, dict[str, tuple[float, str]]] = {
         "vertices_exact": (
             0.01,
             "vertices of the exact set, about 2,000 after two updates: vertices closer than the "
-            "enumeration's rounding are merged or not by the last bits (2,018 against 2,021 "
-            "between an AVX2 and an AVX-512 machine)",
+            "enumeration's rounding are merged or not by the last bits (2,018 on an AVX2 "
+            "machine against the recorded 2,021)",
         )
     }
 }
