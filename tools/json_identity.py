@@ -53,9 +53,9 @@ ROUNDING_DEPENDENT: dict[str, dict[str, tuple[float, str]]] = {
     "rosa2013-timing": {
         "vertices_exact": (
             0.01,
-            "vertices of the exact set, about 2,000 after two updates: vertices closer than the "
-            "enumeration's rounding are merged or not by the last bits (2,018 on an AVX2 "
-            "machine against the recorded 2,021)",
+            "vertices of the exact set, about 2,000 after two updates, a count the last bits of "
+            "its floating-point enumeration decide (2,018 on an AVX2 machine against the "
+            "recorded 2,021; the same seeds)",
         )
     }
 }
