@@ -1370,7 +1370,9 @@ def latex_script_fallback() -> str:
 #: ``\splitmaxdepth`` (any depth) and then boxes the part with no depth, so that the depth of
 #: its last line or code cell (up to 20 pt) went into the bottom margin ("Overfull \vbox ...
 #: detected at" the box's end: 13 over 5 pt in the two editions of December 2026); split with no
-#: depth, the part is measured as it is set.
+#: depth, the part is measured as it is set. And a name from the code (``\sphinxcode``) may break
+#: after its underscores: unbroken, ``alpha_slack_deg`` in a ledger cell stood 6 pt beyond its
+#: column in the A4 edition.
 LATEX_LAYOUT = r"""\newcolumntype{T}{L}
 \usepackage[section]{placeins}
 \setlength{\tymin}{5em}
@@ -1381,6 +1383,9 @@ LATEX_LAYOUT = r"""\newcolumntype{T}{L}
   \edef\reserved@b{\expandafter\expandafter\expandafter\detokenize
     \expandafter\expandafter\expandafter{\csname #1@#2\endcsname}}%
   \ifx\reserved@a\reserved@b\else\@tempswatrue\fi}
+\let\fdi@upquote\sphinxupquote
+\protected\def\sphinxupquote#1{\fdi@upquote{\let\_\fdiUnderscore#1}}
+\def\fdiUnderscore{\textunderscore\allowbreak}
 \makeatother
 """
 
