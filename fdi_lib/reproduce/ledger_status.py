@@ -119,8 +119,15 @@ def _se_interval(ours: Any, se: Any, z: float) -> tuple[float, float] | None:
 
 
 def _label(id: str, path: tuple[str, ...], spec: Claim) -> str:
-    """The row's label: the claim's location in the paper, then what it says."""
+    """The row's label: the claim's location in the paper, then what it says. A claim shown
+    under another reproduction, read again here (``same_path``), has the label of its row there:
+    a figure's caption names the claim, not its JSON path."""
     text = f"{spec.location}: {spec.label}" if spec.label else spec.location
+    if not text.strip() and spec.shown_under and spec.same_path:
+        owner_path = spec.same_path(path)
+        owner = claim_for(spec.shown_under, owner_path)
+        if owner is not None and not owner.shown_under:
+            return _label(spec.shown_under, owner_path, owner)
     if not text.strip():
         text = f"{_fig(id)}: {' '.join(path)}"
     return text.format(*path[1:], fig=_fig(id), num=re.sub(r"^\D+", "", path[-1]))

@@ -308,6 +308,27 @@ def test_the_other_reading_of_a_figure_is_a_note_and_its_caption_has_its_own_sta
     claim = V.figure_claim(rad)
     assert claim.verb == V.COMPARE and "not detected" in claim.differs
     assert V.figure_claim(deg).verb == V.REPRODUCES
+    # the caption names the claim as the per-degree row does, not by its JSON path
+    assert (
+        claim.rows[0].label
+        == rows[0].label
+        == ("Fig. 11 (§6.4 text), alpha fault, step scenario: mean detection time")
+    )
+    assert claim.differs.startswith("; differs: alpha fault, step scenario: mean detection time:")
+    assert "detection_time_ms" not in claim.differs
+
+
+def test_a_figure_lists_a_claim_it_repeats_under_itself_once():
+    """Fig. 7's false-alarm rate is its count again (declared ``figure_reading=False``): the
+    caption names the count alone."""
+    fig7 = ReproductionResult(
+        id="zb2014-fig7",
+        headline={"false_alarms": 0, "false_alarm_rate": {"rate": 0.0}},
+        paper={"false_alarms": 7, "false_alarm_rate": {"rate": 0.0035}},
+        settings={"trials": 2000},
+    )
+    rows = V.figure_claim(fig7).rows
+    assert [r.path for r in rows] == [("false_alarms",)]
 
 
 def _declarations():
