@@ -384,7 +384,7 @@ def test_exercise_table_lists_every_exercise():
     t = E.exercise_table()
     assert [label for label, _ in t.rows] == list(EXERCISES)
     html = t._repr_html_()
-    assert all(f"<th>{i}</th>" in html for i in EXERCISES)
+    assert all(f'<th scope="row">{i}</th>' in html for i in EXERCISES)
     assert "n/a" not in html
 
 

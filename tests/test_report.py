@@ -111,6 +111,11 @@ def test_table_html_and_text():
     assert html.count("<tr>") == 3 and "fdi-table" in html and "n/a" in html
     assert "the paper gives no type I error" in html
     assert t.to_frame().loc["type I error", "paper"] == NA
+    # headers name their scope; an empty corner is no header (axe-core: empty-table-header)
+    assert '<thead><tr><td></td><th scope="col">ours</th><th scope="col">paper</th>' in html
+    assert '<tr><th scope="row">type I error</th>' in html
+    named = table({"a": [1]}, ["ours"], index_header="case")._repr_html_()
+    assert '<thead><tr><th scope="col">case</th><th scope="col">ours</th>' in named
     assert str(t).splitlines()[1].split() == ["false", "alarms", "(of", "2000", "runs)", "0", "7"]
 
 
@@ -139,9 +144,9 @@ def test_table_sets_names_from_the_code_as_code_and_symbols_as_maths():
     )
     html = t._repr_html_()
     math = '<span class="math notranslate nohighlight">\\({}\\)</span>'.format
-    assert "<th>redraw, <code>explore_glr</code> (onset)</th>" in html
+    assert '<th scope="row">redraw, <code>explore_glr</code> (onset)</th>' in html
     assert f">{math('x_k')} &lt; 1 &amp; {math(chr(92) + 'Gamma_k')}</td>" in html
-    assert f"<th>{math('C_{m' + chr(92) + 'eta}')} (per rad)</th>" in html
+    assert f'<th scope="row">{math("C_{m" + chr(92) + "eta}")} (per rad)</th>' in html
     assert (
         "<li>timed by <code>tools/build_report.py</code> against <code>lars_path</code>; "
         f"{math(chr(92) + 'beta_{1,m1}')} and {math(chr(92) + 'Vert r_k' + chr(92) + 'Vert_2')}</li>"
