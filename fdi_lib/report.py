@@ -234,19 +234,20 @@ class Table:
 
     def _repr_html_(self) -> str:
         esc = _html_text
-        # headers carry their scope for screen readers; an empty corner is a data cell, not a
-        # header without a name (axe-core's empty-table-header)
-        corner = (
-            f'<th scope="col">{esc(self.index_header)}</th>' if self.index_header else "<td></td>"
-        )
-        head = corner + "".join(f'<th scope="col">{esc(c)}</th>' for c in self.columns)
+
+        def header(text: str, scope: str) -> str:
+            # headers carry their scope for screen readers; an empty one (the corner, a row that
+            # continues the one above) is a data cell, not a header without a name (axe-core's
+            # empty-table-header)
+            return f'<th scope="{scope}">{esc(text)}</th>' if text.strip() else "<td></td>"
+
+        head = "".join(header(c, "col") for c in (self.index_header, *self.columns))
         # each cell names its column (data-label): on a phone, a table too wide for the column
         # shows each row as a card, every cell after its column's header (the book's CSS)
         labels = [f' data-label="{html.escape(c, quote=True)}"' for c in self.columns]
         body = "".join(
-            '<tr><th scope="row">'
-            + esc(label)
-            + "</th>"
+            "<tr>"
+            + header(label, "row")
             + "".join(f"<td{lab}>{esc(c)}</td>" for lab, c in zip(labels, cells))
             + "</tr>"
             for label, cells in self.rows

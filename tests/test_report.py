@@ -4,7 +4,17 @@ import numpy as np
 import pytest
 
 from fdi_lib.errors import ModelError
-from fdi_lib.report import NA, NBSP, fmt_count, fmt_number, fmt_rate, fmt_time, fmt_value, table
+from fdi_lib.report import (
+    NA,
+    NBSP,
+    Table,
+    fmt_count,
+    fmt_number,
+    fmt_rate,
+    fmt_time,
+    fmt_value,
+    table,
+)
 
 
 @pytest.mark.parametrize(
@@ -114,8 +124,10 @@ def test_table_html_and_text():
     # headers name their scope; an empty corner is no header (axe-core: empty-table-header)
     assert '<thead><tr><td></td><th scope="col">ours</th><th scope="col">paper</th>' in html
     assert '<tr><th scope="row">type I error</th>' in html
-    named = table({"a": [1]}, ["ours"], index_header="case")._repr_html_()
-    assert '<thead><tr><th scope="col">case</th><th scope="col">ours</th>' in named
+    named = Table(("ours", ""), (("a", ("1", "x")), (" ", ("2", "y"))), index_header="case")
+    html = named._repr_html_()
+    assert '<thead><tr><th scope="col">case</th><th scope="col">ours</th><td></td></tr>' in html
+    assert '<tr><td></td><td data-label="ours">2</td>' in html  # a row continuing the one above
     assert str(t).splitlines()[1].split() == ["false", "alarms", "(of", "2000", "runs)", "0", "7"]
 
 
