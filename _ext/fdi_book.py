@@ -78,6 +78,11 @@
     the folds of hidden code cells and the search button are named by the text they show
     (``templates/search-button-field.html``), the bibliography's entries are the
     items of its list, and the site has an icon (``_static/favicon.svg``).
+16. Figure references resolved without re-reading pages: Sphinx 7.4 resolves every ``{numref}``
+    by unpickling the whole target page (up to 3.4 MB, the explorables' frames are inline), 121
+    times a build. :class:`_StandardDomain` reads each target page once per build and keeps, for
+    each id, a childless copy of its node (class, attributes, the classes of its children: all
+    that Sphinx's numbering looks at); the copies are dropped when the pages are read again.
 """
 
 from __future__ import annotations
@@ -104,6 +109,7 @@ from pybtex.richtext import Text
 from pybtex.style.formatting.plain import Style as PlainStyle
 from pybtex.style.labels import BaseLabelStyle
 from sphinx.application import Sphinx
+from sphinx.domains.std import StandardDomain
 from sphinx.errors import ExtensionError
 from sphinx.transforms.post_transforms import SphinxPostTransform
 from sphinx.util import logging
@@ -1162,12 +1168,30 @@ def preview_html(html: str) -> str:
 
 
 def _lighter_previews(app: Sphinx, exception: Exception | None) -> None:
-    """Applies :func:`preview_html` to every preview before sphinx-tippy writes them (its
-    ``build-finished`` handler runs at the default priority, after this one)."""
+    """Applies :func:`preview_html` to every preview a link shows before sphinx-tippy writes
+    them (its ``build-finished`` handler runs at the default priority, after this one). The
+    others (most paragraphs of every page) are never written: :func:`shown_previews`."""
     if exception is not None or app.builder.format != "html":
         return
-    for page in getattr(app.env, "tippy_data", {}).get("pages", {}).values():
-        page["id_to_html"] = {key: preview_html(html) for key, html in page["id_to_html"].items()}
+    pages = getattr(app.env, "tippy_data", {}).get("pages", {})
+    for name, key in shown_previews(pages):
+        pages[name]["id_to_html"][key] = preview_html(pages[name]["id_to_html"][key])
+
+
+def shown_previews(pages: dict[str, dict]) -> set[tuple[str, str | None]]:
+    """``(page, key)`` of every preview in sphinx-tippy's ``pages`` that a link of a page shows,
+    found as sphinx-tippy's ``write_tippy_props_page`` finds them (``key`` ``None``: the page's
+    title)."""
+    out = set()
+    for name, data in pages.items():
+        for refpage, target in data["refs_in_page"]:
+            page = name if refpage is None else refpage
+            if page not in pages:
+                continue
+            key = None if target is None else pages[page]["element_id_map"].get(target)
+            if (target is None or key is not None) and key in pages[page]["id_to_html"]:
+                out.add((page, key))
+    return out
 
 
 # --- 11. The PDF edition -------------------------------------------------------------------
@@ -1892,8 +1916,65 @@ def _visit_citation(self, node: nodes.citation) -> None:
     self.body.append(self.starttag(node, "div", classes=[node.tagname], role="listitem"))
 
 
+class _Targets:
+    """The environment as :meth:`_StandardDomain._resolve_numref_xref` passes it to Sphinx,
+    whose :meth:`get_doctree` returns a page's reference targets from ``cache`` (read once)."""
+
+    def __init__(self, env, cache: dict[str, nodes.document]):
+        self._env, self._cache = env, cache
+
+    def __getattr__(self, name: str):
+        return getattr(self._env, name)
+
+    def get_doctree(self, docname: str) -> nodes.document:
+        if docname not in self._cache:
+            self._cache[docname] = _target_stubs(self._env.get_doctree(docname))
+        return self._cache[docname]
+
+
+def _stub(node: nodes.Node) -> nodes.Node:
+    """``node`` without its tree: same class and attributes (a text: its text)."""
+    if isinstance(node, nodes.Text):
+        return nodes.Text(str(node))
+    return node.__class__(
+        **{k: v.copy() if isinstance(v, list) else v for k, v in node.attributes.items()}
+    )
+
+
+def _target_stubs(doctree: nodes.document) -> nodes.document:
+    """A document whose ``ids`` map every id of ``doctree`` to its node's :func:`_stub` with its
+    children's stubs (Sphinx's std domain numbers a target by its class, ``ids`` and, for a
+    container, whether a child is a literal block)."""
+    out = nodes.document(doctree.settings, doctree.reporter)
+    for ident, node in doctree.ids.items():
+        stub = _stub(node)
+        if isinstance(node, nodes.Element):
+            stub.extend(_stub(child) for child in node.children)
+        out.ids[ident] = stub
+    return out
+
+
+class _StandardDomain(StandardDomain):
+    """Sphinx's std domain, its figure references resolved against :class:`_Targets`."""
+
+    def __init__(self, env) -> None:
+        super().__init__(env)
+        self._targets: dict[str, nodes.document] = {}
+
+    def _resolve_numref_xref(self, env, *args, **kwargs):
+        return super()._resolve_numref_xref(_Targets(env, self._targets), *args, **kwargs)
+
+
+def _forget_targets(app: Sphinx, *args) -> None:
+    """Drops the cached targets when pages are read (before and after: they may have changed)."""
+    app.env.get_domain("std")._targets.clear()
+
+
 def setup(app: Sphinx) -> dict[str, Any]:
     app.add_transform(NumberedExplorables)
+    app.add_domain(_StandardDomain, override=True)
+    app.connect("env-before-read-docs", _forget_targets)
+    app.connect("env-updated", _forget_targets)
     app.add_node(nodes.entry, override=True, html=(_visit_entry, _depart_entry))
     from docutils.writers._html_base import HTMLTranslator
     from myst_nb.sphinx_ import HideCodeCellNode, depart_HideCellInput

@@ -47,6 +47,7 @@ def built(tmp_path_factory) -> Path:
         "extensions = ['myst_parser', 'sphinx_tippy', 'fdi_book']\n"
         "html_theme = 'sphinx_book_theme'\n"
         "myst_enable_extensions = ['dollarmath', 'amsmath']\n"
+        "numfig = True\n"
         f"mathjax_path = {config['mathjax_path']!r}\n"
         f"mathjax3_config = {config['mathjax3_config']!r}\n"
         + "".join(f"{k} = {v!r}\n" for k, v in tippy.items())
@@ -55,10 +56,12 @@ def built(tmp_path_factory) -> Path:
     (src / "other.md").write_text(
         "# Other\n\n$$\nx_k \\in \\R^n\n$$ (eq-x)\n\n"
         '````{admonition} Live $y$\n:name: fig-live\n\n```{raw} html\n<img src="data:image/png;base64,AAAA" '
-        "alt=\"a\"><script>var frames = ['MANY-FRAMES'];</script>\n```\n````\n"
+        "alt=\"a\"><script>var frames = ['MANY-FRAMES'];</script>\n```\n````\n\n"
+        "```{code-block} python\n:caption: Code\n:name: code-x\n\nx = 1\n```\n"
     )
     (src / "plain.md").write_text(
-        '# Plain\n\nSee {eq}`eq-x` and\n<a href="other.html#fig-live">the live figure</a>.\n'
+        '# Plain\n\nSee {eq}`eq-x` and\n<a href="other.html#fig-live">the live figure</a>.\n\n'
+        "{numref}`code-x` and {numref}`Listing {number} again <code-x>`.\n"
     )
     warnings = io.StringIO()
     with docutils_namespace():  # the directives and nodes it registers go with it
@@ -132,6 +135,57 @@ def test_previews_hold_the_target_without_its_scripts(built):
     assert 'a[href=\\"other.html#equation-eq-x\\"]' in tips and "x_k \\\\in \\\\R^n" in tips
     assert 'a[href=\\"other.html#fig-live\\"]' in tips and "Live" in tips
     assert "MANY-FRAMES" not in tips and "<script" not in tips
+
+
+def test_figure_references_are_numbered_from_the_cached_targets(built):
+    html = (built / "plain.html").read_text()
+    assert html.count('href="other.html#code-x"') == 2
+    assert "Listing 1</span>" in html and "Listing 1 again</span>" in html
+
+
+def test_target_stubs_number_as_the_nodes_they_copy():
+    from docutils import nodes
+    from docutils.utils import new_document
+    from sphinx.domains.std import StandardDomain
+
+    doc = new_document("page")
+    code = nodes.container("", nodes.caption("", "Code"), nodes.literal_block("x", "x"))
+    code["literal_block"] = True
+    plain = nodes.container("", nodes.paragraph("", "text"))
+    plain["literal_block"] = True
+    figure = nodes.figure("", nodes.image(uri="a.png"), nodes.caption("", "A"))
+    for ident, node in (("code", code), ("plain", plain), ("fig", figure)):
+        node["ids"] = [ident, ident + "-2"]
+        doc += node
+        doc.note_implicit_target(node)
+    stubs = EXT._target_stubs(doc)
+    assert set(stubs.ids) == set(doc.ids) and not stubs.children
+    domain = type("D", (), {"enumerable_nodes": StandardDomain.enumerable_nodes})()
+
+    def kinds(ids):
+        return {i: StandardDomain.get_enumerable_node_type(domain, n) for i, n in ids.items()}
+
+    assert kinds(stubs.ids) == kinds(doc.ids)
+    assert {kinds(doc.ids)[i] for i in ("code", "fig", "plain")} == {"code-block", "figure"}
+    assert [type(c) for c in stubs.ids["code"]] == [nodes.caption, nodes.literal_block]
+    assert not stubs.ids["code"][0].children  # the children's own children are not copied
+    assert stubs.ids["fig"]["ids"] == ["fig", "fig-2"] and stubs.ids["fig"].parent is None
+
+
+def test_shown_previews_are_those_a_link_points_to():
+    pages = {
+        "a": {
+            "refs_in_page": {(None, "x"), ("b", "y2"), ("b", None), ("b", "gone"), ("c", "z")},
+            "element_id_map": {"x": "x"},
+            "id_to_html": {None: "A", "x": "X", "unused": "U"},
+        },
+        "b": {
+            "refs_in_page": set(),
+            "element_id_map": {"y": "y", "y2": "y", "gone": "gone"},
+            "id_to_html": {None: "B", "y": "Y", "other": "O"},
+        },
+    }
+    assert EXT.shown_previews(pages) == {("a", "x"), ("b", "y"), ("b", None)}
 
 
 def test_preview_html_drops_scripts_sliders_and_permalinks():
