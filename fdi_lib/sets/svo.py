@@ -1112,24 +1112,30 @@ def _dot(M: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 @numba.njit(cache=True)
-def _support_max(DPhi: np.ndarray, V: np.ndarray, F: np.ndarray) -> np.ndarray:  # pragma: no cover
-    """``max`` over the vertex matrices ``v`` and the live vertices ``j`` (``F[a, j]``) of
-    ``DPhi[a, v] @ V[a, j]``, shape ``(a, p)``: the support of the propagated set in each template
-    direction (:meth:`TemplateBatch._step`). Each product is summed in column order from its first
-    term, as :func:`_dot` does, so the result is the same bits as ``_dot`` followed by ``max`` (a
-    NaN propagates), in one pass without the ``(a, 2^n_A, v, p)`` intermediate."""
-    na, nv, p, n = DPhi.shape
+def _support_max(
+    DPhi: np.ndarray, mi: np.ndarray, V: np.ndarray, F: np.ndarray, rows: np.ndarray
+) -> np.ndarray:  # pragma: no cover
+    """``max`` over the vertex matrices ``v`` and the live vertices ``j`` (``F[rows[a], j]``) of
+    ``DPhi[mi[a], v] @ V[rows[a], j]``, shape ``(a, p)``: the support of the propagated set of
+    observer ``rows[a]`` (its model's ``D A_v``, ``DPhi`` ``(models, v, p, n)``, shared by the
+    observers of one model) in each template direction (:meth:`TemplateBatch._step`). Each product
+    is summed in column order from its first term, as :func:`_dot` does, so the result is the same
+    bits as ``_dot`` followed by ``max`` (a NaN propagates), in one pass without the
+    ``(a, 2^n_A, v, p)`` intermediate nor copies of the observers' vertices."""
+    _, nv, p, n = DPhi.shape
+    na = rows.shape[0]
     out = np.empty((na, p))
     for a in range(na):
+        r, q = rows[a], mi[a]
         for i in range(p):
             best = -np.inf
             for v in range(nv):
                 for j in range(V.shape[1]):
-                    if not F[a, j]:
+                    if not F[r, j]:
                         continue
-                    acc = DPhi[a, v, i, 0] * V[a, j, 0]
+                    acc = DPhi[q, v, i, 0] * V[r, j, 0]
                     for c in range(1, n):
-                        acc = acc + DPhi[a, v, i, c] * V[a, j, c]
+                        acc = acc + DPhi[q, v, i, c] * V[r, j, c]
                     if acc > best or acc != acc:
                         best = acc
                         if acc != acc:
@@ -1371,8 +1377,8 @@ class TemplateBatch:
     def _step(self, g: dict, a: np.ndarray, k: int) -> None:
         D, obs = g["D"], g["idx"][a]
         mi = g["mi"][a]  # the observers' rows in the model arrays
-        DPhi = np.matmul(D, g["vA"][mi, k - 1])  # (a, 2^n_A, p, n): D A_v
-        W = _support_max(DPhi, g["V"][a], g["F"][a])  # (a, p): over A_v and the live vertices
+        DPhi = np.matmul(D, g["vA"][:, k - 1])  # (models, 2^n_A, p, n): D A_v of each model
+        W = _support_max(DPhi, mi, g["V"], g["F"], a)  # (a, p): over A_v and the live vertices
         uk = self.u[obs, k - 1]
         c = _dot(D, _dot(g["B"][mi, k - 1], uk))  # D B u
         s = g["sL"][mi]
