@@ -1123,22 +1123,31 @@ def _support_max(
     bits as ``_dot`` followed by ``max`` (a NaN propagates), in one pass without the
     ``(a, 2^n_A, v, p)`` intermediate nor copies of the observers' vertices."""
     _, nv, p, n = DPhi.shape
-    na = rows.shape[0]
+    na, J = rows.shape[0], V.shape[1]
     out = np.empty((na, p))
+    Vt = np.empty((n, J))
+    acc = np.empty(J)
     for a in range(na):
         r, q = rows[a], mi[a]
+        for c in range(n):
+            for j in range(J):
+                Vt[c, j] = V[r, j, c]
         for i in range(p):
             best = -np.inf
             for v in range(nv):
-                for j in range(V.shape[1]):
+                # every vertex's product at once (j innermost, a vector loop), then the max in
+                # vertex order
+                for j in range(J):
+                    acc[j] = DPhi[q, v, i, 0] * Vt[0, j]
+                for c in range(1, n):
+                    for j in range(J):
+                        acc[j] = acc[j] + DPhi[q, v, i, c] * Vt[c, j]
+                for j in range(J):
                     if not F[r, j]:
                         continue
-                    acc = DPhi[q, v, i, 0] * V[r, j, 0]
-                    for c in range(1, n):
-                        acc = acc + DPhi[q, v, i, c] * V[r, j, c]
-                    if acc > best or acc != acc:
-                        best = acc
-                        if acc != acc:
+                    if acc[j] > best or acc[j] != acc[j]:
+                        best = acc[j]
+                        if best != best:
                             break
                 if best != best:
                     break
@@ -1168,6 +1177,15 @@ def _basic_solutions(
     X = np.empty((B, K, n))
     F = np.empty((B, K), dtype=np.bool_)
     mu = np.empty(q)
+    invT = np.empty((n, n, K))  # inv[k, i, j] at [i, j, k]
+    for k in range(K):
+        for i in range(n):
+            for j in range(n):
+                invT[i, j, k] = inv[k, i, j]
+    Mu = np.empty((n, K))
+    Xt = np.empty((n, K))
+    acc = np.empty(K)
+    ok = np.empty(K, dtype=np.bool_)
     for b in range(B):
         bad = False
         for i in range(p):
@@ -1185,21 +1203,30 @@ def _basic_solutions(
             mu[g] = best
             big = max(big, abs(best))
         tol = 1e-12 * (1.0 + big)
+        for j in range(n):
+            for k in range(K):
+                Mu[j, k] = mu[idx[k, j]]
+        # the bases side by side (k innermost, a vector loop): each sum still in its own order
+        for i in range(n):
+            for k in range(K):
+                Xt[i, k] = 0.0
+            for j in range(n):
+                for k in range(K):
+                    Xt[i, k] += invT[i, j, k] * Mu[j, k]
         for k in range(K):
+            ok[k] = not bad
+        for g in range(q):
+            for k in range(K):
+                acc[k] = 0.0
+            for c in range(n):
+                for k in range(K):
+                    acc[k] += Xt[c, k] * U[g, c]
+            for k in range(K):
+                ok[k] = ok[k] and acc[k] <= mu[g] + tol
+        for k in range(K):
+            F[b, k] = ok[k]
             for i in range(n):
-                acc = 0.0
-                for j in range(n):
-                    acc += inv[k, i, j] * mu[idx[k, j]]
-                X[b, k, i] = acc
-            ok = not bad
-            for g in range(q):
-                if not ok:
-                    break
-                acc = 0.0
-                for c in range(n):
-                    acc += X[b, k, c] * U[g, c]
-                ok = acc <= mu[g] + tol
-            F[b, k] = ok
+                X[b, k, i] = Xt[i, k]
     return X, F
 
 
