@@ -427,11 +427,12 @@ class WindowedGLR:
         flat = Gamma.reshape(N, n, w * F * m)
         drive_c = np.ascontiguousarray(np.transpose(drive, (2, 1, 0, 3)))  # (n, N, F, m)
         started = onset >= 0
+        full = started.all(axis=1)  # every slot holds an onset: no mask needed
         for k in range(1, N):  # Gamma_0 = 0
             # Gamma_k(r) = A_{k-1} Gamma_{k-1}(r) + drive_{k-1}(r), eq. (31)
             np.matmul(g.A[k - 1], flat[k - 1], out=flat[k])
             if fam.kind == "step":
-                if started[k - 1].all():  # every slot holds an onset: no mask needed
+                if full[k - 1]:
                     Gamma[k] += drive_c[:, k - 1, None, :, :]
                 else:
                     Gamma[k] += started[k - 1][None, :, None, None] * drive_c[:, k - 1, None, :, :]

@@ -60,7 +60,7 @@ from fdi_lib.nonparametric import energy_statistic, energy_threshold
 from fdi_lib.sets.polytope import Polytope
 from fdi_lib.sets.svo import ModelSequence, run_architecture_i_many
 from fdi_lib.signatures import fault_signature
-from fdi_lib.sparse import diagnose
+from fdi_lib.sparse import flat_ranges, lasso_path_batch
 from fdi_lib.validation import integer, real
 
 
@@ -1004,23 +1004,28 @@ def run_zhang2021(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
     fa, detect, which, peak = _combine(d, stats, [d.subs[n].lasso_threshold for n in names])
     isolated = np.zeros((B, len(CANDIDATES)), dtype=bool)
     step = np.full(B, -1)
-    for b in np.flatnonzero(detect >= 0):
-        k = int(detect[b])
-        r0 = max(d.warmup, k - w + 1)
-        k1 = min(d.N, k + d.settings.isolation_extra + 1)
+    hit = np.flatnonzero(detect >= 0)
+    r0 = np.maximum(d.warmup, detect[hit] - w + 1)
+    k1 = np.minimum(d.N, detect[hit] + d.settings.isolation_extra + 1)
+    # the regression's design depends on its length only: the records of one length share it and
+    # their Lasso paths are followed as one batch (each path the same as alone, lasso_path_batch)
+    for n in np.unique(k1 - r0):
+        rows = np.flatnonzero(k1 - r0 == n)
+        lags = np.arange(n)
         Xs, ys = [], []
         for name, sd in d.subs.items():
             r, S = res[name]
-            lags = np.arange(k1 - r0)
-            Xb = np.zeros((len(lags), r.shape[-1], len(CANDIDATES)))
+            Xb = np.zeros((n, r.shape[-1], len(CANDIDATES)))
             Xb[..., list(sd.sub.candidates)] = S[d.warmup + lags]
             Xs.append(Xb.reshape(-1, len(CANDIDATES)))
-            ys.append(r[b, r0:k1].reshape(-1))
-        X, yy = np.vstack(Xs), np.concatenate(ys)
+            idx = r0[rows, None] + lags  # (records, n): each record's samples r0 .. k1 - 1
+            ys.append(r[hit[rows, None], idx].reshape(len(rows), -1))
+        X, yy = np.vstack(Xs), np.concatenate(ys, axis=1)
         scale = np.linalg.norm(X, axis=0)
-        dg = diagnose(X / scale, yy, n_samples=k1 - r0)
-        isolated[b, dg.support] = True
-        step[b] = k1 - 1
+        Xn = np.broadcast_to(X / scale, (len(rows), *X.shape))
+        flat = flat_ranges(lasso_path_batch(Xn, yy, n_samples=int(n)))
+        isolated[hit[rows]] = flat.support
+        step[hit[rows]] = k1[rows] - 1
     return MethodOutcome(fa, detect, which, isolated, step, peak)
 
 
@@ -1609,6 +1614,35 @@ def fault_records(
     accordingly (``faulty=False``: without it); the first ``settle_s`` seconds (the plant leaving its
     initial equilibrium) are dropped.
     """
+    kinds = (True,) if faulty else (False,)
+    return _segment_records(fault, seeds, settings, params, settle_s, kinds, schedule)[0]
+
+
+def fault_record_pair(
+    fault: Any,
+    seeds: Sequence[np.random.SeedSequence],
+    *,
+    settings: Settings = Settings(),
+    params: Any = None,
+    settle_s: float = 20.0,
+    schedule: str = "benchmark",
+) -> tuple[Records, Records]:
+    """:func:`fault_records` with the fault and without it (its fault-free twin: the same wind and
+    noise), the same records as two calls, the wind drawn once."""
+    return _segment_records(fault, seeds, settings, params, settle_s, (True, False), schedule)
+
+
+def _segment_records(
+    fault: Any,
+    seeds: Sequence[np.random.SeedSequence],
+    settings: Settings,
+    params: Any,
+    settle_s: float,
+    kinds: tuple[bool, ...],
+    schedule: str,
+) -> tuple[Records, ...]:
+    """:func:`fault_records` of ``fault`` with it (``True``) and without it (``False``), one
+    record per entry of ``kinds``, in the same wind."""
     from fdi_lib.systems import wind_turbine as wt
 
     _instance(fault, wt.Fault, "fault")
@@ -1634,12 +1668,17 @@ def fault_records(
             for s in seeds
         ]
     )
-    run = wt.simulate(
-        seed=seeds,
-        faults=(_shifted(fault, t0),) if faulty else (),
-        duration_s=duration,
-        params=params,
-        wind=wind,
-    )
     i0 = int(round(settle_s / params.ts))
-    return records(run).window(i0, i0 + int(round((settings.pre_s + settings.post_s) / params.ts)))
+    i1 = i0 + int(round((settings.pre_s + settings.post_s) / params.ts))
+    return tuple(
+        records(
+            wt.simulate(
+                seed=seeds,
+                faults=(_shifted(fault, t0),) if faulty else (),
+                duration_s=duration,
+                params=params,
+                wind=wind,
+            )
+        ).window(i0, i1)
+        for faulty in kinds
+    )

@@ -235,3 +235,15 @@ def test_every_set_a_method_names_is_in_its_vocabulary(design):
     f8 = frozenset(W.expected_candidates(FAULTS[8]))
     assert [m for m in W.METHODS if not W.METHODS[m].nameable(f5)] == ["bz", "rosa2013"]
     assert [m for m in W.METHODS if not W.METHODS[m].nameable(f8)] == ["bz"]
+
+
+def test_fault_record_pair_is_two_fault_records_bit_for_bit():
+    """The scoreboard's record and fault-free twin from one wind draw (and the simulator's cached
+    initial equilibria) are the records of two separate calls, to the last bit; the fault shows."""
+    seeds = np.random.SeedSequence(21).spawn(2)
+    rec, twin = W.fault_record_pair(FAULTS[9], seeds, settings=SETTINGS)
+    for got, faulty in ((rec, True), (twin, False)):
+        ref = W.fault_records(FAULTS[9], seeds, settings=SETTINGS, faulty=faulty)
+        for key in ("t", "y", "u", "x", "tau_a", "v", "region"):
+            assert np.array_equal(getattr(got, key), getattr(ref, key)), key
+    assert not np.array_equal(rec.y, twin.y)

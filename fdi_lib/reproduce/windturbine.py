@@ -280,8 +280,7 @@ def chunk(
     out = _empty_chunk(n)
     ys, us = [], []
     for f, fault in enumerate(wt.FAULTS):
-        rec = W.fault_records(fault, seeds, settings=settings, schedule=schedule)
-        twin = W.fault_records(fault, seeds, settings=settings, faulty=False, schedule=schedule)
+        rec, twin = W.fault_record_pair(fault, seeds, settings=settings, schedule=schedule)
         ys.append(rec.y)
         us.append(rec.u)
         dy = np.abs(rec.y[:, d.onset :] - twin.y[:, d.onset :]) / d.constants.sigma

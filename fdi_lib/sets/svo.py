@@ -1112,27 +1112,42 @@ def _dot(M: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 @numba.njit(cache=True)
-def _support_max(DPhi: np.ndarray, V: np.ndarray, F: np.ndarray) -> np.ndarray:  # pragma: no cover
-    """``max`` over the vertex matrices ``v`` and the live vertices ``j`` (``F[a, j]``) of
-    ``DPhi[a, v] @ V[a, j]``, shape ``(a, p)``: the support of the propagated set in each template
-    direction (:meth:`TemplateBatch._step`). Each product is summed in column order from its first
-    term, as :func:`_dot` does, so the result is the same bits as ``_dot`` followed by ``max`` (a
-    NaN propagates), in one pass without the ``(a, 2^n_A, v, p)`` intermediate."""
-    na, nv, p, n = DPhi.shape
+def _support_max(
+    DPhi: np.ndarray, mi: np.ndarray, V: np.ndarray, F: np.ndarray, rows: np.ndarray
+) -> np.ndarray:  # pragma: no cover
+    """``max`` over the vertex matrices ``v`` and the live vertices ``j`` (``F[rows[a], j]``) of
+    ``DPhi[mi[a], v] @ V[rows[a], j]``, shape ``(a, p)``: the support of the propagated set of
+    observer ``rows[a]`` (its model's ``D A_v``, ``DPhi`` ``(models, v, p, n)``, shared by the
+    observers of one model) in each template direction (:meth:`TemplateBatch._step`). Each product
+    is summed in column order from its first term, as :func:`_dot` does, so the result is the same
+    bits as ``_dot`` followed by ``max`` (a NaN propagates), in one pass without the
+    ``(a, 2^n_A, v, p)`` intermediate nor copies of the observers' vertices."""
+    _, nv, p, n = DPhi.shape
+    na, J = rows.shape[0], V.shape[1]
     out = np.empty((na, p))
+    Vt = np.empty((n, J))
+    acc = np.empty(J)
     for a in range(na):
+        r, q = rows[a], mi[a]
+        for c in range(n):
+            for j in range(J):
+                Vt[c, j] = V[r, j, c]
         for i in range(p):
             best = -np.inf
             for v in range(nv):
-                for j in range(V.shape[1]):
-                    if not F[a, j]:
+                # every vertex's product at once (j innermost, a vector loop), then the max in
+                # vertex order
+                for j in range(J):
+                    acc[j] = DPhi[q, v, i, 0] * Vt[0, j]
+                for c in range(1, n):
+                    for j in range(J):
+                        acc[j] = acc[j] + DPhi[q, v, i, c] * Vt[c, j]
+                for j in range(J):
+                    if not F[r, j]:
                         continue
-                    acc = DPhi[a, v, i, 0] * V[a, j, 0]
-                    for c in range(1, n):
-                        acc = acc + DPhi[a, v, i, c] * V[a, j, c]
-                    if acc > best or acc != acc:
-                        best = acc
-                        if acc != acc:
+                    if acc[j] > best or acc[j] != acc[j]:
+                        best = acc[j]
+                        if best != best:
                             break
                 if best != best:
                     break
@@ -1162,6 +1177,15 @@ def _basic_solutions(
     X = np.empty((B, K, n))
     F = np.empty((B, K), dtype=np.bool_)
     mu = np.empty(q)
+    invT = np.empty((n, n, K))  # inv[k, i, j] at [i, j, k]
+    for k in range(K):
+        for i in range(n):
+            for j in range(n):
+                invT[i, j, k] = inv[k, i, j]
+    Mu = np.empty((n, K))
+    Xt = np.empty((n, K))
+    acc = np.empty(K)
+    ok = np.empty(K, dtype=np.bool_)
     for b in range(B):
         bad = False
         for i in range(p):
@@ -1179,21 +1203,30 @@ def _basic_solutions(
             mu[g] = best
             big = max(big, abs(best))
         tol = 1e-12 * (1.0 + big)
+        for j in range(n):
+            for k in range(K):
+                Mu[j, k] = mu[idx[k, j]]
+        # the bases side by side (k innermost, a vector loop): each sum still in its own order
+        for i in range(n):
+            for k in range(K):
+                Xt[i, k] = 0.0
+            for j in range(n):
+                for k in range(K):
+                    Xt[i, k] += invT[i, j, k] * Mu[j, k]
         for k in range(K):
+            ok[k] = not bad
+        for g in range(q):
+            for k in range(K):
+                acc[k] = 0.0
+            for c in range(n):
+                for k in range(K):
+                    acc[k] += Xt[c, k] * U[g, c]
+            for k in range(K):
+                ok[k] = ok[k] and acc[k] <= mu[g] + tol
+        for k in range(K):
+            F[b, k] = ok[k]
             for i in range(n):
-                acc = 0.0
-                for j in range(n):
-                    acc += inv[k, i, j] * mu[idx[k, j]]
-                X[b, k, i] = acc
-            ok = not bad
-            for g in range(q):
-                if not ok:
-                    break
-                acc = 0.0
-                for c in range(n):
-                    acc += X[b, k, c] * U[g, c]
-                ok = acc <= mu[g] + tol
-            F[b, k] = ok
+                X[b, k, i] = Xt[i, k]
     return X, F
 
 
@@ -1371,8 +1404,8 @@ class TemplateBatch:
     def _step(self, g: dict, a: np.ndarray, k: int) -> None:
         D, obs = g["D"], g["idx"][a]
         mi = g["mi"][a]  # the observers' rows in the model arrays
-        DPhi = np.matmul(D, g["vA"][mi, k - 1])  # (a, 2^n_A, p, n): D A_v
-        W = _support_max(DPhi, g["V"][a], g["F"][a])  # (a, p): over A_v and the live vertices
+        DPhi = np.matmul(D, g["vA"][:, k - 1])  # (models, 2^n_A, p, n): D A_v of each model
+        W = _support_max(DPhi, mi, g["V"], g["F"], a)  # (a, p): over A_v and the live vertices
         uk = self.u[obs, k - 1]
         c = _dot(D, _dot(g["B"][mi, k - 1], uk))  # D B u
         s = g["sL"][mi]

@@ -184,6 +184,10 @@ def test_support_max_is_dot_then_max_bit_for_bit():
     ref = np.stack(
         [_dot(DPhi[a][:, None], V[a][F[a]][None]).reshape(-1, 6).max(axis=0) for a in range(7)]
     )
-    assert np.array_equal(_support_max(DPhi, V, F), ref)
+    rows = np.arange(7)
+    assert np.array_equal(_support_max(DPhi, rows, V, F, rows), ref)
+    # observers share their model's products and are picked by row, in any order
+    pick = np.array([4, 0, 4])
+    assert np.array_equal(_support_max(DPhi[[0, 4]], np.array([1, 0, 1]), V, F, pick), ref[pick])
     DPhi[2, 1, 3, 0] = np.nan  # a NaN propagates, as in numpy's max
-    assert np.isnan(_support_max(DPhi, V, F)[2, 3])
+    assert np.isnan(_support_max(DPhi, rows, V, F, rows)[2, 3])
