@@ -12,19 +12,20 @@ Model (Zhang 2021, eq. (1)/(23), in the book's notation :math:`A \to F`, :math:`
 
 with :math:`d_k` an arbitrary unknown input (no statistics, no model). The filter of
 Kitanidis (1987), as written in Zhang (2021), eq. (24), designed for :math:`\theta = 0`,
-with :math:`\hat X_k` the prediction and :math:`\hat X_{k|k}` the estimate:
+with :math:`\hat X_k` the prediction, :math:`\hat X_{k|k}` the estimate, :math:`P_k` the prior
+covariance, :math:`K^{\mathrm c}_k` the Kalman part of the gain and :math:`K_k` the Kitanidis
+gain (:math:`\bar K_k` in the book):
 
 .. math::
 
     \begin{aligned}
-    P_k &= F_{k-1} P_{k-1|k-1} F_{k-1}^\T + Q_{k-1}
-        && \text{(24a), prior covariance}, \\
+    P_k &= F_{k-1} P_{k-1|k-1} F_{k-1}^\T + Q_{k-1} && \text{(24a)}, \\
     \Sigma_k &= H_k P_k H_k^\T + R_k && \text{(24b)}, \\
-    K^{\mathrm c}_k &= P_k H_k^\T \Sigma_k^{-1} && \text{(Kalman part)}, \\
+    K^{\mathrm c}_k &= P_k H_k^\T \Sigma_k^{-1}, \\
     \Gamma^{\mathrm K}_k &= (I - K^{\mathrm c}_k H_k) E_{k-1} && \text{(24c)}, \\
     \Xi_k &= E_{k-1}^\T H_k^\T \Sigma_k^{-1} H_k E_{k-1} && \text{(24d)}, \\
     K_k &= K^{\mathrm c}_k + \Gamma^{\mathrm K}_k \Xi_k^{-1} E_{k-1}^\T H_k^\T \Sigma_k^{-1}
-        && \text{(24g), the Kitanidis gain } \bar K_k, \\
+        && \text{(24g)}, \\
     P_{k|k} &= P_k - K^{\mathrm c}_k H_k P_k
         + \Gamma^{\mathrm K}_k \Xi_k^{-1} \Gamma^{\mathrm K\T}_k && \text{(24f)}, \\
     \hat X_{k|k} &= \hat X_k + K_k \varepsilon_k, \quad

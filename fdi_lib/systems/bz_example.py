@@ -17,9 +17,12 @@ Zhang & Basseville (2014), Section 6.1 (:mod:`fdi_lib.systems.zb2014_unstable`):
 
 .. math::
 
-    G = \begin{bmatrix} 0 & 1 & 0 \end{bmatrix}^\T, \quad
-    E = \begin{bmatrix} 1 & 0 & 0 \end{bmatrix}^\T, \quad
-    \Psi = \begin{bmatrix} 0 & 0 \\ 1 & 0 \\ 0 & 1 \end{bmatrix}, \quad
+    G = \begin{bmatrix} 0 \\ 1 \\ 0 \end{bmatrix}, \quad
+    E = \begin{bmatrix} 1 \\ 0 \\ 0 \end{bmatrix}, \quad
+    \Psi = \begin{bmatrix} 0 & 0 \\ 1 & 0 \\ 0 & 1 \end{bmatrix},
+
+.. math::
+
     Q = 0.0025\, I_3, \quad R = 0.0025\, I_3, \quad P_0 = Q,
 
 closed by the PI controller of Section 6.1 on :math:`Y^{(1)}` (set-point 1).

@@ -6,13 +6,16 @@ r"""Example 1 of Zhang (2021), eqs. (40)-(42): a 3-state LTV system with an unkn
 
 .. math::
 
+    A_k = \begin{bmatrix} -0.8 & 0.7 & 0.1 e^{-k} \\ -0.6 & 0 & 0.1 \cos k \\
+        0.1 \sin k & -0.5 & -0.4 \end{bmatrix}, \qquad
+    C = \begin{bmatrix} 1 & 0 & 0 \\ 0 & 0 & 1 \end{bmatrix}, \qquad
+    E = \begin{bmatrix} -1 \\ 0 \\ 0 \end{bmatrix},
+
+.. math::
+
     \begin{aligned}
-    A_k &= \begin{bmatrix} -0.8 & 0.7 & 0.1 e^{-k} \\ -0.6 & 0 & 0.1 \cos k \\
-        0.1 \sin k & -0.5 & -0.4 \end{bmatrix}, &
-    C &= \begin{bmatrix} 1 & 0 & 0 \\ 0 & 0 & 1 \end{bmatrix}, &
-    E &= \begin{bmatrix} -1 & 0 & 0 \end{bmatrix}^\T, \\
-    Q &= I_3, & R &= r I_2 \ (r = 0.5), & & \\
-    d_k &= 10 \sin(0.1 k) + \epsilon_k + 100, & \epsilon_k &\sim \mathcal N(0, 1) \text{ white}, & &
+    Q &= I_3, & R &= r I_2 \ (r = 0.5), \\
+    d_k &= 10 \sin(0.1 k) + \epsilon_k + 100, & \epsilon_k &\sim \mathcal N(0, 1) \text{ white},
     \end{aligned}
 
 :math:`\Psi_k` (the paper's :math:`\Phi_k`, 3 x 50) has i.i.d. entries uniform on ``[-17.3, 17.3]``,
