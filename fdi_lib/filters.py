@@ -1,26 +1,31 @@
-"""Kalman filter for LTV models, in one-step-predictor and prediction/update forms.
+r"""Kalman filter for LTV models, in one-step-predictor and prediction/update forms.
 
-Zhang & Basseville (2014), eqs. (6)-(8), (10)::
+Zhang & Basseville (2014), eqs. (6)-(8), (10):
 
-    Sigma_k = H_k P_k H_k^T + R_k
-    K_k     = P_k H_k^T Sigma_k^{-1}                       (filter gain)
-    eps_k   = Y_k - J_k U_k - H_k Xhat_k                   (innovation)
-    Xhat_{k+1} = F_k Xhat_k + G_k U_k + F_k K_k eps_k      (predictor, gain F_k K_k)
-    P_{k+1} = F_k (I - K_k H_k) P_k F_k^T + Q_k
+.. math::
+
+    \begin{aligned}
+    \Sigma_k &= H_k P_k H_k^\T + R_k, \\
+    K_k &= P_k H_k^\T \Sigma_k^{-1} && \text{(filter gain)}, \\
+    \varepsilon_k &= Y_k - J_k U_k - H_k \hat X_k && \text{(innovation)}, \\
+    \hat X_{k+1} &= F_k \hat X_k + G_k U_k + F_k K_k \varepsilon_k
+        && \text{(predictor, gain } F_k K_k \text{)}, \\
+    P_{k+1} &= F_k (I - K_k H_k) P_k F_k^\T + Q_k .
+    \end{aligned}
 
 The updated estimate of the prediction/update form (Zhang 2021, eq. (4)) is
-``Xhat_{k|k} = Xhat_k + K_k eps_k``; both are returned.
+:math:`\hat X_{k|k} = \hat X_k + K_k \varepsilon_k`; both are returned.
 
 The gains do not depend on the data: :func:`kalman_gains` computes them once
 and :func:`kalman_filter` runs the data recursion, vectorised over any leading
 axes of independent realisations (the Monte Carlo engine shares the gains).
-Numerics: gains by Cholesky solves (no explicit inverse of ``Sigma_k``), the
+Numerics: gains by Cholesky solves (no explicit inverse of :math:`\Sigma_k`), the
 covariance update in Joseph form, symmetrised at every step.
 
 Missing samples (NaN outputs, :mod:`fdi_lib.validation`) are part of the gains: at a missing
-sample ``K_k = 0`` and ``P_{k|k} = P_k`` (the filter predicts without updating, as
-``filterpy``'s ``KalmanFilter.update(None)``), so ``P_k``, ``Sigma_k``, ``A_k = F_k`` and the
-fault signatures built from the gains are those of the record actually observed.
+sample :math:`K_k = 0` and :math:`P_{k|k} = P_k` (the filter predicts without updating, as
+``filterpy``'s ``KalmanFilter.update(None)``), so :math:`P_k`, :math:`\Sigma_k`, :math:`A_k = F_k`
+and the fault signatures built from the gains are those of the record actually observed.
 """
 
 from __future__ import annotations

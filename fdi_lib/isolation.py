@@ -1,16 +1,23 @@
-"""Fault isolation by the minmax (nuisance-rejection) test.
+r"""Fault isolation by the minmax (nuisance-rejection) test.
 
 Zhang & Basseville (2014), Section 4.3, eqs. (38)-(43). After an alarm at
-``k*`` with estimated onset ``r_hat``, the stacked innovations
-``Z ~ N(M theta, R)``; with the Fisher information ``F = M^T R^{-1} M`` and the
-normalised residual ``zeta = M^T R^{-1} Z`` partitioned along ``theta = (theta_a, theta_b)``::
+:math:`k^*` with estimated onset :math:`\hat r`, the stacked innovations
+:math:`Z \sim \mathcal N(M\theta, R)`; with the Fisher information
+:math:`\mathbf F = M^\T R^{-1} M` and the normalised residual :math:`\zeta = M^\T R^{-1} Z`
+partitioned along :math:`\theta = (\theta_a, \theta_b)`:
 
-    zeta_a* = zeta_a - F_ab F_bb^{-1} zeta_b,      F_a* = F_aa - F_ab F_bb^{-1} F_ba
-    l_a     = zeta_a*^T F_a*^{-1} zeta_a*                                   (41)
+.. math::
 
-Under ``theta_a = 0``, whatever ``theta_b``, ``l_a`` is chi-square with ``dim(theta_a)``
-degrees of freedom. Because ``R`` is block diagonal, ``F`` and ``zeta`` are sums
-over samples: they are exactly ``C_k(r_hat)`` and ``d_k(r_hat)`` of the GLR test.
+    \begin{aligned}
+    \zeta_a^* &= \zeta_a - \mathbf F_{ab} \mathbf F_{bb}^{-1} \zeta_b, &
+    \mathbf F_a^* &= \mathbf F_{aa} - \mathbf F_{ab} \mathbf F_{bb}^{-1} \mathbf F_{ba}, \\
+    l_a &= \zeta_a^{*\T} \mathbf F_a^{*-1} \zeta_a^* . && \qquad (41)
+    \end{aligned}
+
+Under :math:`\theta_a = 0`, whatever :math:`\theta_b`, :math:`l_a` is chi-square with
+:math:`\dim\theta_a` degrees of freedom. Because :math:`R` is block diagonal, :math:`\mathbf F`
+and :math:`\zeta` are sums over samples: they are exactly :math:`C_k(\hat r)` and
+:math:`d_k(\hat r)` of the GLR test.
 """
 
 from __future__ import annotations

@@ -1,56 +1,76 @@
-"""Kitanidis unbiased minimum-variance filter for LTV models with an unknown input.
+r"""Kitanidis unbiased minimum-variance filter for LTV models with an unknown input.
 
-Model (Zhang 2021, eq. (1)/(23), in the book's notation ``A -> F``, ``B -> G``,
-``C -> H``, ``D -> J``, state fault profile ``Phi -> Psi``)::
+Model (Zhang 2021, eq. (1)/(23), in the book's notation :math:`A \to F`, :math:`B \to G`,
+:math:`C \to H`, :math:`D \to J`, state fault profile :math:`\Phi \to \Psi`):
 
-    X_{k+1} = F_k X_k + G_k U_k + E_k d_k + W_k (+ Psi_k theta)
-    Y_k     = H_k X_k + J_k U_k + V_k        (+ Phi_k theta)
+.. math::
 
-with ``d_k`` an arbitrary unknown input (no statistics, no model). The filter of
-Kitanidis (1987), as written in Zhang (2021), eq. (24), designed for ``theta = 0``::
+    \begin{aligned}
+    X_{k+1} &= F_k X_k + G_k U_k + E_k d_k + W_k \; (+ \Psi_k \theta), \\
+    Y_k &= H_k X_k + J_k U_k + V_k \; (+ \Phi_k \theta),
+    \end{aligned}
 
-    P_k      = F_{k-1} P_{k-1|k-1} F_{k-1}^T + Q_{k-1}              (24a)  prior covariance
-    Sigma_k  = H_k P_k H_k^T + R_k                                   (24b)
-    Kc_k     = P_k H_k^T Sigma_k^{-1}                                (Kalman part)
-    Gamma_k  = (I - Kc_k H_k) E_{k-1}                                (24c)
-    Xi_k     = E_{k-1}^T H_k^T Sigma_k^{-1} H_k E_{k-1}              (24d)
-    K_k      = Kc_k + Gamma_k Xi_k^{-1} E_{k-1}^T H_k^T Sigma_k^{-1}  (24g)  Kitanidis gain "K-bar"
-    P_{k|k}  = P_k - Kc_k H_k P_k + Gamma_k Xi_k^{-1} Gamma_k^T       (24f)
-    Xhat_k   = Xpred_k + K_k eps_k,   eps_k = Y_k - J_k U_k - H_k Xpred_k,
-    Xpred_{k+1} = F_k Xhat_k + G_k U_k                               (24h)
+with :math:`d_k` an arbitrary unknown input (no statistics, no model). The filter of
+Kitanidis (1987), as written in Zhang (2021), eq. (24), designed for :math:`\theta = 0`,
+with :math:`\hat X_k` the prediction, :math:`\hat X_{k|k}` the estimate, :math:`P_k` the prior
+covariance, :math:`K^{\mathrm c}_k` the Kalman part of the gain and :math:`K_k` the Kitanidis
+gain (:math:`\bar K_k` in the book):
 
-The gain satisfies the key identity (30), ``(I - K_k H_k) E_{k-1} = 0``, so the
+.. math::
+
+    \begin{aligned}
+    P_k &= F_{k-1} P_{k-1|k-1} F_{k-1}^\T + Q_{k-1} && \text{(24a)}, \\
+    \Sigma_k &= H_k P_k H_k^\T + R_k && \text{(24b)}, \\
+    K^{\mathrm c}_k &= P_k H_k^\T \Sigma_k^{-1}, \\
+    \Gamma^{\mathrm K}_k &= (I - K^{\mathrm c}_k H_k) E_{k-1} && \text{(24c)}, \\
+    \Xi_k &= E_{k-1}^\T H_k^\T \Sigma_k^{-1} H_k E_{k-1} && \text{(24d)}, \\
+    K_k &= K^{\mathrm c}_k + \Gamma^{\mathrm K}_k \Xi_k^{-1} E_{k-1}^\T H_k^\T \Sigma_k^{-1}
+        && \text{(24g)}, \\
+    P_{k|k} &= P_k - K^{\mathrm c}_k H_k P_k
+        + \Gamma^{\mathrm K}_k \Xi_k^{-1} \Gamma^{\mathrm K\T}_k && \text{(24f)}, \\
+    \hat X_{k|k} &= \hat X_k + K_k \varepsilon_k, \quad
+        \varepsilon_k = Y_k - J_k U_k - H_k \hat X_k, \\
+    \hat X_{k+1} &= F_k \hat X_{k|k} + G_k U_k && \text{(24h)}.
+    \end{aligned}
+
+The gain satisfies the key identity (30), :math:`(I - K_k H_k) E_{k-1} = 0`, so the
 unknown input vanishes from the estimation error; it needs assumption (iv):
-``H_k E_{k-1}`` of full column rank (else :class:`~fdi_lib.errors.RankConditionError`).
+:math:`H_k E_{k-1}` of full column rank (else :class:`~fdi_lib.errors.RankConditionError`).
 
-Time convention (the same as :mod:`fdi_lib.filters`): ``k = 0 .. N-1``; ``P_0 =
-model.P0`` is the covariance of ``X_0`` *before* ``Y_0``; since ``X_0`` carries no
-unknown input, the update at ``k = 0`` is the ordinary Kalman update (``K_0 =
-Kc_0``, i.e. ``E_{-1} = 0``). With no unknown input at all (``s = 0``) the filter
-*is* the Kalman filter of :func:`fdi_lib.filters.kalman_filter`.
+Time convention (the same as :mod:`fdi_lib.filters`): ``k = 0 .. N-1``; :math:`P_0` =
+``model.P0`` is the covariance of :math:`X_0` *before* :math:`Y_0`; since :math:`X_0` carries no
+unknown input, the update at :math:`k = 0` is the ordinary Kalman update
+(:math:`K_0 = K^{\mathrm c}_0`, i.e. :math:`E_{-1} = 0`). With no unknown input at all
+(:math:`s = 0`) the filter *is* the Kalman filter of :func:`fdi_lib.filters.kalman_filter`.
 
-One-step-predictor form (Basseville & Zhang, eqs. (27)-(28), whose OCR is garbled)::
+One-step-predictor form (Basseville & Zhang, eqs. (27)-(28), whose OCR is garbled):
 
-    Xpred_{k+1} = F_k Xpred_k + G_k U_k + F_k L_k (Y_k - J_k U_k - H_k Xpred_k),   L_k = K_k
-    P_{k+1}     = F_k [(I - L_k H_k) P_k (I - L_k H_k)^T + L_k R_k L_k^T] F_k^T + Q_k
+.. math::
 
-which is the same recursion (``Xpred_{k+1} = F_k Xhat_k + G_k U_k``); the Joseph
+    \begin{aligned}
+    \hat X_{k+1} &= F_k \hat X_k + G_k U_k + F_k L_k (Y_k - J_k U_k - H_k \hat X_k),
+        \qquad L_k = K_k, \\
+    P_{k+1} &= F_k \big[(I - L_k H_k) P_k (I - L_k H_k)^\T + L_k R_k L_k^\T\big] F_k^\T + Q_k,
+    \end{aligned}
+
+which is the same recursion (:math:`\hat X_{k+1} = F_k \hat X_{k|k} + G_k U_k`); the Joseph
 form there equals (24f) (a short algebra shown in the book chapter ``zhang2021``).
-Its "innovation" ``eps_k`` is returned as :attr:`KitanidisResult.innovations` with
-``gains.Sigma`` = ``H_k P_k H_k^T + R_k``; note that ``eps_k`` contains the term
-``H_k E_{k-1} d_{k-1}`` (the prediction cannot know ``d_{k-1}``), whereas the
-updated residual ``Y_k - J_k U_k - H_k Xhat_k`` (25) does not depend on ``d`` at all.
+Its "innovation" :math:`\varepsilon_k` is returned as :attr:`KitanidisResult.innovations` with
+``gains.Sigma`` = :math:`H_k P_k H_k^\T + R_k`; note that :math:`\varepsilon_k` contains the term
+:math:`H_k E_{k-1} d_{k-1}` (the prediction cannot know :math:`d_{k-1}`), whereas the
+updated residual :math:`Y_k - J_k U_k - H_k \hat X_{k|k}` (25) does not depend on :math:`d` at all.
 
 The gains do not depend on the data: :func:`kitanidis_gains` computes them once
 and :func:`kitanidis_filter` runs the data recursion, vectorised over any leading
 axes of independent realisations.
 
 Missing samples (NaN outputs, :mod:`fdi_lib.validation`) are part of the gains: at a missing
-sample ``K_k = 0`` and ``P_{k|k} = P_k`` (no update). The unknown input ``d_{k-1}`` that the
-update at ``k`` would have rejected then stays in the estimation error: the next observed
-sample ``j`` rejects all the pending directions ``[F_{j-1} ... F_k E_{k-1}, ..., E_{j-1}]``
-(the gain (24g) with an orthonormal basis of their span in place of ``E_{j-1}``, whose image
-under ``H_j`` must have full column rank).
+sample :math:`K_k = 0` and :math:`P_{k|k} = P_k` (no update). The unknown input :math:`d_{k-1}`
+that the update at :math:`k` would have rejected then stays in the estimation error: the next
+observed sample :math:`j` rejects all the pending directions
+:math:`[F_{j-1} \cdots F_k E_{k-1}, \dots, E_{j-1}]` (the gain (24g) with an orthonormal basis
+of their span in place of :math:`E_{j-1}`, whose image under :math:`H_j` must have full column
+rank).
 """
 
 from __future__ import annotations
@@ -416,15 +436,20 @@ def residual_signature(
     Psi: Any = None,
     Phi: Any = None,
 ) -> ResidualSignature:
-    """Signature of ``theta`` on the updated residual, Zhang (2021) eqs. (7) and (27).
+    r"""Signature of :math:`\theta` on the updated residual, Zhang (2021) eqs. (7) and (27).
 
-    Generalised to an output profile ``Phi_k``::
+    Generalised to an output profile :math:`\Phi_k`, for the updated residual
+    :math:`\tilde Y_k = Y_k - J_k U_k - H_k \hat X_{k|k}`:
 
-        Upsilon_0     = -K_0 Phi_0
-        Upsilon_{k+1} = (I - K_{k+1} H_{k+1}) (F_k Upsilon_k + Psi_k) - K_{k+1} Phi_{k+1}
-        residual_k    = (H_k Upsilon_k + Phi_k) theta + residual0_k
+    .. math::
 
-    (for ``Phi = 0`` this is exactly (7b)/(27b) with ``Upsilon_0 = 0``).
+        \begin{aligned}
+        \Upsilon_0 &= -K_0 \Phi_0, \\
+        \Upsilon_{k+1} &= (I - K_{k+1} H_{k+1}) (F_k \Upsilon_k + \Psi_k) - K_{k+1} \Phi_{k+1}, \\
+        \tilde Y_k &= (H_k \Upsilon_k + \Phi_k) \theta + \tilde Y^0_k
+        \end{aligned}
+
+    (for :math:`\Phi = 0` this is exactly (7b)/(27b) with :math:`\Upsilon_0 = 0`).
 
     Explained in the book: :doc:`/book/zhang2021/sparse`.
 
@@ -433,7 +458,7 @@ def residual_signature(
     model : LTVModel
     gains : KalmanGains or KitanidisGains
         Any object with filter gains ``K`` of shape ``(N, n, p)`` such that
-        ``Xhat_{k|k} = Xpred_k + K_k eps_k``: :func:`fdi_lib.filters.kalman_gains` (Prop. 1)
+        :math:`\hat X_{k|k} = \hat X_k + K_k \varepsilon_k`: :func:`fdi_lib.filters.kalman_gains` (Prop. 1)
         or :func:`kitanidis_gains` (Prop. 2).
     fault : FaultProfile, optional
         ``Psi_k`` (``(N, n, m)``) and ``Phi_k`` (``(N, p, m)``), shared by all realisations.

@@ -1,14 +1,18 @@
-"""Linear time-varying (LTV) and linear parameter-varying (LPV) state-space models.
+r"""Linear time-varying (LTV) and linear parameter-varying (LPV) state-space models.
 
-The model of Zhang & Basseville (2014), eqs. (1), (3) and (5)::
+The model of Zhang & Basseville (2014), eqs. (1), (3) and (5):
 
-    X_{k+1} = F_k X_k + G_k U_k + W_k + Psi_k theta,   W_k ~ N(0, Q_k)
-    Y_k     = H_k X_k + J_k U_k + V_k + Phi_k theta,   V_k ~ N(0, R_k)
+.. math::
+
+    \begin{aligned}
+    X_{k+1} &= F_k X_k + G_k U_k + W_k + \Psi_k \theta, & W_k &\sim \mathcal N(0, Q_k), \\
+    Y_k &= H_k X_k + J_k U_k + V_k + \Phi_k \theta, & V_k &\sim \mathcal N(0, R_k).
+    \end{aligned}
 
 Every time-varying matrix may be given as a constant, a per-step array of
 shape ``(n_steps, rows, cols)`` or a callable ``k -> (rows, cols)``. It is
 materialised once, on the horizon ``k = 0 .. n_steps-1``, and validated up
-front (shapes, finiteness, symmetric PSD ``Q_k``, symmetric PD ``R_k``), so
+front (shapes, finiteness, symmetric PSD :math:`Q_k`, symmetric PD :math:`R_k`), so
 that the filters and tests can use vectorised array code without re-checking.
 Constant matrices are stored as read-only broadcast views (no copies).
 """

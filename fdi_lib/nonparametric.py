@@ -1,44 +1,55 @@
-"""Parametric and non-parametric additive faults (Basseville & Zhang).
+r"""Parametric and non-parametric additive faults (Basseville & Zhang).
 
-Model (2) of the paper, in the book's notation::
+Model (2) of the paper, in the book's notation:
 
-    X_{k+1} = F_k X_k + G_k U_k + W_k + E_k f_k + Psi_k theta_k
-    Y_k     = H_k X_k + J_k U_k + V_k
+.. math::
 
-with ``f_k`` an arbitrary unknown signal (non-parametric fault) and ``theta_k`` a
+    \begin{aligned}
+    X_{k+1} &= F_k X_k + G_k U_k + W_k + E_k f_k + \Psi_k \theta_k, \\
+    Y_k &= H_k X_k + J_k U_k + V_k,
+    \end{aligned}
+
+with :math:`f_k` an arbitrary unknown signal (non-parametric fault) and :math:`\theta_k` a
 constant or slowly varying vector (parametric fault).
 
-Proposition 1 (eq. 25): for *any* predictor ``Xhat_{k+1} = F_k Xhat_k + G_k U_k +
-F_k K_k eps_k`` (3) designed for the fault-free model, the innovation splits exactly::
+Proposition 1 (eq. 25): for *any* predictor
+:math:`\hat X_{k+1} = F_k \hat X_k + G_k U_k + F_k K_k \varepsilon_k` (3) designed for the
+fault-free model, the innovation splits exactly:
 
-    eps_k = eps0_k + H_k Gamma_k theta_k + H_k zeta_k + H_k delta_k
-    Gamma_{k+1} = A_k Gamma_k + Psi_k,            Gamma_0 = 0     (9)
-    zeta_{k+1}  = A_k zeta_k + E_k f_k,           zeta_0  = 0     (15)
-    delta_{k+1} = A_k delta_k - Gamma_{k+1} e_k,  delta_0 = 0     (23),  e_k = theta_{k+1} - theta_k
+.. math::
 
-with ``A_k = F_k (I - K_k H_k)``. :func:`innovation_split` computes every term
-(``Gamma_k`` through :func:`fdi_lib.signatures.fault_signature`, the same recursion).
+    \begin{aligned}
+    \varepsilon_k &= \varepsilon^0_k + H_k \Gamma_k \theta_k + H_k \zeta_k + H_k \delta_k, \\
+    \Gamma_{k+1} &= A_k \Gamma_k + \Psi_k, & \Gamma_0 &= 0 && (9), \\
+    \zeta_{k+1} &= A_k \zeta_k + E_k f_k, & \zeta_0 &= 0 && (15), \\
+    \delta_{k+1} &= A_k \delta_k - \Gamma_{k+1} e_k, & \delta_0 &= 0 && (23),
+    \end{aligned}
 
-The Kitanidis filter (27)-(28) is the predictor (3) with the gain ``L_k`` of
+with :math:`e_k = \theta_{k+1} - \theta_k` and :math:`A_k = F_k (I - K_k H_k)`.
+:func:`innovation_split` computes every term (:math:`\Gamma_k` through
+:func:`fdi_lib.signatures.fault_signature`, the same recursion).
+
+The Kitanidis filter (27)-(28) is the predictor (3) with the gain :math:`L_k` of
 :func:`fdi_lib.kitanidis.kitanidis_gains` (one implementation for the whole book);
 :func:`kitanidis_predictor_gains` repackages it as :class:`~fdi_lib.filters.KalmanGains`
 so that :func:`fdi_lib.filters.kalman_filter` runs (27) and
-:func:`fdi_lib.signatures.fault_signature` gives ``Delta_k`` (30).
+:func:`fdi_lib.signatures.fault_signature` gives :math:`\Delta_k` (30).
 
 Two corrections to the paper, derived and checked in the book chapter ``bz``:
 
-* With ``K_k = L_k``, (15) gives ``zeta_k = E_{k-1} f_{k-1}`` (because ``(I - L_k H_k) E_{k-1} = 0``),
-  so the Kitanidis *innovation* still contains ``H_k E_{k-1} f_{k-1}``: the paper's
-  ``H_k zeta_k = 0`` does not hold. The fault is rejected by any projection
-  ``T_k`` with ``T_k H_k E_{k-1} = 0`` (:func:`rejection_projection`).
+* With :math:`K_k = L_k`, (15) gives :math:`\zeta_k = E_{k-1} f_{k-1}` (because
+  :math:`(I - L_k H_k) E_{k-1} = 0`), so the Kitanidis *innovation* still contains
+  :math:`H_k E_{k-1} f_{k-1}`: the paper's :math:`H_k \zeta_k = 0` does not hold. The fault is
+  rejected by any projection :math:`T_k` with :math:`T_k H_k E_{k-1} = 0`
+  (:func:`rejection_projection`).
 * The Kitanidis innovation is not white in general (Prop. 2 fails): its lag-one
-  covariance is ``-H_{k+1} F_k D_k Sigma_k`` with ``D_k = L_k - K^Kalman_k``
-  (:func:`kitanidis_lag_covariance`). The projected residual ``T_k eps_k`` *is* white
-  (``D_k Sigma_k T_k^T = 0``), with unit covariance by construction.
+  covariance is :math:`-H_{k+1} F_k D_k \Sigma_k` with :math:`D_k = L_k - K^{\mathrm{Kalman}}_k`
+  (:func:`kitanidis_lag_covariance`). The projected residual :math:`T_k \varepsilon_k` *is* white
+  (:math:`D_k \Sigma_k T_k^\T = 0`), with unit covariance by construction.
 
-Solution 1 (Section 3): windowed GLR + minmax on ``T_k eps_k`` (:func:`solution1`), plus an
-energy test on a parallel Kalman filter's innovation for the onset of ``f``.
-Solution 2 (Section 4): RLS tracking of ``theta_k`` in (47), see :mod:`fdi_lib.rls`
+Solution 1 (Section 3): windowed GLR + minmax on :math:`T_k \varepsilon_k` (:func:`solution1`),
+plus an energy test on a parallel Kalman filter's innovation for the onset of :math:`f`.
+Solution 2 (Section 4): RLS tracking of :math:`\theta_k` in (47), see :mod:`fdi_lib.rls`
 and :func:`solution2`.
 """
 

@@ -1,23 +1,29 @@
-"""Recursive least squares with a forgetting factor, for tracking ``theta_k`` in eq. (47).
+r"""Recursive least squares with a forgetting factor, for tracking :math:`\theta_k` in eq. (47).
 
 Basseville & Zhang, Section 4 (after Ljung 1999): with the regression
-``eps_k = M_k theta_k + noise`` (``M_k = H_k Gamma_k``, noise covariance ``Sigma_k``)::
+:math:`\varepsilon_k = M_k \theta_k + \text{noise}` (:math:`M_k = H_k \Gamma_k`, noise
+covariance :math:`\Sigma_k`) and the forgetting factor :math:`\lambda`:
 
-    S_k       = lambda Sigma_k + M_k P_{k-1} M_k^T
-    L_k       = P_{k-1} M_k^T S_k^{-1}
-    theta_k^  = theta_{k-1}^ + L_k (eps_k - M_k theta_{k-1}^)
-    P_k       = lambda^{-1} (P_{k-1} - P_{k-1} M_k^T S_k^{-1} M_k P_{k-1})
-    E_k       = eps_k - M_k theta_k^                       (tracking error)
+.. math::
 
-with ``theta_0^ = 0``, ``P_0 = I``. This minimises
-``sum_{j<=k} lambda^{k-j} ||eps_j - M_j theta||^2_{Sigma_j^{-1}} + lambda^{k+1} ||theta||^2_{P_0^{-1}}``.
-The gains ``L_k`` and ``P_k`` do not depend on the data (the regressor is known in
-advance), so they are computed once and shared by all realisations; only the
-``theta`` recursion runs per realisation, vectorised.
+    \begin{aligned}
+    S_k &= \lambda \Sigma_k + M_k P_{k-1} M_k^\T, \\
+    \mathcal L_k &= P_{k-1} M_k^\T S_k^{-1}, \\
+    \hat\theta_k &= \hat\theta_{k-1} + \mathcal L_k (\varepsilon_k - M_k \hat\theta_{k-1}), \\
+    P_k &= \lambda^{-1} (P_{k-1} - P_{k-1} M_k^\T S_k^{-1} M_k P_{k-1}), \\
+    \mathcal E_k &= \varepsilon_k - M_k \hat\theta_k && \text{(tracking error)},
+    \end{aligned}
+
+with :math:`\hat\theta_0 = 0`, :math:`P_0 = I`. This minimises
+:math:`\sum_{j \le k} \lambda^{k-j} \|\varepsilon_j - M_j \theta\|^2_{\Sigma_j^{-1}}
++ \lambda^{k+1} \|\theta\|^2_{P_0^{-1}}`.
+The gains :math:`\mathcal L_k` and :math:`P_k` do not depend on the data (the regressor is known
+in advance), so they are computed once and shared by all realisations; only the
+:math:`\hat\theta` recursion runs per realisation, vectorised.
 
 No library is used: filterpy/padasip provide scalar-output RLS only, and the
 matrix-weighted, multi-output form above is five lines of numpy (Cholesky
-solves with scipy, no explicit inverse of ``S_k``).
+solves with scipy, no explicit inverse of :math:`S_k`).
 """
 
 from __future__ import annotations

@@ -1,14 +1,18 @@
-"""Fault signatures on the Kalman innovation.
+r"""Fault signatures on the Kalman innovation.
 
 Zhang & Basseville (2014), Proposition 1 / eqs. (11)-(12) and Proposition 2 /
-eqs. (45)-(46)::
+eqs. (45)-(46):
 
-    eps_k = eps0_k + (H_k Gamma_k + Phi_k) theta
-    Gamma_{k+1} = F_k (I - K_k H_k) Gamma_k + Psi_k - F_k K_k Phi_k,   Gamma_0 = 0
+.. math::
+
+    \begin{aligned}
+    \varepsilon_k &= \varepsilon^0_k + (H_k \Gamma_k + \Phi_k) \theta, \\
+    \Gamma_{k+1} &= F_k (I - K_k H_k) \Gamma_k + \Psi_k - F_k K_k \Phi_k, \qquad \Gamma_0 = 0,
+    \end{aligned}
 
 and, for the comparison of Appendix A, the Willsky-Jones recursions (A.6)-(A.8)
-(whose ``alpha_k(r)`` grows without bound when ``F_k`` is unstable) and the
-revisited recursion (A.17), which coincides with ``Gamma_k`` for an impulsive fault.
+(whose :math:`\alpha_k(r)` grows without bound when :math:`F_k` is unstable) and the
+revisited recursion (A.17), which coincides with :math:`\Gamma_k` for an impulsive fault.
 """
 
 from __future__ import annotations

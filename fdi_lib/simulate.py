@@ -1,9 +1,13 @@
-"""Simulation of the faulty LTV system, open or closed loop.
+r"""Simulation of the faulty LTV system, open or closed loop.
 
-Zhang & Basseville (2014), eqs. (3) and (5)::
+Zhang & Basseville (2014), eqs. (3) and (5):
 
-    X_{k+1} = F_k X_k + G_k U_k + W_k + Psi_k theta
-    Y_k     = H_k X_k + J_k U_k + V_k + Phi_k theta
+.. math::
+
+    \begin{aligned}
+    X_{k+1} &= F_k X_k + G_k U_k + W_k + \Psi_k \theta, \\
+    Y_k &= H_k X_k + J_k U_k + V_k + \Phi_k \theta .
+    \end{aligned}
 
 Noise is drawn first, as a :class:`Noise` record, so that exactly the same
 realisation can be replayed with another ``theta`` (e.g. ``theta = 0``): this

@@ -1,17 +1,23 @@
-"""Sparse fault isolation: from filter residuals to a linear regression, then Lasso.
+r"""Sparse fault isolation: from filter residuals to a linear regression, then Lasso.
 
-Zhang (2021), Section IV. Propositions 1 and 2 say that the updated residual of a
-Kalman (resp. Kitanidis) filter designed for ``theta = 0`` is affine in ``theta``::
+Zhang (2021), Section IV. Propositions 1 and 2 say that the updated residual
+:math:`\tilde Y_k` of a Kalman (resp. Kitanidis) filter designed for :math:`\theta = 0` is
+affine in :math:`\theta`:
 
-    r_k = (H_k Upsilon_k + Phi_k) theta + r0_k        (6) / (26)
+.. math::
 
-Stacking ``k = start .. N-1`` gives the regression ``y = X theta + e`` of (36)-(38)
-(:func:`regression_data`), solved under a sparsity assumption by the Lasso (39)::
+    \tilde Y_k = (H_k \Upsilon_k + \Phi_k) \theta + \tilde Y^0_k \qquad (6) / (26)
 
-    theta_hat(lambda) = argmin  1/(2 N) ||X theta - y||^2 + lambda ||theta||_1
+Stacking ``k = start .. N-1`` gives the regression :math:`\mathbf y = \mathbf X \theta + \mathbf e`
+of (36)-(38) (:func:`regression_data`), solved under a sparsity assumption by the Lasso (39):
 
-with ``N`` the number of *time samples* used (the paper's normalisation; scikit-learn
-normalises by the number of *rows*, ``N p``, and we convert).
+.. math::
+
+    \hat\theta(\lambda) = \arg\min_\theta\ \frac{1}{2N} \|\mathbf X \theta - \mathbf y\|_2^2
+    + \lambda \|\theta\|_1
+
+with :math:`N` the number of *time samples* used (the paper's normalisation; scikit-learn
+normalises by the number of *rows*, :math:`Np`, and we convert).
 
 Two solvers, which must agree:
 
@@ -43,8 +49,9 @@ not say how width is measured; we offer both readings and state the choice:
 * ``scale="linear"``: width ``lambda_hi - lambda_lo``, middle the arithmetic mean.
 
 Like any exploration of ``lambda``, the rule needs a bounded window: we use
-``[lambda_ratio * lambda_max, lambda_max]`` with ``lambda_max = max |X^T y| / N`` (the first
-breakpoint, above which ``theta_hat = 0``) and ``lambda_ratio = 1e-4``, the default window of
+``[lambda_ratio * lambda_max, lambda_max]`` with
+:math:`\lambda_{\max} = \max |\mathbf X^\T \mathbf y| / N` (the first breakpoint, above which
+:math:`\hat\theta = 0`) and ``lambda_ratio = 1e-4``, the default window of
 Matlab's ``lasso`` for more rows than unknowns. Ranges are clipped to the window; only ranges
 with between 1 and ``max_size`` non-zero components (default ``m // 2``: the sparsity
 assumption) are candidates, and the window ends where the support first exceeds ``max_size``. Without these bounds the log reading would favour the last

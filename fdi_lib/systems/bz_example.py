@@ -1,18 +1,31 @@
-"""Designed example for Basseville & Zhang (parametric and non-parametric faults).
+r"""Designed example for Basseville & Zhang (parametric and non-parametric faults).
 
 The paper has no numerical example; this one extends the unstable system of
-Zhang & Basseville (2014), Section 6.1 (:mod:`fdi_lib.systems.zb2014_unstable`)::
+Zhang & Basseville (2014), Section 6.1 (:mod:`fdi_lib.systems.zb2014_unstable`):
 
-    X_{k+1} = F_k X_k + G U_k + W_k + E f_k + Psi theta_k
-    Y_k     = X_k + V_k                                    (H = I_3)
+.. math::
 
-    F_k = [[a_k, 1,   0  ],        a_k = 0.5 + 0.1 sin(2 pi k / 60)
-           [0,   1.2, 0  ],
-           [0,   0.3, 0.8]]
-    G = [0, 1, 0]^T,  E = [1, 0, 0]^T,  Psi = [[0, 0], [1, 0], [0, 1]]
-    Q = 0.0025 I_3,   R = 0.0025 I_3,   P_0 = Q
+    \begin{aligned}
+    X_{k+1} &= F_k X_k + G U_k + W_k + E f_k + \Psi \theta_k, \\
+    Y_k &= X_k + V_k \qquad (H = I_3),
+    \end{aligned}
 
-closed by the PI controller of Section 6.1 on ``Y^(1)`` (set-point 1).
+.. math::
+
+    F_k = \begin{bmatrix} a_k & 1 & 0 \\ 0 & 1.2 & 0 \\ 0 & 0.3 & 0.8 \end{bmatrix}, \qquad
+    a_k = 0.5 + 0.1 \sin(2\pi k / 60),
+
+.. math::
+
+    G = \begin{bmatrix} 0 \\ 1 \\ 0 \end{bmatrix}, \quad
+    E = \begin{bmatrix} 1 \\ 0 \\ 0 \end{bmatrix}, \quad
+    \Psi = \begin{bmatrix} 0 & 0 \\ 1 & 0 \\ 0 & 1 \end{bmatrix},
+
+.. math::
+
+    Q = 0.0025\, I_3, \quad R = 0.0025\, I_3, \quad P_0 = Q,
+
+closed by the PI controller of Section 6.1 on :math:`Y^{(1)}` (set-point 1).
 
 Every choice, and why:
 

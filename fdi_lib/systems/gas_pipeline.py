@@ -1,9 +1,11 @@
-"""Surrogate LPV models of the gas pipeline of Zhang & Basseville (2014), Section 6.2, eq. (53).
+r"""Surrogate LPV models of the gas pipeline of Zhang & Basseville (2014), Section 6.2, eq. (53).
 
-::
+.. math::
 
-    X_{k+1} = (F0 + Fp p_k) X_k + (G0 + Gp p_k) U_k + W_k        W_k ~ N(0, Q)
-    Y_k     = (H0 + Hp p_k) X_k + (J0 + Jp p_k) U_k + V_k        V_k ~ N(0, R)
+    \begin{aligned}
+    X_{k+1} &= (F_0 + F_p p_k) X_k + (G_0 + G_p p_k) U_k + W_k, & W_k &\sim \mathcal N(0, Q), \\
+    Y_k &= (H_0 + H_p p_k) X_k + (J_0 + J_p p_k) U_k + V_k, & V_k &\sim \mathcal N(0, R).
+    \end{aligned}
 
 ``U_k`` is the input mass flow and ``Y_k`` the output mass flow (Nm3/h: the paper
 prints "Nm3"; a normal cubic metre is a quantity of gas, proportional to its mass), ``X_k`` the mass flow and the
@@ -16,15 +18,22 @@ uses a **surrogate**. Two are provided (argument ``variant``):
     Derived from the isothermal gas equations (Osiadacz 1987; Menon 2005)
     lumped over one section of length ``L``: the section stores gas in one capacity
     ``C = A L / c^2`` (mass balance) and carries it through one inertance ``I = L / A``
-    with the friction drop linearised at the operating point (momentum)::
+    with the friction drop linearised at the operating point (momentum):
 
-        C d(dp)/dt = U - q,           I dq/dt = dp - R(pbar) q,
-        R(pbar) = lambda L c^2 qbar / (D A^2 pbar)   (from pin^2 - pout^2 = lambda L c^2 q^2 / (D A^2))
+    .. math::
 
-    with ``q`` the mass flow through the section, ``dp`` the pressure drop across it
-    (the outlet pressure is held by the downstream network) and ``Y = q``. The
-    friction resistance falls as the mean pressure ``pbar`` rises, which is what
-    schedules the model. It is discretised exactly (zero-order hold, matrix
+        \begin{aligned}
+        C \frac{d\,\delta p}{dt} &= U - q, &
+        I \frac{dq}{dt} &= \delta p - R(\bar p)\, q, \\
+        R(\bar p) &= \frac{\lambda L c^2 \bar q}{D A^2 \bar p} &
+        &\text{(from } p_{\mathrm{in}}^2 - p_{\mathrm{out}}^2
+            = \lambda L c^2 q^2 / (D A^2)\text{)}
+        \end{aligned}
+
+    with :math:`q` the mass flow through the section, :math:`\delta p` (``dp``) the pressure
+    drop across it (the outlet pressure is held by the downstream network) and :math:`Y = q`.
+    The friction resistance falls as the mean pressure :math:`\bar p` (``pbar``) rises, which
+    is what schedules the model. It is discretised exactly (zero-order hold, matrix
     exponential) at ``Ts = 2 min`` and linearised in ``p_k`` (first-order Taylor
     expansion at ``p_k = 0``), which gives the affine structure (53).
 

@@ -1,9 +1,13 @@
-"""The unstable example of Zhang & Basseville (2014), Section 6.1, eqs. (51)-(52).
+r"""The unstable example of Zhang & Basseville (2014), Section 6.1, eqs. (51)-(52).
 
-::
+.. math::
 
-    X_{k+1} = [[0.5, 1], [0, 1.2]] X_k + [0, 1]^T U_k + W_k + delta_{r,k+1} theta
-    Y_k     = [1, 0] X_k + V_k,        Q = 0.0025 I,  R = 0.0025,  Ts = 1 s
+    \begin{aligned}
+    X_{k+1} &= \begin{bmatrix} 0.5 & 1 \\ 0 & 1.2 \end{bmatrix} X_k
+        + \begin{bmatrix} 0 \\ 1 \end{bmatrix} U_k + W_k + \delta_{r,k+1} \theta, \\
+    Y_k &= \begin{bmatrix} 1 & 0 \end{bmatrix} X_k + V_k,
+    \qquad Q = 0.0025\, I, \quad R = 0.0025, \quad T_s = 1\ \mathrm{s},
+    \end{aligned}
 
 closed by the PI controller ``C(z) = 0.209 + 0.0011 / (z - 1)`` with set-point 1.
 

@@ -1,14 +1,24 @@
-"""Example 1 of Zhang (2021), eqs. (40)-(42): a 3-state LTV system with an unknown input.
+r"""Example 1 of Zhang (2021), eqs. (40)-(42): a 3-state LTV system with an unknown input.
 
-::
+.. math::
 
-    X_{k+1} = A_k X_k + E d_k + W_k + Psi_k theta,     Y_k = C X_k + V_k
+    X_{k+1} = A_k X_k + E d_k + W_k + \Psi_k \theta, \qquad Y_k = C X_k + V_k,
 
-    A_k = [[-0.8, 0.7, 0.1 exp(-k)], [-0.6, 0, 0.1 cos k], [0.1 sin k, -0.5, -0.4]]
-    C = [[1, 0, 0], [0, 0, 1]],   E = [-1, 0, 0]^T,   Q = I_3,   R = r I_2 (r = 0.5)
-    d_k = 10 sin(0.1 k) + eps_k + 100,   eps_k ~ N(0, 1) white
+.. math::
 
-``Psi_k`` (the paper's ``Phi_k``, 3 x 50) has i.i.d. entries uniform on ``[-17.3, 17.3]``,
+    A_k = \begin{bmatrix} -0.8 & 0.7 & 0.1 e^{-k} \\ -0.6 & 0 & 0.1 \cos k \\
+        0.1 \sin k & -0.5 & -0.4 \end{bmatrix}, \qquad
+    C = \begin{bmatrix} 1 & 0 & 0 \\ 0 & 0 & 1 \end{bmatrix}, \qquad
+    E = \begin{bmatrix} -1 \\ 0 \\ 0 \end{bmatrix},
+
+.. math::
+
+    \begin{aligned}
+    Q &= I_3, & R &= r I_2 \ (r = 0.5), \\
+    d_k &= 10 \sin(0.1 k) + \epsilon_k + 100, & \epsilon_k &\sim \mathcal N(0, 1) \text{ white},
+    \end{aligned}
+
+:math:`\Psi_k` (the paper's :math:`\Phi_k`, 3 x 50) has i.i.d. entries uniform on ``[-17.3, 17.3]``,
 drawn anew in every trial; ``theta`` has ``q`` components equal to 1 at random positions.
 Data ``k = 1 .. N`` with ``N = 100`` are used (the model horizon is ``N + 1`` steps,
 ``k = 0 .. N``). Not stated in the paper, our choices: ``X_0 ~ N(0, I_3)`` (so the filter's
