@@ -38,6 +38,7 @@ import scipy.linalg
 
 from fdi_lib.errors import ModelError, NonFiniteError
 from fdi_lib.models import LTVModel, as_record
+from fdi_lib.threads import blas_single_thread
 from fdi_lib.validation import (
     check_gains,
     check_missing_known,
@@ -127,51 +128,54 @@ def kalman_gains(model: LTVModel, missing: Any = None) -> KalmanGains:
     >>> round(float(g.P[-1, 0, 0]), 4)  # DARE P^2 - 0.81 P - 1 = 0: P = (0.81 + sqrt(0.81**2 + 4)) / 2
     1.4839
     """
-    if not isinstance(model, LTVModel):
-        raise ModelError(f"model: expected an LTVModel, got {type(model).__name__}")
-    N, n, p = model.n_steps, model.n, model.p
-    skip = missing_pattern(missing, N)
-    K = np.empty((N, n, p))
-    P = np.empty((N + 1, n, n))
-    P_filt = np.empty((N, n, n))
-    Sigma = np.empty((N, p, p))
-    L = np.empty((N, p, p))
-    A = np.empty((N, n, n))
-    FK = np.empty((N, n, p))
-    eye = np.eye(n)
-    P[0] = model.P0
-    with np.errstate(over="ignore", invalid="ignore"):  # divergence is reported below, by step
-        for k in range(N):
-            F, H, Pk = model.F[k], model.H[k], P[k]
-            S = H @ Pk @ H.T + model.R[k]
-            S = 0.5 * (S + S.T)
-            c, low = cholesky(S, step=k, what="the Riccati recursion")
-            if skip[k]:  # missing sample: no update
-                Kk, IKH, Pf = np.zeros((n, p)), eye, Pk
-            else:
-                Kk = scipy.linalg.cho_solve(
-                    (c, low), H @ Pk
-                ).T  # P H^T S^{-1} without forming S^{-1}
-                IKH = eye - Kk @ H
-                Pf = IKH @ Pk @ IKH.T + Kk @ model.R[k] @ Kk.T  # Joseph form: stays PSD
-                Pf = 0.5 * (Pf + Pf.T)
-            Pn = F @ Pf @ F.T + model.Q[k]
-            K[k], P_filt[k], Sigma[k], A[k], FK[k] = Kk, Pf, S, F @ IKH, F @ Kk
-            L[k] = np.tril(c)
-            P[k + 1] = 0.5 * (Pn + Pn.T)
-    if not np.all(np.isfinite(P)):
-        k = int(np.argwhere(~np.isfinite(P))[0, 0])
-        raise NonFiniteError(f"model: the Riccati recursion diverged (non-finite P_k at step {k})")
-    return KalmanGains(
-        K=K,
-        P=P,
-        P_filt=P_filt,
-        Sigma=Sigma,
-        Sigma_chol=L,
-        A=A,
-        FK=FK,
-        missing=skip if skip.any() else None,
-    )
+    with blas_single_thread():  # small matrices: BLAS threads only add synchronisation
+        if not isinstance(model, LTVModel):
+            raise ModelError(f"model: expected an LTVModel, got {type(model).__name__}")
+        N, n, p = model.n_steps, model.n, model.p
+        skip = missing_pattern(missing, N)
+        K = np.empty((N, n, p))
+        P = np.empty((N + 1, n, n))
+        P_filt = np.empty((N, n, n))
+        Sigma = np.empty((N, p, p))
+        L = np.empty((N, p, p))
+        A = np.empty((N, n, n))
+        FK = np.empty((N, n, p))
+        eye = np.eye(n)
+        P[0] = model.P0
+        with np.errstate(over="ignore", invalid="ignore"):  # divergence is reported below, by step
+            for k in range(N):
+                F, H, Pk = model.F[k], model.H[k], P[k]
+                S = H @ Pk @ H.T + model.R[k]
+                S = 0.5 * (S + S.T)
+                c, low = cholesky(S, step=k, what="the Riccati recursion")
+                if skip[k]:  # missing sample: no update
+                    Kk, IKH, Pf = np.zeros((n, p)), eye, Pk
+                else:
+                    Kk = scipy.linalg.cho_solve(
+                        (c, low), H @ Pk
+                    ).T  # P H^T S^{-1} without forming S^{-1}
+                    IKH = eye - Kk @ H
+                    Pf = IKH @ Pk @ IKH.T + Kk @ model.R[k] @ Kk.T  # Joseph form: stays PSD
+                    Pf = 0.5 * (Pf + Pf.T)
+                Pn = F @ Pf @ F.T + model.Q[k]
+                K[k], P_filt[k], Sigma[k], A[k], FK[k] = Kk, Pf, S, F @ IKH, F @ Kk
+                L[k] = np.tril(c)
+                P[k + 1] = 0.5 * (Pn + Pn.T)
+        if not np.all(np.isfinite(P)):
+            k = int(np.argwhere(~np.isfinite(P))[0, 0])
+            raise NonFiniteError(
+                f"model: the Riccati recursion diverged (non-finite P_k at step {k})"
+            )
+        return KalmanGains(
+            K=K,
+            P=P,
+            P_filt=P_filt,
+            Sigma=Sigma,
+            Sigma_chol=L,
+            A=A,
+            FK=FK,
+            missing=skip if skip.any() else None,
+        )
 
 
 @dataclass(frozen=True)

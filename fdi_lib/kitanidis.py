@@ -84,6 +84,7 @@ import scipy.linalg
 from fdi_lib.errors import NonFiniteError, RankConditionError, ShapeError
 from fdi_lib.filters import predictor_recursion
 from fdi_lib.models import FaultProfile, LTVModel, as_record, as_sequence
+from fdi_lib.threads import blas_single_thread
 from fdi_lib.validation import (
     array,
     check_finite,
@@ -223,94 +224,99 @@ def kitanidis_gains(model: LTVModel, E: Any, missing: Any = None) -> KitanidisGa
     >>> float(np.abs((np.eye(2) - g.K[3] @ m.H[3]) @ E).max()) < 1e-14   # identity (30)
     True
     """
-    Es = as_unknown_input_matrix(model, E)
-    N, n, p = model.n_steps, model.n, model.p
-    s = Es.shape[2]
-    skip = missing_pattern(missing, N)
-    pending = np.zeros((n, 0))  # unknown-input directions not yet rejected by an update
-    K = np.empty((N, n, p))
-    Kc = np.empty((N, n, p))
-    P = np.empty((N + 1, n, n))
-    P_filt = np.empty((N, n, n))
-    Sigma = np.empty((N, p, p))
-    L = np.empty((N, p, p))
-    Xi = np.zeros((N, s, s))
-    Rcov = np.empty((N, p, p))
-    P[0] = model.P0
-    with np.errstate(over="ignore", invalid="ignore"):  # divergence is reported below, by step
-        for k in range(N):
-            H, Pk, Rk = model.H[k], P[k], model.R[k]
-            S = H @ Pk @ H.T + Rk
-            S = 0.5 * (S + S.T)
-            c, low = cholesky(S, step=k, what="the Kitanidis covariance recursion")
-            if (
-                k > 0
-            ):  # d_{k-1} joins the directions still to reject (after a gap, propagated ones too)
-                pending = (
-                    _span(np.hstack([model.F[k - 1] @ pending, Es[k - 1]]))
-                    if skip[k - 1]
-                    else Es[k - 1]
-                )
-            q = pending.shape[1]
-            if skip[k]:  # missing sample: no update, the pending inputs wait for the next sample
-                Kk = Kbar = np.zeros((n, p))
-                Pf = Pk
-            else:
-                Kk = scipy.linalg.cho_solve((c, low), H @ Pk).T  # P H^T S^{-1} by Cholesky solves
-                Pf = Pk - Kk @ H @ Pk
-                Kbar = Kk
-            if q > 0 and not skip[k]:
-                HE = H @ pending
-                sv = np.linalg.svd(HE, compute_uv=False)
-                if sv.size < q or sv[-1] <= RANK_RTOL * max(1.0, sv[0]):
-                    smin = float(sv[-1]) if sv.size == q else 0.0
-                    gap = (
-                        " (with the unknown inputs pending since the missing samples)"
+    with blas_single_thread():  # small matrices: BLAS threads only add synchronisation
+        Es = as_unknown_input_matrix(model, E)
+        N, n, p = model.n_steps, model.n, model.p
+        s = Es.shape[2]
+        skip = missing_pattern(missing, N)
+        pending = np.zeros((n, 0))  # unknown-input directions not yet rejected by an update
+        K = np.empty((N, n, p))
+        Kc = np.empty((N, n, p))
+        P = np.empty((N + 1, n, n))
+        P_filt = np.empty((N, n, n))
+        Sigma = np.empty((N, p, p))
+        L = np.empty((N, p, p))
+        Xi = np.zeros((N, s, s))
+        Rcov = np.empty((N, p, p))
+        P[0] = model.P0
+        with np.errstate(over="ignore", invalid="ignore"):  # divergence is reported below, by step
+            for k in range(N):
+                H, Pk, Rk = model.H[k], P[k], model.R[k]
+                S = H @ Pk @ H.T + Rk
+                S = 0.5 * (S + S.T)
+                c, low = cholesky(S, step=k, what="the Kitanidis covariance recursion")
+                if (
+                    k > 0
+                ):  # d_{k-1} joins the directions still to reject (after a gap, propagated ones too)
+                    pending = (
+                        _span(np.hstack([model.F[k - 1] @ pending, Es[k - 1]]))
                         if skip[k - 1]
-                        else ""
+                        else Es[k - 1]
                     )
-                    raise RankConditionError(
-                        f"E: assumption (iv) needs H_{{k+1}} E_k of full column rank {q}{gap}; at k = {k - 1}, "
-                        f"H_{k} E_{k - 1} has shape {HE.shape} and smallest singular value {smin:.3g}"
-                    )
-                # Square-root form: with Sigma = L L^T and L^{-1} H E = Qw Rw (thin QR), Xi = Rw^T Rw and
-                # Xi^{-1} E^T H^T Sigma^{-1} = Rw^{-1} Qw^T L^{-1}, a left inverse of H E accurate to
-                # cond(Rw) = sqrt(cond(Xi)) rather than cond(Xi): identity (30) then holds to that precision.
-                Lk = np.tril(c)
-                W = scipy.linalg.solve_triangular(Lk, HE, lower=True)
-                Qw, Rw = np.linalg.qr(W)
-                Linv = scipy.linalg.solve_triangular(Lk, np.eye(p), lower=True)
-                M = scipy.linalg.solve_triangular(Rw, Qw.T @ Linv)  # (s, p), M H E = I
-                Gam = pending - Kk @ HE  # (24c)
-                Kbar = Kk + Gam @ M  # (24g)
-                GR = scipy.linalg.solve_triangular(Rw, Gam.T, trans="T").T  # Gamma Rw^{-1}
-                Pf = Pf + GR @ GR.T  # (24f): + Gamma Xi^{-1} Gamma^T
-                if not skip[k - 1]:
-                    Xi[k] = W.T @ W  # (24d)
-            Pf = 0.5 * (Pf + Pf.T)
-            HK = H @ Kbar
-            Rc = H @ Pf @ H.T + Rk - HK @ Rk - Rk @ HK.T
-            Rcov[k] = 0.5 * (Rc + Rc.T)
-            K[k], Kc[k], P_filt[k], Sigma[k], L[k] = Kbar, Kk, Pf, S, np.tril(c)
-            Pn = model.F[k] @ Pf @ model.F[k].T + model.Q[k]
-            P[k + 1] = 0.5 * (Pn + Pn.T)
-    if not np.all(np.isfinite(P)):
-        k = int(np.argwhere(~np.isfinite(P))[0, 0])
-        raise NonFiniteError(
-            f"model: the Kitanidis covariance recursion diverged (non-finite P at step {k})"
+                q = pending.shape[1]
+                if skip[
+                    k
+                ]:  # missing sample: no update, the pending inputs wait for the next sample
+                    Kk = Kbar = np.zeros((n, p))
+                    Pf = Pk
+                else:
+                    Kk = scipy.linalg.cho_solve(
+                        (c, low), H @ Pk
+                    ).T  # P H^T S^{-1} by Cholesky solves
+                    Pf = Pk - Kk @ H @ Pk
+                    Kbar = Kk
+                if q > 0 and not skip[k]:
+                    HE = H @ pending
+                    sv = np.linalg.svd(HE, compute_uv=False)
+                    if sv.size < q or sv[-1] <= RANK_RTOL * max(1.0, sv[0]):
+                        smin = float(sv[-1]) if sv.size == q else 0.0
+                        gap = (
+                            " (with the unknown inputs pending since the missing samples)"
+                            if skip[k - 1]
+                            else ""
+                        )
+                        raise RankConditionError(
+                            f"E: assumption (iv) needs H_{{k+1}} E_k of full column rank {q}{gap}; at k = {k - 1}, "
+                            f"H_{k} E_{k - 1} has shape {HE.shape} and smallest singular value {smin:.3g}"
+                        )
+                    # Square-root form: with Sigma = L L^T and L^{-1} H E = Qw Rw (thin QR), Xi = Rw^T Rw and
+                    # Xi^{-1} E^T H^T Sigma^{-1} = Rw^{-1} Qw^T L^{-1}, a left inverse of H E accurate to
+                    # cond(Rw) = sqrt(cond(Xi)) rather than cond(Xi): identity (30) then holds to that precision.
+                    Lk = np.tril(c)
+                    W = scipy.linalg.solve_triangular(Lk, HE, lower=True)
+                    Qw, Rw = np.linalg.qr(W)
+                    Linv = scipy.linalg.solve_triangular(Lk, np.eye(p), lower=True)
+                    M = scipy.linalg.solve_triangular(Rw, Qw.T @ Linv)  # (s, p), M H E = I
+                    Gam = pending - Kk @ HE  # (24c)
+                    Kbar = Kk + Gam @ M  # (24g)
+                    GR = scipy.linalg.solve_triangular(Rw, Gam.T, trans="T").T  # Gamma Rw^{-1}
+                    Pf = Pf + GR @ GR.T  # (24f): + Gamma Xi^{-1} Gamma^T
+                    if not skip[k - 1]:
+                        Xi[k] = W.T @ W  # (24d)
+                Pf = 0.5 * (Pf + Pf.T)
+                HK = H @ Kbar
+                Rc = H @ Pf @ H.T + Rk - HK @ Rk - Rk @ HK.T
+                Rcov[k] = 0.5 * (Rc + Rc.T)
+                K[k], Kc[k], P_filt[k], Sigma[k], L[k] = Kbar, Kk, Pf, S, np.tril(c)
+                Pn = model.F[k] @ Pf @ model.F[k].T + model.Q[k]
+                P[k + 1] = 0.5 * (Pn + Pn.T)
+        if not np.all(np.isfinite(P)):
+            k = int(np.argwhere(~np.isfinite(P))[0, 0])
+            raise NonFiniteError(
+                f"model: the Kitanidis covariance recursion diverged (non-finite P at step {k})"
+            )
+        return KitanidisGains(
+            K=K,
+            K_kalman=Kc,
+            P=P,
+            P_filt=P_filt,
+            Sigma=Sigma,
+            Sigma_chol=L,
+            Xi=Xi,
+            residual_cov=Rcov,
+            E=Es,
+            missing=skip if skip.any() else None,
         )
-    return KitanidisGains(
-        K=K,
-        K_kalman=Kc,
-        P=P,
-        P_filt=P_filt,
-        Sigma=Sigma,
-        Sigma_chol=L,
-        Xi=Xi,
-        residual_cov=Rcov,
-        E=Es,
-        missing=skip if skip.any() else None,
-    )
 
 
 @dataclass(frozen=True)

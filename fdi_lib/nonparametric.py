@@ -70,6 +70,7 @@ from fdi_lib.kitanidis import KitanidisGains, as_unknown_input_matrix, kitanidis
 from fdi_lib.models import FaultFamily, LTVModel, fault_profile, ltv_model, step_family
 from fdi_lib.rls import RLSGains, RLSResult, rls_track
 from fdi_lib.signatures import fault_signature
+from fdi_lib.threads import blas_single_thread
 from fdi_lib.validation import array, integer, missing_samples, probability
 
 __all__ = [
@@ -417,20 +418,21 @@ def rejection_projection(model: LTVModel, kgains: KitanidisGains) -> np.ndarray:
     >>> T.shape, float(abs(T[3] @ m.H[3] @ E).max()), (T[3] @ kg.Sigma[3] @ T[3].T).round(6).tolist()
     ((6, 1, 2), 0.0, [[1.0]])
     """
-    N, p = model.n_steps, model.p
-    Es = kgains.E
-    q = Es.shape[2]
-    if q >= p:
-        raise ModelError(
-            f"E: the rejection leaves p - q = {p - q} output directions; expected q < p = {p}"
-        )
-    T = np.empty((N, p - q, p))
-    for k in range(N):
-        Lc = kgains.Sigma_chol[k]
-        B = scipy.linalg.solve_triangular(Lc, model.H[k] @ Es[max(k - 1, 0)], lower=True)
-        Nk = scipy.linalg.null_space(B.T)  # (p, p - q), orthonormal
-        T[k] = scipy.linalg.solve_triangular(Lc, Nk, lower=True, trans="T").T  # N^T L^{-1}
-    return T
+    with blas_single_thread():  # small matrices: BLAS threads only add synchronisation
+        N, p = model.n_steps, model.p
+        Es = kgains.E
+        q = Es.shape[2]
+        if q >= p:
+            raise ModelError(
+                f"E: the rejection leaves p - q = {p - q} output directions; expected q < p = {p}"
+            )
+        T = np.empty((N, p - q, p))
+        for k in range(N):
+            Lc = kgains.Sigma_chol[k]
+            B = scipy.linalg.solve_triangular(Lc, model.H[k] @ Es[max(k - 1, 0)], lower=True)
+            Nk = scipy.linalg.null_space(B.T)  # (p, p - q), orthonormal
+            T[k] = scipy.linalg.solve_triangular(Lc, Nk, lower=True, trans="T").T  # N^T L^{-1}
+        return T
 
 
 @dataclass(frozen=True)

@@ -524,7 +524,7 @@ def test_json_and_summary(cheap_results):
             assert row["status"] != C.REPRODUCED, row
     html = led.summary()._repr_html_()
     assert all(s in html for s in C.STATUSES)
-    assert "<thead><tr><th>status</th>" in html  # status first
+    assert '<thead><tr><th scope="col">status</th>' in html  # status first
     inputs = [r for r in led.rows if r.id == "zb2014-table1"]  # declared: neither list
     assert inputs and all(r.role == C.INPUT for r in inputs)
     # its detection time is the §6.4 sentence, listed under Fig. 11
