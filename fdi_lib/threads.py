@@ -14,9 +14,10 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import os
 from typing import Any, Callable, Iterator, TypeVar
 
-__all__ = ["single_threaded_blas", "blas_single_thread"]
+__all__ = ["ONE_THREAD_ENV", "single_threaded_blas", "blas_single_thread"]
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -35,9 +36,28 @@ def _controller() -> Any:
     return ThreadpoolController()
 
 
+#: Set to 1 when the process starts (``make`` exports them, the grader's kernels get them), these
+#: fix every BLAS the wheels ship to one thread as it loads.
+ONE_THREAD_ENV = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def _one_thread_by_environment() -> bool:
+    return all(os.environ.get(name) == "1" for name in ONE_THREAD_ENV)
+
+
 @contextlib.contextmanager
 def blas_single_thread() -> Iterator[None]:
-    """Context manager: the BLAS limited to one thread inside, restored afterwards."""
+    """Context manager: the BLAS limited to one thread inside, restored afterwards.
+
+    Nothing to do when the environment already fixes it (:data:`ONE_THREAD_ENV`): then no
+    ``ThreadpoolController`` is made, whose search of the loaded libraries and calls into them go
+    through ``ctypes`` (which the grader's kernels forbid: ``tools/grader_kernel.py``). Were a
+    variable set to 1 only after the BLAS loaded, the computation would be as right, only
+    slower.
+    """
+    if _one_thread_by_environment():
+        yield
+        return
     with _controller().limit(limits=1, user_api="blas"):
         yield
 
