@@ -410,6 +410,8 @@ def test_reader_tables_and_counts():
     assert "q = 15" in text and "46 % [43, 49]" in text and "29.5 %" in text
     t = str(snr_table({"var(Y) / var(V)": np.array([[34.5, 32.8]])}, (0.5,)))
     assert "34.5 / 32.8" in t and "34.06 / 32.63" in t
+    # each row says what its ratio compares before the maths
+    assert "variances: $10 \\log_{10}" in t
 
 
 def test_outputs_with_unknown_input_matches_a_direct_loop():

@@ -470,9 +470,13 @@ def snr_table(readings: dict[str, np.ndarray], r_values: Sequence[float] = (0.5,
     def cell(v: Sequence[float]) -> str:
         return " / ".join(fmt_number(float(x), 4) for x in v)
 
-    # the readings' keys ("sum Y^2 / sum V^2") as maths: 10 log10 of a ratio of sums
+    # the readings' keys ("sum Y^2 / sum V^2") as maths, 10 log10 of a ratio of sums, after what
+    # the ratio compares (a header of maths alone is empty to a screen reader's table navigation)
     rows = {
-        f"${_snr_tex(k)}$": [cell(v[i]) for i in range(len(r_values))] for k, v in readings.items()
+        f"{'variances' if k.startswith('var(') else 'sums of squares'}: ${_snr_tex(k)}$": [
+            cell(v[i]) for i in range(len(r_values))
+        ]
+        for k, v in readings.items()
     }
     rows["paper (Table II)"] = [
         cell(PAPER_TABLE2["snr_db"][float(r) if r != int(r) else int(r)]) for r in r_values
