@@ -147,8 +147,12 @@ def test_calling_process_shares_the_work_and_results_keep_their_order():
         assert two["here"][:4].all()  # the calling process takes the first chunk itself
 
 
-def test_single_threaded_blas_limits_every_blas_and_restores_it():
+def test_single_threaded_blas_limits_every_blas_and_restores_it(monkeypatch):
     from threadpoolctl import threadpool_info, threadpool_limits
+
+    # an environment that does not start the BLAS on one thread (make's does: nothing to limit,
+    # tests/test_threads.py)
+    monkeypatch.delenv("OPENBLAS_NUM_THREADS", raising=False)
 
     from fdi_lib.threads import blas_single_thread, single_threaded_blas
 

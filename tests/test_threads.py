@@ -9,7 +9,7 @@ from __future__ import annotations
 import contextlib
 
 import pytest
-from threadpoolctl import threadpool_info, threadpool_limits
+from threadpoolctl import threadpool_info
 
 from fdi_lib import filters, kitanidis, nonparametric, threads
 from fdi_lib.systems import bz_example as ex
@@ -18,15 +18,6 @@ from fdi_lib.threads import ONE_THREAD_ENV, blas_single_thread
 
 def _blas_threads() -> set[int]:
     return {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
-
-
-def test_blas_single_thread_limits_every_blas_and_restores_it(monkeypatch):
-    monkeypatch.delenv("OPENBLAS_NUM_THREADS", raising=False)
-    with threadpool_limits(limits=2, user_api="blas"):
-        assert _blas_threads() == {2}
-        with blas_single_thread():
-            assert _blas_threads() == {1}
-        assert _blas_threads() == {2}
 
 
 def test_nothing_to_limit_when_the_environment_fixes_one_thread(monkeypatch):
