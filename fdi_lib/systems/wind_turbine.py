@@ -2258,7 +2258,8 @@ def simulate_with_twin(
     schedule: str = "benchmark",
 ) -> tuple[WindTurbineRun, WindTurbineRun]:
     """:func:`simulate` with ``faults`` and without them (its fault-free twin: the same wind, noise
-    and start), the same runs as two calls. Until the first fault's first sample the two loops are
+    and start), the same runs as two calls (``seed``, ``duration_s``, ``params``, ``wind``,
+    ``n_realisations``, ``dtype`` and ``schedule`` as there; no accommodation). Until the first fault's first sample the two loops are
     the same (every fault's profile is zero there), so the twin starts from the faulty run's state
     at that sample, with the noise already drawn: about 27 s of a 37 s segment are simulated once."""
     return _simulate(
