@@ -158,8 +158,13 @@ def _opposite_rows_bound(M: np.ndarray, m: np.ndarray) -> float:
     rows, +inf when there are none: ``M_i = -M_j`` gives, for every x, ``min_k (m_k - M_k x) <=
     ((m_i - M_i x) + (m_j - M_j x)) / 2 = (m_i + m_j) / 2`` (the LP's dual certificate with weights
     1/2 on the pair; exact, since the rows cancel exactly in floating point)."""
-    i, j = np.nonzero((M[:, None, :] == -M[None, :, :]).all(axis=2))
-    return float(((m[i] + m[j]) / 2.0).min()) if i.size else np.inf
+    best = np.inf
+    step = max(1, 4_000_000 // max(1, M.size))  # blocks of rows: the comparison holds step x M
+    for start in range(0, M.shape[0], step):
+        i, j = np.nonzero((M[start : start + step, None, :] == -M[None, :, :]).all(axis=2))
+        if i.size:
+            best = min(best, float(((m[start + i] + m[j]) / 2.0).min()))
+    return best
 
 
 def _all_inside(V: np.ndarray, M: np.ndarray, m: np.ndarray, tol: float) -> bool:
