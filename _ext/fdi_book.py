@@ -60,7 +60,8 @@
    list of figures after the contents and an index of the terms a student looks up
    (:data:`INDEX_TERMS`, :class:`_IndexTerms`); tables within the text width, ragged-right,
    intervals and units unbroken (:class:`_PrintedTables`, :data:`LATEX_LAYOUT`), floats kept in
-   their section and LaTeX passes that converge (:data:`LATEX_LAYOUT`).
+   their section and LaTeX passes that converge (:data:`LATEX_LAYOUT`); a reference to an
+   exercise that reaches it (:func:`_latex_exercise_targets`).
    In the HTML, the header's download menu links the PDF when there is one: ``make pdf`` puts it
    beside the pages (:func:`publish_pdf`), and ``make book`` after ``make pdf`` copies it there.
 12. Tables that can be read on a phone: every body cell of a table carries its column's header as
@@ -1427,6 +1428,31 @@ def _latex_preamble(app: Sphinx, config) -> None:
     )
 
 
+def _latex_exercise_targets(app: Sphinx, doctree, docname: str) -> None:
+    """A ``{ref}`` to an exercise reaches it in the PDF: sphinx-exercise labels an exercise
+    ``exercise:<label>`` in LaTeX, where such a reference points at ``<page>:<label>`` (a dead
+    link, "Hyper reference ... undefined", which ``tools/check_pdf.py`` fails); each exercise
+    gets that label too, just before it."""
+    if app.builder.format != "latex":
+        return
+    from sphinx_exercise.nodes import exercise_enumerable_node, exercise_node
+
+    registry = getattr(app.env, "sphinx_exercise_registry", {})
+    for node in list(
+        doctree.findall(lambda n: isinstance(n, (exercise_node, exercise_enumerable_node)))
+    ):
+        label = node.get("label")
+        page = registry.get(label, {}).get("docname") if label else None
+        if page:
+            target = f"{page}:{label}"
+            node.parent.insert(
+                node.parent.index(node),
+                nodes.raw(
+                    "", f"\\phantomsection\\label{{\\detokenize{{{target}}}}}\n", format="latex"
+                ),
+            )
+
+
 def _latex_files(app: Sphinx) -> None:
     if app.builder.name != "latex":
         return
@@ -2006,6 +2032,7 @@ def setup(app: Sphinx) -> dict[str, Any]:
     app.connect("doctree-read", _record_proof_titles)
     app.connect("env-purge-doc", _purge_proof_titles)
     app.connect("config-inited", _latex_preamble)
+    app.connect("doctree-resolved", _latex_exercise_targets)
     app.connect("builder-inited", _latex_files)
     app.connect("env-updated", _latex_cover)
     app.add_post_transform(_ProtectCaptionCitations)

@@ -366,6 +366,16 @@ def test_log_counts_overfull_boxes_over_the_allowance_and_rerun_requests():
     assert check.log_problems_in(
         "LaTeX Warning: Float too large for page by 3.1pt on input line 7.\n"
     ) == ["LaTeX: Float too large for page by 3.1pt on input line 7."]
+    # undefined references of every kind, the warning wrapped before "undefined" included
+    assert check.log_problems_in(
+        "LaTeX Warning: Reference `a:b' on page 3 undefined on input line 5.\n"
+        "LaTeX Warning: Hyper reference `book/windturbine/benchmark:ex-wt-2' on page 232\n"
+        " undefined on input line 23347.\n"
+    ) == [
+        "LaTeX: LaTeX Warning: Reference `a:b' on page 3 undefined on input line 5.",
+        "LaTeX: LaTeX Warning: Hyper reference `book/windturbine/benchmark:ex-wt-2' on page 232 "
+        "undefined on input line 23347.",
+    ]
 
 
 def _bbox_page(lines):

@@ -9,7 +9,8 @@ Fails (exit status 1, one line per problem) when:
   raw TeX macro (``\\name`` with two letters or more) more often than the code listings of the
   LaTeX source print it (a cell's source may hold TeX in a string: ``r"$\\Psi_k$"``), outside
   :data:`ALLOWED_MACROS`;
-- the LaTeX log has an undefined reference or citation (printed as "??" in the PDF), or a
+- the LaTeX log has an undefined reference or citation (printed as "??" in the PDF) or hyper
+  reference (a dead link), or a
   character that the font lacks (xelatex drops it from the page: "Missing character");
 - the layout regressed (issue 33): an overfull box over :data:`OVERFULL_ALLOWANCE_PT`
   (horizontal: a table, a figure or a line beyond the text width; vertical: something taller
@@ -108,9 +109,15 @@ def log_problems(log: Path) -> list[str]:
 
 def log_problems_in(text: str) -> list[str]:
     """The problems of a LaTeX log's text (see the module docstring)."""
+    # a hyper reference too (a link whose target has no label: a dead link in the PDF); the
+    # warning may wrap before "undefined"
     problems = [
-        f"LaTeX: {m.group(0)}"
-        for m in re.finditer(r"LaTeX Warning: (?:Reference|Citation) .* undefined[^\n]*", text)
+        "LaTeX: " + " ".join(m.group(0).split())
+        for m in re.finditer(
+            r"LaTeX Warning: (?:Reference|Citation|Hyper reference) `[^']*' on page \d+\s+"
+            r"undefined[^\n]*",
+            text,
+        )
     ]
     problems += overfull_boxes(text)
     problems += [f"LaTeX: {m.group(0)}" for m in re.finditer(r"Float too large[^\n]*", text)]
