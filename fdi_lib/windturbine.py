@@ -1628,7 +1628,8 @@ def fault_record_pair(
     schedule: str = "benchmark",
 ) -> tuple[Records, Records]:
     """:func:`fault_records` with the fault and without it (its fault-free twin: the same wind and
-    noise), the same records as two calls, the wind drawn once."""
+    noise), the same records as two calls, the wind drawn once and the twin simulated from the
+    fault's onset on (:func:`~fdi_lib.systems.wind_turbine.simulate_with_twin`)."""
     return _segment_records(fault, seeds, settings, params, settle_s, (True, False), schedule)
 
 
@@ -1670,15 +1671,21 @@ def _segment_records(
     )
     i0 = int(round(settle_s / params.ts))
     i1 = i0 + int(round((settings.pre_s + settings.post_s) / params.ts))
-    return tuple(
-        records(
+    faults = (_shifted(fault, t0),)
+    runs = (
+        wt.simulate_with_twin(
+            seed=seeds, faults=faults, duration_s=duration, params=params, wind=wind
+        )
+        if kinds == (True, False)
+        else tuple(
             wt.simulate(
                 seed=seeds,
-                faults=(_shifted(fault, t0),) if faulty else (),
+                faults=faults if faulty else (),
                 duration_s=duration,
                 params=params,
                 wind=wind,
             )
-        ).window(i0, i1)
-        for faulty in kinds
+            for faulty in kinds
+        )
     )
+    return tuple(records(run).window(i0, i1) for run in runs)

@@ -52,6 +52,7 @@ from fdi_lib.errors import ModelError, ResourceError
 from fdi_lib.montecarlo import binomial_ci, run_monte_carlo
 from fdi_lib.reproduce.ledger_claims import BY_TOLERANCE, NOT_CHECKABLE, Claim
 from fdi_lib.reproduce.registry import ReproductionResult, register
+from fdi_lib.threads import single_threaded_blas
 from fdi_lib import windturbine as W
 
 __all__ = [
@@ -113,6 +114,7 @@ def calibrated_design(
 
 
 @functools.lru_cache(maxsize=4)
+@single_threaded_blas
 def _calibration(
     seed: int, settings: W.Settings, schedule: str
 ) -> tuple[W.PlantConstants, W.Calibration, np.ndarray]:
@@ -134,6 +136,7 @@ def _calibration(
 
 
 @functools.lru_cache(maxsize=4)
+@single_threaded_blas
 def _calibrated_design(seed: int, settings: W.Settings, schedule: str) -> W.Design:
     return W.design(*_calibration(seed, settings, schedule), settings)
 
@@ -161,6 +164,7 @@ def stream_design(seed: int) -> tuple[W.Design, int]:
 
 
 @functools.lru_cache(maxsize=2)
+@single_threaded_blas
 def _stream_design(seed: int, settings: W.Settings) -> W.Design:
     return W.design(*_calibration(seed, W.Settings(), "benchmark"), settings)
 

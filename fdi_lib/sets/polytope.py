@@ -153,6 +153,20 @@ def _chebyshev(M: np.ndarray, m: np.ndarray, cap: float = 1e6) -> tuple[str, np.
     return "optimal", res.x[:n], float(res.x[n])
 
 
+def _opposite_rows_bound(M: np.ndarray, m: np.ndarray) -> float:
+    """An upper bound of the Chebyshev radius of Set(M, m) (unit rows) from its exactly opposite
+    rows, +inf when there are none: ``M_i = -M_j`` gives, for every x, ``min_k (m_k - M_k x) <=
+    ((m_i - M_i x) + (m_j - M_j x)) / 2 = (m_i + m_j) / 2`` (the LP's dual certificate with weights
+    1/2 on the pair; exact, since the rows cancel exactly in floating point)."""
+    best = np.inf
+    step = max(1, 4_000_000 // max(1, M.size))  # blocks of rows: the comparison holds step x M
+    for start in range(0, M.shape[0], step):
+        i, j = np.nonzero((M[start : start + step, None, :] == -M[None, :, :]).all(axis=2))
+        if i.size:
+            best = min(best, float(((m[start + i] + m[j]) / 2.0).min()))
+    return best
+
+
 def _all_inside(V: np.ndarray, M: np.ndarray, m: np.ndarray, tol: float) -> bool:
     """Whether every row of V satisfies M v <= m + tol (in blocks: V and M can both be large)."""
     step = max(1, 2_000_000 // max(1, M.shape[0]))
@@ -322,7 +336,10 @@ def _enumerate_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray:
 
     Emptiness is decided by linear programming, never by an empty enumeration: (0, n) is returned
     only when the Chebyshev LP (:func:`_chebyshev`, cddlib verified, HiGHS when unsure) finds no
-    ball of radius above ``-_EMPTY_TOL (1 + max |m|)`` (:data:`_EMPTY_TOL`).
+    ball of radius above ``-_EMPTY_TOL (1 + max |m|)`` (:data:`_EMPTY_TOL`), or when a dual
+    certificate of that LP already proves it: two exactly opposite rows whose offsets leave twice
+    that margin (:func:`_opposite_rows_bound`; an emptied SVO set usually is so, its measurement
+    strip beyond the propagated set in one direction).
 
     Few rows (at most :data:`_MAX_BASES` n-subsets of distinct normals) and normals that bound
     the set: :func:`_basis_vertices`; when it finds no vertex, the LP decides. Otherwise rows are
@@ -340,8 +357,13 @@ def _enumerate_vertices(M: np.ndarray, m: np.ndarray) -> np.ndarray:
         return V
     M, m = _normalise(M, m)
     n = M.shape[1]
+    limit = _EMPTY_TOL * (1.0 + np.abs(m).max(initial=0.0))
+    # two opposite rows with no room between them prove the radius below -limit without the LP
+    # (twice -limit: the rounding of their mean, about 1e-16 max |m|, cannot cross the threshold)
+    if _opposite_rows_bound(M, m) < -2.0 * limit:
+        return np.zeros((0, n))
     status, centre, radius = _chebyshev(M, m)
-    if status == "infeasible" or radius < -_EMPTY_TOL * (1.0 + np.abs(m).max(initial=0.0)):
+    if status == "infeasible" or radius < -limit:
         return np.zeros((0, n))
     if status == "unbounded" or radius >= 1e6 * (1 - 1e-12):
         raise UnboundedSetError(

@@ -80,7 +80,14 @@ from fdi_lib.errors import (
     UnsoundOptionWarning,
 )
 from fdi_lib.validation import integer, real
-from fdi_lib.sets.polytope import Polytope, _hull, _hull_hrep, _enumerate_vertices, box_corners
+from fdi_lib.sets.polytope import (
+    Polytope,
+    _bases,
+    _enumerate_vertices,
+    _hull,
+    _hull_hrep,
+    box_corners,
+)
 from fdi_lib.threads import single_threaded_blas
 
 __all__ = [
@@ -1156,6 +1163,96 @@ def _support_max(
 
 
 @numba.njit(cache=True)
+def _basic_one(
+    m: np.ndarray,
+    norms: np.ndarray,
+    pad: np.ndarray,
+    idx: np.ndarray,
+    invT: np.ndarray,
+    U: np.ndarray,
+    zero: np.ndarray,
+    X: np.ndarray,
+    F: np.ndarray,
+    work: tuple,
+) -> bool:  # pragma: no cover
+    """The basic solutions of one set ``Set(M, m)`` into ``X`` ``(K, n)`` and whether each is
+    feasible into ``F`` ``(K,)`` (:func:`_basic_solutions`; ``invT[i, j, k]`` is ``inv[k, i, j]``,
+    ``work`` the scratch arrays of :func:`_basic_work`); returns whether any is."""
+    p = m.shape[0]
+    q, r = pad.shape
+    K, n = idx.shape
+    mu, Mu, Xt, acc, ok = work
+    bad = False
+    for i in range(p):
+        if zero[i] and m[i] < 0:
+            bad = True
+    big = 0.0
+    for g in range(q):
+        best = np.inf
+        for j in range(r):
+            i = pad[g, j]
+            if i < p:
+                v = m[i] / norms[i]
+                if v < best:
+                    best = v
+        mu[g] = best
+        big = max(big, abs(best))
+    tol = 1e-12 * (1.0 + big)
+    for j in range(n):
+        for k in range(K):
+            Mu[j, k] = mu[idx[k, j]]
+    # the bases side by side (k innermost, a vector loop): each sum still in its own order
+    for i in range(n):
+        for k in range(K):
+            Xt[i, k] = 0.0
+        for j in range(n):
+            for k in range(K):
+                Xt[i, k] += invT[i, j, k] * Mu[j, k]
+    for k in range(K):
+        ok[k] = not bad
+    for g in range(q):
+        for k in range(K):
+            acc[k] = 0.0
+        for c in range(n):
+            for k in range(K):
+                acc[k] += Xt[c, k] * U[g, c]
+        for k in range(K):
+            ok[k] = ok[k] and acc[k] <= mu[g] + tol
+    found = False
+    for k in range(K):
+        F[k] = ok[k]
+        found = found or ok[k]
+        for i in range(n):
+            X[k, i] = Xt[i, k]
+    return found
+
+
+@numba.njit(cache=True)
+def _basic_work(q: int, K: int, n: int) -> tuple:  # pragma: no cover
+    """Scratch arrays of :func:`_basic_one` (``q`` distinct normals, ``K`` bases, dimension ``n``),
+    allocated once per batch of sets."""
+    return (
+        np.empty(q),
+        np.empty((n, K)),
+        np.empty((n, K)),
+        np.empty(K),
+        np.empty(K, dtype=np.bool_),
+    )
+
+
+@numba.njit(cache=True)
+def _inv_t(inv: np.ndarray) -> np.ndarray:  # pragma: no cover
+    """``inv[k, i, j]`` at ``[i, j, k]`` (:func:`_basic_one`'s layout)."""
+    K, n, _ = inv.shape
+    invT = np.empty((n, n, K))
+    for k in range(K):
+        for i in range(n):
+            for j in range(n):
+                invT[i, j, k] = inv[k, i, j]
+    return invT
+
+
+@numba.njit(cache=True)
 def _basic_solutions(
     m: np.ndarray,
     norms: np.ndarray,
@@ -1169,65 +1266,88 @@ def _basic_solutions(
     whether each is feasible ``(B, K)`` (:func:`fdi_lib.sets.polytope._basis_vertices`'s route and
     tolerance, the arrays of its :class:`~fdi_lib.sets.polytope._Bases`): ``mu`` the tightest
     offset per distinct unit normal, feasible to ``1e-12 (1 + max |mu|)``, none where a zero row
-    has a negative offset. Each set is computed on its own, with sums in a fixed order, so its
-    result does not depend on the batch."""
-    B, p = m.shape
-    q, r = pad.shape
+    has a negative offset. Each set is computed on its own (:func:`_basic_one`), with sums in a
+    fixed order, so its result does not depend on the batch."""
+    B = m.shape[0]
     K, n = idx.shape
     X = np.empty((B, K, n))
     F = np.empty((B, K), dtype=np.bool_)
-    mu = np.empty(q)
-    invT = np.empty((n, n, K))  # inv[k, i, j] at [i, j, k]
-    for k in range(K):
-        for i in range(n):
-            for j in range(n):
-                invT[i, j, k] = inv[k, i, j]
-    Mu = np.empty((n, K))
-    Xt = np.empty((n, K))
-    acc = np.empty(K)
-    ok = np.empty(K, dtype=np.bool_)
+    invT = _inv_t(inv)
+    work = _basic_work(pad.shape[0], K, n)
     for b in range(B):
-        bad = False
-        for i in range(p):
-            if zero[i] and m[b, i] < 0:
-                bad = True
-        big = 0.0
-        for g in range(q):
-            best = np.inf
-            for j in range(r):
-                i = pad[g, j]
-                if i < p:
-                    v = m[b, i] / norms[i]
-                    if v < best:
-                        best = v
-            mu[g] = best
-            big = max(big, abs(best))
-        tol = 1e-12 * (1.0 + big)
-        for j in range(n):
-            for k in range(K):
-                Mu[j, k] = mu[idx[k, j]]
-        # the bases side by side (k innermost, a vector loop): each sum still in its own order
-        for i in range(n):
-            for k in range(K):
-                Xt[i, k] = 0.0
-            for j in range(n):
-                for k in range(K):
-                    Xt[i, k] += invT[i, j, k] * Mu[j, k]
-        for k in range(K):
-            ok[k] = not bad
-        for g in range(q):
-            for k in range(K):
-                acc[k] = 0.0
-            for c in range(n):
-                for k in range(K):
-                    acc[k] += Xt[c, k] * U[g, c]
-            for k in range(K):
-                ok[k] = ok[k] and acc[k] <= mu[g] + tol
-        for k in range(K):
-            F[b, k] = ok[k]
-            for i in range(n):
-                X[b, k, i] = Xt[i, k]
+        _basic_one(m[b], norms, pad, idx, invT, U, zero, X[b], F[b], work)
     return X, F
+
+
+@numba.njit(cache=True)
+def _template_step(
+    DPhi: np.ndarray,
+    mi: np.ndarray,
+    rows: np.ndarray,
+    V: np.ndarray,
+    F: np.ndarray,
+    D: np.ndarray,
+    Bk: np.ndarray,
+    Buk: np.ndarray,
+    uk: np.ndarray,
+    sL: np.ndarray,
+    noise: np.ndarray,
+    yk: np.ndarray,
+    margin: float,
+    norms: np.ndarray,
+    pad: np.ndarray,
+    idx: np.ndarray,
+    invT: np.ndarray,
+    U: np.ndarray,
+    zero: np.ndarray,
+    m_out: np.ndarray,
+    found: np.ndarray,
+) -> None:  # pragma: no cover
+    """One template step of the observers ``rows`` (:meth:`TemplateBatch._step`, basis route) in
+    place: the supports ``h`` (:func:`_support_max`, plus ``D B u`` and the uncertainty's
+    ``sum |D B_b u|``, each product in :func:`_dot`'s order, then the margin), the offsets
+    ``m_out[a] = (h, nb + y, nb - y)`` and the basic solutions (:func:`_basic_one`) written into
+    ``V[rows[a], :K]`` and ``F[rows[a]]`` (``False`` beyond ``K``); ``found[a]``: whether any basis
+    is feasible. The same operations in the same order as the array route, hence the same bits."""
+    W = _support_max(DPhi, mi, V, F, rows)
+    na, p = W.shape
+    n = D.shape[1]
+    n_u, n_y, n_b = uk.shape[1], yk.shape[1], Buk.shape[1]
+    K = idx.shape[0]
+    Bu = np.empty(n)
+    Gu = np.empty((n_b, n))
+    work = _basic_work(pad.shape[0], K, n)
+    for a in range(na):
+        r, q = rows[a], mi[a]
+        for i in range(n):
+            t = Bk[q, i, 0] * uk[a, 0]
+            for c in range(1, n_u):
+                t = t + Bk[q, i, c] * uk[a, c]
+            Bu[i] = t
+            for b in range(n_b):
+                t = Buk[q, b, i, 0] * uk[a, 0]
+                for c in range(1, n_u):
+                    t = t + Buk[q, b, i, c] * uk[a, c]
+                Gu[b, i] = t
+        for i in range(p):
+            c = D[i, 0] * Bu[0]
+            for j in range(1, n):
+                c = c + D[i, j] * Bu[j]
+            s = sL[q, i]
+            for b in range(n_b):
+                t = D[i, 0] * Gu[b, 0]
+                for j in range(1, n):
+                    t = t + D[i, j] * Gu[b, j]
+                s = s + abs(t)
+            h = W[a, i] + c + s
+            m_out[a, i] = h + margin * (1.0 + abs(h))
+        for j in range(n_y):
+            nb = noise[q, j] * (1.0 + margin) + margin
+            m_out[a, p + j] = nb + yk[a, j]
+            m_out[a, p + n_y + j] = nb - yk[a, j]
+        found[a] = _basic_one(m_out[a], norms, pad, idx, invT, U, zero, V[r, :K], F[r, :K], work)
+        for j in range(K, F.shape[1]):
+            F[r, j] = False
 
 
 def _vertices_many(M: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -1239,8 +1359,6 @@ def _vertices_many(M: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray
     same normals M, hence the same bases); a vertex on more than n facets may appear several times.
     When that route does not apply, each set's vertices are enumerated on their own and padded.
     """
-    from fdi_lib.sets.polytope import _bases
-
     b = _bases(M.tobytes(), M.shape[0], M.shape[1])
     if b is None or not b.bounded:
         Vs = [_enumerate_vertices(M, row) for row in m]
@@ -1355,13 +1473,19 @@ class TemplateBatch:
                     uniq.append(models[b])
             mi = np.array([rows[id(models[b])] for b in idx])
             L = np.stack([mdl.L for mdl in uniq])
+            M = np.vstack([D, first.C, -first.C])
+            # the basis route in one compiled step (_step_bases) when its normals allow it
+            b = _bases(M.tobytes(), *M.shape) if u.shape[2] else None
+            usable = b is not None and b.bounded
             self._groups.append(
                 {
                     "idx": np.array(idx),
                     "mi": mi,
                     "D": D,
                     "C": first.C,
-                    "M": np.vstack([D, first.C, -first.C]),
+                    "M": M,
+                    "bases": b if usable else None,
+                    "invT": _inv_t(b.inv) if usable else None,
                     "vA": np.stack([mdl._vertex_A[:T] for mdl in uniq]),
                     "B": np.stack([mdl.B[:T] for mdl in uniq]),
                     "B_unc": np.stack([mdl.B_unc[:T] for mdl in uniq]),
@@ -1405,6 +1529,9 @@ class TemplateBatch:
         D, obs = g["D"], g["idx"][a]
         mi = g["mi"][a]  # the observers' rows in the model arrays
         DPhi = np.matmul(D, g["vA"][:, k - 1])  # (models, 2^n_A, p, n): D A_v of each model
+        if g["bases"] is not None:
+            self._step_bases(g, a, k, DPhi)
+            return
         W = _support_max(DPhi, mi, g["V"], g["F"], a)  # (a, p): over A_v and the live vertices
         uk = self.u[obs, k - 1]
         c = _dot(D, _dot(g["B"][mi, k - 1], uk))  # D B u
@@ -1418,12 +1545,58 @@ class TemplateBatch:
         yk = self.y[obs, k]
         X, Fn = _vertices_many(g["M"], np.column_stack([h, nb + yk, nb - yk]))
         if g["V"].shape[1] < X.shape[1]:
-            pad = X.shape[1] - g["V"].shape[1]
-            g["V"] = np.concatenate([g["V"], np.zeros((len(g["idx"]), pad, self.n))], axis=1)
-            g["F"] = np.concatenate([g["F"], np.zeros((len(g["idx"]), pad), dtype=bool)], axis=1)
+            self._widen(g, X.shape[1])
         g["V"][a, : X.shape[1]], g["F"][a, : X.shape[1]] = X, Fn
         g["F"][a, X.shape[1] :] = False
         self.alive[obs] = Fn.any(axis=1)
+
+    def _step_bases(self, g: dict, a: np.ndarray, k: int, DPhi: np.ndarray) -> None:
+        """:meth:`_step` by the basis route in one compiled pass (:func:`_template_step`, the same
+        bits), the vertices written in place; a set with no feasible basis goes to
+        :func:`~fdi_lib.sets.polytope._enumerate_vertices` (emptiness by LP), as in
+        :func:`_vertices_many`."""
+        b, obs, M = g["bases"], g["idx"][a], g["M"]
+        K = b.idx.shape[0]
+        if g["V"].shape[1] < K:
+            self._widen(g, K)
+        m = np.empty((len(a), M.shape[0]))
+        found = np.empty(len(a), dtype=bool)
+        _template_step(
+            DPhi,
+            g["mi"][a],
+            a,
+            g["V"],
+            g["F"],
+            g["D"],
+            g["B"][:, k - 1],
+            g["B_unc"][:, k - 1],
+            self.u[obs, k - 1],
+            g["sL"],
+            g["noise"],
+            self.y[obs, k],
+            self.margin,
+            b.norms,
+            b.pad,
+            b.idx,
+            g["invT"],
+            b.U,
+            b.zero,
+            m,
+            found,
+        )
+        for i in np.flatnonzero(~found):
+            V = _enumerate_vertices(M, m[i])
+            if len(V) > g["V"].shape[1]:
+                self._widen(g, len(V))
+            g["V"][a[i], : len(V)], g["F"][a[i], : len(V)] = V, True
+            found[i] = len(V) > 0
+        self.alive[obs] = found
+
+    def _widen(self, g: dict, K: int) -> None:
+        """Room for ``K`` vertices per observer in the group's arrays (zeros, not live)."""
+        pad = K - g["V"].shape[1]
+        g["V"] = np.concatenate([g["V"], np.zeros((len(g["idx"]), pad, self.n))], axis=1)
+        g["F"] = np.concatenate([g["F"], np.zeros((len(g["idx"]), pad), dtype=bool)], axis=1)
 
     def bounding_boxes(self) -> tuple[np.ndarray, np.ndarray]:
         """Lower and upper corners of the bounding box of every current set, shape (B, n) each

@@ -148,6 +148,7 @@ __all__ = [
     "plant_step",
     "WindTurbineRun",
     "simulate",
+    "simulate_with_twin",
 ]
 
 #: Sampling period (s) [script] ``Ts = 1/100``.
@@ -2231,6 +2232,55 @@ def simulate(
     8 s of CPU; cached on disk afterwards). The loop is serial over realisations: run batches in
     parallel with :func:`fdi_lib.montecarlo.run_monte_carlo` and seed sequences.
     """
+    return _simulate(
+        seed,
+        faults,
+        duration_s,
+        params,
+        wind,
+        n_realisations,
+        dtype,
+        schedule,
+        accommodation,
+        False,
+    )[0]
+
+
+def simulate_with_twin(
+    *,
+    seed: Any,
+    faults: Sequence[Fault] = FAULTS,
+    duration_s: float = SCENARIO_S,
+    params: WindTurbineParams = PARAMS,
+    wind: Any = None,
+    n_realisations: int | None = None,
+    dtype: Any = np.float64,
+    schedule: str = "benchmark",
+) -> tuple[WindTurbineRun, WindTurbineRun]:
+    """:func:`simulate` with ``faults`` and without them (its fault-free twin: the same wind, noise
+    and start), the same runs as two calls (``seed``, ``duration_s``, ``params``, ``wind``,
+    ``n_realisations``, ``dtype`` and ``schedule`` as there; no accommodation). Until the first fault's first sample the two loops are
+    the same (every fault's profile is zero there), so the twin starts from the faulty run's state
+    at that sample, with the noise already drawn: about 27 s of a 37 s segment are simulated once."""
+    return _simulate(
+        seed, faults, duration_s, params, wind, n_realisations, dtype, schedule, None, True
+    )
+
+
+def _simulate(
+    seed: Any,
+    faults: Sequence[Fault],
+    duration_s: float,
+    params: WindTurbineParams,
+    wind: Any,
+    n_realisations: int | None,
+    dtype: Any,
+    schedule: str,
+    accommodation: Mapping[int, Any] | None,
+    twin: bool,
+) -> tuple[WindTurbineRun, ...]:
+    """:func:`simulate`'s run, followed by its fault-free twin if ``twin``
+    (:func:`simulate_with_twin`)."""
     p = check_params(params)
     duration = real(duration_s, "duration_s", low=0.0, low_open=True)
     n = max(1, int(round(duration / p.ts)))
@@ -2249,7 +2299,7 @@ def simulate(
         if isinstance(seed, (list, tuple))
         else (1 if n_realisations is None else integer(n_realisations, "n_realisations", low=1))
     )
-    needed = simulation_bytes(n, n_req, dtype)
+    needed = simulation_bytes(n, n_req, dtype) * (2 if twin else 1)  # the twin's arrays too
     if needed > MEMORY_BUDGET_BYTES:
         raise ResourceError(
             f"duration_s, n_realisations: {n_req} realisation(s) of {n} samples "
@@ -2279,21 +2329,22 @@ def simulate(
         xint[r] = min(max(op.beta / p.K_i if settled else p.beta_min, p.beta_min), p.beta_max)
     pcache = np.full((n_real, 3, 9), np.nan)
     wprev = np.full((n_real, 3), p.omega_n**2)
-    o_state = np.empty((n_real, n, 10), dtype=dtype)
-    o_y = np.empty((n_real, n, 12), dtype=dtype)
-    o_u = np.empty((n_real, n, 2), dtype=dtype)
-    o_tau_a, o_tau_g, o_p_g = (np.empty((n_real, n), dtype=dtype) for _ in range(3))
-    o_zone = np.empty((n_real, n), dtype=np.int8)
     rngs = [np.random.default_rng(_child(s, 1)) for s in seeds]
     std = p.noise_std[:, None]
     c = _constants(p)
     width = min(_CHUNK, n)
     noise = np.empty((n_real, 12, width))
     draw = np.empty((12, width))
-    outputs = (o_state, o_y, o_u, o_tau_a, o_tau_g, o_p_g, o_zone)
     # the loop writes double precision: into the result at its offset, or (float32) into chunk
     # buffers copied after each chunk (one compiled version of the loop either way)
     direct = dtype == np.dtype(np.float64)
+    outputs = (
+        np.empty((n_real, n, 10), dtype=dtype),
+        np.empty((n_real, n, 12), dtype=dtype),
+        np.empty((n_real, n, 2), dtype=dtype),
+        *(np.empty((n_real, n), dtype=dtype) for _ in range(3)),
+        np.empty((n_real, n), dtype=np.int8),
+    )
     buffers = (
         outputs
         if direct
@@ -2307,74 +2358,113 @@ def simulate(
             np.empty((n_real, width), dtype=np.int8),
         )
     )
+    # one loop per run: its faults' arrays, its state (updated in place), outputs and buffers
+    runs = [(_fault_arrays(fz), (state, xint, zone, pcache, wprev), outputs, buffers)]
+    # the twin forks at the first fault's first sample: every profile is zero before it
+    starts = [fz[k] for k in ("sf_start", "af_start", "cf_start", "df_start") if fz[k].size]
+    fork = min(max(min((int(x.min()) for x in starts), default=n), 0), n) if twin else n
     for k0 in range(0, n, _CHUNK):
         m = min(_CHUNK, n - k0)
         for r in range(n_real):
             d = draw[:, :m] if m == width else np.empty((12, m))
             rngs[r].standard_normal(out=d)  # the same stream as standard_normal((12, m))
             np.multiply(d, std, out=noise[r, :, :m])
-        _run(
-            k0,
-            m,
-            v,
-            noise,
-            state,
-            xint,
-            zone,
-            pcache,
-            wprev,
-            acc_chan,
-            acc_k,
-            c,
-            LAMBDA_GRID,
-            BETA_GRID_DEG,
-            CQ_TABLE,
-            fz["sf_chan"],
-            fz["sf_kind"],
-            fz["sf_mag"],
-            fz["sf_start"],
-            fz["sf_stop"],
-            fz["sf_ramp"],
-            fz["af_blade"],
-            fz["af_wn2"],
-            fz["af_2zw"],
-            fz["af_start"],
-            fz["af_stop"],
-            fz["af_ramp"],
-            fz["cf_mag"],
-            fz["cf_start"],
-            fz["cf_stop"],
-            fz["cf_ramp"],
-            fz["df_start"],
-            fz["df_stop"],
-            fz["phi_dt"],
-            fz["gam_dt"],
-            k0 if direct else 0,
-            *buffers,
-        )
-        if not direct:
-            for out, buf in zip(outputs, buffers):
-                out[:, k0 : k0 + m] = buf[:, :m]
-        if not np.all(np.isfinite(state)):
-            raise NumericalError(
-                f"simulate: the state became non-finite before t = {(k0 + m) * p.ts:.2f} s"
-            )
-    if np.any(o_state[:, :, 6] <= 0):
-        raise NumericalError("simulate: the rotor stopped or turned backwards (omega_r <= 0)")
+        cuts = sorted({k0, k0 + m} | ({fork} if k0 < fork < k0 + m else set()))
+        for a, b in zip(cuts[:-1], cuts[1:]):
+            if a == fork and len(runs) == 1:
+                runs.append(_twin_of(runs[0], _fault_arrays(_compile_faults((), p)), direct))
+            segment = noise if a == k0 else np.ascontiguousarray(noise[:, :, a - k0 : m])
+            for arrays, loop_state, _, bufs in runs:
+                _run(
+                    a,
+                    b - a,
+                    v,
+                    segment,
+                    *loop_state,
+                    acc_chan,
+                    acc_k,
+                    c,
+                    LAMBDA_GRID,
+                    BETA_GRID_DEG,
+                    CQ_TABLE,
+                    *arrays,
+                    a if direct else a - k0,
+                    *bufs,
+                )
+        for _, loop_state, outs, bufs in runs:
+            if not direct:
+                for out, buf in zip(outs, bufs):
+                    out[:, k0 : k0 + m] = buf[:, :m]
+            if not np.all(np.isfinite(loop_state[0])):
+                raise NumericalError(
+                    f"simulate: the state became non-finite before t = {(k0 + m) * p.ts:.2f} s"
+                )
+    if twin and len(runs) == 1:  # no fault starts within the run: the twin is the same run
+        runs.append(_twin_of(runs[0], runs[0][0], direct))
     pick = (lambda a: a) if batched else (lambda a: a[0])
-    return WindTurbineRun(
-        t=t,
-        v=pick(v),
-        state=pick(o_state),
-        y=pick(o_y),
-        u=pick(o_u),
-        tau_aero=pick(o_tau_a),
-        tau_g=pick(o_tau_g),
-        p_g=pick(o_p_g),
-        region=pick(o_zone),
-        fault_active=fault_profiles(faults, n, p.ts),
-        faults=faults,
-        params=p,
+    result = []
+    for (*_, outs, _), fs in zip(runs, (faults, ())):
+        o_state, o_y, o_u, o_tau_a, o_tau_g, o_p_g, o_zone = outs
+        if np.any(o_state[:, :, 6] <= 0):
+            raise NumericalError("simulate: the rotor stopped or turned backwards (omega_r <= 0)")
+        result.append(
+            WindTurbineRun(
+                t=t,
+                v=pick(v),
+                state=pick(o_state),
+                y=pick(o_y),
+                u=pick(o_u),
+                tau_aero=pick(o_tau_a),
+                tau_g=pick(o_tau_g),
+                p_g=pick(o_p_g),
+                region=pick(o_zone),
+                fault_active=fault_profiles(fs, n, p.ts),
+                faults=fs,
+                params=p,
+            )
+        )
+    return tuple(result)
+
+
+_FAULT_KEYS = (
+    "sf_chan",
+    "sf_kind",
+    "sf_mag",
+    "sf_start",
+    "sf_stop",
+    "sf_ramp",
+    "af_blade",
+    "af_wn2",
+    "af_2zw",
+    "af_start",
+    "af_stop",
+    "af_ramp",
+    "cf_mag",
+    "cf_start",
+    "cf_stop",
+    "cf_ramp",
+    "df_start",
+    "df_stop",
+    "phi_dt",
+    "gam_dt",
+)
+
+
+def _fault_arrays(fz: dict[str, np.ndarray]) -> tuple[np.ndarray, ...]:
+    """The arrays of :func:`_compile_faults` in the order of :func:`_run`'s arguments."""
+    return tuple(fz[k] for k in _FAULT_KEYS)
+
+
+def _twin_of(run: tuple, arrays: tuple, direct: bool) -> tuple:
+    """A copy of ``run`` (its loop state, outputs and buffers so far) that goes on with the fault
+    arrays ``arrays``."""
+    _, loop_state, outs, bufs = run
+    outs = tuple(o.copy() for o in outs)
+    return (
+        arrays,
+        tuple(x.copy() for x in loop_state),
+        outs,
+        outs if direct else tuple(x.copy() for x in bufs),
     )
 
 

@@ -191,3 +191,44 @@ def test_support_max_is_dot_then_max_bit_for_bit():
     assert np.array_equal(_support_max(DPhi[[0, 4]], np.array([1, 0, 1]), V, F, pick), ref[pick])
     DPhi[2, 1, 3, 0] = np.nan  # a NaN propagates, as in numpy's max
     assert np.isnan(_support_max(DPhi, rows, V, F, rows)[2, 3])
+
+
+def _stepped(models, u, y, X0, array_route: bool):
+    """A TemplateBatch run to the end (every observer), by the array route if asked; its vertices
+    (the live ones, in order) and alive masks after every step."""
+    bank = TemplateBatch(models, u, y, X0)
+    if array_route:
+        for g in bank._groups:
+            g["bases"] = None
+    bank.start()
+    out = []
+    for k in range(1, bank.T + 1):
+        bank.update(k)
+        sets = [(g["V"][g["F"]].copy(), g["F"].copy()) for g in bank._groups]
+        out.append((bank.alive.copy(), sets))
+    return out
+
+
+def test_compiled_step_equals_the_array_route_bit_for_bit():
+    """TemplateBatch._step_bases (one compiled pass, vertices in place) gives the sets of the array
+    route (_dot products, _vertices_many) to the last bit, with sets emptied on the way."""
+    models, u, y = _records(7, 12)
+    seqs = [_constant(m, u.shape[1]) for m in models]
+    runs = uav.simulate_many(
+        [("alpha", "step"), ("elevator", "hard")],
+        [np.random.default_rng(s) for s in range(2)],
+        duration=0.6,
+    )
+    uav_models = [uav.svo_models(r, f) for r in runs for f in ("nominal", *uav.FAULTS)]
+    per = 1 + len(uav.FAULTS)
+    uav_u = np.repeat(np.stack([r.u for r in runs]), per, axis=0)
+    uav_y = np.repeat(np.stack([r.y for r in runs]), per, axis=0)
+    for args in ((seqs, u, y, X0), (uav_models, uav_u, uav_y, R.UAV_X0)):
+        fused = _stepped(*args, array_route=False)
+        ref = _stepped(*args, array_route=True)
+        assert not fused[-1][0].all()  # some sets emptied: both outcomes are compared
+        for (alive_f, sets_f), (alive_r, sets_r) in zip(fused, ref):
+            assert np.array_equal(alive_f, alive_r)
+            for (Vf, Ff), (Vr, Fr) in zip(sets_f, sets_r):
+                assert np.array_equal(Ff, Fr[:, : Ff.shape[1]]) and not Fr[:, Ff.shape[1] :].any()
+                assert np.array_equal(Vf, Vr)

@@ -56,6 +56,25 @@ def test_emptiness_tolerance_is_stated_and_relative():
     assert crossed.vertices().shape == (0, 2)
 
 
+def test_opposite_rows_prove_emptiness_without_the_lp_only_beyond_the_tolerance(monkeypatch):
+    """Two opposite rows 1e-3 or 1e-11 apart the wrong way: empty without any LP; 4e-12 apart (a
+    radius of -2e-12, beyond the tolerance of 1.5e-12 but not twice it): the LP is asked."""
+    calls = []
+    cheb = poly._chebyshev
+    monkeypatch.setattr(poly, "_chebyshev", lambda M, m: calls.append(1) or cheb(M, m))
+    M = np.vstack([np.eye(2), -np.eye(2)])
+    assert poly._enumerate_vertices(M, np.array([0.5, 0.5, -0.501, -0.5])).shape == (0, 2)
+    assert calls == []
+    assert poly._enumerate_vertices(M, np.array([0.5, 0.5, -0.5 - 1e-11, -0.5])).shape == (0, 2)
+    assert calls == []
+    poly._enumerate_vertices(M, np.array([0.5, 0.5, -0.5 - 4e-12, -0.5]))
+    assert calls == [1]
+    # the bound is the pair's mean; rows that are not exact opposites give none
+    assert poly._opposite_rows_bound(M, np.array([0.5, 0.5, -0.7, -0.5])) == pytest.approx(-0.1)
+    skew = np.array([[1.0, 0.0], [-1.0, 1e-17 + 1e-16]])
+    assert poly._opposite_rows_bound(skew, np.array([-1.0, -1.0])) == np.inf
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", [8, 2013])
 def test_healthy_uav_records_of_issue_21_raise_no_alarm(seed):

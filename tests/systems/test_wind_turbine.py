@@ -555,6 +555,40 @@ def test_seeded_runs_are_reproducible_and_batch_consistent():
     np.testing.assert_allclose(small.y, a.y, rtol=1e-6)
 
 
+def _same_runs(a: wt.WindTurbineRun, b: wt.WindTurbineRun) -> None:
+    for name in ("v", "state", "y", "u", "tau_aero", "tau_g", "p_g", "region", "fault_active"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    assert a.faults == b.faults and a.y.dtype == b.y.dtype
+
+
+@pytest.mark.parametrize(
+    ("start", "chunk", "dtype"),
+    [
+        (3.0, None, np.float64),
+        (3.0, 70, np.float32),
+        (2.5, 50, np.float64),
+        (0.0, None, np.float64),
+    ],
+)
+def test_twin_is_the_fault_free_run_bit_for_bit(monkeypatch, start, chunk, dtype):
+    """simulate_with_twin: the faulty run and the fault-free one of two simulate calls, to the last
+    bit, with the fork inside a chunk, on a chunk boundary (2.5 s = 250 samples, chunks of 50), at
+    the first sample, in float32; faults starting after the run leave the twin equal to the run."""
+    if chunk is not None:
+        monkeypatch.setattr(wt, "_CHUNK", chunk)
+    seeds = np.random.SeedSequence(7).spawn(2)
+    faults = (shifted(fault(1), start), shifted(fault(8), start + 0.5))
+    kw = dict(seed=seeds, duration_s=5.0, dtype=dtype)
+    run, twin = wt.simulate_with_twin(faults=faults, **kw)
+    _same_runs(run, wt.simulate(faults=faults, **kw))
+    _same_runs(twin, wt.simulate(faults=(), **kw))
+    assert not np.array_equal(run.y, twin.y)  # the faults show
+    late = (shifted(fault(1), 9.0),)
+    run, twin = wt.simulate_with_twin(faults=late, **kw)
+    _same_runs(run, wt.simulate(faults=late, **kw))
+    _same_runs(twin, wt.simulate(faults=(), **kw))
+
+
 # ---------------------------------------------------------------------------------- linearisation
 @pytest.mark.parametrize("v", [8.0, 16.0], ids=["region1", "region2"])
 def test_linearisation_matches_finite_differences(v):
