@@ -34,7 +34,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
 from fdi_lib.errors import CovarianceError, ModelError, NonFiniteError, ShapeError
@@ -199,25 +198,6 @@ def _check_innovations(eps: np.ndarray, N: int, p: int) -> tuple[np.ndarray, np.
     if eps.ndim < 2 or eps.shape[-2:] != (N, p):
         raise ShapeError(f"innovations: expected shape (..., {N}, {p}), got {eps.shape}")
     return eps, missing_samples(eps, "innovations")
-
-
-@numba.njit(cache=True)
-def _window_sums(inc: np.ndarray) -> np.ndarray:  # pragma: no cover
-    """``C[k, j]``: the sum of ``inc[k', j]`` over the samples ``k'`` since slot ``j`` last
-    restarted (at ``k' = j mod w``, ``inc`` ``(N, w, R)``): the informations ``C_k(r)`` of
-    :meth:`WindowedGLR._shared` by the recursion (27), each slot restarted from zero when its onset
-    enters and added to in sample order."""
-    N, w, R = inc.shape
-    C = np.empty((N, w, R))
-    acc = np.zeros((w, R))
-    for k in range(N):
-        for i in range(R):
-            acc[k % w, i] = 0.0
-        for j in range(w):
-            for i in range(R):
-                acc[j, i] = acc[j, i] + inc[k, j, i]
-                C[k, j, i] = acc[j, i]
-    return C
 
 
 @dataclass(frozen=True)
@@ -473,7 +453,12 @@ class WindowedGLR:
         self._sig_wT = np.ascontiguousarray(np.transpose(sig_w, (0, 2, 3, 4, 1)))  # (N, w, F, m, p)
         inc = np.einsum("kpwfi,kpwfj->kwfij", sig_w, sig_w)  # (N, w, F, m, m)
         del sig_w
-        C = _window_sums(inc.reshape(N, w, -1)).reshape(inc.shape)
+        C = np.empty_like(inc)
+        acc = np.zeros((w, F, m, m))
+        for k in range(N):
+            acc[k % w] = 0.0
+            acc += inc[k]
+            C[k] = acc
         del inc
         self._onsets = onset
         self._allowed = (onset >= 0) & (onset <= k_all[:, None] - self.min_samples)  # (N, w)
