@@ -573,7 +573,7 @@ def _scoreboard_settings(seed: int, trials: int, settings: W.Settings, schedule:
     "windturbine-scoreboard",
     plot="fdi_lib.reproduce.views.windturbine.plot_scoreboard",
     paper=PAPER,
-    default_trials=10,
+    default_trials=100,
     default_seed=2009,
     title="Wind-turbine FDI benchmark: four methods, nine faults (scoreboard)",
     chapter="windturbine/benchmark",
