@@ -170,7 +170,7 @@ browser-test: $(STAMP) $(CHROMIUM) $(AXE_JS) notebooks
 	$(BIN)/python tests/browser/check_jupyterlab.py --notebooks _build/notebooks
 	$(BIN)/python tests/browser/check_explorables.py --html _build/html
 	$(BIN)/python tests/browser/check_previews.py --html _build/html
-	$(BIN)/python tests/browser/page_weights.py --html _build/html
+	$(BIN)/python tests/browser/page_weights.py --html _build/html --report _build/build-report.json
 
 ## Post-build checks of what the built book claims (after `make book`, which leaves its results
 ## cache): every figure caption's verb ("reproduces" / "compare with") agrees with the claims ledger

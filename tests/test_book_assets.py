@@ -254,3 +254,50 @@ def test_status_page_has_the_placeholders():
     text = (ROOT / "book" / "status.md").read_text()
     for ident in ("fdi-build-time", "fdi-page-weights"):
         assert re.search(rf'<div id="{ident}">.*?</div><!-- /{ident} -->', text, re.S), ident
+
+
+def test_page_weights_reopen_only_what_changed_since_the_build(tmp_path, monkeypatch):
+    """``page_weights.py --report``: a page measured by ``make book`` is reused while its HTML has
+    the same SHA-1 and every file it loaded the same size; any change has it measured again."""
+    import hashlib
+
+    monkeypatch.syspath_prepend(str(ROOT / "tests" / "browser"))
+    pw = _load("fdi_page_weights", ROOT / "tests" / "browser" / "page_weights.py")
+    root = tmp_path / "html"
+    (root / "book").mkdir(parents=True)
+    (root / "_static").mkdir()
+    (root / "index.html").write_text('<meta http-equiv="Refresh" content="0; url=book/a.html">')
+    page, script = root / "book" / "a.html", root / "_static" / "x.js"
+    page.write_text("<p>a</p>")
+    script.write_text("x" * 10)
+    w = {
+        "page": "book/a.html",
+        "bytes": 18,
+        "by_kind": {"html": 8, "script": 10},
+        "assets": [["_static/x.js", 10], ["book/a.html", 8]],
+        "has_math": False,
+        "sha1": hashlib.sha1(b"<p>a</p>").hexdigest(),
+    }
+    assert pw.unchanged(w, root)
+    assert not pw.unchanged({**w, "sha1": None}, root)  # a report without hashes
+    script.write_text("x" * 11)
+    assert not pw.unchanged(w, root)
+    script.write_text("x" * 10)
+    page.write_text("<p>b</p>")  # same size, other bytes
+    assert not pw.unchanged(w, root)
+    page.write_text("<p>a</p>")
+
+    report = tmp_path / "build-report.json"
+    report.write_text(json.dumps({"pages": [w]}))
+    asked = []
+
+    def measure(root, pages):
+        asked.append(list(pages))
+        return [{**w, "page": p, "bytes": 6e6, "assets": [[p, 6_000_000]]} for p in pages]
+
+    monkeypatch.setattr(pw, "measure", measure)
+    assert pw.main(["--html", str(root), "--report", str(report)]) == 0
+    assert asked == [[]]
+    page.write_text("<p>c</p>")
+    assert pw.main(["--html", str(root), "--report", str(report)]) == 1  # measured: 6 MB > budget
+    assert asked[-1] == ["book/a.html"]

@@ -17,12 +17,20 @@ Fails (exit status 1) on:
 - ``fontawesome``: a page that loads the theme's 1.5 MB Font Awesome script (the icons come
   from the theme's Font Awesome stylesheet and font).
 
-Usage: ``python tests/browser/page_weights.py [--html _build/html] [--pages ...] [--json FILE]``.
+A page measured by ``make book`` (``--report``, the build report of ``tools/build_report.py``) is not
+opened again when nothing it loaded has changed since: its HTML file has the same SHA-1 and every
+file it requested the same size (a page's weight is the sum of those sizes, and the same HTML
+requests the same files). Any other page is measured afresh (the status page, for one: the build
+writes its tables into it after measuring).
+
+Usage: ``python tests/browser/page_weights.py [--html _build/html] [--pages ...] [--json FILE]
+[--report _build/build-report.json]``.
 """
 
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import sys
 import time
@@ -75,8 +83,10 @@ def measure_page(browser, base: str, root: Path, name: str) -> dict:
     dict
         ``page``, ``bytes`` (total), ``by_kind`` (html, script, stylesheet, font, image,
         other: bytes), ``assets`` (``[path, bytes]`` of every file, largest first),
-        ``has_math`` (the page has a ``.math`` element).
+        ``has_math`` (the page has a ``.math`` element), ``sha1`` (of the page's HTML file as
+        measured: :func:`unchanged`).
     """
+    sha1 = _sha1(root / name)
     context = browser.new_context(
         viewport=VIEWPORTS["1280"], device_scale_factor=1, service_workers="block"
     )
@@ -122,11 +132,30 @@ def measure_page(browser, base: str, root: Path, name: str) -> dict:
         "by_kind": by_kind,
         "assets": sorted(([p, s] for p, s in assets.items()), key=lambda a: -a[1]),
         "has_math": has_math,
+        "sha1": sha1,
     }
 
 
+def _sha1(file: Path) -> str:
+    return hashlib.sha1(file.read_bytes()).hexdigest()
+
+
+def unchanged(w: dict, root: Path) -> bool:
+    """Whether the measurement ``w`` (:func:`measure_page`) still holds for the book at ``root``:
+    the page's HTML file has the SHA-1 it had when measured and every file it loaded is there with
+    the size it had."""
+    page = root / w["page"]
+    return (
+        page.is_file()
+        and w.get("sha1") == _sha1(page)
+        and all((root / p).is_file() and (root / p).stat().st_size == n for p, n in w["assets"])
+    )
+
+
 def measure(root: Path, pages: list[str]) -> list[dict]:
-    """:func:`measure_page` for each page, in one headless Chromium."""
+    """:func:`measure_page` for each page, in one headless Chromium (not started for none)."""
+    if not pages:
+        return []
     from playwright.sync_api import sync_playwright
 
     server, base = serve(root)
@@ -172,12 +201,26 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--html", default="_build/html", type=Path)
     parser.add_argument("--pages", nargs="*", help="only these pages (paths relative to --html)")
     parser.add_argument("--json", type=Path, help="write the measured weights there")
+    parser.add_argument(
+        "--report",
+        type=Path,
+        help="make book's build report: reuse its measurement of every page that has not changed",
+    )
     args = parser.parse_args(argv)
     root = built_book(args.html)
     if root is None:
         return 2
     pages = [p for p in book_pages(root) if not args.pages or p in args.pages]
-    weights = measure(root, pages)
+    known = {}
+    if args.report is not None and args.report.is_file():
+        known = {
+            w["page"]: w
+            for w in json.loads(args.report.read_text()).get("pages") or []
+            if w["page"] in pages and unchanged(w, root)
+        }
+        print(f"  {len(known)} of {len(pages)} pages unchanged since {args.report}: not reopened")
+    fresh = iter(measure(root, [p for p in pages if p not in known]))
+    weights = [known[p] if p in known else next(fresh) for p in pages]
     for w in weights:
         top = ", ".join(f"{Path(p).name} {s / 1e6:.2f}" for p, s in w["assets"][:3])
         print(f"  {w['bytes'] / 1e6:6.2f} MB  {w['page']:45s} ({top})")
