@@ -201,7 +201,9 @@ benchmarks: $(STAMP)
 	mkdir -p _build; rm -f _build/benchmarks.json
 	for f in benchmarks/bench_*.py; do \
 	  if [ "$$f" = benchmarks/bench_notebooks.py ] && [ "$(NOTEBOOKS)" = 0 ]; then echo "== $$f skipped (NOTEBOOKS=0)"; continue; fi; \
-	  echo "== $$f"; FDI_BENCH_JSON=$(CURDIR)/_build/benchmarks.json $(BIN)/python $$f || exit 1; \
+	  echo "== $$f"; t0=$$(date +%s); \
+	  FDI_BENCH_JSON=$(CURDIR)/_build/benchmarks.json $(BIN)/python $$f || exit 1; \
+	  echo "== $$f: $$(( $$(date +%s) - t0 )) s"; \
 	done
 
 ## Re-pin requirements.lock from the current environment (maintainers only).
