@@ -676,8 +676,10 @@ def scoreboard(
         of its subsystem (:func:`fdi_lib.windturbine.separability`; 0: no test can tell it from a
         combination of them).
     bound_violations, svo_false_alarms_with_violation, svo_false_alarms_without_violation : int
-        Fault-free stretches where the noise or the aerodynamic torque left the SVO's bounds, and
-        the SVO's false alarms with and without such a violation.
+        Fault-free stretches that break an assumption of the SVO's sets (the state at the end of
+        the warm-up outside their prior set; the noise, the model error or the aerodynamic
+        torque's increments beyond their bounds: ``_bound_violation``), and the SVO's false
+        alarms with and without such a violation.
 
     Paper keys
     ----------
