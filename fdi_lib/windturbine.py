@@ -99,6 +99,7 @@ __all__ = [
     "run_zhang2021",
     "run_bz",
     "run_svo_bank",
+    "svo_priors",
     "run_methods",
     "expected_candidates",
     "alarm_onsets",
@@ -1278,8 +1279,9 @@ def _prior_box(d: Design, s: Subsystem) -> tuple[np.ndarray, np.ndarray]:
 def run_svo_bank(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
     """Rosa & Silvestre (2013): per subsystem, a template SVO of the nominal model (detection:
     its set is empty) and an Architecture I bank of the fault hypotheses (:func:`svo_banks`;
-    isolation: one hypothesis left), from the end of the warm-up: an empty nominal set before
-    the onset is a false alarm. The three blades (same model structure) run as one batch."""
+    isolation: one hypothesis left), from the end of the warm-up and its prior set
+    (:func:`svo_priors`): an empty nominal set before the onset is a false alarm. The three blades
+    (same model structure) run as one batch."""
     B = y.shape[0]
     names = list(d.subs)
     i0 = d.warmup
@@ -1288,11 +1290,8 @@ def run_svo_bank(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
     det = np.full((len(names), B), -1)
     iso_step = np.full((len(names), B), -1)
     iso_name: list[list[str | None]] = [[None] * B for _ in names]
-    groups = [
-        [n for n in names if d.subs[n].sub.E is None],
-        [n for n in names if d.subs[n].sub.E is not None],
-    ]
-    for group in groups:
+    priors = svo_priors(d)
+    for group in _svo_groups(d):
         nominal, faults, ys, us = [], [], [], []
         for name in group:
             nom, fl = banks[name]
@@ -1302,7 +1301,7 @@ def run_svo_bank(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
             yy, uu = _split(d, y, u, d.subs[name].sub)
             ys.append(yy[:, i0:])
             us.append(uu[:, i0:-1])
-        X0 = _prior_group(d, group)
+        X0 = priors[group[0]]
         res = run_architecture_i_many(nominal, faults, np.concatenate(us), np.concatenate(ys), X0)
         for gi, name in enumerate(group):
             j = names.index(name)
@@ -1347,12 +1346,29 @@ def _specific(generic: str, subsystem: str) -> str:
     return generic
 
 
-def _prior_group(d: Design, group: Sequence[str]) -> Polytope:
-    """Prior set shared by a batch of subsystems: the hull of their boxes."""
-    boxes = [_prior_box(d, d.subs[n].sub) for n in group]
-    return Polytope.box(
-        np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0)
-    )
+def _svo_groups(d: Design) -> list[list[str]]:
+    """The subsystems :func:`run_svo_bank` runs as one batch: the blades (one model structure),
+    then the drive train."""
+    names = list(d.subs)
+    return [
+        [n for n in names if d.subs[n].sub.E is None],
+        [n for n in names if d.subs[n].sub.E is not None],
+    ]
+
+
+def svo_priors(d: Design) -> dict[str, Polytope]:
+    """Subsystem name -> the prior set of its SVOs in :func:`run_svo_bank`, the set assumed to
+    contain its state (and ``tau_a`` for the drive train) at the end of the warm-up: the hull of
+    the prior boxes (:class:`Calibration` ``x_range``, ``tau_range``) of the subsystems of its
+    batch (the three blades share one)."""
+    out = {}
+    for group in _svo_groups(d):
+        boxes = [_prior_box(d, d.subs[n].sub) for n in group]
+        X0 = Polytope.box(
+            np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0)
+        )
+        out.update(dict.fromkeys(group, X0))
+    return out
 
 
 # ----------------------------------------------------------------------------- the method registry

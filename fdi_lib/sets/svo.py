@@ -107,7 +107,14 @@ __all__ = [
     "SVOBatchRun",
     "run_svo_many",
     "run_architecture_i_many",
+    "ROUNDOFF_MARGIN",
 ]
+
+
+#: Default relative outward inflation of every computed support (the ``margin`` of
+#: :class:`SetValuedObserver` and :class:`TemplateBatch`): the round-off guard that keeps
+#: Proposition 2 valid in floating point.
+ROUNDOFF_MARGIN = 1e-9
 
 
 def _arr(name: str, a: Any, ndim: int) -> np.ndarray:
@@ -418,7 +425,7 @@ class SetValuedObserver:
         N: int = 1,
         method: str = "template",
         template: np.ndarray | None = None,
-        margin: float = 1e-9,
+        margin: float = ROUNDOFF_MARGIN,
         strip_before_hull: bool = False,
         scale: Any = None,
         joint: bool = False,
@@ -1423,7 +1430,7 @@ class TemplateBatch:
         X0: Polytope,
         *,
         template: np.ndarray | None = None,
-        margin: float = 1e-9,
+        margin: float = ROUNDOFF_MARGIN,
     ) -> None:
         if not isinstance(X0, Polytope):
             raise ModelError(f"X0: expected a Polytope, got {type(X0).__name__}")
