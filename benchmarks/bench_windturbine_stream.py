@@ -1,7 +1,7 @@
 """Benchmark: the four wind-turbine methods on a long fault-free stream (issue 32, point 3).
 
 For each method alone (:func:`fdi_lib.windturbine.stream_counts`, windows of the false-alarm study,
-:func:`fdi_lib.reproduce.windturbine.stream_design`), on one continuous fault-free stream of the
+:func:`fdi_lib.reproduce.windturbine_streams.stream_design`), on one continuous fault-free stream of the
 benchmark's scenario:
 
 * samples per second (one core's process time, on the ``SHORT_S`` stream without the memory
@@ -25,7 +25,7 @@ import numpy as np
 
 from _record import record
 from fdi_lib import windturbine as W
-from fdi_lib.reproduce.windturbine import stream_design
+from fdi_lib.reproduce.windturbine_streams import stream_design
 from fdi_lib.systems import wind_turbine as wt
 from fdi_lib.threads import blas_single_thread
 

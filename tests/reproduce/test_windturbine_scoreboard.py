@@ -17,6 +17,7 @@ import pytest
 from fdi_lib import windturbine as W
 from fdi_lib.montecarlo import run_monte_carlo
 from fdi_lib.reproduce import windturbine as RW
+from fdi_lib.reproduce import windturbine_streams as RS
 
 TS = 0.01
 
@@ -204,7 +205,7 @@ def stream():
     pytest.importorskip("numba")
     from fdi_lib.systems import wind_turbine as wt
 
-    d, start = RW.stream_design(2009)
+    d, start = RS.stream_design(2009)
     healthy = W.records(
         wt.simulate(seed=np.random.SeedSequence(77).spawn(1), faults=(), duration_s=100.0)
     )
@@ -253,9 +254,9 @@ def test_false_alarm_study_json_and_its_exact_poisson_bounds(monkeypatch):
     from fdi_lib.systems import wind_turbine as wt
 
     monkeypatch.setattr(wt, "SCENARIO_S", 60.0)
-    r = RW.false_alarms(seed=2009, trials=2)
+    r = RS.false_alarms(seed=2009, trials=2)
     h = r.headline
-    d, start = RW.stream_design(2009)
+    d, start = RS.stream_design(2009)
     per_stream = ((6000 - d.N) // (d.N - start) + 1) * (d.N - start)
     assert h["streams"] == 2 and h["hours"] == pytest.approx(2 * per_stream * 0.01 / 3600)
     assert set(h["methods"]) == set(W.METHODS)
