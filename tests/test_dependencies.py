@@ -10,6 +10,7 @@ recursively, as pip resolves them (their markers and the extras asked for)."""
 from __future__ import annotations
 
 import ast
+import functools
 import sys
 import tomllib
 from importlib import metadata
@@ -45,8 +46,14 @@ def _third_party(names: set[str]) -> set[str]:
     return {n for n in names if n not in sys.stdlib_module_names and n not in LOCAL}
 
 
+@functools.cache
+def _packages_distributions() -> dict[str, list[str]]:
+    # read once per process: each call scans every installed distribution's files (about 1 s)
+    return metadata.packages_distributions()
+
+
 def _distributions(module: str) -> set[str]:
-    found = metadata.packages_distributions().get(module)
+    found = _packages_distributions().get(module)
     assert found, f"{module}: imported, but no installed distribution provides it"
     return {canonicalize_name(d) for d in found}
 
