@@ -90,6 +90,8 @@ __all__ = [
     "records",
     "Calibration",
     "calibrate",
+    "Envelope",
+    "operating_envelope",
     "Design",
     "design",
     "MethodOutcome",
