@@ -10,6 +10,7 @@ import pytest
 pytest.importorskip("numba")
 
 from fdi_lib import windturbine as W  # noqa: E402
+from fdi_lib.errors import ModelError  # noqa: E402
 from fdi_lib.systems import wind_turbine as wt  # noqa: E402
 
 FAULTS = {f.id: f for f in wt.FAULTS}
@@ -247,3 +248,27 @@ def test_fault_record_pair_is_two_fault_records_bit_for_bit():
         for key in ("t", "y", "u", "x", "tau_a", "v", "region"):
             assert np.array_equal(getattr(got, key), getattr(ref, key)), key
     assert not np.array_equal(rec.y, twin.y)
+
+
+def test_operating_envelope_contains_every_simulated_state():
+    """The SVO's prior set (:func:`fdi_lib.windturbine.operating_envelope`) holds the true state
+    and ``tau_a`` at every sample of fault-free segments of every fault of the scenario (low-wind
+    starts included: its lower speed faces are 0), and each face is where its criterion puts it:
+    the speeds from 0, the converter torque up to the controller's largest reference, the pitch
+    within the servo's reach of the reference limits."""
+    c = W.plant_constants()
+    env = W.operating_envelope(c, 5.0)
+    seeds = np.random.SeedSequence(2009).spawn(8)
+    for f in wt.FAULTS:
+        rec = W.fault_records(f, seeds, faulty=False)
+        x = rec.x.reshape(-1, 10)
+        assert ((x >= env.x[0]) & (x <= env.x[1])).all(), f.id
+        assert ((rec.tau_a >= env.tau[0]) & (rec.tau_a <= env.tau[1])).all(), f.id
+    p = c.params
+    assert env.x[0, [6, 7, 9]].tolist() == [0.0, 0.0, 0.0] and env.tau[0] == 0.0
+    tgc = p.P_r / (p.eta_gc * (p.omega_nom - p.omega_delta)) / 1e3
+    assert env.x[1, 9] == pytest.approx(tgc)
+    assert env.x[0, 0] < p.beta_min and env.x[1, 0] > p.beta_max
+    assert env.x[1, 7] == pytest.approx(p.N_g * env.x[1, 6])
+    with pytest.raises(ModelError):
+        W.operating_envelope(c, -1.0)

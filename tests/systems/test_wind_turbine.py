@@ -684,6 +684,29 @@ def test_wind_profile_and_kaimal_turbulence():
     assert np.exp(np.mean(np.log(psd[band] / kaimal))) == pytest.approx(1.0, abs=0.1)
 
 
+def test_wind_has_no_jump_beyond_its_turbulence():
+    """The wind's increments per sample (what drives ``tau_a``'s, the SVO's ``dtau_bound``) are
+    those of a continuous wind: the mean profile moves by at most 8.2e-4 m/s per sample over the
+    scenario (its steepest ramp, 4.5 m/s in 55 s), a hundredth of the turbulence's, the
+    turbulence's increments have the standard deviation of the Kaimal spectrum's structure
+    function at one sample (to 3 %, 20 segments of 37 s at 10 and 16.5 m/s) and the largest is
+    within the Gaussian tail (6 standard deviations over 74,000 increments: a join or a step of
+    the synthesis would stand far beyond)."""
+    whole = wt.wind_speed(np.arange(0.0, wt.SCENARIO_S, P.ts), seed=0, model="mean")
+    assert np.abs(np.diff(whole)).max() < 8.2e-4
+    for start in (2073.0, 4173.0):  # F1's and F9's segments (partial and full load)
+        t = start + np.arange(3700) * P.ts
+        mean = wt.wind_speed(t, seed=0, model="mean")
+        V, L = mean.mean(), wt.LENGTH_SCALE_M
+        f = np.linspace(0.0, 0.5 / P.ts, 2_000_001)
+        S = (4 * L / V) / (1 + 6 * f * L / V) ** (5 / 3)
+        sigma = math.sqrt(2 * np.trapezoid(S * (1 - np.cos(2 * np.pi * f * P.ts)), f))
+        u = np.array([wt.wind_speed(t, seed=s) / mean - 1 for s in range(20)])
+        du = np.diff(u / wt.TURBULENCE_INTENSITY, axis=1)
+        assert du.std() == pytest.approx(sigma, rel=0.03)
+        assert np.abs(du).max() < 6 * sigma
+
+
 def test_module_examples():
     result = doctest.testmod(wt, optionflags=doctest.ELLIPSIS)
     assert result.attempted > 0 and result.failed == 0
