@@ -480,9 +480,9 @@ class WindowedGLR:
         (its realisation axis after the slot): the chosen onset's entry for every realisation."""
         return arr[(*index, cols)] if self._per_realisation else arr[index]
 
-    def _score_terms(self, ks: np.ndarray, e_w: np.ndarray) -> np.ndarray:
-        """Terms of samples ``ks`` ``(K,)`` in every ``d_k(r)``, ``(K, w, m, B)``, from their whitened
-        innovations ``e_w`` ``(K, p, B)`` (eq. (28))."""
+    def _score_terms(self, ks: slice, e_w: np.ndarray) -> np.ndarray:
+        """Terms of the samples ``ks`` (a range of ``K``) in every ``d_k(r)``, ``(K, w, m, B)``, from
+        their whitened innovations ``e_w`` ``(K, p, B)`` (eq. (28))."""
         if self._per_realisation:
             return np.einsum("kwbmp,kpb->kwmb", self._sig_wT[ks], e_w)
         return self._sig_wT[ks] @ e_w[:, None]
@@ -516,7 +516,7 @@ class WindowedGLR:
         the ``nan``/``-1`` values are returned (a sample at which the test is not run, e.g. while
         it is disabled: the statistics of later samples are unchanged).
         """
-        model, k, w, m = self.model, self.k, self.window, self.family.m
+        model, k, m = self.model, self.k, self.family.m
         if k >= model.n_steps:
             raise ModelError(f"update: the model horizon N={model.n_steps} is exhausted")
         eps_k = array(eps_k, "eps_k", finite=False)
@@ -540,22 +540,9 @@ class WindowedGLR:
                 f"eps_k: expected NaN at step {k}, a sample the gains skip (missing), got a "
                 f"finite value: innovations and gains of different filters"
             )
-        # New onset r = k enters the window (replacing r = k - w); scores (33), recursively (28).
-        slot = k % w
-        self._d[slot] = 0.0
-        self._C_missing[slot] = 0.0
-        if skip and not known:  # a dropped innovation contributes nothing: its score term is zero,
-            # its information term (precomputed in C_k(r)) is subtracted for every onset it belongs to
-            self._C_missing += self._sig_wT[k] @ np.swapaxes(self._sig_wT[k], -1, -2)
-        elif not skip:
-            e_w = self._Linv[k] @ eps_k.reshape(self._B, model.p).T  # (p, B)
-            self._d += self._score_terms(np.array([k]), e_w[None])[0]
-        self.k = k + 1
+        out = self._advance(eps_k.reshape(self._B, model.p), skip, statistics)
         shape = self.batch_shape
-        if self._admissible is None:  # built by the first update (a whole record never needs it)
-            self._admissible = [np.nonzero(a)[0] for a in self._allowed]
-        slots = self._admissible[k]
-        if not slots.size or not statistics:
+        if out is None:
             return (
                 np.full(shape, np.nan),
                 np.full(shape, -1),
@@ -563,6 +550,39 @@ class WindowedGLR:
                 np.full((*shape, m, m), np.nan),
                 np.full((*shape, m), np.nan),
             )
+        l_k, best_onset, th, C_hat, d_hat = out
+        return (
+            l_k.reshape(shape),
+            best_onset.reshape(shape),
+            th.reshape(*shape, m),
+            C_hat.reshape(*shape, m, m),
+            d_hat.reshape(*shape, m),
+        )
+
+    def _advance(
+        self, eps_k: np.ndarray, skip: bool, statistics: bool
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+        """:meth:`update` of checked innovations ``eps_k`` ``(B, p)`` (``skip``: the sample is
+        missing in every realisation): the outputs flat over the realisations, ``(B, ...)``, or
+        ``None`` when no onset is admissible yet or ``statistics`` is false."""
+        k, w = self.k, self.window
+        # New onset r = k enters the window (replacing r = k - w); scores (33), recursively (28).
+        slot = k % w
+        self._d[slot] = 0.0
+        self._C_missing[slot] = 0.0
+        if skip and not self._skipped[k]:  # a dropped innovation contributes nothing: its score
+            # term is zero, its information term (precomputed in C_k(r)) is subtracted for every
+            # onset it belongs to
+            self._C_missing += self._sig_wT[k] @ np.swapaxes(self._sig_wT[k], -1, -2)
+        elif not skip:
+            e_w = self._Linv[k] @ eps_k.T  # (p, B)
+            self._d += self._score_terms(slice(k, k + 1), e_w[None])[0]
+        self.k = k + 1
+        if self._admissible is None:  # built by the first update (a whole record never needs it)
+            self._admissible = [np.nonzero(a)[0] for a in self._allowed]
+        slots = self._admissible[k]
+        if not slots.size or not statistics:
+            return None
         C = self._Cs[k, slots]  # (S, m, m), or (S, B, m, m) per realisation
         root = self._root[k, slots]  # shared by all realisations, or per realisation
         if np.any(self._C_missing[slots]):  # missing samples in the window
@@ -576,11 +596,7 @@ class WindowedGLR:
         cols = np.arange(self._B)
         l_k = stat[best, cols]
         th = (self._pick(root, (best,), cols) @ q[best, :, cols][..., None])[..., 0]  # (34): C^+ d
-        d_hat = d[best, :, cols]
-        l_k, th, d_hat = l_k.reshape(shape), th.reshape(*shape, m), d_hat.reshape(*shape, m)
-        best_onset = self._onsets[k, slots][best].reshape(shape)
-        C_hat = self._pick(C, (best,), cols).reshape(*shape, m, m)
-        return l_k, best_onset, th, C_hat, d_hat
+        return l_k, self._onsets[k, slots][best], th, self._pick(C, (best,), cols), d[best, :, cols]
 
     def _record(self, eps: np.ndarray) -> WindowGLRResult:
         """:func:`glr_window`: all the samples of a fresh detector, statistics evaluated by blocks.
@@ -605,18 +621,19 @@ class WindowedGLR:
         cols = np.arange(B)
         for k0 in range(0, N, block):
             ks = np.arange(k0, min(N, k0 + block))
+            now = slice(k0, k0 + ks.size)  # ks as a slice: views, not copies
             D = np.empty((ks.size, w, m, B))
-            terms = self._score_terms(ks, e_w[ks])
+            terms = self._score_terms(now, e_w[now])
             for i, k in enumerate(ks):
                 self._d[k % w] = 0.0
                 self._d += terms[i]
                 D[i] = self._d
-            root = self._root[ks]  # (K, w, m, m), or (K, w, B, m, m)
+            root = self._root[now]  # (K, w, m, m), or (K, w, B, m, m)
             q = self._project(root, D)  # (K, w, m, B)
             st = np.einsum("kwmb,kwmb->kwb", q, q)  # (35)
-            st = np.where(self._allowed[ks][:, :, None], st, -np.inf)
+            st = np.where(self._allowed[now][:, :, None], st, -np.inf)
             best = np.argmax(st, axis=1)  # (36), (K, B)
-            ok = self._allowed[ks].any(axis=1)  # some onset admissible
+            ok = self._allowed[now].any(axis=1)  # some onset admissible
             kk = np.arange(ks.size)[:, None]
             stat[ks[ok]] = np.take_along_axis(st, best[:, None, :], axis=1)[:, 0][ok]
             onset[ks[ok]] = self._onsets[ks[:, None], best][ok]
@@ -705,6 +722,7 @@ def glr_window(
     if not isinstance(model, LTVModel):
         raise ModelError(f"model: expected an LTVModel, got {type(model).__name__}")
     eps, missing = _check_innovations(innovations, model.n_steps, model.p)
+    nan_rows = missing
     start = integer(start, "start", low=0, high=model.n_steps)
     batch = eps.shape[:-2]
     check_gains(model, gains)
@@ -761,17 +779,27 @@ def glr_window(
             ):
                 arr[(slice(None),) * len(batch) + (slice(0, start),)] = undefined
         return res
-    # many realisations: one update per sample already works on wide arrays
-    N, m = model.n_steps, family.m
-    stat = np.empty((*batch, N))
-    onset = np.empty((*batch, N), dtype=int)
-    theta = np.empty((*batch, N, m))
-    C_hat = np.empty((*batch, N, m, m))
-    d_hat = np.empty((*batch, N, m))
+    # many realisations: one update per sample already works on wide arrays (the innovations
+    # checked above: the samples missing in one realisation are missing in all)
+    N, m, B = model.n_steps, family.m, det._B
+    out = (  # sample first: each sample's outputs are one contiguous row
+        np.full((N, B), np.nan),
+        np.full((N, B), -1),
+        np.full((N, B, m), np.nan),
+        np.full((N, B, m, m), np.nan),
+        np.full((N, B, m), np.nan),
+    )
+    flat = eps.reshape(B, N, model.p)
+    skip = nan_rows.reshape(-1, N).all(axis=0)
     for k in range(N):
-        (stat[..., k], onset[..., k], theta[..., k, :], C_hat[..., k, :, :], d_hat[..., k, :]) = (
-            det.update(eps[..., k, :], statistics=k >= start)
-        )
+        res = det._advance(flat[:, k], bool(skip[k]), k >= start)
+        if res is not None:
+            for arr, value in zip(out, res):
+                arr[k] = value
+    stat, onset, theta, C_hat, d_hat = (
+        np.ascontiguousarray(np.moveaxis(a, 0, 1).reshape(*batch, *a.shape[:1], *a.shape[2:]))
+        for a in out
+    )
     return WindowGLRResult(
         statistic=stat,
         onset=onset,
