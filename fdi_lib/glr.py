@@ -440,11 +440,11 @@ class WindowedGLR:
             Gamma[k][:, k % w] = drive_c[:, k - 1] if fam.kind == "impulse" else 0.0  # r = k enters
         sig = (model.H @ Gamma.reshape(N, n, w * F * m)).reshape(N, p, w, F, m)
         del Gamma
-        if fam.kind == "step":
-            sig = (
-                sig
-                + (onset >= 0)[:, None, :, None, None] * np.moveaxis(Phi, 0, 2)[:, :, None, :, :]
-            )
+        if fam.kind == "step":  # + Phi~_k for the started onsets (in place, no temporary)
+            Phi_k = np.moveaxis(Phi, 0, 2)[:, :, None, :, :]  # (N, p, 1, F, m)
+            head = min(N, w - 1)  # before, some slots hold no onset yet; after, all do
+            sig[:head] = sig[:head] + started[:head, None, :, None, None] * Phi_k[:head]
+            sig[head:] += Phi_k[head:]  # times True is the same bits
         self._Linv = np.linalg.inv(g.Sigma_chol)  # Sigma_k^{-1/2}, (N, p, p)
         sig_w = (self._Linv @ sig.reshape(N, p, w * F * m)).reshape(sig.shape)
         del sig
