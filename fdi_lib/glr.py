@@ -401,6 +401,8 @@ class WindowedGLR:
         self._d = np.zeros((w, m, self._B))
         # Information of the missing samples still in the window, per slot (subtracted from C_k(r)).
         self._C_missing = np.zeros((w, self._B, m, m) if self._per_realisation else (w, m, m))
+        self._dropped = -w  # the last dropped sample (none: C_missing is zero while k - w < it)
+        self._cols = np.arange(self._B)
         self.k = 0
 
     def _shared(self) -> None:
@@ -574,6 +576,7 @@ class WindowedGLR:
             # term is zero, its information term (precomputed in C_k(r)) is subtracted for every
             # onset it belongs to
             self._C_missing += self._sig_wT[k] @ np.swapaxes(self._sig_wT[k], -1, -2)
+            self._dropped = k
         elif not skip:
             e_w = self._Linv[k] @ eps_k.T  # (p, B)
             self._d += self._score_terms(slice(k, k + 1), e_w[None])[0]
@@ -583,20 +586,26 @@ class WindowedGLR:
         slots = self._admissible[k]
         if not slots.size or not statistics:
             return None
-        C = self._Cs[k, slots]  # (S, m, m), or (S, B, m, m) per realisation
-        root = self._root[k, slots]  # shared by all realisations, or per realisation
-        if np.any(self._C_missing[slots]):  # missing samples in the window
-            C = C - self._C_missing[slots]
+        if self._dropped > k - w and np.any(self._C_missing[slots]):  # missing samples in the
+            # window: the admissible onsets' informations less theirs, and new factors
+            C = self._Cs[k, slots] - self._C_missing[slots]  # (S, m, m), or (S, B, m, m)
             V, inv = _pinv_factors(C)
             root = V * np.sqrt(inv)[..., None, :]
-        d = self._d[slots]  # (S, m, B)
+            d, onsets, allowed = self._d[slots], self._onsets[k, slots], None
+        else:  # every slot (views, no copies), the inadmissible ones out of the maximisation
+            C, root, d = self._Cs[k], self._root[k], self._d  # (w, m, m) or (w, B, m, m); (w, m, B)
+            onsets, allowed = self._onsets[k], self._allowed[k]
         q = self._project(root, d)  # (S, m, B)
-        stat = np.einsum("smb,smb->sb", q, q)  # (35) for every admissible onset, (S, B)
-        best = np.argmax(stat, axis=0)  # (36), (B,)
-        cols = np.arange(self._B)
+        stat = np.einsum("smb,smb->sb", q, q)  # (35) for every onset, (S, B)
+        if allowed is not None:
+            stat = np.where(allowed[:, None], stat, -np.inf)
+        best = np.argmax(
+            stat, axis=0
+        )  # (36), (B,): the first of equal ones, as among the admissible
+        cols = self._cols
         l_k = stat[best, cols]
         th = (self._pick(root, (best,), cols) @ q[best, :, cols][..., None])[..., 0]  # (34): C^+ d
-        return l_k, self._onsets[k, slots][best], th, self._pick(C, (best,), cols), d[best, :, cols]
+        return l_k, onsets[best], th, self._pick(C, (best,), cols), d[best, :, cols]
 
     def _record(self, eps: np.ndarray) -> WindowGLRResult:
         """:func:`glr_window`: all the samples of a fresh detector, statistics evaluated by blocks.
