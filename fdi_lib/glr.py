@@ -607,12 +607,15 @@ class WindowedGLR:
         th = (self._pick(root, (best,), cols) @ q[best, :, cols][..., None])[..., 0]  # (34): C^+ d
         return l_k, onsets[best], th, self._pick(C, (best,), cols), d[best, :, cols]
 
-    def _record(self, eps: np.ndarray) -> WindowGLRResult:
+    def _record(self, eps: np.ndarray, start: int = 0) -> WindowGLRResult:
         """:func:`glr_window`: all the samples of a fresh detector, statistics evaluated by blocks.
 
         The scores ``d_k(r)`` are accumulated sample by sample as in :meth:`update` (same sums
         in the same order) and kept for a block of samples; the quadratic forms (35), the
-        maximisation (36) and the estimates (34) then run on the whole block at once.
+        maximisation (36) and the estimates (34) then run on the whole block at once. The
+        statistics are wanted from ``start`` on: the samples before ``start - w + 1`` are not read
+        (they only enter the scores of onsets never admissible from ``start`` on, whose slots are
+        reset before), and the outputs there stay ``nan``/``-1``.
         """
         model, w, m, B = self.model, self.window, self.family.m, self._B
         N, p = model.n_steps, model.p
@@ -628,7 +631,7 @@ class WindowedGLR:
         d_hat = np.full((N, B, m), np.nan)
         block = max(1, min(N, 2_000_000 // (w * m * B * (m if self._per_realisation else 1))))
         cols = np.arange(B)
-        for k0 in range(0, N, block):
+        for k0 in range(max(0, start - w + 1), N, block):
             ks = np.arange(k0, min(N, k0 + block))
             now = slice(k0, k0 + ks.size)  # ks as a slice: views, not copies
             D = np.empty((ks.size, w, m, B))
@@ -777,7 +780,7 @@ def glr_window(
             )
         det = shared.fresh(batch)
     if (det._B <= _RECORD_MAX_BATCH or det._per_realisation) and not missing.any():
-        res = det._record(eps)
+        res = det._record(eps, start)
         if start:  # the same outputs as sample by sample: none before start
             for arr, undefined in (
                 (res.statistic, np.nan),
