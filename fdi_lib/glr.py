@@ -794,24 +794,21 @@ def glr_window(
     # many realisations: one update per sample already works on wide arrays (the innovations
     # checked above: the samples missing in one realisation are missing in all)
     N, m, B = model.n_steps, family.m, det._B
-    out = (  # sample first: each sample's outputs are one contiguous row
-        np.full((N, B), np.nan),
-        np.full((N, B), -1),
-        np.full((N, B, m), np.nan),
-        np.full((N, B, m, m), np.nan),
-        np.full((N, B, m), np.nan),
+    out = (
+        np.empty((B, N)),
+        np.empty((B, N), dtype=int),
+        np.empty((B, N, m)),
+        np.empty((B, N, m, m)),
+        np.empty((B, N, m)),
     )
+    undefined = (np.nan, -1, np.nan, np.nan, np.nan)
     flat = eps.reshape(B, N, model.p)
     skip = nan_rows.reshape(-1, N).all(axis=0)
     for k in range(N):
         res = det._advance(flat[:, k], bool(skip[k]), k >= start)
-        if res is not None:
-            for arr, value in zip(out, res):
-                arr[k] = value
-    stat, onset, theta, C_hat, d_hat = (
-        np.ascontiguousarray(np.moveaxis(a, 0, 1).reshape(*batch, *a.shape[:1], *a.shape[2:]))
-        for a in out
-    )
+        for arr, value in zip(out, undefined if res is None else res):
+            arr[:, k] = value
+    stat, onset, theta, C_hat, d_hat = (a.reshape(*batch, *a.shape[1:]) for a in out)
     return WindowGLRResult(
         statistic=stat,
         onset=onset,
