@@ -235,8 +235,10 @@ class Records:
         )
 
 
-def records(run: Any) -> Records:
-    """:class:`Records` of a :func:`fdi_lib.systems.wind_turbine.simulate` result (realisations first).
+def records(run: Any, i0: int = 0, i1: int | None = None) -> Records:
+    """:class:`Records` of a :func:`fdi_lib.systems.wind_turbine.simulate` result (realisations first),
+    of its samples ``i0 .. i1 - 1`` (default all: ``records(run).window(i0, i1)``, converting only
+    those samples).
 
     The blade inputs are ``beta_r - (beta_i,m1 + beta_i,m2) / 2``: the benchmark's pitch servo closes
     its loop on the measured pitch, so with this known input the blade's state equation is exact
@@ -247,9 +249,11 @@ def records(run: Any) -> Records:
 
     _instance(run, WindTurbineRun, "run")
 
+    sl = slice(i0, i1)
+
     def batch(a: Any, tail: int) -> np.ndarray:
         a = np.asarray(a, dtype=float)
-        return a if a.ndim == tail + 2 else a[None]
+        return (a if a.ndim == tail + 2 else a[None])[:, sl]
 
     y = batch(run.y, 1)[..., :11].copy()
     y[..., 10] /= 1e3
@@ -260,7 +264,7 @@ def records(run: Any) -> Records:
     x[..., 8] *= 1e3
     x[..., 9] /= 1e3
     return Records(
-        t=np.asarray(run.t, dtype=float),
+        t=np.asarray(run.t, dtype=float)[sl],
         y=y,
         u=u,
         x=x,
@@ -1709,4 +1713,4 @@ def _segment_records(
             for faulty in kinds
         )
     )
-    return tuple(records(run).window(i0, i1) for run in runs)
+    return tuple(records(run, i0, i1) for run in runs)

@@ -64,6 +64,18 @@ def test_subsystem_models_reproduce_the_simulator():
     assert max(v for k, v in faulty.items() if k != "blade1") < 1e-9, faulty
 
 
+def test_records_of_a_window_equal_the_window_of_the_records():
+    """records(run, i0, i1) converts only the window's samples: the same arrays, bit for bit, as
+    the whole run's records cut afterwards."""
+    run = wt.simulate(seed=np.random.SeedSequence(4).spawn(2), faults=(), duration_s=3.0)
+    whole = W.records(run)
+    for i0, i1 in ((0, None), (50, 120), (100, 300)):
+        got, ref = W.records(run, i0, i1), whole.window(i0, i1)
+        for key in ("t", "y", "u", "x", "tau_a", "v", "region"):
+            np.testing.assert_array_equal(getattr(got, key), getattr(ref, key), err_msg=key)
+    assert W.records(run, 100, 300).y.shape[1] == 200
+
+
 def test_zhang2021_reuses_the_blades_kalman_run_bit_for_bit(design):
     """Without an unknown input the residual filter is the Kalman filter (one model, one set of
     gains in the design): run_methods' shared Kalman runs give Zhang 2021 the blades' updated
