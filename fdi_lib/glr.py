@@ -401,6 +401,8 @@ class WindowedGLR:
         self._d = np.zeros((w, m, self._B))
         # Information of the missing samples still in the window, per slot (subtracted from C_k(r)).
         self._C_missing = np.zeros((w, self._B, m, m) if self._per_realisation else (w, m, m))
+        self._dropped = -w  # the last dropped sample (none: C_missing is zero while k - w < it)
+        self._cols = np.arange(self._B)
         self.k = 0
 
     def _shared(self) -> None:
@@ -440,11 +442,11 @@ class WindowedGLR:
             Gamma[k][:, k % w] = drive_c[:, k - 1] if fam.kind == "impulse" else 0.0  # r = k enters
         sig = (model.H @ Gamma.reshape(N, n, w * F * m)).reshape(N, p, w, F, m)
         del Gamma
-        if fam.kind == "step":
-            sig = (
-                sig
-                + (onset >= 0)[:, None, :, None, None] * np.moveaxis(Phi, 0, 2)[:, :, None, :, :]
-            )
+        if fam.kind == "step":  # + Phi~_k for the started onsets (in place, no temporary)
+            Phi_k = np.moveaxis(Phi, 0, 2)[:, :, None, :, :]  # (N, p, 1, F, m)
+            head = min(N, w - 1)  # before, some slots hold no onset yet; after, all do
+            sig[:head] = sig[:head] + started[:head, None, :, None, None] * Phi_k[:head]
+            sig[head:] += Phi_k[head:]  # times True is the same bits
         self._Linv = np.linalg.inv(g.Sigma_chol)  # Sigma_k^{-1/2}, (N, p, p)
         sig_w = (self._Linv @ sig.reshape(N, p, w * F * m)).reshape(sig.shape)
         del sig
@@ -480,9 +482,9 @@ class WindowedGLR:
         (its realisation axis after the slot): the chosen onset's entry for every realisation."""
         return arr[(*index, cols)] if self._per_realisation else arr[index]
 
-    def _score_terms(self, ks: np.ndarray, e_w: np.ndarray) -> np.ndarray:
-        """Terms of samples ``ks`` ``(K,)`` in every ``d_k(r)``, ``(K, w, m, B)``, from their whitened
-        innovations ``e_w`` ``(K, p, B)`` (eq. (28))."""
+    def _score_terms(self, ks: slice, e_w: np.ndarray) -> np.ndarray:
+        """Terms of the samples ``ks`` (a range of ``K``) in every ``d_k(r)``, ``(K, w, m, B)``, from
+        their whitened innovations ``e_w`` ``(K, p, B)`` (eq. (28))."""
         if self._per_realisation:
             return np.einsum("kwbmp,kpb->kwmb", self._sig_wT[ks], e_w)
         return self._sig_wT[ks] @ e_w[:, None]
@@ -516,7 +518,7 @@ class WindowedGLR:
         the ``nan``/``-1`` values are returned (a sample at which the test is not run, e.g. while
         it is disabled: the statistics of later samples are unchanged).
         """
-        model, k, w, m = self.model, self.k, self.window, self.family.m
+        model, k, m = self.model, self.k, self.family.m
         if k >= model.n_steps:
             raise ModelError(f"update: the model horizon N={model.n_steps} is exhausted")
         eps_k = array(eps_k, "eps_k", finite=False)
@@ -540,22 +542,9 @@ class WindowedGLR:
                 f"eps_k: expected NaN at step {k}, a sample the gains skip (missing), got a "
                 f"finite value: innovations and gains of different filters"
             )
-        # New onset r = k enters the window (replacing r = k - w); scores (33), recursively (28).
-        slot = k % w
-        self._d[slot] = 0.0
-        self._C_missing[slot] = 0.0
-        if skip and not known:  # a dropped innovation contributes nothing: its score term is zero,
-            # its information term (precomputed in C_k(r)) is subtracted for every onset it belongs to
-            self._C_missing += self._sig_wT[k] @ np.swapaxes(self._sig_wT[k], -1, -2)
-        elif not skip:
-            e_w = self._Linv[k] @ eps_k.reshape(self._B, model.p).T  # (p, B)
-            self._d += self._score_terms(np.array([k]), e_w[None])[0]
-        self.k = k + 1
+        out = self._advance(eps_k.reshape(self._B, model.p), skip, statistics)
         shape = self.batch_shape
-        if self._admissible is None:  # built by the first update (a whole record never needs it)
-            self._admissible = [np.nonzero(a)[0] for a in self._allowed]
-        slots = self._admissible[k]
-        if not slots.size or not statistics:
+        if out is None:
             return (
                 np.full(shape, np.nan),
                 np.full(shape, -1),
@@ -563,31 +552,70 @@ class WindowedGLR:
                 np.full((*shape, m, m), np.nan),
                 np.full((*shape, m), np.nan),
             )
-        C = self._Cs[k, slots]  # (S, m, m), or (S, B, m, m) per realisation
-        root = self._root[k, slots]  # shared by all realisations, or per realisation
-        if np.any(self._C_missing[slots]):  # missing samples in the window
-            C = C - self._C_missing[slots]
+        l_k, best_onset, th, C_hat, d_hat = out
+        return (
+            l_k.reshape(shape),
+            best_onset.reshape(shape),
+            th.reshape(*shape, m),
+            C_hat.reshape(*shape, m, m),
+            d_hat.reshape(*shape, m),
+        )
+
+    def _advance(
+        self, eps_k: np.ndarray, skip: bool, statistics: bool
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+        """:meth:`update` of checked innovations ``eps_k`` ``(B, p)`` (``skip``: the sample is
+        missing in every realisation): the outputs flat over the realisations, ``(B, ...)``, or
+        ``None`` when no onset is admissible yet or ``statistics`` is false."""
+        k, w = self.k, self.window
+        # New onset r = k enters the window (replacing r = k - w); scores (33), recursively (28).
+        slot = k % w
+        self._d[slot] = 0.0
+        self._C_missing[slot] = 0.0
+        if skip and not self._skipped[k]:  # a dropped innovation contributes nothing: its score
+            # term is zero, its information term (precomputed in C_k(r)) is subtracted for every
+            # onset it belongs to
+            self._C_missing += self._sig_wT[k] @ np.swapaxes(self._sig_wT[k], -1, -2)
+            self._dropped = k
+        elif not skip:
+            e_w = self._Linv[k] @ eps_k.T  # (p, B)
+            self._d += self._score_terms(slice(k, k + 1), e_w[None])[0]
+        self.k = k + 1
+        if self._admissible is None:  # built by the first update (a whole record never needs it)
+            self._admissible = [np.nonzero(a)[0] for a in self._allowed]
+        slots = self._admissible[k]
+        if not slots.size or not statistics:
+            return None
+        if self._dropped > k - w and np.any(self._C_missing[slots]):  # missing samples in the
+            # window: the admissible onsets' informations less theirs, and new factors
+            C = self._Cs[k, slots] - self._C_missing[slots]  # (S, m, m), or (S, B, m, m)
             V, inv = _pinv_factors(C)
             root = V * np.sqrt(inv)[..., None, :]
-        d = self._d[slots]  # (S, m, B)
+            d, onsets, allowed = self._d[slots], self._onsets[k, slots], None
+        else:  # every slot (views, no copies), the inadmissible ones out of the maximisation
+            C, root, d = self._Cs[k], self._root[k], self._d  # (w, m, m) or (w, B, m, m); (w, m, B)
+            onsets, allowed = self._onsets[k], self._allowed[k]
         q = self._project(root, d)  # (S, m, B)
-        stat = np.einsum("smb,smb->sb", q, q)  # (35) for every admissible onset, (S, B)
-        best = np.argmax(stat, axis=0)  # (36), (B,)
-        cols = np.arange(self._B)
+        stat = np.einsum("smb,smb->sb", q, q)  # (35) for every onset, (S, B)
+        if allowed is not None:
+            stat = np.where(allowed[:, None], stat, -np.inf)
+        best = np.argmax(
+            stat, axis=0
+        )  # (36), (B,): the first of equal ones, as among the admissible
+        cols = self._cols
         l_k = stat[best, cols]
         th = (self._pick(root, (best,), cols) @ q[best, :, cols][..., None])[..., 0]  # (34): C^+ d
-        d_hat = d[best, :, cols]
-        l_k, th, d_hat = l_k.reshape(shape), th.reshape(*shape, m), d_hat.reshape(*shape, m)
-        best_onset = self._onsets[k, slots][best].reshape(shape)
-        C_hat = self._pick(C, (best,), cols).reshape(*shape, m, m)
-        return l_k, best_onset, th, C_hat, d_hat
+        return l_k, onsets[best], th, self._pick(C, (best,), cols), d[best, :, cols]
 
-    def _record(self, eps: np.ndarray) -> WindowGLRResult:
+    def _record(self, eps: np.ndarray, start: int = 0) -> WindowGLRResult:
         """:func:`glr_window`: all the samples of a fresh detector, statistics evaluated by blocks.
 
         The scores ``d_k(r)`` are accumulated sample by sample as in :meth:`update` (same sums
         in the same order) and kept for a block of samples; the quadratic forms (35), the
-        maximisation (36) and the estimates (34) then run on the whole block at once.
+        maximisation (36) and the estimates (34) then run on the whole block at once. The
+        statistics are wanted from ``start`` on: the samples before ``start - w + 1`` are not read
+        (they only enter the scores of onsets never admissible from ``start`` on, whose slots are
+        reset before), and the outputs there stay ``nan``/``-1``.
         """
         model, w, m, B = self.model, self.window, self.family.m, self._B
         N, p = model.n_steps, model.p
@@ -603,20 +631,21 @@ class WindowedGLR:
         d_hat = np.full((N, B, m), np.nan)
         block = max(1, min(N, 2_000_000 // (w * m * B * (m if self._per_realisation else 1))))
         cols = np.arange(B)
-        for k0 in range(0, N, block):
+        for k0 in range(max(0, start - w + 1), N, block):
             ks = np.arange(k0, min(N, k0 + block))
+            now = slice(k0, k0 + ks.size)  # ks as a slice: views, not copies
             D = np.empty((ks.size, w, m, B))
-            terms = self._score_terms(ks, e_w[ks])
+            terms = self._score_terms(now, e_w[now])
             for i, k in enumerate(ks):
                 self._d[k % w] = 0.0
                 self._d += terms[i]
                 D[i] = self._d
-            root = self._root[ks]  # (K, w, m, m), or (K, w, B, m, m)
+            root = self._root[now]  # (K, w, m, m), or (K, w, B, m, m)
             q = self._project(root, D)  # (K, w, m, B)
             st = np.einsum("kwmb,kwmb->kwb", q, q)  # (35)
-            st = np.where(self._allowed[ks][:, :, None], st, -np.inf)
+            st = np.where(self._allowed[now][:, :, None], st, -np.inf)
             best = np.argmax(st, axis=1)  # (36), (K, B)
-            ok = self._allowed[ks].any(axis=1)  # some onset admissible
+            ok = self._allowed[now].any(axis=1)  # some onset admissible
             kk = np.arange(ks.size)[:, None]
             stat[ks[ok]] = np.take_along_axis(st, best[:, None, :], axis=1)[:, 0][ok]
             onset[ks[ok]] = self._onsets[ks[:, None], best][ok]
@@ -705,6 +734,7 @@ def glr_window(
     if not isinstance(model, LTVModel):
         raise ModelError(f"model: expected an LTVModel, got {type(model).__name__}")
     eps, missing = _check_innovations(innovations, model.n_steps, model.p)
+    nan_rows = missing
     start = integer(start, "start", low=0, high=model.n_steps)
     batch = eps.shape[:-2]
     check_gains(model, gains)
@@ -750,7 +780,7 @@ def glr_window(
             )
         det = shared.fresh(batch)
     if (det._B <= _RECORD_MAX_BATCH or det._per_realisation) and not missing.any():
-        res = det._record(eps)
+        res = det._record(eps, start)
         if start:  # the same outputs as sample by sample: none before start
             for arr, undefined in (
                 (res.statistic, np.nan),
@@ -761,17 +791,24 @@ def glr_window(
             ):
                 arr[(slice(None),) * len(batch) + (slice(0, start),)] = undefined
         return res
-    # many realisations: one update per sample already works on wide arrays
-    N, m = model.n_steps, family.m
-    stat = np.empty((*batch, N))
-    onset = np.empty((*batch, N), dtype=int)
-    theta = np.empty((*batch, N, m))
-    C_hat = np.empty((*batch, N, m, m))
-    d_hat = np.empty((*batch, N, m))
+    # many realisations: one update per sample already works on wide arrays (the innovations
+    # checked above: the samples missing in one realisation are missing in all)
+    N, m, B = model.n_steps, family.m, det._B
+    out = (
+        np.empty((B, N)),
+        np.empty((B, N), dtype=int),
+        np.empty((B, N, m)),
+        np.empty((B, N, m, m)),
+        np.empty((B, N, m)),
+    )
+    undefined = (np.nan, -1, np.nan, np.nan, np.nan)
+    flat = eps.reshape(B, N, model.p)
+    skip = nan_rows.reshape(-1, N).all(axis=0)
     for k in range(N):
-        (stat[..., k], onset[..., k], theta[..., k, :], C_hat[..., k, :, :], d_hat[..., k, :]) = (
-            det.update(eps[..., k, :], statistics=k >= start)
-        )
+        res = det._advance(flat[:, k], bool(skip[k]), k >= start)
+        for arr, value in zip(out, undefined if res is None else res):
+            arr[:, k] = value
+    stat, onset, theta, C_hat, d_hat = (a.reshape(*batch, *a.shape[1:]) for a in out)
     return WindowGLRResult(
         statistic=stat,
         onset=onset,

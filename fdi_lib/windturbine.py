@@ -51,7 +51,7 @@ import scipy.linalg
 import scipy.stats
 
 from fdi_lib.errors import ModelError, PersistentExcitationError, ShapeError
-from fdi_lib.filters import KalmanGains, kalman_filter, kalman_gains
+from fdi_lib.filters import KalmanGains, KalmanResult, kalman_filter, kalman_gains
 from fdi_lib.glr import WindowedGLR, first_alarm, glr_window
 from fdi_lib.isolation import minmax_isolation
 from fdi_lib.kitanidis import kitanidis_filter, kitanidis_gains, residual_signature
@@ -238,8 +238,10 @@ class Records:
         )
 
 
-def records(run: Any) -> Records:
-    """:class:`Records` of a :func:`fdi_lib.systems.wind_turbine.simulate` result (realisations first).
+def records(run: Any, i0: int = 0, i1: int | None = None) -> Records:
+    """:class:`Records` of a :func:`fdi_lib.systems.wind_turbine.simulate` result (realisations first),
+    of its samples ``i0 .. i1 - 1`` (default all: ``records(run).window(i0, i1)``, converting only
+    those samples).
 
     The blade inputs are ``beta_r - (beta_i,m1 + beta_i,m2) / 2``: the benchmark's pitch servo closes
     its loop on the measured pitch, so with this known input the blade's state equation is exact
@@ -250,9 +252,11 @@ def records(run: Any) -> Records:
 
     _instance(run, WindTurbineRun, "run")
 
+    sl = slice(i0, i1)
+
     def batch(a: Any, tail: int) -> np.ndarray:
         a = np.asarray(a, dtype=float)
-        return a if a.ndim == tail + 2 else a[None]
+        return (a if a.ndim == tail + 2 else a[None])[:, sl]
 
     y = batch(run.y, 1)[..., :11].copy()
     y[..., 10] /= 1e3
@@ -263,7 +267,7 @@ def records(run: Any) -> Records:
     x[..., 8] *= 1e3
     x[..., 9] /= 1e3
     return Records(
-        t=np.asarray(run.t, dtype=float),
+        t=np.asarray(run.t, dtype=float)[sl],
         y=y,
         u=u,
         x=x,
@@ -796,20 +800,20 @@ def design(
         m = fam.m
         glr = WindowedGLR(kf, kg, fam, w)
         thr = detection_thresholds(st, c.Ts, m, kf.p)
-        kit = ltv_model(
-            F=s.F,
-            G=s.G,
-            H=s.H,
-            Q=cal.Q[s.name],
-            R=R,
-            n_steps=N,
-            x0=x0[list(s.states)],
-            P0=1e2 * np.eye(len(s.states)),
-        )
         if s.E is not None:
+            kit = ltv_model(
+                F=s.F,
+                G=s.G,
+                H=s.H,
+                Q=cal.Q[s.name],
+                R=R,
+                n_steps=N,
+                x0=x0[list(s.states)],
+                P0=1e2 * np.eye(len(s.states)),
+            )
             kgains = kitanidis_gains(kit, s.E)
-        else:
-            kgains = kalman_gains(kit)
+        else:  # no unknown input: the residual filter is the Kalman filter itself (one run shared)
+            kit, kgains = kf, kg
         after = (np.arange(N) >= warmup)[:, None, None]  # onset at the end of the warm-up
         sig = residual_signature(
             kit, kgains, fault_profile(kit, Psi=s.Psi * after, Phi=s.Phi * after)
@@ -972,13 +976,19 @@ def _combine(
     return pre, detect, np.where(detect < 0, -1, which), peak
 
 
-def _innovations(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, np.ndarray]:
-    """Kalman innovations of every subsystem (the ZB filters; also the BZ energy test's)."""
+def _kalman_runs(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, KalmanResult]:
+    """The Kalman filter of every subsystem run on the records (the ZB filters; also the BZ energy
+    test's, and Zhang 2021's residual filter where there is no unknown input)."""
     out = {}
     for name, sd in d.subs.items():
         ys, us = _split(d, y, u, sd.sub)
-        out[name] = kalman_filter(sd.kf, ys, us, gains=sd.kf_gains).innovations
+        out[name] = kalman_filter(sd.kf, ys, us, gains=sd.kf_gains)
     return out
+
+
+def _innovations(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, np.ndarray]:
+    """Kalman innovations of every subsystem (:func:`_kalman_runs`)."""
+    return {name: r.innovations for name, r in _kalman_runs(d, y, u).items()}
 
 
 def run_zb(
@@ -1055,9 +1065,15 @@ def whitener(cov: np.ndarray) -> np.ndarray:
     return (V[:, keep] / np.sqrt(lam[keep])).T
 
 
-def _residuals(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+def _residuals(
+    d: Design,
+    y: np.ndarray,
+    u: np.ndarray,
+    kalman: Mapping[str, KalmanResult] | None = None,
+) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Updated residuals of each subsystem (Kitanidis on the drive train, Kalman on the blades),
-    whitened by their steady-state covariance, and the whitened residual signature."""
+    whitened by their steady-state covariance, and the whitened residual signature. ``kalman``: the
+    runs of :func:`_kalman_runs` on these records, whose filter is the blades' (not run again)."""
     out = {}
     for name, sd in d.subs.items():
         ys, us = _split(d, y, u, sd.sub)
@@ -1065,7 +1081,8 @@ def _residuals(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, tuple[np.nd
             r = kitanidis_filter(sd.kit, ys, us, gains=sd.kit_gains).residuals
             cov = sd.kit_gains.residual_cov[-1]
         else:
-            res = kalman_filter(sd.kit, ys, us, gains=sd.kit_gains)
+            shared = kalman is not None and sd.kit is sd.kf and sd.kit_gains is sd.kf_gains
+            res = kalman[name] if shared else kalman_filter(sd.kit, ys, us, gains=sd.kit_gains)
             r = res.updated_residuals
             IHK = np.eye(sd.kit.p) - sd.kit.H[-1] @ sd.kit_gains.K[-1]
             cov = IHK @ sd.kit_gains.Sigma[-1] @ IHK.T
@@ -1092,7 +1109,9 @@ def _lasso_test(d: Design, res: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> 
     return stats
 
 
-def run_zhang2021(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
+def run_zhang2021(
+    d: Design, y: np.ndarray, u: np.ndarray, kalman: Mapping[str, KalmanResult] | None = None
+) -> MethodOutcome:
     """Zhang (2021): Kitanidis residuals (``tau_a`` the unknown input), detection when the Lasso
     of the last ``w`` samples is not identically zero (``max_j |X_j^T y| / ||X_j||`` above the
     Bonferroni normal quantile, the KKT condition of the zero solution with a normalised design),
@@ -1100,7 +1119,7 @@ def run_zhang2021(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
     isolation)."""
     w = d.settings.window
     B = y.shape[0]
-    res = _residuals(d, y, u)
+    res = _residuals(d, y, u, kalman)
     stats = _lasso_test(d, res)
     names = list(d.subs)
     fa, detect, which, peak = _combine(d, stats, [d.subs[n].lasso_threshold for n in names])
@@ -1476,8 +1495,9 @@ def svo_priors(d: Design) -> dict[str, Polytope]:
 # ----------------------------------------------------------------------------- the method registry
 class MethodInputs:
     """The records ``y`` ``(B, N, 11)``, ``u`` ``(B, N, 4)`` of one call to the methods, and the work
-    they share, computed once on first use: the Kalman innovations of every subsystem (Zhang &
-    Basseville's GLR, Basseville & Zhang's energy test).
+    they share, computed once on first use: the Kalman filter of every subsystem (its innovations:
+    Zhang & Basseville's GLR, Basseville & Zhang's energy test; its updated residuals: Zhang 2021's
+    on the blades, whose residual filter it is).
 
     Attributes
     ----------
@@ -1489,9 +1509,14 @@ class MethodInputs:
         self.design, self.y, self.u = _instance(d, Design, "d"), y, u
 
     @functools.cached_property
+    def kalman(self) -> dict[str, KalmanResult]:
+        """Subsystem name -> its Kalman filter run on the records (:func:`_kalman_runs`)."""
+        return _kalman_runs(self.design, self.y, self.u)
+
+    @functools.cached_property
     def innovations(self) -> dict[str, np.ndarray]:
         """Subsystem name -> Kalman innovations ``(B, N, p)``."""
-        return _innovations(self.design, self.y, self.u)
+        return {name: r.innovations for name, r in self.kalman.items()}
 
 
 @dataclass(frozen=True)
@@ -1566,7 +1591,7 @@ def _zb_statistics(d: Design, inputs: MethodInputs) -> tuple[list[np.ndarray], l
 
 
 def _lasso_statistics(d: Design, inputs: MethodInputs) -> tuple[list[np.ndarray], list[float]]:
-    stats = _lasso_test(d, _residuals(d, inputs.y, inputs.u))
+    stats = _lasso_test(d, _residuals(d, inputs.y, inputs.u, inputs.kalman))
     return stats, [sd.lasso_threshold for sd in d.subs.values()]
 
 
@@ -1586,7 +1611,7 @@ def _zb_diagnose(d: Design, inputs: MethodInputs) -> MethodOutcome:
 
 
 def _zhang2021_diagnose(d: Design, inputs: MethodInputs) -> MethodOutcome:
-    return run_zhang2021(d, inputs.y, inputs.u)
+    return run_zhang2021(d, inputs.y, inputs.u, inputs.kalman)
 
 
 def _bz_diagnose(d: Design, inputs: MethodInputs) -> MethodOutcome:
@@ -1806,4 +1831,4 @@ def _segment_records(
             for faulty in kinds
         )
     )
-    return tuple(records(run).window(i0, i1) for run in runs)
+    return tuple(records(run, i0, i1) for run in runs)

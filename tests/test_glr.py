@@ -5,6 +5,7 @@ import pytest
 import scipy.stats
 
 from conftest import make_random_ltv
+from fdi_lib import glr
 from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.filters import kalman_filter, kalman_gains
 from fdi_lib.glr import WindowedGLR, first_alarm, glr_known_profile, glr_window, quadratic_form
@@ -114,6 +115,37 @@ def test_online_updates_equal_batch_and_realisations_are_independent():
         assert r_k == batch.onset[1, k]
     single = glr_window(eps[2], m, g, fam, window=30)
     np.testing.assert_allclose(single.statistic, batch.statistic[2], rtol=1e-12, equal_nan=True)
+
+
+def test_many_realisations_equal_online_updates_bit_for_bit():
+    """More realisations than the block evaluation takes (_RECORD_MAX_BATCH): glr_window steps one
+    detector sample by sample and fills each sample's outputs as one row; the same bits as
+    WindowedGLR.update on every realisation, with a sample dropped in all of them and start=."""
+    m = ex.unstable_model(120)
+    g = kalman_gains(m)
+    fam = impulse_family(m)
+    sim = simulate(
+        m,
+        rng=np.random.default_rng(7),
+        controller=ex.controller(),
+        size=6,
+        fault=fam.profile(60),
+        theta=[2.0, 0.0],
+    )
+    eps = kalman_filter(m, sim.y, sim.u, gains=g).innovations
+    eps[:, 75] = np.nan  # dropped in every realisation: one detector, C_k(r) corrected
+    assert eps.shape[0] > glr._RECORD_MAX_BATCH
+    res = glr_window(eps, m, g, fam, window=30, start=40)
+    online = WindowedGLR(m, g, fam, window=30, batch_shape=(6,))
+    keys = ("statistic", "onset", "theta_hat", "C_hat", "d_hat")
+    for k in range(120):
+        out = online.update(eps[:, k], statistics=k >= 40)
+        for key, value in zip(keys, out):
+            np.testing.assert_array_equal(getattr(res, key)[:, k], value, err_msg=f"{key} at {k}")
+    assert np.all(np.isnan(res.statistic[:, :40])) and np.all(res.onset[:, :40] == -1)
+    assert np.all(np.isfinite(res.statistic[:, 40:]))
+    for key in keys:  # the layout of a result (realisations first), contiguous
+        assert getattr(res, key).flags.c_contiguous
 
 
 def test_shared_detector_gives_the_same_results_for_every_batch():

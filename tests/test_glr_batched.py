@@ -85,10 +85,19 @@ def test_per_realisation_family_equals_one_call_per_realisation(batch, m):
     assert np.all(np.isfinite(res.statistic[..., S:]))
     # the other realisations do see their profiles
     assert np.all(res.statistic.reshape(-1, N)[1:, S:].max(axis=-1) > 0)
-    # start=: the same outputs from start on
-    part = glr_window(eps, model, gains, fam, W, S, start=20)
-    np.testing.assert_array_equal(part.statistic[..., 20:], res.statistic[..., 20:])
-    assert np.all(np.isnan(part.statistic[..., :20]))
+    # start=: the same outputs from start on, bit for bit, the samples before start - W + 1
+    # not read (the scores of onsets never admissible from start on)
+    for start in (20, 35):
+        part = glr_window(eps, model, gains, fam, W, S, start=start)
+        for key in KEYS:  # realisations flattened, samples from start on
+            got, ref = (getattr(r, key) for r in (part, res))
+            np.testing.assert_array_equal(
+                got.reshape(-1, *got.shape[len(batch) :])[:, start:],
+                ref.reshape(-1, *ref.shape[len(batch) :])[:, start:],
+                err_msg=key,
+            )
+        assert np.all(np.isnan(part.statistic[..., :start]))
+        assert np.all(part.onset[..., :start] == -1)
 
 
 def test_a_shared_profile_broadcasts_against_per_realisation_ones():

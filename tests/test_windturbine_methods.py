@@ -65,6 +65,38 @@ def test_subsystem_models_reproduce_the_simulator():
     assert max(v for k, v in faulty.items() if k != "blade1") < 1e-9, faulty
 
 
+def test_records_of_a_window_equal_the_window_of_the_records():
+    """records(run, i0, i1) converts only the window's samples: the same arrays, bit for bit, as
+    the whole run's records cut afterwards."""
+    run = wt.simulate(seed=np.random.SeedSequence(4).spawn(2), faults=(), duration_s=3.0)
+    whole = W.records(run)
+    for i0, i1 in ((0, None), (50, 120), (100, 300)):
+        got, ref = W.records(run, i0, i1), whole.window(i0, i1)
+        for key in ("t", "y", "u", "x", "tau_a", "v", "region"):
+            np.testing.assert_array_equal(getattr(got, key), getattr(ref, key), err_msg=key)
+    assert W.records(run, 100, 300).y.shape[1] == 200
+
+
+def test_zhang2021_reuses_the_blades_kalman_run_bit_for_bit(design):
+    """Without an unknown input the residual filter is the Kalman filter (one model, one set of
+    gains in the design): run_methods' shared Kalman runs give Zhang 2021 the blades' updated
+    residuals, the same bits as its own runs."""
+    for sd in design.subs.values():
+        assert (sd.kit is sd.kf and sd.kit_gains is sd.kf_gains) == (sd.sub.E is None)
+    seeds = np.random.SeedSequence(22).spawn(2)
+    recs = [W.fault_records(FAULTS[i], seeds, settings=SETTINGS) for i in (1, 8)]
+    y = np.concatenate([r.y for r in recs])
+    u = np.concatenate([r.u for r in recs])
+    kalman = W._kalman_runs(design, y, u)
+    shared, alone = W._residuals(design, y, u, kalman), W._residuals(design, y, u)
+    for name in design.subs:
+        for a, b in zip(shared[name], alone[name]):
+            np.testing.assert_array_equal(a, b)
+    got, ref = W.run_zhang2021(design, y, u, kalman), W.run_zhang2021(design, y, u)
+    for key in ("false_alarm", "detect", "isolated", "isolate_step", "peak"):
+        np.testing.assert_array_equal(getattr(got, key), getattr(ref, key))
+
+
 def test_innovations_are_white_with_unit_variance_on_fault_free_data(design):
     """The Kalman filters match the plant: whitened innovations have unit variance (within 10 %)
     and no lag-1 correlation beyond 0.1 after the warm-up."""

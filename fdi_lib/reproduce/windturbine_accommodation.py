@@ -87,7 +87,7 @@ def accommodation_chunk(
         free = wt.simulate(faults=(), **kw)
         faulty = wt.simulate(faults=(moved,), **kw)
         i0 = int(round(SETTLE_S / p.ts))
-        rec = W.records(faulty).window(i0, i0 + d.N)
+        rec = W.records(faulty, i0, i0 + d.N)
         outcomes = (
             list(W.run_methods(d, rec.y, rec.u).values())
             if method == "first"

@@ -545,11 +545,20 @@ def _coefficient_arrays(lam: Any, beta_deg: Any) -> tuple[np.ndarray, np.ndarray
     lam_a = array(lam, "lam")
     beta_a = array(beta_deg, "beta_deg")
     try:
-        lam_b, beta_b = np.broadcast_arrays(lam_a, beta_a)
+        np.broadcast_shapes(lam_a.shape, beta_a.shape)
     except ValueError as exc:
         raise ShapeError(
             f"lam, beta_deg: shapes {lam_a.shape} and {beta_a.shape} do not broadcast"
         ) from exc
+    return _coefficients(lam_a, beta_a)
+
+
+def _coefficients(
+    lam: np.ndarray, beta_deg: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_coefficient_arrays` of checked float arrays that broadcast together: ``Cq`` and its
+    derivatives in ``lambda`` and ``beta``."""
+    lam_b, beta_b = np.broadcast_arrays(lam, beta_deg)
     res = _cq_many(
         np.ascontiguousarray(lam_b, dtype=float).ravel(),
         np.ascontiguousarray(beta_b, dtype=float).ravel(),
@@ -605,9 +614,17 @@ def aero_torque(
         raise ShapeError(
             f"beta_deg: expected a last axis of length 3 (one angle per blade), got {beta_a.shape}"
         )
-    lam = array(omega_r, "omega_r") * params.radius / v_a
-    cq = _coefficient_arrays(lam[..., None], beta_a)[0].sum(axis=-1)
-    return params.rho * math.pi * params.radius**3 / 6.0 * cq * v_a**2
+    return _aero_torque(v_a, array(omega_r, "omega_r"), beta_a, params)
+
+
+def _aero_torque(
+    v: np.ndarray, omega_r: np.ndarray, beta_deg: np.ndarray, params: WindTurbineParams
+) -> np.ndarray:
+    """:func:`aero_torque` of checked float arrays (``v > 0``, three pitch angles last): for the
+    root searches of the equilibria, which call it thousands of times."""
+    lam = omega_r * params.radius / v
+    cq = _coefficients(lam[..., None], beta_deg)[0].sum(axis=-1)
+    return params.rho * math.pi * params.radius**3 / 6.0 * cq * v**2
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -1458,7 +1475,9 @@ def _torque_balance(
 ) -> float:
     """Steady generator-side balance of the drive train: ``eta_dt (tau_aero - B_r omega_r) / N_g - B_g
     omega_g - tau_g`` (zero at equilibrium; from ``Addt`` with ``omega_g = N_g omega_r``)."""
-    tau_a = float(aero_torque(v, omega_r, np.full(3, beta), p))
+    tau_a = float(
+        _aero_torque(np.asarray(v, float), np.asarray(omega_r, float), np.full(3, beta), p)
+    )
     return p.eta_dt * (tau_a - p.B_r * omega_r) / p.N_g - p.B_g * p.N_g * omega_r - tau_g
 
 
