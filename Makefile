@@ -11,7 +11,7 @@ export OPENBLAS_NUM_THREADS := 1
 export OMP_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 
-.PHONY: book book-fast test venv lock clean benchmarks student student-pdf notebooks browser-test check-book grade pdf install-check lint format system-deps
+.PHONY: book book-fast test venv lock clean benchmarks student student-pdf notebooks browser-test browser-pages browser-notebooks check-book grade pdf install-check lint format system-deps
 
 venv: $(STAMP)
 
@@ -162,12 +162,17 @@ system-deps: $(CHROMIUM) $(NODE) $(NPM)
 
 ## The live notebooks as the README opens them: `make notebooks`, then JupyterLab (headless, on
 ## 127.0.0.1) shows each in Chromium with no raw MyST role, directive or undefined macro
-## (tests/browser/check_jupyterlab.py).
-browser-test: $(STAMP) $(CHROMIUM) $(AXE_JS) notebooks
+## (tests/browser/check_jupyterlab.py). `browser-test` runs both halves, `browser-pages` (the built
+## pages) and `browser-notebooks` (JupyterLab), which CI runs in its two lanes.
+browser-test: browser-pages browser-notebooks
+
+browser-notebooks: $(STAMP) $(CHROMIUM) notebooks
+	$(BIN)/python tests/browser/check_jupyterlab.py --notebooks _build/notebooks
+
+browser-pages: $(STAMP) $(CHROMIUM) $(AXE_JS)
 	@test -f _build/html/index.html || { echo "No built book: run make book first"; exit 2; }
 	$(BIN)/python tests/browser/check_book.py --html _build/html --screenshots _build/screenshots \
 	  --axe $(AXE_JS)
-	$(BIN)/python tests/browser/check_jupyterlab.py --notebooks _build/notebooks
 	$(BIN)/python tests/browser/check_explorables.py --html _build/html
 	$(BIN)/python tests/browser/check_previews.py --html _build/html
 	$(BIN)/python tests/browser/page_weights.py --html _build/html --report _build/build-report.json
