@@ -282,6 +282,24 @@ def test_fault_record_pair_is_two_fault_records_bit_for_bit():
     assert not np.array_equal(rec.y, twin.y)
 
 
+def test_servo_gains_are_the_l1_norms_of_the_servo_impulse_response():
+    """The pitch and rate gains of the envelope (SciPy's impulse response) against the state
+    recursion ``Phi^k Gam`` summed by a plain loop, and the pitch gain against a closed-form lower
+    bound: the l1 norm of an impulse response is at least the absolute sum of its samples, the DC
+    gain (1 for the servo's unit-gain pitch, 0 for its rate)."""
+    from fdi_lib.systems.wind_turbine import pitch_discretisation
+
+    c = W.plant_constants()
+    g_beta, g_rate = W._servo_gains(c)
+    Phi, Gam = pitch_discretisation(c.params.omega_n, c.params.zeta, ts=c.Ts)
+    g, acc = Gam[:, 0], np.zeros(2)
+    for _ in range(int(np.ceil(60.0 / c.Ts))):
+        acc += np.abs(g)
+        g = Phi @ g
+    assert (g_beta, g_rate) == pytest.approx(tuple(acc), rel=1e-12)
+    assert g_beta >= 1.0 - 1e-9 and g_rate > 0.0
+
+
 def test_operating_envelope_contains_every_simulated_state():
     """The SVO's prior set (:func:`fdi_lib.windturbine.operating_envelope`) holds the true state
     and ``tau_a`` at every sample of fault-free segments of every fault of the scenario (low-wind
