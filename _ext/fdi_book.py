@@ -491,7 +491,10 @@ def catalogue_markdown(confdir: Path) -> tuple[str, list[Path]]:
             if s.trials is None
             else f"; {s.trials} Monte Carlo trial{'s' * (s.trials != 1)}, "
             + (
-                "the paper's count"
+                f"the command line's default is {r.default_trials} (`--trials "
+                f"{r.default_trials}`), more than a chapter can spend"
+                if r.book_trials is not None
+                else "the paper's count"
                 if s.trials == r.default_trials
                 else f"the paper's {r.default_trials} with `--trials {r.default_trials}`"
                 if r.default_trials

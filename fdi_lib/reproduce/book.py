@@ -80,8 +80,8 @@ def book_settings(id: str) -> BookRun:
     -------
     BookRun
         ``seed`` always an integer (the registry's default when the book sets none); ``trials``
-        the book's count, else the registry's default (``None`` for a reproduction without a
-        trial count of its own).
+        the registration's ``book_trials`` (a study too long for a chapter at its default), else
+        the registry's default (``None`` for a reproduction without a trial count of its own).
     """
     rep = get(id)
     if rep.chapter_seed and rep.chapter not in CHAPTER_SEEDS:
@@ -91,7 +91,7 @@ def book_settings(id: str) -> BookRun:
         )
     return BookRun(
         seed=CHAPTER_SEEDS[rep.chapter] if rep.chapter_seed else rep.default_seed,
-        trials=rep.default_trials,
+        trials=rep.default_trials if rep.book_trials is None else rep.book_trials,
     )
 
 

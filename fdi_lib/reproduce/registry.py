@@ -131,6 +131,10 @@ class Reproduction:
     #: Its paper claims: ``(pattern, Claim)`` pairs, the pattern an ``fnmatch`` pattern of a path
     #: of its ``paper`` dictionary (``"success_rate/*"``); see :mod:`fdi_lib.reproduce.ledger`.
     claims: tuple[tuple[str, Any], ...] = ()
+    #: The book's trial count where it differs from ``default_trials`` (``None``: the default), for
+    #: a study whose default costs more than a chapter can spend; the catalogue's command carries
+    #: it (:func:`fdi_lib.reproduce.book.book_argv`), and the chapter says what the default gives.
+    book_trials: int | None = None
 
     @property
     def monte_carlo(self) -> bool:
@@ -509,6 +513,7 @@ def register(
     chapter_seed: bool = False,
     surrogate: bool = False,
     claims: Mapping[str, Any] | None = None,
+    book_trials: int | None = None,
 ) -> Callable[[Callable[..., ReproductionResult]], Callable[..., ReproductionResult]]:
     """Decorator registering a reproduction function under ``id``.
 
@@ -529,7 +534,16 @@ def register(
     path pattern of its ``paper`` dictionary, the :class:`~fdi_lib.reproduce.ledger_claims.Claim`
     that says where in the paper the value is, its units and how it is compared (see
     :mod:`fdi_lib.reproduce.ledger`; a paper value without a declaration fails the tests).
+    ``book_trials`` is the book's trial count where a chapter cannot spend the default's time
+    (``None``: the book runs ``default_trials``); it must be smaller than ``default_trials``.
     """
+    if book_trials is not None and (
+        default_trials is None or not min_trials <= book_trials < default_trials
+    ):
+        raise ModelError(
+            f"book_trials: expected an integer in [min_trials={min_trials}, default_trials="
+            f"{default_trials}), got {book_trials!r}"
+        )
 
     def decorator(func: Callable[..., ReproductionResult]) -> Callable[..., ReproductionResult]:
         if id in _REGISTRY:
@@ -548,6 +562,7 @@ def register(
             chapter_seed=chapter_seed,
             surrogate=surrogate,
             claims=tuple((claims or {}).items()),
+            book_trials=book_trials,
         )
         return func
 

@@ -257,7 +257,7 @@ def test_false_alarm_study_json_and_its_exact_poisson_bounds(monkeypatch):
     from fdi_lib.systems import wind_turbine as wt
 
     monkeypatch.setattr(wt, "SCENARIO_S", 60.0)
-    r = RS.false_alarms(seed=2009, trials=2)
+    r = RS.false_alarms(seed=2009, trials=2, jobs=1)
     h = r.headline
     d, start = RS.stream_design(2009)
     per_stream = ((6000 - d.N) // (d.N - start) + 1) * (d.N - start)
@@ -275,6 +275,27 @@ def test_false_alarm_study_json_and_its_exact_poisson_bounds(monkeypatch):
         assert v["below_nominal"] == (hi < v["nominal_per_test_hour"])
     # 0 alarms over 1 h gives an upper bound of 3.69 per hour: what "can test 1 per hour" needs
     assert RW._poisson_ci(0, 1.0)[1] == pytest.approx(-np.log(0.025))
+
+
+def test_false_alarm_study_is_registered_with_ten_hours_by_default_and_one_stream_in_the_book():
+    """``windturbine-false-alarms`` in the registry: the command line's default covers at least 10
+    scored hours (what testing the nominal rate of a test without alarms needs), the book runs
+    :data:`BOOK_STREAMS` and its catalogue command says so; a run too long for
+    :data:`~fdi_lib.reproduce.windturbine.MAX_RUN_S` is refused before anything is simulated."""
+    from fdi_lib.errors import ResourceError
+    from fdi_lib.reproduce import get
+    from fdi_lib.reproduce.book import book_argv, book_settings
+    from fdi_lib.systems import wind_turbine as wt
+
+    rep = get("windturbine-false-alarms")
+    d, start = RS.stream_design(2009)
+    n = int(round(wt.SCENARIO_S / d.constants.Ts))
+    per_stream_h = ((n - d.N) // (d.N - start) + 1) * (d.N - start) * d.constants.Ts / 3600
+    assert rep.default_trials * per_stream_h >= 10.0 > (rep.default_trials - 1) * per_stream_h
+    assert book_settings(rep.id).trials == RS.BOOK_STREAMS < rep.default_trials
+    assert book_argv(rep.id)[-3:] == ["--trials", str(RS.BOOK_STREAMS), "--json"]
+    with pytest.raises(ResourceError, match="trials"):
+        rep(seed=2009, trials=10**5, jobs=1)
 
 
 # ----------------------------------------------------------------------------- the SVO's assumptions
