@@ -1280,18 +1280,23 @@ def stream_counts(
     *,
     batch: int = 8,
     methods: Sequence[str] | None = None,
+    region: np.ndarray | None = None,
 ) -> dict[str, Any]:
     """Alarm counts of the methods ``methods`` (default all) over one long stream ``y`` ``(n, 11)``, ``u`` ``(n, 4)``, in
     constant memory: overlapping windows of ``d.N`` samples, each scored from its sample ``start``
     (:func:`stream_alarms` of ``methods``), so that the scored parts tile
     ``[start, start + K (N - start))``; ``batch`` windows at a time are one batch of records (the
-    memory of one batch, whatever ``n``).
+    memory of one batch, whatever ``n``). ``region`` ``(n,)``, the controller's operating region
+    of each sample (:class:`Records`), splits the counts by the kind of window (below).
 
     Returns
     -------
     dict
         Method key -> alarm count, ``"tests"`` (see :func:`stream_alarms`), ``"samples"``: the
-        samples scored.
+        samples scored; with ``region``, ``"by_region"`` -> method key -> alarms in the windows
+        whose scored part switches between regions (``"switch"``), stays in full load
+        (``"full_load"``) or in partial load (``"partial_load"``), and ``"windows"`` -> the number
+        of windows of each kind.
     """
     _instance(d, Design, "d")
     y = np.asarray(y, dtype=float)
@@ -1307,15 +1312,34 @@ def stream_counts(
     if n_windows < 1:
         raise ShapeError(f"y: expected at least one window of {d.N} samples, got {y.shape[0]}")
     methods = _method_keys(methods)
+    if region is not None:
+        region = np.asarray(region)
+        if region.shape != (y.shape[0],) or not np.isin(region, (1, 2)).all():
+            raise ShapeError(
+                f"region: expected ({y.shape[0]},) of 1 (partial load) or 2 (full load), got "
+                f"shape {region.shape}"
+            )
+    kinds = ("switch", "full_load", "partial_load")
     total: dict[str, Any] = {name: 0 for name in methods}
+    split = {name: dict.fromkeys(kinds, 0) for name in methods}
+    windows = dict.fromkeys(kinds, 0)
     tests: dict[str, int] = {}
     for b0 in range(0, n_windows, batch):
         idx = (np.arange(b0, min(b0 + batch, n_windows)) * step)[:, None] + np.arange(d.N)
         counts = stream_alarms(d, y[idx], u[idx], start, methods)
         tests = counts.pop("tests")
+        if region is not None:
+            r = region[idx[:, start:]]
+            kind = np.where((r != r[:, :1]).any(axis=1), 0, np.where(r[:, 0] == 2, 1, 2))
+            for k, key in enumerate(kinds):
+                windows[key] += int((kind == k).sum())
         for name, c in counts.items():
             total[name] += int(c.sum())
-    return {**total, "tests": tests, "samples": n_windows * step}
+            if region is not None:
+                for k, key in enumerate(kinds):
+                    split[name][key] += int(c[kind == k].sum())
+    out = {**total, "tests": tests, "samples": n_windows * step}
+    return out if region is None else {**out, "by_region": split, "windows": windows}
 
 
 def _const(M: np.ndarray, T: int) -> np.ndarray:

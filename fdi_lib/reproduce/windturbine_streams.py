@@ -31,6 +31,7 @@ __all__ = [
     "false_alarms",
     "FALSE_ALARM_STREAMS",
     "BOOK_STREAMS",
+    "WINDOW_KINDS",
     "SECONDS_PER_STREAM",
     "stream_chunk",
     "stream_design",
@@ -77,19 +78,31 @@ def stream_chunk(seeds: list, *, seed: int) -> dict[str, np.ndarray]:
 
     d, start = stream_design(seed)
     n, M = len(seeds), len(W.METHODS)
+    K = len(WINDOW_KINDS)
     out = {
         "alarms": np.zeros((n, M), dtype=np.int64),
         "tests": np.zeros((n, M), dtype=np.int64),
         "samples": np.zeros(n, dtype=np.int64),
+        "alarms_by_region": np.zeros((n, M, K), dtype=np.int64),
+        "windows_by_region": np.zeros((n, K), dtype=np.int64),
     }
     for i, s in enumerate(seeds):
         rec = W.records(wt.simulate(seed=[s], faults=(), duration_s=wt.SCENARIO_S))
-        counts = W.stream_counts(d, rec.y[0], rec.u[0], start, batch=STREAM_BATCH)
+        counts = W.stream_counts(
+            d, rec.y[0], rec.u[0], start, batch=STREAM_BATCH, region=rec.region[0]
+        )
         out["alarms"][i] = [counts[m] for m in W.METHODS]
         out["tests"][i] = [counts["tests"][m] for m in W.METHODS]
         out["samples"][i] = counts["samples"]
+        out["alarms_by_region"][i] = [
+            [counts["by_region"][m][k] for k in WINDOW_KINDS] for m in W.METHODS
+        ]
+        out["windows_by_region"][i] = [counts["windows"][k] for k in WINDOW_KINDS]
     return out
 
+
+#: The kinds of window of :func:`fdi_lib.windturbine.stream_counts`'s ``by_region`` split.
+WINDOW_KINDS = ("switch", "full_load", "partial_load")
 
 #: Continuous fault-free scenarios of :func:`false_alarms` by default: 9 x 4400 s, 10.95 scored
 #: hours, enough for an interval that can test the nominal rate of a test that raises no alarm.
@@ -105,12 +118,15 @@ SECONDS_PER_STREAM = 35.0
 
 def _alarm_rates(x: dict[str, np.ndarray], hours: float, nominal: float) -> dict[str, dict]:
     """The headline's ``methods`` of :func:`false_alarms`: each method's alarms over ``hours``
-    of streams, per hour and per test-hour, against the ``nominal`` rate of each test."""
+    of streams, per hour and per test-hour, against the ``nominal`` rate of each test, and split
+    by the kind of window (:data:`WINDOW_KINDS`)."""
     methods = {}
+    kind_hours = x["windows_by_region"].sum(axis=0) * STREAM_WINDOW_S / 3600.0
     for m, name in enumerate(W.METHODS):
         a = int(x["alarms"][:, m].sum())
         k = int(x["tests"][0, m])
         ci = _poisson_ci(a, hours * k)
+        by = x["alarms_by_region"][:, m].sum(axis=0)
         methods[name] = {
             "alarms": a,
             "tests": k,
@@ -121,6 +137,11 @@ def _alarm_rates(x: dict[str, np.ndarray], hours: float, nominal: float) -> dict
             "nominal_per_test_hour": nominal,
             "p_value_nominal": float(scipy.stats.poisson.sf(a - 1, nominal * hours * k)),
             "below_nominal": bool(ci[1] < nominal),
+            "alarms_by_region": {kind: int(c) for kind, c in zip(WINDOW_KINDS, by)},
+            "rate_per_test_hour_by_region": {
+                kind: float(c / (h * k)) if h > 0 else None
+                for kind, c, h in zip(WINDOW_KINDS, by, kind_hours)
+            },
         }
     return methods
 
@@ -154,6 +175,10 @@ def false_alarms(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
         ``trials``.
     hours : float
         Scored hours over all streams (the first window's overlap of each stream is its warm-up).
+    windows_by_region : dict
+        The scored windows (:data:`STREAM_WINDOW_S` each) whose samples switch between the
+        controller's operating regions (``switch``), stay in full load (``full_load``) or in
+        partial load (``partial_load``).
     methods : dict
         Method key -> ``alarms`` (count over all streams), ``tests`` (statistical tests it runs at
         once: one per subsystem; Basseville & Zhang two; the SVO bank one, at most one alarm per
@@ -162,8 +187,10 @@ def false_alarms(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
         ``nominal_per_test_hour`` (the design's budget, :class:`~fdi_lib.windturbine.Settings`
         ``false_alarms_per_hour``),
         ``p_value_nominal`` (the probability of this many alarms or more if each test raised the
-        nominal rate: exact Poisson) and ``below_nominal`` (the interval's upper end under the
-        budget).
+        nominal rate: exact Poisson), ``below_nominal`` (the interval's upper end under the
+        budget), ``alarms_by_region`` and ``rate_per_test_hour_by_region`` (the alarms in each
+        kind of window of ``windows_by_region`` and their rate per test over those windows' hours;
+        ``None`` without such windows).
     """
     settings = W.Settings()
     trials = check_trials(
@@ -185,7 +212,12 @@ def false_alarms(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
     nominal = settings.false_alarms_per_hour
     from fdi_lib.systems import wind_turbine as wt
 
-    headline = {"streams": trials, "hours": hours, "methods": _alarm_rates(x, hours, nominal)}
+    headline = {
+        "streams": trials,
+        "hours": hours,
+        "windows_by_region": dict(zip(WINDOW_KINDS, map(int, x["windows_by_region"].sum(axis=0)))),
+        "methods": _alarm_rates(x, hours, nominal),
+    }
     settings_out = {
         "seed": seed,
         "trials": trials,

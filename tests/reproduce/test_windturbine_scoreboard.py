@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from fdi_lib import windturbine as W
+from fdi_lib.errors import ShapeError
 from fdi_lib.montecarlo import run_monte_carlo
 from fdi_lib.reproduce import windturbine as RW
 from fdi_lib.reproduce import windturbine_streams as RS
@@ -233,6 +234,33 @@ def test_stream_windows_tile_the_stream_and_batches_do_not_change_the_counts(str
     assert one["tests"] == {"zb2014": 4, "zhang2021": 4, "bz": 8, "rosa2013": 1}
 
 
+def test_stream_counts_split_by_the_kind_of_window_add_up(stream):
+    """With the regions, each window is of one kind (a brute-force loop over the windows' scored
+    samples) and the split counts add up to the totals; a stream in one region puts every window
+    and alarm in that region's kind; a region of the wrong length or value is refused."""
+    d, start, healthy, faulty = stream
+    y, u, region = faulty.y[0], faulty.u[0], faulty.region[0]
+    got = W.stream_counts(d, y, u, start, batch=2, region=region)
+    assert {k: got[k] for k in (*W.METHODS, "tests", "samples")} == W.stream_counts(
+        d, y, u, start, batch=2
+    )
+    step = d.N - start
+    kinds = []
+    for w in range(got["samples"] // step):
+        r = region[w * step + start : w * step + d.N]
+        kinds.append("switch" if len(set(r)) > 1 else "full_load" if r[0] == 2 else "partial_load")
+    assert got["windows"] == {k: kinds.count(k) for k in ("switch", "full_load", "partial_load")}
+    for m in W.METHODS:
+        assert sum(got["by_region"][m].values()) == got[m], m
+    full = W.stream_counts(d, y, u, start, region=np.full(region.shape, 2))
+    assert full["windows"]["full_load"] == len(kinds)
+    assert all(full["by_region"][m]["full_load"] == full[m] for m in W.METHODS)
+    with pytest.raises(ShapeError, match="region"):
+        W.stream_counts(d, y, u, start, region=region[:-1])
+    with pytest.raises(ShapeError, match="region"):
+        W.stream_counts(d, y, u, start, region=np.zeros_like(region))
+
+
 def test_stream_detectors_alarm_on_a_fault_and_count_it_once_per_test(stream):
     """A converter offset for 20 s in the middle of a 100 s stream: every method alarms; a
     statistical test whose statistic stays over its threshold across a window boundary counts one
@@ -263,7 +291,9 @@ def test_false_alarm_study_json_and_its_exact_poisson_bounds(monkeypatch):
     per_stream = ((6000 - d.N) // (d.N - start) + 1) * (d.N - start)
     assert h["streams"] == 2 and h["hours"] == pytest.approx(2 * per_stream * 0.01 / 3600)
     assert set(h["methods"]) == set(W.METHODS)
+    assert sum(h["windows_by_region"].values()) * (d.N - start) == 2 * per_stream
     for m, v in h["methods"].items():
+        assert sum(v["alarms_by_region"].values()) == v["alarms"]
         exposure = h["hours"] * v["tests"]
         assert v["rate_per_test_hour"] == pytest.approx(v["alarms"] / exposure)
         lo, hi = v["rate_per_test_hour_ci"]
