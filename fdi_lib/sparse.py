@@ -781,15 +781,40 @@ def _residual_blocks(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> Iterato
     for b0 in range(0, coefs.shape[0], block):
         c = coefs[b0 : b0 + block]
         Xb = X if X.shape[0] == 1 else X[b0 : b0 + block]
-        Xh, Xl = _split(Xb)
+        # the columns contiguous (m, rows) for the loop over them: elementwise, the same values
+        XT = np.ascontiguousarray(Xb.transpose(0, 2, 1))
+        XTh, XTl = _split(XT)
         yb = y if y.shape[0] == 1 else y[b0 : b0 + block]
         s = np.array(np.broadcast_to(yb, (c.shape[0], rows)))
         e = np.zeros_like(s)
+        # s, err = _two_sum(s, -p) and e += err - _product_error(...) for p = X_k theta_k, the same
+        # operations in the same order, into buffers kept across the columns (a new array of
+        # this size per operation costs more than the operation)
+        p, b, s2, z, err, u, v = (np.empty_like(s) for _ in range(7))
+        th, tl = _split(c)
         for k in range(m):
-            a, t = Xb[:, :, k], c[:, k, None]
-            p = a * t
-            s, err = _two_sum(s, -p)
-            e += err - _product_error((Xh[:, :, k], Xl[:, :, k]), t, p)
+            t, ah, al = c[:, k, None], XTh[:, k], XTl[:, k]
+            np.multiply(XT[:, k], t, out=p)
+            np.negative(p, out=b)
+            np.add(s, b, out=s2)  # _two_sum(s, b): s2 = fl(s + b), err = s + b - s2
+            np.subtract(s2, s, out=z)
+            np.subtract(s2, z, out=u)
+            np.subtract(s, u, out=u)
+            np.subtract(b, z, out=z)
+            np.add(u, z, out=err)
+            s, s2 = s2, s
+            bh, bl = th[:, k, None], tl[:, k, None]  # _product_error((ah, al), t, p)
+            np.multiply(ah, bh, out=u)
+            np.subtract(u, p, out=u)
+            np.multiply(ah, bl, out=v)
+            np.add(u, v, out=u)
+            np.multiply(al, bh, out=v)
+            np.add(u, v, out=u)
+            np.multiply(al, bl, out=v)
+            np.add(u, v, out=u)
+            np.subtract(err, u, out=err)
+            np.add(e, err, out=e)
+        Xh, Xl = XTh.transpose(0, 2, 1), XTl.transpose(0, 2, 1)
         yield slice(b0, b0 + c.shape[0]), Xb, (Xh, Xl), s, e
 
 
@@ -1200,7 +1225,7 @@ def _homotopy(
     stalled = np.zeros(B, int)  # zero-length steps in a row
     outer_buf = np.empty(B * K * K)  # the rank-one change of inv (below)
     while running.any():
-        if running.sum() <= rows.size // 2 and rows.size >= 16:  # drop finished problems
+        if rows.size >= 16 and running.sum() <= rows.size // 2:  # drop finished problems
             keep = running
             Gram, c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j, near = (
                 x[keep]
@@ -1238,10 +1263,7 @@ def _homotopy(
         u[rows[joining], s_ev[joining]] = -1.0  # w: the new column of inv is -w / schur
         col = inv[rows, :k, s_ev]
         z = np.where(joining[:, None], u[:, :k], col)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            f = np.where(
-                joining, 1.0 / schur, np.where(dropping, -1.0 / inv[rows, s_ev, s_ev], 0.0)
-            )
+        f = np.where(joining, 1.0 / schur, np.where(dropping, -1.0 / inv[rows, s_ev, s_ev], 0.0))
         # the outer product in a buffer kept across steps: a new (B, k, k) array at each step
         # (megabytes) is mapped and faulted in anew by the allocator (same products, same sums)
         outer = outer_buf[: rows.size * k * k].reshape(rows.size, k, k)
@@ -1266,8 +1288,7 @@ def _homotopy(
             slot[b, order[b, sd]] = sd
             order[b, last] = m
             n_act[b] -= 1
-        active[rows, j] |= joining
-        active[rows, j] &= ~dropping
+        active[rows, j] = (active[rows, j] | joining) & ~dropping
         sign[rows, j] = np.where(
             joining, np.sign(cov[rows, j]), np.where(dropping, 0.0, sign[rows, j])
         )
@@ -1277,10 +1298,10 @@ def _homotopy(
         d = np.zeros((rows.size, m + 1))
         d[rows[:, None], order[:, :k]] = dA[:, :k]  # unused slots write into column m, dropped
         d = d[:, :m]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            up = (c[:, None] - cov) / (1.0 - a)
-            down = (c[:, None] + cov) / (1.0 + a)
-            zero = -beta / d
+        below, above = c[:, None] - cov, c[:, None] + cov  # the level's gaps to +-cov
+        up = below / (1.0 - a)
+        down = above / (1.0 + a)
+        zero = -beta / d
         join = np.minimum(np.where(up > 0, up, np.inf), np.where(down > 0, down, np.inf))
         # A correlation at the level (a tie, e.g. at lambda_max; to rounding, `near`, while the level
         # is well above it) that would overtake it joins at once (gamma = 0); one that moves away
@@ -1288,15 +1309,14 @@ def _homotopy(
         # ones, e.g. a duplicate: joining would make Gram_AA singular, and staying out keeps the KKT
         # conditions to 1e-9 lambda).
         tol = np.where(c > 1e3 * near, near, 0.0)[:, None]
-        tie = ((c[:, None] - cov <= tol) & (a < 1 - 1e-9)) | (
-            (c[:, None] + cov <= tol) & (a > -1 + 1e-9)
-        )
+        tie = ((below <= tol) & (a < 1 - 1e-9)) | ((above <= tol) & (a > -1 + 1e-9))
         join[tie] = 0.0
         join[active] = np.inf
         hit = barred >= 0
-        b = rows[hit]
-        join[b, barred[b]] = np.where(barred_sign[b] > 0, down[b, barred[b]], up[b, barred[b]])
-        join[b, barred[b]] = np.where(join[b, barred[b]] > 0, join[b, barred[b]], np.inf)
+        if hit.any():
+            b = rows[hit]
+            back = np.where(barred_sign[b] > 0, down[b, barred[b]], up[b, barred[b]])
+            join[b, barred[b]] = np.where(back > 0, back, np.inf)
         # a component that joined in a tie (beta_j = 0) but whose direction opposes its sign leaves
         # at once (gamma = 0): it cannot stay active (its coefficient would take the wrong sign)
         zero = np.where(active & ((zero > 0) | ((beta == 0) & (d * sign[:, :m] < 0))), zero, np.inf)
@@ -1341,7 +1361,7 @@ def _homotopy(
             levels[ids[cycling], point] = np.nan
             running &= ~cycling
         if max_size is not None:  # the interval just followed had more than max_size components
-            running &= active.sum(axis=1) <= max_size
+            running &= n_act <= max_size  # n_act: the active components, active.sum(axis=1)
         running &= (
             ~ended & np.isfinite(c) & np.isfinite(beta).all(axis=1)
         )  # the KKT check rejects it
