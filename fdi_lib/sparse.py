@@ -719,9 +719,10 @@ def kkt_residual(X: Any, y: Any, path: "LassoPath") -> float:
 
 def _split(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Dekker's split ``a = hi + lo`` into halves of 26 bits (so that ``hi * hi`` is exact)."""
-    c = 134217729.0 * a  # 2^27 + 1
-    hi = c - (c - a)
-    return hi, a - hi
+    hi = 134217729.0 * a  # 2^27 + 1
+    lo = hi - a
+    np.subtract(hi, lo, out=hi)  # hi = c - (c - a), c = (2^27 + 1) a
+    return hi, np.subtract(a, hi, out=lo)
 
 
 def _product_error(a: tuple[np.ndarray, np.ndarray], b: np.ndarray, p: np.ndarray) -> np.ndarray:
@@ -1225,7 +1226,7 @@ def _homotopy(
     stalled = np.zeros(B, int)  # zero-length steps in a row
     outer_buf = np.empty(B * K * K)  # the rank-one change of inv (below)
     while running.any():
-        if rows.size >= 16 and running.sum() <= rows.size // 2:  # drop finished problems
+        if rows.size >= 16 and running.sum() <= 3 * rows.size // 4:  # drop finished problems
             keep = running
             Gram, c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j, near = (
                 x[keep]
@@ -1323,12 +1324,13 @@ def _homotopy(
         j_join, j_drop = join.argmin(axis=1), zero.argmin(axis=1)
         g_join, g_drop = join[rows, j_join], zero[rows, j_drop]
         g_end = c - c_min
-        gamma = np.where(running, np.minimum(np.minimum(g_join, g_drop), g_end), 0.0)
+        g_next = np.minimum(g_join, g_drop)
+        gamma = np.where(running, np.minimum(g_next, g_end), 0.0)
         stalled = np.where(gamma == 0, stalled + 1, 0)
         beta += gamma[:, None] * d
         cov -= gamma[:, None] * a
         c = c - gamma
-        ended = running & (g_end <= np.minimum(g_join, g_drop))
+        ended = running & (g_end <= g_next)
         c[ended] = c_min[ended]
         ended |= running & (c <= near)  # an exact fit: below, only rounding is left to follow
         dropping = running & ~ended & (g_drop < g_join)
