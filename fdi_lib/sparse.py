@@ -1194,6 +1194,8 @@ def _homotopy(
     breakpoints, and the number ``(B,)`` of breakpoints of each problem (the tails are padding).
     """
     B, m = Xy.shape
+    if B == 1:  # one problem (lasso_path): the same operations, with scalar bookkeeping
+        return _homotopy_one(Gram, Xy, c_min, max_size)
     K = m if max_size is None else min(m, max_size + 1)  # most components active at once
     rows = np.arange(B)
     beta = np.zeros((B, m))
@@ -1369,6 +1371,137 @@ def _homotopy(
         )  # the KKT check rejects it
         joining &= running
         dropping &= running
+    return levels, coefs, n_points
+
+
+def _homotopy_one(
+    Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray, max_size: int | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_homotopy` for a batch of one problem (``lasso_path``), bit for bit the same.
+
+    The same floating-point operations in the same order on the same shapes where the order of a
+    sum depends on them (the ``einsum`` calls, on ``(1, ...)`` arrays); only the bookkeeping
+    (event, slots, flags, step lengths) is done on scalars instead of ``(B,)`` arrays: a step of
+    one problem is dominated by the number of numpy calls, not by their size. Scalars stay
+    ``numpy.float64`` (a division by zero or a NaN behaves as in the arrays).
+    """
+    m = Xy.shape[1]
+    K = m if max_size is None else min(m, max_size + 1)
+    beta = np.zeros((1, m))
+    cov = Xy.copy()
+    sign = np.zeros((1, m + 1))
+    active = np.zeros((1, m), bool)
+    order = np.full((1, K), m)
+    slot = np.zeros(m, int)
+    n_act = 0
+    inv = np.zeros((1, K, K))
+    GA = np.zeros((1, K, m))
+    j = int(np.abs(cov).argmax(axis=1)[0])
+    c = np.abs(cov[0, j])
+    near = 1e-12 * c
+    c_min = c_min[0]
+    cap = 2 * m + 4
+    levels, coefs = np.zeros((1, cap)), np.zeros((1, cap, m))
+    levels[0, 0] = c
+    n_points = np.ones(1, int)
+    step = 1
+    running = bool(c > c_min)
+    joining, dropping = running, False
+    barred, barred_sign = -1, 0.0
+    stalled = 0
+    outer_buf = np.empty(K * K)
+    while running:
+        s_ev = n_act if joining else int(slot[j])
+        k = min(K, n_act + int(joining))
+        g = GA[:, :, j].copy()  # (1, K), C-contiguous as GA[rows, :, j]
+        u = np.zeros((1, K))
+        u[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], g)
+        schur = Gram[0, j, j] - np.einsum("bi,bi->b", g, u)[0]
+        if joining:
+            u[0, s_ev] = -1.0
+            z, f = u[:, :k], 1.0 / schur
+        else:
+            z, f = inv[:, :k, s_ev], -1.0 / inv[0, s_ev, s_ev]
+        outer = outer_buf[: k * k].reshape(1, k, k)
+        np.multiply((z * f)[:, :, None], z[:, None, :], out=outer)
+        inv[:, :k, :k] += outer
+        if joining:
+            GA[0, s_ev] = Gram[0, j]
+            order[0, s_ev] = j
+            slot[j] = s_ev
+            n_act += 1
+            active[0, j] = True
+            sign[0, j] = np.sign(cov[0, j])
+        else:
+            last = n_act - 1
+            inv[0, s_ev, :] = inv[0, last, :]
+            inv[0, :, s_ev] = inv[0, :, last]
+            inv[0, last, :] = 0.0
+            inv[0, :, last] = 0.0
+            GA[0, s_ev] = GA[0, last]
+            GA[0, last] = 0.0
+            order[0, s_ev] = order[0, last]
+            slot[order[0, s_ev]] = s_ev
+            order[0, last] = m
+            n_act -= 1
+            active[0, j] = False
+            sign[0, j] = 0.0
+        dA = np.zeros((1, K))
+        dA[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], sign[0][order])
+        a = np.einsum("bji,bj->bi", GA[:, :k], dA[:, :k])
+        d = np.zeros((1, m + 1))
+        d[0, order[0, :k]] = dA[0, :k]
+        d = d[:, :m]
+        below, above = c - cov, c + cov
+        up = below / (1.0 - a)
+        down = above / (1.0 + a)
+        zero = -beta / d
+        join = np.minimum(np.where(up > 0, up, np.inf), np.where(down > 0, down, np.inf))
+        tol = near if c > 1e3 * near else 0.0
+        tie = ((below <= tol) & (a < 1 - 1e-9)) | ((above <= tol) & (a > -1 + 1e-9))
+        join[tie] = 0.0
+        join[active] = np.inf
+        if barred >= 0:
+            back = down[0, barred] if barred_sign > 0 else up[0, barred]
+            join[0, barred] = back if back > 0 else np.inf
+        zero = np.where(active & ((zero > 0) | ((beta == 0) & (d * sign[:, :m] < 0))), zero, np.inf)
+        j_join, j_drop = int(join.argmin()), int(zero.argmin())
+        g_join, g_drop = join[0, j_join], zero[0, j_drop]
+        g_end = c - c_min
+        g_next = np.minimum(g_join, g_drop)
+        gamma = np.minimum(g_next, g_end)
+        stalled = stalled + 1 if gamma == 0 else 0
+        beta += gamma * d
+        cov -= gamma * a
+        c = c - gamma
+        ended = bool(g_end <= g_next)
+        if ended:
+            c = c_min
+        ended = ended or bool(c <= near)
+        dropping = not ended and bool(g_drop < g_join)
+        joining = not ended and not dropping
+        j = j_drop if dropping else j_join
+        if dropping:
+            beta[0, j] = 0.0
+        barred = j if dropping else -1
+        barred_sign = sign[0, j]
+        point = step
+        step += 1
+        if point >= cap:
+            levels = np.concatenate([levels, np.zeros_like(levels)], axis=1)
+            coefs = np.concatenate([coefs, np.zeros_like(coefs)], axis=1)
+            cap *= 2
+        levels[0, point] = c
+        coefs[0, point] = beta[0]
+        n_points[0] += 1
+        if step > 50 * m + 100 or stalled > 4 * m + 10:  # as in _homotopy: rejected by the check
+            levels[0, point] = np.nan
+            running = False
+        if max_size is not None:
+            running = running and n_act <= max_size
+        running = running and not ended and bool(np.isfinite(c)) and bool(np.isfinite(beta).all())
+        joining = joining and running
+        dropping = dropping and running
     return levels, coefs, n_points
 
 
