@@ -1313,8 +1313,8 @@ def _homotopy(
         # conditions to 1e-9 lambda).
         tol = np.where(c > 1e3 * near, near, 0.0)[:, None]
         tie = ((below <= tol) & (a < 1 - 1e-9)) | ((above <= tol) & (a > -1 + 1e-9))
-        join[tie] = 0.0
-        join[active] = np.inf
+        np.putmask(join, tie, 0.0)  # join[tie] = 0.0, faster
+        np.putmask(join, active, np.inf)
         hit = barred >= 0
         if hit.any():
             b = rows[hit]
