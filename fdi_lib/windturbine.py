@@ -1137,9 +1137,10 @@ def run_zhang2021(
     # each only over the window that the rule reads (flat_ranges: down to LASSO_RATIO lambda_max,
     # and to the end of the first interval with more than half the candidates). Beyond it, where
     # the rule reads nothing, the path nears the least-squares fit of a design of rank m - 1 (the
-    # torque sensor's and the converter's columns are dependent with the others): paths whose
-    # active set held both columns for a step (a singular Gram_AA) carry the error of the homotopy's
-    # updated inverse on, and failed the KKT check beyond the window only, to be recomputed one by one
+    # torque sensor's and the converter's columns are dependent with the others). The paths that
+    # failed the KKT check there (and only there), to be recomputed one by one, had all held both
+    # columns in their active set for a step: a singular Gram_AA, whose error the homotopy's
+    # updated inverse carries on.
     top = len(CANDIDATES) // 2
     for n in np.unique(k1 - r0):
         rows = np.flatnonzero(k1 - r0 == n)
