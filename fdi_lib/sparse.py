@@ -719,9 +719,10 @@ def kkt_residual(X: Any, y: Any, path: "LassoPath") -> float:
 
 def _split(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Dekker's split ``a = hi + lo`` into halves of 26 bits (so that ``hi * hi`` is exact)."""
-    c = 134217729.0 * a  # 2^27 + 1
-    hi = c - (c - a)
-    return hi, a - hi
+    hi = 134217729.0 * a  # 2^27 + 1
+    lo = hi - a
+    np.subtract(hi, lo, out=hi)  # hi = c - (c - a), c = (2^27 + 1) a
+    return hi, np.subtract(a, hi, out=lo)
 
 
 def _product_error(a: tuple[np.ndarray, np.ndarray], b: np.ndarray, p: np.ndarray) -> np.ndarray:
@@ -781,15 +782,40 @@ def _residual_blocks(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> Iterato
     for b0 in range(0, coefs.shape[0], block):
         c = coefs[b0 : b0 + block]
         Xb = X if X.shape[0] == 1 else X[b0 : b0 + block]
-        Xh, Xl = _split(Xb)
+        # the columns contiguous (m, rows) for the loop over them: elementwise, the same values
+        XT = np.ascontiguousarray(Xb.transpose(0, 2, 1))
+        XTh, XTl = _split(XT)
         yb = y if y.shape[0] == 1 else y[b0 : b0 + block]
         s = np.array(np.broadcast_to(yb, (c.shape[0], rows)))
         e = np.zeros_like(s)
+        # s, err = _two_sum(s, -p) and e += err - _product_error(...) for p = X_k theta_k, the same
+        # operations in the same order, into buffers kept across the columns (a new array of
+        # this size per operation costs more than the operation)
+        p, b, s2, z, err, u, v = (np.empty_like(s) for _ in range(7))
+        th, tl = _split(c)
         for k in range(m):
-            a, t = Xb[:, :, k], c[:, k, None]
-            p = a * t
-            s, err = _two_sum(s, -p)
-            e += err - _product_error((Xh[:, :, k], Xl[:, :, k]), t, p)
+            t, ah, al = c[:, k, None], XTh[:, k], XTl[:, k]
+            np.multiply(XT[:, k], t, out=p)
+            np.negative(p, out=b)
+            np.add(s, b, out=s2)  # _two_sum(s, b): s2 = fl(s + b), err = s + b - s2
+            np.subtract(s2, s, out=z)
+            np.subtract(s2, z, out=u)
+            np.subtract(s, u, out=u)
+            np.subtract(b, z, out=z)
+            np.add(u, z, out=err)
+            s, s2 = s2, s
+            bh, bl = th[:, k, None], tl[:, k, None]  # _product_error((ah, al), t, p)
+            np.multiply(ah, bh, out=u)
+            np.subtract(u, p, out=u)
+            np.multiply(ah, bl, out=v)
+            np.add(u, v, out=u)
+            np.multiply(al, bh, out=v)
+            np.add(u, v, out=u)
+            np.multiply(al, bl, out=v)
+            np.add(u, v, out=u)
+            np.subtract(err, u, out=err)
+            np.add(e, err, out=e)
+        Xh, Xl = XTh.transpose(0, 2, 1), XTl.transpose(0, 2, 1)
         yield slice(b0, b0 + c.shape[0]), Xb, (Xh, Xl), s, e
 
 
@@ -1168,6 +1194,8 @@ def _homotopy(
     breakpoints, and the number ``(B,)`` of breakpoints of each problem (the tails are padding).
     """
     B, m = Xy.shape
+    if B == 1:  # one problem (lasso_path): the same operations, with scalar bookkeeping
+        return _homotopy_one(Gram, Xy, c_min, max_size)
     K = m if max_size is None else min(m, max_size + 1)  # most components active at once
     rows = np.arange(B)
     beta = np.zeros((B, m))
@@ -1200,7 +1228,7 @@ def _homotopy(
     stalled = np.zeros(B, int)  # zero-length steps in a row
     outer_buf = np.empty(B * K * K)  # the rank-one change of inv (below)
     while running.any():
-        if running.sum() <= rows.size // 2 and rows.size >= 16:  # drop finished problems
+        if rows.size >= 16 and running.sum() <= 3 * rows.size // 4:  # drop finished problems
             keep = running
             Gram, c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j, near = (
                 x[keep]
@@ -1238,10 +1266,7 @@ def _homotopy(
         u[rows[joining], s_ev[joining]] = -1.0  # w: the new column of inv is -w / schur
         col = inv[rows, :k, s_ev]
         z = np.where(joining[:, None], u[:, :k], col)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            f = np.where(
-                joining, 1.0 / schur, np.where(dropping, -1.0 / inv[rows, s_ev, s_ev], 0.0)
-            )
+        f = np.where(joining, 1.0 / schur, np.where(dropping, -1.0 / inv[rows, s_ev, s_ev], 0.0))
         # the outer product in a buffer kept across steps: a new (B, k, k) array at each step
         # (megabytes) is mapped and faulted in anew by the allocator (same products, same sums)
         outer = outer_buf[: rows.size * k * k].reshape(rows.size, k, k)
@@ -1266,8 +1291,7 @@ def _homotopy(
             slot[b, order[b, sd]] = sd
             order[b, last] = m
             n_act[b] -= 1
-        active[rows, j] |= joining
-        active[rows, j] &= ~dropping
+        active[rows, j] = (active[rows, j] | joining) & ~dropping
         sign[rows, j] = np.where(
             joining, np.sign(cov[rows, j]), np.where(dropping, 0.0, sign[rows, j])
         )
@@ -1277,10 +1301,10 @@ def _homotopy(
         d = np.zeros((rows.size, m + 1))
         d[rows[:, None], order[:, :k]] = dA[:, :k]  # unused slots write into column m, dropped
         d = d[:, :m]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            up = (c[:, None] - cov) / (1.0 - a)
-            down = (c[:, None] + cov) / (1.0 + a)
-            zero = -beta / d
+        below, above = c[:, None] - cov, c[:, None] + cov  # the level's gaps to +-cov
+        up = below / (1.0 - a)
+        down = above / (1.0 + a)
+        zero = -beta / d
         join = np.minimum(np.where(up > 0, up, np.inf), np.where(down > 0, down, np.inf))
         # A correlation at the level (a tie, e.g. at lambda_max; to rounding, `near`, while the level
         # is well above it) that would overtake it joins at once (gamma = 0); one that moves away
@@ -1288,27 +1312,27 @@ def _homotopy(
         # ones, e.g. a duplicate: joining would make Gram_AA singular, and staying out keeps the KKT
         # conditions to 1e-9 lambda).
         tol = np.where(c > 1e3 * near, near, 0.0)[:, None]
-        tie = ((c[:, None] - cov <= tol) & (a < 1 - 1e-9)) | (
-            (c[:, None] + cov <= tol) & (a > -1 + 1e-9)
-        )
-        join[tie] = 0.0
-        join[active] = np.inf
+        tie = ((below <= tol) & (a < 1 - 1e-9)) | ((above <= tol) & (a > -1 + 1e-9))
+        np.putmask(join, tie, 0.0)  # join[tie] = 0.0, faster
+        np.putmask(join, active, np.inf)
         hit = barred >= 0
-        b = rows[hit]
-        join[b, barred[b]] = np.where(barred_sign[b] > 0, down[b, barred[b]], up[b, barred[b]])
-        join[b, barred[b]] = np.where(join[b, barred[b]] > 0, join[b, barred[b]], np.inf)
+        if hit.any():
+            b = rows[hit]
+            back = np.where(barred_sign[b] > 0, down[b, barred[b]], up[b, barred[b]])
+            join[b, barred[b]] = np.where(back > 0, back, np.inf)
         # a component that joined in a tie (beta_j = 0) but whose direction opposes its sign leaves
         # at once (gamma = 0): it cannot stay active (its coefficient would take the wrong sign)
         zero = np.where(active & ((zero > 0) | ((beta == 0) & (d * sign[:, :m] < 0))), zero, np.inf)
         j_join, j_drop = join.argmin(axis=1), zero.argmin(axis=1)
         g_join, g_drop = join[rows, j_join], zero[rows, j_drop]
         g_end = c - c_min
-        gamma = np.where(running, np.minimum(np.minimum(g_join, g_drop), g_end), 0.0)
+        g_next = np.minimum(g_join, g_drop)
+        gamma = np.where(running, np.minimum(g_next, g_end), 0.0)
         stalled = np.where(gamma == 0, stalled + 1, 0)
         beta += gamma[:, None] * d
         cov -= gamma[:, None] * a
         c = c - gamma
-        ended = running & (g_end <= np.minimum(g_join, g_drop))
+        ended = running & (g_end <= g_next)
         c[ended] = c_min[ended]
         ended |= running & (c <= near)  # an exact fit: below, only rounding is left to follow
         dropping = running & ~ended & (g_drop < g_join)
@@ -1341,12 +1365,143 @@ def _homotopy(
             levels[ids[cycling], point] = np.nan
             running &= ~cycling
         if max_size is not None:  # the interval just followed had more than max_size components
-            running &= active.sum(axis=1) <= max_size
+            running &= n_act <= max_size  # n_act: the active components, active.sum(axis=1)
         running &= (
             ~ended & np.isfinite(c) & np.isfinite(beta).all(axis=1)
         )  # the KKT check rejects it
         joining &= running
         dropping &= running
+    return levels, coefs, n_points
+
+
+def _homotopy_one(
+    Gram: np.ndarray, Xy: np.ndarray, c_min: np.ndarray, max_size: int | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_homotopy` for a batch of one problem (``lasso_path``), bit for bit the same.
+
+    The same floating-point operations in the same order on the same shapes where the order of a
+    sum depends on them (the ``einsum`` calls, on ``(1, ...)`` arrays); only the bookkeeping
+    (event, slots, flags, step lengths) is done on scalars instead of ``(B,)`` arrays: a step of
+    one problem is dominated by the number of numpy calls, not by their size. Scalars stay
+    ``numpy.float64`` (a division by zero or a NaN behaves as in the arrays).
+    """
+    m = Xy.shape[1]
+    K = m if max_size is None else min(m, max_size + 1)
+    beta = np.zeros((1, m))
+    cov = Xy.copy()
+    sign = np.zeros((1, m + 1))
+    active = np.zeros((1, m), bool)
+    order = np.full((1, K), m)
+    slot = np.zeros(m, int)
+    n_act = 0
+    inv = np.zeros((1, K, K))
+    GA = np.zeros((1, K, m))
+    j = int(np.abs(cov).argmax(axis=1)[0])
+    c = np.abs(cov[0, j])
+    near = 1e-12 * c
+    c_min = c_min[0]
+    cap = 2 * m + 4
+    levels, coefs = np.zeros((1, cap)), np.zeros((1, cap, m))
+    levels[0, 0] = c
+    n_points = np.ones(1, int)
+    step = 1
+    running = bool(c > c_min)
+    joining, dropping = running, False
+    barred, barred_sign = -1, 0.0
+    stalled = 0
+    outer_buf = np.empty(K * K)
+    while running:
+        s_ev = n_act if joining else int(slot[j])
+        k = min(K, n_act + int(joining))
+        g = GA[:, :, j].copy()  # (1, K), C-contiguous as GA[rows, :, j]
+        u = np.zeros((1, K))
+        u[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], g)
+        schur = Gram[0, j, j] - np.einsum("bi,bi->b", g, u)[0]
+        if joining:
+            u[0, s_ev] = -1.0
+            z, f = u[:, :k], 1.0 / schur
+        else:
+            z, f = inv[:, :k, s_ev], -1.0 / inv[0, s_ev, s_ev]
+        outer = outer_buf[: k * k].reshape(1, k, k)
+        np.multiply((z * f)[:, :, None], z[:, None, :], out=outer)
+        inv[:, :k, :k] += outer
+        if joining:
+            GA[0, s_ev] = Gram[0, j]
+            order[0, s_ev] = j
+            slot[j] = s_ev
+            n_act += 1
+            active[0, j] = True
+            sign[0, j] = np.sign(cov[0, j])
+        else:
+            last = n_act - 1
+            inv[0, s_ev, :] = inv[0, last, :]
+            inv[0, :, s_ev] = inv[0, :, last]
+            inv[0, last, :] = 0.0
+            inv[0, :, last] = 0.0
+            GA[0, s_ev] = GA[0, last]
+            GA[0, last] = 0.0
+            order[0, s_ev] = order[0, last]
+            slot[order[0, s_ev]] = s_ev
+            order[0, last] = m
+            n_act -= 1
+            active[0, j] = False
+            sign[0, j] = 0.0
+        dA = np.zeros((1, K))
+        dA[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], sign[0][order])
+        a = np.einsum("bji,bj->bi", GA[:, :k], dA[:, :k])
+        d = np.zeros((1, m + 1))
+        d[0, order[0, :k]] = dA[0, :k]
+        d = d[:, :m]
+        below, above = c - cov, c + cov
+        up = below / (1.0 - a)
+        down = above / (1.0 + a)
+        zero = -beta / d
+        join = np.minimum(np.where(up > 0, up, np.inf), np.where(down > 0, down, np.inf))
+        tol = near if c > 1e3 * near else 0.0
+        tie = ((below <= tol) & (a < 1 - 1e-9)) | ((above <= tol) & (a > -1 + 1e-9))
+        join[tie] = 0.0
+        join[active] = np.inf
+        if barred >= 0:
+            back = down[0, barred] if barred_sign > 0 else up[0, barred]
+            join[0, barred] = back if back > 0 else np.inf
+        zero = np.where(active & ((zero > 0) | ((beta == 0) & (d * sign[:, :m] < 0))), zero, np.inf)
+        j_join, j_drop = int(join.argmin()), int(zero.argmin())
+        g_join, g_drop = join[0, j_join], zero[0, j_drop]
+        g_end = c - c_min
+        g_next = np.minimum(g_join, g_drop)
+        gamma = np.minimum(g_next, g_end)
+        stalled = stalled + 1 if gamma == 0 else 0
+        beta += gamma * d
+        cov -= gamma * a
+        c = c - gamma
+        ended = bool(g_end <= g_next)
+        if ended:
+            c = c_min
+        ended = ended or bool(c <= near)
+        dropping = not ended and bool(g_drop < g_join)
+        joining = not ended and not dropping
+        j = j_drop if dropping else j_join
+        if dropping:
+            beta[0, j] = 0.0
+        barred = j if dropping else -1
+        barred_sign = sign[0, j]
+        point = step
+        step += 1
+        if point >= cap:
+            levels = np.concatenate([levels, np.zeros_like(levels)], axis=1)
+            coefs = np.concatenate([coefs, np.zeros_like(coefs)], axis=1)
+            cap *= 2
+        levels[0, point] = c
+        coefs[0, point] = beta[0]
+        n_points[0] += 1
+        if step > 50 * m + 100 or stalled > 4 * m + 10:  # as in _homotopy: rejected by the check
+            levels[0, point] = np.nan
+            running = False
+        if max_size is not None:
+            running = running and n_act <= max_size
+        running = running and not ended and bool(np.isfinite(c)) and bool(np.isfinite(beta).all())
+        joining = joining and running
+        dropping = dropping and running
     return levels, coefs, n_points
 
 

@@ -141,6 +141,10 @@ CANDIDATE_LABELS = {
     "converter": "converter",
     "drive_train": "drive train",
 }
+#: Lower end of the ``lambda`` window of Zhang 2021's rule in :func:`run_zhang2021` (a fraction of
+#: ``lambda_max``: the default of :func:`fdi_lib.sparse.flat_ranges`), down to which the Lasso paths
+#: are followed.
+LASSO_RATIO = 1e-4
 #: Subsystems: name -> (state count, output indices, input indices, candidate indices).
 SUBSYSTEMS = {
     "blade1": ((0, 1), (0,), (0, 1, 11)),
@@ -1132,7 +1136,15 @@ def run_zhang2021(
     r0 = np.maximum(d.warmup, detect[hit] - w + 1)
     k1 = np.minimum(d.N, detect[hit] + d.settings.isolation_extra + 1)
     # the regression's design depends on its length only: the records of one length share it and
-    # their Lasso paths are followed as one batch (each path the same as alone, lasso_path_batch)
+    # their Lasso paths are followed as one batch (each path the same as alone, lasso_path_batch),
+    # each only over the window that the rule reads (flat_ranges: down to LASSO_RATIO lambda_max,
+    # and to the end of the first interval with more than half the candidates). Beyond it, where
+    # the rule reads nothing, the path nears the least-squares fit of a design of rank m - 1 (the
+    # torque sensor's and the converter's columns are dependent with the others). The paths that
+    # failed the KKT check there (and only there), to be recomputed one by one, had all held both
+    # columns in their active set for a step: a singular Gram_AA, whose error the homotopy's
+    # updated inverse carries on.
+    top = len(CANDIDATES) // 2
     for n in np.unique(k1 - r0):
         rows = np.flatnonzero(k1 - r0 == n)
         lags = np.arange(n)
@@ -1147,7 +1159,8 @@ def run_zhang2021(
         X, yy = np.vstack(Xs), np.concatenate(ys, axis=1)
         scale = np.linalg.norm(X, axis=0)
         Xn = np.broadcast_to(X / scale, (len(rows), *X.shape))
-        flat = flat_ranges(lasso_path_batch(Xn, yy, n_samples=int(n)))
+        paths = lasso_path_batch(Xn, yy, n_samples=int(n), lambda_min=LASSO_RATIO, max_size=top)
+        flat = flat_ranges(paths, lambda_ratio=LASSO_RATIO, max_size=top)
         isolated[hit[rows]] = flat.support
         step[hit[rows]] = k1[rows] - 1
     return MethodOutcome(fa, detect, which, isolated, step, peak)

@@ -402,3 +402,51 @@ def test_fallback_refuses_a_problem_it_cannot_scale():
 
     with pytest.raises(NumericalError, match="too far from 1 for scikit-learn's lars_path"):
         _lars_fallback(np.array([[1.0]]), np.array([1e-310]), 0.0, None, 0, 1.0)
+
+
+def test_one_problem_homotopy_is_the_batched_one_bit_for_bit():
+    """``lasso_path`` follows one problem with scalar bookkeeping (``_homotopy_one``), the batch with
+    arrays (``_homotopy``): on random designs with ties, duplicated, scaled, zero and dependent
+    columns, exact fits and both stopping rules, the breakpoints and coefficients are the same bits,
+    including the rare branches (a path ended by a NaN, a path longer than the first buffer)."""
+    from fdi_lib.sparse import _homotopy, _homotopy_one
+
+    rng = np.random.default_rng(1)
+    nan = long = 0
+    for t in range(240):
+        rows, m = rng.integers(3, 40), rng.integers(2, 20)
+        X = rng.standard_normal((rows, m))
+        kind = t % 8
+        if kind == 1 and m > 2:
+            X[:, 1] = X[:, 0]
+        if kind == 2 and m > 2:
+            X[:, 2] = -3 * X[:, 0]
+        if kind == 3:
+            X[:, -1] = 0.0
+        if kind == 4:
+            X = np.round(X)
+        if kind == 5 and m > 3:
+            X[:, 3] = X[:, 0] + X[:, 1]
+        if kind == 6:
+            X = np.sign(X)
+        theta = rng.standard_normal(m) * (rng.random(m) < 0.4)
+        y = X @ theta + (0.0 if kind == 7 else 0.1 * rng.standard_normal(rows))
+        if kind == 4:
+            y = np.round(y)
+        if kind == 6:
+            y = np.sign(rng.standard_normal(rows))
+        G, Xy = (X.T @ X)[None], (X.T @ y)[None]
+        for ratio, max_size in ((0.0, None), (1e-3, None), (0.0, max(1, m // 3))):
+            c_min = np.array([ratio * np.abs(Xy).max()])
+            with np.errstate(all="ignore"):
+                lev, co, k = _homotopy_one(G, Xy, c_min, max_size)
+                lev2, co2, k2 = _homotopy(
+                    np.concatenate([G, G]), np.concatenate([Xy, Xy]), np.repeat(c_min, 2), max_size
+                )
+            n = int(k[0])
+            assert n == k2[0]
+            np.testing.assert_array_equal(lev[0, :n], lev2[0, :n])
+            np.testing.assert_array_equal(co[0, :n], co2[0, :n])
+            nan += bool(np.isnan(lev[0, :n]).any())
+            long += n > 2 * m + 4
+    assert nan > 0 and long > 0  # the rare branches were compared
