@@ -226,6 +226,41 @@ def test_glr_widget_equals_unstable_run():
         plt.close(fig)
 
 
+def test_glr_widget_caches_give_the_uncached_computation_exactly():
+    # the noise innovation is cached per seed (it does not depend on the onset) and the windowed
+    # GLR's noise-independent arrays per window: the same bits as computing them for the move
+    from fdi_lib.filters import kalman_filter
+    from fdi_lib.models import impulse_family
+    from fdi_lib.simulate import simulate
+    from fdi_lib.systems import zb2014_unstable as ex
+
+    model, gains = zb2014._unstable_setup()
+    fam = impulse_family(model)
+    for onset, seed, window in [(10, 0, 100), (201, 1, 25), (490, 0, 200)]:
+        sim = simulate(
+            model,
+            rng=np.random.default_rng(seed),
+            controller=ex.controller(),
+            fault=fam.profile(onset),
+            theta=np.zeros(fam.m),
+        )
+        eps = kalman_filter(model, sim.y, sim.u, gains=gains).innovations[:, 0]
+        _, eps_noise, eps_fault = zb2014._glr_record(onset, seed)
+        np.testing.assert_array_equal(eps_noise, eps)
+        records = np.stack([eps + eps_fault[:, 0] * size for size in (1.5, 0.0)])[..., None]
+        alone = glr_window(records, model, gains, fam, window=window)
+        cached = glr_window(
+            records,
+            model,
+            gains,
+            zb2014._impulse_family(),
+            window=window,
+            shared=zb2014._shared_glr(window),
+        )
+        for f in ("statistic", "onset", "theta_hat", "C_hat", "d_hat"):
+            np.testing.assert_array_equal(getattr(cached, f), getattr(alone, f))
+
+
 def test_pipeline_widget_equals_single_run():
     for size, fault, window, seed, threshold in [
         (-2.0, 1, 160, 0, 50.0),
