@@ -89,6 +89,7 @@ MOVES = {
     "sparse q": (zhang2021.explore_sparse, "q", (6, 1, 25)),
     "bz lambda": (bz.explore_bz, "lam", (0.9, 0.8, 1.0)),
     "bz fault size": (bz.explore_bz, "f_size", (0.0, 0.5)),
+    "bz drift speed": (bz.explore_bz, "delta", (1e-3, 3e-4, 0.0, 2e-3)),
 }
 
 
@@ -118,6 +119,20 @@ def test_moves_that_keep_the_limits_draw_no_axes(draws):
     fig = zb2014.explore_glr(fault_size=2.0, fig=fig)  # l_k's limit 300 -> 500: that axes alone
     render(fig)
     assert draws == {"full": 1, "axes": 1}
+    plt.close(fig)
+
+
+def test_new_tick_labels_wider_than_before_are_drawn_with_their_axes_alone(draws):
+    # the drift speed 3e-4 -> 1e-3 changes the limits of two panels of three (theta_k 0.1 ->
+    # 0.3, l_k 100 -> 1000: wider tick labels): those two are drawn again, inside the regions
+    # grown into the blank space around them, and the pixels equal a full draw
+    fig = bz.explore_bz()
+    render(fig)
+    fig = bz.explore_bz(delta=1e-3, fig=fig)
+    assert [ax.stale for ax in fig.axes] == [True, False, True]
+    render(fig)
+    assert draws == {"full": 1, "axes": 2}
+    np.testing.assert_array_equal(np.array(fig.canvas.buffer_rgba()), full_draw(fig))
     plt.close(fig)
 
 
