@@ -146,6 +146,9 @@ def render(fig: Any) -> None:
             full = not _redraw_axes(fig, renderer, stale, saved[2])
             if not full:
                 setattr(fig, _BACKGROUND, (state, canvas.copy_from_bbox(fig.bbox), saved[2]))
+                # the stale axes marked the figure stale: it is now drawn (otherwise the next
+                # render would draw it in full, see `fig.stale and not stale`)
+                fig.stale = False
     if full:
         setattr(fig, _RENDERING, True)
         try:

@@ -119,6 +119,11 @@ def test_moves_that_keep_the_limits_draw_no_axes(draws):
     fig = zb2014.explore_glr(fault_size=2.0, fig=fig)  # l_k's limit 300 -> 500: that axes alone
     render(fig)
     assert draws == {"full": 1, "axes": 1}
+    # the next move within the limits: nothing is drawn again
+    fig = zb2014.explore_glr(fault_size=2.0, threshold=25.0, fig=fig)
+    render(fig)
+    assert draws == {"full": 1, "axes": 1}
+    np.testing.assert_array_equal(np.array(fig.canvas.buffer_rgba()), full_draw(fig))
     plt.close(fig)
 
 
