@@ -114,11 +114,12 @@ def render(fig: Any) -> None:
     For a figure whose callback kept its artists (:func:`keep_artists`), the first call draws
     everything but the dynamic artists and saves that picture (axes, grid, ticks, labels:
     most of the cost of a draw is their text); later calls restore it and draw only the
-    dynamic artists. A change of a static artist or of the limits marks its axes stale: only
-    the stale axes are then drawn again, over their own part of the saved picture (the parts
-    of different axes do not overlap; otherwise, or after a change of size or resolution,
-    everything is drawn again). Any other figure is drawn in full. The tests compare the
-    pixels with a full draw.
+    dynamic artists. A change of a static artist or of the limits marks its axes stale: unless
+    every axes is stale, only the stale axes are then drawn again, over their own region of the
+    saved picture (regions that do not overlap, each grown into the blank space around its axes
+    for new tick labels; otherwise, or after a change of size or resolution, everything is
+    drawn again). Any other figure is drawn in full. The tests compare the pixels with a full
+    draw.
     """
     canvas = fig.canvas
     if not hasattr(canvas, "copy_from_bbox"):  # e.g. a figure closed by pyplot has no Agg canvas
@@ -218,10 +219,12 @@ def _grown(box: tuple[int, int, int, int], boxes: Any, width: int, height: int) 
 def _static_box(ax: Any, renderer: Any) -> tuple[int, int, int, int]:
     """Pixel box ``(x0, y0, x1, y1)`` (display coordinates) of what ``ax`` draws statically: its
     frame with the tick marks outside it, the tick labels in view, the axis labels and offsets,
-    and its texts (titles included) and legends that are not animated (cheaper than
-    ``get_tightbbox``, which also lays out every minor tick). Its other artists are clipped to
-    the frame."""
+    its texts (titles included) and legends that are not animated, and its static lines and
+    patches that are not clipped to the frame (cheaper than ``get_tightbbox``, which also lays
+    out every minor tick). Its other artists are clipped to the frame."""
     from matplotlib.legend import Legend
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
     from matplotlib.text import Text
     from matplotlib.transforms import Bbox
 
@@ -261,6 +264,15 @@ def _static_box(ax: Any, renderer: Any) -> tuple[int, int, int, int]:
         and a.get_visible()
         and not a.get_animated()
         and (isinstance(a, Legend) or a.get_text())
+    ]
+    boxes += [
+        a.get_window_extent(renderer)
+        for a in ax.get_children()
+        if isinstance(a, (Line2D, Patch))
+        and a is not ax.patch
+        and not a.get_clip_on()
+        and a.get_visible()
+        and not a.get_animated()
     ]
     box = Bbox.union([Bbox([[x0, y0], [x1, y1]]), *boxes])
     return int(np.floor(box.x0)), int(np.floor(box.y0)), int(np.ceil(box.x1)), int(np.ceil(box.y1))

@@ -141,6 +141,31 @@ def test_new_tick_labels_wider_than_before_are_drawn_with_their_axes_alone(draws
     plt.close(fig)
 
 
+def test_a_static_line_outside_its_frame_keeps_the_next_region_away(draws):
+    # the lower axes draws an unclipped static line up into the gap between the panels: the
+    # region of the upper axes, grown towards it, must stop short of it
+    def callback(a, fig=None):
+        art = reusable_artists(fig, "toy")
+        if art is None:
+            fig, axes = figure(2, 1, fig=fig, figsize=(6.0, 4.0))
+            top, bottom = axes[:, 0]
+            bottom.plot([0.5, 0.5], [0.0, 1.3], transform=bottom.transAxes, clip_on=False, lw=3)
+            bottom.set_ylim(0, 1)
+            art = {"line": top.plot([0, 1], [a, a])[0], "top": top}
+            keep_artists(fig, "toy", art)
+        art["line"].set_ydata([a, a])
+        fr.set_limits(art["top"], ylim=(0.0, fr.stepped_limit(a)))
+        return fig
+
+    fig = callback(0.9)
+    render(fig)
+    fig = callback(2.5, fig=fig)  # new limits of the upper axes: that axes alone
+    render(fig)
+    assert draws == {"full": 1, "axes": 1}
+    np.testing.assert_array_equal(np.array(fig.canvas.buffer_rgba()), full_draw(fig))
+    plt.close(fig)
+
+
 def test_a_changed_static_artist_is_drawn_and_other_figures_are_drawn_in_full(draws):
     fig = zb2014.explore_signature()
     render(fig)
