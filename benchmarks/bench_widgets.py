@@ -64,6 +64,8 @@ REPEATS = 5
 CACHE_CLEARS = (
     zb2014._GLR_CACHE.clear,
     zb2014._glr_record.cache_clear,
+    zb2014._noise_innovations.cache_clear,
+    zb2014._shared_glr.cache_clear,
     zb2014_pipeline._GLR_CACHE.clear,
     zb2014_pipeline._noise_innovations.cache_clear,
     zhang2021._trial_path.cache_clear,

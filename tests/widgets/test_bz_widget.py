@@ -41,28 +41,34 @@ def test_bad_values():
 
 
 def test_cached_rls_gains_give_solution2_exactly():
+    # bz_run runs solution 2 step by step with the record's innovation, the regressor and the
+    # RLS gains cached: the same result as solution2 on the record
     from fdi_lib.nonparametric import solution2
     from fdi_lib.reproduce.bz import SOL2, setup
     from fdi_lib.systems import bz_example as ex
     from fdi_lib.widgets.bz import _record
 
-    run = bz_run(0.9, 3e-4, 0.2)
     model, kal = setup(SOL2["n_steps"])[:2]
-    sim = _record(3e-4, 0.2, 0)[2]
-    alone = solution2(
-        model,
-        sim.y,
-        sim.u,
-        Psi=ex.PSI,
-        lam=0.9,
-        energy_window=SOL2["energy_window"],
-        energy_alpha=SOL2["energy_alpha"],
-        start=SOL2["warmup"],
-        kalman=kal,
-    )
-    np.testing.assert_array_equal(run.sol2.rls.theta_hat, alone.rls.theta_hat)
-    np.testing.assert_array_equal(run.sol2.energy, alone.energy)
-    assert run.sol2.energy_alarm == alone.energy_alarm
+    for lam, delta, f_size, seed in [(0.9, 3e-4, 0.2, 0), (1.0, 1e-3, 0.0, 1), (0.8, 0.0, 0.5, 0)]:
+        run = bz_run(lam, delta, f_size, seed=seed)
+        sim = _record(delta, f_size, seed)[2]
+        alone = solution2(
+            model,
+            sim.y,
+            sim.u,
+            Psi=ex.PSI,
+            lam=lam,
+            energy_window=SOL2["energy_window"],
+            energy_alpha=SOL2["energy_alpha"],
+            start=SOL2["warmup"],
+            kalman=kal,
+        )
+        for field in ("theta_hat", "errors", "prior_errors"):
+            np.testing.assert_array_equal(getattr(run.sol2.rls, field), getattr(alone.rls, field))
+        np.testing.assert_array_equal(run.sol2.regressor, alone.regressor)
+        np.testing.assert_array_equal(run.sol2.energy, alone.energy)
+        assert run.sol2.energy_alarm == alone.energy_alarm
+        assert run.sol2.energy_threshold == alone.energy_threshold
     with pytest.raises(
         ModelError, match="rls: expected RLS gains for lam = 0.8, got gains for lam = 0.9"
     ):
@@ -75,5 +81,5 @@ def test_cached_rls_gains_give_solution2_exactly():
             energy_window=SOL2["energy_window"],
             energy_alpha=SOL2["energy_alpha"],
             kalman=kal,
-            rls=run.sol2.rls.gains,
+            rls=bz_run(0.9, 3e-4, 0.2).sol2.rls.gains,
         )

@@ -89,6 +89,7 @@ MOVES = {
     "sparse q": (zhang2021.explore_sparse, "q", (6, 1, 25)),
     "bz lambda": (bz.explore_bz, "lam", (0.9, 0.8, 1.0)),
     "bz fault size": (bz.explore_bz, "f_size", (0.0, 0.5)),
+    "bz drift speed": (bz.explore_bz, "delta", (1e-3, 3e-4, 0.0, 2e-3)),
 }
 
 
@@ -118,6 +119,50 @@ def test_moves_that_keep_the_limits_draw_no_axes(draws):
     fig = zb2014.explore_glr(fault_size=2.0, fig=fig)  # l_k's limit 300 -> 500: that axes alone
     render(fig)
     assert draws == {"full": 1, "axes": 1}
+    # the next move within the limits: nothing is drawn again
+    fig = zb2014.explore_glr(fault_size=2.0, threshold=25.0, fig=fig)
+    render(fig)
+    assert draws == {"full": 1, "axes": 1}
+    np.testing.assert_array_equal(np.array(fig.canvas.buffer_rgba()), full_draw(fig))
+    plt.close(fig)
+
+
+def test_new_tick_labels_wider_than_before_are_drawn_with_their_axes_alone(draws):
+    # the drift speed 3e-4 -> 1e-3 changes the limits of two panels of three (theta_k 0.1 ->
+    # 0.3, l_k 100 -> 1000: wider tick labels): those two are drawn again, inside the regions
+    # grown into the blank space around them, and the pixels equal a full draw
+    fig = bz.explore_bz()
+    render(fig)
+    fig = bz.explore_bz(delta=1e-3, fig=fig)
+    assert [ax.stale for ax in fig.axes] == [True, False, True]
+    render(fig)
+    assert draws == {"full": 1, "axes": 2}
+    np.testing.assert_array_equal(np.array(fig.canvas.buffer_rgba()), full_draw(fig))
+    plt.close(fig)
+
+
+def test_a_static_line_outside_its_frame_keeps_the_next_region_away(draws):
+    # the lower axes draws an unclipped static line up into the gap between the panels: the
+    # region of the upper axes, grown towards it, must stop short of it
+    def callback(a, fig=None):
+        art = reusable_artists(fig, "toy")
+        if art is None:
+            fig, axes = figure(2, 1, fig=fig, figsize=(6.0, 4.0))
+            top, bottom = axes[:, 0]
+            bottom.plot([0.5, 0.5], [0.0, 1.3], transform=bottom.transAxes, clip_on=False, lw=3)
+            bottom.set_ylim(0, 1)
+            art = {"line": top.plot([0, 1], [a, a])[0], "top": top}
+            keep_artists(fig, "toy", art)
+        art["line"].set_ydata([a, a])
+        fr.set_limits(art["top"], ylim=(0.0, fr.stepped_limit(a)))
+        return fig
+
+    fig = callback(0.9)
+    render(fig)
+    fig = callback(2.5, fig=fig)  # new limits of the upper axes: that axes alone
+    render(fig)
+    assert draws == {"full": 1, "axes": 1}
+    np.testing.assert_array_equal(np.array(fig.canvas.buffer_rgba()), full_draw(fig))
     plt.close(fig)
 
 
@@ -224,6 +269,41 @@ def test_glr_widget_equals_unstable_run():
         expected = "no alarm" if run.alarm < 0 else f"alarm after {run.alarm - onset} samples"
         assert top.get_title().endswith(expected)
         plt.close(fig)
+
+
+def test_glr_widget_caches_give_the_uncached_computation_exactly():
+    # the noise innovation is cached per seed (it does not depend on the onset) and the windowed
+    # GLR's noise-independent arrays per window: the same bits as computing them for the move
+    from fdi_lib.filters import kalman_filter
+    from fdi_lib.models import impulse_family
+    from fdi_lib.simulate import simulate
+    from fdi_lib.systems import zb2014_unstable as ex
+
+    model, gains = zb2014._unstable_setup()
+    fam = impulse_family(model)
+    for onset, seed, window in [(10, 0, 100), (201, 1, 25), (490, 0, 200)]:
+        sim = simulate(
+            model,
+            rng=np.random.default_rng(seed),
+            controller=ex.controller(),
+            fault=fam.profile(onset),
+            theta=np.zeros(fam.m),
+        )
+        eps = kalman_filter(model, sim.y, sim.u, gains=gains).innovations[:, 0]
+        _, eps_noise, eps_fault = zb2014._glr_record(onset, seed)
+        np.testing.assert_array_equal(eps_noise, eps)
+        records = np.stack([eps + eps_fault[:, 0] * size for size in (1.5, 0.0)])[..., None]
+        alone = glr_window(records, model, gains, fam, window=window)
+        cached = glr_window(
+            records,
+            model,
+            gains,
+            zb2014._impulse_family(),
+            window=window,
+            shared=zb2014._shared_glr(window),
+        )
+        for f in ("statistic", "onset", "theta_hat", "C_hat", "d_hat"):
+            np.testing.assert_array_equal(getattr(cached, f), getattr(alone, f))
 
 
 def test_pipeline_widget_equals_single_run():
