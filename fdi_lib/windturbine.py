@@ -109,6 +109,7 @@ __all__ = [
     "delays",
     "stream_alarms",
     "stream_counts",
+    "WINDOW_KINDS",
 ]
 
 #: Measured outputs, in the order of :attr:`Records.y` (pitch in deg, speeds in rad/s, torque in kNm).
@@ -1285,6 +1286,11 @@ def _method_keys(methods: Sequence[str] | None) -> tuple[str, ...]:
     return methods
 
 
+#: The kinds of window of :func:`stream_counts`'s split by operating region: its scored part switches
+#: between the controller's regions, stays in full load, or stays in partial load.
+WINDOW_KINDS = ("switch", "full_load", "partial_load")
+
+
 def stream_counts(
     d: Design,
     y: np.ndarray,
@@ -1332,10 +1338,9 @@ def stream_counts(
                 f"region: expected ({y.shape[0]},) of 1 (partial load) or 2 (full load), got "
                 f"shape {region.shape}"
             )
-    kinds = ("switch", "full_load", "partial_load")
     total: dict[str, Any] = {name: 0 for name in methods}
-    split = {name: dict.fromkeys(kinds, 0) for name in methods}
-    windows = dict.fromkeys(kinds, 0)
+    split = {name: dict.fromkeys(WINDOW_KINDS, 0) for name in methods}
+    windows = dict.fromkeys(WINDOW_KINDS, 0)
     tests: dict[str, int] = {}
     for b0 in range(0, n_windows, batch):
         idx = (np.arange(b0, min(b0 + batch, n_windows)) * step)[:, None] + np.arange(d.N)
@@ -1344,12 +1349,12 @@ def stream_counts(
         if region is not None:
             r = region[idx[:, start:]]
             kind = np.where((r != r[:, :1]).any(axis=1), 0, np.where(r[:, 0] == 2, 1, 2))
-            for k, key in enumerate(kinds):
+            for k, key in enumerate(WINDOW_KINDS):
                 windows[key] += int((kind == k).sum())
         for name, c in counts.items():
             total[name] += int(c.sum())
             if region is not None:
-                for k, key in enumerate(kinds):
+                for k, key in enumerate(WINDOW_KINDS):
                     split[name][key] += int(c[kind == k].sum())
     out = {**total, "tests": tests, "samples": n_windows * step}
     return out if region is None else {**out, "by_region": split, "windows": windows}

@@ -31,7 +31,6 @@ __all__ = [
     "false_alarms",
     "FALSE_ALARM_STREAMS",
     "BOOK_STREAMS",
-    "WINDOW_KINDS",
     "SECONDS_PER_STREAM",
     "stream_chunk",
     "stream_design",
@@ -78,7 +77,7 @@ def stream_chunk(seeds: list, *, seed: int) -> dict[str, np.ndarray]:
 
     d, start = stream_design(seed)
     n, M = len(seeds), len(W.METHODS)
-    K = len(WINDOW_KINDS)
+    K = len(W.WINDOW_KINDS)
     out = {
         "alarms": np.zeros((n, M), dtype=np.int64),
         "tests": np.zeros((n, M), dtype=np.int64),
@@ -95,14 +94,11 @@ def stream_chunk(seeds: list, *, seed: int) -> dict[str, np.ndarray]:
         out["tests"][i] = [counts["tests"][m] for m in W.METHODS]
         out["samples"][i] = counts["samples"]
         out["alarms_by_region"][i] = [
-            [counts["by_region"][m][k] for k in WINDOW_KINDS] for m in W.METHODS
+            [counts["by_region"][m][k] for k in W.WINDOW_KINDS] for m in W.METHODS
         ]
-        out["windows_by_region"][i] = [counts["windows"][k] for k in WINDOW_KINDS]
+        out["windows_by_region"][i] = [counts["windows"][k] for k in W.WINDOW_KINDS]
     return out
 
-
-#: The kinds of window of :func:`fdi_lib.windturbine.stream_counts`'s ``by_region`` split.
-WINDOW_KINDS = ("switch", "full_load", "partial_load")
 
 #: Continuous fault-free scenarios of :func:`false_alarms` by default: 9 x 4400 s, 10.95 scored
 #: hours, enough for an interval that can test the nominal rate of a test that raises no alarm.
@@ -119,7 +115,7 @@ SECONDS_PER_STREAM = 35.0
 def _alarm_rates(x: dict[str, np.ndarray], hours: float, nominal: float) -> dict[str, dict]:
     """The headline's ``methods`` of :func:`false_alarms`: each method's alarms over ``hours``
     of streams, per hour and per test-hour, against the ``nominal`` rate of each test, and split
-    by the kind of window (:data:`WINDOW_KINDS`)."""
+    by the kind of window (:data:`~fdi_lib.windturbine.WINDOW_KINDS`)."""
     methods = {}
     kind_hours = x["windows_by_region"].sum(axis=0) * STREAM_WINDOW_S / 3600.0
     for m, name in enumerate(W.METHODS):
@@ -137,10 +133,10 @@ def _alarm_rates(x: dict[str, np.ndarray], hours: float, nominal: float) -> dict
             "nominal_per_test_hour": nominal,
             "p_value_nominal": float(scipy.stats.poisson.sf(a - 1, nominal * hours * k)),
             "below_nominal": bool(ci[1] < nominal),
-            "alarms_by_region": {kind: int(c) for kind, c in zip(WINDOW_KINDS, by)},
+            "alarms_by_region": {kind: int(c) for kind, c in zip(W.WINDOW_KINDS, by)},
             "rate_per_test_hour_by_region": {
                 kind: float(c / (h * k)) if h > 0 else None
-                for kind, c, h in zip(WINDOW_KINDS, by, kind_hours)
+                for kind, c, h in zip(W.WINDOW_KINDS, by, kind_hours)
             },
         }
     return methods
@@ -215,7 +211,9 @@ def false_alarms(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
     headline = {
         "streams": trials,
         "hours": hours,
-        "windows_by_region": dict(zip(WINDOW_KINDS, map(int, x["windows_by_region"].sum(axis=0)))),
+        "windows_by_region": dict(
+            zip(W.WINDOW_KINDS, map(int, x["windows_by_region"].sum(axis=0)))
+        ),
         "methods": _alarm_rates(x, hours, nominal),
     }
     settings_out = {
