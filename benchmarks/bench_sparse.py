@@ -39,8 +39,8 @@ from _record import record
 
 from fdi_lib.montecarlo import run_monte_carlo, trial_rngs, trial_seeds
 from fdi_lib.reproduce import reproduce
-from fdi_lib.reproduce.zhang2021 import LAMBDA_RATIO, example1_chunk, example1_regression
-from fdi_lib.sparse import _kkt_screen, lasso_cvxpy, lasso_path, lasso_path_batch
+from fdi_lib.reproduce.zhang2021 import example1_chunk, example1_regression
+from fdi_lib.sparse import LAMBDA_RATIO, _kkt_screen, lasso_cvxpy, lasso_path, lasso_path_batch
 from fdi_lib.systems import zhang2021_example1 as ex
 from fdi_lib.threads import blas_single_thread
 

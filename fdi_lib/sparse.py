@@ -51,7 +51,7 @@ not say how width is measured; we offer both readings and state the choice:
 Like any exploration of ``lambda``, the rule needs a bounded window: we use
 ``[lambda_ratio * lambda_max, lambda_max]`` with
 :math:`\lambda_{\max} = \max |\mathbf X^\T \mathbf y| / N` (the first breakpoint, above which
-:math:`\hat\theta = 0`) and ``lambda_ratio = 1e-4``, the default window of
+:math:`\hat\theta = 0`) and ``lambda_ratio =`` :data:`LAMBDA_RATIO` (``1e-4``), the default window of
 Matlab's ``lasso`` for more rows than unknowns. Ranges are clipped to the window; only ranges
 with between 1 and ``max_size`` non-zero components (default ``m // 2``: the sparsity
 assumption) are candidates, and the window ends where the support first exceeds ``max_size``. Without these bounds the log reading would favour the last
@@ -103,6 +103,10 @@ __all__ = [
 
 Scale = Literal["log", "linear"]
 
+#: Lower end of the ``lambda`` window that the flat-range rule explores, as a fraction of
+#: ``lambda_max`` (:func:`flat_ranges`): the default window of Matlab's ``lasso`` for more rows than
+#: unknowns. Paths followed for the rule alone may stop there (``lambda_min`` of :func:`lasso_path_batch`).
+LAMBDA_RATIO = 1e-4
 #: Largest violation of the optimality (KKT) conditions accepted on a returned path, relative to
 #: ``lambda`` (:func:`kkt_residual`); a homotopy path above it is recomputed (:func:`lasso_path_batch`).
 KKT_TOL = 1e-6
@@ -1654,7 +1658,7 @@ def flat_ranges(
     paths: PathBatch,
     *,
     scale: Scale = "log",
-    lambda_ratio: float = 1e-4,
+    lambda_ratio: float = LAMBDA_RATIO,
     max_size: int | None = None,
 ) -> FlatRanges:
     """:func:`flat_range` of every path of a batch at once (the same results, as arrays).
@@ -1748,7 +1752,7 @@ def flat_range(
     path: LassoPath,
     *,
     scale: Scale = "log",
-    lambda_ratio: float = 1e-4,
+    lambda_ratio: float = LAMBDA_RATIO,
     max_size: int | None = None,
 ) -> FlatRange:
     """The paper's rule for ``lambda``: the middle of the widest range of constant support size.
@@ -1856,7 +1860,7 @@ class GridFlatRanges:
 
 
 def grid_flat_range(
-    path: LassoPath, n_grid: int, *, lambda_ratio: float = 1e-4, max_size: int | None = None
+    path: LassoPath, n_grid: int, *, lambda_ratio: float = LAMBDA_RATIO, max_size: int | None = None
 ) -> GridFlatRange:
     """The flat-range rule of Zhang (2021, Sec. IV, after (39)) on a finite ``lambda`` grid.
 
@@ -1913,7 +1917,11 @@ def grid_flat_range(
 
 
 def grid_flat_ranges(
-    paths: PathBatch, n_grid: int, *, lambda_ratio: float = 1e-4, max_size: int | None = None
+    paths: PathBatch,
+    n_grid: int,
+    *,
+    lambda_ratio: float = LAMBDA_RATIO,
+    max_size: int | None = None,
 ) -> GridFlatRanges:
     """:func:`grid_flat_range` of every path of a batch at once (the same results, as arrays).
 
@@ -2094,7 +2102,7 @@ def diagnose(
     *,
     n_samples: int | None = None,
     scale: Scale = "log",
-    lambda_ratio: float = 1e-4,
+    lambda_ratio: float = LAMBDA_RATIO,
     max_size: int | None = None,
     path: LassoPath | None = None,
 ) -> Diagnosis:

@@ -60,7 +60,7 @@ from fdi_lib.nonparametric import energy_statistic, energy_threshold
 from fdi_lib.sets.polytope import Polytope
 from fdi_lib.sets.svo import ModelSequence, run_architecture_i_many
 from fdi_lib.signatures import fault_signature
-from fdi_lib.sparse import flat_ranges, lasso_path_batch
+from fdi_lib.sparse import LAMBDA_RATIO, flat_ranges, lasso_path_batch
 from fdi_lib.validation import integer, real
 
 
@@ -142,10 +142,6 @@ CANDIDATE_LABELS = {
     "converter": "converter",
     "drive_train": "drive train",
 }
-#: Lower end of the ``lambda`` window of Zhang 2021's rule in :func:`run_zhang2021` (a fraction of
-#: ``lambda_max``: the default of :func:`fdi_lib.sparse.flat_ranges`), down to which the Lasso paths
-#: are followed.
-LASSO_RATIO = 1e-4
 #: Subsystems: name -> (state count, output indices, input indices, candidate indices).
 SUBSYSTEMS = {
     "blade1": ((0, 1), (0,), (0, 1, 11)),
@@ -1146,7 +1142,7 @@ def run_zhang2021(
     k1 = np.minimum(d.N, detect[hit] + d.settings.isolation_extra + 1)
     # the regression's design depends on its length only: the records of one length share it and
     # their Lasso paths are followed as one batch (each path the same as alone, lasso_path_batch),
-    # each only over the window that the rule reads (flat_ranges: down to LASSO_RATIO lambda_max,
+    # each only over the window that the rule reads (flat_ranges: down to LAMBDA_RATIO lambda_max,
     # and to the end of the first interval with more than half the candidates). Beyond it, where
     # the rule reads nothing, the path nears the least-squares fit of a design of rank m - 1 (the
     # torque sensor's and the converter's columns are dependent with the others). The paths that
@@ -1168,8 +1164,8 @@ def run_zhang2021(
         X, yy = np.vstack(Xs), np.concatenate(ys, axis=1)
         scale = np.linalg.norm(X, axis=0)
         Xn = np.broadcast_to(X / scale, (len(rows), *X.shape))
-        paths = lasso_path_batch(Xn, yy, n_samples=int(n), lambda_min=LASSO_RATIO, max_size=top)
-        flat = flat_ranges(paths, lambda_ratio=LASSO_RATIO, max_size=top)
+        paths = lasso_path_batch(Xn, yy, n_samples=int(n), lambda_min=LAMBDA_RATIO, max_size=top)
+        flat = flat_ranges(paths, lambda_ratio=LAMBDA_RATIO, max_size=top)
         isolated[hit[rows]] = flat.support
         step[hit[rows]] = k1[rows] - 1
     return MethodOutcome(fa, detect, which, isolated, step, peak)

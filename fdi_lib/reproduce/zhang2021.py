@@ -41,6 +41,7 @@ from fdi_lib.reproduce.ledger_claims import (
 )
 from fdi_lib.reproduce.registry import ReproductionResult, register
 from fdi_lib.sparse import (
+    LAMBDA_RATIO,
     RegressionData,
     flat_range,
     flat_ranges,
@@ -184,8 +185,6 @@ PAPER_TABLE2 = {
     ),
 }
 SCALES = ("log", "linear")
-#: Lower end of the explored lambda window (fraction of lambda_max), see :func:`fdi_lib.sparse.flat_range`.
-LAMBDA_RATIO = 1e-4
 #: Sizes of the geometric lambda grids of the grid reading of the rule (:func:`fdi_lib.sparse.grid_flat_range`),
 #: on the same window; chosen before any run (a coarse and a fine grid), not tuned.
 GRID_SIZES = (50, 200)
@@ -450,7 +449,7 @@ def fig2(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult:
             "r": 0.5,
             "N": ex.N_DATA,
             "m": ex.N_PARAMS,
-            "lambda_ratio": 1e-4,
+            "lambda_ratio": LAMBDA_RATIO,
         },
         data={"lambdas": d["path"].lambdas, "sizes": d["path"].support_sizes(), "grid": d["grid"]},
     )

@@ -22,8 +22,9 @@ from fdi_lib.kitanidis import residual_signature
 from fdi_lib.montecarlo import run_monte_carlo_many, trial_seeds
 from fdi_lib.reproduce.ledger_claims import BY_TOLERANCE, Claim, IS_INPUT
 from fdi_lib.reproduce.registry import register, ReproductionResult
-from fdi_lib.reproduce.zhang2021 import LAMBDA_RATIO, PAPER, SCALES
+from fdi_lib.reproduce.zhang2021 import PAPER, SCALES
 from fdi_lib.sparse import (
+    LAMBDA_RATIO,
     flat_range,
     flat_ranges,
     lasso_path,

@@ -24,13 +24,18 @@ from fdi_lib.reproduce.ledger_claims import ci_at, ours_at, shown_under
 from fdi_lib.reproduce.registry import register, ReproductionResult
 from fdi_lib.reproduce.zhang2021 import (
     example1_regression,
-    LAMBDA_RATIO,
     PAPER,
     PAPER_TABLE1,
     PAPER_TABLE2,
     SCALES,
 )
-from fdi_lib.sparse import flat_ranges, grid_flat_ranges, lasso_path_batch, regression_data
+from fdi_lib.sparse import (
+    LAMBDA_RATIO,
+    flat_ranges,
+    grid_flat_ranges,
+    lasso_path_batch,
+    regression_data,
+)
 from fdi_lib.systems import zhang2021_example1 as ex
 from fdi_lib.threads import single_threaded_blas
 
