@@ -1337,10 +1337,13 @@ def stream_counts(
     methods = _method_keys(methods)
     if region is not None:
         region = np.asarray(region)
-        if region.shape != (y.shape[0],) or not np.isin(region, (1, 2)).all():
-            raise ShapeError(
-                f"region: expected ({y.shape[0]},) of 1 (partial load) or 2 (full load), got "
-                f"shape {region.shape}"
+        if region.shape != (y.shape[0],):
+            raise ShapeError(f"region: expected shape ({y.shape[0]},), got {region.shape}")
+        bad = np.flatnonzero(~np.isin(region, (1, 2)))
+        if bad.size:
+            raise ModelError(
+                f"region: expected 1 (partial load) or 2 (full load) at every sample, got "
+                f"{region[bad[0]].item()!r} at index {bad[0]} ({bad.size} such samples)"
             )
     total: dict[str, Any] = {name: 0 for name in methods}
     split = {name: dict.fromkeys(WINDOW_KINDS, 0) for name in methods}

@@ -84,6 +84,28 @@ def test_describe_prints_the_docstring(capsys):
     assert "gamma_norm_max" in capsys.readouterr().out
 
 
+@pytest.mark.parametrize(
+    "kw",
+    [
+        {"default_trials": 9, "book_trials": 9},  # not smaller than the default
+        {"default_trials": 9, "book_trials": 0, "min_trials": 1},  # below the fewest accepted
+        {"default_trials": 9, "book_trials": 1},  # min_trials defaults to 2
+        {"default_trials": 9, "book_trials": 1.5, "min_trials": 1},  # not an integer
+        {"default_trials": 9, "book_trials": True, "min_trials": 1},
+        {"book_trials": 1, "min_trials": 1},  # deterministic: no trials to reduce
+    ],
+)
+def test_a_book_trial_count_outside_min_to_default_is_refused_at_registration(kw):
+    """``register(book_trials=...)``: the book's count must lie in ``[min_trials,
+    default_trials)``; anything else is refused when the module registers, and nothing is
+    registered under the id."""
+    from fdi_lib.reproduce.registry import _REGISTRY, register
+
+    with pytest.raises(ModelError, match=r"book_trials: expected an integer in \[min_trials="):
+        register("book-trials-probe", paper="none", title="t", chapter="none", **kw)
+    assert "book-trials-probe" not in _REGISTRY
+
+
 def test_unknown_keyword_is_rejected_by_name():
     with pytest.raises(TypeError, match="unexpected keyword argument 'sed'"):
         reproduce("zb2014-fig1", sed=3)

@@ -538,7 +538,10 @@ def register(
     (``None``: the book runs ``default_trials``); it must be smaller than ``default_trials``.
     """
     if book_trials is not None and (
-        default_trials is None or not min_trials <= book_trials < default_trials
+        isinstance(book_trials, bool)
+        or not isinstance(book_trials, int)
+        or default_trials is None
+        or not min_trials <= book_trials < default_trials
     ):
         raise ModelError(
             f"book_trials: expected an integer in [min_trials={min_trials}, default_trials="

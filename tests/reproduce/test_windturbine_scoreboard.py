@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from fdi_lib import windturbine as W
-from fdi_lib.errors import ShapeError
+from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.montecarlo import run_monte_carlo
 from fdi_lib.reproduce import windturbine as RW
 from fdi_lib.reproduce import windturbine_streams as RS
@@ -257,8 +257,10 @@ def test_stream_counts_split_by_the_kind_of_window_add_up(stream):
     assert all(full["by_region"][m]["full_load"] == full[m] for m in W.METHODS)
     with pytest.raises(ShapeError, match="region"):
         W.stream_counts(d, y, u, start, region=region[:-1])
-    with pytest.raises(ShapeError, match="region"):
-        W.stream_counts(d, y, u, start, region=np.zeros_like(region))
+    bad = region.copy()
+    bad[[7, 9]] = [0, 3]
+    with pytest.raises(ModelError, match=r"region: .* got 0(\.0)? at index 7 \(2 such samples\)"):
+        W.stream_counts(d, y, u, start, region=bad)
 
 
 def test_stream_detectors_alarm_on_a_fault_and_count_it_once_per_test(stream):
