@@ -1136,53 +1136,84 @@ def _support_max(
     is summed in column order from its first term, as :func:`_dot` does, so the result is the same
     bits as ``_dot`` followed by ``max`` (a NaN propagates), in one pass without the
     ``(a, 2^n_A, v, p)`` intermediate nor copies of the observers' vertices."""
+    J, n = V.shape[1], V.shape[2]
     out = np.empty((rows.shape[0], DPhi.shape[2]))
-    _support_into(
-        out, np.empty((DPhi.shape[3], V.shape[1])), np.empty(V.shape[1]), DPhi, mi, V, F, rows
-    )
+    scratch = (np.empty((n, J)), np.empty(J), np.empty(J, dtype=np.int64))
+    _support_into(out, scratch, DPhi, mi, V, F, rows)
     return out
 
 
 @numba.njit(cache=True)
 def _support_into(
     out: np.ndarray,
-    Vt: np.ndarray,
-    acc: np.ndarray,
+    scratch: tuple,
     DPhi: np.ndarray,
     mi: np.ndarray,
     V: np.ndarray,
     F: np.ndarray,
     rows: np.ndarray,
 ) -> None:  # pragma: no cover
-    """:func:`_support_max` into ``out[:len(rows)]``, with the scratch arrays ``Vt`` (at least
-    ``(n, J)``) and ``acc`` (at least ``(J,)``) of the caller."""
+    """:func:`_support_max` into ``out[:len(rows)]`` with the caller's scratch arrays (``(n, J)``,
+    ``(J,)`` and ``(J,)`` integers, or larger): the live vertices side by side (a vector loop),
+    each product summed in column order, and the largest kept as ``max`` keeps it (the first of
+    equal values, without a branch); an observer with a NaN product is redone as ``max``
+    propagates it (:func:`_support_nan`)."""
     _, nv, p, n = DPhi.shape
-    J = V.shape[1]
+    Vt, acc, live = scratch
     for a in range(rows.shape[0]):
         r, q = rows[a], mi[a]
+        L = 0
+        for j in range(V.shape[1]):
+            if F[r, j]:
+                live[L] = j
+                L += 1
         for c in range(n):
-            for j in range(J):
-                Vt[c, j] = V[r, j, c]
+            for j in range(L):
+                Vt[c, j] = V[r, live[j], c]
+        nan = False
         for i in range(p):
             best = -np.inf
             for v in range(nv):
-                # every vertex's product at once (j innermost, a vector loop), then the max in
-                # vertex order
-                for j in range(J):
-                    acc[j] = DPhi[q, v, i, 0] * Vt[0, j]
+                x = DPhi[q, v, i, 0]
+                for j in range(L):
+                    acc[j] = x * Vt[0, j]
                 for c in range(1, n):
-                    for j in range(J):
-                        acc[j] = acc[j] + DPhi[q, v, i, c] * Vt[c, j]
-                for j in range(J):
-                    if not F[r, j]:
-                        continue
-                    if acc[j] > best or acc[j] != acc[j]:
-                        best = acc[j]
-                        if best != best:
-                            break
-                if best != best:
-                    break
+                    x = DPhi[q, v, i, c]
+                    for j in range(L):
+                        acc[j] = acc[j] + x * Vt[c, j]
+                for j in range(L):
+                    t = acc[j]
+                    nan = nan | (t != t)
+                    best = t if t > best else best
             out[a, i] = best
+        if nan:
+            _support_nan(out[a], DPhi[q], V[r], F[r])
+
+
+@numba.njit(cache=True)
+def _support_nan(
+    out: np.ndarray, DPhi: np.ndarray, V: np.ndarray, F: np.ndarray
+) -> None:  # pragma: no cover
+    """:func:`_support_into` of one observer (its model's ``DPhi`` ``(v, p, n)``, vertices ``V``
+    ``(J, n)``, live ``F``) with a NaN product: in each direction, the first NaN in the order of
+    the vertex matrices and the live vertices, as ``max`` propagates it."""
+    nv, p, n = DPhi.shape
+    for i in range(p):
+        best = -np.inf
+        for v in range(nv):
+            for j in range(V.shape[0]):
+                if not F[j]:
+                    continue
+                t = DPhi[v, i, 0] * V[j, 0]
+                for c in range(1, n):
+                    t = t + DPhi[v, i, c] * V[j, c]
+                if t > best or t != t:
+                    best = t
+                    if best != best:
+                        break
+            if best != best:
+                break
+        out[i] = best
 
 
 @numba.njit(cache=True)
@@ -1234,17 +1265,19 @@ def _basic_one(
     for k in range(K):
         ok[k] = not bad
     for g in range(q):
+        lim = mu[g] + tol
         for k in range(K):
             acc[k] = 0.0
         for c in range(n):
+            w = U[g, c]
             for k in range(K):
-                acc[k] += Xt[c, k] * U[g, c]
-        for k in range(K):
-            ok[k] = ok[k] and acc[k] <= mu[g] + tol
+                acc[k] += Xt[c, k] * w
+        for k in range(K):  # without a branch: a vector loop
+            ok[k] = ok[k] & (acc[k] <= lim)
     found = False
     for k in range(K):
         F[k] = ok[k]
-        found = found or ok[k]
+        found = found | ok[k]
         for i in range(n):
             X[k, i] = Xt[i, k]
     return found
@@ -1310,8 +1343,7 @@ def _group_step(
     y: np.ndarray,
     margin: float,
     W: np.ndarray,
-    Vt: np.ndarray,
-    acc: np.ndarray,
+    scratch: tuple,
     Bu: np.ndarray,
     Gu: np.ndarray,
     work: tuple,
@@ -1323,11 +1355,11 @@ def _group_step(
     basic solutions (:func:`_basic_one`) written into ``V[rows[a], :K]`` and ``F[rows[a]]``
     (``False`` beyond ``K``); ``found[a]``: whether any basis is feasible, and the result: whether
     all are. The same operations in the same order as the array route, hence the same bits; the
-    scratch arrays (``W``, ``Vt``, ``acc``, ``Bu``, ``Gu``, ``work``) are the caller's, at least
+    scratch arrays (``W``, ``scratch``, ``Bu``, ``Gu``, ``work``) are the caller's, at least
     the group's sizes."""
     DPhi, first, rows, obs, mi, V, F, D, B, B_unc, sL, noise = g[:12]
     norms, pad, idx, invT, U, zero, m_out, found = g[12:]
-    _support_into(W, Vt, acc, DPhi[0] if DPhi.shape[0] == 1 else DPhi[k - first], mi, V, F, rows)
+    _support_into(W, scratch, DPhi[0] if DPhi.shape[0] == 1 else DPhi[k - first], mi, V, F, rows)
     p, n = D.shape
     n_u, n_y, n_b = u.shape[2], y.shape[2], B_unc.shape[2]
     K = idx.shape[0]
@@ -1380,12 +1412,13 @@ def _template_run(
     for g in groups:
         na, p, J = max(na, g[2].shape[0]), max(p, g[7].shape[0]), max(J, g[5].shape[1])
         n_b, q, K = max(n_b, g[9].shape[2]), max(q, g[13].shape[0]), max(K, g[14].shape[0])
-    W, Vt, acc = np.empty((na, p)), np.empty((n, J)), np.empty(J)
+    W = np.empty((na, p))
+    scratch = (np.empty((n, J)), np.empty(J), np.empty(J, dtype=np.int64))
     Bu, Gu, work = np.empty(n), np.empty((n_b, n)), _basic_work(q, K, n)
     while True:
         every = True
         for g in groups:
-            ok = _group_step(g, k, u, y, margin, W, Vt, acc, Bu, Gu, work)
+            ok = _group_step(g, k, u, y, margin, W, scratch, Bu, Gu, work)
             every = every and ok
         if not every or k == last:
             return k
