@@ -1565,7 +1565,7 @@ class TemplateBatch:
             mi = np.array([rows[id(models[b])] for b in idx])
             L = np.stack([mdl.L for mdl in uniq])
             M = np.vstack([D, first.C, -first.C])
-            # the basis route in one compiled step (_step_bases) when its normals allow it
+            # the basis route in compiled loops (advance, _template_run) when its normals allow it
             b = _bases(M.tobytes(), *M.shape) if u.shape[2] else None
             usable = b is not None and b.bounded
             vA = np.stack([mdl._vertex_A[:T] for mdl in uniq])
@@ -1573,7 +1573,7 @@ class TemplateBatch:
                 {
                     "idx": np.array(idx),
                     "mi": mi,
-                    "D": np.array(D, dtype=float, order="C"),  # one array type for the kernel
+                    "D": D,
                     "C": first.C,
                     "M": M,
                     "bases": b if usable else None,
@@ -1678,7 +1678,7 @@ class TemplateBatch:
             g["mi"][a],
             g["V"],
             g["F"],
-            g["D"],
+            np.ascontiguousarray(g["D"]),  # one array type for every group
             g["B"],
             g["B_unc"],
             g["sL"],

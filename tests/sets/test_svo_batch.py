@@ -212,7 +212,7 @@ def _stepped(models, u, y, X0, array_route: bool):
 
 
 def test_compiled_step_equals_the_array_route_bit_for_bit():
-    """TemplateBatch._step_bases (one compiled pass, vertices in place) gives the sets of the array
+    """TemplateBatch.update (the compiled basis route, vertices in place) gives the sets of the array
     route (_dot products, _vertices_many) to the last bit, with sets emptied on the way."""
     models, u, y = _records(7, 12)
     seqs = [_constant(m, u.shape[1]) for m in models]
