@@ -1580,6 +1580,7 @@ class TemplateBatch:
                     "invT": _inv_t(b.inv) if usable else None,
                     "vA": vA,
                     "DPhi": _invariant_product(D, vA),
+                    "chunk": None,  # (first step, D A_v of the steps from it) when time-varying
                     "B": np.stack([mdl.B[:T] for mdl in uniq]),
                     "B_unc": np.stack([mdl.B_unc[:T] for mdl in uniq]),
                     "noise": np.stack([mdl.noise for mdl in uniq]),
@@ -1630,8 +1631,9 @@ class TemplateBatch:
         if any(g["bases"] is None for g, _ in live):
             last = k
         fused = [(g, a) for g, a in live if g["bases"] is not None]
-        if any(g["DPhi"] is None for g, _ in fused):  # D A_v of each step: a chunk at a time
-            last = min(last, k + _DPHI_CHUNK - 1)
+        for g, _ in fused:
+            if g["DPhi"] is None:  # D A_v of each step: a chunk at a time
+                last = min(last, self._chunk(g, k))
         if fused:
             last = self._run_bases(fused, k, last)
         for g, a in live:
@@ -1662,17 +1664,25 @@ class TemplateBatch:
         g["F"][a, X.shape[1] :] = False
         self.alive[obs] = Fn.any(axis=1)
 
-    def _kernel_group(self, g: dict, a: np.ndarray, k: int, last: int) -> tuple:
-        """The arrays of one group for :func:`_group_step` (steps ``k`` to ``last``)."""
+    def _chunk(self, g: dict, k: int) -> int:
+        """``D A_v`` of a time-varying group at step ``k`` and up to ``_DPHI_CHUNK - 1`` steps after
+        it (by the product the array route makes), kept until a step beyond them; returns the last
+        step it holds."""
+        if g["chunk"] is None or not g["chunk"][0] <= k < g["chunk"][0] + len(g["chunk"][1]):
+            steps = range(k, min(self.T, k + _DPHI_CHUNK - 1) + 1)
+            g["chunk"] = (k, np.stack([np.matmul(g["D"], g["vA"][:, j - 1]) for j in steps]))
+        return g["chunk"][0] + len(g["chunk"][1]) - 1
+
+    def _kernel_group(self, g: dict, a: np.ndarray, k: int) -> tuple:
+        """The arrays of one group for :func:`_group_step` from step ``k`` on (within the group's
+        chunk, :meth:`_chunk`, when it is time-varying)."""
         b = g["bases"]
         if g["V"].shape[1] < b.idx.shape[0]:
             self._widen(g, b.idx.shape[0])
-        DPhi = g["DPhi"]
-        if DPhi is None:  # D A_v of each step, by the product the array route makes
-            DPhi = np.stack([np.matmul(g["D"], g["vA"][:, j - 1]) for j in range(k, last + 1)])
+        first, DPhi = (k, g["DPhi"]) if g["DPhi"] is not None else g["chunk"]
         return (
             DPhi,
-            k,
+            first,
             a,
             g["idx"][a],
             g["mi"][a],
@@ -1698,7 +1708,7 @@ class TemplateBatch:
         route in one compiled loop (:func:`_template_run`), the vertices written in place; a set
         with no feasible basis goes to :func:`~fdi_lib.sets.polytope._enumerate_vertices`
         (emptiness by LP), as in :func:`_vertices_many`. Returns the last step made."""
-        args = tuple(self._kernel_group(g, a, k, last) for g, a in fused)
+        args = tuple(self._kernel_group(g, a, k) for g, a in fused)
         last = _template_run(args, self.u, self.y, k, last, self.margin)
         for (g, a), arg in zip(fused, args):
             m, found = arg[-2:]
