@@ -1425,6 +1425,9 @@ def _template_run(
         k += 1
 
 
+#: The groups of one call of :func:`_template_run` (a multiple of it, padded with idle groups).
+_GROUPS_PER_CALL = 4
+
 #: Steps of a time-varying model whose products ``D A_v`` :meth:`TemplateBatch.advance` makes at
 #: once (the memory of one call).
 _DPHI_CHUNK = 64
@@ -1708,8 +1711,14 @@ class TemplateBatch:
         route in one compiled loop (:func:`_template_run`), the vertices written in place; a set
         with no feasible basis goes to :func:`~fdi_lib.sets.polytope._enumerate_vertices`
         (emptiness by LP), as in :func:`_vertices_many`. Returns the last step made."""
-        args = tuple(self._kernel_group(g, a, k) for g, a in fused)
-        last = _template_run(args, self.u, self.y, k, last, self.margin)
+        args = [self._kernel_group(g, a, k) for g, a in fused]
+        # padded with observer-less copies of the first group to a multiple of _GROUPS_PER_CALL:
+        # one compiled signature whatever the number of groups
+        idle = (
+            args[0][:2] + (args[0][2][:0],) + args[0][3:-2] + (np.empty((0, 0)), np.empty(0, bool))
+        )
+        pad = [idle] * (-len(args) % _GROUPS_PER_CALL)
+        last = _template_run(tuple(args + pad), self.u, self.y, k, last, self.margin)
         for (g, a), arg in zip(fused, args):
             m, found = arg[-2:]
             for i in np.flatnonzero(~found):
