@@ -1130,13 +1130,14 @@ def _support_max(
     DPhi: np.ndarray, mi: np.ndarray, V: np.ndarray, F: np.ndarray, rows: np.ndarray
 ) -> np.ndarray:  # pragma: no cover
     """``max`` over the vertex matrices ``v`` and the live vertices ``j`` (``F[rows[a], j]``) of
-    ``DPhi[mi[a], v] @ V[rows[a], j]``, shape ``(a, p)``: the support of the propagated set of
+    ``DPhi[mi[a], v] @ V[rows[a], :, j]``, shape ``(a, p)`` (``V`` ``(observers, n, J)``, a vertex
+    per column): the support of the propagated set of
     observer ``rows[a]`` (its model's ``D A_v``, ``DPhi`` ``(models, v, p, n)``, shared by the
     observers of one model) in each template direction (:meth:`TemplateBatch._step`). Each product
     is summed in column order from its first term, as :func:`_dot` does, so the result is the same
     bits as ``_dot`` followed by ``max`` (a NaN propagates), in one pass without the
     ``(a, 2^n_A, v, p)`` intermediate nor copies of the observers' vertices."""
-    J, n = V.shape[1], V.shape[2]
+    n, J = V.shape[1], V.shape[2]
     out = np.empty((rows.shape[0], DPhi.shape[2]))
     scratch = (np.empty((n, J)), np.empty(J), np.empty(J, dtype=np.int64))
     _support_into(out, scratch, DPhi, mi, V, F, rows)
@@ -1163,13 +1164,13 @@ def _support_into(
     for a in range(rows.shape[0]):
         r, q = rows[a], mi[a]
         L = 0
-        for j in range(V.shape[1]):
+        for j in range(V.shape[2]):
             if F[r, j]:
                 live[L] = j
                 L += 1
         for c in range(n):
             for j in range(L):
-                Vt[c, j] = V[r, live[j], c]
+                Vt[c, j] = V[r, c, live[j]]
         nan = False
         for i in range(p):
             best = -np.inf
@@ -1195,18 +1196,18 @@ def _support_nan(
     out: np.ndarray, DPhi: np.ndarray, V: np.ndarray, F: np.ndarray
 ) -> None:  # pragma: no cover
     """:func:`_support_into` of one observer (its model's ``DPhi`` ``(v, p, n)``, vertices ``V``
-    ``(J, n)``, live ``F``) with a NaN product: in each direction, the first NaN in the order of
+    ``(n, J)``, live ``F``) with a NaN product: in each direction, the first NaN in the order of
     the vertex matrices and the live vertices, as ``max`` propagates it."""
     nv, p, n = DPhi.shape
     for i in range(p):
         best = -np.inf
         for v in range(nv):
-            for j in range(V.shape[0]):
+            for j in range(V.shape[1]):
                 if not F[j]:
                     continue
-                t = DPhi[v, i, 0] * V[j, 0]
+                t = DPhi[v, i, 0] * V[0, j]
                 for c in range(1, n):
-                    t = t + DPhi[v, i, c] * V[j, c]
+                    t = t + DPhi[v, i, c] * V[c, j]
                 if t > best or t != t:
                     best = t
                     if best != best:
@@ -1229,13 +1230,13 @@ def _basic_one(
     F: np.ndarray,
     work: tuple,
 ) -> bool:  # pragma: no cover
-    """The basic solutions of one set ``Set(M, m)`` into ``X`` ``(K, n)`` and whether each is
-    feasible into ``F`` ``(K,)`` (:func:`_basic_solutions`; ``invT[i, j, k]`` is ``inv[k, i, j]``,
+    """The basic solutions of one set ``Set(M, m)`` into ``X[:, :K]`` (``X`` ``(n, K)`` or wider, a
+    solution per column) and whether each is feasible into ``F[:K]`` (:func:`_basic_solutions`; ``invT[i, j, k]`` is ``inv[k, i, j]``,
     ``work`` the scratch arrays of :func:`_basic_work`); returns whether any is."""
     p = m.shape[0]
     q, r = pad.shape
     K, n = idx.shape
-    mu, Mu, Xt, acc, ok = work
+    mu, Mu, acc, ok = work
     bad = False
     for i in range(p):
         if zero[i] and m[i] < 0:
@@ -1258,10 +1259,10 @@ def _basic_one(
     # the bases side by side (k innermost, a vector loop): each sum still in its own order
     for i in range(n):
         for k in range(K):
-            Xt[i, k] = 0.0
+            X[i, k] = 0.0
         for j in range(n):
             for k in range(K):
-                Xt[i, k] += invT[i, j, k] * Mu[j, k]
+                X[i, k] += invT[i, j, k] * Mu[j, k]
     for k in range(K):
         ok[k] = not bad
     for g in range(q):
@@ -1271,15 +1272,13 @@ def _basic_one(
         for c in range(n):
             w = U[g, c]
             for k in range(K):
-                acc[k] += Xt[c, k] * w
+                acc[k] += X[c, k] * w
         for k in range(K):  # without a branch: a vector loop
             ok[k] = ok[k] & (acc[k] <= lim)
     found = False
     for k in range(K):
         F[k] = ok[k]
         found = found | ok[k]
-        for i in range(n):
-            X[k, i] = Xt[i, k]
     return found
 
 
@@ -1287,13 +1286,7 @@ def _basic_one(
 def _basic_work(q: int, K: int, n: int) -> tuple:  # pragma: no cover
     """Scratch arrays of :func:`_basic_one` (``q`` distinct normals, ``K`` bases, dimension ``n``),
     allocated once per batch of sets."""
-    return (
-        np.empty(q),
-        np.empty((n, K)),
-        np.empty((n, K)),
-        np.empty(K),
-        np.empty(K, dtype=np.bool_),
-    )
+    return (np.empty(q), np.empty((n, K)), np.empty(K), np.empty(K, dtype=np.bool_))
 
 
 @numba.njit(cache=True)
@@ -1330,8 +1323,12 @@ def _basic_solutions(
     F = np.empty((B, K), dtype=np.bool_)
     invT = _inv_t(inv)
     work = _basic_work(pad.shape[0], K, n)
+    Xt = np.empty((n, K))
     for b in range(B):
-        _basic_one(m[b], norms, pad, idx, invT, U, zero, X[b], F[b], work)
+        _basic_one(m[b], norms, pad, idx, invT, U, zero, Xt, F[b], work)
+        for k in range(K):
+            for i in range(n):
+                X[b, k, i] = Xt[i, k]
     return X, F
 
 
@@ -1352,7 +1349,7 @@ def _group_step(
     route; ``g`` as :meth:`TemplateBatch._kernel_group` builds it) in place: the supports ``h``
     (:func:`_support_into`, plus ``D B u`` and the uncertainty's ``sum |D B_b u|``, each product in
     :func:`_dot`'s order, then the margin), the offsets ``m_out[a] = (h, nb + y, nb - y)`` and the
-    basic solutions (:func:`_basic_one`) written into ``V[rows[a], :K]`` and ``F[rows[a]]``
+    basic solutions (:func:`_basic_one`) written into ``V[rows[a], :, :K]`` and ``F[rows[a]]``
     (``False`` beyond ``K``); ``found[a]``: whether any basis is feasible, and the result: whether
     all are. The same operations in the same order as the array route, hence the same bits; the
     scratch arrays (``W``, ``scratch``, ``Bu``, ``Gu``, ``work``) are the caller's, at least
@@ -1392,7 +1389,7 @@ def _group_step(
             nb = noise[q, j] * (1.0 + margin) + margin
             m_out[a, p + j] = nb + y[o, k, j]
             m_out[a, p + n_y + j] = nb - y[o, k, j]
-        found[a] = _basic_one(m_out[a], norms, pad, idx, invT, U, zero, V[r, :K], F[r, :K], work)
+        found[a] = _basic_one(m_out[a], norms, pad, idx, invT, U, zero, V[r], F[r], work)
         every = every and found[a]
         for j in range(K, F.shape[1]):
             F[r, j] = False
@@ -1407,10 +1404,10 @@ def _template_run(
     order at each step) in one compiled loop, the scratch arrays allocated once; stops after the
     first step at which a set has no feasible basis (its ``m_out`` and ``found`` are that step's)
     and returns the last step made."""
-    n = groups[0][5].shape[2]
+    n = groups[0][5].shape[1]
     na = p = J = n_b = q = K = 0
     for g in groups:
-        na, p, J = max(na, g[2].shape[0]), max(p, g[7].shape[0]), max(J, g[5].shape[1])
+        na, p, J = max(na, g[2].shape[0]), max(p, g[7].shape[0]), max(J, g[5].shape[2])
         n_b, q, K = max(n_b, g[9].shape[2]), max(q, g[13].shape[0]), max(K, g[14].shape[0])
     W = np.empty((na, p))
     scratch = (np.empty((n, J)), np.empty(J), np.empty(J, dtype=np.int64))
@@ -1605,7 +1602,8 @@ class TemplateBatch:
                     g["noise"][g["mi"]] - y0,
                 ]
             )
-            g["V"], g["F"] = _vertices_many(np.vstack([self.X0.M, g["C"], -g["C"]]), m)
+            X, g["F"] = _vertices_many(np.vstack([self.X0.M, g["C"], -g["C"]]), m)
+            g["V"] = np.ascontiguousarray(np.swapaxes(X, 1, 2))  # a vertex per column
             self.alive[g["idx"]] = g["F"].any(axis=1)
         return ~self.alive
 
@@ -1661,9 +1659,9 @@ class TemplateBatch:
         nb = g["noise"][mi] * (1.0 + self.margin) + self.margin
         yk = self.y[obs, k]
         X, Fn = _vertices_many(g["M"], np.column_stack([h, nb + yk, nb - yk]))
-        if g["V"].shape[1] < X.shape[1]:
+        if g["V"].shape[2] < X.shape[1]:
             self._widen(g, X.shape[1])
-        g["V"][a, : X.shape[1]], g["F"][a, : X.shape[1]] = X, Fn
+        g["V"][a, :, : X.shape[1]], g["F"][a, : X.shape[1]] = np.swapaxes(X, 1, 2), Fn
         g["F"][a, X.shape[1] :] = False
         self.alive[obs] = Fn.any(axis=1)
 
@@ -1680,7 +1678,7 @@ class TemplateBatch:
         """The arrays of one group for :func:`_group_step` from step ``k`` on (within the group's
         chunk, :meth:`_chunk`, when it is time-varying)."""
         b = g["bases"]
-        if g["V"].shape[1] < b.idx.shape[0]:
+        if g["V"].shape[2] < b.idx.shape[0]:
             self._widen(g, b.idx.shape[0])
         first, DPhi = (k, g["DPhi"]) if g["DPhi"] is not None else g["chunk"]
         return (
@@ -1723,17 +1721,17 @@ class TemplateBatch:
             m, found = arg[-2:]
             for i in np.flatnonzero(~found):
                 V = _enumerate_vertices(g["M"], m[i])
-                if len(V) > g["V"].shape[1]:
+                if len(V) > g["V"].shape[2]:
                     self._widen(g, len(V))
-                g["V"][a[i], : len(V)], g["F"][a[i], : len(V)] = V, True
+                g["V"][a[i], :, : len(V)], g["F"][a[i], : len(V)] = V.T, True
                 found[i] = len(V) > 0
             self.alive[g["idx"][a]] = found
         return last
 
     def _widen(self, g: dict, K: int) -> None:
         """Room for ``K`` vertices per observer in the group's arrays (zeros, not live)."""
-        pad = K - g["V"].shape[1]
-        g["V"] = np.concatenate([g["V"], np.zeros((len(g["idx"]), pad, self.n))], axis=1)
+        pad = K - g["V"].shape[2]
+        g["V"] = np.concatenate([g["V"], np.zeros((len(g["idx"]), self.n, pad))], axis=2)
         g["F"] = np.concatenate([g["F"], np.zeros((len(g["idx"]), pad), dtype=bool)], axis=1)
 
     def bounding_boxes(self) -> tuple[np.ndarray, np.ndarray]:
@@ -1743,7 +1741,8 @@ class TemplateBatch:
         upper = lower.copy()
         for g in self._groups:
             live = self.alive[g["idx"]]
-            V, F = g["V"][live], g["F"][live][:, :, None]
+            V = np.ascontiguousarray(np.swapaxes(g["V"][live], 1, 2))  # a vertex per row
+            F = g["F"][live][:, :, None]
             lower[g["idx"][live]] = np.where(F, V, np.inf).min(axis=1)
             upper[g["idx"][live]] = np.where(F, V, -np.inf).max(axis=1)
         return lower, upper

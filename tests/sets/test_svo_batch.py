@@ -180,11 +180,11 @@ def test_support_max_is_dot_then_max_bit_for_bit():
 
     rng = np.random.default_rng(5)
     DPhi = rng.normal(size=(7, 4, 6, 3)) * 10.0 ** rng.integers(-3, 4, size=(7, 4, 6, 1))
-    V = rng.normal(size=(7, 9, 3))
+    V = rng.normal(size=(7, 3, 9))  # a vertex per column
     F = rng.random((7, 9)) < 0.6
     F[:, 0] = True
     ref = np.stack(
-        [_dot(DPhi[a][:, None], V[a][F[a]][None]).reshape(-1, 6).max(axis=0) for a in range(7)]
+        [_dot(DPhi[a][:, None], V[a].T[F[a]][None]).reshape(-1, 6).max(axis=0) for a in range(7)]
     )
     rows = np.arange(7)
     assert np.array_equal(_support_max(DPhi, rows, V, F, rows), ref)
@@ -206,7 +206,7 @@ def _stepped(models, u, y, X0, array_route: bool):
     out = []
     for k in range(1, bank.T + 1):
         bank.update(k)
-        sets = [(g["V"][g["F"]].copy(), g["F"].copy()) for g in bank._groups]
+        sets = [(np.swapaxes(g["V"], 1, 2)[g["F"]], g["F"].copy()) for g in bank._groups]
         out.append((bank.alive.copy(), sets))
     return out
 
@@ -245,7 +245,14 @@ def _advanced(models, u, y, X0):
     out, k = [], 1
     while k <= bank.T and bank.alive.any():
         k, emptied = bank.advance(k)
-        out.append((k, emptied, bank.alive.copy(), [g["V"][g["F"]].copy() for g in bank._groups]))
+        out.append(
+            (
+                k,
+                emptied,
+                bank.alive.copy(),
+                [np.swapaxes(g["V"], 1, 2)[g["F"]] for g in bank._groups],
+            )
+        )
         k += 1
     return out
 
