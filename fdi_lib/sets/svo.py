@@ -1130,43 +1130,91 @@ def _support_max(
     DPhi: np.ndarray, mi: np.ndarray, V: np.ndarray, F: np.ndarray, rows: np.ndarray
 ) -> np.ndarray:  # pragma: no cover
     """``max`` over the vertex matrices ``v`` and the live vertices ``j`` (``F[rows[a], j]``) of
-    ``DPhi[mi[a], v] @ V[rows[a], j]``, shape ``(a, p)``: the support of the propagated set of
+    ``DPhi[mi[a], v] @ V[rows[a], :, j]``, shape ``(a, p)`` (``V`` ``(observers, n, J)``, a vertex
+    per column): the support of the propagated set of
     observer ``rows[a]`` (its model's ``D A_v``, ``DPhi`` ``(models, v, p, n)``, shared by the
     observers of one model) in each template direction (:meth:`TemplateBatch._step`). Each product
     is summed in column order from its first term, as :func:`_dot` does, so the result is the same
     bits as ``_dot`` followed by ``max`` (a NaN propagates), in one pass without the
     ``(a, 2^n_A, v, p)`` intermediate nor copies of the observers' vertices."""
+    n, J = V.shape[1], V.shape[2]
+    out = np.empty((rows.shape[0], DPhi.shape[2]))
+    scratch = (np.empty((n, J)), np.empty(J), np.empty(J, dtype=np.int64))
+    _support_into(out, scratch, DPhi, mi, V, F, rows)
+    return out
+
+
+@numba.njit(cache=True)
+def _support_into(
+    out: np.ndarray,
+    scratch: tuple,
+    DPhi: np.ndarray,
+    mi: np.ndarray,
+    V: np.ndarray,
+    F: np.ndarray,
+    rows: np.ndarray,
+) -> None:  # pragma: no cover
+    """:func:`_support_max` into ``out[:len(rows)]`` with the caller's scratch arrays (``(n, J)``,
+    ``(J,)`` and ``(J,)`` integers, or larger): the live vertices side by side (a vector loop),
+    each product summed in column order, and the largest kept as ``max`` keeps it (the first of
+    equal values, without a branch); an observer with a NaN product is redone as ``max``
+    propagates it (:func:`_support_nan`)."""
     _, nv, p, n = DPhi.shape
-    na, J = rows.shape[0], V.shape[1]
-    out = np.empty((na, p))
-    Vt = np.empty((n, J))
-    acc = np.empty(J)
-    for a in range(na):
+    Vt, acc, live = scratch
+    for a in range(rows.shape[0]):
         r, q = rows[a], mi[a]
+        L = 0
+        for j in range(V.shape[2]):
+            if F[r, j]:
+                live[L] = j
+                L += 1
         for c in range(n):
-            for j in range(J):
-                Vt[c, j] = V[r, j, c]
+            for j in range(L):
+                Vt[c, j] = V[r, c, live[j]]
+        nan = False
         for i in range(p):
             best = -np.inf
             for v in range(nv):
-                # every vertex's product at once (j innermost, a vector loop), then the max in
-                # vertex order
-                for j in range(J):
-                    acc[j] = DPhi[q, v, i, 0] * Vt[0, j]
+                x = DPhi[q, v, i, 0]
+                for j in range(L):
+                    acc[j] = x * Vt[0, j]
                 for c in range(1, n):
-                    for j in range(J):
-                        acc[j] = acc[j] + DPhi[q, v, i, c] * Vt[c, j]
-                for j in range(J):
-                    if not F[r, j]:
-                        continue
-                    if acc[j] > best or acc[j] != acc[j]:
-                        best = acc[j]
-                        if best != best:
-                            break
-                if best != best:
-                    break
+                    x = DPhi[q, v, i, c]
+                    for j in range(L):
+                        acc[j] = acc[j] + x * Vt[c, j]
+                for j in range(L):
+                    t = acc[j]
+                    nan = nan | (t != t)
+                    best = t if t > best else best
             out[a, i] = best
-    return out
+        if nan:
+            _support_nan(out[a], DPhi[q], V[r], F[r])
+
+
+@numba.njit(cache=True)
+def _support_nan(
+    out: np.ndarray, DPhi: np.ndarray, V: np.ndarray, F: np.ndarray
+) -> None:  # pragma: no cover
+    """:func:`_support_into` of one observer (its model's ``DPhi`` ``(v, p, n)``, vertices ``V``
+    ``(n, J)``, live ``F``) with a NaN product: in each direction, the first NaN in the order of
+    the vertex matrices and the live vertices, as ``max`` propagates it."""
+    nv, p, n = DPhi.shape
+    for i in range(p):
+        best = -np.inf
+        for v in range(nv):
+            for j in range(V.shape[1]):
+                if not F[j]:
+                    continue
+                t = DPhi[v, i, 0] * V[0, j]
+                for c in range(1, n):
+                    t = t + DPhi[v, i, c] * V[c, j]
+                if t > best or t != t:
+                    best = t
+                    if best != best:
+                        break
+            if best != best:
+                break
+        out[i] = best
 
 
 @numba.njit(cache=True)
@@ -1182,13 +1230,13 @@ def _basic_one(
     F: np.ndarray,
     work: tuple,
 ) -> bool:  # pragma: no cover
-    """The basic solutions of one set ``Set(M, m)`` into ``X`` ``(K, n)`` and whether each is
-    feasible into ``F`` ``(K,)`` (:func:`_basic_solutions`; ``invT[i, j, k]`` is ``inv[k, i, j]``,
+    """The basic solutions of one set ``Set(M, m)`` into ``X[:, :K]`` (``X`` ``(n, K)`` or wider, a
+    solution per column) and whether each is feasible into ``F[:K]`` (:func:`_basic_solutions`; ``invT[i, j, k]`` is ``inv[k, i, j]``,
     ``work`` the scratch arrays of :func:`_basic_work`); returns whether any is."""
     p = m.shape[0]
     q, r = pad.shape
     K, n = idx.shape
-    mu, Mu, Xt, acc, ok = work
+    mu, Mu, acc, ok = work
     bad = False
     for i in range(p):
         if zero[i] and m[i] < 0:
@@ -1211,26 +1259,26 @@ def _basic_one(
     # the bases side by side (k innermost, a vector loop): each sum still in its own order
     for i in range(n):
         for k in range(K):
-            Xt[i, k] = 0.0
+            X[i, k] = 0.0
         for j in range(n):
             for k in range(K):
-                Xt[i, k] += invT[i, j, k] * Mu[j, k]
+                X[i, k] += invT[i, j, k] * Mu[j, k]
     for k in range(K):
         ok[k] = not bad
     for g in range(q):
+        lim = mu[g] + tol
         for k in range(K):
             acc[k] = 0.0
         for c in range(n):
+            w = U[g, c]
             for k in range(K):
-                acc[k] += Xt[c, k] * U[g, c]
-        for k in range(K):
-            ok[k] = ok[k] and acc[k] <= mu[g] + tol
+                acc[k] += X[c, k] * w
+        for k in range(K):  # without a branch: a vector loop
+            ok[k] = ok[k] & (acc[k] <= lim)
     found = False
     for k in range(K):
         F[k] = ok[k]
-        found = found or ok[k]
-        for i in range(n):
-            X[k, i] = Xt[i, k]
+        found = found | ok[k]
     return found
 
 
@@ -1238,13 +1286,7 @@ def _basic_one(
 def _basic_work(q: int, K: int, n: int) -> tuple:  # pragma: no cover
     """Scratch arrays of :func:`_basic_one` (``q`` distinct normals, ``K`` bases, dimension ``n``),
     allocated once per batch of sets."""
-    return (
-        np.empty(q),
-        np.empty((n, K)),
-        np.empty((n, K)),
-        np.empty(K),
-        np.empty(K, dtype=np.bool_),
-    )
+    return (np.empty(q), np.empty((n, K)), np.empty(K), np.empty(K, dtype=np.bool_))
 
 
 @numba.njit(cache=True)
@@ -1281,60 +1323,55 @@ def _basic_solutions(
     F = np.empty((B, K), dtype=np.bool_)
     invT = _inv_t(inv)
     work = _basic_work(pad.shape[0], K, n)
+    Xt = np.empty((n, K))
     for b in range(B):
-        _basic_one(m[b], norms, pad, idx, invT, U, zero, X[b], F[b], work)
+        _basic_one(m[b], norms, pad, idx, invT, U, zero, Xt, F[b], work)
+        for k in range(K):
+            for i in range(n):
+                X[b, k, i] = Xt[i, k]
     return X, F
 
 
 @numba.njit(cache=True)
-def _template_step(
-    DPhi: np.ndarray,
-    mi: np.ndarray,
-    rows: np.ndarray,
-    V: np.ndarray,
-    F: np.ndarray,
-    D: np.ndarray,
-    Bk: np.ndarray,
-    Buk: np.ndarray,
-    uk: np.ndarray,
-    sL: np.ndarray,
-    noise: np.ndarray,
-    yk: np.ndarray,
+def _group_step(
+    g: tuple,
+    k: int,
+    u: np.ndarray,
+    y: np.ndarray,
     margin: float,
-    norms: np.ndarray,
-    pad: np.ndarray,
-    idx: np.ndarray,
-    invT: np.ndarray,
-    U: np.ndarray,
-    zero: np.ndarray,
-    m_out: np.ndarray,
-    found: np.ndarray,
-) -> None:  # pragma: no cover
-    """One template step of the observers ``rows`` (:meth:`TemplateBatch._step`, basis route) in
-    place: the supports ``h`` (:func:`_support_max`, plus ``D B u`` and the uncertainty's
-    ``sum |D B_b u|``, each product in :func:`_dot`'s order, then the margin), the offsets
-    ``m_out[a] = (h, nb + y, nb - y)`` and the basic solutions (:func:`_basic_one`) written into
-    ``V[rows[a], :K]`` and ``F[rows[a]]`` (``False`` beyond ``K``); ``found[a]``: whether any basis
-    is feasible. The same operations in the same order as the array route, hence the same bits."""
-    W = _support_max(DPhi, mi, V, F, rows)
-    na, p = W.shape
-    n = D.shape[1]
-    n_u, n_y, n_b = uk.shape[1], yk.shape[1], Buk.shape[1]
+    W: np.ndarray,
+    scratch: tuple,
+    Bu: np.ndarray,
+    Gu: np.ndarray,
+    work: tuple,
+) -> bool:  # pragma: no cover
+    """Step ``k`` of the observers ``rows`` of one group (:meth:`TemplateBatch._step`, basis
+    route; ``g`` as :meth:`TemplateBatch._kernel_group` builds it) in place: the supports ``h``
+    (:func:`_support_into`, plus ``D B u`` and the uncertainty's ``sum |D B_b u|``, each product in
+    :func:`_dot`'s order, then the margin), the offsets ``m_out[a] = (h, nb + y, nb - y)`` and the
+    basic solutions (:func:`_basic_one`) written into ``V[rows[a], :, :K]`` and ``F[rows[a]]``
+    (``False`` beyond ``K``); ``found[a]``: whether any basis is feasible, and the result: whether
+    all are. The same operations in the same order as the array route, hence the same bits; the
+    scratch arrays (``W``, ``scratch``, ``Bu``, ``Gu``, ``work``) are the caller's, at least
+    the group's sizes."""
+    DPhi, first, rows, obs, mi, V, F, D, B, B_unc, sL, noise = g[:12]
+    norms, pad, idx, invT, U, zero, m_out, found = g[12:]
+    _support_into(W, scratch, DPhi[0] if DPhi.shape[0] == 1 else DPhi[k - first], mi, V, F, rows)
+    p, n = D.shape
+    n_u, n_y, n_b = u.shape[2], y.shape[2], B_unc.shape[2]
     K = idx.shape[0]
-    Bu = np.empty(n)
-    Gu = np.empty((n_b, n))
-    work = _basic_work(pad.shape[0], K, n)
-    for a in range(na):
-        r, q = rows[a], mi[a]
+    every = True
+    for a in range(rows.shape[0]):
+        r, q, o = rows[a], mi[a], obs[a]
         for i in range(n):
-            t = Bk[q, i, 0] * uk[a, 0]
+            t = B[q, k - 1, i, 0] * u[o, k - 1, 0]
             for c in range(1, n_u):
-                t = t + Bk[q, i, c] * uk[a, c]
+                t = t + B[q, k - 1, i, c] * u[o, k - 1, c]
             Bu[i] = t
             for b in range(n_b):
-                t = Buk[q, b, i, 0] * uk[a, 0]
+                t = B_unc[q, k - 1, b, i, 0] * u[o, k - 1, 0]
                 for c in range(1, n_u):
-                    t = t + Buk[q, b, i, c] * uk[a, c]
+                    t = t + B_unc[q, k - 1, b, i, c] * u[o, k - 1, c]
                 Gu[b, i] = t
         for i in range(p):
             c = D[i, 0] * Bu[0]
@@ -1350,11 +1387,57 @@ def _template_step(
             m_out[a, i] = h + margin * (1.0 + abs(h))
         for j in range(n_y):
             nb = noise[q, j] * (1.0 + margin) + margin
-            m_out[a, p + j] = nb + yk[a, j]
-            m_out[a, p + n_y + j] = nb - yk[a, j]
-        found[a] = _basic_one(m_out[a], norms, pad, idx, invT, U, zero, V[r, :K], F[r, :K], work)
+            m_out[a, p + j] = nb + y[o, k, j]
+            m_out[a, p + n_y + j] = nb - y[o, k, j]
+        found[a] = _basic_one(m_out[a], norms, pad, idx, invT, U, zero, V[r], F[r], work)
+        every = every and found[a]
         for j in range(K, F.shape[1]):
             F[r, j] = False
+    return every
+
+
+@numba.njit(cache=True)
+def _template_run(
+    groups: tuple, u: np.ndarray, y: np.ndarray, k: int, last: int, margin: float
+) -> int:  # pragma: no cover
+    """Steps ``k``, ``k + 1``, ... ``last`` of every group (:func:`_group_step`, the groups in
+    order at each step) in one compiled loop, the scratch arrays allocated once; stops after the
+    first step at which a set has no feasible basis (its ``m_out`` and ``found`` are that step's)
+    and returns the last step made."""
+    n = groups[0][5].shape[1]
+    na = p = J = n_b = q = K = 0
+    for g in groups:
+        na, p, J = max(na, g[2].shape[0]), max(p, g[7].shape[0]), max(J, g[5].shape[2])
+        n_b, q, K = max(n_b, g[9].shape[2]), max(q, g[13].shape[0]), max(K, g[14].shape[0])
+    W = np.empty((na, p))
+    scratch = (np.empty((n, J)), np.empty(J), np.empty(J, dtype=np.int64))
+    Bu, Gu, work = np.empty(n), np.empty((n_b, n)), _basic_work(q, K, n)
+    while True:
+        every = True
+        for g in groups:
+            ok = _group_step(g, k, u, y, margin, W, scratch, Bu, Gu, work)
+            every = every and ok
+        if not every or k == last:
+            return k
+        k += 1
+
+
+#: The groups of one call of :func:`_template_run` (a multiple of it, padded with idle groups).
+_GROUPS_PER_CALL = 4
+
+#: Steps of a time-varying model whose products ``D A_v`` :meth:`TemplateBatch.advance` makes at
+#: once (the memory of one call).
+_DPHI_CHUNK = 64
+
+
+def _invariant_product(D: np.ndarray, vA: np.ndarray) -> np.ndarray | None:
+    """``D A_v`` of every model ``(1, models, v, p, n)`` when the vertex matrices ``vA``
+    ``(models, T, v, n, n)`` are the same bits at every step (computed once, by the product each
+    step makes), else None."""
+    bits = vA.reshape(vA.shape[0], vA.shape[1], -1).view(np.uint64)
+    if vA.shape[1] == 0 or not (bits == bits[:, :1]).all():
+        return None
+    return np.ascontiguousarray(np.matmul(D, vA[:, 0])[None])
 
 
 def _vertices_many(M: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -1458,7 +1541,8 @@ class TemplateBatch:
                     f"n_u = {u.shape[2]}, got A {mdl.A.shape}, C {mdl.C.shape}, B {mdl.B.shape}"
                 )
         self.margin = real(margin, "margin", low=0.0, what="a non-negative relative inflation")
-        self.T, self.n, self.u, self.y, self.X0 = T, X0.dim, u, y, X0
+        self.T, self.n, self.X0 = T, X0.dim, X0
+        self.u, self.y = np.ascontiguousarray(u), np.ascontiguousarray(y)
         self.template = None if template is None else _arr("template", template, 2)
         self.alive = np.ones(Bn, dtype=bool)
         # observers with the same array shapes and C are stepped together
@@ -1481,9 +1565,10 @@ class TemplateBatch:
             mi = np.array([rows[id(models[b])] for b in idx])
             L = np.stack([mdl.L for mdl in uniq])
             M = np.vstack([D, first.C, -first.C])
-            # the basis route in one compiled step (_step_bases) when its normals allow it
+            # the basis route in compiled loops (advance, _template_run) when its normals allow it
             b = _bases(M.tobytes(), *M.shape) if u.shape[2] else None
             usable = b is not None and b.bounded
+            vA = np.stack([mdl._vertex_A[:T] for mdl in uniq])
             self._groups.append(
                 {
                     "idx": np.array(idx),
@@ -1493,7 +1578,9 @@ class TemplateBatch:
                     "M": M,
                     "bases": b if usable else None,
                     "invT": _inv_t(b.inv) if usable else None,
-                    "vA": np.stack([mdl._vertex_A[:T] for mdl in uniq]),
+                    "vA": vA,
+                    "DPhi": _invariant_product(D, vA),
+                    "chunk": None,  # (first step, D A_v of the steps from it) when time-varying
                     "B": np.stack([mdl.B[:T] for mdl in uniq]),
                     "B_unc": np.stack([mdl.B_unc[:T] for mdl in uniq]),
                     "noise": np.stack([mdl.noise for mdl in uniq]),
@@ -1515,30 +1602,51 @@ class TemplateBatch:
                     g["noise"][g["mi"]] - y0,
                 ]
             )
-            g["V"], g["F"] = _vertices_many(np.vstack([self.X0.M, g["C"], -g["C"]]), m)
+            X, g["F"] = _vertices_many(np.vstack([self.X0.M, g["C"], -g["C"]]), m)
+            g["V"] = np.ascontiguousarray(np.swapaxes(X, 1, 2))  # a vertex per column
             self.alive[g["idx"]] = g["F"].any(axis=1)
         return ~self.alive
 
     def update(self, k: int, which: np.ndarray | None = None) -> np.ndarray:
         """X̂(k) from X̂(k-1) for the live observers in the mask ``which`` (default all);
         returns the mask of the observers that became empty at k."""
+        return self.advance(k, which, last=k)[1]
+
+    def advance(
+        self, k: int, which: np.ndarray | None = None, last: int | None = None
+    ) -> tuple[int, np.ndarray]:
+        """:meth:`update` at k, k + 1, ... ``last`` (default T) for the live observers in the mask
+        ``which`` (default all), in one compiled loop (the same bits), until the first step at
+        which a set has no feasible basis (it may be empty: the LP decides) or ``last``; returns
+        the last step made and the mask of the observers that became empty at it. The array route
+        (a group whose normals have no usable bases) makes one step per call."""
         if not 1 <= k <= self.T:
             raise ModelError(f"k: expected a sample in [1, {self.T}], got {k}")
+        last = self.T if last is None else last
+        if not k <= last <= self.T:
+            raise ModelError(f"last: expected a sample in [{k}, {self.T}], got {last}")
         which = self.alive if which is None else self.alive & np.asarray(which, dtype=bool)
         before = self.alive.copy()
-        for g in self._groups:
-            a = np.flatnonzero(which[g["idx"]])
-            if a.size:
+        live = [(g, np.flatnonzero(which[g["idx"]])) for g in self._groups]
+        live = [(g, a) for g, a in live if a.size]
+        if any(g["bases"] is None for g, _ in live):
+            last = k
+        fused = [(g, a) for g, a in live if g["bases"] is not None]
+        for g, _ in fused:
+            if g["DPhi"] is None:  # D A_v of each step: a chunk at a time
+                last = min(last, self._chunk(g, k))
+        if fused:
+            last = self._run_bases(fused, k, last)
+        for g, a in live:
+            if g["bases"] is None:
                 self._step(g, a, k)
-        return before & ~self.alive
+        return last, before & ~self.alive
 
     def _step(self, g: dict, a: np.ndarray, k: int) -> None:
+        """One step by the array route (:func:`_dot` products, :func:`_vertices_many`)."""
         D, obs = g["D"], g["idx"][a]
         mi = g["mi"][a]  # the observers' rows in the model arrays
         DPhi = np.matmul(D, g["vA"][:, k - 1])  # (models, 2^n_A, p, n): D A_v of each model
-        if g["bases"] is not None:
-            self._step_bases(g, a, k, DPhi)
-            return
         W = _support_max(DPhi, mi, g["V"], g["F"], a)  # (a, p): over A_v and the live vertices
         uk = self.u[obs, k - 1]
         c = _dot(D, _dot(g["B"][mi, k - 1], uk))  # D B u
@@ -1551,58 +1659,79 @@ class TemplateBatch:
         nb = g["noise"][mi] * (1.0 + self.margin) + self.margin
         yk = self.y[obs, k]
         X, Fn = _vertices_many(g["M"], np.column_stack([h, nb + yk, nb - yk]))
-        if g["V"].shape[1] < X.shape[1]:
+        if g["V"].shape[2] < X.shape[1]:
             self._widen(g, X.shape[1])
-        g["V"][a, : X.shape[1]], g["F"][a, : X.shape[1]] = X, Fn
+        g["V"][a, :, : X.shape[1]], g["F"][a, : X.shape[1]] = np.swapaxes(X, 1, 2), Fn
         g["F"][a, X.shape[1] :] = False
         self.alive[obs] = Fn.any(axis=1)
 
-    def _step_bases(self, g: dict, a: np.ndarray, k: int, DPhi: np.ndarray) -> None:
-        """:meth:`_step` by the basis route in one compiled pass (:func:`_template_step`, the same
-        bits), the vertices written in place; a set with no feasible basis goes to
-        :func:`~fdi_lib.sets.polytope._enumerate_vertices` (emptiness by LP), as in
-        :func:`_vertices_many`."""
-        b, obs, M = g["bases"], g["idx"][a], g["M"]
-        K = b.idx.shape[0]
-        if g["V"].shape[1] < K:
-            self._widen(g, K)
-        m = np.empty((len(a), M.shape[0]))
-        found = np.empty(len(a), dtype=bool)
-        _template_step(
+    def _chunk(self, g: dict, k: int) -> int:
+        """``D A_v`` of a time-varying group at step ``k`` and up to ``_DPHI_CHUNK - 1`` steps after
+        it (by the product the array route makes), kept until a step beyond them; returns the last
+        step it holds."""
+        if g["chunk"] is None or not g["chunk"][0] <= k < g["chunk"][0] + len(g["chunk"][1]):
+            steps = range(k, min(self.T, k + _DPHI_CHUNK - 1) + 1)
+            g["chunk"] = (k, np.stack([np.matmul(g["D"], g["vA"][:, j - 1]) for j in steps]))
+        return g["chunk"][0] + len(g["chunk"][1]) - 1
+
+    def _kernel_group(self, g: dict, a: np.ndarray, k: int) -> tuple:
+        """The arrays of one group for :func:`_group_step` from step ``k`` on (within the group's
+        chunk, :meth:`_chunk`, when it is time-varying)."""
+        b = g["bases"]
+        if g["V"].shape[2] < b.idx.shape[0]:
+            self._widen(g, b.idx.shape[0])
+        first, DPhi = (k, g["DPhi"]) if g["DPhi"] is not None else g["chunk"]
+        return (
             DPhi,
-            g["mi"][a],
+            first,
             a,
+            g["idx"][a],
+            g["mi"][a],
             g["V"],
             g["F"],
-            g["D"],
-            g["B"][:, k - 1],
-            g["B_unc"][:, k - 1],
-            self.u[obs, k - 1],
+            np.ascontiguousarray(g["D"]),  # one array type for every group
+            g["B"],
+            g["B_unc"],
             g["sL"],
             g["noise"],
-            self.y[obs, k],
-            self.margin,
             b.norms,
             b.pad,
             b.idx,
             g["invT"],
             b.U,
             b.zero,
-            m,
-            found,
+            np.empty((len(a), g["M"].shape[0])),
+            np.empty(len(a), dtype=bool),
         )
-        for i in np.flatnonzero(~found):
-            V = _enumerate_vertices(M, m[i])
-            if len(V) > g["V"].shape[1]:
-                self._widen(g, len(V))
-            g["V"][a[i], : len(V)], g["F"][a[i], : len(V)] = V, True
-            found[i] = len(V) > 0
-        self.alive[obs] = found
+
+    def _run_bases(self, fused: list, k: int, last: int) -> int:
+        """Steps ``k`` to ``last`` of the groups ``fused`` (pairs group, observers) by the basis
+        route in one compiled loop (:func:`_template_run`), the vertices written in place; a set
+        with no feasible basis goes to :func:`~fdi_lib.sets.polytope._enumerate_vertices`
+        (emptiness by LP), as in :func:`_vertices_many`. Returns the last step made."""
+        args = [self._kernel_group(g, a, k) for g, a in fused]
+        # padded with observer-less copies of the first group to a multiple of _GROUPS_PER_CALL:
+        # one compiled signature whatever the number of groups
+        idle = (
+            args[0][:2] + (args[0][2][:0],) + args[0][3:-2] + (np.empty((0, 0)), np.empty(0, bool))
+        )
+        pad = [idle] * (-len(args) % _GROUPS_PER_CALL)
+        last = _template_run(tuple(args + pad), self.u, self.y, k, last, self.margin)
+        for (g, a), arg in zip(fused, args):
+            m, found = arg[-2:]
+            for i in np.flatnonzero(~found):
+                V = _enumerate_vertices(g["M"], m[i])
+                if len(V) > g["V"].shape[2]:
+                    self._widen(g, len(V))
+                g["V"][a[i], :, : len(V)], g["F"][a[i], : len(V)] = V.T, True
+                found[i] = len(V) > 0
+            self.alive[g["idx"][a]] = found
+        return last
 
     def _widen(self, g: dict, K: int) -> None:
         """Room for ``K`` vertices per observer in the group's arrays (zeros, not live)."""
-        pad = K - g["V"].shape[1]
-        g["V"] = np.concatenate([g["V"], np.zeros((len(g["idx"]), pad, self.n))], axis=1)
+        pad = K - g["V"].shape[2]
+        g["V"] = np.concatenate([g["V"], np.zeros((len(g["idx"]), self.n, pad))], axis=2)
         g["F"] = np.concatenate([g["F"], np.zeros((len(g["idx"]), pad), dtype=bool)], axis=1)
 
     def bounding_boxes(self) -> tuple[np.ndarray, np.ndarray]:
@@ -1612,7 +1741,8 @@ class TemplateBatch:
         upper = lower.copy()
         for g in self._groups:
             live = self.alive[g["idx"]]
-            V, F = g["V"][live], g["F"][live][:, :, None]
+            V = np.ascontiguousarray(np.swapaxes(g["V"][live], 1, 2))  # a vertex per row
+            F = g["F"][live][:, :, None]
             lower[g["idx"][live]] = np.where(F, V, np.inf).min(axis=1)
             upper[g["idx"][live]] = np.where(F, V, -np.inf).max(axis=1)
         return lower, upper
@@ -1673,12 +1803,14 @@ def run_svo_many(
         lower = np.full((len(empty_at), T + 1, bank.n), np.nan)
         upper = lower.copy()
         lower[:, 0], upper[:, 0] = bank.bounding_boxes()
-    for k in range(1, T + 1):
-        if not bank.alive.any():
-            break
-        empty_at[bank.update(k)] = k
+    k = 1
+    while k <= T and bank.alive.any():
+        # to the next set with no feasible basis in one call, one step at a time for the boxes
+        k, emptied = bank.advance(k, last=k if bounds else T)
+        empty_at[emptied] = k
         if bounds:
             lower[:, k], upper[:, k] = bank.bounding_boxes()
+        k += 1
     return SVOBatchRun(tuple(None if e < 0 else int(e) for e in empty_at), lower, upper)
 
 
@@ -1732,16 +1864,19 @@ def run_architecture_i_many(
     det = np.full(R, -1)
     iso = np.full(R, -1)
     done = np.zeros(R, dtype=bool)
-    for k in range(bank.T + 1):
-        if k > 0:
-            empty_at.reshape(-1)[bank.update(k, np.repeat(~done, per))] = k
+    k = 0
+    while True:
+        # the decisions change only where a set empties: from one such step to the next in one
+        # call (TemplateBatch.advance), the same as every step
         det = np.where((det < 0) & (empty_at[:, 0] >= 0), k, det)
         live = (empty_at[:, 1:] < 0).sum(axis=1)
         found = ~done & (det >= 0) & (live == 1)
         iso[found] = k
         done |= found | ((det >= 0) & (live == 0))
-        if done.all():
+        if done.all() or k == bank.T:
             break
+        k, emptied = bank.advance(k + 1, np.repeat(~done, per))
+        empty_at.reshape(-1)[emptied] = k
     out = []
     for r in range(R):
         e = {name: None if v < 0 else int(v) for name, v in zip(["nominal", *names], empty_at[r])}

@@ -91,6 +91,8 @@ def test_model_sequence_and_batch_reject_bad_input():
     bank.start()
     with pytest.raises(ModelError, match=r"k: expected a sample in \[1, 3\], got 4"):
         bank.update(4)
+    with pytest.raises(ModelError, match=r"last: expected a sample in \[2, 3\], got 1"):
+        bank.advance(2, last=1)
 
 
 def test_batch_equals_one_observer_at_a_time_on_random_systems():
@@ -178,11 +180,11 @@ def test_support_max_is_dot_then_max_bit_for_bit():
 
     rng = np.random.default_rng(5)
     DPhi = rng.normal(size=(7, 4, 6, 3)) * 10.0 ** rng.integers(-3, 4, size=(7, 4, 6, 1))
-    V = rng.normal(size=(7, 9, 3))
+    V = rng.normal(size=(7, 3, 9))  # a vertex per column
     F = rng.random((7, 9)) < 0.6
     F[:, 0] = True
     ref = np.stack(
-        [_dot(DPhi[a][:, None], V[a][F[a]][None]).reshape(-1, 6).max(axis=0) for a in range(7)]
+        [_dot(DPhi[a][:, None], V[a].T[F[a]][None]).reshape(-1, 6).max(axis=0) for a in range(7)]
     )
     rows = np.arange(7)
     assert np.array_equal(_support_max(DPhi, rows, V, F, rows), ref)
@@ -204,13 +206,13 @@ def _stepped(models, u, y, X0, array_route: bool):
     out = []
     for k in range(1, bank.T + 1):
         bank.update(k)
-        sets = [(g["V"][g["F"]].copy(), g["F"].copy()) for g in bank._groups]
+        sets = [(np.swapaxes(g["V"], 1, 2)[g["F"]], g["F"].copy()) for g in bank._groups]
         out.append((bank.alive.copy(), sets))
     return out
 
 
 def test_compiled_step_equals_the_array_route_bit_for_bit():
-    """TemplateBatch._step_bases (one compiled pass, vertices in place) gives the sets of the array
+    """TemplateBatch.update (the compiled basis route, vertices in place) gives the sets of the array
     route (_dot products, _vertices_many) to the last bit, with sets emptied on the way."""
     models, u, y = _records(7, 12)
     seqs = [_constant(m, u.shape[1]) for m in models]
@@ -232,3 +234,57 @@ def test_compiled_step_equals_the_array_route_bit_for_bit():
             for (Vf, Ff), (Vr, Fr) in zip(sets_f, sets_r):
                 assert np.array_equal(Ff, Fr[:, : Ff.shape[1]]) and not Fr[:, Ff.shape[1] :].any()
                 assert np.array_equal(Vf, Vr)
+
+
+def _advanced(models, u, y, X0):
+    """A TemplateBatch run to the end by :meth:`TemplateBatch.advance` (from one set with no
+    feasible basis to the next); the step reached, the masks of the sets emptied there and
+    alive, and the live vertices after each call."""
+    bank = TemplateBatch(models, u, y, X0)
+    bank.start()
+    out, k = [], 1
+    while k <= bank.T and bank.alive.any():
+        k, emptied = bank.advance(k)
+        out.append(
+            (
+                k,
+                emptied,
+                bank.alive.copy(),
+                [np.swapaxes(g["V"], 1, 2)[g["F"]] for g in bank._groups],
+            )
+        )
+        k += 1
+    return out
+
+
+def test_advance_equals_one_step_at_a_time_bit_for_bit():
+    """TemplateBatch.advance (many steps in one compiled loop, D A_v once for a model the same at
+    every step, a chunk at a time for a time-varying one) stops where a set has no feasible basis
+    and gives the sets of update, one step at a time, to the last bit."""
+    models, u, y = _records(11, 7, 30)
+    seqs = [_constant(m, u.shape[1]) for m in models]
+    runs = uav.simulate_many(
+        [("alpha", "step"), ("elevator", "hard")],
+        [np.random.default_rng(s) for s in range(2)],
+        duration=1.0,
+    )
+    uav_models = [uav.svo_models(r, f) for r in runs for f in ("nominal", *uav.FAULTS)]
+    per = 1 + len(uav.FAULTS)
+    uav_u = np.repeat(np.stack([r.u for r in runs]), per, axis=0)
+    uav_y = np.repeat(np.stack([r.y for r in runs]), per, axis=0)
+    for args, invariant in (
+        ((seqs, u, y, X0), True),
+        ((uav_models, uav_u, uav_y, R.UAV_X0), False),
+    ):
+        assert all((g["DPhi"] is not None) == invariant for g in TemplateBatch(*args)._groups)
+        fused = _advanced(*args)
+        ref = _stepped(*args, array_route=False)
+        assert len(fused) < len(ref)  # several steps per call
+        assert any(e.any() for _, e, _, _ in fused)  # some sets emptied on the way
+        for k, emptied, alive, sets in fused:
+            alive_r, sets_r = ref[k - 1]
+            assert np.array_equal(alive, alive_r)
+            if k > 1:
+                assert np.array_equal(emptied, ref[k - 2][0] & ~alive_r)
+            for V, (Vr, _) in zip(sets, sets_r):
+                assert np.array_equal(V.view(np.uint64), Vr.view(np.uint64))
