@@ -504,9 +504,18 @@ class WindowedGLR:
     def _score_terms(self, ks: slice, e_w: np.ndarray) -> np.ndarray:
         """Terms of the samples ``ks`` (a range of ``K``) in every ``d_k(r)``, ``(K, w, m, B)``, from
         their whitened innovations ``e_w`` ``(K, p, B)`` (eq. (28))."""
-        if self._per_realisation:
-            return np.einsum("kwbmp,kpb->kwmb", self._sig_wT[ks], e_w)
-        return self._sig_wT[ks] @ e_w[:, None]
+        S = self._sig_wT[ks]  # (K, w, m, p), or (K, w, B, m, p)
+        if self._per_realisation:  # the sum over p in order, then + 0.0: the bits of an einsum
+            t = S[..., 0] * e_w[:, None, 0, :, None]  # (K, w, B, m)
+            for i in range(1, S.shape[-1]):
+                t += S[..., i] * e_w[:, None, i, :, None]
+            t += 0.0  # a sum of -0.0 terms is +0.0, as einsum's (which starts from 0.0)
+            return np.swapaxes(t, -1, -2)
+        K, w, m, p = S.shape
+        if m == 1:  # (1, p) @ (p, B) per onset: numpy's gemv, whose bits a gemm does not keep
+            return S @ e_w[:, None]
+        # one matrix product (w m, p) @ (p, B) per sample, not w: the same gemm per entry
+        return (S.reshape(K, w * m, p) @ e_w).reshape(K, w, m, -1)
 
     def fresh(self, batch_shape: tuple[int, ...] = ()) -> "WindowedGLR":
         """A new detector at ``k = 0`` for innovations of leading shape ``batch_shape``.

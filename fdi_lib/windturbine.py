@@ -46,6 +46,7 @@ import functools
 from dataclasses import dataclass
 from typing import Any, Callable, Mapping, Sequence
 
+import numba
 import numpy as np
 import scipy.linalg
 import scipy.stats
@@ -1099,6 +1100,29 @@ def _residuals(
     return out
 
 
+@numba.njit(cache=True)
+def _window_correlations(r: np.ndarray, kern: np.ndarray) -> np.ndarray:
+    """``out[b, j, k] = sum_i sum_q r[b, q, k + i] kern[i, q, j]`` for residuals ``r`` ``(B, p, N)``
+    (samples last) and a kernel ``kern`` ``(w, p, m)``, ``k = 0 .. N - w``: each sum from 0.0 over
+    ``i``, then ``q``, in order: for ``m >= 2`` (every subsystem's candidates) the bits of
+    ``einsum("bkpw,wpm->bkm")`` on the sliding windows of the residuals, which sums in this order (for
+    ``m = 1`` it sums by partial sums), as whole rows of ``k`` at a time (no strided iteration)."""
+    B, p, N = r.shape
+    w, m = kern.shape[0], kern.shape[2]
+    K = N - w + 1
+    out = np.zeros((B, m, K))
+    for b in range(B):
+        for i in range(w):
+            for q in range(p):
+                x = r[b, q, i : i + K]
+                for j in range(m):
+                    c = kern[i, q, j]
+                    o = out[b, j]
+                    for k in range(K):
+                        o[k] += x[k] * c
+    return out
+
+
 def _lasso_test(d: Design, res: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> list[np.ndarray]:
     """Per subsystem, ``max_j |X_j^T y| / ||X_j||`` over the last ``w`` whitened residuals
     (Zhang 2021's detection: the Lasso of the window is not identically zero), ``nan`` before
@@ -1109,8 +1133,8 @@ def _lasso_test(d: Design, res: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> 
         r, S = res[name]
         kern = S[d.warmup : d.warmup + w]  # (w, p, m): onset at window start
         norm = np.sqrt(np.einsum("wpm,wpm->m", kern, kern))
-        win = np.lib.stride_tricks.sliding_window_view(r, w, axis=1)  # (B, N-w+1, p, w)
-        t = np.einsum("bkpw,wpm->bkm", win, kern) / norm
+        rT = np.ascontiguousarray(np.swapaxes(r, 1, 2))
+        t = np.swapaxes(_window_correlations(rT, np.ascontiguousarray(kern)), 1, 2) / norm
         st = np.full(r.shape[:2], np.nan)
         st[:, w - 1 :] = np.abs(t).max(axis=-1)
         stats.append(st)

@@ -218,3 +218,20 @@ def test_shape_errors_of_per_realisation_profiles():
         NonFiniteError, match=r"Psi: expected finite values, got inf at index \(1, 5, 0, 0\)"
     ):
         step_family(model, Psi=bad)
+
+
+@pytest.mark.parametrize("m", [1, 2, 3])
+def test_score_terms_are_the_bits_of_the_products_they_replace(m):
+    """WindowedGLR._score_terms: with per-realisation profiles, the sum over the outputs written out
+    has the bits of the einsum it replaces; with a shared family, one (w m, p) @ (p, B) product per
+    sample those of w products (m, p) @ (p, B) (for m = 1, gemv: kept as w products)."""
+    model, gains, eps, Psi, Phi = _setup((4,), m, seed=3)
+    e_w = np.random.default_rng(1).standard_normal((N, p, 4))
+    e_w[3, 0] = -0.0
+    own = WindowedGLR(model, gains, step_family(model, Psi=Psi, Phi=Phi), W, batch_shape=(4,))
+    ref = np.einsum("kwbmp,kpb->kwmb", own._sig_wT, e_w)
+    assert own._score_terms(slice(0, N), e_w).tobytes() == np.ascontiguousarray(ref).tobytes()
+    shared = WindowedGLR(model, gains, step_family(model, Psi=Psi[0], Phi=Phi[1]), W)
+    ref = shared._sig_wT @ e_w[:, None]
+    got = shared._score_terms(slice(0, N), e_w)
+    assert np.ascontiguousarray(got).tobytes() == ref.tobytes()

@@ -52,6 +52,20 @@ def _one_step_error(faulty: bool) -> dict[str, float]:
     return out
 
 
+def test_window_correlations_are_the_bits_of_the_einsum():
+    """The Lasso test's compiled window sums (W._window_correlations) against the einsum on the
+    sliding windows that they replace, bit for bit (sizes of the blades and the drive train)."""
+    rng = np.random.default_rng(4)
+    for B, N, p, w, m in ((3, 120, 2, 30, 3), (2, 90, 5, 50, 7), (1, 40, 1, 40, 2)):
+        r = rng.standard_normal((B, N, p))
+        kern = rng.standard_normal((w, p, m))
+        ref = np.einsum(
+            "bkpw,wpm->bkm", np.lib.stride_tricks.sliding_window_view(r, w, axis=1), kern
+        )
+        out = W._window_correlations(np.ascontiguousarray(np.swapaxes(r, 1, 2)), kern)
+        assert np.ascontiguousarray(np.swapaxes(out, 1, 2)).tobytes() == ref.tobytes()
+
+
 def test_subsystem_models_reproduce_the_simulator():
     """Independent check against the simulator's true states: with healthy sensors every
     subsystem's one-step prediction is exact to rounding; a stuck pitch sensor (the servo's loop
