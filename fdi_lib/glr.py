@@ -139,30 +139,6 @@ def _small_eigh(C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.diagonal(A, axis1=-2, axis2=-1).copy(), V
 
 
-def _slot_sums(x: np.ndarray, k0: int, init: np.ndarray) -> np.ndarray:
-    """The running sums of a window's slots over samples ``k0 .. k0 + K - 1``, all at once.
-
-    ``x`` ``(K, w, ...)`` holds each sample's term in every slot ``j`` (onset ``r = j mod w``) and
-    ``init`` ``(w, ...)`` the sums before ``k0``. Returns ``S`` ``(K, w, ...)``, ``S[i]`` the sums
-    after sample ``k = k0 + i``: the same bits as the loop ``acc[k % w] = 0.0; acc += x[i];
-    S[i] = acc`` (slot ``k mod w`` restarts at ``k``), by one sequential ``cumsum`` per segment between
-    restarts. Each slot's samples are laid out along a segment axis at their place in it (the samples
-    of a segment begun before ``k0`` after ``init``, the others after ``0.0``); the gaps hold ``-0.0``,
-    the exact identity of IEEE addition, so every sum is the loop's.
-    """
-    K, w = x.shape[:2]
-    jj = np.arange(w)
-    o = (k0 - jj) % w  # samples of the slot's current segment before k0
-    t = np.arange(K)[:, None] + o  # (K, w): place of each sample in its slot's segments
-    a, c = t // w, 1 + t % w
-    Z = np.full((-(-(K + w) // w), w + 1, *x.shape[1:]), -0.0)
-    Z[a, c, jj] = x
-    Z[:, 0] = 0.0  # a restart: 0.0 + the first term, as the loop
-    Z[0, 0, o > 0] = init[o > 0]  # the segments begun before k0 go on from init
-    np.cumsum(Z, axis=1, out=Z)
-    return Z[a, c, jj]
-
-
 def quadratic_form(C: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(d^T C^+ d, C^+ d)`` for symmetric PSD ``C`` ``(..., m, m)`` and ``d`` ``(..., m)``.
 
@@ -479,7 +455,12 @@ class WindowedGLR:
         self._sig_wT = np.ascontiguousarray(np.transpose(sig_w, (0, 2, 3, 4, 1)))  # (N, w, F, m, p)
         inc = np.einsum("kpwfi,kpwfj->kwfij", sig_w, sig_w)  # (N, w, F, m, m)
         del sig_w
-        C = _slot_sums(inc, 0, np.zeros((w, F, m, m)))  # C_k(r), recursively (27)
+        C = np.empty_like(inc)
+        acc = np.zeros((w, F, m, m))
+        for k in range(N):
+            acc[k % w] = 0.0
+            acc += inc[k]
+            C[k] = acc
         del inc
         self._onsets = onset
         self._allowed = (onset >= 0) & (onset <= k_all[:, None] - self.min_samples)  # (N, w)
@@ -662,8 +643,12 @@ class WindowedGLR:
         for k0 in range(max(0, start - w + 1), N, block):
             ks = np.arange(k0, min(N, k0 + block))
             now = slice(k0, k0 + ks.size)  # ks as a slice: views, not copies
-            D = _slot_sums(self._score_terms(now, e_w[now]), k0, self._d)  # (K, w, m, B)
-            self._d = D[-1].copy()
+            D = np.empty((ks.size, w, m, B))
+            terms = self._score_terms(now, e_w[now])
+            for i, k in enumerate(ks):
+                self._d[k % w] = 0.0
+                self._d += terms[i]
+                D[i] = self._d
             root = self._root[now]  # (K, w, m, m), or (K, w, B, m, m)
             q = self._project(root, D)  # (K, w, m, B)
             st = np.einsum("kwmb,kwmb->kwb", q, q)  # (35)
