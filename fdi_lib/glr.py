@@ -406,12 +406,24 @@ class WindowedGLR:
         self.k = 0
 
     def _shared(self) -> None:
-        """Everything noise-independent, for all ``k`` at once (stacks indexed by slot ``r mod w``).
+        """Everything noise-independent, for all ``k`` at once (stacks indexed by slot ``r mod w``):
+        :meth:`_shared_blocks` as one block of all the samples, kept."""
+        for _, self._sig_wT, self._Cs, self._root in self._shared_blocks(self.model.n_steps):
+            pass
+
+    def _shared_blocks(self, size: int):
+        """The noise-independent arrays by blocks of ``size`` samples: yields ``(ks, sig_wT, C,
+        root)``, ``ks`` the block's slice of samples (the first block's arrays before the second is
+        computed: the memory of one block, whatever ``N``).
 
         ``Gamma_k(r)`` by the recursion (31) (one vectorised step per sample over the window's
-        onsets), then in single array operations over all ``(k, r)``: the whitened signatures
-        ``Sigma_k^{-1/2} (H_k Gamma_k(r) + Phi~_k)``, the informations ``C_k(r)`` (sums (32),
-        recursively (27)), and the factors of their pseudo-inverses ``C^+ = R R^T``.
+        onsets), then in single array operations over the block's ``(k, r)``: the whitened
+        signatures ``Sigma_k^{-1/2} (H_k Gamma_k(r) + Phi~_k)`` (``sig_wT``), the informations
+        ``C_k(r)`` (sums (32), recursively (27)), and the factors of their pseudo-inverses
+        ``C^+ = R R^T`` (``root``). Every entry is the same operation whatever the blocks
+        (products per sample, elementwise operations, one decomposition per matrix), except the
+        Jacobi sweeps of ``3 <= m <= 4``, whose number the whole stack sets (:func:`_small_eigh`).
+        Also sets the onsets, admissible slots and ``Sigma_k^{-1/2}`` of all samples.
         """
         model, g, fam, w = self.model, self.gains, self.family, self.window
         N, n, p, m = model.n_steps, model.n, model.p, fam.m
@@ -423,52 +435,60 @@ class WindowedGLR:
         # onset held by slot j at time k: the r = j mod w in (k - w, k] (-1 before the record)
         onset = k_all[:, None] - (k_all[:, None] - np.arange(w)[None, :]) % w  # (N, w)
         onset[onset < 0] = -1
-        # Gamma_k(r) as (n, w F m): slots (and realisations) side by side, so that (31) is one
-        # matrix product per sample
-        Gamma = np.zeros((N, n, w, F, m))
-        flat = Gamma.reshape(N, n, w * F * m)
+        self._onsets = onset
+        self._allowed = (onset >= 0) & (onset <= k_all[:, None] - self.min_samples)  # (N, w)
+        self._Linv = np.linalg.inv(g.Sigma_chol)  # Sigma_k^{-1/2}, (N, p, p)
         drive_c = np.ascontiguousarray(np.transpose(drive, (2, 1, 0, 3)))  # (n, N, F, m)
         started = onset >= 0
         full = started.all(axis=1)  # every slot holds an onset: no mask needed
-        for k in range(1, N):  # Gamma_0 = 0
-            # Gamma_k(r) = A_{k-1} Gamma_{k-1}(r) + drive_{k-1}(r), eq. (31)
-            np.matmul(g.A[k - 1], flat[k - 1], out=flat[k])
-            if fam.kind == "step":
-                if full[k - 1]:
-                    Gamma[k] += drive_c[:, k - 1, None, :, :]
-                else:
-                    Gamma[k] += started[k - 1][None, :, None, None] * drive_c[:, k - 1, None, :, :]
-            # impulse: Psi_{k-1}(r) != 0 only for r = k
-            Gamma[k][:, k % w] = drive_c[:, k - 1] if fam.kind == "impulse" else 0.0  # r = k enters
-        sig = (model.H @ Gamma.reshape(N, n, w * F * m)).reshape(N, p, w, F, m)
-        del Gamma
-        if fam.kind == "step":  # + Phi~_k for the started onsets (in place, no temporary)
-            Phi_k = np.moveaxis(Phi, 0, 2)[:, :, None, :, :]  # (N, p, 1, F, m)
-            head = min(N, w - 1)  # before, some slots hold no onset yet; after, all do
-            sig[:head] = sig[:head] + started[:head, None, :, None, None] * Phi_k[:head]
-            sig[head:] += Phi_k[head:]  # times True is the same bits
-        self._Linv = np.linalg.inv(g.Sigma_chol)  # Sigma_k^{-1/2}, (N, p, p)
-        sig_w = (self._Linv @ sig.reshape(N, p, w * F * m)).reshape(sig.shape)
-        del sig
-        if self._skipped.any():  # a sample the filter skipped adds nothing to C_k(r) and d_k(r)
-            sig_w[self._skipped] = 0.0
-        self._sig_wT = np.ascontiguousarray(np.transpose(sig_w, (0, 2, 3, 4, 1)))  # (N, w, F, m, p)
-        inc = np.einsum("kpwfi,kpwfj->kwfij", sig_w, sig_w)  # (N, w, F, m, m)
-        del sig_w
-        C = np.empty_like(inc)
-        acc = np.zeros((w, F, m, m))
-        for k in range(N):
-            acc[k % w] = 0.0
-            acc += inc[k]
-            C[k] = acc
-        del inc
-        self._onsets = onset
-        self._allowed = (onset >= 0) & (onset <= k_all[:, None] - self.min_samples)  # (N, w)
-        V, inv = _pinv_factors(C)
-        root = V * np.sqrt(inv)[..., None, :]  # C^+ = root root^T
-        if not self._per_realisation:  # drop the realisation axis of a shared family
-            self._sig_wT, C, root = self._sig_wT[:, :, 0], C[:, :, 0], root[:, :, 0]
-        self._Cs, self._root = C, root
+        Phi_k = np.moveaxis(Phi, 0, 2)[:, :, None, :, :]  # (N, p, 1, F, m)
+        head = min(N, w - 1)  # before, some slots hold no onset yet; after, all do
+        last = np.zeros((n, w * F * m))  # Gamma_{k0 - 1} of the block starting at k0
+        acc = np.zeros((w, F, m, m))  # C_{k0 - 1}(r)
+        for k0 in range(0, N, size):
+            K = min(size, N - k0)
+            # Gamma_k(r) as (n, w F m): slots (and realisations) side by side, so that (31) is one
+            # matrix product per sample
+            Gamma = np.zeros((K, n, w, F, m))
+            flat = Gamma.reshape(K, n, w * F * m)
+            for k in range(max(k0, 1), k0 + K):  # Gamma_0 = 0
+                i = k - k0
+                # Gamma_k(r) = A_{k-1} Gamma_{k-1}(r) + drive_{k-1}(r), eq. (31)
+                np.matmul(g.A[k - 1], flat[i - 1] if i else last, out=flat[i])
+                if fam.kind == "step":
+                    if full[k - 1]:
+                        Gamma[i] += drive_c[:, k - 1, None, :, :]
+                    else:
+                        Gamma[i] += started[k - 1][None, :, None, None] * drive_c[:, k - 1, None]
+                # impulse: Psi_{k-1}(r) != 0 only for r = k
+                Gamma[i][:, k % w] = drive_c[:, k - 1] if fam.kind == "impulse" else 0.0  # r = k
+            last = flat[-1].copy()
+            sig = (model.H[k0 : k0 + K] @ flat).reshape(K, p, w, F, m)
+            del Gamma, flat
+            if fam.kind == "step":  # + Phi~_k for the started onsets (in place, no temporary)
+                h = min(K, max(0, head - k0))
+                ph = Phi_k[k0 : k0 + K]
+                sig[:h] = sig[:h] + started[k0 : k0 + h, None, :, None, None] * ph[:h]
+                sig[h:] += ph[h:]  # times True is the same bits
+            sig_w = (self._Linv[k0 : k0 + K] @ sig.reshape(K, p, w * F * m)).reshape(sig.shape)
+            del sig
+            if self._skipped[k0 : k0 + K].any():  # a skipped sample adds nothing to C_k(r), d_k(r)
+                sig_w[self._skipped[k0 : k0 + K]] = 0.0
+            sig_wT = np.ascontiguousarray(np.transpose(sig_w, (0, 2, 3, 4, 1)))  # (K, w, F, m, p)
+            inc = np.einsum("kpwfi,kpwfj->kwfij", sig_w, sig_w)  # (K, w, F, m, m)
+            del sig_w
+            C = np.empty_like(inc)
+            for k in range(k0, k0 + K):
+                acc[k % w] = 0.0
+                acc += inc[k - k0]
+                C[k - k0] = acc
+            del inc
+            V, inv = _pinv_factors(C)
+            root = V * np.sqrt(inv)[..., None, :]  # C^+ = root root^T
+            del V, inv
+            if not self._per_realisation:  # drop the realisation axis of a shared family
+                sig_wT, C, root = sig_wT[:, :, 0], C[:, :, 0], root[:, :, 0]
+            yield slice(k0, k0 + K), sig_wT, C, root
 
     def _project(self, root: np.ndarray, d: np.ndarray) -> np.ndarray:
         """``R^T d`` per onset (and realisation): ``root`` ``(..., m, m)`` (or ``(..., B, m, m)`` for
@@ -482,10 +502,10 @@ class WindowedGLR:
         (its realisation axis after the slot): the chosen onset's entry for every realisation."""
         return arr[(*index, cols)] if self._per_realisation else arr[index]
 
-    def _score_terms(self, ks: slice, e_w: np.ndarray) -> np.ndarray:
-        """Terms of the samples ``ks`` (a range of ``K``) in every ``d_k(r)``, ``(K, w, m, B)``, from
-        their whitened innovations ``e_w`` ``(K, p, B)`` (eq. (28))."""
-        S = self._sig_wT[ks]  # (K, w, m, p), or (K, w, B, m, p)
+    def _score_terms(self, S: np.ndarray, e_w: np.ndarray) -> np.ndarray:
+        """Terms of ``K`` samples in every ``d_k(r)``, ``(K, w, m, B)``, from their whitened
+        signatures ``S`` (``sig_wT`` of :meth:`_shared_blocks`: ``(K, w, m, p)``, or
+        ``(K, w, B, m, p)``) and innovations ``e_w`` ``(K, p, B)`` (eq. (28))."""
         if self._per_realisation:  # the sum over p in order, then + 0.0: the bits of an einsum
             t = S[..., 0] * e_w[:, None, 0, :, None]  # (K, w, B, m)
             for i in range(1, S.shape[-1]):
@@ -580,7 +600,8 @@ class WindowedGLR:
         # New onset r = k enters the window (replacing r = k - w); scores (33), recursively (28).
         slot = k % w
         self._d[slot] = 0.0
-        self._C_missing[slot] = 0.0
+        if self._dropped >= 0:  # zero until a sample is dropped
+            self._C_missing[slot] = 0.0
         if skip and not self._skipped[k]:  # a dropped innovation contributes nothing: its score
             # term is zero, its information term (precomputed in C_k(r)) is subtracted for every
             # onset it belongs to
@@ -588,7 +609,7 @@ class WindowedGLR:
             self._dropped = k
         elif not skip:
             e_w = self._Linv[k] @ eps_k.T  # (p, B)
-            self._d += self._score_terms(slice(k, k + 1), e_w[None])[0]
+            self._d += self._score_terms(self._sig_wT[k : k + 1], e_w[None])[0]
         self.k = k + 1
         if self._admissible is None:  # built by the first update (a whole record never needs it)
             self._admissible = [np.nonzero(a)[0] for a in self._allowed]
@@ -606,8 +627,8 @@ class WindowedGLR:
             onsets, allowed = self._onsets[k], self._allowed[k]
         q = self._project(root, d)  # (S, m, B)
         stat = np.einsum("smb,smb->sb", q, q)  # (35) for every onset, (S, B)
-        if allowed is not None:
-            stat = np.where(allowed[:, None], stat, -np.inf)
+        if allowed is not None:  # (in place: stat is a new array)
+            stat[~allowed] = -np.inf
         best = np.argmax(
             stat, axis=0
         )  # (36), (B,): the first of equal ones, as among the admissible
@@ -616,7 +637,7 @@ class WindowedGLR:
         th = (self._pick(root, (best,), cols) @ q[best, :, cols][..., None])[..., 0]  # (34): C^+ d
         return l_k, onsets[best], th, self._pick(C, (best,), cols), d[best, :, cols]
 
-    def _record(self, eps: np.ndarray, start: int = 0) -> WindowGLRResult:
+    def _record(self, eps: np.ndarray, start: int = 0, blocks=None) -> WindowGLRResult:
         """:func:`glr_window`: all the samples of a fresh detector, statistics evaluated by blocks.
 
         The scores ``d_k(r)`` are accumulated sample by sample as in :meth:`update` (same sums
@@ -624,7 +645,9 @@ class WindowedGLR:
         maximisation (36) and the estimates (34) then run on the whole block at once. The
         statistics are wanted from ``start`` on: the samples before ``start - w + 1`` are not read
         (they only enter the scores of onsets never admissible from ``start`` on, whose slots are
-        reset before), and the outputs there stay ``nan``/``-1``.
+        reset before), and the outputs there stay ``nan``/``-1``. ``blocks``: the noise-independent
+        arrays by blocks of samples (:meth:`_shared_blocks`, of a detector that does not keep them);
+        default the kept ones, in blocks of about 2e6 floats of scores.
         """
         model, w, m, B = self.model, self.window, self.family.m, self._B
         N, p = model.n_steps, model.p
@@ -638,18 +661,33 @@ class WindowedGLR:
         theta = np.full((N, B, m), np.nan)
         C_hat = np.full((N, B, m, m), np.nan)
         d_hat = np.full((N, B, m), np.nan)
-        block = max(1, min(N, 2_000_000 // (w * m * B * (m if self._per_realisation else 1))))
+        first = max(0, start - w + 1)
+        if blocks is None:
+            size = max(1, min(N, 2_000_000 // (w * m * B * (m if self._per_realisation else 1))))
+            blocks = (
+                (
+                    slice(k0, k0 + size),
+                    self._sig_wT[k0 : k0 + size],
+                    self._Cs[k0 : k0 + size],
+                    self._root[k0 : k0 + size],
+                )
+                for k0 in range(first, N, size)
+            )
         cols = np.arange(B)
-        for k0 in range(max(0, start - w + 1), N, block):
-            ks = np.arange(k0, min(N, k0 + block))
+        for now, sig_wT, Cs, root in blocks:
+            skip = max(0, first - now.start)  # samples of the block before the first one read
+            if skip >= sig_wT.shape[0]:
+                continue
+            k0 = now.start + skip
+            sig_wT, Cs, root = sig_wT[skip:], Cs[skip:], root[skip:]
+            ks = np.arange(k0, k0 + sig_wT.shape[0])
             now = slice(k0, k0 + ks.size)  # ks as a slice: views, not copies
             D = np.empty((ks.size, w, m, B))
-            terms = self._score_terms(now, e_w[now])
+            terms = self._score_terms(sig_wT, e_w[now])
             for i, k in enumerate(ks):
                 self._d[k % w] = 0.0
                 self._d += terms[i]
                 D[i] = self._d
-            root = self._root[now]  # (K, w, m, m), or (K, w, B, m, m)
             q = self._project(root, D)  # (K, w, m, B)
             st = np.einsum("kwmb,kwmb->kwb", q, q)  # (35)
             st = np.where(self._allowed[now][:, :, None], st, -np.inf)
@@ -662,7 +700,7 @@ class WindowedGLR:
             qb = np.take_along_axis(q, at, axis=1)[:, 0]  # (K, m, B)
             th = np.einsum("kbij,kjb->kbi", self._pick(root, (kk, best), cols), qb)  # (34): C^+ d
             theta[ks[ok]] = th[ok]
-            C_hat[ks[ok]] = self._pick(self._Cs, (ks[:, None], best), cols)[ok]
+            C_hat[ks[ok]] = self._pick(Cs, (kk, best), cols)[ok]
             d_hat[ks[ok]] = np.swapaxes(np.take_along_axis(D, at, axis=1)[:, 0], 1, 2)[ok]
         self.k = N
         shape = self.batch_shape
@@ -810,13 +848,17 @@ def glr_window(
         np.empty((B, N, m, m)),
         np.empty((B, N, m)),
     )
-    undefined = (np.nan, -1, np.nan, np.nan, np.nan)
+    undefined = tuple(  # the outputs of a sample without statistics
+        np.full((B, *a.shape[2:]), value, dtype=a.dtype)
+        for a, value in zip(out, (np.nan, -1, np.nan, np.nan, np.nan))
+    )
     flat = eps.reshape(B, N, model.p)
     skip = nan_rows.reshape(-1, N).all(axis=0)
-    for k in range(N):
-        res = det._advance(flat[:, k], bool(skip[k]), k >= start)
-        for arr, value in zip(out, undefined if res is None else res):
-            arr[:, k] = value
+    for k0 in range(0, N, _OUTPUT_BLOCK):  # the outputs written by blocks of samples
+        ks = range(k0, min(N, k0 + _OUTPUT_BLOCK))
+        rows = [det._advance(flat[:, k], bool(skip[k]), k >= start) or undefined for k in ks]
+        for i, arr in enumerate(out):
+            arr[:, ks.start : ks.stop] = np.stack([r[i] for r in rows], axis=1)
     stat, onset, theta, C_hat, d_hat = (a.reshape(*batch, *a.shape[1:]) for a in out)
     return WindowGLRResult(
         statistic=stat,
@@ -833,6 +875,9 @@ def glr_window(
 #: samples (:meth:`WindowedGLR._record`: few, wide array operations); beyond, sample by sample.
 #: Per-realisation profiles always take the blocks (their projections are not shared products).
 _RECORD_MAX_BATCH = 4
+
+#: Samples whose outputs :func:`glr_window` stacks and writes at once when it steps sample by sample.
+_OUTPUT_BLOCK = 64
 
 #: Budget (bytes) of the arrays :func:`glr_window` holds for a block of realisations with their
 #: own profiles (signatures, informations, pseudo-inverse factors: ``N w m (n + 3 p + 4 m)``
