@@ -356,6 +356,38 @@ class WindowedGLR:
         min_samples: int | None = None,
         batch_shape: tuple[int, ...] = (),
     ) -> None:
+        self._setup(model, gains, family, window, min_samples, batch_shape)
+        self._shared()
+        self._reset()
+
+    @classmethod
+    def _unkept(
+        cls,
+        model: LTVModel,
+        gains: KalmanGains,
+        family: FaultFamily,
+        window: int,
+        min_samples: int | None,
+        batch_shape: tuple[int, ...],
+    ) -> "WindowedGLR":
+        """A detector without its noise-independent arrays, for :meth:`_record` with the blocks of
+        :meth:`_shared_blocks` (a record of many realisations with their own profiles)."""
+        det = object.__new__(cls)
+        det._setup(model, gains, family, window, min_samples, batch_shape)
+        det._reset()
+        return det
+
+    def _setup(
+        self,
+        model: LTVModel,
+        gains: KalmanGains,
+        family: FaultFamily,
+        window: int,
+        min_samples: int | None,
+        batch_shape: tuple[int, ...],
+    ) -> None:
+        """Check the arguments of :class:`WindowedGLR`; set them, the onsets held by the slots,
+        the admissible ones and ``Sigma_k^{-1/2}``."""
         if not isinstance(model, LTVModel) or not isinstance(family, FaultFamily):
             raise ModelError(
                 f"model, family: expected an LTVModel and a FaultFamily, got "
@@ -390,8 +422,13 @@ class WindowedGLR:
         # (N, w, B, ...) instead of (N, w, ...); _project and _pick hide the difference.
         self._per_realisation = bool(family.batch_shape)
         self._admissible: list[np.ndarray] | None = None  # per sample, the admissible slots
-        self._shared()
-        self._reset()
+        k_all = np.arange(N)
+        # onset held by slot j at time k: the r = j mod w in (k - w, k] (-1 before the record)
+        onset = k_all[:, None] - (k_all[:, None] - np.arange(window)[None, :]) % window  # (N, w)
+        onset[onset < 0] = -1
+        self._onsets = onset
+        self._allowed = (onset >= 0) & (onset <= k_all[:, None] - self.min_samples)  # (N, w)
+        self._Linv = np.linalg.inv(gains.Sigma_chol)  # Sigma_k^{-1/2}, (N, p, p)
 
     def _reset(self) -> None:
         """Start at ``k = 0``: zero scores and missing-sample information."""
@@ -423,7 +460,6 @@ class WindowedGLR:
         ``C^+ = R R^T`` (``root``). Every entry is the same operation whatever the blocks
         (products per sample, elementwise operations, one decomposition per matrix), except the
         Jacobi sweeps of ``3 <= m <= 4``, whose number the whole stack sets (:func:`_small_eigh`).
-        Also sets the onsets, admissible slots and ``Sigma_k^{-1/2}`` of all samples.
         """
         model, g, fam, w = self.model, self.gains, self.family, self.window
         N, n, p, m = model.n_steps, model.n, model.p, fam.m
@@ -431,15 +467,8 @@ class WindowedGLR:
         Psi = fam.Psi_tilde.reshape(F, N, n, m)
         Phi = fam.Phi_tilde.reshape(F, N, p, m)
         drive = Psi - g.FK @ Phi  # Psi~_k - F_k K_k Phi~_k, (F, N, n, m)
-        k_all = np.arange(N)
-        # onset held by slot j at time k: the r = j mod w in (k - w, k] (-1 before the record)
-        onset = k_all[:, None] - (k_all[:, None] - np.arange(w)[None, :]) % w  # (N, w)
-        onset[onset < 0] = -1
-        self._onsets = onset
-        self._allowed = (onset >= 0) & (onset <= k_all[:, None] - self.min_samples)  # (N, w)
-        self._Linv = np.linalg.inv(g.Sigma_chol)  # Sigma_k^{-1/2}, (N, p, p)
         drive_c = np.ascontiguousarray(np.transpose(drive, (2, 1, 0, 3)))  # (n, N, F, m)
-        started = onset >= 0
+        started = self._onsets >= 0
         full = started.all(axis=1)  # every slot holds an onset: no mask needed
         Phi_k = np.moveaxis(Phi, 0, 2)[:, :, None, :, :]  # (N, p, 1, F, m)
         head = min(N, w - 1)  # before, some slots hold no onset yet; after, all do
@@ -489,6 +518,7 @@ class WindowedGLR:
             if not self._per_realisation:  # drop the realisation axis of a shared family
                 sig_wT, C, root = sig_wT[:, :, 0], C[:, :, 0], root[:, :, 0]
             yield slice(k0, k0 + K), sig_wT, C, root
+            del sig_wT, C, root  # the next block's arrays in the memory of these
 
     def _project(self, root: np.ndarray, d: np.ndarray) -> np.ndarray:
         """``R^T d`` per onset (and realisation): ``root`` ``(..., m, m)`` (or ``(..., B, m, m)`` for
@@ -702,6 +732,7 @@ class WindowedGLR:
             theta[ks[ok]] = th[ok]
             C_hat[ks[ok]] = self._pick(Cs, (kk, best), cols)[ok]
             d_hat[ks[ok]] = np.swapaxes(np.take_along_axis(D, at, axis=1)[:, 0], 1, 2)[ok]
+            del sig_wT, Cs, root, D, terms, q, st  # before the next block is computed
         self.k = N
         shape = self.batch_shape
         return WindowGLRResult(
@@ -789,6 +820,7 @@ def glr_window(
     if not isinstance(family, FaultFamily):
         raise ModelError(f"family: expected a FaultFamily, got {type(family).__name__}")
     _check_family_batch(family, batch)
+    blocks = None  # the detector's arrays by blocks of samples, not kept (many own profiles)
     missing = missing & ~gains_missing(gains)  # dropped innovations the gains do not know
     if missing.any() and batch:
         flat_missing = missing.reshape(-1, model.n_steps)
@@ -804,13 +836,16 @@ def glr_window(
         window = integer(window, "window", low=1, high=model.n_steps)
         per = 8 * model.n_steps * window * family.m * (model.n + 3 * model.p + 4 * family.m)
         size = max(1, _PER_REALISATION_BYTES // per)
-        if B > size:
+        if B > size and (shared is not None or missing.any() or family.m in (3, 4)):
             return _grouped_glr_window(
                 eps, np.arange(B) // size, model, gains, family, window, min_samples, shared, start
             )
-    if shared is None:
+        if B > size:  # all realisations at once, the arrays by blocks of samples in the budget
+            det = WindowedGLR._unkept(model, gains, family, window, min_samples, batch)
+            blocks = det._shared_blocks(max(1, _PER_REALISATION_BYTES * model.n_steps // (B * per)))
+    if blocks is None and shared is None:
         det = WindowedGLR(model, gains, family, window, min_samples, batch_shape=batch)
-    else:
+    elif blocks is None:
         s = -(-family.m // model.p) if min_samples is None else min_samples
         if (
             not isinstance(shared, WindowedGLR)
@@ -827,7 +862,7 @@ def glr_window(
             )
         det = shared.fresh(batch)
     if (det._B <= _RECORD_MAX_BATCH or det._per_realisation) and not missing.any():
-        res = det._record(eps, start)
+        res = det._record(eps, start, blocks)
         if start:  # the same outputs as sample by sample: none before start
             for arr, undefined in (
                 (res.statistic, np.nan),
