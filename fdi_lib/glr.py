@@ -773,8 +773,11 @@ def glr_window(
         As in :class:`WindowedGLR`. A ``family`` of per-realisation profiles
         (``family.batch_shape == batch``, :func:`fdi_lib.models.step_family` with a leading batch
         axis) gives each realisation the test of its own profile, the same as one call per
-        realisation with its own family, in one pass over the samples; realisations are taken by
-        blocks whose per-realisation arrays stay within about ``_PER_REALISATION_BYTES``.
+        realisation with its own family, in one pass over the samples; when the realisations'
+        arrays exceed ``_PER_REALISATION_BYTES``, they are computed and read by blocks of samples
+        within it (all realisations at once), or, for ``3 <= m <= 4`` (whose Jacobi sweeps the stack
+        of matrices sets), with dropped samples or a ``shared`` detector, the realisations are
+        taken by blocks within it.
     shared : WindowedGLR, optional
         A detector built with these same ``model``, ``gains`` and ``family`` objects, ``window``
         and ``min_samples``, whose noise-independent quantities are reused
@@ -914,9 +917,9 @@ _RECORD_MAX_BATCH = 4
 #: Samples whose outputs :func:`glr_window` stacks and writes at once when it steps sample by sample.
 _OUTPUT_BLOCK = 64
 
-#: Budget (bytes) of the arrays :func:`glr_window` holds for a block of realisations with their
-#: own profiles (signatures, informations, pseudo-inverse factors: ``N w m (n + 3 p + 4 m)``
-#: floats per realisation).
+#: Budget (bytes) of the arrays :func:`glr_window` holds for realisations with their own profiles
+#: (signatures, informations, pseudo-inverse factors: ``N w m (n + 3 p + 4 m)`` floats per
+#: realisation): by blocks of samples, or of realisations, within it.
 _PER_REALISATION_BYTES = 64 * 2**20
 
 
