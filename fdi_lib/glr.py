@@ -77,8 +77,9 @@ def _eigh(C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _pinv_diagonal(lam: np.ndarray) -> np.ndarray:
     """``1 / lam`` above the cut-off ``RANK_RTOL * max(lam)``, 0 below: the pseudo-inverse's eigenvalues."""
-    cutoff = RANK_RTOL * np.maximum(lam.max(axis=-1, keepdims=True), np.finfo(float).tiny)
-    return np.where(lam > cutoff, 1.0 / np.where(lam > cutoff, lam, 1.0), 0.0)
+    top = lam.max(axis=-1, keepdims=True) if lam.shape[-1] > 1 else lam  # one: itself, no reduce
+    keep = lam > RANK_RTOL * np.maximum(top, np.finfo(float).tiny)
+    return np.where(keep, 1.0 / np.where(keep, lam, 1.0), 0.0)
 
 
 #: Largest size decomposed by :func:`_small_eigh` (cyclic Jacobi); larger ones go to LAPACK.
