@@ -55,7 +55,12 @@ from fdi_lib.errors import ModelError, PersistentExcitationError, ShapeError
 from fdi_lib.filters import KalmanGains, KalmanResult, kalman_filter, kalman_gains
 from fdi_lib.glr import WindowedGLR, first_alarm, glr_window
 from fdi_lib.isolation import minmax_isolation
-from fdi_lib.kitanidis import kitanidis_filter, kitanidis_gains, residual_signature
+from fdi_lib.kitanidis import (
+    KitanidisResult,
+    kitanidis_filter,
+    kitanidis_gains,
+    residual_signature,
+)
 from fdi_lib.models import LTVModel, fault_profile, ltv_model, step_family
 from fdi_lib.nonparametric import energy_statistic, energy_threshold
 from fdi_lib.sets.polytope import Polytope
@@ -1074,20 +1079,37 @@ def whitener(cov: np.ndarray) -> np.ndarray:
     return (V[:, keep] / np.sqrt(lam[keep])).T
 
 
+def _kitanidis_runs(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, KitanidisResult]:
+    """The Kitanidis filter of every subsystem with an unknown input (the drive train) run on the
+    records: Zhang 2021's residuals, and the innovations Basseville & Zhang project away from
+    ``tau_a`` (the same recursion as the Kalman predictor with its gains, ``SubDesign.bz_red``)."""
+    out = {}
+    for name, sd in d.subs.items():
+        if sd.sub.E is not None:
+            ys, us = _split(d, y, u, sd.sub)
+            out[name] = kitanidis_filter(sd.kit, ys, us, gains=sd.kit_gains)
+    return out
+
+
 def _residuals(
     d: Design,
     y: np.ndarray,
     u: np.ndarray,
     kalman: Mapping[str, KalmanResult] | None = None,
+    kitanidis: Mapping[str, KitanidisResult] | None = None,
 ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Updated residuals of each subsystem (Kitanidis on the drive train, Kalman on the blades),
-    whitened by their steady-state covariance, and the whitened residual signature. ``kalman``: the
-    runs of :func:`_kalman_runs` on these records, whose filter is the blades' (not run again)."""
+    whitened by their steady-state covariance, and the whitened residual signature. ``kalman``,
+    ``kitanidis``: the runs of :func:`_kalman_runs` and :func:`_kitanidis_runs` on these records
+    (the Kalman filter is the blades' residual filter), not run again."""
     out = {}
     for name, sd in d.subs.items():
         ys, us = _split(d, y, u, sd.sub)
         if sd.sub.E is not None:
-            r = kitanidis_filter(sd.kit, ys, us, gains=sd.kit_gains).residuals
+            if kitanidis is None:
+                r = kitanidis_filter(sd.kit, ys, us, gains=sd.kit_gains).residuals
+            else:
+                r = kitanidis[name].residuals
             cov = sd.kit_gains.residual_cov[-1]
         else:
             shared = kalman is not None and sd.kit is sd.kf and sd.kit_gains is sd.kf_gains
@@ -1142,7 +1164,11 @@ def _lasso_test(d: Design, res: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> 
 
 
 def run_zhang2021(
-    d: Design, y: np.ndarray, u: np.ndarray, kalman: Mapping[str, KalmanResult] | None = None
+    d: Design,
+    y: np.ndarray,
+    u: np.ndarray,
+    kalman: Mapping[str, KalmanResult] | None = None,
+    kitanidis: Mapping[str, KitanidisResult] | None = None,
 ) -> MethodOutcome:
     """Zhang (2021): Kitanidis residuals (``tau_a`` the unknown input), detection when the Lasso
     of the last ``w`` samples is not identically zero (``max_j |X_j^T y| / ||X_j||`` above the
@@ -1151,7 +1177,7 @@ def run_zhang2021(
     isolation)."""
     w = d.settings.window
     B = y.shape[0]
-    res = _residuals(d, y, u, kalman)
+    res = _residuals(d, y, u, kalman, kitanidis)
     stats = _lasso_test(d, res)
     names = list(d.subs)
     fa, detect, which, peak = _combine(d, stats, [d.subs[n].lasso_threshold for n in names])
@@ -1192,10 +1218,15 @@ def run_zhang2021(
 
 
 def _bz_stats(
-    d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray]
+    d: Design,
+    y: np.ndarray,
+    u: np.ndarray,
+    eps: Mapping[str, np.ndarray],
+    kitanidis: Mapping[str, KitanidisResult] | None = None,
 ) -> tuple[list[np.ndarray], list[float], list[np.ndarray], list[float]]:
     """Basseville & Zhang's statistics and thresholds per subsystem: the parametric windowed GLRs,
-    then the energy tests."""
+    then the energy tests. ``kitanidis``: the runs of :func:`_kitanidis_runs` on these records,
+    whose innovations are the drive train's (not run again)."""
     w = d.settings.window
     par_stats: list[np.ndarray] = []
     par_thr: list[float] = []
@@ -1214,7 +1245,10 @@ def _bz_stats(
             from fdi_lib.nonparametric import reduce_residual
 
             kpred, T = sd.bz_red
-            e_kit = kalman_filter(sd.kit, ys, us, gains=kpred).innovations
+            if kitanidis is None:
+                e_kit = kalman_filter(sd.kit, ys, us, gains=kpred).innovations
+            else:  # the same recursion (predictor_recursion, the Kitanidis gains K): the same bits
+                e_kit = kitanidis[name].innovations
             red = reduce_residual(sd.kit, sd.kit_gains, e_kit, T)
             g = glr_window(
                 red.residuals,
@@ -1232,7 +1266,11 @@ def _bz_stats(
 
 
 def run_bz(
-    d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray] | None = None
+    d: Design,
+    y: np.ndarray,
+    u: np.ndarray,
+    eps: Mapping[str, np.ndarray] | None = None,
+    kitanidis: Mapping[str, KitanidisResult] | None = None,
 ) -> MethodOutcome:
     """Basseville & Zhang: parametric tests (the stiffness ``wn^2`` of each pitch actuator, a
     data-dependent profile ``Psi_k``; the converter offset and the drive-train torque on the
@@ -1243,7 +1281,7 @@ def run_bz(
     eps = _innovations(d, y, u) if eps is None else eps
     B = y.shape[0]
     names = list(d.subs)
-    par_stats, par_thr, en, en_thr = _bz_stats(d, y, u, eps)
+    par_stats, par_thr, en, en_thr = _bz_stats(d, y, u, eps, kitanidis)
     isolated = np.zeros((B, len(CANDIDATES)), dtype=bool)
     pfa, pdet, pwhich, ppeak = _combine(d, par_stats, par_thr)
     efa, edet, ewhich, epeak = _combine(d, en, en_thr)
@@ -1583,6 +1621,11 @@ class MethodInputs:
         return _kalman_runs(self.design, self.y, self.u)
 
     @functools.cached_property
+    def kitanidis(self) -> dict[str, KitanidisResult]:
+        """Subsystem name -> its Kitanidis filter run on the records (:func:`_kitanidis_runs`)."""
+        return _kitanidis_runs(self.design, self.y, self.u)
+
+    @functools.cached_property
     def innovations(self) -> dict[str, np.ndarray]:
         """Subsystem name -> Kalman innovations ``(B, N, p)``."""
         return {name: r.innovations for name, r in self.kalman.items()}
@@ -1660,12 +1703,14 @@ def _zb_statistics(d: Design, inputs: MethodInputs) -> tuple[list[np.ndarray], l
 
 
 def _lasso_statistics(d: Design, inputs: MethodInputs) -> tuple[list[np.ndarray], list[float]]:
-    stats = _lasso_test(d, _residuals(d, inputs.y, inputs.u, inputs.kalman))
+    stats = _lasso_test(d, _residuals(d, inputs.y, inputs.u, inputs.kalman, inputs.kitanidis))
     return stats, [sd.lasso_threshold for sd in d.subs.values()]
 
 
 def _bz_statistics(d: Design, inputs: MethodInputs) -> tuple[list[np.ndarray], list[float]]:
-    par, par_thr, en, en_thr = _bz_stats(d, inputs.y, inputs.u, inputs.innovations)
+    par, par_thr, en, en_thr = _bz_stats(
+        d, inputs.y, inputs.u, inputs.innovations, inputs.kitanidis
+    )
     return par + en, par_thr + en_thr
 
 
@@ -1680,11 +1725,11 @@ def _zb_diagnose(d: Design, inputs: MethodInputs) -> MethodOutcome:
 
 
 def _zhang2021_diagnose(d: Design, inputs: MethodInputs) -> MethodOutcome:
-    return run_zhang2021(d, inputs.y, inputs.u, inputs.kalman)
+    return run_zhang2021(d, inputs.y, inputs.u, inputs.kalman, inputs.kitanidis)
 
 
 def _bz_diagnose(d: Design, inputs: MethodInputs) -> MethodOutcome:
-    return run_bz(d, inputs.y, inputs.u, inputs.innovations)
+    return run_bz(d, inputs.y, inputs.u, inputs.innovations, inputs.kitanidis)
 
 
 def _svo_diagnose(d: Design, inputs: MethodInputs) -> MethodOutcome:

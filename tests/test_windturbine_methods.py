@@ -111,6 +111,30 @@ def test_zhang2021_reuses_the_blades_kalman_run_bit_for_bit(design):
         np.testing.assert_array_equal(getattr(got, key), getattr(ref, key))
 
 
+def test_bz_and_zhang2021_share_the_kitanidis_run_bit_for_bit(design):
+    """The drive train's Kitanidis filter, run once per batch (MethodInputs.kitanidis): its residuals
+    are Zhang 2021's, its innovations those Basseville & Zhang project, the same bits as each
+    method's own run (the Kalman predictor with the Kitanidis gains for BZ)."""
+    kpred, _ = design.subs["drive_train"].bz_red
+    assert kpred.K is design.subs["drive_train"].kit_gains.K
+    seeds = np.random.SeedSequence(23).spawn(2)
+    recs = [W.fault_records(FAULTS[i], seeds, settings=SETTINGS) for i in (5, 8)]
+    y = np.concatenate([r.y for r in recs])
+    u = np.concatenate([r.u for r in recs])
+    inputs = W.MethodInputs(design, y, u)
+    assert list(inputs.kitanidis) == ["drive_train"]
+    shared = W._bz_stats(design, y, u, inputs.innovations, inputs.kitanidis)
+    alone = W._bz_stats(design, y, u, inputs.innovations)
+    for a, b in zip(shared, alone):
+        for x, z in zip(a, b):
+            assert np.asarray(x).tobytes() == np.asarray(z).tobytes()
+    shared = W._residuals(design, y, u, inputs.kalman, inputs.kitanidis)
+    alone = W._residuals(design, y, u)
+    for name in design.subs:
+        for a, b in zip(shared[name], alone[name]):
+            assert a.tobytes() == b.tobytes()
+
+
 def test_innovations_are_white_with_unit_variance_on_fault_free_data(design):
     """The Kalman filters match the plant: whitened innovations have unit variance (within 10 %)
     and no lag-1 correlation beyond 0.1 after the warm-up."""
