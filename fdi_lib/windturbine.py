@@ -1604,7 +1604,8 @@ class MethodInputs:
     """The records ``y`` ``(B, N, 11)``, ``u`` ``(B, N, 4)`` of one call to the methods, and the work
     they share, computed once on first use: the Kalman filter of every subsystem (its innovations:
     Zhang & Basseville's GLR, Basseville & Zhang's energy test; its updated residuals: Zhang 2021's
-    on the blades, whose residual filter it is).
+    on the blades, whose residual filter it is) and the Kitanidis filter of the drive train (its
+    residuals: Zhang 2021's; its innovations: Basseville & Zhang's parametric test).
 
     Attributes
     ----------
