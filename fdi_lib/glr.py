@@ -298,16 +298,17 @@ class WindowGLRResult:
     C_hat, d_hat : numpy.ndarray
         ``C_k(r_hat_k)`` ``(*batch, N, m, m)`` and ``d_k(r_hat_k)`` ``(*batch, N, m)``: the
         Fisher information and normalised residual of the minmax isolation test (41)
-        run from the estimated onset.
+        run from the estimated onset. ``theta_hat``, ``C_hat`` and ``d_hat`` are ``None`` when
+        :func:`glr_window` was asked for the statistics alone (``estimates=False``).
     window, min_samples : int
         ``w`` and ``s`` of eq. (37).
     """
 
     statistic: np.ndarray
     onset: np.ndarray
-    theta_hat: np.ndarray
-    C_hat: np.ndarray
-    d_hat: np.ndarray
+    theta_hat: np.ndarray | None
+    C_hat: np.ndarray | None
+    d_hat: np.ndarray | None
     window: int
     min_samples: int
 
@@ -622,11 +623,12 @@ class WindowedGLR:
         )
 
     def _advance(
-        self, eps_k: np.ndarray, skip: bool, statistics: bool
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+        self, eps_k: np.ndarray, skip: bool, statistics: bool, estimates: bool = True
+    ) -> tuple[np.ndarray, ...] | None:
         """:meth:`update` of checked innovations ``eps_k`` ``(B, p)`` (``skip``: the sample is
         missing in every realisation): the outputs flat over the realisations, ``(B, ...)``, or
-        ``None`` when no onset is admissible yet or ``statistics`` is false."""
+        ``None`` when no onset is admissible yet or ``statistics`` is false; without ``estimates``,
+        ``(l_k, r_hat_k)`` alone."""
         k, w = self.k, self.window
         # New onset r = k enters the window (replacing r = k - w); scores (33), recursively (28).
         slot = k % w
@@ -665,10 +667,14 @@ class WindowedGLR:
         )  # (36), (B,): the first of equal ones, as among the admissible
         cols = self._cols
         l_k = stat[best, cols]
+        if not estimates:
+            return l_k, onsets[best]
         th = (self._pick(root, (best,), cols) @ q[best, :, cols][..., None])[..., 0]  # (34): C^+ d
         return l_k, onsets[best], th, self._pick(C, (best,), cols), d[best, :, cols]
 
-    def _record(self, eps: np.ndarray, start: int = 0, blocks=None) -> WindowGLRResult:
+    def _record(
+        self, eps: np.ndarray, start: int = 0, blocks=None, estimates: bool = True
+    ) -> WindowGLRResult:
         """:func:`glr_window`: all the samples of a fresh detector, statistics evaluated by blocks.
 
         The scores ``d_k(r)`` are accumulated sample by sample as in :meth:`update` (same sums
@@ -678,7 +684,8 @@ class WindowedGLR:
         (they only enter the scores of onsets never admissible from ``start`` on, whose slots are
         reset before), and the outputs there stay ``nan``/``-1``. ``blocks``: the noise-independent
         arrays by blocks of samples (:meth:`_shared_blocks`, of a detector that does not keep them);
-        default the kept ones, in blocks of about 2e6 floats of scores.
+        default the kept ones, in blocks of about 2e6 floats of scores. Without ``estimates``, the
+        statistics and onsets alone (:func:`glr_window`).
         """
         model, w, m, B = self.model, self.window, self.family.m, self._B
         N, p = model.n_steps, model.p
@@ -689,9 +696,11 @@ class WindowedGLR:
         e_w = self._Linv @ np.moveaxis(eps.reshape(B, N, p), 0, 2)  # (N, p, B)
         stat = np.full((N, B), np.nan)
         onset = np.full((N, B), -1)
-        theta = np.full((N, B, m), np.nan)
-        C_hat = np.full((N, B, m, m), np.nan)
-        d_hat = np.full((N, B, m), np.nan)
+        theta, C_hat, d_hat = (
+            (np.full((N, B, m), np.nan), np.full((N, B, m, m), np.nan), np.full((N, B, m), np.nan))
+            if estimates
+            else (None, None, None)
+        )
         first = max(0, start - w + 1)
         if blocks is None:
             size = max(1, min(N, 2_000_000 // (w * m * B * (m if self._per_realisation else 1))))
@@ -727,6 +736,9 @@ class WindowedGLR:
             kk = np.arange(ks.size)[:, None]
             stat[ks[ok]] = np.take_along_axis(st, best[:, None, :], axis=1)[:, 0][ok]
             onset[ks[ok]] = self._onsets[ks[:, None], best][ok]
+            if not estimates:
+                del sig_wT, Cs, root, D, terms, q, st  # before the next block is computed
+                continue
             at = best[:, None, None, :]
             qb = np.take_along_axis(q, at, axis=1)[:, 0]  # (K, m, B)
             th = np.einsum("kbij,kjb->kbi", self._pick(root, (kk, best), cols), qb)  # (34): C^+ d
@@ -739,9 +751,12 @@ class WindowedGLR:
         return WindowGLRResult(
             statistic=np.moveaxis(stat, 0, -1).reshape(*shape, N),
             onset=np.moveaxis(onset, 0, -1).reshape(*shape, N),
-            theta_hat=np.moveaxis(theta, 0, 1).reshape(*shape, N, m),
-            C_hat=np.moveaxis(C_hat, 0, 1).reshape(*shape, N, m, m),
-            d_hat=np.moveaxis(d_hat, 0, 1).reshape(*shape, N, m),
+            **{
+                key: None
+                if arr is None
+                else np.moveaxis(arr, 0, 1).reshape(*shape, N, *arr.shape[2:])
+                for key, arr in (("theta_hat", theta), ("C_hat", C_hat), ("d_hat", d_hat))
+            },
             window=w,
             min_samples=self.min_samples,
         )
@@ -757,6 +772,7 @@ def glr_window(
     *,
     shared: WindowedGLR | None = None,
     start: int = 0,
+    estimates: bool = True,
 ) -> WindowGLRResult:
     """Windowed GLR with unknown onset (35)-(37) over a whole record.
 
@@ -788,6 +804,11 @@ def glr_window(
         First sample whose statistics are wanted (``0 <= start <= N``): before it the outputs are
         ``nan``/``-1`` and only the scores are accumulated, which saves the statistics of a
         period where the test is disabled; the outputs from ``start`` on are unchanged.
+    estimates : bool
+        With ``False``, the statistics and onsets alone (``theta_hat``, ``C_hat``, ``d_hat`` of the
+        result are ``None``): a detector that only compares ``l_k`` with a threshold skips the
+        estimates (34) and the picks of ``C_k(r_hat)``, ``d_k(r_hat)``; the statistics and onsets
+        are the same.
 
     Returns
     -------
@@ -831,7 +852,16 @@ def glr_window(
         patterns, group = np.unique(flat_missing, axis=0, return_inverse=True)
         if len(patterns) > 1:
             return _grouped_glr_window(
-                eps, group.reshape(-1), model, gains, family, window, min_samples, shared, start
+                eps,
+                group.reshape(-1),
+                model,
+                gains,
+                family,
+                window,
+                min_samples,
+                shared,
+                start,
+                estimates,
             )
     if (
         family.batch_shape
@@ -842,7 +872,16 @@ def glr_window(
         size = max(1, _PER_REALISATION_BYTES // per)
         if B > size and (shared is not None or missing.any() or family.m in (3, 4)):
             return _grouped_glr_window(
-                eps, np.arange(B) // size, model, gains, family, window, min_samples, shared, start
+                eps,
+                np.arange(B) // size,
+                model,
+                gains,
+                family,
+                window,
+                min_samples,
+                shared,
+                start,
+                estimates,
             )
         if B > size:  # all realisations at once, the arrays by blocks of samples in the budget
             det = WindowedGLR._unkept(model, gains, family, window, min_samples, batch)
@@ -866,7 +905,7 @@ def glr_window(
             )
         det = shared.fresh(batch)
     if (det._B <= _RECORD_MAX_BATCH or det._per_realisation) and not missing.any():
-        res = det._record(eps, start, blocks)
+        res = det._record(eps, start, blocks, estimates)
         if start:  # the same outputs as sample by sample: none before start
             for arr, undefined in (
                 (res.statistic, np.nan),
@@ -875,7 +914,8 @@ def glr_window(
                 (res.C_hat, np.nan),
                 (res.d_hat, np.nan),
             ):
-                arr[(slice(None),) * len(batch) + (slice(0, start),)] = undefined
+                if arr is not None:
+                    arr[(slice(None),) * len(batch) + (slice(0, start),)] = undefined
         return res
     # many realisations: one update per sample already works on wide arrays (the innovations
     # checked above: the samples missing in one realisation are missing in all)
@@ -886,7 +926,7 @@ def glr_window(
         np.empty((B, N, m)),
         np.empty((B, N, m, m)),
         np.empty((B, N, m)),
-    )
+    )[: 5 if estimates else 2]
     undefined = tuple(  # the outputs of a sample without statistics
         np.full((B, *a.shape[2:]), value, dtype=a.dtype)
         for a, value in zip(out, (np.nan, -1, np.nan, np.nan, np.nan))
@@ -895,10 +935,15 @@ def glr_window(
     skip = nan_rows.reshape(-1, N).all(axis=0)
     for k0 in range(0, N, _OUTPUT_BLOCK):  # the outputs written by blocks of samples
         ks = range(k0, min(N, k0 + _OUTPUT_BLOCK))
-        rows = [det._advance(flat[:, k], bool(skip[k]), k >= start) or undefined for k in ks]
+        rows = [
+            det._advance(flat[:, k], bool(skip[k]), k >= start, estimates) or undefined for k in ks
+        ]
         for i, arr in enumerate(out):
             arr[:, ks.start : ks.stop] = np.stack([r[i] for r in rows], axis=1)
-    stat, onset, theta, C_hat, d_hat = (a.reshape(*batch, *a.shape[1:]) for a in out)
+    stat, onset, theta, C_hat, d_hat = (
+        None if a is None else a.reshape(*batch, *a.shape[1:])
+        for a in out + (None,) * (5 - len(out))
+    )
     return WindowGLRResult(
         statistic=stat,
         onset=onset,
@@ -943,6 +988,7 @@ def _grouped_glr_window(
     min_samples: int | None,
     shared: WindowedGLR | None,
     start: int,
+    estimates: bool,
 ) -> WindowGLRResult:
     """:func:`glr_window` run once per group of realisations (those sharing the same missing samples,
     or a block of realisations with their own profiles, which take their rows of the family)."""
@@ -956,6 +1002,8 @@ def _grouped_glr_window(
         "C_hat": np.empty((B, N, m, m)),
         "d_hat": np.empty((B, N, m)),
     }
+    if not estimates:
+        out = {key: out[key] for key in ("statistic", "onset")}
     res = None
     for i in np.unique(group):
         rows = np.nonzero(group == i)[0]
@@ -968,11 +1016,23 @@ def _grouped_glr_window(
             )
             fam = FaultFamily(kind=family.kind, Psi_tilde=Psi, Phi_tilde=Phi)
             sh = None
-        res = glr_window(flat[rows], model, gains, fam, window, min_samples, shared=sh, start=start)
+        res = glr_window(
+            flat[rows],
+            model,
+            gains,
+            fam,
+            window,
+            min_samples,
+            shared=sh,
+            start=start,
+            estimates=estimates,
+        )
         for key, arr in out.items():
             arr[rows] = getattr(res, key)
+    fields = dict.fromkeys(("theta_hat", "C_hat", "d_hat"))  # None: not asked for
+    fields.update({key: arr.reshape(*batch, *arr.shape[1:]) for key, arr in out.items()})
     return WindowGLRResult(
-        **{key: arr.reshape(*batch, *arr.shape[1:]) for key, arr in out.items()},
+        **fields,
         window=res.window,
         min_samples=res.min_samples,
     )

@@ -1031,11 +1031,20 @@ def run_zb(
     return MethodOutcome(fa, detect, which, isolated, step, peak)
 
 
-def _zb_glr(d: Design, eps: Mapping[str, np.ndarray]) -> dict[str, Any]:
-    """The windowed GLR of every subsystem's innovations (Zhang & Basseville)."""
+def _zb_glr(d: Design, eps: Mapping[str, np.ndarray], estimates: bool = True) -> dict[str, Any]:
+    """The windowed GLR of every subsystem's innovations (Zhang & Basseville); ``estimates``: also
+    the information and score at the estimated onset, which the minmax isolation reads
+    (:func:`~fdi_lib.glr.glr_window`)."""
     return {
         name: glr_window(
-            eps[name], sd.kf, sd.kf_gains, sd.family, sd.glr.window, shared=sd.glr, start=d.warmup
+            eps[name],
+            sd.kf,
+            sd.kf_gains,
+            sd.family,
+            sd.glr.window,
+            shared=sd.glr,
+            start=d.warmup,
+            estimates=estimates,
         )
         for name, sd in d.subs.items()
     }
@@ -1238,7 +1247,9 @@ def _bz_stats(
             drive = us[..., 0]  # (B, N): beta_r - ybar
             # one profile per realisation (its own input), all realisations in one windowed GLR
             fam = step_family(sd.kf, Psi=col[None, None, :, None] * drive[:, :, None, None])
-            st = glr_window(eps[name], sd.kf, sd.kf_gains, fam, w, start=d.warmup).statistic
+            st = glr_window(
+                eps[name], sd.kf, sd.kf_gains, fam, w, start=d.warmup, estimates=False
+            ).statistic
             par_stats.append(st)
             par_thr.append(float(scipy.stats.chi2.ppf(1.0 - d.alpha_sample / w, 1)))
         else:
@@ -1258,6 +1269,7 @@ def _bz_stats(
                 w,
                 shared=sd.bz_glr,
                 start=d.warmup,
+                estimates=False,
             )
             par_stats.append(g.statistic)
             par_thr.append(float(scipy.stats.chi2.ppf(1.0 - d.alpha_sample / w, 1)))
@@ -1699,7 +1711,7 @@ def statistic_alarms(
 
 
 def _zb_statistics(d: Design, inputs: MethodInputs) -> tuple[list[np.ndarray], list[float]]:
-    zb = _zb_glr(d, inputs.innovations)
+    zb = _zb_glr(d, inputs.innovations, estimates=False)  # the alarms read the statistics alone
     return [zb[n].statistic for n in d.subs], [sd.glr_threshold for sd in d.subs.values()]
 
 

@@ -200,7 +200,7 @@ def test_blocks_of_samples_within_the_memory_budget(monkeypatch, m, start):
     blocked = glr_window(eps, model, gains, fam, W, S, start=start)
     assert sizes == [(7, 3 * N // 7)]
     realisations = glr._grouped_glr_window(
-        eps, np.arange(7) // 3, model, gains, fam, W, S, None, start
+        eps, np.arange(7) // 3, model, gains, fam, W, S, None, start, True
     )
     for key in KEYS:
         assert getattr(blocked, key).tobytes() == getattr(whole, key).tobytes(), key
