@@ -77,8 +77,9 @@ def _eigh(C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _pinv_diagonal(lam: np.ndarray) -> np.ndarray:
     """``1 / lam`` above the cut-off ``RANK_RTOL * max(lam)``, 0 below: the pseudo-inverse's eigenvalues."""
-    cutoff = RANK_RTOL * np.maximum(lam.max(axis=-1, keepdims=True), np.finfo(float).tiny)
-    return np.where(lam > cutoff, 1.0 / np.where(lam > cutoff, lam, 1.0), 0.0)
+    top = lam.max(axis=-1, keepdims=True) if lam.shape[-1] > 1 else lam  # one: itself, no reduce
+    keep = lam > RANK_RTOL * np.maximum(top, np.finfo(float).tiny)
+    return np.where(keep, 1.0 / np.where(keep, lam, 1.0), 0.0)
 
 
 #: Largest size decomposed by :func:`_small_eigh` (cyclic Jacobi); larger ones go to LAPACK.
@@ -297,16 +298,17 @@ class WindowGLRResult:
     C_hat, d_hat : numpy.ndarray
         ``C_k(r_hat_k)`` ``(*batch, N, m, m)`` and ``d_k(r_hat_k)`` ``(*batch, N, m)``: the
         Fisher information and normalised residual of the minmax isolation test (41)
-        run from the estimated onset.
+        run from the estimated onset. ``theta_hat``, ``C_hat`` and ``d_hat`` are ``None`` when
+        :func:`glr_window` was asked for the statistics alone (``estimates=False``).
     window, min_samples : int
         ``w`` and ``s`` of eq. (37).
     """
 
     statistic: np.ndarray
     onset: np.ndarray
-    theta_hat: np.ndarray
-    C_hat: np.ndarray
-    d_hat: np.ndarray
+    theta_hat: np.ndarray | None
+    C_hat: np.ndarray | None
+    d_hat: np.ndarray | None
     window: int
     min_samples: int
 
@@ -356,6 +358,38 @@ class WindowedGLR:
         min_samples: int | None = None,
         batch_shape: tuple[int, ...] = (),
     ) -> None:
+        self._setup(model, gains, family, window, min_samples, batch_shape)
+        self._shared()
+        self._reset()
+
+    @classmethod
+    def _unkept(
+        cls,
+        model: LTVModel,
+        gains: KalmanGains,
+        family: FaultFamily,
+        window: int,
+        min_samples: int | None,
+        batch_shape: tuple[int, ...],
+    ) -> "WindowedGLR":
+        """A detector without its noise-independent arrays, for :meth:`_record` with the blocks of
+        :meth:`_shared_blocks` (a record of many realisations with their own profiles)."""
+        det = object.__new__(cls)
+        det._setup(model, gains, family, window, min_samples, batch_shape)
+        det._reset()
+        return det
+
+    def _setup(
+        self,
+        model: LTVModel,
+        gains: KalmanGains,
+        family: FaultFamily,
+        window: int,
+        min_samples: int | None,
+        batch_shape: tuple[int, ...],
+    ) -> None:
+        """Check the arguments of :class:`WindowedGLR`; set them, the onsets held by the slots,
+        the admissible ones and ``Sigma_k^{-1/2}``."""
         if not isinstance(model, LTVModel) or not isinstance(family, FaultFamily):
             raise ModelError(
                 f"model, family: expected an LTVModel and a FaultFamily, got "
@@ -390,8 +424,13 @@ class WindowedGLR:
         # (N, w, B, ...) instead of (N, w, ...); _project and _pick hide the difference.
         self._per_realisation = bool(family.batch_shape)
         self._admissible: list[np.ndarray] | None = None  # per sample, the admissible slots
-        self._shared()
-        self._reset()
+        k_all = np.arange(N)
+        # onset held by slot j at time k: the r = j mod w in (k - w, k] (-1 before the record)
+        onset = k_all[:, None] - (k_all[:, None] - np.arange(window)[None, :]) % window  # (N, w)
+        onset[onset < 0] = -1
+        self._onsets = onset
+        self._allowed = (onset >= 0) & (onset <= k_all[:, None] - self.min_samples)  # (N, w)
+        self._Linv = np.linalg.inv(gains.Sigma_chol)  # Sigma_k^{-1/2}, (N, p, p)
 
     def _reset(self) -> None:
         """Start at ``k = 0``: zero scores and missing-sample information."""
@@ -406,12 +445,23 @@ class WindowedGLR:
         self.k = 0
 
     def _shared(self) -> None:
-        """Everything noise-independent, for all ``k`` at once (stacks indexed by slot ``r mod w``).
+        """Everything noise-independent, for all ``k`` at once (stacks indexed by slot ``r mod w``):
+        :meth:`_shared_blocks` as one block of all the samples, kept."""
+        for _, self._sig_wT, self._Cs, self._root in self._shared_blocks(self.model.n_steps):
+            pass
+
+    def _shared_blocks(self, size: int):
+        """The noise-independent arrays by blocks of ``size`` samples: yields ``(ks, sig_wT, C,
+        root)``, ``ks`` the block's slice of samples (the first block's arrays before the second is
+        computed: the memory of one block, whatever ``N``).
 
         ``Gamma_k(r)`` by the recursion (31) (one vectorised step per sample over the window's
-        onsets), then in single array operations over all ``(k, r)``: the whitened signatures
-        ``Sigma_k^{-1/2} (H_k Gamma_k(r) + Phi~_k)``, the informations ``C_k(r)`` (sums (32),
-        recursively (27)), and the factors of their pseudo-inverses ``C^+ = R R^T``.
+        onsets), then in single array operations over the block's ``(k, r)``: the whitened
+        signatures ``Sigma_k^{-1/2} (H_k Gamma_k(r) + Phi~_k)`` (``sig_wT``), the informations
+        ``C_k(r)`` (sums (32), recursively (27)), and the factors of their pseudo-inverses
+        ``C^+ = R R^T`` (``root``). Every entry is the same operation whatever the blocks
+        (products per sample, elementwise operations, one decomposition per matrix), except the
+        Jacobi sweeps of ``3 <= m <= 4``, whose number the whole stack sets (:func:`_small_eigh`).
         """
         model, g, fam, w = self.model, self.gains, self.family, self.window
         N, n, p, m = model.n_steps, model.n, model.p, fam.m
@@ -419,56 +469,58 @@ class WindowedGLR:
         Psi = fam.Psi_tilde.reshape(F, N, n, m)
         Phi = fam.Phi_tilde.reshape(F, N, p, m)
         drive = Psi - g.FK @ Phi  # Psi~_k - F_k K_k Phi~_k, (F, N, n, m)
-        k_all = np.arange(N)
-        # onset held by slot j at time k: the r = j mod w in (k - w, k] (-1 before the record)
-        onset = k_all[:, None] - (k_all[:, None] - np.arange(w)[None, :]) % w  # (N, w)
-        onset[onset < 0] = -1
-        # Gamma_k(r) as (n, w F m): slots (and realisations) side by side, so that (31) is one
-        # matrix product per sample
-        Gamma = np.zeros((N, n, w, F, m))
-        flat = Gamma.reshape(N, n, w * F * m)
         drive_c = np.ascontiguousarray(np.transpose(drive, (2, 1, 0, 3)))  # (n, N, F, m)
-        started = onset >= 0
+        started = self._onsets >= 0
         full = started.all(axis=1)  # every slot holds an onset: no mask needed
-        for k in range(1, N):  # Gamma_0 = 0
-            # Gamma_k(r) = A_{k-1} Gamma_{k-1}(r) + drive_{k-1}(r), eq. (31)
-            np.matmul(g.A[k - 1], flat[k - 1], out=flat[k])
-            if fam.kind == "step":
-                if full[k - 1]:
-                    Gamma[k] += drive_c[:, k - 1, None, :, :]
-                else:
-                    Gamma[k] += started[k - 1][None, :, None, None] * drive_c[:, k - 1, None, :, :]
-            # impulse: Psi_{k-1}(r) != 0 only for r = k
-            Gamma[k][:, k % w] = drive_c[:, k - 1] if fam.kind == "impulse" else 0.0  # r = k enters
-        sig = (model.H @ Gamma.reshape(N, n, w * F * m)).reshape(N, p, w, F, m)
-        del Gamma
-        if fam.kind == "step":  # + Phi~_k for the started onsets (in place, no temporary)
-            Phi_k = np.moveaxis(Phi, 0, 2)[:, :, None, :, :]  # (N, p, 1, F, m)
-            head = min(N, w - 1)  # before, some slots hold no onset yet; after, all do
-            sig[:head] = sig[:head] + started[:head, None, :, None, None] * Phi_k[:head]
-            sig[head:] += Phi_k[head:]  # times True is the same bits
-        self._Linv = np.linalg.inv(g.Sigma_chol)  # Sigma_k^{-1/2}, (N, p, p)
-        sig_w = (self._Linv @ sig.reshape(N, p, w * F * m)).reshape(sig.shape)
-        del sig
-        if self._skipped.any():  # a sample the filter skipped adds nothing to C_k(r) and d_k(r)
-            sig_w[self._skipped] = 0.0
-        self._sig_wT = np.ascontiguousarray(np.transpose(sig_w, (0, 2, 3, 4, 1)))  # (N, w, F, m, p)
-        inc = np.einsum("kpwfi,kpwfj->kwfij", sig_w, sig_w)  # (N, w, F, m, m)
-        del sig_w
-        C = np.empty_like(inc)
-        acc = np.zeros((w, F, m, m))
-        for k in range(N):
-            acc[k % w] = 0.0
-            acc += inc[k]
-            C[k] = acc
-        del inc
-        self._onsets = onset
-        self._allowed = (onset >= 0) & (onset <= k_all[:, None] - self.min_samples)  # (N, w)
-        V, inv = _pinv_factors(C)
-        root = V * np.sqrt(inv)[..., None, :]  # C^+ = root root^T
-        if not self._per_realisation:  # drop the realisation axis of a shared family
-            self._sig_wT, C, root = self._sig_wT[:, :, 0], C[:, :, 0], root[:, :, 0]
-        self._Cs, self._root = C, root
+        Phi_k = np.moveaxis(Phi, 0, 2)[:, :, None, :, :]  # (N, p, 1, F, m)
+        head = min(N, w - 1)  # before, some slots hold no onset yet; after, all do
+        last = np.zeros((n, w * F * m))  # Gamma_{k0 - 1} of the block starting at k0
+        acc = np.zeros((w, F, m, m))  # C_{k0 - 1}(r)
+        for k0 in range(0, N, size):
+            K = min(size, N - k0)
+            # Gamma_k(r) as (n, w F m): slots (and realisations) side by side, so that (31) is one
+            # matrix product per sample
+            Gamma = np.zeros((K, n, w, F, m))
+            flat = Gamma.reshape(K, n, w * F * m)
+            for k in range(max(k0, 1), k0 + K):  # Gamma_0 = 0
+                i = k - k0
+                # Gamma_k(r) = A_{k-1} Gamma_{k-1}(r) + drive_{k-1}(r), eq. (31)
+                np.matmul(g.A[k - 1], flat[i - 1] if i else last, out=flat[i])
+                if fam.kind == "step":
+                    if full[k - 1]:
+                        Gamma[i] += drive_c[:, k - 1, None, :, :]
+                    else:
+                        Gamma[i] += started[k - 1][None, :, None, None] * drive_c[:, k - 1, None]
+                # impulse: Psi_{k-1}(r) != 0 only for r = k
+                Gamma[i][:, k % w] = drive_c[:, k - 1] if fam.kind == "impulse" else 0.0  # r = k
+            last = flat[-1].copy()
+            sig = (model.H[k0 : k0 + K] @ flat).reshape(K, p, w, F, m)
+            del Gamma, flat
+            if fam.kind == "step":  # + Phi~_k for the started onsets (in place, no temporary)
+                h = min(K, max(0, head - k0))
+                ph = Phi_k[k0 : k0 + K]
+                sig[:h] = sig[:h] + started[k0 : k0 + h, None, :, None, None] * ph[:h]
+                sig[h:] += ph[h:]  # times True is the same bits
+            sig_w = (self._Linv[k0 : k0 + K] @ sig.reshape(K, p, w * F * m)).reshape(sig.shape)
+            del sig
+            if self._skipped[k0 : k0 + K].any():  # a skipped sample adds nothing to C_k(r), d_k(r)
+                sig_w[self._skipped[k0 : k0 + K]] = 0.0
+            sig_wT = np.ascontiguousarray(np.transpose(sig_w, (0, 2, 3, 4, 1)))  # (K, w, F, m, p)
+            inc = np.einsum("kpwfi,kpwfj->kwfij", sig_w, sig_w)  # (K, w, F, m, m)
+            del sig_w
+            C = np.empty_like(inc)
+            for k in range(k0, k0 + K):
+                acc[k % w] = 0.0
+                acc += inc[k - k0]
+                C[k - k0] = acc
+            del inc
+            V, inv = _pinv_factors(C)
+            root = V * np.sqrt(inv)[..., None, :]  # C^+ = root root^T
+            del V, inv
+            if not self._per_realisation:  # drop the realisation axis of a shared family
+                sig_wT, C, root = sig_wT[:, :, 0], C[:, :, 0], root[:, :, 0]
+            yield slice(k0, k0 + K), sig_wT, C, root
+            del sig_wT, C, root  # the next block's arrays in the memory of these
 
     def _project(self, root: np.ndarray, d: np.ndarray) -> np.ndarray:
         """``R^T d`` per onset (and realisation): ``root`` ``(..., m, m)`` (or ``(..., B, m, m)`` for
@@ -482,12 +534,21 @@ class WindowedGLR:
         (its realisation axis after the slot): the chosen onset's entry for every realisation."""
         return arr[(*index, cols)] if self._per_realisation else arr[index]
 
-    def _score_terms(self, ks: slice, e_w: np.ndarray) -> np.ndarray:
-        """Terms of the samples ``ks`` (a range of ``K``) in every ``d_k(r)``, ``(K, w, m, B)``, from
-        their whitened innovations ``e_w`` ``(K, p, B)`` (eq. (28))."""
-        if self._per_realisation:
-            return np.einsum("kwbmp,kpb->kwmb", self._sig_wT[ks], e_w)
-        return self._sig_wT[ks] @ e_w[:, None]
+    def _score_terms(self, S: np.ndarray, e_w: np.ndarray) -> np.ndarray:
+        """Terms of ``K`` samples in every ``d_k(r)``, ``(K, w, m, B)``, from their whitened
+        signatures ``S`` (``sig_wT`` of :meth:`_shared_blocks`: ``(K, w, m, p)``, or
+        ``(K, w, B, m, p)``) and innovations ``e_w`` ``(K, p, B)`` (eq. (28))."""
+        if self._per_realisation:  # the sum over p in order, then + 0.0: the bits of an einsum
+            t = S[..., 0] * e_w[:, None, 0, :, None]  # (K, w, B, m)
+            for i in range(1, S.shape[-1]):
+                t += S[..., i] * e_w[:, None, i, :, None]
+            t += 0.0  # a sum of -0.0 terms is +0.0, as einsum's (which starts from 0.0)
+            return np.swapaxes(t, -1, -2)
+        K, w, m, p = S.shape
+        if m == 1:  # (1, p) @ (p, B) per onset: numpy's gemv, whose bits a gemm does not keep
+            return S @ e_w[:, None]
+        # one matrix product (w m, p) @ (p, B) per sample, not w: the same gemm per entry
+        return (S.reshape(K, w * m, p) @ e_w).reshape(K, w, m, -1)
 
     def fresh(self, batch_shape: tuple[int, ...] = ()) -> "WindowedGLR":
         """A new detector at ``k = 0`` for innovations of leading shape ``batch_shape``.
@@ -562,16 +623,18 @@ class WindowedGLR:
         )
 
     def _advance(
-        self, eps_k: np.ndarray, skip: bool, statistics: bool
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+        self, eps_k: np.ndarray, skip: bool, statistics: bool, estimates: bool = True
+    ) -> tuple[np.ndarray, ...] | None:
         """:meth:`update` of checked innovations ``eps_k`` ``(B, p)`` (``skip``: the sample is
         missing in every realisation): the outputs flat over the realisations, ``(B, ...)``, or
-        ``None`` when no onset is admissible yet or ``statistics`` is false."""
+        ``None`` when no onset is admissible yet or ``statistics`` is false; without ``estimates``,
+        ``(l_k, r_hat_k)`` alone."""
         k, w = self.k, self.window
         # New onset r = k enters the window (replacing r = k - w); scores (33), recursively (28).
         slot = k % w
         self._d[slot] = 0.0
-        self._C_missing[slot] = 0.0
+        if self._dropped >= 0:  # zero until a sample is dropped
+            self._C_missing[slot] = 0.0
         if skip and not self._skipped[k]:  # a dropped innovation contributes nothing: its score
             # term is zero, its information term (precomputed in C_k(r)) is subtracted for every
             # onset it belongs to
@@ -579,7 +642,7 @@ class WindowedGLR:
             self._dropped = k
         elif not skip:
             e_w = self._Linv[k] @ eps_k.T  # (p, B)
-            self._d += self._score_terms(slice(k, k + 1), e_w[None])[0]
+            self._d += self._score_terms(self._sig_wT[k : k + 1], e_w[None])[0]
         self.k = k + 1
         if self._admissible is None:  # built by the first update (a whole record never needs it)
             self._admissible = [np.nonzero(a)[0] for a in self._allowed]
@@ -597,17 +660,21 @@ class WindowedGLR:
             onsets, allowed = self._onsets[k], self._allowed[k]
         q = self._project(root, d)  # (S, m, B)
         stat = np.einsum("smb,smb->sb", q, q)  # (35) for every onset, (S, B)
-        if allowed is not None:
-            stat = np.where(allowed[:, None], stat, -np.inf)
+        if allowed is not None:  # (in place: stat is a new array)
+            stat[~allowed] = -np.inf
         best = np.argmax(
             stat, axis=0
         )  # (36), (B,): the first of equal ones, as among the admissible
         cols = self._cols
         l_k = stat[best, cols]
+        if not estimates:
+            return l_k, onsets[best]
         th = (self._pick(root, (best,), cols) @ q[best, :, cols][..., None])[..., 0]  # (34): C^+ d
         return l_k, onsets[best], th, self._pick(C, (best,), cols), d[best, :, cols]
 
-    def _record(self, eps: np.ndarray, start: int = 0) -> WindowGLRResult:
+    def _record(
+        self, eps: np.ndarray, start: int = 0, blocks=None, estimates: bool = True
+    ) -> WindowGLRResult:
         """:func:`glr_window`: all the samples of a fresh detector, statistics evaluated by blocks.
 
         The scores ``d_k(r)`` are accumulated sample by sample as in :meth:`update` (same sums
@@ -615,7 +682,10 @@ class WindowedGLR:
         maximisation (36) and the estimates (34) then run on the whole block at once. The
         statistics are wanted from ``start`` on: the samples before ``start - w + 1`` are not read
         (they only enter the scores of onsets never admissible from ``start`` on, whose slots are
-        reset before), and the outputs there stay ``nan``/``-1``.
+        reset before), and the outputs there stay ``nan``/``-1``. ``blocks``: the noise-independent
+        arrays by blocks of samples (:meth:`_shared_blocks`, of a detector that does not keep them);
+        default the kept ones, in blocks of about 2e6 floats of scores. Without ``estimates``, the
+        statistics and onsets alone (:func:`glr_window`).
         """
         model, w, m, B = self.model, self.window, self.family.m, self._B
         N, p = model.n_steps, model.p
@@ -626,21 +696,38 @@ class WindowedGLR:
         e_w = self._Linv @ np.moveaxis(eps.reshape(B, N, p), 0, 2)  # (N, p, B)
         stat = np.full((N, B), np.nan)
         onset = np.full((N, B), -1)
-        theta = np.full((N, B, m), np.nan)
-        C_hat = np.full((N, B, m, m), np.nan)
-        d_hat = np.full((N, B, m), np.nan)
-        block = max(1, min(N, 2_000_000 // (w * m * B * (m if self._per_realisation else 1))))
+        theta, C_hat, d_hat = (
+            (np.full((N, B, m), np.nan), np.full((N, B, m, m), np.nan), np.full((N, B, m), np.nan))
+            if estimates
+            else (None, None, None)
+        )
+        first = max(0, start - w + 1)
+        if blocks is None:
+            size = max(1, min(N, 2_000_000 // (w * m * B * (m if self._per_realisation else 1))))
+            blocks = (
+                (
+                    slice(k0, k0 + size),
+                    self._sig_wT[k0 : k0 + size],
+                    self._Cs[k0 : k0 + size],
+                    self._root[k0 : k0 + size],
+                )
+                for k0 in range(first, N, size)
+            )
         cols = np.arange(B)
-        for k0 in range(max(0, start - w + 1), N, block):
-            ks = np.arange(k0, min(N, k0 + block))
+        for now, sig_wT, Cs, root in blocks:
+            skip = max(0, first - now.start)  # samples of the block before the first one read
+            if skip >= sig_wT.shape[0]:
+                continue
+            k0 = now.start + skip
+            sig_wT, Cs, root = sig_wT[skip:], Cs[skip:], root[skip:]
+            ks = np.arange(k0, k0 + sig_wT.shape[0])
             now = slice(k0, k0 + ks.size)  # ks as a slice: views, not copies
             D = np.empty((ks.size, w, m, B))
-            terms = self._score_terms(now, e_w[now])
+            terms = self._score_terms(sig_wT, e_w[now])
             for i, k in enumerate(ks):
                 self._d[k % w] = 0.0
                 self._d += terms[i]
                 D[i] = self._d
-            root = self._root[now]  # (K, w, m, m), or (K, w, B, m, m)
             q = self._project(root, D)  # (K, w, m, B)
             st = np.einsum("kwmb,kwmb->kwb", q, q)  # (35)
             st = np.where(self._allowed[now][:, :, None], st, -np.inf)
@@ -649,20 +736,27 @@ class WindowedGLR:
             kk = np.arange(ks.size)[:, None]
             stat[ks[ok]] = np.take_along_axis(st, best[:, None, :], axis=1)[:, 0][ok]
             onset[ks[ok]] = self._onsets[ks[:, None], best][ok]
+            if not estimates:
+                del sig_wT, Cs, root, D, terms, q, st  # before the next block is computed
+                continue
             at = best[:, None, None, :]
             qb = np.take_along_axis(q, at, axis=1)[:, 0]  # (K, m, B)
             th = np.einsum("kbij,kjb->kbi", self._pick(root, (kk, best), cols), qb)  # (34): C^+ d
             theta[ks[ok]] = th[ok]
-            C_hat[ks[ok]] = self._pick(self._Cs, (ks[:, None], best), cols)[ok]
+            C_hat[ks[ok]] = self._pick(Cs, (kk, best), cols)[ok]
             d_hat[ks[ok]] = np.swapaxes(np.take_along_axis(D, at, axis=1)[:, 0], 1, 2)[ok]
+            del sig_wT, Cs, root, D, terms, q, st  # before the next block is computed
         self.k = N
         shape = self.batch_shape
         return WindowGLRResult(
             statistic=np.moveaxis(stat, 0, -1).reshape(*shape, N),
             onset=np.moveaxis(onset, 0, -1).reshape(*shape, N),
-            theta_hat=np.moveaxis(theta, 0, 1).reshape(*shape, N, m),
-            C_hat=np.moveaxis(C_hat, 0, 1).reshape(*shape, N, m, m),
-            d_hat=np.moveaxis(d_hat, 0, 1).reshape(*shape, N, m),
+            **{
+                key: None
+                if arr is None
+                else np.moveaxis(arr, 0, 1).reshape(*shape, N, *arr.shape[2:])
+                for key, arr in (("theta_hat", theta), ("C_hat", C_hat), ("d_hat", d_hat))
+            },
             window=w,
             min_samples=self.min_samples,
         )
@@ -678,6 +772,7 @@ def glr_window(
     *,
     shared: WindowedGLR | None = None,
     start: int = 0,
+    estimates: bool = True,
 ) -> WindowGLRResult:
     """Windowed GLR with unknown onset (35)-(37) over a whole record.
 
@@ -695,8 +790,11 @@ def glr_window(
         As in :class:`WindowedGLR`. A ``family`` of per-realisation profiles
         (``family.batch_shape == batch``, :func:`fdi_lib.models.step_family` with a leading batch
         axis) gives each realisation the test of its own profile, the same as one call per
-        realisation with its own family, in one pass over the samples; realisations are taken by
-        blocks whose per-realisation arrays stay within about ``_PER_REALISATION_BYTES``.
+        realisation with its own family, in one pass over the samples; when the realisations'
+        arrays exceed ``_PER_REALISATION_BYTES``, they are computed and read by blocks of samples
+        within it (all realisations at once), or, for ``3 <= m <= 4`` (whose Jacobi sweeps the stack
+        of matrices sets), with dropped samples or a ``shared`` detector, the realisations are
+        taken by blocks within it.
     shared : WindowedGLR, optional
         A detector built with these same ``model``, ``gains`` and ``family`` objects, ``window``
         and ``min_samples``, whose noise-independent quantities are reused
@@ -706,6 +804,11 @@ def glr_window(
         First sample whose statistics are wanted (``0 <= start <= N``): before it the outputs are
         ``nan``/``-1`` and only the scores are accumulated, which saves the statistics of a
         period where the test is disabled; the outputs from ``start`` on are unchanged.
+    estimates : bool
+        With ``False``, the statistics and onsets alone (``theta_hat``, ``C_hat``, ``d_hat`` of the
+        result are ``None``): a detector that only compares ``l_k`` with a threshold skips the
+        estimates (34) and the picks of ``C_k(r_hat)``, ``d_k(r_hat)``; the statistics and onsets
+        are the same.
 
     Returns
     -------
@@ -742,13 +845,23 @@ def glr_window(
     if not isinstance(family, FaultFamily):
         raise ModelError(f"family: expected a FaultFamily, got {type(family).__name__}")
     _check_family_batch(family, batch)
+    blocks = None  # the detector's arrays by blocks of samples, not kept (many own profiles)
     missing = missing & ~gains_missing(gains)  # dropped innovations the gains do not know
     if missing.any() and batch:
         flat_missing = missing.reshape(-1, model.n_steps)
         patterns, group = np.unique(flat_missing, axis=0, return_inverse=True)
         if len(patterns) > 1:
             return _grouped_glr_window(
-                eps, group.reshape(-1), model, gains, family, window, min_samples, shared, start
+                eps,
+                group.reshape(-1),
+                model,
+                gains,
+                family,
+                window,
+                min_samples,
+                shared,
+                start,
+                estimates,
             )
     if (
         family.batch_shape
@@ -757,13 +870,25 @@ def glr_window(
         window = integer(window, "window", low=1, high=model.n_steps)
         per = 8 * model.n_steps * window * family.m * (model.n + 3 * model.p + 4 * family.m)
         size = max(1, _PER_REALISATION_BYTES // per)
-        if B > size:
+        if B > size and (shared is not None or missing.any() or family.m in (3, 4)):
             return _grouped_glr_window(
-                eps, np.arange(B) // size, model, gains, family, window, min_samples, shared, start
+                eps,
+                np.arange(B) // size,
+                model,
+                gains,
+                family,
+                window,
+                min_samples,
+                shared,
+                start,
+                estimates,
             )
-    if shared is None:
+        if B > size:  # all realisations at once, the arrays by blocks of samples in the budget
+            det = WindowedGLR._unkept(model, gains, family, window, min_samples, batch)
+            blocks = det._shared_blocks(max(1, _PER_REALISATION_BYTES * model.n_steps // (B * per)))
+    if blocks is None and shared is None:
         det = WindowedGLR(model, gains, family, window, min_samples, batch_shape=batch)
-    else:
+    elif blocks is None:
         s = -(-family.m // model.p) if min_samples is None else min_samples
         if (
             not isinstance(shared, WindowedGLR)
@@ -780,7 +905,7 @@ def glr_window(
             )
         det = shared.fresh(batch)
     if (det._B <= _RECORD_MAX_BATCH or det._per_realisation) and not missing.any():
-        res = det._record(eps, start)
+        res = det._record(eps, start, blocks, estimates)
         if start:  # the same outputs as sample by sample: none before start
             for arr, undefined in (
                 (res.statistic, np.nan),
@@ -789,7 +914,8 @@ def glr_window(
                 (res.C_hat, np.nan),
                 (res.d_hat, np.nan),
             ):
-                arr[(slice(None),) * len(batch) + (slice(0, start),)] = undefined
+                if arr is not None:
+                    arr[(slice(None),) * len(batch) + (slice(0, start),)] = undefined
         return res
     # many realisations: one update per sample already works on wide arrays (the innovations
     # checked above: the samples missing in one realisation are missing in all)
@@ -800,15 +926,24 @@ def glr_window(
         np.empty((B, N, m)),
         np.empty((B, N, m, m)),
         np.empty((B, N, m)),
+    )[: 5 if estimates else 2]
+    undefined = tuple(  # the outputs of a sample without statistics
+        np.full((B, *a.shape[2:]), value, dtype=a.dtype)
+        for a, value in zip(out, (np.nan, -1, np.nan, np.nan, np.nan))
     )
-    undefined = (np.nan, -1, np.nan, np.nan, np.nan)
     flat = eps.reshape(B, N, model.p)
     skip = nan_rows.reshape(-1, N).all(axis=0)
-    for k in range(N):
-        res = det._advance(flat[:, k], bool(skip[k]), k >= start)
-        for arr, value in zip(out, undefined if res is None else res):
-            arr[:, k] = value
-    stat, onset, theta, C_hat, d_hat = (a.reshape(*batch, *a.shape[1:]) for a in out)
+    for k0 in range(0, N, _OUTPUT_BLOCK):  # the outputs written by blocks of samples
+        ks = range(k0, min(N, k0 + _OUTPUT_BLOCK))
+        rows = [
+            det._advance(flat[:, k], bool(skip[k]), k >= start, estimates) or undefined for k in ks
+        ]
+        for i, arr in enumerate(out):
+            arr[:, ks.start : ks.stop] = np.stack([r[i] for r in rows], axis=1)
+    stat, onset, theta, C_hat, d_hat = (
+        None if a is None else a.reshape(*batch, *a.shape[1:])
+        for a in out + (None,) * (5 - len(out))
+    )
     return WindowGLRResult(
         statistic=stat,
         onset=onset,
@@ -825,9 +960,12 @@ def glr_window(
 #: Per-realisation profiles always take the blocks (their projections are not shared products).
 _RECORD_MAX_BATCH = 4
 
-#: Budget (bytes) of the arrays :func:`glr_window` holds for a block of realisations with their
-#: own profiles (signatures, informations, pseudo-inverse factors: ``N w m (n + 3 p + 4 m)``
-#: floats per realisation).
+#: Samples whose outputs :func:`glr_window` stacks and writes at once when it steps sample by sample.
+_OUTPUT_BLOCK = 64
+
+#: Budget (bytes) of the arrays :func:`glr_window` holds for realisations with their own profiles
+#: (signatures, informations, pseudo-inverse factors: ``N w m (n + 3 p + 4 m)`` floats per
+#: realisation): by blocks of samples, or of realisations, within it.
 _PER_REALISATION_BYTES = 64 * 2**20
 
 
@@ -850,6 +988,7 @@ def _grouped_glr_window(
     min_samples: int | None,
     shared: WindowedGLR | None,
     start: int,
+    estimates: bool,
 ) -> WindowGLRResult:
     """:func:`glr_window` run once per group of realisations (those sharing the same missing samples,
     or a block of realisations with their own profiles, which take their rows of the family)."""
@@ -863,6 +1002,8 @@ def _grouped_glr_window(
         "C_hat": np.empty((B, N, m, m)),
         "d_hat": np.empty((B, N, m)),
     }
+    if not estimates:
+        out = {key: out[key] for key in ("statistic", "onset")}
     res = None
     for i in np.unique(group):
         rows = np.nonzero(group == i)[0]
@@ -875,11 +1016,23 @@ def _grouped_glr_window(
             )
             fam = FaultFamily(kind=family.kind, Psi_tilde=Psi, Phi_tilde=Phi)
             sh = None
-        res = glr_window(flat[rows], model, gains, fam, window, min_samples, shared=sh, start=start)
+        res = glr_window(
+            flat[rows],
+            model,
+            gains,
+            fam,
+            window,
+            min_samples,
+            shared=sh,
+            start=start,
+            estimates=estimates,
+        )
         for key, arr in out.items():
             arr[rows] = getattr(res, key)
+    fields = dict.fromkeys(("theta_hat", "C_hat", "d_hat"))  # None: not asked for
+    fields.update({key: arr.reshape(*batch, *arr.shape[1:]) for key, arr in out.items()})
     return WindowGLRResult(
-        **{key: arr.reshape(*batch, *arr.shape[1:]) for key, arr in out.items()},
+        **fields,
         window=res.window,
         min_samples=res.min_samples,
     )

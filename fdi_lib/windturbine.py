@@ -46,6 +46,7 @@ import functools
 from dataclasses import dataclass
 from typing import Any, Callable, Mapping, Sequence
 
+import numba
 import numpy as np
 import scipy.linalg
 import scipy.stats
@@ -54,7 +55,12 @@ from fdi_lib.errors import ModelError, PersistentExcitationError, ShapeError
 from fdi_lib.filters import KalmanGains, KalmanResult, kalman_filter, kalman_gains
 from fdi_lib.glr import WindowedGLR, first_alarm, glr_window
 from fdi_lib.isolation import minmax_isolation
-from fdi_lib.kitanidis import kitanidis_filter, kitanidis_gains, residual_signature
+from fdi_lib.kitanidis import (
+    KitanidisResult,
+    kitanidis_filter,
+    kitanidis_gains,
+    residual_signature,
+)
 from fdi_lib.models import LTVModel, fault_profile, ltv_model, step_family
 from fdi_lib.nonparametric import energy_statistic, energy_threshold
 from fdi_lib.sets.polytope import Polytope
@@ -1029,11 +1035,20 @@ def run_zb(
     return MethodOutcome(fa, detect, which, isolated, step, peak)
 
 
-def _zb_glr(d: Design, eps: Mapping[str, np.ndarray]) -> dict[str, Any]:
-    """The windowed GLR of every subsystem's innovations (Zhang & Basseville)."""
+def _zb_glr(d: Design, eps: Mapping[str, np.ndarray], estimates: bool = True) -> dict[str, Any]:
+    """The windowed GLR of every subsystem's innovations (Zhang & Basseville); ``estimates``: also
+    the information and score at the estimated onset, which the minmax isolation reads
+    (:func:`~fdi_lib.glr.glr_window`)."""
     return {
         name: glr_window(
-            eps[name], sd.kf, sd.kf_gains, sd.family, sd.glr.window, shared=sd.glr, start=d.warmup
+            eps[name],
+            sd.kf,
+            sd.kf_gains,
+            sd.family,
+            sd.glr.window,
+            shared=sd.glr,
+            start=d.warmup,
+            estimates=estimates,
         )
         for name, sd in d.subs.items()
     }
@@ -1077,20 +1092,37 @@ def whitener(cov: np.ndarray) -> np.ndarray:
     return (V[:, keep] / np.sqrt(lam[keep])).T
 
 
+def _kitanidis_runs(d: Design, y: np.ndarray, u: np.ndarray) -> dict[str, KitanidisResult]:
+    """The Kitanidis filter of every subsystem with an unknown input (the drive train) run on the
+    records: Zhang 2021's residuals, and the innovations Basseville & Zhang project away from
+    ``tau_a`` (the same recursion as the Kalman predictor with its gains, ``SubDesign.bz_red``)."""
+    out = {}
+    for name, sd in d.subs.items():
+        if sd.sub.E is not None:
+            ys, us = _split(d, y, u, sd.sub)
+            out[name] = kitanidis_filter(sd.kit, ys, us, gains=sd.kit_gains)
+    return out
+
+
 def _residuals(
     d: Design,
     y: np.ndarray,
     u: np.ndarray,
     kalman: Mapping[str, KalmanResult] | None = None,
+    kitanidis: Mapping[str, KitanidisResult] | None = None,
 ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Updated residuals of each subsystem (Kitanidis on the drive train, Kalman on the blades),
-    whitened by their steady-state covariance, and the whitened residual signature. ``kalman``: the
-    runs of :func:`_kalman_runs` on these records, whose filter is the blades' (not run again)."""
+    whitened by their steady-state covariance, and the whitened residual signature. ``kalman``,
+    ``kitanidis``: the runs of :func:`_kalman_runs` and :func:`_kitanidis_runs` on these records
+    (the Kalman filter is the blades' residual filter), not run again."""
     out = {}
     for name, sd in d.subs.items():
         ys, us = _split(d, y, u, sd.sub)
         if sd.sub.E is not None:
-            r = kitanidis_filter(sd.kit, ys, us, gains=sd.kit_gains).residuals
+            if kitanidis is None:
+                r = kitanidis_filter(sd.kit, ys, us, gains=sd.kit_gains).residuals
+            else:
+                r = kitanidis[name].residuals
             cov = sd.kit_gains.residual_cov[-1]
         else:
             shared = kalman is not None and sd.kit is sd.kf and sd.kit_gains is sd.kf_gains
@@ -1100,6 +1132,29 @@ def _residuals(
             cov = IHK @ sd.kit_gains.Sigma[-1] @ IHK.T
         W = whitener(cov)
         out[name] = (r @ W.T, np.einsum("ij,kjm->kim", W, sd.kit_signature))
+    return out
+
+
+@numba.njit(cache=True)
+def _window_correlations(r: np.ndarray, kern: np.ndarray) -> np.ndarray:
+    """``out[b, j, k] = sum_i sum_q r[b, q, k + i] kern[i, q, j]`` for residuals ``r`` ``(B, p, N)``
+    (samples last) and a kernel ``kern`` ``(w, p, m)``, ``k = 0 .. N - w``: each sum from 0.0 over
+    ``i``, then ``q``, in order: for ``m >= 2`` (every subsystem's candidates) the bits of
+    ``einsum("bkpw,wpm->bkm")`` on the sliding windows of the residuals, which sums in this order (for
+    ``m = 1`` it sums by partial sums), as whole rows of ``k`` at a time (no strided iteration)."""
+    B, p, N = r.shape
+    w, m = kern.shape[0], kern.shape[2]
+    K = N - w + 1
+    out = np.zeros((B, m, K))
+    for b in range(B):
+        for i in range(w):
+            for q in range(p):
+                x = r[b, q, i : i + K]
+                for j in range(m):
+                    c = kern[i, q, j]
+                    o = out[b, j]
+                    for k in range(K):
+                        o[k] += x[k] * c
     return out
 
 
@@ -1113,8 +1168,8 @@ def _lasso_test(d: Design, res: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> 
         r, S = res[name]
         kern = S[d.warmup : d.warmup + w]  # (w, p, m): onset at window start
         norm = np.sqrt(np.einsum("wpm,wpm->m", kern, kern))
-        win = np.lib.stride_tricks.sliding_window_view(r, w, axis=1)  # (B, N-w+1, p, w)
-        t = np.einsum("bkpw,wpm->bkm", win, kern) / norm
+        rT = np.ascontiguousarray(np.swapaxes(r, 1, 2))
+        t = np.swapaxes(_window_correlations(rT, np.ascontiguousarray(kern)), 1, 2) / norm
         st = np.full(r.shape[:2], np.nan)
         st[:, w - 1 :] = np.abs(t).max(axis=-1)
         stats.append(st)
@@ -1122,7 +1177,11 @@ def _lasso_test(d: Design, res: Mapping[str, tuple[np.ndarray, np.ndarray]]) -> 
 
 
 def run_zhang2021(
-    d: Design, y: np.ndarray, u: np.ndarray, kalman: Mapping[str, KalmanResult] | None = None
+    d: Design,
+    y: np.ndarray,
+    u: np.ndarray,
+    kalman: Mapping[str, KalmanResult] | None = None,
+    kitanidis: Mapping[str, KitanidisResult] | None = None,
 ) -> MethodOutcome:
     """Zhang (2021): Kitanidis residuals (``tau_a`` the unknown input), detection when the Lasso
     of the last ``w`` samples is not identically zero (``max_j |X_j^T y| / ||X_j||`` above the
@@ -1131,7 +1190,7 @@ def run_zhang2021(
     isolation)."""
     w = d.settings.window
     B = y.shape[0]
-    res = _residuals(d, y, u, kalman)
+    res = _residuals(d, y, u, kalman, kitanidis)
     stats = _lasso_test(d, res)
     names = list(d.subs)
     fa, detect, which, peak = _combine(d, stats, [d.subs[n].lasso_threshold for n in names])
@@ -1172,10 +1231,15 @@ def run_zhang2021(
 
 
 def _bz_stats(
-    d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray]
+    d: Design,
+    y: np.ndarray,
+    u: np.ndarray,
+    eps: Mapping[str, np.ndarray],
+    kitanidis: Mapping[str, KitanidisResult] | None = None,
 ) -> tuple[list[np.ndarray], list[float], list[np.ndarray], list[float]]:
     """Basseville & Zhang's statistics and thresholds per subsystem: the parametric windowed GLRs,
-    then the energy tests."""
+    then the energy tests. ``kitanidis``: the runs of :func:`_kitanidis_runs` on these records,
+    whose innovations are the drive train's (not run again)."""
     w = d.settings.window
     par_stats: list[np.ndarray] = []
     par_thr: list[float] = []
@@ -1187,14 +1251,19 @@ def _bz_stats(
             drive = us[..., 0]  # (B, N): beta_r - ybar
             # one profile per realisation (its own input), all realisations in one windowed GLR
             fam = step_family(sd.kf, Psi=col[None, None, :, None] * drive[:, :, None, None])
-            st = glr_window(eps[name], sd.kf, sd.kf_gains, fam, w, start=d.warmup).statistic
+            st = glr_window(
+                eps[name], sd.kf, sd.kf_gains, fam, w, start=d.warmup, estimates=False
+            ).statistic
             par_stats.append(st)
             par_thr.append(float(scipy.stats.chi2.ppf(1.0 - d.alpha_sample / w, 1)))
         else:
             from fdi_lib.nonparametric import reduce_residual
 
             kpred, T = sd.bz_red
-            e_kit = kalman_filter(sd.kit, ys, us, gains=kpred).innovations
+            if kitanidis is None:
+                e_kit = kalman_filter(sd.kit, ys, us, gains=kpred).innovations
+            else:  # the same recursion (predictor_recursion, the Kitanidis gains K): the same bits
+                e_kit = kitanidis[name].innovations
             red = reduce_residual(sd.kit, sd.kit_gains, e_kit, T)
             g = glr_window(
                 red.residuals,
@@ -1204,6 +1273,7 @@ def _bz_stats(
                 w,
                 shared=sd.bz_glr,
                 start=d.warmup,
+                estimates=False,
             )
             par_stats.append(g.statistic)
             par_thr.append(float(scipy.stats.chi2.ppf(1.0 - d.alpha_sample / w, 1)))
@@ -1212,7 +1282,11 @@ def _bz_stats(
 
 
 def run_bz(
-    d: Design, y: np.ndarray, u: np.ndarray, eps: Mapping[str, np.ndarray] | None = None
+    d: Design,
+    y: np.ndarray,
+    u: np.ndarray,
+    eps: Mapping[str, np.ndarray] | None = None,
+    kitanidis: Mapping[str, KitanidisResult] | None = None,
 ) -> MethodOutcome:
     """Basseville & Zhang: parametric tests (the stiffness ``wn^2`` of each pitch actuator, a
     data-dependent profile ``Psi_k``; the converter offset and the drive-train torque on the
@@ -1223,7 +1297,7 @@ def run_bz(
     eps = _innovations(d, y, u) if eps is None else eps
     B = y.shape[0]
     names = list(d.subs)
-    par_stats, par_thr, en, en_thr = _bz_stats(d, y, u, eps)
+    par_stats, par_thr, en, en_thr = _bz_stats(d, y, u, eps, kitanidis)
     isolated = np.zeros((B, len(CANDIDATES)), dtype=bool)
     pfa, pdet, pwhich, ppeak = _combine(d, par_stats, par_thr)
     efa, edet, ewhich, epeak = _combine(d, en, en_thr)
@@ -1549,7 +1623,8 @@ class MethodInputs:
     """The records ``y`` ``(B, N, 11)``, ``u`` ``(B, N, 4)`` of one call to the methods, and the work
     they share, computed once on first use: the Kalman filter of every subsystem (its innovations:
     Zhang & Basseville's GLR, Basseville & Zhang's energy test; its updated residuals: Zhang 2021's
-    on the blades, whose residual filter it is).
+    on the blades, whose residual filter it is) and the Kitanidis filter of the drive train (its
+    residuals: Zhang 2021's; its innovations: Basseville & Zhang's parametric test).
 
     Attributes
     ----------
@@ -1564,6 +1639,11 @@ class MethodInputs:
     def kalman(self) -> dict[str, KalmanResult]:
         """Subsystem name -> its Kalman filter run on the records (:func:`_kalman_runs`)."""
         return _kalman_runs(self.design, self.y, self.u)
+
+    @functools.cached_property
+    def kitanidis(self) -> dict[str, KitanidisResult]:
+        """Subsystem name -> its Kitanidis filter run on the records (:func:`_kitanidis_runs`)."""
+        return _kitanidis_runs(self.design, self.y, self.u)
 
     @functools.cached_property
     def innovations(self) -> dict[str, np.ndarray]:
@@ -1638,17 +1718,19 @@ def statistic_alarms(
 
 
 def _zb_statistics(d: Design, inputs: MethodInputs) -> tuple[list[np.ndarray], list[float]]:
-    zb = _zb_glr(d, inputs.innovations)
+    zb = _zb_glr(d, inputs.innovations, estimates=False)  # the alarms read the statistics alone
     return [zb[n].statistic for n in d.subs], [sd.glr_threshold for sd in d.subs.values()]
 
 
 def _lasso_statistics(d: Design, inputs: MethodInputs) -> tuple[list[np.ndarray], list[float]]:
-    stats = _lasso_test(d, _residuals(d, inputs.y, inputs.u, inputs.kalman))
+    stats = _lasso_test(d, _residuals(d, inputs.y, inputs.u, inputs.kalman, inputs.kitanidis))
     return stats, [sd.lasso_threshold for sd in d.subs.values()]
 
 
 def _bz_statistics(d: Design, inputs: MethodInputs) -> tuple[list[np.ndarray], list[float]]:
-    par, par_thr, en, en_thr = _bz_stats(d, inputs.y, inputs.u, inputs.innovations)
+    par, par_thr, en, en_thr = _bz_stats(
+        d, inputs.y, inputs.u, inputs.innovations, inputs.kitanidis
+    )
     return par + en, par_thr + en_thr
 
 
@@ -1663,11 +1745,11 @@ def _zb_diagnose(d: Design, inputs: MethodInputs) -> MethodOutcome:
 
 
 def _zhang2021_diagnose(d: Design, inputs: MethodInputs) -> MethodOutcome:
-    return run_zhang2021(d, inputs.y, inputs.u, inputs.kalman)
+    return run_zhang2021(d, inputs.y, inputs.u, inputs.kalman, inputs.kitanidis)
 
 
 def _bz_diagnose(d: Design, inputs: MethodInputs) -> MethodOutcome:
-    return run_bz(d, inputs.y, inputs.u, inputs.innovations)
+    return run_bz(d, inputs.y, inputs.u, inputs.innovations, inputs.kitanidis)
 
 
 def _svo_diagnose(d: Design, inputs: MethodInputs) -> MethodOutcome:

@@ -324,3 +324,31 @@ def test_windowed_glr_estimates_equal_brute_force(kind, m_faults, batch):
             np.testing.assert_allclose(
                 fast.theta_hat[b, k], th, rtol=1e-7, atol=1e-9 * np.abs(th).max()
             )
+
+
+@pytest.mark.parametrize("size", [2, 6])
+def test_statistics_alone_are_those_with_the_estimates(size):
+    """glr_window(..., estimates=False): the same statistics and onsets, bit for bit, without
+    theta_hat, C_hat, d_hat (None), by blocks (few realisations), sample by sample (many), per group
+    of missing samples, and with per-realisation profiles."""
+    m = ex.unstable_model(120)
+    g = kalman_gains(m)
+    fam = impulse_family(m)
+    sim = simulate(
+        m,
+        rng=np.random.default_rng(9),
+        controller=ex.controller(),
+        size=size,
+        fault=fam.profile(60),
+        theta=[2.0, 0.0],
+    )
+    eps = kalman_filter(m, sim.y, sim.u, gains=g).innovations
+    eps_nan = eps.copy()
+    eps_nan[1, 70] = np.nan  # two missing-sample patterns: grouped evaluation
+    own = step_family(m, Psi=np.random.default_rng(1).standard_normal((size, 120, m.n, 1)))
+    for e, f in ((eps, fam), (eps_nan, fam), (eps, own)):
+        full = glr_window(e, m, g, f, window=30, start=40)
+        alone = glr_window(e, m, g, f, window=30, start=40, estimates=False)
+        assert alone.theta_hat is None and alone.C_hat is None and alone.d_hat is None
+        assert alone.statistic.tobytes() == full.statistic.tobytes()
+        assert alone.onset.tobytes() == full.onset.tobytes()

@@ -156,11 +156,12 @@ def test_missing_samples_with_per_realisation_profiles():
 
 
 def test_blocks_of_realisations_within_the_memory_budget(monkeypatch):
-    """A budget smaller than the batch's arrays: blocks of realisations, the same results."""
-    model, gains, eps, Psi, Phi = _setup((7,), 1, seed=5)
+    """A budget smaller than the batch's arrays, m = 3 (whose Jacobi sweeps the stack of matrices
+    sets): blocks of realisations, the same results."""
+    model, gains, eps, Psi, Phi = _setup((7,), 3, seed=5)
     fam = step_family(model, Psi=Psi, Phi=Phi)
     whole = glr_window(eps, model, gains, fam, W, S)
-    per = 8 * N * W * (n + 3 * p + 4)
+    per = 8 * N * W * 3 * (n + 3 * p + 12)
     monkeypatch.setattr(glr, "_PER_REALISATION_BYTES", 3 * per)  # blocks of 3, 3 and 1
     calls = []
     real = glr.WindowedGLR.__init__
@@ -175,6 +176,35 @@ def test_blocks_of_realisations_within_the_memory_budget(monkeypatch):
     _assert_same(
         blocked, {key: getattr(whole, key) for key in KEYS}
     )  # rounding differs with the block
+
+
+@pytest.mark.parametrize("m, start", [(1, 0), (1, 15), (2, 0)])
+def test_blocks_of_samples_within_the_memory_budget(monkeypatch, m, start):
+    """A budget smaller than the batch's arrays, m outside 3..4: all realisations in one pass, the
+    detector's arrays by blocks of samples (3/7 of the record), the same bits as with the whole
+    record in one block; the blocks of realisations taken before agree to rounding (their last block,
+    one realisation, takes other products)."""
+    model, gains, eps, Psi, Phi = _setup((7,), m, seed=6)
+    fam = step_family(model, Psi=Psi, Phi=Phi)
+    whole = glr_window(eps, model, gains, fam, W, S, start=start)
+    per = 8 * N * W * m * (n + 3 * p + 4 * m)
+    monkeypatch.setattr(glr, "_PER_REALISATION_BYTES", 3 * per)
+    sizes = []
+    real = glr.WindowedGLR._shared_blocks
+
+    def spy(self, size):
+        sizes.append((self._B, size))
+        return real(self, size)
+
+    monkeypatch.setattr(glr.WindowedGLR, "_shared_blocks", spy)
+    blocked = glr_window(eps, model, gains, fam, W, S, start=start)
+    assert sizes == [(7, 3 * N // 7)]
+    realisations = glr._grouped_glr_window(
+        eps, np.arange(7) // 3, model, gains, fam, W, S, None, start, True
+    )
+    for key in KEYS:
+        assert getattr(blocked, key).tobytes() == getattr(whole, key).tobytes(), key
+    _assert_same(blocked, {key: getattr(realisations, key) for key in KEYS})
 
 
 def test_shape_errors_of_per_realisation_profiles():
@@ -218,3 +248,20 @@ def test_shape_errors_of_per_realisation_profiles():
         NonFiniteError, match=r"Psi: expected finite values, got inf at index \(1, 5, 0, 0\)"
     ):
         step_family(model, Psi=bad)
+
+
+@pytest.mark.parametrize("m", [1, 2, 3])
+def test_score_terms_are_the_bits_of_the_products_they_replace(m):
+    """WindowedGLR._score_terms: with per-realisation profiles, the sum over the outputs written out
+    has the bits of the einsum it replaces; with a shared family, one (w m, p) @ (p, B) product per
+    sample those of w products (m, p) @ (p, B) (for m = 1, gemv: kept as w products)."""
+    model, gains, eps, Psi, Phi = _setup((4,), m, seed=3)
+    e_w = np.random.default_rng(1).standard_normal((N, p, 4))
+    e_w[3, 0] = -0.0
+    own = WindowedGLR(model, gains, step_family(model, Psi=Psi, Phi=Phi), W, batch_shape=(4,))
+    ref = np.einsum("kwbmp,kpb->kwmb", own._sig_wT, e_w)
+    assert own._score_terms(own._sig_wT, e_w).tobytes() == np.ascontiguousarray(ref).tobytes()
+    shared = WindowedGLR(model, gains, step_family(model, Psi=Psi[0], Phi=Phi[1]), W)
+    ref = shared._sig_wT @ e_w[:, None]
+    got = shared._score_terms(shared._sig_wT, e_w)
+    assert np.ascontiguousarray(got).tobytes() == ref.tobytes()

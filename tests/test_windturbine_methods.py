@@ -52,6 +52,20 @@ def _one_step_error(faulty: bool) -> dict[str, float]:
     return out
 
 
+def test_window_correlations_are_the_bits_of_the_einsum():
+    """The Lasso test's compiled window sums (W._window_correlations) against the einsum on the
+    sliding windows that they replace, bit for bit (sizes of the blades and the drive train)."""
+    rng = np.random.default_rng(4)
+    for B, N, p, w, m in ((3, 120, 2, 30, 3), (2, 90, 5, 50, 7), (1, 40, 1, 40, 2)):
+        r = rng.standard_normal((B, N, p))
+        kern = rng.standard_normal((w, p, m))
+        ref = np.einsum(
+            "bkpw,wpm->bkm", np.lib.stride_tricks.sliding_window_view(r, w, axis=1), kern
+        )
+        out = W._window_correlations(np.ascontiguousarray(np.swapaxes(r, 1, 2)), kern)
+        assert np.ascontiguousarray(np.swapaxes(out, 1, 2)).tobytes() == ref.tobytes()
+
+
 def test_subsystem_models_reproduce_the_simulator():
     """Independent check against the simulator's true states: with healthy sensors every
     subsystem's one-step prediction is exact to rounding; a stuck pitch sensor (the servo's loop
@@ -95,6 +109,30 @@ def test_zhang2021_reuses_the_blades_kalman_run_bit_for_bit(design):
     got, ref = W.run_zhang2021(design, y, u, kalman), W.run_zhang2021(design, y, u)
     for key in ("false_alarm", "detect", "isolated", "isolate_step", "peak"):
         np.testing.assert_array_equal(getattr(got, key), getattr(ref, key))
+
+
+def test_bz_and_zhang2021_share_the_kitanidis_run_bit_for_bit(design):
+    """The drive train's Kitanidis filter, run once per batch (MethodInputs.kitanidis): its residuals
+    are Zhang 2021's, its innovations those Basseville & Zhang project, the same bits as each
+    method's own run (the Kalman predictor with the Kitanidis gains for BZ)."""
+    kpred, _ = design.subs["drive_train"].bz_red
+    assert kpred.K is design.subs["drive_train"].kit_gains.K
+    seeds = np.random.SeedSequence(23).spawn(2)
+    recs = [W.fault_records(FAULTS[i], seeds, settings=SETTINGS) for i in (5, 8)]
+    y = np.concatenate([r.y for r in recs])
+    u = np.concatenate([r.u for r in recs])
+    inputs = W.MethodInputs(design, y, u)
+    assert list(inputs.kitanidis) == ["drive_train"]
+    shared = W._bz_stats(design, y, u, inputs.innovations, inputs.kitanidis)
+    alone = W._bz_stats(design, y, u, inputs.innovations)
+    for a, b in zip(shared, alone):
+        for x, z in zip(a, b):
+            assert np.asarray(x).tobytes() == np.asarray(z).tobytes()
+    shared = W._residuals(design, y, u, inputs.kalman, inputs.kitanidis)
+    alone = W._residuals(design, y, u)
+    for name in design.subs:
+        for a, b in zip(shared[name], alone[name]):
+            assert a.tobytes() == b.tobytes()
 
 
 def test_innovations_are_white_with_unit_variance_on_fault_free_data(design):
