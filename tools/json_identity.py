@@ -61,7 +61,7 @@ ROUNDING_DEPENDENT: dict[str, dict[str, tuple[float, str]]] = {
 }
 #: Reproductions too slow to recompute in the test suite even at :data:`TRIALS`, with why.
 SKIP: dict[str, str] = {
-    "windturbine-false-alarms": "one stream is the benchmark's whole 4400 s scenario, about 35 s of "
+    "windturbine-false-alarms": "one stream is the benchmark's whole 4400 s scenario, about 22 s of "
     "a core; its counts are tested on short streams (tests/reproduce/test_windturbine_scoreboard.py) "
     "and its command against the book's result by tools/check_catalogue.py",
 }

@@ -104,12 +104,13 @@ def stream_chunk(seeds: list, *, seed: int) -> dict[str, np.ndarray]:
 #: hours, enough for an interval that can test the nominal rate of a test that raises no alarm.
 FALSE_ALARM_STREAMS = 9
 #: The book's count (one scenario, 1.22 scored hours): the default's 9 would take the chapter
-#: about 5 min of a core (:data:`SECONDS_PER_STREAM`), more than the whole book's execution.
+#: about 4 min of a core (:data:`SECONDS_PER_STREAM`).
 BOOK_STREAMS = 1
 #: Seconds of one core per stream (the simulation and the four methods over one 4400 s scenario,
-#: ``benchmarks/bench_windturbine_stream.py``: about 31 s on the book's 2-core machine, quiet): the
-#: estimate with which a too large ``trials`` is refused (:func:`check_trials`).
-SECONDS_PER_STREAM = 35.0
+#: measured as the second of two streams at ``--jobs 1``: about 22 s on the book's 2-core machine,
+#: quiet, 31 s before the speed-ups of issue 35): the estimate with which a too large ``trials`` is
+#: refused (:func:`check_trials`).
+SECONDS_PER_STREAM = 25.0
 
 
 def _alarm_rates(x: dict[str, np.ndarray], hours: float, nominal: float) -> dict[str, dict]:
@@ -162,7 +163,7 @@ def false_alarms(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
     threshold, the SVO bank at every window.
 
     The book runs :data:`BOOK_STREAMS`: the default's :data:`FALSE_ALARM_STREAMS` would take the
-    chapter about 5 min of a core (:data:`SECONDS_PER_STREAM`; each method's samples per second
+    chapter about 4 min of a core (:data:`SECONDS_PER_STREAM`; each method's samples per second
     and its memory, flat in the stream's length, in ``benchmarks/bench_windturbine_stream.py``).
 
     Headline keys
