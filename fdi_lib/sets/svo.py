@@ -1398,12 +1398,12 @@ def _group_step(
 
 @numba.njit(cache=True)
 def _template_run(
-    groups: tuple, u: np.ndarray, y: np.ndarray, k: int, last: int, margin: float
+    groups: Any, u: np.ndarray, y: np.ndarray, k: int, last: int, margin: float
 ) -> int:  # pragma: no cover
     """Steps ``k``, ``k + 1``, ... ``last`` of every group (:func:`_group_step`, the groups in
-    order at each step) in one compiled loop, the scratch arrays allocated once; stops after the
-    first step at which a set has no feasible basis (its ``m_out`` and ``found`` are that step's)
-    and returns the last step made."""
+    order at each step; ``groups`` a ``numba.typed.List`` of their tuples) in one compiled loop,
+    the scratch arrays allocated once; stops after the first step at which a set has no feasible
+    basis (its ``m_out`` and ``found`` are that step's) and returns the last step made."""
     n = groups[0][5].shape[1]
     na = p = J = n_b = q = K = 0
     for g in groups:
@@ -1421,9 +1421,6 @@ def _template_run(
             return k
         k += 1
 
-
-#: The groups of one call of :func:`_template_run` (a multiple of it, padded with idle groups).
-_GROUPS_PER_CALL = 4
 
 #: Steps of a time-varying model whose products ``D A_v`` :meth:`TemplateBatch.advance` makes at
 #: once (the memory of one call).
@@ -1710,13 +1707,10 @@ class TemplateBatch:
         with no feasible basis goes to :func:`~fdi_lib.sets.polytope._enumerate_vertices`
         (emptiness by LP), as in :func:`_vertices_many`. Returns the last step made."""
         args = [self._kernel_group(g, a, k) for g, a in fused]
-        # padded with observer-less copies of the first group to a multiple of _GROUPS_PER_CALL:
-        # one compiled signature whatever the number of groups
-        idle = (
-            args[0][:2] + (args[0][2][:0],) + args[0][3:-2] + (np.empty((0, 0)), np.empty(0, bool))
-        )
-        pad = [idle] * (-len(args) % _GROUPS_PER_CALL)
-        last = _template_run(tuple(args + pad), self.u, self.y, k, last, self.margin)
+        # a typed list: one compiled signature whatever the number of groups (a tuple of them
+        # compiled one per length, in minutes for a dozen groups: LLVM on one huge aggregate)
+        groups = numba.typed.List(args)
+        last = _template_run(groups, self.u, self.y, k, last, self.margin)
         for (g, a), arg in zip(fused, args):
             m, found = arg[-2:]
             for i in np.flatnonzero(~found):
