@@ -11,7 +11,7 @@ export OPENBLAS_NUM_THREADS := 1
 export OMP_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 
-.PHONY: book book-fast test venv lock clean benchmarks student student-pdf notebooks browser-test browser-pages browser-notebooks check-book grade pdf install-check lint format system-deps
+.PHONY: book book-execute book-pages book-fast test venv lock clean benchmarks student student-pdf notebooks browser-test browser-pages browser-notebooks check-book grade pdf install-check lint format system-deps
 
 venv: $(STAMP)
 
@@ -45,21 +45,32 @@ $(NODE):
 ## the execution time of every chapter and the wall time of the build, measures what each page
 ## loads (headless Chromium, installed if absent as for the browser test) and writes both into the
 ## built status page, which is executed before any page is written and cannot measure them itself.
-## BOOK_JOBS chapters at a time (default: the cores).
+## BOOK_JOBS chapters at a time (default: the cores). The two halves are targets of their own,
+## `book-execute` (the chapters, into the jupyter-cache and the results cache) and `book-pages`
+## (Jupyter Book and the report), so that CI can start the student edition, which reuses the
+## executed chapters, beside the pages; `make book` runs them one after the other.
 KERNEL_NOISE := sed -u -e '/Kernel is running over TCP without encryption/d' \
                        -e '/KeyboardInterrupt caught in kernel/d'
-book: export FDI_RESULTS_CACHE := $(CURDIR)/_build/results-cache
-book: BOOK_STARTED := $(shell date +%s)
 book: $(STAMP) $(CHROMIUM)
+	@$(MAKE) --no-print-directory book-execute
+	@$(MAKE) --no-print-directory book-pages
+	@echo "Book built: $(abspath _build/html/index.html)"
+
+book-execute: export FDI_RESULTS_CACHE := $(CURDIR)/_build/results-cache
+book-execute: $(STAMP)
 	rm -rf _build/html _build/.doctrees _build/results-cache
 	mkdir -p _build
+	date +%s > _build/.book-started
 	set -o pipefail; $(BIN)/python tools/execute_book.py --cache _build/.jupyter_cache-book \
 	  --config-out _build/_config_book.yml $(if $(BOOK_JOBS),--jobs $(BOOK_JOBS)) 2>&1 \
 	  | $(KERNEL_NOISE) | tee _build.log
+
+book-pages: export FDI_RESULTS_CACHE := $(CURDIR)/_build/results-cache
+book-pages: $(STAMP) $(CHROMIUM)
+	@test -f _build/_config_book.yml && test -f _build/.book-started || { echo "No executed chapters: run make book-execute first"; exit 2; }
 	set -o pipefail; $(BIN)/jupyter-book build . --config _build/_config_book.yml \
 	  --warningiserror --nitpick --keep-going --builder html 2>&1 | $(KERNEL_NOISE) | tee -a _build.log
-	$(BIN)/python tools/build_report.py --html _build/html --log _build.log --started $(BOOK_STARTED)
-	@echo "Book built: $(abspath _build/html/index.html)"
+	$(BIN)/python tools/build_report.py --html _build/html --log _build.log --started $$(cat _build/.book-started)
 
 ## Authoring mode: re-execute only the chapters whose text changed since the last book-fast
 ## (jupyter-cache), with a cache keyed by the library's source (a change in fdi_lib re-executes

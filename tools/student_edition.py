@@ -114,7 +114,10 @@ def write_notebooks(src: Path, out: Path, glue_dir: Path | None = None) -> list[
 BOOK_CACHE = REPO / "_build" / ".jupyter_cache-book"
 #: The results cache of the last ``make book`` (``$FDI_RESULTS_CACHE``): a reproduction that a
 #: student chapter runs at the settings and with the code of a full-book chapter reads its result
-#: (keyed by the settings and the library's sources, :mod:`fdi_lib.reproduce.registry`).
+#: (keyed by the settings and the library's sources, :mod:`fdi_lib.reproduce.registry`). The
+#: student run reads and writes a copy of it (``OUT/results-cache``): the book's cache holds what
+#: the book computed and nothing else, whatever runs beside or after (the caption check,
+#: ``tests/browser/check_captions.py``, reads it while CI builds this edition).
 BOOK_RESULTS = REPO / "_build" / "results-cache"
 
 
@@ -125,7 +128,11 @@ def build(out: Path, extra: list[str]) -> None:
         PYTHONPATH=os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])),
     )
     if BOOK_RESULTS.is_dir() and "FDI_RESULTS_CACHE" not in env:
-        env["FDI_RESULTS_CACHE"] = str(BOOK_RESULTS)
+        results = out / "results-cache"
+        if results.exists():
+            shutil.rmtree(results)
+        shutil.copytree(BOOK_RESULTS, results)
+        env["FDI_RESULTS_CACHE"] = str(results)
     work = out / "build"
     config = out / "_config_student.yml"
     # the chapters executed side by side, those unchanged by the stripping taken from make book's
