@@ -5,8 +5,11 @@ Jupyter renders (``tools/notebook_markdown.py``: roles and directives resolved, 
 defined), and JupyterLab opens them. This test starts the environment's JupyterLab headless on
 the loopback interface (a random port and token, no browser, no update or news check), opens
 each given notebook in headless Chromium (``check_book.py``'s launch, every request to another
-host blocked), waits for its Markdown cells and their maths to render (the notebook drawn whole:
-``windowingMode`` none) and fails on what a reader would see of MyST that JupyterLab cannot read:
+host blocked), alone (a reset workspace, kept in the test's temporary settings: JupyterLab restores
+the last workspace, which made the check of the k-th notebook draw the k-1 before it too, start
+their kernels and report their problems under its name), waits for its Markdown cells and their
+maths to render (the notebook drawn whole: ``windowingMode`` none), shuts its kernel down, and
+fails on what a reader would see of MyST that JupyterLab cannot read:
 
 - ``role``: a raw role in the rendered text (``{numref}`` before ``fig-x`` in code);
 - ``directive``: a directive fence (```` ```{prf:proposition} ````: a code block of that
@@ -91,7 +94,11 @@ def start_lab(root: Path, settings: Path) -> tuple[subprocess.Popen, str, str]:
         path.write_text(json.dumps(value))
     port, token = free_port(), secrets.token_hex(16)
     lab = Path(sys.executable).with_name("jupyter-lab")
-    env = dict(os.environ, JUPYTERLAB_SETTINGS_DIR=str(settings))
+    env = dict(
+        os.environ,
+        JUPYTERLAB_SETTINGS_DIR=str(settings),
+        JUPYTERLAB_WORKSPACES_DIR=str(settings / "workspaces"),
+    )
     log = (settings / "lab.log").open("w")
     proc = subprocess.Popen(  # as root in CI; no extension manager (it asks PyPI)
         [
@@ -127,7 +134,7 @@ def start_lab(root: Path, settings: Path) -> tuple[subprocess.Popen, str, str]:
 
 def check_notebook(context, base: str, token: str, name: str) -> list[tuple[str, str, str]]:
     page = context.new_page()
-    page.goto(f"{base}/lab/tree/{name}?token={token}", wait_until="load")
+    page.goto(f"{base}/lab/tree/{name}?reset&token={token}", wait_until="load")
     page.wait_for_selector(
         ".jp-MarkdownCell .jp-RenderedMarkdown", state="attached", timeout=120_000
     )
@@ -151,7 +158,22 @@ def check_notebook(context, base: str, token: str, name: str) -> list[tuple[str,
     if seen == 0 and tex:
         found.append(("render", "maths", "the notebook's maths never typeset"))
     page.close()
+    shut_down_sessions(base, token)
     return found
+
+
+def shut_down_sessions(base: str, token: str) -> None:
+    """Shut down every session (and its kernel) of the server: opening a notebook started one."""
+    headers = {"Authorization": f"token {token}"}
+    with urllib.request.urlopen(
+        urllib.request.Request(f"{base}/api/sessions", headers=headers)
+    ) as r:
+        sessions = json.load(r)
+    for session in sessions:
+        req = urllib.request.Request(
+            f"{base}/api/sessions/{session['id']}", headers=headers, method="DELETE"
+        )
+        urllib.request.urlopen(req).close()
 
 
 def main(argv: list[str] | None = None) -> int:
