@@ -256,6 +256,15 @@ def test_status_page_has_the_placeholders():
         assert re.search(rf'<div id="{ident}">.*?</div><!-- /{ident} -->', text, re.S), ident
 
 
+def test_the_pdf_script_page_weights_exempts_is_the_one_make_pdf_writes(tmp_path, monkeypatch):
+    monkeypatch.syspath_prepend(str(ROOT / "tests" / "browser"))
+    pw = _load("fdi_page_weights", ROOT / "tests" / "browser" / "page_weights.py")
+    EXT.publish_pdf(tmp_path, None)
+    assert [p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*.js")] == list(
+        pw.AFTER_BUILD
+    )
+
+
 def test_page_weights_reopen_only_what_changed_since_the_build(tmp_path, monkeypatch):
     """``page_weights.py --report``: a page measured by ``make book`` is reused while its HTML has
     the same SHA-1 and every file it loaded the same size; any change has it measured again."""
@@ -286,6 +295,26 @@ def test_page_weights_reopen_only_what_changed_since_the_build(tmp_path, monkeyp
     page.write_text("<p>b</p>")  # same size, other bytes
     assert not pw.unchanged(w, root)
     page.write_text("<p>a</p>")
+    # the PDF edition's script, rewritten by make pdf after the build: reused, its size read again
+    pdf_js = root / pw.AFTER_BUILD[0]
+    pdf_js.write_text("y" * 4)
+    with_pdf = {
+        **w,
+        "bytes": 22,
+        "by_kind": {"html": 8, "script": 14},
+        "assets": [["_static/x.js", 10], ["book/a.html", 8], [pw.AFTER_BUILD[0], 4]],
+    }
+    pdf_js.write_text("y" * 40)
+    assert pw.unchanged(with_pdf, root)
+    assert pw.resized(with_pdf, root) == {
+        **with_pdf,
+        "bytes": 58,
+        "by_kind": {"html": 8, "script": 50},
+        "assets": [[pw.AFTER_BUILD[0], 40], ["_static/x.js", 10], ["book/a.html", 8]],
+    }
+    assert pw.resized(w, root) == w  # the same sizes: the same measurement
+    pdf_js.unlink()
+    assert not pw.unchanged(with_pdf, root)  # a file gone is a change
 
     report = tmp_path / "build-report.json"
     report.write_text(json.dumps({"pages": [w]}))
