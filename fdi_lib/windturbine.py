@@ -1343,16 +1343,25 @@ def stream_alarms(
     Returns
     -------
     dict
-        Method key (of ``methods``) -> ``(B,)`` alarm counts, and ``"tests"`` -> method key -> the
-        number of tests summed.
+        Method key (of ``methods``) -> ``(B,)`` alarm counts, ``"tests"`` -> method key -> the
+        number of tests summed, and ``"by_test"`` -> method key -> test name (a subsystem of
+        :data:`SUBSYSTEMS`; Basseville & Zhang: a subsystem's ``parametric`` and ``energy`` tests;
+        the SVO: its ``bank``) -> ``(B,)`` counts.
     """
     _instance(d, Design, "d")
     start = integer(start, "start", low=d.warmup + d.settings.window, high=d.N - 1)
     methods = _method_keys(methods)
     inputs = MethodInputs(d, np.asarray(y, dtype=float), np.asarray(u, dtype=float))
-    out: dict[str, Any] = {"tests": {}}
+    out: dict[str, Any] = {"tests": {}, "by_test": {}}
     for name in methods:
-        out[name], out["tests"][name] = METHODS[name].alarms(d, inputs, start)
+        counts, tests = METHODS[name].alarms(d, inputs, start), METHODS[name].tests
+        if counts.shape != (inputs.y.shape[0], len(tests)):  # a method's record is inconsistent
+            raise ModelError(
+                f"METHODS[{name!r}].alarms: expected counts of shape "
+                f"{(inputs.y.shape[0], len(tests))} (records, tests), got {counts.shape}"
+            )
+        out[name], out["tests"][name] = counts.sum(axis=-1), len(tests)
+        out["by_test"][name] = dict(zip(tests, counts.T))
     return out
 
 
@@ -1389,8 +1398,9 @@ def stream_counts(
     Returns
     -------
     dict
-        Method key -> alarm count, ``"tests"`` (see :func:`stream_alarms`), ``"samples"``: the
-        samples scored; with ``region``, ``"by_region"`` -> method key -> alarms in the windows
+        Method key -> alarm count, ``"tests"`` (see :func:`stream_alarms`), ``"by_test"`` ->
+        method key -> test name -> alarm count (the names of :func:`stream_alarms`),
+        ``"samples"``: the samples scored; with ``region``, ``"by_region"`` -> method key -> alarms in the windows
         whose scored part switches between regions (``"switch"``), stays in full load
         (``"full_load"``) or in partial load (``"partial_load"``), and ``"windows"`` -> the number
         of windows of each kind.
@@ -1420,6 +1430,7 @@ def stream_counts(
                 f"{region[bad[0]].item()!r} at index {bad[0]} ({bad.size} such samples)"
             )
     total: dict[str, Any] = {name: 0 for name in methods}
+    by_test: dict[str, dict[str, int]] = {}
     split = {name: dict.fromkeys(WINDOW_KINDS, 0) for name in methods}
     windows = dict.fromkeys(WINDOW_KINDS, 0)
     tests: dict[str, int] = {}
@@ -1427,6 +1438,10 @@ def stream_counts(
         idx = (np.arange(b0, min(b0 + batch, n_windows)) * step)[:, None] + np.arange(d.N)
         counts = stream_alarms(d, y[idx], u[idx], start, methods)
         tests = counts.pop("tests")
+        for name, per_test in counts.pop("by_test").items():
+            acc = by_test.setdefault(name, dict.fromkeys(per_test, 0))
+            for test, c in per_test.items():
+                acc[test] += int(c.sum())
         if region is not None:
             r = region[idx[:, start:]]
             kind = np.where((r != r[:, :1]).any(axis=1), 0, np.where(r[:, 0] == 2, 1, 2))
@@ -1437,7 +1452,7 @@ def stream_counts(
             if region is not None:
                 for k, key in enumerate(WINDOW_KINDS):
                     split[name][key] += int(c[kind == k].sum())
-    out = {**total, "tests": tests, "samples": n_windows * step}
+    out = {**total, "tests": tests, "by_test": by_test, "samples": n_windows * step}
     return out if region is None else {**out, "by_region": split, "windows": windows}
 
 
@@ -1676,8 +1691,12 @@ class Method:
         ``diagnose(d, inputs) -> MethodOutcome``: detection and isolation on the records of a
         :class:`MethodInputs` (``inputs``), with the noise-independent :class:`Design` ``d``.
     alarms : callable
-        ``alarms(d, inputs, start) -> (counts, tests)``: the ``(B,)`` alarm counts from sample
-        ``start`` on and the number of tests summed (:func:`stream_alarms`).
+        ``alarms(d, inputs, start) -> counts``: the ``(B, T)`` alarm counts from sample ``start``
+        on of each of its ``T`` tests, in the order of ``tests`` (:func:`stream_alarms`).
+    tests : tuple of str
+        The names of its statistical tests, those a stream runs at once: a subsystem of
+        :data:`SUBSYSTEMS` (one test each), a subsystem's ``parametric`` and ``energy`` tests, or
+        the SVO's ``bank`` (one test, at most one alarm per window).
     nameable : callable
         ``nameable(expected) -> bool``: whether the method's isolation can name exactly the
         frozenset ``expected`` of candidates at all (its vocabulary: a failure to isolate a set it
@@ -1691,7 +1710,8 @@ class Method:
     name: str
     label: str
     diagnose: Callable[[Design, MethodInputs], MethodOutcome]
-    alarms: Callable[[Design, MethodInputs, int], tuple[np.ndarray, int]]
+    alarms: Callable[[Design, MethodInputs, int], np.ndarray]
+    tests: tuple[str, ...]
     nameable: Callable[[frozenset[str]], bool]
     style: PlotStyle
     bounded: bool = False
@@ -1699,20 +1719,20 @@ class Method:
 
 def statistic_alarms(
     statistics: Callable[[Design, MethodInputs], tuple[list[np.ndarray], list[float]]],
-) -> Callable[[Design, MethodInputs, int], tuple[np.ndarray, int]]:
+) -> Callable[[Design, MethodInputs, int], np.ndarray]:
     """:attr:`Method.alarms` of a method that compares statistics with thresholds:
     ``statistics(d, inputs)`` returns the statistics ``(B, N)`` (``nan`` where not yet defined) and
-    their thresholds; the alarms are the onsets (:func:`alarm_onsets`) of each statistic over its
-    threshold at samples ``[start, N)``, one test per statistic."""
+    their thresholds, in the order of :attr:`Method.tests`; the alarms are the onsets
+    (:func:`alarm_onsets`) of each statistic over its threshold at samples ``[start, N)``."""
 
-    def alarms(d: Design, inputs: MethodInputs, start: int) -> tuple[np.ndarray, int]:
+    def alarms(d: Design, inputs: MethodInputs, start: int) -> np.ndarray:
         stats, thr = statistics(d, inputs)
-        count = np.zeros(inputs.y.shape[0], dtype=np.int64)
-        for st, h in zip(stats, thr):
+        count = np.zeros((inputs.y.shape[0], len(stats)), dtype=np.int64)
+        for t, (st, h) in enumerate(zip(stats, thr)):
             first_alarm(st, h, start=d.warmup)  # NaN after the warm-up: an error
             edges = alarm_onsets(np.nan_to_num(st, nan=-np.inf) > h, start - 1)
-            count += edges[:, start:].sum(axis=-1)
-        return count, len(stats)
+            count[:, t] = edges[:, start:].sum(axis=-1)
+        return count
 
     return alarms
 
@@ -1734,10 +1754,10 @@ def _bz_statistics(d: Design, inputs: MethodInputs) -> tuple[list[np.ndarray], l
     return par + en, par_thr + en_thr
 
 
-def _svo_alarms(d: Design, inputs: MethodInputs, start: int) -> tuple[np.ndarray, int]:
+def _svo_alarms(d: Design, inputs: MethodInputs, start: int) -> np.ndarray:
     """The SVO bank from ``start`` on, from its prior set: at most one alarm (an emptied set)."""
     svo = run_svo_bank(dataclasses.replace(d, warmup=start, onset=d.N), inputs.y, inputs.u)
-    return svo.false_alarm.astype(np.int64), 1
+    return svo.false_alarm.astype(np.int64)[:, None]
 
 
 def _zb_diagnose(d: Design, inputs: MethodInputs) -> MethodOutcome:
@@ -1793,6 +1813,7 @@ METHODS: dict[str, Method] = {
             "GLR + minmax",
             _zb_diagnose,
             statistic_alarms(_zb_statistics),
+            tuple(SUBSYSTEMS),
             _within_a_subsystem,
             PlotStyle("C0"),
         ),
@@ -1801,6 +1822,7 @@ METHODS: dict[str, Method] = {
             "Kitanidis + Lasso",
             _zhang2021_diagnose,
             statistic_alarms(_lasso_statistics),
+            tuple(SUBSYSTEMS),
             _any_set,
             PlotStyle("C1"),
         ),
@@ -1809,6 +1831,7 @@ METHODS: dict[str, Method] = {
             "parametric + energy",
             _bz_diagnose,
             statistic_alarms(_bz_statistics),
+            tuple(f"{s} {kind}" for kind in ("parametric", "energy") for s in SUBSYSTEMS),
             _bz_sets,
             PlotStyle("C2"),
         ),
@@ -1817,6 +1840,7 @@ METHODS: dict[str, Method] = {
             "SVO bank",
             _svo_diagnose,
             _svo_alarms,
+            ("bank",),
             _one_hypothesis,
             PlotStyle("C3"),
             bounded=True,

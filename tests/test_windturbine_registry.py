@@ -67,6 +67,7 @@ TOY = W.Method(
     label="sensor pairs",
     diagnose=_pair_diagnose,
     alarms=W.statistic_alarms(_pair_statistics),
+    tests=tuple(f"{W.SENSORS[i]} - {W.SENSORS[j]}" for i, j in PAIRS),
     nameable=_names_nothing,
     style=W.PlotStyle("C4", "s"),
 )

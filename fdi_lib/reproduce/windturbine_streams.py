@@ -84,6 +84,8 @@ def stream_chunk(seeds: list, *, seed: int) -> dict[str, np.ndarray]:
         "samples": np.zeros(n, dtype=np.int64),
         "alarms_by_region": np.zeros((n, M, K), dtype=np.int64),
         "windows_by_region": np.zeros((n, K), dtype=np.int64),
+        "dtau_sq_by_region": np.zeros((n, len(REGIONS))),
+        "dtau_n_by_region": np.zeros((n, len(REGIONS)), dtype=np.int64),
     }
     for i, s in enumerate(seeds):
         rec = W.records(wt.simulate(seed=[s], faults=(), duration_s=wt.SCENARIO_S))
@@ -97,7 +99,18 @@ def stream_chunk(seeds: list, *, seed: int) -> dict[str, np.ndarray]:
             [counts["by_region"][m][k] for k in W.WINDOW_KINDS] for m in W.METHODS
         ]
         out["windows_by_region"][i] = [counts["windows"][k] for k in W.WINDOW_KINDS]
+        for m in W.METHODS:
+            out.setdefault(f"alarms_by_test_{m}", np.zeros((n, len(counts["by_test"][m])), int))
+            out[f"alarms_by_test_{m}"][i] = list(counts["by_test"][m].values())
+        dtau, region = np.diff(rec.tau_a[0]), rec.region[0][1:]
+        for r, code in enumerate(REGIONS.values()):
+            out["dtau_sq_by_region"][i, r] = float(np.sum(dtau[region == code] ** 2))
+            out["dtau_n_by_region"][i, r] = int(np.sum(region == code))
     return out
+
+
+#: The controller's operating regions by their code in :attr:`~fdi_lib.windturbine.Records.region`.
+REGIONS = {"partial_load": 1, "full_load": 2}
 
 
 #: Continuous fault-free scenarios of :func:`false_alarms` by default: 9 x 4400 s, 10.95 scored
@@ -139,8 +152,28 @@ def _alarm_rates(x: dict[str, np.ndarray], hours: float, nominal: float) -> dict
                 kind: float(c / (h * k)) if h > 0 else None
                 for kind, c, h in zip(W.WINDOW_KINDS, by, kind_hours)
             },
+            "alarms_by_test": dict(
+                zip(W.METHODS[name].tests, map(int, x[f"alarms_by_test_{name}"].sum(axis=0)))
+            ),
         }
     return methods
+
+
+def _tau_a_increments(x: dict[str, np.ndarray], q_tau: float) -> dict:
+    """The headline's ``tau_a_increments`` of :func:`false_alarms`: the mean square of the
+    aerodynamic torque's increments per sample in each operating region over the streams, against
+    the variance ``q_tau`` of the Kalman filter's random walk (:class:`~fdi_lib.windturbine.Calibration`)."""
+    sq, n = x["dtau_sq_by_region"].sum(axis=0), x["dtau_n_by_region"].sum(axis=0)
+    return {
+        "filter_variance": q_tau,
+        "mean_square_by_region": {
+            r: float(a / b) if b else None for r, a, b in zip(REGIONS, sq, n)
+        },
+        "ratio_by_region": {
+            r: float(a / b / q_tau) if b else None for r, a, b in zip(REGIONS, sq, n)
+        },
+        "samples_by_region": dict(zip(REGIONS, map(int, n))),
+    }
 
 
 @register(
@@ -187,7 +220,15 @@ def false_alarms(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
         nominal rate: exact Poisson), ``below_nominal`` (the interval's upper end under the
         budget), ``alarms_by_region`` and ``rate_per_test_hour_by_region`` (the alarms in each
         kind of window of ``windows_by_region`` and their rate per test over those windows' hours;
-        ``None`` without such windows).
+        ``None`` without such windows), ``alarms_by_test`` (test name of
+        :attr:`~fdi_lib.windturbine.Method.tests` -> its alarms).
+    tau_a_increments : dict
+        What the drive train's Kalman filter assumes about the aerodynamic torque against what it
+        does in the streams: ``filter_variance`` (the variance per sample of the filter's random
+        walk, MN² m², from the calibration runs, :class:`~fdi_lib.windturbine.Calibration`
+        ``q_tau``), ``mean_square_by_region`` (the mean square of the true torque's increments
+        per sample at the samples in partial and full load), ``ratio_by_region`` (the latter over
+        the former) and ``samples_by_region``.
     """
     settings = W.Settings()
     trials = check_trials(
@@ -216,6 +257,7 @@ def false_alarms(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
             zip(W.WINDOW_KINDS, map(int, x["windows_by_region"].sum(axis=0)))
         ),
         "methods": _alarm_rates(x, hours, nominal),
+        "tau_a_increments": _tau_a_increments(x, d.calibration.q_tau),
     }
     settings_out = {
         "seed": seed,

@@ -232,6 +232,34 @@ def test_stream_windows_tile_the_stream_and_batches_do_not_change_the_counts(str
     assert one == many
     assert one["samples"] == ((n - d.N) // step + 1) * step and one["samples"] > n - d.N
     assert one["tests"] == {"zb2014": 4, "zhang2021": 4, "bz": 8, "rosa2013": 1}
+    subs = ["blade1", "blade2", "blade3", "drive_train"]
+    assert {m: list(v) for m, v in one["by_test"].items()} == {
+        "zb2014": subs,
+        "zhang2021": subs,
+        "bz": [f"{s} parametric" for s in subs] + [f"{s} energy" for s in subs],
+        "rosa2013": ["bank"],
+    }
+    for m in W.METHODS:  # the tests' counts add up to the method's
+        assert sum(one["by_test"][m].values()) == one[m], m
+    # a statistical test counted alone: its statistic's onsets over the threshold, window by window
+    inputs = W.MethodInputs(d, faulty.y[0][None, : d.N], faulty.u[0][None, : d.N])
+    st = W._zb_glr(d, inputs.innovations, estimates=False)["drive_train"].statistic[0]
+    over = np.nan_to_num(st, nan=-np.inf) > d.subs["drive_train"].glr_threshold
+    first = sum(over[k] and not over[k - 1] for k in range(start, d.N))
+    window = W.stream_alarms(d, faulty.y[0][None, : d.N], faulty.u[0][None, : d.N], start)
+    assert window["by_test"]["zb2014"]["drive_train"][0] == first
+
+
+def test_a_method_whose_alarms_do_not_match_its_tests_is_refused(stream, monkeypatch):
+    import dataclasses
+
+    d, start, healthy, _ = stream
+    bad = dataclasses.replace(W.METHODS["rosa2013"], tests=("bank", "extra"))
+    monkeypatch.setitem(W.METHODS, "rosa2013", bad)
+    with pytest.raises(
+        ModelError, match=r"METHODS\['rosa2013'\]\.alarms: expected counts of shape"
+    ):
+        W.stream_alarms(d, healthy.y[:, : d.N], healthy.u[:, : d.N], start, ["rosa2013"])
 
 
 def test_stream_counts_split_by_the_kind_of_window_add_up(stream):
@@ -241,7 +269,7 @@ def test_stream_counts_split_by_the_kind_of_window_add_up(stream):
     d, start, healthy, faulty = stream
     y, u, region = faulty.y[0], faulty.u[0], faulty.region[0]
     got = W.stream_counts(d, y, u, start, batch=2, region=region)
-    assert {k: got[k] for k in (*W.METHODS, "tests", "samples")} == W.stream_counts(
+    assert {k: got[k] for k in (*W.METHODS, "tests", "by_test", "samples")} == W.stream_counts(
         d, y, u, start, batch=2
     )
     step = d.N - start
@@ -305,6 +333,26 @@ def test_false_alarm_study_json_and_its_exact_poisson_bounds(monkeypatch):
                 0.025, abs=1e-9
             )
         assert v["below_nominal"] == (hi < v["nominal_per_test_hour"])
+        assert sum(v["alarms_by_test"].values()) == v["alarms"]
+        assert list(v["alarms_by_test"]) == list(W.METHODS[m].tests)
+    # the torque's increments per region, by a loop over the two streams' samples
+    inc = h["tau_a_increments"]
+    assert inc["filter_variance"] == d.calibration.q_tau
+    sq, n = {1: 0.0, 2: 0.0}, {1: 0, 2: 0}
+    for s in np.random.SeedSequence(2009).spawn(2):
+        rec = W.records(wt.simulate(seed=[s], faults=(), duration_s=60.0))
+        tau, region = rec.tau_a[0], rec.region[0]
+        for k in range(1, len(tau)):
+            sq[region[k]] += (tau[k] - tau[k - 1]) ** 2
+            n[region[k]] += 1
+    assert inc["samples_by_region"] == {"partial_load": n[1], "full_load": n[2]}
+    for name, code in (("partial_load", 1), ("full_load", 2)):
+        if n[code]:
+            ms = sq[code] / n[code]
+            assert inc["mean_square_by_region"][name] == pytest.approx(ms, rel=1e-9)
+            assert inc["ratio_by_region"][name] == pytest.approx(ms / d.calibration.q_tau, rel=1e-9)
+        else:
+            assert inc["mean_square_by_region"][name] is None
     # 0 alarms over 1 h gives an upper bound of 3.69 per hour: what "can test 1 per hour" needs
     assert RW._poisson_ci(0, 1.0)[1] == pytest.approx(-np.log(0.025))
 
