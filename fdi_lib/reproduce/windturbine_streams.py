@@ -159,6 +159,21 @@ def _alarm_rates(x: dict[str, np.ndarray], hours: float, nominal: float) -> dict
     return methods
 
 
+def _headline(x: dict[str, np.ndarray], seed: int, nominal: float) -> dict:
+    """The headline of :func:`false_alarms` from its chunks' arrays ``x``."""
+    d, _ = stream_design(seed)
+    hours = float(x["samples"].sum() * d.constants.Ts / 3600.0)
+    return {
+        "streams": int(x["samples"].shape[0]),
+        "hours": hours,
+        "windows_by_region": dict(
+            zip(W.WINDOW_KINDS, map(int, x["windows_by_region"].sum(axis=0)))
+        ),
+        "methods": _alarm_rates(x, hours, nominal),
+        "tau_a_increments": _tau_a_increments(x, d.calibration.q_tau),
+    }
+
+
 def _tau_a_increments(x: dict[str, np.ndarray], q_tau: float) -> dict:
     """The headline's ``tau_a_increments`` of :func:`false_alarms`: the mean square of the
     aerodynamic torque's increments per sample in each operating region over the streams, against
@@ -245,20 +260,9 @@ def false_alarms(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
         chunk_size=1,
         description="wind-turbine false alarms",
     )
-    d, start = stream_design(seed)
-    hours = float(x["samples"].sum() * d.constants.Ts / 3600.0)
     nominal = settings.false_alarms_per_hour
     from fdi_lib.systems import wind_turbine as wt
 
-    headline = {
-        "streams": trials,
-        "hours": hours,
-        "windows_by_region": dict(
-            zip(W.WINDOW_KINDS, map(int, x["windows_by_region"].sum(axis=0)))
-        ),
-        "methods": _alarm_rates(x, hours, nominal),
-        "tau_a_increments": _tau_a_increments(x, d.calibration.q_tau),
-    }
     settings_out = {
         "seed": seed,
         "trials": trials,
@@ -270,7 +274,7 @@ def false_alarms(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
     }
     return ReproductionResult(
         id="windturbine-false-alarms",
-        headline=headline,
+        headline=_headline(x, seed, nominal),
         paper={},
         settings=settings_out,
         data={"raw": x},
