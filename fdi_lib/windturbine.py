@@ -1388,22 +1388,25 @@ def stream_counts(
     methods: Sequence[str] | None = None,
     region: np.ndarray | None = None,
 ) -> dict[str, Any]:
-    """Alarm counts of the methods ``methods`` (default all) over one long stream ``y`` ``(n, 11)``, ``u`` ``(n, 4)``, in
-    constant memory: overlapping windows of ``d.N`` samples, each scored from its sample ``start``
+    """Alarm counts of the methods ``methods`` (default all) over one long stream ``y`` ``(n, 11)``,
+    ``u`` ``(n, 4)``: overlapping windows of ``d.N`` samples, each scored from its sample ``start``
     (:func:`stream_alarms` of ``methods``), so that the scored parts tile
     ``[start, start + K (N - start))``; ``batch`` windows at a time are one batch of records (the
-    memory of one batch, whatever ``n``). ``region`` ``(n,)``, the controller's operating region
-    of each sample (:class:`Records`), splits the counts by the kind of window (below).
+    memory of one batch, whatever ``n``: only the counts of each window, one integer per test, grow
+    with the stream). ``region`` ``(n,)``, the controller's operating region of each sample
+    (:class:`Records`), splits the counts by the kind of window (below).
 
     Returns
     -------
     dict
         Method key -> alarm count, ``"tests"`` (see :func:`stream_alarms`), ``"by_test"`` ->
         method key -> test name -> alarm count (the names of :func:`stream_alarms`),
-        ``"samples"``: the samples scored; with ``region``, ``"by_region"`` -> method key -> alarms in the windows
-        whose scored part switches between regions (``"switch"``), stays in full load
-        (``"full_load"``) or in partial load (``"partial_load"``), and ``"windows"`` -> the number
-        of windows of each kind.
+        ``"per_window"`` -> method key -> test name -> ``(K,)`` counts of each window,
+        ``"samples"``: the samples scored; with ``region``, ``"by_region"`` -> method key -> alarms
+        in the windows whose scored part switches between regions (``"switch"``), stays in full
+        load (``"full_load"``) or in partial load (``"partial_load"``), ``"windows"`` -> the number
+        of windows of each kind and ``"window_kinds"`` -> ``(K,)`` the kind of each window (an
+        index of :data:`WINDOW_KINDS`).
     """
     _instance(d, Design, "d")
     y = np.asarray(y, dtype=float)
@@ -1419,41 +1422,55 @@ def stream_counts(
     if n_windows < 1:
         raise ShapeError(f"y: expected at least one window of {d.N} samples, got {y.shape[0]}")
     methods = _method_keys(methods)
-    if region is not None:
-        region = np.asarray(region)
-        if region.shape != (y.shape[0],):
-            raise ShapeError(f"region: expected shape ({y.shape[0]},), got {region.shape}")
-        bad = np.flatnonzero(~np.isin(region, (1, 2)))
-        if bad.size:
-            raise ModelError(
-                f"region: expected 1 (partial load) or 2 (full load) at every sample, got "
-                f"{region[bad[0]].item()!r} at index {bad[0]} ({bad.size} such samples)"
-            )
-    total: dict[str, Any] = {name: 0 for name in methods}
-    by_test: dict[str, dict[str, int]] = {}
-    split = {name: dict.fromkeys(WINDOW_KINDS, 0) for name in methods}
-    windows = dict.fromkeys(WINDOW_KINDS, 0)
+    region = None if region is None else _checked_region(region, y.shape[0])
+    chunks: dict[str, dict[str, list[np.ndarray]]] = {name: {} for name in methods}
+    kinds = []
     tests: dict[str, int] = {}
     for b0 in range(0, n_windows, batch):
         idx = (np.arange(b0, min(b0 + batch, n_windows)) * step)[:, None] + np.arange(d.N)
         counts = stream_alarms(d, y[idx], u[idx], start, methods)
-        tests = counts.pop("tests")
-        for name, per_test in counts.pop("by_test").items():
-            acc = by_test.setdefault(name, dict.fromkeys(per_test, 0))
-            for test, c in per_test.items():
-                acc[test] += int(c.sum())
+        tests = counts["tests"]
+        for name in methods:
+            for test, c in counts["by_test"][name].items():
+                chunks[name].setdefault(test, []).append(c)
         if region is not None:
             r = region[idx[:, start:]]
-            kind = np.where((r != r[:, :1]).any(axis=1), 0, np.where(r[:, 0] == 2, 1, 2))
-            for k, key in enumerate(WINDOW_KINDS):
-                windows[key] += int((kind == k).sum())
-        for name, c in counts.items():
-            total[name] += int(c.sum())
-            if region is not None:
-                for k, key in enumerate(WINDOW_KINDS):
-                    split[name][key] += int(c[kind == k].sum())
-    out = {**total, "tests": tests, "by_test": by_test, "samples": n_windows * step}
-    return out if region is None else {**out, "by_region": split, "windows": windows}
+            kinds.append(np.where((r != r[:, :1]).any(axis=1), 0, np.where(r[:, 0] == 2, 1, 2)))
+    per_window = {m: {t: np.concatenate(c) for t, c in tc.items()} for m, tc in chunks.items()}
+    out = {
+        **{m: int(sum(c.sum() for c in tc.values())) for m, tc in per_window.items()},
+        "tests": tests,
+        "by_test": {m: {t: int(c.sum()) for t, c in tc.items()} for m, tc in per_window.items()},
+        "per_window": per_window,
+        "samples": n_windows * step,
+    }
+    if region is None:
+        return out
+    kind = np.concatenate(kinds)
+    out["by_region"] = {
+        m: {
+            key: int(sum(c[kind == k].sum() for c in tc.values()))
+            for k, key in enumerate(WINDOW_KINDS)
+        }
+        for m, tc in per_window.items()
+    }
+    out["windows"] = {key: int((kind == k).sum()) for k, key in enumerate(WINDOW_KINDS)}
+    out["window_kinds"] = kind
+    return out
+
+
+def _checked_region(region: Any, n: int) -> np.ndarray:
+    """``region`` of :func:`stream_counts`, checked: ``(n,)``, 1 or 2 at every sample."""
+    region = np.asarray(region)
+    if region.shape != (n,):
+        raise ShapeError(f"region: expected shape ({n},), got {region.shape}")
+    bad = np.flatnonzero(~np.isin(region, (1, 2)))
+    if bad.size:
+        raise ModelError(
+            f"region: expected 1 (partial load) or 2 (full load) at every sample, got "
+            f"{region[bad[0]].item()!r} at index {bad[0]} ({bad.size} such samples)"
+        )
+    return region
 
 
 def _const(M: np.ndarray, T: int) -> np.ndarray:

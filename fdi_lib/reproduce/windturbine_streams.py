@@ -86,6 +86,10 @@ def stream_chunk(seeds: list, *, seed: int) -> dict[str, np.ndarray]:
         "windows_by_region": np.zeros((n, K), dtype=np.int64),
         "dtau_sq_by_region": np.zeros((n, len(REGIONS))),
         "dtau_n_by_region": np.zeros((n, len(REGIONS)), dtype=np.int64),
+        # full-load windows with and without an alarm of a method's drive-train test(s): [without, with]
+        "dtau_sq_full_by_alarm": np.zeros((n, M, 2)),
+        "dtau_n_full_by_alarm": np.zeros((n, M, 2), dtype=np.int64),
+        "full_windows_by_alarm": np.zeros((n, M, 2), dtype=np.int64),
     }
     for i, s in enumerate(seeds):
         rec = W.records(wt.simulate(seed=[s], faults=(), duration_s=wt.SCENARIO_S))
@@ -106,7 +110,37 @@ def stream_chunk(seeds: list, *, seed: int) -> dict[str, np.ndarray]:
         for r, code in enumerate(REGIONS.values()):
             out["dtau_sq_by_region"][i, r] = float(np.sum(dtau[region == code] ** 2))
             out["dtau_n_by_region"][i, r] = int(np.sum(region == code))
+        _full_load_windows(out, i, counts, dtau, d.N - start, start, d.N)
     return out
+
+
+def _full_load_windows(
+    out: dict[str, np.ndarray],
+    i: int,
+    counts: dict,
+    dtau: np.ndarray,
+    step: int,
+    start: int,
+    N: int,
+) -> None:
+    """Fill row ``i`` of :func:`stream_chunk`'s ``*_full_by_alarm`` arrays: over the full-load
+    windows of a stream's :func:`~fdi_lib.windturbine.stream_counts` ``counts``, split by whether
+    a method's drive-train test(s) alarmed in the window, the sum of the squared increments of
+    ``tau_a`` (``dtau[k - 1]`` for the window's scored samples ``k``), their number and the
+    windows' number. A method without a drive-train test leaves its row at zero."""
+    full = counts["window_kinds"] == W.WINDOW_KINDS.index("full_load")
+    first = np.arange(full.size) * step + start  # each window's first scored sample
+    cum = np.r_[0.0, np.cumsum(dtau**2)]
+    sq = cum[first + step - 1] - cum[first - 1]  # dtau[first - 1 : first + step - 1]
+    for m, name in enumerate(W.METHODS):
+        dt = [c for t, c in counts["per_window"][name].items() if t.split()[0] == "drive_train"]
+        if not dt:
+            continue
+        alarmed = np.sum(dt, axis=0) > 0
+        for j, sel in enumerate((full & ~alarmed, full & alarmed)):
+            out["dtau_sq_full_by_alarm"][i, m, j] = float(sq[sel].sum())
+            out["dtau_n_full_by_alarm"][i, m, j] = int(sel.sum()) * step
+            out["full_windows_by_alarm"][i, m, j] = int(sel.sum())
 
 
 #: The controller's operating regions by their code in :attr:`~fdi_lib.windturbine.Records.region`.
@@ -179,6 +213,19 @@ def _tau_a_increments(x: dict[str, np.ndarray], q_tau: float) -> dict:
     aerodynamic torque's increments per sample in each operating region over the streams, against
     the variance ``q_tau`` of the Kalman filter's random walk (:class:`~fdi_lib.windturbine.Calibration`)."""
     sq, n = x["dtau_sq_by_region"].sum(axis=0), x["dtau_n_by_region"].sum(axis=0)
+    fsq, fn = x["dtau_sq_full_by_alarm"].sum(axis=0), x["dtau_n_full_by_alarm"].sum(axis=0)
+    fw = x["full_windows_by_alarm"].sum(axis=0)
+    by_alarm = {
+        name: {
+            key: {
+                "windows": int(fw[m, j]),
+                "ratio": float(fsq[m, j] / fn[m, j] / q_tau) if fn[m, j] else None,
+            }
+            for j, key in enumerate(("without_alarm", "with_alarm"))
+        }
+        for m, name in enumerate(W.METHODS)
+        if any(t.split()[0] == "drive_train" for t in W.METHODS[name].tests)
+    }
     return {
         "filter_variance": q_tau,
         "mean_square_by_region": {
@@ -188,6 +235,7 @@ def _tau_a_increments(x: dict[str, np.ndarray], q_tau: float) -> dict:
             r: float(a / b / q_tau) if b else None for r, a, b in zip(REGIONS, sq, n)
         },
         "samples_by_region": dict(zip(REGIONS, map(int, n))),
+        "full_load_windows_by_drive_train_alarm": by_alarm,
     }
 
 
@@ -238,12 +286,14 @@ def false_alarms(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
         ``None`` without such windows), ``alarms_by_test`` (test name of
         :attr:`~fdi_lib.windturbine.Method.tests` -> its alarms).
     tau_a_increments : dict
-        What the drive train's Kalman filter assumes about the aerodynamic torque against what it
-        does in the streams: ``filter_variance`` (the variance per sample of the filter's random
-        walk, MN² m², from the calibration runs, :class:`~fdi_lib.windturbine.Calibration`
-        ``q_tau``), ``mean_square_by_region`` (the mean square of the true torque's increments
-        per sample at the samples in partial and full load), ``ratio_by_region`` (the latter over
-        the former) and ``samples_by_region``.
+        The drive train's Kalman filter's model of the aerodynamic torque against the streams'
+        torque: ``filter_variance`` (its random walk's variance per sample, MN² m²,
+        :class:`~fdi_lib.windturbine.Calibration` ``q_tau``), ``mean_square_by_region`` and
+        ``ratio_by_region`` (the true torque's mean square increment per sample in partial and full
+        load, and over ``filter_variance``), ``samples_by_region``, and
+        ``full_load_windows_by_drive_train_alarm``: per method with a drive-train test, the
+        full-load windows ``without_alarm`` and ``with_alarm`` of it, each with its ``windows`` and
+        ``ratio`` (the same ratio over their scored samples; ``None`` without such windows).
     """
     settings = W.Settings()
     trials = check_trials(

@@ -229,7 +229,15 @@ def test_stream_windows_tile_the_stream_and_batches_do_not_change_the_counts(str
     step = d.N - start
     one = W.stream_counts(d, faulty.y[0], faulty.u[0], start, batch=1)
     many = W.stream_counts(d, faulty.y[0], faulty.u[0], start, batch=3)
+    windows = one.pop("per_window")
+    assert {
+        m: {t: c.tolist() for t, c in tc.items()} for m, tc in many.pop("per_window").items()
+    } == {m: {t: c.tolist() for t, c in tc.items()} for m, tc in windows.items()}
     assert one == many
+    n_windows = one["samples"] // step
+    for m, tc in windows.items():  # one count per window, adding up to the test's
+        for t, c in tc.items():
+            assert c.shape == (n_windows,) and c.sum() == one["by_test"][m][t], (m, t)
     assert one["samples"] == ((n - d.N) // step + 1) * step and one["samples"] > n - d.N
     assert one["tests"] == {"zb2014": 4, "zhang2021": 4, "bz": 8, "rosa2013": 1}
     subs = ["blade1", "blade2", "blade3", "drive_train"]
@@ -269,15 +277,16 @@ def test_stream_counts_split_by_the_kind_of_window_add_up(stream):
     d, start, healthy, faulty = stream
     y, u, region = faulty.y[0], faulty.u[0], faulty.region[0]
     got = W.stream_counts(d, y, u, start, batch=2, region=region)
-    assert {k: got[k] for k in (*W.METHODS, "tests", "by_test", "samples")} == W.stream_counts(
-        d, y, u, start, batch=2
-    )
+    plain = W.stream_counts(d, y, u, start, batch=2)
+    del plain["per_window"]
+    assert {k: got[k] for k in (*W.METHODS, "tests", "by_test", "samples")} == plain
     step = d.N - start
     kinds = []
     for w in range(got["samples"] // step):
         r = region[w * step + start : w * step + d.N]
         kinds.append("switch" if len(set(r)) > 1 else "full_load" if r[0] == 2 else "partial_load")
     assert got["windows"] == {k: kinds.count(k) for k in ("switch", "full_load", "partial_load")}
+    assert [W.WINDOW_KINDS[k] for k in got["window_kinds"]] == kinds
     for m in W.METHODS:
         assert sum(got["by_region"][m].values()) == got[m], m
     full = W.stream_counts(d, y, u, start, region=np.full(region.shape, 2))
@@ -346,6 +355,11 @@ def test_false_alarm_study_json_and_its_exact_poisson_bounds(monkeypatch):
             sq[region[k]] += (tau[k] - tau[k - 1]) ** 2
             n[region[k]] += 1
     assert inc["samples_by_region"] == {"partial_load": n[1], "full_load": n[2]}
+    by_alarm = inc["full_load_windows_by_drive_train_alarm"]
+    assert list(by_alarm) == ["zb2014", "zhang2021", "bz"]  # the SVO bank has no drive-train test
+    full = sum(v["windows"] for v in by_alarm["zb2014"].values())
+    assert all(sum(v["windows"] for v in e.values()) == full for e in by_alarm.values())
+    assert full == h["windows_by_region"]["full_load"]
     for name, code in (("partial_load", 1), ("full_load", 2)):
         if n[code]:
             ms = sq[code] / n[code]
@@ -355,6 +369,45 @@ def test_false_alarm_study_json_and_its_exact_poisson_bounds(monkeypatch):
             assert inc["mean_square_by_region"][name] is None
     # 0 alarms over 1 h gives an upper bound of 3.69 per hour: what "can test 1 per hour" needs
     assert RW._poisson_ci(0, 1.0)[1] == pytest.approx(-np.log(0.025))
+
+
+def test_full_load_windows_split_by_a_drive_train_alarm_by_a_loop_over_samples():
+    """The torque's squared increments over the scored samples of the full-load windows, split by
+    whether a method's drive-train test(s) alarmed there: a loop over windows and samples on a
+    hand-built stream (5 windows; the SVO bank, without a drive-train test, stays at zero)."""
+    rng = np.random.default_rng(3)
+    step, start, N = 7, 3, 10
+    K = 5
+    dtau = rng.standard_normal(K * step + start + 2)
+    kinds = np.array([1, 1, 0, 1, 2])  # full, full, switch, full, partial
+    drive = {"zb2014": [2, 0, 1, 0, 0], "zhang2021": [0, 0, 0, 0, 3]}
+    per_window = {m: {t: np.zeros(K, int) for t in W.METHODS[m].tests} for m in W.METHODS}
+    per_window["zb2014"]["drive_train"][:] = drive["zb2014"]
+    per_window["zb2014"]["blade1"][:] = [0, 1, 0, 1, 0]  # not a drive-train test
+    per_window["zhang2021"]["drive_train"][:] = drive["zhang2021"]
+    per_window["bz"]["drive_train energy"][:] = [0, 0, 0, 1, 0]
+    per_window["bz"]["drive_train parametric"][:] = [0, 1, 0, 0, 0]
+    drive["bz"] = [0, 1, 0, 1, 0]
+    out = {
+        k: np.zeros((1, len(W.METHODS), 2), dtype=float if "sq" in k else np.int64)
+        for k in ("dtau_sq_full_by_alarm", "dtau_n_full_by_alarm", "full_windows_by_alarm")
+    }
+    RS._full_load_windows(
+        out, 0, {"window_kinds": kinds, "per_window": per_window}, dtau, step, start, N
+    )
+    for m, name in enumerate(W.METHODS):
+        want = np.zeros((3, 2))
+        for w in range(K):
+            if kinds[w] != 1 or name not in drive:
+                continue
+            j = int(drive[name][w] > 0)
+            for k in range(w * step + start, w * step + N):
+                want[0, j] += dtau[k - 1] ** 2
+                want[1, j] += 1
+            want[2, j] += 1
+        got = [out[k][0, m] for k in out]
+        np.testing.assert_allclose(got[0], want[0], rtol=1e-12, err_msg=name)
+        assert got[1].tolist() == want[1].tolist() and got[2].tolist() == want[2].tolist(), name
 
 
 def test_false_alarm_study_is_registered_with_ten_hours_by_default_and_one_stream_in_the_book():
