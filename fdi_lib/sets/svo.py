@@ -1140,7 +1140,7 @@ def _support_max(
     n, J = V.shape[1], V.shape[2]
     out = np.empty((rows.shape[0], DPhi.shape[2]))
     scratch = (np.empty((n, J)), np.empty(J), np.empty(J, dtype=np.int64))
-    _support_into(out, scratch, DPhi, mi, V, F, rows)
+    _support_into(out, scratch, DPhi, mi, V, F, rows, np.empty((0, 2), np.int64), F[:, 0])
     return out
 
 
@@ -1153,42 +1153,103 @@ def _support_into(
     V: np.ndarray,
     F: np.ndarray,
     rows: np.ndarray,
+    corner: np.ndarray,
+    boxed: np.ndarray,
 ) -> None:  # pragma: no cover
     """:func:`_support_max` into ``out[:len(rows)]`` with the caller's scratch arrays (``(n, J)``,
     ``(J,)`` and ``(J,)`` integers, or larger): the live vertices side by side (a vector loop),
     each product summed in column order, and the largest kept as ``max`` keeps it (the first of
     equal values, without a branch); an observer with a NaN product is redone as ``max``
-    propagates it (:func:`_support_nan`)."""
+    propagates it (:func:`_support_nan`). An observer whose set is a box with its corners in
+    ``V`` (``boxed[rows[a]]``, ``corner`` from :func:`_box_route`) goes by :func:`_support_box`,
+    the same bits."""
     _, nv, p, n = DPhi.shape
     Vt, acc, live = scratch
     for a in range(rows.shape[0]):
         r, q = rows[a], mi[a]
-        L = 0
-        for j in range(V.shape[2]):
-            if F[r, j]:
-                live[L] = j
-                L += 1
-        for c in range(n):
-            for j in range(L):
-                Vt[c, j] = V[r, c, live[j]]
-        nan = False
-        for i in range(p):
-            best = -np.inf
-            for v in range(nv):
-                x = DPhi[q, v, i, 0]
-                for j in range(L):
-                    acc[j] = x * Vt[0, j]
-                for c in range(1, n):
-                    x = DPhi[q, v, i, c]
-                    for j in range(L):
-                        acc[j] = acc[j] + x * Vt[c, j]
-                for j in range(L):
-                    t = acc[j]
-                    nan = nan | (t != t)
-                    best = t if t > best else best
-            out[a, i] = best
+        if corner.shape[0] and boxed[r] and _support_box(out[a], acc, DPhi[q], V[r], corner):
+            continue
+        nan = _support_vertices(out[a], Vt, acc, live, DPhi[q], V[r], F[r])
         if nan:
             _support_nan(out[a], DPhi[q], V[r], F[r])
+
+
+@numba.njit(cache=True)
+def _support_vertices(
+    out: np.ndarray,
+    Vt: np.ndarray,
+    acc: np.ndarray,
+    live: np.ndarray,
+    DPhi: np.ndarray,
+    V: np.ndarray,
+    F: np.ndarray,
+) -> bool:  # pragma: no cover
+    """The support of one observer (its model's ``DPhi`` ``(v, p, n)``, vertices ``V`` ``(n, J)``,
+    live ``F``) in each direction into ``out`` (:func:`_support_into`'s vertex route, scratch
+    ``Vt``, ``acc``, ``live``); returns whether a product is NaN."""
+    nv, p, n = DPhi.shape
+    L = 0
+    for j in range(V.shape[1]):
+        if F[j]:
+            live[L] = j
+            L += 1
+    for c in range(n):
+        for j in range(L):
+            Vt[c, j] = V[c, live[j]]
+    nan = False
+    for i in range(p):
+        best = -np.inf
+        for v in range(nv):
+            x = DPhi[v, i, 0]
+            for j in range(L):
+                acc[j] = x * Vt[0, j]
+            for c in range(1, n):
+                x = DPhi[v, i, c]
+                for j in range(L):
+                    acc[j] = acc[j] + x * Vt[c, j]
+            for j in range(L):
+                t = acc[j]
+                nan = nan | (t != t)
+                best = t if t > best else best
+        out[i] = best
+    return nan
+
+
+@numba.njit(cache=True, inline="always")
+def _support_box(
+    out: np.ndarray, bounds: np.ndarray, DPhi: np.ndarray, V: np.ndarray, corner: np.ndarray
+) -> bool:  # pragma: no cover
+    """The support of one observer whose live vertices are all the corners of a box (``V``
+    ``(n, J)``; coordinate ``c`` of corner ``corner[c, 0]`` is its one bound, of ``corner[c, 1]``
+    the other, copied into ``bounds[c]`` and ``bounds[n + c]``) in each direction of ``DPhi``
+    ``(v, p, n)`` into ``out``. Returns False when a product or a sum is not finite: then
+    :func:`_support_vertices` redoes it (the order in which a NaN wins).
+
+    Over a box, ``d . x`` is largest at the corner that takes, in each coordinate, the larger of
+    the two products; rounded addition is monotone, so that corner's sum in column order is also
+    the largest of the rounded sums :func:`_support_vertices` compares: the same bits in ``2 n``
+    products per direction instead of ``n 2^n``."""
+    nv, p, n = DPhi.shape
+    for c in range(n):
+        bounds[c] = V[c, corner[c, 0]]
+        bounds[n + c] = V[c, corner[c, 1]]
+    check = 0.0  # a sum of every product and total: finite unless one is not
+    for i in range(p):
+        best = -np.inf
+        for v in range(nv):
+            x = DPhi[v, i, 0]
+            lo, hi = x * bounds[0], x * bounds[n]
+            t = lo if lo >= hi else hi
+            check = check + lo + hi
+            for c in range(1, n):
+                x = DPhi[v, i, c]
+                lo, hi = x * bounds[c], x * bounds[n + c]
+                t = t + (lo if lo >= hi else hi)
+                check = check + lo + hi
+            check = check + t
+            best = t if t > best else best
+        out[i] = best
+    return check - check == 0.0
 
 
 @numba.njit(cache=True)
@@ -1233,26 +1294,10 @@ def _basic_one(
     """The basic solutions of one set ``Set(M, m)`` into ``X[:, :K]`` (``X`` ``(n, K)`` or wider, a
     solution per column) and whether each is feasible into ``F[:K]`` (:func:`_basic_solutions`; ``invT[i, j, k]`` is ``inv[k, i, j]``,
     ``work`` the scratch arrays of :func:`_basic_work`); returns whether any is."""
-    p = m.shape[0]
-    q, r = pad.shape
+    q = pad.shape[0]
     K, n = idx.shape
     mu, Mu, acc, ok = work
-    bad = False
-    for i in range(p):
-        if zero[i] and m[i] < 0:
-            bad = True
-    big = 0.0
-    for g in range(q):
-        best = np.inf
-        for j in range(r):
-            i = pad[g, j]
-            if i < p:
-                v = m[i] / norms[i]
-                if v < best:
-                    best = v
-        mu[g] = best
-        big = max(big, abs(best))
-    tol = 1e-12 * (1.0 + big)
+    bad, tol = _tightest(m, norms, pad, zero, mu)
     for j in range(n):
         for k in range(K):
             Mu[j, k] = mu[idx[k, j]]
@@ -1280,6 +1325,125 @@ def _basic_one(
         F[k] = ok[k]
         found = found | ok[k]
     return found
+
+
+@numba.njit(cache=True)
+def _tightest(
+    m: np.ndarray, norms: np.ndarray, pad: np.ndarray, zero: np.ndarray, mu: np.ndarray
+) -> tuple[bool, float]:  # pragma: no cover
+    """The tightest offset ``mu[g]`` of each distinct unit normal of ``Set(M, m)`` (into ``mu``),
+    whether a zero row has a negative offset (no solution), and the feasibility tolerance
+    ``1e-12 (1 + max |mu|)`` (:func:`_basic_one`)."""
+    p = m.shape[0]
+    q, r = pad.shape
+    bad = False
+    for i in range(p):
+        if zero[i] and m[i] < 0:
+            bad = True
+    big = 0.0
+    for g in range(q):
+        best = np.inf
+        for j in range(r):
+            i = pad[g, j]
+            if i < p:
+                v = m[i] / norms[i]
+                if v < best:
+                    best = v
+        mu[g] = best
+        big = max(big, abs(best))
+    return bad, 1e-12 * (1.0 + big)
+
+
+@numba.njit(cache=True, inline="always")
+def _basic_box(
+    m: np.ndarray,
+    norms: np.ndarray,
+    pad: np.ndarray,
+    zero: np.ndarray,
+    route: tuple,
+    X: np.ndarray,
+    F: np.ndarray,
+    work: tuple,
+) -> int:  # pragma: no cover
+    """:func:`_basic_one` when the distinct unit normals are ``+-e_i`` (``route`` the box's
+    tables, :func:`_box_route`): each basic solution is a corner, whose coordinate ``c`` is one
+    of two values ``sign mu[normal]`` (``side[c, k]`` says which), and its product with a unit
+    normal has one nonzero term. :func:`_basic_one` adds the other terms, all zeros, so ``+ 0.0``
+    gives the same bits (a ``-0.0`` made ``0.0``), and each feasibility test depends on one
+    coordinate's side only: two tests per normal instead of one per corner. Returns -1 when an
+    offset is not finite (``0 * inf``: :func:`_basic_one` must do it), else 0, 1 or 2: no
+    solution, some or all feasible (then ``X[:, :K]`` holds the box's corners)."""
+    side, normal, sign, axis, unit = route[:5]
+    mu, val, _, good = work  # good[2 c + e]: value e of coordinate c passes every test
+    bad, tol = _tightest(m, norms, pad, zero, mu)
+    for v in mu:
+        if not np.isfinite(v):
+            return -1
+    n, K = side.shape
+    for c in range(n):
+        for e in range(2):
+            val[c, e] = sign[c, e] * mu[normal[c, e]] + 0.0
+            good[2 * c + e] = not bad
+    for h in range(axis.shape[0]):
+        c, w, lim = axis[h], unit[h], mu[h] + tol
+        for e in range(2):
+            good[2 * c + e] = good[2 * c + e] & (val[c, e] * w + 0.0 <= lim)
+    for c in range(n):  # k innermost: a vector loop
+        for k in range(K):
+            X[c, k] = val[c, side[c, k]]
+    every = True
+    for i in range(2 * n):
+        every = every & good[i]
+    for k in range(K):
+        F[k] = True
+    if every:  # every value passes: every corner is feasible
+        return 2
+    for c in range(n):
+        for k in range(K):
+            F[k] = F[k] & good[2 * c + side[c, k]]
+    found = False
+    for k in range(K):
+        found = found | F[k]
+    return 1 if found else 0
+
+
+@numba.njit(cache=True)
+def _basic_rows(
+    m_out: np.ndarray,
+    rows: np.ndarray,
+    bases: tuple,
+    route: tuple,
+    boxed: np.ndarray,
+    V: np.ndarray,
+    F: np.ndarray,
+    found: np.ndarray,
+    work: tuple,
+) -> bool:  # pragma: no cover
+    """The basic solutions of the sets ``m_out[a]`` of the observers ``rows[a]`` of one group
+    (``bases``: :func:`_basic_one`'s arrays; ``route``: :func:`_box_route`'s) into
+    ``V[rows[a], :, :K]`` and ``F[rows[a]]`` (``False`` beyond ``K``), by :func:`_basic_box` when
+    the group's sets are boxes (``boxed[rows[a]]``: all ``K`` corners feasible), else
+    :func:`_basic_one`; ``found[a]``: whether any is
+    feasible. Returns whether all observers have one."""
+    norms, pad, idx, invT, U, zero = bases
+    K = idx.shape[0]
+    every = True
+    for a in range(rows.shape[0]):
+        r = rows[a]
+        status = (
+            _basic_box(m_out[a], norms, pad, zero, route, V[r], F[r], work)
+            if route[5].shape[0]
+            else -1
+        )
+        if status < 0:
+            found[a] = _basic_one(m_out[a], norms, pad, idx, invT, U, zero, V[r], F[r], work)
+        else:
+            found[a] = status > 0
+        boxed[r] = status == 2
+        every = every and found[a]
+        for j in range(K, F.shape[1]):
+            F[r, j] = False
+    return every
 
 
 @numba.njit(cache=True)
@@ -1349,20 +1513,18 @@ def _group_step(
     route; ``g`` as :meth:`TemplateBatch._kernel_group` builds it) in place: the supports ``h``
     (:func:`_support_into`, plus ``D B u`` and the uncertainty's ``sum |D B_b u|``, each product in
     :func:`_dot`'s order, then the margin), the offsets ``m_out[a] = (h, nb + y, nb - y)`` and the
-    basic solutions (:func:`_basic_one`) written into ``V[rows[a], :, :K]`` and ``F[rows[a]]``
-    (``False`` beyond ``K``); ``found[a]``: whether any basis is feasible, and the result: whether
-    all are. The same operations in the same order as the array route, hence the same bits; the
-    scratch arrays (``W``, ``scratch``, ``Bu``, ``Gu``, ``work``) are the caller's, at least
-    the group's sizes."""
+    basic solutions (:func:`_basic_rows`); returns whether every observer has one. The same
+    operations in the same order as the array route, hence the same bits; the scratch arrays
+    (``W``, ``scratch``, ``Bu``, ``Gu``, ``work``) are the caller's, at least the group's
+    sizes."""
     DPhi, first, rows, obs, mi, V, F, D, B, B_unc, sL, noise = g[:12]
-    norms, pad, idx, invT, U, zero, m_out, found = g[12:]
-    _support_into(W, scratch, DPhi[0] if DPhi.shape[0] == 1 else DPhi[k - first], mi, V, F, rows)
+    m_out, found, route, boxed = g[18:]
+    Phi = DPhi[0] if DPhi.shape[0] == 1 else DPhi[k - first]
+    _support_into(W, scratch, Phi, mi, V, F, rows, route[5], boxed)
     p, n = D.shape
     n_u, n_y, n_b = u.shape[2], y.shape[2], B_unc.shape[2]
-    K = idx.shape[0]
-    every = True
     for a in range(rows.shape[0]):
-        r, q, o = rows[a], mi[a], obs[a]
+        q, o = mi[a], obs[a]
         for i in range(n):
             t = B[q, k - 1, i, 0] * u[o, k - 1, 0]
             for c in range(1, n_u):
@@ -1389,11 +1551,7 @@ def _group_step(
             nb = noise[q, j] * (1.0 + margin) + margin
             m_out[a, p + j] = nb + y[o, k, j]
             m_out[a, p + n_y + j] = nb - y[o, k, j]
-        found[a] = _basic_one(m_out[a], norms, pad, idx, invT, U, zero, V[r], F[r], work)
-        every = every and found[a]
-        for j in range(K, F.shape[1]):
-            F[r, j] = False
-    return every
+    return _basic_rows(m_out, rows, g[12:18], route, boxed, V, F, found, work)
 
 
 @numba.njit(cache=True)
@@ -1420,6 +1578,50 @@ def _template_run(
         if not every or k == last:
             return k
         k += 1
+
+
+#: The tables of :func:`_box_route` for normals that are not a box's.
+_NO_BOX = (
+    np.empty((0, 0), dtype=np.int64),
+    np.empty((0, 2), dtype=np.int64),
+    np.empty((0, 2)),
+    np.empty(0, dtype=np.int64),
+    np.empty(0),
+    np.empty((0, 2), dtype=np.int64),
+)
+
+
+def _box_route(b: Any) -> tuple:
+    """The tables of :func:`_basic_box` and :func:`_support_box` when the distinct unit normals of
+    ``b`` (:func:`~fdi_lib.sets.polytope._bases`) are exactly ``+-e_i`` for every coordinate and
+    each basis inverse is a signed permutation (then every set is a box and the basic solutions
+    are its corners): ``side[c, k]``, which of its two values coordinate ``c`` of solution ``k``
+    takes; value ``e`` of coordinate ``c`` is ``sign[c, e] mu[normal[c, e]]``; normal ``g`` is
+    ``unit[g] e_axis[g]``; ``corner[c, e]``, a solution whose coordinate ``c`` takes value ``e``.
+    Else :data:`_NO_BOX`."""
+    U, inv = b.U, b.inv
+    n = U.shape[1]
+    nonzero = U != 0
+    if U.shape[0] != 2 * n or not (nonzero.sum(axis=1) == 1).all():
+        return _NO_BOX
+    axis = nonzero.argmax(axis=1)
+    unit = U[np.arange(len(U)), axis]
+    if {(int(a), float(w)) for a, w in zip(axis, unit)} != {
+        (c, w) for c in range(n) for w in (-1.0, 1.0)
+    }:
+        return _NO_BOX
+    if not (np.isin(inv, (-1.0, 0.0, 1.0)).all() and ((inv != 0).sum(axis=2) == 1).all()):
+        return _NO_BOX
+    j = (inv != 0).argmax(axis=2)  # (K, n): the one term of each coordinate
+    K = inv.shape[0]
+    normal_k = b.idx[np.arange(K)[:, None], j].T  # (n, K)
+    sign_k = np.take_along_axis(inv, j[:, :, None], axis=2)[:, :, 0].T
+    side = np.ascontiguousarray(normal_k != normal_k[:, :1], dtype=np.int64)
+    corner = np.column_stack([np.zeros(n, dtype=np.int64), side.argmax(axis=1)])
+    rows = np.arange(n)[:, None]
+    normal = np.ascontiguousarray(normal_k[rows, corner])
+    sign = np.ascontiguousarray(sign_k[rows, corner])
+    return side, normal.astype(np.int64), sign, axis.astype(np.int64), unit, corner
 
 
 #: Steps of a time-varying model whose products ``D A_v`` :meth:`TemplateBatch.advance` makes at
@@ -1575,6 +1777,8 @@ class TemplateBatch:
                     "M": M,
                     "bases": b if usable else None,
                     "invT": _inv_t(b.inv) if usable else None,
+                    "route": _box_route(b) if usable else _NO_BOX,
+                    "boxed": np.zeros(len(idx), dtype=bool),  # V holds the box's K corners
                     "vA": vA,
                     "DPhi": _invariant_product(D, vA),
                     "chunk": None,  # (first step, D A_v of the steps from it) when time-varying
@@ -1601,6 +1805,7 @@ class TemplateBatch:
             )
             X, g["F"] = _vertices_many(np.vstack([self.X0.M, g["C"], -g["C"]]), m)
             g["V"] = np.ascontiguousarray(np.swapaxes(X, 1, 2))  # a vertex per column
+            g["boxed"][:] = False
             self.alive[g["idx"]] = g["F"].any(axis=1)
         return ~self.alive
 
@@ -1699,6 +1904,8 @@ class TemplateBatch:
             b.zero,
             np.empty((len(a), g["M"].shape[0])),
             np.empty(len(a), dtype=bool),
+            g["route"],
+            g["boxed"],
         )
 
     def _run_bases(self, fused: list, k: int, last: int) -> int:
@@ -1712,12 +1919,13 @@ class TemplateBatch:
         groups = numba.typed.List(args)
         last = _template_run(groups, self.u, self.y, k, last, self.margin)
         for (g, a), arg in zip(fused, args):
-            m, found = arg[-2:]
+            m, found = arg[18:20]
             for i in np.flatnonzero(~found):
                 V = _enumerate_vertices(g["M"], m[i])
                 if len(V) > g["V"].shape[2]:
                     self._widen(g, len(V))
                 g["V"][a[i], :, : len(V)], g["F"][a[i], : len(V)] = V.T, True
+                g["boxed"][a[i]] = False
                 found[i] = len(V) > 0
             self.alive[g["idx"][a]] = found
         return last

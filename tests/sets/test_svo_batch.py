@@ -288,3 +288,125 @@ def test_advance_equals_one_step_at_a_time_bit_for_bit():
                 assert np.array_equal(emptied, ref[k - 2][0] & ~alive_r)
             for V, (Vr, _) in zip(sets, sets_r):
                 assert np.array_equal(V.view(np.uint64), Vr.view(np.uint64))
+
+
+def _box_records(seed: int, count: int, n: int, T: int = 30):
+    """Random n-D systems measured in every coordinate (``C`` diagonal: every set is a box), one
+    A and one B uncertainty, and records; every other one with a sensor fault from k = 12, one
+    without measurement noise (flat boxes)."""
+    rng = np.random.default_rng(seed)
+    models, us, ys = [], [], []
+    for i in range(count):
+        A = rng.standard_normal((n, n))
+        A *= rng.uniform(0.6, 0.95) / max(abs(np.linalg.eigvals(A)))
+        A1, B1 = 0.1 * rng.standard_normal((1, n, n)), 0.1 * rng.standard_normal((1, n, 1))
+        B, C = rng.standard_normal((n, 1)), np.diag(rng.choice([0.5, 1.0, 2.0], n))
+        noise = 0.0 if i == 1 else rng.uniform(0.05, 0.2)
+        m = SVOModel(
+            A=A, B=B, C=C, L=np.diag(rng.uniform(0.01, 0.1, n)), noise=noise, A_unc=A1, B_unc=B1
+        )
+        x, u = rng.uniform(-0.5, 0.5, n), rng.uniform(-1, 1, (T, 1))
+        y = np.empty((T + 1, n))
+        for k in range(T + 1):
+            y[k] = C @ x + noise * rng.uniform(-1, 1, n) + (1.5 if i % 2 and k >= 12 else 0.0)
+            if k < T:
+                d = rng.uniform(-1, 1, 2)
+                x = (A + d[0] * A1[0]) @ x + (B + d[1] * B1[0]) @ u[k]
+                x = x + m.L @ rng.uniform(-1, 1, n)
+        models.append(_constant(m, T))
+        us.append(u)
+        ys.append(y)
+    return models, np.stack(us), np.stack(ys)
+
+
+@pytest.mark.parametrize("n", [2, 3])
+def test_box_route_equals_the_vertex_route_bit_for_bit(n, monkeypatch):
+    """Sets whose normals are all +-e_i are boxes: their corners and supports by the box route
+    (:func:`_basic_box`, :func:`_support_box`: 2 n products per direction) are the bits of the
+    basis route over every vertex and of the array route, step by step and by ``advance``, with
+    flat boxes and sets emptied on the way."""
+    from fdi_lib.sets import svo
+
+    models, u, y = _box_records(n, 8, n)
+    X0n = Polytope.box(-np.ones(n), np.ones(n))
+    bank = TemplateBatch(models, u, y, X0n)
+    assert all(g["route"][5].shape[0] == n for g in bank._groups)  # the box route applies
+    boxed = _stepped(models, u, y, X0n, array_route=False)
+    advanced = _advanced(models, u, y, X0n)
+    ref = _stepped(models, u, y, X0n, array_route=True)
+    monkeypatch.setattr(svo, "_box_route", lambda b: svo._NO_BOX)
+    vertices = _stepped(models, u, y, X0n, array_route=False)
+    assert not boxed[-1][0].all() and boxed[-1][0].any()  # some sets emptied, some not
+    for run in (boxed, vertices):
+        for (alive, sets), (alive_r, sets_r) in zip(run, ref):
+            assert np.array_equal(alive, alive_r)
+            for (V, F), (Vr, Fr) in zip(sets, sets_r):
+                assert np.array_equal(F, Fr[:, : F.shape[1]]) and not Fr[:, F.shape[1] :].any()
+                assert np.array_equal(V.view(np.uint64), Vr.view(np.uint64))
+    for k, _, alive, sets in advanced:
+        assert np.array_equal(alive, ref[k - 1][0])
+        for V, (Vr, _) in zip(sets, ref[k - 1][1]):
+            assert np.array_equal(V.view(np.uint64), Vr.view(np.uint64))
+
+
+def test_box_route_tables_and_its_limits():
+    """:func:`_box_route` gives each corner's coordinates as the basis inverses do, and declines
+    normals that are not +-e_i (a skewed strip) or a box open on one side; :func:`_basic_box`
+    gives :func:`_basic_one`'s bits (zero bounds, a flat box, a box, no corner) and hands
+    it an infinite bound; :func:`_support_box`
+    hands a NaN product to the vertex route, which propagates it as ``max`` does."""
+    from fdi_lib.sets.polytope import _bases
+    from fdi_lib.sets.svo import (
+        _NO_BOX,
+        _basic_box,
+        _basic_one,
+        _basic_work,
+        _box_route,
+        _inv_t,
+        _support_into,
+        _support_max,
+    )
+
+    D = np.vstack([np.eye(3), -np.eye(3)])
+    M = np.vstack([D, np.diag([2.0, 1.0, 0.5])])
+    b = _bases(M.tobytes(), *M.shape)
+    side, normal, sign, axis, unit, corner = _box_route(b)
+    mu = np.arange(1.0, 1.0 + len(b.U))
+    corners = np.einsum("kij,kj->ki", b.inv, mu[b.idx])  # (K, n): each basis solved
+    rows = np.arange(3)[:, None]
+    assert np.array_equal((sign * mu[normal])[rows, side].T, corners)
+    assert np.array_equal(unit[:, None] * np.eye(3)[axis], b.U)
+    assert (side[rows, corner] == [0, 1]).all()
+    invT, work = _inv_t(b.inv), _basic_work(len(b.U), len(b.idx), 3)
+    X, Xr = np.empty((3, 8)), np.empty((3, 8))
+    F, Fr = np.empty(8, dtype=bool), np.empty(8, dtype=bool)
+    route = (side, normal, sign, axis, unit, corner)
+    m0 = np.zeros(len(M))  # every bound 0 (a corner's -0.0 is 0.0, as the bases' sums give)
+    flat = np.r_[1.0, 2.0, 3.0, -1.0, -2.0, -3.0, 4.0, 4.0, 4.0]  # x0 in [1, 1]
+    empty = np.r_[1.0, 2.0, 3.0, -1.5, 0.0, 0.0, 4.0, 4.0, 4.0]  # x0 in [1.5, 1]: no corner
+    box = np.r_[0.1, 0.7, 1 / 3, 0.3, 0.2, 0.1, 1.3, 0.25, 0.05]  # bounds from both rows
+    for m, status in ((m0, 2), (flat, 2), (box, 2), (empty, 0), (-np.ones(len(M)), 0)):
+        assert _basic_box(m, b.norms, b.pad, b.zero, route, X, F, work) == status
+        assert _basic_one(m, b.norms, b.pad, b.idx, invT, b.U, b.zero, Xr, Fr, work) == (status > 0)
+        assert np.array_equal(F, Fr) and np.array_equal(X.view(np.uint64), Xr.view(np.uint64))
+    inf = np.where(np.isin(np.arange(len(M)), (0, 6)), np.inf, 0.0)  # both rows of +e_0
+    assert _basic_box(inf, b.norms, b.pad, b.zero, route, X, F, work) == -1  # to _basic_one
+    skew = np.vstack([D, [[1.0, 1.0, 0.0]]])
+    open_box = np.vstack([np.eye(3), -np.eye(3)[:2]])
+    for Mx in (skew, open_box):
+        bx = _bases(Mx.tobytes(), *Mx.shape)
+        assert bx is None or _box_route(bx) is _NO_BOX
+    rng = np.random.default_rng(2)
+    V = np.ascontiguousarray(corners.T[None].repeat(2, axis=0))  # two boxes, their 8 corners
+    F = np.ones((2, 8), dtype=bool)
+    DPhi = rng.normal(size=(1, 2, 6, 3))
+    DPhi[0, 1, 4, 2] = np.nan
+    rows2, mi = np.arange(2), np.zeros(2, dtype=np.int64)
+    out = np.empty((2, 6))
+    scratch = (np.empty((3, 8)), np.empty(8), np.empty(8, dtype=np.int64))
+    _support_into(out, scratch, DPhi, mi, V, F, rows2, corner, np.array([True, False]))
+    ref = _support_max(DPhi, mi, V, F, rows2)
+    assert np.array_equal(out, ref, equal_nan=True) and np.isnan(out[:, 4]).all()
+    DPhi[0, 1, 4, 2] = 0.5
+    _support_into(out, scratch, DPhi, mi, V, F, rows2, corner, np.ones(2, dtype=bool))
+    assert np.array_equal(out, _support_max(DPhi, mi, V, F, rows2))
