@@ -1733,6 +1733,13 @@ class Method:
     style: PlotStyle
     bounded: bool = False
 
+    def tests_on(self, subsystem: str) -> tuple[str, ...]:
+        """Those of its :attr:`tests` that read ``subsystem`` of :data:`SUBSYSTEMS` alone: named
+        after it (``"drive_train"``, ``"drive_train energy"``); none for the SVO's ``bank``."""
+        if subsystem not in SUBSYSTEMS:
+            raise ModelError(f"subsystem: expected one of {list(SUBSYSTEMS)}, got {subsystem!r}")
+        return tuple(t for t in self.tests if t.split()[0] == subsystem)
+
 
 def statistic_alarms(
     statistics: Callable[[Design, MethodInputs], tuple[list[np.ndarray], list[float]]],

@@ -18,6 +18,7 @@ import pytest
 import scipy.stats
 
 from fdi_lib import windturbine as W
+from fdi_lib.errors import ModelError
 
 pytest.importorskip("numba")
 
@@ -83,6 +84,16 @@ def test_the_registry_is_one_record_per_method():
     assert [n for n, m in W.METHODS.items() if m.bounded] == ["rosa2013"]
     with pytest.raises(AttributeError):
         W.METHODS["zb2014"].label = "x"  # frozen
+    on = {name: m.tests_on("drive_train") for name, m in W.METHODS.items()}
+    assert on == {
+        "zb2014": ("drive_train",),
+        "zhang2021": ("drive_train",),
+        "bz": ("drive_train parametric", "drive_train energy"),
+        "rosa2013": (),  # its bank reads every subsystem
+    }
+    assert W.METHODS["bz"].tests_on("blade2") == ("blade2 parametric", "blade2 energy")
+    with pytest.raises(ModelError, match="subsystem: expected one of"):
+        W.METHODS["zb2014"].tests_on("drive")
 
 
 @pytest.fixture(scope="module")

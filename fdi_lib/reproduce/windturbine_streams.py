@@ -88,7 +88,6 @@ def stream_chunk(seeds: list, *, seed: int) -> dict[str, np.ndarray]:
         "dtau_n_by_region": np.zeros((n, len(REGIONS)), dtype=np.int64),
         # full-load windows with and without an alarm of a method's drive-train test(s): [without, with]
         "dtau_sq_full_by_alarm": np.zeros((n, M, 2)),
-        "dtau_n_full_by_alarm": np.zeros((n, M, 2), dtype=np.int64),
         "full_windows_by_alarm": np.zeros((n, M, 2), dtype=np.int64),
     }
     for i, s in enumerate(seeds):
@@ -126,20 +125,19 @@ def _full_load_windows(
     """Fill row ``i`` of :func:`stream_chunk`'s ``*_full_by_alarm`` arrays: over the full-load
     windows of a stream's :func:`~fdi_lib.windturbine.stream_counts` ``counts``, split by whether
     a method's drive-train test(s) alarmed in the window, the sum of the squared increments of
-    ``tau_a`` (``dtau[k - 1]`` for the window's scored samples ``k``), their number and the
-    windows' number. A method without a drive-train test leaves its row at zero."""
+    ``tau_a`` (``dtau[k - 1]`` for the window's ``step`` scored samples ``k``) and the windows'
+    number. A method without a drive-train test leaves its row at zero."""
     full = counts["window_kinds"] == W.WINDOW_KINDS.index("full_load")
     first = np.arange(full.size) * step + start  # each window's first scored sample
     cum = np.r_[0.0, np.cumsum(dtau**2)]
     sq = cum[first + step - 1] - cum[first - 1]  # dtau[first - 1 : first + step - 1]
     for m, name in enumerate(W.METHODS):
-        dt = [c for t, c in counts["per_window"][name].items() if t.split()[0] == "drive_train"]
-        if not dt:
+        tests = W.METHODS[name].tests_on("drive_train")
+        if not tests:
             continue
-        alarmed = np.sum(dt, axis=0) > 0
+        alarmed = np.sum([counts["per_window"][name][t] for t in tests], axis=0) > 0
         for j, sel in enumerate((full & ~alarmed, full & alarmed)):
             out["dtau_sq_full_by_alarm"][i, m, j] = float(sq[sel].sum())
-            out["dtau_n_full_by_alarm"][i, m, j] = int(sel.sum()) * step
             out["full_windows_by_alarm"][i, m, j] = int(sel.sum())
 
 
@@ -195,7 +193,7 @@ def _alarm_rates(x: dict[str, np.ndarray], hours: float, nominal: float) -> dict
 
 def _headline(x: dict[str, np.ndarray], seed: int, nominal: float) -> dict:
     """The headline of :func:`false_alarms` from its chunks' arrays ``x``."""
-    d, _ = stream_design(seed)
+    d, start = stream_design(seed)
     hours = float(x["samples"].sum() * d.constants.Ts / 3600.0)
     return {
         "streams": int(x["samples"].shape[0]),
@@ -204,17 +202,18 @@ def _headline(x: dict[str, np.ndarray], seed: int, nominal: float) -> dict:
             zip(W.WINDOW_KINDS, map(int, x["windows_by_region"].sum(axis=0)))
         ),
         "methods": _alarm_rates(x, hours, nominal),
-        "tau_a_increments": _tau_a_increments(x, d.calibration.q_tau),
+        "tau_a_increments": _tau_a_increments(x, d.calibration.q_tau, d.N - start),
     }
 
 
-def _tau_a_increments(x: dict[str, np.ndarray], q_tau: float) -> dict:
+def _tau_a_increments(x: dict[str, np.ndarray], q_tau: float, step: int) -> dict:
     """The headline's ``tau_a_increments`` of :func:`false_alarms`: the mean square of the
     aerodynamic torque's increments per sample in each operating region over the streams, against
-    the variance ``q_tau`` of the Kalman filter's random walk (:class:`~fdi_lib.windturbine.Calibration`)."""
+    the variance ``q_tau`` of the Kalman filter's random walk (:class:`~fdi_lib.windturbine.Calibration`),
+    windows of ``step`` scored samples."""
     sq, n = x["dtau_sq_by_region"].sum(axis=0), x["dtau_n_by_region"].sum(axis=0)
-    fsq, fn = x["dtau_sq_full_by_alarm"].sum(axis=0), x["dtau_n_full_by_alarm"].sum(axis=0)
-    fw = x["full_windows_by_alarm"].sum(axis=0)
+    fsq, fw = x["dtau_sq_full_by_alarm"].sum(axis=0), x["full_windows_by_alarm"].sum(axis=0)
+    fn = fw * step  # the scored samples of those windows
     by_alarm = {
         name: {
             key: {
@@ -224,7 +223,7 @@ def _tau_a_increments(x: dict[str, np.ndarray], q_tau: float) -> dict:
             for j, key in enumerate(("without_alarm", "with_alarm"))
         }
         for m, name in enumerate(W.METHODS)
-        if any(t.split()[0] == "drive_train" for t in W.METHODS[name].tests)
+        if W.METHODS[name].tests_on("drive_train")
     }
     return {
         "filter_variance": q_tau,
