@@ -17,7 +17,11 @@ Reported, on this machine and its current load:
 * the exact rule on the book's 2-D example for N = 1..6: one one-step hull per horizon level, so
   the time grows about linearly with N, not with the 2^N vertex sequences;
 * the exact rule (scaled coordinates) at N = 1, 2, 3 on the first ``EXACT_STEPS`` samples: its
-  sets grow at every step, so the time per step grows too.
+  sets grow at every step, so the time per step grows too;
+* sets that are boxes (every state measured, as in the wind turbine's banks; ``BOX_N`` states,
+  ``BATCH`` records stepped together): CPU per observer and sample of the interval route
+  (``fdi_lib.sets.svo._box_route``) against the vertex route on the same records, the same sets
+  (target: at least ``BOX_TARGET`` times faster).
 
 Compare with Remark 4 (5-200 ms per step, MATLAB, Xeon 2.6 GHz, exact rule) like for like: the
 exact rule's figures, not the template's.
@@ -31,9 +35,11 @@ import time
 
 import numpy as np
 
+from _record import record
+
 from fdi_lib.reproduce.rosa2013 import UAV_X0, simulate_toy, toy_model, toy_prior
-from fdi_lib.sets import polytope
-from fdi_lib.sets.svo import run_svo, run_svo_many
+from fdi_lib.sets import Polytope, polytope, svo
+from fdi_lib.sets.svo import ModelSequence, run_svo, run_svo_many
 from fdi_lib.systems import eclipse_uav as uav
 from fdi_lib.threads import single_threaded_blas
 
@@ -42,6 +48,9 @@ EXACT_TARGET_MS = 5.0
 EXACT_STEPS = 2
 BATCH = 100  # records stepped together (the Figs 11-12 study has 100 per reading)
 ONE_BY_ONE = 10  # of which run one at a time for the ratio
+BOX_N = 5  # states of the box benchmark (the wind turbine's drive train)
+BOX_STEPS = 400
+BOX_TARGET = 2.0
 
 
 def _models(run, kind):
@@ -163,6 +172,64 @@ def main() -> None:
             f"N = {N}: per update {', '.join(f'{v:.1f}' for v in st)} ms "
             f"(target {EXACT_TARGET_MS} ms), vertices {res.n_vertices.tolist()}"
         )
+
+    boxes()
+
+
+def _box_records(rng: np.random.Generator) -> tuple[list[ModelSequence], np.ndarray, np.ndarray]:
+    """``BATCH`` random stable ``BOX_N``-state systems, every state measured (the template's sets are
+    boxes), one uncertain direction of ``A``, and a fault-free record of each."""
+    n, T = BOX_N, BOX_STEPS
+    seqs, us, ys = [], [], []
+    for _ in range(BATCH):
+        A = rng.standard_normal((n, n))
+        A *= 0.9 / max(abs(np.linalg.eigvals(A)))
+        A1, B, L = 0.02 * rng.standard_normal((n, n)), rng.standard_normal((n, 1)), 0.05 * np.eye(n)
+        x, u = np.zeros(n), rng.uniform(-1, 1, (T, 1))
+        y = np.empty((T + 1, n))
+        for k in range(T + 1):
+            y[k] = x + 0.1 * rng.uniform(-1, 1, n)
+            if k < T:
+                x = (A + rng.uniform(-1, 1) * A1) @ x + B @ u[k] + L @ rng.uniform(-1, 1, n)
+        rep = lambda a: np.repeat(a[None], T, axis=0)  # noqa: E731
+        seqs.append(
+            ModelSequence(
+                A=rep(A), B=rep(B), C=np.eye(n), L=L, noise=np.full(n, 0.1), A_unc=rep(A1[None])
+            )
+        )
+        us.append(u)
+        ys.append(y)
+    return seqs, np.stack(us), np.stack(ys)
+
+
+@single_threaded_blas
+def boxes() -> None:
+    print(f"\n== sets that are boxes: {BATCH} records of {BOX_N} measured states, interval route")
+    seqs, u, y = _box_records(np.random.default_rng(3))
+    X0 = Polytope.box(-np.ones(BOX_N), np.ones(BOX_N))
+    run_svo_many(seqs[:2], u[:2, :5], y[:2, :6], X0)  # compiled code loaded
+    route = svo._box_route
+    cpu, runs = {}, {}
+    for name, table in (("vertices", lambda b: svo._NO_BOX), ("interval", route)):
+        svo._box_route = table
+        try:
+            c0 = time.process_time()
+            runs[name] = run_svo_many(seqs, u, y, X0, bounds=False)
+            cpu[name] = (time.process_time() - c0) / (BATCH * BOX_STEPS)
+        finally:
+            svo._box_route = route
+    same = runs["vertices"].empty_at == runs["interval"].empty_at
+    record(
+        f"template SVOs on boxes ({BOX_N} states), interval route against every vertex",
+        cpu["vertices"] / cpu["interval"],
+        "x",
+        BOX_TARGET,
+        higher_is_better=True,
+        baseline="the vertex route on the same records",
+        speedup=cpu["vertices"] / cpu["interval"],
+        note=f"CPU per observer and sample {cpu['interval'] * 1e6:.2f} us against "
+        f"{cpu['vertices'] * 1e6:.2f} us; same sets emptied: {same}",
+    )
 
 
 if __name__ == "__main__":
