@@ -79,7 +79,18 @@ def _pinv_diagonal(lam: np.ndarray) -> np.ndarray:
     """``1 / lam`` above the cut-off ``RANK_RTOL * max(lam)``, 0 below: the pseudo-inverse's eigenvalues."""
     top = lam.max(axis=-1, keepdims=True) if lam.shape[-1] > 1 else lam  # one: itself, no reduce
     keep = lam > RANK_RTOL * np.maximum(top, np.finfo(float).tiny)
-    return np.where(keep, 1.0 / np.where(keep, lam, 1.0), 0.0)
+    return np.divide(1.0, lam, out=np.zeros(lam.shape), where=keep)
+
+
+def _pinv_root(C: np.ndarray) -> np.ndarray:
+    """``R`` with ``C^+ = R R^T`` for symmetric PSD ``C`` ``(..., m, m)``: ``V diag(inv)^(1/2)`` of
+    :func:`_pinv_factors`. For ``m = 1`` (``V = 1``) the square root of ``inv`` itself, the same
+    bits without the eigenvector stack and its product."""
+    if C.shape[-1] == 1:
+        inv = _pinv_diagonal(C[..., 0])
+        return np.sqrt(inv, out=inv)[..., None, :]
+    V, inv = _pinv_factors(C)
+    return V * np.sqrt(inv)[..., None, :]
 
 
 #: Largest size decomposed by :func:`_small_eigh` (cyclic Jacobi); larger ones go to LAPACK.
@@ -514,9 +525,7 @@ class WindowedGLR:
                 acc += inc[k - k0]
                 C[k - k0] = acc
             del inc
-            V, inv = _pinv_factors(C)
-            root = V * np.sqrt(inv)[..., None, :]  # C^+ = root root^T
-            del V, inv
+            root = _pinv_root(C)  # C^+ = root root^T
             if not self._per_realisation:  # drop the realisation axis of a shared family
                 sig_wT, C, root = sig_wT[:, :, 0], C[:, :, 0], root[:, :, 0]
             yield slice(k0, k0 + K), sig_wT, C, root
@@ -526,8 +535,20 @@ class WindowedGLR:
         """``R^T d`` per onset (and realisation): ``root`` ``(..., m, m)`` (or ``(..., B, m, m)`` for
         per-realisation profiles), scores ``d`` ``(..., m, B)``; returns ``(..., m, B)``."""
         if self._per_realisation:
+            if root.shape[-1] == 1:  # one product per entry, + 0.0: the bits of the einsum
+                q = root[..., 0, 0][..., None, :] * d  # (which sums from 0.0)
+                q += 0.0
+                return q
             return np.einsum("...bji,...jb->...ib", root, d)
         return np.swapaxes(root, -1, -2) @ d
+
+    @staticmethod
+    def _quadratic(q: np.ndarray) -> np.ndarray:
+        """``q^T q`` over the parameter axis (-2) of projections ``q`` ``(..., m, B)``: ``(..., B)``
+        (for ``m = 1`` the square, the bits of the sum of one square)."""
+        if q.shape[-2] == 1:
+            return np.square(q[..., 0, :])
+        return np.einsum("...mb,...mb->...b", q, q)
 
     def _pick(self, arr: np.ndarray, index: tuple, cols: np.ndarray) -> np.ndarray:
         """``arr[index]`` of a shared array, ``arr[index + (cols,)]`` of a per-realisation one
@@ -652,14 +673,13 @@ class WindowedGLR:
         if self._dropped > k - w and np.any(self._C_missing[slots]):  # missing samples in the
             # window: the admissible onsets' informations less theirs, and new factors
             C = self._Cs[k, slots] - self._C_missing[slots]  # (S, m, m), or (S, B, m, m)
-            V, inv = _pinv_factors(C)
-            root = V * np.sqrt(inv)[..., None, :]
+            root = _pinv_root(C)
             d, onsets, allowed = self._d[slots], self._onsets[k, slots], None
         else:  # every slot (views, no copies), the inadmissible ones out of the maximisation
             C, root, d = self._Cs[k], self._root[k], self._d  # (w, m, m) or (w, B, m, m); (w, m, B)
             onsets, allowed = self._onsets[k], self._allowed[k]
         q = self._project(root, d)  # (S, m, B)
-        stat = np.einsum("smb,smb->sb", q, q)  # (35) for every onset, (S, B)
+        stat = self._quadratic(q)  # (35) for every onset, (S, B)
         if allowed is not None:  # (in place: stat is a new array)
             stat[~allowed] = -np.inf
         best = np.argmax(
@@ -729,8 +749,8 @@ class WindowedGLR:
                 self._d += terms[i]
                 D[i] = self._d
             q = self._project(root, D)  # (K, w, m, B)
-            st = np.einsum("kwmb,kwmb->kwb", q, q)  # (35)
-            st = np.where(self._allowed[now][:, :, None], st, -np.inf)
+            st = self._quadratic(q)  # (35), (K, w, B)
+            np.copyto(st, -np.inf, where=~self._allowed[now][:, :, None])
             best = np.argmax(st, axis=1)  # (36), (K, B)
             ok = self._allowed[now].any(axis=1)  # some onset admissible
             kk = np.arange(ks.size)[:, None]

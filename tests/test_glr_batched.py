@@ -265,3 +265,27 @@ def test_score_terms_are_the_bits_of_the_products_they_replace(m):
     ref = shared._sig_wT @ e_w[:, None]
     got = shared._score_terms(shared._sig_wT, e_w)
     assert np.ascontiguousarray(got).tobytes() == ref.tobytes()
+
+
+def test_one_parameter_shortcuts_are_the_bits_of_the_general_forms():
+    """m = 1: the pseudo-inverse root without eigenvectors, the per-realisation projection as one
+    product per entry and the statistic as a square have the bits of the general forms they skip
+    (V diag(inv)^(1/2) with V = 1, the einsums), zeros of either sign, zero, negative, infinite and
+    NaN informations included."""
+    rng = np.random.default_rng(4)
+    C = rng.gamma(1.0, size=(6, 5, 1, 1))
+    C.reshape(-1)[:6] = (0.0, -1e-3, np.inf, np.nan, 1e-320, -0.0)
+    V, inv = glr._pinv_factors(C)
+    ref = V * np.sqrt(inv)[..., None, :]
+    assert glr._pinv_root(C).tobytes() == ref.tobytes()
+    root = glr._pinv_root(C)[:, :, None]  # (K, w, B = 1, 1, 1): per realisation
+    d = rng.standard_normal((6, 5, 1, 1))
+    d.reshape(-1)[6:9] = (-0.0, 0.0, -2.0)
+    own = object.__new__(WindowedGLR)
+    own._per_realisation = True
+    q = own._project(root, d)
+    assert q.tobytes() == np.einsum("...bji,...jb->...ib", root, d).tobytes()
+    ref = np.einsum("kwmb,kwmb->kwb", q, q)
+    assert WindowedGLR._quadratic(q).tobytes() == ref.tobytes()
+    q2 = rng.standard_normal((6, 5, 2, 3))  # m = 2: the einsum itself
+    assert WindowedGLR._quadratic(q2).tobytes() == np.einsum("kwmb,kwmb->kwb", q2, q2).tobytes()
