@@ -64,7 +64,7 @@ from fdi_lib.kitanidis import (
 from fdi_lib.models import LTVModel, fault_profile, ltv_model, step_family
 from fdi_lib.nonparametric import energy_statistic, energy_threshold
 from fdi_lib.sets.polytope import Polytope
-from fdi_lib.sets.svo import ModelSequence, run_architecture_i_many
+from fdi_lib.sets.svo import FDIResult, ModelSequence, run_architecture_i_many, run_svo_many
 from fdi_lib.signatures import fault_signature
 from fdi_lib.sparse import LAMBDA_RATIO, flat_ranges, lasso_path_batch
 from fdi_lib.validation import integer, real
@@ -1558,7 +1558,13 @@ def run_svo_bank(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
     its set is empty) and an Architecture I bank of the fault hypotheses (:func:`svo_banks`;
     isolation: one hypothesis left), from the end of the warm-up and its prior set
     (:func:`svo_priors`): an empty nominal set before the onset is a false alarm. The three blades
-    (same model structure) run as one batch."""
+    (same model structure) run as one batch.
+
+    Isolation follows detection and the nominal SVO does not depend on the others: the nominal
+    SVOs of all records go first (:func:`~fdi_lib.sets.svo.run_svo_many`), and the banks run, from
+    the first sample, only on the records whose nominal set empties, where their outcome is the
+    one of the whole bank (:func:`~fdi_lib.sets.svo.run_architecture_i_many`; the others' fault
+    SVOs play no part: tested)."""
     B = y.shape[0]
     names = list(d.subs)
     i0 = d.warmup
@@ -1579,12 +1585,12 @@ def run_svo_bank(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
             ys.append(yy[:, i0:])
             us.append(uu[:, i0:-1])
         X0 = priors[group[0]]
-        res = run_architecture_i_many(nominal, faults, np.concatenate(us), np.concatenate(ys), X0)
+        res = _detected_banks(nominal, faults, np.concatenate(us), np.concatenate(ys), X0)
         for gi, name in enumerate(group):
             j = names.index(name)
             for b in range(B):
-                r = res[gi * B + b]
-                if r.detection_step is None:
+                r = res.get(gi * B + b)
+                if r is None or r.detection_step is None:
                     continue
                 det[j, b] = i0 + r.detection_step
                 if r.isolation_step is not None:
@@ -1607,6 +1613,23 @@ def run_svo_bank(d: Design, y: np.ndarray, u: np.ndarray) -> MethodOutcome:
     return MethodOutcome(
         pre, detect, np.where(detect < 0, -1, which), isolated, step, np.full(B, np.nan)
     )
+
+
+def _detected_banks(
+    nominal: list[ModelSequence],
+    faults: list[dict[str, ModelSequence]],
+    u: np.ndarray,
+    y: np.ndarray,
+    X0: Polytope,
+) -> dict[int, FDIResult]:
+    """Record index -> the Architecture I outcome of :func:`run_svo_bank`, for the records whose
+    nominal set empties (the only ones with a detection)."""
+    empty = run_svo_many(nominal, u, y, X0).empty_at
+    todo = [i for i, e in enumerate(empty) if e is not None]
+    runs = run_architecture_i_many(
+        [nominal[i] for i in todo], [faults[i] for i in todo], u[todo], y[todo], X0
+    )
+    return dict(zip(todo, runs))
 
 
 def _generic(candidate: str) -> str:

@@ -452,3 +452,25 @@ def test_the_svo_prior_contains_a_low_wind_start_and_raises_no_false_alarm():
     assert W.svo_priors(d)["drive_train"].contains(start)
     assert RW._bound_violation(d, twin).tolist() == [False, False]
     assert W.run_svo_bank(d, twin.y, twin.u).false_alarm.tolist() == [False, False]
+
+
+def test_the_banks_run_on_the_detected_records_only_with_the_whole_banks_outcome(monkeypatch):
+    """run_svo_bank runs the fault hypotheses' SVOs only where the nominal set empties: its outcome
+    is the one of the banks run on every record (forced here by a stand-in that reports every
+    nominal set empty), on records with a detection and an isolation (F1), a detection alone (F2)
+    and neither (F4)."""
+    pytest.importorskip("numba")
+    from fdi_lib.sets.svo import SVOBatchRun
+    from fdi_lib.systems import wind_turbine as wt
+
+    d = RW.calibrated_design(2009)
+    seeds = np.random.SeedSequence(2009).spawn(2)
+    recs = [W.fault_records(f, seeds) for f in wt.FAULTS if f.id in (1, 2, 4)]
+    y, u = (np.concatenate([getattr(r, k) for r in recs]) for k in ("y", "u"))
+    lazy = W.run_svo_bank(d, y, u)
+    monkeypatch.setattr(W, "run_svo_many", lambda models, *a, **k: SVOBatchRun((0,) * len(models)))
+    whole = W.run_svo_bank(d, y, u)
+    for key in ("false_alarm", "detect", "subsystem", "isolated", "isolate_step"):
+        np.testing.assert_array_equal(getattr(lazy, key), getattr(whole, key), err_msg=key)
+    assert (lazy.detect < 0).any() and (lazy.isolate_step >= 0).any()
+    assert ((lazy.detect >= 0) & (lazy.isolate_step < 0)).any()  # detected, not isolated
