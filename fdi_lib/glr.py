@@ -461,10 +461,13 @@ class WindowedGLR:
         for _, self._sig_wT, self._Cs, self._root in self._shared_blocks(self.model.n_steps):
             pass
 
-    def _shared_blocks(self, size: int):
-        """The noise-independent arrays by blocks of ``size`` samples: yields ``(ks, sig_wT, C,
-        root)``, ``ks`` the block's slice of samples (the first block's arrays before the second is
-        computed: the memory of one block, whatever ``N``).
+    def _shared_blocks(self, size: int, first: int = 0):
+        """The noise-independent arrays by blocks of ``size`` samples from sample ``first`` on:
+        yields ``(ks, sig_wT, C, root)``, ``ks`` the block's slice of samples (the first block's
+        arrays before the second is computed: the memory of one block, whatever ``N``). The
+        entries of the onsets ``r >= first`` are those of ``first = 0``, bit for bit (each onset's
+        recursions start from zero at ``r``); the onsets before ``first`` hold partial sums, which
+        :meth:`_record` never reads when ``first <= start - w + 1`` (their slots are reset first).
 
         ``Gamma_k(r)`` by the recursion (31) (one vectorised step per sample over the window's
         onsets), then in single array operations over the block's ``(k, r)``: the whitened
@@ -487,7 +490,7 @@ class WindowedGLR:
         head = min(N, w - 1)  # before, some slots hold no onset yet; after, all do
         last = np.zeros((n, w * F * m))  # Gamma_{k0 - 1} of the block starting at k0
         acc = np.zeros((w, F, m, m))  # C_{k0 - 1}(r)
-        for k0 in range(0, N, size):
+        for k0 in range(first, N, size):
             K = min(size, N - k0)
             # Gamma_k(r) as (n, w F m): slots (and realisations) side by side, so that (31) is one
             # matrix product per sample
@@ -905,7 +908,10 @@ def glr_window(
             )
         if B > size:  # all realisations at once, the arrays by blocks of samples in the budget
             det = WindowedGLR._unkept(model, gains, family, window, min_samples, batch)
-            blocks = det._shared_blocks(max(1, _PER_REALISATION_BYTES * model.n_steps // (B * per)))
+            blocks = det._shared_blocks(
+                max(1, _PER_REALISATION_BYTES * model.n_steps // (B * per)),
+                max(0, start - det.window + 1),  # the first sample _record reads
+            )
     if blocks is None and shared is None:
         det = WindowedGLR(model, gains, family, window, min_samples, batch_shape=batch)
     elif blocks is None:

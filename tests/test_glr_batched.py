@@ -183,7 +183,8 @@ def test_blocks_of_samples_within_the_memory_budget(monkeypatch, m, start):
     """A budget smaller than the batch's arrays, m outside 3..4: all realisations in one pass, the
     detector's arrays by blocks of samples (3/7 of the record), the same bits as with the whole
     record in one block; the blocks of realisations taken before agree to rounding (their last block,
-    one realisation, takes other products)."""
+    one realisation, takes other products). With ``start``, the blocks begin at the first sample
+    read, ``start - W + 1``, and the outputs keep their bits."""
     model, gains, eps, Psi, Phi = _setup((7,), m, seed=6)
     fam = step_family(model, Psi=Psi, Phi=Phi)
     whole = glr_window(eps, model, gains, fam, W, S, start=start)
@@ -192,13 +193,13 @@ def test_blocks_of_samples_within_the_memory_budget(monkeypatch, m, start):
     sizes = []
     real = glr.WindowedGLR._shared_blocks
 
-    def spy(self, size):
-        sizes.append((self._B, size))
-        return real(self, size)
+    def spy(self, size, first=0):
+        sizes.append((self._B, size, first))
+        return real(self, size, first)
 
     monkeypatch.setattr(glr.WindowedGLR, "_shared_blocks", spy)
     blocked = glr_window(eps, model, gains, fam, W, S, start=start)
-    assert sizes == [(7, 3 * N // 7)]
+    assert sizes == [(7, 3 * N // 7, max(0, start - W + 1))]  # from the first sample read
     realisations = glr._grouped_glr_window(
         eps, np.arange(7) // 3, model, gains, fam, W, S, None, start, True
     )
