@@ -143,6 +143,29 @@ def _bank_outcomes(runs: "list[uav.UAVRun]", alpha_slack_deg: float = 0.0) -> li
     return out
 
 
+@lru_cache(maxsize=4)
+def _study_runs(
+    seed: int, trials: int, duration: float, eta_unit: str, fault_mode: str
+) -> list[uav.UAVRun]:
+    """The simulated runs of :func:`uav_study`, their arrays read-only (cached: the studies that
+    differ only in their observers, such as ``alpha_slack_deg``, share them)."""
+    streams = trial_seeds(seed, int(trials))  # refuses a count that would not fit in memory
+    cases = [("none", "step", ss) for ss in streams]  # the scenario is irrelevant without fault
+    cases += [(f, s, ss) for f in uav.FAULTS for s in uav.SCENARIOS for ss in streams]
+    # the closed loops are simulated together (vectorised, each run independent of the batch)
+    runs = uav.simulate_many(
+        [(f, s) for f, s, _ in cases],
+        [np.random.default_rng(ss) for _, _, ss in cases],
+        duration=duration,
+        eta_unit=eta_unit,
+        fault_mode=fault_mode,
+    )
+    for r in runs:  # shared by the studies: read-only
+        for a in (r.t, r.x, r.y, r.u):
+            a.flags.writeable = False
+    return runs
+
+
 @lru_cache(maxsize=16)
 def uav_study(
     seed: int,
@@ -164,17 +187,7 @@ def uav_study(
     """
     from joblib.externals.loky import get_reusable_executor
 
-    streams = trial_seeds(seed, int(trials))  # refuses a count that would not fit in memory
-    cases = [("none", "step", ss) for ss in streams]  # the scenario is irrelevant without fault
-    cases += [(f, s, ss) for f in uav.FAULTS for s in uav.SCENARIOS for ss in streams]
-    # the closed loops are simulated together (vectorised, each run independent of the batch)
-    sims = uav.simulate_many(
-        [(f, s) for f, s, _ in cases],
-        [np.random.default_rng(ss) for _, _, ss in cases],
-        duration=duration,
-        eta_unit=eta_unit,
-        fault_mode=fault_mode,
-    )
+    sims = _study_runs(seed, trials, duration, eta_unit, fault_mode)
     jobs = effective_jobs(jobs, len(sims))
     bank = partial(_bank_outcomes, alpha_slack_deg=float(alpha_slack_deg))
     if jobs == 1:
