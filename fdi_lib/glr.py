@@ -471,7 +471,8 @@ class WindowedGLR:
 
         ``Gamma_k(r)`` by the recursion (31) (one vectorised step per sample over the window's
         onsets), then in single array operations over the block's ``(k, r)``: the whitened
-        signatures ``Sigma_k^{-1/2} (H_k Gamma_k(r) + Phi~_k)`` (``sig_wT``), the informations
+        signatures ``Sigma_k^{-1/2} (H_k Gamma_k(r) + Phi~_k)`` (``sig_wT``: ``(K, w, m, p)``, or
+        ``(K, p, w, B, m)`` for per-realisation profiles, as computed), the informations
         ``C_k(r)`` (sums (32), recursively (27)), and the factors of their pseudo-inverses
         ``C^+ = R R^T`` (``root``). Every entry is the same operation whatever the blocks
         (products per sample, elementwise operations, one decomposition per matrix), except the
@@ -519,8 +520,11 @@ class WindowedGLR:
             del sig
             if self._skipped[k0 : k0 + K].any():  # a skipped sample adds nothing to C_k(r), d_k(r)
                 sig_w[self._skipped[k0 : k0 + K]] = 0.0
-            sig_wT = np.ascontiguousarray(np.transpose(sig_w, (0, 2, 3, 4, 1)))  # (K, w, F, m, p)
             inc = np.einsum("kpwfi,kpwfj->kwfij", sig_w, sig_w)  # (K, w, F, m, m)
+            if self._per_realisation:  # as computed, (K, p, w, B, m): _score_terms reads slabs
+                sig_wT = sig_w
+            else:  # (K, w, m, p): one (w m, p) matrix per sample
+                sig_wT = np.ascontiguousarray(np.transpose(sig_w[:, :, :, 0], (0, 2, 3, 1)))
             del sig_w
             C = np.empty_like(inc)
             for k in range(k0, k0 + K):
@@ -530,7 +534,7 @@ class WindowedGLR:
             del inc
             root = _pinv_root(C)  # C^+ = root root^T
             if not self._per_realisation:  # drop the realisation axis of a shared family
-                sig_wT, C, root = sig_wT[:, :, 0], C[:, :, 0], root[:, :, 0]
+                C, root = C[:, :, 0], root[:, :, 0]
             yield slice(k0, k0 + K), sig_wT, C, root
             del sig_wT, C, root  # the next block's arrays in the memory of these
 
@@ -561,11 +565,12 @@ class WindowedGLR:
     def _score_terms(self, S: np.ndarray, e_w: np.ndarray) -> np.ndarray:
         """Terms of ``K`` samples in every ``d_k(r)``, ``(K, w, m, B)``, from their whitened
         signatures ``S`` (``sig_wT`` of :meth:`_shared_blocks`: ``(K, w, m, p)``, or
-        ``(K, w, B, m, p)``) and innovations ``e_w`` ``(K, p, B)`` (eq. (28))."""
+        ``(K, p, w, B, m)`` for per-realisation profiles) and innovations ``e_w`` ``(K, p, B)``
+        (eq. (28))."""
         if self._per_realisation:  # the sum over p in order, then + 0.0: the bits of an einsum
-            t = S[..., 0] * e_w[:, None, 0, :, None]  # (K, w, B, m)
-            for i in range(1, S.shape[-1]):
-                t += S[..., i] * e_w[:, None, i, :, None]
+            t = S[:, 0] * e_w[:, 0, None, :, None]  # (K, w, B, m)
+            for i in range(1, S.shape[1]):
+                t += S[:, i] * e_w[:, i, None, :, None]
             t += 0.0  # a sum of -0.0 terms is +0.0, as einsum's (which starts from 0.0)
             return np.swapaxes(t, -1, -2)
         K, w, m, p = S.shape
@@ -662,7 +667,9 @@ class WindowedGLR:
         if skip and not self._skipped[k]:  # a dropped innovation contributes nothing: its score
             # term is zero, its information term (precomputed in C_k(r)) is subtracted for every
             # onset it belongs to
-            self._C_missing += self._sig_wT[k] @ np.swapaxes(self._sig_wT[k], -1, -2)
+            S = self._sig_wT[k]  # (w, m, p), or (p, w, B, m): as (w, B, m, p), contiguous
+            S = np.ascontiguousarray(np.moveaxis(S, 0, -1)) if self._per_realisation else S
+            self._C_missing += S @ np.swapaxes(S, -1, -2)
             self._dropped = k
         elif not skip:
             e_w = self._Linv[k] @ eps_k.T  # (p, B)

@@ -260,7 +260,7 @@ def test_score_terms_are_the_bits_of_the_products_they_replace(m):
     e_w = np.random.default_rng(1).standard_normal((N, p, 4))
     e_w[3, 0] = -0.0
     own = WindowedGLR(model, gains, step_family(model, Psi=Psi, Phi=Phi), W, batch_shape=(4,))
-    ref = np.einsum("kwbmp,kpb->kwmb", own._sig_wT, e_w)
+    ref = np.einsum("kpwbm,kpb->kwmb", own._sig_wT, e_w)
     assert own._score_terms(own._sig_wT, e_w).tobytes() == np.ascontiguousarray(ref).tobytes()
     shared = WindowedGLR(model, gains, step_family(model, Psi=Psi[0], Phi=Phi[1]), W)
     ref = shared._sig_wT @ e_w[:, None]
