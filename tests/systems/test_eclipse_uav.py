@@ -262,3 +262,18 @@ def test_svo_models_warn_when_a_record_leaves_the_envelope():
     with warnings.catch_warnings():
         warnings.simplefilter("error", EnvelopeWarning)
         uav.svo_models(calm)
+
+
+@pytest.mark.parametrize("K, dim, a", [(600, 3, 0.9), (601, 4, 0.5), (2, 1, 0.3), (1, 2, 0.9)])
+def test_bounded_lowpass_is_the_recursion_bit_for_bit(K, dim, a):
+    """The filtered noise is z_k = a z_{k-1} + (1 - a) w_k from z_0 = w_0, written as a loop, bit
+    for bit, scaled into [-1, 1]."""
+    for seed in range(20):
+        w = np.random.default_rng(seed).uniform(-1.0, 1.0, size=(K, dim))
+        z = w.copy()
+        for k in range(1, K):
+            z[k] = a * z[k - 1] + (1.0 - a) * w[k]
+        ref = z / max(1.0, float(np.abs(z).max()))
+        got = uav._bounded_lowpass(np.random.default_rng(seed), K, dim, a)
+        assert got.tobytes() == ref.tobytes()
+        assert np.abs(got).max() <= 1.0
