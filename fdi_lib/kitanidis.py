@@ -513,28 +513,31 @@ def residual_signature(
         check_finite(arr, name)
     batch = np.broadcast_shapes(Psi_a.shape[:-3], Phi_a.shape[:-3])
     m = Psi_a.shape[-1]
+    # An all-zero Phi (the usual state-fault case) is skipped rather than multiplied (tested before
+    # the broadcast: a shared profile is not read once per realisation).
+    has_phi = bool(np.any(Phi_a))
     Psi_a = np.broadcast_to(Psi_a, (*batch, N, n, m))
     Phi_a = np.broadcast_to(Phi_a, (*batch, N, p, m))
     nb = int(np.prod(batch, dtype=int))
-    # The recursion acts column by column: stack the columns of all realisations side by side,
-    # (N, rows, batch * m), so that each step is one plain matrix product (one BLAS call). Profiles
-    # already in that layout (a (N, n, batch, m) array seen as (batch, N, n, m)) are not copied.
-    # An all-zero Phi (the usual state-fault case) is skipped rather than multiplied.
-    has_phi = bool(np.any(Phi_a))
-    Psi_c = np.moveaxis(Psi_a.reshape(nb, N, n, m), 0, 2).reshape(N, n, nb * m)
-    Phi_c = np.moveaxis(Phi_a.reshape(nb, N, p, m), 0, 2).reshape(N, p, nb * m) if has_phi else None
+    # The recursion acts column by column: the columns of all realisations side by side, (N, rows,
+    # batch * m), so that each step is one plain matrix product (one BLAS call). The profiles are
+    # read in place at each step, seen in that layout ((rows, batch, m) views, not copied).
+    Psi_c = np.moveaxis(Psi_a.reshape(nb, N, n, m), 0, 2)
+    Phi_c = np.moveaxis(Phi_a.reshape(nb, N, p, m), 0, 2) if has_phi else None
     K = gains.K
     IKH = np.eye(n) - K @ model.H  # (N, n, n)
     U = np.empty((N, n, nb * m))
     # H_k Upsilon_k, one product per sample while Upsilon_k is in cache, stored realisation first
     # (the layout of the regression (36)-(38) built from it)
     HU = np.empty((nb, N, p, m))
-    U[0] = -K[0] @ Phi_c[0] if has_phi else 0.0
+    U[0] = -K[0] @ Phi_c[0].reshape(p, nb * m) if has_phi else 0.0
     for k in range(N):
         if k > 0:
-            U[k] = IKH[k] @ (model.F[k - 1] @ U[k - 1] + Psi_c[k - 1])
+            V = model.F[k - 1] @ U[k - 1]
+            np.add(V.reshape(n, nb, m), Psi_c[k - 1], out=V.reshape(n, nb, m))
+            np.matmul(IKH[k], V, out=U[k])
             if has_phi:
-                U[k] -= K[k] @ Phi_c[k]
+                U[k] -= K[k] @ Phi_c[k].reshape(p, nb * m)
         HU[:, k] = (model.H[k] @ U[k]).reshape(p, nb, m).transpose(1, 0, 2)
     # back to (*batch, N, rows, m) as views of the stacked arrays (no copy)
     Ups = np.moveaxis(U.reshape(N, n, nb, m), 2, 0).reshape(*batch, N, n, m)

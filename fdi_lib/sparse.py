@@ -1219,8 +1219,11 @@ def _homotopy(
         1e-12 * c
     )  # a correlation this close to the level ties with it (rounding of cov, ~eps c_0)
     cap = 2 * m + 4  # breakpoints stored per problem (grown if needed)
-    levels, coefs = np.zeros((B, cap)), np.zeros((B, cap, m))
+    levels = np.zeros((B, cap))
     levels[:, 0] = c
+    # the coefficients of each step's breakpoint, (problems, m), stored at the end: writing them at
+    # once into a (B, S, m) array costs less than one strided row per problem at every step
+    steps: list[tuple[np.ndarray, np.ndarray]] = []
     n_points = np.ones(B, int)
     step = 1  # breakpoints so far of every problem still running (each step adds one to each)
     ids = np.arange(B)  # problems still followed (the arrays below are compacted to them)
@@ -1272,9 +1275,10 @@ def _homotopy(
         z = np.where(joining[:, None], u[:, :k], col)
         f = np.where(joining, 1.0 / schur, np.where(dropping, -1.0 / inv[rows, s_ev, s_ev], 0.0))
         # the outer product in a buffer kept across steps: a new (B, k, k) array at each step
-        # (megabytes) is mapped and faulted in anew by the allocator (same products, same sums)
+        # (megabytes) is mapped and faulted in anew by the allocator (same products, same sums;
+        # einsum forms them faster than a broadcast multiply)
         outer = outer_buf[: rows.size * k * k].reshape(rows.size, k, k)
-        np.multiply((z * f[:, None])[:, :, None], z[:, None, :], out=outer)
+        np.einsum("bi,bj->bij", z * f[:, None], z, out=outer)
         inv[:, :k, :k] += outer
         if joining.any():
             b = rows[joining]
@@ -1350,10 +1354,9 @@ def _homotopy(
         step += 1
         if point >= cap:
             levels = np.concatenate([levels, np.zeros_like(levels)], axis=1)
-            coefs = np.concatenate([coefs, np.zeros_like(coefs)], axis=1)
             cap *= 2
         levels[at, point] = c[running]
-        coefs[at, point] = beta[running]
+        steps.append((at, beta[running]))
         n_points[at] += 1
         if step > 50 * m + 100:  # far more steps than a path has (a cycle of zero-length steps on a
             levels[at, point] = (
@@ -1375,6 +1378,9 @@ def _homotopy(
         )  # the KKT check rejects it
         joining &= running
         dropping &= running
+    coefs = np.zeros((B, step, m))
+    for point, (at, beta_at) in enumerate(steps, start=1):
+        coefs[at, point] = beta_at
     return levels, coefs, n_points
 
 
@@ -1427,7 +1433,7 @@ def _homotopy_one(
         else:
             z, f = inv[:, :k, s_ev], -1.0 / inv[0, s_ev, s_ev]
         outer = outer_buf[: k * k].reshape(1, k, k)
-        np.multiply((z * f)[:, :, None], z[:, None, :], out=outer)
+        np.einsum("bi,bj->bij", z * f, z, out=outer)
         inv[:, :k, :k] += outer
         if joining:
             GA[0, s_ev] = Gram[0, j]
