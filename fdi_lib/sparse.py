@@ -113,6 +113,9 @@ KKT_TOL = 1e-6
 #: Below ``KKT_FLOOR * lambda_max`` the KKT tolerance is absolute, ``KKT_TOL * KKT_FLOOR * lambda_max``
 #: (:func:`kkt_residual`; at ``lambda = 0``, the end of a full path, a relative one has no meaning).
 KKT_FLOOR = 1e-6
+# values of X per block of problems that lasso_path_batch scales and multiplies together (a few
+# hundred kB: they stay in cache between the passes)
+_BLOCK_VALUES = 2**17
 
 
 @dataclass(frozen=True)
@@ -574,10 +577,7 @@ def lasso_path_batch(
     # are the powers of 2 nearest to the RMS of X and y: exact, so an exact tie stays one.
     # Computed from the scaled X and y: the raw squares would overflow beyond 1e154 and underflow
     # below 1e-154 (a design of 1e-160 had a zero Gram matrix).
-    sx, sy = _pow2_rms(X.reshape(X.shape[0], -1)), _pow2_rms(y)
-    Xs, ys = X / sx[:, None, None], y / sy[:, None]
-    Gram = np.matmul(Xs.transpose(0, 2, 1), Xs)
-    Xy = np.einsum("bri,br->bi", Xs, ys)
+    sx, sy, ys, Gram, Xy = _scaled_problems(X, y)
     B = X.shape[0]
     c_min = lambda_min * np.abs(Xy).max(axis=1)
     with np.errstate(
@@ -596,16 +596,27 @@ def lasso_path_batch(
         Gram, Xy, ynorm, levels, coefs, n_points, rows
     )
     # the exact check where the screen does not pass (its bound holds elsewhere): all such
-    # breakpoints of the batch at once
+    # breakpoints of the batch at once, from the scaled X of their problems (X / sx, formed only
+    # for them)
     broken = (point_res == np.inf).any(axis=1)  # a NaN (a singular step or a cycle): recomputed
-    point_res = _kkt_where_screen_fails(
-        Xs, ys, g, slack, levels, coefs, n_points, abs_gram, point_res
+    checked = np.flatnonzero((point_res > KKT_TOL).any(axis=1))
+    Xs = X[checked] / sx[checked, None, None]
+    point_res[checked] = _kkt_where_screen_fails(
+        Xs,
+        ys[checked],
+        g[checked],
+        slack[checked],
+        levels[checked],
+        coefs[checked],
+        n_points[checked],
+        abs_gram[checked],
+        point_res[checked],
     )
     kkt, floor = np.maximum(point_res.max(axis=1), 0.0), point_floor.max(axis=1)
     solver = np.full(B, "homotopy", dtype=object)
     fixed = []
     for b in np.flatnonzero(kkt > KKT_TOL):  # degenerate or ill-conditioned designs
-        Xb, yb, k = Xs[b], ys[b], n_points[b]
+        Xb, yb, k = Xs[np.searchsorted(checked, b)], ys[b], n_points[b]
         if broken[b]:
             fixed.append((b, *_lars_fallback(Xb, yb, float(c_min[b]), max_size, b, float(kkt[b]))))
             continue
@@ -657,6 +668,28 @@ def lasso_path_batch(
         kkt_residual=kkt,
         kkt_floor=floor * (sx * sy / N),
     )
+
+
+def _scaled_problems(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The exact rescaling of :func:`lasso_path_batch`'s problems ``X`` ``(B, rows, m)``, ``y``
+    ``(B, rows)`` and their Gram form: ``sx``, ``sy`` ``(B,)`` (:func:`_pow2_rms` of each problem's
+    ``X`` and ``y``), ``ys = y / sy``, and, for ``Xs = X / sx``, ``Gram = Xs^T Xs`` ``(B, m, m)``
+    and ``Xs^T ys`` ``(B, m)``. Computed a few problems at a time, while their ``X`` and ``Xs`` are
+    in cache (``Xs`` is not kept); each problem's values are those of the whole batch at once (the
+    same operations on its rows)."""
+    B, rows, m = X.shape
+    sy = _pow2_rms(y)
+    ys = y / sy[:, None]
+    sx, Gram, Xy = np.empty(B), np.empty((B, m, m)), np.empty((B, m))
+    block = max(1, _BLOCK_VALUES // (rows * m))
+    buf = np.empty((min(block, B), rows, m))
+    for b0 in range(0, B, block):
+        sl = slice(b0, b0 + block)
+        sx[sl] = _pow2_rms(X[sl].reshape(-1, rows * m))
+        Xs = np.divide(X[sl], sx[sl, None, None], out=buf[: sx[sl].size])
+        np.matmul(Xs.transpose(0, 2, 1), Xs, out=Gram[sl])
+        Xy[sl] = np.einsum("bri,br->bi", Xs, ys[sl])
+    return sx, sy, ys, Gram, Xy
 
 
 def kkt_residual(X: Any, y: Any, path: "LassoPath") -> float:

@@ -314,6 +314,8 @@ def example1_chunk(
     trials = ex.draw_trials(model, trial_rngs(seeds), q=q)
     reg, y = example1_regression(trials, r=r)
     true = trials.theta != 0  # (trials, m)
+    snr = snr_db(y, trials.noise.v)
+    del trials  # its Psi_k (tens of MB) are not needed by the paths: freed before they are followed
     paths = lasso_path_batch(
         reg.X,
         reg.y,
@@ -329,7 +331,7 @@ def example1_chunk(
     for n in GRID_SIZES:
         g = grid_flat_ranges(paths, n, lambda_ratio=LAMBDA_RATIO)
         out[f"success_grid{n}"] = np.all(g.support == true, axis=1)
-    out["snr_db"] = snr_db(y, trials.noise.v)
+    out["snr_db"] = snr
     return out
 
 
