@@ -423,14 +423,14 @@ class ResidualSignature:
 
     Attributes
     ----------
-    Upsilon : numpy.ndarray
+    Upsilon : numpy.ndarray or None
         ``Upsilon_k`` (7) with a Kalman gain, or ``Upsilon-tilde_k`` (27) with a Kitanidis gain,
-        ``(*batch, N, n, m)``.
+        ``(*batch, N, n, m)``; None when not asked for (``residual_signature(upsilon=False)``).
     on_residual : numpy.ndarray
         ``H_k Upsilon_k + Phi_k``, ``(*batch, N, p, m)``: the regressor of ``theta`` in (6)/(26).
     """
 
-    Upsilon: np.ndarray
+    Upsilon: np.ndarray | None
     on_residual: np.ndarray
 
 
@@ -441,6 +441,7 @@ def residual_signature(
     *,
     Psi: Any = None,
     Phi: Any = None,
+    upsilon: bool = True,
 ) -> ResidualSignature:
     r"""Signature of :math:`\theta` on the updated residual, Zhang (2021) eqs. (7) and (27).
 
@@ -471,6 +472,10 @@ def residual_signature(
     Psi, Phi : array_like, optional
         Instead of ``fault``: per-realisation profiles ``(*batch, N, n, m)`` / ``(*batch, N, p, m)``
         (e.g. a random ``Psi_k`` drawn in each Monte Carlo trial).
+    upsilon : bool
+        Return ``Upsilon`` too (default). ``False``: only ``on_residual`` (the same values), the
+        recursion kept in one sample's memory instead of ``N`` (for a regression alone: the
+        ``Upsilon`` of a Monte Carlo chunk's trials are tens of MB).
 
     Returns
     -------
@@ -526,21 +531,25 @@ def residual_signature(
     Phi_c = np.moveaxis(Phi_a.reshape(nb, N, p, m), 0, 2) if has_phi else None
     K = gains.K
     IKH = np.eye(n) - K @ model.H  # (N, n, n)
-    U = np.empty((N, n, nb * m))
+    # Upsilon_k in U[k % kept]: every sample, or (upsilon=False) the last one (each step reads
+    # Upsilon_{k-1} into a new array before it writes Upsilon_k)
+    kept = N if upsilon else 1
+    U = np.empty((kept, n, nb * m))
     # H_k Upsilon_k, one product per sample while Upsilon_k is in cache, stored realisation first
     # (the layout of the regression (36)-(38) built from it)
     HU = np.empty((nb, N, p, m))
     U[0] = -K[0] @ Phi_c[0].reshape(p, nb * m) if has_phi else 0.0
     for k in range(N):
+        Uk = U[k % kept]
         if k > 0:
-            V = model.F[k - 1] @ U[k - 1]
+            V = model.F[k - 1] @ U[(k - 1) % kept]
             np.add(V.reshape(n, nb, m), Psi_c[k - 1], out=V.reshape(n, nb, m))
-            np.matmul(IKH[k], V, out=U[k])
+            np.matmul(IKH[k], V, out=Uk)
             if has_phi:
-                U[k] -= K[k] @ Phi_c[k].reshape(p, nb * m)
-        HU[:, k] = (model.H[k] @ U[k]).reshape(p, nb, m).transpose(1, 0, 2)
+                Uk -= K[k] @ Phi_c[k].reshape(p, nb * m)
+        HU[:, k] = (model.H[k] @ Uk).reshape(p, nb, m).transpose(1, 0, 2)
     # back to (*batch, N, rows, m) as views of the stacked arrays (no copy)
-    Ups = np.moveaxis(U.reshape(N, n, nb, m), 2, 0).reshape(*batch, N, n, m)
+    Ups = np.moveaxis(U.reshape(N, n, nb, m), 2, 0).reshape(*batch, N, n, m) if upsilon else None
     on_res = HU.reshape(*batch, N, p, m)
     if has_phi:
         on_res = on_res + Phi_a

@@ -1259,7 +1259,9 @@ def _homotopy(
     steps: list[tuple[np.ndarray, np.ndarray]] = []
     n_points = np.ones(B, int)
     step = 1  # breakpoints so far of every problem still running (each step adds one to each)
-    ids = np.arange(B)  # problems still followed (the arrays below are compacted to them)
+    # problems still followed: the arrays below are compacted to them, Gram (the largest, read a
+    # row per step) is not, and is indexed through ids
+    ids = np.arange(B)
     running = c > c_min
     joining = running.copy()  # problems whose event is the join of component j
     dropping = np.zeros(B, bool)  # ... the drop of component j
@@ -1270,10 +1272,9 @@ def _homotopy(
     while running.any():
         if rows.size >= 16 and running.sum() <= 3 * rows.size // 4:  # drop finished problems
             keep = running
-            Gram, c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j, near = (
+            c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j, near = (
                 x[keep]
                 for x in (
-                    Gram,
                     c_min,
                     beta,
                     cov,
@@ -1302,7 +1303,7 @@ def _homotopy(
         g = GA[rows, :, j]  # Gram[A, j] (zero in unused slots)
         u = np.zeros((rows.size, K))
         u[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], g)
-        schur = Gram[rows, j, j] - np.einsum("bi,bi->b", g, u)  # G_jj - g_A^T inv g_A
+        schur = Gram[ids, j, j] - np.einsum("bi,bi->b", g, u)  # G_jj - g_A^T inv g_A
         u[rows[joining], s_ev[joining]] = -1.0  # w: the new column of inv is -w / schur
         col = inv[rows, :k, s_ev]
         z = np.where(joining[:, None], u[:, :k], col)
@@ -1315,7 +1316,7 @@ def _homotopy(
         inv[:, :k, :k] += outer
         if joining.any():
             b = rows[joining]
-            GA[b, s_ev[b]] = Gram[b, j[b]]  # row j (the Gram matrix is symmetric)
+            GA[b, s_ev[b]] = Gram[ids[b], j[b]]  # row j (the Gram matrix is symmetric)
             order[b, s_ev[b]] = j[b]
             slot[b, j[b]] = s_ev[b]
             n_act[b] += 1

@@ -295,7 +295,7 @@ def example1_regression(
     model, gains = _example1_setup(float(r))  # gains shared by all trials
     y = ex.simulate_trials(model, trials)
     res = kitanidis_filter(model, y, gains=gains)
-    sig = residual_signature(model, gains, Psi=trials.Psi)  # Psi_k differs per trial
+    sig = residual_signature(model, gains, Psi=trials.Psi, upsilon=False)  # Psi_k differs per trial
     return regression_data(res.residuals, sig.on_residual, start=1), y
 
 
