@@ -329,6 +329,14 @@ class PathBatch:
     def _activity(self) -> tuple[np.ndarray, np.ndarray]:
         return _activity(self.coefs)  # computed once per batch, shared by the rules
 
+    @functools.cached_property
+    def _sizes(self) -> np.ndarray:
+        """Support size on each interval ``(B, S-1)`` (of :attr:`_activity`), -1 in the padding;
+        computed once per batch, shared by the rules."""
+        S = self.lambdas.shape[1]
+        valid = np.arange(S - 1) < (self.n_points - 1)[:, None]
+        return np.where(valid, self._activity[1].sum(axis=2), -1)
+
     def path(self, b: int) -> LassoPath:
         """Path ``b`` as a :class:`LassoPath`."""
         k = int(self.n_points[b])
@@ -998,7 +1006,8 @@ def _kkt_screen(
             * norms.max(axis=1, keepdims=True)
             * (ynorm[:, None] + np.einsum("bsi,bi->bs", np.abs(coefs), norms))
         )
-        g = Xy[:, None, :] - np.matmul(coefs, Gram)
+        g = np.matmul(coefs, Gram)
+        np.subtract(Xy[:, None, :], g, out=g)  # in place: one (B, S, m) array, not two
         abs_gram = np.abs(Gram)
         point_res, point_floor = _kkt(g, slack, levels, coefs, n_points, abs_gram, points=True)
     return g, slack, abs_gram, point_res, point_floor
@@ -1743,10 +1752,9 @@ def _flat_ranges(
     _check_rule(lambda_ratio, max_size)
     a = paths.lambdas
     B, S = a.shape
-    tol, act = paths._activity
+    tol, _ = paths._activity
     top = paths.coefs.shape[2] // 2 if max_size is None else int(max_size)
-    K = paths.n_points - 1  # intervals (a[i+1], a[i]) of each path
-    sizes = np.where(np.arange(S - 1) < K[:, None], act.sum(axis=2), -1)
+    sizes = paths._sizes  # of the intervals (a[i+1], a[i]) of each path
     floor = lambda_ratio * a[:, 0]
     over = sizes > top
     first_over = np.where(over.any(axis=1), over.argmax(axis=1), S - 1)
@@ -2016,11 +2024,12 @@ def _grid_flat_ranges(
     grid[:, 0] = a[:, 0]
     _, act = paths._activity  # (B, S-1, m): support on each interval (a[i+1], a[i])
     K = paths.n_points - 1
-    isz = np.where(np.arange(S - 1) < K[:, None], act.sum(axis=2), -1)
+    isz = paths._sizes
     # interval i is (a[i+1], a[i]); lambda >= a[0] has the empty support
     idx = np.empty(grid.shape, int)
+    neg_a, neg_grid = -a, -grid  # ascending
     for b in range(B):  # one sorted search per path
-        idx[b] = np.searchsorted(-a[b, : K[b] + 1], -grid[b], side="right") - 1
+        idx[b] = np.searchsorted(neg_a[b, : K[b] + 1], neg_grid[b], side="right") - 1
     idx = np.clip(idx, 0, (K - 1)[:, None])
     sizes = np.where(grid >= a[:, :1], 0, isz[rows[:, None], idx])  # theta_hat(lambda_max) = 0
     over = isz > top
