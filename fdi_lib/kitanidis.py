@@ -423,14 +423,14 @@ class ResidualSignature:
 
     Attributes
     ----------
-    Upsilon : numpy.ndarray
+    Upsilon : numpy.ndarray or None
         ``Upsilon_k`` (7) with a Kalman gain, or ``Upsilon-tilde_k`` (27) with a Kitanidis gain,
-        ``(*batch, N, n, m)``.
+        ``(*batch, N, n, m)``; None when not asked for (``residual_signature(upsilon=False)``).
     on_residual : numpy.ndarray
         ``H_k Upsilon_k + Phi_k``, ``(*batch, N, p, m)``: the regressor of ``theta`` in (6)/(26).
     """
 
-    Upsilon: np.ndarray
+    Upsilon: np.ndarray | None
     on_residual: np.ndarray
 
 
@@ -441,6 +441,7 @@ def residual_signature(
     *,
     Psi: Any = None,
     Phi: Any = None,
+    upsilon: bool = True,
 ) -> ResidualSignature:
     r"""Signature of :math:`\theta` on the updated residual, Zhang (2021) eqs. (7) and (27).
 
@@ -471,6 +472,10 @@ def residual_signature(
     Psi, Phi : array_like, optional
         Instead of ``fault``: per-realisation profiles ``(*batch, N, n, m)`` / ``(*batch, N, p, m)``
         (e.g. a random ``Psi_k`` drawn in each Monte Carlo trial).
+    upsilon : bool
+        Return ``Upsilon`` too (default). ``False``: only ``on_residual`` (the same values), the
+        recursion kept in one sample's memory instead of ``N`` (for a regression alone: the
+        ``Upsilon`` of a Monte Carlo chunk's trials are tens of MB).
 
     Returns
     -------
@@ -513,31 +518,38 @@ def residual_signature(
         check_finite(arr, name)
     batch = np.broadcast_shapes(Psi_a.shape[:-3], Phi_a.shape[:-3])
     m = Psi_a.shape[-1]
+    # An all-zero Phi (the usual state-fault case) is skipped rather than multiplied (tested before
+    # the broadcast: a shared profile is not read once per realisation).
+    has_phi = bool(np.any(Phi_a))
     Psi_a = np.broadcast_to(Psi_a, (*batch, N, n, m))
     Phi_a = np.broadcast_to(Phi_a, (*batch, N, p, m))
     nb = int(np.prod(batch, dtype=int))
-    # The recursion acts column by column: stack the columns of all realisations side by side,
-    # (N, rows, batch * m), so that each step is one plain matrix product (one BLAS call). Profiles
-    # already in that layout (a (N, n, batch, m) array seen as (batch, N, n, m)) are not copied.
-    # An all-zero Phi (the usual state-fault case) is skipped rather than multiplied.
-    has_phi = bool(np.any(Phi_a))
-    Psi_c = np.moveaxis(Psi_a.reshape(nb, N, n, m), 0, 2).reshape(N, n, nb * m)
-    Phi_c = np.moveaxis(Phi_a.reshape(nb, N, p, m), 0, 2).reshape(N, p, nb * m) if has_phi else None
+    # The recursion acts column by column: the columns of all realisations side by side, (N, rows,
+    # batch * m), so that each step is one plain matrix product (one BLAS call). The profiles are
+    # read in place at each step, seen in that layout ((rows, batch, m) views, not copied).
+    Psi_c = np.moveaxis(Psi_a.reshape(nb, N, n, m), 0, 2)
+    Phi_c = np.moveaxis(Phi_a.reshape(nb, N, p, m), 0, 2) if has_phi else None
     K = gains.K
     IKH = np.eye(n) - K @ model.H  # (N, n, n)
-    U = np.empty((N, n, nb * m))
+    # Upsilon_k in U[k % kept]: every sample, or (upsilon=False) the last one (each step reads
+    # Upsilon_{k-1} into a new array before it writes Upsilon_k)
+    kept = N if upsilon else 1
+    U = np.empty((kept, n, nb * m))
     # H_k Upsilon_k, one product per sample while Upsilon_k is in cache, stored realisation first
     # (the layout of the regression (36)-(38) built from it)
     HU = np.empty((nb, N, p, m))
-    U[0] = -K[0] @ Phi_c[0] if has_phi else 0.0
+    U[0] = -K[0] @ Phi_c[0].reshape(p, nb * m) if has_phi else 0.0
     for k in range(N):
+        Uk = U[k % kept]
         if k > 0:
-            U[k] = IKH[k] @ (model.F[k - 1] @ U[k - 1] + Psi_c[k - 1])
+            V = model.F[k - 1] @ U[(k - 1) % kept]
+            np.add(V.reshape(n, nb, m), Psi_c[k - 1], out=V.reshape(n, nb, m))
+            np.matmul(IKH[k], V, out=Uk)
             if has_phi:
-                U[k] -= K[k] @ Phi_c[k]
-        HU[:, k] = (model.H[k] @ U[k]).reshape(p, nb, m).transpose(1, 0, 2)
+                Uk -= K[k] @ Phi_c[k].reshape(p, nb * m)
+        HU[:, k] = (model.H[k] @ Uk).reshape(p, nb, m).transpose(1, 0, 2)
     # back to (*batch, N, rows, m) as views of the stacked arrays (no copy)
-    Ups = np.moveaxis(U.reshape(N, n, nb, m), 2, 0).reshape(*batch, N, n, m)
+    Ups = np.moveaxis(U.reshape(N, n, nb, m), 2, 0).reshape(*batch, N, n, m) if upsilon else None
     on_res = HU.reshape(*batch, N, p, m)
     if has_phi:
         on_res = on_res + Phi_a

@@ -113,6 +113,9 @@ KKT_TOL = 1e-6
 #: Below ``KKT_FLOOR * lambda_max`` the KKT tolerance is absolute, ``KKT_TOL * KKT_FLOOR * lambda_max``
 #: (:func:`kkt_residual`; at ``lambda = 0``, the end of a full path, a relative one has no meaning).
 KKT_FLOOR = 1e-6
+# values of X per block of problems that lasso_path_batch scales and multiplies together (a few
+# hundred kB: they stay in cache between the passes)
+_BLOCK_VALUES = 2**17
 
 
 @dataclass(frozen=True)
@@ -325,6 +328,14 @@ class PathBatch:
     @functools.cached_property
     def _activity(self) -> tuple[np.ndarray, np.ndarray]:
         return _activity(self.coefs)  # computed once per batch, shared by the rules
+
+    @functools.cached_property
+    def _sizes(self) -> np.ndarray:
+        """Support size on each interval ``(B, S-1)`` (of :attr:`_activity`), -1 in the padding;
+        computed once per batch, shared by the rules."""
+        S = self.lambdas.shape[1]
+        valid = np.arange(S - 1) < (self.n_points - 1)[:, None]
+        return np.where(valid, self._activity[1].sum(axis=2), -1)
 
     def path(self, b: int) -> LassoPath:
         """Path ``b`` as a :class:`LassoPath`."""
@@ -574,10 +585,7 @@ def lasso_path_batch(
     # are the powers of 2 nearest to the RMS of X and y: exact, so an exact tie stays one.
     # Computed from the scaled X and y: the raw squares would overflow beyond 1e154 and underflow
     # below 1e-154 (a design of 1e-160 had a zero Gram matrix).
-    sx, sy = _pow2_rms(X.reshape(X.shape[0], -1)), _pow2_rms(y)
-    Xs, ys = X / sx[:, None, None], y / sy[:, None]
-    Gram = np.matmul(Xs.transpose(0, 2, 1), Xs)
-    Xy = np.einsum("bri,br->bi", Xs, ys)
+    sx, sy, ys, Gram, Xy = _scaled_problems(X, y)
     B = X.shape[0]
     c_min = lambda_min * np.abs(Xy).max(axis=1)
     with np.errstate(
@@ -596,16 +604,27 @@ def lasso_path_batch(
         Gram, Xy, ynorm, levels, coefs, n_points, rows
     )
     # the exact check where the screen does not pass (its bound holds elsewhere): all such
-    # breakpoints of the batch at once
+    # breakpoints of the batch at once, from the scaled X of their problems (X / sx, formed only
+    # for them)
     broken = (point_res == np.inf).any(axis=1)  # a NaN (a singular step or a cycle): recomputed
-    point_res = _kkt_where_screen_fails(
-        Xs, ys, g, slack, levels, coefs, n_points, abs_gram, point_res
+    checked = np.flatnonzero((point_res > KKT_TOL).any(axis=1))
+    Xs = X[checked] / sx[checked, None, None]
+    point_res[checked] = _kkt_where_screen_fails(
+        Xs,
+        ys[checked],
+        g[checked],
+        slack[checked],
+        levels[checked],
+        coefs[checked],
+        n_points[checked],
+        abs_gram[checked],
+        point_res[checked],
     )
     kkt, floor = np.maximum(point_res.max(axis=1), 0.0), point_floor.max(axis=1)
     solver = np.full(B, "homotopy", dtype=object)
     fixed = []
     for b in np.flatnonzero(kkt > KKT_TOL):  # degenerate or ill-conditioned designs
-        Xb, yb, k = Xs[b], ys[b], n_points[b]
+        Xb, yb, k = Xs[np.searchsorted(checked, b)], ys[b], n_points[b]
         if broken[b]:
             fixed.append((b, *_lars_fallback(Xb, yb, float(c_min[b]), max_size, b, float(kkt[b]))))
             continue
@@ -657,6 +676,28 @@ def lasso_path_batch(
         kkt_residual=kkt,
         kkt_floor=floor * (sx * sy / N),
     )
+
+
+def _scaled_problems(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The exact rescaling of :func:`lasso_path_batch`'s problems ``X`` ``(B, rows, m)``, ``y``
+    ``(B, rows)`` and their Gram form: ``sx``, ``sy`` ``(B,)`` (:func:`_pow2_rms` of each problem's
+    ``X`` and ``y``), ``ys = y / sy``, and, for ``Xs = X / sx``, ``Gram = Xs^T Xs`` ``(B, m, m)``
+    and ``Xs^T ys`` ``(B, m)``. Computed a few problems at a time, while their ``X`` and ``Xs`` are
+    in cache (``Xs`` is not kept); each problem's values are those of the whole batch at once (the
+    same operations on its rows)."""
+    B, rows, m = X.shape
+    sy = _pow2_rms(y)
+    ys = y / sy[:, None]
+    sx, Gram, Xy = np.empty(B), np.empty((B, m, m)), np.empty((B, m))
+    block = max(1, _BLOCK_VALUES // (rows * m))
+    buf = np.empty((min(block, B), rows, m))
+    for b0 in range(0, B, block):
+        sl = slice(b0, b0 + block)
+        sx[sl] = _pow2_rms(X[sl].reshape(-1, rows * m))
+        Xs = np.divide(X[sl], sx[sl, None, None], out=buf[: sx[sl].size])
+        np.matmul(Xs.transpose(0, 2, 1), Xs, out=Gram[sl])
+        Xy[sl] = np.einsum("bri,br->bi", Xs, ys[sl])
+    return sx, sy, ys, Gram, Xy
 
 
 def kkt_residual(X: Any, y: Any, path: "LassoPath") -> float:
@@ -965,7 +1006,8 @@ def _kkt_screen(
             * norms.max(axis=1, keepdims=True)
             * (ynorm[:, None] + np.einsum("bsi,bi->bs", np.abs(coefs), norms))
         )
-        g = Xy[:, None, :] - np.matmul(coefs, Gram)
+        g = np.matmul(coefs, Gram)
+        np.subtract(Xy[:, None, :], g, out=g)  # in place: one (B, S, m) array, not two
         abs_gram = np.abs(Gram)
         point_res, point_floor = _kkt(g, slack, levels, coefs, n_points, abs_gram, points=True)
     return g, slack, abs_gram, point_res, point_floor
@@ -1219,11 +1261,16 @@ def _homotopy(
         1e-12 * c
     )  # a correlation this close to the level ties with it (rounding of cov, ~eps c_0)
     cap = 2 * m + 4  # breakpoints stored per problem (grown if needed)
-    levels, coefs = np.zeros((B, cap)), np.zeros((B, cap, m))
+    levels = np.zeros((B, cap))
     levels[:, 0] = c
+    # the coefficients of each step's breakpoint, (problems, m), stored at the end: writing them at
+    # once into a (B, S, m) array costs less than one strided row per problem at every step
+    steps: list[tuple[np.ndarray, np.ndarray]] = []
     n_points = np.ones(B, int)
     step = 1  # breakpoints so far of every problem still running (each step adds one to each)
-    ids = np.arange(B)  # problems still followed (the arrays below are compacted to them)
+    # problems still followed: the arrays below are compacted to them, Gram (the largest, read a
+    # row per step) is not, and is indexed through ids
+    ids = np.arange(B)
     running = c > c_min
     joining = running.copy()  # problems whose event is the join of component j
     dropping = np.zeros(B, bool)  # ... the drop of component j
@@ -1234,10 +1281,9 @@ def _homotopy(
     while running.any():
         if rows.size >= 16 and running.sum() <= 3 * rows.size // 4:  # drop finished problems
             keep = running
-            Gram, c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j, near = (
+            c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j, near = (
                 x[keep]
                 for x in (
-                    Gram,
                     c_min,
                     beta,
                     cov,
@@ -1266,19 +1312,20 @@ def _homotopy(
         g = GA[rows, :, j]  # Gram[A, j] (zero in unused slots)
         u = np.zeros((rows.size, K))
         u[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], g)
-        schur = Gram[rows, j, j] - np.einsum("bi,bi->b", g, u)  # G_jj - g_A^T inv g_A
+        schur = Gram[ids, j, j] - np.einsum("bi,bi->b", g, u)  # G_jj - g_A^T inv g_A
         u[rows[joining], s_ev[joining]] = -1.0  # w: the new column of inv is -w / schur
         col = inv[rows, :k, s_ev]
         z = np.where(joining[:, None], u[:, :k], col)
         f = np.where(joining, 1.0 / schur, np.where(dropping, -1.0 / inv[rows, s_ev, s_ev], 0.0))
         # the outer product in a buffer kept across steps: a new (B, k, k) array at each step
-        # (megabytes) is mapped and faulted in anew by the allocator (same products, same sums)
+        # (megabytes) is mapped and faulted in anew by the allocator (same products, same sums;
+        # einsum forms them faster than a broadcast multiply)
         outer = outer_buf[: rows.size * k * k].reshape(rows.size, k, k)
-        np.multiply((z * f[:, None])[:, :, None], z[:, None, :], out=outer)
+        np.einsum("bi,bj->bij", z * f[:, None], z, out=outer)
         inv[:, :k, :k] += outer
         if joining.any():
             b = rows[joining]
-            GA[b, s_ev[b]] = Gram[b, j[b]]  # row j (the Gram matrix is symmetric)
+            GA[b, s_ev[b]] = Gram[ids[b], j[b]]  # row j (the Gram matrix is symmetric)
             order[b, s_ev[b]] = j[b]
             slot[b, j[b]] = s_ev[b]
             n_act[b] += 1
@@ -1350,10 +1397,9 @@ def _homotopy(
         step += 1
         if point >= cap:
             levels = np.concatenate([levels, np.zeros_like(levels)], axis=1)
-            coefs = np.concatenate([coefs, np.zeros_like(coefs)], axis=1)
             cap *= 2
         levels[at, point] = c[running]
-        coefs[at, point] = beta[running]
+        steps.append((at, beta[running]))
         n_points[at] += 1
         if step > 50 * m + 100:  # far more steps than a path has (a cycle of zero-length steps on a
             levels[at, point] = (
@@ -1375,6 +1421,9 @@ def _homotopy(
         )  # the KKT check rejects it
         joining &= running
         dropping &= running
+    coefs = np.zeros((B, step, m))
+    for point, (at, beta_at) in enumerate(steps, start=1):
+        coefs[at, point] = beta_at
     return levels, coefs, n_points
 
 
@@ -1427,7 +1476,7 @@ def _homotopy_one(
         else:
             z, f = inv[:, :k, s_ev], -1.0 / inv[0, s_ev, s_ev]
         outer = outer_buf[: k * k].reshape(1, k, k)
-        np.multiply((z * f)[:, :, None], z[:, None, :], out=outer)
+        np.einsum("bi,bj->bij", z * f, z, out=outer)
         inv[:, :k, :k] += outer
         if joining:
             GA[0, s_ev] = Gram[0, j]
@@ -1703,10 +1752,9 @@ def _flat_ranges(
     _check_rule(lambda_ratio, max_size)
     a = paths.lambdas
     B, S = a.shape
-    tol, act = paths._activity
+    tol, _ = paths._activity
     top = paths.coefs.shape[2] // 2 if max_size is None else int(max_size)
-    K = paths.n_points - 1  # intervals (a[i+1], a[i]) of each path
-    sizes = np.where(np.arange(S - 1) < K[:, None], act.sum(axis=2), -1)
+    sizes = paths._sizes  # of the intervals (a[i+1], a[i]) of each path
     floor = lambda_ratio * a[:, 0]
     over = sizes > top
     first_over = np.where(over.any(axis=1), over.argmax(axis=1), S - 1)
@@ -1976,11 +2024,12 @@ def _grid_flat_ranges(
     grid[:, 0] = a[:, 0]
     _, act = paths._activity  # (B, S-1, m): support on each interval (a[i+1], a[i])
     K = paths.n_points - 1
-    isz = np.where(np.arange(S - 1) < K[:, None], act.sum(axis=2), -1)
+    isz = paths._sizes
     # interval i is (a[i+1], a[i]); lambda >= a[0] has the empty support
     idx = np.empty(grid.shape, int)
+    neg_a, neg_grid = -a, -grid  # ascending
     for b in range(B):  # one sorted search per path
-        idx[b] = np.searchsorted(-a[b, : K[b] + 1], -grid[b], side="right") - 1
+        idx[b] = np.searchsorted(neg_a[b, : K[b] + 1], neg_grid[b], side="right") - 1
     idx = np.clip(idx, 0, (K - 1)[:, None])
     sizes = np.where(grid >= a[:, :1], 0, isz[rows[:, None], idx])  # theta_hat(lambda_max) = 0
     over = isz > top

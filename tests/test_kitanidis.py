@@ -176,6 +176,23 @@ def test_batched_signature_matches_one_by_one(random_ltv):
     assert np.all(batched.Upsilon[:, 0] == 0.0)
 
 
+def test_signature_without_upsilon_is_the_same_regressor(random_ltv):
+    """``upsilon=False`` keeps one sample of the recursion, not ``N``: the same ``on_residual``,
+    bit for bit (state and output profiles, per realisation and in another layout), no
+    ``Upsilon``."""
+    rng = np.random.default_rng(9)
+    m, E = _with_unknown_input(rng, random_ltv, n=3, p=2, s=1, N=25)
+    g = kitanidis_gains(m, E)
+    Psi = rng.standard_normal((25, 3, 4, 6)).transpose(2, 0, 1, 3)  # (4, 25, 3, 6), strided
+    Phi = rng.standard_normal((4, 25, 2, 6))
+    for kw in ({"Psi": Psi}, {"Psi": Psi, "Phi": Phi}, {"Phi": Phi}):
+        full = residual_signature(m, g, **kw)
+        lean = residual_signature(m, g, **kw, upsilon=False)
+        assert lean.Upsilon is None and full.Upsilon.shape == (4, 25, 3, 6)
+        np.testing.assert_array_equal(lean.on_residual, full.on_residual)
+        assert np.any(full.on_residual[:, -1] != 0.0)
+
+
 def test_rank_condition_error_names_the_step():
     N = 10
     H = np.tile(np.array([[1.0, 0.0, 0.0]]), (N, 1, 1))

@@ -295,7 +295,7 @@ def example1_regression(
     model, gains = _example1_setup(float(r))  # gains shared by all trials
     y = ex.simulate_trials(model, trials)
     res = kitanidis_filter(model, y, gains=gains)
-    sig = residual_signature(model, gains, Psi=trials.Psi)  # Psi_k differs per trial
+    sig = residual_signature(model, gains, Psi=trials.Psi, upsilon=False)  # Psi_k differs per trial
     return regression_data(res.residuals, sig.on_residual, start=1), y
 
 
@@ -314,6 +314,8 @@ def example1_chunk(
     trials = ex.draw_trials(model, trial_rngs(seeds), q=q)
     reg, y = example1_regression(trials, r=r)
     true = trials.theta != 0  # (trials, m)
+    snr = snr_db(y, trials.noise.v)
+    del trials  # its Psi_k (tens of MB) are not needed by the paths: freed before they are followed
     paths = lasso_path_batch(
         reg.X,
         reg.y,
@@ -329,7 +331,7 @@ def example1_chunk(
     for n in GRID_SIZES:
         g = grid_flat_ranges(paths, n, lambda_ratio=LAMBDA_RATIO)
         out[f"success_grid{n}"] = np.all(g.support == true, axis=1)
-    out["snr_db"] = snr_db(y, trials.noise.v)
+    out["snr_db"] = snr
     return out
 
 

@@ -197,7 +197,7 @@ def initial_state_chunk(
         trials = dataclasses.replace(trials0, noise=noise)
         y = ex.simulate_trials(sim_model, trials)
         res = kitanidis_filter(filt, y, gains=gains)
-        sig = residual_signature(filt, gains, Psi=trials.Psi)
+        sig = residual_signature(filt, gains, Psi=trials.Psi, upsilon=False)
         reg = regression_data(res.residuals, sig.on_residual, start=1)
         true = trials.theta != 0
         paths = lasso_path_batch(

@@ -54,6 +54,7 @@ N_PARAMS = 50
 PSI_HALF_WIDTH = 17.3
 E = np.array([[-1.0], [0.0], [0.0]])
 C = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+_BLOCK = 8  # trials whose Psi_k draws draw_trials copies into the batch together
 
 
 def state_matrices(n_steps: int) -> np.ndarray:
@@ -142,18 +143,22 @@ def draw_trials(
     theta = np.zeros((B, m))
     # Psi in the layout of fdi_lib.kitanidis.residual_signature, (N, 3, B, m), seen as (B, N, 3, m)
     Psi_s = np.empty((N, 3, B, m))
-    P = np.empty((N, 3, m))  # one trial's draws (in cache while they are scaled)
+    # a few trials' draws, contiguous (in cache while they are scaled), copied into Psi_s together:
+    # rows of _BLOCK trials side by side rather than one trial's row at a time
+    block = np.empty((_BLOCK, N, 3, m))
     eps = np.empty((B, N))
     z0, zw, zv = np.empty((B, n)), np.empty((B, N, n)), np.empty((B, N, p))
     span = PSI_HALF_WIDTH - (-PSI_HALF_WIDTH)
     for b, rng in enumerate(rngs):
         theta[b, rng.choice(m, size=int(q), replace=False)] = 1.0
-        rng.random(
-            out=P
-        )  # rng.uniform(low, high) is low + (high - low) U for these U, bit for bit:
+        P = block[b % _BLOCK]
+        # rng.uniform(low, high) is low + (high - low) U for these U, bit for bit:
+        rng.random(out=P)
         P *= span
         P += -PSI_HALF_WIDTH
-        Psi_s[:, :, b] = P
+        if b % _BLOCK == _BLOCK - 1 or b == B - 1:
+            b0 = b - b % _BLOCK
+            Psi_s[:, :, b0 : b + 1] = block[: b + 1 - b0].transpose(1, 2, 0, 3)
         rng.standard_normal(out=eps[b])
         for z in (z0[b], zw[b], zv[b]):  # the draws of fdi_lib.simulate.draw_noise, in its order
             rng.standard_normal(out=z)
