@@ -76,9 +76,12 @@ def _eigh(C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _pinv_diagonal(lam: np.ndarray) -> np.ndarray:
-    """``1 / lam`` above the cut-off ``RANK_RTOL * max(lam)``, 0 below: the pseudo-inverse's eigenvalues."""
+    """``1 / lam`` above the cut-off ``RANK_RTOL * max(lam)``, 0 below: the pseudo-inverse's
+    eigenvalues. An eigenvalue below the smallest normal number is below the cut-off too (its
+    inverse would overflow to infinity): an information that small is none."""
+    tiny = np.finfo(float).tiny
     top = lam.max(axis=-1, keepdims=True) if lam.shape[-1] > 1 else lam  # one: itself, no reduce
-    keep = lam > RANK_RTOL * np.maximum(top, np.finfo(float).tiny)
+    keep = (lam > RANK_RTOL * np.maximum(top, tiny)) & (lam >= tiny)
     return np.divide(1.0, lam, out=np.zeros(lam.shape), where=keep)
 
 
@@ -178,9 +181,16 @@ def quadratic_form(C: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray
     """
     C = array(C, "C")
     d = array(d, "d")
-    if C.ndim < 2 or C.shape[-1] != C.shape[-2] or d.ndim < 1 or d.shape[-1] != C.shape[-1]:
+    if (
+        C.ndim < 2
+        or C.shape[-1] != C.shape[-2]
+        or d.ndim < 1
+        or d.shape[-1] != C.shape[-1]
+        or C.shape[-1] < 1
+    ):
         raise ShapeError(
-            f"C, d: expected shapes (..., m, m) and (..., m), got {C.shape} and {d.shape}"
+            f"C, d: expected shapes (..., m, m) and (..., m) with m >= 1, got {C.shape} and "
+            f"{d.shape}"
         )
     scale = np.abs(C).max(axis=(-2, -1))
     asym = np.abs(C - np.swapaxes(C, -1, -2)).max(axis=(-2, -1))
@@ -276,8 +286,8 @@ def glr_known_profile(
         )
     S = array(signature, "signature")
     N, p = gains.Sigma.shape[:2]
-    if S.ndim != 3 or S.shape[:2] != (N, p):
-        raise ShapeError(f"signature: expected shape ({N}, {p}, m), got {S.shape}")
+    if S.ndim != 3 or S.shape[:2] != (N, p) or S.shape[2] < 1:
+        raise ShapeError(f"signature: expected shape ({N}, {p}, m) with m >= 1, got {S.shape}")
     eps, missing = _check_innovations(innovations, N, p)
     check_skipped(missing, gains, "innovations")
     if (

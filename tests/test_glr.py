@@ -272,6 +272,23 @@ def test_bad_arguments():
         det.update(np.zeros(1))
     with pytest.raises(ShapeError, match=r"signature: expected shape \(20, 1, m\)"):
         glr_known_profile(np.zeros((20, 1)), g, np.zeros((20, 2, 2)))
+    # no parameter at all (m = 0): a shape error, not numpy's empty reduction
+    with pytest.raises(ShapeError, match=r"signature: expected shape \(20, 1, m\) with m >= 1"):
+        glr_known_profile(np.zeros((20, 1)), g, np.zeros((20, 1, 0)))
+    with pytest.raises(ShapeError, match=r"C, d: expected shapes .* with m >= 1, got \(3, 0, 0\)"):
+        quadratic_form(np.zeros((3, 0, 0)), np.zeros((3, 0)))
+
+
+def test_an_information_below_the_smallest_normal_number_is_none():
+    """An eigenvalue of C that is positive but subnormal would give an infinite 1 / lambda (an
+    overflow): it is below the cut-off, the statistic 0 and the estimate 0, finite, without a
+    warning; the smallest normal one is still inverted."""
+    tiny = np.finfo(float).tiny
+    for lam, inverted in ((tiny / 4, False), (5e-324, False), (tiny, True), (1.0, True)):
+        with np.errstate(over="raise", divide="raise", invalid="raise"):
+            stat, theta = quadratic_form(np.array([[[lam]]]), np.array([[1e-160]]))
+        assert np.isfinite(stat).all() and np.isfinite(theta).all()
+        assert (stat[0] > 0) == inverted and (theta[0, 0] > 0) == inverted
 
 
 @pytest.mark.parametrize(
