@@ -79,9 +79,9 @@ def _pinv_diagonal(lam: np.ndarray) -> np.ndarray:
     """``1 / lam`` above the cut-off ``RANK_RTOL * max(lam)``, 0 below: the pseudo-inverse's
     eigenvalues. An eigenvalue below the smallest normal number is below the cut-off too (its
     inverse would overflow to infinity): an information that small is none."""
-    tiny = np.finfo(float).tiny
+    tiny = np.finfo(float).tiny  # (a top below it leaves every eigenvalue below it too)
     top = lam.max(axis=-1, keepdims=True) if lam.shape[-1] > 1 else lam  # one: itself, no reduce
-    keep = (lam > RANK_RTOL * np.maximum(top, tiny)) & (lam >= tiny)
+    keep = (lam > RANK_RTOL * top) & (lam >= tiny)
     return np.divide(1.0, lam, out=np.zeros(lam.shape), where=keep)
 
 
