@@ -15,7 +15,7 @@ from fdi_lib.errors import EmptySetError, ModelError
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.sets.polytope import plot_polytope, polygon_outline
 from fdi_lib.sets.svo import run_svo
-from fdi_lib.redraw import keep_artists, reusable_artists
+from fdi_lib.redraw import keep_artists, reusable_artists, set_limits
 
 __all__ = ["explore_svo", "horizon_study", "GRID", "MAX_HORIZON"]
 
@@ -42,8 +42,9 @@ def _example(delta_bound: float, noise: float, seed: int, steps: int) -> tuple:
     return model, x, u, y, per_vertex, hull, hull.volume(), exact
 
 
-def _limits(lo: float, hi: float) -> tuple[float, float]:
-    """``[lo, hi]`` widened by 5 % on each side (matplotlib's default margin)."""
+def _limits(values: Any) -> tuple[float, float]:
+    """The range of ``values`` widened by 5 % on each side (matplotlib's default margin)."""
+    lo, hi = float(np.nanmin(values)), float(np.nanmax(values))
     pad = 0.05 * (hi - lo)
     return lo - pad, hi + pad
 
@@ -113,11 +114,18 @@ def explore_svo(
     shapes = [polygon_outline(P) for P in (hull, *per_vertex)]
     box = shapes[0]  # the hull contains the per-vertex sets
     shown = np.concatenate([res.lower[:, 1], res.upper[:, 1], x[:, 1]])
-    title = f"N = {int(horizon)}: mean width {_mean_width(res):.2f}, exact {_mean_width(exact):.2f}"
+    titles = (
+        f"hull: area {area:.3f}, union-to-hull gap shown grey",
+        f"N = {int(horizon)}: mean width {_mean_width(res):.2f}, exact {_mean_width(exact):.2f}",
+    )
     art = reusable_artists(fig, "explore_svo")
     if art is None:  # first call: build the figure; later calls only move its artists
         fig, axes = figure(1, 2, fig=fig, figsize=(8.0, 3.4))
         ax, ax2 = axes[0]
+        for a in (ax, ax2):
+            # the axis under the data: its ticks and labels, which cost most of a draw, are then
+            # static (drawn once) instead of above the moving sets and bands
+            a.set_axisbelow(True)
         plot_polytope(hull, ax, color="0.6", alpha=0.25)
         for P, c in zip(per_vertex, (PAPER_COLOR, OURS_COLOR)):
             plot_polytope(P, ax, color=c)
@@ -141,6 +149,8 @@ def explore_svo(
                 k, exact.lower[:, 1], "--", k, exact.upper[:, 1], "--", color=PAPER_COLOR, lw=1.0
             ),
             "true": ax2.plot(k, x[:, 1], "k.-", lw=0.8, label="true $x_2$")[0],
+            # dynamic, at a fixed place: a new title is drawn alone, not with its axes
+            "titles": [a.set_title(t, y=1.0) for a, t in zip((ax, ax2), titles)],
         }
         art["exact"][0].set_label("exact SVO, N = 1 to 6")
         ax2.set_xlabel("k")
@@ -155,13 +165,11 @@ def explore_svo(
         for line, bound in zip(art["exact"], (exact.lower, exact.upper)):
             line.set_data(k, bound[:, 1])
         art["true"].set_data(k, x[:, 1])
-    ax, ax2 = art["ax"], art["ax2"]
-    ax.set_xlim(*_limits(box[:, 0].min(), box[:, 0].max()))
-    ax.set_ylim(*_limits(box[:, 1].min(), box[:, 1].max()))
-    ax2.set_xlim(*_limits(0.0, float(k[-1])))
-    ax2.set_ylim(*_limits(float(np.nanmin(shown)), float(np.nanmax(shown))))
-    ax.set_title(f"hull: area {area:.3f}, union-to-hull gap shown grey")
-    ax2.set_title(title)
+        for t, text in zip(art["titles"], titles):
+            t.set_text(text)
+    # set only where they change: an axes whose limits stay is not drawn again
+    set_limits(art["ax"], xlim=_limits(box[:, 0]), ylim=_limits(box[:, 1]))
+    set_limits(art["ax2"], xlim=_limits(k), ylim=_limits(shown))
     return fig
 
 

@@ -36,6 +36,7 @@ from fdi_lib.redraw import (
 from fdi_lib.widgets import (
     batched_glr,
     bz,
+    rosa2013,
     widget_png,
     zb2014,
     zb2014_pipeline,  # noqa: E402
@@ -90,6 +91,8 @@ MOVES = {
     "bz lambda": (bz.explore_bz, "lam", (0.9, 0.8, 1.0)),
     "bz fault size": (bz.explore_bz, "f_size", (0.0, 0.5)),
     "bz drift speed": (bz.explore_bz, "delta", (1e-3, 3e-4, 0.0, 2e-3)),
+    "svo horizon": (rosa2013.explore_svo, "horizon", (2, 4, 1)),
+    "svo bound": (rosa2013.explore_svo, "delta_bound", (0.0, 1.0, 0.6)),
 }
 
 
