@@ -33,6 +33,7 @@ one Jacobi rotation per 2 x 2 matrix, applied to all matrices at once, LAPACK's 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -320,7 +321,8 @@ class WindowGLRResult:
         ``C_k(r_hat_k)`` ``(*batch, N, m, m)`` and ``d_k(r_hat_k)`` ``(*batch, N, m)``: the
         Fisher information and normalised residual of the minmax isolation test (41)
         run from the estimated onset. ``theta_hat``, ``C_hat`` and ``d_hat`` are ``None`` when
-        :func:`glr_window` was asked for the statistics alone (``estimates=False``).
+        :func:`glr_window` was asked for the statistics alone (``estimates=False``);
+        ``theta_hat`` and ``C_hat`` are ``None`` with ``estimates="scores"``.
     window, min_samples : int
         ``w`` and ``s`` of eq. (37).
     """
@@ -589,6 +591,40 @@ class WindowedGLR:
         # one matrix product (w m, p) @ (p, B) per sample, not w: the same gemm per entry
         return (S.reshape(K, w * m, p) @ e_w).reshape(K, w, m, -1)
 
+    def information(self, k: Any, onset: Any) -> np.ndarray:
+        """``C_k(r)``, eq. (32), of the onsets ``onset`` at the samples ``k`` (integer arrays of one
+        shape; returns that shape plus ``(m, m)``), for a family shared by the realisations.
+
+        It is the ``C_hat`` of :func:`glr_window` (this detector's or a :meth:`fresh` one's) where
+        ``r_hat_k = onset`` and no innovation in the window is missing (a missing one's information
+        is taken off there): with ``estimates="scores"``, the minmax isolation reads it at the few
+        samples it needs instead of every sample's.
+
+        Raises
+        ------
+        ModelError
+            Per-realisation profiles, or an onset not admissible at its sample
+            (``k - w < r <= k - s``).
+        """
+        if self._per_realisation or not hasattr(self, "_Cs"):
+            raise ModelError(
+                "information: expected a detector of a shared family that keeps its arrays, got "
+                + ("per-realisation profiles" if self._per_realisation else "one without them")
+            )
+        k, onset = np.broadcast_arrays(np.asarray(k), np.asarray(onset))
+        if k.dtype.kind not in "iu" or onset.dtype.kind not in "iu":
+            raise ModelError(f"k, onset: expected integers, got {k.dtype} and {onset.dtype}")
+        w, s, N = self.window, self.min_samples, self.model.n_steps
+        bad = (k < 0) | (k >= N) | (onset <= k - w) | (onset > k - s)
+        if bad.any():
+            i = tuple(int(j) for j in np.argwhere(bad)[0])
+            raise ModelError(
+                f"onset: expected an onset r with k - {w} < r <= k - {s} (window w = {w}, "
+                f"min_samples s = {s}) at a sample 0 <= k < {N}, got r = {onset[i]} at k = {k[i]} "
+                f"(index {i})"
+            )
+        return self._Cs[k, onset % w]
+
     def fresh(self, batch_shape: tuple[int, ...] = ()) -> "WindowedGLR":
         """A new detector at ``k = 0`` for innovations of leading shape ``batch_shape``.
 
@@ -662,12 +698,12 @@ class WindowedGLR:
         )
 
     def _advance(
-        self, eps_k: np.ndarray, skip: bool, statistics: bool, estimates: bool = True
+        self, eps_k: np.ndarray, skip: bool, statistics: bool, estimates: bool | str = True
     ) -> tuple[np.ndarray, ...] | None:
         """:meth:`update` of checked innovations ``eps_k`` ``(B, p)`` (``skip``: the sample is
         missing in every realisation): the outputs flat over the realisations, ``(B, ...)``, or
-        ``None`` when no onset is admissible yet or ``statistics`` is false; without ``estimates``,
-        ``(l_k, r_hat_k)`` alone."""
+        ``None`` when no onset is admissible yet or ``statistics`` is false; those of
+        :func:`_outputs` ``(estimates)``, in its order."""
         k, w = self.k, self.window
         # New onset r = k enters the window (replacing r = k - w); scores (33), recursively (28).
         slot = k % w
@@ -709,11 +745,13 @@ class WindowedGLR:
         l_k = stat[best, cols]
         if not estimates:
             return l_k, onsets[best]
+        if estimates == "scores":
+            return l_k, onsets[best], d[best, :, cols]
         th = (self._pick(root, (best,), cols) @ q[best, :, cols][..., None])[..., 0]  # (34): C^+ d
         return l_k, onsets[best], th, self._pick(C, (best,), cols), d[best, :, cols]
 
     def _record(
-        self, eps: np.ndarray, start: int = 0, blocks=None, estimates: bool = True
+        self, eps: np.ndarray, start: int = 0, blocks=None, estimates: bool | str = True
     ) -> WindowGLRResult:
         """:func:`glr_window`: all the samples of a fresh detector, statistics evaluated by blocks.
 
@@ -724,8 +762,8 @@ class WindowedGLR:
         (they only enter the scores of onsets never admissible from ``start`` on, whose slots are
         reset before), and the outputs there stay ``nan``/``-1``. ``blocks``: the noise-independent
         arrays by blocks of samples (:meth:`_shared_blocks`, of a detector that does not keep them);
-        default the kept ones, in blocks of about 2e6 floats of scores. Without ``estimates``, the
-        statistics and onsets alone (:func:`glr_window`).
+        default the kept ones, in blocks of about 2e6 floats of scores. ``estimates`` as in
+        :func:`glr_window`.
         """
         model, w, m, B = self.model, self.window, self.family.m, self._B
         N, p = model.n_steps, model.p
@@ -736,10 +774,10 @@ class WindowedGLR:
         e_w = self._Linv @ np.moveaxis(eps.reshape(B, N, p), 0, 2)  # (N, p, B)
         stat = np.full((N, B), np.nan)
         onset = np.full((N, B), -1)
+        keys = _outputs(estimates)
         theta, C_hat, d_hat = (
-            (np.full((N, B, m), np.nan), np.full((N, B, m, m), np.nan), np.full((N, B, m), np.nan))
-            if estimates
-            else (None, None, None)
+            np.full((N, B, *shape), np.nan) if key in keys else None
+            for key, shape in (("theta_hat", (m,)), ("C_hat", (m, m)), ("d_hat", (m,)))
         )
         first = max(0, start - w + 1)
         if blocks is None:
@@ -780,10 +818,11 @@ class WindowedGLR:
                 del sig_wT, Cs, root, D, terms, q, st  # before the next block is computed
                 continue
             at = best[:, None, None, :]
-            qb = np.take_along_axis(q, at, axis=1)[:, 0]  # (K, m, B)
-            th = np.einsum("kbij,kjb->kbi", self._pick(root, (kk, best), cols), qb)  # (34): C^+ d
-            theta[ks[ok]] = th[ok]
-            C_hat[ks[ok]] = self._pick(Cs, (kk, best), cols)[ok]
+            if theta is not None:
+                qb = np.take_along_axis(q, at, axis=1)[:, 0]  # (K, m, B)
+                th = np.einsum("kbij,kjb->kbi", self._pick(root, (kk, best), cols), qb)  # (34)
+                theta[ks[ok]] = th[ok]
+                C_hat[ks[ok]] = self._pick(Cs, (kk, best), cols)[ok]
             d_hat[ks[ok]] = np.swapaxes(np.take_along_axis(D, at, axis=1)[:, 0], 1, 2)[ok]
             del sig_wT, Cs, root, D, terms, q, st  # before the next block is computed
         self.k = N
@@ -812,7 +851,7 @@ def glr_window(
     *,
     shared: WindowedGLR | None = None,
     start: int = 0,
-    estimates: bool = True,
+    estimates: bool | str = True,
 ) -> WindowGLRResult:
     """Windowed GLR with unknown onset (35)-(37) over a whole record.
 
@@ -844,11 +883,13 @@ def glr_window(
         First sample whose statistics are wanted (``0 <= start <= N``): before it the outputs are
         ``nan``/``-1`` and only the scores are accumulated, which saves the statistics of a
         period where the test is disabled; the outputs from ``start`` on are unchanged.
-    estimates : bool
+    estimates : bool or "scores"
         With ``False``, the statistics and onsets alone (``theta_hat``, ``C_hat``, ``d_hat`` of the
         result are ``None``): a detector that only compares ``l_k`` with a threshold skips the
         estimates (34) and the picks of ``C_k(r_hat)``, ``d_k(r_hat)``; the statistics and onsets
-        are the same.
+        are the same. With ``"scores"``, also ``d_hat`` (``theta_hat`` and ``C_hat`` are
+        ``None``): a caller that reads the estimates at a few samples takes the information there
+        from :meth:`WindowedGLR.information` instead of a ``(*batch, N, m, m)`` array.
 
     Returns
     -------
@@ -879,6 +920,7 @@ def glr_window(
     eps, missing = _check_innovations(innovations, model.n_steps, model.p)
     nan_rows = missing
     start = integer(start, "start", low=0, high=model.n_steps)
+    _outputs(estimates)  # checked before any work
     batch = eps.shape[:-2]
     check_gains(model, gains)
     check_skipped(missing, gains, "innovations")
@@ -963,16 +1005,12 @@ def glr_window(
     # many realisations: one update per sample already works on wide arrays (the innovations
     # checked above: the samples missing in one realisation are missing in all)
     N, m, B = model.n_steps, family.m, det._B
-    out = (
-        np.empty((B, N)),
-        np.empty((B, N), dtype=int),
-        np.empty((B, N, m)),
-        np.empty((B, N, m, m)),
-        np.empty((B, N, m)),
-    )[: 5 if estimates else 2]
+    shapes = {"statistic": (), "onset": (), "theta_hat": (m,), "C_hat": (m, m), "d_hat": (m,)}
+    keys = _outputs(estimates)
+    out = tuple(np.empty((B, N, *shapes[k]), dtype=int if k == "onset" else float) for k in keys)
     undefined = tuple(  # the outputs of a sample without statistics
-        np.full((B, *a.shape[2:]), value, dtype=a.dtype)
-        for a, value in zip(out, (np.nan, -1, np.nan, np.nan, np.nan))
+        np.full((B, *a.shape[2:]), -1 if key == "onset" else np.nan, dtype=a.dtype)
+        for key, a in zip(keys, out)
     )
     flat = eps.reshape(B, N, model.p)
     skip = nan_rows.reshape(-1, N).all(axis=0)
@@ -983,19 +1021,20 @@ def glr_window(
         ]
         for i, arr in enumerate(out):
             arr[:, ks.start : ks.stop] = np.stack([r[i] for r in rows], axis=1)
-    stat, onset, theta, C_hat, d_hat = (
-        None if a is None else a.reshape(*batch, *a.shape[1:])
-        for a in out + (None,) * (5 - len(out))
-    )
-    return WindowGLRResult(
-        statistic=stat,
-        onset=onset,
-        theta_hat=theta,
-        C_hat=C_hat,
-        d_hat=d_hat,
-        window=det.window,
-        min_samples=det.min_samples,
-    )
+    fields = dict.fromkeys(shapes)  # None: not asked for
+    fields.update({key: a.reshape(*batch, *a.shape[1:]) for key, a in zip(keys, out)})
+    return WindowGLRResult(**fields, window=det.window, min_samples=det.min_samples)
+
+
+def _outputs(estimates: bool | str) -> tuple[str, ...]:
+    """The fields of :class:`WindowGLRResult` that :func:`glr_window` computes for ``estimates``
+    (checked: ``True``, ``False`` or ``"scores"``), in the order :meth:`WindowedGLR._advance`
+    returns them."""
+    if isinstance(estimates, (bool, np.bool_)):
+        return ("statistic", "onset", "theta_hat", "C_hat", "d_hat")[: 5 if estimates else 2]
+    if isinstance(estimates, str) and estimates == "scores":
+        return ("statistic", "onset", "d_hat")
+    raise ModelError(f"estimates: expected True, False or 'scores', got {estimates!r}")
 
 
 #: Up to this many realisations, :func:`glr_window` evaluates the statistics by blocks of
@@ -1031,7 +1070,7 @@ def _grouped_glr_window(
     min_samples: int | None,
     shared: WindowedGLR | None,
     start: int,
-    estimates: bool,
+    estimates: bool | str,
 ) -> WindowGLRResult:
     """:func:`glr_window` run once per group of realisations (those sharing the same missing samples,
     or a block of realisations with their own profiles, which take their rows of the family)."""
@@ -1045,8 +1084,7 @@ def _grouped_glr_window(
         "C_hat": np.empty((B, N, m, m)),
         "d_hat": np.empty((B, N, m)),
     }
-    if not estimates:
-        out = {key: out[key] for key in ("statistic", "onset")}
+    out = {key: out[key] for key in _outputs(estimates)}
     res = None
     for i in np.unique(group):
         rows = np.nonzero(group == i)[0]

@@ -1017,7 +1017,7 @@ def run_zb(
     samples after the alarm, from the onset the window estimates then."""
     eps = _innovations(d, y, u) if eps is None else eps
     B = y.shape[0]
-    res = _zb_glr(d, eps)
+    res = _zb_glr(d, eps, estimates="scores")  # the informations at the decisions only
     names = list(d.subs)
     fa, detect, which, peak = _combine(
         d, [res[n].statistic for n in names], [d.subs[n].glr_threshold for n in names]
@@ -1028,17 +1028,17 @@ def run_zb(
         rows = np.flatnonzero((detect >= 0) & (which == j))
         if rows.size:
             k = step[rows]
-            C = res[name].C_hat[rows, k]
-            dd = res[name].d_hat[rows, k]
             sd = d.subs[name]
+            C = sd.glr.information(k, res[name].onset[rows, k])
+            dd = res[name].d_hat[rows, k]
             isolated[np.ix_(rows, sd.sub.candidates)] = _minmax(C, dd, d.settings.isolation_alpha)
     return MethodOutcome(fa, detect, which, isolated, step, peak)
 
 
-def _zb_glr(d: Design, eps: Mapping[str, np.ndarray], estimates: bool = True) -> dict[str, Any]:
-    """The windowed GLR of every subsystem's innovations (Zhang & Basseville); ``estimates``: also
-    the information and score at the estimated onset, which the minmax isolation reads
-    (:func:`~fdi_lib.glr.glr_window`)."""
+def _zb_glr(d: Design, eps: Mapping[str, np.ndarray], estimates: bool | str) -> dict[str, Any]:
+    """The windowed GLR of every subsystem's innovations (Zhang & Basseville); ``estimates`` as in
+    :func:`~fdi_lib.glr.glr_window` (the minmax isolation reads the score at the estimated onset,
+    and the information there)."""
     return {
         name: glr_window(
             eps[name],

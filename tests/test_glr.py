@@ -347,7 +347,8 @@ def test_windowed_glr_estimates_equal_brute_force(kind, m_faults, batch):
 def test_statistics_alone_are_those_with_the_estimates(size):
     """glr_window(..., estimates=False): the same statistics and onsets, bit for bit, without
     theta_hat, C_hat, d_hat (None), by blocks (few realisations), sample by sample (many), per group
-    of missing samples, and with per-realisation profiles."""
+    of missing samples, and with per-realisation profiles; estimates="scores": also d_hat, bit for
+    bit."""
     m = ex.unstable_model(120)
     g = kalman_gains(m)
     fam = impulse_family(m)
@@ -369,3 +370,36 @@ def test_statistics_alone_are_those_with_the_estimates(size):
         assert alone.theta_hat is None and alone.C_hat is None and alone.d_hat is None
         assert alone.statistic.tobytes() == full.statistic.tobytes()
         assert alone.onset.tobytes() == full.onset.tobytes()
+        scores = glr_window(e, m, g, f, window=30, start=40, estimates="scores")
+        assert scores.theta_hat is None and scores.C_hat is None
+        for key in ("statistic", "onset", "d_hat"):
+            assert getattr(scores, key).tobytes() == getattr(full, key).tobytes(), key
+
+
+def test_information_is_the_estimates_information_at_the_estimated_onset():
+    """WindowedGLR.information(k, r_hat_k) is glr_window's C_hat, bit for bit, at every sample where
+    an onset is estimated (a shared family, sample by sample and by blocks); it refuses what it
+    cannot give: per-realisation profiles, an onset outside the window or too recent, floats."""
+    m = ex.unstable_model(120)
+    g = kalman_gains(m)
+    fam = step_family(m, Phi=np.eye(m.p))
+    det = WindowedGLR(m, g, fam, window=30)
+    for size in (2, 6):
+        sim = simulate(m, rng=np.random.default_rng(size), controller=ex.controller(), size=size)
+        eps = kalman_filter(m, sim.y, sim.u, gains=g).innovations
+        res = glr_window(eps, m, g, fam, window=30, shared=det)
+        b, k = np.nonzero(res.onset >= 0)
+        assert b.size > 100
+        got = det.information(k, res.onset[b, k])
+        assert got.tobytes() == res.C_hat[b, k].tobytes()
+    with pytest.raises(ModelError, match=r"r = 100 at k = 100 \(index \(1,\)\)"):
+        det.information([100, 100], [95, 100])  # s = 1: the newest onset has no sample yet
+    with pytest.raises(ModelError, match="r = 70 at k = 100"):
+        det.information(100, 70)
+    with pytest.raises(ModelError, match="expected integers"):
+        det.information(100.0, 95)
+    own = step_family(m, Psi=np.ones((2, 120, m.n, 1)))
+    with pytest.raises(ModelError, match="per-realisation profiles"):
+        WindowedGLR(m, g, own, window=30, batch_shape=(2,)).information(100, 95)
+    with pytest.raises(ModelError, match="estimates: expected True, False or 'scores'"):
+        glr_window(eps, m, g, fam, window=30, estimates="C")
