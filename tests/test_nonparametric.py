@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import scipy.linalg
 import scipy.stats
 
 from fdi_lib.errors import ModelError, ShapeError
@@ -200,6 +201,35 @@ def test_energy_statistic_matches_loop_and_threshold():
             )
             assert np.allclose(e[:, k], brute, rtol=1e-12)
     assert energy_threshold(5, 2, 0.05) == pytest.approx(scipy.stats.chi2.ppf(0.95, 10))
+
+
+def test_energy_statistic_whitens_by_each_samples_own_factor():
+    """Time-varying factors whose off-diagonal entries exceed the diagonal (where a general solve
+    pivots), three components, a batch and a missing sample: against a loop of triangular solves."""
+    rng = np.random.default_rng(4)
+    N, p, w = 40, 3, 6
+    L = np.tril(rng.normal(scale=3.0, size=(N, p, p)), -1) + np.einsum(
+        "ni,ij->nij", rng.uniform(0.1, 1.0, size=(N, p)), np.eye(p)
+    )
+    r = rng.normal(size=(2, N, p))
+    r[:, 17] = np.nan  # missing in both realisations: out of its windows
+    e = energy_statistic(r, L, w)
+    terms = np.array(
+        [
+            [
+                0.0
+                if k == 17
+                else float(np.sum(scipy.linalg.solve_triangular(L[k], r[b, k], lower=True) ** 2))
+                for k in range(N)
+            ]
+            for b in range(2)
+        ]
+    )
+    brute = np.array(
+        [[terms[b, k - w + 1 : k + 1].sum() for k in range(w - 1, N)] for b in range(2)]
+    )
+    assert np.all(np.isnan(e[:, : w - 1]))
+    np.testing.assert_allclose(e[:, w - 1 :], brute, rtol=1e-12)
 
 
 def test_bad_inputs_raise_typed_errors(setting):
