@@ -68,10 +68,17 @@ and misses ranges shorter than the grid step.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 from typing import Any, Iterator, Literal
 
 import numpy as np
+
+try:  # numpy.einsum's C function without its Python wrapper (the same sums): _homotopy_one calls it
+    # 4 times a step, where the wrapper costs a third of a small einsum
+    from numpy._core.multiarray import c_einsum as _c_einsum
+except ImportError:  # numpy moved it: the wrapper
+    _c_einsum = np.einsum
 
 from fdi_lib.errors import ModelError, NumericalError, ShapeError
 from fdi_lib.validation import array, integer, real
@@ -116,6 +123,7 @@ KKT_FLOOR = 1e-6
 # values of X per block of problems that lasso_path_batch scales and multiplies together (a few
 # hundred kB: they stay in cache between the passes)
 _BLOCK_VALUES = 2**17
+_EPS, _TINY = np.finfo(float).eps, np.finfo(float).tiny  # (np.finfo costs a call per use)
 
 
 @dataclass(frozen=True)
@@ -461,10 +469,9 @@ def lasso_path(
     >>> path.kkt_residual <= KKT_TOL
     True
     """
-    X, y = _check_xy(X, y)
-    return lasso_path_batch(
-        X[None], y[None], n_samples=n_samples, lambda_min=lambda_min, max_size=max_size
-    ).path(0)
+    X, y = _check_xy(X, y)  # checked once: lasso_path_batch's own checks are the same
+    rule = _path_rule(X.shape[0], n_samples, lambda_min, max_size)
+    return _path_batch(X[None], y[None], *rule).path(0)
 
 
 def lasso_paths(
@@ -573,13 +580,29 @@ def lasso_path_batch(
     y = array(y, "y")
     if y.shape != X.shape[:2]:
         raise ShapeError(f"y: expected shape {X.shape[:2]}, got {y.shape}")
-    rows = X.shape[1]
+    return _path_batch(X, y, *_path_rule(X.shape[1], n_samples, lambda_min, max_size))
+
+
+def _path_rule(
+    rows: int, n_samples: int | None, lambda_min: float, max_size: int | None
+) -> tuple[int, float, int | None]:
+    """The checked ``n_samples`` (``N``), ``lambda_min`` and ``max_size`` of :func:`lasso_path_batch`
+    for problems of ``rows`` rows."""
     N = _norm(n_samples, rows)
     lambda_min = real(
         lambda_min, "lambda_min", low=0.0, high=1.0, high_open=True, what="a fraction of lambda_max"
     )
     if max_size is not None:
         max_size = integer(max_size, "max_size", low=1)
+    return N, lambda_min, max_size
+
+
+def _path_batch(
+    X: np.ndarray, y: np.ndarray, N: int, lambda_min: float, max_size: int | None
+) -> PathBatch:
+    """:func:`lasso_path_batch` of checked arguments (``X`` ``(B, rows, m)`` and ``y`` ``(B, rows)``
+    finite float arrays, ``N``, ``lambda_min`` and ``max_size`` from :func:`_path_rule`)."""
+    rows = X.shape[1]
     # Exact rescaling X = sx X', y = sy y' per problem: theta = (sy / sx) theta', lambda = sx sy lambda'
     # (keeps the homotopy's tolerances meaningful whatever the units, e.g. gas flows ~1e5). sx and sy
     # are the powers of 2 nearest to the RMS of X and y: exact, so an exact tie stays one.
@@ -609,19 +632,68 @@ def lasso_path_batch(
     broken = (point_res == np.inf).any(axis=1)  # a NaN (a singular step or a cycle): recomputed
     checked = np.flatnonzero((point_res > KKT_TOL).any(axis=1))
     Xs = X[checked] / sx[checked, None, None]
-    point_res[checked] = _kkt_where_screen_fails(
-        Xs,
-        ys[checked],
-        g[checked],
-        slack[checked],
-        levels[checked],
-        coefs[checked],
-        n_points[checked],
-        abs_gram[checked],
-        point_res[checked],
-    )
+    if checked.size:  # (a batch that the screen passes skips the call's set-up)
+        point_res[checked] = _kkt_where_screen_fails(
+            Xs,
+            ys[checked],
+            g[checked],
+            slack[checked],
+            levels[checked],
+            coefs[checked],
+            n_points[checked],
+            abs_gram[checked],
+            point_res[checked],
+        )
     kkt, floor = np.maximum(point_res.max(axis=1), 0.0), point_floor.max(axis=1)
     solver = np.full(B, "homotopy", dtype=object)
+    levels, coefs = _recompute_failed(
+        Xs, ys, checked, broken, c_min, max_size, levels, coefs, n_points, kkt, floor, solver
+    )
+    S = levels.shape[1]
+    # the correlation level c is rows * alpha (scikit-learn's 1/(2 rows)); (39) has 1/(2N): lambda = c / N
+    with np.errstate(over="ignore", invalid="ignore"):  # checked just below
+        lam = levels * (sx * sy / N)[:, None]
+        th = coefs * (sy / sx)[:, None, None]  # zeros in the padding
+    on_path = np.arange(S) < n_points[:, None]
+    bad = ~(np.isfinite(lam) | ~on_path).all(axis=1) | ~np.isfinite(th).all(axis=(1, 2))
+    if bad.any():
+        b = int(np.flatnonzero(bad)[0])
+        raise NumericalError(
+            f"X, y (problem {b}): the Lasso path is not representable in float64 (lambda_max "
+            f"or a coefficient overflows: RMS of X {sx[b]:.3g}, of y {sy[b]:.3g}); expected a "
+            f"design and data scaled towards 1"
+        )
+    lam[~on_path] = -np.inf  # padding
+    return PathBatch(
+        lambdas=lam,
+        coefs=th,
+        n_points=n_points,
+        n_samples=N,
+        solver=solver,
+        kkt_residual=kkt,
+        kkt_floor=floor * (sx * sy / N),
+    )
+
+
+def _recompute_failed(
+    Xs: np.ndarray,
+    ys: np.ndarray,
+    checked: np.ndarray,
+    broken: np.ndarray,
+    c_min: np.ndarray,
+    max_size: int | None,
+    levels: np.ndarray,
+    coefs: np.ndarray,
+    n_points: np.ndarray,
+    kkt: np.ndarray,
+    floor: np.ndarray,
+    solver: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The paths of :func:`_path_batch` that fail the KKT check (``kkt > KKT_TOL``), recomputed
+    alone (see :func:`lasso_path_batch`): ``Xs`` are the scaled designs of the problems
+    ``checked``, ``broken`` the paths with a NaN. ``n_points``, ``kkt``, ``floor``, ``solver`` and
+    ``coefs`` are updated in place; returns ``levels`` and ``coefs``, padded to the longest path."""
+    S = levels.shape[1]
     fixed = []
     for b in np.flatnonzero(kkt > KKT_TOL):  # degenerate or ill-conditioned designs
         Xb, yb, k = Xs[np.searchsorted(checked, b)], ys[b], n_points[b]
@@ -653,29 +725,7 @@ def lasso_path_batch(
             levels[b], coefs[b] = 0.0, 0.0
             levels[b, : lev.size], coefs[b, : lev.size] = lev, co
             n_points[b], kkt[b], floor[b], solver[b] = lev.size, res, fl, "sklearn-fallback"
-    # the correlation level c is rows * alpha (scikit-learn's 1/(2 rows)); (39) has 1/(2N): lambda = c / N
-    with np.errstate(over="ignore", invalid="ignore"):  # checked just below
-        lam = levels * (sx * sy / N)[:, None]
-        th = coefs * (sy / sx)[:, None, None]  # zeros in the padding
-    on_path = np.arange(S) < n_points[:, None]
-    bad = ~(np.isfinite(lam) | ~on_path).all(axis=1) | ~np.isfinite(th).all(axis=(1, 2))
-    if bad.any():
-        b = int(np.flatnonzero(bad)[0])
-        raise NumericalError(
-            f"X, y (problem {b}): the Lasso path is not representable in float64 (lambda_max "
-            f"or a coefficient overflows: RMS of X {sx[b]:.3g}, of y {sy[b]:.3g}); expected a "
-            f"design and data scaled towards 1"
-        )
-    lam[~on_path] = -np.inf  # padding
-    return PathBatch(
-        lambdas=lam,
-        coefs=th,
-        n_points=n_points,
-        n_samples=N,
-        solver=solver,
-        kkt_residual=kkt,
-        kkt_floor=floor * (sx * sy / N),
-    )
+    return levels, coefs
 
 
 def _scaled_problems(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -881,7 +931,7 @@ def _gradient_bounded(
     :func:`_gradient_dd` (about a third of it) and two products with ``|X|^T``."""
     Xd = X[None] if X.ndim == 2 else X
     rows, m = Xd.shape[1:]
-    eps = np.finfo(float).eps
+    eps = _EPS
     g, slack = np.empty(coefs.shape), np.empty(coefs.shape[0])
     for sl, Xb, _, s, e in _residual_blocks(X, y, coefs):
         r = s + e
@@ -1002,7 +1052,7 @@ def _kkt_screen(
         # (Cauchy-Schwarz on
         # X^T y, X^T X and G theta), doubled
         slack = (
-            (2 * np.finfo(float).eps * (rows + m + 2))
+            (2 * _EPS * (rows + m + 2))
             * norms.max(axis=1, keepdims=True)
             * (ynorm[:, None] + np.einsum("bsi,bi->bs", np.abs(coefs), norms))
         )
@@ -1051,11 +1101,9 @@ def _kkt(
         np.maximum(worst, levels + np.where(neg, g, -np.inf).max(axis=2), out=worst)
         # float floor: rounding theta to float64 (|delta_k| <= eps/2 |theta_k|) moves g_j by up to
         # eps/2 sum_k |G_jk theta_k|; below floor_i = that / KKT_TOL, KKT_TOL lambda cannot be met
-        floor = np.matmul(np.abs(coefs), abs_gram).max(axis=2) * (
-            0.5 * np.finfo(float).eps / KKT_TOL
-        )
+        floor = np.matmul(np.abs(coefs), abs_gram).max(axis=2) * (0.5 * _EPS / KKT_TOL)
         scale = np.maximum(np.maximum(levels, KKT_FLOOR * levels[:, :1]), floor)
-        scale = np.maximum(scale, np.finfo(float).tiny)
+        scale = np.maximum(scale, _TINY)
         res = np.where(valid, (worst + slack) / scale, -np.inf)
         floor = np.where(valid, floor, 0.0)
         if points:  # per breakpoint, (B, S)
@@ -1432,100 +1480,53 @@ def _homotopy_one(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`_homotopy` for a batch of one problem (``lasso_path``), bit for bit the same.
 
-    The same floating-point operations in the same order on the same shapes where the order of a
-    sum depends on them (the ``einsum`` calls, on ``(1, ...)`` arrays); only the bookkeeping
-    (event, slots, flags, step lengths) is done on scalars instead of ``(B,)`` arrays: a step of
-    one problem is dominated by the number of numpy calls, not by their size. Scalars stay
-    ``numpy.float64`` (a division by zero or a NaN behaves as in the arrays).
+    A step of one problem is dominated by the number of numpy calls, not by their size, so it
+    makes few: the same floating-point operations on the same values, the sums (the ``einsum``
+    calls, :func:`_one_direction`, without numpy's Python wrapper) on the same shapes and
+    layouts, hence in the same order, and the elementwise ones on stacked rows
+    (:func:`_one_event`), ``P = [cov, -cov, beta]`` and ``Q = [-a, a, d]``, through exact sign
+    changes (``c + cov = c - (-cov)``, ``1 - a = 1 + (-a)``, ``-beta = -0.0 - beta``, ``d =
+    -0.0 + d``, ``cov - gamma a = cov + gamma (-a)``): one call serves the joins of either sign
+    and the drops. The bookkeeping (event, slots, flags, step lengths) is done on scalars, which
+    stay ``numpy.float64`` (a division by zero or a NaN behaves as in the arrays).
     """
     m = Xy.shape[1]
     K = m if max_size is None else min(m, max_size + 1)
-    beta = np.zeros((1, m))
-    cov = Xy.copy()
-    sign = np.zeros((1, m + 1))
-    active = np.zeros((1, m), bool)
-    order = np.full((1, K), m)
-    slot = np.zeros(m, int)
-    n_act = 0
-    inv = np.zeros((1, K, K))
-    GA = np.zeros((1, K, m))
-    j = int(np.abs(cov).argmax(axis=1)[0])
-    c = np.abs(cov[0, j])
-    near = 1e-12 * c
-    c_min = c_min[0]
+    P = np.concatenate([Xy, -Xy, np.zeros((1, m))])  # cov, -cov, beta
+    Q = np.zeros((3, m))  # -a, a, d: the step's direction (filled by _one_direction)
+    col = np.full((3, m), -0.0)  # c, c (set at each step), -0.0 (-0.0 - beta is -beta, zeros too)
+    one = np.ones((3, m))  # 1, 1, -0.0: 1 - a, 1 + a and d (-0.0 + d is d) from Q
+    one[2] = -0.0
+    zero_m = np.zeros(m)
+    sign, shut = np.zeros(m), np.zeros((2, m))  # shut: inf on the active set, else 0 (_one_event)
+    # inverse of Gram_AA, active rows of Gram, signs and components in slot order (as _homotopy)
+    inv, GA, sign_slots, order = (
+        np.zeros((1, K, K)),
+        np.zeros((1, K, m)),
+        np.zeros((1, K)),
+        np.full(K, m),
+    )
+    slot, n_act = [0] * m, 0
+    j = int(np.abs(Xy).argmax())
+    c = np.abs(Xy[0, j])
+    near, c_min = 1e-12 * c, c_min[0]
     cap = 2 * m + 4
     levels, coefs = np.zeros((1, cap)), np.zeros((1, cap, m))
     levels[0, 0] = c
-    n_points = np.ones(1, int)
-    step = 1
+    step, stalled = 1, 0
     running = bool(c > c_min)
-    joining, dropping = running, False
-    barred, barred_sign = -1, 0.0
-    stalled = 0
-    outer_buf = np.empty(K * K)
+    joining, barred, barred_sign = running, -1, 0.0
     while running:
-        s_ev = n_act if joining else int(slot[j])
-        k = min(K, n_act + int(joining))
-        g = GA[:, :, j].copy()  # (1, K), C-contiguous as GA[rows, :, j]
-        u = np.zeros((1, K))
-        u[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], g)
-        schur = Gram[0, j, j] - np.einsum("bi,bi->b", g, u)[0]
-        if joining:
-            u[0, s_ev] = -1.0
-            z, f = u[:, :k], 1.0 / schur
-        else:
-            z, f = inv[:, :k, s_ev], -1.0 / inv[0, s_ev, s_ev]
-        outer = outer_buf[: k * k].reshape(1, k, k)
-        np.einsum("bi,bj->bij", z * f, z, out=outer)
-        inv[:, :k, :k] += outer
-        if joining:
-            GA[0, s_ev] = Gram[0, j]
-            order[0, s_ev] = j
-            slot[j] = s_ev
-            n_act += 1
-            active[0, j] = True
-            sign[0, j] = np.sign(cov[0, j])
-        else:
-            last = n_act - 1
-            inv[0, s_ev, :] = inv[0, last, :]
-            inv[0, :, s_ev] = inv[0, :, last]
-            inv[0, last, :] = 0.0
-            inv[0, :, last] = 0.0
-            GA[0, s_ev] = GA[0, last]
-            GA[0, last] = 0.0
-            order[0, s_ev] = order[0, last]
-            slot[order[0, s_ev]] = s_ev
-            order[0, last] = m
-            n_act -= 1
-            active[0, j] = False
-            sign[0, j] = 0.0
-        dA = np.zeros((1, K))
-        dA[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], sign[0][order])
-        a = np.einsum("bji,bj->bi", GA[:, :k], dA[:, :k])
-        d = np.zeros((1, m + 1))
-        d[0, order[0, :k]] = dA[0, :k]
-        d = d[:, :m]
-        below, above = c - cov, c + cov
-        up = below / (1.0 - a)
-        down = above / (1.0 + a)
-        zero = -beta / d
-        join = np.minimum(np.where(up > 0, up, np.inf), np.where(down > 0, down, np.inf))
-        tol = near if c > 1e3 * near else 0.0
-        tie = ((below <= tol) & (a < 1 - 1e-9)) | ((above <= tol) & (a > -1 + 1e-9))
-        join[tie] = 0.0
-        join[active] = np.inf
-        if barred >= 0:
-            back = down[0, barred] if barred_sign > 0 else up[0, barred]
-            join[0, barred] = back if back > 0 else np.inf
-        zero = np.where(active & ((zero > 0) | ((beta == 0) & (d * sign[:, :m] < 0))), zero, np.inf)
-        j_join, j_drop = int(join.argmin()), int(zero.argmin())
-        g_join, g_drop = join[0, j_join], zero[0, j_drop]
+        state = (Gram, P, Q, inv, GA, sign_slots, order, slot, sign, shut)
+        n_act = _one_direction(*state, j, joining, n_act)
+        np.add(c, shut, out=col[:2])
+        event = (P, Q, col, one, c, near, sign, n_act, j if joining else -1, barred, barred_sign)
+        g_join, j_join, g_drop, j_drop = _one_event(*event)
         g_end = c - c_min
-        g_next = np.minimum(g_join, g_drop)
-        gamma = np.minimum(g_next, g_end)
+        g_next = _min(g_join, g_drop)
+        gamma = _min(g_next, g_end)
         stalled = stalled + 1 if gamma == 0 else 0
-        beta += gamma * d
-        cov -= gamma * a
+        P += gamma * Q  # cov - gamma a, -(cov - gamma a) (to the sign of a zero), beta + gamma d
         c = c - gamma
         ended = bool(g_end <= g_next)
         if ended:
@@ -1535,27 +1536,146 @@ def _homotopy_one(
         joining = not ended and not dropping
         j = j_drop if dropping else j_join
         if dropping:
-            beta[0, j] = 0.0
+            P[2, j] = 0.0
         barred = j if dropping else -1
-        barred_sign = sign[0, j]
-        point = step
-        step += 1
-        if point >= cap:
+        barred_sign = sign[j]
+        if step >= cap:
             levels = np.concatenate([levels, np.zeros_like(levels)], axis=1)
             coefs = np.concatenate([coefs, np.zeros_like(coefs)], axis=1)
             cap *= 2
-        levels[0, point] = c
-        coefs[0, point] = beta[0]
-        n_points[0] += 1
+        levels[0, step], coefs[0, step] = c, P[2]
+        step += 1
         if step > 50 * m + 100 or stalled > 4 * m + 10:  # as in _homotopy: rejected by the check
-            levels[0, point] = np.nan
+            levels[0, step - 1] = np.nan
             running = False
         if max_size is not None:
             running = running and n_act <= max_size
-        running = running and not ended and bool(np.isfinite(c)) and bool(np.isfinite(beta).all())
+        # beta finite: 0 beta_j is NaN where beta_j is not, and so is then their sum
+        running = running and not ended and math.isfinite(c) and not math.isnan(P[2].dot(zero_m))
         joining = joining and running
-        dropping = dropping and running
-    return levels, coefs, n_points
+    return levels, coefs, np.array([step])
+
+
+def _min(a: np.float64, b: np.float64) -> np.float64:
+    """``numpy.minimum(a, b)`` of two scalars, the ufunc called only where the order does not
+    decide (equal values, e.g. ``0.0`` and ``-0.0``, or a NaN)."""
+    if a < b:
+        return a
+    if b < a:
+        return b
+    return np.minimum(a, b)
+
+
+def _one_direction(
+    Gram: np.ndarray,
+    P: np.ndarray,
+    Q: np.ndarray,
+    inv: np.ndarray,
+    GA: np.ndarray,
+    sign_slots: np.ndarray,
+    order: np.ndarray,
+    slot: list[int],
+    sign: np.ndarray,
+    shut: np.ndarray,
+    j: int,
+    joining: bool,
+    n_act: int,
+) -> int:
+    """A step of :func:`_homotopy_one`: component ``j`` joins (or drops) the active set, the
+    rank-one change of the inverse ``inv`` of ``Gram_AA`` and of the slots (in place), then the
+    direction: ``Q = [-a, a, d]``. Returns the new number of active components.
+
+    The sums are :func:`_homotopy`'s ``einsum`` calls on ``(1, ...)`` arrays of the same layouts.
+    The rank-one change is the broadcast product, not the ``einsum`` of :func:`_homotopy`, which
+    adds each product to a zero: the same values but for the sign of a zero product, which adds
+    the same to ``inv`` (whose entries are never ``-0.0``: a sum is ``-0.0`` only of two).
+    """
+    K = GA.shape[1]
+    s = n_act if joining else slot[j]
+    k = min(K, n_act + 1) if joining else n_act
+    if joining:
+        g = GA[:, :, j].copy()  # (1, K), C-contiguous as GA[rows, :, j]
+        u = np.zeros((1, K))
+        _c_einsum("bij,bj->bi", inv[:, :k], g, out=u[:, :k])
+        schur = Gram[0, j, j] - _c_einsum("bi,bi->b", g, u)[0]
+        u[0, s] = -1.0
+        z, f = u[0, :k], 1.0 / schur
+    else:
+        z, f = inv[0, :k, s], -1.0 / inv[0, s, s]
+    zf = z * f
+    inv[0, :k, :k] += zf[:, None] * z
+    if joining:
+        GA[0, s] = Gram[0, j]
+        order[s], slot[j] = j, s
+        shut[:, j] = np.inf
+        cov = P[0, j]
+        sign[j] = sign_slots[0, s] = 1.0 if cov > 0 else -1.0 if cov < 0 else np.sign(cov)
+        n_act += 1
+    else:
+        last = n_act - 1
+        inv[0, s, :] = inv[0, last, :]
+        inv[0, :, s] = inv[0, :, last]
+        inv[0, last, :] = 0.0
+        inv[0, :, last] = 0.0
+        GA[0, s], GA[0, last] = GA[0, last], 0.0
+        sign_slots[0, s], sign_slots[0, last] = sign_slots[0, last], 0.0
+        order[s] = order[last]
+        slot[order[s]] = s
+        order[last] = GA.shape[2]  # m: unused
+        shut[:, j], sign[j], Q[2, j] = 0.0, 0.0, 0.0
+        n_act = last
+    dA = _c_einsum("bij,bj->bi", inv[:, :k], sign_slots)
+    _c_einsum("bji,bj->bi", GA[:, :k], dA, out=Q[1:2])  # a
+    np.negative(Q[1], out=Q[0])
+    Q[2, order[:n_act]] = dA[0, :n_act]  # d (zero off the active set)
+    return n_act
+
+
+def _one_event(
+    P: np.ndarray,
+    Q: np.ndarray,
+    col: np.ndarray,
+    one: np.ndarray,
+    c: np.float64,
+    near: np.float64,
+    sign: np.ndarray,
+    n_act: int,
+    joined: int,
+    barred: int,
+    barred_sign: float,
+) -> tuple[np.float64, int, np.float64, int]:
+    """The next event of :func:`_homotopy_one`: the step length to the first join and its
+    component, and to the first drop and its component (the rules of :func:`_homotopy`, the same
+    values), from the rows ``P = [cov, -cov, beta]``, ``Q = [-a, a, d]``, ``one = [1, 1, -0.0]``
+    and ``col = [c, c, -0.0]``, where the first two rows of ``col`` are ``c + inf`` on the active
+    set; ``n_act`` components are active, ``joined`` the one that just joined (-1 after a drop),
+    ``barred`` the one that just dropped (-1 after a join) and ``barred_sign`` its former sign.
+
+    The rows of ``(col - P) / (one + Q)`` are ``up``, ``down`` and ``zero`` of :func:`_homotopy`,
+    but on the active set, where the gaps ``col - P`` are ``inf`` (or NaN), neither a join nor a
+    tie: ``join[active] = inf``. Off the active set ``beta`` and ``d`` are ``0.0``, ``zero`` is
+    NaN and no drop condition holds: ``zero[~active] = inf``.
+    """
+    num = col - P  # c - cov, c + cov, -beta
+    ratio = num / (one + Q)  # up, down, zero
+    pos = ratio > 0.0
+    # a component with beta_j = 0 whose direction opposes its sign (it joined in a tie) leaves at
+    # once: off the active set beta is 0.0 and sign 0.0, on it usually only the one just joined
+    zeros = n_act - np.count_nonzero(P[2])  # active components at beta_j = 0
+    if zeros == 1 and joined >= 0 and P[2, joined] == 0:
+        pos[2, joined] |= Q[2, joined] * sign[joined] < 0
+    elif zeros:
+        pos[2] |= (P[2] == 0) & (Q[2] * sign < 0)
+    R = np.where(pos, ratio, np.inf)
+    tol = near if c > 1e3 * near else 0.0
+    if np.fmin.reduce(num[:2], axis=None) <= tol:  # a gap at the level (NaN aside): ties, if
+        np.putmask(R[:2], (num[:2] <= tol) & (Q[:2] > -1 + 1e-9), 0.0)  # a < 1 - 1e-9, a > -1 + ...
+    join = np.minimum(R[0], R[1])
+    if barred >= 0:
+        back = ratio[1, barred] if barred_sign > 0 else ratio[0, barred]
+        join[barred] = back if back > 0 else np.inf
+    j_join, j_drop = int(join.argmin()), int(R[2].argmin())
+    return join[j_join], j_join, R[2, j_drop], j_drop
 
 
 def lasso_cvxpy(X: Any, y: Any, lam: float, *, n_samples: int | None = None) -> np.ndarray:

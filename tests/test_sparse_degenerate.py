@@ -450,3 +450,16 @@ def test_one_problem_homotopy_is_the_batched_one_bit_for_bit():
             nan += bool(np.isnan(lev[0, :n]).any())
             long += n > 2 * m + 4
     assert nan > 0 and long > 0  # the rare branches were compared
+
+
+def test_scalar_minimum_of_the_one_problem_homotopy_is_numpys():
+    """``_min`` (``_homotopy_one``'s step lengths) is ``numpy.minimum`` bit for bit, the sign of a
+    zero and a NaN included, whichever the order of its arguments."""
+    from fdi_lib.sparse import _min
+
+    values = [0.0, -0.0, 1e-300, -1.0, 2.5, np.inf, -np.inf, np.nan]
+    for a in map(np.float64, values):
+        for b in map(np.float64, values):
+            got, want = _min(a, b), np.minimum(a, b)
+            assert type(got) is np.float64
+            assert np.array(got).tobytes() == np.array(want).tobytes(), (a, b)
