@@ -74,12 +74,6 @@ from typing import Any, Iterator, Literal
 
 import numpy as np
 
-try:  # numpy.einsum's C function without its Python wrapper (the same sums): _homotopy_one calls it
-    # 4 times a step, where the wrapper costs a third of a small einsum
-    from numpy._core.multiarray import c_einsum as _c_einsum
-except ImportError:  # numpy moved it: the wrapper
-    _c_einsum = np.einsum
-
 from fdi_lib.errors import ModelError, NumericalError, ShapeError
 from fdi_lib.validation import array, integer, real
 
@@ -1482,7 +1476,7 @@ def _homotopy_one(
 
     A step of one problem is dominated by the number of numpy calls, not by their size, so it
     makes few: the same floating-point operations on the same values, the sums (the ``einsum``
-    calls, :func:`_one_direction`, without numpy's Python wrapper) on the same shapes and
+    calls, :func:`_one_direction`) on the same shapes and
     layouts, hence in the same order, and the elementwise ones on stacked rows
     (:func:`_one_event`), ``P = [cov, -cov, beta]`` and ``Q = [-a, a, d]``, through exact sign
     changes (``c + cov = c - (-cov)``, ``1 - a = 1 + (-a)``, ``-beta = -0.0 - beta``, ``d =
@@ -1596,8 +1590,8 @@ def _one_direction(
     if joining:
         g = GA[:, :, j].copy()  # (1, K), C-contiguous as GA[rows, :, j]
         u = np.zeros((1, K))
-        _c_einsum("bij,bj->bi", inv[:, :k], g, out=u[:, :k])
-        schur = Gram[0, j, j] - _c_einsum("bi,bi->b", g, u)[0]
+        np.einsum("bij,bj->bi", inv[:, :k], g, out=u[:, :k])
+        schur = Gram[0, j, j] - np.einsum("bi,bi->b", g, u)[0]
         u[0, s] = -1.0
         z, f = u[0, :k], 1.0 / schur
     else:
@@ -1624,8 +1618,8 @@ def _one_direction(
         order[last] = GA.shape[2]  # m: unused
         shut[:, j], sign[j], Q[2, j] = 0.0, 0.0, 0.0
         n_act = last
-    dA = _c_einsum("bij,bj->bi", inv[:, :k], sign_slots)
-    _c_einsum("bji,bj->bi", GA[:, :k], dA, out=Q[1:2])  # a
+    dA = np.einsum("bij,bj->bi", inv[:, :k], sign_slots)
+    np.einsum("bji,bj->bi", GA[:, :k], dA, out=Q[1:2])  # a
     np.negative(Q[1], out=Q[0])
     Q[2, order[:n_act]] = dA[0, :n_act]  # d (zero off the active set)
     return n_act
