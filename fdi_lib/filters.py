@@ -151,21 +151,22 @@ def kalman_gains(model: LTVModel, missing: Any = None) -> KalmanGains:
                 if skip[k]:  # missing sample: no update
                     Kk, IKH, Pf = np.zeros((n, p)), eye, Pk
                 else:
-                    Kk = scipy.linalg.cho_solve(
-                        (c, low), H @ Pk
+                    Kk = scipy.linalg.cho_solve(  # (S finite: so is H P)
+                        (c, low), H @ Pk, check_finite=False
                     ).T  # P H^T S^{-1} without forming S^{-1}
                     IKH = eye - Kk @ H
                     Pf = IKH @ Pk @ IKH.T + Kk @ model.R[k] @ Kk.T  # Joseph form: stays PSD
                     Pf = 0.5 * (Pf + Pf.T)
                 Pn = F @ Pf @ F.T + model.Q[k]
                 K[k], P_filt[k], Sigma[k], A[k], FK[k] = Kk, Pf, S, F @ IKH, F @ Kk
-                L[k] = np.tril(c)
+                L[k] = c  # its upper triangle zeroed once, after the recursion
                 P[k + 1] = 0.5 * (Pn + Pn.T)
         if not np.all(np.isfinite(P)):
             k = int(np.argwhere(~np.isfinite(P))[0, 0])
             raise NonFiniteError(
                 f"model: the Riccati recursion diverged (non-finite P_k at step {k})"
             )
+        L = np.tril(L)
         return KalmanGains(
             K=K,
             P=P,

@@ -260,8 +260,8 @@ def kitanidis_gains(model: LTVModel, E: Any, missing: Any = None) -> KitanidisGa
                     Kk = Kbar = np.zeros((n, p))
                     Pf = Pk
                 else:
-                    Kk = scipy.linalg.cho_solve(
-                        (c, low), H @ Pk
+                    Kk = scipy.linalg.cho_solve(  # (S finite: so is H P)
+                        (c, low), H @ Pk, check_finite=False
                     ).T  # P H^T S^{-1} by Cholesky solves
                     Pf = Pk - Kk @ H @ Pk
                     Kbar = Kk
@@ -283,13 +283,19 @@ def kitanidis_gains(model: LTVModel, E: Any, missing: Any = None) -> KitanidisGa
                     # Xi^{-1} E^T H^T Sigma^{-1} = Rw^{-1} Qw^T L^{-1}, a left inverse of H E accurate to
                     # cond(Rw) = sqrt(cond(Xi)) rather than cond(Xi): identity (30) then holds to that precision.
                     Lk = np.tril(c)
-                    W = scipy.linalg.solve_triangular(Lk, HE, lower=True)
+                    W = scipy.linalg.solve_triangular(Lk, HE, lower=True, check_finite=False)
                     Qw, Rw = np.linalg.qr(W)
-                    Linv = scipy.linalg.solve_triangular(Lk, np.eye(p), lower=True)
-                    M = scipy.linalg.solve_triangular(Rw, Qw.T @ Linv)  # (s, p), M H E = I
+                    Linv = scipy.linalg.solve_triangular(
+                        Lk, np.eye(p), lower=True, check_finite=False
+                    )
+                    M = scipy.linalg.solve_triangular(
+                        Rw, Qw.T @ Linv, check_finite=False
+                    )  # M H E = I
                     Gam = pending - Kk @ HE  # (24c)
                     Kbar = Kk + Gam @ M  # (24g)
-                    GR = scipy.linalg.solve_triangular(Rw, Gam.T, trans="T").T  # Gamma Rw^{-1}
+                    GR = scipy.linalg.solve_triangular(  # Gamma Rw^{-1}
+                        Rw, Gam.T, trans="T", check_finite=False
+                    ).T
                     Pf = Pf + GR @ GR.T  # (24f): + Gamma Xi^{-1} Gamma^T
                     if not skip[k - 1]:
                         Xi[k] = W.T @ W  # (24d)
@@ -297,7 +303,7 @@ def kitanidis_gains(model: LTVModel, E: Any, missing: Any = None) -> KitanidisGa
                 HK = H @ Kbar
                 Rc = H @ Pf @ H.T + Rk - HK @ Rk - Rk @ HK.T
                 Rcov[k] = 0.5 * (Rc + Rc.T)
-                K[k], Kc[k], P_filt[k], Sigma[k], L[k] = Kbar, Kk, Pf, S, np.tril(c)
+                K[k], Kc[k], P_filt[k], Sigma[k], L[k] = Kbar, Kk, Pf, S, c  # tril: below
                 Pn = model.F[k] @ Pf @ model.F[k].T + model.Q[k]
                 P[k + 1] = 0.5 * (Pn + Pn.T)
         if not np.all(np.isfinite(P)):
@@ -305,6 +311,7 @@ def kitanidis_gains(model: LTVModel, E: Any, missing: Any = None) -> KitanidisGa
             raise NonFiniteError(
                 f"model: the Kitanidis covariance recursion diverged (non-finite P at step {k})"
             )
+        L = np.tril(L)
         return KitanidisGains(
             K=K,
             K_kalman=Kc,

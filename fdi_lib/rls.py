@@ -92,7 +92,7 @@ def rls_gains(regressor: Any, Sigma: Any, *, lam: float, P0: Any = None) -> RLSG
         Pk, Mk = P[k], M[k]
         S = lam * S_all[k] + Mk @ Pk @ Mk.T
         c = cholesky(0.5 * (S + S.T), step=k, what="the RLS gain recursion", name="Sigma")
-        Lk = scipy.linalg.cho_solve(c, Mk @ Pk).T  # P M^T S^{-1}
+        Lk = scipy.linalg.cho_solve(c, Mk @ Pk, check_finite=False).T  # P M^T S^{-1} (S finite)
         Pn = (Pk - Lk @ Mk @ Pk) / lam
         L[k], P[k + 1] = Lk, 0.5 * (Pn + Pn.T)
     if not np.all(np.isfinite(P)):

@@ -554,8 +554,8 @@ def cholesky(
     """
     if not np.all(np.isfinite(S)):
         raise NonFiniteError(f"{name}: {what} diverged (non-finite values at step {step})")
-    try:
-        return scipy.linalg.cho_factor(S, lower=True)
+    try:  # (finite: checked above, not again by scipy, whose check costs a third of the call)
+        return scipy.linalg.cho_factor(S, lower=True, check_finite=False)
     except np.linalg.LinAlgError as exc:
         raise CovarianceError(
             f"{name}: {what} lost positive definiteness at step {step} (expected a "
