@@ -1005,9 +1005,8 @@ def glr_window(
     # many realisations: one update per sample already works on wide arrays (the innovations
     # checked above: the samples missing in one realisation are missing in all)
     N, m, B = model.n_steps, family.m, det._B
-    shapes = {"statistic": (), "onset": (), "theta_hat": (m,), "C_hat": (m, m), "d_hat": (m,)}
     keys = _outputs(estimates)
-    out = tuple(np.empty((B, N, *shapes[k]), dtype=int if k == "onset" else float) for k in keys)
+    out = tuple(_empty_outputs(keys, B, N, m).values())
     undefined = tuple(  # the outputs of a sample without statistics
         np.full((B, *a.shape[2:]), -1 if key == "onset" else np.nan, dtype=a.dtype)
         for key, a in zip(keys, out)
@@ -1021,7 +1020,7 @@ def glr_window(
         ]
         for i, arr in enumerate(out):
             arr[:, ks.start : ks.stop] = np.stack([r[i] for r in rows], axis=1)
-    fields = dict.fromkeys(shapes)  # None: not asked for
+    fields = dict.fromkeys(_outputs(True))  # None: not asked for
     fields.update({key: a.reshape(*batch, *a.shape[1:]) for key, a in zip(keys, out)})
     return WindowGLRResult(**fields, window=det.window, min_samples=det.min_samples)
 
@@ -1035,6 +1034,12 @@ def _outputs(estimates: bool | str) -> tuple[str, ...]:
     if isinstance(estimates, str) and estimates == "scores":
         return ("statistic", "onset", "d_hat")
     raise ModelError(f"estimates: expected True, False or 'scores', got {estimates!r}")
+
+
+def _empty_outputs(keys: tuple[str, ...], B: int, N: int, m: int) -> dict[str, np.ndarray]:
+    """Uninitialised arrays ``(B, N, ...)`` of the fields ``keys`` of :class:`WindowGLRResult`."""
+    shapes = {"statistic": (), "onset": (), "theta_hat": (m,), "C_hat": (m, m), "d_hat": (m,)}
+    return {k: np.empty((B, N, *shapes[k]), dtype=int if k == "onset" else float) for k in keys}
 
 
 #: Up to this many realisations, :func:`glr_window` evaluates the statistics by blocks of
@@ -1077,14 +1082,7 @@ def _grouped_glr_window(
     batch, N, m = eps.shape[:-2], model.n_steps, family.m
     flat = eps.reshape(-1, N, model.p)
     B = flat.shape[0]
-    out = {
-        "statistic": np.empty((B, N)),
-        "onset": np.empty((B, N), dtype=int),
-        "theta_hat": np.empty((B, N, m)),
-        "C_hat": np.empty((B, N, m, m)),
-        "d_hat": np.empty((B, N, m)),
-    }
-    out = {key: out[key] for key in _outputs(estimates)}
+    out = _empty_outputs(_outputs(estimates), B, N, m)
     res = None
     for i in np.unique(group):
         rows = np.nonzero(group == i)[0]
