@@ -81,8 +81,11 @@ def _pinv_diagonal(lam: np.ndarray) -> np.ndarray:
     eigenvalues. An eigenvalue below the smallest normal number is below the cut-off too (its
     inverse would overflow to infinity): an information that small is none."""
     tiny = np.finfo(float).tiny  # (a top below it leaves every eigenvalue below it too)
-    top = lam.max(axis=-1, keepdims=True) if lam.shape[-1] > 1 else lam  # one: itself, no reduce
-    keep = (lam > RANK_RTOL * top) & (lam >= tiny)
+    if lam.shape[-1] == 1:  # its own top: lam > RANK_RTOL lam holds for every lam >= tiny, and
+        # fails for +inf, whose inverse is the 0 left where nothing is kept: the same values
+        keep = lam >= tiny
+    else:
+        keep = (lam > RANK_RTOL * lam.max(axis=-1, keepdims=True)) & (lam >= tiny)
     return np.divide(1.0, lam, out=np.zeros(lam.shape), where=keep)
 
 
