@@ -117,6 +117,8 @@ KKT_FLOOR = 1e-6
 # values of X per block of problems that lasso_path_batch scales and multiplies together (a few
 # hundred kB: they stay in cache between the passes)
 _BLOCK_VALUES = 2**17
+# values of X per block of problems of the gradient in double-double (_residual_blocks)
+_DD_BLOCK_VALUES = 1_000_000
 _EPS, _TINY = np.finfo(float).eps, np.finfo(float).tiny  # (np.finfo costs a call per use)
 
 
@@ -841,13 +843,10 @@ def _gradient_dd(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> np.ndarray:
     survives). Processed in blocks of ``coefs`` rows.
     """
     out = np.empty(coefs.shape)
-    for sl, Xb, (Xh, Xl), s, e in _residual_blocks(X, y, coefs):
+    for sl, Xb, s, e in _residual_blocks(X, y, coefs):
         XT = Xb.transpose(0, 2, 1)
         P = XT * s[:, None, :]  # (P, m, rows)
-        E = (
-            _product_error((Xh.transpose(0, 2, 1), Xl.transpose(0, 2, 1)), s[:, None, :], P)
-            + XT * e[:, None, :]
-        )
+        E = _product_error(_split(XT), s[:, None, :], P) + XT * e[:, None, :]
         while P.shape[2] > 1:
             if P.shape[2] % 2:
                 P = np.concatenate([P, np.zeros(P.shape[:2] + (1,))], axis=2)
@@ -861,19 +860,19 @@ def _gradient_dd(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> np.ndarray:
 def _residual_blocks(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> Iterator[tuple[Any, ...]]:
     """The residuals ``y_b - X_b theta_b`` of :func:`_gradient_dd` (its first stage), in blocks of
     ``coefs`` rows: for each block, its slice of the rows of ``coefs``, its ``X`` ``(1 or P, rows,
-    m)``, that ``X``'s Dekker split and the residuals as unevaluated sums ``s + e`` ``(P, rows)``
-    (Ogita, Rump and Oishi's Dot2: ``|fl(s + e) - r| <= eps/2 |r| + gamma_(m+1)^2 (|y| + |X|
-    |theta|)``, ``gamma_n = n (eps/2) / (1 - n eps/2)``)."""
+    m)`` and the residuals as unevaluated sums ``s + e`` ``(P, rows)`` (Ogita, Rump and Oishi's
+    Dot2: ``|fl(s + e) - r| <= eps/2 |r| + gamma_(m+1)^2 (|y| + |X| |theta|)``, ``gamma_n = n
+    (eps/2) / (1 - n eps/2)``). A loop over the columns of ``X``, each copied and split
+    (:func:`_split`) where it is used, in cache (rather than a transposed copy and split of the
+    whole block before the loop: the same values, several times the memory traffic)."""
     X = X[None] if X.ndim == 2 else X
     y = y[None] if y.ndim == 1 else y
     rows, m = X.shape[1:]
-    block = max(1, 1_000_000 // (rows * m))
+    block = max(1, _DD_BLOCK_VALUES // (rows * m))
     for b0 in range(0, coefs.shape[0], block):
         c = coefs[b0 : b0 + block]
         Xb = X if X.shape[0] == 1 else X[b0 : b0 + block]
-        # the columns contiguous (m, rows) for the loop over them: elementwise, the same values
-        XT = np.ascontiguousarray(Xb.transpose(0, 2, 1))
-        XTh, XTl = _split(XT)
+        XT = Xb.transpose(0, 2, 1)  # (1 or P, m, rows), a view
         yb = y if y.shape[0] == 1 else y[b0 : b0 + block]
         s = np.array(np.broadcast_to(yb, (c.shape[0], rows)))
         e = np.zeros_like(s)
@@ -881,10 +880,17 @@ def _residual_blocks(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> Iterato
         # operations in the same order, into buffers kept across the columns (a new array of
         # this size per operation costs more than the operation)
         p, b, s2, z, err, u, v = (np.empty_like(s) for _ in range(7))
+        # column k of X (copied contiguous: elementwise, the same values) and its split
+        xk, ah, al = (np.empty(XT.shape[::2]) for _ in range(3))
         th, tl = _split(c)
         for k in range(m):
-            t, ah, al = c[:, k, None], XTh[:, k], XTl[:, k]
-            np.multiply(XT[:, k], t, out=p)
+            t = c[:, k, None]
+            np.copyto(xk, XT[:, k])
+            np.multiply(xk, 134217729.0, out=ah)  # _split(xk), into the buffers
+            np.subtract(ah, xk, out=al)
+            np.subtract(ah, al, out=ah)
+            np.subtract(xk, ah, out=al)
+            np.multiply(xk, t, out=p)
             np.negative(p, out=b)
             np.add(s, b, out=s2)  # _two_sum(s, b): s2 = fl(s + b), err = s + b - s2
             np.subtract(s2, s, out=z)
@@ -904,8 +910,7 @@ def _residual_blocks(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> Iterato
             np.add(u, v, out=u)
             np.subtract(err, u, out=err)
             np.add(e, err, out=e)
-        Xh, Xl = XTh.transpose(0, 2, 1), XTl.transpose(0, 2, 1)
-        yield slice(b0, b0 + c.shape[0]), Xb, (Xh, Xl), s, e
+        yield slice(b0, b0 + c.shape[0]), Xb, s, e
 
 
 def _gradient_bounded(
@@ -927,7 +932,7 @@ def _gradient_bounded(
     rows, m = Xd.shape[1:]
     eps = _EPS
     g, slack = np.empty(coefs.shape), np.empty(coefs.shape[0])
-    for sl, Xb, _, s, e in _residual_blocks(X, y, coefs):
+    for sl, Xb, s, e in _residual_blocks(X, y, coefs):
         r = s + e
         absX = np.abs(Xb)
         yb = np.abs(y[None] if y.ndim == 1 else y)
@@ -1398,7 +1403,8 @@ def _homotopy(
         up = below / (1.0 - a)
         down = above / (1.0 + a)
         zero = -beta / d
-        join = np.minimum(np.where(up > 0, up, np.inf), np.where(down > 0, down, np.inf))
+        inactive = ~active  # the components that can join
+        join = np.fmin(_where_inf((up > 0) & inactive, up), _where_inf((down > 0) & inactive, down))
         # A correlation at the level (a tie, e.g. at lambda_max; to rounding, `near`, while the level
         # is well above it) that would overtake it joins at once (gamma = 0); one that moves away
         # from it does not, nor one that moves with it to 1e-9 (a column in the span of the active
@@ -1406,8 +1412,7 @@ def _homotopy(
         # conditions to 1e-9 lambda).
         tol = np.where(c > 1e3 * near, near, 0.0)[:, None]
         tie = ((below <= tol) & (a < 1 - 1e-9)) | ((above <= tol) & (a > -1 + 1e-9))
-        np.putmask(join, tie, 0.0)  # join[tie] = 0.0, faster
-        np.putmask(join, active, np.inf)
+        np.putmask(join, tie & inactive, 0.0)  # join[tie & inactive] = 0.0, faster
         hit = barred >= 0
         if hit.any():
             b = rows[hit]
@@ -1415,7 +1420,7 @@ def _homotopy(
             join[b, barred[b]] = np.where(back > 0, back, np.inf)
         # a component that joined in a tie (beta_j = 0) but whose direction opposes its sign leaves
         # at once (gamma = 0): it cannot stay active (its coefficient would take the wrong sign)
-        zero = np.where(active & ((zero > 0) | ((beta == 0) & (d * sign[:, :m] < 0))), zero, np.inf)
+        zero = _where_inf(active & ((zero > 0) | ((beta == 0) & (d * sign[:, :m] < 0))), zero)
         j_join, j_drop = join.argmin(axis=1), zero.argmin(axis=1)
         g_join, g_drop = join[rows, j_join], zero[rows, j_drop]
         g_end = c - c_min
@@ -1467,6 +1472,17 @@ def _homotopy(
     for point, (at, beta_at) in enumerate(steps, start=1):
         coefs[at, point] = beta_at
     return levels, coefs, n_points
+
+
+def _where_inf(mask: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``numpy.where(mask, x, inf)`` for an ``x`` with no NaN where ``mask`` holds, the same bits,
+    without a branch per element (``where`` mispredicts on masks without a pattern, several times
+    slower; under ``numpy.errstate(invalid="ignore")``): ``-0.0`` added where ``mask`` holds
+    (exact, the sign of a zero kept), NaN elsewhere (``-0.0 / 0``), which ``fmin`` with ``inf``
+    turns into ``inf``."""
+    out = np.divide(-0.0, mask)
+    np.add(x, out, out=out)
+    return np.fmin(out, np.inf, out=out)
 
 
 def _homotopy_one(

@@ -197,3 +197,34 @@ def test_gradient_from_the_double_double_residual_is_within_its_bound(seed):
         X.shape[0],
     )[1][0]
     assert np.median(_gradient_bounded(X, y, th)[1] / gram_slack) < 0.1
+
+
+@pytest.mark.parametrize("shared", [False, True])
+def test_residual_in_double_double_is_dot2_bit_for_bit(shared, monkeypatch):
+    """``_residual_blocks`` (the first stage of the exact gradient, a loop of in-place operations
+    over the columns, each split where it is used) gives the bits of Dot2 written with the
+    error-free transformations themselves: ``s, err = TwoSum(s, -X_k theta_k)``, ``e += err -
+    TwoProductError``, from ``s = y``, ``e = 0``; one ``X`` per row of ``coefs`` or one for all,
+    in blocks of 3 rows."""
+    import fdi_lib.sparse as sp
+
+    rng = np.random.default_rng(5)
+    P, rows, m = 7, 30, 9
+    X = rng.standard_normal((1 if shared else P, rows, m)) * 10.0 ** rng.integers(-3, 4, m)
+    X[..., 2] = X[..., 1]  # a duplicated column and an integer one (exact products)
+    X[..., 4] = np.round(X[..., 4])
+    y = rng.standard_normal((1 if shared else P, rows))
+    coefs = rng.standard_normal((P, m)) * (rng.random((P, m)) < 0.6)
+    s, e = np.broadcast_to(y, (P, rows)).copy(), np.zeros((P, rows))
+    for k in range(m):
+        t = coefs[:, k, None]
+        p = X[:, :, k] * t
+        s, err = sp._two_sum(s, -p)
+        e = e + (err - sp._product_error(sp._split(X[:, :, k]), t, p))
+    monkeypatch.setattr(sp, "_DD_BLOCK_VALUES", 3 * rows * m)
+    got_s, got_e = np.full((P, rows), np.nan), np.full((P, rows), np.nan)
+    blocks = list(sp._residual_blocks(X[0] if shared else X, y[0] if shared else y, coefs))
+    assert len(blocks) == 3
+    for sl, _, bs, be in blocks:
+        got_s[sl], got_e[sl] = bs, be
+    assert got_s.tobytes() == s.tobytes() and got_e.tobytes() == e.tobytes()
