@@ -1361,15 +1361,18 @@ def _homotopy(
         u[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], g)
         schur = Gram[ids, j, j] - np.einsum("bi,bi->b", g, u)  # G_jj - g_A^T inv g_A
         u[rows[joining], s_ev[joining]] = -1.0  # w: the new column of inv is -w / schur
-        col = inv[rows, :k, s_ev]
-        z = np.where(joining[:, None], u[:, :k], col)
+        # over all K slots once most are used: inv[:, :K, :K] is contiguous, faster to add to than
+        # its strided corner (the unused slots' zeros in z add zeros, to zeros: inv is unchanged)
+        kk = K if 4 * k > 3 * K else k
+        col = inv[rows, :kk, s_ev]
+        z = np.where(joining[:, None], u[:, :kk], col)
         f = np.where(joining, 1.0 / schur, np.where(dropping, -1.0 / inv[rows, s_ev, s_ev], 0.0))
         # the outer product in a buffer kept across steps: a new (B, k, k) array at each step
         # (megabytes) is mapped and faulted in anew by the allocator (same products, same sums;
         # einsum forms them faster than a broadcast multiply)
-        outer = outer_buf[: rows.size * k * k].reshape(rows.size, k, k)
+        outer = outer_buf[: rows.size * kk * kk].reshape(rows.size, kk, kk)
         np.einsum("bi,bj->bij", z * f[:, None], z, out=outer)
-        inv[:, :k, :k] += outer
+        inv[:, :kk, :kk] += outer
         if joining.any():
             b = rows[joining]
             GA[b, s_ev[b]] = Gram[ids[b], j[b]]  # row j (the Gram matrix is symmetric)
