@@ -1328,24 +1328,10 @@ def _homotopy(
     while running.any():
         if rows.size >= 16 and running.sum() <= 3 * rows.size // 4:  # drop finished problems
             keep = running
-            c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j, near = (
-                x[keep]
-                for x in (
-                    c_min,
-                    beta,
-                    cov,
-                    sign,
-                    active,
-                    inv,
-                    GA,
-                    order,
-                    slot,
-                    n_act,
-                    c,
-                    j,
-                    near,
-                )
+            c_min, beta, cov, sign, active, inv, GA = (
+                x[keep] for x in (c_min, beta, cov, sign, active, inv, GA)
             )
+            order, slot, n_act, c, j, near = (x[keep] for x in (order, slot, n_act, c, j, near))
             joining, dropping, barred, barred_sign, stalled, running, ids = (
                 x[keep] for x in (joining, dropping, barred, barred_sign, stalled, running, ids)
             )
