@@ -619,7 +619,7 @@ def _path_batch(
     # for the paths it does not pass, the check in double-double from X and y (nothing subtracted),
     # then the coefficients refined on the path's own supports, then scikit-learn's lars_path.
     ynorm = np.sqrt(np.einsum("br,br->b", ys, ys))
-    g, slack, abs_gram, point_res, point_floor = _kkt_screen(
+    g, slack, terms, point_res, point_floor = _kkt_screen(
         Gram, Xy, ynorm, levels, coefs, n_points, rows
     )
     # the exact check where the screen does not pass (its bound holds elsewhere): all such
@@ -636,8 +636,7 @@ def _path_batch(
             slack[checked],
             levels[checked],
             coefs[checked],
-            n_points[checked],
-            abs_gram[checked],
+            tuple(t[checked] for t in terms),
             point_res[checked],
         )
     kkt, floor = np.maximum(point_res.max(axis=1), 0.0), point_floor.max(axis=1)
@@ -965,14 +964,14 @@ def _kkt_where_screen_fails(
     slack: np.ndarray,
     levels: np.ndarray,
     coefs: np.ndarray,
-    n_points: np.ndarray,
-    abs_gram: np.ndarray,
+    terms: tuple[np.ndarray, ...],
     point_res: np.ndarray,
 ) -> np.ndarray:
     """The per-breakpoint residuals of :func:`_kkt` after the screen (:func:`_kkt_screen`'s ``g``,
-    ``slack``, ``point_res``, updated in place), its failures checked again: with the gradient from
-    the residual in double-double and its bound (:func:`_gradient_bounded`), then, where that does
-    not pass either, with the gradient in double-double, nothing subtracted (:func:`_gradient_dd`).
+    ``slack`` and ``point_res``, updated in place, and ``terms``), its failures checked again: with
+    the gradient from the residual in double-double and its bound (:func:`_gradient_bounded`),
+    then, where that does not pass either, with the gradient in double-double, nothing subtracted
+    (:func:`_gradient_dd`).
     ``X`` ``(B, rows, m)``, ``y`` ``(B, rows)`` (``B = 1``: one problem). A problem with a
     non-finite residual (a NaN path) is left as it is: no check can pass it."""
     broken = (point_res == np.inf).any(axis=1)
@@ -983,7 +982,7 @@ def _kkt_where_screen_fails(
         with np.errstate(all="ignore"):
             Xp, yp = (X[0], y[0]) if X.shape[0] == 1 else (X[pb], y[pb])
             g[pb, pi], slack[pb, pi] = gradient(Xp, yp, coefs[pb, pi])
-            point_res = _kkt(g, slack, levels, coefs, n_points, abs_gram, points=True)[0]
+            point_res = _kkt(g, slack, levels, terms, points=True)[0]
     return point_res
 
 
@@ -995,14 +994,10 @@ def _kkt_direct(
     subtracted."""
     with np.errstate(all="ignore"):
         g = _gradient_dd(X, y, coefs)
-        res, floor = _kkt(
-            g[None],
-            np.zeros((1, levels.size)),
-            levels[None],
-            coefs[None],
-            np.array([levels.size]),
-            np.abs(X.T @ X)[None],
+        terms = _kkt_terms(
+            levels[None], coefs[None], np.array([levels.size]), np.abs(X.T @ X)[None]
         )
+        res, floor = _kkt(g[None], np.zeros((1, levels.size)), levels[None], terms)
     return float(res[0]), float(floor[0])
 
 
@@ -1015,7 +1010,7 @@ def _kkt_path(
     k = np.array([levels.size])
     gram = X.T @ X
     with np.errstate(all="ignore"):
-        g, slack, abs_gram, res, _ = _kkt_screen(
+        g, slack, terms, res, _ = _kkt_screen(
             gram[None],
             (X.T @ y)[None],
             np.sqrt(y @ y)[None],
@@ -1024,10 +1019,8 @@ def _kkt_path(
             k,
             X.shape[0],
         )
-        _kkt_where_screen_fails(
-            X[None], y[None], g, slack, levels[None], coefs[None], k, abs_gram, res
-        )
-        res, floor = _kkt(g, slack, levels[None], coefs[None], k, abs_gram)
+        _kkt_where_screen_fails(X[None], y[None], g, slack, levels[None], coefs[None], terms, res)
+        res, floor = _kkt(g, slack, levels[None], terms)
     return float(res[0]), float(floor[0])
 
 
@@ -1042,8 +1035,8 @@ def _kkt_screen(
 ) -> tuple[np.ndarray, ...]:
     """The batched screen of :func:`lasso_path_batch`'s KKT check, from ``Gram`` ``(B, m, m)``,
     ``Xy`` ``(B, m)`` and ``||y||`` ``(B,)``: the gradients ``g`` ``(B, S, m)`` (Gram form), the
-    bound of their rounding ``slack`` ``(B, S)``, ``|Gram|``, and the per-breakpoint residuals and
-    floors of :func:`_kkt` (the slack added)."""
+    bound of their rounding ``slack`` ``(B, S)``, the paths' :func:`_kkt_terms`, and the
+    per-breakpoint residuals and floors of :func:`_kkt` (the slack added)."""
     m = Gram.shape[1]
     with np.errstate(all="ignore"):
         norms = np.sqrt(np.einsum("bii->bi", Gram))
@@ -1057,54 +1050,64 @@ def _kkt_screen(
         )
         g = np.matmul(coefs, Gram)
         np.subtract(Xy[:, None, :], g, out=g)  # in place: one (B, S, m) array, not two
-        abs_gram = np.abs(Gram)
-        point_res, point_floor = _kkt(g, slack, levels, coefs, n_points, abs_gram, points=True)
-    return g, slack, abs_gram, point_res, point_floor
+        terms = _kkt_terms(levels, coefs, n_points, np.abs(Gram))
+        point_res, point_floor = _kkt(g, slack, levels, terms, points=True)
+    return g, slack, terms, point_res, point_floor
 
 
-def _kkt(
-    g: np.ndarray,
-    slack: np.ndarray,
-    levels: np.ndarray,
-    coefs: np.ndarray,
-    n_points: np.ndarray,
-    abs_gram: np.ndarray,
-    *,
-    points: bool = False,
-) -> tuple[np.ndarray, np.ndarray]:
-    """The residuals of :func:`kkt_residual` ``(B,)`` and the float floors ``(B,)`` (the largest
-    ``floor_i``, in levels) of paths ``coefs`` ``(B, S, m)`` padded after ``n_points`` (with
-    ``points=True``, per breakpoint ``(B, S)``: residual, ``-inf`` in the padding, and floor), from
-    the gradients ``g`` ``(B, S, m)`` (without the ``1/N``) at the levels ``levels`` ``(B, S)`` (``N
-    lambda``). ``slack`` ``(B, S)`` bounds the error of ``g`` at each breakpoint and is *added* to
-    the violation (a screen with a rounded ``g`` can then fail a good path, never pass a bad one);
-    ``abs_gram`` ``(B, m, m)`` is ``|X^T X|`` (for the float floor). Vectorised over the batch: a
-    few passes over ``(B, S, m)``."""
+def _kkt_terms(
+    levels: np.ndarray, coefs: np.ndarray, n_points: np.ndarray, abs_gram: np.ndarray
+) -> tuple[np.ndarray, ...]:
+    """What :func:`_kkt` needs of paths ``coefs`` ``(B, S, m)`` padded after ``n_points``, at the
+    levels ``levels`` ``(B, S)`` (``N lambda``), besides their gradients (computed once for a
+    check whose gradients are computed again at some breakpoints, :func:`_kkt_where_screen_fails`):
+    the breakpoints on the paths ``(B, S)``, the signs ``pos``, ``neg`` ``(B, S, m)`` each
+    ``theta_j`` has at a breakpoint or on an interval next to it (as :func:`_activity` reads them),
+    the float floors ``(B, S)`` (0 in the padding) and the scales of the violations ``(B, S)``.
+    ``abs_gram`` ``(B, m, m)`` is ``|X^T X|`` (for the float floor)."""
     B, S, m = coefs.shape
     valid = np.arange(S) < n_points[:, None]  # (B, S)
     with np.errstate(all="ignore"):
         top = np.maximum(coefs.max(axis=(1, 2), initial=0.0), -coefs.min(axis=(1, 2), initial=0.0))
         zero = 1e-12 * np.maximum(1.0, top)[:, None, None]
-        # the signs theta_j has at breakpoint i or on an interval next to it (as _activity reads them)
         pos, neg = coefs > zero, coefs < -zero
         mid = coefs[:, :-1] + coefs[:, 1:]
         mid[~valid[:, 1:]] = 0.0
         for mask, on in ((pos, mid > 2 * zero), (neg, mid < -2 * zero)):
             mask[:, :-1] |= on
             mask[:, 1:] |= on
+        # float floor: rounding theta to float64 (|delta_k| <= eps/2 |theta_k|) moves g_j by up to
+        # eps/2 sum_k |G_jk theta_k|; below floor_i = that / KKT_TOL, KKT_TOL lambda cannot be met
+        floor = np.matmul(np.abs(coefs), abs_gram).max(axis=2) * (0.5 * _EPS / KKT_TOL)
+        scale = np.maximum(np.maximum(levels, KKT_FLOOR * levels[:, :1]), floor)
+        scale = np.maximum(scale, _TINY)
+    return valid, pos, neg, np.where(valid, floor, 0.0), scale
+
+
+def _kkt(
+    g: np.ndarray,
+    slack: np.ndarray,
+    levels: np.ndarray,
+    terms: tuple[np.ndarray, ...],
+    *,
+    points: bool = False,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The residuals of :func:`kkt_residual` ``(B,)`` and the float floors ``(B,)`` (the largest
+    ``floor_i``, in levels) of paths padded to ``S`` breakpoints (with ``points=True``, per
+    breakpoint ``(B, S)``: residual, ``-inf`` in the padding, and floor), from the gradients ``g``
+    ``(B, S, m)`` (without the ``1/N``) at the levels ``levels`` ``(B, S)`` (``N lambda``) and the
+    paths' :func:`_kkt_terms`. ``slack`` ``(B, S)`` bounds the error of ``g`` at each breakpoint
+    and is *added* to the violation (a screen with a rounded ``g`` can then fail a good path, never
+    pass a bad one). Vectorised over the batch: a few passes over ``(B, S, m)``."""
+    valid, pos, neg, floor, scale = terms
+    with np.errstate(all="ignore"):
         # |g_j| <= c for every j; c - g_j <= 0 where theta_j > 0 and c + g_j <= 0 where theta_j < 0 (with
         # the first, g_j = c sign(theta_j); a sign change on an interval gives c + |g_j|): four
         # reductions over j
         worst = np.maximum(g.max(axis=2), -g.min(axis=2)) - levels
         np.maximum(worst, levels - np.where(pos, g, np.inf).min(axis=2), out=worst)
         np.maximum(worst, levels + np.where(neg, g, -np.inf).max(axis=2), out=worst)
-        # float floor: rounding theta to float64 (|delta_k| <= eps/2 |theta_k|) moves g_j by up to
-        # eps/2 sum_k |G_jk theta_k|; below floor_i = that / KKT_TOL, KKT_TOL lambda cannot be met
-        floor = np.matmul(np.abs(coefs), abs_gram).max(axis=2) * (0.5 * _EPS / KKT_TOL)
-        scale = np.maximum(np.maximum(levels, KKT_FLOOR * levels[:, :1]), floor)
-        scale = np.maximum(scale, _TINY)
         res = np.where(valid, (worst + slack) / scale, -np.inf)
-        floor = np.where(valid, floor, 0.0)
         if points:  # per breakpoint, (B, S)
             return np.where(np.isnan(res), np.inf, res), floor
         res, floor = res.max(axis=1), floor.max(axis=1)

@@ -228,3 +228,37 @@ def test_residual_in_double_double_is_dot2_bit_for_bit(shared, monkeypatch):
     for sl, _, bs, be in blocks:
         got_s[sl], got_e[sl] = bs, be
     assert got_s.tobytes() == s.tobytes() and got_e.tobytes() == e.tobytes()
+
+
+def test_batch_residuals_are_those_of_each_path_checked_alone(monkeypatch):
+    """The KKT check of a batch (the screen's signs, floors and scales reused, for the problems it
+    does not pass, where the gradient is computed again in double-double) gives each path the
+    residual and float floor, bit for bit, of that path checked alone: full paths of Example 1's
+    regressions (which the screen does not pass at ``lambda = 0``) mixed with generic ones."""
+    import fdi_lib.sparse as sp
+    from fdi_lib.montecarlo import trial_rngs, trial_seeds
+    from fdi_lib.reproduce.zhang2021 import example1_regression
+    from fdi_lib.systems import zhang2021_example1 as ex
+
+    reg, _ = example1_regression(
+        ex.draw_trials(ex.example1_model(), trial_rngs(trial_seeds(0, 4)), q=15)
+    )
+    rng = np.random.default_rng(2)
+    Xr = rng.standard_normal((3, 200, 50))
+    yr = Xr[:, :, :3] @ [1.0, -2.0, 0.5] + 0.3 * rng.standard_normal((3, 200))
+    X = np.concatenate([Xr[:1], reg.X[:2], Xr[1:], reg.X[2:]])
+    y = np.concatenate([yr[:1], reg.y[:2], yr[1:], reg.y[2:]])
+    rechecked = []
+    screen_fails = sp._kkt_where_screen_fails
+
+    def spy(X, *args):
+        rechecked.append(X.shape[0])
+        return screen_fails(X, *args)
+
+    monkeypatch.setattr(sp, "_kkt_where_screen_fails", spy)
+    batch = sp.lasso_path_batch(X, y, n_samples=reg.n_samples)
+    assert 0 < rechecked[0] < len(X) and list(batch.solver) == ["homotopy"] * len(X)
+    for b in range(len(X)):
+        alone = sp.lasso_path(X[b], y[b], n_samples=reg.n_samples)
+        assert alone.kkt_residual == batch.kkt_residual[b], b
+        assert alone.kkt_floor == batch.kkt_floor[b], b
