@@ -70,7 +70,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
-from typing import Any, Iterator, Literal
+from typing import Any, Callable, Iterator, Literal
 
 import numpy as np
 
@@ -624,13 +624,12 @@ def _path_batch(
     )
     # the exact check where the screen does not pass (its bound holds elsewhere): all such
     # breakpoints of the batch at once, from the scaled X of their problems (X / sx, formed only
-    # for them)
+    # for them, where used)
     broken = (point_res == np.inf).any(axis=1)  # a NaN (a singular step or a cycle): recomputed
     checked = np.flatnonzero((point_res > KKT_TOL).any(axis=1))
-    Xs = X[checked] / sx[checked, None, None]
     if checked.size:  # (a batch that the screen passes skips the call's set-up)
         point_res[checked] = _kkt_where_screen_fails(
-            Xs,
+            lambda p: X[checked[p]] / sx[checked[p], None, None],
             ys[checked],
             g[checked],
             slack[checked],
@@ -642,7 +641,7 @@ def _path_batch(
     kkt, floor = np.maximum(point_res.max(axis=1), 0.0), point_floor.max(axis=1)
     solver = np.full(B, "homotopy", dtype=object)
     levels, coefs = _recompute_failed(
-        Xs, ys, checked, broken, c_min, max_size, levels, coefs, n_points, kkt, floor, solver
+        X, sx, ys, broken, c_min, max_size, levels, coefs, n_points, kkt, floor, solver
     )
     S = levels.shape[1]
     # the correlation level c is rows * alpha (scikit-learn's 1/(2 rows)); (39) has 1/(2N): lambda = c / N
@@ -671,9 +670,9 @@ def _path_batch(
 
 
 def _recompute_failed(
-    Xs: np.ndarray,
+    X: np.ndarray,
+    sx: np.ndarray,
     ys: np.ndarray,
-    checked: np.ndarray,
     broken: np.ndarray,
     c_min: np.ndarray,
     max_size: int | None,
@@ -685,13 +684,13 @@ def _recompute_failed(
     solver: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The paths of :func:`_path_batch` that fail the KKT check (``kkt > KKT_TOL``), recomputed
-    alone (see :func:`lasso_path_batch`): ``Xs`` are the scaled designs of the problems
-    ``checked``, ``broken`` the paths with a NaN. ``n_points``, ``kkt``, ``floor``, ``solver`` and
+    alone (see :func:`lasso_path_batch`): ``X / sx`` and ``ys`` are the scaled problems,
+    ``broken`` the paths with a NaN. ``n_points``, ``kkt``, ``floor``, ``solver`` and
     ``coefs`` are updated in place; returns ``levels`` and ``coefs``, padded to the longest path."""
     S = levels.shape[1]
     fixed = []
     for b in np.flatnonzero(kkt > KKT_TOL):  # degenerate or ill-conditioned designs
-        Xb, yb, k = Xs[np.searchsorted(checked, b)], ys[b], n_points[b]
+        Xb, yb, k = X[b] / sx[b], ys[b], n_points[b]
         if broken[b]:
             fixed.append((b, *_lars_fallback(Xb, yb, float(c_min[b]), max_size, b, float(kkt[b]))))
             continue
@@ -958,7 +957,7 @@ def _gradient_exact(
 
 
 def _kkt_where_screen_fails(
-    X: np.ndarray,
+    design: Callable[[np.ndarray], np.ndarray],
     y: np.ndarray,
     g: np.ndarray,
     slack: np.ndarray,
@@ -972,15 +971,16 @@ def _kkt_where_screen_fails(
     the gradient from the residual in double-double and its bound (:func:`_gradient_bounded`),
     then, where that does not pass either, with the gradient in double-double, nothing subtracted
     (:func:`_gradient_dd`).
-    ``X`` ``(B, rows, m)``, ``y`` ``(B, rows)`` (``B = 1``: one problem). A problem with a
-    non-finite residual (a NaN path) is left as it is: no check can pass it."""
+    ``design(p)`` is the ``X`` ``(P, rows, m)`` of the problems ``p`` (indices into the ``B``
+    problems), ``y`` ``(B, rows)`` (``B = 1``: one problem). A problem with a non-finite residual
+    (a NaN path) is left as it is: no check can pass it."""
     broken = (point_res == np.inf).any(axis=1)
     for gradient in (_gradient_bounded, _gradient_exact):
         pb, pi = np.nonzero((point_res > KKT_TOL) & ~broken[:, None])
         if not pb.size:
             break
         with np.errstate(all="ignore"):
-            Xp, yp = (X[0], y[0]) if X.shape[0] == 1 else (X[pb], y[pb])
+            Xp, yp = (design(pb[:1])[0], y[0]) if y.shape[0] == 1 else (design(pb), y[pb])
             g[pb, pi], slack[pb, pi] = gradient(Xp, yp, coefs[pb, pi])
             point_res = _kkt(g, slack, levels, terms, points=True)[0]
     return point_res
@@ -1019,7 +1019,9 @@ def _kkt_path(
             k,
             X.shape[0],
         )
-        _kkt_where_screen_fails(X[None], y[None], g, slack, levels[None], coefs[None], terms, res)
+        _kkt_where_screen_fails(
+            lambda p: X[None], y[None], g, slack, levels[None], coefs[None], terms, res
+        )
         res, floor = _kkt(g, slack, levels[None], terms)
     return float(res[0]), float(floor[0])
 

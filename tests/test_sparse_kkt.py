@@ -251,9 +251,9 @@ def test_batch_residuals_are_those_of_each_path_checked_alone(monkeypatch):
     rechecked = []
     screen_fails = sp._kkt_where_screen_fails
 
-    def spy(X, *args):
-        rechecked.append(X.shape[0])
-        return screen_fails(X, *args)
+    def spy(design, y, *args):
+        rechecked.append(y.shape[0])
+        return screen_fails(design, y, *args)
 
     monkeypatch.setattr(sp, "_kkt_where_screen_fails", spy)
     batch = sp.lasso_path_batch(X, y, n_samples=reg.n_samples)
