@@ -70,7 +70,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
-from typing import Any, Iterator, Literal
+from typing import Any, Callable, Iterator, Literal
 
 import numpy as np
 
@@ -117,6 +117,8 @@ KKT_FLOOR = 1e-6
 # values of X per block of problems that lasso_path_batch scales and multiplies together (a few
 # hundred kB: they stay in cache between the passes)
 _BLOCK_VALUES = 2**17
+# values of X per block of problems of the gradient in double-double (_residual_blocks)
+_DD_BLOCK_VALUES = 1_000_000
 _EPS, _TINY = np.finfo(float).eps, np.finfo(float).tiny  # (np.finfo costs a call per use)
 
 
@@ -617,31 +619,29 @@ def _path_batch(
     # for the paths it does not pass, the check in double-double from X and y (nothing subtracted),
     # then the coefficients refined on the path's own supports, then scikit-learn's lars_path.
     ynorm = np.sqrt(np.einsum("br,br->b", ys, ys))
-    g, slack, abs_gram, point_res, point_floor = _kkt_screen(
+    g, slack, terms, point_res, point_floor = _kkt_screen(
         Gram, Xy, ynorm, levels, coefs, n_points, rows
     )
     # the exact check where the screen does not pass (its bound holds elsewhere): all such
     # breakpoints of the batch at once, from the scaled X of their problems (X / sx, formed only
-    # for them)
+    # for them, where used)
     broken = (point_res == np.inf).any(axis=1)  # a NaN (a singular step or a cycle): recomputed
     checked = np.flatnonzero((point_res > KKT_TOL).any(axis=1))
-    Xs = X[checked] / sx[checked, None, None]
     if checked.size:  # (a batch that the screen passes skips the call's set-up)
         point_res[checked] = _kkt_where_screen_fails(
-            Xs,
+            lambda p: X[checked[p]] / sx[checked[p], None, None],
             ys[checked],
             g[checked],
             slack[checked],
             levels[checked],
             coefs[checked],
-            n_points[checked],
-            abs_gram[checked],
+            tuple(t[checked] for t in terms),
             point_res[checked],
         )
     kkt, floor = np.maximum(point_res.max(axis=1), 0.0), point_floor.max(axis=1)
     solver = np.full(B, "homotopy", dtype=object)
     levels, coefs = _recompute_failed(
-        Xs, ys, checked, broken, c_min, max_size, levels, coefs, n_points, kkt, floor, solver
+        X, sx, ys, broken, c_min, max_size, levels, coefs, n_points, kkt, floor, solver
     )
     S = levels.shape[1]
     # the correlation level c is rows * alpha (scikit-learn's 1/(2 rows)); (39) has 1/(2N): lambda = c / N
@@ -670,9 +670,9 @@ def _path_batch(
 
 
 def _recompute_failed(
-    Xs: np.ndarray,
+    X: np.ndarray,
+    sx: np.ndarray,
     ys: np.ndarray,
-    checked: np.ndarray,
     broken: np.ndarray,
     c_min: np.ndarray,
     max_size: int | None,
@@ -684,13 +684,13 @@ def _recompute_failed(
     solver: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The paths of :func:`_path_batch` that fail the KKT check (``kkt > KKT_TOL``), recomputed
-    alone (see :func:`lasso_path_batch`): ``Xs`` are the scaled designs of the problems
-    ``checked``, ``broken`` the paths with a NaN. ``n_points``, ``kkt``, ``floor``, ``solver`` and
+    alone (see :func:`lasso_path_batch`): ``X / sx`` and ``ys`` are the scaled problems,
+    ``broken`` the paths with a NaN. ``n_points``, ``kkt``, ``floor``, ``solver`` and
     ``coefs`` are updated in place; returns ``levels`` and ``coefs``, padded to the longest path."""
     S = levels.shape[1]
     fixed = []
     for b in np.flatnonzero(kkt > KKT_TOL):  # degenerate or ill-conditioned designs
-        Xb, yb, k = Xs[np.searchsorted(checked, b)], ys[b], n_points[b]
+        Xb, yb, k = X[b] / sx[b], ys[b], n_points[b]
         if broken[b]:
             fixed.append((b, *_lars_fallback(Xb, yb, float(c_min[b]), max_size, b, float(kkt[b]))))
             continue
@@ -841,13 +841,10 @@ def _gradient_dd(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> np.ndarray:
     survives). Processed in blocks of ``coefs`` rows.
     """
     out = np.empty(coefs.shape)
-    for sl, Xb, (Xh, Xl), s, e in _residual_blocks(X, y, coefs):
+    for sl, Xb, s, e in _residual_blocks(X, y, coefs):
         XT = Xb.transpose(0, 2, 1)
         P = XT * s[:, None, :]  # (P, m, rows)
-        E = (
-            _product_error((Xh.transpose(0, 2, 1), Xl.transpose(0, 2, 1)), s[:, None, :], P)
-            + XT * e[:, None, :]
-        )
+        E = _product_error(_split(XT), s[:, None, :], P) + XT * e[:, None, :]
         while P.shape[2] > 1:
             if P.shape[2] % 2:
                 P = np.concatenate([P, np.zeros(P.shape[:2] + (1,))], axis=2)
@@ -861,19 +858,19 @@ def _gradient_dd(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> np.ndarray:
 def _residual_blocks(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> Iterator[tuple[Any, ...]]:
     """The residuals ``y_b - X_b theta_b`` of :func:`_gradient_dd` (its first stage), in blocks of
     ``coefs`` rows: for each block, its slice of the rows of ``coefs``, its ``X`` ``(1 or P, rows,
-    m)``, that ``X``'s Dekker split and the residuals as unevaluated sums ``s + e`` ``(P, rows)``
-    (Ogita, Rump and Oishi's Dot2: ``|fl(s + e) - r| <= eps/2 |r| + gamma_(m+1)^2 (|y| + |X|
-    |theta|)``, ``gamma_n = n (eps/2) / (1 - n eps/2)``)."""
+    m)`` and the residuals as unevaluated sums ``s + e`` ``(P, rows)`` (Ogita, Rump and Oishi's
+    Dot2: ``|fl(s + e) - r| <= eps/2 |r| + gamma_(m+1)^2 (|y| + |X| |theta|)``, ``gamma_n = n
+    (eps/2) / (1 - n eps/2)``). A loop over the columns of ``X``, each copied and split
+    (:func:`_split`) where it is used, in cache (rather than a transposed copy and split of the
+    whole block before the loop: the same values, several times the memory traffic)."""
     X = X[None] if X.ndim == 2 else X
     y = y[None] if y.ndim == 1 else y
     rows, m = X.shape[1:]
-    block = max(1, 1_000_000 // (rows * m))
+    block = max(1, _DD_BLOCK_VALUES // (rows * m))
     for b0 in range(0, coefs.shape[0], block):
         c = coefs[b0 : b0 + block]
         Xb = X if X.shape[0] == 1 else X[b0 : b0 + block]
-        # the columns contiguous (m, rows) for the loop over them: elementwise, the same values
-        XT = np.ascontiguousarray(Xb.transpose(0, 2, 1))
-        XTh, XTl = _split(XT)
+        XT = Xb.transpose(0, 2, 1)  # (1 or P, m, rows), a view
         yb = y if y.shape[0] == 1 else y[b0 : b0 + block]
         s = np.array(np.broadcast_to(yb, (c.shape[0], rows)))
         e = np.zeros_like(s)
@@ -881,10 +878,17 @@ def _residual_blocks(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> Iterato
         # operations in the same order, into buffers kept across the columns (a new array of
         # this size per operation costs more than the operation)
         p, b, s2, z, err, u, v = (np.empty_like(s) for _ in range(7))
+        # column k of X (copied contiguous: elementwise, the same values) and its split
+        xk, ah, al = (np.empty(XT.shape[::2]) for _ in range(3))
         th, tl = _split(c)
         for k in range(m):
-            t, ah, al = c[:, k, None], XTh[:, k], XTl[:, k]
-            np.multiply(XT[:, k], t, out=p)
+            t = c[:, k, None]
+            np.copyto(xk, XT[:, k])
+            np.multiply(xk, 134217729.0, out=ah)  # _split(xk), into the buffers
+            np.subtract(ah, xk, out=al)
+            np.subtract(ah, al, out=ah)
+            np.subtract(xk, ah, out=al)
+            np.multiply(xk, t, out=p)
             np.negative(p, out=b)
             np.add(s, b, out=s2)  # _two_sum(s, b): s2 = fl(s + b), err = s + b - s2
             np.subtract(s2, s, out=z)
@@ -904,8 +908,7 @@ def _residual_blocks(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> Iterato
             np.add(u, v, out=u)
             np.subtract(err, u, out=err)
             np.add(e, err, out=e)
-        Xh, Xl = XTh.transpose(0, 2, 1), XTl.transpose(0, 2, 1)
-        yield slice(b0, b0 + c.shape[0]), Xb, (Xh, Xl), s, e
+        yield slice(b0, b0 + c.shape[0]), Xb, s, e
 
 
 def _gradient_bounded(
@@ -927,7 +930,7 @@ def _gradient_bounded(
     rows, m = Xd.shape[1:]
     eps = _EPS
     g, slack = np.empty(coefs.shape), np.empty(coefs.shape[0])
-    for sl, Xb, _, s, e in _residual_blocks(X, y, coefs):
+    for sl, Xb, s, e in _residual_blocks(X, y, coefs):
         r = s + e
         absX = np.abs(Xb)
         yb = np.abs(y[None] if y.ndim == 1 else y)
@@ -954,31 +957,32 @@ def _gradient_exact(
 
 
 def _kkt_where_screen_fails(
-    X: np.ndarray,
+    design: Callable[[np.ndarray], np.ndarray],
     y: np.ndarray,
     g: np.ndarray,
     slack: np.ndarray,
     levels: np.ndarray,
     coefs: np.ndarray,
-    n_points: np.ndarray,
-    abs_gram: np.ndarray,
+    terms: tuple[np.ndarray, ...],
     point_res: np.ndarray,
 ) -> np.ndarray:
     """The per-breakpoint residuals of :func:`_kkt` after the screen (:func:`_kkt_screen`'s ``g``,
-    ``slack``, ``point_res``, updated in place), its failures checked again: with the gradient from
-    the residual in double-double and its bound (:func:`_gradient_bounded`), then, where that does
-    not pass either, with the gradient in double-double, nothing subtracted (:func:`_gradient_dd`).
-    ``X`` ``(B, rows, m)``, ``y`` ``(B, rows)`` (``B = 1``: one problem). A problem with a
-    non-finite residual (a NaN path) is left as it is: no check can pass it."""
+    ``slack`` and ``point_res``, updated in place, and ``terms``), its failures checked again: with
+    the gradient from the residual in double-double and its bound (:func:`_gradient_bounded`),
+    then, where that does not pass either, with the gradient in double-double, nothing subtracted
+    (:func:`_gradient_dd`).
+    ``design(p)`` is the ``X`` ``(P, rows, m)`` of the problems ``p`` (indices into the ``B``
+    problems), ``y`` ``(B, rows)`` (``B = 1``: one problem). A problem with a non-finite residual
+    (a NaN path) is left as it is: no check can pass it."""
     broken = (point_res == np.inf).any(axis=1)
     for gradient in (_gradient_bounded, _gradient_exact):
         pb, pi = np.nonzero((point_res > KKT_TOL) & ~broken[:, None])
         if not pb.size:
             break
         with np.errstate(all="ignore"):
-            Xp, yp = (X[0], y[0]) if X.shape[0] == 1 else (X[pb], y[pb])
+            Xp, yp = (design(pb[:1])[0], y[0]) if y.shape[0] == 1 else (design(pb), y[pb])
             g[pb, pi], slack[pb, pi] = gradient(Xp, yp, coefs[pb, pi])
-            point_res = _kkt(g, slack, levels, coefs, n_points, abs_gram, points=True)[0]
+            point_res = _kkt(g, slack, levels, terms, points=True)[0]
     return point_res
 
 
@@ -990,14 +994,10 @@ def _kkt_direct(
     subtracted."""
     with np.errstate(all="ignore"):
         g = _gradient_dd(X, y, coefs)
-        res, floor = _kkt(
-            g[None],
-            np.zeros((1, levels.size)),
-            levels[None],
-            coefs[None],
-            np.array([levels.size]),
-            np.abs(X.T @ X)[None],
+        terms = _kkt_terms(
+            levels[None], coefs[None], np.array([levels.size]), np.abs(X.T @ X)[None]
         )
+        res, floor = _kkt(g[None], np.zeros((1, levels.size)), levels[None], terms)
     return float(res[0]), float(floor[0])
 
 
@@ -1010,7 +1010,7 @@ def _kkt_path(
     k = np.array([levels.size])
     gram = X.T @ X
     with np.errstate(all="ignore"):
-        g, slack, abs_gram, res, _ = _kkt_screen(
+        g, slack, terms, res, _ = _kkt_screen(
             gram[None],
             (X.T @ y)[None],
             np.sqrt(y @ y)[None],
@@ -1020,9 +1020,9 @@ def _kkt_path(
             X.shape[0],
         )
         _kkt_where_screen_fails(
-            X[None], y[None], g, slack, levels[None], coefs[None], k, abs_gram, res
+            lambda p: X[None], y[None], g, slack, levels[None], coefs[None], terms, res
         )
-        res, floor = _kkt(g, slack, levels[None], coefs[None], k, abs_gram)
+        res, floor = _kkt(g, slack, levels[None], terms)
     return float(res[0]), float(floor[0])
 
 
@@ -1037,8 +1037,8 @@ def _kkt_screen(
 ) -> tuple[np.ndarray, ...]:
     """The batched screen of :func:`lasso_path_batch`'s KKT check, from ``Gram`` ``(B, m, m)``,
     ``Xy`` ``(B, m)`` and ``||y||`` ``(B,)``: the gradients ``g`` ``(B, S, m)`` (Gram form), the
-    bound of their rounding ``slack`` ``(B, S)``, ``|Gram|``, and the per-breakpoint residuals and
-    floors of :func:`_kkt` (the slack added)."""
+    bound of their rounding ``slack`` ``(B, S)``, the paths' :func:`_kkt_terms`, and the
+    per-breakpoint residuals and floors of :func:`_kkt` (the slack added)."""
     m = Gram.shape[1]
     with np.errstate(all="ignore"):
         norms = np.sqrt(np.einsum("bii->bi", Gram))
@@ -1052,54 +1052,64 @@ def _kkt_screen(
         )
         g = np.matmul(coefs, Gram)
         np.subtract(Xy[:, None, :], g, out=g)  # in place: one (B, S, m) array, not two
-        abs_gram = np.abs(Gram)
-        point_res, point_floor = _kkt(g, slack, levels, coefs, n_points, abs_gram, points=True)
-    return g, slack, abs_gram, point_res, point_floor
+        terms = _kkt_terms(levels, coefs, n_points, np.abs(Gram))
+        point_res, point_floor = _kkt(g, slack, levels, terms, points=True)
+    return g, slack, terms, point_res, point_floor
 
 
-def _kkt(
-    g: np.ndarray,
-    slack: np.ndarray,
-    levels: np.ndarray,
-    coefs: np.ndarray,
-    n_points: np.ndarray,
-    abs_gram: np.ndarray,
-    *,
-    points: bool = False,
-) -> tuple[np.ndarray, np.ndarray]:
-    """The residuals of :func:`kkt_residual` ``(B,)`` and the float floors ``(B,)`` (the largest
-    ``floor_i``, in levels) of paths ``coefs`` ``(B, S, m)`` padded after ``n_points`` (with
-    ``points=True``, per breakpoint ``(B, S)``: residual, ``-inf`` in the padding, and floor), from
-    the gradients ``g`` ``(B, S, m)`` (without the ``1/N``) at the levels ``levels`` ``(B, S)`` (``N
-    lambda``). ``slack`` ``(B, S)`` bounds the error of ``g`` at each breakpoint and is *added* to
-    the violation (a screen with a rounded ``g`` can then fail a good path, never pass a bad one);
-    ``abs_gram`` ``(B, m, m)`` is ``|X^T X|`` (for the float floor). Vectorised over the batch: a
-    few passes over ``(B, S, m)``."""
+def _kkt_terms(
+    levels: np.ndarray, coefs: np.ndarray, n_points: np.ndarray, abs_gram: np.ndarray
+) -> tuple[np.ndarray, ...]:
+    """What :func:`_kkt` needs of paths ``coefs`` ``(B, S, m)`` padded after ``n_points``, at the
+    levels ``levels`` ``(B, S)`` (``N lambda``), besides their gradients (computed once for a
+    check whose gradients are computed again at some breakpoints, :func:`_kkt_where_screen_fails`):
+    the breakpoints on the paths ``(B, S)``, the signs ``pos``, ``neg`` ``(B, S, m)`` each
+    ``theta_j`` has at a breakpoint or on an interval next to it (as :func:`_activity` reads them),
+    the float floors ``(B, S)`` (0 in the padding) and the scales of the violations ``(B, S)``.
+    ``abs_gram`` ``(B, m, m)`` is ``|X^T X|`` (for the float floor)."""
     B, S, m = coefs.shape
     valid = np.arange(S) < n_points[:, None]  # (B, S)
     with np.errstate(all="ignore"):
         top = np.maximum(coefs.max(axis=(1, 2), initial=0.0), -coefs.min(axis=(1, 2), initial=0.0))
         zero = 1e-12 * np.maximum(1.0, top)[:, None, None]
-        # the signs theta_j has at breakpoint i or on an interval next to it (as _activity reads them)
         pos, neg = coefs > zero, coefs < -zero
         mid = coefs[:, :-1] + coefs[:, 1:]
         mid[~valid[:, 1:]] = 0.0
         for mask, on in ((pos, mid > 2 * zero), (neg, mid < -2 * zero)):
             mask[:, :-1] |= on
             mask[:, 1:] |= on
+        # float floor: rounding theta to float64 (|delta_k| <= eps/2 |theta_k|) moves g_j by up to
+        # eps/2 sum_k |G_jk theta_k|; below floor_i = that / KKT_TOL, KKT_TOL lambda cannot be met
+        floor = np.matmul(np.abs(coefs), abs_gram).max(axis=2) * (0.5 * _EPS / KKT_TOL)
+        scale = np.maximum(np.maximum(levels, KKT_FLOOR * levels[:, :1]), floor)
+        scale = np.maximum(scale, _TINY)
+    return valid, pos, neg, np.where(valid, floor, 0.0), scale
+
+
+def _kkt(
+    g: np.ndarray,
+    slack: np.ndarray,
+    levels: np.ndarray,
+    terms: tuple[np.ndarray, ...],
+    *,
+    points: bool = False,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The residuals of :func:`kkt_residual` ``(B,)`` and the float floors ``(B,)`` (the largest
+    ``floor_i``, in levels) of paths padded to ``S`` breakpoints (with ``points=True``, per
+    breakpoint ``(B, S)``: residual, ``-inf`` in the padding, and floor), from the gradients ``g``
+    ``(B, S, m)`` (without the ``1/N``) at the levels ``levels`` ``(B, S)`` (``N lambda``) and the
+    paths' :func:`_kkt_terms`. ``slack`` ``(B, S)`` bounds the error of ``g`` at each breakpoint
+    and is *added* to the violation (a screen with a rounded ``g`` can then fail a good path, never
+    pass a bad one). Vectorised over the batch: a few passes over ``(B, S, m)``."""
+    valid, pos, neg, floor, scale = terms
+    with np.errstate(all="ignore"):
         # |g_j| <= c for every j; c - g_j <= 0 where theta_j > 0 and c + g_j <= 0 where theta_j < 0 (with
         # the first, g_j = c sign(theta_j); a sign change on an interval gives c + |g_j|): four
         # reductions over j
         worst = np.maximum(g.max(axis=2), -g.min(axis=2)) - levels
         np.maximum(worst, levels - np.where(pos, g, np.inf).min(axis=2), out=worst)
         np.maximum(worst, levels + np.where(neg, g, -np.inf).max(axis=2), out=worst)
-        # float floor: rounding theta to float64 (|delta_k| <= eps/2 |theta_k|) moves g_j by up to
-        # eps/2 sum_k |G_jk theta_k|; below floor_i = that / KKT_TOL, KKT_TOL lambda cannot be met
-        floor = np.matmul(np.abs(coefs), abs_gram).max(axis=2) * (0.5 * _EPS / KKT_TOL)
-        scale = np.maximum(np.maximum(levels, KKT_FLOOR * levels[:, :1]), floor)
-        scale = np.maximum(scale, _TINY)
         res = np.where(valid, (worst + slack) / scale, -np.inf)
-        floor = np.where(valid, floor, 0.0)
         if points:  # per breakpoint, (B, S)
             return np.where(np.isnan(res), np.inf, res), floor
         res, floor = res.max(axis=1), floor.max(axis=1)
@@ -1323,24 +1333,10 @@ def _homotopy(
     while running.any():
         if rows.size >= 16 and running.sum() <= 3 * rows.size // 4:  # drop finished problems
             keep = running
-            c_min, beta, cov, sign, active, inv, GA, order, slot, n_act, c, j, near = (
-                x[keep]
-                for x in (
-                    c_min,
-                    beta,
-                    cov,
-                    sign,
-                    active,
-                    inv,
-                    GA,
-                    order,
-                    slot,
-                    n_act,
-                    c,
-                    j,
-                    near,
-                )
+            c_min, beta, cov, sign, active, inv, GA = (
+                x[keep] for x in (c_min, beta, cov, sign, active, inv, GA)
             )
+            order, slot, n_act, c, j, near = (x[keep] for x in (order, slot, n_act, c, j, near))
             joining, dropping, barred, barred_sign, stalled, running, ids = (
                 x[keep] for x in (joining, dropping, barred, barred_sign, stalled, running, ids)
             )
@@ -1356,15 +1352,18 @@ def _homotopy(
         u[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], g)
         schur = Gram[ids, j, j] - np.einsum("bi,bi->b", g, u)  # G_jj - g_A^T inv g_A
         u[rows[joining], s_ev[joining]] = -1.0  # w: the new column of inv is -w / schur
-        col = inv[rows, :k, s_ev]
-        z = np.where(joining[:, None], u[:, :k], col)
+        # over all K slots once most are used: inv[:, :K, :K] is contiguous, faster to add to than
+        # its strided corner (the unused slots' zeros in z add zeros, to zeros: inv is unchanged)
+        kk = K if 4 * k > 3 * K else k
+        col = inv[rows, :kk, s_ev]
+        z = np.where(joining[:, None], u[:, :kk], col)
         f = np.where(joining, 1.0 / schur, np.where(dropping, -1.0 / inv[rows, s_ev, s_ev], 0.0))
         # the outer product in a buffer kept across steps: a new (B, k, k) array at each step
         # (megabytes) is mapped and faulted in anew by the allocator (same products, same sums;
         # einsum forms them faster than a broadcast multiply)
-        outer = outer_buf[: rows.size * k * k].reshape(rows.size, k, k)
+        outer = outer_buf[: rows.size * kk * kk].reshape(rows.size, kk, kk)
         np.einsum("bi,bj->bij", z * f[:, None], z, out=outer)
-        inv[:, :k, :k] += outer
+        inv[:, :kk, :kk] += outer
         if joining.any():
             b = rows[joining]
             GA[b, s_ev[b]] = Gram[ids[b], j[b]]  # row j (the Gram matrix is symmetric)
@@ -1398,7 +1397,8 @@ def _homotopy(
         up = below / (1.0 - a)
         down = above / (1.0 + a)
         zero = -beta / d
-        join = np.minimum(np.where(up > 0, up, np.inf), np.where(down > 0, down, np.inf))
+        inactive = ~active  # the components that can join
+        join = np.fmin(_where_inf((up > 0) & inactive, up), _where_inf((down > 0) & inactive, down))
         # A correlation at the level (a tie, e.g. at lambda_max; to rounding, `near`, while the level
         # is well above it) that would overtake it joins at once (gamma = 0); one that moves away
         # from it does not, nor one that moves with it to 1e-9 (a column in the span of the active
@@ -1406,8 +1406,7 @@ def _homotopy(
         # conditions to 1e-9 lambda).
         tol = np.where(c > 1e3 * near, near, 0.0)[:, None]
         tie = ((below <= tol) & (a < 1 - 1e-9)) | ((above <= tol) & (a > -1 + 1e-9))
-        np.putmask(join, tie, 0.0)  # join[tie] = 0.0, faster
-        np.putmask(join, active, np.inf)
+        np.putmask(join, tie & inactive, 0.0)  # join[tie & inactive] = 0.0, faster
         hit = barred >= 0
         if hit.any():
             b = rows[hit]
@@ -1415,7 +1414,7 @@ def _homotopy(
             join[b, barred[b]] = np.where(back > 0, back, np.inf)
         # a component that joined in a tie (beta_j = 0) but whose direction opposes its sign leaves
         # at once (gamma = 0): it cannot stay active (its coefficient would take the wrong sign)
-        zero = np.where(active & ((zero > 0) | ((beta == 0) & (d * sign[:, :m] < 0))), zero, np.inf)
+        zero = _where_inf(active & ((zero > 0) | ((beta == 0) & (d * sign[:, :m] < 0))), zero)
         j_join, j_drop = join.argmin(axis=1), zero.argmin(axis=1)
         g_join, g_drop = join[rows, j_join], zero[rows, j_drop]
         g_end = c - c_min
@@ -1467,6 +1466,17 @@ def _homotopy(
     for point, (at, beta_at) in enumerate(steps, start=1):
         coefs[at, point] = beta_at
     return levels, coefs, n_points
+
+
+def _where_inf(mask: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``numpy.where(mask, x, inf)`` for an ``x`` with no NaN where ``mask`` holds, the same bits,
+    without a branch per element (``where`` mispredicts on masks without a pattern, several times
+    slower; under ``numpy.errstate(invalid="ignore")``): ``-0.0`` added where ``mask`` holds
+    (exact, the sign of a zero kept), NaN elsewhere (``-0.0 / 0``), which ``fmin`` with ``inf``
+    turns into ``inf``."""
+    out = np.divide(-0.0, mask)
+    np.add(x, out, out=out)
+    return np.fmin(out, np.inf, out=out)
 
 
 def _homotopy_one(

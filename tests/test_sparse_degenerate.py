@@ -463,3 +463,20 @@ def test_scalar_minimum_of_the_one_problem_homotopy_is_numpys():
             got, want = _min(a, b), np.minimum(a, b)
             assert type(got) is np.float64
             assert np.array(got).tobytes() == np.array(want).tobytes(), (a, b)
+
+
+def test_where_inf_is_numpys_where_bit_for_bit():
+    """``_where_inf`` (the homotopy's step lengths without a branch per element) is
+    ``numpy.where(mask, x, inf)`` bit for bit, the sign of a zero kept where the mask holds, and
+    ``inf`` elsewhere whatever ``x`` is there (NaN, -inf, a negative zero)."""
+    from fdi_lib.sparse import _where_inf
+
+    rng = np.random.default_rng(3)
+    values = np.array([0.0, -0.0, 5e-324, -1.0, 2.5, 1e300, np.inf, -np.inf, np.nan])
+    x = rng.choice(values, (40, 30)) * rng.choice([1.0, 3.0], (40, 30))
+    mask = rng.random((40, 30)) < 0.5
+    mask &= ~np.isnan(x)  # no NaN where the mask holds (the documented domain)
+    assert mask.any() and (~mask & np.isnan(x)).any() and (mask & (x == 0) & np.signbit(x)).any()
+    with np.errstate(all="ignore"):
+        got = _where_inf(mask, x)
+    assert got.tobytes() == np.where(mask, x, np.inf).tobytes()

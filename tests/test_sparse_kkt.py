@@ -197,3 +197,68 @@ def test_gradient_from_the_double_double_residual_is_within_its_bound(seed):
         X.shape[0],
     )[1][0]
     assert np.median(_gradient_bounded(X, y, th)[1] / gram_slack) < 0.1
+
+
+@pytest.mark.parametrize("shared", [False, True])
+def test_residual_in_double_double_is_dot2_bit_for_bit(shared, monkeypatch):
+    """``_residual_blocks`` (the first stage of the exact gradient, a loop of in-place operations
+    over the columns, each split where it is used) gives the bits of Dot2 written with the
+    error-free transformations themselves: ``s, err = TwoSum(s, -X_k theta_k)``, ``e += err -
+    TwoProductError``, from ``s = y``, ``e = 0``; one ``X`` per row of ``coefs`` or one for all,
+    in blocks of 3 rows."""
+    import fdi_lib.sparse as sp
+
+    rng = np.random.default_rng(5)
+    P, rows, m = 7, 30, 9
+    X = rng.standard_normal((1 if shared else P, rows, m)) * 10.0 ** rng.integers(-3, 4, m)
+    X[..., 2] = X[..., 1]  # a duplicated column and an integer one (exact products)
+    X[..., 4] = np.round(X[..., 4])
+    y = rng.standard_normal((1 if shared else P, rows))
+    coefs = rng.standard_normal((P, m)) * (rng.random((P, m)) < 0.6)
+    s, e = np.broadcast_to(y, (P, rows)).copy(), np.zeros((P, rows))
+    for k in range(m):
+        t = coefs[:, k, None]
+        p = X[:, :, k] * t
+        s, err = sp._two_sum(s, -p)
+        e = e + (err - sp._product_error(sp._split(X[:, :, k]), t, p))
+    monkeypatch.setattr(sp, "_DD_BLOCK_VALUES", 3 * rows * m)
+    got_s, got_e = np.full((P, rows), np.nan), np.full((P, rows), np.nan)
+    blocks = list(sp._residual_blocks(X[0] if shared else X, y[0] if shared else y, coefs))
+    assert len(blocks) == 3
+    for sl, _, bs, be in blocks:
+        got_s[sl], got_e[sl] = bs, be
+    assert got_s.tobytes() == s.tobytes() and got_e.tobytes() == e.tobytes()
+
+
+def test_batch_residuals_are_those_of_each_path_checked_alone(monkeypatch):
+    """The KKT check of a batch (the screen's signs, floors and scales reused, for the problems it
+    does not pass, where the gradient is computed again in double-double) gives each path the
+    residual and float floor, bit for bit, of that path checked alone: full paths of Example 1's
+    regressions (which the screen does not pass at ``lambda = 0``) mixed with generic ones."""
+    import fdi_lib.sparse as sp
+    from fdi_lib.montecarlo import trial_rngs, trial_seeds
+    from fdi_lib.reproduce.zhang2021 import example1_regression
+    from fdi_lib.systems import zhang2021_example1 as ex
+
+    reg, _ = example1_regression(
+        ex.draw_trials(ex.example1_model(), trial_rngs(trial_seeds(0, 4)), q=15)
+    )
+    rng = np.random.default_rng(2)
+    Xr = rng.standard_normal((3, 200, 50))
+    yr = Xr[:, :, :3] @ [1.0, -2.0, 0.5] + 0.3 * rng.standard_normal((3, 200))
+    X = np.concatenate([Xr[:1], reg.X[:2], Xr[1:], reg.X[2:]])
+    y = np.concatenate([yr[:1], reg.y[:2], yr[1:], reg.y[2:]])
+    rechecked = []
+    screen_fails = sp._kkt_where_screen_fails
+
+    def spy(design, y, *args):
+        rechecked.append(y.shape[0])
+        return screen_fails(design, y, *args)
+
+    monkeypatch.setattr(sp, "_kkt_where_screen_fails", spy)
+    batch = sp.lasso_path_batch(X, y, n_samples=reg.n_samples)
+    assert 0 < rechecked[0] < len(X) and list(batch.solver) == ["homotopy"] * len(X)
+    for b in range(len(X)):
+        alone = sp.lasso_path(X[b], y[b], n_samples=reg.n_samples)
+        assert alone.kkt_residual == batch.kkt_residual[b], b
+        assert alone.kkt_floor == batch.kkt_floor[b], b
