@@ -806,11 +806,15 @@ def kkt_residual(X: Any, y: Any, path: "LassoPath") -> float:
     return _kkt_direct(X / sx, y / sy, levels, coefs)[0]
 
 
-def _split(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Dekker's split ``a = hi + lo`` into halves of 26 bits (so that ``hi * hi`` is exact)."""
-    hi = 134217729.0 * a  # 2^27 + 1
-    lo = hi - a
-    np.subtract(hi, lo, out=hi)  # hi = c - (c - a), c = (2^27 + 1) a
+def _split(
+    a: np.ndarray, out: tuple[np.ndarray, np.ndarray] | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Dekker's split ``a = hi + lo`` into halves of 26 bits (so that ``hi * hi`` is exact), into
+    the buffers ``out`` if given."""
+    hi, lo = (np.empty_like(a), np.empty_like(a)) if out is None else out
+    np.multiply(a, 134217729.0, out=hi)  # c = (2^27 + 1) a
+    np.subtract(hi, a, out=lo)
+    np.subtract(hi, lo, out=hi)  # hi = c - (c - a)
     return hi, np.subtract(a, hi, out=lo)
 
 
@@ -884,10 +888,7 @@ def _residual_blocks(X: np.ndarray, y: np.ndarray, coefs: np.ndarray) -> Iterato
         for k in range(m):
             t = c[:, k, None]
             np.copyto(xk, XT[:, k])
-            np.multiply(xk, 134217729.0, out=ah)  # _split(xk), into the buffers
-            np.subtract(ah, xk, out=al)
-            np.subtract(ah, al, out=ah)
-            np.subtract(xk, ah, out=al)
+            _split(xk, out=(ah, al))
             np.multiply(xk, t, out=p)
             np.negative(p, out=b)
             np.add(s, b, out=s2)  # _two_sum(s, b): s2 = fl(s + b), err = s + b - s2
