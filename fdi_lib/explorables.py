@@ -22,6 +22,12 @@ the ``image/png`` output that myst-nb's LaTeX builder prefers to HTML), drawn ag
 for paper (:func:`fdi_lib.plotting.for_paper`: larger text, so that it prints at
 :data:`PAPER_MIN_FONT_PT` or more at the width of the text, legends above the axes, no axes
 title); the PNG carries the caption (``fdi:caption``) for the book's extension to typeset under it.
+The HTML book never shows it, and drawing it took 1.5-2.7 s of each explorable's cell (13.6 s
+over the book's seven): where ``$FDI_PAPER_FIGURES`` is ``deferred`` (the book's execution,
+``tools/execute_book.py``) the display leaves it out and carries instead what
+:func:`paper_figure` needs to draw it in another process (:meth:`Explorable.paper_spec`, a small
+JSON output of type :data:`PAPER_SPEC_MIME`), which the PDF edition does before its LaTeX build
+(``tools/pdf_edition.py``): the same bytes (tested).
 
 :func:`figure_data` reduces a figure to its data arrays and texts; the tests compare the frames
 of the grid with the callback's output at the same slider values through it.
@@ -34,7 +40,9 @@ import html
 import html.parser
 import io
 import itertools
+import importlib
 import json
+import os
 import uuid
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping, Sequence
@@ -59,6 +67,9 @@ __all__ = [
     "PALETTE_COLOURS",
     "MAX_FRAMES",
     "MAX_BYTES",
+    "PAPER_SPEC_MIME",
+    "PAPER_FIGURES_ENV",
+    "paper_figure",
 ]
 
 #: Colours of the palette PNG of a frame (the house style uses a handful; 64 keeps antialiasing).
@@ -87,6 +98,16 @@ PAPER_GROWTH = 1.4
 
 #: Most bytes of one explorable's HTML, its page weight (the chapters' measure 0.15 to 1.6 MB).
 MAX_BYTES = 3_000_000
+
+#: MIME type of an explorable's paper-figure specification in a notebook's output
+#: (:meth:`Explorable.paper_spec`, read by :func:`paper_figure`).
+PAPER_SPEC_MIME = "application/vnd.fdi.explorable-paper+json"
+#: Environment variable: ``deferred`` leaves the small multiples out of an explorable's display
+#: (where the specification can draw them elsewhere); anything else, or unset, draws them.
+PAPER_FIGURES_ENV = "FDI_PAPER_FIGURES"
+#: Modules whose callbacks :func:`paper_figure` imports by name (the book's widgets): a notebook's
+#: output names a function to call, and nothing outside the library is imported for it.
+PAPER_CALLBACK_PACKAGE = "fdi_lib."
 
 
 def figure_data(fig: Figure) -> list[Any]:
@@ -318,6 +339,28 @@ class Explorable:
         panels : int
             Frames to show when there is a single slider (at least 2).
         """
+        return self._small_multiples(panels, self._frame_info())
+
+    def _frame_info(self) -> dict[str, float]:
+        """The shown frame's size in pixels, resolution and smallest text (its PNG metadata)."""
+        from PIL import Image
+
+        first = Image.open(
+            io.BytesIO(
+                base64.b64decode(
+                    self.frames[sum(s * d for s, d in zip(self.strides, self.default))]
+                )
+            )
+        )
+        return {
+            "width": first.width,
+            "height": first.height,
+            "dpi": float(first.info.get("fdi:dpi", DISPLAY_DPI)),
+            "min_font_pt": float(first.info["fdi:min_font_pt"]),
+        }
+
+    def _small_multiples(self, panels: int, frame: Mapping[str, float]) -> bytes:
+        """:meth:`small_multiples` with the shown frame's :meth:`_frame_info` given."""
         import matplotlib.pyplot as plt
         from PIL import Image
         from PIL.PngImagePlugin import PngInfo
@@ -327,17 +370,10 @@ class Explorable:
         if isinstance(panels, bool) or not isinstance(panels, int) or panels < 2:
             raise ModelError(f"panels: expected an integer of at least 2, got {panels!r}")
         columns = 2
-        first = Image.open(
-            io.BytesIO(
-                base64.b64decode(
-                    self.frames[sum(s * d for s, d in zip(self.strides, self.default))]
-                )
-            )
-        )
-        dpi = float(first.info.get("fdi:dpi", DISPLAY_DPI))
-        width, height = first.width / dpi, first.height / dpi  # inches
+        dpi = float(frame["dpi"])
+        width, height = frame["width"] / dpi, frame["height"] / dpi  # inches
         scale = min(1.0, PAPER_TEXT_WIDTH_IN / (columns * width))  # printed / drawn
-        font_scale = PAPER_DRAWN_FONT_PT / (float(first.info.get("fdi:min_font_pt")) * scale)
+        font_scale = PAPER_DRAWN_FONT_PT / (float(frame["min_font_pt"]) * scale)
         title_pt = STYLE["axes.titlesize"] * font_scale
         shown = [[_fmt(v) for v in g] for g in self.grid]
         # the longest title the panels can have (the first two sliders' widest values), on as
@@ -390,8 +426,92 @@ class Explorable:
         )
         return out.getvalue()
 
-    def _repr_png_(self) -> bytes:
-        return self.small_multiples()
+    def paper_spec(self) -> dict[str, Any] | None:
+        """What :func:`paper_figure` needs to draw :meth:`small_multiples` in another process, as
+        JSON values: the callback's name (a function of :data:`PAPER_CALLBACK_PACKAGE`), the
+        sliders, the fixed arguments, the caption and the shown frame's :meth:`_frame_info`.
+        ``None`` when they cannot say it exactly: a callback defined elsewhere (in a notebook), or
+        a value that is not an ``int``, ``float``, ``bool`` or ``str`` (a NumPy scalar, a tuple),
+        which JSON would not give back as it is."""
+        module = getattr(self.callback, "__module__", None) or ""
+        qualname = getattr(self.callback, "__qualname__", "")
+        if not module.startswith(PAPER_CALLBACK_PACKAGE) or "<" in qualname:
+            return None
+        values = [v for g in self.grid for v in g] + list(self.fixed.values())
+        if not all(type(v) in (int, float, bool, str) for v in values):
+            return None
+        return {
+            "callback": f"{module}:{qualname}",
+            "names": list(self.names),
+            "labels": list(self.labels),
+            "grid": [list(g) for g in self.grid],
+            "default": list(self.default),
+            "fixed": dict(self.fixed),
+            "caption": self.caption,
+            "frame": self._frame_info(),
+            "panels": PANELS,
+        }
+
+    def _repr_mimebundle_(self, include: Any = None, exclude: Any = None) -> dict[str, Any]:
+        """HTML (sliders and frames), a text summary, and for paper the small multiples
+        (``image/png``) or, where ``$FDI_PAPER_FIGURES`` is ``deferred`` and the explorable can
+        say how to draw them, their :meth:`paper_spec` (:data:`PAPER_SPEC_MIME`)."""
+        bundle: dict[str, Any] = {"text/html": self._repr_html_(), "text/plain": repr(self)}
+        spec = self.paper_spec()
+        if spec is not None:
+            bundle[PAPER_SPEC_MIME] = spec
+        if spec is None or os.environ.get(PAPER_FIGURES_ENV) != "deferred":
+            bundle["image/png"] = self.small_multiples(PANELS)
+        return bundle
+
+
+def paper_figure(spec: Mapping[str, Any]) -> bytes:
+    """The small multiples (:meth:`Explorable.small_multiples`) of the explorable that
+    :meth:`Explorable.paper_spec` describes, drawn in this process: the same PNG, byte for byte,
+    as the explorable's own (its callback imported by name and called at the same values, in the
+    book's style).
+
+    Raises
+    ------
+    ModelError
+        ``spec`` is not such a specification (a missing key, or a callback outside
+        :data:`PAPER_CALLBACK_PACKAGE` or not found there).
+    """
+    import matplotlib as mpl
+
+    from fdi_lib.plotting import use_style
+
+    keys = ("callback", "names", "labels", "grid", "default", "fixed", "caption", "frame", "panels")
+    if not isinstance(spec, Mapping) or set(keys) - set(spec):
+        missing = sorted(set(keys) - set(spec)) if isinstance(spec, Mapping) else keys
+        raise ModelError(f"spec: expected an explorable's paper_spec, missing {list(missing)}")
+    module, _, qualname = str(spec["callback"]).partition(":")
+    if not module.startswith(PAPER_CALLBACK_PACKAGE) or not qualname:
+        raise ModelError(
+            f"spec['callback']: expected 'module:function' of {PAPER_CALLBACK_PACKAGE}*, got "
+            f"{spec['callback']!r}"
+        )
+    try:
+        callback: Any = importlib.import_module(module)
+        for part in qualname.split("."):
+            callback = getattr(callback, part)
+    except (ImportError, AttributeError) as exc:
+        raise ModelError(f"spec['callback']: {spec['callback']!r} not found ({exc})") from None
+    ex = Explorable(
+        names=tuple(spec["names"]),
+        labels=tuple(spec["labels"]),
+        grid=tuple(tuple(g) for g in spec["grid"]),
+        frames=(),
+        data=(),
+        default=tuple(spec["default"]),
+        caption=spec["caption"],
+        alt="",
+        callback=callback,
+        fixed=dict(spec["fixed"]),
+    )
+    with mpl.rc_context():
+        use_style()
+        return ex._small_multiples(spec["panels"], spec["frame"])
 
 
 def _spread(n: int, default: int, m: int) -> list[int]:

@@ -214,6 +214,35 @@ def test_the_cache_gives_back_glued_values(tmp_path):
     assert merged.cells[2].outputs[0]["data"] == {"text/plain": "2"}
 
 
+def test_the_cache_draws_the_paper_figures_the_html_build_deferred(monkeypatch):
+    """An explorable executed with its paper figure deferred (``tools/execute_book.py``) carries a
+    specification instead of its small multiples: the PDF edition draws them from it, as the
+    ``image/png`` output the LaTeX build takes, the bytes the kernel would have drawn; an output
+    that has its PNG, or no specification, is left as it is."""
+    import base64
+
+    import nbformat
+
+    from fdi_lib import explorables as E
+
+    monkeypatch.setattr(E, "PAPER_CALLBACK_PACKAGE", _line.__module__)  # this module's _line
+    ex = explorable(_line, {"a": (1.0, 2.0, 3.0)}, caption="toy", default={"a": 2.0})
+    monkeypatch.setenv(E.PAPER_FIGURES_ENV, "deferred")
+    deferred = json.loads(json.dumps(ex._repr_mimebundle_()))  # as the notebook stores it
+    assert "image/png" not in deferred and E.PAPER_SPEC_MIME in deferred
+    drawn = {"text/plain": "x", "image/png": "AAAA"}
+    cell = nbformat.v4.new_code_cell("explorable(...)")
+    cell.outputs = [
+        nbformat.v4.new_output("display_data", deferred),
+        nbformat.v4.new_output("display_data", drawn),
+        nbformat.v4.new_output("execute_result", {"text/plain": "2"}, execution_count=1),
+    ]
+    assert TOOL.paper_figures([cell]) == 1
+    assert base64.b64decode(cell.outputs[0]["data"]["image/png"]) == ex.small_multiples()
+    assert cell.outputs[1]["data"] == drawn and cell.outputs[2]["data"] == {"text/plain": "2"}
+    assert TOOL.paper_figures([cell]) == 0  # drawn once
+
+
 def test_publish_pdf_links_the_pdf_only_when_it_is_there(tmp_path):
     html = tmp_path / "html"
     (html / "_static").mkdir(parents=True)

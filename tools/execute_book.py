@@ -29,6 +29,10 @@ So this script does the scheduling and leaves the rest to myst-nb's own executio
    :func:`fdi_lib.montecarlo.effective_jobs` reads as the machine's size; results do not depend
    on the number of processes, so the outputs are those of a serial build (tested:
    ``tests/test_execute_book.py`` compares the glued values);
+   each kernel also leaves the explorables' small multiples for paper out of their outputs
+   (``$FDI_PAPER_FIGURES`` = ``deferred``, :data:`fdi_lib.explorables.PAPER_FIGURES_ENV`): the
+   HTML pages never show them, and the PDF edition draws them from the specification that takes
+   their place (``tools/pdf_edition.py``), 1.5-2.7 s of each explorable's cell fewer here;
 3. each executed notebook goes into the jupyter-cache ``--cache`` with its run time; a cell error
    stops the script (exit status 1, the traceback printed) before the book is built, as
    ``execute.allow_errors: false`` does in a serial build;
@@ -55,6 +59,7 @@ from typing import Any, NamedTuple
 REPO = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(REPO), str(REPO / "tools")]
 
+from fdi_lib.explorables import PAPER_FIGURES_ENV  # noqa: E402
 from fdi_lib.montecarlo import CORES_ENV  # noqa: E402
 
 #: Without the times of a last build (a fresh clone), the chapters known to be the longest (issue
@@ -142,12 +147,14 @@ def execute(
 ) -> tuple[float | None, str]:
     """In a worker process: execute ``notebook`` (JSON, as read from the chapter ``path``) in the
     chapter's folder as myst-nb does, its kernel on ``cores`` cores (``$FDI_CORES``, which the
-    kernel inherits: a worker runs one chapter at a time); returns the run time and the executed
+    kernel inherits: a worker runs one chapter at a time; the explorables' paper figures
+    deferred, ``$FDI_PAPER_FIGURES``); returns the run time and the executed
     notebook, or ``None`` and the traceback."""
     import nbformat
     from jupyter_cache.executors.utils import single_nb_execution
 
     os.environ[CORES_ENV] = str(cores)
+    os.environ[PAPER_FIGURES_ENV] = "deferred"
     nb = nbformat.reads(notebook, as_version=4)
     result = single_nb_execution(
         nb,

@@ -12,7 +12,9 @@
    file of ``fdi_lib`` is not taken (it may show what an older library computed), and a chapter
    is taken from the cache only if its code cells are those of the sources (jupyter-cache
    compares a hash of them); any other chapter, or every chapter without an HTML build, is
-   executed by the LaTeX build and cached for the next one;
+   executed by the LaTeX build and cached for the next one. The HTML build leaves the
+   explorables' small multiples for paper out (:func:`paper_figures` draws them here, from the
+   specification in their place);
 2. runs Jupyter Book's ``pdflatex`` builder with the book's ``_config.yml`` (its ``latex:``
    section: xelatex, the parts of ``_toc.yml``; execution mode ``cache`` on the cache above),
    strict as ``make book`` is (``--warningiserror --nitpick``), and xelatex in batch mode with
@@ -92,6 +94,9 @@ def prime_cache(executed: Path, cache_dir: Path, newer_than: float = 0.0) -> int
                 prefix = output.get("metadata", {}).get("scrapbook", {}).get("mime_prefix", "")
                 output["data"] = {prefix + k: v for k, v in output["data"].items()}
                 code[0].outputs.append(nbformat.from_dict(output))
+        drawn = paper_figures(code)
+        if drawn:
+            print(f"pdf: {path.name}: {drawn} explorables' small multiples drawn", flush=True)
         # its run time in the HTML build, for the status page (_ext/fdi_book.py writes it)
         timing = path.with_name(path.stem + ".exec.json")
         data = (
@@ -103,6 +108,27 @@ def prime_cache(executed: Path, cache_dir: Path, newer_than: float = 0.0) -> int
             CacheBundleIn(nb, str(path), data=data), check_validity=False, overwrite=True
         )
         n += 1
+    return n
+
+
+def paper_figures(cells: list) -> int:
+    """The small multiples of every explorable among the outputs of ``cells`` that carries their
+    specification in their place (``tools/execute_book.py`` defers them: the HTML pages never
+    show them), drawn by :func:`fdi_lib.explorables.paper_figure` as the ``image/png`` output
+    that myst-nb's LaTeX builder takes, the same bytes as the kernel would have drawn; returns
+    how many."""
+    import base64
+
+    from fdi_lib.explorables import PAPER_SPEC_MIME, paper_figure
+
+    n = 0
+    for cell in cells:
+        for output in cell.get("outputs", []):
+            data = output.get("data", {})
+            if PAPER_SPEC_MIME in data and "image/png" not in data:
+                png = paper_figure(data[PAPER_SPEC_MIME])
+                data["image/png"] = base64.b64encode(png).decode("ascii")
+                n += 1
     return n
 
 

@@ -281,6 +281,42 @@ def _tall(a, fig=None):
     return fig
 
 
+def test_a_deferred_paper_figure_is_drawn_elsewhere_with_the_same_bytes(monkeypatch):
+    """With ``$FDI_PAPER_FIGURES`` = ``deferred`` (the book's execution) the display carries, in
+    place of the small multiples, a JSON specification from which :func:`paper_figure` draws them
+    in another process: the same PNG, byte for byte. Otherwise the display draws them, and so it
+    does, deferred or not, for a callback the specification cannot name (one defined in a
+    notebook) or a value JSON would not give back as it is (a NumPy scalar)."""
+    from fdi_lib import explorables as E
+
+    ex = explorable(_line, {"a": (1.0, 2.0, 3.0)}, caption="toy", default={"a": 2.0}, b=1)
+    assert ex.paper_spec() is None  # this module is not the library: not imported by name
+    monkeypatch.setattr(E, "PAPER_CALLBACK_PACKAGE", _line.__module__)
+    monkeypatch.setenv(E.PAPER_FIGURES_ENV, "deferred")
+    bundle = ex._repr_mimebundle_()
+    assert set(bundle) == {"text/html", "text/plain", E.PAPER_SPEC_MIME}
+    assert bundle["text/html"] == ex._repr_html_()
+    spec = json.loads(json.dumps(bundle[E.PAPER_SPEC_MIME]))  # as a notebook keeps it
+    assert spec["callback"] == f"{_line.__module__}:_line" and spec["fixed"] == {"b": 1}
+    assert E.paper_figure(spec) == ex.small_multiples()
+    monkeypatch.setenv(E.PAPER_FIGURES_ENV, "")
+    assert ex._repr_mimebundle_()["image/png"] == ex.small_multiples()
+    monkeypatch.setenv(E.PAPER_FIGURES_ENV, "deferred")
+    local = explorable(lambda a, fig=None: _line(a, 1, fig=fig), {"a": (1.0, 2.0)}, caption="x")
+    scalar = explorable(_line, {"a": (1.0, 2.0)}, caption="x", b=np.float64(1.0))
+    for drawn in (local, scalar):
+        assert drawn.paper_spec() is None
+        assert drawn._repr_mimebundle_()["image/png"] == drawn.small_multiples()
+    # a specification names a function of the library, and one that is there
+    for bad, match in (
+        ({**spec, "callback": "os:system"}, "expected 'module:function' of"),
+        ({**spec, "callback": f"{_line.__module__}:nope"}, "not found"),
+        ({k: v for k, v in spec.items() if k != "grid"}, r"missing \['grid'\]"),
+    ):
+        with pytest.raises(ModelError, match=match):
+            E.paper_figure(bad)
+
+
 def test_small_multiples_are_redrawn_for_paper_with_the_default_among_them():
     """The paper form of an explorable: the chosen frames drawn again by the callback, two per
     row, one title each (the slider values), text that prints at PAPER_DRAWN_FONT_PT or more at
@@ -313,7 +349,7 @@ def test_small_multiples_are_redrawn_for_paper_with_the_default_among_them():
         b=1,
     )
     calls.clear()
-    sheet = Image.open(io.BytesIO(one._repr_png_()))
+    sheet = Image.open(io.BytesIO(one.small_multiples()))
     # 4 of the 5 values, evenly spread (0, 1.33, 2.67, 4 rounded), the default 2.0 (index 1)
     # among them, each drawn afresh (no figure passed)
     assert calls == [(1.0, None), (2.0, None), (4.0, None), (5.0, None)]
