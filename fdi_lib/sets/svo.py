@@ -1580,6 +1580,22 @@ def _template_run(
         k += 1
 
 
+@numba.njit(cache=True)
+def _group_list(g: tuple) -> Any:  # pragma: no cover
+    """A ``numba.typed.List`` holding the group ``g``, for :func:`_template_run`; :func:`_push`
+    appends the others. Built in compiled code, cached on disk with it: ``numba.typed.List(...)``
+    in Python compiles the list's methods, which numba does not cache, 0.7 s in every process."""
+    groups = numba.typed.List()
+    groups.append(g)
+    return groups
+
+
+@numba.njit(cache=True)
+def _push(groups: Any, g: tuple) -> None:  # pragma: no cover
+    """Appends the group ``g`` to ``groups`` (:func:`_group_list`)."""
+    groups.append(g)
+
+
 #: The tables of :func:`_box_route` for normals that are not a box's.
 _NO_BOX = (
     np.empty((0, 0), dtype=np.int64),
@@ -1915,8 +1931,11 @@ class TemplateBatch:
         (emptiness by LP), as in :func:`_vertices_many`. Returns the last step made."""
         args = [self._kernel_group(g, a, k) for g, a in fused]
         # a typed list: one compiled signature whatever the number of groups (a tuple of them
-        # compiled one per length, in minutes for a dozen groups: LLVM on one huge aggregate)
-        groups = numba.typed.List(args)
+        # compiled one per length, in minutes for a dozen groups: LLVM on one huge aggregate),
+        # built by cached functions (_group_list)
+        groups = _group_list(args[0])
+        for arg in args[1:]:
+            _push(groups, arg)
         last = _template_run(groups, self.u, self.y, k, last, self.margin)
         for (g, a), arg in zip(fused, args):
             m, found = arg[18:20]

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -23,6 +27,7 @@ from fdi_lib.systems import eclipse_uav as uav
 from tests.sets.test_svo_props import random_system, simulate
 
 X0 = Polytope.box([-1.0, -1.0], [1.0, 1.0])
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _constant(model: SVOModel, T: int) -> ModelSequence:
@@ -119,6 +124,39 @@ def test_each_observer_is_independent_of_its_batch():
         assert alone.empty_at[0] == whole.empty_at[i]
         np.testing.assert_array_equal(alone.lower[0], whole.lower[i])
         np.testing.assert_array_equal(alone.upper[0], whole.upper[i])
+
+
+def _small_template_run():
+    """:func:`run_svo_many` on two short random records (the compiled basis route)."""
+    models, u, y = _records(5, 2)
+    return run_svo_many([_constant(m, u.shape[1]) for m in models], u, y, X0)
+
+
+#: A new process: what numba compiles (not loads from its disk cache) in a small template run.
+_COMPILED_IN_A_NEW_PROCESS = """
+from numba.core import event
+from fdi_lib.sets.svo import _template_run
+from tests.sets.test_svo_batch import _small_template_run
+with event.install_recorder("numba:compile") as rec:
+    _small_template_run()
+print(len(_template_run.overloads), sorted({e.data["dispatcher"].__qualname__ for _, e in rec.buffer}))
+"""
+
+
+def test_a_new_process_compiles_nothing_for_the_template_route():
+    """With numba's disk cache written (by this process's run), another process runs the compiled
+    template route compiling nothing: its typed list of groups is built in cached functions
+    (``numba.typed.List(...)`` in Python compiled the list's methods in every process, 0.7 s)."""
+    _small_template_run()
+    done = subprocess.run(
+        [sys.executable, "-c", _COMPILED_IN_A_NEW_PROCESS],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=600,
+    )
+    assert done.stdout.strip() == "1 []"  # _template_run loaded from the cache, nothing compiled
 
 
 def test_architecture_i_batch_equals_one_bank_at_a_time_on_the_uav():
