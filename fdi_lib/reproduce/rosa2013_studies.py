@@ -348,21 +348,21 @@ def containment_check(
     never).
     The record may leave the manoeuvre envelope on purpose: its :class:`EnvelopeWarning` is not shown.
     """
-    return _containment_checks(eta_unit, (seed,), amplitude, duration)[0]
+    return _containment_checks(eta_unit, [(seed, amplitude)], duration)[0]
 
 
 @single_threaded_blas
 def _containment_checks(
-    eta_unit: str, seeds: Sequence[int], amplitude: float, duration: float
+    eta_unit: str, cases: Sequence[tuple[int, float]], duration: float
 ) -> list[dict]:
-    """:func:`containment_check` of each seed, the records simulated together
+    """:func:`containment_check` of each (seed, amplitude), the records simulated together
     (:func:`uav.simulate_many`: each the same as alone)."""
     runs = uav.simulate_many(
-        [("none", "step")] * len(seeds),
-        [np.random.default_rng(seed) for seed in seeds],
+        [("none", "step")] * len(cases),
+        [np.random.default_rng(seed) for seed, _ in cases],
         duration=duration,
         eta_unit=eta_unit,
-        amplitude=amplitude,
+        amplitude=[a for _, a in cases],
     )
     out = []
     for run in runs:
@@ -406,9 +406,10 @@ def envelope_study(
     :data:`uav.ENVELOPE_AIRSPEED` of the reading.
     """
     out = {}
-    for unit in eta_units:
-        checks = {a: _containment_checks(unit, seeds, a, duration) for a in amplitudes}
-        flat = [c for cs in checks.values() for c in cs]
+    n = len(seeds)
+    for unit in eta_units:  # the records of every amplitude and seed simulated together
+        flat = _containment_checks(unit, [(s, a) for a in amplitudes for s in seeds], duration)
+        checks = {a: flat[i * n : (i + 1) * n] for i, a in enumerate(amplitudes)}
         losses = [c["loss_airspeed"] for c in flat if c["loss_airspeed"] is not None]
         clean = [c["max_airspeed"] for c in flat if c["loss_airspeed"] is None]
         out[unit] = {

@@ -67,25 +67,33 @@ def _record_up_to(run: "uav.UAVRun", stop: int) -> "uav.UAVRun":
     )
 
 
+def _detections(runs: "list[uav.UAVRun]") -> tuple:
+    """The first empty sample of the nominal SVO on each run (None: never), all runs stepped
+    together (:func:`run_svo_many`)."""
+    u = np.stack([r.u for r in runs])
+    y = np.stack([r.y for r in runs])
+    return run_svo_many([uav.svo_models(r, "nominal") for r in runs], u, y, UAV_X0).empty_at
+
+
 @single_threaded_blas
-def _bank_outcomes(runs: "list[uav.UAVRun]", alpha_slack_deg: float = 0.0) -> list[dict]:
+def _bank_outcomes(
+    runs: "list[uav.UAVRun]", detections: tuple | None = None, alpha_slack_deg: float = 0.0
+) -> list[dict]:
     """The Architecture I bank (template SVOs, N = 1) on each run, all runs stepped together.
 
     ``alpha_slack_deg`` is added to the alpha noise bound of the observers
     :data:`LOOSENED_OBSERVERS` (the nominal and alpha SVOs keep theirs).
 
     Isolation is declared only after detection, and the nominal SVO does not depend on the others:
-    the nominal SVOs of all runs go first (:func:`run_svo_many`), and the fault SVOs are run, from
-    sample 0, only on the runs whose nominal SVO empties (:func:`run_architecture_i_many`; on the
-    others, healthy runs and hidden faults, they play no part). Each run's outcome is the one of
-    :func:`fdi_lib.sets.svo.run_architecture_i` on it alone (tested).
+    the nominal SVOs of all runs go first (:func:`_detections`, or ``detections`` when given), and
+    the fault SVOs are run, from sample 0, only on the runs whose nominal SVO empties
+    (:func:`run_architecture_i_many`; on the others, healthy runs and hidden faults, they play no
+    part). Each run's outcome is the one of :func:`fdi_lib.sets.svo.run_architecture_i` on it alone
+    (tested).
     """
     if not runs:
         return []
-    u = np.stack([r.u for r in runs])
-    y = np.stack([r.y for r in runs])
-    nominal = [uav.svo_models(r, "nominal") for r in runs]
-    det = run_svo_many(nominal, u, y, UAV_X0).empty_at
+    det = _detections(runs) if detections is None else detections
     out = [
         {
             "fault": r.fault,
@@ -99,27 +107,21 @@ def _bank_outcomes(runs: "list[uav.UAVRun]", alpha_slack_deg: float = 0.0) -> li
         for r, e in zip(runs, det)
     ]
     todo = [i for i, r in enumerate(runs) if det[i] is not None and r.fault != "none"]
+    slack = {f: alpha_slack_deg if f in LOOSENED_OBSERVERS else 0.0 for f in uav.FAULTS}
     # A bank's outcome up to sample k depends on the record up to k only, and most banks decide
-    # soon after detection: they first run (fault models built) up to twice the median detection
-    # sample; the banks still undecided there run again on the whole record.
-    T = u.shape[1]
+    # soon after detection: they first run (models built on the record so far) up to twice the
+    # median detection sample; the banks still undecided there run again on the whole record.
+    T = len(runs[0].u)
     for stop in (min(T, 2 * int(np.median([det[i] for i in todo]))) if todo else T, T):
         if not todo:
             break
         cut = [_record_up_to(runs[i], stop) for i in todo]
+        models = [uav.svo_model_bank(r, {"nominal": 0.0, **slack}) for r in cut]
         banks = run_architecture_i_many(
-            [nominal[i] for i in todo],
-            [
-                {
-                    f: uav.svo_models(
-                        r, f, alpha_slack_deg=alpha_slack_deg if f in LOOSENED_OBSERVERS else 0.0
-                    )
-                    for f in uav.FAULTS
-                }
-                for r in cut
-            ],
-            u[todo, :stop],
-            y[todo, : stop + 1],
+            [m.pop("nominal") for m in models],
+            models,
+            np.stack([r.u for r in cut]),
+            np.stack([r.y for r in cut]),
             UAV_X0,
         )
         left = []
@@ -166,6 +168,15 @@ def _study_runs(
     return runs
 
 
+@lru_cache(maxsize=4)
+def _study_detections(
+    seed: int, trials: int, duration: float, eta_unit: str, fault_mode: str
+) -> tuple:
+    """:func:`_detections` on the runs of :func:`_study_runs` (cached: ``alpha_slack_deg`` leaves
+    the nominal SVO as it is, so the studies that differ only in it share them)."""
+    return _detections(_study_runs(seed, trials, duration, eta_unit, fault_mode))
+
+
 @lru_cache(maxsize=16)
 def uav_study(
     seed: int,
@@ -188,15 +199,17 @@ def uav_study(
     from joblib.externals.loky import get_reusable_executor
 
     sims = _study_runs(seed, trials, duration, eta_unit, fault_mode)
+    det = _study_detections(seed, trials, duration, eta_unit, fault_mode)
     jobs = effective_jobs(jobs, len(sims))
     bank = partial(_bank_outcomes, alpha_slack_deg=float(alpha_slack_deg))
     if jobs == 1:
-        return tuple(bank(sims))
+        return tuple(bank(sims, det))
     # one chunk per job, every jobs-th run (the cases are listed in blocks, so each job gets some of
     # each); each run's outcome does not depend on its batch. The pool is loky's reusable one, as in
     # fdi_lib.montecarlo (joblib.Parallel fails on a pool that montecarlo started).
     pool = get_reusable_executor(max_workers=int(jobs), timeout=600)
-    parts = list(pool.map(bank, [sims[j::jobs] for j in range(jobs)]))
+    chunks = [(sims[j::jobs], det[j::jobs]) for j in range(jobs)]
+    parts = list(pool.map(bank, *zip(*chunks)))
     out = [None] * len(sims)
     for j, part in enumerate(parts):
         out[j::jobs] = part

@@ -63,7 +63,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 from scipy.linalg import expm
@@ -103,6 +103,7 @@ __all__ = [
     "UAVRun",
     "simulate",
     "svo_models",
+    "svo_model_bank",
     "svo_scale",
     "discretize_many",
     "excitation",
@@ -614,13 +615,14 @@ def simulate_many(
     substeps: int = 2,
     eta_unit: str = ETA_UNIT,
     fault_mode: str = "deviation",
-    amplitude: float = 0.0,
+    amplitude: float | Sequence[float] = 0.0,
 ) -> list[UAVRun]:
     """:func:`simulate` for several (fault, scenario) cases at once, stepped together (vectorised).
 
     Run i uses ``rngs[i]``, draws exactly what :func:`simulate` draws from it, and gets the same
     result as ``simulate(*cases[i], rng=rngs[i], ...)`` whatever the other cases (the batch only
-    shares the loop over time). Other parameters as in :func:`simulate`.
+    shares the loop over time). ``amplitude`` is one value for every case or one per case; other
+    parameters as in :func:`simulate`.
     """
     if len(cases) != len(rngs):
         raise ShapeError(f"rngs: expected one generator per case ({len(cases)}), got {len(rngs)}")
@@ -631,9 +633,14 @@ def simulate_many(
     _check_eta_unit(eta_unit)
     if fault_mode not in FAULT_MODES:
         raise ModelError(f"fault_mode: expected one of {FAULT_MODES}, got {fault_mode!r}")
-    if not np.isfinite(amplitude) or amplitude < 0:
+    amp = np.asarray(amplitude, dtype=float)
+    if amp.shape not in ((), (len(cases),)):
+        raise ShapeError(
+            f"amplitude: expected one value or one per case ({len(cases)}), got shape {amp.shape}"
+        )
+    if not np.all(np.isfinite(amp)) or np.any(amp < 0):
         raise ModelError(
-            f"amplitude: expected a finite non-negative airspeed (m/s), got {amplitude!r}"
+            f"amplitude: expected finite non-negative airspeeds (m/s), got {amplitude!r}"
         )
     for rng in rngs:
         if not isinstance(rng, np.random.Generator):
@@ -662,6 +669,7 @@ def simulate_many(
     y = np.zeros((nb, K + 1, 4))
     u = np.zeros((nb, K, 2))
     xhat = np.zeros((nb, 4))
+    ref = np.zeros((nb, 4))  # the state reference of each case: its airspeed command
     h = TS / substeps
     Kg, Ae, Be, Le, Ce = lqg.K, lqg.A, lqg.B, lqg.L, lqg.C
 
@@ -673,7 +681,7 @@ def simulate_many(
         y[:, k, 1] += alpha_off[:, k]
         if k == K:
             break
-        ref = np.array([amplitude * np.sign(np.sin(2 * np.pi * 0.25 * t[k])), 0.0, 0.0, 0.0])
+        ref[:, 0] = amp * np.sign(np.sin(2 * np.pi * 0.25 * t[k]))
         uk = -mv(Kg, xhat - ref) + exc[k]
         u[:, k] = uk
         xhat = mv(Ae, xhat) + mv(Be, uk) + mv(Le, y[:, k] - mv(Ce, xhat))
@@ -777,14 +785,38 @@ def svo_models(
     :math:`\delta V` = noise bound + margin, gives the parametric uncertainty
     :math:`A_1 = (A_d(V^+) - A_d(V^-)) / 2` (:math:`n_A = 1`) and :math:`B_1` likewise.
     """
+    return _model_bank(run, {kind: alpha_slack_deg}, dist_scale, noise_scale)[kind]
+
+
+def svo_model_bank(
+    run: UAVRun, kinds: Mapping[str, float], *, dist_scale: float = 1.0, noise_scale: float = 1.0
+) -> dict:
+    r""":func:`svo_models` of several kinds on one record: ``kinds`` maps each kind to its
+    ``alpha_slack_deg``. The same models, bit for bit; the discretisations that kinds share (those
+    of the nominal and alpha SVOs, :math:`A_d, B_d` at :math:`\hat V \pm \delta V`) are computed
+    once.
+
+    Returns
+    -------
+    dict
+        kind -> :class:`fdi_lib.sets.svo.ModelSequence`, in the order of ``kinds``.
+    """
+    return _model_bank(run, kinds, dist_scale, noise_scale)
+
+
+def _model_bank(
+    run: UAVRun, kinds: Mapping[str, float], dist_scale: float, noise_scale: float
+) -> dict:
+    """:func:`svo_model_bank` (its warning is the caller's caller's: ``stacklevel=3``)."""
     from fdi_lib.sets.svo import ModelSequence
 
-    if kind not in ("nominal", "global") + FAULTS:
-        raise ModelError(f"kind: expected 'nominal', 'global' or one of {FAULTS}, got {kind!r}")
+    for kind in kinds:
+        if kind not in ("nominal", "global") + FAULTS:
+            raise ModelError(f"kind: expected 'nominal', 'global' or one of {FAULTS}, got {kind!r}")
     for name, val in (
         ("dist_scale", dist_scale),
         ("noise_scale", noise_scale),
-        ("alpha_slack_deg", alpha_slack_deg),
+        *(("alpha_slack_deg", v) for v in kinds.values()),
     ):
         if (
             not isinstance(val, (int, float, np.integer, np.floating))
@@ -798,41 +830,46 @@ def svo_models(
             f"(|y_V| <= {ENVELOPE_AIRSPEED[run.eta_unit]} m/s, eta_unit={run.eta_unit!r}); the sets may lose "
             f"the true state (see uav.envelope_exceedance)",
             EnvelopeWarning,
-            stacklevel=2,
+            stacklevel=3,
         )
     C = measurement_matrix()
-    noise = (NOISE_BOUND + SVO_NOISE_MARGIN) * float(noise_scale)
-    if kind in ("alpha", "global"):
-        noise = noise + np.r_[0.0, np.deg2rad(5.0) * 1.02, 0.0, 0.0]
-    if alpha_slack_deg:
-        noise = noise + np.r_[0.0, np.deg2rad(float(alpha_slack_deg)), 0.0, 0.0]
     L = np.diag(
         np.r_[DIST_ACCEL[:2] * TS, 0.5 * DIST_ACCEL[2] * TS**2, DIST_ACCEL[2] * TS]
         + SVO_DIST_MARGIN
     ) * float(dist_scale)
     dV = NOISE_BOUND[0] + SVO_V_MARGIN
-    mu_c, mu_r = (1.15, 0.15) if kind in ("dynamics", "global") else (1.0, 0.0)
-    eff_c, eff_r = (0.75, 0.25) if kind in ("elevator", "global") else (1.0, 0.0)
-
     Vh = V_TRIM + run.y[:, 0]
-    Ap, Bp = discretize_many(Vh + dV, mu_c, eff_c, eta_unit=run.eta_unit)
-    Am, Bm = discretize_many(Vh - dV, mu_c, eff_c, eta_unit=run.eta_unit)
-    A_unc = [(Ap - Am) / 2]
-    B_unc = [(Bp - Bm) / 2]
-    if mu_r:
-        Ahi, _ = discretize_many(Vh, mu_c + mu_r, eff_c, eta_unit=run.eta_unit)
-        Alo, _ = discretize_many(Vh, mu_c - mu_r, eff_c, eta_unit=run.eta_unit)
-        A_unc.append((Ahi - Alo) / 2)
-    if eff_r:
-        _, Bhi = discretize_many(Vh, mu_c, eff_c + eff_r, eta_unit=run.eta_unit)
-        _, Blo = discretize_many(Vh, mu_c, eff_c - eff_r, eta_unit=run.eta_unit)
-        B_unc.append((Bhi - Blo) / 2)
-    return ModelSequence(
-        A=(Ap + Am) / 2,
-        B=(Bp + Bm) / 2,
-        C=C,
-        L=L,
-        noise=noise,
-        A_unc=np.stack(A_unc, axis=1),
-        B_unc=np.stack(B_unc, axis=1),
-    )
+    airspeeds = {1: Vh + dV, -1: Vh - dV, 0: Vh}  # the scheduling airspeed, up, down, as measured
+    done: dict = {}  # (airspeed, mu, eff) -> (A_d, B_d), for this record only
+
+    def disc(side: int, mu: float, eff: float) -> tuple[np.ndarray, np.ndarray]:
+        if (side, mu, eff) not in done:
+            done[side, mu, eff] = discretize_many(airspeeds[side], mu, eff, eta_unit=run.eta_unit)
+        return done[side, mu, eff]
+
+    out = {}
+    for kind, slack in kinds.items():
+        noise = (NOISE_BOUND + SVO_NOISE_MARGIN) * float(noise_scale)
+        if kind in ("alpha", "global"):
+            noise = noise + np.r_[0.0, np.deg2rad(5.0) * 1.02, 0.0, 0.0]
+        if slack:
+            noise = noise + np.r_[0.0, np.deg2rad(float(slack)), 0.0, 0.0]
+        mu_c, mu_r = (1.15, 0.15) if kind in ("dynamics", "global") else (1.0, 0.0)
+        eff_c, eff_r = (0.75, 0.25) if kind in ("elevator", "global") else (1.0, 0.0)
+        (Ap, Bp), (Am, Bm) = disc(1, mu_c, eff_c), disc(-1, mu_c, eff_c)
+        A_unc = [(Ap - Am) / 2]
+        B_unc = [(Bp - Bm) / 2]
+        if mu_r:
+            A_unc.append((disc(0, mu_c + mu_r, eff_c)[0] - disc(0, mu_c - mu_r, eff_c)[0]) / 2)
+        if eff_r:
+            B_unc.append((disc(0, mu_c, eff_c + eff_r)[1] - disc(0, mu_c, eff_c - eff_r)[1]) / 2)
+        out[kind] = ModelSequence(
+            A=(Ap + Am) / 2,
+            B=(Bp + Bm) / 2,
+            C=C,
+            L=L,
+            noise=noise,
+            A_unc=np.stack(A_unc, axis=1),
+            B_unc=np.stack(B_unc, axis=1),
+        )
+    return out

@@ -26,11 +26,12 @@ MAX_HORIZON = 6
 GRID = {"delta_bound": (0.0, 0.2, 0.4, 0.6, 0.8, 1.0), "horizon": (1, 2, 3, 4)}
 
 
-@functools.lru_cache(maxsize=1)
+@functools.lru_cache(maxsize=len(GRID["delta_bound"]))
 def _example(delta_bound: float, noise: float, seed: int, steps: int) -> tuple:
     """What the horizon slider does not change: the model, the record, the hull panel and the
-    exact rule's run (kept for the last values only, so that moving any other slider recomputes
-    them)."""
+    exact rule's run (kept for as many values as the explorable's grid has uncertainty bounds:
+    :func:`horizon_study`, the frames of the explorable and its panels for paper, which run over
+    them in turn, compute each once)."""
     from fdi_lib.reproduce.rosa2013 import _fig2_sets, simulate_toy, toy_model, toy_prior
 
     model = toy_model(delta_bound=delta_bound, noise=noise)

@@ -79,6 +79,16 @@ def test_step_times_keys():
     assert out["empty_at"] is None and out["median_ms"] > 0 and out["max_facets"] <= 20
 
 
+def test_the_timed_run_is_simulated_once_and_read_only():
+    """step_times and exact_step_times time their updates on one shared healthy run (its
+    simulation is not timed): the run of uav.simulate, its arrays read-only."""
+    run = R._healthy_run(0, 0.2)
+    assert R._healthy_run(0, 0.2) is run
+    ref = uav.simulate("none", "step", rng=np.random.default_rng(0), duration=0.2)
+    np.testing.assert_array_equal(run.y, ref.y)
+    assert not any(a.flags.writeable for a in (run.t, run.x, run.y, run.u))
+
+
 def test_exact_step_times_keys():
     """The exact rule's timing of rosa2013-timing (one update here: its sets grow tenfold per update)."""
     out = R.exact_step_times(1, 0, steps=1)

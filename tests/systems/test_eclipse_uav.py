@@ -218,6 +218,41 @@ def test_simulate_many_matches_one_run_loops_and_is_batch_independent():
         uav.simulate_many(cases, [np.random.default_rng(0)])
 
 
+def test_simulate_many_takes_one_amplitude_per_case():
+    """Per-case airspeed commands (the envelope study simulates its amplitudes together): each run
+    the same, bit for bit, as simulated alone with its amplitude."""
+    amps = [0.0, 3.0, 7.0]
+    rngs = [np.random.default_rng(1) for _ in amps]
+    runs = uav.simulate_many([("none", "step")] * 3, rngs, duration=0.6, amplitude=amps)
+    for a, r in zip(amps, runs):
+        one = uav.simulate("none", "step", rng=np.random.default_rng(1), duration=0.6, amplitude=a)
+        np.testing.assert_array_equal(one.x, r.x)
+        np.testing.assert_array_equal(one.u, r.u)
+    assert np.abs(runs[2].y[:, 0] - runs[0].y[:, 0]).max() > 0.1
+    cases, rngs = [("none", "step")] * 3, [np.random.default_rng(0)] * 3
+    with pytest.raises(ShapeError, match="amplitude: expected one value or one per case"):
+        uav.simulate_many(cases, rngs, duration=0.1, amplitude=[1.0, 2.0])
+    with pytest.raises(ModelError, match="amplitude: expected finite non-negative"):
+        uav.simulate_many(cases, rngs, duration=0.1, amplitude=[1.0, -2.0, 0.0])
+
+
+def test_svo_model_bank_is_svo_models_of_each_kind():
+    """The bank shares the discretisations of its kinds (nominal and alpha: the same A_d, B_d):
+    each model bit for bit the one svo_models builds alone."""
+    run = uav.simulate("elevator", "hard", rng=np.random.default_rng(3), duration=0.6)
+    kinds = {"nominal": 0.0, "alpha": 0.0, "elevator": 4.0, "dynamics": 4.0, "global": 1.0}
+    bank = uav.svo_model_bank(run, kinds, dist_scale=0.5)
+    assert list(bank) == list(kinds)
+    for kind, slack in kinds.items():
+        one = uav.svo_models(run, kind, alpha_slack_deg=slack, dist_scale=0.5)
+        for name in ("A", "B", "C", "L", "noise", "A_unc", "B_unc"):
+            np.testing.assert_array_equal(getattr(bank[kind], name), getattr(one, name))
+    with pytest.raises(ModelError, match="alpha_slack_deg: expected a finite non-negative"):
+        uav.svo_model_bank(run, {"nominal": 0.0, "elevator": -1.0})
+    with pytest.raises(ModelError, match="kind: expected"):
+        uav.svo_model_bank(run, {"rudder": 0.0})
+
+
 def test_batched_expm_against_scipy():
     """The vectorised exponential against scipy.linalg.expm on random stacks of several norms
     (zero, small, and large enough to need squaring), and batch independence."""
