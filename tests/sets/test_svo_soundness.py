@@ -75,6 +75,23 @@ def test_opposite_rows_prove_emptiness_without_the_lp_only_beyond_the_tolerance(
     assert poly._opposite_rows_bound(skew, np.array([-1.0, -1.0])) == np.inf
 
 
+def test_opposite_rows_bound_is_the_smallest_over_every_pair():
+    """The rows matched by their bytes give the bound of the comparison of every pair, bit for bit:
+    -0.0 is 0.0's opposite, duplicated rows, zero rows (their own opposites), NaN rows (none)."""
+    rng = np.random.default_rng(1)
+    for _ in range(400):
+        p, n = int(rng.integers(1, 40)), int(rng.integers(1, 4))
+        M = rng.integers(-1, 2, (p, n)) * rng.choice([1.0, 0.5, 1e-17], size=(p, n))
+        M[rng.random((p, n)) < 0.2] = -0.0
+        M[rng.random(p) < 0.05, 0] = np.nan
+        m = rng.standard_normal(p)
+        pairs = (M[:, None, :] == -M[None, :, :]).all(axis=2)
+        i, j = np.nonzero(pairs)
+        expected = float(((m[i] + m[j]) / 2.0).min()) if i.size else np.inf
+        got = poly._opposite_rows_bound(M, m)
+        assert got == expected and np.signbit(got) == np.signbit(expected)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", [8, 2013])
 def test_healthy_uav_records_of_issue_21_raise_no_alarm(seed):
