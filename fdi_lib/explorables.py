@@ -401,8 +401,7 @@ class Explorable:
             try:
                 fig.set_size_inches(width, height * grow)
                 for_paper(fig, font_scale)
-                out = io.BytesIO()
-                fig.savefig(out, format="png", dpi=dpi * RASTER_SCALE, facecolor="white")
+                image = _saved_pixels(fig, dpi * RASTER_SCALE)
                 smallest = smallest_font_pt(fig)
             finally:
                 plt.close(fig)
@@ -411,9 +410,7 @@ class Explorable:
                 for j, (label, i) in enumerate(zip(self.labels, point))
                 if len(picks[j]) > 1
             )
-            tiles.append(
-                (Image.open(out).convert("RGB"), _wrapped(title, title_pt, width), smallest)
-            )
+            tiles.append((image, _wrapped(title, title_pt, width), smallest))
         sheet, title_pt = _tiled(tiles, columns, dpi * RASTER_SCALE, title_pt, lines)
         fonts = [t[2] for t in tiles] + ([title_pt] if title_pt else [])
         info = PngInfo()
@@ -512,6 +509,21 @@ def paper_figure(spec: Mapping[str, Any]) -> bytes:
     with mpl.rc_context():
         use_style()
         return ex._small_multiples(spec["panels"], spec["frame"])
+
+
+def _saved_pixels(fig: Figure, dpi: float) -> Any:
+    """The RGB image of ``fig`` that ``savefig`` at ``dpi`` on white writes (animated artists
+    included): its raw pixels, the very pixels of its PNG without encoding and decoding one (a
+    PNG per panel of the small multiples took a fifth of their time). ``fig`` is left at ``dpi``,
+    whose canvas gives the size of the pixels."""
+    from PIL import Image
+
+    fig.set_dpi(dpi)
+    out = io.BytesIO()
+    fig.savefig(out, format="rgba", dpi=dpi, facecolor="white")
+    return Image.frombuffer(
+        "RGBA", fig.canvas.get_width_height(), out.getvalue(), "raw", "RGBA", 0, 1
+    ).convert("RGB")
 
 
 def _spread(n: int, default: int, m: int) -> list[int]:

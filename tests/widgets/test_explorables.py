@@ -317,6 +317,30 @@ def test_a_deferred_paper_figure_is_drawn_elsewhere_with_the_same_bytes(monkeypa
             E.paper_figure(bad)
 
 
+def test_a_panel_of_the_small_multiples_holds_the_pixels_of_its_png():
+    """The panels are taken raw from ``savefig`` (no PNG encoded and decoded per panel): the
+    same pixels as a PNG of the same figure, its animated artists (which only a save draws) and
+    its size at a resolution that is not a whole number of pixels per inch included."""
+    from fdi_lib.explorables import _saved_pixels
+
+    def drawn():
+        fig, ax = figure(figsize=(5.5, 3.33))
+        ax[0, 0].plot([0.0, 1.0], [0.0, 1.0])
+        ax[0, 0].plot([0.0, 1.0], [1.0, 0.0], color="red", animated=True)
+        return fig
+
+    fig = drawn()
+    png = io.BytesIO()
+    fig.savefig(png, format="png", dpi=217.3, facecolor="white")
+    expected = np.asarray(Image.open(png).convert("RGB"))
+    got = _saved_pixels(drawn(), 217.3)
+    plt.close("all")
+    assert got.size == (expected.shape[1], expected.shape[0])
+    np.testing.assert_array_equal(np.asarray(got), expected)
+    red = (expected[..., 0] > 200) & (expected[..., 1] < 80)
+    assert red.sum() > 100  # the animated line is in both
+
+
 def test_small_multiples_are_redrawn_for_paper_with_the_default_among_them():
     """The paper form of an explorable: the chosen frames drawn again by the callback, two per
     row, one title each (the slider values), text that prints at PAPER_DRAWN_FONT_PT or more at
