@@ -95,6 +95,27 @@ def test_monte_carlo_identical_for_any_chunk_size(variant, schedule):
             np.testing.assert_array_equal(one[fault][key], default[fault][key])
 
 
+def test_fewer_trials_are_the_first_runs_of_a_cached_run():
+    """A cached run serves a request of fewer trials on the same surrogate, spelt another way
+    (its calibrated scale, its default schedule, no isolation), with its first runs: the numbers
+    of a fresh run of that count (as the chapter's sensitivity studies read the book's runs). A
+    request of more trials runs them."""
+    zp._MC_CACHE.clear()
+    many = zp.fault_runs(seed=4, trials=12, fault=2)
+    few = zp.fault_runs(
+        seed=4, trials=5, fault=2, isolate=False, state2_scale=10.0, schedule="centred"
+    )
+    assert len(zp._MC_CACHE) == 1  # nothing ran
+    zp._MC_CACHE.clear()
+    fresh = zp.fault_runs(seed=4, trials=5, fault=2, chunk_size=5)
+    more = zp.fault_runs(seed=4, trials=12, fault=2)
+    zp._MC_CACHE.clear()
+    for key in fresh:
+        assert few[key].shape[0] == 5 and more[key].shape[0] == 12
+        np.testing.assert_array_equal(few[key], fresh[key])
+        np.testing.assert_array_equal(more[key], many[key])
+
+
 def test_known_onset_minmax_type1_is_nominal():
     """With the onset known (no selection), each minmax test on the absent fault is chi2(1)."""
     st = zp.pipeline_setup()
