@@ -14,7 +14,7 @@ too); a reproduction registered with ``chapter_seed=True`` runs in the book at i
 (:func:`fdi_lib.reproduce.registry.register`: the book's settings travel with the registration).
 :func:`book_settings` resolves them against the registry. :func:`book_order` is the book's order of
 the reproductions (the chapters of ``_toc.yml``, then the first ``book_run`` of each in its
-chapter).
+chapter; :func:`book_key` the place of one).
 """
 
 from __future__ import annotations
@@ -39,6 +39,7 @@ __all__ = [
     "book_command",
     "toc_documents",
     "book_order",
+    "book_key",
     "BOOK_ROOT",
 ]
 
@@ -157,24 +158,31 @@ def toc_documents(root: Path | None = None) -> list[str]:
 
 
 @lru_cache(maxsize=None)
-def book_order() -> tuple[str, ...]:
-    """Every registered reproduction in book order: its chapter's place in ``_toc.yml`` (the
-    registration's ``chapter``), then the place of its first ``book_run("ID"`` in that chapter,
-    then the identifier (without the book's sources: the order of registration)."""
+def _book_sources() -> tuple[list[str], dict[str, str]]:
+    """The documents of ``_toc.yml`` (:func:`toc_documents`) and the text of each, read once."""
     docs = toc_documents()
-    reps = list_reproductions()
-    if not docs:
-        return tuple(r.id for r in reps)
     texts = {
         doc: (BOOK_ROOT / f"{doc}.md").read_text()
         for doc in docs
         if (BOOK_ROOT / f"{doc}.md").is_file()
     }
+    return docs, texts
 
-    def key(rep: Any) -> tuple[int, int, str]:
-        doc = f"book/{rep.chapter}"
-        chapter = docs.index(doc) if doc in docs else len(docs)
-        m = re.search(rf"""\bbook_run\(\s*["']{re.escape(rep.id)}["']""", texts.get(doc, ""))
-        return chapter, m.start() if m else len(texts.get(doc, "")), rep.id
 
-    return tuple(r.id for r in sorted(reps, key=key))
+def book_key(id: str) -> tuple[int, int, str]:
+    """Where the reproduction ``id`` comes in :func:`book_order`, its sort key there, from its own
+    registration (no other reproduction's module imported): its chapter's place in ``_toc.yml``
+    (the registration's ``chapter``), then the place of its first ``book_run("ID"`` in that
+    chapter, then the identifier (without the book's sources: the identifier alone counts)."""
+    docs, texts = _book_sources()
+    doc = f"book/{get(id).chapter}"
+    text = texts.get(doc, "")
+    m = re.search(rf"""\bbook_run\(\s*["']{re.escape(id)}["']""", text)
+    return docs.index(doc) if doc in docs else len(docs), m.start() if m else len(text), id
+
+
+@lru_cache(maxsize=None)
+def book_order() -> tuple[str, ...]:
+    """Every registered reproduction in book order (sorted by :func:`book_key`; without the
+    book's sources, by identifier)."""
+    return tuple(sorted((r.id for r in list_reproductions()), key=book_key))

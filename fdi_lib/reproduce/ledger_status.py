@@ -382,11 +382,16 @@ def surrogate_role(
     )
 
 
-def _order(id: str) -> tuple[int, str]:
-    from fdi_lib.reproduce.book import book_order  # book imports the registry, as this module
+def _order(id: str) -> tuple[int, tuple[int, int, str]]:
+    """Sort key of ``id`` in the book's order (:func:`~fdi_lib.reproduce.book.book_key`; from its
+    own registration: a caption's ledger of one figure imports no other reproduction's module),
+    an identifier that is not registered after every registered one."""
+    from fdi_lib.reproduce.book import book_key  # book imports the registry, as this module
 
-    order = book_order()
-    return (order.index(id), id) if id in order else (len(order), id)
+    try:
+        return 0, book_key(id)
+    except UnknownReproductionError:
+        return 1, (0, 0, id)
 
 
 # ----------------------------------------------------------------------------- mission

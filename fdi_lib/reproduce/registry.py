@@ -591,8 +591,11 @@ def list_reproductions() -> list[Reproduction]:
 
 
 def get(id: str) -> Reproduction:
-    """The reproduction registered under ``id`` (``UnknownReproductionError`` otherwise)."""
-    _load_all()
+    """The reproduction registered under ``id`` (``UnknownReproductionError`` otherwise); the
+    modules of :mod:`fdi_lib.reproduce` are imported unless ``id``'s has been already (a
+    chapter's own reproductions do not import the others', e.g. numba's for the polytopes)."""
+    if id not in _REGISTRY:
+        _load_all()
     try:
         return _REGISTRY[id]
     except KeyError:

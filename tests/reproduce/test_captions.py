@@ -204,3 +204,27 @@ def test_post_build_check_fails_on_a_caption_that_disagrees(tmp_path, monkeypatc
         page(sliders, attrs=' class="align-default fdi-explorable-figure" id="fig-svo-explore"')
         == []
     )
+
+
+def test_a_caption_imports_no_other_reproduction_module():
+    """A chapter's caption (its figure's own ledger) reads its reproduction's registration alone:
+    the other papers' modules (numba's polytopes of Rosa 2013 among them) are not imported, in a
+    fresh process as a chapter's kernel; the book's order of all of them is still that of
+    :func:`~fdi_lib.reproduce.book.book_key`."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\n"
+        "from fdi_lib.reproduce import zb2014_pipeline_single\n"
+        "from fdi_lib.reproduce.book import book_order, book_key, book_run\n"
+        "from fdi_lib.reproduce.views.ledger import glue_caption\n"
+        "glue_caption(book_run('zb2014-table1'))\n"
+        "print(sorted(m for m in sys.modules if m.startswith('fdi_lib.reproduce.')\n"
+        "             and m.split('.')[2].startswith(('rosa', 'bz', 'wind', 'zhang'))))\n"
+        "print(list(book_order()) == sorted(book_order(), key=book_key))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT
+    ).stdout.split("\n")
+    assert out[:2] == ["[]", "True"]
