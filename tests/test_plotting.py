@@ -196,3 +196,20 @@ def test_for_paper_enlarges_every_text_drops_axes_titles_and_lifts_legends_off_t
     with pytest.raises(ModelError, match="font_scale: expected a positive number, got 0"):
         for_paper(fig, 0)
     plt.close(fig)
+
+
+def test_in_ipython_a_figure_is_drawn_once_for_display():
+    """In IPython the book's style shows figures through png_for_display (whose savefig draws
+    them) and takes out pyplot's hook that drew every stale figure after a cell before that: a
+    draw thrown away (70-200 ms a figure)."""
+    from IPython.core.interactiveshell import InteractiveShell
+    from matplotlib.figure import Figure
+
+    shell = InteractiveShell.instance()
+    plt.install_repl_displayhook()  # as the inline backend's activation does
+    hooks = shell.events.callbacks["post_execute"]
+    assert any(getattr(f, "__module__", "") == "matplotlib.pyplot" for f in hooks)
+    plotting.use_style()
+    hooks = shell.events.callbacks["post_execute"]
+    assert not any(getattr(f, "__module__", "") == "matplotlib.pyplot" for f in hooks)
+    assert shell.display_formatter.formatters["image/png"].lookup_by_type(Figure) is png_for_display
