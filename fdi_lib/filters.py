@@ -34,7 +34,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 
 from fdi_lib.errors import ModelError, NonFiniteError
 from fdi_lib.models import LTVModel, as_record
@@ -42,6 +41,7 @@ from fdi_lib.threads import blas_single_thread
 from fdi_lib.validation import (
     check_gains,
     check_missing_known,
+    cho_solve,
     cholesky,
     common_pattern,
     gains_missing,
@@ -147,13 +147,11 @@ def kalman_gains(model: LTVModel, missing: Any = None) -> KalmanGains:
                 F, H, Pk = model.F[k], model.H[k], P[k]
                 S = H @ Pk @ H.T + model.R[k]
                 S = 0.5 * (S + S.T)
-                c, low = cholesky(S, step=k, what="the Riccati recursion")
+                c = cholesky(S, step=k, what="the Riccati recursion")[0]
                 if skip[k]:  # missing sample: no update
                     Kk, IKH, Pf = np.zeros((n, p)), eye, Pk
                 else:
-                    Kk = scipy.linalg.cho_solve(  # (S finite: so is H P)
-                        (c, low), H @ Pk, check_finite=False
-                    ).T  # P H^T S^{-1} without forming S^{-1}
+                    Kk = cho_solve(c, H @ Pk).T  # P H^T S^{-1} without forming S^{-1}
                     IKH = eye - Kk @ H
                     Pf = IKH @ Pk @ IKH.T + Kk @ model.R[k] @ Kk.T  # Joseph form: stays PSD
                     Pf = 0.5 * (Pf + Pf.T)

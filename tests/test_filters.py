@@ -3,10 +3,11 @@ import pytest
 import scipy.linalg
 from filterpy.kalman import KalmanFilter
 
-from fdi_lib.errors import NonFiniteError, ShapeError
+from fdi_lib.errors import CovarianceError, NonFiniteError, ShapeError
 from fdi_lib.filters import kalman_filter, kalman_gains
 from fdi_lib.models import ltv_model
 from fdi_lib.simulate import simulate
+from fdi_lib.validation import cho_solve, cholesky, solve_triangular
 
 
 def test_against_filterpy_on_a_random_ltv_system(random_ltv):
@@ -84,3 +85,28 @@ def test_bad_outputs():
         match=r"y: expected finite values or NaN \(missing\), got inf at index \(3, 0\)",
     ):
         kalman_filter(m, y)
+
+
+def test_recursion_solves_are_scipys_bits():
+    """``cholesky``, ``cho_solve`` and ``solve_triangular`` of :mod:`fdi_lib.validation` call LAPACK
+    as scipy does: the same bits for factors in C and Fortran order, both triangles, transposed or
+    not, vector and matrix right-hand sides."""
+    rng = np.random.default_rng(3)
+    for p in (1, 2, 5):
+        A = rng.standard_normal((p, p))
+        S = A @ A.T + p * np.eye(p)
+        c = cholesky(S, step=0, what="test")
+        ref = scipy.linalg.cho_factor(S, lower=True, check_finite=False)
+        np.testing.assert_array_equal(np.tril(c[0]), np.tril(ref[0]))
+        assert c[1] is True
+        for b in (rng.standard_normal(p), rng.standard_normal((p, 3))):
+            np.testing.assert_array_equal(cho_solve(c[0], b), scipy.linalg.cho_solve(ref, b))
+            for a in (np.tril(A), np.triu(A), np.asfortranarray(np.tril(A))):
+                lower = bool(np.array_equal(a, np.tril(a)))
+                for trans in (False, True):
+                    np.testing.assert_array_equal(
+                        solve_triangular(a, b, lower=lower, trans=trans),
+                        scipy.linalg.solve_triangular(a, b, lower=lower, trans=int(trans)),
+                    )
+    with pytest.raises(CovarianceError, match="step 4"):
+        cholesky(-np.eye(2), step=4, what="test")
