@@ -90,8 +90,7 @@ def accommodation_chunk(
         wind = np.stack([wt.wind_speed(t_abs, seed=wt._child(s, 0)) for s in seeds])
         moved = W._shifted(fault, t0)
         kw = dict(seed=list(seeds), duration_s=duration, params=p, wind=wind)
-        free = wt.simulate(faults=(), **kw)
-        faulty = wt.simulate(faults=(moved,), **kw)
+        faulty, free = wt.simulate_with_twin(faults=(moved,), **kw)  # the twin from the fault on
         i0 = int(round(SETTLE_S / p.ts))
         rec = W.records(faulty, i0, i0 + d.N)
         outcomes = (
