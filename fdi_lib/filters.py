@@ -34,7 +34,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 
 from fdi_lib.errors import ModelError, NonFiniteError
 from fdi_lib.models import LTVModel, as_record
@@ -42,6 +41,7 @@ from fdi_lib.threads import blas_single_thread
 from fdi_lib.validation import (
     check_gains,
     check_missing_known,
+    cho_solve,
     cholesky,
     common_pattern,
     gains_missing,
@@ -147,13 +147,11 @@ def kalman_gains(model: LTVModel, missing: Any = None) -> KalmanGains:
                 F, H, Pk = model.F[k], model.H[k], P[k]
                 S = H @ Pk @ H.T + model.R[k]
                 S = 0.5 * (S + S.T)
-                c, low = cholesky(S, step=k, what="the Riccati recursion")
+                c = cholesky(S, step=k, what="the Riccati recursion")[0]
                 if skip[k]:  # missing sample: no update
                     Kk, IKH, Pf = np.zeros((n, p)), eye, Pk
                 else:
-                    Kk = scipy.linalg.cho_solve(  # (S finite: so is H P)
-                        (c, low), H @ Pk, check_finite=False
-                    ).T  # P H^T S^{-1} without forming S^{-1}
+                    Kk = cho_solve(c, H @ Pk).T  # P H^T S^{-1} without forming S^{-1}
                     IKH = eye - Kk @ H
                     Pf = IKH @ Pk @ IKH.T + Kk @ model.R[k] @ Kk.T  # Joseph form: stays PSD
                     Pf = 0.5 * (Pf + Pf.T)
@@ -321,22 +319,27 @@ def predictor_recursion(
     N, n = model.n_steps, model.n
     batch = y.shape[:-2]
     any_skip = bool(skip.any())
-    xh = np.empty((*batch, N + 1, n))
-    xh[..., 0, :] = initial_state(model, x0)
-    eps = np.empty(y.shape)
-    xf = np.empty((*batch, N, n))
+    # Sample-major work arrays (step k: the contiguous block [k]), written in place by each step's
+    # products and sums (the same operations as on the records' layout: the same bits).
+    xh = np.empty((N + 1, *batch, n))
+    xh[0] = initial_state(model, x0)
+    eps = np.empty((N, *batch, y.shape[-1]))
+    xf = np.empty((N, *batch, n))
     # Known input contributions, computed for all k at once.
     Gu = np.broadcast_to(np.einsum("kij,...kj->...ki", model.G, u), (*batch, N, n))
     ybar = y - np.einsum("kij,...kj->...ki", model.J, u)
+    yk, Guk = np.moveaxis(ybar, -2, 0), np.moveaxis(Gu, -2, 0)
+    HT, KT, FT = (np.swapaxes(a, 1, 2) for a in (model.H, K, model.F))
     for k in range(N):
         if any_skip and skip[k]:  # a missing sample: NaN innovation, no update (K_k = 0)
-            eps[..., k, :] = np.nan
-            xf[..., k, :] = xh[..., k, :]
+            eps[k] = np.nan
+            xf[k] = xh[k]
         else:
-            e = ybar[..., k, :] - xh[..., k, :] @ model.H[k].T
-            eps[..., k, :] = e
-            xf[..., k, :] = xh[..., k, :] + e @ K[k].T
-        xh[..., k + 1, :] = xf[..., k, :] @ model.F[k].T + Gu[..., k, :]
+            e = np.matmul(xh[k], HT[k], out=eps[k])
+            np.subtract(yk[k], e, out=e)
+            np.add(xh[k], np.matmul(e, KT[k], out=xf[k]), out=xf[k])
+        np.add(np.matmul(xf[k], FT[k], out=xh[k + 1]), Guk[k], out=xh[k + 1])
+    eps, xh, xf = (np.ascontiguousarray(np.moveaxis(a, 0, -2)) for a in (eps, xh, xf))
     upd = ybar - np.einsum("kij,...kj->...ki", model.H, xf)
     if any_skip:
         upd = np.where(skip[:, None], np.nan, upd)

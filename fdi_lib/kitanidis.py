@@ -79,7 +79,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 
 from fdi_lib.errors import NonFiniteError, RankConditionError, ShapeError
 from fdi_lib.filters import predictor_recursion
@@ -89,11 +88,13 @@ from fdi_lib.validation import (
     array,
     check_finite,
     check_missing_known,
+    cho_solve,
     cholesky,
     common_pattern,
     gains_missing,
     measurements,
     missing_pattern,
+    solve_triangular,
 )
 
 __all__ = [
@@ -244,7 +245,7 @@ def kitanidis_gains(model: LTVModel, E: Any, missing: Any = None) -> KitanidisGa
                 H, Pk, Rk = model.H[k], P[k], model.R[k]
                 S = H @ Pk @ H.T + Rk
                 S = 0.5 * (S + S.T)
-                c, low = cholesky(S, step=k, what="the Kitanidis covariance recursion")
+                c = cholesky(S, step=k, what="the Kitanidis covariance recursion")[0]
                 if (
                     k > 0
                 ):  # d_{k-1} joins the directions still to reject (after a gap, propagated ones too)
@@ -260,9 +261,7 @@ def kitanidis_gains(model: LTVModel, E: Any, missing: Any = None) -> KitanidisGa
                     Kk = Kbar = np.zeros((n, p))
                     Pf = Pk
                 else:
-                    Kk = scipy.linalg.cho_solve(  # (S finite: so is H P)
-                        (c, low), H @ Pk, check_finite=False
-                    ).T  # P H^T S^{-1} by Cholesky solves
+                    Kk = cho_solve(c, H @ Pk).T  # P H^T S^{-1} by Cholesky solves (S, H P finite)
                     Pf = Pk - Kk @ H @ Pk
                     Kbar = Kk
                 if q > 0 and not skip[k]:
@@ -283,19 +282,13 @@ def kitanidis_gains(model: LTVModel, E: Any, missing: Any = None) -> KitanidisGa
                     # Xi^{-1} E^T H^T Sigma^{-1} = Rw^{-1} Qw^T L^{-1}, a left inverse of H E accurate to
                     # cond(Rw) = sqrt(cond(Xi)) rather than cond(Xi): identity (30) then holds to that precision.
                     Lk = np.tril(c)
-                    W = scipy.linalg.solve_triangular(Lk, HE, lower=True, check_finite=False)
+                    W = solve_triangular(Lk, HE, lower=True)
                     Qw, Rw = np.linalg.qr(W)
-                    Linv = scipy.linalg.solve_triangular(
-                        Lk, np.eye(p), lower=True, check_finite=False
-                    )
-                    M = scipy.linalg.solve_triangular(
-                        Rw, Qw.T @ Linv, check_finite=False
-                    )  # M H E = I
+                    Linv = solve_triangular(Lk, np.eye(p), lower=True)
+                    M = solve_triangular(Rw, Qw.T @ Linv)  # M H E = I
                     Gam = pending - Kk @ HE  # (24c)
                     Kbar = Kk + Gam @ M  # (24g)
-                    GR = scipy.linalg.solve_triangular(  # Gamma Rw^{-1}
-                        Rw, Gam.T, trans="T", check_finite=False
-                    ).T
+                    GR = solve_triangular(Rw, Gam.T, trans=True).T  # Gamma Rw^{-1}
                     Pf = Pf + GR @ GR.T  # (24f): + Gamma Xi^{-1} Gamma^T
                     if not skip[k - 1]:
                         Xi[k] = W.T @ W  # (24d)

@@ -71,7 +71,7 @@ from fdi_lib.models import FaultFamily, LTVModel, fault_profile, ltv_model, step
 from fdi_lib.rls import RLSGains, RLSResult, rls_track
 from fdi_lib.signatures import fault_signature
 from fdi_lib.threads import blas_single_thread
-from fdi_lib.validation import array, integer, missing_samples, probability
+from fdi_lib.validation import array, integer, missing_samples, probability, solve_triangular
 
 __all__ = [
     "kitanidis_predictor_gains",
@@ -429,9 +429,9 @@ def rejection_projection(model: LTVModel, kgains: KitanidisGains) -> np.ndarray:
         T = np.empty((N, p - q, p))
         for k in range(N):
             Lc = kgains.Sigma_chol[k]
-            B = scipy.linalg.solve_triangular(Lc, model.H[k] @ Es[max(k - 1, 0)], lower=True)
+            B = solve_triangular(Lc, model.H[k] @ Es[max(k - 1, 0)], lower=True)
             Nk = scipy.linalg.null_space(B.T)  # (p, p - q), orthonormal
-            T[k] = scipy.linalg.solve_triangular(Lc, Nk, lower=True, trans="T").T  # N^T L^{-1}
+            T[k] = solve_triangular(Lc, Nk, lower=True, trans=True).T  # N^T L^{-1}
         return T
 
 

@@ -83,6 +83,8 @@ __all__ = [
     "check_gains",
     "initial_state",
     "cholesky",
+    "cho_solve",
+    "solve_triangular",
 ]
 
 #: Relative tolerance of the symmetry and positive semi-definiteness checks.
@@ -554,11 +556,67 @@ def cholesky(
     """
     if not np.all(np.isfinite(S)):
         raise NonFiniteError(f"{name}: {what} diverged (non-finite values at step {step})")
-    try:  # (finite: checked above, not again by scipy, whose check costs a third of the call)
-        return scipy.linalg.cho_factor(S, lower=True, check_finite=False)
-    except np.linalg.LinAlgError as exc:
+    # finite: checked above. LAPACK's potrf as cho_factor calls it (its upper triangle not
+    # cleaned), without scipy's per-call argument handling: most of the call on a small matrix
+    (potrf,) = scipy.linalg.get_lapack_funcs(("potrf",), (S,))
+    c, info = potrf(S, lower=True, overwrite_a=False, clean=False)
+    if info > 0:
         raise CovarianceError(
             f"{name}: {what} lost positive definiteness at step {step} (expected a "
             f"positive definite matrix, smallest eigenvalue "
             f"{np.linalg.eigvalsh(S)[0]:.3g})"
-        ) from exc
+        )
+    return c, True  # (info < 0, an illegal argument: excluded by f2py's checks)
+
+
+def cho_solve(c: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``scipy.linalg.cho_solve((c, True), b, check_finite=False)`` inside a recursion: ``S^{-1} b``
+    from the factor ``c`` of :func:`cholesky`, ``b`` ``(p,)`` or ``(p, m)`` finite and not empty.
+
+    The same LAPACK call (potrs), so the same bits, without scipy's per-call argument handling
+    (five times the solve itself on the recursions' small matrices).
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> c, _ = cholesky(np.array([[4.0, 2.0], [2.0, 5.0]]), step=0, what="Riccati")
+    >>> cho_solve(c, np.array([6.0, 7.0])).tolist()
+    [1.0, 1.0]
+    """
+    (potrs,) = scipy.linalg.get_lapack_funcs(("potrs",), (c, b))
+    return potrs(c, b, lower=True, overwrite_b=False)[0]  # (its info: an illegal argument)
+
+
+def solve_triangular(
+    a: np.ndarray, b: np.ndarray, *, lower: bool = False, trans: bool = False
+) -> np.ndarray:
+    """``scipy.linalg.solve_triangular(a, b, trans, lower, check_finite=False)`` inside a
+    recursion: ``a^{-1} b`` (``trans``: ``a^{-T} b``), ``a`` ``(p, p)`` triangular, ``b`` ``(p,)``
+    or ``(p, m)``, both finite and not empty.
+
+    The same LAPACK call as scipy's (trtrs; on ``a^T``, the other triangle and the other
+    transposition, when ``a`` is not in Fortran order), so the same bits, without its per-call
+    argument handling (ten times the solve itself on the recursions' small matrices).
+
+    Explained in the book: :doc:`/book/notation`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> solve_triangular(np.array([[2.0, 0.0], [1.0, 1.0]]), np.array([2.0, 3.0]), lower=True)
+    array([1., 2.])
+    >>> solve_triangular(np.array([[1.0, 0.0], [0.0, 0.0]]), np.ones(2), lower=True)
+    Traceback (most recent call last):
+        ...
+    numpy.linalg.LinAlgError: singular matrix: resolution failed at diagonal 1
+    """
+    (trtrs,) = scipy.linalg.get_lapack_funcs(("trtrs",), (a, b))
+    if a.flags.f_contiguous:
+        x, info = trtrs(a, b, overwrite_b=False, lower=lower, trans=trans, unitdiag=False)
+    else:  # trtrs reads Fortran order: the transposed system, as scipy solves it
+        x, info = trtrs(a.T, b, overwrite_b=False, lower=not lower, trans=not trans, unitdiag=False)
+    if info > 0:
+        raise np.linalg.LinAlgError(f"singular matrix: resolution failed at diagonal {info - 1}")
+    return x

@@ -3,10 +3,11 @@ import pytest
 import scipy.linalg
 from filterpy.kalman import KalmanFilter
 
-from fdi_lib.errors import NonFiniteError, ShapeError
-from fdi_lib.filters import kalman_filter, kalman_gains
+from fdi_lib.errors import CovarianceError, NonFiniteError, ShapeError
+from fdi_lib.filters import kalman_filter, kalman_gains, predictor_recursion
 from fdi_lib.models import ltv_model
 from fdi_lib.simulate import simulate
+from fdi_lib.validation import cho_solve, cholesky, solve_triangular
 
 
 def test_against_filterpy_on_a_random_ltv_system(random_ltv):
@@ -84,3 +85,67 @@ def test_bad_outputs():
         match=r"y: expected finite values or NaN \(missing\), got inf at index \(3, 0\)",
     ):
         kalman_filter(m, y)
+
+
+def _predictor_reference(m, y, u, K, skip):
+    """The recursion of ``predictor_recursion`` step by step on the records' own layout."""
+    batch, N, n = y.shape[:-2], m.n_steps, m.n
+    xh = np.empty((*batch, N + 1, n))
+    xh[..., 0, :] = m.x0
+    eps, xf = np.empty(y.shape), np.empty((*batch, N, n))
+    Gu = np.broadcast_to(np.einsum("kij,...kj->...ki", m.G, u), (*batch, N, n))
+    ybar = y - np.einsum("kij,...kj->...ki", m.J, u)
+    for k in range(N):
+        if skip[k]:
+            eps[..., k, :] = np.nan
+            xf[..., k, :] = xh[..., k, :]
+        else:
+            e = ybar[..., k, :] - xh[..., k, :] @ m.H[k].T
+            eps[..., k, :] = e
+            xf[..., k, :] = xh[..., k, :] + e @ K[k].T
+        xh[..., k + 1, :] = xf[..., k, :] @ m.F[k].T + Gu[..., k, :]
+    upd = np.where(skip[:, None], np.nan, ybar - np.einsum("kij,...kj->...ki", m.H, xf))
+    return eps, xh, xf, upd
+
+
+@pytest.mark.parametrize("batch", [(), (1,), (4,), (3, 2)])
+@pytest.mark.parametrize("shared_u", [False, True])
+def test_predictor_recursion_bits_of_the_step_by_step_loop(random_ltv, batch, shared_u):
+    """The sample-major loop gives the bits of the step-by-step one on the records' layout (missing
+    samples, batches of any rank, inputs per record or shared), in C-ordered arrays of its shapes."""
+    rng = np.random.default_rng(11)
+    m = random_ltv(rng, n=3, p=2, l=1, n_steps=30)
+    y = rng.standard_normal((*batch, 30, 2))
+    u = rng.standard_normal((30, 1) if shared_u else (*batch, 30, 1))
+    K = kalman_gains(m).K
+    skip = np.zeros(30, dtype=bool)
+    skip[[4, 17]] = True
+    got = predictor_recursion(m, y, u, K, skip)
+    for a, b in zip(got, _predictor_reference(m, y, u, K, skip)):
+        assert a.shape == b.shape and a.flags.c_contiguous
+        np.testing.assert_array_equal(a, b)
+
+
+def test_recursion_solves_are_scipys_bits():
+    """``cholesky``, ``cho_solve`` and ``solve_triangular`` of :mod:`fdi_lib.validation` call LAPACK
+    as scipy does: the same bits for factors in C and Fortran order, both triangles, transposed or
+    not, vector and matrix right-hand sides."""
+    rng = np.random.default_rng(3)
+    for p in (1, 2, 5):
+        A = rng.standard_normal((p, p))
+        S = A @ A.T + p * np.eye(p)
+        c = cholesky(S, step=0, what="test")
+        ref = scipy.linalg.cho_factor(S, lower=True, check_finite=False)
+        np.testing.assert_array_equal(np.tril(c[0]), np.tril(ref[0]))
+        assert c[1] is True
+        for b in (rng.standard_normal(p), rng.standard_normal((p, 3))):
+            np.testing.assert_array_equal(cho_solve(c[0], b), scipy.linalg.cho_solve(ref, b))
+            for a in (np.tril(A), np.triu(A), np.asfortranarray(np.tril(A))):
+                lower = bool(np.array_equal(a, np.tril(a)))
+                for trans in (False, True):
+                    np.testing.assert_array_equal(
+                        solve_triangular(a, b, lower=lower, trans=trans),
+                        scipy.linalg.solve_triangular(a, b, lower=lower, trans=int(trans)),
+                    )
+    with pytest.raises(CovarianceError, match="step 4"):
+        cholesky(-np.eye(2), step=4, what="test")

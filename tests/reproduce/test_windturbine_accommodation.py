@@ -58,3 +58,18 @@ def test_accommodation_reproduction_measures_against_the_fault_free_twin():
         assert np.all(x["accommodated"][sw, j, 1] < 0.5 * x["faulty"][sw, j, 1])
     with pytest.raises(ModelError, match="method: expected 'first' or one of"):
         A.accommodation(seed=1, trials=2, jobs=1, method="best")
+
+
+def test_accommodation_chunks_change_no_bit():
+    """The realisations in one chunk (:data:`~fdi_lib.reproduce.windturbine_accommodation.
+    CHUNK_REALISATIONS`) give the bits of one realisation per chunk: each record is computed alone."""
+    import functools
+
+    from fdi_lib.montecarlo import run_monte_carlo
+
+    chunk = functools.partial(A.accommodation_chunk, seed=2009, method="first")
+    one = run_monte_carlo(chunk, 2, seed=2009, chunk_size=A.CHUNK_REALISATIONS)
+    apart = run_monte_carlo(chunk, 2, seed=2009, chunk_size=1)
+    assert one.keys() == apart.keys()
+    for k in one:
+        np.testing.assert_array_equal(one[k], apart[k])
