@@ -738,7 +738,7 @@ def _scaled_problems(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, ...]:
     for b0 in range(0, B, block):
         sl = slice(b0, b0 + block)
         sx[sl] = _pow2_rms(X[sl].reshape(-1, rows * m))
-        Xs = np.divide(X[sl], sx[sl, None, None], out=buf[: sx[sl].size])
+        Xs = _divide_pow2(X[sl], sx[sl, None, None], out=buf[: sx[sl].size])
         np.matmul(Xs.transpose(0, 2, 1), Xs, out=Gram[sl])
         Xy[sl] = np.einsum("bri,br->bi", Xs, ys[sl])
     return sx, sy, ys, Gram, Xy
@@ -1153,12 +1153,24 @@ def _pow2_rms(a: np.ndarray) -> np.ndarray:
     )  # 2^(e-1) <= top: representable even near the limits
     ok = top > 0
     u[~ok] = 1.0
-    t = a / u[:, None]
+    t = _divide_pow2(a, u[:, None])
     ms = np.einsum("bk,bk->b", t, t) / a.shape[1]
     with np.errstate(divide="ignore"):
         s = np.exp2(np.round(np.log2(ms) / 2 + (e - 1)))
     s[~ok] = 1.0
     return s
+
+
+def _divide_pow2(a: np.ndarray, s: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """``a / s`` for powers of 2 ``s`` (broadcast against ``a``; into ``out`` if given), bit for bit,
+    as ``a * (1 / s)``, which costs less: the reciprocal of a power of 2 is exact while finite, and
+    both are then one rounding of the same value. Divides when a reciprocal is not finite
+    (``s < 2^-1023``, or a zero ``s``)."""
+    with np.errstate(over="ignore", divide="ignore"):
+        r = 1.0 / s
+    if np.isfinite(r).all():
+        return np.multiply(a, r, out=out)
+    return np.divide(a, s, out=out)
 
 
 def _lars_fallback(
