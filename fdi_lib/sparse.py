@@ -727,8 +727,10 @@ def _scaled_problems(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, ...]:
     ``(B, rows)`` and their Gram form: ``sx``, ``sy`` ``(B,)`` (:func:`_pow2_rms` of each problem's
     ``X`` and ``y``), ``ys = y / sy``, and, for ``Xs = X / sx``, ``Gram = Xs^T Xs`` ``(B, m, m)``
     and ``Xs^T ys`` ``(B, m)``. Computed a few problems at a time, while their ``X`` and ``Xs`` are
-    in cache (``Xs`` is not kept); each problem's values are those of the whole batch at once (the
-    same operations on its rows)."""
+    in cache (``Xs`` is not kept; an ``X`` whose problems are not contiguous, e.g. the regression
+    of :func:`fdi_lib.kitanidis.residual_signature`'s stacked realisations, is gathered into the
+    buffer first); each problem's values are those of the whole batch at once (the same
+    operations on its rows)."""
     B, rows, m = X.shape
     sy = _pow2_rms(y)
     ys = y / sy[:, None]
@@ -737,8 +739,12 @@ def _scaled_problems(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, ...]:
     buf = np.empty((min(block, B), rows, m))
     for b0 in range(0, B, block):
         sl = slice(b0, b0 + block)
-        sx[sl] = _pow2_rms(X[sl].reshape(-1, rows * m))
-        Xs = _divide_pow2(X[sl], sx[sl, None, None], out=buf[: sx[sl].size])
+        Xb = X[sl]
+        if not Xb.flags.c_contiguous:  # gathered into the buffer, then scaled there
+            Xb = buf[: Xb.shape[0]]
+            Xb[...] = X[sl]
+        sx[sl] = _pow2_rms(Xb.reshape(-1, rows * m))
+        Xs = _divide_pow2(Xb, sx[sl, None, None], out=buf[: sx[sl].size])
         np.matmul(Xs.transpose(0, 2, 1), Xs, out=Gram[sl])
         Xy[sl] = np.einsum("bri,br->bi", Xs, ys[sl])
     return sx, sy, ys, Gram, Xy
