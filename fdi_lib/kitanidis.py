@@ -539,9 +539,10 @@ def residual_signature(
     K = gains.K
     IKH = np.eye(n) - K @ model.H  # (N, n, n)
     # Upsilon_k in U[k % kept]: every sample, or (upsilon=False) the last one (each step reads
-    # Upsilon_{k-1} into a new array before it writes Upsilon_k)
+    # Upsilon_{k-1} into V, a buffer kept across the steps, before it writes Upsilon_k)
     kept = N if upsilon else 1
     U = np.empty((kept, n, nb * m))
+    V = np.empty((n, nb * m))
     # H_k Upsilon_k, one product per sample while Upsilon_k is in cache, written in place in the
     # stacked layout; the regression (36)-(38) built from it is a view too (k and the output merge
     # into its rows), which fdi_lib.sparse.lasso_path_batch gathers a few realisations at a time
@@ -550,7 +551,7 @@ def residual_signature(
     for k in range(N):
         Uk = U[k % kept]
         if k > 0:
-            V = model.F[k - 1] @ U[(k - 1) % kept]
+            np.matmul(model.F[k - 1], U[(k - 1) % kept], out=V)
             np.add(V.reshape(n, nb, m), Psi_c[k - 1], out=V.reshape(n, nb, m))
             np.matmul(IKH[k], V, out=Uk)
             if has_phi:
