@@ -1368,7 +1368,7 @@ def _homotopy(
         # rank-one change of inv: + w w^T / schur (j joins), - col col^T / col_s (j drops)
         g = GA[rows, :, j]  # Gram[A, j] (zero in unused slots)
         u = np.zeros((rows.size, K))
-        u[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], g)
+        np.einsum("bij,bj->bi", inv[:, :k], g, out=u[:, :k])
         schur = Gram[ids, j, j] - np.einsum("bi,bi->b", g, u)  # G_jj - g_A^T inv g_A
         u[rows[joining], s_ev[joining]] = -1.0  # w: the new column of inv is -w / schur
         # over all K slots once most are used: inv[:, :K, :K] is contiguous, faster to add to than
@@ -1407,7 +1407,7 @@ def _homotopy(
             joining, np.sign(cov[rows, j]), np.where(dropping, 0.0, sign[rows, j])
         )
         dA = np.zeros((rows.size, K))
-        dA[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], sign[rows[:, None], order])
+        np.einsum("bij,bj->bi", inv[:, :k], sign[rows[:, None], order], out=dA[:, :k])
         a = np.einsum("bji,bj->bi", GA[:, :k], dA[:, :k])  # a sum in slot order: unused slots add 0
         d = np.zeros((rows.size, m + 1))
         d[rows[:, None], order[:, :k]] = dA[:, :k]  # unused slots write into column m, dropped
