@@ -532,25 +532,28 @@ def residual_signature(
     K = gains.K
     IKH = np.eye(n) - K @ model.H  # (N, n, n)
     # Upsilon_k in U[k % kept]: every sample, or (upsilon=False) the last one (each step reads
-    # Upsilon_{k-1} into a new array before it writes Upsilon_k)
+    # Upsilon_{k-1} into V, a buffer kept across the steps, before it writes Upsilon_k)
     kept = N if upsilon else 1
     U = np.empty((kept, n, nb * m))
-    # H_k Upsilon_k, one product per sample while Upsilon_k is in cache, stored realisation first
-    # (the layout of the regression (36)-(38) built from it)
-    HU = np.empty((nb, N, p, m))
+    V = np.empty((n, nb * m))
+    # H_k Upsilon_k, one product per sample while Upsilon_k is in cache, written in place in the
+    # stacked layout; the regression (36)-(38) built from it is a view too (k and the output merge
+    # into its rows), which fdi_lib.sparse.lasso_path_batch gathers a few realisations at a time
+    HU = np.empty((N, p, nb * m))
     U[0] = -K[0] @ Phi_c[0].reshape(p, nb * m) if has_phi else 0.0
     for k in range(N):
         Uk = U[k % kept]
         if k > 0:
-            V = model.F[k - 1] @ U[(k - 1) % kept]
+            np.matmul(model.F[k - 1], U[(k - 1) % kept], out=V)
             np.add(V.reshape(n, nb, m), Psi_c[k - 1], out=V.reshape(n, nb, m))
             np.matmul(IKH[k], V, out=Uk)
             if has_phi:
                 Uk -= K[k] @ Phi_c[k].reshape(p, nb * m)
-        HU[:, k] = (model.H[k] @ Uk).reshape(p, nb, m).transpose(1, 0, 2)
-    # back to (*batch, N, rows, m) as views of the stacked arrays (no copy)
+        np.matmul(model.H[k], Uk, out=HU[k])
+    # back to (*batch, N, rows, m) as views of the stacked arrays (no copy, realisations not
+    # contiguous)
     Ups = np.moveaxis(U.reshape(N, n, nb, m), 2, 0).reshape(*batch, N, n, m) if upsilon else None
-    on_res = HU.reshape(*batch, N, p, m)
+    on_res = np.moveaxis(HU.reshape(N, p, nb, m), 2, 0).reshape(*batch, N, p, m)
     if has_phi:
         on_res = on_res + Phi_a
     return ResidualSignature(Upsilon=Ups, on_residual=on_res)

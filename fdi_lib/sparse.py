@@ -727,8 +727,10 @@ def _scaled_problems(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, ...]:
     ``(B, rows)`` and their Gram form: ``sx``, ``sy`` ``(B,)`` (:func:`_pow2_rms` of each problem's
     ``X`` and ``y``), ``ys = y / sy``, and, for ``Xs = X / sx``, ``Gram = Xs^T Xs`` ``(B, m, m)``
     and ``Xs^T ys`` ``(B, m)``. Computed a few problems at a time, while their ``X`` and ``Xs`` are
-    in cache (``Xs`` is not kept); each problem's values are those of the whole batch at once (the
-    same operations on its rows)."""
+    in cache (``Xs`` is not kept; an ``X`` whose problems are not contiguous, e.g. the regression
+    of :func:`fdi_lib.kitanidis.residual_signature`'s stacked realisations, is gathered into the
+    buffer first); each problem's values are those of the whole batch at once (the same
+    operations on its rows)."""
     B, rows, m = X.shape
     sy = _pow2_rms(y)
     ys = y / sy[:, None]
@@ -737,8 +739,12 @@ def _scaled_problems(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, ...]:
     buf = np.empty((min(block, B), rows, m))
     for b0 in range(0, B, block):
         sl = slice(b0, b0 + block)
-        sx[sl] = _pow2_rms(X[sl].reshape(-1, rows * m))
-        Xs = np.divide(X[sl], sx[sl, None, None], out=buf[: sx[sl].size])
+        Xb = X[sl]
+        if not Xb.flags.c_contiguous:  # gathered into the buffer, then scaled there
+            Xb = buf[: Xb.shape[0]]
+            Xb[...] = X[sl]
+        sx[sl] = _pow2_rms(Xb.reshape(-1, rows * m))
+        Xs = _divide_pow2(Xb, sx[sl, None, None], out=buf[: sx[sl].size])
         np.matmul(Xs.transpose(0, 2, 1), Xs, out=Gram[sl])
         Xy[sl] = np.einsum("bri,br->bi", Xs, ys[sl])
     return sx, sy, ys, Gram, Xy
@@ -1153,12 +1159,24 @@ def _pow2_rms(a: np.ndarray) -> np.ndarray:
     )  # 2^(e-1) <= top: representable even near the limits
     ok = top > 0
     u[~ok] = 1.0
-    t = a / u[:, None]
+    t = _divide_pow2(a, u[:, None])
     ms = np.einsum("bk,bk->b", t, t) / a.shape[1]
     with np.errstate(divide="ignore"):
         s = np.exp2(np.round(np.log2(ms) / 2 + (e - 1)))
     s[~ok] = 1.0
     return s
+
+
+def _divide_pow2(a: np.ndarray, s: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """``a / s`` for powers of 2 ``s`` (broadcast against ``a``; into ``out`` if given), bit for bit,
+    as ``a * (1 / s)``, which costs less: the reciprocal of a power of 2 is exact while finite, and
+    both are then one rounding of the same value. Divides when a reciprocal is not finite
+    (``s < 2^-1023``, or a zero ``s``)."""
+    with np.errstate(over="ignore", divide="ignore"):
+        r = 1.0 / s
+    if np.isfinite(r).all():
+        return np.multiply(a, r, out=out)
+    return np.divide(a, s, out=out)
 
 
 def _lars_fallback(
@@ -1350,7 +1368,7 @@ def _homotopy(
         # rank-one change of inv: + w w^T / schur (j joins), - col col^T / col_s (j drops)
         g = GA[rows, :, j]  # Gram[A, j] (zero in unused slots)
         u = np.zeros((rows.size, K))
-        u[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], g)
+        np.einsum("bij,bj->bi", inv[:, :k], g, out=u[:, :k])
         schur = Gram[ids, j, j] - np.einsum("bi,bi->b", g, u)  # G_jj - g_A^T inv g_A
         u[rows[joining], s_ev[joining]] = -1.0  # w: the new column of inv is -w / schur
         # over all K slots once most are used: inv[:, :K, :K] is contiguous, faster to add to than
@@ -1389,7 +1407,7 @@ def _homotopy(
             joining, np.sign(cov[rows, j]), np.where(dropping, 0.0, sign[rows, j])
         )
         dA = np.zeros((rows.size, K))
-        dA[:, :k] = np.einsum("bij,bj->bi", inv[:, :k], sign[rows[:, None], order])
+        np.einsum("bij,bj->bi", inv[:, :k], sign[rows[:, None], order], out=dA[:, :k])
         a = np.einsum("bji,bj->bi", GA[:, :k], dA[:, :k])  # a sum in slot order: unused slots add 0
         d = np.zeros((rows.size, m + 1))
         d[rows[:, None], order[:, :k]] = dA[:, :k]  # unused slots write into column m, dropped

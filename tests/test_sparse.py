@@ -320,6 +320,26 @@ def test_batched_paths_match_scikit_learn_on_example1_and_stop_at_max_size():
         )
 
 
+def test_paths_of_a_strided_batch_are_those_of_its_contiguous_copy(monkeypatch):
+    """Example 1's regression is a view of residual_signature's stacked realisations (problems
+    not contiguous): lasso_path_batch gathers it a few problems at a time (here 3, and a tail of
+    1) and gives the paths of the same problems made contiguous, bit for bit."""
+    from fdi_lib import sparse
+    from fdi_lib.montecarlo import trial_rngs, trial_seeds
+    from fdi_lib.reproduce.zhang2021 import example1_regression
+    from fdi_lib.systems import zhang2021_example1 as ex
+
+    trials = ex.draw_trials(ex.example1_model(), trial_rngs(trial_seeds(4, 10)), q=8)
+    reg, _ = example1_regression(trials)
+    assert not reg.X.flags.c_contiguous
+    monkeypatch.setattr(sparse, "_BLOCK_VALUES", 3 * reg.X.shape[1] * reg.X.shape[2])
+    kw = dict(n_samples=reg.n_samples, lambda_min=1e-4, max_size=25)
+    strided = sparse.lasso_path_batch(reg.X, reg.y, **kw)
+    dense = sparse.lasso_path_batch(np.ascontiguousarray(reg.X), reg.y, **kw)
+    assert strided.lambdas.tobytes() == dense.lambdas.tobytes()
+    assert strided.coefs.tobytes() == dense.coefs.tobytes()
+
+
 def _rule_by_loops(path, scale, lambda_ratio, top):
     """The flat-range rule written as plain loops over the breakpoints (reference)."""
     a, c = path.lambdas, path.coefs

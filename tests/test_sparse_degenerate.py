@@ -480,3 +480,24 @@ def test_where_inf_is_numpys_where_bit_for_bit():
     with np.errstate(all="ignore"):
         got = _where_inf(mask, x)
     assert got.tobytes() == np.where(mask, x, np.inf).tobytes()
+
+
+@pytest.mark.parametrize("exponent", [0, 7, -40, 1021, -1022, -1023, -1024, -1074])
+def test_divide_pow2_is_the_division_bit_for_bit(exponent):
+    """``_divide_pow2`` (the rescaling of the Lasso problems by powers of 2, multiplied by the
+    exact reciprocal) is ``a / s`` bit for bit: normal and subnormal quotients, signed zeros, inf
+    and NaN, with powers of 2 whose reciprocal is finite and (below ``2^-1023``) not, when it
+    divides; into ``out`` too."""
+    from fdi_lib.sparse import _divide_pow2
+
+    rng = np.random.default_rng(5)
+    a = rng.standard_normal((6, 500)) * np.ldexp(1.0, rng.integers(-1074, 1023, (6, 500)))
+    a[0, :6] = [0.0, -0.0, np.inf, -np.inf, np.nan, 5e-324]
+    s = np.ldexp(1.0, exponent + np.array([0, 1, 0, 2, 0, 1]))[:, None]
+    with np.errstate(all="ignore"):
+        want = a / s
+        out = np.empty_like(a)
+        got = _divide_pow2(a, s, out=out)
+    assert got is out and got.tobytes() == want.tobytes()
+    subnormal = (want != 0) & (np.abs(want) < np.finfo(float).tiny)
+    assert (subnormal | (np.isinf(want) & np.isfinite(a))).any()  # rounded below or overflowed

@@ -54,7 +54,6 @@ N_PARAMS = 50
 PSI_HALF_WIDTH = 17.3
 E = np.array([[-1.0], [0.0], [0.0]])
 C = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
-_BLOCK = 8  # trials whose Psi_k draws draw_trials copies into the batch together
 
 
 def state_matrices(n_steps: int) -> np.ndarray:
@@ -141,30 +140,23 @@ def draw_trials(
         raise ModelError(f"q: expected an integer in [0, {m}], got {q!r}")
     N, n, p, B = model.n_steps, model.n, model.p, len(rngs)
     theta = np.zeros((B, m))
-    # Psi in the layout of fdi_lib.kitanidis.residual_signature, (N, 3, B, m), seen as (B, N, 3, m)
-    Psi_s = np.empty((N, 3, B, m))
-    # a few trials' draws, contiguous (in cache while they are scaled), copied into Psi_s together:
-    # rows of _BLOCK trials side by side rather than one trial's row at a time
-    block = np.empty((_BLOCK, N, 3, m))
+    Psi = np.empty((B, N, 3, m))  # each trial's draws contiguous, scaled while in cache
     eps = np.empty((B, N))
     z0, zw, zv = np.empty((B, n)), np.empty((B, N, n)), np.empty((B, N, p))
     span = PSI_HALF_WIDTH - (-PSI_HALF_WIDTH)
     for b, rng in enumerate(rngs):
         theta[b, rng.choice(m, size=int(q), replace=False)] = 1.0
-        P = block[b % _BLOCK]
+        P = Psi[b]
         # rng.uniform(low, high) is low + (high - low) U for these U, bit for bit:
         rng.random(out=P)
         P *= span
         P += -PSI_HALF_WIDTH
-        if b % _BLOCK == _BLOCK - 1 or b == B - 1:
-            b0 = b - b % _BLOCK
-            Psi_s[:, :, b0 : b + 1] = block[: b + 1 - b0].transpose(1, 2, 0, 3)
         rng.standard_normal(out=eps[b])
         for z in (z0[b], zw[b], zv[b]):  # the draws of fdi_lib.simulate.draw_noise, in its order
             rng.standard_normal(out=z)
     d = 10.0 * np.sin(0.1 * np.arange(N)) + eps + 100.0
     return Example1Trial(
-        Psi=Psi_s.transpose(2, 0, 1, 3),
+        Psi=Psi,
         theta=theta,
         d=d[:, :, None],
         noise=noise_from_standard(model, z0, zw, zv),
