@@ -164,6 +164,22 @@ def test_rated_wind_speed_separates_the_regions():
     assert wt.operating_point(v_rated + 0.01, region=1).region == 1
 
 
+def test_torque_balance_has_the_bits_of_the_array_torque():
+    """The root searches' balance computes the three blades' torque on floats (_cq_three): the same
+    bits as the array path _aero_torque, over the table, outside it (extrapolation) and at a zero
+    coefficient (whose sign numpy's sum of three drops)."""
+    rng = np.random.default_rng(11)
+    points = [(v, w, b) for v, w, b in rng.uniform([2.0, 0.05, -4.0], [30.0, 2.5, 50.0], (400, 3))]
+    points += [(8.0, 8.0 * 8.0 / P.radius, float(b)) for b in wt.BETA_GRID_DEG]  # on the grid
+    for v, w, b in points:
+        tau_a = float(wt._aero_torque(np.asarray(v), np.asarray(w), np.full(3, b), P))
+        want = P.eta_dt * (tau_a - P.B_r * w) / P.N_g - P.B_g * P.N_g * w - 1e4
+        assert wt._torque_balance(v, w, b, 1e4, P).hex() == want.hex(), (v, w, b)
+    grid = np.array([0.0, 2.0])  # a table of -0.0: numpy's sum of three is +0.0
+    cq = wt._cq_three(1.0, 0.0, grid, grid - 1.0, np.full((2, 2), -0.0))
+    assert math.copysign(1.0, cq) == 1.0
+
+
 # ---------------------------------------------------------------------------------- pitch actuators
 @pytest.mark.parametrize(
     "wn, zeta",
