@@ -1005,6 +1005,21 @@ def _schedule(schedule: Any) -> np.ndarray:
     return WIND_SCHEDULES[schedule]
 
 
+@functools.lru_cache(maxsize=64)
+def _kaimal_scale(n_fft: int, dt: float, L: float, V: float) -> np.ndarray:
+    """The factor of :func:`wind_speed` on the FFT of ``n_fft`` white samples: the square root of
+    the Kaimal spectrum at its frequencies over ``2 dt`` (white noise of unit variance per sample
+    has the one-sided density ``2 dt``). Cached (read-only): the realisations of one stretch of the
+    scenario (the same times, a seed each) share it."""
+    from scipy.fft import rfftfreq
+
+    f = rfftfreq(n_fft, dt)
+    psd = (4 * L / V) / (1 + 6 * f * L / V) ** (5.0 / 3.0)
+    scale = np.sqrt(psd / (2 * dt))
+    scale.setflags(write=False)
+    return scale
+
+
 def wind_speed(
     t: Any,
     *,
@@ -1049,14 +1064,11 @@ def wind_speed(
         seed = integer(seed, "seed", low=0)
     rng = np.random.default_rng(seed)
     V = float(mean.mean())
-    from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
+    from scipy.fft import irfft, next_fast_len, rfft
 
     n = t_a.size
     n_fft = next_fast_len(n + int(np.ceil(10 * L / V / dt)), real=True)
-    f = rfftfreq(n_fft, dt)
-    psd = (4 * L / V) / (1 + 6 * f * L / V) ** (5.0 / 3.0)
-    # white noise of unit variance per sample has the one-sided density 2 dt: scale to psd
-    shaped = rfft(rng.standard_normal(n_fft)) * np.sqrt(psd / (2 * dt))
+    shaped = rfft(rng.standard_normal(n_fft)) * _kaimal_scale(n_fft, dt, L, V)
     shaped[0] = 0.0  # zero mean: the mean wind is vbar
     u = irfft(shaped, n_fft)[:n]
     v = mean * (1 + ti * u)

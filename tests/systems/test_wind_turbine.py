@@ -700,6 +700,27 @@ def test_wind_profile_and_kaimal_turbulence():
     assert np.exp(np.mean(np.log(psd[band] / kaimal))) == pytest.approx(1.0, abs=0.1)
 
 
+def test_wind_of_a_stretch_shares_its_cached_spectrum():
+    """Realisations of one stretch (the same times, a seed each) take the spectral factor from the
+    cache (_kaimal_scale, read-only): the same bits as the spectral synthesis written out."""
+    from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
+
+    t = 2000.0 + np.arange(2700) * P.ts
+    mean = np.interp(t, wt.WIND_PROFILE[:, 0], wt.WIND_PROFILE[:, 1])
+    L, V, dt = wt.LENGTH_SCALE_M, float(mean.mean()), float(np.diff(t).mean())
+    n_fft = next_fast_len(t.size + int(np.ceil(10 * L / V / dt)), real=True)
+    f = rfftfreq(n_fft, dt)
+    scale = np.sqrt((4 * L / V) / (1 + 6 * f * L / V) ** (5.0 / 3.0) / (2 * dt))
+    wt._kaimal_scale.cache_clear()
+    for seed in (3, 4, 3):
+        shaped = rfft(np.random.default_rng(seed).standard_normal(n_fft)) * scale
+        shaped[0] = 0.0
+        want = mean * (1 + wt.TURBULENCE_INTENSITY * irfft(shaped, n_fft)[: t.size])
+        assert wt.wind_speed(t, seed=seed).tobytes() == want.tobytes()
+    assert wt._kaimal_scale.cache_info().hits == 2
+    assert not wt._kaimal_scale(n_fft, dt, L, V).flags.writeable
+
+
 def test_wind_has_no_jump_beyond_its_turbulence():
     """The wind's increments per sample (what drives ``tau_a``'s, the SVO's ``dtau_bound``) are
     those of a continuous wind: the mean profile moves by at most 8.2e-4 m/s per sample over the
