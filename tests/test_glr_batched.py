@@ -208,6 +208,29 @@ def test_blocks_of_samples_within_the_memory_budget(monkeypatch, m, start):
     _assert_same(blocked, {key: getattr(realisations, key) for key in KEYS})
 
 
+def test_blocks_of_samples_are_cut_to_the_cache_size(monkeypatch):
+    """Blocks of samples hold _SAMPLE_BLOCK_BYTES of the realisations' arrays when that is less than
+    the budget (here one realisation's worth: N / 7 samples of 7 realisations), the same bits."""
+    model, gains, eps, Psi, Phi = _setup((7,), 2, seed=9)
+    fam = step_family(model, Psi=Psi, Phi=Phi)
+    whole = glr_window(eps, model, gains, fam, W, S, start=15)
+    per = 8 * N * W * 2 * (n + 3 * p + 8)
+    monkeypatch.setattr(glr, "_PER_REALISATION_BYTES", 3 * per)
+    monkeypatch.setattr(glr, "_SAMPLE_BLOCK_BYTES", per)
+    sizes = []
+    real = glr.WindowedGLR._shared_blocks
+
+    def spy(self, size, first=0):
+        sizes.append(size)
+        return real(self, size, first)
+
+    monkeypatch.setattr(glr.WindowedGLR, "_shared_blocks", spy)
+    blocked = glr_window(eps, model, gains, fam, W, S, start=15)
+    assert sizes == [N // 7]
+    for key in KEYS:
+        assert getattr(blocked, key).tobytes() == getattr(whole, key).tobytes(), key
+
+
 @pytest.mark.parametrize("blocks", [False, True])
 def test_a_family_without_output_faults_skips_their_terms_bit_for_bit(monkeypatch, blocks):
     """Phi~ = 0 (per-realisation, shared step and impulse families): the detector skips the terms
