@@ -1117,16 +1117,17 @@ def _residuals(
     (the Kalman filter is the blades' residual filter), not run again."""
     out = {}
     for name, sd in d.subs.items():
-        ys, us = _split(d, y, u, sd.sub)
         if sd.sub.E is not None:
             if kitanidis is None:
-                r = kitanidis_filter(sd.kit, ys, us, gains=sd.kit_gains).residuals
+                r = kitanidis_filter(sd.kit, *_split(d, y, u, sd.sub), gains=sd.kit_gains).residuals
             else:
                 r = kitanidis[name].residuals
             cov = sd.kit_gains.residual_cov[-1]
         else:
-            shared = kalman is not None and sd.kit is sd.kf and sd.kit_gains is sd.kf_gains
-            res = kalman[name] if shared else kalman_filter(sd.kit, ys, us, gains=sd.kit_gains)
+            if kalman is not None and sd.kit is sd.kf and sd.kit_gains is sd.kf_gains:
+                res = kalman[name]
+            else:
+                res = kalman_filter(sd.kit, *_split(d, y, u, sd.sub), gains=sd.kit_gains)
             r = res.updated_residuals
             IHK = np.eye(sd.kit.p) - sd.kit.H[-1] @ sd.kit_gains.K[-1]
             cov = IHK @ sd.kit_gains.Sigma[-1] @ IHK.T
@@ -1244,11 +1245,10 @@ def _bz_stats(
     par_stats: list[np.ndarray] = []
     par_thr: list[float] = []
     for name, sd in d.subs.items():
-        ys, us = _split(d, y, u, sd.sub)
         if sd.sub.E is None:
             # d beta'' = Delta(wn^2) (beta_r - ybar): the profile is the blade's known input
             col = sd.sub.G[:, 0] / d.constants.params.omega_n**2
-            drive = us[..., 0]  # (B, N): beta_r - ybar
+            drive = u[..., sd.sub.inputs[0]]  # (B, N): beta_r - ybar
             # one profile per realisation (its own input), all realisations in one windowed GLR
             fam = step_family(sd.kf, Psi=col[None, None, :, None] * drive[:, :, None, None])
             st = glr_window(
@@ -1261,7 +1261,7 @@ def _bz_stats(
 
             kpred, T = sd.bz_red
             if kitanidis is None:
-                e_kit = kalman_filter(sd.kit, ys, us, gains=kpred).innovations
+                e_kit = kalman_filter(sd.kit, *_split(d, y, u, sd.sub), gains=kpred).innovations
             else:  # the same recursion (predictor_recursion, the Kitanidis gains K): the same bits
                 e_kit = kitanidis[name].innovations
             red = reduce_residual(sd.kit, sd.kit_gains, e_kit, T)

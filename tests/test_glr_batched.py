@@ -9,7 +9,7 @@ from conftest import make_random_ltv
 from fdi_lib.errors import ModelError, NonFiniteError, ShapeError
 from fdi_lib.filters import kalman_filter, kalman_gains
 from fdi_lib.glr import WindowedGLR, glr_window
-from fdi_lib.models import step_family
+from fdi_lib.models import impulse_family, step_family
 from fdi_lib.simulate import simulate
 
 N, n, p, W, S = 40, 3, 2, 9, 1
@@ -206,6 +206,57 @@ def test_blocks_of_samples_within_the_memory_budget(monkeypatch, m, start):
     for key in KEYS:
         assert getattr(blocked, key).tobytes() == getattr(whole, key).tobytes(), key
     _assert_same(blocked, {key: getattr(realisations, key) for key in KEYS})
+
+
+def test_blocks_of_samples_are_cut_to_the_cache_size(monkeypatch):
+    """Blocks of samples hold _SAMPLE_BLOCK_BYTES of the realisations' arrays when that is less than
+    the budget (here one realisation's worth: N / 7 samples of 7 realisations), the same bits."""
+    model, gains, eps, Psi, Phi = _setup((7,), 2, seed=9)
+    fam = step_family(model, Psi=Psi, Phi=Phi)
+    whole = glr_window(eps, model, gains, fam, W, S, start=15)
+    per = 8 * N * W * 2 * (n + 3 * p + 8)
+    monkeypatch.setattr(glr, "_PER_REALISATION_BYTES", 3 * per)
+    monkeypatch.setattr(glr, "_SAMPLE_BLOCK_BYTES", per)
+    sizes = []
+    real = glr.WindowedGLR._shared_blocks
+
+    def spy(self, size, first=0):
+        sizes.append(size)
+        return real(self, size, first)
+
+    monkeypatch.setattr(glr.WindowedGLR, "_shared_blocks", spy)
+    blocked = glr_window(eps, model, gains, fam, W, S, start=15)
+    assert sizes == [N // 7]
+    for key in KEYS:
+        assert getattr(blocked, key).tobytes() == getattr(whole, key).tobytes(), key
+
+
+@pytest.mark.parametrize("blocks", [False, True])
+def test_a_family_without_output_faults_skips_their_terms_bit_for_bit(monkeypatch, blocks):
+    """Phi~ = 0 (per-realisation, shared step and impulse families): the detector skips the terms
+    that add zeros (glr._has_output_faults false); the same bits as with them, outputs and the
+    detector's arrays; ``blocks``: the per-realisation arrays by blocks of samples, from start."""
+    model, gains, eps, Psi, Phi = _setup((5,), 1, seed=8)
+    per = 8 * N * W * (n + 3 * p + 4)
+    if blocks:
+        monkeypatch.setattr(glr, "_PER_REALISATION_BYTES", 2 * per)
+    families = (step_family(model, Psi=Psi), step_family(model, Psi=Psi[1]))
+    families += (impulse_family(model, Psi=Psi[1]),)
+    assert glr._has_output_faults(step_family(model, Psi=Psi, Phi=Phi))
+
+    def run(fam):
+        det = WindowedGLR(model, gains, fam, W, S, batch_shape=(5,))
+        res = glr_window(eps, model, gains, fam, W, S, start=15 if blocks else 0)
+        return [getattr(res, k) for k in KEYS] + [det._sig_wT, det._Cs, det._root]
+
+    skipped = []
+    for fam in families:
+        assert not glr._has_output_faults(fam)
+        skipped.append(run(fam))
+    monkeypatch.setattr(glr, "_has_output_faults", lambda family: True)  # the zeros added
+    for fam, got in zip(families, skipped):
+        for a, b in zip(got, run(fam)):
+            assert a.shape == b.shape and a.tobytes() == b.tobytes()
 
 
 def test_shape_errors_of_per_realisation_profiles():

@@ -270,8 +270,8 @@ def _bound_violation(d: W.Design, rec: W.Records) -> np.ndarray:
     some 1e-15) or an increment of ``tau_a`` beyond ``dtau_bound``. Samples before ``d.warmup``
     are not integrated (the sets start there)."""
     sl = slice(d.warmup, d.onset)
-    clean = rec.x[..., [0, 0, 2, 2, 4, 4, 6, 6, 7, 7, 9]]
-    noise = np.abs(rec.y - clean)[:, sl] / d.constants.sigma
+    clean = rec.x[:, sl][..., [0, 0, 2, 2, 4, 4, 6, 6, 7, 7, 9]]
+    noise = np.abs(rec.y[:, sl] - clean) / d.constants.sigma
     tau = rec.tau_a[:, sl]
     out = (noise.max(axis=(1, 2)) > d.settings.svo_sigmas) | (
         np.abs(np.diff(tau, axis=1)).max(axis=1) > d.calibration.dtau_bound

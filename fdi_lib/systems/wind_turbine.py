@@ -1005,6 +1005,21 @@ def _schedule(schedule: Any) -> np.ndarray:
     return WIND_SCHEDULES[schedule]
 
 
+@functools.lru_cache(maxsize=64)
+def _kaimal_scale(n_fft: int, dt: float, L: float, V: float) -> np.ndarray:
+    """The factor of :func:`wind_speed` on the FFT of ``n_fft`` white samples: the square root of
+    the Kaimal spectrum at its frequencies over ``2 dt`` (white noise of unit variance per sample
+    has the one-sided density ``2 dt``). Cached (read-only): the realisations of one stretch of the
+    scenario (the same times, a seed each) share it."""
+    from scipy.fft import rfftfreq
+
+    f = rfftfreq(n_fft, dt)
+    psd = (4 * L / V) / (1 + 6 * f * L / V) ** (5.0 / 3.0)
+    scale = np.sqrt(psd / (2 * dt))
+    scale.setflags(write=False)
+    return scale
+
+
 def wind_speed(
     t: Any,
     *,
@@ -1049,14 +1064,11 @@ def wind_speed(
         seed = integer(seed, "seed", low=0)
     rng = np.random.default_rng(seed)
     V = float(mean.mean())
-    from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
+    from scipy.fft import irfft, next_fast_len, rfft
 
     n = t_a.size
     n_fft = next_fast_len(n + int(np.ceil(10 * L / V / dt)), real=True)
-    f = rfftfreq(n_fft, dt)
-    psd = (4 * L / V) / (1 + 6 * f * L / V) ** (5.0 / 3.0)
-    # white noise of unit variance per sample has the one-sided density 2 dt: scale to psd
-    shaped = rfft(rng.standard_normal(n_fft)) * np.sqrt(psd / (2 * dt))
+    shaped = rfft(rng.standard_normal(n_fft)) * _kaimal_scale(n_fft, dt, L, V)
     shaped[0] = 0.0  # zero mean: the mean wind is vbar
     u = irfft(shaped, n_fft)[:n]
     v = mean * (1 + ti * u)
@@ -1470,14 +1482,25 @@ class OperatingPoint:
         )
 
 
+@numba.njit(cache=True)
+def _cq_three(
+    lam: float, beta: float, lam_grid: np.ndarray, beta_grid: np.ndarray, table: np.ndarray
+) -> float:
+    """``Cq(lambda, beta)`` of three blades at the same pitch, summed as :func:`_aero_torque` sums
+    them (numpy's sum of three: the first plus ``(0 + second) + third``): the same bits, without the
+    array calls (a root search evaluates it some thirty times per equilibrium)."""
+    c = _cq_grad(lam, beta, lam_grid, beta_grid, table)[0]
+    return c + ((0.0 + c) + c)
+
+
 def _torque_balance(
     v: float, omega_r: float, beta: float, tau_g: float, p: WindTurbineParams
 ) -> float:
     """Steady generator-side balance of the drive train: ``eta_dt (tau_aero - B_r omega_r) / N_g - B_g
-    omega_g - tau_g`` (zero at equilibrium; from ``Addt`` with ``omega_g = N_g omega_r``)."""
-    tau_a = float(
-        _aero_torque(np.asarray(v, float), np.asarray(omega_r, float), np.full(3, beta), p)
-    )
+    omega_g - tau_g`` (zero at equilibrium; from ``Addt`` with ``omega_g = N_g omega_r``). The torque
+    is :func:`_aero_torque`'s of three blades at pitch ``beta``, the same operations on floats."""
+    cq = _cq_three(omega_r * p.radius / v, beta, LAMBDA_GRID, BETA_GRID_DEG, CQ_TABLE)
+    tau_a = p.rho * math.pi * p.radius**3 / 6.0 * cq * (v * v)
     return p.eta_dt * (tau_a - p.B_r * omega_r) / p.N_g - p.B_g * p.N_g * omega_r - tau_g
 
 
@@ -1576,7 +1599,7 @@ def _initial_point(v: float, p: WindTurbineParams) -> OperatingPoint:
     """The equilibrium :func:`simulate` starts a realisation from at the first wind sample ``v``:
     :func:`operating_point`, in region 1 in the band just above rated without a region-2
     equilibrium. Cached: runs with the same wind (a fault's record and its fault-free twin) share
-    the root searches (about 15 ms each)."""
+    the root searches (about 0.2 ms each)."""
     try:
         return operating_point(v, params=p)
     except ModelError:  # the band just above rated without equilibrium: start in region 1

@@ -164,6 +164,22 @@ def test_rated_wind_speed_separates_the_regions():
     assert wt.operating_point(v_rated + 0.01, region=1).region == 1
 
 
+def test_torque_balance_has_the_bits_of_the_array_torque():
+    """The root searches' balance computes the three blades' torque on floats (_cq_three): the same
+    bits as the array path _aero_torque, over the table, outside it (extrapolation) and at a zero
+    coefficient (whose sign numpy's sum of three drops)."""
+    rng = np.random.default_rng(11)
+    points = [(v, w, b) for v, w, b in rng.uniform([2.0, 0.05, -4.0], [30.0, 2.5, 50.0], (400, 3))]
+    points += [(8.0, 8.0 * 8.0 / P.radius, float(b)) for b in wt.BETA_GRID_DEG]  # on the grid
+    for v, w, b in points:
+        tau_a = float(wt._aero_torque(np.asarray(v), np.asarray(w), np.full(3, b), P))
+        want = P.eta_dt * (tau_a - P.B_r * w) / P.N_g - P.B_g * P.N_g * w - 1e4
+        assert wt._torque_balance(v, w, b, 1e4, P).hex() == want.hex(), (v, w, b)
+    grid = np.array([0.0, 2.0])  # a table of -0.0: numpy's sum of three is +0.0
+    cq = wt._cq_three(1.0, 0.0, grid, grid - 1.0, np.full((2, 2), -0.0))
+    assert math.copysign(1.0, cq) == 1.0
+
+
 # ---------------------------------------------------------------------------------- pitch actuators
 @pytest.mark.parametrize(
     "wn, zeta",
@@ -682,6 +698,27 @@ def test_wind_profile_and_kaimal_turbulence():
     band = (f > 0.005) & (f < 1.0)
     kaimal = (4 * wt.LENGTH_SCALE_M / V) / (1 + 6 * f[band] * wt.LENGTH_SCALE_M / V) ** (5 / 3)
     assert np.exp(np.mean(np.log(psd[band] / kaimal))) == pytest.approx(1.0, abs=0.1)
+
+
+def test_wind_of_a_stretch_shares_its_cached_spectrum():
+    """Realisations of one stretch (the same times, a seed each) take the spectral factor from the
+    cache (_kaimal_scale, read-only): the same bits as the spectral synthesis written out."""
+    from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
+
+    t = 2000.0 + np.arange(2700) * P.ts
+    mean = np.interp(t, wt.WIND_PROFILE[:, 0], wt.WIND_PROFILE[:, 1])
+    L, V, dt = wt.LENGTH_SCALE_M, float(mean.mean()), float(np.diff(t).mean())
+    n_fft = next_fast_len(t.size + int(np.ceil(10 * L / V / dt)), real=True)
+    f = rfftfreq(n_fft, dt)
+    scale = np.sqrt((4 * L / V) / (1 + 6 * f * L / V) ** (5.0 / 3.0) / (2 * dt))
+    wt._kaimal_scale.cache_clear()
+    for seed in (3, 4, 3):
+        shaped = rfft(np.random.default_rng(seed).standard_normal(n_fft)) * scale
+        shaped[0] = 0.0
+        want = mean * (1 + wt.TURBULENCE_INTENSITY * irfft(shaped, n_fft)[: t.size])
+        assert wt.wind_speed(t, seed=seed).tobytes() == want.tobytes()
+    assert wt._kaimal_scale.cache_info().hits == 2
+    assert not wt._kaimal_scale(n_fft, dt, L, V).flags.writeable
 
 
 def test_wind_has_no_jump_beyond_its_turbulence():
