@@ -151,13 +151,13 @@ REGIONS = {"partial_load": 1, "full_load": 2}
 #: hours, enough for an interval that can test the nominal rate of a test that raises no alarm.
 FALSE_ALARM_STREAMS = 9
 #: The book's count (one scenario, 1.22 scored hours): the default's 9 would take the chapter
-#: about 4 min of a core (:data:`SECONDS_PER_STREAM`).
+#: about 1 min of a core (:data:`SECONDS_PER_STREAM`).
 BOOK_STREAMS = 1
 #: Seconds of one core per stream (the simulation and the four methods over one 4400 s scenario,
-#: measured as the second of two streams at ``--jobs 1``: about 22 s on the book's 2-core machine,
-#: quiet, 31 s before the speed-ups of issue 35): the estimate with which a too large ``trials`` is
-#: refused (:func:`check_trials`).
-SECONDS_PER_STREAM = 25.0
+#: measured as the second of two streams at ``--jobs 1``, user CPU: about 6.1 s on the book's 2-core
+#: machine), rounded up: the estimate with which a too large ``trials`` is refused
+#: (:func:`check_trials`).
+SECONDS_PER_STREAM = 7.0
 
 
 def _alarm_rates(x: dict[str, np.ndarray], hours: float, nominal: float) -> dict[str, dict]:
@@ -260,7 +260,7 @@ def false_alarms(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
     threshold, the SVO bank at every window.
 
     The book runs :data:`BOOK_STREAMS`: the default's :data:`FALSE_ALARM_STREAMS` would take the
-    chapter about 4 min of a core (:data:`SECONDS_PER_STREAM`; each method's samples per second
+    chapter about 1 min of a core (:data:`SECONDS_PER_STREAM`; each method's samples per second
     and its memory, flat in the stream's length, in ``benchmarks/bench_windturbine_stream.py``).
 
     Headline keys
