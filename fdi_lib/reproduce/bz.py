@@ -14,7 +14,9 @@ parametric fault components).
   error-energy detection of the non-parametric fault, for several ``lambda``.
 
 Monte Carlo runs use :func:`fdi_lib.montecarlo.run_monte_carlo` (one seed stream per
-realisation, chunks vectorised over realisations, results independent of ``jobs``).
+realisation, chunks vectorised over realisations, results independent of ``jobs``); what does not
+depend on the records (gains, regressor, RLS gains, GLR detectors) comes from
+:mod:`fdi_lib.reproduce.bz_setup`, computed once per process.
 """
 
 from __future__ import annotations
@@ -25,18 +27,23 @@ from typing import Any, Sequence
 import numpy as np
 import scipy.stats
 
-from fdi_lib.filters import KalmanGains, kalman_filter, kalman_gains
+from fdi_lib.filters import kalman_filter
 from fdi_lib.glr import first_alarm, glr_window
-from fdi_lib.kitanidis import KitanidisGains, kitanidis_filter, kitanidis_gains
-from fdi_lib.models import LTVModel, fault_profile, step_family
+from fdi_lib.kitanidis import KitanidisGains, kitanidis_filter
+from fdi_lib.models import LTVModel, fault_profile
 from fdi_lib.montecarlo import binomial_ci, draw_noise_batch, run_monte_carlo
 from fdi_lib.nonparametric import (
     kitanidis_lag_covariance,
-    kitanidis_predictor_gains,
     nonparametric_signature,
-    rejection_projection,
     solution1,
-    solution2,
+    solution2_tracking,
+)
+from fdi_lib.reproduce.bz_setup import (
+    kalman_detector,
+    kalman_regressor,
+    kitanidis_detector,
+    regressor_rls_gains,
+    setup,
 )
 from fdi_lib.reproduce.ledger_claims import BY_CHECK, BY_INTERVAL, Claim, in_ci
 from fdi_lib.reproduce.registry import ReproductionResult, register
@@ -47,7 +54,6 @@ __all__ = [
     "SOL1",
     "SOL2",
     "WHITE",
-    "setup",
     "updated_residual_projection",
     "projected_lag_covariance",
     "ljung_box_pvalues",
@@ -87,20 +93,6 @@ SOL2: dict[str, Any] = {
 }
 #: Settings of the whiteness check (long records, transient discarded).
 WHITE: dict[str, Any] = {"n_steps": 600, "discard": 50, "lags": 10, "f_size": 0.2, "f_onset": 0}
-
-
-@functools.lru_cache(maxsize=4)
-def setup(n_steps: int) -> tuple[LTVModel, KalmanGains, KitanidisGains, KalmanGains, np.ndarray]:
-    """``(model, kalman, kitanidis, kitanidis_predictor, T)`` for the example (cached, data independent)."""
-    model = ex.bz_model(n_steps)
-    kg = kitanidis_gains(model, ex.E)
-    return (
-        model,
-        kalman_gains(model),
-        kg,
-        kitanidis_predictor_gains(model, ex.E, kg),
-        rejection_projection(model, kg),
-    )
 
 
 def zeta_check(n_steps: int = WHITE["n_steps"]) -> dict[str, float]:
@@ -498,6 +490,7 @@ def _solution1_chunk(seeds: Sequence[np.random.SeedSequence]) -> dict[str, np.nd
         kgains=kg,
         kalman=kal,
         T=T,
+        glr=kitanidis_detector(n, s["window"]),
     )
     out: dict[str, np.ndarray] = {}
     for i, name in enumerate(SCENARIOS1):
@@ -508,7 +501,8 @@ def _solution1_chunk(seeds: Sequence[np.random.SeedSequence]) -> dict[str, np.nd
     # The same GLR on the *standard Kalman* innovation of scenario f: no rejection of E f.
     sim = sims[SCENARIOS1.index("f")]
     eps = kalman_filter(model, sim.y, sim.u, gains=kal).innovations
-    g = glr_window(eps, model, kal, step_family(model, Psi=ex.PSI), s["window"])
+    det = kalman_detector(n, s["window"])
+    g = glr_window(eps, model, kal, det.family, s["window"], shared=det, estimates=False)
     out["f_kalman_glr_alarm"] = first_alarm(g.statistic, thr)
     return out
 
@@ -666,18 +660,20 @@ def _solution2_chunk(seeds: Sequence[np.random.SeedSequence]) -> dict[str, np.nd
         )
     ]
     y, u = np.stack([sim.y for sim in sims]), np.stack([sim.u for sim in sims])  # scenarios stacked
+    # solution2 for each lambda, without recomputing what lambda does not change (the innovation,
+    # the regressor, and the RLS gains of each lambda, shared by the chunks): the same numbers
+    eps = kalman_filter(model, y, u, gains=kal).innovations
     out: dict[str, np.ndarray] = {}
     for i, lam in enumerate(s["lambdas"]):
-        r = solution2(
-            model,
-            y,
-            u,
-            Psi=ex.PSI,
+        r = solution2_tracking(
+            eps,
+            kalman_regressor(n),
+            kal,
             lam=lam,
             energy_window=s["energy_window"],
             energy_alpha=s["energy_alpha"],
             start=s["warmup"],
-            kalman=kal,
+            rls=regressor_rls_gains(n, lam),
         )
         err = np.linalg.norm(r.rls.theta_hat - th, axis=-1)  # (3, runs, N)
         for j, tag in enumerate(tags):

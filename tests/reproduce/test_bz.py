@@ -71,7 +71,8 @@ def test_updated_residual_is_free_of_f_white_and_singular(results):
     """Zhang 2021's updated residual (I - H L) eps: T H E = 0, closed-form lag covariance zero
     (while the innovation's is not), covariance of rank p - q; Monte Carlo agrees."""
     from fdi_lib.nonparametric import kitanidis_lag_covariance
-    from fdi_lib.reproduce.bz import projected_lag_covariance, setup, updated_residual_projection
+    from fdi_lib.reproduce.bz import projected_lag_covariance, updated_residual_projection
+    from fdi_lib.reproduce.bz_setup import setup
     from fdi_lib.systems import bz_example as ex
 
     model, _, kg, _, _ = setup(200)
