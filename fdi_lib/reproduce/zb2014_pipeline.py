@@ -432,18 +432,19 @@ def _isolation_statistics(
         l2[ok] = minmax_statistic(C[ok], d[ok], [1])
         cos2[ok] = C[ok, 0, 1] ** 2 / (C[ok, 0, 0] * C[ok, 1, 1])
         info_alarm[ok] = C[ok]
-        # to the end of the record: the signature of each distinct onset estimate, then F, zeta
-        # per onset
+        # to the end of the record: the signature of each distinct onset estimate, F, zeta per
+        # onset, then the minmax statistics of all runs at once (the same bits as per onset: the
+        # statistic is computed run by run)
         onsets = np.unique(onset_hat[ok])
         sigs = _onset_signatures(st, st.input_family, onsets)
+        zeta_rec = np.zeros((B, 2))
         for j, r in enumerate(onsets):
             sel = ok & (onset_hat == r)
-            F, zeta = information(
+            info_rec[sel], zeta_rec[sel] = information(
                 eps[sel], sigs[:, :, 2 * j : 2 * j + 2], st.gains, int(r), st.model.n_steps
             )
-            info_rec[sel] = F
-            l1_rec[sel] = minmax_statistic(F, zeta, [0])
-            l2_rec[sel] = minmax_statistic(F, zeta, [1])
+        l1_rec[ok] = minmax_statistic(info_rec[ok], zeta_rec[ok], [0])
+        l2_rec[ok] = minmax_statistic(info_rec[ok], zeta_rec[ok], [1])
     F, zeta = information(eps, st.known_signature, st.gains, FAULT_ONSET, st.model.n_steps)
     return {
         "l1": l1,
