@@ -132,7 +132,7 @@ def fault_schedule(
         raise ModelError(f"schedule: expected one of {SCHEDULES}, got {schedule!r}")
     if variant == "physical":
         cal = gp.calibration_for(state2_scale)
-        p = gp.surrogate(**cal)[2]
+        p = gp.filtered_surrogate(**cal)[2]
     else:
         p = gp.pipeline_schedule(variant=variant)
     if schedule == DEFAULT_SCHEDULE[variant]:
@@ -199,11 +199,11 @@ def _surrogate_key(
 
 @functools.lru_cache(maxsize=8)
 def _pipeline_setup(variant: str, schedule: str, state2_scale: float | None) -> PipelineSetup:
-    if variant == "physical":
-        model, u, _ = gp.surrogate(**gp.calibration_for(state2_scale))
+    if variant == "physical":  # shared with the calibration targets of the same surrogate
+        model, u, _, gains = gp.filtered_surrogate(**gp.calibration_for(state2_scale))
     else:
         model, u = gp.pipeline_model(variant=variant), gp.pipeline_input(variant=variant)
-    gains = kalman_gains(model)
+        gains = kalman_gains(model)
     fam = gp.input_fault_family(
         model, schedule=fault_schedule(variant, schedule, state2_scale), u=u
     )
