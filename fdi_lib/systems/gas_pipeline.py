@@ -815,15 +815,15 @@ def surrogate(
     return _model_from(mats, p, u), u, p
 
 
-@functools.lru_cache(maxsize=8)
 def filtered_surrogate(
     section_length_km: float, state2_scale: float, pressure_swing_bar: float
 ) -> tuple[LTVModel, np.ndarray, np.ndarray, KalmanGains]:
     """:func:`surrogate` and the Kalman gains of its model, computed once per process and constants.
 
     The calibration targets (:func:`calibration_targets`) and the set-up of the reproductions
-    (:func:`fdi_lib.reproduce.zb2014_pipeline.pipeline_setup`) of one surrogate share them. Every
-    array is read-only, so a caller cannot change what the next one reads.
+    (:func:`fdi_lib.reproduce.zb2014_pipeline.pipeline_setup`) of one surrogate share them, the
+    constants given by position or by keyword. Every array is read-only, so a caller cannot change
+    what the next one reads.
 
     Returns
     -------
@@ -831,6 +831,15 @@ def filtered_surrogate(
         ``(model, u, p, gains)``: those of :func:`surrogate` and
         :func:`fdi_lib.filters.kalman_gains` of ``model``.
     """
+    return _filtered_surrogate(
+        float(section_length_km), float(state2_scale), float(pressure_swing_bar)
+    )
+
+
+@functools.lru_cache(maxsize=8)
+def _filtered_surrogate(
+    section_length_km: float, state2_scale: float, pressure_swing_bar: float
+) -> tuple[LTVModel, np.ndarray, np.ndarray, KalmanGains]:
     from fdi_lib.filters import kalman_gains
 
     model, u, p = surrogate(section_length_km, state2_scale, pressure_swing_bar)

@@ -299,6 +299,8 @@ def test_filtered_surrogate_is_fresh_bits_shared_and_read_only():
     cal = gp.calibration_for(3.0)
     model, u, p, gains = gp.filtered_surrogate(**cal)
     assert gp.filtered_surrogate(**cal)[3] is gains
+    by_position = cal["section_length_km"], cal["state2_scale"], cal["pressure_swing_bar"]
+    assert gp.filtered_surrogate(*by_position)[3] is gains
     m2, u2, p2 = gp.surrogate(**cal)
     g2 = kalman_gains(m2)
     np.testing.assert_array_equal(u, u2)
