@@ -560,19 +560,19 @@ def known_onset_isolation_power(
     dict
         Per fault ("1", "2"): ``cos2`` (``F12^2 / (F11 F22)``), ``noncentrality`` and ``power``.
     """
-    if state2_scale is None:
-        u = gp.pipeline_input(variant=variant)
-        model = gp.pipeline_model(variant=variant, schedule=schedule, u=u)
-        gains = kalman_gains(model)
-        fam = gp.input_fault_family(model, schedule=schedule, u=u, variant=variant)
-    elif schedule is not None:
+    if schedule is None:  # the surrogate's own: its shared set-up (the same model and gains)
+        st = pipeline_setup(variant, state2_scale=state2_scale)
+        model, gains, fam = st.model, st.gains, st.input_family
+    elif state2_scale is not None:
         raise ModelError(
             f"schedule: expected None with state2_scale={state2_scale!r} (the schedule is "
             f"that surrogate's own), got an array"
         )
     else:
-        st = pipeline_setup(variant, state2_scale=state2_scale)
-        model, gains, fam = st.model, st.gains, st.input_family
+        u = gp.pipeline_input(variant=variant)
+        model = gp.pipeline_model(variant=variant, schedule=schedule, u=u)
+        gains = kalman_gains(model)
+        fam = gp.input_fault_family(model, schedule=schedule, u=u, variant=variant)
     sig = fault_signature(model, gains, fam.profile(start)).on_innovation
     F, _ = information(np.zeros((model.n_steps, model.p)), sig, gains, start, stop)
     out = {}

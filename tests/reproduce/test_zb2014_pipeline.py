@@ -468,3 +468,13 @@ def test_record_end_minmax_of_all_runs_at_once_is_per_onset_bits():
         np.testing.assert_array_equal(out["l1_record"][sel], minmax_statistic(F, zeta, [0]))
         np.testing.assert_array_equal(out["l2_record"][sel], minmax_statistic(F, zeta, [1]))
     assert np.isnan(out["l1_record"][~ok]).all()
+
+
+@pytest.mark.parametrize("variant", ["physical", "designed"])
+def test_known_onset_power_from_the_setup_is_that_of_its_schedule_given(variant):
+    """Without a schedule the closed-form power reads the shared set-up: the same numbers as
+    with the surrogate's own schedule given (a model and gains built anew)."""
+    own = gp.pipeline_schedule(variant=variant)
+    assert zp.known_onset_isolation_power(variant=variant) == zp.known_onset_isolation_power(
+        schedule=own, variant=variant
+    )
