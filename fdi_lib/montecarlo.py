@@ -40,6 +40,7 @@ from __future__ import annotations
 import concurrent.futures
 import contextlib
 import contextvars
+import functools
 import math
 import os
 import sys
@@ -1126,7 +1127,14 @@ def binomial_ci(successes: int, trials: int, level: float = 0.95) -> tuple[float
             f"successes, trials: expected 0 <= successes <= trials, trials >= 1, "
             f"got {successes}, {trials}"
         )
-    ci = scipy.stats.binomtest(int(successes), int(trials)).proportion_ci(
+    return _exact_ci(int(successes), int(trials), float(level))
+
+
+@functools.lru_cache(maxsize=1024)
+def _exact_ci(successes: int, trials: int, level: float) -> tuple[float, float]:
+    # scipy's root finding costs about 2 ms a call, and the reproductions ask for the same
+    # counts many times (e.g. 0 or all of n runs): each is computed once per process
+    ci = scipy.stats.binomtest(successes, trials).proportion_ci(
         confidence_level=level, method="exact"
     )
     return float(ci.low), float(ci.high)

@@ -89,6 +89,7 @@ __all__ = [
     "solution1",
     "Solution2Result",
     "solution2",
+    "solution2_tracking",
     "first_alarm_after",
 ]
 
@@ -910,16 +911,61 @@ def solution2(
     [0.06, -0.04]
     """
     kal = kalman_gains(model) if kalman is None else kalman
-    if rls is not None and rls.lam != lam:
-        raise ModelError(f"rls: expected RLS gains for lam = {lam}, got gains for lam = {rls.lam}")
     eps = kalman_filter(model, y, u, gains=kal).innovations
     sig = fault_signature(model, kal, fault_profile(model, Psi=Psi))
-    res = rls_track(eps, sig.on_innovation, kal.Sigma, lam=lam, gains=rls)
-    thr = energy_threshold(energy_window, model.p, energy_alpha)
-    en = energy_statistic(res.errors, kal.Sigma_chol, energy_window)
+    return solution2_tracking(
+        eps,
+        sig.on_innovation,
+        kal,
+        lam=lam,
+        energy_window=energy_window,
+        energy_alpha=energy_alpha,
+        start=start,
+        rls=rls,
+    )
+
+
+def solution2_tracking(
+    innovations: np.ndarray,
+    regressor: np.ndarray,
+    kalman: KalmanGains,
+    *,
+    lam: float,
+    energy_window: int,
+    energy_alpha: float,
+    start: int = 0,
+    rls: RLSGains | None = None,
+) -> Solution2Result:
+    """What :func:`solution2` does after its Kalman filter: RLS on (47) and the energy of ``E_k``.
+
+    For callers that track the same records with several forgetting factors: the innovation and
+    the regressor do not depend on ``lam``, so they are computed once and passed here (the same
+    result as :func:`solution2`, bit for bit).
+
+    Parameters
+    ----------
+    innovations : numpy.ndarray
+        Kalman innovations ``eps_k`` of the records, ``(*batch, N, p)`` (:func:`fdi_lib.filters.kalman_filter`
+        with ``kalman``).
+    regressor : numpy.ndarray
+        ``H_k Gamma_k`` ``(N, p, m)`` with the Kalman gain (:func:`fdi_lib.signatures.fault_signature`).
+    kalman : KalmanGains
+        The gains of the Kalman filter (``Sigma_k`` whitens the RLS and the energy).
+    lam, energy_window, energy_alpha, start, rls
+        As in :func:`solution2`.
+
+    Returns
+    -------
+    Solution2Result
+    """
+    if rls is not None and rls.lam != lam:
+        raise ModelError(f"rls: expected RLS gains for lam = {lam}, got gains for lam = {rls.lam}")
+    res = rls_track(innovations, regressor, kalman.Sigma, lam=lam, gains=rls)
+    thr = energy_threshold(energy_window, kalman.Sigma.shape[-1], energy_alpha)
+    en = energy_statistic(res.errors, kalman.Sigma_chol, energy_window)
     return Solution2Result(
         rls=res,
-        regressor=sig.on_innovation,
+        regressor=regressor,
         energy=en,
         energy_alarm=first_alarm(en, thr, start),
         energy_threshold=thr,

@@ -331,3 +331,15 @@ def test_the_uav_studies_refuse_a_trillion_trials_at_once(id):
 
     with pytest.raises(ResourceError, match=r"n_trials: 1000000000000 seed sequences"):
         reproduce(id, trials=10**12)
+
+
+def test_binomial_ci_cached_is_scipy_exact_every_time():
+    # binomial_ci computes each (successes, trials, level) once per process: a repeated call gives
+    # scipy's exact interval, the same bits, as an immutable tuple
+    import scipy.stats
+
+    for k, n, level in [(0, 1000, 0.95), (7, 2000, 0.95), (7, 2000, 0.9), (100, 100, 0.99)]:
+        ci = scipy.stats.binomtest(k, n).proportion_ci(confidence_level=level, method="exact")
+        for _ in range(2):
+            got = binomial_ci(k, n, level)
+            assert isinstance(got, tuple) and got == (float(ci.low), float(ci.high))

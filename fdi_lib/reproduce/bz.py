@@ -14,7 +14,9 @@ parametric fault components).
   error-energy detection of the non-parametric fault, for several ``lambda``.
 
 Monte Carlo runs use :func:`fdi_lib.montecarlo.run_monte_carlo` (one seed stream per
-realisation, chunks vectorised over realisations, results independent of ``jobs``).
+realisation, chunks vectorised over realisations, results independent of ``jobs``); what does not
+depend on the records (gains, regressor, RLS gains, GLR detectors) comes from
+:mod:`fdi_lib.reproduce.bz_setup`, computed once per process.
 """
 
 from __future__ import annotations
@@ -25,18 +27,23 @@ from typing import Any, Sequence
 import numpy as np
 import scipy.stats
 
-from fdi_lib.filters import KalmanGains, kalman_filter, kalman_gains
+from fdi_lib.filters import kalman_filter
 from fdi_lib.glr import first_alarm, glr_window
-from fdi_lib.kitanidis import KitanidisGains, kitanidis_filter, kitanidis_gains
-from fdi_lib.models import LTVModel, fault_profile, step_family
-from fdi_lib.montecarlo import binomial_ci, draw_noise_batch, run_monte_carlo
+from fdi_lib.kitanidis import KitanidisGains, kitanidis_filter
+from fdi_lib.models import LTVModel, fault_profile
+from fdi_lib.montecarlo import binomial_ci, default_chunk_size, draw_noise_batch, run_monte_carlo
 from fdi_lib.nonparametric import (
     kitanidis_lag_covariance,
-    kitanidis_predictor_gains,
     nonparametric_signature,
-    rejection_projection,
     solution1,
-    solution2,
+    solution2_tracking,
+)
+from fdi_lib.reproduce.bz_setup import (
+    kalman_detector,
+    kalman_regressor,
+    kitanidis_detector,
+    regressor_rls_gains,
+    setup,
 )
 from fdi_lib.reproduce.ledger_claims import BY_CHECK, BY_INTERVAL, Claim, in_ci
 from fdi_lib.reproduce.registry import ReproductionResult, register
@@ -47,7 +54,6 @@ __all__ = [
     "SOL1",
     "SOL2",
     "WHITE",
-    "setup",
     "updated_residual_projection",
     "projected_lag_covariance",
     "ljung_box_pvalues",
@@ -89,20 +95,6 @@ SOL2: dict[str, Any] = {
 WHITE: dict[str, Any] = {"n_steps": 600, "discard": 50, "lags": 10, "f_size": 0.2, "f_onset": 0}
 
 
-@functools.lru_cache(maxsize=4)
-def setup(n_steps: int) -> tuple[LTVModel, KalmanGains, KitanidisGains, KalmanGains, np.ndarray]:
-    """``(model, kalman, kitanidis, kitanidis_predictor, T)`` for the example (cached, data independent)."""
-    model = ex.bz_model(n_steps)
-    kg = kitanidis_gains(model, ex.E)
-    return (
-        model,
-        kalman_gains(model),
-        kg,
-        kitanidis_predictor_gains(model, ex.E, kg),
-        rejection_projection(model, kg),
-    )
-
-
 def zeta_check(n_steps: int = WHITE["n_steps"]) -> dict[str, float]:
     """Section 3.1's "H_k zeta_k = 0 with the gain L_k", on the fault of the whiteness study.
 
@@ -123,6 +115,15 @@ def zeta_check(n_steps: int = WHITE["n_steps"]) -> dict[str, float]:
 def _simulate(model: LTVModel, noise: Noise, f: np.ndarray, theta_path: np.ndarray):
     prof = fault_profile(model, Psi=ex.state_disturbance(f, theta_path))
     return simulate(model, noise=noise, controller=ex.controller(), fault=prof, theta=[1.0])
+
+
+def _monte_carlo(chunk: Any, trials: int, seed: int, jobs: int) -> dict[str, np.ndarray]:
+    """:func:`~fdi_lib.montecarlo.run_monte_carlo` of ``chunk``; a serial run of up to 300 trials
+    takes its default chunks (for parallel workers) as one, as fast as one of them, unless one
+    holds a single realisation: the chunks are batch-invariant from two on (tests), same bits."""
+    size = default_chunk_size(trials)
+    one = jobs == 1 and trials <= 300 and size > 1 and trials % size != 1
+    return run_monte_carlo(chunk, trials, seed=seed, jobs=jobs, chunk_size=trials if one else None)
 
 
 def _rate(hits: np.ndarray) -> tuple[float, list[float]]:
@@ -433,9 +434,7 @@ def whiteness(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult
     """
     n = WHITE["n_steps"]
     trials = 300 if trials is None else trials
-    out = run_monte_carlo(
-        functools.partial(_whiteness_chunk, n_steps=n), trials, seed=seed, jobs=jobs
-    )
+    out = _monte_carlo(functools.partial(_whiteness_chunk, n_steps=n), trials, seed, jobs)
     model, kal, kg, kpred, T = setup(n)
     d = WHITE["discard"]
     pv, headline = _portmanteau_rates(out)
@@ -498,6 +497,7 @@ def _solution1_chunk(seeds: Sequence[np.random.SeedSequence]) -> dict[str, np.nd
         kgains=kg,
         kalman=kal,
         T=T,
+        glr=kitanidis_detector(n, s["window"]),
     )
     out: dict[str, np.ndarray] = {}
     for i, name in enumerate(SCENARIOS1):
@@ -508,7 +508,8 @@ def _solution1_chunk(seeds: Sequence[np.random.SeedSequence]) -> dict[str, np.nd
     # The same GLR on the *standard Kalman* innovation of scenario f: no rejection of E f.
     sim = sims[SCENARIOS1.index("f")]
     eps = kalman_filter(model, sim.y, sim.u, gains=kal).innovations
-    g = glr_window(eps, model, kal, step_family(model, Psi=ex.PSI), s["window"])
+    det = kalman_detector(n, s["window"])
+    g = glr_window(eps, model, kal, det.family, s["window"], shared=det, estimates=False)
     out["f_kalman_glr_alarm"] = first_alarm(g.statistic, thr)
     return out
 
@@ -623,7 +624,7 @@ def solution1_mc(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
     """
     s = SOL1
     trials = 300 if trials is None else trials
-    out = run_monte_carlo(_solution1_chunk, trials, seed=seed, jobs=jobs)
+    out = _monte_carlo(_solution1_chunk, trials, seed, jobs)
     h = _solution1_headline(out, s["theta_onset"], s["f_onset"])
     paper = {
         "glr_detection_rate_theta_with_f": "detected whatever f (Section 3.2), no number",
@@ -666,18 +667,20 @@ def _solution2_chunk(seeds: Sequence[np.random.SeedSequence]) -> dict[str, np.nd
         )
     ]
     y, u = np.stack([sim.y for sim in sims]), np.stack([sim.u for sim in sims])  # scenarios stacked
+    # solution2 for each lambda, without recomputing what lambda does not change (the innovation,
+    # the regressor, and the RLS gains of each lambda, shared by the chunks): the same numbers
+    eps = kalman_filter(model, y, u, gains=kal).innovations
     out: dict[str, np.ndarray] = {}
     for i, lam in enumerate(s["lambdas"]):
-        r = solution2(
-            model,
-            y,
-            u,
-            Psi=ex.PSI,
+        r = solution2_tracking(
+            eps,
+            kalman_regressor(n),
+            kal,
             lam=lam,
             energy_window=s["energy_window"],
             energy_alpha=s["energy_alpha"],
             start=s["warmup"],
-            kalman=kal,
+            rls=regressor_rls_gains(n, lam),
         )
         err = np.linalg.norm(r.rls.theta_hat - th, axis=-1)  # (3, runs, N)
         for j, tag in enumerate(tags):
@@ -742,7 +745,7 @@ def solution2_mc(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
     """
     s = SOL2
     trials = 300 if trials is None else trials
-    out = run_monte_carlo(_solution2_chunk, trials, seed=seed, jobs=jobs)
+    out = _monte_carlo(_solution2_chunk, trials, seed, jobs)
     lo, hi = s["tracking_range"]
     fon = s["f_onset"]
     h: dict[str, Any] = {

@@ -132,7 +132,7 @@ def fault_schedule(
         raise ModelError(f"schedule: expected one of {SCHEDULES}, got {schedule!r}")
     if variant == "physical":
         cal = gp.calibration_for(state2_scale)
-        p = gp.surrogate(**cal)[2]
+        p = gp.filtered_surrogate(**cal)[2]
     else:
         p = gp.pipeline_schedule(variant=variant)
     if schedule == DEFAULT_SCHEDULE[variant]:
@@ -199,11 +199,11 @@ def _surrogate_key(
 
 @functools.lru_cache(maxsize=8)
 def _pipeline_setup(variant: str, schedule: str, state2_scale: float | None) -> PipelineSetup:
-    if variant == "physical":
-        model, u, _ = gp.surrogate(**gp.calibration_for(state2_scale))
+    if variant == "physical":  # shared with the calibration targets of the same surrogate
+        model, u, _, gains = gp.filtered_surrogate(**gp.calibration_for(state2_scale))
     else:
         model, u = gp.pipeline_model(variant=variant), gp.pipeline_input(variant=variant)
-    gains = kalman_gains(model)
+        gains = kalman_gains(model)
     fam = gp.input_fault_family(
         model, schedule=fault_schedule(variant, schedule, state2_scale), u=u
     )
@@ -432,18 +432,19 @@ def _isolation_statistics(
         l2[ok] = minmax_statistic(C[ok], d[ok], [1])
         cos2[ok] = C[ok, 0, 1] ** 2 / (C[ok, 0, 0] * C[ok, 1, 1])
         info_alarm[ok] = C[ok]
-        # to the end of the record: the signature of each distinct onset estimate, then F, zeta
-        # per onset
+        # to the end of the record: the signature of each distinct onset estimate, F, zeta per
+        # onset, then the minmax statistics of all runs at once (the same bits as per onset: the
+        # statistic is computed run by run)
         onsets = np.unique(onset_hat[ok])
         sigs = _onset_signatures(st, st.input_family, onsets)
+        zeta_rec = np.zeros((B, 2))
         for j, r in enumerate(onsets):
             sel = ok & (onset_hat == r)
-            F, zeta = information(
+            info_rec[sel], zeta_rec[sel] = information(
                 eps[sel], sigs[:, :, 2 * j : 2 * j + 2], st.gains, int(r), st.model.n_steps
             )
-            info_rec[sel] = F
-            l1_rec[sel] = minmax_statistic(F, zeta, [0])
-            l2_rec[sel] = minmax_statistic(F, zeta, [1])
+        l1_rec[ok] = minmax_statistic(info_rec[ok], zeta_rec[ok], [0])
+        l2_rec[ok] = minmax_statistic(info_rec[ok], zeta_rec[ok], [1])
     F, zeta = information(eps, st.known_signature, st.gains, FAULT_ONSET, st.model.n_steps)
     return {
         "l1": l1,
@@ -559,19 +560,19 @@ def known_onset_isolation_power(
     dict
         Per fault ("1", "2"): ``cos2`` (``F12^2 / (F11 F22)``), ``noncentrality`` and ``power``.
     """
-    if state2_scale is None:
-        u = gp.pipeline_input(variant=variant)
-        model = gp.pipeline_model(variant=variant, schedule=schedule, u=u)
-        gains = kalman_gains(model)
-        fam = gp.input_fault_family(model, schedule=schedule, u=u, variant=variant)
-    elif schedule is not None:
+    if schedule is None:  # the surrogate's own: its shared set-up (the same model and gains)
+        st = pipeline_setup(variant, state2_scale=state2_scale)
+        model, gains, fam = st.model, st.gains, st.input_family
+    elif state2_scale is not None:
         raise ModelError(
             f"schedule: expected None with state2_scale={state2_scale!r} (the schedule is "
             f"that surrogate's own), got an array"
         )
     else:
-        st = pipeline_setup(variant, state2_scale=state2_scale)
-        model, gains, fam = st.model, st.gains, st.input_family
+        u = gp.pipeline_input(variant=variant)
+        model = gp.pipeline_model(variant=variant, schedule=schedule, u=u)
+        gains = kalman_gains(model)
+        fam = gp.input_fault_family(model, schedule=schedule, u=u, variant=variant)
     sig = fault_signature(model, gains, fam.profile(start)).on_innovation
     F, _ = information(np.zeros((model.n_steps, model.p)), sig, gains, start, stop)
     out = {}

@@ -113,8 +113,10 @@ Common to both
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
@@ -124,6 +126,9 @@ import scipy.stats
 from fdi_lib.errors import ModelError, ShapeError
 from fdi_lib.models import FaultFamily, LTVModel, lpv_model, step_family
 from fdi_lib.simulate import Noise, simulate
+
+if TYPE_CHECKING:
+    from fdi_lib.filters import KalmanGains
 
 __all__ = [
     "TS_MIN",
@@ -152,6 +157,7 @@ __all__ = [
     "calibration_for",
     "select_state2_scale",
     "surrogate",
+    "filtered_surrogate",
     "surrogate_limits",
     "projected_q",
     "pipeline_schedule",
@@ -809,6 +815,42 @@ def surrogate(
     return _model_from(mats, p, u), u, p
 
 
+def filtered_surrogate(
+    section_length_km: float, state2_scale: float, pressure_swing_bar: float
+) -> tuple[LTVModel, np.ndarray, np.ndarray, KalmanGains]:
+    """:func:`surrogate` and the Kalman gains of its model, computed once per process and constants.
+
+    The calibration targets (:func:`calibration_targets`) and the set-up of the reproductions
+    (:func:`fdi_lib.reproduce.zb2014_pipeline.pipeline_setup`) of one surrogate share them, the
+    constants given by position or by keyword. Every array is read-only, so a caller cannot change
+    what the next one reads.
+
+    Returns
+    -------
+    tuple
+        ``(model, u, p, gains)``: those of :func:`surrogate` and
+        :func:`fdi_lib.filters.kalman_gains` of ``model``.
+    """
+    return _filtered_surrogate(
+        float(section_length_km), float(state2_scale), float(pressure_swing_bar)
+    )
+
+
+@functools.lru_cache(maxsize=8)
+def _filtered_surrogate(
+    section_length_km: float, state2_scale: float, pressure_swing_bar: float
+) -> tuple[LTVModel, np.ndarray, np.ndarray, KalmanGains]:
+    from fdi_lib.filters import kalman_gains
+
+    model, u, p = surrogate(section_length_km, state2_scale, pressure_swing_bar)
+    gains = kalman_gains(model)
+    arrays = [getattr(obj, f.name) for obj in (model, gains) for f in dataclasses.fields(obj)]
+    for a in (*arrays, u, p):
+        if isinstance(a, np.ndarray):
+            a.flags.writeable = False
+    return model, u, p, gains
+
+
 def calibration_targets(
     length_km: float, state2_scale: float, pressure_swing_bar: float
 ) -> dict[str, float]:
@@ -832,12 +874,10 @@ def calibration_targets(
     dict
         ``fig9_level_over_threshold`` and ``fault2_miss_probability`` (as in ``CALIBRATION``).
     """
-    from fdi_lib.filters import kalman_gains
     from fdi_lib.isolation import information
     from fdi_lib.signatures import fault_signature
 
-    model, u, p = surrogate(length_km, state2_scale, pressure_swing_bar)
-    gains = kalman_gains(model)
+    model, u, p, gains = filtered_surrogate(length_km, state2_scale, pressure_swing_bar)
     leak_on = minutes_to_index(LEAK_ONSET_MIN)
     sig = fault_signature(model, gains, output_leak_family(model).profile(leak_on)).on_innovation
     # lambda_k = theta^2 sum_{j=r}^{k} rho_j^2 / Sigma_j (p = 1), for k = r+1 .. N-1.

@@ -21,20 +21,20 @@ import scipy.stats
 
 from fdi_lib.errors import ModelError
 from fdi_lib.filters import kalman_filter
-from fdi_lib.glr import WindowedGLR, first_alarm
 from fdi_lib.nonparametric import (
     Solution1Result,
     Solution2Result,
-    energy_statistic,
-    energy_threshold,
     solution1,
-    solution1_glr,
+    solution2_tracking,
 )
 from fdi_lib.plotting import OURS_COLOR, THRESHOLD_COLOR, figure
-from fdi_lib.reproduce.bz import SOL1, SOL2, _simulate, setup
-from fdi_lib.models import fault_profile
-from fdi_lib.rls import RLSGains, rls_gains, rls_track
-from fdi_lib.signatures import fault_signature
+from fdi_lib.reproduce.bz import SOL1, SOL2, _simulate
+from fdi_lib.reproduce.bz_setup import (
+    kalman_regressor,
+    kitanidis_detector,
+    regressor_rls_gains,
+    setup,
+)
 from fdi_lib.simulate import draw_noise
 from fdi_lib.systems import bz_example as ex
 from fdi_lib.redraw import keep_artists, reusable_artists, set_limits, stepped_range
@@ -75,45 +75,21 @@ def bz_run(lam: float = 0.95, delta: float = 3e-4, f_size: float = 0.2, *, seed:
     if delta < 0 or f_size < 0:
         raise ModelError(f"delta, f_size: expected non-negative values, got {delta!r}, {f_size!r}")
     th, f, sim, s1, eps = _record(float(delta), float(f_size), int(seed))
-    model, kal = setup(SOL2["n_steps"])[:2]
-    # solution2 (fdi_lib.nonparametric) step by step, without what lambda does not change: the
-    # record's Kalman innovation (cached with the record) and the regressor (tests: the same
-    # result as solution2)
-    rls = rls_track(eps, _regressor(), kal.Sigma, lam=lam, gains=_rls_gains(float(lam)))
-    threshold = energy_threshold(SOL2["energy_window"], model.p, SOL2["energy_alpha"])
-    energy = energy_statistic(rls.errors, kal.Sigma_chol, SOL2["energy_window"])
-    s2 = Solution2Result(
-        rls=rls,
-        regressor=_regressor(),
-        energy=energy,
-        energy_alarm=first_alarm(energy, threshold, SOL2["warmup"]),
-        energy_threshold=threshold,
+    n = SOL2["n_steps"]
+    # solution2 (fdi_lib.nonparametric) without what lambda does not change: the record's Kalman
+    # innovation (cached with the record), the regressor and the RLS gains of each lambda (cached
+    # in fdi_lib.reproduce.bz_setup, shared with bz-solution2; tests: the same result as solution2)
+    s2 = solution2_tracking(
+        eps,
+        kalman_regressor(n),
+        setup(n)[1],
+        lam=lam,
+        energy_window=SOL2["energy_window"],
+        energy_alpha=SOL2["energy_alpha"],
+        start=SOL2["warmup"],
+        rls=regressor_rls_gains(n, float(lam)),
     )
     return BZRun(theta_path=th, f=f, sol1=s1, sol2=s2)
-
-
-@functools.lru_cache(maxsize=1)
-def _regressor() -> np.ndarray:
-    # solution 2's regressor H_k Gamma_k depends on the setting only
-    model, kal = setup(SOL2["n_steps"])[:2]
-    return fault_signature(model, kal, fault_profile(model, Psi=ex.PSI)).on_innovation
-
-
-@functools.lru_cache(maxsize=16)
-def _rls_gains(lam: float) -> RLSGains:
-    # the RLS gains of solution 2 depend on lambda only (not on the record): a move of the drift
-    # or of the fault reuses them, and the explorable computes one per value of lambda
-    return rls_gains(_regressor(), setup(SOL2["n_steps"])[1].Sigma, lam=lam)
-
-
-@functools.lru_cache(maxsize=1)
-def _glr() -> WindowedGLR:
-    # solution 1's windowed GLR arrays (signatures, informations, their pseudo-inverses) depend on
-    # the setting, not on the record: a move of the drift or of the fault reuses them (a new
-    # record measured 17.6 ms of CPU with them recomputed, 13.0 ms without; the rest of such a
-    # redraw, about 90 ms, is matplotlib's)
-    model, _, kg, _, T = setup(SOL2["n_steps"])
-    return solution1_glr(model, E=ex.E, Psi=ex.PSI, window=SOL1["window"], kgains=kg, T=T)
 
 
 @functools.lru_cache(maxsize=8)
@@ -141,7 +117,11 @@ def _record(delta: float, f_size: float, seed: int):
         kgains=kg,
         kalman=kal,
         T=T,
-        glr=_glr(),
+        # solution 1's windowed GLR arrays (signatures, informations, their pseudo-inverses)
+        # depend on the setting, not on the record: a move of the drift or of the fault reuses
+        # them (a new record measured 17.6 ms of CPU with them recomputed, 13.0 ms without; the
+        # rest of such a redraw, about 90 ms, is matplotlib's)
+        glr=kitanidis_detector(n, SOL1["window"]),
     )
     eps = kalman_filter(model, sim.y, sim.u, gains=kal).innovations  # solution 2's innovation
     return th, f, sim, s1, eps

@@ -9,7 +9,7 @@ import scipy.stats
 from fdi_lib.filters import kalman_filter
 from fdi_lib.glr import WindowedGLR
 from fdi_lib.isolation import minmax_statistic
-from fdi_lib.montecarlo import binomial_ci, trial_seeds
+from fdi_lib.montecarlo import binomial_ci, draw_noise_batch, trial_seeds
 from fdi_lib.reproduce import reproduce
 from fdi_lib.reproduce import zb2014_pipeline as zp
 from fdi_lib.reproduce.views import zb2014_pipeline as zpv
@@ -439,3 +439,42 @@ def test_state2_scale_option_and_sensitivity():
         zp.pipeline_setup("designed", state2_scale=3.0)
     with pytest.raises(ModelError, match="state2_scale: expected a positive number"):
         gp.calibration_for(-1.0)
+
+
+def test_record_end_minmax_of_all_runs_at_once_is_per_onset_bits():
+    """The record-end minmax statistics, computed for all runs in one call, are those of one
+    call per onset estimate (F shared by the onset's runs), bit for bit."""
+    from fdi_lib.isolation import information
+
+    st = zp.pipeline_setup()
+    seeds = trial_seeds(12, 40)
+    out = zp.detection_chunk(seeds, fault=1)
+    noise = draw_noise_batch(st.model, seeds)
+    sim = simulate(
+        st.model,
+        noise=noise,
+        u=st.u,
+        fault=st.input_family.profile(zp.FAULT_ONSET),
+        theta=zp.fault_theta(1),
+    )
+    eps = kalman_filter(st.model, sim.y, st.u, gains=st.gains).innovations
+    ok = out["alarm"] >= 0
+    onsets = np.unique(out["onset_hat"][ok])
+    assert onsets.size > 1
+    sigs = zp._onset_signatures(st, st.input_family, onsets)
+    for j, r in enumerate(onsets):
+        sel = ok & (out["onset_hat"] == r)
+        F, zeta = information(eps[sel], sigs[:, :, 2 * j : 2 * j + 2], st.gains, int(r), 500)
+        np.testing.assert_array_equal(out["l1_record"][sel], minmax_statistic(F, zeta, [0]))
+        np.testing.assert_array_equal(out["l2_record"][sel], minmax_statistic(F, zeta, [1]))
+    assert np.isnan(out["l1_record"][~ok]).all()
+
+
+@pytest.mark.parametrize("variant", ["physical", "designed"])
+def test_known_onset_power_from_the_setup_is_that_of_its_schedule_given(variant):
+    """Without a schedule the closed-form power reads the shared set-up: the same numbers as
+    with the surrogate's own schedule given (a model and gains built anew)."""
+    own = gp.pipeline_schedule(variant=variant)
+    assert zp.known_onset_isolation_power(variant=variant) == zp.known_onset_isolation_power(
+        schedule=own, variant=variant
+    )

@@ -291,3 +291,26 @@ def test_surrogate_limits_from_first_principles():
     # the surrogate leaves it out: steady outlet flow = inlet flow at every frozen pressure
     rep = gp.design_report()
     assert abs(rep["dc_gain_min"] - 1) < 0.02 and abs(rep["dc_gain_max"] - 1) < 0.02
+
+
+def test_filtered_surrogate_is_fresh_bits_shared_and_read_only():
+    import dataclasses
+
+    cal = gp.calibration_for(3.0)
+    model, u, p, gains = gp.filtered_surrogate(**cal)
+    assert gp.filtered_surrogate(**cal)[3] is gains
+    by_position = cal["section_length_km"], cal["state2_scale"], cal["pressure_swing_bar"]
+    assert gp.filtered_surrogate(*by_position)[3] is gains
+    m2, u2, p2 = gp.surrogate(**cal)
+    g2 = kalman_gains(m2)
+    np.testing.assert_array_equal(u, u2)
+    np.testing.assert_array_equal(p, p2)
+    for a, b in ((model, m2), (gains, g2)):
+        for f in dataclasses.fields(a):
+            x, y = getattr(a, f.name), getattr(b, f.name)
+            if isinstance(x, np.ndarray):
+                np.testing.assert_array_equal(x, y)
+                with pytest.raises(ValueError, match="read-only"):
+                    x[...] = 0.0
+    with pytest.raises(ValueError, match="read-only"):
+        u[0] = 0.0

@@ -44,7 +44,8 @@ def test_cached_rls_gains_give_solution2_exactly():
     # bz_run runs solution 2 step by step with the record's innovation, the regressor and the
     # RLS gains cached: the same result as solution2 on the record
     from fdi_lib.nonparametric import solution2
-    from fdi_lib.reproduce.bz import SOL2, setup
+    from fdi_lib.reproduce.bz import SOL2
+    from fdi_lib.reproduce.bz_setup import setup
     from fdi_lib.systems import bz_example as ex
     from fdi_lib.widgets.bz import _record
 

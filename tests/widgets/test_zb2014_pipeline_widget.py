@@ -32,3 +32,19 @@ def test_defaults_reproduce_fig5_run_and_redraw_into_same_figure():
 def test_bad_slider_values(kwargs, message):
     with pytest.raises(ModelError, match=message):
         explore_pipeline(**kwargs)
+
+
+def test_book_window_uses_the_setup_detector_with_the_same_statistics():
+    # at w = 160 the runs reuse the set-up's windowed GLR: the statistics and onsets of a fresh one
+    import numpy as np
+
+    from fdi_lib.glr import glr_window
+    from fdi_lib.reproduce.zb2014_pipeline import pipeline_setup
+    from fdi_lib.widgets.zb2014_pipeline import pipeline_run
+
+    st = pipeline_setup()
+    for size in (-2.0, -6.0):
+        run = pipeline_run(size, window=160)
+        fresh = glr_window(run.innovations[:, None], st.model, st.gains, st.input_family, 160)
+        np.testing.assert_array_equal(run.statistic, fresh.statistic)
+        np.testing.assert_array_equal(run.onset, fresh.onset)
