@@ -31,7 +31,7 @@ from fdi_lib.filters import kalman_filter
 from fdi_lib.glr import first_alarm, glr_window
 from fdi_lib.kitanidis import KitanidisGains, kitanidis_filter
 from fdi_lib.models import LTVModel, fault_profile
-from fdi_lib.montecarlo import binomial_ci, default_chunk_size, draw_noise_batch, run_monte_carlo
+from fdi_lib.montecarlo import binomial_ci, draw_noise_batch, run_monte_carlo
 from fdi_lib.nonparametric import (
     kitanidis_lag_covariance,
     nonparametric_signature,
@@ -115,15 +115,6 @@ def zeta_check(n_steps: int = WHITE["n_steps"]) -> dict[str, float]:
 def _simulate(model: LTVModel, noise: Noise, f: np.ndarray, theta_path: np.ndarray):
     prof = fault_profile(model, Psi=ex.state_disturbance(f, theta_path))
     return simulate(model, noise=noise, controller=ex.controller(), fault=prof, theta=[1.0])
-
-
-def _monte_carlo(chunk: Any, trials: int, seed: int, jobs: int) -> dict[str, np.ndarray]:
-    """:func:`~fdi_lib.montecarlo.run_monte_carlo` of ``chunk``; a serial run of up to 300 trials
-    takes its default chunks (for parallel workers) as one, as fast as one of them, unless one
-    holds a single realisation: the chunks are batch-invariant from two on (tests), same bits."""
-    size = default_chunk_size(trials)
-    one = jobs == 1 and trials <= 300 and size > 1 and trials % size != 1
-    return run_monte_carlo(chunk, trials, seed=seed, jobs=jobs, chunk_size=trials if one else None)
 
 
 def _rate(hits: np.ndarray) -> tuple[float, list[float]]:
@@ -434,7 +425,9 @@ def whiteness(*, seed: int, trials: int | None, jobs: int) -> ReproductionResult
     """
     n = WHITE["n_steps"]
     trials = 300 if trials is None else trials
-    out = _monte_carlo(functools.partial(_whiteness_chunk, n_steps=n), trials, seed, jobs)
+    out = run_monte_carlo(
+        functools.partial(_whiteness_chunk, n_steps=n), trials, seed=seed, jobs=jobs
+    )
     model, kal, kg, kpred, T = setup(n)
     d = WHITE["discard"]
     pv, headline = _portmanteau_rates(out)
@@ -624,7 +617,7 @@ def solution1_mc(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
     """
     s = SOL1
     trials = 300 if trials is None else trials
-    out = _monte_carlo(_solution1_chunk, trials, seed, jobs)
+    out = run_monte_carlo(_solution1_chunk, trials, seed=seed, jobs=jobs)
     h = _solution1_headline(out, s["theta_onset"], s["f_onset"])
     paper = {
         "glr_detection_rate_theta_with_f": "detected whatever f (Section 3.2), no number",
@@ -745,7 +738,7 @@ def solution2_mc(*, seed: int, trials: int | None, jobs: int) -> ReproductionRes
     """
     s = SOL2
     trials = 300 if trials is None else trials
-    out = _monte_carlo(_solution2_chunk, trials, seed, jobs)
+    out = run_monte_carlo(_solution2_chunk, trials, seed=seed, jobs=jobs)
     lo, hi = s["tracking_range"]
     fon = s["f_onset"]
     h: dict[str, Any] = {

@@ -138,30 +138,3 @@ def test_ljung_box_pvalues_equal_statsmodels(shape, lags):
     )
     np.testing.assert_array_equal(ours, ref)
     assert ours[:, 0].max() < 1e-6 and ours.shape == shape[::2]
-
-
-@pytest.mark.parametrize("name", ["_whiteness_chunk", "_solution1_chunk", "_solution2_chunk"])
-def test_chunks_are_batch_invariant(name):
-    """A serial run takes its realisations in one chunk, parallel workers in several: the
-    numbers of each realisation do not depend on the chunk it ran in, bit for bit."""
-    import functools
-
-    from fdi_lib.montecarlo import run_monte_carlo
-    from fdi_lib.reproduce import bz
-
-    chunk = getattr(bz, name)
-    if name == "_whiteness_chunk":
-        chunk = functools.partial(chunk, n_steps=120)
-    one = run_monte_carlo(chunk, 6, seed=5, chunk_size=6)
-    many = run_monte_carlo(chunk, 6, seed=5, chunk_size=2)
-    assert one.keys() == many.keys()
-    for key in one:
-        np.testing.assert_array_equal(one[key], many[key])
-
-
-@pytest.mark.parametrize("rid", ["bz-whiteness", "bz-solution1", "bz-solution2"])
-def test_serial_run_in_one_chunk_gives_the_parallel_numbers(rid):
-    # 8 trials: chunks of 2 for two workers, one chunk of 8 for a serial run; the same results
-    a = reproduce(rid, seed=4, trials=8, jobs=1)
-    b = reproduce(rid, seed=4, trials=8, jobs=2)
-    assert a.to_json() == b.to_json()
