@@ -300,11 +300,23 @@ def _expm_many(E: np.ndarray) -> np.ndarray:
     s = np.maximum(0, np.ceil(np.log2(np.maximum(norm, 1e-300) / 0.25))).astype(int)
     X = E * (0.5**s)[:, None, None]
     eye = np.eye(E.shape[1])
-    F = np.broadcast_to(eye, E.shape).copy()
-    for k in range(16, 0, -1):  # Horner: I + X (I + X/2 (I + X/3 (...)))
-        F = eye + (X @ F) / k
+    # Horner: I + X (I + X/2 (I + X/3 (...))), in two buffers. Its first step I + (X I)/16 is
+    # I + X/16: X I = X exactly but for the sign of a zero, which adding I makes + in both
+    F = X / 16
+    F += eye
+    T = np.empty_like(F)
+    for k in range(15, 0, -1):
+        np.matmul(X, F, out=T)
+        T /= k
+        T += eye
+        F, T = T, F
     for j in range(int(s.max(initial=0))):
-        F = np.where((j < s)[:, None, None], F @ F, F)
+        sq = j < s
+        if sq.all():
+            np.matmul(F, F, out=T)
+            F, T = T, F
+        else:
+            F[sq] = F[sq] @ F[sq]
     return F
 
 
