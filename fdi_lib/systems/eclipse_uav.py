@@ -430,11 +430,11 @@ def _derivative(
     u_star, w_star = _TRIM_UW
     P0, P1, P2 = P
     V = np.hypot(u_star + x[:, 0], w_star + x[:, 1])[:, None, None]
-    H = P0 + V * (P1 + V * P2)  # healthy [A B](V), shape (b, 4, 6)
-    S = np.ones_like(H)
-    S[:, 3, 0] = mu
-    S[:, :, 4] = eff[:, None]
-    AB = H * S
+    AB = P0 + V * (P1 + V * P2)  # healthy [A B](V), shape (b, 4, 6)
+    if total:  # its elevator column and M_u, before the faults scale them
+        H_eta, H_mu = AB[:, :, 4].copy(), AB[:, 3, 0].copy()
+    AB[:, 3, 0] *= mu
+    AB[:, :, 4] *= eff[:, None]
     dx = (AB[:, :, :4] * x[:, None, :]).sum(axis=2) + (AB[:, :, 4:] * delta[:, None, :]).sum(axis=2)
     dx[:, 0] += (
         DIST_ACCEL[0] * dist[:, 0] - x[:, 3] * x[:, 1] + AB[:, 0, 2] * (np.sin(x[:, 2]) - x[:, 2])
@@ -442,8 +442,8 @@ def _derivative(
     dx[:, 1] += DIST_ACCEL[1] * dist[:, 1]
     dx[:, 3] += DIST_ACCEL[2] * dist[:, 2]
     if total:
-        dx += ((eff - 1.0) * ETA_TRIM)[:, None] * H[:, :, 4]
-        dx[:, 3] += (mu - 1.0) * H[:, 3, 0] * u_star
+        dx += ((eff - 1.0) * ETA_TRIM)[:, None] * H_eta
+        dx[:, 3] += (mu - 1.0) * H_mu * u_star
     return dx
 
 
