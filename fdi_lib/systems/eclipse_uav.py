@@ -301,13 +301,18 @@ def _expm_many(E: np.ndarray) -> np.ndarray:
     X = E * (0.5**s)[:, None, None]
     eye = np.eye(E.shape[1])
     # Horner: I + X (I + X/2 (I + X/3 (...))), in two buffers. Its first step I + (X I)/16 is
-    # I + X/16: X I = X exactly but for the sign of a zero, which adding I makes + in both
-    F = X / 16
+    # I + X/16 (X I = X exactly but for the sign of a zero, which adding I makes + in both); a
+    # division by a power of 2 is the product by its inverse (the same rounding of the same
+    # number), and one by 1 is nothing
+    F = X * (1.0 / 16)
     F += eye
     T = np.empty_like(F)
     for k in range(15, 0, -1):
         np.matmul(X, F, out=T)
-        T /= k
+        if k & (k - 1):
+            T /= k
+        elif k > 1:
+            T *= 1.0 / k
         T += eye
         F, T = T, F
     for j in range(int(s.max(initial=0))):

@@ -271,8 +271,9 @@ def test_batched_expm_against_scipy():
 
 
 def test_batched_expm_has_the_bits_of_the_plain_recursion():
-    """The buffered recursion of _expm_many (first Horner step I + X/16, squaring in place or of
-    the rows that need it) gives the bits of the plain one, F = I + (X @ F) / k from F = I, squared
+    """The buffered recursion of _expm_many (first Horner step I + X/16, products for the divisions
+    by powers of 2, squaring in place or of the rows that need it) gives the bits of the plain
+    one, F = I + (X @ F) / k from F = I, squared
     by np.where: on the UAV's discretisations, on random stacks whose matrices need different
     numbers of squarings, and on zeros (signed)."""
 
