@@ -292,9 +292,9 @@ def _bases(key: bytes, p: int, n: int) -> _Bases | None:
     norms = np.linalg.norm(M, axis=1)
     zero = norms < 1e-14
     norms = np.where(zero, 1.0, norms)
-    unit = np.round(M / norms[:, None], 12)
-    first, group = _unique_rows(unit[~zero])
-    U = unit[~zero][first]
+    unit = np.round(M / norms[:, None], 12)[~zero]
+    first, group = _unique_rows(unit)
+    U = unit[first]
     rows = np.flatnonzero(~zero)
     q = U.shape[0]
     if q < n or math.comb(q, n) > _MAX_BASES:

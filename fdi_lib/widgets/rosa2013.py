@@ -14,7 +14,7 @@ import numpy as np
 from fdi_lib.errors import EmptySetError, ModelError
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.sets.polytope import plot_polytope, polygon_outline
-from fdi_lib.sets.svo import run_svo
+from fdi_lib.sets.svo import SVORun, run_svo
 from fdi_lib.redraw import keep_artists, reusable_artists, set_limits
 
 __all__ = ["explore_svo", "horizon_study", "GRID", "MAX_HORIZON"]
@@ -44,15 +44,15 @@ def _example(delta_bound: float, noise: float, seed: int, steps: int) -> tuple:
 
 
 @functools.lru_cache(maxsize=len(GRID["delta_bound"]) * MAX_HORIZON)
-def _template_run(delta_bound: float, noise: float, seed: int, steps: int, horizon: int) -> Any:
+def _template_run(delta_bound: float, noise: float, seed: int, steps: int, horizon: int) -> SVORun:
     """The template rule's run (:func:`fdi_lib.sets.svo.run_svo`, sets kept) on the record of
-    :func:`_example` with horizon N, its bounds read-only (cached: :func:`horizon_study` and the
+    :func:`_example` with horizon N, its arrays read-only (cached: :func:`horizon_study` and the
     frames of the explorable ask for the same runs)."""
     from fdi_lib.reproduce.rosa2013 import toy_prior
 
     model, x, u, y, *_ = _example(delta_bound, noise, seed, steps)
     run = run_svo(model, u, y, toy_prior(), N=horizon, method="template", keep_sets=True)
-    for a in (run.lower, run.upper):
+    for a in (run.lower, run.upper, run.n_facets, run.n_vertices, run.step_time):
         a.flags.writeable = False
     return run
 
