@@ -87,6 +87,19 @@ def box_corners(generators: np.ndarray) -> np.ndarray:
     return signs @ G.T
 
 
+def _unique_rows(key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct rows of ``key`` (p, n) in lexicographic order, as the index of the first row
+    equal to each, and for every row the position of its own among them: the ``index`` and
+    ``inverse`` of ``np.unique(key, axis=0)``, without the structured copy that makes numpy's slow
+    on the small arrays here (a stable sort, so the first of equal rows is the earliest)."""
+    order = np.lexsort(key.T[::-1])
+    first = np.ones(len(order), dtype=bool)
+    first[1:] = np.any(key[order[1:]] != key[order[:-1]], axis=1)
+    inverse = np.empty(len(order), dtype=np.intp)
+    inverse[order] = np.cumsum(first) - 1
+    return order[first], inverse
+
+
 def _normalise(M: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unit-norm rows, exact duplicates merged (keeping the tightest offset), zero rows checked."""
     norms = np.linalg.norm(M, axis=1)
@@ -111,10 +124,24 @@ def _chebyshev(M: np.ndarray, m: np.ndarray, cap: float = 1e6) -> tuple[str, np.
     Returns (status, centre, radius); status is "optimal", "infeasible" or "unbounded".
     cddlib's LP is used rather than HiGHS because it has microsecond overhead on these
     tiny problems (HiGHS is the independent route used by :meth:`Polytope.is_empty`).
+    Cached on the bytes of M and m (:func:`_chebyshev_of`): the SVOs of a study meet the same
+    sets again (a record's nominal SVO in the detection pass, then in each bank of observers),
+    and an emptied set's LP goes to HiGHS, at about a millisecond.
     """
+    status, centre, radius = _chebyshev_of(M.tobytes(), m.tobytes(), M.shape[1], float(cap))
+    return status, centre.copy(), radius
+
+
+@functools.lru_cache(maxsize=512)
+def _chebyshev_of(
+    M_bytes: bytes, m_bytes: bytes, n: int, cap: float
+) -> tuple[str, np.ndarray, float]:
+    """:func:`_chebyshev` of M = frombuffer(M_bytes).reshape(-1, n), m = frombuffer(m_bytes) (fresh
+    C-ordered arrays, as :func:`_normalise` gives them)."""
     import cdd
 
-    n = M.shape[1]
+    M = np.frombuffer(M_bytes, dtype=float).reshape(-1, n).copy()
+    m = np.frombuffer(m_bytes, dtype=float).copy()
     # variables (x, r): maximise r s.t. m - M x - r >= 0, r <= cap
     rows = np.column_stack([m, -M, -np.ones(len(m))])
     rows = np.vstack([rows, np.r_[cap, np.zeros(n), -1.0], np.r_[0.0, np.zeros(n), 1.0]])
@@ -237,7 +264,7 @@ def _qhull_vertices(M: np.ndarray, m: np.ndarray, centre: np.ndarray, radius: fl
                 continue
             # merge vertices reported once per incident facet
             key = np.round(V / (1e-9 * (1.0 + np.abs(V).max())), 0)
-            V = V[np.unique(key, axis=0, return_index=True)[1]]
+            V = V[_unique_rows(key)[0]]
             if opts is not None:
                 # conv(V) holds B(centre, radius), so (1 + s)(conv(V) - centre) holds conv(V) + s radius B
                 size = np.abs(V - centre).max()
@@ -279,14 +306,14 @@ def _bases(key: bytes, p: int, n: int) -> _Bases | None:
     norms = np.linalg.norm(M, axis=1)
     zero = norms < 1e-14
     norms = np.where(zero, 1.0, norms)
-    unit = np.round(M / norms[:, None], 12)
-    U, group = np.unique(unit[~zero], axis=0, return_inverse=True)
+    unit = np.round(M / norms[:, None], 12)[~zero]
+    first, group = _unique_rows(unit)
+    U = unit[first]
     rows = np.flatnonzero(~zero)
     q = U.shape[0]
     if q < n or math.comb(q, n) > _MAX_BASES:
         return None
     # pad[g] = the rows with normal g, in increasing order, then p (an index for +inf)
-    group = group.reshape(-1)
     order = np.argsort(group, kind="stable")
     counts = np.bincount(group, minlength=q)
     pad = np.full((q, counts.max()), p)
@@ -472,7 +499,7 @@ def _hull(V: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
                 except QhullError:
                     continue
                 eq = hull.equations  # rows [a, b] with a (x - shift) + b <= 0 (unit normals)
-                eq = eq[np.unique(np.round(eq, 12), axis=0, return_index=True)[1]]
+                eq = eq[_unique_rows(np.round(eq, 12))[0]]
                 M, m = eq[:, :-1].copy(), -eq[:, -1] + eq[:, :-1] @ shift
                 if _all_inside(V, M, m, 1e-9 * scale):
                     return M, m, hull.vertices

@@ -300,11 +300,28 @@ def _expm_many(E: np.ndarray) -> np.ndarray:
     s = np.maximum(0, np.ceil(np.log2(np.maximum(norm, 1e-300) / 0.25))).astype(int)
     X = E * (0.5**s)[:, None, None]
     eye = np.eye(E.shape[1])
-    F = np.broadcast_to(eye, E.shape).copy()
-    for k in range(16, 0, -1):  # Horner: I + X (I + X/2 (I + X/3 (...)))
-        F = eye + (X @ F) / k
+    # Horner: I + X (I + X/2 (I + X/3 (...))), in two buffers. Its first step I + (X I)/16 is
+    # I + X/16 (X I = X exactly but for the sign of a zero, which adding I makes + in both); a
+    # division by a power of 2 is the product by its inverse (the same rounding of the same
+    # number), and one by 1 is nothing
+    F = X * (1.0 / 16)
+    F += eye
+    T = np.empty_like(F)
+    for k in range(15, 0, -1):
+        np.matmul(X, F, out=T)
+        if k & (k - 1):
+            T /= k
+        elif k > 1:
+            T *= 1.0 / k
+        T += eye
+        F, T = T, F
     for j in range(int(s.max(initial=0))):
-        F = np.where((j < s)[:, None, None], F @ F, F)
+        sq = j < s
+        if sq.all():
+            np.matmul(F, F, out=T)
+            F, T = T, F
+        else:
+            F[sq] = F[sq] @ F[sq]
     return F
 
 
@@ -418,11 +435,11 @@ def _derivative(
     u_star, w_star = _TRIM_UW
     P0, P1, P2 = P
     V = np.hypot(u_star + x[:, 0], w_star + x[:, 1])[:, None, None]
-    H = P0 + V * (P1 + V * P2)  # healthy [A B](V), shape (b, 4, 6)
-    S = np.ones_like(H)
-    S[:, 3, 0] = mu
-    S[:, :, 4] = eff[:, None]
-    AB = H * S
+    AB = P0 + V * (P1 + V * P2)  # healthy [A B](V), shape (b, 4, 6)
+    if total:  # its elevator column and M_u, before the faults scale them
+        H_eta, H_mu = AB[:, :, 4].copy(), AB[:, 3, 0].copy()
+    AB[:, 3, 0] *= mu
+    AB[:, :, 4] *= eff[:, None]
     dx = (AB[:, :, :4] * x[:, None, :]).sum(axis=2) + (AB[:, :, 4:] * delta[:, None, :]).sum(axis=2)
     dx[:, 0] += (
         DIST_ACCEL[0] * dist[:, 0] - x[:, 3] * x[:, 1] + AB[:, 0, 2] * (np.sin(x[:, 2]) - x[:, 2])
@@ -430,8 +447,8 @@ def _derivative(
     dx[:, 1] += DIST_ACCEL[1] * dist[:, 1]
     dx[:, 3] += DIST_ACCEL[2] * dist[:, 2]
     if total:
-        dx += ((eff - 1.0) * ETA_TRIM)[:, None] * H[:, :, 4]
-        dx[:, 3] += (mu - 1.0) * H[:, 3, 0] * u_star
+        dx += ((eff - 1.0) * ETA_TRIM)[:, None] * H_eta
+        dx[:, 3] += (mu - 1.0) * H_mu * u_star
     return dx
 
 

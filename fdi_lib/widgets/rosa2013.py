@@ -14,7 +14,7 @@ import numpy as np
 from fdi_lib.errors import EmptySetError, ModelError
 from fdi_lib.plotting import OURS_COLOR, PAPER_COLOR, figure
 from fdi_lib.sets.polytope import plot_polytope, polygon_outline
-from fdi_lib.sets.svo import run_svo
+from fdi_lib.sets.svo import SVORun, run_svo
 from fdi_lib.redraw import keep_artists, reusable_artists, set_limits
 
 __all__ = ["explore_svo", "horizon_study", "GRID", "MAX_HORIZON"]
@@ -41,6 +41,20 @@ def _example(delta_bound: float, noise: float, seed: int, steps: int) -> tuple:
     for a in (x, u, y, exact.lower, exact.upper):
         a.flags.writeable = False
     return model, x, u, y, per_vertex, hull, hull.volume(), exact
+
+
+@functools.lru_cache(maxsize=len(GRID["delta_bound"]) * MAX_HORIZON)
+def _template_run(delta_bound: float, noise: float, seed: int, steps: int, horizon: int) -> SVORun:
+    """The template rule's run (:func:`fdi_lib.sets.svo.run_svo`, sets kept) on the record of
+    :func:`_example` with horizon N, its arrays read-only (cached: :func:`horizon_study` and the
+    frames of the explorable ask for the same runs)."""
+    from fdi_lib.reproduce.rosa2013 import toy_prior
+
+    model, x, u, y, *_ = _example(delta_bound, noise, seed, steps)
+    run = run_svo(model, u, y, toy_prior(), N=horizon, method="template", keep_sets=True)
+    for a in (run.lower, run.upper, run.n_facets, run.n_vertices, run.step_time):
+        a.flags.writeable = False
+    return run
 
 
 def _limits(values: Any) -> tuple[float, float]:
@@ -99,18 +113,15 @@ def explore_svo(
         Left: per-vertex sets and hull for one step; right: bounds on x2(k) (template rule,
         horizon N: band; exact rule: dashed) with the true state.
     """
-    from fdi_lib.reproduce.rosa2013 import toy_prior
-
     if not (0.0 <= delta_bound <= 1.0):
         raise ModelError(f"delta_bound: expected a value in [0, 1], got {delta_bound!r}")
     if not (0.0 < noise <= 2.0):
         raise ModelError(f"noise: expected a value in (0, 2], got {noise!r}")
     if int(horizon) != horizon or not (1 <= horizon <= MAX_HORIZON):
         raise ModelError(f"horizon: expected an integer in 1..{MAX_HORIZON}, got {horizon!r}")
-    model, x, u, y, per_vertex, hull, area, exact = _example(
-        float(delta_bound), float(noise), int(seed), int(steps)
-    )
-    res = run_svo(model, u, y, toy_prior(), N=int(horizon), method="template")
+    key = (float(delta_bound), float(noise), int(seed), int(steps))
+    _, x, _, _, per_vertex, hull, area, exact = _example(*key)
+    res = _template_run(*key, int(horizon))
     k = np.arange(len(x))
     shapes = [polygon_outline(P) for P in (hull, *per_vertex)]
     box = shapes[0]  # the hull contains the per-vertex sets
@@ -210,7 +221,7 @@ def horizon_study(
                         np.max(np.abs(np.r_[ex_n.lower - exact.lower, ex_n.upper - exact.upper]))
                     ),
                 )
-            tmp = run_svo(model, u, y, toy_prior(), N=int(n), method="template", keep_sets=True)
+            tmp = _template_run(float(db), float(noise), int(seed), int(steps), int(n))
             template_width[db][n] = _mean_width(tmp)
             inside = inside and all(S.contains(x[i], 1e-7) for i, S in enumerate(tmp.sets))
     return {

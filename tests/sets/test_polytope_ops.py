@@ -164,9 +164,31 @@ def test_chebyshev_falls_back_to_highs_when_cddlib_aborts(monkeypatch):
 
     monkeypatch.setattr(cdd, "linprog_solve", boom)
     M = np.vstack([np.eye(2), -np.eye(2)])
-    status, centre, radius = poly._chebyshev(M, np.array([1.0, 2.0, 1.0, 0.0]))
+    # an answer cached before would not reach the patched cddlib, nor HiGHS's stay for the others
+    poly._chebyshev_of.cache_clear()
+    try:
+        status, centre, radius = poly._chebyshev(M, np.array([1.0, 2.0, 1.0, 0.0]))
+    finally:
+        poly._chebyshev_of.cache_clear()
     assert status == "optimal" and radius == pytest.approx(1.0)
     assert Polytope.box([-1, 0], [1, 2]).vertices().shape == (4, 2)
+
+
+def test_chebyshev_cache_is_a_fresh_solve_and_cannot_be_changed():
+    """_chebyshev's answers, cached on the bytes of (M, m): those of a fresh solve bit for bit
+    (a set and an empty one), for arrays of other layouts with the same values too, and a caller
+    changing the centre it got changes no later answer."""
+    from fdi_lib.sets import polytope as poly
+
+    M = np.vstack([np.eye(2), -np.eye(2), [[0.6, 0.8]]])
+    for m in (np.array([1.0, 2.0, 1.0, 0.0, 1.5]), np.array([0.5, 0.5, -0.6, -0.5, 1.0])):
+        fresh = poly._chebyshev_of.__wrapped__(M.tobytes(), m.tobytes(), 2, 1e6)
+        first = poly._chebyshev(M, m)
+        first[1][:] = 7.0
+        again = poly._chebyshev(np.asfortranarray(M), m.copy())
+        assert again[0] == fresh[0] and again[2] == fresh[2]
+        assert again[1].tobytes() == fresh[1].tobytes()
+    assert fresh[2] < 0  # the second set is empty: no ball fits
 
 
 def test_cdd_hull_failure_is_a_numerical_error(monkeypatch):

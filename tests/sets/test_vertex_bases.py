@@ -143,3 +143,22 @@ def test_boundedness_matches_lp():
         assert b.bounded == lp
         seen.add(lp)
     assert seen == {True, False}
+
+
+def test_unique_rows_is_numpys_unique_along_rows():
+    """_unique_rows (the hulls' and the bases' merging of rows) gives the index and inverse of
+    np.unique(key, axis=0), and its rows bit for bit (the sign of a zero too), on random keys with
+    repeated rows, near-zero and signed-zero entries, and no rows."""
+    from fdi_lib.sets.polytope import _unique_rows
+
+    rng = np.random.default_rng(11)
+    for _ in range(300):
+        p, n = int(rng.integers(0, 30)), int(rng.integers(1, 5))
+        key = np.round(rng.normal(size=(p, n)) * rng.choice([1.0, 1e-13, 0.0]), 1)
+        if p > 3:
+            key[rng.integers(0, p, 3)] = key[rng.integers(0, p, 3)]
+        key[key == 0] *= rng.choice([1.0, -1.0], size=int((key == 0).sum()))
+        rows, index, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+        first, inv = _unique_rows(key)
+        assert np.array_equal(first, index) and np.array_equal(inv, inverse.reshape(-1))
+        assert key[first].tobytes() == rows.tobytes()

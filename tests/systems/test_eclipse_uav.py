@@ -270,6 +270,36 @@ def test_batched_expm_against_scipy():
     np.testing.assert_array_equal(uav._expm_many(E[3:5]), F[3:5])
 
 
+def test_batched_expm_has_the_bits_of_the_plain_recursion():
+    """The buffered recursion of _expm_many (first Horner step I + X/16, products for the divisions
+    by powers of 2, squaring in place or of the rows that need it) gives the bits of the plain
+    one, F = I + (X @ F) / k from F = I, squared
+    by np.where: on the UAV's discretisations, on random stacks whose matrices need different
+    numbers of squarings, and on zeros (signed)."""
+
+    def plain(E):
+        norm = np.abs(E).sum(axis=2).max(axis=1)
+        s = np.maximum(0, np.ceil(np.log2(np.maximum(norm, 1e-300) / 0.25))).astype(int)
+        X = E * (0.5**s)[:, None, None]
+        eye = np.eye(E.shape[1])
+        F = np.broadcast_to(eye, E.shape).copy()
+        for k in range(16, 0, -1):
+            F = eye + (X @ F) / k
+        for j in range(int(s.max(initial=0))):
+            F = np.where((j < s)[:, None, None], F @ F, F)
+        return F
+
+    rng = np.random.default_rng(5)
+    P = uav._polynomial(1.15, 0.75, "deg")
+    V = uav.V_TRIM + rng.uniform(-4.0, 4.0, 300)
+    E_uav = np.zeros((V.size, 6, 6))
+    E_uav[:, :4, :] = P[0] + V[:, None, None] * P[1] + V[:, None, None] ** 2 * P[2]
+    E_mix = rng.normal(size=(40, 6, 6)) * rng.choice([0.0, 1e-3, 0.3, 2.0, 9.0], 40)[:, None, None]
+    E_mix[0] = -0.0
+    for E in (E_uav * uav.TS, E_mix, E_mix[:0]):
+        assert uav._expm_many(E).tobytes() == plain(E).tobytes()
+
+
 @pytest.mark.parametrize("eta_unit,seed,amplitude", [("deg", 3, 5.0), ("rad", 3, 3.0)])
 def test_envelope_lies_below_the_measured_loss_of_the_true_state(eta_unit, seed, amplitude):
     """The runs of the envelope study that lost the true state at the smallest airspeed deviation:

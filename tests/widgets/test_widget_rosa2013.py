@@ -29,3 +29,25 @@ def test_explore_svo_draws_and_reuses_the_figure():
 def test_explore_svo_rejects_bad_values(kw, msg):
     with pytest.raises(ModelError, match=msg):
         explore_svo(**kw)
+
+
+def test_template_run_cache_is_a_fresh_run_and_read_only():
+    """The cached template run that the frames and horizon_study share: the bits of a fresh
+    run_svo, and a caller cannot change its arrays."""
+    from fdi_lib.reproduce.rosa2013 import toy_prior
+    from fdi_lib.sets.svo import run_svo
+    from fdi_lib.widgets.rosa2013 import _example, _template_run
+
+    model, x, u, y, *_ = _example(0.4, 0.5, 0, 25)
+    fresh = run_svo(model, u, y, toy_prior(), N=3, method="template", keep_sets=True)
+    cached = _template_run(0.4, 0.5, 0, 25, 3)
+    assert cached is _template_run(0.4, 0.5, 0, 25, 3)
+    assert cached.empty_at == fresh.empty_at
+    for name in ("lower", "upper", "n_facets", "n_vertices"):
+        a = getattr(cached, name)
+        assert a.tobytes() == getattr(fresh, name).tobytes()
+        with pytest.raises(ValueError):
+            a[0] = 0
+    assert len(cached.sets) == len(fresh.sets) == len(x)
+    for S, R in zip(cached.sets, fresh.sets):
+        assert S.M.tobytes() == R.M.tobytes() and S.m.tobytes() == R.m.tobytes()
