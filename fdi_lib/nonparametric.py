@@ -942,6 +942,8 @@ def solution2_tracking(
     the regressor do not depend on ``lam``, so they are computed once and passed here (the same
     result as :func:`solution2`, bit for bit).
 
+    Explained in the book: :doc:`/book/bz/parametric-nonparametric`.
+
     Parameters
     ----------
     innovations : numpy.ndarray
@@ -957,6 +959,32 @@ def solution2_tracking(
     Returns
     -------
     Solution2Result
+
+    Examples
+    --------
+    One filtering for two forgetting factors, each the same as :func:`solution2`:
+
+    >>> import numpy as np
+    >>> from fdi_lib.filters import kalman_filter, kalman_gains
+    >>> from fdi_lib.models import fault_profile
+    >>> from fdi_lib.signatures import fault_signature
+    >>> from fdi_lib.simulate import simulate
+    >>> from fdi_lib.systems import bz_example as ex
+    >>> N = 120
+    >>> model = ex.bz_model(N)
+    >>> s = simulate(model, rng=np.random.default_rng(21), controller=ex.controller(), size=4)
+    >>> kal = kalman_gains(model)
+    >>> eps = kalman_filter(model, s.y, s.u, gains=kal).innovations
+    >>> X = fault_signature(model, kal, fault_profile(model, Psi=ex.PSI)).on_innovation
+    >>> kw = dict(energy_window=20, energy_alpha=1e-4, start=30)
+    >>> all(
+    ...     np.array_equal(
+    ...         solution2_tracking(eps, X, kal, lam=lam, **kw).rls.theta_hat,
+    ...         solution2(model, s.y, s.u, Psi=ex.PSI, lam=lam, **kw).rls.theta_hat,
+    ...     )
+    ...     for lam in (0.95, 0.99)
+    ... )
+    True
     """
     if rls is not None and rls.lam != lam:
         raise ModelError(f"rls: expected RLS gains for lam = {lam}, got gains for lam = {rls.lam}")
