@@ -45,6 +45,7 @@ from _record import record  # noqa: E402
 from fdi_lib.explorables import explorable  # noqa: E402
 from fdi_lib.plotting import DISPLAY_DPI, RASTER_SCALE  # noqa: E402
 from fdi_lib.redraw import render  # noqa: E402
+from fdi_lib.reproduce import bz_setup  # noqa: E402
 from fdi_lib.widgets import (
     _encode_png,
     bz,
@@ -70,7 +71,9 @@ CACHE_CLEARS = (
     zb2014_pipeline._noise_innovations.cache_clear,
     zhang2021._trial_path.cache_clear,
     bz._record.cache_clear,
-    bz._rls_gains.cache_clear,
+    bz_setup.regressor_rls_gains.cache_clear,  # the RLS gains per lambda (shared with the chapter)
+    rosa2013._example.cache_clear,  # per uncertainty bound
+    rosa2013._template_run.cache_clear,  # per uncertainty bound and horizon
 )
 
 # widget: (callback, the slider moved, two values it alternates between; the second value of a
