@@ -4,13 +4,15 @@ Filter gains, the projection, the regressor of solution 2, its RLS gains for eac
 factor and the windowed GLR detectors of solution 1 depend on the setting (the record length,
 ``lambda``, the window), not on the records: the Monte Carlo chunks of ``bz-solution1`` and
 ``bz-solution2`` and the chapter's explorable (:mod:`fdi_lib.widgets.bz`) compute each once per
-process and share it. The arrays of the regressor and of the RLS gains are read-only, so a caller
-cannot change what the next one reads.
+process and share it. Every array they return (the model's, the gains', the projection, the
+regressor) is read-only, so a caller cannot change what the next one reads.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
+from typing import Any
 
 import numpy as np
 
@@ -34,20 +36,31 @@ __all__ = [
 
 @functools.lru_cache(maxsize=4)
 def setup(n_steps: int) -> tuple[LTVModel, KalmanGains, KitanidisGains, KalmanGains, np.ndarray]:
-    """``(model, kalman, kitanidis, kitanidis_predictor, T)`` for the example (cached, data independent)."""
+    """``(model, kalman, kitanidis, kitanidis_predictor, T)`` for the example (cached, data
+    independent; every array read-only)."""
     model = ex.bz_model(n_steps)
     kg = kitanidis_gains(model, ex.E)
-    return (
+    out = (
         model,
         kalman_gains(model),
         kg,
         kitanidis_predictor_gains(model, ex.E, kg),
         rejection_projection(model, kg),
     )
+    for part in out:
+        _read_only(part)
+    return out
 
 
-def _read_only(a: np.ndarray) -> np.ndarray:
-    a.flags.writeable = False
+def _read_only(a: Any) -> Any:
+    """``a`` with its array (an array) or every array field (a dataclass) made read-only."""
+    if isinstance(a, np.ndarray):
+        a.flags.writeable = False
+    else:
+        for field in dataclasses.fields(a):
+            value = getattr(a, field.name)
+            if isinstance(value, np.ndarray):
+                value.flags.writeable = False
     return a
 
 
@@ -63,9 +76,7 @@ def kalman_regressor(n_steps: int) -> np.ndarray:
 def regressor_rls_gains(n_steps: int, lam: float) -> RLSGains:
     """The RLS gains of solution 2 (:func:`fdi_lib.rls.rls_gains` of :func:`kalman_regressor` and
     the Kalman ``Sigma_k``) for the forgetting factor ``lam``; arrays read-only."""
-    g = rls_gains(kalman_regressor(n_steps), setup(n_steps)[1].Sigma, lam=lam)
-    _read_only(g.L), _read_only(g.P)
-    return g
+    return _read_only(rls_gains(kalman_regressor(n_steps), setup(n_steps)[1].Sigma, lam=lam))
 
 
 @functools.lru_cache(maxsize=4)

@@ -37,6 +37,26 @@ def test_cached_regressor_and_rls_gains_are_fresh_bits_and_read_only():
             a[0] = 0.0
 
 
+def test_cached_setup_is_read_only_and_fresh_bits():
+    """Every array of the shared model, gains and projection is read-only (a caller cannot change
+    what the next one reads), and equal to a fresh computation."""
+    from fdi_lib.filters import kalman_gains
+    from fdi_lib.kitanidis import kitanidis_gains
+
+    model, kal, kg, pred, T = setup(N)
+    fresh = ex.bz_model(N)
+    arrays = [T]
+    for part in (model, kal, kg, pred):
+        arrays += [v for v in vars(part).values() if isinstance(v, np.ndarray)]
+    assert len(arrays) > 20
+    for a in arrays:
+        with pytest.raises(ValueError, match="read-only"):
+            a.flat[0] = 0.0
+    np.testing.assert_array_equal(model.F, fresh.F)
+    np.testing.assert_array_equal(kal.K, kalman_gains(fresh).K)
+    np.testing.assert_array_equal(kg.K, kitanidis_gains(fresh, ex.E).K)
+
+
 def test_cached_detectors_give_the_statistics_of_fresh_ones():
     model, kal, kg, _, T = setup(N)
     eps = np.random.default_rng(3).standard_normal((4, N, model.p))
