@@ -60,9 +60,9 @@ from check_book import (
 PAGE_BUDGET_MB = 5.0
 
 #: Pages measured at a time, each in its own browser context (an empty cache each). A page is
-#: about 0.4-2.5 s of Chromium's parsing, layout and MathJax, then half a second without a
-#: request: on 2 quiet cores the 26 pages took 46.0 s one at a time, 34.2 s two, 31.4 s three and
-#: 28.8 s four at a time, every page's measurement the same.
+#: about 0.3-1.7 s of Chromium's parsing, layout and MathJax. When each page also waited half a
+#: second without a request, the 26 pages took 46.0 s one at a time on 2 quiet cores, 34.2 s two,
+#: 31.4 s three and 28.8 s four at a time, every page's measurement the same.
 PAGES_AT_ONCE = 4
 
 MATHJAX_ENTRY = "mathjax/tex-chtml.js"
