@@ -18,6 +18,7 @@ its module's ``__all__``) stays text. A name that exists nowhere fails the build
 
 from __future__ import annotations
 
+import functools
 import re
 import warnings
 from typing import Any
@@ -192,7 +193,8 @@ def _param_list(title: str, section: list[str]) -> list[str]:
 
     # A description line that starts like a list item continues the sentence above it.
     text = "\n".join(re.sub(r"^(\s+)([*+-] )", r"\1\\\2", line) for line in section)
-    doc = SphinxDocString("Parameters\n----------\n" + text, config={"xref_param_type": False})
+    config = {"xref_param_type": False, "template": numpydoc_template()}
+    doc = SphinxDocString("Parameters\n----------\n" + text, config=config)
     rendered = doc._str_param_list("Parameters")
     return [""] + [line.replace(":Parameters:", f":{title}:", 1) for line in rendered]
 
@@ -209,10 +211,86 @@ def drop_object_base(app: Any, name: str, obj: Any, options: Any, bases: list[ty
     bases[:] = [b for b in bases if b is not object]
 
 
+@functools.cache
+def numpydoc_template(builder: Any = None) -> Any:
+    """numpydoc's docstring template (``numpydoc_docstring.rst``), loaded once per builder.
+
+    Loaded as numpydoc 1.11's :func:`numpydoc.docscrape_sphinx.get_doc_object` loads it: through
+    the builder's template loader (a ``templates_path`` of the project may override it), else
+    from numpydoc's own folder. numpydoc makes a new Jinja environment and compiles the template
+    for every docstring (1,299 a build of the book, 1 ms each); a compiled template renders any
+    number of them.
+    """
+    from pathlib import Path
+
+    from jinja2 import FileSystemLoader
+    from jinja2.sandbox import SandboxedEnvironment
+    from numpydoc import docscrape_sphinx
+    from sphinx.jinja2glue import BuiltinTemplateLoader
+
+    dirs = [str(Path(docscrape_sphinx.__file__).parent / "templates")]
+    if builder is None:
+        loader: Any = FileSystemLoader(dirs)
+    else:
+        loader = BuiltinTemplateLoader()
+        loader.init(builder, dirs=dirs)
+    return SandboxedEnvironment(loader=loader).get_template("numpydoc_docstring.rst")
+
+
+def get_doc_object(
+    obj: Any,
+    what: str | None = None,
+    doc: str | None = None,
+    config: Any = None,
+    builder: Any = None,
+) -> Any:
+    """numpydoc's :func:`~numpydoc.docscrape_sphinx.get_doc_object` with the template of
+    :func:`numpydoc_template` (numpydoc's own compiles it anew on every call)."""
+    from numpydoc import docscrape
+    from numpydoc.docscrape_sphinx import SphinxClassDoc, SphinxFunctionDoc, SphinxObjDoc
+
+    config = {} if config is None else config
+    config["template"] = numpydoc_template(builder)
+    return docscrape.get_doc_object(
+        obj,
+        what=what,
+        doc=doc,
+        config=config,
+        class_doc=SphinxClassDoc,
+        func_doc=SphinxFunctionDoc,
+        obj_doc=SphinxObjDoc,
+    )
+
+
+def drop_type_comments(app: Any, config: Any) -> None:
+    """``config-inited`` handler: no reading of type comments when signatures show no types.
+
+    autodoc reads a function's ``# type:`` comments into its annotations before it formats its
+    signature (``sphinx.ext.autodoc.type_comment``: the function's source parsed again, for the
+    576 signatures of the reference, 0.4 s a build); with ``autodoc_typehints: none`` the
+    signatures show no annotation, whatever its source, so the handler is disconnected.
+    """
+    if config.autodoc_typehints != "none":
+        return
+    from sphinx.ext.autodoc.type_comment import update_annotations_using_type_comments
+
+    for listener in list(app.events.listeners.get("autodoc-before-process-signature", [])):
+        if listener.handler is update_annotations_using_type_comments:
+            app.disconnect(listener.id)
+
+
 def setup(app: Any) -> dict[str, Any]:
+    # numpydoc renders every docstring through its module's ``get_doc_object``, the function its
+    # own ``setup(app, get_doc_object_=...)`` lets a caller replace: :func:`get_doc_object` above,
+    # the same with the template compiled once (tests/test_api_reference.py compares the two).
+    app.setup_extension("numpydoc")
+    import numpydoc.numpydoc
+
+    numpydoc.numpydoc.get_doc_object = get_doc_object
     # numpydoc also reads the raw docstring for a signature and warns about the sections above.
     warnings.filterwarnings("ignore", r"Unknown section (Headline|Paper) Keys", UserWarning)
     app.connect("autodoc-process-bases", drop_object_base)
+    app.connect("config-inited", drop_type_comments)
     app.connect("missing-reference", resolve_unqualified)
     # numpydoc's own handler has the default priority (500): the library's sections are cut
     # before it reads a docstring and set back after it has rendered one.

@@ -143,6 +143,51 @@ def test_figure_references_are_numbered_from_the_cached_targets(built):
     assert "Listing 1</span>" in html and "Listing 1 again</span>" in html
 
 
+def test_figures_are_numbered_from_the_pages_in_memory():
+    """Item 17: while Sphinx numbers the figures (``env-get-updated``), a page read by this build
+    is the doctree in memory; any other is unpickled; afterwards every page is unpickled again."""
+    from docutils.utils import new_document
+
+    read, pickled = new_document("read"), new_document("pickled")
+
+    class Env:
+        _write_doc_doctree_cache = {"read": read}
+
+        def get_doctree(self, docname):
+            return pickled
+
+    env = Env()
+    assert EXT._doctrees_in_memory(None, env) == []
+    assert env.get_doctree("read") is read and env.get_doctree("earlier") is pickled
+    assert EXT._doctrees_from_disk(None, env) == []
+    assert "get_doctree" not in vars(env) and env.get_doctree("read") is pickled
+
+
+def test_bibliography_text_without_looking_up_plugins(built, monkeypatch):
+    """The labels' plain text (:func:`_plain`) and sphinxcontrib-bibtex's plain-text backend
+    (registered by the extension's setup, which ``built`` ran) come without a look-up among the
+    installed packages' entry points (4 ms each)."""
+    import pybtex.plugin
+    from pybtex.backends.plaintext import Backend
+    from pybtex.richtext import Text
+
+    latex = [
+        r"Basseville and Nikiforov",
+        r"{\'E}mile Zola",
+        r"Zhang {\textendash} Rosa",
+        r"M{\"u}ller",
+    ]
+    expected = [Text.from_latex(t).render_as("text") for t in latex]
+
+    def no_entry_points(**kwargs):
+        raise AssertionError(f"entry points looked up: {kwargs}")
+
+    monkeypatch.setattr(pybtex.plugin, "entry_points", no_entry_points)
+    assert [EXT._plain(t) for t in latex] == expected
+    assert expected[1] == "Émile Zola" and expected[3] == "Müller"
+    assert pybtex.plugin.find_plugin("pybtex.backends", "plaintext") is Backend
+
+
 def test_target_stubs_number_as_the_nodes_they_copy():
     from docutils import nodes
     from docutils.utils import new_document
