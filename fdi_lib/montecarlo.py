@@ -49,7 +49,6 @@ import warnings
 from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
-import scipy.stats
 
 from fdi_lib.errors import ClusterError, JobsCappedWarning, ModelError, ResourceError, ShapeError
 from fdi_lib.models import LTVModel
@@ -1133,7 +1132,11 @@ def binomial_ci(successes: int, trials: int, level: float = 0.95) -> tuple[float
 @functools.lru_cache(maxsize=1024)
 def _exact_ci(successes: int, trials: int, level: float) -> tuple[float, float]:
     # scipy's root finding costs about 2 ms a call, and the reproductions ask for the same
-    # counts many times (e.g. 0 or all of n runs): each is computed once per process
+    # counts many times (e.g. 0 or all of n runs): each is computed once per process. Imported
+    # here: scipy.stats takes a third of a second to import, which a worker process running
+    # chunks would pay at its start for nothing
+    import scipy.stats
+
     ci = scipy.stats.binomtest(successes, trials).proportion_ci(
         confidence_level=level, method="exact"
     )

@@ -624,12 +624,13 @@ def _path_batch(
     )
     # the exact check where the screen does not pass (its bound holds elsewhere): all such
     # breakpoints of the batch at once, from the scaled X of their problems (X / sx, formed only
-    # for them, where used)
+    # for them, where used, divided in the gathered copy: a new array for the quotient costs
+    # several times the division)
     broken = (point_res == np.inf).any(axis=1)  # a NaN (a singular step or a cycle): recomputed
     checked = np.flatnonzero((point_res > KKT_TOL).any(axis=1))
     if checked.size:  # (a batch that the screen passes skips the call's set-up)
         point_res[checked] = _kkt_where_screen_fails(
-            lambda p: X[checked[p]] / sx[checked[p], None, None],
+            lambda p: np.divide(Xp := X[checked[p]], sx[checked[p], None, None], out=Xp),
             ys[checked],
             g[checked],
             slack[checked],
@@ -989,7 +990,11 @@ def _kkt_where_screen_fails(
         with np.errstate(all="ignore"):
             Xp, yp = (design(pb[:1])[0], y[0]) if y.shape[0] == 1 else (design(pb), y[pb])
             g[pb, pi], slack[pb, pi] = gradient(Xp, yp, coefs[pb, pi])
-            point_res = _kkt(g, slack, levels, terms, points=True)[0]
+            # the residuals of these breakpoints only, as breakpoints (P, 1) of their own: a
+            # breakpoint's residual reads its own gradient, slack and terms only (the same
+            # values as over the whole batch; the others are unchanged)
+            at = tuple(t[pb, pi][:, None] for t in (g, slack, levels, *terms))
+            point_res[pb, pi] = _kkt(*at[:3], at[3:], points=True)[0][:, 0]
     return point_res
 
 

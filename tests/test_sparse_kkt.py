@@ -262,3 +262,31 @@ def test_batch_residuals_are_those_of_each_path_checked_alone(monkeypatch):
         alone = sp.lasso_path(X[b], y[b], n_samples=reg.n_samples)
         assert alone.kkt_residual == batch.kkt_residual[b], b
         assert alone.kkt_floor == batch.kkt_floor[b], b
+
+
+def test_rechecked_residuals_are_those_of_the_whole_batch_recomputed(monkeypatch):
+    """:func:`fdi_lib.sparse._kkt_where_screen_fails` recomputes the residuals of the breakpoints
+    it checks again only: bit for bit those of every breakpoint recomputed from the updated
+    gradients and slacks (Example 1's full paths, which the screen does not pass at lambda = 0)."""
+    import fdi_lib.sparse as sp
+    from fdi_lib.montecarlo import trial_rngs, trial_seeds
+    from fdi_lib.reproduce.zhang2021 import example1_regression
+    from fdi_lib.systems import zhang2021_example1 as ex
+
+    reg, _ = example1_regression(
+        ex.draw_trials(ex.example1_model(), trial_rngs(trial_seeds(0, 6)), q=15)
+    )
+    screen_fails = sp._kkt_where_screen_fails
+    changed = []
+
+    def spy(design, y, g, slack, levels, coefs, terms, point_res):
+        before = point_res.copy()
+        out = screen_fails(design, y, g, slack, levels, coefs, terms, point_res)
+        whole = sp._kkt(g, slack, levels, terms, points=True)[0]
+        assert out.tobytes() == whole.tobytes()
+        changed.append(int((out != before).sum()))
+        return out
+
+    monkeypatch.setattr(sp, "_kkt_where_screen_fails", spy)
+    sp.lasso_path_batch(reg.X, reg.y, n_samples=reg.n_samples)
+    assert changed and changed[0] > 0

@@ -178,20 +178,29 @@ def _initial_state_setup(r: float, init: str) -> tuple[Any, Any, Any]:
 
 @single_threaded_blas
 def initial_state_chunk(
-    seeds: Sequence[np.random.SeedSequence], *, q: int, r: float
+    seeds: Sequence[np.random.SeedSequence],
+    *,
+    q: int,
+    r: float,
+    inits: Sequence[str] = tuple(INIT_VARIANTS),
 ) -> dict[str, np.ndarray]:
-    """Monte Carlo chunk: the log rule and the oracle under each initialisation of :data:`INIT_VARIANTS`.
+    """Monte Carlo chunk: the log rule and the oracle under each initialisation ``inits`` of :data:`INIT_VARIANTS` (default all).
 
     The trials are those of :func:`~fdi_lib.reproduce.zhang2021.example1_chunk` (same seeds, same draws) except the initial
     state, ``X_0`` scaled by the value in :data:`INIT_VARIANTS`. Returns per-trial booleans
-    ``log_<init>`` and ``oracle_<init>``.
+    ``log_<init>`` and ``oracle_<init>``; each initialisation's are the same computed alone or
+    with the others.
     """
     import dataclasses
 
+    unknown = sorted(set(inits) - set(INIT_VARIANTS))
+    if unknown:
+        raise ModelError(f"inits: expected names of {sorted(INIT_VARIANTS)}, got {unknown}")
     base = ex.example1_model(r=r)
     trials0 = ex.draw_trials(base, trial_rngs(seeds), q=q)
     out: dict[str, np.ndarray] = {}
-    for init, s in INIT_VARIANTS.items():
+    for init in inits:
+        s = INIT_VARIANTS[init]
         sim_model, filt, gains = _initial_state_setup(float(r), init)
         noise = dataclasses.replace(trials0.noise, x0=s * trials0.noise.x0)
         trials = dataclasses.replace(trials0, noise=noise)
@@ -228,6 +237,22 @@ def unknown_input_effect(*, q: int = 15, r: float = 0.5, trials: int = 20, seed:
 
 def variant_columns() -> list[tuple[str, int, float]]:
     return [(f"q{q}", q, 0.5) for q in VARIANT_Q] + [(f"r{r:g}", 5, r) for r in VARIANT_R]
+
+
+def _chunk_functions(cols: list[tuple[str, int, float]]) -> dict[str, partial]:
+    """The chunk functions of :func:`lambda_rule`, keyed by column (:func:`variant_columns`) or
+    initialisation (:data:`INIT_VARIANTS`, one function each), in the order handed out.
+
+    The calling process runs the first chunk alone (the memory probe), then takes chunks from the
+    front while a worker takes them from the back (:func:`~fdi_lib.montecarlo.run_monte_carlo_many`):
+    an initialisation's chunk (about half a column's) first, so that the worker waits less, and the
+    other one after two columns, near where the two processes meet at the end of the run (about
+    half the work from the front), so that neither waits long for the other's last chunk."""
+    init = {i: partial(initial_state_chunk, q=15, r=0.5, inits=(i,)) for i in INIT_VARIANTS}
+    col = {key: partial(lambda_rule_chunk, q=q, r=r) for key, q, r in cols}
+    first, second = INIT_VARIANTS
+    order = [first, *list(col)[:2], second, *list(col)[2:]]
+    return {key: {**init, **col}[key] for key in order}
 
 
 def _column_rates(
@@ -325,13 +350,10 @@ def lambda_rule(*, seed: int, trials: int | None, jobs: int) -> ReproductionResu
     n = 200 if trials is None else trials
     cols = variant_columns()
     # one pool for the variants' columns and the initial-state runs (same trials)
-    *results, res = run_monte_carlo_many(
-        [partial(lambda_rule_chunk, q=q, r=r) for _, q, r in cols]
-        + [partial(initial_state_chunk, q=15, r=0.5)],
-        n,
-        seed=seed,
-        jobs=jobs,
-    )
+    fns = _chunk_functions(cols)
+    outs = dict(zip(fns, run_monte_carlo_many(list(fns.values()), n, seed=seed, jobs=jobs)))
+    results = [outs[key] for key, _, _ in cols]
+    res = {k: v for init in INIT_VARIANTS for k, v in outs[init].items()}
     rates, cis, orates, ocis, beyond = _column_rates(cols, results, n)
     init_ci = {k: list(binomial_ci(int(v.sum()), n)) for k, v in res.items()}
     headline = {

@@ -317,6 +317,50 @@ def test_initial_state_models_start_like_the_paper():
         initial_state_models(0.5, "zero")
 
 
+def test_initial_state_chunk_per_initialisation_is_the_joint_one():
+    """Each initialisation computed alone (one chunk function each in the pool) gives the bits of
+    the joint chunk; an unknown name is refused."""
+    from fdi_lib.errors import ModelError
+    from fdi_lib.montecarlo import trial_seeds
+    from fdi_lib.reproduce.zhang2021_lambda import INIT_VARIANTS, initial_state_chunk
+
+    seeds = trial_seeds(1, 8)  # trials on which the two initialisations part (both rows)
+    both = initial_state_chunk(seeds, q=15, r=0.5)
+    assert list(both) == [f"{k}_{i}" for i in INIT_VARIANTS for k in ("log", "oracle")]
+    for k in ("log", "oracle"):
+        assert not np.array_equal(both[f"{k}_paper"], both[f"{k}_spread"])
+    for init in INIT_VARIANTS:
+        alone = initial_state_chunk(seeds, q=15, r=0.5, inits=(init,))
+        assert list(alone) == [f"log_{init}", f"oracle_{init}"]
+        for k, v in alone.items():
+            np.testing.assert_array_equal(v, both[k])
+    with pytest.raises(ModelError, match="inits: expected names of"):
+        initial_state_chunk(seeds, q=15, r=0.5, inits=("paper", "zero"))
+
+
+def test_lambda_rule_chunk_functions_start_short_and_cover_every_column_once():
+    """The pool's first chunk (run alone by the calling process) is an initialisation's, half a
+    column's; every column and initialisation has one function, with its own settings."""
+    from fdi_lib.reproduce.zhang2021_lambda import (
+        INIT_VARIANTS,
+        _chunk_functions,
+        initial_state_chunk,
+        lambda_rule_chunk,
+        variant_columns,
+    )
+
+    cols = variant_columns()
+    fns = _chunk_functions(cols)
+    assert sorted(fns) == sorted([key for key, _, _ in cols] + list(INIT_VARIANTS))
+    first, *rest = fns
+    assert fns[first].func is initial_state_chunk and first in INIT_VARIANTS
+    assert list(fns).index(list(INIT_VARIANTS)[1]) == 3  # the other one after two columns
+    for key, q, r in cols:
+        assert fns[key].func is lambda_rule_chunk and fns[key].keywords == {"q": q, "r": r}
+    for init in INIT_VARIANTS:
+        assert fns[init].keywords == {"q": 15, "r": 0.5, "inits": (init,)}
+
+
 def test_unknown_input_cannot_change_the_regression():
     from fdi_lib.reproduce.zhang2021_lambda import unknown_input_effect
 
