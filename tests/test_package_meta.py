@@ -17,7 +17,7 @@ def test_citation_version_and_licence_match_pyproject():
     cff = yaml.safe_load((ROOT / "CITATION.cff").read_text())
     assert cff["cff-version"] == "1.2.0"
     assert cff["version"] == _project()["version"]
-    assert cff["license"] == _project()["license"]["text"]
+    assert cff["license"] == _project()["license"]
 
 
 def test_citation_cites_the_four_papers():
@@ -33,7 +33,7 @@ def test_citation_cites_the_four_papers():
 
 
 def test_licence_file_is_the_declared_licence():
-    assert _project()["license"]["text"] == "BSD-3-Clause"
+    assert _project()["license"] == "BSD-3-Clause"
     assert (ROOT / "LICENSE").read_text().startswith("BSD 3-Clause License")
 
 
