@@ -17,6 +17,8 @@ also opened from ``file://``. Fails on:
   maths, code or words (issue 33 took the book from 373 such tokens at 1280 px to 0: the
   reference's docstrings write :math: and ``code``, tables and the claims ledger set their
   symbols as maths and their names as code, :func:`fdi_lib.report.text_pieces`);
+- ``zero``: a signed zero (``-0.0``, ``−0``) in the text, code and maths excepted: a glued number
+  rounded to zero from below reads as a negative quantity;
 - ``pdf``: when a PDF edition sits beside the pages (``fdi-book.pdf``), a page whose download
   menu does not link it;
 - ``alt``: an image in the text whose alt text is empty, a file name or path, or raw TeX (it
@@ -163,6 +165,17 @@ PAGE_CHECKS_JS = r"""
       const around = t.slice(Math.max(0, m.index - 25), m.index + 35).replace(/\s+/g, ' ');
       out.push(['tex', describe(n.parentElement), around]);
     }
+  }
+  // 1e. a signed zero in the prose ("-0.0", "−0"): a glued number rounded to zero from below
+  // reads as a negative quantity (code and maths excluded)
+  const signedZero = /(^|[^\w.\-−])[-−]0(?:\.0+)?(?![\d.])/;
+  const walker4 = document.createTreeWalker(article, NodeFilter.SHOW_TEXT, {
+    acceptNode: (n) => (n.parentElement.closest('pre, code, kbd, .literal, script, style, '
+                                                 + 'mjx-container, textarea, .highlight, .math')
+      ? NodeFilter.FILTER_REJECT : NodeFilter.FILTER_ACCEPT)});
+  for (let n = walker4.nextNode(); n; n = walker4.nextNode()) {
+    const t = n.nodeValue, m = t.match(signedZero);
+    if (m) out.push(['zero', describe(n.parentElement), t.slice(Math.max(0, m.index - 30), m.index + 20).replace(/\s+/g, ' ')]);
   }
   // 1d. the PDF edition, when it is beside the pages, in the download menu (a page without one,
   // the search page, has nothing to link it from)
