@@ -46,6 +46,9 @@ def built(tmp_path_factory) -> Path:
         f"sys.path.insert(0, {str(ROOT / '_ext')!r})\n"
         "extensions = ['myst_parser', 'sphinx_tippy', 'fdi_book']\n"
         "html_theme = 'sphinx_book_theme'\n"
+        # its own parser for .md: a Sphinx app of another test module in this process
+        # (myst-nb's) leaves ``.md -> myst-nb`` in a default shared by later apps
+        "source_suffix = {'.md': 'markdown'}\n"
         "myst_enable_extensions = ['dollarmath', 'amsmath']\n"
         "numfig = True\n"
         f"mathjax_path = {config['mathjax_path']!r}\n"
